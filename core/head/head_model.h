@@ -1,0 +1,65 @@
+// The generic head of jeong2002 (Sec. 4, Fig. 4): a hand-designed triangle
+// control mesh plus its annotations. Data only; see generic_head.h for loading.
+//
+// Conventions: the head looks along +z, up is +y, +x is the head's LEFT side
+// (the viewer's right in a frontal view). Units: metres, the generic head is
+// about 0.24 m tall from chin to crown. The mesh is a topological disk: its
+// only boundary loop runs around the neck. The eye openings and the mouth slit
+// continue inwards as closed pockets (eye sockets where separate eyeball
+// models sit; a mouth bag behind lips whose upper and lower vertices are
+// distinct), so they add no boundary and one texture chart covers the head.
+#pragma once
+#include "mesh/tri_mesh.h"
+
+#include <map>
+#include <string>
+
+namespace lk {
+
+// Axis-aligned box around a feature (ear, nose, mouth) with its landmark
+// vertices (3 per ear, 4 for nose and mouth) used for blending (Sec. 4.2).
+struct FeatureBox {
+  std::string name;  // "ear_left", "ear_right", "nose", "mouth"
+  Vec3 min = Vec3::Zero(), max = Vec3::Zero();
+  std::vector<int> landmarks;  // vertex indices into the generic mesh
+  bool contains(const Vec3& p) const {
+    return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
+  }
+};
+
+// A clipping plane: points with dot(normal, p - point) < 0 are cut away.
+struct ClipPlane {
+  Vec3 point = Vec3::Zero();
+  Vec3 normal = Vec3::UnitY();
+  bool keeps(const Vec3& p) const { return normal.dot(p - point) >= 0; }
+};
+
+struct EyeSocket {
+  Vec3 center = Vec3::Zero();   // eyeball centre
+  double radius = 0.012;        // eyeball radius
+  std::vector<int> rim;         // vertex loop of the eyelid opening (ordered)
+};
+
+struct HeadAnnotations {
+  std::vector<FeatureBox> boxes;                // ear_left, ear_right, nose, mouth
+  std::vector<std::array<int, 2>> binding_edges;  // E_binding: mesh edges + virtual lip edges
+  std::vector<int> constrained_vertices;        // E_constraint: inner lip vertices
+  ClipPlane neck_clip;                          // removes the neck below it
+  ClipPlane back_clip;                          // removes the back of the head (hair)
+  Vec3 look = Vec3::UnitZ();
+  Vec3 up = Vec3::UnitY();
+  // Named vertex sets: "face", "scalp", "ears", "ear_left", "ear_right",
+  // "neck", "lips", "upper_lip", "lower_lip", "eye_rim_left", "eye_rim_right",
+  // "nose", "brow", "jaw", "chin", "cheeks".
+  std::map<std::string, std::vector<int>> regions;
+  EyeSocket eye_left, eye_right;                // +x is left
+  Vec3 mouth_center = Vec3::Zero();             // between the lips, for teeth/tongue
+  double mouth_width = 0.05;
+};
+
+struct GenericHead {
+  TriMesh mesh;
+  HeadAnnotations annotations;
+};
+
+}  // namespace lk

@@ -1,0 +1,43 @@
+// The likeness command-line harness: each command lives in its own cmd_*.cpp
+// and registers itself with a static Registrar. Commands are thin shells:
+// read files, call core/, write files, print.
+#pragma once
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace lk::cli {
+
+// Parsed "--key value" / "--flag" arguments; positional arguments in order.
+struct Args {
+  std::map<std::string, std::vector<std::string>> options;  // --key v1 v2 ...
+  std::vector<std::string> positional;
+
+  bool has(const std::string& key) const { return options.count(key) != 0; }
+  std::string get(const std::string& key, const std::string& def = "") const;
+  std::vector<std::string> get_all(const std::string& key) const;
+  // Returns false (and prints an error) if the value is missing or not a number.
+  bool get_int(const std::string& key, int def, int& out) const;
+  bool get_double(const std::string& key, double def, double& out) const;
+};
+
+Args parse_args(int argc, char** argv, int first);
+
+struct Command {
+  std::string name;
+  std::string usage;    // one line: "likeness render --mesh FILE ..."
+  std::string summary;  // what it does
+  std::function<int(const Args&)> run;  // exit code: 0 ok, 1 failed, 2 usage
+};
+
+std::map<std::string, Command>& registry();
+
+struct Registrar {
+  explicit Registrar(Command c) { registry()[c.name] = std::move(c); }
+};
+
+// Prints "likeness <command>: error: <message>" to stderr and returns 1.
+int fail(const std::string& command, const std::string& message);
+
+}  // namespace lk::cli

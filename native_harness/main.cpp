@@ -1,0 +1,102 @@
+// likeness: the native command-line harness.
+#include "command.h"
+
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+
+namespace lk::cli {
+
+std::map<std::string, Command>& registry() {
+  static std::map<std::string, Command> r;
+  return r;
+}
+
+std::string Args::get(const std::string& key, const std::string& def) const {
+  auto it = options.find(key);
+  return (it == options.end() || it->second.empty()) ? def : it->second.front();
+}
+
+std::vector<std::string> Args::get_all(const std::string& key) const {
+  auto it = options.find(key);
+  return it == options.end() ? std::vector<std::string>{} : it->second;
+}
+
+bool Args::get_int(const std::string& key, int def, int& out) const {
+  out = def;
+  if (!has(key)) return true;
+  const std::string v = get(key);
+  char* end = nullptr;
+  const long x = std::strtol(v.c_str(), &end, 10);
+  if (v.empty() || *end != '\0') {
+    std::cerr << "error: --" << key << " expects an integer, got '" << v << "'\n";
+    return false;
+  }
+  out = static_cast<int>(x);
+  return true;
+}
+
+bool Args::get_double(const std::string& key, double def, double& out) const {
+  out = def;
+  if (!has(key)) return true;
+  const std::string v = get(key);
+  char* end = nullptr;
+  const double x = std::strtod(v.c_str(), &end);
+  if (v.empty() || *end != '\0') {
+    std::cerr << "error: --" << key << " expects a number, got '" << v << "'\n";
+    return false;
+  }
+  out = x;
+  return true;
+}
+
+Args parse_args(int argc, char** argv, int first) {
+  Args a;
+  std::string key;
+  for (int i = first; i < argc; ++i) {
+    std::string s = argv[i];
+    if (s.size() > 2 && s.rfind("--", 0) == 0) {
+      key = s.substr(2);
+      a.options[key];  // a flag with no value is still present
+    } else if (!key.empty()) {
+      a.options[key].push_back(s);
+    } else {
+      a.positional.push_back(s);
+    }
+  }
+  return a;
+}
+
+int fail(const std::string& command, const std::string& message) {
+  std::cerr << "likeness " << command << ": error: " << message << "\n";
+  return 1;
+}
+
+}  // namespace lk::cli
+
+static void usage() {
+  std::cout << "likeness: scan + photos -> animatable, textured, multiresolution head\n\n"
+               "commands:\n";
+  for (auto& [name, c] : lk::cli::registry())
+    std::cout << "  " << c.usage << "\n      " << c.summary << "\n";
+}
+
+int main(int argc, char** argv) {
+  if (argc < 2 || std::string(argv[1]) == "--help" || std::string(argv[1]) == "help") {
+    usage();
+    return argc < 2 ? 2 : 0;
+  }
+  auto& r = lk::cli::registry();
+  auto it = r.find(argv[1]);
+  if (it == r.end()) {
+    std::cerr << "likeness: unknown command '" << argv[1] << "'\n\n";
+    usage();
+    return 2;
+  }
+  lk::cli::Args args = lk::cli::parse_args(argc, argv, 2);
+  if (args.has("help")) {
+    std::cout << it->second.usage << "\n  " << it->second.summary << "\n";
+    return 0;
+  }
+  return it->second.run(args);
+}

@@ -1,0 +1,27 @@
+// Where tests find data. Real data in ../shared/data is never copied into the
+// repo; tests that need it skip with a message when it is absent.
+#pragma once
+#include <string>
+#include <sys/stat.h>
+
+namespace lk::test {
+
+inline std::string source_dir() { return LK_SOURCE_DIR; }
+inline std::string shared_data_dir() { return LK_SOURCE_DIR "/../shared/data"; }
+inline bool exists(const std::string& p) {
+  struct stat st;
+  return ::stat(p.c_str(), &st) == 0;
+}
+// A fresh scratch folder for a test's files (under the build tree).
+std::string scratch_dir(const std::string& name);
+
+}  // namespace lk::test
+
+// Use at the top of a TEST_CASE that needs ../shared/data/<rel>.
+#define LK_REQUIRE_SHARED(rel)                                                      \
+  do {                                                                              \
+    if (!lk::test::exists(lk::test::shared_data_dir() + "/" + (rel))) {             \
+      WARN("skipped: ../shared/data/" << (rel) << " is absent (real data is not in the repo)"); \
+      return;                                                                       \
+    }                                                                               \
+  } while (0)
