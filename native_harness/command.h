@@ -41,3 +41,20 @@ struct Registrar {
 int fail(const std::string& command, const std::string& message);
 
 }  // namespace lk::cli
+
+namespace lk::cli {
+
+// `likeness bench` runs every registered benchmark section in name order
+// (or only those named with --only). Each prints its own table with the
+// papers' figures beside ours. Benchmarks are measurements, never tests.
+struct Bench {
+  std::string name;
+  std::string summary;
+  std::function<int(const Args&)> run;  // 0 ok
+};
+std::map<std::string, Bench>& bench_registry();
+struct BenchRegistrar {
+  explicit BenchRegistrar(Bench b) { bench_registry()[b.name] = std::move(b); }
+};
+
+}  // namespace lk::cli

@@ -1,0 +1,76 @@
+// Readers and writers for meshes, point clouds and images. Parsing works on
+// bytes in memory (the web app hands us the bytes of a dropped file); the
+// *_file helpers are thin wrappers for the native harness.
+//
+// Every reader validates what it reads and fails with a Status whose message
+// names the problem (truncated data, wrong counts, NaN/inf, unsupported
+// property, empty input, declared sizes beyond the bytes given). No reader
+// allocates more than the input can justify, so a huge declared count in a
+// small file cannot exhaust memory or hang.
+#pragma once
+#include "common/status.h"
+#include "image/image.h"
+#include "mesh/tri_mesh.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace lk {
+
+using Bytes = std::vector<std::uint8_t>;
+
+// Which kind of geometry a file held.
+enum class GeometryKind { Mesh, PointCloud };
+
+// PLY: ascii, binary_little_endian, binary_big_endian. Vertex properties
+// x y z (float/double/int types), optional nx ny nz, red green blue (uchar or
+// float); faces as "vertex_indices"/"vertex_index" lists (polygons are
+// fan-triangulated). A PLY without faces is a point cloud.
+Status read_ply(const std::uint8_t* data, size_t size, TriMesh& mesh, GeometryKind& kind);
+// Writes binary little-endian PLY (ascii when ascii is true). Faces are
+// written when the mesh has triangles; normals and colors when present.
+Bytes write_ply(const TriMesh& mesh, bool ascii = false);
+Bytes write_ply(const PointCloud& cloud, bool ascii = false);
+
+// OBJ: v, vn, vt, f (polygons fan-triangulated, negative indices allowed),
+// mtllib/usemtl recorded (texture_name from the MTL's map_Kd when given).
+// Per-corner uvs when vt indices differ from v indices.
+Status read_obj(const std::uint8_t* data, size_t size, TriMesh& mesh, GeometryKind& kind,
+                const std::string& mtl_text = "");
+// OBJ text; with a material name, writes "mtllib <mtl_file>" and "usemtl".
+std::string write_obj(const TriMesh& mesh, const std::string& mtl_file = "");
+// MTL text with one material whose map_Kd is texture_file.
+std::string write_mtl(const std::string& texture_file);
+
+// XYZ: one point per line, "x y z" optionally followed by "nx ny nz" (and/or
+// "r g b"); '#' comments.
+Status read_xyz(const std::uint8_t* data, size_t size, PointCloud& cloud);
+
+// Picks the reader from the file name's extension (.ply .obj .xyz) or, when
+// unknown, from the first bytes. A mesh also fills cloud with its vertices.
+Status read_geometry(const std::string& name, const std::uint8_t* data, size_t size,
+                     TriMesh& mesh, PointCloud& cloud, GeometryKind& kind);
+
+// Images: PNG/JPEG/BMP/TGA via stb_image. Fails on anything that is not an
+// image, and on images over max_pixels (default 64 Mpixel).
+Status read_image(const std::uint8_t* data, size_t size, Image& image,
+                  int want_channels = 0, size_t max_pixels = 64u << 20);
+Bytes write_png(const Image& image);
+
+// File helpers (native only). Files larger than max_bytes (default 2 GiB)
+// are refused with TooLarge before being read.
+Status read_file(const std::string& path, Bytes& out, size_t max_bytes = (size_t(2) << 30));
+Status write_file(const std::string& path, const void* data, size_t size);
+Status write_file(const std::string& path, const std::string& text);
+Status write_file(const std::string& path, const Bytes& bytes);
+Status load_geometry_file(const std::string& path, TriMesh& mesh, PointCloud& cloud, GeometryKind& kind);
+Status load_mesh_file(const std::string& path, TriMesh& mesh);         // fails if not a mesh
+Status load_point_cloud_file(const std::string& path, PointCloud& cloud);  // any geometry's vertices
+Status load_image_file(const std::string& path, Image& image, int want_channels = 0);
+Status save_png_file(const std::string& path, const Image& image);
+
+PointCloud to_point_cloud(const TriMesh& mesh);
+
+}  // namespace lk
