@@ -1,0 +1,63 @@
+// Cameras for the renderer: an orbit camera driven by pixel deltas (mouse,
+// touch) and the canonical views used in docs and tests.
+//
+// Head conventions (head_model.h): the head looks along +z, up is +y, +x is
+// the head's LEFT (the viewer's right in a frontal view). So "left" looks at
+// the head's left cheek from +x, "right" from -x, "top" looks down from +y
+// with the face towards the bottom of the image, and "three-quarter" sits
+// between front and left, slightly above eye level.
+#pragma once
+#include "common/status.h"
+#include "common/types.h"
+#include "render/renderer.h"
+
+#include <glm/glm.hpp>
+
+#include <string>
+
+namespace lk {
+
+enum class CanonicalView { Front, Left, Right, Back, Top, ThreeQuarter };
+
+// "front" | "left" | "right" | "back" | "top" | "three-quarter" (also
+// "three_quarter"). InvalidInput names the accepted values otherwise.
+Status parse_canonical_view(const std::string& name, CanonicalView& out);
+const char* to_string(CanonicalView view);
+
+// A camera orbiting a target point. yaw turns around +y (0 = on +z looking
+// at the face, +90 degrees = on +x, the head's left); pitch raises the camera
+// (limited to just under +-90 degrees so "up" stays defined).
+struct OrbitCamera {
+  glm::vec3 target = {0.0f, 0.0f, 0.0f};
+  float distance = 1.0f;     // target to eye, world units
+  float yaw_deg = 0.0f;
+  float pitch_deg = 0.0f;
+  float fov_y_deg = 30.0f;   // vertical field of view
+  float scene_radius = 0.5f; // size of what is looked at: sets near/far planes
+
+  glm::vec3 eye() const;
+  glm::mat4 view() const;
+  glm::mat4 projection(float aspect) const;  // aspect = width / height
+  CameraMatrices matrices(float aspect) const;
+
+  // Pointer interaction; deltas in pixels, viewport_height in pixels (so the
+  // feel does not depend on the canvas size). Dragging the full viewport
+  // height turns the camera by 180 degrees; pan keeps the point under the
+  // cursor under the cursor (at the target's depth); zoom > 0 moves closer
+  // (wheel: pass -deltaY).
+  void orbit(float dx_px, float dy_px, float viewport_height_px);
+  void pan(float dx_px, float dy_px, float viewport_height_px);
+  void zoom(float amount_px);
+};
+
+// A camera that frames bbox from the named direction, filling the image of
+// the given aspect (width / height) with a small margin.
+OrbitCamera canonical_view(CanonicalView view, const BBox& bbox, float aspect);
+Status canonical_view(const std::string& name, const BBox& bbox, float aspect, OrbitCamera& out);
+
+// Distance at which a camera looking along `forward` (unit, from eye to
+// target) with the given up vector sees all of bbox centred on its centre.
+float framing_distance(const BBox& bbox, const glm::vec3& forward, const glm::vec3& up,
+                       float fov_y_deg, float aspect, float margin = 1.08f);
+
+}  // namespace lk

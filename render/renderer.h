@@ -1,0 +1,163 @@
+// The shared GL renderer: one small forward renderer written against the
+// OpenGL ES 3.0 / WebGL2 subset, used by the wasm viewer (SDL2 + WebGL2) and
+// by the native harness (OSMesa, see offscreen.h). No windowing here: create
+// a Renderer while a GL context is current and use it only on that context.
+//
+// What it draws:
+//   - triangle meshes (TriMesh: positions #V by 3, triangles #F by 3, optional
+//     normals #V by 3, colors #V by 3, uvs #V by 2 or 3*#F by 2 per corner),
+//     shaded with a key + fill + rim light rig (Blinn-Phong with a skin-tone
+//     default albedo), optionally textured (RGB/RGBA image) and optionally with
+//     a wireframe overlay (barycentric edge distance, no geometry shader);
+//   - point clouds (PointCloud: positions #P by 3, optional normals, colors)
+//     as round point sprites of a settable size in pixels.
+// Shading is done in linear RGB and written gamma-encoded (sRGB), so the
+// default framebuffer (not sRGB-aware in WebGL2 or OSMesa) shows correct tones.
+//
+// Color conventions: DrawStyle colors and backgrounds are sRGB in [0,1] (what
+// a person picks); TriMesh::colors are linear RGB (see tri_mesh.h);
+// PointCloud::colors are taken as sRGB (scanner colors as stored in files);
+// textures are sRGB-encoded images.
+//
+// Meshes are uploaded unrolled (three GPU vertices per triangle) so that
+// per-corner uvs and the wireframe's barycentrics need no index tricks; a
+// 100k-triangle mesh costs about 17 MB of GPU memory.
+#pragma once
+#include "common/status.h"
+#include "image/image.h"
+#include "mesh/tri_mesh.h"
+
+#include <glm/glm.hpp>
+
+#include <memory>
+#include <vector>
+
+namespace lk {
+
+// Identifies an uploaded mesh or point cloud (one namespace for both), or a
+// texture. Negative = none.
+using DrawableHandle = int;
+using TextureHandle = int;
+constexpr int kNoHandle = -1;
+
+// How point sprites get their color.
+enum class PointColoring {
+  Auto,         // colors if present, else normals if present, else base_color
+  VertexColor,  // falls back to base_color when the cloud has no colors
+  Normal,       // normal mapped to RGB (n * 0.5 + 0.5); base_color when absent
+  BaseColor,
+};
+
+// Per-drawable appearance and placement. Defaults give a good-looking head.
+struct DrawStyle {
+  bool visible = true;
+  glm::mat4 model = glm::mat4(1.0f);             // object -> world
+  glm::vec3 base_color = {0.86f, 0.70f, 0.62f};  // sRGB albedo (skin tone) when no color/texture
+  bool use_vertex_colors = true;  // meshes: TriMesh::colors modulate nothing, they replace base_color
+  bool use_texture = true;        // meshes: attached texture replaces base_color (needs uvs)
+  float specular = 0.25f;         // Blinn-Phong specular strength (0 = matte)
+  float shininess = 32.0f;        // Blinn-Phong exponent
+  // Surfaces. With surface = false and wireframe = true only the edges are
+  // drawn (a control mesh over its subdivided surface).
+  bool surface = true;
+  bool wireframe = false;                         // overlay the triangle edges
+  glm::vec3 wire_color = {0.10f, 0.12f, 0.16f};   // sRGB
+  float wire_width_px = 1.0f;                     // line width in pixels (antialiased)
+  // Point clouds.
+  float point_size_px = 4.0f;  // sprite diameter in pixels
+  PointColoring point_coloring = PointColoring::Auto;
+};
+
+// View and projection (GLM conventions: right-handed view, clip z in [-1,1]).
+struct CameraMatrices {
+  glm::mat4 view = glm::mat4(1.0f);
+  glm::mat4 projection = glm::mat4(1.0f);
+};
+
+// Pixel rectangle of the framebuffer to draw into (origin bottom-left, as GL).
+struct Viewport {
+  int x = 0, y = 0, width = 0, height = 0;
+};
+
+// Lights are fixed to the camera so every view is lit the same way; the
+// directions point from the surface towards the light, in view space.
+struct LightRig {
+  glm::vec3 key_dir = {-0.45f, 0.55f, 0.70f};   // upper left, in front
+  glm::vec3 key_color = {1.00f, 0.96f, 0.90f};  // warm, linear intensity
+  glm::vec3 fill_dir = {0.65f, 0.05f, 0.75f};   // right, soft
+  glm::vec3 fill_color = {0.30f, 0.34f, 0.42f}; // cool
+  glm::vec3 rim_dir = {0.20f, 0.45f, -0.90f};   // behind, outlines the silhouette
+  glm::vec3 rim_color = {0.55f, 0.58f, 0.65f};
+  glm::vec3 ambient_sky = {0.16f, 0.17f, 0.20f};     // hemisphere ambient, from above
+  glm::vec3 ambient_ground = {0.07f, 0.06f, 0.06f};  // from below
+  float exposure = 1.0f;
+};
+
+struct RendererOptions {
+  // The background, sRGB: a vertical gradient from top to bottom (equal
+  // colors give a flat background).
+  glm::vec3 background_top = {0.30f, 0.32f, 0.36f};
+  glm::vec3 background_bottom = {0.13f, 0.14f, 0.16f};
+  LightRig lights;
+};
+
+class Renderer {
+ public:
+  Renderer();
+  ~Renderer();  // frees GL objects; the context must still be current
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  // Compiles the embedded shaders on the current context. Fails (with the
+  // GLSL log) if they do not compile; every other call is a no-op until
+  // init() has succeeded.
+  Status init(const RendererOptions& options = {});
+  bool ready() const;
+
+  // --- Meshes -----------------------------------------------------------
+  // Uploads a mesh; normals are computed (area-weighted) when absent. Fails
+  // on empty or invalid meshes (bad indices, NaN) and on attribute arrays of
+  // the wrong length.
+  Status upload_mesh(const TriMesh& mesh, DrawableHandle& out);
+  // Animation: replaces positions (#V, same count and triangles as uploaded)
+  // and normals (#V, or empty to recompute them) in place.
+  Status update_mesh(DrawableHandle handle, const std::vector<Vec3>& positions,
+                     const std::vector<Vec3>& normals = {});
+
+  // --- Point clouds -----------------------------------------------------
+  Status upload_points(const PointCloud& cloud, DrawableHandle& out);
+
+  // --- Textures ---------------------------------------------------------
+  // RGB or RGBA 8-bit, sRGB-encoded; mipmapped, linear filtering.
+  Status upload_texture(const Image& image, TextureHandle& out);
+  // Attaches (or with kNoHandle detaches) a texture to a mesh.
+  Status attach_texture(DrawableHandle mesh, TextureHandle texture);
+
+  // --- Per-drawable state -----------------------------------------------
+  // style() returns nullptr for an unknown handle.
+  DrawStyle* style(DrawableHandle handle);
+  Status set_visible(DrawableHandle handle, bool visible);
+  Status set_base_color(DrawableHandle handle, const glm::vec3& srgb);
+  Status set_model_matrix(DrawableHandle handle, const glm::mat4& model);
+  Status set_wireframe(DrawableHandle handle, bool wireframe);
+  Status set_point_size(DrawableHandle handle, float pixels);
+  // Bounding box of the drawable's positions in object space (before model).
+  Status bounds(DrawableHandle handle, BBox& out) const;
+  void remove(DrawableHandle handle);
+  void remove_texture(TextureHandle texture);
+  void clear();  // removes every drawable and texture
+
+  // --- Frame ------------------------------------------------------------
+  void set_background(const glm::vec3& srgb);  // flat
+  void set_background_gradient(const glm::vec3& top_srgb, const glm::vec3& bottom_srgb);
+  void set_lights(const LightRig& lights);
+  // Clears the viewport to the background and draws every visible drawable.
+  // Returns an error if GL reported one.
+  Status draw(const CameraMatrices& camera, const Viewport& viewport);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace lk
