@@ -1,0 +1,428 @@
+#include "raycast/bvh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace lk {
+
+namespace {
+
+// Deeper trees than this are forced into median splits, so the fixed-size
+// traversal stacks below can never overflow (one entry per level).
+constexpr int kMaxDepth = 48;
+constexpr int kStackSize = 2 * kMaxDepth + 8;
+
+struct BuildTri {
+  Vec3 box_min, box_max, centroid;
+};
+
+double half_area(const Vec3& lo, const Vec3& hi) {
+  const Vec3 d = (hi - lo).cwiseMax(Vec3::Zero());
+  return d.x() * d.y() + d.y() * d.z() + d.z() * d.x();
+}
+
+struct Builder {
+  const BvhOptions& opt;
+  const std::vector<BuildTri>& tris;
+  std::vector<int>& order;
+  std::vector<BvhNode>& nodes;
+
+  void make_leaf(int node, int begin, int end) {
+    BvhNode& n = nodes[node];
+    n.first = begin;
+    n.count = end - begin;
+  }
+
+  // Builds the subtree over order[begin, end) into nodes[node].
+  void build(int node, int begin, int end, int depth) {
+    Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
+    Vec3 clo = lo, chi = hi;
+    for (int i = begin; i < end; ++i) {
+      const BuildTri& t = tris[order[i]];
+      lo = lo.cwiseMin(t.box_min);
+      hi = hi.cwiseMax(t.box_max);
+      clo = clo.cwiseMin(t.centroid);
+      chi = chi.cwiseMax(t.centroid);
+    }
+    nodes[node].box_min = lo;
+    nodes[node].box_max = hi;
+    const int count = end - begin;
+    if (count <= opt.max_leaf_triangles) return make_leaf(node, begin, end);
+
+    int mid = -1;
+    const Vec3 cext = chi - clo;
+    if (depth < kMaxDepth - 8) mid = sah_split(begin, end, clo, cext, lo, hi);
+    if (mid < 0) {
+      // SAH found nothing better than a leaf, or the tree is getting deep:
+      // a leaf when small enough, otherwise a median split on the widest axis.
+      if (count <= 4 * opt.max_leaf_triangles && depth < kMaxDepth - 8)
+        return make_leaf(node, begin, end);
+      int axis = 0;
+      cext.maxCoeff(&axis);
+      mid = begin + count / 2;
+      std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end,
+                       [&](int a, int b) {
+                         if (tris[a].centroid[axis] != tris[b].centroid[axis])
+                           return tris[a].centroid[axis] < tris[b].centroid[axis];
+                         return a < b;  // ties broken by id: the build stays deterministic
+                       });
+    }
+    const int left = static_cast<int>(nodes.size());
+    nodes.emplace_back();
+    build(left, begin, mid, depth + 1);
+    const int right = static_cast<int>(nodes.size());
+    nodes.emplace_back();
+    build(right, mid, end, depth + 1);
+    nodes[node].first = right;
+    nodes[node].count = 0;
+  }
+
+  // Binned SAH; returns the partition point or -1 when splitting does not pay.
+  int sah_split(int begin, int end, const Vec3& clo, const Vec3& cext, const Vec3& lo,
+                const Vec3& hi) {
+    const int nb = std::max(2, opt.sah_bins);
+    const int count = end - begin;
+    double best_cost = half_area(lo, hi) * count;  // cost of a leaf (traversal cost ~ 1 triangle)
+    int best_axis = -1, best_bin = -1;
+    std::vector<int> bin_count(nb);
+    std::vector<Vec3> bin_lo(nb), bin_hi(nb);
+    std::vector<double> right_cost(nb);
+    for (int axis = 0; axis < 3; ++axis) {
+      if (!(cext[axis] > 0)) continue;
+      const double scale = nb / cext[axis];
+      std::fill(bin_count.begin(), bin_count.end(), 0);
+      std::fill(bin_lo.begin(), bin_lo.end(), Vec3::Constant(1e300));
+      std::fill(bin_hi.begin(), bin_hi.end(), Vec3::Constant(-1e300));
+      for (int i = begin; i < end; ++i) {
+        const BuildTri& t = tris[order[i]];
+        const int b = std::min(nb - 1, static_cast<int>((t.centroid[axis] - clo[axis]) * scale));
+        ++bin_count[b];
+        bin_lo[b] = bin_lo[b].cwiseMin(t.box_min);
+        bin_hi[b] = bin_hi[b].cwiseMax(t.box_max);
+      }
+      // Sweep from the right, then from the left, evaluating the split after bin b.
+      Vec3 rlo = Vec3::Constant(1e300), rhi = Vec3::Constant(-1e300);
+      int rc = 0;
+      for (int b = nb - 1; b > 0; --b) {
+        rlo = rlo.cwiseMin(bin_lo[b]);
+        rhi = rhi.cwiseMax(bin_hi[b]);
+        rc += bin_count[b];
+        right_cost[b] = rc ? half_area(rlo, rhi) * rc : 0.0;
+      }
+      Vec3 llo = Vec3::Constant(1e300), lhi = Vec3::Constant(-1e300);
+      int lc = 0;
+      for (int b = 0; b < nb - 1; ++b) {
+        llo = llo.cwiseMin(bin_lo[b]);
+        lhi = lhi.cwiseMax(bin_hi[b]);
+        lc += bin_count[b];
+        if (lc == 0 || lc == count) continue;
+        // One node visit costs about half a triangle test.
+        const double cost =
+            0.5 * half_area(lo, hi) + half_area(llo, lhi) * lc + right_cost[b + 1];
+        if (cost < best_cost) {
+          best_cost = cost;
+          best_axis = axis;
+          best_bin = b;
+        }
+      }
+    }
+    if (best_axis < 0) return -1;
+    const double scale = nb / cext[best_axis];
+    auto it = std::stable_partition(order.begin() + begin, order.begin() + end, [&](int id) {
+      const int b =
+          std::min(nb - 1, static_cast<int>((tris[id].centroid[best_axis] - clo[best_axis]) * scale));
+      return b <= best_bin;
+    });
+    const int mid = static_cast<int>(it - order.begin());
+    return (mid == begin || mid == end) ? -1 : mid;
+  }
+};
+
+void triangle_box(const MeshBvh& bvh, int f, Vec3& lo, Vec3& hi) {
+  const Tri& t = bvh.triangles[f];
+  const Vec3& a = bvh.positions[t[0]];
+  const Vec3& b = bvh.positions[t[1]];
+  const Vec3& c = bvh.positions[t[2]];
+  lo = a.cwiseMin(b).cwiseMin(c);
+  hi = a.cwiseMax(b).cwiseMax(c);
+}
+
+Status check_mesh(const TriMesh& mesh) {
+  for (size_t i = 0; i < mesh.positions.size(); ++i)
+    if (!mesh.positions[i].allFinite())
+      return Status::error(ErrorCode::InvalidInput,
+                           "vertex " + std::to_string(i) + " has a non-finite coordinate");
+  const int nv = mesh.num_vertices();
+  for (size_t f = 0; f < mesh.triangles.size(); ++f)
+    for (int v : mesh.triangles[f])
+      if (v < 0 || v >= nv)
+        return Status::error(ErrorCode::InvalidInput,
+                             "triangle " + std::to_string(f) + " references vertex " +
+                                 std::to_string(v) + " of " + std::to_string(nv));
+  return Status::success();
+}
+
+// Slab test; returns the entry distance or +inf when the box is missed.
+inline double ray_box(const Vec3& lo, const Vec3& hi, const Vec3& origin, const Vec3& inv_dir,
+                      double t_min, double t_max) {
+  double t0 = t_min, t1 = t_max;
+  for (int k = 0; k < 3; ++k) {
+    double a = (lo[k] - origin[k]) * inv_dir[k];
+    double b = (hi[k] - origin[k]) * inv_dir[k];
+    if (a > b) std::swap(a, b);
+    // NaN (origin on a slab plane of a zero-direction axis) fails both
+    // comparisons and so leaves the interval unchanged: the box is kept.
+    if (a > t0) t0 = a;
+    if (b < t1) t1 = b;
+    if (t0 > t1) return std::numeric_limits<double>::infinity();
+  }
+  return t0;
+}
+
+// Möller-Trumbore; both faces count. Returns true with t, u, v on a hit.
+inline bool ray_triangle(const Vec3& o, const Vec3& d, const Vec3& a, const Vec3& b,
+                         const Vec3& c, double& t, double& u, double& v) {
+  const Vec3 e1 = b - a, e2 = c - a;
+  const Vec3 pv = d.cross(e2);
+  const double det = e1.dot(pv);
+  if (det == 0.0 || !std::isfinite(det)) return false;
+  const double inv = 1.0 / det;
+  const Vec3 tv = o - a;
+  u = tv.dot(pv) * inv;
+  if (u < 0.0 || u > 1.0) return false;
+  const Vec3 qv = tv.cross(e1);
+  v = d.dot(qv) * inv;
+  if (v < 0.0 || u + v > 1.0) return false;
+  t = e2.dot(qv) * inv;
+  return true;
+}
+
+inline double box_distance2(const Vec3& lo, const Vec3& hi, const Vec3& p) {
+  const Vec3 d = (lo - p).cwiseMax(p - hi).cwiseMax(Vec3::Zero());
+  return d.squaredNorm();
+}
+
+template <bool kAnyHit>
+RayHit traverse(const MeshBvh& bvh, const Ray& ray, int skip_triangle) {
+  RayHit best;
+  if (bvh.nodes.empty()) return best;
+  const Vec3 inv(1.0 / ray.direction.x(), 1.0 / ray.direction.y(), 1.0 / ray.direction.z());
+  double t_max = ray.t_max;
+  int stack[kStackSize];
+  int top = 0;
+  if (ray_box(bvh.nodes[0].box_min, bvh.nodes[0].box_max, ray.origin, inv, ray.t_min, t_max) ==
+      std::numeric_limits<double>::infinity())
+    return best;
+  stack[top++] = 0;
+  while (top > 0) {
+    const BvhNode& n = bvh.nodes[stack[--top]];
+    if (n.leaf()) {
+      for (int i = n.first; i < n.first + n.count; ++i) {
+        const int f = bvh.triangle_order[i];
+        if (f == skip_triangle) continue;
+        const Tri& tri = bvh.triangles[f];
+        double t, u, v;
+        if (!ray_triangle(ray.origin, ray.direction, bvh.positions[tri[0]], bvh.positions[tri[1]],
+                          bvh.positions[tri[2]], t, u, v))
+          continue;
+        if (t < ray.t_min || t > t_max) continue;
+        best.triangle = f;
+        best.t = t;
+        best.barycentric = Vec3(1.0 - u - v, u, v);
+        if (kAnyHit) return best;
+        t_max = t;
+      }
+      continue;
+    }
+    const int left = static_cast<int>(&n - bvh.nodes.data()) + 1, right = n.first;
+    const double tl = ray_box(bvh.nodes[left].box_min, bvh.nodes[left].box_max, ray.origin, inv,
+                              ray.t_min, t_max);
+    const double tr = ray_box(bvh.nodes[right].box_min, bvh.nodes[right].box_max, ray.origin, inv,
+                              ray.t_min, t_max);
+    const double inf = std::numeric_limits<double>::infinity();
+    // Push the farther child first so the nearer one is searched first and
+    // shrinks t_max for the other.
+    if (tl < tr) {
+      if (tr != inf) stack[top++] = right;
+      stack[top++] = left;
+    } else {
+      if (tl != inf) stack[top++] = left;
+      if (tr != inf) stack[top++] = right;
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+Status build_bvh(const TriMesh& mesh, MeshBvh& out, const BvhOptions& options) {
+  out = MeshBvh{};
+  Status s = check_mesh(mesh);
+  if (!s.ok()) return s;
+  if (options.max_leaf_triangles < 1)
+    return Status::error(ErrorCode::InvalidInput, "max_leaf_triangles must be at least 1");
+  out.triangles = mesh.triangles;
+  out.positions = mesh.positions;
+  const int nf = mesh.num_triangles();
+  if (nf == 0) return Status::success();
+  std::vector<BuildTri> tris(nf);
+  for (int f = 0; f < nf; ++f) {
+    triangle_box(out, f, tris[f].box_min, tris[f].box_max);
+    tris[f].centroid = 0.5 * (tris[f].box_min + tris[f].box_max);
+  }
+  out.triangle_order.resize(nf);
+  for (int f = 0; f < nf; ++f) out.triangle_order[f] = f;
+  out.nodes.reserve(2 * nf / std::max(1, options.max_leaf_triangles) + 1);
+  out.nodes.emplace_back();
+  Builder b{options, tris, out.triangle_order, out.nodes};
+  b.build(0, 0, nf, 0);
+  return Status::success();
+}
+
+Status refit_bvh(const TriMesh& mesh, MeshBvh& bvh) {
+  if (mesh.num_vertices() != static_cast<int>(bvh.positions.size()) ||
+      mesh.num_triangles() != bvh.num_triangles())
+    return Status::error(ErrorCode::InvalidInput,
+                         "refit_bvh: the mesh's vertex or triangle count differs from the build");
+  for (size_t i = 0; i < mesh.positions.size(); ++i)
+    if (!mesh.positions[i].allFinite())
+      return Status::error(ErrorCode::InvalidInput,
+                           "vertex " + std::to_string(i) + " has a non-finite coordinate");
+  bvh.positions = mesh.positions;
+  // Children always follow their parent in the array, so a reverse sweep
+  // sees both children before the parent.
+  for (int i = static_cast<int>(bvh.nodes.size()) - 1; i >= 0; --i) {
+    BvhNode& n = bvh.nodes[i];
+    if (n.leaf()) {
+      Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300), tlo, thi;
+      for (int k = n.first; k < n.first + n.count; ++k) {
+        triangle_box(bvh, bvh.triangle_order[k], tlo, thi);
+        lo = lo.cwiseMin(tlo);
+        hi = hi.cwiseMax(thi);
+      }
+      n.box_min = lo;
+      n.box_max = hi;
+    } else {
+      const BvhNode& l = bvh.nodes[i + 1];
+      const BvhNode& r = bvh.nodes[n.first];
+      n.box_min = l.box_min.cwiseMin(r.box_min);
+      n.box_max = l.box_max.cwiseMax(r.box_max);
+    }
+  }
+  return Status::success();
+}
+
+RayHit intersect_first(const MeshBvh& bvh, const Ray& ray) {
+  return traverse<false>(bvh, ray, -1);
+}
+
+bool intersect_any(const MeshBvh& bvh, const Ray& ray, int skip_triangle) {
+  return traverse<true>(bvh, ray, skip_triangle).hit();
+}
+
+Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c,
+                               Vec3& bary) {
+  // Ericson, Real-Time Collision Detection, Sec. 5.1.5: Voronoi regions.
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) { bary = Vec3(1, 0, 0); return a; }
+  const Vec3 bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) { bary = Vec3(0, 1, 0); return b; }
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+    const double v = d1 / (d1 - d3);
+    bary = Vec3(1 - v, v, 0);
+    return a + v * ab;
+  }
+  const Vec3 cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) { bary = Vec3(0, 0, 1); return c; }
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+    const double w = d2 / (d2 - d6);
+    bary = Vec3(1 - w, 0, w);
+    return a + w * ac;
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    bary = Vec3(0, 1 - w, w);
+    return b + w * (c - b);
+  }
+  const double sum = va + vb + vc;
+  if (!(sum > 0)) {  // degenerate (zero-area) triangle: fall back to its longest edge
+    Vec3 best = a;
+    double best_d = (p - a).squaredNorm();
+    bary = Vec3(1, 0, 0);
+    const Vec3* corners[3] = {&a, &b, &c};
+    for (int k = 0; k < 3; ++k) {
+      const Vec3& s = *corners[k];
+      const Vec3& e = *corners[(k + 1) % 3];
+      const Vec3 se = e - s;
+      const double len2 = se.squaredNorm();
+      const double t = len2 > 0 ? std::clamp((p - s).dot(se) / len2, 0.0, 1.0) : 0.0;
+      const Vec3 q = s + t * se;
+      const double dq = (p - q).squaredNorm();
+      if (dq < best_d) {
+        best_d = dq;
+        best = q;
+        bary = Vec3::Zero();
+        bary[k] = 1 - t;
+        bary[(k + 1) % 3] = t;
+      }
+    }
+    return best;
+  }
+  const double v = vb / sum, w = vc / sum;
+  bary = Vec3(1 - v - w, v, w);
+  return a + v * ab + w * ac;
+}
+
+ClosestPoint closest_point(const MeshBvh& bvh, const Vec3& p, double max_distance) {
+  ClosestPoint best;
+  if (bvh.nodes.empty() || !p.allFinite()) return best;
+  double best_d2 = max_distance * max_distance;
+  if (!(max_distance >= 0)) return best;
+  int stack[kStackSize];
+  int top = 0;
+  if (box_distance2(bvh.nodes[0].box_min, bvh.nodes[0].box_max, p) > best_d2) return best;
+  stack[top++] = 0;
+  while (top > 0) {
+    const int ni = stack[--top];
+    const BvhNode& n = bvh.nodes[ni];
+    if (box_distance2(n.box_min, n.box_max, p) > best_d2) continue;  // shrunk since pushed
+    if (n.leaf()) {
+      for (int i = n.first; i < n.first + n.count; ++i) {
+        const int f = bvh.triangle_order[i];
+        const Tri& t = bvh.triangles[f];
+        Vec3 bary;
+        const Vec3 q = closest_point_on_triangle(p, bvh.positions[t[0]], bvh.positions[t[1]],
+                                                 bvh.positions[t[2]], bary);
+        const double d2 = (q - p).squaredNorm();
+        if (d2 < best_d2 || (d2 == best_d2 && !best.found())) {
+          best_d2 = d2;
+          best.triangle = f;
+          best.point = q;
+          best.barycentric = bary;
+        }
+      }
+      continue;
+    }
+    const int left = ni + 1, right = n.first;
+    const double dl = box_distance2(bvh.nodes[left].box_min, bvh.nodes[left].box_max, p);
+    const double dr = box_distance2(bvh.nodes[right].box_min, bvh.nodes[right].box_max, p);
+    if (dl < dr) {
+      if (dr <= best_d2) stack[top++] = right;
+      if (dl <= best_d2) stack[top++] = left;
+    } else {
+      if (dl <= best_d2) stack[top++] = left;
+      if (dr <= best_d2) stack[top++] = right;
+    }
+  }
+  if (best.found()) best.distance = std::sqrt(best_d2);
+  return best;
+}
+
+}  // namespace lk
