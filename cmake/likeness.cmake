@@ -29,8 +29,10 @@ endfunction()
 function(likeness_embed out_var prefix)
   set(out ${CMAKE_CURRENT_BINARY_DIR}/${prefix}_embedded.cpp)
   set(deps ${ARGN})
+  # add_custom_command splits arguments at ';', so the list travels '|'-joined.
+  string(REPLACE ";" "|" files_arg "${deps}")
   add_custom_command(OUTPUT ${out}
-    COMMAND ${CMAKE_COMMAND} -DOUT=${out} -DPREFIX=${prefix} "-DFILES=${deps}"
+    COMMAND ${CMAKE_COMMAND} -DOUT=${out} -DPREFIX=${prefix} "-DFILES=${files_arg}"
             -P ${PROJECT_SOURCE_DIR}/cmake/embed_files.cmake
     DEPENDS ${deps} ${PROJECT_SOURCE_DIR}/cmake/embed_files.cmake
     COMMENT "Embedding ${prefix} files")
