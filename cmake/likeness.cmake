@@ -2,7 +2,10 @@
 
 # Warnings for our own code (third-party headers are included as SYSTEM).
 function(likeness_warnings target)
-  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow=local
+  # -Wshadow=local is GCC's; clang (emcc, the wasm build of the same code)
+  # does not know it and would warn about the flag on every file.
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic
+    $<$<CXX_COMPILER_ID:GNU>:-Wshadow=local>
     -Wno-missing-field-initializers)
 endfunction()
 
