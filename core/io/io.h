@@ -36,9 +36,13 @@ Bytes write_ply(const PointCloud& cloud, bool ascii = false);
 
 // OBJ: v, vn, vt, f (polygons fan-triangulated, negative indices allowed),
 // mtllib/usemtl recorded (texture_name from the MTL's map_Kd when given).
-// Per-corner uvs when vt indices differ from v indices.
+// Per-corner uvs (3 * #F) unless every vertex uses a single uv throughout;
+// vn normals are averaged per vertex. Unknown statements made of lowercase
+// letters are skipped; any other line start is rejected as "not OBJ".
 Status read_obj(const std::uint8_t* data, size_t size, TriMesh& mesh, GeometryKind& kind,
                 const std::string& mtl_text = "");
+// The file name after "mtllib" (empty if none), so a caller can fetch the MTL.
+std::string obj_mtllib(const std::uint8_t* data, size_t size);
 // OBJ text; with a material name, writes "mtllib <mtl_file>" and "usemtl".
 std::string write_obj(const TriMesh& mesh, const std::string& mtl_file = "");
 // MTL text with one material whose map_Kd is texture_file.
@@ -46,21 +50,40 @@ std::string write_mtl(const std::string& texture_file);
 
 // XYZ: one point per line, "x y z" optionally followed by "nx ny nz" (and/or
 // "r g b"); '#' comments.
+// Six columns are normals if every extra triple has unit length, else colors
+// (0..255 if any exceeds 1); with nine, the unit-length triple is the normal.
 Status read_xyz(const std::uint8_t* data, size_t size, PointCloud& cloud);
+// "x y z [nx ny nz] [r g b]" with colors as 0..255 integers.
+std::string write_xyz(const PointCloud& cloud);
 
-// Picks the reader from the file name's extension (.ply .obj .xyz) or, when
-// unknown, from the first bytes. A mesh also fills cloud with its vertices.
+// Legacy VTK, ASCII DATASET POLYDATA only (e.g. Cyberware scans in VTKData):
+// POINTS, POLYGONS (fan-triangulated), TRIANGLE_STRIPS, and point NORMALS,
+// TEXTURE_COORDINATES (per-vertex uvs) and COLOR_SCALARS; other sections are
+// skipped by their declared sizes. Versions up to 4.2 and 5.1 (OFFSETS /
+// CONNECTIVITY) cell layouts.
+Status read_vtk(const std::uint8_t* data, size_t size, TriMesh& mesh, GeometryKind& kind);
+
+// Picks the reader from the file name's extension (.ply .obj .xyz .vtk;
+// .txt .pts .asc as XYZ) or, when unknown, from the first bytes. Both mesh
+// and cloud receive the vertices (with normals/colors); mesh also the faces.
 Status read_geometry(const std::string& name, const std::uint8_t* data, size_t size,
                      TriMesh& mesh, PointCloud& cloud, GeometryKind& kind);
 
 // Images: PNG/JPEG/BMP/TGA via stb_image. Fails on anything that is not an
-// image, and on images over max_pixels (default 64 Mpixel).
+// image, and on images over max_pixels (default 64 Mpixel), checked from the
+// header before decoding. A JPEG whose data ends before its end-of-image
+// marker is refused as Truncated (stb would fill the missing rows with grey).
+// want_channels 0 keeps the file's channels (gray+alpha becomes RGBA).
 Status read_image(const std::uint8_t* data, size_t size, Image& image,
                   int want_channels = 0, size_t max_pixels = 64u << 20);
+// Empty when the image is empty or its pixel count disagrees with its size.
 Bytes write_png(const Image& image);
 
 // File helpers (native only). Files larger than max_bytes (default 2 GiB)
-// are refused with TooLarge before being read.
+// are refused with TooLarge before being read. Every message starts with the
+// path ("scan.ply: truncated: ..."). For an OBJ, load_geometry_file also
+// reads the MTL named by mtllib (next to the OBJ) and sets texture_name to
+// the map_Kd path resolved against the MTL's folder.
 Status read_file(const std::string& path, Bytes& out, size_t max_bytes = (size_t(2) << 30));
 Status write_file(const std::string& path, const void* data, size_t size);
 Status write_file(const std::string& path, const std::string& text);

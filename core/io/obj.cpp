@@ -1,0 +1,339 @@
+// Wavefront OBJ (+ MTL) reader and writer.
+//
+// OBJ indexes positions, uvs and normals separately. Our TriMesh has one
+// position per vertex, so uvs become per-vertex when every vertex uses a
+// single uv throughout, and per-corner (uv_per_corner) otherwise, which keeps
+// texture seams exact. Normals are averaged per vertex.
+#include "io/io.h"
+#include "io/text_scan.h"
+
+#include <climits>
+#include <cmath>
+
+namespace lk {
+
+using io_detail::quote;
+
+namespace {
+
+struct Corner {
+  int v = -1, vt = -1, vn = -1;
+};
+
+// Resolves a 1-based (or negative, relative) OBJ index against count items.
+bool resolve_index(std::string_view text, int count, int& out) {
+  std::int64_t i = 0;
+  if (!io_detail::parse_int64(text.data(), text.data() + text.size(), i)) return false;
+  if (i > 0 && i <= count) {
+    out = static_cast<int>(i - 1);
+    return true;
+  }
+  if (i < 0 && -i <= count) {
+    out = static_cast<int>(count + i);
+    return true;
+  }
+  out = -1;
+  return true;
+}
+
+// OBJ statements are short lowercase words ("v", "usemtl", "c_interp"); a
+// line starting with anything else means the input is not OBJ text.
+bool is_statement_name(std::string_view key) {
+  if (key.size() > 16) return false;
+  for (char c : key)
+    if (!((c >= 'a' && c <= 'z') || c == '_')) return false;
+  return true;
+}
+
+// "map_Kd [-options ...] file": the file is the last token.
+std::string map_file(std::string_view rest) {
+  io_detail::Tokenizer tok(rest.data(), rest.data() + rest.size());
+  std::string_view last;
+  for (std::string_view t = tok.next(); !t.empty(); t = tok.next()) last = t;
+  return std::string(last);
+}
+
+// Material name -> map_Kd, in file order.
+std::vector<std::pair<std::string, std::string>> parse_mtl(const std::string& text) {
+  std::vector<std::pair<std::string, std::string>> materials;
+  io_detail::Tokenizer tok(text.data(), text.data() + text.size());
+  while (!tok.at_end()) {
+    const std::string_view key = tok.next_on_line();
+    if (key == "newmtl") {
+      materials.push_back({std::string(tok.rest_of_line()), ""});
+    } else if (key == "map_Kd" && !materials.empty()) {
+      materials.back().second = map_file(tok.rest_of_line());
+    }
+    tok.skip_line();
+  }
+  return materials;
+}
+
+}  // namespace
+
+std::string obj_mtllib(const std::uint8_t* data, size_t size) {
+  const char* text = reinterpret_cast<const char*>(data);
+  io_detail::Tokenizer tok(text, text + size);
+  while (!tok.at_end()) {
+    if (tok.next_on_line() == "mtllib") return std::string(tok.rest_of_line());
+    tok.skip_line();
+  }
+  return "";
+}
+
+Status read_obj(const std::uint8_t* data, size_t size, TriMesh& mesh, GeometryKind& kind,
+                const std::string& mtl_text) {
+  mesh = TriMesh();
+  kind = GeometryKind::PointCloud;
+  if (size == 0) return Status::error(ErrorCode::Empty, "empty input: no bytes");
+  const char* text = reinterpret_cast<const char*>(data);
+  io_detail::Tokenizer tok(text, text + size);
+
+  std::vector<Vec3> vertex_colors;
+  bool all_have_colors = true;
+  std::vector<Vec2> texcoords;
+  std::vector<Vec3> normals;
+  std::vector<Corner> corners;  // 3 per triangle
+  std::vector<Corner> face;
+  std::string used_material;
+  int faces_with_uv = 0, faces_without_uv = 0;
+  int num_faces = 0;
+
+  auto error_at = [&tok](ErrorCode code, const std::string& what) {
+    return Status::error(code, "line " + std::to_string(tok.line()) + ": " + what);
+  };
+  auto read_reals = [&tok](double* out, int min_count, int max_count, int& got, std::string_view& bad) {
+    got = 0;
+    for (std::string_view t = tok.next_on_line(); !t.empty(); t = tok.next_on_line()) {
+      if (got == max_count) return true;  // extra fields (e.g. vt's w) are ignored
+      if (!io_detail::parse_double(t.data(), t.data() + t.size(), out[got])) {
+        bad = t;
+        return false;
+      }
+      ++got;
+    }
+    return got >= min_count;
+  };
+
+  while (!tok.at_end()) {
+    const std::string_view key = tok.next_on_line();
+    if (key.empty() || key[0] == '#') {
+      // blank line or comment
+    } else if (key == "v") {
+      double x[6];
+      int got = 0;
+      std::string_view bad;
+      if (!read_reals(x, 3, 6, got, bad))
+        return error_at(ErrorCode::InvalidInput,
+                        bad.empty() ? "a vertex needs 3 coordinates" : "vertex coordinate " + quote(bad) + " is not a number");
+      const Vec3 p(x[0], x[1], x[2]);
+      if (!p.allFinite())
+        return error_at(ErrorCode::InvalidInput, "vertex " + std::to_string(mesh.positions.size() + 1) +
+                                                     " has a NaN or infinite coordinate");
+      if (mesh.positions.size() >= static_cast<size_t>(INT_MAX))
+        return error_at(ErrorCode::TooLarge, "too many vertices");
+      mesh.positions.push_back(p);
+      if (got == 6 && all_have_colors) {
+        vertex_colors.push_back(Vec3(x[3], x[4], x[5]));
+      } else {
+        all_have_colors = false;
+      }
+    } else if (key == "vt") {
+      double x[3];
+      int got = 0;
+      std::string_view bad;
+      if (!read_reals(x, 1, 3, got, bad))
+        return error_at(ErrorCode::InvalidInput, "texture coordinate " + quote(bad) + " is not a number");
+      const Vec2 uv(x[0], got > 1 ? x[1] : 0.0);
+      if (!uv.allFinite()) return error_at(ErrorCode::InvalidInput, "NaN or infinite texture coordinate");
+      texcoords.push_back(uv);
+    } else if (key == "vn") {
+      double x[3];
+      int got = 0;
+      std::string_view bad;
+      if (!read_reals(x, 3, 3, got, bad))
+        return error_at(ErrorCode::InvalidInput,
+                        bad.empty() ? "a normal needs 3 components" : "normal component " + quote(bad) + " is not a number");
+      const Vec3 n(x[0], x[1], x[2]);
+      if (!n.allFinite()) return error_at(ErrorCode::InvalidInput, "NaN or infinite normal");
+      normals.push_back(n);
+    } else if (key == "f") {
+      face.clear();
+      for (std::string_view t = tok.next_on_line(); !t.empty(); t = tok.next_on_line()) {
+        // v, v/vt, v//vn or v/vt/vn
+        Corner c;
+        const size_t s1 = t.find('/');
+        const std::string_view vs = t.substr(0, s1);
+        std::string_view ts, ns;
+        if (s1 != std::string_view::npos) {
+          const size_t s2 = t.find('/', s1 + 1);
+          ts = t.substr(s1 + 1, s2 == std::string_view::npos ? std::string_view::npos : s2 - s1 - 1);
+          if (s2 != std::string_view::npos) ns = t.substr(s2 + 1);
+        }
+        const int nv = static_cast<int>(mesh.positions.size());
+        if (!resolve_index(vs, nv, c.v))
+          return error_at(ErrorCode::InvalidInput, "face corner " + quote(t) + " is not a vertex index");
+        if (c.v < 0)
+          return error_at(ErrorCode::InvalidInput, "face refers to vertex " + std::string(vs) + " but only " +
+                                                       std::to_string(nv) + " vertices are defined before it");
+        if (!ts.empty()) {
+          if (!resolve_index(ts, static_cast<int>(texcoords.size()), c.vt) || c.vt < 0)
+            return error_at(ErrorCode::InvalidInput, "face refers to texture coordinate " + quote(ts) + " but only " +
+                                                         std::to_string(texcoords.size()) + " are defined");
+        }
+        if (!ns.empty()) {
+          if (!resolve_index(ns, static_cast<int>(normals.size()), c.vn) || c.vn < 0)
+            return error_at(ErrorCode::InvalidInput, "face refers to normal " + quote(ns) + " but only " +
+                                                         std::to_string(normals.size()) + " are defined");
+        }
+        face.push_back(c);
+      }
+      if (face.size() < 3)
+        return error_at(ErrorCode::InvalidInput,
+                        "a face has " + std::to_string(face.size()) + " corners (at least 3 needed)");
+      int with_uv = 0;
+      for (const Corner& c : face) with_uv += c.vt >= 0;
+      if (with_uv != 0 && with_uv != static_cast<int>(face.size()))
+        return error_at(ErrorCode::InvalidInput, "a face has texture coordinates on some corners but not others");
+      (with_uv ? faces_with_uv : faces_without_uv)++;
+      if (faces_with_uv && faces_without_uv)
+        return error_at(ErrorCode::InvalidInput, "some faces have texture coordinates and others do not");
+      ++num_faces;
+      for (size_t k = 1; k + 1 < face.size(); ++k) {
+        corners.push_back(face[0]);
+        corners.push_back(face[k]);
+        corners.push_back(face[k + 1]);
+      }
+    } else if (key == "usemtl") {
+      if (used_material.empty()) used_material = std::string(tok.rest_of_line());
+    } else if (is_statement_name(key)) {
+      // mtllib (read by obj_mtllib), groups, smoothing groups, lines and
+      // free-form geometry: nothing we use.
+    } else {
+      return error_at(ErrorCode::InvalidInput, "not an OBJ statement: " + quote(key));
+    }
+    tok.skip_line();
+  }
+
+  const int nv = mesh.num_vertices();
+  if (nv == 0) return Status::error(ErrorCode::Empty, "empty: the OBJ has no vertices");
+  if (all_have_colors && static_cast<int>(vertex_colors.size()) == nv) mesh.colors = std::move(vertex_colors);
+
+  const size_t nt = corners.size() / 3;
+  mesh.triangles.resize(nt);
+  for (size_t f = 0; f < nt; ++f)
+    mesh.triangles[f] = {corners[3 * f].v, corners[3 * f + 1].v, corners[3 * f + 2].v};
+
+  if (faces_with_uv > 0) {
+    // Per-vertex when each vertex always uses one uv and every vertex has one.
+    std::vector<int> uv_of_vertex(nv, -1);
+    bool per_vertex = true;
+    for (const Corner& c : corners) {
+      if (uv_of_vertex[c.v] < 0) uv_of_vertex[c.v] = c.vt;
+      else if (texcoords[uv_of_vertex[c.v]] != texcoords[c.vt]) per_vertex = false;
+    }
+    for (int v = 0; v < nv && per_vertex; ++v) per_vertex = uv_of_vertex[v] >= 0;
+    if (per_vertex) {
+      mesh.uvs.resize(nv);
+      for (int v = 0; v < nv; ++v) mesh.uvs[v] = texcoords[uv_of_vertex[v]];
+    } else {
+      mesh.uvs.resize(corners.size());
+      for (size_t i = 0; i < corners.size(); ++i) mesh.uvs[i] = texcoords[corners[i].vt];
+      mesh.uv_per_corner = true;
+    }
+  }
+
+  bool any_normal = false;
+  for (const Corner& c : corners) any_normal |= c.vn >= 0;
+  if (any_normal) {
+    std::vector<Vec3> sum(nv, Vec3::Zero());
+    for (const Corner& c : corners)
+      if (c.vn >= 0) sum[c.v] += normals[c.vn];
+    bool complete = true;
+    for (Vec3& n : sum) {
+      const double len = n.norm();
+      if (len > 0) n /= len;
+      else complete = false;
+    }
+    if (complete) mesh.normals = std::move(sum);
+  } else if (nt == 0 && static_cast<int>(normals.size()) == nv) {
+    mesh.normals = std::move(normals);  // a point cloud stored as v + vn lines
+  }
+
+  if (!mtl_text.empty()) {
+    const auto materials = parse_mtl(mtl_text);
+    for (const auto& [name, file] : materials)
+      if (!file.empty() && (used_material.empty() || name == used_material)) {
+        mesh.texture_name = file;
+        break;
+      }
+  }
+  kind = nt > 0 ? GeometryKind::Mesh : GeometryKind::PointCloud;
+  return Status::success();
+}
+
+std::string write_obj(const TriMesh& mesh, const std::string& mtl_file) {
+  const size_t nv = mesh.positions.size();
+  const bool has_colors = mesh.colors.size() == nv && nv > 0;
+  const bool has_normals = mesh.normals.size() == nv && nv > 0;
+  const bool per_corner = mesh.uv_per_corner && mesh.uvs.size() == 3 * mesh.triangles.size() && !mesh.uvs.empty();
+  const bool per_vertex_uv = !mesh.uv_per_corner && mesh.uvs.size() == nv && nv > 0;
+  std::string out = "# written by likeness\n";
+  if (!mtl_file.empty()) out += "mtllib " + mtl_file + "\n";
+  for (size_t i = 0; i < nv; ++i) {
+    out += "v";
+    for (int k = 0; k < 3; ++k) {
+      out += ' ';
+      io_detail::append_double(out, mesh.positions[i][k]);
+    }
+    if (has_colors)
+      for (int k = 0; k < 3; ++k) {
+        out += ' ';
+        io_detail::append_double(out, mesh.colors[i][k]);
+      }
+    out += '\n';
+  }
+  if (per_vertex_uv || per_corner) {
+    for (const Vec2& uv : mesh.uvs) {
+      out += "vt ";
+      io_detail::append_double(out, uv.x());
+      out += ' ';
+      io_detail::append_double(out, uv.y());
+      out += '\n';
+    }
+  }
+  if (has_normals)
+    for (const Vec3& n : mesh.normals) {
+      out += "vn";
+      for (int k = 0; k < 3; ++k) {
+        out += ' ';
+        io_detail::append_double(out, n[k]);
+      }
+      out += '\n';
+    }
+  if (!mtl_file.empty()) out += "usemtl material_0\n";
+  for (size_t f = 0; f < mesh.triangles.size(); ++f) {
+    out += "f";
+    for (int k = 0; k < 3; ++k) {
+      const std::string v = std::to_string(mesh.triangles[f][k] + 1);
+      out += ' ' + v;
+      if (per_corner) out += '/' + std::to_string(3 * f + k + 1);
+      else if (per_vertex_uv) out += '/' + v;
+      if (has_normals) out += (per_corner || per_vertex_uv ? "/" : "//") + v;
+    }
+    out += '\n';
+  }
+  return out;
+}
+
+std::string write_mtl(const std::string& texture_file) {
+  return "# written by likeness\n"
+         "newmtl material_0\n"
+         "Ka 1 1 1\n"
+         "Kd 1 1 1\n"
+         "Ks 0 0 0\n"
+         "illum 1\n"
+         "map_Kd " + texture_file + "\n";
+}
+
+}  // namespace lk
