@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Browser test of the web app: serves WEBDIR (build/web) on 127.0.0.1 and
+# drives Debian's Chromium with playwright-core (see test.mjs).
+# Usage: tests/browser/run.sh WEBDIR     (env LK_SCREENSHOT_DIR=dir keeps screenshots)
+# Exit: 0 pass, 1 fail, 77 skipped (no /usr/bin/chromium, or WEBDIR not built).
+set -euo pipefail
+HERE="$(cd "$(dirname "$0")" && pwd)"
+WEBDIR="${1:-}"
+if [ -z "$WEBDIR" ]; then
+  echo "usage: tests/browser/run.sh WEBDIR" >&2
+  exit 2
+fi
+if [ ! -x /usr/bin/chromium ]; then
+  echo "SKIPPED: /usr/bin/chromium is missing (apt-get install chromium, or run scripts/setup)"
+  exit 77
+fi
+for f in index.html app.js worker.js likeness_viewer.js likeness_viewer.wasm likeness_worker.js likeness_worker.wasm; do
+  if [ ! -f "$WEBDIR/$f" ]; then
+    echo "SKIPPED: $WEBDIR/$f is missing: the wasm build has not run (scripts/build)"
+    exit 77
+  fi
+done
+if [ ! -d "$HERE/node_modules/playwright-core" ]; then
+  echo "FAILED: $HERE/node_modules/playwright-core is missing: run scripts/setup" >&2
+  exit 1
+fi
+exec node "$HERE/test.mjs" "$WEBDIR"

@@ -1,0 +1,347 @@
+// Browser test of the Likeness web app (run through run.sh).
+//
+// Serves WEBDIR on 127.0.0.1 (a free port) with a tiny static server, drives
+// Debian's Chromium (WebGL2 on SwiftShader) with playwright-core and checks:
+//   - the page reaches state "ready" and reports its load time;
+//   - the canvas shows the head: enough pixels differ from the background and
+//     they are shaded (not one flat color);
+//   - dragging on the canvas orbits the view (the image changes);
+//   - a generated ASCII PLY point cloud (green torus) set on the file input
+//     leads to "done", the status names its point count and green points
+//     appear on the canvas;
+//   - broken inputs (truncated PLY, a text file, a PLY declaring 2^31
+//     vertices, an empty file, a file over the size limit) lead to "error"
+//     with a visible message naming the file, the previous model stays on
+//     screen, and a good file (an OBJ cube) loads afterwards;
+//   - no console errors, no uncaught exceptions, and every network request
+//     goes to the page's own origin.
+// Screenshots go to $LK_SCREENSHOT_DIR when set (web_*.png).
+import { chromium } from 'playwright-core';
+import http from 'node:http';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import zlib from 'node:zlib';
+
+const WEBDIR = path.resolve(process.argv[2] || '');
+const SHOT_DIR = process.env.LK_SCREENSHOT_DIR || '';
+const READY_TIMEOUT_MS = 180000;  // SwiftShader compiles shaders on the CPU
+const JOB_TIMEOUT_MS = 120000;
+
+// ---------------------------------------------------------------- results --
+const results = [];
+function check(name, ok, detail = '') {
+  results.push({ name, ok: !!ok, detail });
+  console.log(`${ok ? 'PASS' : 'FAIL'}  ${name}${detail ? '  (' + detail + ')' : ''}`);
+  return !!ok;
+}
+
+// ---------------------------------------------------------- static server --
+const MIME = {
+  '.html': 'text/html; charset=utf-8', '.js': 'text/javascript; charset=utf-8',
+  '.mjs': 'text/javascript; charset=utf-8', '.css': 'text/css; charset=utf-8',
+  '.wasm': 'application/wasm', '.png': 'image/png', '.json': 'application/json',
+};
+const served = [];
+function startServer(root) {
+  const server = http.createServer((req, res) => {
+    const url = new URL(req.url, 'http://x');
+    const rel = decodeURIComponent(url.pathname === '/' ? '/index.html' : url.pathname);
+    const file = path.join(root, path.normalize(rel));
+    served.push(rel);
+    if (!file.startsWith(root) || !fs.existsSync(file) || fs.statSync(file).isDirectory()) {
+      res.writeHead(404, { 'content-type': 'text/plain' });
+      res.end('not found');
+      return;
+    }
+    res.writeHead(200, { 'content-type': MIME[path.extname(file)] || 'application/octet-stream',
+                         'cache-control': 'no-store' });
+    fs.createReadStream(file).pipe(res);
+  });
+  return new Promise((resolve) => server.listen(0, '127.0.0.1', () => resolve(server)));
+}
+
+// ------------------------------------------------------------ PNG decoding --
+// Enough of PNG for Chromium's screenshots: 8-bit RGB/RGBA, not interlaced.
+function decodePng(buf) {
+  let pos = 8, width = 0, height = 0, colorType = 0;
+  const idat = [];
+  while (pos < buf.length) {
+    const len = buf.readUInt32BE(pos);
+    const type = buf.toString('ascii', pos + 4, pos + 8);
+    const data = buf.subarray(pos + 8, pos + 8 + len);
+    if (type === 'IHDR') {
+      width = data.readUInt32BE(0); height = data.readUInt32BE(4);
+      if (data[8] !== 8 || data[12] !== 0) throw new Error('unsupported PNG (bit depth/interlace)');
+      colorType = data[9];
+    } else if (type === 'IDAT') idat.push(data);
+    pos += 12 + len;
+  }
+  const channels = colorType === 6 ? 4 : colorType === 2 ? 3 : 0;
+  if (!channels) throw new Error('unsupported PNG color type ' + colorType);
+  const raw = zlib.inflateSync(Buffer.concat(idat));
+  const stride = width * channels;
+  const out = Buffer.alloc(width * height * 4);
+  const prev = Buffer.alloc(stride), cur = Buffer.alloc(stride);
+  for (let y = 0; y < height; y++) {
+    const filter = raw[y * (stride + 1)];
+    const line = raw.subarray(y * (stride + 1) + 1, (y + 1) * (stride + 1));
+    for (let i = 0; i < stride; i++) {
+      const a = i >= channels ? cur[i - channels] : 0, b = prev[i], c = i >= channels ? prev[i - channels] : 0;
+      let v = line[i];
+      if (filter === 1) v += a;
+      else if (filter === 2) v += b;
+      else if (filter === 3) v += (a + b) >> 1;
+      else if (filter === 4) {
+        const p = a + b - c, pa = Math.abs(p - a), pb = Math.abs(p - b), pc = Math.abs(p - c);
+        v += pa <= pb && pa <= pc ? a : pb <= pc ? b : c;
+      }
+      cur[i] = v & 255;
+    }
+    for (let x = 0; x < width; x++) {
+      out[(y * width + x) * 4] = cur[x * channels];
+      out[(y * width + x) * 4 + 1] = cur[x * channels + 1];
+      out[(y * width + x) * 4 + 2] = cur[x * channels + 2];
+      out[(y * width + x) * 4 + 3] = channels === 4 ? cur[x * channels + 3] : 255;
+    }
+    cur.copy(prev);
+  }
+  return { width, height, data: out };
+}
+
+// The background is a vertical gradient, so each row's background color is
+// read at the right edge (the toolbar and hint sit on the left). A pixel
+// differing from it by more than 24 in some channel is "foreground".
+function analyse(img) {
+  const { width, height, data } = img;
+  let fg = 0, green = 0, sum = 0, sum2 = 0;
+  for (let y = 0; y < height; y++) {
+    const ref = [0, 0, 0];
+    for (let x = width - 5; x < width - 1; x++) for (let k = 0; k < 3; k++) ref[k] += data[(y * width + x) * 4 + k] / 4;
+    for (let x = 0; x < width; x++) {
+      const i = (y * width + x) * 4, r = data[i], g = data[i + 1], b = data[i + 2];
+      if (Math.max(Math.abs(r - ref[0]), Math.abs(g - ref[1]), Math.abs(b - ref[2])) > 24) {
+        fg++;
+        const lum = 0.2126 * r + 0.7152 * g + 0.0722 * b;
+        sum += lum; sum2 += lum * lum;
+      }
+      if (g > r + 60 && g > b + 60) green++;
+    }
+  }
+  const n = width * height;
+  const mean = fg ? sum / fg : 0;
+  return { fgFraction: fg / n, greenFraction: green / n, lumStd: fg ? Math.sqrt(Math.max(0, sum2 / fg - mean * mean)) : 0 };
+}
+
+function differingFraction(a, b) {
+  if (a.width !== b.width || a.height !== b.height) return 1;
+  let d = 0;
+  for (let i = 0; i < a.data.length; i += 4) {
+    if (Math.abs(a.data[i] - b.data[i]) + Math.abs(a.data[i + 1] - b.data[i + 1]) +
+        Math.abs(a.data[i + 2] - b.data[i + 2]) > 30) d++;
+  }
+  return d / (a.width * a.height);
+}
+
+// ------------------------------------------------------------- test files --
+function torusPly(count) {
+  const lines = [];
+  for (let i = 0; i < count; i++) {
+    const u = (i * 0.6180339887 % 1) * 2 * Math.PI, v = (i / count) * 2 * Math.PI * 37;
+    const R = 0.09, r = 0.035;
+    const x = (R + r * Math.cos(v)) * Math.cos(u), y = r * Math.sin(v), z = (R + r * Math.cos(v)) * Math.sin(u);
+    lines.push(`${x.toFixed(5)} ${y.toFixed(5)} ${z.toFixed(5)} 40 220 90`);
+  }
+  const header = ['ply', 'format ascii 1.0', 'comment generated by tests/browser/test.mjs',
+    `element vertex ${count}`, 'property float x', 'property float y', 'property float z',
+    'property uchar red', 'property uchar green', 'property uchar blue', 'end_header'];
+  return Buffer.from(header.concat(lines).join('\n') + '\n');
+}
+
+function cubeObj() {
+  const v = ['v -1 -1 -1', 'v 1 -1 -1', 'v 1 1 -1', 'v -1 1 -1', 'v -1 -1 1', 'v 1 -1 1', 'v 1 1 1', 'v -1 1 1'];
+  const f = ['f 1 4 3 2', 'f 5 6 7 8', 'f 1 2 6 5', 'f 2 3 7 6', 'f 3 4 8 7', 'f 4 1 5 8'];
+  return Buffer.from(['# unit cube, quads', ...v, ...f].join('\n') + '\n');
+}
+
+function truncatedPly() {
+  const full = torusPly(1000).toString();
+  return Buffer.from(full.slice(0, Math.floor(full.length * 0.3)));
+}
+
+function hugeCountPly() {
+  return Buffer.from(['ply', 'format binary_little_endian 1.0', 'element vertex 2147483647',
+    'property float x', 'property float y', 'property float z', 'end_header', ''].join('\n') +
+    'only a few bytes follow');
+}
+
+// ------------------------------------------------------------------ steps --
+async function shot(page, name) {
+  if (!SHOT_DIR) return;
+  fs.mkdirSync(SHOT_DIR, { recursive: true });
+  await page.screenshot({ path: path.join(SHOT_DIR, name) });
+}
+
+const HIDE_OVERLAYS = '.toolbar, .hint { visibility: hidden !important; }';
+async function canvasImage(page) {
+  // Give the viewer a few animation frames to draw what it was just given.
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(() => requestAnimationFrame(r)))));
+  const png = await page.locator('#canvas').screenshot({ style: HIDE_OVERLAYS });
+  return decodePng(png);
+}
+
+async function state(page) { return page.evaluate(() => document.body.dataset.state); }
+
+async function waitForState(page, wanted, timeout = JOB_TIMEOUT_MS) {
+  await page.waitForFunction((w) => w.includes(document.body.dataset.state), wanted, { timeout });
+  return state(page);
+}
+
+async function setFile(page, name, buffer, mimeType = 'application/octet-stream') {
+  await page.setInputFiles('#file-input', { name, mimeType, buffer });
+  // The state leaves "ready"/"done"/"error" synchronously or the job starts;
+  // wait for it to settle.
+  await page.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: JOB_TIMEOUT_MS });
+  return state(page);
+}
+
+async function bannerText(page) {
+  return page.evaluate(() => {
+    const b = document.getElementById('error-banner');
+    const visible = !b.hidden && b.getBoundingClientRect().height > 0;
+    return visible ? document.getElementById('error-text').textContent : '';
+  });
+}
+
+async function main() {
+  if (!fs.existsSync(path.join(WEBDIR, 'index.html'))) {
+    console.error(`FAILED: ${WEBDIR}/index.html not found`);
+    process.exit(1);
+  }
+  const server = await startServer(WEBDIR);
+  const origin = `http://127.0.0.1:${server.address().port}`;
+  const profile = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-chromium-'));
+  const context = await chromium.launchPersistentContext(profile, {
+    executablePath: '/usr/bin/chromium',
+    headless: true,
+    args: ['--no-sandbox', '--disable-quic', '--no-first-run', '--disable-background-networking',
+           '--disable-component-update', '--disable-sync', '--use-angle=swiftshader',
+           '--enable-unsafe-swiftshader'],
+    viewport: { width: 1280, height: 800 },
+    deviceScaleFactor: 1,
+  });
+  const consoleErrors = [], foreign = [], requests = [];
+  context.on('request', (req) => {
+    const url = req.url();
+    requests.push(url);
+    if (!(url.startsWith(origin + '/') || url.startsWith('data:') || url.startsWith('blob:'))) foreign.push(url);
+  });
+  const watch = (page) => {
+    page.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(m.text()); });
+    page.on('pageerror', (e) => consoleErrors.push('uncaught: ' + e.message));
+  };
+
+  try {
+    // 1. Start-up.
+    const page = context.pages()[0] || await context.newPage();
+    watch(page);
+    const t0 = Date.now();
+    await page.goto(origin + '/index.html');
+    const s0 = await waitForState(page, ['ready', 'error'], READY_TIMEOUT_MS);
+    const wallMs = Date.now() - t0;
+    const loadMs = await page.evaluate(() => window.likeness && window.likeness.loadMs);
+    if (!check('page reaches "ready"', s0 === 'ready', s0 === 'ready' ? `app load ${Math.round(loadMs)} ms, wall ${wallMs} ms`
+                                                                  : 'state ' + s0 + ': ' + await bannerText(page))) {
+      throw new Error('the page did not start');
+    }
+    await shot(page, 'web_start.png');
+    const head = await canvasImage(page);
+    const headStats = analyse(head);
+    check('canvas shows the head (not blank)', headStats.fgFraction > 0.03,
+          `${(100 * headStats.fgFraction).toFixed(1)}% of ${head.width}x${head.height} px differ from the background`);
+    check('head is shaded (not one flat color)', headStats.lumStd > 8, `luminance std ${headStats.lumStd.toFixed(1)}`);
+
+    // 2. Orbit by dragging.
+    const box = await page.locator('#canvas').boundingBox();
+    await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
+    await page.mouse.down();
+    for (let i = 1; i <= 10; i++) await page.mouse.move(box.x + box.width / 2 + 18 * i, box.y + box.height / 2);
+    await page.mouse.up();
+    const orbited = await canvasImage(page);
+    const orbitDiff = differingFraction(head, orbited);
+    check('dragging orbits the view', orbitDiff > 0.005, `${(100 * orbitDiff).toFixed(1)}% of pixels changed`);
+    await page.click('#btn-reset');
+
+    // 3. A point cloud.
+    const before = await canvasImage(page);
+    const s1 = await setFile(page, 'torus.ply', torusPly(20000));
+    const status1 = await page.textContent('#status');
+    check('point cloud PLY leads to "done"', s1 === 'done', `state ${s1}; status "${status1.trim()}"`);
+    check('status names the point count', /20,000 points/.test(status1));
+    const points = await canvasImage(page);
+    const pointStats = analyse(points);
+    const pointDiff = differingFraction(before, points);
+    check('canvas changes when the points are shown', pointDiff > 0.01, `${(100 * pointDiff).toFixed(1)}% of pixels changed`);
+    check('green points are drawn', pointStats.greenFraction > 0.005, `${(100 * pointStats.greenFraction).toFixed(2)}% green pixels`);
+    await shot(page, 'web_points.png');
+
+    // 4. Broken inputs: each gives "error" with a visible message naming the
+    // file; the torus stays on screen.
+    const broken = [
+      ['truncated.ply', truncatedPly()],
+      ['notes.txt', Buffer.from('These are my notes, not a scan.\nSecond line.\n')],
+      ['huge_count.ply', hugeCountPly()],
+      ['empty.ply', Buffer.alloc(0)],
+    ];
+    for (const [name, bytes] of broken) {
+      const t = Date.now();
+      const s = await setFile(page, name, bytes);
+      const msg = await bannerText(page);
+      check(`${name} leads to "error" with a visible message`, s === 'error' && msg.includes(name),
+            `state ${s} after ${Date.now() - t} ms; "${msg}"`);
+    }
+    await shot(page, 'web_error.png');
+    const afterErrors = await canvasImage(page);
+    check('the previous model stays after errors', analyse(afterErrors).greenFraction > 0.5 * pointStats.greenFraction);
+
+    // 5. A good file after the errors.
+    const s2 = await setFile(page, 'cube.obj', cubeObj());
+    const status2 = await page.textContent('#status');
+    check('a good OBJ loads after errors', s2 === 'done' && (await bannerText(page)) === '',
+          `state ${s2}; status "${status2.trim()}"`);
+    check('status names the cube\'s 8 vertices and 12 triangles', /8 vertices, 12 triangles/.test(status2));
+    const cube = await canvasImage(page);
+    check('the cube replaces the points', analyse(cube).greenFraction < 0.001 && analyse(cube).fgFraction > 0.03,
+          `${(100 * analyse(cube).fgFraction).toFixed(1)}% foreground`);
+    await shot(page, 'web_mesh.png');
+
+    // 6. The size limit, on a page started with a 1 MB limit.
+    const page2 = await context.newPage();
+    watch(page2);
+    await page2.goto(origin + '/index.html?max_mb=1');
+    await waitForState(page2, ['ready', 'error'], READY_TIMEOUT_MS);
+    const s3 = await setFile(page2, 'big.ply', Buffer.alloc(2 * 1024 * 1024, 32));
+    const msg3 = await bannerText(page2);
+    check('a file over the size limit is refused with a message', s3 === 'error' && /up to 1\.0 MB/.test(msg3), `"${msg3}"`);
+    const s4 = await setFile(page2, 'torus.ply', torusPly(2000));
+    check('... and the page keeps working', s4 === 'done', 'state ' + s4);
+    await page2.close();
+
+    check('no console errors', consoleErrors.length === 0, consoleErrors.slice(0, 5).join(' | '));
+    check('every request goes to the page\'s own origin', foreign.length === 0 && requests.length > 0,
+          foreign.length ? foreign.slice(0, 5).join(', ') : `${requests.length} requests, all to ${origin}`);
+  } catch (e) {
+    check('test ran to the end', false, e && e.message ? e.message.split('\n')[0] : String(e));
+  } finally {
+    await context.close().catch(() => {});
+    server.close();
+    fs.rmSync(profile, { recursive: true, force: true });
+  }
+
+  const failed = results.filter((r) => !r.ok);
+  console.log(`\nbrowser test: ${results.length - failed.length}/${results.length} checks passed` +
+              (SHOT_DIR ? `; screenshots in ${SHOT_DIR}` : ''));
+  process.exit(failed.length ? 1 : 0);
+}
+
+main();

@@ -1,0 +1,236 @@
+// likeness_viewer.wasm: the 3D view of the web app. An SDL2 window on the
+// page's <canvas id="canvas"> with a GLES 3.0 (WebGL2) context, an orbit
+// camera on mouse, touch and keyboard, and embind calls for web/app.js:
+//
+//   show_mesh(positions, normals, colors, indices) -> "" or an error message
+//   show_points(positions, normals, colors)        -> "" or an error message
+//   show_generic_head()                            -> "" or an error message
+//   set_point_size(pixels), reset_view()
+//   frames_drawn() -> number of frames drawn so far (0 until the head is up)
+//   startup_error() -> "" or why the viewer could not start
+// Arrays are JS typed arrays (Float32Array / Uint32Array), shapes as in
+// viewer_scene.h. Nothing throws: failures come back as messages.
+//
+// Input: left drag orbits, right/middle or shift+left drag pans, the wheel
+// zooms; one finger orbits and a pinch zooms on touch screens; with the canvas
+// focused, arrow keys orbit (shift: pan), +/- zoom and R resets the view.
+// The canvas is redrawn only when something changed, so an idle page costs
+// no CPU (WebGL2 runs on the CPU under SwiftShader).
+#include "viewer_scene.h"
+
+#include <SDL.h>
+#include <emscripten.h>
+#include <emscripten/bind.h>
+#include <emscripten/html5.h>
+#include <emscripten/val.h>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+namespace {
+
+using emscripten::val;
+
+// The one viewer of the page. A global because the browser's frame callback
+// and the embind functions have no other way to reach it.
+struct Viewer {
+  SDL_Window* window = nullptr;
+  SDL_GLContext context = nullptr;
+  lk::web::ViewerScene scene;
+  int frames_drawn = 0;
+  std::string startup_error;
+  bool panning = false, orbiting = false;
+};
+Viewer* g_viewer = nullptr;
+
+constexpr const char* kCanvas = "#canvas";
+
+// Keeps the drawing buffer at the canvas' CSS size times the device pixel
+// ratio, so the page's layout decides the size and the image stays sharp.
+void fit_canvas(Viewer& v) {
+  double css_w = 0, css_h = 0;
+  emscripten_get_element_css_size(kCanvas, &css_w, &css_h);
+  const double dpr = emscripten_get_device_pixel_ratio();
+  const int want_w = std::max(1, int(std::lround(css_w * dpr)));
+  const int want_h = std::max(1, int(std::lround(css_h * dpr)));
+  int w = 0, h = 0;
+  emscripten_get_canvas_element_size(kCanvas, &w, &h);
+  if (w != want_w || h != want_h) emscripten_set_canvas_element_size(kCanvas, want_w, want_h);
+  v.scene.resize(want_w, want_h);
+}
+
+// SDL reports mouse motion in its window's units; the camera wants
+// framebuffer pixels.
+float pixels_per_sdl_unit(const Viewer& v) {
+  int sdl_w = 0, sdl_h = 0, w = 0, h = 0;
+  SDL_GetWindowSize(v.window, &sdl_w, &sdl_h);
+  emscripten_get_canvas_element_size(kCanvas, &w, &h);
+  return sdl_w > 0 ? float(w) / float(sdl_w) : 1.0f;
+}
+
+void handle_event(Viewer& v, const SDL_Event& e) {
+  switch (e.type) {
+    case SDL_MOUSEBUTTONDOWN: {
+      const bool shift = (SDL_GetModState() & KMOD_SHIFT) != 0;
+      if (e.button.button == SDL_BUTTON_LEFT && !shift) v.orbiting = true;
+      else v.panning = true;
+      break;
+    }
+    case SDL_MOUSEBUTTONUP:
+      v.orbiting = v.panning = false;
+      break;
+    case SDL_MOUSEMOTION: {
+      if (!v.orbiting && !v.panning) break;
+      const float k = pixels_per_sdl_unit(v);
+      if (v.orbiting) v.scene.orbit(e.motion.xrel * k, e.motion.yrel * k);
+      else v.scene.pan(e.motion.xrel * k, e.motion.yrel * k);
+      break;
+    }
+    case SDL_MOUSEWHEEL:
+      // SDL scales DOM pixel deltas down by 100 (one notch ~ 1); give the
+      // camera pixels back. Positive y is "wheel away": zoom in.
+      v.scene.zoom(e.wheel.preciseY * 100.0f);
+      break;
+    case SDL_MULTIGESTURE: {
+      // dDist is the change in finger spread, normalised to the touch device.
+      int w = 0, h = 0;
+      emscripten_get_canvas_element_size(kCanvas, &w, &h);
+      v.scene.zoom(e.mgesture.dDist * float(h) * 2.0f);
+      break;
+    }
+    case SDL_KEYDOWN: {
+      const bool shift = (e.key.keysym.mod & KMOD_SHIFT) != 0;
+      const float step = 40.0f;  // pixels of drag per key press
+      float dx = 0, dy = 0;
+      switch (e.key.keysym.sym) {
+        case SDLK_LEFT: dx = -step; break;
+        case SDLK_RIGHT: dx = step; break;
+        case SDLK_UP: dy = -step; break;
+        case SDLK_DOWN: dy = step; break;
+        case SDLK_PLUS: case SDLK_EQUALS: case SDLK_KP_PLUS: v.scene.zoom(120.0f); break;
+        case SDLK_MINUS: case SDLK_KP_MINUS: v.scene.zoom(-120.0f); break;
+        case SDLK_r: v.scene.reset_view(); break;
+        default: break;
+      }
+      if (dx != 0 || dy != 0) {
+        if (shift) v.scene.pan(dx, dy);
+        else v.scene.orbit(dx, dy);
+      }
+      break;
+    }
+    default:
+      break;
+  }
+}
+
+void frame() {
+  Viewer& v = *g_viewer;
+  SDL_Event e;
+  while (SDL_PollEvent(&e)) handle_event(v, e);
+  fit_canvas(v);
+  lk::Status status;
+  if (v.scene.draw_if_needed(status)) {
+    if (status.ok()) ++v.frames_drawn;
+    else std::fprintf(stderr, "likeness viewer: draw failed: %s\n", status.message.c_str());
+  }
+}
+
+std::string show_start_head() {
+  const lk::Status s = g_viewer->scene.show_mesh(lk::web::start_head());
+  return s.ok() ? std::string() : s.message;
+}
+
+// ---- embind -----------------------------------------------------------------
+
+template <typename T>
+std::vector<T> from_js(const val& array) {
+  if (array.isUndefined() || array.isNull()) return {};
+  return emscripten::convertJSArrayToNumberVector<T>(array);
+}
+
+std::string js_show_mesh(val positions, val normals, val colors, val indices) {
+  if (!g_viewer || !g_viewer->startup_error.empty()) return "the viewer is not running";
+  lk::TriMesh mesh;
+  lk::Status s = lk::web::mesh_from_arrays(from_js<float>(positions), from_js<float>(normals),
+                                           from_js<float>(colors), from_js<std::uint32_t>(indices), mesh);
+  if (s.ok()) s = g_viewer->scene.show_mesh(mesh);
+  return s.ok() ? std::string() : s.message;
+}
+
+std::string js_show_points(val positions, val normals, val colors) {
+  if (!g_viewer || !g_viewer->startup_error.empty()) return "the viewer is not running";
+  lk::PointCloud cloud;
+  lk::Status s = lk::web::cloud_from_arrays(from_js<float>(positions), from_js<float>(normals),
+                                            from_js<float>(colors), cloud);
+  if (s.ok()) s = g_viewer->scene.show_points(cloud);
+  return s.ok() ? std::string() : s.message;
+}
+
+std::string js_show_generic_head() {
+  if (!g_viewer || !g_viewer->startup_error.empty()) return "the viewer is not running";
+  return show_start_head();
+}
+
+void js_set_point_size(float pixels) {
+  if (g_viewer && std::isfinite(pixels)) g_viewer->scene.set_point_size(std::min(64.0f, std::max(1.0f, pixels)));
+}
+
+void js_reset_view() {
+  if (g_viewer) g_viewer->scene.reset_view();
+}
+
+int js_frames_drawn() { return g_viewer ? g_viewer->frames_drawn : 0; }
+std::string js_startup_error() { return g_viewer ? g_viewer->startup_error : std::string("not started"); }
+
+}  // namespace
+
+EMSCRIPTEN_BINDINGS(likeness_viewer) {
+  emscripten::function("show_mesh", &js_show_mesh);
+  emscripten::function("show_points", &js_show_points);
+  emscripten::function("show_generic_head", &js_show_generic_head);
+  emscripten::function("set_point_size", &js_set_point_size);
+  emscripten::function("reset_view", &js_reset_view);
+  emscripten::function("frames_drawn", &js_frames_drawn);
+  emscripten::function("startup_error", &js_startup_error);
+}
+
+int main() {
+  g_viewer = new Viewer();
+  Viewer& v = *g_viewer;
+  // Keys go to the canvas only (it is focusable): SDL's default, the whole
+  // window, would swallow Tab and the arrow keys for the rest of the page.
+  SDL_SetHint(SDL_HINT_EMSCRIPTEN_KEYBOARD_ELEMENT, kCanvas);
+  if (SDL_Init(SDL_INIT_VIDEO) != 0) {
+    v.startup_error = std::string("SDL_Init failed: ") + SDL_GetError();
+    return 0;
+  }
+  SDL_GL_SetAttribute(SDL_GL_CONTEXT_PROFILE_MASK, SDL_GL_CONTEXT_PROFILE_ES);
+  SDL_GL_SetAttribute(SDL_GL_CONTEXT_MAJOR_VERSION, 3);
+  SDL_GL_SetAttribute(SDL_GL_CONTEXT_MINOR_VERSION, 0);
+  SDL_GL_SetAttribute(SDL_GL_DEPTH_SIZE, 24);
+  SDL_GL_SetAttribute(SDL_GL_MULTISAMPLEBUFFERS, 1);  // WebGL antialias
+  SDL_GL_SetAttribute(SDL_GL_MULTISAMPLESAMPLES, 4);
+  v.window = SDL_CreateWindow("Likeness", SDL_WINDOWPOS_UNDEFINED, SDL_WINDOWPOS_UNDEFINED, 960, 720,
+                              SDL_WINDOW_OPENGL);
+  if (!v.window) {
+    v.startup_error = std::string("could not create the window: ") + SDL_GetError();
+    return 0;
+  }
+  v.context = SDL_GL_CreateContext(v.window);
+  if (!v.context) {
+    v.startup_error = std::string("WebGL 2 is not available: ") + SDL_GetError();
+    return 0;
+  }
+  if (lk::Status s = v.scene.init(); !s.ok()) {
+    v.startup_error = "the renderer could not start: " + s.message;
+    return 0;
+  }
+  fit_canvas(v);
+  if (std::string err = show_start_head(); !err.empty()) {
+    v.startup_error = "could not show the head: " + err;
+    return 0;
+  }
+  emscripten_set_main_loop(frame, 0, 0);
+  return 0;
+}

@@ -1,0 +1,180 @@
+#include "viewer_scene.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace lk::web {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+bool all_finite(const std::vector<float>& v) {
+  for (float x : v)
+    if (!std::isfinite(x)) return false;
+  return true;
+}
+
+std::vector<Vec3> to_vec3(const std::vector<float>& flat) {
+  std::vector<Vec3> out(flat.size() / 3);
+  for (size_t i = 0; i < out.size(); ++i) out[i] = Vec3(flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]);
+  return out;
+}
+
+// Optional per-vertex arrays must be empty or exactly #V*3.
+Status check_attribute(const char* what, const std::vector<float>& a, size_t vertex_count) {
+  if (!a.empty() && a.size() != vertex_count * 3)
+    return Status::error(ErrorCode::InvalidInput, std::string(what) + ": " + std::to_string(a.size()) +
+                                                      " values for " + std::to_string(vertex_count) +
+                                                      " vertices (need 3 per vertex)");
+  if (!all_finite(a)) return Status::error(ErrorCode::InvalidInput, std::string(what) + ": NaN or infinite values");
+  return Status::success();
+}
+
+Status check_positions(const std::vector<float>& positions) {
+  if (positions.empty()) return Status::error(ErrorCode::Empty, "no vertices");
+  if (positions.size() % 3 != 0)
+    return Status::error(ErrorCode::InvalidInput, "positions: length " + std::to_string(positions.size()) +
+                                                      " is not a multiple of 3");
+  if (!all_finite(positions)) return Status::error(ErrorCode::InvalidInput, "positions: NaN or infinite values");
+  return Status::success();
+}
+
+}  // namespace
+
+Status mesh_from_arrays(const std::vector<float>& positions, const std::vector<float>& normals,
+                        const std::vector<float>& colors, const std::vector<std::uint32_t>& indices,
+                        TriMesh& out) {
+  if (Status s = check_positions(positions); !s.ok()) return s;
+  const size_t nv = positions.size() / 3;
+  if (Status s = check_attribute("normals", normals, nv); !s.ok()) return s;
+  if (Status s = check_attribute("colors", colors, nv); !s.ok()) return s;
+  if (indices.empty()) return Status::error(ErrorCode::Empty, "a mesh needs triangles");
+  if (indices.size() % 3 != 0)
+    return Status::error(ErrorCode::InvalidInput, "indices: length " + std::to_string(indices.size()) +
+                                                      " is not a multiple of 3");
+  for (std::uint32_t i : indices)
+    if (i >= nv)
+      return Status::error(ErrorCode::InvalidInput, "indices: vertex " + std::to_string(i) + " of " +
+                                                        std::to_string(nv));
+  out = TriMesh{};
+  out.positions = to_vec3(positions);
+  out.normals = to_vec3(normals);
+  out.colors = to_vec3(colors);
+  out.triangles.resize(indices.size() / 3);
+  for (size_t f = 0; f < out.triangles.size(); ++f)
+    out.triangles[f] = {int(indices[3 * f]), int(indices[3 * f + 1]), int(indices[3 * f + 2])};
+  return Status::success();
+}
+
+Status cloud_from_arrays(const std::vector<float>& positions, const std::vector<float>& normals,
+                         const std::vector<float>& colors, PointCloud& out) {
+  if (Status s = check_positions(positions); !s.ok()) return s;
+  const size_t nv = positions.size() / 3;
+  if (Status s = check_attribute("normals", normals, nv); !s.ok()) return s;
+  if (Status s = check_attribute("colors", colors, nv); !s.ok()) return s;
+  out = PointCloud{};
+  out.positions = to_vec3(positions);
+  out.normals = to_vec3(normals);
+  out.colors = to_vec3(colors);
+  return Status::success();
+}
+
+// A head-sized ellipsoid (0.16 wide, 0.24 tall, 0.20 deep, metres: the generic
+// head's proportions in head_model.h), shown until the generic head lands.
+TriMesh start_head() {
+  const int rings = 32, segments = 48;
+  const Vec3 radii(0.08, 0.12, 0.10);
+  TriMesh m;
+  for (int r = 0; r <= rings; ++r) {
+    const double theta = kPi * r / rings;  // from +y down to -y
+    for (int s = 0; s < segments; ++s) {
+      const double phi = 2 * kPi * s / segments;
+      const Vec3 unit(std::sin(theta) * std::sin(phi), std::cos(theta), std::sin(theta) * std::cos(phi));
+      m.positions.push_back(unit.cwiseProduct(radii));
+    }
+  }
+  auto at = [&](int r, int s) { return r * segments + (s % segments); };
+  for (int r = 0; r < rings; ++r)
+    for (int s = 0; s < segments; ++s) {
+      // Counter-clockwise seen from outside.
+      m.triangles.push_back({at(r, s), at(r + 1, s), at(r + 1, s + 1)});
+      m.triangles.push_back({at(r, s), at(r + 1, s + 1), at(r, s + 1)});
+    }
+  return m;
+}
+
+Status ViewerScene::init() { return renderer_.init(); }
+
+Status ViewerScene::replace(DrawableHandle fresh) {
+  BBox box;
+  if (Status s = renderer_.bounds(fresh, box); !s.ok()) {
+    renderer_.remove(fresh);
+    return s;
+  }
+  if (model_ != kNoHandle) renderer_.remove(model_);
+  model_ = fresh;
+  bounds_ = box;
+  if (model_is_points_) renderer_.set_point_size(model_, point_size_);
+  reset_view();
+  return Status::success();
+}
+
+Status ViewerScene::show_mesh(const TriMesh& mesh) {
+  DrawableHandle fresh = kNoHandle;
+  if (Status s = renderer_.upload_mesh(mesh, fresh); !s.ok()) return s;
+  model_is_points_ = false;
+  return replace(fresh);
+}
+
+Status ViewerScene::show_points(const PointCloud& cloud) {
+  DrawableHandle fresh = kNoHandle;
+  if (Status s = renderer_.upload_points(cloud, fresh); !s.ok()) return s;
+  model_is_points_ = true;
+  return replace(fresh);
+}
+
+void ViewerScene::set_point_size(float pixels) {
+  point_size_ = pixels;
+  if (model_ != kNoHandle && model_is_points_) renderer_.set_point_size(model_, pixels);
+  dirty_ = true;
+}
+
+void ViewerScene::reset_view() {
+  if (bounds_.valid()) camera_ = canonical_view(CanonicalView::ThreeQuarter, bounds_, float(width_) / float(height_));
+  dirty_ = true;
+}
+
+void ViewerScene::resize(int width_px, int height_px) {
+  if (width_px == width_ && height_px == height_) return;
+  width_ = std::max(1, width_px);
+  height_ = std::max(1, height_px);
+  dirty_ = true;
+}
+
+void ViewerScene::orbit(float dx, float dy) {
+  camera_.orbit(dx, dy, float(height_));
+  dirty_ = true;
+}
+
+void ViewerScene::pan(float dx, float dy) {
+  camera_.pan(dx, dy, float(height_));
+  dirty_ = true;
+}
+
+void ViewerScene::zoom(float amount_px) {
+  camera_.zoom(amount_px);
+  dirty_ = true;
+}
+
+bool ViewerScene::draw_if_needed(Status& status) {
+  if (!dirty_) return false;
+  dirty_ = false;
+  Viewport viewport;
+  viewport.width = width_;
+  viewport.height = height_;
+  status = renderer_.draw(camera_.matrices(float(width_) / float(height_)), viewport);
+  return true;
+}
+
+}  // namespace lk::web

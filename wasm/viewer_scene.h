@@ -1,0 +1,67 @@
+// What the web viewer shows: one model at a time (the generic head at start,
+// then whatever the user loads), drawn with lk::Renderer and looked at through
+// an lk::OrbitCamera. No SDL or Emscripten here; viewer_main.cpp feeds it
+// input and a GL context.
+//
+// Array shapes of the flat arrays coming from JS (worker results):
+//   positions #V*3 floats, normals #V*3 or 0, colors #V*3 or 0 (in [0,1]),
+//   indices #F*3 (unsigned, < #V).
+#pragma once
+#include "common/status.h"
+#include "render/camera.h"
+#include "render/renderer.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace lk::web {
+
+// Builds a TriMesh / PointCloud from flat arrays, checking lengths, index
+// ranges and finiteness (the arrays come from JS: never trust them).
+Status mesh_from_arrays(const std::vector<float>& positions, const std::vector<float>& normals,
+                        const std::vector<float>& colors, const std::vector<std::uint32_t>& indices,
+                        TriMesh& out);
+Status cloud_from_arrays(const std::vector<float>& positions, const std::vector<float>& normals,
+                         const std::vector<float>& colors, PointCloud& out);
+
+// The head shown before anything is loaded.
+TriMesh start_head();
+
+class ViewerScene {
+ public:
+  // Needs a current GL context.
+  Status init();
+
+  // Replace the shown model; the camera is reframed on it. On failure the
+  // previous model stays.
+  Status show_mesh(const TriMesh& mesh);
+  Status show_points(const PointCloud& cloud);
+
+  void set_point_size(float pixels);
+  void reset_view();                 // frames the model from the default view
+  void resize(int width_px, int height_px);
+
+  // Pointer deltas in framebuffer pixels.
+  void orbit(float dx, float dy);
+  void pan(float dx, float dy);
+  void zoom(float amount_px);
+
+  // Draws if anything changed since the last draw. Returns true when it drew.
+  bool draw_if_needed(Status& status);
+  void invalidate() { dirty_ = true; }
+
+ private:
+  Status replace(DrawableHandle fresh);
+
+  Renderer renderer_;
+  OrbitCamera camera_;
+  DrawableHandle model_ = kNoHandle;
+  bool model_is_points_ = false;
+  BBox bounds_;
+  float point_size_ = 3.0f;
+  int width_ = 1, height_ = 1;
+  bool dirty_ = true;
+};
+
+}  // namespace lk::web

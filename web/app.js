@@ -1,0 +1,337 @@
+// Likeness web app: wires the page to two WebAssembly modules.
+//   likeness_viewer.js  (main thread) draws on #canvas with WebGL2 via SDL2.
+//   worker.js -> likeness_worker.js  (Web Worker) runs the core's jobs.
+// Files are read locally and transferred to the worker; nothing is fetched
+// from anywhere but this page's own origin.
+//
+// document.body.dataset.state is always one of:
+//   loading  the modules start and the generic head is not drawn yet
+//   ready    viewer and worker are up, nothing loaded yet
+//   working  a job runs in the worker
+//   done     the last job's result is shown
+//   error    the last action failed; the message is in #error-banner and the
+//            previous model is still shown
+'use strict';
+
+(function () {
+  const params = new URLSearchParams(location.search);
+  // Largest scan file accepted. Parsing needs a few times the file's size in
+  // wasm memory (32-bit heap, 2 GiB at most), so refuse early with a clear
+  // message rather than let the worker run out of memory. ?max_mb=N overrides.
+  const DEFAULT_MAX_SCAN_MB = 400;
+  const maxScanMb = Number(params.get('max_mb')) > 0 ? Number(params.get('max_mb')) : DEFAULT_MAX_SCAN_MB;
+  const MAX_SCAN_BYTES = maxScanMb * 1024 * 1024;
+  const PHOTO_EXTENSIONS = ['jpg', 'jpeg', 'png'];
+
+  const $ = (id) => document.getElementById(id);
+  const ui = {
+    canvas: $('canvas'), overlay: $('viewer-overlay'), overlayText: $('overlay-text'),
+    status: $('status'), banner: $('error-banner'), bannerText: $('error-text'),
+    dismiss: $('error-dismiss'), dropZone: $('drop-zone'), fileInput: $('file-input'),
+    fileList: $('file-list'), reset: $('btn-reset'), generic: $('btn-generic'),
+    pointSize: $('point-size'), maxSize: $('max-size'),
+  };
+
+  // Exposed for the browser test and for debugging from the console.
+  const app = window.likeness = {
+    startedAt: performance.now(),
+    loadMs: null,          // page start -> viewer and worker up, head drawn
+    viewer: null,
+    worker: null,
+    model: null,           // {name, kind, vertexCount, triangleCount} shown now
+    lastError: null,
+  };
+
+  let stateBeforeError = 'ready';
+  function setState(state) {
+    if (state !== 'error') stateBeforeError = state;
+    document.body.dataset.state = state;
+    const interactive = state !== 'loading';
+    ui.fileInput.disabled = !interactive || state === 'working';
+    ui.reset.disabled = !interactive;
+    ui.generic.disabled = !interactive || state === 'working';
+    ui.pointSize.disabled = !interactive;
+    ui.dropZone.classList.toggle('busy', state === 'working');
+  }
+
+  function setStatus(text) { ui.status.textContent = text; }
+
+  function showError(message) {
+    app.lastError = message;
+    ui.bannerText.textContent = message;
+    ui.banner.hidden = false;
+    setState('error');
+  }
+
+  function clearError() {
+    ui.banner.hidden = true;
+    if (document.body.dataset.state === 'error') setState(stateBeforeError);
+  }
+
+  function fatalStartup(message) {
+    ui.overlayText.textContent = 'The app could not start.';
+    ui.overlay.classList.add('failed');
+    showError(message);
+  }
+
+  // ---- pipeline stage display ---------------------------------------------
+  function stageItem(stage) { return document.querySelector('#stages li[data-stage="' + stage + '"]'); }
+  function setStage(stage, tag, fraction, cls) {
+    const li = stageItem(stage);
+    if (!li) return;
+    li.querySelector('.stage-tag').textContent = tag;
+    if (fraction !== undefined) li.querySelector('progress').value = fraction;
+    li.classList.remove('active', 'complete', 'failed');
+    if (cls) li.classList.add(cls);
+  }
+
+  // ---- the worker -----------------------------------------------------------
+  let nextJobId = 1;
+  const jobs = new Map();  // id -> {resolve, reject, onProgress}
+  let workerReady = null;  // promise resolved when the worker's core is up
+
+  function startWorker() {
+    const worker = new Worker('worker.js');
+    app.worker = worker;
+    workerReady = new Promise((resolve, reject) => {
+      worker.onmessage = (e) => {
+        const msg = e.data;
+        if (msg.type === 'ready') {
+          resolve();
+        } else if (msg.type === 'progress') {
+          const job = jobs.get(msg.id);
+          if (job && job.onProgress) job.onProgress(msg.stage, msg.fraction);
+        } else if (msg.type === 'result') {
+          const job = jobs.get(msg.id);
+          jobs.delete(msg.id);
+          if (job) job.resolve(msg.result);
+        } else if (msg.type === 'fatal') {
+          workerDied(worker, msg.message);
+          reject(new Error(msg.message));
+        }
+      };
+      worker.onerror = (e) => {
+        e.preventDefault();
+        const why = e.message || 'the worker failed to load';
+        workerDied(worker, why);
+        reject(new Error(why));
+      };
+    });
+    return workerReady;
+  }
+
+  // The core aborted (out of memory or a bug): fail the running jobs with the
+  // reason and start a fresh worker so the page keeps working.
+  function workerDied(worker, why) {
+    if (app.worker !== worker) return;
+    worker.terminate();
+    for (const [, job] of jobs) job.reject(new Error(why));
+    jobs.clear();
+    if (document.body.dataset.state !== 'loading') startWorker().catch(() => {});
+  }
+
+  function runJob(message, transfer, onProgress) {
+    return workerReady.then(() => new Promise((resolve, reject) => {
+      const id = nextJobId++;
+      jobs.set(id, { resolve, reject, onProgress });
+      app.worker.postMessage(Object.assign({ id }, message), transfer);
+    }));
+  }
+
+  // ---- the viewer -----------------------------------------------------------
+  function loadScript(src) {
+    return new Promise((resolve, reject) => {
+      const s = document.createElement('script');
+      s.src = src;
+      s.onload = resolve;
+      s.onerror = () => reject(new Error('could not load ' + src));
+      document.head.appendChild(s);
+    });
+  }
+
+  // Resolves once the viewer has drawn at least one frame with the head.
+  function firstFrame(viewer) {
+    return new Promise((resolve, reject) => {
+      const poll = () => {
+        const why = viewer.startup_error();
+        if (why) reject(new Error('the 3D viewer could not start: ' + why));
+        else if (viewer.frames_drawn() > 0) resolve();
+        else requestAnimationFrame(poll);
+      };
+      poll();
+    });
+  }
+
+  async function startViewer() {
+    await loadScript('likeness_viewer.js');
+    const viewer = await LikenessViewer({
+      canvas: ui.canvas,
+      print: (t) => console.log('[viewer]', t),
+      printErr: (t) => console.warn('[viewer]', t),
+      onAbort: (what) => fatalStartup('The 3D viewer stopped: ' + what),
+    });
+    app.viewer = viewer;
+    await firstFrame(viewer);
+    ui.overlay.hidden = true;
+    return viewer;
+  }
+
+  // ---- files ----------------------------------------------------------------
+  function extension(name) {
+    const dot = name.lastIndexOf('.');
+    return dot < 0 ? '' : name.slice(dot + 1).toLowerCase();
+  }
+
+  function formatBytes(n) {
+    if (n < 1024) return n + ' B';
+    if (n < 1024 * 1024) return (n / 1024).toFixed(1) + ' KB';
+    if (n < 1024 * 1024 * 1024) return (n / 1024 / 1024).toFixed(1) + ' MB';
+    return (n / 1024 / 1024 / 1024).toFixed(2) + ' GB';
+  }
+
+  function listFile(file, note, cls) {
+    const li = document.createElement('li');
+    if (cls) li.className = cls;
+    const name = document.createElement('span');
+    name.className = 'file-name';
+    name.textContent = file.name;
+    const meta = document.createElement('span');
+    meta.className = 'file-meta';
+    meta.textContent = formatBytes(file.size) + ' · ' + note;
+    li.append(name, meta);
+    ui.fileList.prepend(li);
+    while (ui.fileList.children.length > 8) ui.fileList.lastChild.remove();
+    return meta;
+  }
+
+  async function handleFiles(fileList) {
+    const files = Array.from(fileList || []);
+    if (!files.length) return;
+    const state = document.body.dataset.state;
+    if (state === 'loading') return;
+    if (state === 'working') {
+      showError('Still working on the previous file; drop the new one when it has finished.');
+      return;
+    }
+    clearError();
+    const photos = files.filter((f) => PHOTO_EXTENSIONS.includes(extension(f.name)));
+    const scans = files.filter((f) => !photos.includes(f));
+    for (const p of photos) listFile(p, 'photo, kept for the Texture stage (coming)');
+    if (!scans.length) {
+      setStatus(photos.length + ' photo(s) received. Drop a head scan (PLY, OBJ or XYZ) to start.');
+      return;
+    }
+    for (const extra of scans.slice(1)) listFile(extra, 'ignored: one scan at a time', 'ignored');
+    await loadScan(scans[0]);
+  }
+
+  async function loadScan(file) {
+    const meta = listFile(file, 'reading…');
+    if (file.size > MAX_SCAN_BYTES) {
+      meta.textContent = formatBytes(file.size) + ' · too large';
+      setStage('load', 'failed', 0, 'failed');
+      showError(file.name + ' is ' + formatBytes(file.size) + '; the web app accepts scans up to ' +
+                formatBytes(MAX_SCAN_BYTES) + '. Decimate the scan or use the native tool (likeness).');
+      return;
+    }
+    if (file.size === 0) {
+      meta.textContent = '0 B · empty';
+      setStage('load', 'failed', 0, 'failed');
+      showError(file.name + ' is empty.');
+      return;
+    }
+    setState('working');
+    setStage('load', 'reading', 0, 'active');
+    setStatus('Reading ' + file.name + '…');
+    const t0 = performance.now();
+    let result;
+    try {
+      const buffer = await file.arrayBuffer();
+      setStage('load', 'parsing', 0.05, 'active');
+      result = await runJob({ type: 'parse', name: file.name, buffer }, [buffer], (stage, fraction) => {
+        if (stage === 'load') setStage('load', 'parsing', 0.05 + 0.9 * fraction, 'active');
+      });
+    } catch (e) {
+      result = { ok: false, code: 'Internal', message: file.name + ': ' + (e && e.message ? e.message : e) };
+    }
+    const ms = performance.now() - t0;
+    if (!result.ok) {
+      meta.textContent = formatBytes(file.size) + ' · not loaded';
+      setStage('load', 'failed', 0, 'failed');
+      const kept = app.model ? ' The previous model (' + app.model.name + ') is still shown.' : '';
+      setStatus('Could not load ' + file.name + '.' + kept);
+      showError(result.message || (file.name + ': ' + result.code));
+      return;
+    }
+    const shown = result.kind === 'mesh'
+      ? app.viewer.show_mesh(result.positions, result.normals, result.colors, result.indices)
+      : app.viewer.show_points(result.positions, result.normals, result.colors);
+    if (shown !== '') {
+      setStage('load', 'failed', 0, 'failed');
+      showError(file.name + ': ' + shown);
+      return;
+    }
+    app.model = { name: file.name, kind: result.kind, vertexCount: result.vertexCount,
+                  triangleCount: result.triangleCount, parseMs: ms };
+    const what = result.kind === 'mesh'
+      ? 'mesh, ' + result.vertexCount.toLocaleString('en') + ' vertices, ' +
+        result.triangleCount.toLocaleString('en') + ' triangles'
+      : 'point cloud, ' + result.vertexCount.toLocaleString('en') + ' points';
+    meta.textContent = formatBytes(file.size) + ' · ' + what;
+    setStage('load', 'done', 1, 'complete');
+    setStatus(file.name + ': ' + what + ' (loaded in ' + Math.round(ms) + ' ms).');
+    setState('done');
+  }
+
+  // ---- wiring -----------------------------------------------------------------
+  function wire() {
+    ui.maxSize.textContent = formatBytes(MAX_SCAN_BYTES);
+    ui.fileInput.addEventListener('change', () => {
+      const files = ui.fileInput.files;
+      handleFiles(files).finally(() => { ui.fileInput.value = ''; });
+    });
+    // Dropping anywhere on the page counts, so a near miss never makes the
+    // browser navigate away to the file.
+    let dragDepth = 0;
+    window.addEventListener('dragenter', (e) => { e.preventDefault(); dragDepth++; ui.dropZone.classList.add('over'); });
+    window.addEventListener('dragleave', () => { if (--dragDepth <= 0) { dragDepth = 0; ui.dropZone.classList.remove('over'); } });
+    window.addEventListener('dragover', (e) => e.preventDefault());
+    window.addEventListener('drop', (e) => {
+      e.preventDefault();
+      dragDepth = 0;
+      ui.dropZone.classList.remove('over');
+      handleFiles(e.dataTransfer && e.dataTransfer.files);
+    });
+    ui.dismiss.addEventListener('click', clearError);
+    ui.reset.addEventListener('click', () => app.viewer && app.viewer.reset_view());
+    ui.generic.addEventListener('click', () => {
+      if (!app.viewer) return;
+      app.viewer.show_generic_head();
+      app.model = null;
+      clearError();
+      setStatus('Showing the generic head model.');
+    });
+    ui.pointSize.addEventListener('input', () => app.viewer && app.viewer.set_point_size(Number(ui.pointSize.value)));
+  }
+
+  async function start() {
+    setState('loading');
+    wire();
+    setStatus('Starting the viewer and the core…');
+    try {
+      const workerUp = startWorker();
+      const viewer = await startViewer();
+      await workerUp;
+      viewer.set_point_size(Number(ui.pointSize.value));
+      app.loadMs = performance.now() - app.startedAt;
+      setState('ready');
+      setStatus('Ready. Showing the generic head. Drop a head scan to begin.');
+    } catch (e) {
+      fatalStartup('Could not start Likeness: ' + (e && e.message ? e.message : e) +
+                   '. This app needs WebGL 2 and WebAssembly.');
+    }
+  }
+
+  if (document.readyState === 'loading') document.addEventListener('DOMContentLoaded', start);
+  else start();
+})();
