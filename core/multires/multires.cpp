@@ -1,0 +1,445 @@
+#include "multires/multires.h"
+
+#include "mesh/geometry.h"
+
+#include <Eigen/Cholesky>
+#include <nanoflann.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <numeric>
+
+namespace lk {
+namespace {
+
+// The per-vertex kernels below are the ONLY place where normals and
+// displaced positions are computed, by evaluate() and by local updates alike:
+// same operands in the same order give bit-identical results.
+inline Vec3 vertex_normal(const IndexRows& vertex_faces, const std::vector<Tri>& tris,
+                          const std::vector<Vec3>& P, int v) {
+  Vec3 n = Vec3::Zero();
+  for (int i = vertex_faces.offsets[v]; i < vertex_faces.offsets[v + 1]; ++i) {
+    const Tri& t = tris[vertex_faces.items[i]];
+    const Vec3& a = P[t[0]];
+    n += (P[t[1]] - a).cross(P[t[2]] - a);  // area-weighted
+  }
+  const double len = n.norm();
+  if (len > 0) n /= len;
+  return n;
+}
+
+inline bool same_bits(const Vec3& a, const Vec3& b) { return std::memcmp(a.data(), b.data(), sizeof(double) * 3) == 0; }
+
+inline Vec3 displace(const Vec3& p, double d, const Vec3& n) { return p + d * n; }
+
+// Rows from (row, item) pairs; items sorted and unique per row.
+IndexRows rows_from_pairs(int rows, std::vector<std::pair<int, int>>& pairs) {
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  IndexRows r;
+  r.offsets.assign(rows + 1, 0);
+  for (auto& pr : pairs) ++r.offsets[pr.first + 1];
+  for (int i = 0; i < rows; ++i) r.offsets[i + 1] += r.offsets[i];
+  r.items.resize(pairs.size());
+  for (size_t i = 0; i < pairs.size(); ++i) r.items[i] = pairs[i].second;
+  return r;
+}
+
+MultiresLevelLinks build_links(int num_vertices, const std::vector<Tri>& tris, const ButterflyLevel* next) {
+  MultiresLevelLinks L;
+  std::vector<std::pair<int, int>> pairs;
+  pairs.reserve(tris.size() * 3);
+  for (int f = 0; f < static_cast<int>(tris.size()); ++f)
+    for (int v : tris[f]) pairs.push_back({v, f});
+  L.vertex_faces = rows_from_pairs(num_vertices, pairs);
+
+  // A vertex's normal reads every corner of its triangles, so moving u
+  // changes the normals of u and of every vertex sharing a triangle with u.
+  pairs.clear();
+  pairs.reserve(tris.size() * 9 + num_vertices);
+  for (int v = 0; v < num_vertices; ++v) pairs.push_back({v, v});
+  for (const Tri& t : tris)
+    for (int a : t)
+      for (int b : t) pairs.push_back({a, b});
+  L.normal_reach = rows_from_pairs(num_vertices, pairs);
+
+  if (next) {
+    // Coarse vertex u feeds fine vertex u (copy) and every stencil naming it.
+    pairs.clear();
+    pairs.reserve(next->stencil_indices.size() + num_vertices);
+    for (int v = 0; v < num_vertices; ++v) pairs.push_back({v, v});
+    for (int k = 0; k < next->num_new_vertices(); ++k)
+      for (int i = next->stencil_offsets[k]; i < next->stencil_offsets[k + 1]; ++i)
+        pairs.push_back({next->stencil_indices[i], num_vertices + k});
+    L.refine_reach = rows_from_pairs(num_vertices, pairs);
+  }
+  return L;
+}
+
+// Normals and displaced positions of level l from its base positions.
+void evaluate_level(MultiresMesh& m, int l) {
+  MultiresState& s = m.state;
+  const int nv = m.num_vertices(l);
+  const auto& tris = m.triangles(l);
+  s.normals[l].resize(nv);
+  s.displaced[l].resize(nv);
+  for (int v = 0; v < nv; ++v) {
+    s.normals[l][v] = vertex_normal(m.links[l].vertex_faces, tris, s.base[l], v);
+    s.displaced[l][v] = displace(s.base[l][v], m.displacements[l][v], s.normals[l][v]);
+  }
+}
+
+void resize_state(MultiresMesh& m) {
+  const int L = m.num_levels();
+  m.state.base.resize(L + 1);
+  m.state.normals.resize(L + 1);
+  m.state.displaced.resize(L + 1);
+}
+
+Status check_sizes(const MultiresMesh& m) {
+  const int L = m.num_levels();
+  if (static_cast<int>(m.displacements.size()) != L + 1 || static_cast<int>(m.links.size()) != L + 1)
+    return Status::error(ErrorCode::InvalidInput, "multires: displacement or link arrays do not match the levels");
+  for (int l = 0; l <= L; ++l)
+    if (static_cast<int>(m.displacements[l].size()) != m.num_vertices(l))
+      return Status::error(ErrorCode::InvalidInput, "multires: level " + std::to_string(l) + " has " +
+                                                        std::to_string(m.displacements[l].size()) +
+                                                        " displacements for " + std::to_string(m.num_vertices(l)) +
+                                                        " vertices");
+  return Status::success();
+}
+
+double mean_edge(const std::vector<Vec3>& P, const std::vector<Tri>& tris) {
+  if (tris.empty()) return 0;
+  double sum = 0;
+  for (const Tri& t : tris)
+    for (int k = 0; k < 3; ++k) sum += (P[t[k]] - P[t[(k + 1) % 3]]).norm();
+  return sum / (3.0 * tris.size());
+}
+
+struct CloudAdaptor {
+  const std::vector<Vec3>& pts;
+  size_t kdtree_get_point_count() const { return pts.size(); }
+  double kdtree_get_pt(size_t i, size_t dim) const { return pts[i][static_cast<int>(dim)]; }
+  template <class BBOX>
+  bool kdtree_get_bbox(BBOX&) const { return false; }
+};
+using CloudTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, CloudAdaptor>,
+                                                      CloudAdaptor, 3, size_t>;
+
+// Median of a non-empty list (reordered).
+double median(std::vector<double>& xs) {
+  const size_t h = xs.size() / 2;
+  std::nth_element(xs.begin(), xs.begin() + h, xs.end());
+  const double upper = xs[h];
+  if (xs.size() % 2) return upper;
+  return 0.5 * (*std::max_element(xs.begin(), xs.begin() + h) + upper);
+}
+
+// Cylinder points in the vertex's frame: (u, v) across the normal line, t along it.
+struct LinePoint {
+  double u, v, t;
+};
+
+// Least-squares height field t = t0 + a u + b v + c u^2 + d uv + e v^2 over
+// the points; its value t0 at the line is where the line meets the sampled
+// surface. A quadric, not a plane or a median: a curved surface sags by
+// rho^2 / 2R across the cylinder, which would otherwise bias the result.
+using Quadric = Eigen::Matrix<double, 6, 1>;
+inline Quadric quadric_row(const LinePoint& p, double scale) {
+  const double u = p.u / scale, v = p.v / scale;  // O(1) for conditioning
+  Quadric row;
+  row << 1, u, v, u * u, u * v, v * v;
+  return row;
+}
+
+bool fit_crossing(const std::vector<LinePoint>& pts, const std::vector<char>& use, double scale, Quadric& x) {
+  Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 1> rhs = Eigen::Matrix<double, 6, 1>::Zero();
+  int n = 0;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    if (!use[i]) continue;
+    const Quadric row = quadric_row(pts[i], scale);
+    A += row * row.transpose();
+    rhs += row * pts[i].t;
+    ++n;
+  }
+  if (n < 10) return false;
+  Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(A);
+  if (ldlt.info() != Eigen::Success) return false;
+  x = ldlt.solve(rhs);
+  return x.allFinite() && ldlt.rcond() > 1e-10;
+}
+
+// Signed distance along n from p to the sampled surface, or false when the
+// cylinder around the normal line holds too few points.
+bool measure_one(const CloudTree& tree, const std::vector<Vec3>& pts, const Vec3& p, const Vec3& n, double radius,
+                 double max_distance, const DisplacementOptions& opt,
+                 std::vector<std::pair<size_t, double>>& matches, std::vector<LinePoint>& line_pts,
+                 std::vector<double>& scratch, double& out) {
+  if (n.squaredNorm() == 0) return false;  // no normal (isolated vertex)
+  matches.clear();
+  const double r2 = radius * radius;
+  tree.radiusSearch(p.data(), max_distance * max_distance + r2, matches, nanoflann::SearchParams(32, 0, false));
+  const Vec3 e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+  line_pts.clear();
+  for (const auto& m : matches) {
+    const Vec3 delta = pts[m.first] - p;
+    const double t = delta.dot(n);
+    if (std::abs(t) > max_distance) continue;
+    if (delta.squaredNorm() - t * t > r2) continue;
+    line_pts.push_back({delta.dot(e1), delta.dot(e2), t});
+  }
+  const int min_points = std::max(1, opt.min_points);
+  if (static_cast<int>(line_pts.size()) < min_points) return false;
+  std::sort(line_pts.begin(), line_pts.end(),
+            [](const LinePoint& a, const LinePoint& b) { return std::abs(a.t) < std::abs(b.t); });
+  // The nearest crossing that enough points agree on; a lone stray point
+  // near the vertex does not count as a crossing.
+  const double width = opt.cluster_fraction * max_distance;
+  std::vector<char> use(line_pts.size(), 0);
+  for (const LinePoint& centre : line_pts) {
+    scratch.clear();
+    for (size_t i = 0; i < line_pts.size(); ++i) {
+      use[i] = std::abs(line_pts[i].t - centre.t) <= width;
+      if (use[i]) scratch.push_back(line_pts[i].t);
+    }
+    if (static_cast<int>(scratch.size()) < min_points) continue;
+    const double fallback = median(scratch);
+    double t0 = fallback;
+    Quadric q;
+    if (fit_crossing(line_pts, use, radius, q)) {
+      t0 = q[0];
+      // One robust pass: drop points far from the first fit (outliers,
+      // the edge of another sheet), then refit.
+      scratch.clear();
+      for (size_t i = 0; i < line_pts.size(); ++i)
+        if (use[i]) scratch.push_back(std::abs(line_pts[i].t - quadric_row(line_pts[i], radius).dot(q)));
+      const double limit = 4.0 * median(scratch) + 1e-12 * max_distance;
+      for (size_t i = 0; i < line_pts.size(); ++i)
+        if (use[i] && std::abs(line_pts[i].t - quadric_row(line_pts[i], radius).dot(q)) > limit) use[i] = 0;
+      if (fit_crossing(line_pts, use, radius, q)) t0 = q[0];
+    }
+    out = std::abs(t0) <= max_distance ? t0 : fallback;
+    return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+Status build_multires(const TriMesh& control, int levels, MultiresMesh& out) {
+  out = MultiresMesh{};
+  for (const Vec3& p : control.positions)
+    if (!p.allFinite()) return Status::error(ErrorCode::InvalidInput, "multires: a control position is not finite");
+  Status s = build_butterfly_levels(control, levels, out.levels);
+  if (!s.ok()) {
+    out = MultiresMesh{};
+    return s;
+  }
+  out.control = control.positions;
+  out.control_triangles = control.triangles;
+  const int L = out.num_levels();
+  out.displacements.resize(L + 1);
+  out.links.resize(L + 1);
+  for (int l = 0; l <= L; ++l) {
+    out.displacements[l].assign(out.num_vertices(l), 0.0);
+    out.links[l] = build_links(out.num_vertices(l), out.triangles(l), l < L ? &out.levels[l] : nullptr);
+  }
+  return evaluate(out);
+}
+
+Status evaluate(MultiresMesh& mesh) {
+  Status s = check_sizes(mesh);
+  if (!s.ok()) return s;
+  resize_state(mesh);
+  mesh.state.base[0] = mesh.control;
+  for (int l = 0; l <= mesh.num_levels(); ++l) {
+    evaluate_level(mesh, l);
+    if (l < mesh.num_levels()) {
+      s = apply(mesh.levels[l], mesh.state.displaced[l], mesh.state.base[l + 1]);
+      if (!s.ok()) return s;
+    }
+  }
+  return Status::success();
+}
+
+TriMesh level_mesh(const MultiresMesh& mesh, int level) {
+  TriMesh m;
+  if (level < 0 || level > mesh.num_levels() || static_cast<int>(mesh.state.displaced.size()) <= level) return m;
+  m.positions = mesh.state.displaced[level];
+  m.triangles = mesh.triangles(level);
+  m.normals = vertex_normals(m);  // of the displaced surface, for shading
+  return m;
+}
+
+Status measure_displacements(const PointCloud& cloud, const DisplacementOptions& options, MultiresMesh& mesh,
+                             DisplacementStats* stats, const ProgressFn& progress) {
+  if (cloud.positions.empty()) return Status::error(ErrorCode::Empty, "multires: the point cloud is empty");
+  for (const Vec3& p : cloud.positions)
+    if (!p.allFinite()) return Status::error(ErrorCode::InvalidInput, "multires: a point of the cloud is not finite");
+  if (options.radius < 0 || options.max_distance < 0 || !(options.cluster_fraction > 0))
+    return Status::error(ErrorCode::InvalidInput, "multires: negative radius/max distance or non-positive cluster fraction");
+  Status s = check_sizes(mesh);
+  if (!s.ok()) return s;
+
+  CloudAdaptor adaptor{cloud.positions};
+  CloudTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  tree.buildIndex();
+
+  const int L = mesh.num_levels();
+  for (auto& d : mesh.displacements) std::fill(d.begin(), d.end(), 0.0);
+  resize_state(mesh);
+  if (stats) *stats = DisplacementStats{std::vector<int>(L + 1, 0), std::vector<int>(L + 1, 0),
+                                        std::vector<double>(L + 1, 0.0), std::vector<double>(L + 1, 0.0)};
+  std::vector<std::pair<size_t, double>> matches;
+  std::vector<LinePoint> line_pts;
+  std::vector<double> scratch;
+  mesh.state.base[0] = mesh.control;
+  for (int l = 0; l <= L; ++l) {
+    evaluate_level(mesh, l);  // normals N_l with d_l = 0
+    const double edge = mean_edge(mesh.state.base[l], mesh.triangles(l));
+    const double radius = options.radius > 0 ? options.radius : 0.5 * edge;
+    const double max_distance = options.max_distance > 0 ? options.max_distance : 2.0 * edge;
+    const int nv = mesh.num_vertices(l);
+    const int first = (l == 0 || options.remeasure_coarse_vertices) ? 0 : mesh.num_vertices(l - 1);
+    int measured = 0;
+    double sum_abs = 0, max_abs = 0;
+    for (int v = first; v < nv; ++v) {
+      double d = 0;
+      if (measure_one(tree, cloud.positions, mesh.state.base[l][v], mesh.state.normals[l][v], radius, max_distance,
+                      options, matches, line_pts, scratch, d)) {
+        mesh.displacements[l][v] = d;
+        ++measured;
+        sum_abs += std::abs(d);
+        max_abs = std::max(max_abs, std::abs(d));
+      }
+    }
+    if (stats) {
+      stats->candidates[l] = nv - first;
+      stats->measured[l] = measured;
+      stats->mean_abs[l] = measured ? sum_abs / measured : 0.0;
+      stats->max_abs[l] = max_abs;
+    }
+    evaluate_level(mesh, l);  // now with d_l
+    if (l < L) {
+      s = apply(mesh.levels[l], mesh.state.displaced[l], mesh.state.base[l + 1]);
+      if (!s.ok()) return s;
+    }
+    if (!report(progress, "multires displacements", static_cast<double>(l + 1) / (L + 1))) {
+      for (auto& d : mesh.displacements) std::fill(d.begin(), d.end(), 0.0);
+      evaluate(mesh);
+      return Status::error(ErrorCode::Cancelled, "multires: displacement measurement cancelled");
+    }
+  }
+  return Status::success();
+}
+
+Status update_control_vertices(MultiresMesh& mesh, const std::vector<int>& moved,
+                               const std::vector<Vec3>& new_positions, UpdateFootprint* footprint) {
+  const int L = mesh.num_levels();
+  if (moved.size() != new_positions.size())
+    return Status::error(ErrorCode::InvalidInput, "multires update: " + std::to_string(moved.size()) +
+                                                      " indices but " + std::to_string(new_positions.size()) +
+                                                      " positions");
+  for (size_t i = 0; i < moved.size(); ++i) {
+    if (moved[i] < 0 || moved[i] >= static_cast<int>(mesh.control.size()))
+      return Status::error(ErrorCode::InvalidInput, "multires update: control vertex " + std::to_string(moved[i]) +
+                                                        " does not exist");
+    if (!new_positions[i].allFinite())
+      return Status::error(ErrorCode::InvalidInput, "multires update: position of control vertex " +
+                                                        std::to_string(moved[i]) + " is not finite");
+  }
+  MultiresState& st = mesh.state;
+  if (static_cast<int>(st.displaced.size()) != L + 1 || static_cast<int>(mesh.links.size()) != L + 1 ||
+      static_cast<int>(st.displaced[L].size()) != mesh.num_vertices(L))
+    return Status::error(ErrorCode::InvalidInput, "multires update: the mesh has not been built and evaluated");
+
+  auto& sc = mesh.scratch;
+  if (static_cast<int>(sc.base_mark.size()) != L + 1) {
+    sc.base_mark.assign(L + 1, {});
+    sc.displaced_mark.assign(L + 1, {});
+    for (int l = 0; l <= L; ++l) {
+      sc.base_mark[l].assign(mesh.num_vertices(l), 0);
+      sc.displaced_mark[l].assign(mesh.num_vertices(l), 0);
+    }
+    sc.stamp = 0;
+  }
+  if (++sc.stamp == 0) {  // wrapped: clear the marks once every 2^32 updates
+    for (int l = 0; l <= L; ++l) {
+      std::fill(sc.base_mark[l].begin(), sc.base_mark[l].end(), 0);
+      std::fill(sc.displaced_mark[l].begin(), sc.displaced_mark[l].end(), 0);
+    }
+    sc.stamp = 1;
+  }
+  const std::uint32_t stamp = sc.stamp;
+  if (footprint) {
+    footprint->base_changed.assign(L + 1, 0);
+    footprint->displaced_changed.assign(L + 1, 0);
+  }
+
+  // changed: P_l differs; reached: N_l and P'_l recomputed; spread: P'_l
+  // differs bit-wise, so the next level must look at its dependents. A value
+  // that comes out bit-identical (e.g. P' = P + 0 * N where d = 0 and P did
+  // not move) stops the spread without changing the result.
+  std::vector<int> changed, reached, spread;
+  changed.reserve(moved.size());
+  for (size_t i = 0; i < moved.size(); ++i) {
+    const int v = moved[i];
+    mesh.control[v] = new_positions[i];
+    st.base[0][v] = new_positions[i];
+    if (sc.base_mark[0][v] != stamp) {
+      sc.base_mark[0][v] = stamp;
+      changed.push_back(v);
+    }
+  }
+  for (int l = 0; l <= L; ++l) {
+    const MultiresLevelLinks& links = mesh.links[l];
+    auto& mark = sc.displaced_mark[l];
+    reached.clear();
+    for (int u : changed)
+      for (int i = links.normal_reach.offsets[u]; i < links.normal_reach.offsets[u + 1]; ++i) {
+        const int v = links.normal_reach.items[i];
+        if (mark[v] != stamp) {
+          mark[v] = stamp;
+          reached.push_back(v);
+        }
+      }
+    const auto& tris = mesh.triangles(l);
+    spread.clear();
+    for (int v : reached) {
+      st.normals[l][v] = vertex_normal(links.vertex_faces, tris, st.base[l], v);
+      const Vec3 p = displace(st.base[l][v], mesh.displacements[l][v], st.normals[l][v]);
+      if (!same_bits(p, st.displaced[l][v])) {
+        st.displaced[l][v] = p;
+        spread.push_back(v);
+      }
+    }
+    if (footprint) {
+      footprint->base_changed[l] = static_cast<int>(changed.size());
+      footprint->displaced_changed[l] = static_cast<int>(reached.size());
+    }
+    if (l == L) break;
+
+    const ButterflyLevel& next = mesh.levels[l];
+    const int nc = next.num_coarse_vertices;
+    auto& next_mark = sc.base_mark[l + 1];
+    auto& fine = st.base[l + 1];
+    changed.clear();
+    for (int u : spread)
+      for (int i = links.refine_reach.offsets[u]; i < links.refine_reach.offsets[u + 1]; ++i) {
+        const int f = links.refine_reach.items[i];
+        if (next_mark[f] == stamp) continue;
+        next_mark[f] = stamp;
+        const Vec3 p = f < nc ? st.displaced[l][f] : butterfly_new_vertex(next, f - nc, st.displaced[l]);
+        if (!same_bits(p, fine[f])) {
+          fine[f] = p;
+          changed.push_back(f);
+        }
+      }
+  }
+  return Status::success();
+}
+
+}  // namespace lk

@@ -1,0 +1,136 @@
+// The multiresolution head of jeong2002 Sec. 5 (displaced Modified Butterfly
+// hierarchy, one scalar normal displacement per vertex per level) and its
+// local update for animation, Sec. 6.
+//
+// Evaluation, for l = 0 .. L (L = number of refinement levels):
+//   N_l  = unit area-weighted vertex normals of the level-l mesh at P_l
+//   P'_l = P_l + d_l * N_l                 (the level-l output mesh)
+//   P_{l+1} = Butterfly(P'_l)              (P_0 = control positions)
+// Arrays: P_l, P'_l, N_l, d_l are #V_l long; #V_0 = #control vertices,
+// #V_{l+1} = #V_l + #E_l. Level-l triangles: control triangles for l = 0,
+// levels[l-1].fine_triangles otherwise.
+//
+// Local update (Sec. 6): moving control vertices changes P only inside their
+// support. Per level we precompute who depends on whom: a vertex's normal on
+// its one-ring, a fine vertex on its stencil. update_control_vertices walks
+// these sets level by level and re-evaluates exactly the same per-vertex
+// arithmetic as evaluate(), so its result is bit-identical to a full
+// recompute (exact equality, not a tolerance).
+#pragma once
+#include "common/progress.h"
+#include "common/status.h"
+#include "mesh/tri_mesh.h"
+#include "subdiv/butterfly.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace lk {
+
+// Compressed rows: row i is items[offsets[i] .. offsets[i+1]).
+struct IndexRows {
+  std::vector<int> offsets;  // #rows + 1
+  std::vector<int> items;
+  int rows() const { return offsets.empty() ? 0 : static_cast<int>(offsets.size()) - 1; }
+};
+
+// Per-level dependency sets for evaluation and local updates.
+struct MultiresLevelLinks {
+  IndexRows vertex_faces;   // #V_l rows: incident triangles, ascending (normal summation order)
+  IndexRows normal_reach;   // #V_l rows: vertices whose normal depends on this vertex (itself + one-ring)
+  IndexRows refine_reach;   // #V_l rows (l < L): level-(l+1) vertices whose P depends on this P'
+};
+
+// Evaluated positions of every level (a cache of evaluate()).
+struct MultiresState {
+  std::vector<std::vector<Vec3>> base;       // L+1 arrays: P_l (before displacement)
+  std::vector<std::vector<Vec3>> normals;    // L+1 arrays: N_l
+  std::vector<std::vector<Vec3>> displaced;  // L+1 arrays: P'_l, the level-l output mesh
+};
+
+struct MultiresMesh {
+  std::vector<Vec3> control;                       // #V_0 control positions (P_0)
+  std::vector<Tri> control_triangles;              // #F_0
+  std::vector<ButterflyLevel> levels;              // L refinement steps
+  std::vector<std::vector<double>> displacements;  // L+1 arrays: d_l, #V_l each
+  std::vector<MultiresLevelLinks> links;           // L+1
+  MultiresState state;
+  // Scratch of update_control_vertices (visit marks per level); not
+  // thread-safe: one update at a time per mesh.
+  struct Scratch {
+    std::vector<std::vector<std::uint32_t>> base_mark, displaced_mark;  // L+1, #V_l each
+    std::uint32_t stamp = 0;
+  } scratch;
+
+  int num_levels() const { return static_cast<int>(levels.size()); }  // L
+  int num_vertices(int level) const {
+    return level == 0 ? static_cast<int>(control.size()) : levels[level - 1].num_fine_vertices;
+  }
+  const std::vector<Tri>& triangles(int level) const {
+    return level == 0 ? control_triangles : levels[level - 1].fine_triangles;
+  }
+};
+
+// Builds the hierarchy over the control mesh (topology, stencils, links), with
+// zero displacements, and evaluates it. Fails like build_butterfly_levels.
+Status build_multires(const TriMesh& control, int levels, MultiresMesh& out);
+
+// Full recompute of state from control + displacements (sizes must match).
+Status evaluate(MultiresMesh& mesh);
+
+// The level-l output mesh (P'_l with its triangles and normals N_l).
+TriMesh level_mesh(const MultiresMesh& mesh, int level);
+
+struct DisplacementOptions {
+  // Radius of the cylinder around a vertex's normal line that collects scan
+  // points. 0: half the mean edge length of the level being measured, so the
+  // sampling footprint shrinks with the triangles.
+  double radius = 0.0;
+  // Points farther than this along the normal are ignored (another sheet of
+  // the surface, outliers). 0: twice the mean edge length of the level.
+  double max_distance = 0.0;
+  // Fewer points than this in the cylinder means "no data": displacement 0,
+  // and the subdivision surface stays smooth there (Sec. 5).
+  int min_points = 3;
+  // The line may cross the scan more than once (ears, lips); only points
+  // within this fraction of max_distance of the crossing nearest to the
+  // vertex are used. Their crossing with the line comes from a least-squares
+  // quadric height field over the cylinder (one outlier-rejection pass),
+  // falling back to their median below 10 points.
+  double cluster_fraction = 0.25;
+  // jeong2002 stores one displacement per vertex introduced on each level;
+  // vertices inherited from the coarser level already lie on the data. Set
+  // to re-measure them on every level as well.
+  bool remeasure_coarse_vertices = false;
+};
+
+struct DisplacementStats {
+  std::vector<int> measured;       // L+1: vertices with data, per level
+  std::vector<int> candidates;     // L+1: vertices measured for, per level
+  std::vector<double> mean_abs;    // L+1: mean |d| over measured vertices
+  std::vector<double> max_abs;     // L+1
+};
+
+// Measures d_0 .. d_L from a point cloud (jeong2002 Sec. 5): before each
+// refinement, the signed distance along N_l from each vertex to the surface
+// the points sample near the normal line (see DisplacementOptions). Overwrites mesh.displacements and re-evaluates. Fails with
+// Empty on an empty cloud, InvalidInput on non-finite points, Cancelled when
+// progress asks to stop (the mesh is then left with zero displacements).
+Status measure_displacements(const PointCloud& cloud, const DisplacementOptions& options, MultiresMesh& mesh,
+                             DisplacementStats* stats = nullptr, const ProgressFn& progress = {});
+
+// How many vertices per level an update recomputed (locality, benchmarks).
+struct UpdateFootprint {
+  std::vector<int> base_changed;       // L+1: P_l changed (moved vertices on level 0)
+  std::vector<int> displaced_changed;  // L+1: N_l and P'_l recomputed
+};
+
+// Moves control vertices (indices into control, with their new positions) and
+// recomputes state only inside their support on every level; everything else
+// is left untouched. A repeated index takes its last position. Fails with
+// InvalidInput on mismatched sizes, an index out of range, a non-finite
+// position, or a mesh that was not evaluated (nothing is changed then).
+Status update_control_vertices(MultiresMesh& mesh, const std::vector<int>& moved,
+                               const std::vector<Vec3>& new_positions, UpdateFootprint* footprint = nullptr);
+
+}  // namespace lk

@@ -1,0 +1,274 @@
+#include "multires/multires.h"
+
+#include "mesh/topology.h"
+#include "../subdiv/shapes.h"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <random>
+#include <set>
+
+using namespace lk;
+using namespace lk::test;
+
+namespace {
+
+// The mirrored irregular grid bent into a smooth bump: boundary, corners and
+// interior vertices of valence 4..8.
+TriMesh bumpy_patch(int half_width = 4, int height = 7) {
+  TriMesh m = mirrored_irregular_grid(half_width, height);
+  const double cy = 0.5 * height;
+  for (Vec3& p : m.positions) p.z() = 1.5 * std::exp(-0.08 * ((p.x()) * (p.x()) + (p.y() - cy) * (p.y() - cy)));
+  return m;
+}
+
+// Random but deterministic displacements on every level.
+void random_displacements(MultiresMesh& m, unsigned seed, double amplitude) {
+  std::mt19937 rng(seed);
+  for (int l = 0; l <= m.num_levels(); ++l) {
+    std::uniform_real_distribution<double> d(-amplitude / (1 << l), amplitude / (1 << l));
+    for (double& x : m.displacements[l]) x = d(rng);
+  }
+}
+
+void require_identical(const MultiresMesh& a, const MultiresMesh& b) {
+  REQUIRE(a.num_levels() == b.num_levels());
+  for (int l = 0; l <= a.num_levels(); ++l) {
+    INFO("level " << l);
+    int base = 0, normals = 0, displaced = 0;
+    for (int v = 0; v < a.num_vertices(l); ++v) {
+      base += a.state.base[l][v] != b.state.base[l][v];
+      normals += a.state.normals[l][v] != b.state.normals[l][v];
+      displaced += a.state.displaced[l][v] != b.state.displaced[l][v];
+    }
+    CHECK(base == 0);
+    CHECK(normals == 0);
+    CHECK(displaced == 0);
+  }
+}
+
+// A smooth star-shaped target around the origin: radius as a function of direction.
+double target_radius(const Vec3& dir) {
+  return 1.0 + 0.08 * dir.x() * dir.y() + 0.06 * std::sin(3 * dir.z()) + 0.04 * dir.x() * dir.x();
+}
+
+PointCloud sample_target(int n, double noise, unsigned seed, double drop_above_z = 1e9) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0, 1);
+  PointCloud c;
+  while (c.size() < n) {
+    Vec3 d(g(rng), g(rng), g(rng));
+    d.normalize();
+    if (d.z() > drop_above_z) continue;  // a hole: no data there
+    c.positions.push_back(d * (target_radius(d) + noise * g(rng)));
+  }
+  return c;
+}
+
+double radial_error(const Vec3& p) { return std::abs(p.norm() - target_radius(p.normalized())); }
+
+}  // namespace
+
+TEST_CASE("multires: zero displacements give the plain butterfly hierarchy", "[multires]") {
+  TriMesh m = icosphere(1);
+  MultiresMesh mr;
+  REQUIRE(build_multires(m, 3, mr).ok());
+  REQUIRE(mr.num_levels() == 3);
+  std::vector<std::vector<Vec3>> P;
+  REQUIRE(apply_all(mr.levels, m.positions, P).ok());
+  for (int l = 0; l <= 3; ++l) {
+    REQUIRE(static_cast<int>(mr.state.displaced[l].size()) == mr.num_vertices(l));
+    for (int v = 0; v < mr.num_vertices(l); ++v) CHECK(mr.state.displaced[l][v] == P[l][v]);
+  }
+  TriMesh out = level_mesh(mr, 2);
+  CHECK(out.num_vertices() == mr.num_vertices(2));
+  CHECK(out.num_triangles() == 16 * m.num_triangles());
+  CHECK(out.normals.size() == out.positions.size());
+}
+
+TEST_CASE("multires: a displacement moves the vertex along its normal on its level", "[multires]") {
+  TriMesh m = icosphere(1);
+  MultiresMesh mr;
+  REQUIRE(build_multires(m, 2, mr).ok());
+  const int v = 50;  // a vertex introduced on level 1
+  REQUIRE(v >= mr.num_vertices(0));
+  const Vec3 before = mr.state.displaced[1][v];
+  const Vec3 n = mr.state.normals[1][v];
+  mr.displacements[1][v] = 0.01;
+  REQUIRE(evaluate(mr).ok());
+  CHECK((mr.state.displaced[1][v] - (before + 0.01 * n)).norm() < 1e-15);
+  CHECK(n.dot(before.normalized()) > 0.99);  // outward normal on a sphere
+  CHECK(mr.state.displaced[2][v] == mr.state.displaced[1][v]);  // interpolated by the next level
+}
+
+TEST_CASE("multires: measured displacements put every level on the scanned surface", "[multires]") {
+  TriMesh m = icosphere(1);  // unit sphere; the target bulges up to ~10% away
+  const double noise = 0.001;
+  PointCloud cloud = sample_target(400000, noise, 11);
+  MultiresMesh mr;
+  REQUIRE(build_multires(m, 3, mr).ok());
+  double before_mean = 0;
+  for (const Vec3& p : mr.state.displaced[3]) before_mean += radial_error(p);
+  before_mean /= mr.num_vertices(3);
+
+  DisplacementStats stats;
+  REQUIRE(measure_displacements(cloud, DisplacementOptions{}, mr, &stats).ok());
+  for (int l = 0; l <= 3; ++l) {
+    INFO("level " << l << ": " << stats.measured[l] << " of " << stats.candidates[l] << " measured, mean |d| "
+                  << stats.mean_abs[l]);
+    CHECK(stats.measured[l] == stats.candidates[l]);  // dense data everywhere
+    double mean = 0, worst = 0;
+    for (const Vec3& p : mr.state.displaced[l]) {
+      mean += radial_error(p);
+      worst = std::max(worst, radial_error(p));
+    }
+    mean /= mr.num_vertices(l);
+    INFO("mean error " << mean << " max " << worst << " (before displacement " << before_mean << ")");
+    CHECK(mean < 0.3 * noise);  // the quadric fit averages the noise away
+    CHECK(worst < 1.5 * noise);
+  }
+  CHECK(before_mean > 20 * noise);
+  // Displacements shrink with the level: detail is coarse-to-fine.
+  CHECK(stats.mean_abs[3] < stats.mean_abs[0]);
+  // Vertices inherited from the coarser level are not re-measured (jeong2002).
+  for (int v = 0; v < mr.num_vertices(2); ++v) CHECK(mr.displacements[3][v] == 0.0);
+  // measure + incremental evaluation equals a fresh full evaluation
+  MultiresMesh again = mr;
+  REQUIRE(evaluate(again).ok());
+  require_identical(mr, again);
+}
+
+TEST_CASE("multires: where the scan has no data the displacement is zero", "[multires]") {
+  TriMesh m = icosphere(1);
+  PointCloud cloud = sample_target(200000, 0.0005, 5, /*drop_above_z=*/0.5);
+  MultiresMesh mr;
+  REQUIRE(build_multires(m, 3, mr).ok());
+  DisplacementStats stats;
+  REQUIRE(measure_displacements(cloud, DisplacementOptions{}, mr, &stats).ok());
+  int in_hole = 0, measured_elsewhere = 0, below = 0;
+  for (int l = 0; l <= 3; ++l) {
+    CHECK(stats.measured[l] < stats.candidates[l]);
+    for (int v = 0; v < mr.num_vertices(l); ++v) {
+      const Vec3 dir = mr.state.base[l][v].normalized();
+      if (dir.z() > 0.85) {
+        ++in_hole;
+        CHECK(mr.displacements[l][v] == 0.0);
+      } else if (dir.z() < 0.3) {
+        ++below;
+        measured_elsewhere += mr.displacements[l][v] != 0.0;
+      }
+    }
+  }
+  CHECK(in_hole > 100);
+  // Data region: new vertices are measured (inherited ones keep 0).
+  CHECK(measured_elsewhere > below / 2);
+}
+
+TEST_CASE("multires: local update equals a full recompute, bit for bit", "[multires]") {
+  for (int shape = 0; shape < 2; ++shape) {
+    TriMesh m = shape == 0 ? bumpy_patch(6, 10) : icosphere(2);
+    MultiresMesh local;
+    REQUIRE(build_multires(m, 3, local).ok());
+    random_displacements(local, 17 + shape, 0.2);
+    REQUIRE(evaluate(local).ok());
+    MeshTopology topo;
+    REQUIRE(build_topology(m, topo).ok());
+
+    std::mt19937 rng(99 + shape);
+    std::uniform_int_distribution<int> pick(0, m.num_vertices() - 1);
+    std::uniform_int_distribution<int> how_many(1, 4);
+    std::normal_distribution<double> step(0, 0.1);
+    std::set<int> kinds;  // 0 boundary, 1 regular interior, 2 extraordinary interior
+    for (int round = 0; round < 30; ++round) {
+      std::vector<int> moved;
+      std::vector<Vec3> to;
+      const int n = how_many(rng);
+      for (int i = 0; i < n; ++i) {
+        int v = pick(rng);
+        // make sure boundary and extraordinary vertices are exercised
+        if (round == 0 && shape == 0) v = topo.boundary_loops[0][0];
+        moved.push_back(v);
+        to.push_back(local.control[v] + Vec3(step(rng), step(rng), step(rng)));
+        kinds.insert(topo.is_boundary(v) ? 0 : topo.valence(v) == 6 ? 1 : 2);
+      }
+      UpdateFootprint fp;
+      REQUIRE(update_control_vertices(local, moved, to, &fp).ok());
+      MultiresMesh full = local;  // same control and displacements
+      REQUIRE(evaluate(full).ok());
+      INFO("shape " << shape << " round " << round);
+      require_identical(local, full);
+      if (n == 1) CHECK(fp.displaced_changed[3] < local.num_vertices(3));
+    }
+    if (shape == 0) CHECK(kinds.size() == 3);
+  }
+}
+
+TEST_CASE("multires: an update touches only the support of the moved vertex", "[multires]") {
+  TriMesh m = bumpy_patch(10, 20);
+  MultiresMesh mr;
+  REQUIRE(build_multires(m, 3, mr).ok());
+  random_displacements(mr, 3, 0.1);
+  REQUIRE(evaluate(mr).ok());
+  double max_edge = 0;
+  for (const Tri& t : m.triangles)
+    for (int k = 0; k < 3; ++k) max_edge = std::max(max_edge, (m.positions[t[k]] - m.positions[t[(k + 1) % 3]]).norm());
+
+  const int v = 10 * 21 + 10;  // an interior control vertex (centre column, row 10)
+  const MultiresMesh before = mr;
+  UpdateFootprint fp;
+  REQUIRE(update_control_vertices(mr, {v}, {mr.control[v] + Vec3(0.05, -0.1, 0.2)}, &fp).ok());
+  for (int l = 0; l <= 3; ++l) {
+    int changed = 0, far_changed = 0;
+    for (int u = 0; u < mr.num_vertices(l); ++u) {
+      if (mr.state.displaced[l][u] == before.state.displaced[l][u]) continue;
+      ++changed;
+      // Butterfly stencils reach two rings per level and normals one ring, on
+      // ever finer levels: the support stays within a few coarse edges.
+      if ((before.state.displaced[l][u] - m.positions[v]).norm() > 6 * max_edge) ++far_changed;
+    }
+    INFO("level " << l << ": " << changed << " changed of " << mr.num_vertices(l) << ", recomputed "
+                  << fp.displaced_changed[l]);
+    CHECK(changed > 0);
+    CHECK(far_changed == 0);
+    CHECK(changed <= fp.displaced_changed[l]);
+    CHECK(fp.displaced_changed[l] < mr.num_vertices(l));
+  }
+  CHECK(fp.displaced_changed[3] < mr.num_vertices(3) / 3);
+}
+
+TEST_CASE("multires: bad input gives clear errors and changes nothing", "[multires]") {
+  MultiresMesh mr;
+  CHECK(build_multires(TriMesh{}, 2, mr).code == ErrorCode::Empty);
+  TriMesh nan_mesh = icosahedron();
+  nan_mesh.positions[3].x() = std::nan("");
+  CHECK(build_multires(nan_mesh, 1, mr).code == ErrorCode::InvalidInput);
+
+  REQUIRE(build_multires(icosahedron(), 2, mr).ok());
+  const MultiresMesh before = mr;
+  CHECK(update_control_vertices(mr, {0, 1}, {Vec3::Zero()}).code == ErrorCode::InvalidInput);
+  CHECK(update_control_vertices(mr, {12}, {Vec3::Zero()}).code == ErrorCode::InvalidInput);
+  CHECK(update_control_vertices(mr, {-1}, {Vec3::Zero()}).code == ErrorCode::InvalidInput);
+  CHECK(update_control_vertices(mr, {2}, {Vec3(0, std::nan(""), 0)}).code == ErrorCode::InvalidInput);
+  require_identical(mr, before);
+  CHECK(mr.control == before.control);
+
+  MultiresMesh unevaluated;
+  CHECK(update_control_vertices(unevaluated, {}, {}).code == ErrorCode::InvalidInput);
+
+  CHECK(measure_displacements(PointCloud{}, DisplacementOptions{}, mr).code == ErrorCode::Empty);
+  PointCloud bad;
+  bad.positions = {Vec3(0, 0, std::numeric_limits<double>::infinity())};
+  CHECK(measure_displacements(bad, DisplacementOptions{}, mr).code == ErrorCode::InvalidInput);
+  MultiresMesh wrong = mr;
+  wrong.displacements[1].pop_back();
+  CHECK(evaluate(wrong).code == ErrorCode::InvalidInput);
+
+  // Cancelling leaves zero displacements.
+  PointCloud cloud = sample_target(20000, 0.0, 1);
+  Status s = measure_displacements(cloud, DisplacementOptions{}, mr, nullptr,
+                                   [](const char*, double f) { return f < 0.5; });
+  CHECK(s.code == ErrorCode::Cancelled);
+  for (const auto& d : mr.displacements)
+    for (double x : d) CHECK(x == 0.0);
+}
