@@ -65,7 +65,8 @@ Status load_geometry_file(const std::string& path, TriMesh& mesh, PointCloud& cl
   if (Status s = read_file(path, bytes); !s) return s;
   // An OBJ's material library sits next to it; its map_Kd becomes a path the
   // caller can open directly. A missing MTL only means no texture name.
-  const std::string mtllib = obj_mtllib(bytes.data(), bytes.size());
+  std::string mtllib = obj_mtllib(bytes.data(), bytes.size());
+  while (mtllib.compare(0, 2, "./") == 0) mtllib.erase(0, 2);
   Bytes mtl;
   if (!mtllib.empty()) {
     const std::string mtl_path = is_absolute(mtllib) ? mtllib : directory_of(path) + mtllib;

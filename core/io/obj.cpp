@@ -81,10 +81,10 @@ std::string obj_mtllib(const std::uint8_t* data, size_t size) {
   return "";
 }
 
-Status read_obj(const std::uint8_t* data, size_t size, TriMesh& mesh, GeometryKind& kind,
-                const std::string& mtl_text) {
-  mesh = TriMesh();
-  kind = GeometryKind::PointCloud;
+namespace {
+
+Status read_obj_body(const std::uint8_t* data, size_t size, TriMesh& mesh, GeometryKind& kind,
+                     const std::string& mtl_text) {
   if (size == 0) return Status::error(ErrorCode::Empty, "empty input: no bytes");
   const char* text = reinterpret_cast<const char*>(data);
   io_detail::Tokenizer tok(text, text + size);
@@ -270,6 +270,17 @@ Status read_obj(const std::uint8_t* data, size_t size, TriMesh& mesh, GeometryKi
   }
   kind = nt > 0 ? GeometryKind::Mesh : GeometryKind::PointCloud;
   return Status::success();
+}
+
+}  // namespace
+
+Status read_obj(const std::uint8_t* data, size_t size, TriMesh& mesh, GeometryKind& kind,
+                const std::string& mtl_text) {
+  mesh = TriMesh();
+  kind = GeometryKind::PointCloud;
+  Status s = read_obj_body(data, size, mesh, kind, mtl_text);
+  if (!s) mesh = TriMesh();  // never hand back half a mesh
+  return s;
 }
 
 std::string write_obj(const TriMesh& mesh, const std::string& mtl_file) {
