@@ -1,0 +1,77 @@
+// Closest points on a triangle mesh, and scan-to-surface distance statistics.
+//
+// jeong2002 Sec. 4.2/4.3: E_dist needs Pi(G, p), the projection of a scan
+// point p onto the nearest surface point of the mesh G; Sec. 7 (Table 1)
+// reports the mean and maximum of |Pi(G, p) - p| over the scan in percent of
+// the point cloud's bounding-box diagonal. Both come from this exact query
+// (not an approximation through mesh vertices), answered by a bounding-volume
+// hierarchy over the triangles.
+//
+// Shapes: positions #V by 3, triangles #F by 3, query points #P by 3.
+#pragma once
+#include "mesh/tri_mesh.h"
+
+#include <vector>
+
+namespace lk {
+
+// The nearest surface point of one query.
+struct SurfacePoint {
+  int face = -1;                     // triangle index, -1 when the mesh is empty
+  Vec3 barycentric = Vec3::Zero();   // weights of the triangle's corners 0,1,2
+  Vec3 point = Vec3::Zero();         // the closest point itself
+  double squared_distance = 1e300;
+};
+
+// A BVH over a mesh's triangles for closest-point queries. It stores a copy
+// of the positions it was built from; rebuild it after the mesh moves.
+class ClosestPointTree {
+ public:
+  ClosestPointTree() = default;
+  explicit ClosestPointTree(const TriMesh& mesh) { build(mesh); }
+  void build(const TriMesh& mesh);
+
+  bool empty() const { return triangles_.empty(); }
+  // Exact closest point on the mesh. When a finite upper bound on the squared
+  // distance is known (e.g. from the previous iteration's triangle) passing
+  // it prunes the search; if nothing is nearer than the bound the result's
+  // face is -1.
+  SurfacePoint closest(const Vec3& p, double max_squared_distance = 1e300) const;
+
+ private:
+  struct Node {
+    Vec3 min = Vec3::Zero(), max = Vec3::Zero();
+    int first = 0, count = 0;  // leaf: range in order_; inner: count == 0
+    int left = -1, right = -1;
+  };
+  int build_node(int first, int count, std::vector<Vec3>& centroids);
+
+  std::vector<Vec3> positions_;
+  std::vector<Tri> triangles_;
+  std::vector<int> order_;  // triangle ids, leaves own contiguous ranges
+  std::vector<Node> nodes_;
+};
+
+// Closest point on triangle (a, b, c) to p, with barycentric weights.
+SurfacePoint closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+
+// Distances from scan points to a surface, the measure of jeong2002 Table 1.
+struct DistanceStats {
+  int count = 0;           // points measured
+  double mean = 0;         // mean distance, scan units
+  double max = 0;          // maximum distance
+  double rms = 0;
+  double p95 = 0;          // 95th percentile
+  double mean_pct = 0;     // mean in percent of the reference diagonal
+  double max_pct = 0;
+};
+
+// Distances from every point (or every stride-th point when stride > 1) to
+// the mesh, normalized by reference_diagonal (the cloud's bbox diagonal).
+DistanceStats point_to_surface_stats(const std::vector<Vec3>& points, const TriMesh& mesh,
+                                     double reference_diagonal, int stride = 1);
+
+// Summary of a list of distances (consumed: it is partially sorted).
+DistanceStats summarize_distances(std::vector<double>& distances, double reference_diagonal);
+
+}  // namespace lk

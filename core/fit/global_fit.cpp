@@ -1,0 +1,326 @@
+#include "fit/global_fit.h"
+
+#include "fit/closest_point.h"
+#include "mesh/geometry.h"
+
+#include <Eigen/Sparse>
+#include <Eigen/SparseCholesky>
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <random>
+
+namespace lk {
+namespace {
+
+using SpMat = Eigen::SparseMatrix<double>;
+using Triplet = Eigen::Triplet<double>;
+using VecX = Eigen::VectorXd;
+
+// A linear residual block R x - b, with x the interleaved coordinates
+// (x0 y0 z0 x1 ...) of all vertices.
+struct LinearTerm {
+  SpMat R;
+  VecX b;
+  double energy(const VecX& x) const { return R.rows() ? (R * x - b).squaredNorm() : 0.0; }
+};
+
+VecX to_vector(const std::vector<Vec3>& p) {
+  VecX x(3 * p.size());
+  for (size_t i = 0; i < p.size(); ++i) x.segment<3>(3 * i) = p[i];
+  return x;
+}
+
+void from_vector(const VecX& x, std::vector<Vec3>& p) {
+  for (size_t i = 0; i < p.size(); ++i) p[i] = x.segment<3>(3 * i);
+}
+
+// Umbrella operator rows: L(v) = x_v - mean(one-ring of v), minus rest.
+LinearTerm smooth_term(const MeshTopology& topo, const VecX& rest, bool preserve_rest) {
+  const int nv = topo.num_vertices;
+  std::vector<Triplet> t;
+  for (int v = 0; v < nv; ++v) {
+    const auto& ring = topo.rings[v];
+    if (ring.empty()) continue;
+    const double w = 1.0 / ring.size();
+    for (int c = 0; c < 3; ++c) {
+      t.emplace_back(3 * v + c, 3 * v + c, 1.0);
+      for (int u : ring) t.emplace_back(3 * v + c, 3 * u + c, -w);
+    }
+  }
+  LinearTerm term;
+  term.R.resize(3 * nv, 3 * nv);
+  term.R.setFromTriplets(t.begin(), t.end());
+  term.b = preserve_rest ? VecX(term.R * rest) : VecX::Zero(3 * nv);
+  return term;
+}
+
+LinearTerm binding_term(const std::vector<std::array<int, 2>>& edges, int nv, const VecX& rest) {
+  std::vector<Triplet> t;
+  LinearTerm term;
+  term.b.resize(3 * edges.size());
+  for (size_t e = 0; e < edges.size(); ++e) {
+    const int a = edges[e][0], b = edges[e][1];
+    for (int c = 0; c < 3; ++c) {
+      t.emplace_back(3 * e + c, 3 * a + c, 1.0);
+      t.emplace_back(3 * e + c, 3 * b + c, -1.0);
+      term.b[3 * e + c] = rest[3 * a + c] - rest[3 * b + c];
+    }
+  }
+  term.R.resize(3 * edges.size(), 3 * nv);
+  term.R.setFromTriplets(t.begin(), t.end());
+  return term;
+}
+
+LinearTerm constraint_term(const std::vector<int>& vertices, int nv, const VecX& rest) {
+  std::vector<Triplet> t;
+  LinearTerm term;
+  term.b.resize(3 * vertices.size());
+  for (size_t i = 0; i < vertices.size(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      t.emplace_back(3 * i + c, 3 * vertices[i] + c, 1.0);
+      term.b[3 * i + c] = rest[3 * vertices[i] + c];
+    }
+  term.R.resize(3 * vertices.size(), 3 * nv);
+  term.R.setFromTriplets(t.begin(), t.end());
+  return term;
+}
+
+// Closest points of the point set on the mesh with positions x.
+struct Projection {
+  std::vector<SurfacePoint> hits;
+  double dist_energy = 0;  // 1/#S sum min(d, tau)^2
+};
+
+void project(const std::vector<Vec3>& points, const std::vector<int>& set, TriMesh& work,
+             const VecX& x, double tau, Projection& out) {
+  from_vector(x, work.positions);
+  ClosestPointTree tree(work);
+  out.hits.resize(set.size());
+  double sum = 0;
+  const double tau2 = tau * tau;
+  for (size_t i = 0; i < set.size(); ++i) {
+    out.hits[i] = tree.closest(points[set[i]]);
+    sum += std::min(out.hits[i].squared_distance, tau2);
+  }
+  out.dist_energy = set.empty() ? 0.0 : sum / set.size();
+}
+
+bool finite(const Vec3& p) { return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()); }
+
+}  // namespace
+
+Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const MeshTopology& topology,
+                  const GlobalFitTerms& terms, const GlobalFitOptions& options, TriMesh& out,
+                  GlobalFitResult& result, const ProgressFn& progress) {
+  result = GlobalFitResult{};
+  const int nv = mesh.num_vertices();
+  if (points.empty()) return Status::error(ErrorCode::Empty, "global fit: no scan points to fit");
+  if (mesh.triangles.empty() || nv == 0)
+    return Status::error(ErrorCode::Empty, "global fit: the control mesh has no triangles");
+  if (topology.num_vertices != nv || static_cast<int>(topology.rings.size()) != nv)
+    return Status::error(ErrorCode::InvalidInput, "global fit: topology does not match the mesh");
+  if (options.smooth_weights.empty())
+    return Status::error(ErrorCode::InvalidInput, "global fit: no rounds (smooth_weights is empty)");
+  for (const Vec3& p : points)
+    if (!finite(p)) return Status::error(ErrorCode::InvalidInput, "global fit: non-finite scan point");
+  for (const Vec3& p : mesh.positions)
+    if (!finite(p)) return Status::error(ErrorCode::InvalidInput, "global fit: non-finite mesh vertex");
+  for (const auto& e : terms.binding_edges)
+    if (e[0] < 0 || e[1] < 0 || e[0] >= nv || e[1] >= nv || e[0] == e[1])
+      return Status::error(ErrorCode::InvalidInput, "global fit: binding edge with a bad vertex index");
+  for (int v : terms.constrained_vertices)
+    if (v < 0 || v >= nv)
+      return Status::error(ErrorCode::InvalidInput, "global fit: constrained vertex index out of range");
+
+  const VecX rest = to_vector(mesh.positions);
+  const LinearTerm smooth = smooth_term(topology, rest, options.preserve_rest_shape);
+  const LinearTerm binding = binding_term(terms.binding_edges, nv, rest);
+  const LinearTerm constraint = constraint_term(terms.constrained_vertices, nv, rest);
+  const double inv_v = 1.0 / nv;
+  const SpMat h_smooth = SpMat(smooth.R.transpose() * smooth.R) * inv_v;
+  const VecX g_smooth = smooth.R.transpose() * smooth.b * inv_v;
+  SpMat h_fixed(3 * nv, 3 * nv);
+  VecX g_fixed = VecX::Zero(3 * nv);
+  if (binding.R.rows()) {
+    h_fixed += SpMat(binding.R.transpose() * binding.R) * (options.binding_weight * inv_v);
+    g_fixed += binding.R.transpose() * binding.b * (options.binding_weight * inv_v);
+  }
+  if (constraint.R.rows()) {
+    h_fixed += SpMat(constraint.R.transpose() * constraint.R) * (options.constraint_weight * inv_v);
+    g_fixed += constraint.R.transpose() * constraint.b * (options.constraint_weight * inv_v);
+  }
+
+  const double edge = mean_edge_length(mesh);
+  // A tiny pull towards the current positions keeps the system definite for
+  // vertices that neither data nor regularizers reach (isolated vertices);
+  // scaled far below every real term.
+  const double tikhonov = 1e-9;
+
+  // One random order of the points; round r uses a prefix of it.
+  std::vector<int> order(points.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::mt19937 rng(options.seed);
+  std::shuffle(order.begin(), order.end(), rng);
+
+  TriMesh work = mesh;
+  VecX x = rest;
+  const int rounds = static_cast<int>(options.smooth_weights.size());
+  const int total_iterations = rounds * std::max(1, options.max_iterations_per_round);
+  Eigen::SimplicialLDLT<SpMat> solver;
+  bool analyzed = false;
+  int done_iterations = 0;
+
+  auto energy_parts = [&](const VecX& xx, double dist, double lambda, GlobalFitIteration& it) {
+    it.e_dist = dist;
+    it.e_smooth = smooth.energy(xx) * inv_v;
+    it.e_binding = binding.energy(xx) * inv_v;
+    it.e_constraint = constraint.energy(xx) * inv_v;
+    return it.e_dist + lambda * it.e_smooth + options.binding_weight * it.e_binding +
+           options.constraint_weight * it.e_constraint;
+  };
+
+  for (int r = 0; r < rounds; ++r) {
+    const double lambda = options.smooth_weights[r];
+    const bool last = r + 1 == rounds;
+    int count = last ? options.final_points : options.subsample_points;
+    if (count <= 0 || count > static_cast<int>(points.size())) count = static_cast<int>(points.size());
+    const std::vector<int> set(order.begin(), order.begin() + count);
+
+    // The trimming distance is fixed for the round so that the round
+    // minimizes one well-defined energy.
+    Projection proj;
+    project(points, set, work, x, 1e300, proj);
+    std::vector<double> d(proj.hits.size());
+    for (size_t i = 0; i < d.size(); ++i) d[i] = std::sqrt(proj.hits[i].squared_distance);
+    std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+    const double tau = std::max(options.trim_factor * d[d.size() / 2], options.trim_floor_edges * edge);
+    {
+      double sum = 0;
+      for (const auto& h : proj.hits) sum += std::min(h.squared_distance, tau * tau);
+      proj.dist_energy = sum / set.size();
+    }
+    GlobalFitIteration scratch;
+    double e_old = energy_parts(x, proj.dist_energy, lambda, scratch);
+
+    const SpMat h_reg = SpMat(h_smooth * lambda) + h_fixed;
+    const VecX g_reg = g_smooth * lambda + g_fixed;
+    const double w = 1.0 / set.size();
+    const double beta = options.point_to_point_weight;
+
+    for (int it = 0; it < options.max_iterations_per_round; ++it) {
+      if (!report(progress, "global_fitting", double(done_iterations) / total_iterations))
+        return Status::error(ErrorCode::Cancelled, "global fit cancelled");
+      ++done_iterations;
+
+      // Data term, accumulated per triangle as 9x9 blocks (the corners'
+      // coordinates), so the assembly cost does not grow with the triplets.
+      const int nf = mesh.num_triangles();
+      std::vector<Eigen::Matrix<double, 9, 9>> blocks(nf, Eigen::Matrix<double, 9, 9>::Zero());
+      VecX g = g_reg;
+      const double tau2 = tau * tau;
+      for (size_t i = 0; i < set.size(); ++i) {
+        const SurfacePoint& h = proj.hits[i];
+        if (h.face < 0 || h.squared_distance > tau2) continue;
+        const Vec3& p = points[set[i]];
+        const Tri& tri = mesh.triangles[h.face];
+        Vec3 n = p - h.point;
+        const double len = n.norm();
+        if (len > 1e-12 * edge) {
+          n /= len;
+        } else {
+          n = face_normal_area(work, h.face);
+          const double nl = n.norm();
+          if (nl <= 0) continue;
+          n /= nl;
+        }
+        Eigen::Matrix<double, 9, 1> a;
+        for (int k = 0; k < 3; ++k) a.segment<3>(3 * k) = h.barycentric[k] * n;
+        auto& B = blocks[h.face];
+        B.noalias() += w * a * a.transpose();
+        const double np = n.dot(p);
+        for (int k = 0; k < 3; ++k) {
+          for (int l = 0; l < 3; ++l) {
+            const double bb = w * beta * h.barycentric[k] * h.barycentric[l];
+            for (int c = 0; c < 3; ++c) B(3 * k + c, 3 * l + c) += bb;
+          }
+          g.segment<3>(3 * tri[k]) += w * (a.segment<3>(3 * k) * np + beta * h.barycentric[k] * p);
+        }
+      }
+      std::vector<Triplet> trip;
+      trip.reserve(size_t(nf) * 81 + 3 * nv);
+      for (int f = 0; f < nf; ++f) {
+        const Tri& tri = mesh.triangles[f];
+        for (int k = 0; k < 3; ++k)
+          for (int l = 0; l < 3; ++l)
+            for (int c = 0; c < 3; ++c)
+              for (int e = 0; e < 3; ++e)
+                trip.emplace_back(3 * tri[k] + c, 3 * tri[l] + e, blocks[f](3 * k + c, 3 * l + e));
+      }
+      for (int i = 0; i < 3 * nv; ++i) trip.emplace_back(i, i, tikhonov * w);
+      SpMat h_data(3 * nv, 3 * nv);
+      h_data.setFromTriplets(trip.begin(), trip.end());
+      const SpMat H = h_data + h_reg;
+      g += (tikhonov * w) * x;
+      if (!analyzed) {
+        solver.analyzePattern(H);
+        analyzed = true;
+      }
+      solver.factorize(H);
+      if (solver.info() != Eigen::Success)
+        return Status::error(ErrorCode::NotConverged, "global fit: the normal equations are singular");
+      const VecX x_star = solver.solve(g);
+      if (!x_star.allFinite())
+        return Status::error(ErrorCode::NotConverged, "global fit: the solve produced non-finite positions");
+
+      // Backtracking on the true energy: the linearization is exact only at
+      // the current correspondences.
+      GlobalFitIteration rec;
+      rec.round = r;
+      rec.points = count;
+      rec.smooth_weight = lambda;
+      rec.trim_distance = tau;
+      rec.energy_before = e_old;
+      double step = 1.0;
+      bool accepted = false;
+      Projection trial;
+      for (int bt = 0; bt < 6; ++bt, step *= 0.5) {
+        const VecX xt = x + step * (x_star - x);
+        project(points, set, work, xt, tau, trial);
+        GlobalFitIteration parts;
+        const double e_new = energy_parts(xt, trial.dist_energy, lambda, parts);
+        if (e_new <= e_old) {
+          accepted = true;
+          x = xt;
+          proj = std::move(trial);
+          rec.energy_after = e_new;
+          rec.e_dist = parts.e_dist;
+          rec.e_smooth = parts.e_smooth;
+          rec.e_binding = parts.e_binding;
+          rec.e_constraint = parts.e_constraint;
+          rec.step = step;
+          break;
+        }
+      }
+      if (!accepted) {
+        from_vector(x, work.positions);  // project() left a trial in work
+        rec.energy_after = e_old;
+        energy_parts(x, proj.dist_energy, lambda, rec);
+        rec.step = 0;
+        result.iterations.push_back(rec);
+        break;
+      }
+      result.iterations.push_back(rec);
+      const double change = (e_old - rec.energy_after) / std::max(e_old, 1e-300);
+      e_old = rec.energy_after;
+      if (change < options.relative_tolerance) break;
+    }
+  }
+  result.rounds = rounds;
+  out = mesh;
+  from_vector(x, out.positions);
+  report(progress, "global_fitting", 1.0);
+  return Status::success();
+}
+
+}  // namespace lk

@@ -1,0 +1,99 @@
+// Global control-mesh fitting: jeong2002 Sec. 4.3.
+//
+//   E_global = E_dist + lambda E_smooth + mu E_binding + nu E_constraint
+//
+// minimized over all control vertex positions X (#V by 3). Each iteration
+// projects the scan points onto the current mesh (exact closest points, see
+// closest_point.h), linearizes E_dist as point-to-plane distance of the
+// barycentric combination of the projecting triangle's corners (Hoppe et al.
+// 1994; Marschner et al. 2000) plus a small point-to-point share for
+// conditioning, and solves the resulting sparse 3#V by 3#V normal equations
+// with Eigen's SimplicialLDLT. A backtracking step on the TRUE energy (true
+// closest-point distances) makes every iteration decrease E_global, which
+// the returned per-iteration energies show.
+//
+// Normalization (so the weights do not depend on scan density or mesh size):
+//   E_dist       = 1/#S  sum_p min(d_p, tau)^2          over the point set S
+//   E_smooth     = 1/#V  sum_v |L(v) - L0(v)|^2          umbrella operator L
+//   E_binding    = 1/#V  sum_e |(x_a - x_b) - r_e|^2     binding edges
+//   E_constraint = 1/#V  sum_c |x_c - x~_c|^2            constrained vertices
+// so lambda = 1 weighs a vertex's smoothness like the data of an average
+// vertex. tau trims outliers (points farther than a few times the median
+// residual count as tau, and do not pull).
+//
+// Deviations from the paper, chosen on purpose:
+// - L0(v) is the umbrella vector of the mesh before global fitting when
+//   preserve_rest_shape is set (default): in holes the surface keeps the
+//   shape of the locally fitted generic head instead of shrinking towards
+//   its one-ring centroids (the paper's pure umbrella, L0 = 0, is available).
+// - r_e is the edge vector before global fitting. For the virtual lip edges,
+//   whose ends coincide in the generic head, that is the paper's sum of l_e^2;
+//   for mesh edges (behind the ears) binding the edge VECTOR keeps the ear's
+//   shape without pulling it onto the skull as a pure length penalty would.
+// - The smoothing weight decreases over rounds (as Hoppe's spring constant):
+//   early rounds on a random subsample of the scan with strong smoothing,
+//   the last round on all points.
+#pragma once
+#include "common/progress.h"
+#include "common/status.h"
+#include "mesh/topology.h"
+#include "mesh/tri_mesh.h"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace lk {
+
+struct GlobalFitOptions {
+  // lambda per round; the number of rounds is the size of this list. Early
+  // rounds keep the mesh stiff while correspondences are still poor.
+  std::vector<double> smooth_weights = {1.0, 0.2, 0.05};
+  double binding_weight = 1.0;      // mu: binding edges keep ears and lips in shape
+  double constraint_weight = 10.0;  // nu: inner-lip vertices stay put
+  // Share of point-to-point distance added to point-to-plane: regularizes
+  // sliding along the surface, keeps the normal equations well conditioned.
+  double point_to_point_weight = 0.1;
+  bool preserve_rest_shape = true;  // see header comment
+  int max_iterations_per_round = 12;
+  double relative_tolerance = 2e-3;  // stop a round when E changes less than this
+  int subsample_points = 20000;      // points per early round (0: all)
+  int final_points = 0;              // points in the last round (0: all)
+  // Trimming: residuals beyond max(trim_factor * median, trim_floor) count
+  // as that distance. trim_floor is in units of the mesh's mean edge length.
+  double trim_factor = 4.0;
+  double trim_floor_edges = 0.25;
+  std::uint32_t seed = 1;
+};
+
+// Terms of E_binding and E_constraint, from the head's annotations.
+struct GlobalFitTerms {
+  std::vector<std::array<int, 2>> binding_edges;  // vertex pairs (mesh or virtual edges)
+  std::vector<int> constrained_vertices;
+};
+
+struct GlobalFitIteration {
+  int round = 0;
+  int points = 0;              // #S in this round
+  double smooth_weight = 0;    // lambda in this round
+  double trim_distance = 0;    // tau in this round
+  double energy_before = 0;    // E_global at the start of the iteration
+  double energy_after = 0;     // E_global after the accepted step (<= energy_before)
+  double e_dist = 0, e_smooth = 0, e_binding = 0, e_constraint = 0;  // after, unweighted
+  double step = 1;             // accepted fraction of the linear solve's step (0: none)
+};
+
+struct GlobalFitResult {
+  std::vector<GlobalFitIteration> iterations;
+  int rounds = 0;
+};
+
+// points: the scan points to fit (already stripped of clipped regions), #P.
+// mesh: the control mesh after local fitting; topology: its connectivity.
+// out: the fitted mesh (same triangles, new positions). Fails on empty or
+// non-finite input, index errors in terms, or a singular system.
+Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const MeshTopology& topology,
+                  const GlobalFitTerms& terms, const GlobalFitOptions& options, TriMesh& out,
+                  GlobalFitResult& result, const ProgressFn& progress = {});
+
+}  // namespace lk
