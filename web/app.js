@@ -36,6 +36,7 @@
   const app = window.likeness = {
     startedAt: performance.now(),
     loadMs: null,          // page start -> viewer and worker up, head drawn
+    timings: {},           // ms since page start: viewerModule, firstFrame, worker
     viewer: null,
     worker: null,
     model: null,           // {name, kind, vertexCount, triangleCount} shown now
@@ -97,6 +98,7 @@
       worker.onmessage = (e) => {
         const msg = e.data;
         if (msg.type === 'ready') {
+          if (app.timings.worker === undefined) app.timings.worker = performance.now() - app.startedAt;
           resolve();
         } else if (msg.type === 'progress') {
           const job = jobs.get(msg.id);
@@ -171,7 +173,9 @@
       onAbort: (what) => fatalStartup('The 3D viewer stopped: ' + what),
     });
     app.viewer = viewer;
+    app.timings.viewerModule = performance.now() - app.startedAt;
     await firstFrame(viewer);
+    app.timings.firstFrame = performance.now() - app.startedAt;
     ui.overlay.hidden = true;
     return viewer;
   }

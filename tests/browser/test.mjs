@@ -249,8 +249,9 @@ async function main() {
     await page.goto(origin + '/index.html');
     const s0 = await waitForState(page, ['ready', 'error'], READY_TIMEOUT_MS);
     const wallMs = Date.now() - t0;
-    const loadMs = await page.evaluate(() => window.likeness && window.likeness.loadMs);
-    if (!check('page reaches "ready"', s0 === 'ready', s0 === 'ready' ? `app load ${Math.round(loadMs)} ms, wall ${wallMs} ms`
+    const { loadMs, timings } = await page.evaluate(() => ({ loadMs: window.likeness.loadMs, timings: window.likeness.timings }));
+    const parts = Object.entries(timings || {}).map(([k, v]) => `${k} ${Math.round(v)}`).join(', ');
+    if (!check('page reaches "ready"', s0 === 'ready', s0 === 'ready' ? `app load ${Math.round(loadMs)} ms (${parts}), wall ${wallMs} ms`
                                                                   : 'state ' + s0 + ': ' + await bannerText(page))) {
       throw new Error('the page did not start');
     }
