@@ -29,7 +29,7 @@
     status: $('status'), banner: $('error-banner'), bannerText: $('error-text'),
     dismiss: $('error-dismiss'), dropZone: $('drop-zone'), fileInput: $('file-input'),
     fileList: $('file-list'), reset: $('btn-reset'), generic: $('btn-generic'),
-    pointSize: $('point-size'), maxSize: $('max-size'),
+    pointSize: $('point-size'), maxSize: $('max-size'), sample: $('btn-sample'),
   };
 
   // Exposed for the browser test and for debugging from the console.
@@ -51,6 +51,7 @@
     ui.fileInput.disabled = !interactive || state === 'working';
     ui.reset.disabled = !interactive;
     ui.generic.disabled = !interactive || state === 'working';
+    ui.sample.disabled = !interactive || state === 'working';
     ui.pointSize.disabled = !interactive;
     ui.dropZone.classList.toggle('busy', state === 'working');
   }
@@ -204,7 +205,7 @@
     meta.textContent = formatBytes(file.size) + ' · ' + note;
     li.append(name, meta);
     ui.fileList.prepend(li);
-    while (ui.fileList.children.length > 8) ui.fileList.lastChild.remove();
+    while (ui.fileList.children.length > 6) ui.fileList.lastChild.remove();
     return meta;
   }
 
@@ -229,19 +230,28 @@
     await loadScan(scans[0]);
   }
 
+  const SCAN_EXTENSIONS = ['ply', 'obj', 'xyz', 'vtk'];
+
+  // A failed load: the message goes to the banner, the stage and the file
+  // list say so, and the status line says what is still shown.
+  function loadFailed(file, meta, note, message) {
+    meta.textContent = formatBytes(file.size) + ' · ' + note;
+    setStage('load', 'failed', 0, 'failed');
+    const kept = app.model ? ' The previous model (' + app.model.name + ') is still shown.' : '';
+    setStatus('Could not load ' + file.name + '.' + kept);
+    showError(message);
+  }
+
   async function loadScan(file) {
     const meta = listFile(file, 'reading…');
     if (file.size > MAX_SCAN_BYTES) {
-      meta.textContent = formatBytes(file.size) + ' · too large';
-      setStage('load', 'failed', 0, 'failed');
-      showError(file.name + ' is ' + formatBytes(file.size) + '; the web app accepts scans up to ' +
-                formatBytes(MAX_SCAN_BYTES) + '. Decimate the scan or use the native tool (likeness).');
+      loadFailed(file, meta, 'too large', file.name + ' is ' + formatBytes(file.size) +
+                 '; the web app accepts scans up to ' + formatBytes(MAX_SCAN_BYTES) +
+                 '. Decimate the scan or use the native tool (likeness).');
       return;
     }
     if (file.size === 0) {
-      meta.textContent = '0 B · empty';
-      setStage('load', 'failed', 0, 'failed');
-      showError(file.name + ' is empty.');
+      loadFailed(file, meta, 'empty', file.name + ' is empty.');
       return;
     }
     setState('working');
@@ -260,19 +270,20 @@
     }
     const ms = performance.now() - t0;
     if (!result.ok) {
-      meta.textContent = formatBytes(file.size) + ' · not loaded';
-      setStage('load', 'failed', 0, 'failed');
-      const kept = app.model ? ' The previous model (' + app.model.name + ') is still shown.' : '';
-      setStatus('Could not load ' + file.name + '.' + kept);
-      showError(result.message || (file.name + ': ' + result.code));
+      let message = result.message || (file.name + ': ' + result.code);
+      // The core guessed the format from the bytes; say what we expected.
+      if (!SCAN_EXTENSIONS.includes(extension(file.name))) {
+        message = file.name + ' is not a PLY, OBJ, XYZ or VTK scan (' +
+                  message.replace(file.name + ': ', '') + ').';
+      }
+      loadFailed(file, meta, 'not loaded', message);
       return;
     }
     const shown = result.kind === 'mesh'
       ? app.viewer.show_mesh(result.positions, result.normals, result.colors, result.indices)
       : app.viewer.show_points(result.positions, result.normals, result.colors);
     if (shown !== '') {
-      setStage('load', 'failed', 0, 'failed');
-      showError(file.name + ': ' + shown);
+      loadFailed(file, meta, 'not shown', file.name + ': ' + shown);
       return;
     }
     app.model = { name: file.name, kind: result.kind, vertexCount: result.vertexCount,
@@ -285,6 +296,29 @@
     setStage('load', 'done', 1, 'complete');
     setStatus(file.name + ': ' + what + ' (loaded in ' + Math.round(ms) + ' ms).');
     setState('done');
+  }
+
+  // The built-in sample (a synthetic head from our virtual scanner, no real
+  // person) is put beside the page by scripts/demo; it comes from this page's
+  // own origin like everything else.
+  const SAMPLE_URL = 'sample/scan.ply';
+  async function loadSample() {
+    if (document.body.dataset.state === 'working') return;
+    clearError();
+    let response;
+    try {
+      response = await fetch(SAMPLE_URL, { cache: 'no-store' });
+    } catch (e) {
+      showError('Could not fetch the sample (' + SAMPLE_URL + '): ' + (e && e.message ? e.message : e));
+      return;
+    }
+    if (!response.ok) {
+      showError('The built-in sample is not installed next to this page (' + SAMPLE_URL + ': HTTP ' +
+                response.status + '). scripts/demo makes it; or drop your own scan.');
+      return;
+    }
+    const blob = await response.blob();
+    await loadScan(new File([blob], 'sample_scan.ply'));
   }
 
   // ---- wiring -----------------------------------------------------------------
@@ -307,6 +341,7 @@
       handleFiles(e.dataTransfer && e.dataTransfer.files);
     });
     ui.dismiss.addEventListener('click', clearError);
+    ui.sample.addEventListener('click', loadSample);
     ui.reset.addEventListener('click', () => app.viewer && app.viewer.reset_view());
     ui.generic.addEventListener('click', () => {
       if (!app.viewer) return;

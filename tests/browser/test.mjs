@@ -316,7 +316,21 @@ async function main() {
           `${(100 * analyse(cube).fgFraction).toFixed(1)}% foreground`);
     await shot(page, 'web_mesh.png');
 
-    // 6. The size limit, on a page started with a 1 MB limit.
+    // 6. The built-in sample, when scripts/demo has put it beside the page
+    // (clicking it otherwise would log the 404 as a console error).
+    if (fs.existsSync(path.join(WEBDIR, 'sample', 'scan.ply'))) {
+      await page.click('#btn-sample');
+      await page.waitForFunction(() => document.body.dataset.state === 'error' ||
+        (document.body.dataset.state === 'done' && window.likeness.model && window.likeness.model.name === 'sample_scan.ply'),
+        null, { timeout: JOB_TIMEOUT_MS });
+      const s5 = await state(page);
+      check('"Try the sample" loads sample/scan.ply', s5 === 'done', `state ${s5}; status "${(await page.textContent('#status')).trim()}"`);
+      await shot(page, 'web_sample.png');
+    } else {
+      console.log('note  "Try the sample" not exercised: no sample/scan.ply in WEBDIR (scripts/demo makes it)');
+    }
+
+    // 7. The size limit, on a page started with a 1 MB limit.
     const page2 = await context.newPage();
     watch(page2);
     await page2.goto(origin + '/index.html?max_mb=1');
