@@ -32,7 +32,8 @@ struct BoxTransform {
 
 // The box's part of the mesh and its data, in local indices.
 struct BoxProblem {
-  std::vector<Vec3> rest;       // box vertices as aligned
+  std::vector<Vec3> rest;       // box vertices (and their outside neighbours) as aligned
+  std::vector<char> moving;     // 1 for vertices inside the box (they follow T)
   std::vector<Tri> triangles;   // local indices
   std::vector<std::array<int, 2>> edges;
   std::vector<double> rest_lengths;
@@ -49,7 +50,7 @@ struct BoxProblem {
   void evaluate(const BoxTransform& T, Eval& ev) const {
     TriMesh m;
     m.positions.resize(rest.size());
-    for (size_t i = 0; i < rest.size(); ++i) m.positions[i] = T.apply(rest[i]);
+    for (size_t i = 0; i < rest.size(); ++i) m.positions[i] = moving[i] ? T.apply(rest[i]) : rest[i];
     m.triangles = triangles;
     ClosestPointTree tree(m);
     ev.hits.resize(points.size());
@@ -77,10 +78,17 @@ struct BoxProblem {
       const SurfacePoint& h = ev.hits[i];
       if (h.face < 0) continue;
       const Tri& tri = triangles[h.face];
-      const Vec3 y = h.barycentric[0] * rest[tri[0]] + h.barycentric[1] * rest[tri[1]] +
-                     h.barycentric[2] * rest[tri[2]];
-      const Vec3 q = y - T.c;
-      const Vec3 x = T.apply(y);
+      // Only corners inside the box follow T: q collects their weighted
+      // offsets from the centre, wm their total weight.
+      Vec3 x = Vec3::Zero(), q = Vec3::Zero();
+      double wm = 0;
+      for (int k = 0; k < 3; ++k) {
+        x += h.barycentric[k] * ev.moved[tri[k]];
+        if (moving[tri[k]]) {
+          q += h.barycentric[k] * (rest[tri[k]] - T.c);
+          wm += h.barycentric[k];
+        }
+      }
       Vec3 n = points[i] - x;
       const double len = n.norm();
       if (len > 1e-15) {
@@ -95,7 +103,7 @@ struct BoxProblem {
       Vec12 j;
       for (int a = 0; a < 3; ++a)
         for (int b = 0; b < 3; ++b) j[3 * a + b] = n[a] * q[b];
-      j.tail<3>() = n;
+      j.tail<3>() = wm * n;
       const double r = n.dot(x - points[i]);
       JtJ.noalias() += wd * j * j.transpose();
       Jtr.noalias() += wd * r * j;
@@ -103,7 +111,7 @@ struct BoxProblem {
       for (int a = 0; a < 3; ++a) {
         Vec12 jp = Vec12::Zero();
         for (int b = 0; b < 3; ++b) jp[3 * a + b] = q[b];
-        jp[9 + a] = 1;
+        jp[9 + a] = wm;
         JtJ.noalias() += wd * point_to_point * jp * jp.transpose();
         Jtr.noalias() += wd * point_to_point * (x[a] - points[i][a]) * jp;
       }
@@ -175,16 +183,25 @@ Status fit_local(const std::vector<Vec3>& points, const TriMesh& mesh, const Mes
     prob.stretch_k = options.stretch_weight;
     std::vector<int> local(nv, -1);
     for (int v = 0; v < nv; ++v)
-      if (box.contains(generic_vertices[v])) {
-        inside[bi][v] = 1;
-        local[v] = static_cast<int>(prob.rest.size());
-        prob.rest.push_back(mesh.positions[v]);
+      if (box.contains(generic_vertices[v])) inside[bi][v] = 1;
+    // G_b plus the ring of triangles that leave the box: points near the
+    // box's walls belong to those, and without them the fit would stretch
+    // G_b to reach them.
+    for (const Tri& t : mesh.triangles) {
+      if (!inside[bi][t[0]] && !inside[bi][t[1]] && !inside[bi][t[2]]) continue;
+      Tri lt;
+      for (int k = 0; k < 3; ++k) {
+        if (local[t[k]] < 0) {
+          local[t[k]] = static_cast<int>(prob.rest.size());
+          prob.rest.push_back(mesh.positions[t[k]]);
+          prob.moving.push_back(inside[bi][t[k]]);
+        }
+        lt[k] = local[t[k]];
       }
-    for (const Tri& t : mesh.triangles)
-      if (local[t[0]] >= 0 && local[t[1]] >= 0 && local[t[2]] >= 0)
-        prob.triangles.push_back({local[t[0]], local[t[1]], local[t[2]]});
+      prob.triangles.push_back(lt);
+    }
     for (const Edge& e : topology.edges)
-      if (local[e.v0] >= 0 && local[e.v1] >= 0) {
+      if (inside[bi][e.v0] && inside[bi][e.v1]) {
         prob.edges.push_back({local[e.v0], local[e.v1]});
         prob.rest_lengths.push_back((mesh.positions[e.v0] - mesh.positions[e.v1]).norm());
       }
@@ -197,11 +214,13 @@ Status fit_local(const std::vector<Vec3>& points, const TriMesh& mesh, const Mes
     }
     for (int i : idx) prob.points.push_back(points[i]);
     fit.points = static_cast<int>(prob.points.size());
-    fit.vertices = static_cast<int>(prob.rest.size());
-
     BoxTransform T;
-    for (const Vec3& y : prob.rest) T.c += y;
-    if (!prob.rest.empty()) T.c /= double(prob.rest.size());
+    for (size_t i = 0; i < prob.rest.size(); ++i)
+      if (prob.moving[i]) {
+        T.c += prob.rest[i];
+        ++fit.vertices;
+      }
+    if (fit.vertices > 0) T.c /= double(fit.vertices);
 
     if (prob.triangles.empty() || fit.points < options.min_points_per_box) {
       // Nothing to fit against (a hole in the scan or a box outside it): the
