@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Browser test of the web app: serves WEBDIR (build/web) on 127.0.0.1 and
-# drives Debian's Chromium with playwright-core (see test.mjs).
+# Tests of the web app in WEBDIR (build/web): first the worker's wasm core
+# under Node (worker_node.mjs), then the page itself, served on 127.0.0.1 and
+# driven in Debian's Chromium by playwright-core (test.mjs).
 # Usage: tests/browser/run.sh WEBDIR     (env LK_SCREENSHOT_DIR=dir keeps screenshots)
 # Exit: 0 pass, 1 fail, 77 skipped (no /usr/bin/chromium, or WEBDIR not built).
 set -euo pipefail
@@ -10,16 +11,19 @@ if [ -z "$WEBDIR" ]; then
   echo "usage: tests/browser/run.sh WEBDIR" >&2
   exit 2
 fi
-if [ ! -x /usr/bin/chromium ]; then
-  echo "SKIPPED: /usr/bin/chromium is missing (apt-get install chromium, or run scripts/setup)"
-  exit 77
-fi
 for f in index.html app.js worker.js likeness_viewer.js likeness_viewer.wasm likeness_worker.js likeness_worker.wasm; do
   if [ ! -f "$WEBDIR/$f" ]; then
     echo "SKIPPED: $WEBDIR/$f is missing: the wasm build has not run (scripts/build)"
     exit 77
   fi
 done
+# 1. The worker's wasm core under Node (no browser needed).
+node --no-experimental-fetch "$HERE/worker_node.mjs" "$WEBDIR"
+# 2. The page in Chromium.
+if [ ! -x /usr/bin/chromium ]; then
+  echo "SKIPPED: the browser part: /usr/bin/chromium is missing (apt-get install chromium, or run scripts/setup)"
+  exit 77
+fi
 if [ ! -d "$HERE/node_modules/playwright-core" ]; then
   echo "FAILED: $HERE/node_modules/playwright-core is missing: run scripts/setup" >&2
   exit 1
