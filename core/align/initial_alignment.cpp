@@ -1,0 +1,358 @@
+// Silhouette-based initial alignment (jeong2002 Sec. 4.1); see the header.
+#include "align/initial_alignment.h"
+
+#include "mesh/geometry.h"
+#include "numeric/powell.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace lk {
+
+namespace {
+
+constexpr int kMinPoints = 50;         // fewer cannot outline a head in 64^2 pixels
+constexpr int kMinResolution = 16;
+constexpr int kMaxResolution = 4096;
+constexpr double kPi = 3.14159265358979323846;
+
+// Value at fraction q of the sorted values (q in [0,1]), by selection.
+double quantile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  const size_t k = static_cast<size_t>(std::clamp(q, 0.0, 1.0) * (values.size() - 1) + 0.5);
+  std::nth_element(values.begin(), values.begin() + k, values.end());
+  return values[k];
+}
+
+// The 9 parameters (translation in head heights, rotation vector in
+// radians, log scale per axis of the faced generic head) around the
+// initialization world = s * (g' - ref_g) + ref_c with g' = facing * g.
+struct AffineModel {
+  Mat3 facing = Mat3::Identity();  // generic frame -> world axes (look -> +z, up -> +y)
+  double scale = 1.0;              // initial uniform scale s
+  Vec3 pivot = Vec3::Zero();       // centre of rotation / scaling, faced generic coordinates
+  Vec3 ref_generic = Vec3::Zero();
+  Vec3 ref_world = Vec3::Zero();
+  double head_height = 1.0;        // world units, the translation unit
+
+  void transform_of(const double* q, Mat3& linear, Vec3& translation) const {
+    const Vec3 rv(q[3], q[4], q[5]);
+    const double angle = rv.norm();
+    const Mat3 rot = angle > 0.0 ? Eigen::AngleAxisd(angle, rv / angle).toRotationMatrix() : Mat3::Identity();
+    const Vec3 scales(scale * std::exp(q[6]), scale * std::exp(q[7]), scale * std::exp(q[8]));
+    const Mat3 rs = rot * scales.asDiagonal();
+    linear = rs * facing;
+    translation = -rs * pivot + scale * (pivot - ref_generic) + ref_world +
+                  head_height * Vec3(q[0], q[1], q[2]);
+  }
+};
+
+Status validate_inputs(const TriMesh& generic, const PointCloud& cloud, const AlignOptions& o) {
+  if (generic.triangles.empty() || generic.positions.empty())
+    return Status::error(ErrorCode::Empty, "align: the generic head has no triangles");
+  std::string why;
+  if (!is_valid(generic, &why)) return Status::error(ErrorCode::InvalidInput, "align: generic head: " + why);
+  if (cloud.positions.empty()) return Status::error(ErrorCode::Empty, "align: the point cloud has no points");
+  for (size_t i = 0; i < cloud.positions.size(); ++i)
+    if (!cloud.positions[i].allFinite())
+      return Status::error(ErrorCode::InvalidInput,
+                           "align: point " + std::to_string(i) + " of the cloud is not finite (NaN or inf)");
+  if (cloud.size() < kMinPoints)
+    return Status::error(ErrorCode::InvalidInput, "align: the point cloud has only " + std::to_string(cloud.size()) +
+                         " points; at least " + std::to_string(kMinPoints) + " are needed to draw its silhouette");
+  const BBox box = bounding_box(cloud.positions);
+  const Vec3 size = box.size();
+  if (!(size.minCoeff() > 1e-9 * std::max(1.0, box.max.cwiseAbs().maxCoeff())))
+    return Status::error(ErrorCode::InvalidInput,
+                         "align: the point cloud is flat or a single point (bounding box " +
+                         std::to_string(size.x()) + " x " + std::to_string(size.y()) + " x " +
+                         std::to_string(size.z()) + "); a head scan needs extent in x, y and z");
+  std::vector<int> levels = o.coarse_resolutions;
+  levels.push_back(o.resolution);
+  for (int r : levels)
+    if (r < kMinResolution || r > kMaxResolution)
+      return Status::error(ErrorCode::InvalidInput, "align: resolution " + std::to_string(r) + " is outside [" +
+                           std::to_string(kMinResolution) + ", " + std::to_string(kMaxResolution) + "]");
+  if (!(o.window_margin >= 0.0 && o.window_margin < 10.0) || !(o.init_slab_fraction > 0.0 && o.init_slab_fraction <= 1.0) ||
+      !(o.init_outlier_fraction >= 0.0 && o.init_outlier_fraction < 0.2) || !(o.step_translation > 0.0) ||
+      !(o.step_rotation_deg > 0.0) || !(o.step_scale > 0.0) || !(o.tolerance > 0.0))
+    return Status::error(ErrorCode::InvalidInput, "align: an option is out of range (margin, slab/outlier fraction, steps, tolerance)");
+  return Status::success();
+}
+
+ClipPlane transform_plane(const ClipPlane& plane, const Mat3& linear, const Vec3& translation) {
+  ClipPlane out;
+  out.point = linear * plane.point + translation;
+  // Normals transform with the inverse transpose.
+  out.normal = (linear.inverse().transpose() * plane.normal).normalized();
+  return out;
+}
+
+// Initialization: match the top of the head, the width of its upper part
+// and its front (see the header for why not the bounding boxes).
+Status initialize(const TriMesh& generic, const HeadAnnotations& ann, const PointCloud& cloud,
+                  const AlignOptions& o, AffineModel& model, std::vector<ClipPlane>& generic_clips) {
+  // Facing: the generic's look / up onto the world's +z / +y.
+  Vec3 look = ann.look.normalized(), up = ann.up.normalized();
+  if (!look.allFinite() || !up.allFinite() || std::fabs(look.dot(up)) > 0.5)
+    return Status::error(ErrorCode::InvalidInput, "align: the generic head's look and up directions are unusable");
+  up = (up - up.dot(look) * look).normalized();
+  Mat3 generic_axes;
+  generic_axes << up.cross(look), up, look;
+  model.facing = generic_axes.transpose();  // rows: the generic's left, up, look
+
+  generic_clips.clear();
+  if (o.use_neck_clip) generic_clips.push_back(transform_plane(ann.neck_clip, model.facing, Vec3::Zero()));
+  if (o.use_back_clip) generic_clips.push_back(transform_plane(ann.back_clip, model.facing, Vec3::Zero()));
+
+  std::vector<Vec3> kept;
+  for (const Vec3& p : generic.positions) {
+    const Vec3 q = model.facing * p;
+    bool keep = true;
+    for (const ClipPlane& c : generic_clips) keep = keep && c.keeps(q);
+    if (keep) kept.push_back(q);
+  }
+  if (kept.size() < 4)
+    return Status::error(ErrorCode::NotAHead, "align: the generic head's clip planes remove all of its vertices");
+  const BBox gbox = bounding_box(kept);
+  const double top_g = gbox.max.y(), height_g = gbox.size().y();
+  double xmin_g = 1e300, xmax_g = -1e300, front_g = -1e300;
+  for (const Vec3& p : kept) {
+    if (p.y() < top_g - o.init_slab_fraction * height_g) continue;
+    xmin_g = std::min(xmin_g, p.x());
+    xmax_g = std::max(xmax_g, p.x());
+    front_g = std::max(front_g, p.z());
+  }
+  const double width_g = xmax_g - xmin_g;
+  if (!(width_g > 0.0) || !(height_g > 0.0))
+    return Status::error(ErrorCode::NotAHead, "align: the generic head has no width or height above its neck plane");
+  const BBox full_g = bounding_box(generic.positions);
+
+  // Cloud: robust extents, then a fixed point for the scale s that makes the
+  // generic's upper-head slab as wide as the cloud's slab of height s * slab.
+  const double q = o.init_outlier_fraction;
+  std::vector<double> ys(cloud.positions.size());
+  for (size_t i = 0; i < ys.size(); ++i) ys[i] = cloud.positions[i].y();
+  const double top_c = quantile(ys, 1.0 - q);
+  const double extent_c = top_c - quantile(ys, q);
+  double s = extent_c / std::max(1e-300, (model.facing * full_g.size()).cwiseAbs().y());
+  double cx_c = 0.0, front_c = 0.0;
+  std::vector<double> xs, zs;
+  for (int iter = 0; iter < 30; ++iter) {
+    xs.clear();
+    zs.clear();
+    const double bottom = top_c - o.init_slab_fraction * s * height_g;
+    for (const Vec3& p : cloud.positions)
+      if (p.y() >= bottom) {
+        xs.push_back(p.x());
+        zs.push_back(p.z());
+      }
+    if (xs.size() < 3) break;  // slab too thin to measure: keep s
+    const double x0 = quantile(xs, q), x1 = quantile(xs, 1.0 - q);
+    cx_c = 0.5 * (x0 + x1);
+    front_c = quantile(zs, 1.0 - q);
+    const double s_new = (x1 - x0) / width_g;
+    if (!(s_new > 0.0)) break;
+    const bool settled = std::fabs(s_new - s) < 1e-4 * s;
+    s = s_new;
+    if (settled) break;
+  }
+  if (xs.size() < 3 || !(s > 0.0) || !std::isfinite(s))
+    return Status::error(ErrorCode::NotAHead, "align: could not measure the head's width in the point cloud");
+
+  model.scale = s;
+  model.pivot = gbox.center();
+  model.ref_generic = Vec3(0.5 * (xmin_g + xmax_g), top_g, front_g);
+  model.ref_world = Vec3(cx_c, top_c, front_c);
+  model.head_height = s * height_g;
+  return Status::success();
+}
+
+void views_xor(const std::array<SilhouetteMask, kSilhouetteViews>& a,
+               const std::array<SilhouetteMask, kSilhouetteViews>& b, std::array<int, kSilhouetteViews>& out) {
+  for (int v = 0; v < kSilhouetteViews; ++v) out[v] = xor_count(a[v], b[v]);
+}
+
+}  // namespace
+
+int total_xor(const std::array<int, kSilhouetteViews>& per_view) {
+  int sum = 0;
+  for (int c : per_view) sum += c;
+  return sum;
+}
+
+Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const PointCloud& cloud,
+                     const AlignOptions& options, AlignResult& out, const ProgressFn& progress) {
+  out = AlignResult{};
+  Status st = validate_inputs(generic, cloud, options);
+  if (!st) return st;
+
+  AffineModel model;
+  std::vector<ClipPlane> generic_clips;
+  st = initialize(generic, ann, cloud, options, model, generic_clips);
+  if (!st) return st;
+  double q[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+  model.transform_of(q, out.initial_linear, out.initial_translation);
+
+  // The clip planes are placed once from the initial T and then stay fixed
+  // in the world while T changes (Sec. 4.1).
+  AlignFrame& frame = out.frame;
+  for (const ClipPlane& c : generic_clips) {
+    // generic_clips are in faced coordinates: world = s (g' - ref_g) + ref_c.
+    frame.clips.push_back(transform_plane(c, model.scale * Mat3::Identity(),
+                                          model.ref_world - model.scale * model.ref_generic));
+  }
+  std::vector<Vec3> cloud_kept;
+  cloud_kept.reserve(cloud.positions.size());
+  for (const Vec3& p : cloud.positions) {
+    bool keep = true;
+    for (const ClipPlane& c : frame.clips) keep = keep && c.keeps(p);
+    if (keep) cloud_kept.push_back(p);
+  }
+  if (static_cast<int>(cloud_kept.size()) < kMinPoints)
+    return Status::error(ErrorCode::NotAHead, "align: only " + std::to_string(cloud_kept.size()) +
+                         " scan points remain above the neck plane and in front of the back plane");
+
+  // The world-fixed window: the kept cloud and the initially placed generic.
+  BBox box = bounding_box(cloud_kept);
+  std::vector<Vec3> placed(generic.positions.size());
+  for (size_t i = 0; i < placed.size(); ++i) {
+    placed[i] = out.initial_linear * generic.positions[i] + out.initial_translation;
+    bool keep = true;
+    for (const ClipPlane& c : frame.clips) keep = keep && c.keeps(placed[i]);
+    if (keep) box.extend(placed[i]);
+  }
+  frame.window = make_view_window(box, options.window_margin, options.resolution);
+
+  std::vector<int> resolutions;
+  for (int r : options.coarse_resolutions)
+    if (r < options.resolution) resolutions.push_back(r);
+  resolutions.push_back(options.resolution);
+
+  // Buffers reused by every evaluation of the objective.
+  std::array<SilhouetteMask, kSilhouetteViews> cloud_masks, mesh_masks;
+  std::vector<Vec3> moved(generic.positions.size());
+  auto render_mesh = [&](const double* params, const ViewWindow& window) {
+    Mat3 linear;
+    Vec3 translation;
+    model.transform_of(params, linear, translation);
+    for (size_t i = 0; i < moved.size(); ++i) moved[i] = linear * generic.positions[i] + translation;
+    rasterize_mesh_silhouettes(moved, generic.triangles, window, frame.clips, mesh_masks,
+                               options.cull_back_faces);
+  };
+
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(9);
+  Eigen::VectorXd step(9);
+  const double rot_step = options.step_rotation_deg * kPi / 180.0;
+  step << options.step_translation, options.step_translation, options.step_translation,
+      rot_step, rot_step, rot_step, options.step_scale, options.step_scale, options.step_scale;
+
+  const int num_levels = static_cast<int>(resolutions.size());
+  for (int li = 0; li < num_levels; ++li) {
+    ViewWindow window = frame.window;
+    window.resolution = resolutions[li];
+    AlignLevel level;
+    level.resolution = window.resolution;
+    rasterize_point_silhouettes(cloud_kept, window, frame.clips, options.splat, cloud_masks, &level.cloud);
+    render_mesh(x.data(), window);
+    views_xor(mesh_masks, cloud_masks, level.xor_before);
+
+    const ObjectiveFn objective = [&](const Eigen::VectorXd& p) -> double {
+      render_mesh(p.data(), window);
+      double d = 0.0;
+      for (int v = 0; v < kSilhouetteViews; ++v) d += xor_count(mesh_masks[v], cloud_masks[v]);
+      return d;
+    };
+    PowellOptions po;
+    po.tolerance = options.tolerance;
+    po.max_iterations = options.max_iterations;
+    po.max_evaluations = options.max_evaluations;
+    // Finer levels start closer to the answer: smaller initial steps.
+    const double level_scale = std::pow(0.5, li);
+    po.initial_step = step * level_scale;
+    // D cannot change for moves well below a pixel: stop line searches at a
+    // quarter pixel of translation, in units of the direction length.
+    po.line_tolerance = 0.01;
+    po.line_absolute_tolerance =
+        0.25 * window.pixel_size() / (model.head_height * options.step_translation * level_scale);
+    PowellResult pr;
+    const ProgressFn level_progress = [&](const char*, double f) {
+      return report(progress, "align", (li + f) / num_levels);
+    };
+    st = powell_minimize(objective, x, po, pr, level_progress);
+    out.evaluations += pr.evaluations;
+    out.iterations += pr.iterations;
+    if (!st) return with_context(st, "align at " + std::to_string(window.resolution) + "^2");
+    x = pr.x;
+    render_mesh(x.data(), window);
+    views_xor(mesh_masks, cloud_masks, level.xor_after);
+    level.evaluations = pr.evaluations;
+    level.iterations = pr.iterations;
+    level.xor_per_iteration = pr.value_per_iteration;
+    out.levels.push_back(std::move(level));
+    if (!report(progress, "align", double(li + 1) / num_levels))
+      return Status::error(ErrorCode::Cancelled, "align: cancelled");
+  }
+
+  // The final level's masks are still in cloud_masks: D before and after.
+  const double zero[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+  render_mesh(zero, frame.window);
+  views_xor(mesh_masks, cloud_masks, out.xor_before);
+  out.xor_after = out.levels.back().xor_after;
+
+  for (int i = 0; i < 9; ++i) out.parameters[i] = x[i];
+  model.transform_of(x.data(), out.linear, out.translation);
+  out.aligned = generic;
+  transform(out.aligned, out.linear, out.translation);
+  return Status::success();
+}
+
+Status align_difference_images(const TriMesh& generic, const Mat3& linear, const Vec3& translation,
+                               const PointCloud& cloud, const AlignFrame& frame,
+                               const AlignOptions& options, std::array<Image, kSilhouetteViews>& out) {
+  const int n = frame.window.resolution;
+  if (n < kMinResolution || n > kMaxResolution)
+    return Status::error(ErrorCode::InvalidInput, "align_difference_images: the frame has no valid window (run align_initial first)");
+  std::string why;
+  if (!is_valid(generic, &why)) return Status::error(ErrorCode::InvalidInput, "align_difference_images: " + why);
+  std::array<SilhouetteMask, kSilhouetteViews> cloud_masks, mesh_masks;
+  rasterize_point_silhouettes(cloud.positions, frame.window, frame.clips, options.splat, cloud_masks);
+  std::vector<Vec3> moved(generic.positions.size());
+  for (size_t i = 0; i < moved.size(); ++i) moved[i] = linear * generic.positions[i] + translation;
+  rasterize_mesh_silhouettes(moved, generic.triangles, frame.window, frame.clips, mesh_masks,
+                             options.cull_back_faces);
+  for (int v = 0; v < kSilhouetteViews; ++v) {
+    Image im = Image::make(n, n, 3, 0);
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) {
+        const bool a = mesh_masks[v].get(x, y), b = cloud_masks[v].get(x, y);
+        const std::uint8_t value = (a != b) ? 255 : (a ? 64 : 0);
+        std::uint8_t* px = im.at(x, y);
+        px[0] = px[1] = px[2] = value;
+      }
+    out[v] = std::move(im);
+  }
+  return Status::success();
+}
+
+Image concat_views(const std::array<Image, kSilhouetteViews>& views) {
+  constexpr int kGap = 2;
+  int width = 0, height = 0;
+  for (const Image& v : views) {
+    width += v.width;
+    height = std::max(height, v.height);
+  }
+  width += kGap * (kSilhouetteViews - 1);
+  Image out = Image::make(std::max(width, 0), height, 3, 128);
+  int x0 = 0;
+  for (const Image& v : views) {
+    for (int y = 0; y < v.height; ++y)
+      for (int x = 0; x < v.width; ++x)
+        for (int c = 0; c < 3; ++c) out.at(x0 + x, y)[c] = v.at(x, y)[std::min(c, v.channels - 1)];
+    x0 += v.width + kGap;
+  }
+  return out;
+}
+
+}  // namespace lk

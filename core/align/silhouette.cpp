@@ -1,0 +1,365 @@
+// CPU silhouettes for jeong2002 Sec. 4.1; see silhouette.h.
+#include "align/silhouette.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace lk {
+
+const char* to_string(SilhouetteView view) {
+  switch (view) {
+    case SilhouetteView::Front: return "front";
+    case SilhouetteView::Side: return "side";
+    case SilhouetteView::Top: return "top";
+  }
+  return "?";
+}
+
+SilhouetteMask SilhouetteMask::make(int n) {
+  SilhouetteMask m;
+  m.size = std::max(0, n);
+  m.words_per_row = (m.size + 63) / 64;
+  m.bits.assign(static_cast<size_t>(m.size) * m.words_per_row, 0);
+  return m;
+}
+
+void SilhouetteMask::set_span(int y, int x0, int x1) {
+  if (y < 0 || y >= size) return;
+  x0 = std::max(x0, 0);
+  x1 = std::min(x1, size);
+  if (x0 >= x1) return;
+  std::uint64_t* row = &bits[static_cast<size_t>(y) * words_per_row];
+  const int w0 = x0 >> 6, w1 = (x1 - 1) >> 6;
+  const std::uint64_t first = ~std::uint64_t(0) << (x0 & 63);
+  const std::uint64_t last = ~std::uint64_t(0) >> (63 - ((x1 - 1) & 63));
+  if (w0 == w1) {
+    row[w0] |= first & last;
+    return;
+  }
+  row[w0] |= first;
+  for (int w = w0 + 1; w < w1; ++w) row[w] = ~std::uint64_t(0);
+  row[w1] |= last;
+}
+
+void SilhouetteMask::clear() { std::fill(bits.begin(), bits.end(), 0); }
+
+int SilhouetteMask::count() const {
+  long long n = 0;
+  for (std::uint64_t w : bits) n += __builtin_popcountll(w);
+  return static_cast<int>(n);
+}
+
+int xor_count(const SilhouetteMask& a, const SilhouetteMask& b) {
+  if (a.bits.size() != b.bits.size()) return -1;
+  long long n = 0;
+  for (size_t i = 0; i < a.bits.size(); ++i) n += __builtin_popcountll(a.bits[i] ^ b.bits[i]);
+  return static_cast<int>(n);
+}
+
+namespace {
+
+// Which world axis feeds the column and row of each view, with signs.
+struct ViewAxes { int col_axis; double col_sign; int row_axis; double row_sign; };
+constexpr ViewAxes kViewAxes[kSilhouetteViews] = {
+    {0, +1.0, 1, -1.0},  // front
+    {2, +1.0, 1, -1.0},  // side
+    {0, +1.0, 2, +1.0},  // top
+};
+
+}  // namespace
+
+Vec2 ViewWindow::project(const Vec3& p, SilhouetteView view) const {
+  const ViewAxes& a = kViewAxes[static_cast<int>(view)];
+  const double scale = resolution / (2.0 * half_size);
+  return Vec2((a.col_sign * (p[a.col_axis] - center[a.col_axis]) + half_size) * scale,
+              (a.row_sign * (p[a.row_axis] - center[a.row_axis]) + half_size) * scale);
+}
+
+ViewWindow make_view_window(const BBox& box, double margin, int resolution) {
+  ViewWindow w;
+  w.center = box.center();
+  const double side = box.valid() ? box.size().maxCoeff() : 0.0;
+  w.half_size = 0.5 * side * (1.0 + 2.0 * margin);
+  if (!(w.half_size > 0.0)) w.half_size = 1.0;
+  w.resolution = resolution;
+  return w;
+}
+
+void rasterize_triangle(const Vec2& a, const Vec2& b, const Vec2& c, SilhouetteMask& mask) {
+  const int n = mask.size;
+  // Sort by y: top (t), middle (m), bottom (b). Rows whose centre j + 0.5
+  // lies in [y_t, y_m) are bounded by the long edge t-b and the edge t-m;
+  // rows in [y_m, y_b) by t-b and m-b. Half-open in y, so a vertex on a
+  // scan line counts once and triangles sharing an edge leave no gap.
+  if (!a.allFinite() || !b.allFinite() || !c.allFinite()) return;
+  const Vec2* v0 = &a;
+  const Vec2* v1 = &b;
+  const Vec2* v2 = &c;
+  if (v1->y() < v0->y()) std::swap(v0, v1);
+  if (v2->y() < v1->y()) std::swap(v1, v2);
+  if (v1->y() < v0->y()) std::swap(v0, v1);
+  const double y0 = v0->y(), y1 = v1->y(), y2 = v2->y();
+  if (!(y2 > y0)) return;  // flat, or NaN
+  // Row range, clamped before any int conversion so far-away vertices
+  // cannot overflow.
+  auto first_row = [n](double y) {
+    return static_cast<int>(std::ceil(std::clamp(y - 0.5, -1.0, n + 1.0)));
+  };
+  const int j_top = std::max(first_row(y0), 0);
+  const int j_mid = std::clamp(first_row(y1), 0, n);
+  const int j_end = std::min(first_row(y2), n);
+  if (j_top >= j_end) return;
+  const double x0 = v0->x(), x1 = v1->x(), x2 = v2->x();
+  const double slope_long = (x2 - x0) / (y2 - y0);
+  auto fill = [&](int j, double xa, double xb) {
+    if (xa > xb) std::swap(xa, xb);
+    xa = std::clamp(xa - 0.5, -1.0, n + 1.0);
+    xb = std::clamp(xb - 0.5, -1.0, n + 1.0);
+    mask.set_span(j, static_cast<int>(std::ceil(xa)), static_cast<int>(std::ceil(xb)));
+  };
+  if (y1 > y0) {
+    const double slope = (x1 - x0) / (y1 - y0);
+    for (int j = j_top; j < j_mid; ++j) {
+      const double dy = j + 0.5 - y0;
+      fill(j, x0 + dy * slope_long, x0 + dy * slope);
+    }
+  }
+  if (y2 > y1) {
+    const double slope = (x2 - x1) / (y2 - y1);
+    for (int j = std::max(j_mid, j_top); j < j_end; ++j) {
+      const double yc = j + 0.5;
+      fill(j, x0 + (yc - y0) * slope_long, x1 + (yc - y1) * slope);
+    }
+  }
+}
+
+namespace {
+
+void reset_masks(int n, std::array<SilhouetteMask, kSilhouetteViews>& out) {
+  for (auto& m : out) {
+    if (m.size != n) m = SilhouetteMask::make(n);
+    else m.clear();
+  }
+}
+
+// Sutherland-Hodgman: keeps the part of the polygon with distance >= 0.
+int clip_polygon(const Vec3* in, int count, const ClipPlane& plane, Vec3* out) {
+  int m = 0;
+  for (int i = 0; i < count; ++i) {
+    const Vec3& p = in[i];
+    const Vec3& q = in[(i + 1) % count];
+    const double dp = plane.normal.dot(p - plane.point);
+    const double dq = plane.normal.dot(q - plane.point);
+    if (dp >= 0) out[m++] = p;
+    if ((dp >= 0) != (dq >= 0)) out[m++] = p + (dp / (dp - dq)) * (q - p);
+  }
+  return m;
+}
+
+}  // namespace
+
+void rasterize_mesh_silhouettes(const std::vector<Vec3>& positions, const std::vector<Tri>& triangles,
+                                const ViewWindow& window, const std::vector<ClipPlane>& clips,
+                                std::array<SilhouetteMask, kSilhouetteViews>& out,
+                                bool cull_back_faces) {
+  reset_masks(window.resolution, out);
+  const int nv = static_cast<int>(positions.size());
+  const int nc = static_cast<int>(clips.size());
+  // Per vertex: projections into each view, and a bit per plane it falls behind.
+  std::vector<Vec2> projected(static_cast<size_t>(nv) * kSilhouetteViews);
+  std::vector<unsigned> behind(nv, 0u);
+  for (int i = 0; i < nv; ++i) {
+    for (int v = 0; v < kSilhouetteViews; ++v)
+      projected[static_cast<size_t>(i) * kSilhouetteViews + v] =
+          window.project(positions[i], static_cast<SilhouetteView>(v));
+    for (int c = 0; c < nc && c < 32; ++c)
+      if (!clips[c].keeps(positions[i])) behind[i] |= 1u << c;
+  }
+  Vec3 poly[2][3 + 32];
+  for (const Tri& t : triangles) {
+    if (t[0] < 0 || t[1] < 0 || t[2] < 0 || t[0] >= nv || t[1] >= nv || t[2] >= nv) continue;
+    const unsigned all_behind = behind[t[0]] & behind[t[1]] & behind[t[2]];
+    if (all_behind) continue;
+    // Which views see the triangle's front: the view directions are -z, +x
+    // and -y, so the sign of one normal component decides each.
+    bool seen[kSilhouetteViews] = {true, true, true};
+    if (cull_back_faces) {
+      const Vec3 normal = (positions[t[1]] - positions[t[0]]).cross(positions[t[2]] - positions[t[0]]);
+      seen[0] = normal.z() > 0.0;
+      seen[1] = normal.x() < 0.0;
+      seen[2] = normal.y() > 0.0;
+    }
+    const unsigned any_behind = behind[t[0]] | behind[t[1]] | behind[t[2]];
+    if (!any_behind) {
+      for (int v = 0; v < kSilhouetteViews; ++v)
+        if (seen[v])
+          rasterize_triangle(projected[static_cast<size_t>(t[0]) * kSilhouetteViews + v],
+                           projected[static_cast<size_t>(t[1]) * kSilhouetteViews + v],
+                           projected[static_cast<size_t>(t[2]) * kSilhouetteViews + v], out[v]);
+      continue;
+    }
+    // Straddles a plane: clip exactly, then fan-triangulate.
+    int count = 3;
+    for (int k = 0; k < 3; ++k) poly[0][k] = positions[t[k]];
+    int cur = 0;
+    for (int c = 0; c < nc && c < 32 && count >= 3; ++c) {
+      if (!((any_behind >> c) & 1u)) continue;
+      count = clip_polygon(poly[cur], count, clips[c], poly[1 - cur]);
+      cur = 1 - cur;
+    }
+    if (count < 3) continue;
+    for (int v = 0; v < kSilhouetteViews; ++v) {
+      if (!seen[v]) continue;
+      const auto view = static_cast<SilhouetteView>(v);
+      const Vec2 p0 = window.project(poly[cur][0], view);
+      for (int k = 1; k + 1 < count; ++k)
+        rasterize_triangle(p0, window.project(poly[cur][k], view), window.project(poly[cur][k + 1], view),
+                           out[v]);
+    }
+  }
+}
+
+namespace {
+
+constexpr double kFar = 1e12;  // "no feature": larger than any squared distance in a mask
+
+// Felzenszwalb-Huttenlocher 1D squared distance transform of f (n samples):
+// the lower envelope of the parabolas rooted at each sample.
+void distance_1d(const double* f, int n, double* d, int* v, double* z) {
+  const double inf = std::numeric_limits<double>::infinity();
+  int k = 0;
+  v[0] = 0;
+  z[0] = -inf;
+  z[1] = inf;
+  for (int q = 1; q < n; ++q) {
+    double s = ((f[q] + double(q) * q) - (f[v[k]] + double(v[k]) * v[k])) / (2.0 * q - 2.0 * v[k]);
+    while (s <= z[k]) {
+      --k;
+      s = ((f[q] + double(q) * q) - (f[v[k]] + double(v[k]) * v[k])) / (2.0 * q - 2.0 * v[k]);
+    }
+    ++k;
+    v[k] = q;
+    z[k] = s;
+    z[k + 1] = inf;
+  }
+  k = 0;
+  for (int q = 0; q < n; ++q) {
+    while (z[k + 1] < q) ++k;
+    d[q] = double(q - v[k]) * (q - v[k]) + f[v[k]];
+  }
+}
+
+// Squared Euclidean distance from every cell of an n x n grid to the nearest
+// cell where feature is true.
+void squared_distance_2d(const std::vector<char>& feature, int n, std::vector<double>& out) {
+  out.assign(static_cast<size_t>(n) * n, kFar);
+  std::vector<double> f(n), d(n), z(n + 1);
+  std::vector<int> v(n);
+  for (int y = 0; y < n; ++y) {
+    for (int x = 0; x < n; ++x) f[x] = feature[static_cast<size_t>(y) * n + x] ? 0.0 : kFar;
+    distance_1d(f.data(), n, d.data(), v.data(), z.data());
+    for (int x = 0; x < n; ++x) out[static_cast<size_t>(y) * n + x] = d[x];
+  }
+  for (int x = 0; x < n; ++x) {
+    for (int y = 0; y < n; ++y) f[y] = out[static_cast<size_t>(y) * n + x];
+    distance_1d(f.data(), n, d.data(), v.data(), z.data());
+    for (int y = 0; y < n; ++y) out[static_cast<size_t>(y) * n + x] = d[y];
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// Squared distances from every cell of the (n+2)^2 padded grid to the
+// nearest covered pixel; the one-pixel empty border stands for "outside the
+// mask is empty".
+std::vector<double> distance_to_covered(const SilhouetteMask& mask) {
+  const int n = mask.size, g = n + 2;
+  std::vector<char> feature(static_cast<size_t>(g) * g, 0);
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) feature[static_cast<size_t>(y + 1) * g + x + 1] = mask.get(x, y);
+  std::vector<double> dist;
+  squared_distance_2d(feature, g, dist);
+  return dist;
+}
+
+// Closing from the distances above: the dilation is every cell within the
+// radius of a covered pixel; its erosion keeps the cells farther than the
+// radius from any cell outside the dilation.
+SilhouetteMask closing_from_distance(const std::vector<double>& to_covered, int n, double radius_px) {
+  const int g = n + 2;
+  const double r2 = radius_px * radius_px;
+  std::vector<char> outside(to_covered.size());
+  for (size_t i = 0; i < outside.size(); ++i) outside[i] = !(to_covered[i] <= r2);
+  std::vector<double> dist;
+  squared_distance_2d(outside, g, dist);
+  SilhouetteMask closed = SilhouetteMask::make(n);
+  for (int y = 0; y < n; ++y) {
+    const double* row = &dist[static_cast<size_t>(y + 1) * g + 1];
+    for (int x = 0; x < n; ++x)
+      if (row[x] > r2) closed.set(x, y);
+  }
+  return closed;
+}
+
+}  // namespace
+
+SilhouetteMask close_mask(const SilhouetteMask& mask, double radius_px) {
+  if (!(radius_px > 0.0) || mask.size == 0) return mask;
+  return closing_from_distance(distance_to_covered(mask), mask.size, radius_px);
+}
+
+void rasterize_point_silhouettes(const std::vector<Vec3>& points, const ViewWindow& window,
+                                 const std::vector<ClipPlane>& clips, const PointSplatOptions& options,
+                                 std::array<SilhouetteMask, kSilhouetteViews>& out,
+                                 PointSilhouetteInfo* info) {
+  const int n = window.resolution;
+  std::array<SilhouetteMask, kSilhouetteViews> raw;
+  reset_masks(n, raw);
+  int kept = 0;
+  for (const Vec3& p : points) {
+    bool keep = p.allFinite();
+    for (const ClipPlane& c : clips) keep = keep && c.keeps(p);
+    if (!keep) continue;
+    ++kept;
+    for (int v = 0; v < kSilhouetteViews; ++v) {
+      const Vec2 q = window.project(p, static_cast<SilhouetteView>(v));
+      if (!(q.x() >= 0.0 && q.y() >= 0.0 && q.x() < n && q.y() < n)) continue;
+      raw[v].set(static_cast<int>(q.x()), static_cast<int>(q.y()));
+    }
+  }
+  const std::vector<double> radii = options.closing_radii_px.empty() ? std::vector<double>{0.0}
+                                                                        : options.closing_radii_px;
+  for (int v = 0; v < kSilhouetteViews; ++v) {
+    // Try every radius: filling sampling holes adds a lot of area at once
+    // (often only from some radius on, when the gaps between points close),
+    // while filling true concavities of the outline adds little per step.
+    // The largest radius that still added much is the one that closed the
+    // holes (footnote 1's "fully covered silhouette").
+    const std::vector<double> to_covered = distance_to_covered(raw[v]);
+    auto closed = [&](double r) { return r > 0.0 ? closing_from_distance(to_covered, n, r) : raw[v]; };
+    SilhouetteMask current = closed(radii[0]);
+    double chosen = radii[0];
+    int previous_count = current.count();
+    for (size_t k = 1; k < radii.size(); ++k) {
+      SilhouetteMask next = closed(radii[k]);
+      const int next_count = next.count();
+      if (next_count - previous_count >= options.hole_tolerance * next_count) {
+        current = next;
+        chosen = radii[k];
+      }
+      previous_count = next_count;
+    }
+    out[v] = std::move(current);
+    if (info) {
+      info->closing_radius_px[v] = chosen;
+      info->raw_pixels[v] = raw[v].count();
+      info->covered_pixels[v] = out[v].count();
+    }
+  }
+  if (info) info->points_kept = kept;
+}
+
+}  // namespace lk
