@@ -1,0 +1,143 @@
+// likeness bench --only io: reader speed on a synthetic 300k-point scan in
+// every PLY flavour and XYZ, plus the real OBJ/VTK scans and a photo when
+// ../shared/data (or --data DIR) is present. Median of 5 runs (1 with --quick).
+#include "command.h"
+
+#include "io/io.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <functional>
+#include <string>
+
+namespace lk::cli {
+namespace {
+
+struct Timing {
+  double wall_ms = 0, cpu_ms = 0;  // medians; CPU time is steadier on a busy machine
+};
+
+Timing median_ms(int reps, const std::function<bool()>& f, bool& ok) {
+  std::vector<double> wall, cpu;
+  ok = true;
+  for (int i = 0; i < reps; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::clock_t c0 = std::clock();
+    ok = f() && ok;
+    cpu.push_back(1000.0 * double(std::clock() - c0) / CLOCKS_PER_SEC);
+    wall.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  }
+  std::sort(wall.begin(), wall.end());
+  std::sort(cpu.begin(), cpu.end());
+  return {wall[wall.size() / 2], cpu[cpu.size() / 2]};
+}
+
+// A 300k-point helix-wrapped cylinder with normals, like a dense range scan.
+PointCloud synthetic_scan(int n) {
+  PointCloud c;
+  c.positions.reserve(n);
+  c.normals.reserve(n);
+  for (int i = 0; i < n; ++i) {
+    const double a = i * 0.0137, h = i * 1e-3;
+    c.positions.push_back(Vec3(100 * std::cos(a), 100 * std::sin(a), h));
+    c.normals.push_back(Vec3(std::cos(a), std::sin(a), 0));
+  }
+  return c;
+}
+
+void row(const std::string& what, size_t bytes, Timing t, bool ok) {
+  std::printf("   %-44s %8.2f MB %9.2f ms %9.2f ms %8.1f MB/s %s\n", what.c_str(), bytes / 1e6, t.wall_ms, t.cpu_ms,
+              t.cpu_ms > 0 ? bytes / 1e3 / t.cpu_ms : 0.0, ok ? "" : "(FAILED)");
+}
+
+// Ascii PLY as scanners write it: 6 decimals per value.
+Bytes ascii_ply_6_decimals(const PointCloud& c) {
+  std::string s = "ply\nformat ascii 1.0\nelement vertex " + std::to_string(c.size()) +
+                  "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\n"
+                  "property float nz\nend_header\n";
+  char line[160];
+  for (int i = 0; i < c.size(); ++i) {
+    const Vec3 &p = c.positions[i], &n = c.normals[i];
+    std::snprintf(line, sizeof(line), "%.6f %.6f %.6f %.6f %.6f %.6f\n", p.x(), p.y(), p.z(), n.x(), n.y(), n.z());
+    s += line;
+  }
+  return Bytes(s.begin(), s.end());
+}
+
+int run_io_bench(const Args& args) {
+  const int reps = args.has("quick") ? 1 : 5;
+  const int n = 300000;
+  const PointCloud cloud = synthetic_scan(n);
+  PointCloud xyz_only;
+  xyz_only.positions = cloud.positions;
+  std::printf("   %-44s %11s %12s %12s %13s\n", "input", "size", "wall (med)", "CPU (med)", "MB/CPU-s");
+  int failures = 0;
+  struct Case {
+    std::string name;
+    Bytes bytes;
+  };
+  std::vector<Case> cases;
+  cases.push_back({"PLY binary LE, 300k points xyz (float)", write_ply(xyz_only)});
+  cases.push_back({"PLY binary LE, 300k points xyz+normals", write_ply(cloud)});
+  cases.push_back({"PLY ascii, 300k points xyz (17 digits)", write_ply(xyz_only, true)});
+  cases.push_back({"PLY ascii, 300k points xyz+normals (17 dig.)", write_ply(cloud, true)});
+  cases.push_back({"PLY ascii, 300k points xyz+normals (%.6f)", ascii_ply_6_decimals(cloud)});
+  for (const Case& c : cases) {
+    TriMesh m;
+    GeometryKind kind;
+    bool ok = false;
+    const Timing ms = median_ms(reps, [&] { return read_ply(c.bytes.data(), c.bytes.size(), m, kind).ok() && m.num_vertices() == n; }, ok);
+    row(c.name, c.bytes.size(), ms, ok);
+    failures += !ok;
+  }
+  {
+    const std::string text = write_xyz(cloud);
+    PointCloud back;
+    bool ok = false;
+    const Timing ms = median_ms(reps, [&] {
+      return read_xyz(reinterpret_cast<const std::uint8_t*>(text.data()), text.size(), back).ok() && back.size() == n;
+    }, ok);
+    row("XYZ, 300k points xyz+normals", text.size(), ms, ok);
+    failures += !ok;
+  }
+  const std::string shared = args.get("data", "../shared/data");
+  struct FileCase {
+    std::string label, path;
+    bool image;
+  };
+  const std::vector<FileCase> files = {
+      {"OBJ james.obj (6,393 v, 12,228 f)", shared + "/head_scans/james_menpo3d/james.obj", false},
+      {"VTK fran_cut.vtk (2,205 v, 4,224 f)", shared + "/head_scans/fran_cyberware/fran_cut.vtk", false},
+      {"JPEG Kira 0001.jpg (1800x1200)", shared + "/multiview_faces/keentools_kira/0001.jpg", true},
+  };
+  for (const FileCase& f : files) {
+    Bytes bytes;
+    if (!read_file(f.path, bytes)) {
+      std::printf("   %-44s (skipped: %s absent)\n", f.label.c_str(), f.path.c_str());
+      continue;
+    }
+    bool ok = false;
+    Timing ms;
+    if (f.image) {
+      Image im;
+      ms = median_ms(reps, [&] { return read_image(bytes.data(), bytes.size(), im).ok(); }, ok);
+    } else {
+      TriMesh m;
+      PointCloud c;
+      GeometryKind kind;
+      ms = median_ms(reps, [&] { return read_geometry(f.path, bytes.data(), bytes.size(), m, c, kind).ok(); }, ok);
+    }
+    row(f.label, bytes.size(), ms, ok);
+    failures += !ok;
+  }
+  return failures ? 1 : 0;
+}
+
+BenchRegistrar reg({"io", "reader speed: 300k-point PLY (binary/ascii), XYZ, real OBJ/VTK scans, JPEG photo",
+                    run_io_bench});
+
+}  // namespace
+}  // namespace lk::cli
