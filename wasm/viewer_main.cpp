@@ -6,14 +6,16 @@
 //   show_points(positions, normals, colors)        -> "" or an error message
 //   show_generic_head()                            -> "" or an error message
 //   set_point_size(pixels), reset_view()
+//   orbit(dx, dy), pan(dx, dy), zoom(amount): camera steps in pixels, as if
+//     dragged (the page's keyboard control)
 //   frames_drawn() -> number of frames drawn so far (0 until the head is up)
 //   startup_error() -> "" or why the viewer could not start
 // Arrays are JS typed arrays (Float32Array / Uint32Array), shapes as in
 // viewer_scene.h. Nothing throws: failures come back as messages.
 //
 // Input: left drag orbits, right/middle or shift+left drag pans, the wheel
-// zooms; one finger orbits and a pinch zooms on touch screens; with the canvas
-// focused, arrow keys orbit (shift: pan), +/- zoom and R resets the view.
+// zooms; one finger orbits and a pinch zooms on touch screens. Keys are
+// web/app.js's (arrows orbit, shift+arrows pan, +/- zoom, R resets).
 // The canvas is redrawn only when something changed, so an idle page costs
 // no CPU (WebGL2 runs on the CPU under SwiftShader).
 #include "viewer_scene.h"
@@ -99,26 +101,6 @@ void handle_event(Viewer& v, const SDL_Event& e) {
       v.scene.zoom(e.mgesture.dDist * float(h) * 2.0f);
       break;
     }
-    case SDL_KEYDOWN: {
-      const bool shift = (e.key.keysym.mod & KMOD_SHIFT) != 0;
-      const float step = 40.0f;  // pixels of drag per key press
-      float dx = 0, dy = 0;
-      switch (e.key.keysym.sym) {
-        case SDLK_LEFT: dx = -step; break;
-        case SDLK_RIGHT: dx = step; break;
-        case SDLK_UP: dy = -step; break;
-        case SDLK_DOWN: dy = step; break;
-        case SDLK_PLUS: case SDLK_EQUALS: case SDLK_KP_PLUS: v.scene.zoom(120.0f); break;
-        case SDLK_MINUS: case SDLK_KP_MINUS: v.scene.zoom(-120.0f); break;
-        case SDLK_r: v.scene.reset_view(); break;
-        default: break;
-      }
-      if (dx != 0 || dy != 0) {
-        if (shift) v.scene.pan(dx, dy);
-        else v.scene.orbit(dx, dy);
-      }
-      break;
-    }
     default:
       break;
   }
@@ -137,7 +119,9 @@ void frame() {
 }
 
 std::string show_start_head() {
-  const lk::Status s = g_viewer->scene.show_mesh(lk::web::start_head());
+  lk::TriMesh head;
+  lk::Status s = lk::web::start_head(head);
+  if (s.ok()) s = g_viewer->scene.show_mesh(head);
   return s.ok() ? std::string() : s.message;
 }
 
@@ -180,6 +164,18 @@ void js_reset_view() {
   if (g_viewer) g_viewer->scene.reset_view();
 }
 
+// Camera steps for keyboard (and scripted) control, in framebuffer pixels as
+// if dragged; zoom > 0 moves closer.
+void js_orbit(float dx, float dy) {
+  if (g_viewer && std::isfinite(dx) && std::isfinite(dy)) g_viewer->scene.orbit(dx, dy);
+}
+void js_pan(float dx, float dy) {
+  if (g_viewer && std::isfinite(dx) && std::isfinite(dy)) g_viewer->scene.pan(dx, dy);
+}
+void js_zoom(float amount) {
+  if (g_viewer && std::isfinite(amount)) g_viewer->scene.zoom(amount);
+}
+
 int js_frames_drawn() { return g_viewer ? g_viewer->frames_drawn : 0; }
 std::string js_startup_error() { return g_viewer ? g_viewer->startup_error : std::string("not started"); }
 
@@ -191,6 +187,9 @@ EMSCRIPTEN_BINDINGS(likeness_viewer) {
   emscripten::function("show_generic_head", &js_show_generic_head);
   emscripten::function("set_point_size", &js_set_point_size);
   emscripten::function("reset_view", &js_reset_view);
+  emscripten::function("orbit", &js_orbit);
+  emscripten::function("pan", &js_pan);
+  emscripten::function("zoom", &js_zoom);
   emscripten::function("frames_drawn", &js_frames_drawn);
   emscripten::function("startup_error", &js_startup_error);
 }
@@ -198,8 +197,8 @@ EMSCRIPTEN_BINDINGS(likeness_viewer) {
 int main() {
   g_viewer = new Viewer();
   Viewer& v = *g_viewer;
-  // Keys go to the canvas only (it is focusable): SDL's default, the whole
-  // window, would swallow Tab and the arrow keys for the rest of the page.
+  // SDL listens for keys on the canvas (default: the whole window, where it
+  // would swallow Tab and the arrows for the rest of the page); see below.
   SDL_SetHint(SDL_HINT_EMSCRIPTEN_KEYBOARD_ELEMENT, kCanvas);
   if (SDL_Init(SDL_INIT_VIDEO) != 0) {
     v.startup_error = std::string("SDL_Init failed: ") + SDL_GetError();
@@ -217,6 +216,13 @@ int main() {
     v.startup_error = std::string("could not create the window: ") + SDL_GetError();
     return 0;
   }
+  // SDL's key handlers call preventDefault on keys, Tab included, which
+  // would trap keyboard users in the canvas. Unregister them: web/app.js
+  // handles the view keys (through orbit/pan/zoom below) and lets the rest
+  // through.
+  emscripten_set_keydown_callback(kCanvas, nullptr, 0, nullptr);
+  emscripten_set_keyup_callback(kCanvas, nullptr, 0, nullptr);
+  emscripten_set_keypress_callback(kCanvas, nullptr, 0, nullptr);
   v.context = SDL_GL_CreateContext(v.window);
   if (!v.context) {
     v.startup_error = std::string("WebGL 2 is not available: ") + SDL_GetError();

@@ -1,13 +1,13 @@
 #include "viewer_scene.h"
 
+#include "head/generic_head.h"
+
 #include <algorithm>
 #include <cmath>
 
 namespace lk::web {
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 bool all_finite(const std::vector<float>& v) {
   for (float x : v)
@@ -80,28 +80,11 @@ Status cloud_from_arrays(const std::vector<float>& positions, const std::vector<
   return Status::success();
 }
 
-// A head-sized ellipsoid (0.16 wide, 0.24 tall, 0.20 deep, metres: the generic
-// head's proportions in head_model.h), shown until the generic head lands.
-TriMesh start_head() {
-  const int rings = 32, segments = 48;
-  const Vec3 radii(0.08, 0.12, 0.10);
-  TriMesh m;
-  for (int r = 0; r <= rings; ++r) {
-    const double theta = kPi * r / rings;  // from +y down to -y
-    for (int s = 0; s < segments; ++s) {
-      const double phi = 2 * kPi * s / segments;
-      const Vec3 unit(std::sin(theta) * std::sin(phi), std::cos(theta), std::sin(theta) * std::cos(phi));
-      m.positions.push_back(unit.cwiseProduct(radii));
-    }
-  }
-  auto at = [&](int r, int s) { return r * segments + (s % segments); };
-  for (int r = 0; r < rings; ++r)
-    for (int s = 0; s < segments; ++s) {
-      // Counter-clockwise seen from outside.
-      m.triangles.push_back({at(r, s), at(r + 1, s), at(r + 1, s + 1)});
-      m.triangles.push_back({at(r, s), at(r + 1, s + 1), at(r, s + 1)});
-    }
-  return m;
+Status start_head(TriMesh& out) {
+  GenericHead head;
+  if (Status s = load_generic_head(head); !s.ok()) return s;
+  out = std::move(head.mesh);
+  return Status::success();
 }
 
 Status ViewerScene::init() { return renderer_.init(); }

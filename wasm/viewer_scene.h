@@ -25,8 +25,9 @@ Status mesh_from_arrays(const std::vector<float>& positions, const std::vector<f
 Status cloud_from_arrays(const std::vector<float>& positions, const std::vector<float>& normals,
                          const std::vector<float>& colors, PointCloud& out);
 
-// The head shown before anything is loaded.
-TriMesh start_head();
+// The head shown before anything is loaded: the generic head of jeong2002
+// (core/head, embedded in the module).
+Status start_head(TriMesh& out);
 
 class ViewerScene {
  public:

@@ -128,11 +128,13 @@
   function workerDied(worker, why) {
     if (app.worker !== worker) return;
     worker.terminate();
-    for (const [, job] of jobs) job.reject(new Error(why));
+    for (const [, job] of jobs) job.reject(new Error('the worker stopped (' + why + ') and was restarted'));
     jobs.clear();
     if (document.body.dataset.state !== 'loading') startWorker().catch(() => {});
   }
 
+  // Runs a worker job; resolves with the core's result object, rejects when
+  // the worker dies on the way (the page then has a fresh worker).
   function runJob(message, transfer, onProgress) {
     return workerReady.then(() => new Promise((resolve, reject) => {
       const id = nextJobId++;
@@ -140,6 +142,8 @@
       app.worker.postMessage(Object.assign({ id }, message), transfer);
     }));
   }
+
+  app.runJob = runJob;
 
   // ---- the viewer -----------------------------------------------------------
   function loadScript(src) {
@@ -292,7 +296,10 @@
       ? 'mesh, ' + result.vertexCount.toLocaleString('en') + ' vertices, ' +
         result.triangleCount.toLocaleString('en') + ' triangles'
       : 'point cloud, ' + result.vertexCount.toLocaleString('en') + ' points';
-    meta.textContent = formatBytes(file.size) + ' · ' + what;
+    meta.textContent = formatBytes(file.size) + ' · ' + (result.kind === 'mesh'
+      ? result.triangleCount.toLocaleString('en') + ' triangles'
+      : result.vertexCount.toLocaleString('en') + ' points');
+    meta.parentElement.title = file.name + ': ' + what;
     setStage('load', 'done', 1, 'complete');
     setStatus(file.name + ': ' + what + ' (loaded in ' + Math.round(ms) + ' ms).');
     setState('done');
@@ -349,6 +356,22 @@
       app.model = null;
       clearError();
       setStatus('Showing the generic head model.');
+    });
+    // Keyboard control of the focused canvas. Only the view keys are taken;
+    // Tab and everything else keep their usual meaning.
+    ui.canvas.addEventListener('keydown', (e) => {
+      const v = app.viewer;
+      if (!v || e.ctrlKey || e.metaKey || e.altKey) return;
+      const step = 40;  // pixels of drag per key press
+      const arrows = { ArrowLeft: [-step, 0], ArrowRight: [step, 0], ArrowUp: [0, -step], ArrowDown: [0, step] };
+      if (arrows[e.key]) {
+        const [dx, dy] = arrows[e.key];
+        if (e.shiftKey) v.pan(dx, dy); else v.orbit(dx, dy);
+      } else if (e.key === '+' || e.key === '=') v.zoom(120);
+      else if (e.key === '-' || e.key === '_') v.zoom(-120);
+      else if (e.key === 'r' || e.key === 'R') v.reset_view();
+      else return;
+      e.preventDefault();
     });
     ui.pointSize.addEventListener('input', () => app.viewer && app.viewer.set_point_size(Number(ui.pointSize.value)));
   }

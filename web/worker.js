@@ -1,12 +1,14 @@
 // The Web Worker that runs the core (likeness_worker.wasm) off the main thread.
 //
-// Messages in:  {type:'parse', id, name, buffer: ArrayBuffer}  (buffer transferred)
-// Messages out: {type:'ready'}
-//               {type:'progress', id, stage, fraction}
-//               {type:'result', id, result}   result = the core's {ok, code, message, ...};
-//                                              typed arrays are transferred back
-//               {type:'fatal', message}        the module aborted (e.g. out of memory);
-//                                              the page starts a fresh worker
+// Messages in:  {type:<job>, id, ...job fields}; ArrayBuffers are transferred.
+// Messages out: {type:'ready'}                        the core is up
+//               {type:'progress', id, stage, fraction} from the job's ProgressFn
+//               {type:'result', id, result}           the core's {ok, code, message, ...};
+//                                                     typed arrays are transferred back
+//               {type:'fatal', message}               the module aborted (out of memory,
+//                                                     a bug): the page starts a new worker
+// To add a stage: bind it in wasm/worker_bindings.cpp (bytes as pointer+size,
+// a progress function, a {ok, code, message, ...} result) and add it to JOBS.
 'use strict';
 importScripts('likeness_worker.js');
 
@@ -27,7 +29,7 @@ LikenessWorker({
   while (pending.length) handle(pending.shift());
 }, (err) => fatal('could not start the core: ' + err));
 
-// Copies the bytes into the wasm heap, runs the job, frees the copy.
+// Copies the bytes into the wasm heap, runs fn(pointer, size), frees the copy.
 function withHeapBytes(buffer, fn) {
   const bytes = new Uint8Array(buffer);
   const ptr = core._malloc(Math.max(1, bytes.length));
@@ -40,32 +42,38 @@ function withHeapBytes(buffer, fn) {
   }
 }
 
+// job name -> (message, progress) -> result
+const JOBS = {
+  // {name, buffer}: a dropped PLY / OBJ / XYZ / VTK file -> geometry arrays.
+  parse: (msg, progress) =>
+    withHeapBytes(msg.buffer, (ptr, size) => core.parse_geometry(msg.name, ptr, size, progress)),
+};
+
 function transferables(result) {
   const out = [];
-  for (const key of ['positions', 'normals', 'colors', 'indices']) {
-    if (result[key] && result[key].buffer) out.push(result[key].buffer);
+  for (const value of Object.values(result)) {
+    if (ArrayBuffer.isView(value) && value.buffer.byteLength) out.push(value.buffer);
   }
   return out;
 }
 
 function handle(msg) {
-  if (msg.type === 'parse') {
-    const progress = (stage, fraction) => {
-      postMessage({ type: 'progress', id: msg.id, stage, fraction });
-    };
-    let result;
-    try {
-      result = withHeapBytes(msg.buffer, (ptr, size) => core.parse_geometry(msg.name, ptr, size, progress));
-    } catch (e) {
-      // Only an abort (a bug or memory exhaustion) gets here: the core returns
-      // errors as values. The module is unusable afterwards.
-      fatal(msg.name + ': ' + (e && e.message ? e.message : e));
-      return;
-    }
-    postMessage({ type: 'result', id: msg.id, result }, transferables(result));
-  } else {
+  const job = JOBS[msg.type];
+  if (!job) {
     postMessage({ type: 'result', id: msg.id, result: { ok: false, code: 'Internal', message: 'unknown job ' + msg.type } });
+    return;
   }
+  const progress = (stage, fraction) => { postMessage({ type: 'progress', id: msg.id, stage, fraction }); };
+  let result;
+  try {
+    result = job(msg, progress);
+  } catch (e) {
+    // The core returns errors as values, so only an abort or a binding
+    // error (a bug) gets here; the module may be unusable afterwards.
+    fatal(msg.type + ': ' + (e && e.message ? e.message : e));
+    return;
+  }
+  postMessage({ type: 'result', id: msg.id, result }, transferables(result));
 }
 
 onmessage = (e) => {

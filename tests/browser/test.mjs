@@ -5,14 +5,16 @@
 //   - the page reaches state "ready" and reports its load time;
 //   - the canvas shows the head: enough pixels differ from the background and
 //     they are shaded (not one flat color);
-//   - dragging on the canvas orbits the view (the image changes);
+//   - dragging on the canvas orbits the view, Reset view restores it; arrow
+//     keys orbit the focused canvas, R resets, Tab still leaves it;
 //   - a generated ASCII PLY point cloud (green torus) set on the file input
 //     leads to "done", the status names its point count and green points
 //     appear on the canvas;
 //   - broken inputs (truncated PLY, a text file, a PLY declaring 2^31
 //     vertices, an empty file, a file over the size limit) lead to "error"
 //     with a visible message naming the file, the previous model stays on
-//     screen, and a good file (an OBJ cube) loads afterwards;
+//     screen; a worker dying mid-job is replaced; and a good file (an OBJ
+//     cube) loads afterwards;
 //   - no console errors, no uncaught exceptions, and every network request
 //     goes to the page's own origin.
 // Screenshots go to $LK_SCREENSHOT_DIR when set (web_*.png).
@@ -272,6 +274,21 @@ async function main() {
     const orbitDiff = differingFraction(head, orbited);
     check('dragging orbits the view', orbitDiff > 0.005, `${(100 * orbitDiff).toFixed(1)}% of pixels changed`);
     await page.click('#btn-reset');
+    const reset = await canvasImage(page);
+    const resetDiff = differingFraction(head, reset);
+    check('"Reset view" restores the start view', resetDiff < 0.002, `${(100 * resetDiff).toFixed(2)}% of pixels differ from the start`);
+
+    // Keyboard: arrows orbit the focused canvas, R resets, Tab still moves on.
+    await page.focus('#canvas');
+    for (let i = 0; i < 4; i++) await page.keyboard.press('ArrowRight');
+    const keyed = await canvasImage(page);
+    check('arrow keys orbit the focused canvas', differingFraction(reset, keyed) > 0.005,
+          `${(100 * differingFraction(reset, keyed)).toFixed(1)}% of pixels changed`);
+    await page.keyboard.press('r');
+    check('R resets the view', differingFraction(reset, await canvasImage(page)) < 0.002);
+    await page.keyboard.press('Tab');
+    const focused = await page.evaluate(() => document.activeElement && document.activeElement.id);
+    check('Tab moves focus on from the canvas', focused !== 'canvas', `focus on #${focused}`);
 
     // 3. A point cloud.
     const before = await canvasImage(page);
@@ -304,6 +321,20 @@ async function main() {
     await shot(page, 'web_error.png');
     const afterErrors = await canvasImage(page);
     check('the previous model stays after errors', analyse(afterErrors).greenFraction > 0.5 * pointStats.greenFraction);
+
+    // A worker that dies mid-job (here: a binding error from a malformed
+    // message) fails that job with a message and is replaced.
+    const crash = await page.evaluate(async () => {
+      const old = window.likeness.worker;
+      try {
+        await window.likeness.runJob({ type: 'parse', name: 5, buffer: new ArrayBuffer(4) }, []);
+        return { rejected: false };
+      } catch (e) {
+        return { rejected: true, message: e.message, replaced: window.likeness.worker !== old };
+      }
+    });
+    check('a dying worker fails its job and is replaced', crash.rejected && crash.replaced && /restarted/.test(crash.message),
+          JSON.stringify(crash));
 
     // 5. A good file after the errors.
     const s2 = await setFile(page, 'cube.obj', cubeObj());

@@ -1,0 +1,59 @@
+// Screenshots of the web app for the docs (not a test): serves WEBDIR on
+// 127.0.0.1, opens the page in Debian's Chromium and writes
+//   OUTDIR/web_start.png          the page once ready (the generic head)
+//   OUTDIR/web_<stem>.png         after loading each FILE given
+// Usage: node screenshots.mjs WEBDIR OUTDIR [FILE ...] [--point-size N]
+import { chromium } from 'playwright-core';
+import http from 'node:http';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+
+const args = process.argv.slice(2);
+let pointSize = null;
+const ps = args.indexOf('--point-size');
+if (ps >= 0) { pointSize = args[ps + 1]; args.splice(ps, 2); }
+const [webdir, outdir, ...files] = args;
+if (!webdir || !outdir) {
+  console.error('usage: node screenshots.mjs WEBDIR OUTDIR [FILE ...] [--point-size N]');
+  process.exit(2);
+}
+const root = path.resolve(webdir);
+const MIME = { '.html': 'text/html', '.js': 'text/javascript', '.css': 'text/css', '.wasm': 'application/wasm' };
+const server = http.createServer((req, res) => {
+  const file = path.join(root, path.normalize(decodeURIComponent(new URL(req.url, 'http://x').pathname)));
+  if (!file.startsWith(root) || !fs.existsSync(file) || fs.statSync(file).isDirectory()) { res.writeHead(404); res.end(); return; }
+  res.writeHead(200, { 'content-type': MIME[path.extname(file)] || 'application/octet-stream' });
+  fs.createReadStream(file).pipe(res);
+});
+await new Promise((r) => server.listen(0, '127.0.0.1', r));
+const profile = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-shots-'));
+const context = await chromium.launchPersistentContext(profile, {
+  executablePath: '/usr/bin/chromium', headless: true,
+  args: ['--no-sandbox', '--disable-quic', '--no-first-run', '--disable-background-networking',
+         '--disable-component-update', '--disable-sync', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
+  viewport: { width: 1280, height: 800 }, deviceScaleFactor: 1,
+});
+try {
+  const page = context.pages()[0] || await context.newPage();
+  await page.goto(`http://127.0.0.1:${server.address().port}/index.html`);
+  await page.waitForFunction(() => ['ready', 'error'].includes(document.body.dataset.state), null, { timeout: 180000 });
+  fs.mkdirSync(outdir, { recursive: true });
+  const settle = () => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+  await settle();
+  await page.screenshot({ path: path.join(outdir, 'web_start.png') });
+  console.log('wrote', path.join(outdir, 'web_start.png'));
+  if (pointSize) await page.fill('#point-size', String(pointSize));
+  for (const f of files) {
+    await page.setInputFiles('#file-input', f);
+    await page.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: 120000 });
+    await settle();
+    const out = path.join(outdir, 'web_' + path.basename(f).replace(/\.[^.]*$/, '') + '.png');
+    await page.screenshot({ path: out });
+    console.log('wrote', out, '(' + (await page.textContent('#status')).trim() + ')');
+  }
+} finally {
+  await context.close();
+  server.close();
+  fs.rmSync(profile, { recursive: true, force: true });
+}
