@@ -43,7 +43,7 @@ try {
   await settle();
   await page.screenshot({ path: path.join(outdir, 'web_start.png') });
   console.log('wrote', path.join(outdir, 'web_start.png'));
-  if (pointSize) await page.fill('#point-size', String(pointSize));
+  if (pointSize) { await page.fill('#point-size', String(pointSize)); await page.evaluate(() => document.activeElement.blur()); }
   for (const f of files) {
     await page.setInputFiles('#file-input', f);
     await page.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: 120000 });
