@@ -38,6 +38,6 @@ function(likeness_embed out_var prefix)
     COMMAND ${CMAKE_COMMAND} -DOUT=${out} -DPREFIX=${prefix} "-DFILES=${files_arg}"
             -P ${PROJECT_SOURCE_DIR}/cmake/embed_files.cmake
     DEPENDS ${deps} ${PROJECT_SOURCE_DIR}/cmake/embed_files.cmake
-    COMMENT "Embedding ${prefix} files")
+    COMMENT "Embedding ${prefix} files" VERBATIM)
   set(${out_var} ${out} PARENT_SCOPE)
 endfunction()

@@ -14,6 +14,7 @@
 #include <glm/glm.hpp>
 
 #include <string>
+#include <vector>
 
 namespace lk {
 
@@ -54,10 +55,16 @@ struct OrbitCamera {
 // the given aspect (width / height) with a small margin.
 OrbitCamera canonical_view(CanonicalView view, const BBox& bbox, float aspect);
 Status canonical_view(const std::string& name, const BBox& bbox, float aspect, OrbitCamera& out);
+// Tighter: frames the points themselves (e.g. mesh vertices), not their box,
+// whose corners stick out beyond a round head in perspective. Aimed at the
+// box centre. Empty points give a default camera.
+OrbitCamera canonical_view(CanonicalView view, const std::vector<Vec3>& points, float aspect);
 
 // Distance at which a camera looking along `forward` (unit, from eye to
 // target) with the given up vector sees all of bbox centred on its centre.
 float framing_distance(const BBox& bbox, const glm::vec3& forward, const glm::vec3& up,
                        float fov_y_deg, float aspect, float margin = 1.08f);
+float framing_distance(const std::vector<Vec3>& points, const Vec3& center, const glm::vec3& forward,
+                       const glm::vec3& up, float fov_y_deg, float aspect, float margin = 1.08f);
 
 }  // namespace lk

@@ -1,0 +1,663 @@
+// The shared GLES3 / WebGL2 renderer (see renderer.h).
+#include "render/renderer.h"
+
+#include "mesh/geometry.h"
+#include "render/gl.h"
+#include "render/shader_sources.h"
+
+#include <glm/gtc/matrix_inverse.hpp>
+#include <glm/gtc/type_ptr.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <string>
+
+namespace lk {
+namespace {
+
+// Attribute locations, fixed by layout qualifiers in shaders/*.vert.
+enum Attribute : GLuint { kPosition = 0, kNormal = 1, kUv = 2, kColor = 3, kBarycentric = 4 };
+
+glm::vec3 srgb_to_linear(const glm::vec3& c) {
+  glm::vec3 out;
+  for (int i = 0; i < 3; ++i) {
+    const float x = std::clamp(c[i], 0.0f, 1.0f);
+    out[i] = x <= 0.04045f ? x / 12.92f : std::pow((x + 0.055f) / 1.055f, 2.4f);
+  }
+  return out;
+}
+
+const char* gl_error_name(GLenum e) {
+  switch (e) {
+    case GL_INVALID_ENUM: return "GL_INVALID_ENUM";
+    case GL_INVALID_VALUE: return "GL_INVALID_VALUE";
+    case GL_INVALID_OPERATION: return "GL_INVALID_OPERATION";
+    case GL_OUT_OF_MEMORY: return "GL_OUT_OF_MEMORY";
+    case GL_INVALID_FRAMEBUFFER_OPERATION: return "GL_INVALID_FRAMEBUFFER_OPERATION";
+    default: return "unknown GL error";
+  }
+}
+
+// Collects every pending GL error into one Status.
+Status check_gl(const char* where) {
+  std::string errors;
+  for (int i = 0; i < 16; ++i) {
+    const GLenum e = glGetError();
+    if (e == GL_NO_ERROR) break;
+    if (!errors.empty()) errors += ", ";
+    errors += gl_error_name(e);
+  }
+  if (errors.empty()) return Status::success();
+  return Status::error(ErrorCode::Internal, std::string(where) + ": " + errors);
+}
+
+Status compile_shader(GLenum type, const std::string& source, const char* name, GLuint& out) {
+  out = glCreateShader(type);
+  const char* src = source.c_str();
+  const GLint len = static_cast<GLint>(source.size());
+  glShaderSource(out, 1, &src, &len);
+  glCompileShader(out);
+  GLint ok = GL_FALSE;
+  glGetShaderiv(out, GL_COMPILE_STATUS, &ok);
+  if (ok == GL_TRUE) return Status::success();
+  GLint log_len = 0;
+  glGetShaderiv(out, GL_INFO_LOG_LENGTH, &log_len);
+  std::string log(static_cast<size_t>(std::max(log_len, 1)), '\0');
+  glGetShaderInfoLog(out, log_len, nullptr, log.data());
+  glDeleteShader(out);
+  out = 0;
+  return Status::error(ErrorCode::Internal, std::string("shader ") + name + " does not compile: " + log);
+}
+
+Status link_program(const std::string& vs_src, const std::string& fs_src, const char* name,
+                    GLuint& out) {
+  GLuint vs = 0, fs = 0;
+  Status s = compile_shader(GL_VERTEX_SHADER, vs_src, name, vs);
+  if (!s) return s;
+  s = compile_shader(GL_FRAGMENT_SHADER, fs_src, name, fs);
+  if (!s) {
+    glDeleteShader(vs);
+    return s;
+  }
+  out = glCreateProgram();
+  glAttachShader(out, vs);
+  glAttachShader(out, fs);
+  glLinkProgram(out);
+  glDeleteShader(vs);  // flagged; freed with the program
+  glDeleteShader(fs);
+  GLint ok = GL_FALSE;
+  glGetProgramiv(out, GL_LINK_STATUS, &ok);
+  if (ok == GL_TRUE) return Status::success();
+  GLint log_len = 0;
+  glGetProgramiv(out, GL_INFO_LOG_LENGTH, &log_len);
+  std::string log(static_cast<size_t>(std::max(log_len, 1)), '\0');
+  glGetProgramInfoLog(out, log_len, nullptr, log.data());
+  glDeleteProgram(out);
+  out = 0;
+  return Status::error(ErrorCode::Internal, std::string("program ") + name + " does not link: " + log);
+}
+
+bool finite(const Vec3& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
+
+// Uniform locations looked up once per program; -1 (absent) is ignored by GL.
+struct Uniforms {
+  GLuint program = 0;
+  std::map<std::string, GLint> cache;
+  GLint operator[](const char* name) {
+    auto it = cache.find(name);
+    if (it != cache.end()) return it->second;
+    const GLint loc = glGetUniformLocation(program, name);
+    cache[name] = loc;
+    return loc;
+  }
+};
+
+void upload_vec3s(GLuint buffer, const std::vector<float>& data, GLenum usage) {
+  glBindBuffer(GL_ARRAY_BUFFER, buffer);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data(),
+               usage);
+}
+
+void bind_attribute(GLuint buffer, GLuint location, int components) {
+  glBindBuffer(GL_ARRAY_BUFFER, buffer);
+  glEnableVertexAttribArray(location);
+  glVertexAttribPointer(location, components, GL_FLOAT, GL_FALSE, 0, nullptr);
+}
+
+}  // namespace
+
+struct Renderer::Impl {
+  struct Drawable {
+    bool is_points = false;
+    GLuint vao = 0;
+    GLuint position_buffer = 0, normal_buffer = 0, uv_buffer = 0, color_buffer = 0,
+           barycentric_buffer = 0;
+    GLsizei vertex_count = 0;  // GPU vertices (3 per triangle for meshes)
+    int num_vertices = 0;      // source vertices (#V or #P)
+    std::vector<Tri> triangles;  // kept for update_mesh: normals and unrolling
+    bool has_colors = false, has_uvs = false, has_normals = false;
+    TextureHandle texture = kNoHandle;
+    DrawStyle style;
+    BBox bbox;
+  };
+
+  bool ready = false;
+  RendererOptions options;
+  GLuint mesh_program = 0, points_program = 0, background_program = 0;
+  Uniforms mesh_u, points_u, background_u;
+  GLuint background_vao = 0;
+  std::map<DrawableHandle, Drawable> drawables;
+  std::map<TextureHandle, GLuint> textures;
+  int next_handle = 0;
+  int next_texture = 0;
+  float max_point_size = 64.0f;
+  int max_texture_size = 2048;
+
+  ~Impl() { release_all(); }
+
+  void release(Drawable& d) {
+    GLuint buffers[] = {d.position_buffer, d.normal_buffer, d.uv_buffer, d.color_buffer,
+                        d.barycentric_buffer};
+    for (GLuint b : buffers)
+      if (b) glDeleteBuffers(1, &b);
+    if (d.vao) glDeleteVertexArrays(1, &d.vao);
+  }
+
+  void release_all() {
+    if (!ready) return;
+    for (auto& [h, d] : drawables) release(d);
+    drawables.clear();
+    for (auto& [h, t] : textures) glDeleteTextures(1, &t);
+    textures.clear();
+    if (background_vao) glDeleteVertexArrays(1, &background_vao);
+    if (mesh_program) glDeleteProgram(mesh_program);
+    if (points_program) glDeleteProgram(points_program);
+    if (background_program) glDeleteProgram(background_program);
+    background_vao = mesh_program = points_program = background_program = 0;
+    ready = false;
+  }
+
+  Drawable* find(DrawableHandle h) {
+    auto it = drawables.find(h);
+    return it == drawables.end() ? nullptr : &it->second;
+  }
+
+  // Unrolls per-vertex data to three GPU vertices per triangle.
+  std::vector<float> unroll3(const std::vector<Vec3>& per_vertex, const std::vector<Tri>& tris) {
+    std::vector<float> out;
+    out.reserve(tris.size() * 9);
+    for (const Tri& t : tris)
+      for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < 3; ++k) out.push_back(static_cast<float>(per_vertex[t[c]][k]));
+    return out;
+  }
+
+  void draw_mesh(const Drawable& d, const CameraMatrices& cam) {
+    const DrawStyle& s = d.style;
+    Uniforms& u = mesh_u;
+    glUseProgram(mesh_program);
+    glUniformMatrix4fv(u["u_model"], 1, GL_FALSE, glm::value_ptr(s.model));
+    glUniformMatrix4fv(u["u_view"], 1, GL_FALSE, glm::value_ptr(cam.view));
+    glUniformMatrix4fv(u["u_projection"], 1, GL_FALSE, glm::value_ptr(cam.projection));
+    const glm::mat3 normal_matrix = glm::inverseTranspose(glm::mat3(cam.view * s.model));
+    glUniformMatrix3fv(u["u_normal_matrix"], 1, GL_FALSE, glm::value_ptr(normal_matrix));
+
+    int albedo_source = 0;
+    auto tex = textures.find(d.texture);
+    if (s.use_texture && d.has_uvs && tex != textures.end()) {
+      albedo_source = 2;
+      glActiveTexture(GL_TEXTURE0);
+      glBindTexture(GL_TEXTURE_2D, tex->second);
+      glUniform1i(u["u_texture"], 0);
+    } else if (s.use_vertex_colors && d.has_colors) {
+      albedo_source = 1;
+    }
+    glUniform1i(u["u_albedo_source"], albedo_source);
+    glUniform3fv(u["u_base_color"], 1, glm::value_ptr(srgb_to_linear(s.base_color)));
+    glUniform1f(u["u_specular"], s.specular);
+    glUniform1f(u["u_shininess"], std::max(s.shininess, 1.0f));
+    glUniform1i(u["u_surface"], s.surface ? 1 : 0);
+    glUniform1i(u["u_wireframe"], s.wireframe ? 1 : 0);
+    glUniform3fv(u["u_wire_color"], 1, glm::value_ptr(srgb_to_linear(s.wire_color)));
+    glUniform1f(u["u_wire_width"], std::max(s.wire_width_px, 0.5f));
+
+    const LightRig& l = options.lights;
+    glUniform3fv(u["u_key_dir"], 1, glm::value_ptr(l.key_dir));
+    glUniform3fv(u["u_key_color"], 1, glm::value_ptr(l.key_color));
+    glUniform3fv(u["u_fill_dir"], 1, glm::value_ptr(l.fill_dir));
+    glUniform3fv(u["u_fill_color"], 1, glm::value_ptr(l.fill_color));
+    glUniform3fv(u["u_rim_dir"], 1, glm::value_ptr(l.rim_dir));
+    glUniform3fv(u["u_rim_color"], 1, glm::value_ptr(l.rim_color));
+    glUniform3fv(u["u_ambient_sky"], 1, glm::value_ptr(l.ambient_sky));
+    glUniform3fv(u["u_ambient_ground"], 1, glm::value_ptr(l.ambient_ground));
+    glUniform1f(u["u_exposure"], l.exposure);
+
+    // Edges alone are blended over what is already drawn (antialiased lines).
+    if (!s.surface) {
+      glEnable(GL_BLEND);
+      glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+      glDepthMask(GL_FALSE);
+    }
+    glBindVertexArray(d.vao);
+    glDrawArrays(GL_TRIANGLES, 0, d.vertex_count);
+    if (!s.surface) {
+      glDisable(GL_BLEND);
+      glDepthMask(GL_TRUE);
+    }
+  }
+
+  void draw_points(const Drawable& d, const CameraMatrices& cam) {
+    const DrawStyle& s = d.style;
+    Uniforms& u = points_u;
+    glUseProgram(points_program);
+    glUniformMatrix4fv(u["u_model"], 1, GL_FALSE, glm::value_ptr(s.model));
+    glUniformMatrix4fv(u["u_view"], 1, GL_FALSE, glm::value_ptr(cam.view));
+    glUniformMatrix4fv(u["u_projection"], 1, GL_FALSE, glm::value_ptr(cam.projection));
+    glUniform1f(u["u_point_size"], std::clamp(s.point_size_px, 1.0f, max_point_size));
+    int source = 0;  // base color
+    switch (s.point_coloring) {
+      case PointColoring::Auto: source = d.has_colors ? 1 : (d.has_normals ? 2 : 0); break;
+      case PointColoring::VertexColor: source = d.has_colors ? 1 : 0; break;
+      case PointColoring::Normal: source = d.has_normals ? 2 : 0; break;
+      case PointColoring::BaseColor: source = 0; break;
+    }
+    glUniform1i(u["u_color_source"], source);
+    glUniform3fv(u["u_base_color"], 1, glm::value_ptr(srgb_to_linear(s.base_color)));
+    glUniform3fv(u["u_key_dir"], 1, glm::value_ptr(options.lights.key_dir));
+    glUniform1f(u["u_exposure"], options.lights.exposure);
+    glBindVertexArray(d.vao);
+    glDrawArrays(GL_POINTS, 0, d.vertex_count);
+  }
+};
+
+Renderer::Renderer() : impl_(std::make_unique<Impl>()) {}
+Renderer::~Renderer() = default;
+
+bool Renderer::ready() const { return impl_->ready; }
+
+Status Renderer::init(const RendererOptions& options) {
+  using namespace likeness_embedded;
+  using shader_sources::text;
+  impl_->release_all();
+  impl_->options = options;
+  Impl& m = *impl_;
+  Status s = link_program(text(shaders_mesh_vert, shaders_mesh_vert_size),
+                          text(shaders_mesh_frag, shaders_mesh_frag_size), "mesh", m.mesh_program);
+  if (s) s = link_program(text(shaders_points_vert, shaders_points_vert_size),
+                          text(shaders_points_frag, shaders_points_frag_size), "points",
+                          m.points_program);
+  if (s) s = link_program(text(shaders_background_vert, shaders_background_vert_size),
+                          text(shaders_background_frag, shaders_background_frag_size),
+                          "background", m.background_program);
+  if (!s) {
+    m.ready = true;  // so release_all frees what was made
+    m.release_all();
+    return s;
+  }
+  m.mesh_u = Uniforms{m.mesh_program, {}};
+  m.points_u = Uniforms{m.points_program, {}};
+  m.background_u = Uniforms{m.background_program, {}};
+  glGenVertexArrays(1, &m.background_vao);  // core profiles need a VAO bound even without attributes
+
+  GLfloat range[2] = {1.0f, 64.0f};
+  glGetFloatv(GL_ALIASED_POINT_SIZE_RANGE, range);
+  m.max_point_size = std::max(range[1], 1.0f);
+  glGetIntegerv(GL_MAX_TEXTURE_SIZE, &m.max_texture_size);
+#ifdef GL_PROGRAM_POINT_SIZE
+  // Desktop GL needs this for gl_PointSize; GLES3/WebGL2 always honours it.
+  glEnable(GL_PROGRAM_POINT_SIZE);
+#endif
+  m.ready = true;
+  return check_gl("Renderer::init");
+}
+
+Status Renderer::upload_mesh(const TriMesh& mesh, DrawableHandle& out) {
+  out = kNoHandle;
+  if (!impl_->ready) return Status::error(ErrorCode::InvalidInput, "renderer not initialized (call init() on a current GL context)");
+  if (mesh.positions.empty() || mesh.triangles.empty())
+    return Status::error(ErrorCode::Empty, "mesh has no vertices or no triangles");
+  std::string why;
+  if (!is_valid(mesh, &why)) return Status::error(ErrorCode::InvalidInput, "mesh is invalid: " + why);
+  const size_t nv = mesh.positions.size(), nf = mesh.triangles.size();
+  if (!mesh.normals.empty() && mesh.normals.size() != nv)
+    return Status::error(ErrorCode::InvalidInput, "mesh has " + std::to_string(mesh.normals.size()) +
+                                                      " normals for " + std::to_string(nv) + " vertices");
+  if (!mesh.colors.empty() && mesh.colors.size() != nv)
+    return Status::error(ErrorCode::InvalidInput, "mesh has " + std::to_string(mesh.colors.size()) +
+                                                      " colors for " + std::to_string(nv) + " vertices");
+  const size_t want_uvs = mesh.uv_per_corner ? 3 * nf : nv;
+  if (!mesh.uvs.empty() && mesh.uvs.size() != want_uvs)
+    return Status::error(ErrorCode::InvalidInput,
+                         "mesh has " + std::to_string(mesh.uvs.size()) + " uvs, expected " +
+                             std::to_string(want_uvs) + (mesh.uv_per_corner ? " (per corner)" : " (per vertex)"));
+  if (nf * 3 > static_cast<size_t>(1) << 30)
+    return Status::error(ErrorCode::TooLarge, "mesh has too many triangles to draw");
+
+  Impl& m = *impl_;
+  Impl::Drawable d;
+  d.num_vertices = static_cast<int>(nv);
+  d.triangles = mesh.triangles;
+  d.vertex_count = static_cast<GLsizei>(nf * 3);
+  d.bbox = bounding_box(mesh.positions);
+  d.has_normals = true;
+  d.has_colors = !mesh.colors.empty();
+  d.has_uvs = !mesh.uvs.empty();
+
+  glGenVertexArrays(1, &d.vao);
+  glBindVertexArray(d.vao);
+  glGenBuffers(1, &d.position_buffer);
+  glGenBuffers(1, &d.normal_buffer);
+  glGenBuffers(1, &d.barycentric_buffer);
+  upload_vec3s(d.position_buffer, m.unroll3(mesh.positions, mesh.triangles), GL_DYNAMIC_DRAW);
+  bind_attribute(d.position_buffer, kPosition, 3);
+  const std::vector<Vec3> normals = mesh.normals.empty() ? vertex_normals(mesh) : mesh.normals;
+  upload_vec3s(d.normal_buffer, m.unroll3(normals, mesh.triangles), GL_DYNAMIC_DRAW);
+  bind_attribute(d.normal_buffer, kNormal, 3);
+
+  std::vector<float> bary(nf * 9, 0.0f);
+  for (size_t f = 0; f < nf; ++f)
+    for (int c = 0; c < 3; ++c) bary[f * 9 + c * 3 + c] = 1.0f;
+  upload_vec3s(d.barycentric_buffer, bary, GL_STATIC_DRAW);
+  bind_attribute(d.barycentric_buffer, kBarycentric, 3);
+
+  if (d.has_colors) {
+    glGenBuffers(1, &d.color_buffer);
+    upload_vec3s(d.color_buffer, m.unroll3(mesh.colors, mesh.triangles), GL_STATIC_DRAW);
+    bind_attribute(d.color_buffer, kColor, 3);
+  } else {
+    glDisableVertexAttribArray(kColor);
+  }
+  if (d.has_uvs) {
+    std::vector<float> uv;
+    uv.reserve(nf * 6);
+    for (size_t f = 0; f < nf; ++f)
+      for (int c = 0; c < 3; ++c) {
+        const Vec2& t = mesh.uv_per_corner ? mesh.uvs[f * 3 + c] : mesh.uvs[mesh.triangles[f][c]];
+        uv.push_back(static_cast<float>(t.x()));
+        uv.push_back(static_cast<float>(t.y()));
+      }
+    glGenBuffers(1, &d.uv_buffer);
+    glBindBuffer(GL_ARRAY_BUFFER, d.uv_buffer);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(uv.size() * sizeof(float)), uv.data(),
+                 GL_STATIC_DRAW);
+    bind_attribute(d.uv_buffer, kUv, 2);
+  } else {
+    glDisableVertexAttribArray(kUv);
+  }
+  glBindVertexArray(0);
+  Status s = check_gl("upload_mesh");
+  if (!s) {
+    m.release(d);
+    return s;
+  }
+  out = m.next_handle++;
+  m.drawables[out] = std::move(d);
+  return Status::success();
+}
+
+Status Renderer::update_mesh(DrawableHandle handle, const std::vector<Vec3>& positions,
+                             const std::vector<Vec3>& normals) {
+  Impl& m = *impl_;
+  Impl::Drawable* d = m.find(handle);
+  if (!d || d->is_points) return Status::error(ErrorCode::InvalidInput, "update_mesh: no mesh with handle " + std::to_string(handle));
+  if (positions.size() != static_cast<size_t>(d->num_vertices))
+    return Status::error(ErrorCode::InvalidInput, "update_mesh: " + std::to_string(positions.size()) +
+                                                      " positions for a mesh of " + std::to_string(d->num_vertices) + " vertices");
+  if (!normals.empty() && normals.size() != positions.size())
+    return Status::error(ErrorCode::InvalidInput, "update_mesh: " + std::to_string(normals.size()) +
+                                                      " normals for " + std::to_string(positions.size()) + " vertices");
+  for (const Vec3& p : positions)
+    if (!finite(p)) return Status::error(ErrorCode::InvalidInput, "update_mesh: non-finite position");
+  TriMesh tmp;
+  tmp.positions = positions;
+  tmp.triangles = d->triangles;
+  const std::vector<Vec3> n = normals.empty() ? vertex_normals(tmp) : normals;
+  upload_vec3s(d->position_buffer, m.unroll3(positions, d->triangles), GL_DYNAMIC_DRAW);
+  upload_vec3s(d->normal_buffer, m.unroll3(n, d->triangles), GL_DYNAMIC_DRAW);
+  d->bbox = bounding_box(positions);
+  return check_gl("update_mesh");
+}
+
+Status Renderer::upload_points(const PointCloud& cloud, DrawableHandle& out) {
+  out = kNoHandle;
+  if (!impl_->ready) return Status::error(ErrorCode::InvalidInput, "renderer not initialized (call init() on a current GL context)");
+  const size_t n = cloud.positions.size();
+  if (n == 0) return Status::error(ErrorCode::Empty, "point cloud has no points");
+  if (!cloud.normals.empty() && cloud.normals.size() != n)
+    return Status::error(ErrorCode::InvalidInput, "point cloud has " + std::to_string(cloud.normals.size()) +
+                                                      " normals for " + std::to_string(n) + " points");
+  if (!cloud.colors.empty() && cloud.colors.size() != n)
+    return Status::error(ErrorCode::InvalidInput, "point cloud has " + std::to_string(cloud.colors.size()) +
+                                                      " colors for " + std::to_string(n) + " points");
+  if (n > static_cast<size_t>(1) << 30) return Status::error(ErrorCode::TooLarge, "point cloud too large to draw");
+  for (const Vec3& p : cloud.positions)
+    if (!finite(p)) return Status::error(ErrorCode::InvalidInput, "point cloud has a non-finite position");
+
+  auto flat = [](const std::vector<Vec3>& v) {
+    std::vector<float> out_f;
+    out_f.reserve(v.size() * 3);
+    for (const Vec3& p : v)
+      for (int k = 0; k < 3; ++k) out_f.push_back(static_cast<float>(p[k]));
+    return out_f;
+  };
+  Impl& m = *impl_;
+  Impl::Drawable d;
+  d.is_points = true;
+  d.num_vertices = static_cast<int>(n);
+  d.vertex_count = static_cast<GLsizei>(n);
+  d.bbox = bounding_box(cloud.positions);
+  d.has_normals = !cloud.normals.empty();
+  d.has_colors = !cloud.colors.empty();
+  d.style.point_coloring = PointColoring::Auto;
+  glGenVertexArrays(1, &d.vao);
+  glBindVertexArray(d.vao);
+  glGenBuffers(1, &d.position_buffer);
+  upload_vec3s(d.position_buffer, flat(cloud.positions), GL_STATIC_DRAW);
+  bind_attribute(d.position_buffer, kPosition, 3);
+  if (d.has_normals) {
+    glGenBuffers(1, &d.normal_buffer);
+    upload_vec3s(d.normal_buffer, flat(cloud.normals), GL_STATIC_DRAW);
+    bind_attribute(d.normal_buffer, kNormal, 3);
+  }
+  if (d.has_colors) {
+    glGenBuffers(1, &d.color_buffer);
+    upload_vec3s(d.color_buffer, flat(cloud.colors), GL_STATIC_DRAW);
+    bind_attribute(d.color_buffer, kColor, 3);
+  }
+  glBindVertexArray(0);
+  Status s = check_gl("upload_points");
+  if (!s) {
+    m.release(d);
+    return s;
+  }
+  out = m.next_handle++;
+  m.drawables[out] = std::move(d);
+  return Status::success();
+}
+
+Status Renderer::upload_texture(const Image& image, TextureHandle& out) {
+  out = kNoHandle;
+  Impl& m = *impl_;
+  if (!m.ready) return Status::error(ErrorCode::InvalidInput, "renderer not initialized (call init() on a current GL context)");
+  if (image.empty()) return Status::error(ErrorCode::Empty, "texture image is empty");
+  if (image.channels < 1 || image.channels > 4 ||
+      image.pixels.size() != static_cast<size_t>(image.width) * image.height * image.channels)
+    return Status::error(ErrorCode::InvalidInput, "texture image has inconsistent size/channels");
+  if (image.width > m.max_texture_size || image.height > m.max_texture_size)
+    return Status::error(ErrorCode::TooLarge, "texture " + std::to_string(image.width) + "x" +
+                                                  std::to_string(image.height) + " exceeds GL_MAX_TEXTURE_SIZE " +
+                                                  std::to_string(m.max_texture_size));
+  // RGBA rows, bottom row first: uv (0,0) is the image's lower-left corner
+  // (the OBJ convention) while lk::Image stores the top row first.
+  const int w = image.width, h = image.height, c = image.channels;
+  std::vector<std::uint8_t> rgba(static_cast<size_t>(w) * h * 4);
+  for (int y = 0; y < h; ++y) {
+    const std::uint8_t* src = image.at(0, h - 1 - y);
+    std::uint8_t* dst = &rgba[static_cast<size_t>(y) * w * 4];
+    for (int x = 0; x < w; ++x, src += c, dst += 4) {
+      dst[0] = src[0];
+      dst[1] = c >= 3 ? src[1] : src[0];
+      dst[2] = c >= 3 ? src[2] : src[0];
+      dst[3] = c == 4 ? src[3] : (c == 2 ? src[1] : 255);
+    }
+  }
+  GLuint tex = 0;
+  glGenTextures(1, &tex);
+  glBindTexture(GL_TEXTURE_2D, tex);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_SRGB8_ALPHA8, w, h, 0, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+  glGenerateMipmap(GL_TEXTURE_2D);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glBindTexture(GL_TEXTURE_2D, 0);
+  Status s = check_gl("upload_texture");
+  if (!s) {
+    glDeleteTextures(1, &tex);
+    return s;
+  }
+  out = m.next_texture++;
+  m.textures[out] = tex;
+  return Status::success();
+}
+
+Status Renderer::attach_texture(DrawableHandle mesh, TextureHandle texture) {
+  Impl::Drawable* d = impl_->find(mesh);
+  if (!d || d->is_points) return Status::error(ErrorCode::InvalidInput, "attach_texture: no mesh with handle " + std::to_string(mesh));
+  if (texture != kNoHandle && !impl_->textures.count(texture))
+    return Status::error(ErrorCode::InvalidInput, "attach_texture: no texture with handle " + std::to_string(texture));
+  if (texture != kNoHandle && !d->has_uvs)
+    return Status::error(ErrorCode::InvalidInput, "attach_texture: the mesh has no uvs");
+  d->texture = texture;
+  return Status::success();
+}
+
+DrawStyle* Renderer::style(DrawableHandle handle) {
+  Impl::Drawable* d = impl_->find(handle);
+  return d ? &d->style : nullptr;
+}
+
+namespace {
+Status no_drawable(const char* what, DrawableHandle h) {
+  return Status::error(ErrorCode::InvalidInput, std::string(what) + ": no drawable with handle " + std::to_string(h));
+}
+}  // namespace
+
+Status Renderer::set_visible(DrawableHandle handle, bool visible) {
+  DrawStyle* s = style(handle);
+  if (!s) return no_drawable("set_visible", handle);
+  s->visible = visible;
+  return Status::success();
+}
+
+Status Renderer::set_base_color(DrawableHandle handle, const glm::vec3& srgb) {
+  DrawStyle* s = style(handle);
+  if (!s) return no_drawable("set_base_color", handle);
+  s->base_color = srgb;
+  return Status::success();
+}
+
+Status Renderer::set_model_matrix(DrawableHandle handle, const glm::mat4& model) {
+  DrawStyle* s = style(handle);
+  if (!s) return no_drawable("set_model_matrix", handle);
+  s->model = model;
+  return Status::success();
+}
+
+Status Renderer::set_wireframe(DrawableHandle handle, bool wireframe) {
+  DrawStyle* s = style(handle);
+  if (!s) return no_drawable("set_wireframe", handle);
+  s->wireframe = wireframe;
+  return Status::success();
+}
+
+Status Renderer::set_point_size(DrawableHandle handle, float pixels) {
+  DrawStyle* s = style(handle);
+  if (!s) return no_drawable("set_point_size", handle);
+  if (!(pixels > 0.0f)) return Status::error(ErrorCode::InvalidInput, "set_point_size: size must be positive");
+  s->point_size_px = pixels;
+  return Status::success();
+}
+
+Status Renderer::bounds(DrawableHandle handle, BBox& out) const {
+  Impl::Drawable* d = impl_->find(handle);
+  if (!d) return no_drawable("bounds", handle);
+  out = d->bbox;
+  return Status::success();
+}
+
+void Renderer::remove(DrawableHandle handle) {
+  Impl::Drawable* d = impl_->find(handle);
+  if (!d) return;
+  impl_->release(*d);
+  impl_->drawables.erase(handle);
+}
+
+void Renderer::remove_texture(TextureHandle texture) {
+  auto it = impl_->textures.find(texture);
+  if (it == impl_->textures.end()) return;
+  glDeleteTextures(1, &it->second);
+  impl_->textures.erase(it);
+  for (auto& [h, d] : impl_->drawables)
+    if (d.texture == texture) d.texture = kNoHandle;
+}
+
+void Renderer::clear() {
+  for (auto& [h, d] : impl_->drawables) impl_->release(d);
+  impl_->drawables.clear();
+  for (auto& [h, t] : impl_->textures) glDeleteTextures(1, &t);
+  impl_->textures.clear();
+}
+
+void Renderer::set_background(const glm::vec3& srgb) { set_background_gradient(srgb, srgb); }
+
+void Renderer::set_background_gradient(const glm::vec3& top_srgb, const glm::vec3& bottom_srgb) {
+  impl_->options.background_top = top_srgb;
+  impl_->options.background_bottom = bottom_srgb;
+}
+
+void Renderer::set_lights(const LightRig& lights) { impl_->options.lights = lights; }
+
+Status Renderer::draw(const CameraMatrices& camera, const Viewport& viewport) {
+  Impl& m = *impl_;
+  if (!m.ready) return Status::error(ErrorCode::InvalidInput, "renderer not initialized (call init() on a current GL context)");
+  if (viewport.width <= 0 || viewport.height <= 0)
+    return Status::error(ErrorCode::InvalidInput, "draw: empty viewport");
+  glViewport(viewport.x, viewport.y, viewport.width, viewport.height);
+  glScissor(viewport.x, viewport.y, viewport.width, viewport.height);
+  glEnable(GL_SCISSOR_TEST);
+  glDisable(GL_BLEND);
+  glDisable(GL_CULL_FACE);  // open scans and mouth/eye pockets show their insides
+
+  // Background: drawn, not cleared, so it can be a gradient.
+  glDisable(GL_DEPTH_TEST);
+  glDepthMask(GL_FALSE);
+  glUseProgram(m.background_program);
+  glUniform3fv(m.background_u["u_top"], 1, glm::value_ptr(m.options.background_top));
+  glUniform3fv(m.background_u["u_bottom"], 1, glm::value_ptr(m.options.background_bottom));
+  glBindVertexArray(m.background_vao);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glDepthMask(GL_TRUE);
+  glClearDepthf(1.0f);
+  glClear(GL_DEPTH_BUFFER_BIT);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LEQUAL);  // wire-only passes over coincident surfaces
+
+  // Opaque things first, then blended edge-only meshes.
+  for (auto& [h, d] : m.drawables) {
+    if (!d.style.visible) continue;
+    if (d.is_points) m.draw_points(d, camera);
+    else if (d.style.surface) m.draw_mesh(d, camera);
+  }
+  for (auto& [h, d] : m.drawables)
+    if (d.style.visible && !d.is_points && !d.style.surface && d.style.wireframe) m.draw_mesh(d, camera);
+
+  glBindVertexArray(0);
+  glUseProgram(0);
+  glDisable(GL_SCISSOR_TEST);
+  return check_gl("Renderer::draw");
+}
+
+}  // namespace lk
