@@ -1,0 +1,846 @@
+#include "head/generic_head_builder.h"
+
+#include "mesh/topology.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <string>
+
+namespace lk {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+double radians(double degrees) { return degrees * kPi / 180.0; }
+
+// ---------------------------------------------------------------------------
+// The head's shape as a signed distance function (negative inside). Built
+// from smoothly blended ellipsoids; mirror-symmetric because it only sees |x|.
+
+double sd_ellipsoid(const Vec3& p, const Vec3& c, const Vec3& r) {
+  const Vec3 q = p - c;
+  const double k0 = (q.array() / r.array()).matrix().norm();
+  const double k1 = (q.array() / (r.array() * r.array())).matrix().norm();
+  if (k1 < 1e-12) return -r.minCoeff();
+  return k0 * (k0 - 1.0) / k1;
+}
+
+double sd_sphere(const Vec3& p, const Vec3& c, double r) { return (p - c).norm() - r; }
+
+// A capsule whose radius goes linearly from ra at a to rb at b.
+double sd_tapered_capsule(const Vec3& p, const Vec3& a, const Vec3& b, double ra, double rb) {
+  const Vec3 ab = b - a;
+  const double t = std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+  return (p - (a + t * ab)).norm() - (ra + t * (rb - ra));
+}
+
+// Polynomial smooth minimum: blends two shapes with a fillet of size k.
+double smooth_min(double a, double b, double k) {
+  const double h = std::max(k - std::abs(a - b), 0.0) / k;
+  return std::min(a, b) - h * h * k * 0.25;
+}
+double smooth_max(double a, double b, double k) { return -smooth_min(-a, -b, k); }
+
+struct HeadShape {
+  // Left eyeball centre (the right one is mirrored) and the sphere the lids
+  // follow; the lid sphere is larger than the eyeball so lids cover it.
+  Vec3 eye_center{0.032, 0.022, 0.060};
+  double lid_radius = 0.0140;
+  double slit_y = -0.0535;  // height of the closed lip line
+  double slit_z = 0.095;    // depth of the lip line at the midline (approx.)
+
+  double distance(const Vec3& p0) const {
+    const Vec3 p(std::abs(p0.x()), p0.y(), p0.z());
+    double d = sd_ellipsoid(p, {0, 0.030, -0.012}, {0.073, 0.105, 0.098});        // cranium
+    d = smooth_min(d, sd_ellipsoid(p, {0, -0.004, 0.026}, {0.060, 0.060, 0.064}), 0.02);   // midface
+    d = smooth_min(d, sd_ellipsoid(p, {0, -0.056, 0.010}, {0.056, 0.048, 0.070}), 0.025);  // jaw
+    d = smooth_min(d, sd_ellipsoid(p, {0.036, -0.075, -0.005}, {0.018, 0.022, 0.030}), 0.02);  // jaw angle
+    d = smooth_min(d, sd_ellipsoid(p, {0, -0.090, 0.066}, {0.021, 0.016, 0.016}), 0.014);  // chin
+    d = smooth_min(d, sd_ellipsoid(p, {0.048, 0.004, 0.050}, {0.020, 0.013, 0.024}), 0.016);  // cheekbone
+    d = smooth_min(d, sd_ellipsoid(p, {0, 0.042, 0.076}, {0.056, 0.011, 0.017}), 0.016);   // brow ridge
+    // Eye socket: hollow under the brow, then the lids over the eyeball.
+    d = smooth_max(d, -sd_ellipsoid(p, {0.033, 0.019, 0.082}, {0.021, 0.014, 0.018}), 0.008);
+    d = smooth_min(d, sd_sphere(p, eye_center, lid_radius), 0.004);
+    // Nose: bridge, tip, wings (alae).
+    double nose = sd_tapered_capsule(p, {0, 0.030, 0.081}, {0, -0.011, 0.104}, 0.0050, 0.0070);
+    nose = smooth_min(nose, sd_sphere(p, {0, -0.014, 0.103}, 0.0090), 0.008);
+    nose = smooth_min(nose, sd_ellipsoid(p, {0.0135, -0.020, 0.091}, {0.0085, 0.0075, 0.0095}), 0.006);
+    d = smooth_min(d, nose, 0.007);
+    // Lips: two volumes meeting in a crease (the lip line).
+    const double upper = sd_ellipsoid(p, {0, slit_y + 0.0065, 0.085}, {0.025, 0.0075, 0.0105});
+    const double lower = sd_ellipsoid(p, {0, slit_y - 0.0075, 0.082}, {0.022, 0.0085, 0.0105});
+    d = smooth_min(d, std::min(upper, lower), 0.006);
+    // Neck: an elliptic cylinder below the head.
+    const double nx = p.x() / 0.051, nz = (p.z() + 0.016) / 0.056;
+    const double neck = std::max((std::sqrt(nx * nx + nz * nz) - 1.0) * 0.051, p.y() + 0.03);
+    d = smooth_min(d, neck, 0.03);
+    return d;
+  }
+
+  Vec3 gradient(const Vec3& p) const {
+    const double h = 1e-5;
+    Vec3 g;
+    for (int k = 0; k < 3; ++k) {
+      Vec3 a = p, b = p;
+      a[k] += h;
+      b[k] -= h;
+      g[k] = (distance(a) - distance(b)) / (2 * h);
+    }
+    return g;
+  }
+
+  // First point where the ray from an inside origin leaves the head.
+  Vec3 cast(const Vec3& origin, const Vec3& dir) const {
+    const Vec3 d = dir.normalized();
+    const double step = 0.0004;
+    double t0 = 0;
+    for (double t = step; t < 0.4; t += step) {
+      if (distance(origin + t * d) > 0) {
+        double lo = t0, hi = t;
+        for (int k = 0; k < 40; ++k) {
+          const double mid = 0.5 * (lo + hi);
+          (distance(origin + mid * d) > 0 ? hi : lo) = mid;
+        }
+        return origin + 0.5 * (lo + hi) * d;
+      }
+      t0 = t;
+    }
+    return origin + 0.4 * d;
+  }
+
+  // Newton steps onto the zero level set.
+  Vec3 project(Vec3 p) const {
+    for (int k = 0; k < 30; ++k) {
+      const Vec3 g = gradient(p);
+      const double g2 = g.squaredNorm();
+      if (g2 < 1e-12) break;
+      p -= distance(p) * g / g2;
+    }
+    return p;
+  }
+};
+
+// ---------------------------------------------------------------------------
+// Layout of the quad grid. Rows go from the neck's bottom (row 0, the mesh's
+// boundary) to the crown patch; columns are meridians, column 0 on the face's
+// midline, increasing towards +x (the head's left).
+
+constexpr int kColumns = 40;  // the crown patch is 10 x 10, whose border has 40 vertices
+constexpr int kCapSize = 10;
+
+// Row kinds: the neck rows cast horizontal rays from the neck's axis, one
+// transition row is interpolated and projected, the head rows cast rays from
+// a centre inside the head at the given elevation (degrees).
+const double kNeckRowY[] = {-0.195, -0.172, -0.150};
+constexpr int kNeckRows = 3;
+constexpr int kTransitionRow = 3;
+const double kHeadRowElevation[] = {-60, -54, -48.5, -43.5, -39.5, -36.5, -33.8, -31, -27.5, -24,
+                                    -20.5, -16.5, -12.5, -8, -4, 0, 5, 10, 15, 20, 26, 33, 40};
+constexpr int kHeadRows = sizeof(kHeadRowElevation) / sizeof(double);
+constexpr int kFirstHeadRow = kNeckRows + 1;
+constexpr int kRows = kFirstHeadRow + kHeadRows;
+
+// Rows of the features (see kHeadRowElevation).
+constexpr int kSlitRow = kFirstHeadRow + 6;     // -33.8 deg: the lip line
+constexpr int kRimLowRow = kFirstHeadRow + 16;  // 5 deg: lower lid of the eye opening
+constexpr int kEarLowRow = kFirstHeadRow + 11;  // -16.5 deg .. 10 deg: ear root
+constexpr int kEarHighRow = kFirstHeadRow + 17;
+// Columns (left side; the right side mirrors c -> -c).
+constexpr int kEyeCol0 = 2, kEyeCol1 = 6;     // eye opening: 4 quads wide, 1 high
+constexpr int kMouthHalfWidth = 3;            // lip line spans columns -3..3
+constexpr int kEarCol0 = 12, kEarCol1 = 14;   // ear root: 2 quads wide, 6 high
+
+const Vec3 kRayCenter(0, 0.010, -0.005);
+const Vec3 kNeckAxis(0, 0, -0.016);
+
+double column_azimuth(int c) {
+  const double u = 2 * kPi * c / kColumns;
+  return u - 0.5 * std::sin(u);  // denser over the face, coarser at the back
+}
+int wrap(int c) { return ((c % kColumns) + kColumns) % kColumns; }
+Vec3 direction(double azimuth, double elevation) {
+  return {std::cos(elevation) * std::sin(azimuth), std::sin(elevation),
+          std::cos(elevation) * std::cos(azimuth)};
+}
+
+enum class Part { Grid, Cap, LowerLipLine, EyePocket, MouthBag, Ear };
+
+struct VertexInfo {
+  Part part = Part::Grid;
+  int row = -1, col = -1;  // grid vertices (col in 0..kColumns-1)
+  int side = 0;            // +1 left, -1 right, 0 midline / both
+  int chain = 0;           // lips and mouth bag: +1 upper, -1 lower, 0 corner
+};
+
+class Builder {
+ public:
+  std::vector<Vec3> positions;
+  std::vector<VertexInfo> info;
+  std::vector<std::vector<int>> polygons;  // quads and triangles, CCW from outside
+
+  int add(const Vec3& p, const VertexInfo& vi) {
+    positions.push_back(p);
+    info.push_back(vi);
+    return static_cast<int>(positions.size()) - 1;
+  }
+
+  bool has_directed_edge(int a, int b) const {
+    for (const auto& poly : polygons)
+      for (size_t k = 0; k < poly.size(); ++k)
+        if (poly[k] == a && poly[(k + 1) % poly.size()] == b) return true;
+    return false;
+  }
+
+  // Reorders a hole's loop so that the existing faces contain loop[k] -> loop[k+1].
+  void orient_loop(std::vector<int>& loop) const {
+    if (!has_directed_edge(loop[0], loop[1])) std::reverse(loop.begin(), loop.end());
+  }
+
+  // Adds a ring of new vertices behind an oriented hole loop and the quads
+  // joining them; returns the new vertices, index for index.
+  std::vector<int> extrude(const std::vector<int>& loop, const std::vector<Vec3>& new_positions,
+                           const VertexInfo& vi) {
+    std::vector<int> ring;
+    for (size_t k = 0; k < loop.size(); ++k) {
+      VertexInfo v = vi;
+      v.chain = info[loop[k]].chain;
+      ring.push_back(add(new_positions[k], v));
+    }
+    const size_t n = loop.size();
+    for (size_t k = 0; k < n; ++k) {
+      const size_t k1 = (k + 1) % n;
+      polygons.push_back({loop[k1], loop[k], ring[k], ring[k1]});
+    }
+    return ring;
+  }
+
+  // Closes a hole whose loop is made of two chains walking from one end to
+  // the other (top[k] faces bottom[k]; ends may be shared vertices).
+  void close_between(const std::vector<int>& top, const std::vector<int>& bottom) {
+    const bool forward = has_directed_edge(top[0], top[1]);
+    for (size_t k = 0; k + 1 < top.size(); ++k) {
+      std::vector<int> q = forward ? std::vector<int>{top[k + 1], top[k], bottom[k], bottom[k + 1]}
+                                   : std::vector<int>{top[k], top[k + 1], bottom[k + 1], bottom[k]};
+      std::vector<int> poly;
+      for (int v : q)
+        if (std::find(poly.begin(), poly.end(), v) == poly.end()) poly.push_back(v);
+      polygons.push_back(poly);
+    }
+  }
+};
+
+BBox box_of(const std::vector<Vec3>& p, const std::vector<int>& ids) {
+  BBox b;
+  for (int v : ids) b.extend(p[v]);
+  return b;
+}
+
+std::vector<int> sorted_unique(std::vector<int> v) {
+  std::sort(v.begin(), v.end());
+  v.erase(std::unique(v.begin(), v.end()), v.end());
+  return v;
+}
+
+}  // namespace
+
+Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& out) {
+  if (!(options.eyeball_radius > 0.005 && options.eyeball_radius < 0.0135))
+    return Status::error(ErrorCode::InvalidInput, "eyeball_radius must be in (5 mm, 13.5 mm)");
+  if (!(options.socket_clearance > 0 && options.eyeball_radius + options.socket_clearance < 0.0138))
+    return Status::error(ErrorCode::InvalidInput, "socket pocket would not fit inside the lids");
+  if (!(options.lip_gap > 0 && options.lip_gap < 0.001))
+    return Status::error(ErrorCode::InvalidInput, "lip_gap must be in (0, 1 mm)");
+
+  const HeadShape shape;
+  Builder b;
+
+  // --- 1. grid vertices -----------------------------------------------------
+  std::vector<std::vector<int>> grid(kRows, std::vector<int>(kColumns, -1));
+  for (int r = 0; r < kRows; ++r)
+    for (int c = 0; c < kColumns; ++c) {
+      VertexInfo vi;
+      vi.row = r;
+      vi.col = c;
+      grid[r][c] = b.add(Vec3::Zero(), vi);
+    }
+  auto g = [&](int r, int c) { return grid[r][wrap(c)]; };
+  for (int c = 0; c < kColumns; ++c) {
+    const double az = column_azimuth(c);
+    for (int r = 0; r < kNeckRows; ++r) {
+      const Vec3 origin(kNeckAxis.x(), kNeckRowY[r], kNeckAxis.z());
+      Vec3 p = shape.cast(origin, {std::sin(az), 0, std::cos(az)});
+      p.y() = kNeckRowY[r];
+      b.positions[g(r, c)] = p;
+    }
+    for (int h = 0; h < kHeadRows; ++h)
+      b.positions[g(kFirstHeadRow + h, c)] =
+          shape.cast(kRayCenter, direction(az, radians(kHeadRowElevation[h])));
+  }
+  for (int c = 0; c < kColumns; ++c)
+    b.positions[g(kTransitionRow, c)] = shape.project(
+        0.5 * (b.positions[g(kTransitionRow - 1, c)] + b.positions[g(kTransitionRow + 1, c)]));
+
+  // Casts through a point given in front of the face.
+  // The plain layout before the features are warped in; relaxation keeps its
+  // local spacing (denser over the face) while evening out the warps.
+  std::vector<Vec3> reference = b.positions;
+  auto cast_towards = [&](const Vec3& target) { return shape.cast(kRayCenter, target - kRayCenter); };
+
+  // --- 2. eyes: concentric ellipse around a 4 x 1 opening on the lid sphere --
+  const double lid_half_angle = radians(64);  // half the opening's width, seen from the eyeball
+  const double upper_lid = radians(21), lower_lid = radians(15), canthus = radians(3.5);
+  std::map<int, std::vector<int>> rim_top, rim_bottom;  // by side, medial -> lateral
+  for (int side : {1, -1}) {
+    const Vec3 eye(side * shape.eye_center.x(), shape.eye_center.y(), shape.eye_center.z());
+    const Vec3 opening_center = eye + Vec3(0, 0.0008, shape.lid_radius);
+    // Ring around the opening (columns 1..7, rows rim-1..rim+2).
+    for (int r = kRimLowRow - 1; r <= kRimLowRow + 2; ++r)
+      for (int c = kEyeCol0 - 1; c <= kEyeCol1 + 1; ++c) {
+        const bool perimeter = r == kRimLowRow - 1 || r == kRimLowRow + 2 || c == kEyeCol0 - 1 ||
+                               c == kEyeCol1 + 1;
+        if (!perimeter) continue;
+        const double x = (c - 0.5 * (kEyeCol0 + kEyeCol1)) / (0.5 * (kEyeCol1 - kEyeCol0) + 1);
+        const double y = (r - (kRimLowRow + 0.5)) / 1.5;
+        const double a = std::atan2(y, x);
+        const double dy = std::sin(a) > 0 ? 0.0115 : 0.0100;
+        const Vec3 target = opening_center + Vec3(side * 0.0165 * std::cos(a), dy * std::sin(a), 0);
+        b.positions[g(r, side * c)] = cast_towards(target);
+      }
+    // The opening's rim lies on the lid sphere.
+    for (int k = 0; k <= kEyeCol1 - kEyeCol0; ++k) {
+      const double t = 2.0 * k / (kEyeCol1 - kEyeCol0) - 1.0;  // -1 medial .. +1 lateral
+      const double az = t * lid_half_angle;
+      const double open = std::pow(std::max(0.0, 1 - t * t), 0.7);
+      const double tilt = 0.03 * t;  // lateral corner slightly higher
+      for (int top : {1, 0}) {
+        const double el = tilt + (top ? canthus + upper_lid * open : -canthus - lower_lid * open);
+        const Vec3 dir(side * std::sin(az) * std::cos(el), std::sin(el), std::cos(az) * std::cos(el));
+        const int v = g(kRimLowRow + top, side * (kEyeCol0 + k));
+        b.positions[v] = eye + shape.lid_radius * dir;
+        (top ? rim_top : rim_bottom)[side].push_back(v);
+      }
+    }
+  }
+
+  // --- 3. mouth: lip line and two concentric ellipses -----------------------
+  const double mouth_half_width = 0.0245;
+  const Vec3 mouth_front(0, shape.slit_y, 0.088);  // near the lips, so rays land close to x, y
+  for (int ring = 1; ring <= 2; ++ring) {
+    const int hw = kMouthHalfWidth + ring;
+    const double ax = mouth_half_width + (ring == 1 ? 0.0045 : 0.0105);
+    const double up = ring == 1 ? 0.0075 : 0.0120, down = ring == 1 ? 0.0095 : 0.0175;
+    for (int r = kSlitRow - ring; r <= kSlitRow + ring; ++r)
+      for (int c = -hw; c <= hw; ++c) {
+        if (r != kSlitRow - ring && r != kSlitRow + ring && std::abs(c) != hw) continue;
+        const double a = std::atan2(double(r - kSlitRow) / ring, double(c) / hw);
+        const double dy = std::sin(a) * (std::sin(a) > 0 ? up : down);
+        b.positions[g(r, c)] = cast_towards(mouth_front + Vec3(ax * std::cos(a), dy, 0));
+      }
+  }
+  std::vector<int> upper_line, lower_line;  // corner .. corner, from -x to +x
+  for (int c = -kMouthHalfWidth; c <= kMouthHalfWidth; ++c) {
+    const double t = double(c) / kMouthHalfWidth;
+    const Vec3 target = mouth_front + Vec3(mouth_half_width * t, -0.0015 * t * t, 0);
+    Vec3 p = cast_towards(target);
+    const int v = g(kSlitRow, c);
+    if (std::abs(c) == kMouthHalfWidth) {
+      b.positions[v] = p;
+      b.info[v].chain = 0;
+      upper_line.push_back(v);
+      lower_line.push_back(v);
+      continue;
+    }
+    b.positions[v] = p + Vec3(0, 0.5 * options.lip_gap, 0);
+    b.info[v].chain = 1;
+    VertexInfo lower;
+    lower.part = Part::LowerLipLine;
+    lower.row = kSlitRow;
+    lower.col = wrap(c);
+    lower.chain = -1;
+    upper_line.push_back(v);
+    lower_line.push_back(b.add(p - Vec3(0, 0.5 * options.lip_gap, 0), lower));
+    reference.push_back(reference[v]);
+  }
+
+  // --- 4. grid faces (holes left for the eyes and ears) ----------------------
+  // Quad (r, c) spans columns c..c+1 and rows r..r+1.
+  auto quad_is_eye = [&](int r, int c) {
+    if (r != kRimLowRow) return false;
+    for (int side : {1, -1}) {
+      const int lo = side > 0 ? kEyeCol0 : -kEyeCol1;
+      const int hi = side > 0 ? kEyeCol1 : -kEyeCol0;
+      for (int k = lo; k < hi; ++k)
+        if (wrap(k) == c) return true;
+    }
+    return false;
+  };
+  auto quad_is_ear = [&](int r, int c) {
+    if (r < kEarLowRow || r >= kEarHighRow) return false;
+    for (int k = kEarCol0; k < kEarCol1; ++k)
+      if (wrap(k) == c || wrap(-k - 1) == c) return true;
+    return false;
+  };
+  std::map<int, std::vector<std::vector<int>>> ear_patch;  // by side
+  for (int r = 0; r + 1 < kRows; ++r)
+    for (int c = 0; c < kColumns; ++c) {
+      std::vector<int> q = {g(r, c), g(r, c + 1), g(r + 1, c + 1), g(r + 1, c)};
+      if (quad_is_eye(r, c)) continue;
+      if (quad_is_ear(r, c)) {
+        ear_patch[c < kColumns / 2 ? 1 : -1].push_back(q);
+        continue;
+      }
+      // Faces below the lip line use the lower lip's vertices.
+      if (r + 1 == kSlitRow) {
+        for (int k = 2; k < 4; ++k) {
+          const int col = b.info[q[k]].col;
+          const int cc = col > kColumns / 2 ? col - kColumns : col;
+          if (std::abs(cc) < kMouthHalfWidth) q[k] = lower_line[cc + kMouthHalfWidth];
+        }
+      }
+      b.polygons.push_back(q);
+    }
+
+  // --- 5. crown patch: a 10 x 10 quad grid closing the top row --------------
+  {
+    const int n = kCapSize;
+    std::vector<std::vector<int>> cap(n + 1, std::vector<int>(n + 1, -1));
+    // Border walk from the front middle towards +x, matching columns 0..39.
+    int p = n / 2, q = n, dp = 1, dq = 0;
+    for (int c = 0; c < kColumns; ++c) {
+      cap[p][q] = g(kRows - 1, c);
+      if (c + 1 == kColumns) break;
+      if ((dp == 1 && p == n) || (dq == -1 && q == 0) || (dp == -1 && p == 0) || (dq == 1 && q == n)) {
+        const int t = dp;
+        dp = dq;
+        dq = -t;
+      }
+      p += dp;
+      q += dq;
+    }
+    const double top_elevation = radians(kHeadRowElevation[kHeadRows - 1]);
+    for (int i = 1; i < n; ++i)
+      for (int j = 1; j < n; ++j) {
+        const double X = -1 + 2.0 * i / n, Z = -1 + 2.0 * j / n;
+        const double dx = X * std::sqrt(1 - Z * Z / 2), dz = Z * std::sqrt(1 - X * X / 2);
+        const double rho = std::sqrt(dx * dx + dz * dz);
+        const double psi = std::atan2(dx, dz);
+        const double az = psi - rho * rho * 0.5 * std::sin(psi);
+        const double el = kPi / 2 - (kPi / 2 - top_elevation) * rho;
+        VertexInfo vi;
+        vi.part = Part::Cap;
+        cap[i][j] = b.add(shape.cast(kRayCenter, direction(az, el)), vi);
+      }
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j)
+        b.polygons.push_back({cap[i][j], cap[i][j + 1], cap[i + 1][j + 1], cap[i + 1][j]});
+  }
+
+  // --- 6. eye pockets ------------------------------------------------------
+  HeadAnnotations& ann = out.annotations;
+  ann = HeadAnnotations{};
+  const double pocket_radius = options.eyeball_radius + options.socket_clearance;
+  for (int side : {1, -1}) {
+    const Vec3 eye(side * shape.eye_center.x(), shape.eye_center.y(), shape.eye_center.z());
+    std::vector<int> top = rim_top[side], bottom = rim_bottom[side];
+    std::vector<int> loop = top;
+    loop.insert(loop.end(), bottom.rbegin(), bottom.rend());
+    b.orient_loop(loop);
+    EyeSocket& socket = side > 0 ? ann.eye_left : ann.eye_right;
+    socket.center = eye;
+    socket.radius = options.eyeball_radius;
+    socket.rim = loop;
+    VertexInfo vi;
+    vi.part = Part::EyePocket;
+    vi.side = side;
+    // The pocket is a sphere around the eyeball. Seen along the eye's axis,
+    // each vertex has an angle chi around the axis and a polar angle psi from
+    // the front. Rings go back from the lid rim (psi 20..64 deg) to a circle
+    // near the back pole with evenly spaced chi, where the top and bottom
+    // chains meet in a strip of quads.
+    const int n_top = static_cast<int>(top.size());
+    std::map<int, double> chi_even;
+    for (int k = 0; k < n_top; ++k) {
+      const double chi = radians(180.0 - 180.0 * (k + 0.5) / n_top);
+      chi_even[top[k]] = chi;
+      chi_even[bottom[k]] = -chi;
+    }
+    auto sphere_point = [&](double chi, double psi) -> Vec3 {
+      const Vec3 d(side * std::sin(psi) * std::cos(chi), std::sin(psi) * std::sin(chi), std::cos(psi));
+      return eye + pocket_radius * d;
+    };
+    std::vector<int> ring = loop;
+    for (int step = 0; step < 3; ++step) {
+      std::vector<Vec3> next;
+      for (size_t k = 0; k < loop.size(); ++k) {
+        const Vec3 u = (b.positions[loop[k]] - eye).normalized();  // rim direction
+        const double chi = std::atan2(u.y(), side * u.x());
+        const double even = chi_even[loop[k]];
+        if (step == 0) next.push_back(eye + pocket_radius * u);  // inner edge of the lid
+        if (step == 1) next.push_back(sphere_point(0.5 * (chi + even), radians(95)));
+        if (step == 2) next.push_back(sphere_point(even, radians(140)));
+      }
+      std::vector<int> new_ring = b.extrude(ring, next, vi);
+      std::map<int, int> to_new;
+      for (size_t k = 0; k < ring.size(); ++k) to_new[ring[k]] = new_ring[k];
+      for (int& v : top) v = to_new[v];
+      for (int& v : bottom) v = to_new[v];
+      ring = new_ring;
+    }
+    b.close_between(top, bottom);
+  }
+
+  // --- 7. mouth bag behind the lip line -------------------------------------
+  std::vector<int> bag_vertices;
+  {
+    std::vector<int> top = upper_line, bottom = lower_line;
+    std::vector<int> loop = top;
+    for (int k = int(bottom.size()) - 2; k >= 1; --k) loop.push_back(bottom[k]);
+    b.orient_loop(loop);
+    // Cross-section of the bag (Fig. 4 right): inner lips, then up/down behind
+    // the lips towards the gums, then the back of the bag. Offsets (m) from
+    // the lip line for the upper side; the lower side mirrors in y.
+    const Vec3 profile[] = {{0, 0.0025, -0.0050}, {0, 0.0085, -0.0110}, {0, 0.0075, -0.0230}};
+    VertexInfo vi;
+    vi.part = Part::MouthBag;
+    std::vector<int> ring = loop;
+    for (const Vec3& off : profile) {
+      std::vector<Vec3> next;
+      for (int v : loop) {
+        const Vec3& p = b.positions[v];
+        const int chain = b.info[v].chain;
+        const double t = std::min(1.0, std::abs(p.x()) / mouth_half_width);
+        const double taper = 1 - 0.6 * t * t;
+        Vec3 o(0, chain * off.y() * taper, off.z());
+        // The corners of the mouth turn inwards, narrowing the bag behind them.
+        if (chain == 0) o.x() = (p.x() > 0 ? -1 : 1) * 0.3 * -off.z();
+        next.push_back(p + o);
+      }
+      std::vector<int> new_ring = b.extrude(ring, next, vi);
+      std::map<int, int> to_new;
+      for (size_t k = 0; k < ring.size(); ++k) to_new[ring[k]] = new_ring[k];
+      for (int& v : top) v = to_new[v];
+      for (int& v : bottom) v = to_new[v];
+      bag_vertices.insert(bag_vertices.end(), new_ring.begin(), new_ring.end());
+      ring = new_ring;
+    }
+    b.close_between(top, bottom);
+  }
+
+  // --- 8. ears: the root patch extruded into a flap -------------------------
+  std::map<int, std::vector<int>> ear_vertices, ear_rim, ear_behind;
+  std::map<int, std::vector<std::array<int, 2>>> ear_binding;
+  for (int side : {1, -1}) {
+    std::vector<int> loop;
+    const int c0 = side * kEarCol0, c1 = side * kEarCol1;
+    const int step = side;
+    for (int c = c0; c != c1; c += step) loop.push_back(g(kEarLowRow, c));
+    for (int r = kEarLowRow; r < kEarHighRow; ++r) loop.push_back(g(r, c1));
+    for (int c = c1; c != c0; c -= step) loop.push_back(g(kEarHighRow, c));
+    for (int r = kEarHighRow; r > kEarLowRow; --r) loop.push_back(g(r, c0));
+    b.orient_loop(loop);
+    Vec3 root = Vec3::Zero();
+    std::vector<int> patch_ids;
+    for (const auto& q : ear_patch[side]) patch_ids.insert(patch_ids.end(), q.begin(), q.end());
+    patch_ids = sorted_unique(patch_ids);
+    for (int v : patch_ids) root += b.positions[v];
+    root /= double(patch_ids.size());
+    const Vec3 n = shape.gradient(root).normalized();
+    const Vec3 up = (Vec3::UnitY() - Vec3::UnitY().dot(n) * n).normalized();
+    const Vec3 back = up.cross(n).normalized() * side;  // -z for both ears
+    double half_back = 0, half_up = 0;
+    for (int v : loop) {
+      const Vec3 d = b.positions[v] - root;
+      half_back = std::max(half_back, std::abs(d.dot(back)));
+      half_up = std::max(half_up, std::abs(d.dot(up)));
+    }
+    auto at = [&](double bk, double u, double outward) -> Vec3 { return root + bk * back + u * up + outward * n; };
+    // The helix (outer rim) outline, by the angle of each loop vertex around the root.
+    auto helix = [&](double w, double out_extra, double scale) -> Vec3 {
+      const double cw = std::cos(w), sw = std::sin(w);
+      const double bk = 0.008 + scale * 0.0165 * cw;
+      const double u = 0.003 + scale * (sw > 0 ? 0.032 : 0.030) * sw;
+      const double outward = 0.006 + 0.014 * (0.5 + 0.5 * cw) + 0.004 * std::max(0.0, sw) + out_extra;
+      return at(bk, u, outward);
+    };
+    std::vector<Vec3> ring_a, ring_b, ring_c;
+    std::vector<double> angle;
+    for (int v : loop) {
+      const Vec3 d = b.positions[v] - root;
+      const double w = std::atan2(d.dot(up) / half_up, d.dot(back) / half_back);
+      angle.push_back(w);
+      ring_a.push_back(at(1.04 * d.dot(back), 1.04 * d.dot(up), d.dot(n) + 0.0035));
+      ring_b.push_back(helix(w, 0, 1.0));
+      ring_c.push_back(helix(w, 0.0025, 0.80));
+    }
+    VertexInfo vi;
+    vi.part = Part::Ear;
+    vi.side = side;
+    const std::vector<int> a_ids = b.extrude(loop, ring_a, vi);
+    const std::vector<int> b_ids = b.extrude(a_ids, ring_b, vi);
+    const std::vector<int> c_ids = b.extrude(b_ids, ring_c, vi);
+    std::map<int, int> to_cap;
+    for (size_t k = 0; k < loop.size(); ++k) to_cap[loop[k]] = c_ids[k];
+    // The patch's inner vertices become the bowl (concha) and the antihelix.
+    for (int v : patch_ids) {
+      if (to_cap.count(v)) continue;
+      const Vec3 d = b.positions[v] - root;
+      const double u = d.dot(up) / half_up;  // -1 .. 1
+      b.positions[v] = at(0.009, 0.003 + 0.021 * u, 0.008 + 0.006 * u * u + 0.003 * std::max(0.0, u));
+      b.info[v].part = Part::Ear;
+      b.info[v].side = side;
+      ear_vertices[side].push_back(v);
+    }
+    for (auto q : ear_patch[side]) {
+      for (int& v : q)
+        if (to_cap.count(v)) v = to_cap[v];
+      b.polygons.push_back(q);
+    }
+    for (int v : loop) ear_vertices[side].push_back(v);
+    for (auto* ids : {&a_ids, &b_ids, &c_ids}) ear_vertices[side].insert(ear_vertices[side].end(), ids->begin(), ids->end());
+    // Helix landmarks and the binding edges spanning the hollow behind the ear.
+    ear_rim[side] = b_ids;
+    for (size_t k = 0; k < loop.size(); ++k) {
+      if (std::cos(angle[k]) <= 0.2) continue;  // back half only
+      ear_binding[side].push_back({loop[k], a_ids[k]});
+      ear_binding[side].push_back({a_ids[k], b_ids[k]});
+      const VertexInfo& li = b.info[loop[k]];
+      if (li.part == Part::Grid && li.col == wrap(c1)) {
+        const int behind = g(li.row, c1 + side);
+        ear_binding[side].push_back({loop[k], behind});
+        ear_behind[side].push_back(behind);
+      }
+    }
+  }
+
+  // --- 9. relaxation of the surface grid ---------------------------------------
+  // Vertices on the shape (grid and crown) move towards the average of their
+  // neighbours, less the average's offset in the plain layout, and are
+  // projected back onto the shape. Feature lines stay where they were put.
+  {
+    std::set<int> pinned;
+    for (int side : {1, -1}) {
+      for (int v : rim_top[side]) pinned.insert(v);
+      for (int v : rim_bottom[side]) pinned.insert(v);
+      for (int r = kRimLowRow - 1; r <= kRimLowRow + 2; ++r)
+        for (int c = kEyeCol0 - 1; c <= kEyeCol1 + 1; ++c) pinned.insert(g(r, side * c));
+      for (int r = kEarLowRow; r <= kEarHighRow; ++r)
+        for (int c = kEarCol0; c <= kEarCol1; ++c) pinned.insert(g(r, side * c));
+    }
+    for (int r = kSlitRow - 1; r <= kSlitRow + 1; ++r)
+      for (int c = -kMouthHalfWidth - 1; c <= kMouthHalfWidth + 1; ++c) pinned.insert(g(r, c));
+    for (int c = 0; c < kColumns; ++c) pinned.insert(g(0, c));
+    const int n = static_cast<int>(b.positions.size());
+    std::vector<std::set<int>> neighbours(n);
+    for (const auto& poly : b.polygons)
+      for (size_t k = 0; k < poly.size(); ++k) {
+        const int a = poly[k], c = poly[(k + 1) % poly.size()];
+        neighbours[a].insert(c);
+        neighbours[c].insert(a);
+      }
+    std::vector<int> movable;
+    for (int v = 0; v < n; ++v) {
+      const Part part = b.info[v].part;
+      if ((part == Part::Grid || part == Part::Cap) && !pinned.count(v)) movable.push_back(v);
+    }
+    auto average = [&](const std::vector<Vec3>& p, int v) -> Vec3 {
+      Vec3 sum = Vec3::Zero();
+      for (int w : neighbours[v]) sum += p[w];
+      return sum / double(neighbours[v].size());
+    };
+    std::vector<Vec3> offset(n, Vec3::Zero());
+    // The crown patch's plain layout does not follow the face's denser
+    // columns, so there (and on the rows meeting it) plain smoothing is right.
+    for (int v : movable)
+      if (b.info[v].part == Part::Grid && b.info[v].row < kRows - 2)
+        offset[v] = average(reference, v) - reference[v];
+    for (int it = 0; it < options.relax_iterations; ++it) {
+      std::vector<Vec3> next = b.positions;
+      for (int v : movable) {
+        Vec3 p = b.positions[v] + 0.5 * (average(b.positions, v) - offset[v] - b.positions[v]);
+        p = shape.project(p);
+        if (b.info[v].row >= 0 && b.info[v].row < kNeckRows) p.y() = kNeckRowY[b.info[v].row];
+        next[v] = p;
+      }
+      b.positions = next;
+    }
+  }
+
+  // --- 10. mirror symmetry: pair vertices and make the pairs exact -----------
+  const int nv = static_cast<int>(b.positions.size());
+  std::vector<int> mirror(nv, -1);
+  for (int v = 0; v < nv; ++v) {
+    if (mirror[v] >= 0) continue;
+    const Vec3 m(-b.positions[v].x(), b.positions[v].y(), b.positions[v].z());
+    int best = -1;
+    double best_d = 1e-6;
+    for (int w = 0; w < nv; ++w) {
+      const double d = (b.positions[w] - m).norm();
+      if (d < best_d && (mirror[w] < 0)) best = w, best_d = d;
+    }
+    if (best < 0)
+      return Status::error(ErrorCode::Internal, "generic head: vertex " + std::to_string(v) +
+                                                    " has no mirror partner");
+    mirror[v] = best;
+    mirror[best] = v;
+  }
+  for (int v = 0; v < nv; ++v) {
+    if (mirror[v] == v) {
+      b.positions[v].x() = 0;
+    } else if (v < mirror[v]) {
+      const Vec3& p = b.positions[v];
+      b.positions[mirror[v]] = Vec3(-p.x(), p.y(), p.z());
+    }
+  }
+
+  // --- 11. triangles: split quads along their shorter diagonal --------------
+  TriMesh& mesh = out.mesh;
+  mesh = TriMesh{};
+  mesh.positions = b.positions;
+  for (const auto& poly : b.polygons) {
+    if (poly.size() == 3) {
+      mesh.triangles.push_back({poly[0], poly[1], poly[2]});
+      continue;
+    }
+    const double d02 = (b.positions[poly[0]] - b.positions[poly[2]]).squaredNorm();
+    const double d13 = (b.positions[poly[1]] - b.positions[poly[3]]).squaredNorm();
+    if (d02 <= d13) {
+      mesh.triangles.push_back({poly[0], poly[1], poly[2]});
+      mesh.triangles.push_back({poly[0], poly[2], poly[3]});
+    } else {
+      mesh.triangles.push_back({poly[0], poly[1], poly[3]});
+      mesh.triangles.push_back({poly[1], poly[2], poly[3]});
+    }
+  }
+  MeshTopology topo;
+  Status st = build_topology(mesh, topo);
+  if (!st.ok()) return with_context(st, "generic head construction");
+  if (topo.boundary_loops.size() != 1 || euler_characteristic(topo, mesh.num_triangles()) != 1)
+    return Status::error(ErrorCode::Internal, "generic head is not a disk (" +
+                                                  std::to_string(topo.boundary_loops.size()) +
+                                                  " boundary loops)");
+
+  // --- 12. annotations ------------------------------------------------------
+  const auto& P = mesh.positions;
+  auto azimuth_deg = [&](int col) {
+    double a = column_azimuth(col) * 180 / kPi;
+    return a > 180 ? a - 360 : a;
+  };
+  std::map<std::string, std::vector<int>> R;
+  for (int v = 0; v < nv; ++v) {
+    const VertexInfo& vi = b.info[v];
+    if (vi.part == Part::Cap) {
+      R["scalp"].push_back(v);
+      continue;
+    }
+    if (vi.part == Part::EyePocket || vi.part == Part::MouthBag || vi.part == Part::LowerLipLine) {
+      R["face"].push_back(v);
+      continue;
+    }
+    if (vi.part != Part::Grid) continue;
+    const int r = vi.row;
+    const double a = std::abs(azimuth_deg(vi.col));
+    const int cc = vi.col > kColumns / 2 ? vi.col - kColumns : vi.col;
+    const int h = r - kFirstHeadRow;  // head row index, negative on the neck
+    if (h >= 0 && h <= 21 && a <= 70) R["face"].push_back(v);
+    if (h < 0 || (h == 0 && a > 35)) R["neck"].push_back(v);
+    if (h >= 21 || (h >= 8 && a >= 105) || (h >= 18 && a > 70)) R["scalp"].push_back(v);
+    if (h >= 0 && h <= 3 && a <= 25) R["chin"].push_back(v);
+    if (h >= 0 && h <= 5 && a > 25 && a <= 110) R["jaw"].push_back(v);
+    if (h >= 6 && h <= 14 && a >= 30 && a <= 75) R["cheeks"].push_back(v);
+    if (h >= 18 && h <= 20 && a <= 55) R["brow"].push_back(v);
+    if ((cc == 0 && h >= 9 && h <= 18) || (std::abs(cc) == 1 && h >= 9 && h <= 14) ||
+        (std::abs(cc) == 2 && h >= 10 && h <= 13))
+      R["nose"].push_back(v);
+    if (r >= kSlitRow - 1 && r <= kSlitRow + 1 && std::abs(cc) <= kMouthHalfWidth + 1) {
+      R["lips"].push_back(v);
+      if (r == kSlitRow + 1 || (r == kSlitRow && vi.chain == 1)) R["upper_lip"].push_back(v);
+      if (r == kSlitRow - 1) R["lower_lip"].push_back(v);
+    }
+  }
+  for (int v : lower_line) {
+    if (b.info[v].chain == 0) continue;
+    R["lips"].push_back(v);
+    R["lower_lip"].push_back(v);
+  }
+  for (int v : bag_vertices) {
+    R["lips"].push_back(v);
+    if (b.info[v].chain > 0) R["upper_lip"].push_back(v);
+    if (b.info[v].chain < 0) R["lower_lip"].push_back(v);
+  }
+  R["ear_left"] = ear_vertices[1];
+  R["ear_right"] = ear_vertices[-1];
+  R["ears"] = ear_vertices[1];
+  R["ears"].insert(R["ears"].end(), ear_vertices[-1].begin(), ear_vertices[-1].end());
+  R["eye_rim_left"] = ann.eye_left.rim;
+  R["eye_rim_right"] = ann.eye_right.rim;
+  for (auto& [name, ids] : R) ids = sorted_unique(ids);
+
+  // Feature boxes with landmarks (Sec. 4.2: 3 per ear, 4 for nose and mouth).
+  auto make_box = [&](const std::string& name, const std::vector<int>& ids, double margin,
+                      const std::vector<int>& landmarks) {
+    FeatureBox fb;
+    fb.name = name;
+    const BBox bb = box_of(P, ids);
+    fb.min = bb.min - Vec3::Constant(margin);
+    fb.max = bb.max + Vec3::Constant(margin);
+    fb.landmarks = landmarks;
+    return fb;
+  };
+  for (int side : {1, -1}) {
+    const std::vector<int>& rim = ear_rim[side];
+    auto pick = [&](auto better) {
+      int best = rim[0];
+      for (int v : rim)
+        if (better(P[v], P[best])) best = v;
+      return best;
+    };
+    const int top = pick([](const Vec3& p, const Vec3& q) { return p.y() > q.y(); });
+    const int lobe = pick([](const Vec3& p, const Vec3& q) { return p.y() < q.y(); });
+    const int back = pick([](const Vec3& p, const Vec3& q) { return p.z() < q.z(); });
+    ann.boxes.push_back(make_box(side > 0 ? "ear_left" : "ear_right", ear_vertices[side], 0.010,
+                                 {top, back, lobe}));
+  }
+  {
+    int tip = g(kFirstHeadRow, 0), nasion = -1;
+    for (int r = kFirstHeadRow + 9; r <= kFirstHeadRow + 14; ++r)
+      if (P[g(r, 0)].z() > P[tip].z()) tip = g(r, 0);
+    for (int r = kFirstHeadRow + 16; r <= kFirstHeadRow + 19; ++r)
+      if (nasion < 0 || P[g(r, 0)].z() < P[nasion].z()) nasion = g(r, 0);
+    int ala_left = -1;
+    for (int v : R["nose"])
+      if (ala_left < 0 || P[v].x() > P[ala_left].x()) ala_left = v;
+    ann.boxes.push_back(make_box("nose", R["nose"], 0.008, {nasion, tip, ala_left, mirror[ala_left]}));
+  }
+  {
+    std::vector<int> mouth_ids = R["lips"];
+    ann.boxes.push_back(make_box("mouth", mouth_ids, 0.008,
+                                 {upper_line.front(), upper_line.back(), g(kSlitRow + 1, 0),
+                                  g(kSlitRow - 1, 0)}));
+  }
+  // Binding edges: behind the ears, plus virtual upper-lower lip edges.
+  for (int side : {1, -1})
+    for (const auto& e : ear_binding[side]) ann.binding_edges.push_back(e);
+  for (size_t k = 1; k + 1 < upper_line.size(); ++k)
+    ann.binding_edges.push_back({upper_line[k], lower_line[k]});
+  ann.constrained_vertices = sorted_unique(bag_vertices);
+
+  // Clipping planes (Sec. 4.1): below the jaw, and the hair-covered back.
+  double jaw_bottom = 1e9;
+  for (int v : R["jaw"]) jaw_bottom = std::min(jaw_bottom, P[v].y());
+  for (int v : R["chin"]) jaw_bottom = std::min(jaw_bottom, P[v].y());
+  ann.neck_clip.point = Vec3(0, jaw_bottom - 0.015, 0);
+  ann.neck_clip.normal = Vec3::UnitY();
+  ann.back_clip.point = Vec3(0, 0, -0.045);
+  ann.back_clip.normal = Vec3(0, -0.3, 1).normalized();
+  ann.look = Vec3::UnitZ();
+  ann.up = Vec3::UnitY();
+  ann.regions = R;
+  const Vec3 slit_mid = 0.5 * (P[upper_line[kMouthHalfWidth]] + P[lower_line[kMouthHalfWidth]]);
+  ann.mouth_center = slit_mid - Vec3(0, 0, 0.008);
+  ann.mouth_width = (P[upper_line.front()] - P[upper_line.back()]).norm();
+  (void)ear_behind;
+  return Status::success();
+}
+
+}  // namespace lk

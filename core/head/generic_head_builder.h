@@ -1,0 +1,44 @@
+// Procedural construction of the generic head control mesh of jeong2002
+// (Sec. 4, Fig. 4: "hand-designed generic control mesh" with feature boxes,
+// landmarks, binding edges, constrained lip vertices and clipping planes).
+// The committed asset core/head/data/generic_head.{obj,json} is the output of
+// this builder (`likeness make-generic-head`); the app loads the asset, so
+// changing the builder changes nothing until the asset is regenerated.
+//
+// How the mesh is made, so it can be improved:
+//  1. The head's shape is a smooth signed distance function (SDF): cranium,
+//     jaw, chin, cheekbones, brow ridge, nose, lips, lid spheres, neck.
+//  2. A quad grid of rings (neck bottom .. crown) x meridians (denser over the
+//     face) is placed on it by casting one ray per vertex; a 10 x 10 quad
+//     patch closes the crown without a pole.
+//  3. Blocks of the grid around the eyes and the mouth are warped into
+//     concentric ellipses (edge loops for animation). The eye openings are
+//     4 x 1 holes continued inwards as closed pockets around the eyeballs;
+//     the mouth is a slit (upper and lower lip vertices separate) continued
+//     as a closed mouth bag. Ears are a 2 x 6 grid patch extruded into a flap
+//     with a rim and a real concavity behind it.
+//  4. Quads are split along their shorter diagonal; the result is made exactly
+//     mirror-symmetric (x -> -x) and annotated.
+//
+// Output shapes: mesh.positions #V by 3 (metres; +z look, +y up, +x = the
+// head's left), mesh.triangles #F by 3 (counter-clockwise seen from outside).
+// The mesh is a topological disk whose one boundary loop is the neck's bottom.
+#pragma once
+#include "common/status.h"
+#include "head/head_model.h"
+
+namespace lk {
+
+struct GenericHeadBuildOptions {
+  double eyeball_radius = 0.012;   // radius of the separate eyeball models (m)
+  double socket_clearance = 0.0007;  // gap between eyeball and socket pocket (m)
+  double lip_gap = 0.0003;         // distance between upper and lower lip vertices in
+                                   // the closed pose (m); > 0 keeps them distinct
+  int relax_iterations = 8;        // smoothing passes evening out the surface grid (0: none)
+};
+
+// Builds the generic head and its annotations. Fails with Internal if one of
+// the construction invariants (disk topology, mirror symmetry) does not hold.
+Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& out);
+
+}  // namespace lk

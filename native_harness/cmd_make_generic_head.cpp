@@ -1,0 +1,59 @@
+// likeness make-generic-head: regenerates the generic head asset
+// (core/head/data/generic_head.{obj,json}) from core/head/generic_head_builder.
+#include "command.h"
+
+#include "head/generic_head.h"
+#include "head/generic_head_builder.h"
+#include "io/io.h"
+#include "mesh/geometry.h"
+#include "mesh/topology.h"
+
+#include <cstdio>
+#include <iostream>
+
+namespace lk::cli {
+namespace {
+
+const char* kName = "make-generic-head";
+
+int run_make_generic_head(const Args& args) {
+  for (const auto& [key, values] : args.options)
+    if (key != "out") {
+      fail(kName, "unknown option --" + key + " (see `likeness help`)");
+      return 2;
+    }
+  const std::string out_dir = args.get("out");
+  if (out_dir.empty()) {
+    fail(kName, "--out DIR is required (the asset lives in core/head/data)");
+    return 2;
+  }
+  GenericHead head;
+  Status s = build_generic_head(GenericHeadBuildOptions{}, head);
+  if (!s) return fail(kName, s.message);
+
+  const std::string obj_path = out_dir + "/generic_head.obj";
+  const std::string json_path = out_dir + "/generic_head.json";
+  s = write_file(obj_path, write_obj(head.mesh));
+  if (!s) return fail(kName, with_context(s, obj_path).message);
+  s = write_file(json_path, head_annotations_to_json(head.annotations, head.mesh.num_vertices()));
+  if (!s) return fail(kName, with_context(s, json_path).message);
+
+  MeshTopology topo;
+  s = build_topology(head.mesh, topo);
+  if (!s) return fail(kName, s.message);
+  const BBox box = bounding_box(head.mesh.positions);
+  std::printf("generic head: %d vertices, %d triangles, %zu boundary loop(s), Euler characteristic %d\n",
+              head.mesh.num_vertices(), head.mesh.num_triangles(), topo.boundary_loops.size(),
+              euler_characteristic(topo, head.mesh.num_triangles()));
+  std::printf("bounding box (m): x %.3f..%.3f  y %.3f..%.3f  z %.3f..%.3f\n", box.min.x(), box.max.x(),
+              box.min.y(), box.max.y(), box.min.z(), box.max.z());
+  std::printf("wrote %s and %s\n", obj_path.c_str(), json_path.c_str());
+  return 0;
+}
+
+Registrar reg({kName, "likeness make-generic-head --out DIR",
+               "builds the generic head control mesh + annotations (writes generic_head.obj/.json)",
+               run_make_generic_head});
+
+}  // namespace
+}  // namespace lk::cli

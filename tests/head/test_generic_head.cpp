@@ -1,0 +1,417 @@
+// The generic head (jeong2002 Sec. 4, Fig. 4): the embedded asset must load,
+// be a clean disk-shaped control mesh with the eye/mouth pockets, ears and
+// annotations the later stages rely on, and match what the builder makes.
+#include "head/generic_head.h"
+#include "head/generic_head_builder.h"
+#include "mesh/geometry.h"
+#include "mesh/topology.h"
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+using namespace lk;
+
+namespace {
+
+const GenericHead& asset() {
+  static GenericHead head;
+  static bool loaded = false;
+  if (!loaded) {
+    Status s = load_generic_head(head);
+    INFO(s.message);
+    REQUIRE(s.ok());
+    loaded = true;
+  }
+  return head;
+}
+
+const FeatureBox& box_named(const HeadAnnotations& a, const std::string& name) {
+  for (const FeatureBox& b : a.boxes)
+    if (b.name == name) return b;
+  FAIL("no box " << name);
+  return a.boxes.front();
+}
+
+double min_angle_degrees(const TriMesh& m, int f) {
+  double best = 180;
+  for (int k = 0; k < 3; ++k) {
+    const Vec3& p = m.positions[m.triangles[f][k]];
+    const Vec3 a = (m.positions[m.triangles[f][(k + 1) % 3]] - p).normalized();
+    const Vec3 b = (m.positions[m.triangles[f][(k + 2) % 3]] - p).normalized();
+    best = std::min(best, std::acos(std::clamp(a.dot(b), -1.0, 1.0)) * 180 / M_PI);
+  }
+  return best;
+}
+
+// Segment p->q against triangle (a, b, c), excluding the end points.
+bool segment_hits_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c,
+                           double* t_out = nullptr) {
+  const Vec3 d = q - p, e1 = b - a, e2 = c - a;
+  const Vec3 h = d.cross(e2);
+  const double det = e1.dot(h);
+  if (std::abs(det) < 1e-18) return false;
+  const double inv = 1 / det;
+  const Vec3 s = p - a;
+  const double u = s.dot(h) * inv;
+  if (u < 0 || u > 1) return false;
+  const Vec3 qv = s.cross(e1);
+  const double v = d.dot(qv) * inv;
+  if (v < 0 || u + v > 1) return false;
+  const double t = e2.dot(qv) * inv;
+  if (t_out) *t_out = t;
+  return t > 1e-9 && t < 1 - 1e-9;
+}
+
+}  // namespace
+
+TEST_CASE("generic head loads from the embedded asset", "[head]") {
+  const GenericHead& h = asset();
+  CHECK(h.mesh.num_vertices() > 500);
+  std::string why;
+  CHECK(is_valid(h.mesh, &why));
+  INFO(why);
+  CHECK(h.mesh.normals.empty());
+}
+
+TEST_CASE("generic head has 1000..3000 triangles", "[head]") {
+  const int f = asset().mesh.num_triangles();
+  CHECK(f >= 1000);
+  CHECK(f <= 3000);
+}
+
+TEST_CASE("generic head is a disk whose only boundary is the neck's bottom", "[head]") {
+  const TriMesh& m = asset().mesh;
+  MeshTopology topo;
+  Status s = build_topology(m, topo);
+  INFO(s.message);
+  REQUIRE(s.ok());  // manifold, consistently oriented
+  CHECK(euler_characteristic(topo, m.num_triangles()) == 1);
+  REQUIRE(topo.boundary_loops.size() == 1);
+  const BBox box = bounding_box(m.positions);
+  double highest_boundary = -1e9;
+  for (int v : topo.boundary_loops[0]) highest_boundary = std::max(highest_boundary, m.positions[v].y());
+  double lowest_inner = 1e9;
+  for (int v = 0; v < m.num_vertices(); ++v)
+    if (!topo.is_boundary(v)) lowest_inner = std::min(lowest_inner, m.positions[v].y());
+  CHECK(highest_boundary < box.min.y() + 0.001);
+  CHECK(highest_boundary < lowest_inner);
+  // Pockets add no boundary: eye rims and lip lines are interior vertices.
+  for (int v : asset().annotations.eye_left.rim) CHECK_FALSE(topo.is_boundary(v));
+  for (int v : asset().annotations.regions.at("lips")) CHECK_FALSE(topo.is_boundary(v));
+}
+
+TEST_CASE("generic head is oriented outwards", "[head]") {
+  const TriMesh& m = asset().mesh;
+  MeshTopology topo;
+  REQUIRE(build_topology(m, topo).ok());
+  // Close the neck with a fan to its centroid: the closed volume must be
+  // positive and close to a head's (~3.5..6 litres incl. the neck).
+  Vec3 c = Vec3::Zero();
+  for (int v : topo.boundary_loops[0]) c += m.positions[v];
+  c /= double(topo.boundary_loops[0].size());
+  double volume = 0;
+  for (const Tri& t : m.triangles)
+    volume += m.positions[t[0]].dot(m.positions[t[1]].cross(m.positions[t[2]])) / 6;
+  const auto& loop = topo.boundary_loops[0];
+  // The fan's orientation follows the open boundary's direction in the triangles.
+  double fan = 0;
+  for (size_t k = 0; k < loop.size(); ++k) {
+    const int a = loop[k], b = loop[(k + 1) % loop.size()];
+    const Edge& e = topo.edges[topo.find_edge(a, b)];
+    const Tri& t = m.triangles[e.f0];
+    bool a_then_b = false;
+    for (int i = 0; i < 3; ++i) a_then_b = a_then_b || (t[i] == a && t[(i + 1) % 3] == b);
+    const Vec3 &pa = m.positions[a], &pb = m.positions[b];
+    fan += (a_then_b ? c.dot(pb.cross(pa)) : c.dot(pa.cross(pb))) / 6;
+  }
+  volume += fan;
+  CHECK(volume > 0.0035);
+  CHECK(volume < 0.0065);
+  // On the scalp every face normal points away from the head's centre.
+  const std::vector<Vec3> normals = vertex_normals(m);
+  const Vec3 center(0, 0.02, -0.01);
+  int outward = 0, total = 0;
+  for (int v : asset().annotations.regions.at("scalp")) {
+    ++total;
+    if (normals[v].dot(m.positions[v] - center) > 0) ++outward;
+  }
+  CHECK(total > 100);
+  CHECK(outward == total);
+}
+
+TEST_CASE("generic head has no degenerate or self-intersecting triangles", "[head]") {
+  const TriMesh& m = asset().mesh;
+  double worst = 180;
+  for (int f = 0; f < m.num_triangles(); ++f) worst = std::min(worst, min_angle_degrees(m, f));
+  INFO("smallest angle " << worst << " deg");
+  CHECK(worst > 5.0);
+  // Every edge against every triangle not sharing a vertex with it.
+  MeshTopology topo;
+  REQUIRE(build_topology(m, topo).ok());
+  std::vector<BBox> boxes(m.num_triangles());
+  for (int f = 0; f < m.num_triangles(); ++f)
+    for (int v : m.triangles[f]) boxes[f].extend(m.positions[v]);
+  int crossings = 0;
+  for (const Edge& e : topo.edges) {
+    const Vec3 &p = m.positions[e.v0], &q = m.positions[e.v1];
+    BBox eb;
+    eb.extend(p);
+    eb.extend(q);
+    for (int f = 0; f < m.num_triangles(); ++f) {
+      const Tri& t = m.triangles[f];
+      if (std::find(t.begin(), t.end(), e.v0) != t.end() || std::find(t.begin(), t.end(), e.v1) != t.end())
+        continue;
+      if ((eb.max.array() < boxes[f].min.array()).any() || (eb.min.array() > boxes[f].max.array()).any())
+        continue;
+      if (segment_hits_triangle(p, q, m.positions[t[0]], m.positions[t[1]], m.positions[t[2]])) {
+        ++crossings;
+        UNSCOPED_INFO("edge " << e.v0 << "-" << e.v1 << " crosses triangle " << f);
+      }
+    }
+  }
+  CHECK(crossings == 0);
+}
+
+TEST_CASE("generic head is human-sized and in the house's frame", "[head]") {
+  const GenericHead& h = asset();
+  const TriMesh& m = h.mesh;
+  double crown = -1e9, chin = 1e9, nose_z = -1e9, back_z = 1e9;
+  for (const Vec3& p : m.positions) crown = std::max(crown, p.y()), back_z = std::min(back_z, p.z());
+  for (int v : h.annotations.regions.at("chin")) chin = std::min(chin, m.positions[v].y());
+  for (int v : h.annotations.regions.at("nose")) nose_z = std::max(nose_z, m.positions[v].z());
+  INFO("chin to crown " << crown - chin << " m");
+  CHECK(crown - chin > 0.22);
+  CHECK(crown - chin < 0.26);
+  CHECK(nose_z > 0.09);   // looks along +z
+  CHECK(back_z < -0.09);  // back of the head behind the origin
+  CHECK(crown > 0.1);     // up is +y
+  CHECK(h.annotations.look.isApprox(Vec3::UnitZ()));
+  CHECK(h.annotations.up.isApprox(Vec3::UnitY()));
+  // +x is the head's left: the left ear and eye are on +x.
+  for (int v : h.annotations.regions.at("ear_left")) CHECK(m.positions[v].x() > 0.03);
+  for (int v : h.annotations.regions.at("ear_right")) CHECK(m.positions[v].x() < -0.03);
+  CHECK(h.annotations.eye_left.center.x() > 0.02);
+}
+
+TEST_CASE("generic head is mirror-symmetric", "[head]") {
+  const TriMesh& m = asset().mesh;
+  int unmatched = 0;
+  for (int v = 0; v < m.num_vertices(); ++v) {
+    const Vec3 mirrored(-m.positions[v].x(), m.positions[v].y(), m.positions[v].z());
+    bool found = false;
+    for (int w = 0; w < m.num_vertices() && !found; ++w) found = (m.positions[w] - mirrored).norm() < 1e-6;
+    if (!found) ++unmatched;
+  }
+  CHECK(unmatched == 0);
+}
+
+TEST_CASE("generic head annotations are consistent with the mesh", "[head]") {
+  const GenericHead& h = asset();
+  const TriMesh& m = h.mesh;
+  const HeadAnnotations& a = h.annotations;
+  MeshTopology topo;
+  REQUIRE(build_topology(m, topo).ok());
+
+  SECTION("boxes hold their landmarks and their feature") {
+    REQUIRE(a.boxes.size() == 4);
+    const std::pair<const char*, const char*> box_region[] = {
+        {"ear_left", "ear_left"}, {"ear_right", "ear_right"}, {"nose", "nose"}, {"mouth", "lips"}};
+    for (const auto& [box_name, region] : box_region) {
+      const FeatureBox& b = box_named(a, box_name);
+      const size_t want = std::string(box_name).rfind("ear", 0) == 0 ? 3 : 4;
+      CHECK(b.landmarks.size() == want);
+      CHECK(std::set<int>(b.landmarks.begin(), b.landmarks.end()).size() == want);
+      for (int v : b.landmarks) CHECK(b.contains(m.positions[v]));
+      for (int v : a.regions.at(region)) CHECK(b.contains(m.positions[v]));
+    }
+    // Boxes do not swallow each other: the nose box holds no ear vertex, etc.
+    for (int v : a.regions.at("ears")) CHECK_FALSE(box_named(a, "nose").contains(m.positions[v]));
+    CHECK_FALSE(box_named(a, "mouth").contains(m.positions[box_named(a, "nose").landmarks[1]]));
+  }
+
+  SECTION("binding edges: mesh edges behind the ears, virtual edges across the lips") {
+    const std::set<int> upper(a.regions.at("upper_lip").begin(), a.regions.at("upper_lip").end());
+    const std::set<int> lower(a.regions.at("lower_lip").begin(), a.regions.at("lower_lip").end());
+    int virtual_edges = 0, ear_edges = 0;
+    for (const auto& e : a.binding_edges) {
+      if (topo.find_edge(e[0], e[1]) >= 0) {
+        ++ear_edges;
+        // Behind an ear: on the ear side, behind the ear's front.
+        const Vec3 mid = 0.5 * (m.positions[e[0]] + m.positions[e[1]]);
+        CHECK(std::abs(mid.x()) > 0.05);
+        CHECK(mid.z() < 0.01);
+        continue;
+      }
+      ++virtual_edges;
+      const bool ul = upper.count(e[0]) && lower.count(e[1]);
+      const bool lu = lower.count(e[0]) && upper.count(e[1]);
+      CHECK((ul || lu));
+      CHECK(e[0] != e[1]);
+      CHECK((m.positions[e[0]] - m.positions[e[1]]).norm() < 0.001);
+    }
+    CHECK(virtual_edges >= 3);
+    CHECK(ear_edges >= 6);
+  }
+
+  SECTION("constrained vertices are the inside of the mouth") {
+    REQUIRE(!a.constrained_vertices.empty());
+    const FeatureBox& mouth = box_named(a, "mouth");
+    for (int v : a.constrained_vertices) {
+      CHECK(mouth.contains(m.positions[v]));
+      CHECK(m.positions[v].z() < a.mouth_center.z() + 0.006);
+    }
+    CHECK(mouth.contains(a.mouth_center));
+    CHECK(a.mouth_width > 0.04);
+    CHECK(a.mouth_width < 0.06);
+  }
+
+  SECTION("eye sockets: the eyeball fits inside and shows through the lids") {
+    for (const EyeSocket* eye : {&a.eye_left, &a.eye_right}) {
+      CHECK(eye->radius == Approx(0.012).margin(0.002));
+      // The rim is a closed loop of mesh edges.
+      REQUIRE(eye->rim.size() >= 6);
+      for (size_t k = 0; k < eye->rim.size(); ++k)
+        CHECK(topo.find_edge(eye->rim[k], eye->rim[(k + 1) % eye->rim.size()]) >= 0);
+      // No vertex inside the eyeball.
+      for (const Vec3& p : m.positions) CHECK((p - eye->center).norm() > eye->radius);
+      // Nothing covers the front of the eyeball: a ray from the front hits it first.
+      const Vec3 apex = eye->center + eye->radius * Vec3::UnitZ();
+      const Vec3 from = apex + Vec3(0, 0, 0.3);
+      int blocked = 0;
+      for (const Tri& t : m.triangles)
+        if (segment_hits_triangle(from, apex, m.positions[t[0]], m.positions[t[1]], m.positions[t[2]]))
+          ++blocked;
+      CHECK(blocked == 0);
+      // ...but from behind, the socket pocket is closed around it.
+      const Vec3 back = eye->center - Vec3(0, 0, 0.03);
+      int pocket = 0;
+      for (const Tri& t : m.triangles)
+        if (segment_hits_triangle(eye->center, back, m.positions[t[0]], m.positions[t[1]], m.positions[t[2]]))
+          ++pocket;
+      CHECK(pocket >= 1);
+    }
+  }
+
+  SECTION("regions") {
+    for (const std::string& name : required_head_regions()) {
+      INFO(name);
+      REQUIRE(a.regions.count(name));
+      CHECK(!a.regions.at(name).empty());
+    }
+    // The lip chains: upper above lower at the mouth's middle.
+    double upper_y = 0, lower_y = 0;
+    for (int v : a.regions.at("upper_lip")) upper_y += m.positions[v].y();
+    for (int v : a.regions.at("lower_lip")) lower_y += m.positions[v].y();
+    CHECK(upper_y / a.regions.at("upper_lip").size() > lower_y / a.regions.at("lower_lip").size());
+    CHECK(a.regions.at("eye_rim_left").size() == a.eye_left.rim.size());
+  }
+
+  SECTION("clipping planes cut the neck and the back, keep the face") {
+    for (int v : a.regions.at("chin")) CHECK(a.neck_clip.keeps(m.positions[v]));
+    for (int v : a.regions.at("nose")) CHECK(a.back_clip.keeps(m.positions[v]));
+    for (int v : topo.boundary_loops[0]) CHECK_FALSE(a.neck_clip.keeps(m.positions[v]));
+    int back_cut = 0;
+    for (int v : a.regions.at("scalp")) back_cut += a.back_clip.keeps(m.positions[v]) ? 0 : 1;
+    CHECK(back_cut > 20);
+    CHECK(a.back_clip.normal.z() > 0.8);
+  }
+}
+
+TEST_CASE("generic head asset is what the builder makes", "[head]") {
+  GenericHead built;
+  Status s = build_generic_head(GenericHeadBuildOptions{}, built);
+  INFO(s.message);
+  REQUIRE(s.ok());
+  const GenericHead& h = asset();
+  REQUIRE(built.mesh.num_vertices() == h.mesh.num_vertices());
+  REQUIRE(built.mesh.num_triangles() == h.mesh.num_triangles());
+  double worst = 0;
+  for (int v = 0; v < h.mesh.num_vertices(); ++v)
+    worst = std::max(worst, (built.mesh.positions[v] - h.mesh.positions[v]).norm());
+  INFO("regenerate with: likeness make-generic-head --out core/head/data");
+  CHECK(worst < 1e-9);
+  CHECK(built.mesh.triangles == h.mesh.triangles);
+  // Indices exactly, coordinates to 1e-9 m (compilers may round differently).
+  const HeadAnnotations &a = built.annotations, &b = h.annotations;
+  CHECK(a.regions == b.regions);
+  CHECK(a.binding_edges == b.binding_edges);
+  CHECK(a.constrained_vertices == b.constrained_vertices);
+  CHECK(a.eye_left.rim == b.eye_left.rim);
+  CHECK(a.eye_right.rim == b.eye_right.rim);
+  REQUIRE(a.boxes.size() == b.boxes.size());
+  for (size_t k = 0; k < a.boxes.size(); ++k) {
+    CHECK(a.boxes[k].name == b.boxes[k].name);
+    CHECK(a.boxes[k].landmarks == b.boxes[k].landmarks);
+    CHECK((a.boxes[k].min - b.boxes[k].min).norm() < 1e-9);
+    CHECK((a.boxes[k].max - b.boxes[k].max).norm() < 1e-9);
+  }
+  CHECK((a.eye_left.center - b.eye_left.center).norm() < 1e-9);
+  CHECK((a.mouth_center - b.mouth_center).norm() < 1e-9);
+  CHECK(a.mouth_width == Approx(b.mouth_width).margin(1e-9));
+  CHECK((a.neck_clip.point - b.neck_clip.point).norm() < 1e-9);
+  CHECK((a.back_clip.normal - b.back_clip.normal).norm() < 1e-9);
+}
+
+TEST_CASE("head annotations round-trip through JSON", "[head]") {
+  const GenericHead& h = asset();
+  const std::string text = head_annotations_to_json(h.annotations, h.mesh.num_vertices());
+  HeadAnnotations back;
+  Status s = parse_head_annotations(text, h.mesh.num_vertices(), back);
+  INFO(s.message);
+  REQUIRE(s.ok());
+  CHECK(head_annotations_to_json(back, h.mesh.num_vertices()) == text);
+  CHECK(back.binding_edges == h.annotations.binding_edges);
+  CHECK(back.regions == h.annotations.regions);
+  CHECK(back.eye_left.center == h.annotations.eye_left.center);
+  CHECK(back.boxes[2].max == h.annotations.boxes[2].max);
+}
+
+TEST_CASE("broken head annotations are rejected with a message", "[head]") {
+  const GenericHead& h = asset();
+  const int n = h.mesh.num_vertices();
+  const std::string good = head_annotations_to_json(h.annotations, n);
+  auto reject = [&](const std::string& text, const std::string& expect_in_message, int num_vertices) {
+    HeadAnnotations out;
+    Status s = parse_head_annotations(text, num_vertices, out);
+    INFO("expected \"" << expect_in_message << "\" in: " << s.message);
+    CHECK(s.code == ErrorCode::InvalidInput);
+    CHECK(s.message.find(expect_in_message) != std::string::npos);
+  };
+  auto replaced = [&](const std::string& from, const std::string& to) {
+    std::string t = good;
+    const size_t at = t.find(from);
+    REQUIRE(at != std::string::npos);
+    return t.replace(at, from.size(), to);
+  };
+  reject("", "not valid JSON", n);
+  reject(good.substr(0, good.size() / 2), "not valid JSON", n);
+  reject("[1,2,3]", "must be a JSON object", n);
+  reject(good, "num_vertices", n + 1);
+  // An index past the mesh's vertices, and a negative one.
+  const std::string face_key = "\"face\": [";
+  reject(replaced(face_key, face_key + std::to_string(n) + ","), "out of range", n);
+  reject(replaced(face_key, face_key + "-1,"), "out of range", n);
+  reject(replaced(face_key, face_key + "1.5,"), "must be an integer", n);
+  reject(replaced("\"name\":\"nose\"", "\"name\":\"chin\""), "unknown box", n);
+  reject(replaced("\"name\":\"nose\"", "\"name\":\"mouth\""), "duplicate box", n);
+  reject(replaced("\"constrained_vertices\"", "\"constrained\""), "constrained_vertices", n);
+  reject(replaced("\"neck_clip\": {\"normal\":[", "\"neck_clip\": {\"normal\":[\"x\","), "neck_clip", n);
+  reject(replaced("\"landmarks\":[", "\"landmarks\":[0,"), "landmarks", n);
+  reject(replaced("\"face\":", "\"face_renamed\":"), "regions.face", n);
+  reject(replaced("\"radius\":", "\"radius\":-1,\"r\":"), "radius", n);
+  HeadAnnotations out;
+  CHECK_FALSE(parse_head_annotations(good, 0, out).ok());
+}
+
+TEST_CASE("generic head builder rejects impossible options", "[head]") {
+  GenericHead h;
+  GenericHeadBuildOptions o;
+  o.eyeball_radius = 0.02;
+  CHECK(build_generic_head(o, h).code == ErrorCode::InvalidInput);
+  o = GenericHeadBuildOptions{};
+  o.lip_gap = 0;
+  CHECK(build_generic_head(o, h).code == ErrorCode::InvalidInput);
+}
