@@ -5,6 +5,7 @@
 // must show its quadrants in the right places (catches row flips).
 #include <catch2/catch.hpp>
 
+#include "head/generic_head.h"
 #include "mesh/geometry.h"
 #include "render/camera.h"
 #include "render/offscreen.h"
@@ -513,4 +514,70 @@ TEST_CASE("orbit camera: angles, framing and interaction", "[render][camera]") {
   cam = front;
   cam.pan(100.0f, 0.0f, 600.0f);
   CHECK(cam.target.x < front.target.x);  // drag right: scene moves right, target left
+}
+
+TEST_CASE("the generic head renders plausibly from the front and the side", "[render][head]") {
+  GenericHead head;
+  const Status loaded = load_generic_head(head);
+  INFO(loaded.message);
+  REQUIRE(loaded.ok());
+  const int w = 200, h = 200;
+  struct ViewCheck {
+    CanonicalView view;
+    double min_fraction, max_fraction;
+  };
+  // A head is taller than wide (front) and about as deep as tall (side),
+  // so these ranges separate the views; each bound leaves ~30% slack.
+  for (const ViewCheck vc : {ViewCheck{CanonicalView::Front, 0.18, 0.45},
+                             ViewCheck{CanonicalView::Left, 0.25, 0.60},
+                             ViewCheck{CanonicalView::ThreeQuarter, 0.22, 0.55}}) {
+    const OrbitCamera cam = canonical_view(vc.view, head.mesh.positions, 1.0f);
+    const CameraMatrices m = cam.matrices(1.0f);
+    const Image im = render(mesh_scene(head.mesh), [&](float) { return m; }, w, h);
+    const MaskStats s = foreground_stats(im);
+    // The drawn extent is the projected vertices' extent (to a pixel).
+    float min_x = 1e9f, max_x = -1e9f, min_y = 1e9f, max_y = -1e9f;
+    for (const Vec3& p : head.mesh.positions) {
+      const glm::vec4 c = m.projection * m.view * glm::vec4(p.x(), p.y(), p.z(), 1.0f);
+      const float x = (c.x / c.w * 0.5f + 0.5f) * w, y = (0.5f - c.y / c.w * 0.5f) * h;
+      min_x = std::min(min_x, x);
+      max_x = std::max(max_x, x);
+      min_y = std::min(min_y, y);
+      max_y = std::max(max_y, y);
+    }
+    INFO("view " << to_string(vc.view) << ": fraction " << s.fraction << ", image box x " << s.min_x << ".."
+                 << s.max_x << " y " << s.min_y << ".." << s.max_y << ", projected x " << min_x << ".."
+                 << max_x << " y " << min_y << ".." << max_y);
+    CHECK(s.fraction > vc.min_fraction);
+    CHECK(s.fraction < vc.max_fraction);
+    CHECK(std::abs(s.min_x - min_x) < 1.5);
+    CHECK(std::abs(s.max_x + 1 - max_x) < 1.5);
+    CHECK(std::abs(s.min_y - min_y) < 1.5);
+    CHECK(std::abs(s.max_y + 1 - max_y) < 1.5);
+    if (vc.view == CanonicalView::Front) {
+      CHECK(s.max_y - s.min_y > 1.2 * (s.max_x - s.min_x));  // taller than wide
+      // Left-right symmetric: foreground pixels per half within 3%.
+      int left = 0, right = 0;
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+          if (!is_background(im, x, y)) (x < w / 2 ? left : right)++;
+      CHECK(std::abs(left - right) < 0.03 * (left + right));
+    }
+    // Shaded, not flat: luminance spread over the head.
+    double sum = 0, sum2 = 0;
+    int n = 0;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        if (!is_background(im, x, y)) {
+          const double l = luminance(im.at(x, y));
+          sum += l;
+          sum2 += l * l;
+          ++n;
+        }
+    const double mean = sum / n, sd = std::sqrt(std::max(sum2 / n - mean * mean, 0.0));
+    INFO("luminance mean " << mean << " sd " << sd);
+    CHECK(mean > 70);
+    CHECK(mean < 220);
+    CHECK(sd > 12);
+  }
 }
