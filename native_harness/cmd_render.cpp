@@ -65,11 +65,11 @@ int run_render(const Args& args) {
   Image texture;
   if (!mesh_path.empty()) {
     s = load_mesh_file(mesh_path, mesh);
-    if (!s) return fail(kName, with_context(s, mesh_path).message);
+    if (!s) return fail(kName, s.message);
   }
   if (!points_path.empty()) {
     s = load_point_cloud_file(points_path, cloud);
-    if (!s) return fail(kName, with_context(s, points_path).message);
+    if (!s) return fail(kName, s.message);
     if (cloud.size() == 0) return fail(kName, points_path + ": no points");
   }
   // An OBJ's material names its texture; use it when no --texture is given.
@@ -81,7 +81,7 @@ int run_render(const Args& args) {
   if (!tex_path.empty()) {
     if (mesh.uvs.empty()) return fail(kName, mesh_path + ": the mesh has no uvs, so a texture cannot be applied");
     s = load_image_file(tex_path, texture);
-    if (!s) return fail(kName, with_context(s, tex_path).message);
+    if (!s) return fail(kName, s.message);
   }
 
   const bool edges_only = args.has("edges-only");
@@ -128,7 +128,7 @@ int run_render(const Args& args) {
   s = render_offscreen(setup, camera_for, options, image);
   if (!s) return fail(kName, s.message);
   s = save_png_file(out_path, image);
-  if (!s) return fail(kName, with_context(s, out_path).message);
+  if (!s) return fail(kName, s.message);
   std::cout << "wrote " << out_path << " (" << size << "x" << size << ", " << to_string(view) << " view";
   if (!mesh.positions.empty()) std::cout << ", " << mesh.num_triangles() << " triangles";
   if (cloud.size() > 0) std::cout << ", " << cloud.size() << " points";
