@@ -22,6 +22,10 @@
   const maxScanMb = Number(params.get('max_mb')) > 0 ? Number(params.get('max_mb')) : DEFAULT_MAX_SCAN_MB;
   const MAX_SCAN_BYTES = maxScanMb * 1024 * 1024;
   const PHOTO_EXTENSIONS = ['jpg', 'jpeg', 'png'];
+  // What the viewer draws at most (see loadScan); ?max_display_points=N and
+  // ?max_display_triangles=N override.
+  const MAX_DISPLAY_POINTS = Number(params.get('max_display_points')) > 0 ? Number(params.get('max_display_points')) : 4000000;
+  const MAX_DISPLAY_TRIANGLES = Number(params.get('max_display_triangles')) > 0 ? Number(params.get('max_display_triangles')) : 2000000;
 
   const $ = (id) => document.getElementById(id);
   const ui = {
@@ -236,6 +240,19 @@
 
   const SCAN_EXTENSIONS = ['ply', 'obj', 'xyz', 'vtk'];
 
+  // Every stride-th point of a parsed point cloud (positions, normals, colors).
+  function thinPoints(result, stride) {
+    const n = Math.ceil(result.vertexCount / stride);
+    const pick = (a) => {
+      if (!a || a.length === 0) return a;
+      const out = new Float32Array(n * 3);
+      for (let i = 0, j = 0; j < n; i += stride, j++) out.set(a.subarray(3 * i, 3 * i + 3), 3 * j);
+      return out;
+    };
+    return Object.assign({}, result, { positions: pick(result.positions), normals: pick(result.normals),
+                                       colors: pick(result.colors), vertexCount: n });
+  }
+
   // A failed load: the message goes to the banner, the stage and the file
   // list say so, and the status line says what is still shown.
   function loadFailed(file, meta, note, message) {
@@ -272,7 +289,6 @@
     } catch (e) {
       result = { ok: false, code: 'Internal', message: file.name + ': ' + (e && e.message ? e.message : e) };
     }
-    const ms = performance.now() - t0;
     if (!result.ok) {
       let message = result.message || (file.name + ': ' + result.code);
       // The core guessed the format from the bytes; say what we expected.
@@ -283,19 +299,36 @@
       loadFailed(file, meta, 'not loaded', message);
       return;
     }
-    const shown = result.kind === 'mesh'
-      ? app.viewer.show_mesh(result.positions, result.normals, result.colors, result.indices)
-      : app.viewer.show_points(result.positions, result.normals, result.colors);
+    // Display budget: the viewer holds what it shows in its own 32-bit heap
+    // and on the GPU (meshes unrolled, ~170 bytes per triangle), so very
+    // large scans are thinned for display. The full data stays with the
+    // worker's stages.
+    let display = result, stride = 1;
+    if (result.kind === 'points' && result.vertexCount > MAX_DISPLAY_POINTS) {
+      stride = Math.ceil(result.vertexCount / MAX_DISPLAY_POINTS);
+      display = thinPoints(result, stride);
+    }
+    if (result.kind === 'mesh' && result.triangleCount > MAX_DISPLAY_TRIANGLES) {
+      loadFailed(file, meta, 'too many triangles', file.name + ' has ' + result.triangleCount.toLocaleString('en') +
+                 ' triangles; the web viewer shows meshes up to ' + MAX_DISPLAY_TRIANGLES.toLocaleString('en') +
+                 '. Decimate it, or drop its vertices as a point cloud (XYZ).');
+      return;
+    }
+    const shown = display.kind === 'mesh'
+      ? app.viewer.show_mesh(display.positions, display.normals, display.colors, display.indices)
+      : app.viewer.show_points(display.positions, display.normals, display.colors);
+    const ms = performance.now() - t0;
     if (shown !== '') {
       loadFailed(file, meta, 'not shown', file.name + ': ' + shown);
       return;
     }
     app.model = { name: file.name, kind: result.kind, vertexCount: result.vertexCount,
-                  triangleCount: result.triangleCount, parseMs: ms };
+                  triangleCount: result.triangleCount, loadMs: ms, displayStride: stride };
     const what = result.kind === 'mesh'
       ? 'mesh, ' + result.vertexCount.toLocaleString('en') + ' vertices, ' +
         result.triangleCount.toLocaleString('en') + ' triangles'
-      : 'point cloud, ' + result.vertexCount.toLocaleString('en') + ' points';
+      : 'point cloud, ' + result.vertexCount.toLocaleString('en') + ' points' +
+        (stride > 1 ? ' (showing 1 in ' + stride + ')' : '');
     meta.textContent = formatBytes(file.size) + ' · ' + (result.kind === 'mesh'
       ? result.triangleCount.toLocaleString('en') + ' triangles'
       : result.vertexCount.toLocaleString('en') + ' points');

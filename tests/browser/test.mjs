@@ -11,10 +11,11 @@
 //     leads to "done", the status names its point count and green points
 //     appear on the canvas;
 //   - broken inputs (truncated PLY, a text file, a PLY declaring 2^31
-//     vertices, an empty file, a file over the size limit) lead to "error"
-//     with a visible message naming the file, the previous model stays on
-//     screen; a worker dying mid-job is replaced; and a good file (an OBJ
-//     cube) loads afterwards;
+//     vertices, an empty file, a file over the size limit, a mesh over the
+//     display limit) lead to "error" with a visible message naming the file,
+//     the previous model stays on screen, a worker dying mid-job is replaced,
+//     and a good file (an OBJ cube) loads afterwards; point clouds over the
+//     display limit are thinned, not refused;
 //   - no console errors, no uncaught exceptions, and every network request
 //     goes to the page's own origin.
 // Screenshots go to $LK_SCREENSHOT_DIR when set (web_*.png).
@@ -361,16 +362,22 @@ async function main() {
       console.log('note  "Try the sample" not exercised: no sample/scan.ply in WEBDIR (scripts/demo makes it)');
     }
 
-    // 7. The size limit, on a page started with a 1 MB limit.
+    // 7. The limits, on a page started with small ones: file size 1 MB,
+    // display 5,000 points and 10 triangles.
     const page2 = await context.newPage();
     watch(page2);
-    await page2.goto(origin + '/index.html?max_mb=1');
+    await page2.goto(origin + '/index.html?max_mb=1&max_display_points=5000&max_display_triangles=10');
     await waitForState(page2, ['ready', 'error'], READY_TIMEOUT_MS);
     const s3 = await setFile(page2, 'big.ply', Buffer.alloc(2 * 1024 * 1024, 32));
     const msg3 = await bannerText(page2);
     check('a file over the size limit is refused with a message', s3 === 'error' && /up to 1\.0 MB/.test(msg3), `"${msg3}"`);
-    const s4 = await setFile(page2, 'torus.ply', torusPly(2000));
-    check('... and the page keeps working', s4 === 'done', 'state ' + s4);
+    const s4 = await setFile(page2, 'torus.ply', torusPly(20000));
+    const status4 = await page2.textContent('#status');
+    check('... the page keeps working, and a large cloud is thinned for display', s4 === 'done' &&
+          /20,000 points \(showing 1 in 4\)/.test(status4), `state ${s4}; "${status4.trim()}"`);
+    const s5 = await setFile(page2, 'cube.obj', cubeObj());
+    const msg5 = await bannerText(page2);
+    check('a mesh over the display limit is refused with a message', s5 === 'error' && /up to 10\b/.test(msg5), `"${msg5}"`);
     await page2.close();
 
     check('no console errors', consoleErrors.length === 0, consoleErrors.slice(0, 5).join(' | '));
