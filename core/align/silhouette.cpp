@@ -176,6 +176,14 @@ void rasterize_mesh_silhouettes(const std::vector<Vec3>& positions, const std::v
     for (int c = 0; c < nc && c < 32; ++c)
       if (!clips[c].keeps(positions[i])) behind[i] |= 1u << c;
   }
+  // Culling per view; off where a clip plane's cut side faces the viewer.
+  const Vec3 view_direction[kSilhouetteViews] = {Vec3(0, 0, -1), Vec3(1, 0, 0), Vec3(0, -1, 0)};
+  bool cull[kSilhouetteViews];
+  for (int v = 0; v < kSilhouetteViews; ++v) {
+    cull[v] = cull_back_faces;
+    for (const ClipPlane& c : clips)
+      if (c.normal.dot(view_direction[v]) > 1e-12) cull[v] = false;
+  }
   Vec3 poly[2][3 + 32];
   for (const Tri& t : triangles) {
     if (t[0] < 0 || t[1] < 0 || t[2] < 0 || t[0] >= nv || t[1] >= nv || t[2] >= nv) continue;
@@ -186,9 +194,8 @@ void rasterize_mesh_silhouettes(const std::vector<Vec3>& positions, const std::v
     bool seen[kSilhouetteViews] = {true, true, true};
     if (cull_back_faces) {
       const Vec3 normal = (positions[t[1]] - positions[t[0]]).cross(positions[t[2]] - positions[t[0]]);
-      seen[0] = normal.z() > 0.0;
-      seen[1] = normal.x() < 0.0;
-      seen[2] = normal.y() > 0.0;
+      for (int v = 0; v < kSilhouetteViews; ++v)
+        seen[v] = !cull[v] || normal.dot(view_direction[v]) < 0.0;
     }
     const unsigned any_behind = behind[t[0]] | behind[t[1]] | behind[t[2]];
     if (!any_behind) {
@@ -332,29 +339,37 @@ void rasterize_point_silhouettes(const std::vector<Vec3>& points, const ViewWind
   }
   const std::vector<double> radii = options.closing_radii_px.empty() ? std::vector<double>{0.0}
                                                                         : options.closing_radii_px;
+  // Try every radius: filling sampling holes adds a lot of area at once
+  // (often only from some radius on, when the gaps between points close),
+  // while filling true concavities of the outline adds little per step.
+  // The largest radius that still added much is the one that closed the
+  // holes (footnote 1's "fully covered silhouette").
+  std::array<std::vector<double>, kSilhouetteViews> to_covered;
+  std::array<double, kSilhouetteViews> chosen{};
+  auto closed = [&](int v, double r) { return r > 0.0 ? closing_from_distance(to_covered[v], n, r) : raw[v]; };
   for (int v = 0; v < kSilhouetteViews; ++v) {
-    // Try every radius: filling sampling holes adds a lot of area at once
-    // (often only from some radius on, when the gaps between points close),
-    // while filling true concavities of the outline adds little per step.
-    // The largest radius that still added much is the one that closed the
-    // holes (footnote 1's "fully covered silhouette").
-    const std::vector<double> to_covered = distance_to_covered(raw[v]);
-    auto closed = [&](double r) { return r > 0.0 ? closing_from_distance(to_covered, n, r) : raw[v]; };
-    SilhouetteMask current = closed(radii[0]);
-    double chosen = radii[0];
-    int previous_count = current.count();
+    to_covered[v] = distance_to_covered(raw[v]);
+    chosen[v] = radii[0];
+    int previous_count = closed(v, radii[0]).count();
     for (size_t k = 1; k < radii.size(); ++k) {
-      SilhouetteMask next = closed(radii[k]);
-      const int next_count = next.count();
-      if (next_count - previous_count >= options.hole_tolerance * next_count) {
-        current = next;
-        chosen = radii[k];
-      }
+      const int next_count = closed(v, radii[k]).count();
+      if (next_count - previous_count >= options.hole_tolerance * next_count) chosen[v] = radii[k];
       previous_count = next_count;
     }
-    out[v] = std::move(current);
+  }
+  // The gaps between points are a property of the cloud, and all views have
+  // the same pixel size: the median radius keeps one view whose outline has
+  // a real opening (e.g. looking into a cut-away back of the head from
+  // above) from filling it in.
+  if (options.same_radius_in_all_views) {
+    std::array<double, kSilhouetteViews> sorted = chosen;
+    std::sort(sorted.begin(), sorted.end());
+    chosen.fill(sorted[kSilhouetteViews / 2]);
+  }
+  for (int v = 0; v < kSilhouetteViews; ++v) {
+    out[v] = closed(v, chosen[v]);
     if (info) {
-      info->closing_radius_px[v] = chosen;
+      info->closing_radius_px[v] = chosen[v];
       info->raw_pixels[v] = raw[v].count();
       info->covered_pixels[v] = out[v].count();
     }

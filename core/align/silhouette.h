@@ -77,11 +77,13 @@ void rasterize_triangle(const Vec2& a, const Vec2& b, const Vec2& c, SilhouetteM
 // vertex positions into the three views. Parts on the cut side of any clip
 // plane are removed (triangles are clipped exactly, not dropped). out is
 // resized to window.resolution.
-// cull_back_faces skips triangles facing away from each view: the outline
-// of a closed, outward-oriented (counter-clockwise) surface is already
-// covered by the triangles facing the viewer, so this halves the work. It is
-// wrong for open surfaces seen through their opening and for inward-facing
-// meshes.
+// cull_back_faces skips triangles facing away from a view (directions -z,
+// +x, -y for front, side, top): a ray entering a closed, outward-oriented
+// (counter-clockwise) surface first crosses a triangle facing it, so the
+// outline is unchanged at half the work. A clip plane whose cut side faces
+// the viewer opens the surface to view (one sees its inside through the
+// cut), so culling is switched off in such views. Wrong for inward-facing
+// or open meshes seen through their own holes.
 void rasterize_mesh_silhouettes(const std::vector<Vec3>& positions, const std::vector<Tri>& triangles,
                                 const ViewWindow& window, const std::vector<ClipPlane>& clips,
                                 std::array<SilhouetteMask, kSilhouetteViews>& out,
@@ -95,6 +97,8 @@ struct PointSplatOptions {
   // the outline fill slowly). 0 means the raw one-pixel-per-point mask.
   std::vector<double> closing_radii_px = {0.0, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0};
   double hole_tolerance = 0.01;
+  // Use the median of the three views' radii in every view (see the .cpp).
+  bool same_radius_in_all_views = true;
 };
 
 // What point splatting chose per view.

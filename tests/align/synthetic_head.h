@@ -1,5 +1,6 @@
 // A procedural head-like test shape for the alignment tests: cranium, jaw,
-// nose and ears as ellipsoids and an open neck cylinder, with annotations
+// nose and ears as ellipsoids and a capped neck cylinder (all closed and
+// outward-oriented, overlapping), with annotations
 // in the generic head's conventions (looks along +z, up +y, metres, about
 // 0.26 m from neck cut to crown). Front/back, up/down and left/right are
 // told apart by the nose, the neck and a slightly offset left ear, so every
@@ -38,7 +39,7 @@ inline void add_ellipsoid(TriMesh& m, const Vec3& c, const Vec3& r, int stacks =
   for (int j = 0; j < slices; ++j) m.triangles.push_back({ring(stacks - 1, j), south, ring(stacks - 1, j + 1)});
 }
 
-// Open cylinder along y from y0 to y1.
+// Closed cylinder along y from y0 to y1 (capped, outward-oriented).
 inline void add_cylinder(TriMesh& m, const Vec3& c, double radius_x, double radius_z, double y0, double y1,
                          int rings = 12, int slices = 40) {
   const double pi = 3.14159265358979323846;
@@ -55,6 +56,14 @@ inline void add_cylinder(TriMesh& m, const Vec3& c, double radius_x, double radi
       m.triangles.push_back({at(i, j), at(i, j + 1), at(i + 1, j + 1)});
       m.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i + 1, j)});
     }
+  const int bottom = m.num_vertices();
+  m.positions.push_back(Vec3(c.x(), y0, c.z()));
+  const int top = m.num_vertices();
+  m.positions.push_back(Vec3(c.x(), y1, c.z()));
+  for (int j = 0; j < slices; ++j) {
+    m.triangles.push_back({bottom, at(0, j + 1), at(0, j)});
+    m.triangles.push_back({top, at(rings, j), at(rings, j + 1)});
+  }
 }
 
 // neck_bottom: where the neck cylinder ends (the generic: -0.19; a scan
@@ -67,7 +76,7 @@ inline GenericHead synthetic_head(double neck_bottom = -0.19) {
   add_ellipsoid(m, Vec3(0, -0.005, 0.098), Vec3(0.014, 0.026, 0.022), 10, 20);  // nose
   add_ellipsoid(m, Vec3(0.079, 0.012, -0.012), Vec3(0.012, 0.032, 0.02), 10, 20);   // left ear
   add_ellipsoid(m, Vec3(-0.079, 0.006, -0.018), Vec3(0.012, 0.03, 0.02), 10, 20);   // right ear
-  add_cylinder(m, Vec3(0, 0, -0.02), 0.05, 0.055, neck_bottom, -0.06);  // neck
+  add_cylinder(m, Vec3(0, 0, -0.02), 0.05, 0.055, neck_bottom, -0.06);  // neck, capped
   HeadAnnotations& a = h.annotations;
   a.neck_clip.point = Vec3(0, -0.115, 0);
   a.neck_clip.normal = Vec3(0, 1, 0);

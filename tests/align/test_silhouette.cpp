@@ -1,6 +1,7 @@
 // Silhouette masks (core/align/silhouette.h): exact pixel counts for known
 // shapes, clipping, projection, hole filling of sparse points.
 #include "align/silhouette.h"
+#include "synthetic_head.h"
 
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -168,4 +169,35 @@ TEST_CASE("sparse points are closed into a full silhouette of the right size", "
   dense.push_back(Vec3(std::nan(""), 0, 0));
   rasterize_point_silhouettes(dense, w, {upper}, PointSplatOptions{}, masks, &info);
   CHECK(info.covered_pixels[0] == Approx(disk / 2).epsilon(0.04));
+}
+
+TEST_CASE("back-face culling leaves clipped head silhouettes unchanged", "[silhouette]") {
+  // Culling is only a speed-up: for an outward-oriented head cut by a
+  // horizontal neck plane and a slanted back plane (whose cut side faces the
+  // top view, so one looks into the head from above), every view must come
+  // out exactly as without culling, in any pose.
+  const GenericHead head = test::synthetic_head();
+  ClipPlane neck = head.annotations.neck_clip;
+  ClipPlane back;
+  back.point = Vec3(0, 0, -0.03);
+  back.normal = Vec3(0, -0.3, 1).normalized();
+  ViewWindow w;
+  w.center = Vec3(0, -0.02, 0);
+  w.half_size = 0.2;
+  w.resolution = 200;
+  for (int k = 0; k < 4; ++k) {
+    const Mat3 r = Eigen::AngleAxisd(0.08 * k, Vec3(1, 0.5, 0.2).normalized()).toRotationMatrix();
+    std::vector<Vec3> moved;
+    for (const Vec3& p : head.mesh.positions) moved.push_back(r * p);
+    std::array<SilhouetteMask, kSilhouetteViews> culled, full;
+    for (const auto& clips : {std::vector<ClipPlane>{}, std::vector<ClipPlane>{neck}, std::vector<ClipPlane>{neck, back}}) {
+      rasterize_mesh_silhouettes(moved, head.mesh.triangles, w, clips, culled, true);
+      rasterize_mesh_silhouettes(moved, head.mesh.triangles, w, clips, full, false);
+      for (int v = 0; v < kSilhouetteViews; ++v) {
+        INFO("pose " << k << ", " << clips.size() << " planes, view " << v);
+        CHECK(full[v].count() > 1000);
+        CHECK(xor_count(culled[v], full[v]) == 0);
+      }
+    }
+  }
 }
