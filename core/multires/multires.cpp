@@ -16,14 +16,15 @@ namespace {
 // The per-vertex kernels below are the ONLY place where normals and
 // displaced positions are computed, by evaluate() and by local updates alike:
 // same operands in the same order give bit-identical results.
-inline Vec3 vertex_normal(const IndexRows& vertex_faces, const std::vector<Tri>& tris,
-                          const std::vector<Vec3>& P, int v) {
+inline Vec3 face_normal(const std::vector<Tri>& tris, const std::vector<Vec3>& P, int f) {
+  const Tri& t = tris[f];
+  const Vec3& a = P[t[0]];
+  return (P[t[1]] - a).cross(P[t[2]] - a);  // length = 2 area: area-weighted sums
+}
+
+inline Vec3 vertex_normal(const IndexRows& vertex_faces, const std::vector<Vec3>& face_normals, int v) {
   Vec3 n = Vec3::Zero();
-  for (int i = vertex_faces.offsets[v]; i < vertex_faces.offsets[v + 1]; ++i) {
-    const Tri& t = tris[vertex_faces.items[i]];
-    const Vec3& a = P[t[0]];
-    n += (P[t[1]] - a).cross(P[t[2]] - a);  // area-weighted
-  }
+  for (int i = vertex_faces.offsets[v]; i < vertex_faces.offsets[v + 1]; ++i) n += face_normals[vertex_faces.items[i]];
   const double len = n.norm();
   if (len > 0) n /= len;
   return n;
@@ -33,46 +34,55 @@ inline bool same_bits(const Vec3& a, const Vec3& b) { return std::memcmp(a.data(
 
 inline Vec3 displace(const Vec3& p, double d, const Vec3& n) { return p + d * n; }
 
-// Rows from (row, item) pairs; items sorted and unique per row.
-IndexRows rows_from_pairs(int rows, std::vector<std::pair<int, int>>& pairs) {
-  std::sort(pairs.begin(), pairs.end());
-  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+// Counting-sort construction of compressed rows, O(#items): count(emit)
+// calls emit(row, item) for every pair, twice (count, then fill), in the
+// same order, so rows keep the emission order.
+template <class Emit>
+IndexRows rows_by_counting(int rows, const Emit& emit_all) {
   IndexRows r;
   r.offsets.assign(rows + 1, 0);
-  for (auto& pr : pairs) ++r.offsets[pr.first + 1];
+  emit_all([&](int row, int) { ++r.offsets[row + 1]; });
   for (int i = 0; i < rows; ++i) r.offsets[i + 1] += r.offsets[i];
-  r.items.resize(pairs.size());
-  for (size_t i = 0; i < pairs.size(); ++i) r.items[i] = pairs[i].second;
+  r.items.resize(r.offsets[rows]);
+  std::vector<int> fill(r.offsets.begin(), r.offsets.end() - 1);
+  emit_all([&](int row, int item) { r.items[fill[row]++] = item; });
   return r;
 }
 
 MultiresLevelLinks build_links(int num_vertices, const std::vector<Tri>& tris, const ButterflyLevel* next) {
   MultiresLevelLinks L;
-  std::vector<std::pair<int, int>> pairs;
-  pairs.reserve(tris.size() * 3);
-  for (int f = 0; f < static_cast<int>(tris.size()); ++f)
-    for (int v : tris[f]) pairs.push_back({v, f});
-  L.vertex_faces = rows_from_pairs(num_vertices, pairs);
+  const int nf = static_cast<int>(tris.size());
+  // Faces in ascending order per vertex: the normal's summation order.
+  L.vertex_faces = rows_by_counting(num_vertices, [&](auto&& emit) {
+    for (int f = 0; f < nf; ++f)
+      for (int v : tris[f]) emit(v, f);
+  });
 
   // A vertex's normal reads every corner of its triangles, so moving u
   // changes the normals of u and of every vertex sharing a triangle with u.
-  pairs.clear();
-  pairs.reserve(tris.size() * 9 + num_vertices);
-  for (int v = 0; v < num_vertices; ++v) pairs.push_back({v, v});
-  for (const Tri& t : tris)
-    for (int a : t)
-      for (int b : t) pairs.push_back({a, b});
-  L.normal_reach = rows_from_pairs(num_vertices, pairs);
+  std::vector<int> seen(num_vertices, -1);
+  L.normal_reach = rows_by_counting(num_vertices, [&](auto&& emit) {
+    std::fill(seen.begin(), seen.end(), -1);
+    for (int u = 0; u < num_vertices; ++u) {
+      seen[u] = u;
+      emit(u, u);
+      for (int i = L.vertex_faces.offsets[u]; i < L.vertex_faces.offsets[u + 1]; ++i)
+        for (int v : tris[L.vertex_faces.items[i]])
+          if (seen[v] != u) {
+            seen[v] = u;
+            emit(u, v);
+          }
+    }
+  });
 
   if (next) {
-    // Coarse vertex u feeds fine vertex u (copy) and every stencil naming it.
-    pairs.clear();
-    pairs.reserve(next->stencil_indices.size() + num_vertices);
-    for (int v = 0; v < num_vertices; ++v) pairs.push_back({v, v});
-    for (int k = 0; k < next->num_new_vertices(); ++k)
-      for (int i = next->stencil_offsets[k]; i < next->stencil_offsets[k + 1]; ++i)
-        pairs.push_back({next->stencil_indices[i], num_vertices + k});
-    L.refine_reach = rows_from_pairs(num_vertices, pairs);
+    // Coarse vertex u feeds fine vertex u (a copy) and every stencil naming it.
+    L.refine_reach = rows_by_counting(num_vertices, [&](auto&& emit) {
+      for (int v = 0; v < num_vertices; ++v) emit(v, v);
+      for (int k = 0; k < next->num_new_vertices(); ++k)
+        for (int i = next->stencil_offsets[k]; i < next->stencil_offsets[k + 1]; ++i)
+          emit(next->stencil_indices[i], num_vertices + k);
+    });
   }
   return L;
 }
@@ -84,8 +94,10 @@ void evaluate_level(MultiresMesh& m, int l) {
   const auto& tris = m.triangles(l);
   s.normals[l].resize(nv);
   s.displaced[l].resize(nv);
+  s.face_normals[l].resize(tris.size());
+  for (int f = 0; f < static_cast<int>(tris.size()); ++f) s.face_normals[l][f] = face_normal(tris, s.base[l], f);
   for (int v = 0; v < nv; ++v) {
-    s.normals[l][v] = vertex_normal(m.links[l].vertex_faces, tris, s.base[l], v);
+    s.normals[l][v] = vertex_normal(m.links[l].vertex_faces, s.face_normals[l], v);
     s.displaced[l][v] = displace(s.base[l][v], m.displacements[l][v], s.normals[l][v]);
   }
 }
@@ -95,6 +107,7 @@ void resize_state(MultiresMesh& m) {
   m.state.base.resize(L + 1);
   m.state.normals.resize(L + 1);
   m.state.displaced.resize(L + 1);
+  m.state.face_normals.resize(L + 1);
 }
 
 Status check_sizes(const MultiresMesh& m) {
@@ -353,16 +366,19 @@ Status update_control_vertices(MultiresMesh& mesh, const std::vector<int>& moved
   }
   MultiresState& st = mesh.state;
   if (static_cast<int>(st.displaced.size()) != L + 1 || static_cast<int>(mesh.links.size()) != L + 1 ||
-      static_cast<int>(st.displaced[L].size()) != mesh.num_vertices(L))
+      static_cast<int>(st.displaced[L].size()) != mesh.num_vertices(L) ||
+      st.face_normals.size() != st.displaced.size())
     return Status::error(ErrorCode::InvalidInput, "multires update: the mesh has not been built and evaluated");
 
   auto& sc = mesh.scratch;
   if (static_cast<int>(sc.base_mark.size()) != L + 1) {
     sc.base_mark.assign(L + 1, {});
     sc.displaced_mark.assign(L + 1, {});
+    sc.face_mark.assign(L + 1, {});
     for (int l = 0; l <= L; ++l) {
       sc.base_mark[l].assign(mesh.num_vertices(l), 0);
       sc.displaced_mark[l].assign(mesh.num_vertices(l), 0);
+      sc.face_mark[l].assign(mesh.triangles(l).size(), 0);
     }
     sc.stamp = 0;
   }
@@ -370,6 +386,7 @@ Status update_control_vertices(MultiresMesh& mesh, const std::vector<int>& moved
     for (int l = 0; l <= L; ++l) {
       std::fill(sc.base_mark[l].begin(), sc.base_mark[l].end(), 0);
       std::fill(sc.displaced_mark[l].begin(), sc.displaced_mark[l].end(), 0);
+      std::fill(sc.face_mark[l].begin(), sc.face_mark[l].end(), 0);
     }
     sc.stamp = 1;
   }
@@ -383,7 +400,7 @@ Status update_control_vertices(MultiresMesh& mesh, const std::vector<int>& moved
   // differs bit-wise, so the next level must look at its dependents. A value
   // that comes out bit-identical (e.g. P' = P + 0 * N where d = 0 and P did
   // not move) stops the spread without changing the result.
-  std::vector<int> changed, reached, spread;
+  std::vector<int> changed, reached, spread, targets;
   changed.reserve(moved.size());
   for (size_t i = 0; i < moved.size(); ++i) {
     const int v = moved[i];
@@ -406,10 +423,22 @@ Status update_control_vertices(MultiresMesh& mesh, const std::vector<int>& moved
           reached.push_back(v);
         }
       }
+    // Triangles with a moved corner get new face normals first.
     const auto& tris = mesh.triangles(l);
+    auto& face_mark = sc.face_mark[l];
+    for (int u : changed)
+      for (int i = links.vertex_faces.offsets[u]; i < links.vertex_faces.offsets[u + 1]; ++i) {
+        const int f = links.vertex_faces.items[i];
+        if (face_mark[f] != stamp) {
+          face_mark[f] = stamp;
+          st.face_normals[l][f] = face_normal(tris, st.base[l], f);
+        }
+      }
+    // Ascending order turns scattered reads into mostly forward sweeps.
+    std::sort(reached.begin(), reached.end());
     spread.clear();
     for (int v : reached) {
-      st.normals[l][v] = vertex_normal(links.vertex_faces, tris, st.base[l], v);
+      st.normals[l][v] = vertex_normal(links.vertex_faces, st.face_normals[l], v);
       const Vec3 p = displace(st.base[l][v], mesh.displacements[l][v], st.normals[l][v]);
       if (!same_bits(p, st.displaced[l][v])) {
         st.displaced[l][v] = p;
@@ -426,18 +455,24 @@ Status update_control_vertices(MultiresMesh& mesh, const std::vector<int>& moved
     const int nc = next.num_coarse_vertices;
     auto& next_mark = sc.base_mark[l + 1];
     auto& fine = st.base[l + 1];
-    changed.clear();
+    targets.clear();
     for (int u : spread)
       for (int i = links.refine_reach.offsets[u]; i < links.refine_reach.offsets[u + 1]; ++i) {
         const int f = links.refine_reach.items[i];
-        if (next_mark[f] == stamp) continue;
-        next_mark[f] = stamp;
-        const Vec3 p = f < nc ? st.displaced[l][f] : butterfly_new_vertex(next, f - nc, st.displaced[l]);
-        if (!same_bits(p, fine[f])) {
-          fine[f] = p;
-          changed.push_back(f);
+        if (next_mark[f] != stamp) {
+          next_mark[f] = stamp;
+          targets.push_back(f);
         }
       }
+    std::sort(targets.begin(), targets.end());
+    changed.clear();
+    for (int f : targets) {
+      const Vec3 p = f < nc ? st.displaced[l][f] : butterfly_new_vertex(next, f - nc, st.displaced[l]);
+      if (!same_bits(p, fine[f])) {
+        fine[f] = p;
+        changed.push_back(f);
+      }
+    }
   }
   return Status::success();
 }

@@ -46,6 +46,7 @@ struct MultiresState {
   std::vector<std::vector<Vec3>> base;       // L+1 arrays: P_l (before displacement)
   std::vector<std::vector<Vec3>> normals;    // L+1 arrays: N_l
   std::vector<std::vector<Vec3>> displaced;  // L+1 arrays: P'_l, the level-l output mesh
+  std::vector<std::vector<Vec3>> face_normals;  // L+1 arrays, #F_l: unnormalised (2 x area) normals at P_l
 };
 
 struct MultiresMesh {
@@ -59,6 +60,7 @@ struct MultiresMesh {
   // thread-safe: one update at a time per mesh.
   struct Scratch {
     std::vector<std::vector<std::uint32_t>> base_mark, displaced_mark;  // L+1, #V_l each
+    std::vector<std::vector<std::uint32_t>> face_mark;                  // L+1, #F_l each
     std::uint32_t stamp = 0;
   } scratch;
 

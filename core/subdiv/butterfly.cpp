@@ -29,9 +29,124 @@ std::vector<double> extraordinary_weights(int K) {
   return s;
 }
 
+// Connectivity of one level as the stencils need it. Level 0 comes from
+// MeshTopology (which also validates the input); finer levels are derived
+// from the coarser one in O(#F) without hashing: every coarse edge e splits
+// into fine edges 2e (at edges[e].v0) and 2e+1 (at v1), every coarse face f
+// adds three inner edges 2 #E + 3 f + {0, 1, 2}.
+struct LevelTopo {
+  int num_vertices = 0;
+  const std::vector<Tri>* triangles = nullptr;
+  std::vector<Edge> edges;                      // v0 < v1; f1 = -1 on the boundary
+  std::vector<std::array<int, 3>> face_edges;   // edge k joins corners k and k+1
+  std::vector<int> valence;                     // #V
+  std::vector<char> boundary;                   // #V
+  std::vector<std::array<int, 2>> boundary_edges;  // #V: the two boundary edges at a boundary vertex
+  std::vector<std::vector<int>> ring_edges;     // #V: ordered edges around interior extraordinary vertices
+
+  int other_end(int e, int v) const { return edges[e].v0 == v ? edges[e].v1 : edges[e].v0; }
+  int opposite(int f, int e) const {
+    const Tri& t = (*triangles)[f];
+    for (int v : t)
+      if (v != edges[e].v0 && v != edges[e].v1) return v;
+    return -1;
+  }
+  bool irregular_interior(int v) const { return !boundary[v] && valence[v] != 6; }
+};
+
+Status topo_from_mesh(const std::vector<Tri>& triangles, int num_vertices, LevelTopo& out) {
+  TriMesh mesh;  // connectivity only; build_topology takes #V from positions
+  mesh.positions.assign(num_vertices, Vec3::Zero());
+  mesh.triangles = triangles;
+  MeshTopology topo;
+  Status s = build_topology(mesh, topo);
+  if (!s.ok()) return s;
+  out.num_vertices = num_vertices;
+  out.triangles = &triangles;
+  out.edges = std::move(topo.edges);
+  out.face_edges = std::move(topo.face_edges);
+  out.valence.resize(num_vertices);
+  out.boundary.assign(topo.boundary_vertex.begin(), topo.boundary_vertex.end());
+  out.boundary_edges.assign(num_vertices, {-1, -1});
+  out.ring_edges.assign(num_vertices, {});
+  for (int v = 0; v < num_vertices; ++v) {
+    const auto& ring = topo.rings[v];
+    out.valence[v] = static_cast<int>(ring.size());
+    if (ring.empty()) continue;  // isolated vertex: in no stencil
+    if (out.boundary[v]) {
+      out.boundary_edges[v] = {topo.find_edge(v, ring.front()), topo.find_edge(v, ring.back())};
+    } else if (ring.size() < 3) {
+      return Status::error(ErrorCode::InvalidInput,
+                           "vertex " + std::to_string(v) + " is interior with valence " +
+                               std::to_string(ring.size()) + " (< 3): the mesh folds onto itself");
+    } else if (ring.size() != 6) {
+      for (int n : ring) out.ring_edges[v].push_back(topo.find_edge(v, n));
+    }
+  }
+  return Status::success();
+}
+
+// The connectivity of the 1 -> 4 split of `coarse` (fine triangles as built
+// by build_one_level).
+void topo_refined(const LevelTopo& c, const std::vector<Tri>& fine_triangles, LevelTopo& f) {
+  const int nc = c.num_vertices;
+  const int ne = static_cast<int>(c.edges.size());
+  const int nf = static_cast<int>(c.triangles->size());
+  const auto& tris = *c.triangles;
+  f.num_vertices = nc + ne;
+  f.triangles = &fine_triangles;
+  auto corner_child = [&](int face, int v) {
+    const Tri& t = tris[face];
+    return 4 * face + (t[0] == v ? 0 : t[1] == v ? 1 : 2);
+  };
+  auto half = [&](int e, int v) { return 2 * e + (c.edges[e].v0 == v ? 0 : 1); };
+
+  f.edges.resize(2 * ne + 3 * nf);
+  for (int e = 0; e < ne; ++e) {
+    const Edge& ce = c.edges[e];
+    for (int side = 0; side < 2; ++side) {
+      const int v = side == 0 ? ce.v0 : ce.v1;
+      Edge& fe = f.edges[2 * e + side];
+      fe.v0 = v;  // coarse indices come before every edge vertex
+      fe.v1 = nc + e;
+      fe.f0 = corner_child(ce.f0, v);
+      fe.f1 = ce.f1 >= 0 ? corner_child(ce.f1, v) : -1;
+    }
+  }
+  f.face_edges.resize(4 * static_cast<size_t>(nf));
+  for (int face = 0; face < nf; ++face) {
+    const Tri& t = tris[face];
+    const auto& ce = c.face_edges[face];
+    const int m0 = nc + ce[0], m1 = nc + ce[1], m2 = nc + ce[2];
+    const int i0 = 2 * ne + 3 * face, i1 = i0 + 1, i2 = i0 + 2;
+    f.edges[i0] = Edge{std::min(m0, m1), std::max(m0, m1), 4 * face + 1, 4 * face + 3};
+    f.edges[i1] = Edge{std::min(m1, m2), std::max(m1, m2), 4 * face + 2, 4 * face + 3};
+    f.edges[i2] = Edge{std::min(m2, m0), std::max(m2, m0), 4 * face + 0, 4 * face + 3};
+    f.face_edges[4 * face + 0] = {half(ce[0], t[0]), i2, half(ce[2], t[0])};
+    f.face_edges[4 * face + 1] = {half(ce[1], t[1]), i0, half(ce[0], t[1])};
+    f.face_edges[4 * face + 2] = {half(ce[2], t[2]), i1, half(ce[1], t[2])};
+    f.face_edges[4 * face + 3] = {i0, i1, i2};
+  }
+  f.valence.resize(f.num_vertices);
+  f.boundary.resize(f.num_vertices);
+  f.boundary_edges.assign(f.num_vertices, {-1, -1});
+  f.ring_edges.assign(f.num_vertices, {});
+  for (int v = 0; v < nc; ++v) {
+    f.valence[v] = c.valence[v];
+    f.boundary[v] = c.boundary[v];
+    if (c.boundary[v]) f.boundary_edges[v] = {half(c.boundary_edges[v][0], v), half(c.boundary_edges[v][1], v)};
+    for (int e : c.ring_edges[v]) f.ring_edges[v].push_back(half(e, v));
+  }
+  for (int e = 0; e < ne; ++e) {
+    const bool b = c.edges[e].boundary();
+    f.valence[nc + e] = b ? 4 : 6;
+    f.boundary[nc + e] = b;
+    if (b) f.boundary_edges[nc + e] = {2 * e, 2 * e + 1};
+  }
+}
+
 struct StencilBuilder {
-  const TriMesh& mesh;
-  const MeshTopology& topo;
+  const LevelTopo& topo;
   std::vector<std::vector<double>> weight_table;  // by valence
 
   const std::vector<double>& weights_for(int K) {
@@ -40,18 +155,21 @@ struct StencilBuilder {
     return weight_table[K];
   }
 
-  bool irregular_interior(int v) const { return !topo.is_boundary(v) && topo.valence(v) != 6; }
-
-  // The other boundary neighbour of boundary vertex v (not `not_this`).
-  int boundary_neighbour(int v, int not_this) const {
-    const auto& r = topo.rings[v];
-    return r.front() == not_this ? r.back() : r.front();
+  // The other boundary neighbour of boundary vertex v, across the boundary
+  // edge that is not `along`.
+  int boundary_neighbour(int v, int along) const {
+    const auto& be = topo.boundary_edges[v];
+    return topo.other_end(be[0] == along ? be[1] : be[0], v);
   }
 
   // Wing across edge x-apex, seen from triangle `face` = (x, y, apex); when
   // that edge is on the boundary the wing is the reflection x + apex - y.
   void add_wing(int x, int y, int apex, int face, double w, std::vector<Term>& terms) const {
-    const int e = topo.find_edge(x, apex);
+    int e = -1;
+    for (int k = 0; k < 3; ++k) {
+      const Edge& cand = topo.edges[topo.face_edges[face][k]];
+      if ((cand.v0 == x && cand.v1 == apex) || (cand.v0 == apex && cand.v1 == x)) e = topo.face_edges[face][k];
+    }
     const Edge& edge = topo.edges[e];
     if (edge.boundary()) {
       terms.push_back({x, w});
@@ -59,18 +177,17 @@ struct StencilBuilder {
       terms.push_back({y, -w});
       return;
     }
-    const int other = edge.f0 == face ? edge.f1 : edge.f0;
-    terms.push_back({topo.opposite_vertex(mesh, other, e), w});
+    terms.push_back({topo.opposite(edge.f0 == face ? edge.f1 : edge.f0, e), w});
   }
 
   void add_extraordinary(int center, int other_end, double scale, std::vector<Term>& terms) {
-    const auto& ring = topo.rings[center];
+    const auto& ring = topo.ring_edges[center];
     const int K = static_cast<int>(ring.size());
     const auto& s = weights_for(K);
     int j0 = 0;
-    while (ring[j0] != other_end) ++j0;
+    while (topo.other_end(ring[j0], center) != other_end) ++j0;
     // The weights are symmetric (s_j = s_{K-j}), so the ring's direction does not matter.
-    for (int j = 0; j < K; ++j) terms.push_back({ring[(j0 + j) % K], scale * s[j]});
+    for (int j = 0; j < K; ++j) terms.push_back({topo.other_end(ring[(j0 + j) % K], center), scale * s[j]});
     terms.push_back({center, scale * s[K]});
   }
 
@@ -81,19 +198,19 @@ struct StencilBuilder {
     if (edge.boundary()) {
       terms.push_back({a, 9.0 / 16});
       terms.push_back({b, 9.0 / 16});
-      terms.push_back({boundary_neighbour(a, b), -1.0 / 16});
-      terms.push_back({boundary_neighbour(b, a), -1.0 / 16});
+      terms.push_back({boundary_neighbour(a, e), -1.0 / 16});
+      terms.push_back({boundary_neighbour(b, e), -1.0 / 16});
       return;
     }
-    const bool irr_a = irregular_interior(a), irr_b = irregular_interior(b);
+    const bool irr_a = topo.irregular_interior(a), irr_b = topo.irregular_interior(b);
     if (irr_a || irr_b) {
       const double scale = (irr_a && irr_b) ? 0.5 : 1.0;
       if (irr_a) add_extraordinary(a, b, scale, terms);
       if (irr_b) add_extraordinary(b, a, scale, terms);
       return;
     }
-    const int c = topo.opposite_vertex(mesh, edge.f0, e);
-    const int d = topo.opposite_vertex(mesh, edge.f1, e);
+    const int c = topo.opposite(edge.f0, e);
+    const int d = topo.opposite(edge.f1, e);
     terms.push_back({a, 0.5});
     terms.push_back({b, 0.5});
     terms.push_back({c, 0.125});
@@ -118,32 +235,21 @@ void compact(std::vector<Term>& terms) {
   terms.resize(out);
 }
 
-Status build_one_level(const std::vector<Tri>& triangles, int num_vertices, ButterflyLevel& level) {
-  TriMesh mesh;  // connectivity only; build_topology takes #V from positions
-  mesh.positions.assign(num_vertices, Vec3::Zero());
-  mesh.triangles = triangles;
-  MeshTopology topo;
-  Status s = build_topology(mesh, topo);
-  if (!s.ok()) return s;
-  for (int v = 0; v < num_vertices; ++v)
-    if (!topo.rings[v].empty() && !topo.is_boundary(v) && topo.valence(v) < 3)
-      return Status::error(ErrorCode::InvalidInput,
-                           "vertex " + std::to_string(v) + " is interior with valence " +
-                               std::to_string(topo.valence(v)) + " (< 3): the mesh folds onto itself");
-
-  const int nc = num_vertices;
+void build_one_level(const LevelTopo& topo, ButterflyLevel& level) {
+  const int nc = topo.num_vertices;
   const int ne = static_cast<int>(topo.edges.size());
-  level = ButterflyLevel{};
+  const std::vector<Tri>& triangles = *topo.triangles;
   level.num_coarse_vertices = nc;
   level.num_fine_vertices = nc + ne;
-  level.coarse_triangles = triangles;
   level.edge_endpoints.resize(ne);
   level.stencil_offsets.resize(ne + 1);
   level.stencil_offsets[0] = 0;
+  level.stencil_indices.clear();
+  level.stencil_weights.clear();
   level.stencil_indices.reserve(static_cast<size_t>(ne) * 8);
   level.stencil_weights.reserve(static_cast<size_t>(ne) * 8);
 
-  StencilBuilder builder{mesh, topo, {}};
+  StencilBuilder builder{topo, {}};
   std::vector<Term> terms;
   for (int e = 0; e < ne; ++e) {
     level.edge_endpoints[e] = {topo.edges[e].v0, topo.edges[e].v1};
@@ -157,7 +263,8 @@ Status build_one_level(const std::vector<Tri>& triangles, int num_vertices, Butt
   }
 
   // 1 -> 4 split; face_edges[f][k] joins corners k and k+1, so the children
-  // keep the parent's counter-clockwise orientation.
+  // keep the parent's counter-clockwise orientation (topo_refined relies on
+  // this numbering).
   level.fine_triangles.resize(4 * triangles.size());
   for (size_t f = 0; f < triangles.size(); ++f) {
     const Tri& t = triangles[f];
@@ -168,7 +275,6 @@ Status build_one_level(const std::vector<Tri>& triangles, int num_vertices, Butt
     level.fine_triangles[4 * f + 2] = {t[2], m20, m12};
     level.fine_triangles[4 * f + 3] = {m01, m12, m20};
   }
-  return Status::success();
 }
 
 }  // namespace
@@ -186,13 +292,20 @@ Status build_butterfly_levels(const TriMesh& control, int levels, std::vector<Bu
                                                   " triangles exceed the limit of " +
                                                   std::to_string(max_fine_triangles) + " fine triangles");
   out.resize(levels);
+  if (levels == 0) return Status::success();
+  out[0].coarse_triangles = control.triangles;
+  LevelTopo topo, next;
+  Status s = topo_from_mesh(out[0].coarse_triangles, control.num_vertices(), topo);
+  if (!s.ok()) {
+    out.clear();
+    return with_context(s, "butterfly level 0");
+  }
   for (int l = 0; l < levels; ++l) {
-    const std::vector<Tri>& tris = l == 0 ? control.triangles : out[l - 1].fine_triangles;
-    const int nv = l == 0 ? control.num_vertices() : out[l - 1].num_fine_vertices;
-    Status s = build_one_level(tris, nv, out[l]);
-    if (!s.ok()) {
-      out.clear();
-      return with_context(s, "butterfly level " + std::to_string(l));
+    build_one_level(topo, out[l]);
+    if (l + 1 < levels) {
+      out[l + 1].coarse_triangles = out[l].fine_triangles;
+      topo_refined(topo, out[l + 1].coarse_triangles, next);
+      std::swap(topo, next);
     }
   }
   return Status::success();

@@ -314,3 +314,43 @@ TEST_CASE("butterfly: bad input gives clear errors", "[subdiv]") {
   CHECK(build_butterfly_levels(icosahedron(), 0, levels).ok());
   CHECK(levels.empty());
 }
+
+TEST_CASE("butterfly: finer levels derived from the coarse connectivity match a fresh build", "[subdiv]") {
+  // Levels >= 1 derive their connectivity from the coarser level without
+  // hashing; a level built from scratch on the same triangles (through
+  // MeshTopology) must give the same stencils edge by edge.
+  for (const TriMesh& m : {mirrored_irregular_grid(3, 4), icosphere(1), planar_fan(5)}) {
+    std::vector<ButterflyLevel> derived;
+    REQUIRE(build_butterfly_levels(m, 3, derived).ok());
+    for (int l = 1; l < 3; ++l) {
+      TriMesh level_mesh;
+      level_mesh.positions.assign(derived[l].num_coarse_vertices, Vec3::Zero());
+      level_mesh.triangles = derived[l].coarse_triangles;
+      std::vector<ButterflyLevel> fresh;
+      REQUIRE(build_butterfly_levels(level_mesh, 1, fresh).ok());
+      const ButterflyLevel& a = derived[l];
+      const ButterflyLevel& b = fresh[0];
+      REQUIRE(a.num_fine_vertices == b.num_fine_vertices);
+      std::map<std::array<int, 2>, std::map<int, double>> rows;
+      for (int k = 0; k < b.num_new_vertices(); ++k)
+        for (int i = b.stencil_offsets[k]; i < b.stencil_offsets[k + 1]; ++i)
+          rows[b.edge_endpoints[k]][b.stencil_indices[i]] = b.stencil_weights[i];
+      REQUIRE(static_cast<int>(rows.size()) == a.num_new_vertices());
+      int mismatches = 0;
+      for (int k = 0; k < a.num_new_vertices(); ++k) {
+        const auto it = rows.find(a.edge_endpoints[k]);
+        REQUIRE(it != rows.end());
+        if (static_cast<int>(it->second.size()) != a.stencil_offsets[k + 1] - a.stencil_offsets[k]) {
+          ++mismatches;
+          continue;
+        }
+        for (int i = a.stencil_offsets[k]; i < a.stencil_offsets[k + 1]; ++i) {
+          const auto w = it->second.find(a.stencil_indices[i]);
+          if (w == it->second.end() || std::abs(w->second - a.stencil_weights[i]) > 1e-15) ++mismatches;
+        }
+      }
+      INFO("level " << l);
+      CHECK(mismatches == 0);
+    }
+  }
+}
