@@ -1,7 +1,11 @@
 #include "multires/multires.h"
 
+#include "io/io.h"
+#include "mesh/geometry.h"
 #include "mesh/topology.h"
+#include "raycast/bvh.h"
 #include "../subdiv/shapes.h"
+#include "test_data.h"
 
 #include <catch2/catch.hpp>
 
@@ -271,4 +275,61 @@ TEST_CASE("multires: bad input gives clear errors and changes nothing", "[multir
   CHECK(s.code == ErrorCode::Cancelled);
   for (const auto& d : mr.displacements)
     for (double x : d) CHECK(x == 0.0);
+}
+
+TEST_CASE("multires: displacements pull a smoothed real scan back onto the scan (fran_cut)", "[multires][shared]") {
+  LK_REQUIRE_SHARED("head_scans/fran_cyberware/fran_cut.vtk");
+  TriMesh fran;
+  REQUIRE(load_mesh_file(shared_data_dir() + "/head_scans/fran_cyberware/fran_cut.vtk", fran).ok());
+  MeshTopology topo;
+  REQUIRE(build_topology(fran, topo).ok());
+  // Control mesh: the scan with its detail smoothed away (uniform Laplacian,
+  // boundary kept), so the displacements have real detail to recover.
+  TriMesh control = fran;
+  for (int it = 0; it < 10; ++it) {
+    std::vector<Vec3> next = control.positions;
+    for (int v = 0; v < control.num_vertices(); ++v) {
+      if (topo.is_boundary(v) || topo.rings[v].empty()) continue;
+      Vec3 mean = Vec3::Zero();
+      for (int n : topo.rings[v]) mean += control.positions[n];
+      next[v] = 0.5 * control.positions[v] + 0.5 * mean / static_cast<double>(topo.rings[v].size());
+    }
+    control.positions = next;
+  }
+  // The scan as a point cloud: its vertices plus points on its triangles.
+  PointCloud cloud;
+  cloud.positions = fran.positions;
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> u01(0, 1);
+  for (const Tri& t : fran.triangles)
+    for (int i = 0; i < 12; ++i) {
+      double a = u01(rng), b = u01(rng);
+      if (a + b > 1) a = 1 - a, b = 1 - b;
+      const Vec3& p0 = fran.positions[t[0]];
+      cloud.positions.push_back(p0 + a * (fran.positions[t[1]] - p0) + b * (fran.positions[t[2]] - p0));
+    }
+  MeshBvh bvh;
+  REQUIRE(build_bvh(fran, bvh).ok());
+  MultiresMesh mr;
+  REQUIRE(build_multires(control, 2, mr).ok());
+  auto mean_distance = [&](const std::vector<Vec3>& pts) {
+    double sum = 0;
+    for (const Vec3& p : pts) sum += closest_point(bvh, p).distance;
+    return sum / pts.size();
+  };
+  const double diag = bounding_box(fran.positions).diagonal();
+  const double before = mean_distance(mr.state.displaced[2]);
+  DisplacementStats stats;
+  REQUIRE(measure_displacements(cloud, DisplacementOptions{}, mr, &stats).ok());
+  const double after0 = mean_distance(mr.state.displaced[0]);
+  const double after2 = mean_distance(mr.state.displaced[2]);
+  INFO("mean distance to the scan, % of bbox diagonal: before " << 100 * before / diag << ", after: level 0 "
+                                                                << 100 * after0 / diag << ", level 2 "
+                                                                << 100 * after2 / diag);
+  CHECK(stats.measured[0] > 0.9 * stats.candidates[0]);
+  CHECK(after0 < 0.2 * before);
+  CHECK(after2 < 0.2 * before);
+  CHECK(after2 < 0.001 * diag);
+  WARN("fran_cut: mean distance to the scan " << 100 * before / diag << "% -> " << 100 * after2 / diag
+                                              << "% of the bbox diagonal (level 2)");
 }

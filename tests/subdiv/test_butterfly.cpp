@@ -1,7 +1,9 @@
 #include "subdiv/butterfly.h"
 
+#include "io/io.h"
 #include "mesh/topology.h"
 #include "shapes.h"
+#include "test_data.h"
 
 #include <catch2/catch.hpp>
 
@@ -353,4 +355,33 @@ TEST_CASE("butterfly: finer levels derived from the coarse connectivity match a 
       CHECK(mismatches == 0);
     }
   }
+}
+
+TEST_CASE("butterfly: real Cyberware scan (fran_cut) refines into a valid interpolating mesh", "[subdiv][shared]") {
+  LK_REQUIRE_SHARED("head_scans/fran_cyberware/fran_cut.vtk");
+  TriMesh fran;
+  REQUIRE(load_mesh_file(shared_data_dir() + "/head_scans/fran_cyberware/fran_cut.vtk", fran).ok());
+  std::vector<ButterflyLevel> levels;
+  REQUIRE(build_butterfly_levels(fran, 2, levels).ok());
+  std::vector<std::vector<Vec3>> P;
+  REQUIRE(apply_all(levels, fran.positions, P).ok());
+  for (int v = 0; v < fran.num_vertices(); ++v) CHECK(P[2][v] == fran.positions[v]);
+  TriMesh fine;
+  fine.positions = P[2];
+  fine.triangles = levels[1].fine_triangles;
+  MeshTopology t;
+  REQUIRE(build_topology(fine, t).ok());
+  for (const Vec3& p : P[2]) REQUIRE(p.allFinite());
+  // A smooth interpolant of a smooth scan stays close to its triangles: new
+  // vertices move off the edge midpoints by a small fraction of the edge length.
+  const ButterflyLevel& L0 = levels[0];
+  double worst = 0;
+  for (int k = 0; k < L0.num_new_vertices(); ++k) {
+    const auto [a, b] = L0.edge_endpoints[k];
+    const double len = (fran.positions[a] - fran.positions[b]).norm();
+    const Vec3 mid = 0.5 * (fran.positions[a] + fran.positions[b]);
+    worst = std::max(worst, (P[1][L0.num_coarse_vertices + k] - mid).norm() / len);
+  }
+  INFO("largest offset from the edge midpoint: " << worst << " edge lengths");
+  CHECK(worst < 0.5);
 }
