@@ -266,3 +266,39 @@ TEST_CASE("align puts the generic on a virtual structured-light scan of another 
   CHECK(total_xor(r.xor_after) < 0.7 * total_xor(r.xor_before));
   check_monotone(r);
 }
+
+TEST_CASE("align reports progress in order and survives absurd coordinates", "[align]") {
+  const GenericHead generic = test::synthetic_head();
+  const PointCloud cloud = transformed(test::sample_surface(generic.mesh, 5000, 2), random_affine(4, 5, 0.1, 0.1, 1.0));
+  AlignOptions o;
+  o.resolution = 64;
+  o.coarse_resolutions = {32};
+  std::vector<double> fractions;
+  lk::ProgressFn record = [&](const char* stage, double f) {
+    CHECK(std::string(stage) == "align");
+    fractions.push_back(f);
+    return true;
+  };
+  AlignResult r;
+  REQUIRE(align_initial(generic.mesh, generic.annotations, cloud, o, r, record).ok());
+  REQUIRE(!fractions.empty());
+  for (size_t i = 0; i < fractions.size(); ++i) {
+    CHECK(fractions[i] >= 0.0);
+    CHECK(fractions[i] <= 1.0);
+    if (i > 0) CHECK(fractions[i] >= fractions[i - 1]);
+  }
+  CHECK(fractions.back() == 1.0);
+  CHECK(r.levels.size() == 2);
+
+  // Coordinates near the limits of double: an error or a result, never a crash.
+  PointCloud huge = cloud;
+  for (Vec3& p : huge.positions) p *= 1e300;
+  const Status st = align_initial(generic.mesh, generic.annotations, huge, o, r);
+  INFO(st.message);
+  CHECK((st.ok() || !st.message.empty()));
+
+  // A generic head whose look and up are parallel cannot be faced.
+  HeadAnnotations bad = generic.annotations;
+  bad.up = bad.look;
+  CHECK(align_initial(generic.mesh, bad, cloud, o, r).code == ErrorCode::InvalidInput);
+}
