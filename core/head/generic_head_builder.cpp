@@ -45,35 +45,39 @@ double smooth_max(double a, double b, double k) { return -smooth_min(-a, -b, k);
 struct HeadShape {
   // Left eyeball centre (the right one is mirrored) and the sphere the lids
   // follow; the lid sphere is larger than the eyeball so lids cover it.
-  Vec3 eye_center{0.032, 0.022, 0.060};
+  Vec3 eye_center{0.032, 0.025, 0.068};
   double lid_radius = 0.0140;
-  double slit_y = -0.0535;  // height of the closed lip line
-  double slit_z = 0.095;    // depth of the lip line at the midline (approx.)
+  double slit_y = -0.0530;  // height of the closed lip line
 
   double distance(const Vec3& p0) const {
     const Vec3 p(std::abs(p0.x()), p0.y(), p0.z());
-    double d = sd_ellipsoid(p, {0, 0.030, -0.012}, {0.073, 0.105, 0.098});        // cranium
-    d = smooth_min(d, sd_ellipsoid(p, {0, -0.004, 0.026}, {0.060, 0.060, 0.064}), 0.02);   // midface
-    d = smooth_min(d, sd_ellipsoid(p, {0, -0.056, 0.010}, {0.056, 0.048, 0.070}), 0.025);  // jaw
-    d = smooth_min(d, sd_ellipsoid(p, {0.036, -0.075, -0.005}, {0.018, 0.022, 0.030}), 0.02);  // jaw angle
-    d = smooth_min(d, sd_ellipsoid(p, {0, -0.090, 0.066}, {0.021, 0.016, 0.016}), 0.014);  // chin
-    d = smooth_min(d, sd_ellipsoid(p, {0.048, 0.004, 0.050}, {0.020, 0.013, 0.024}), 0.016);  // cheekbone
-    d = smooth_min(d, sd_ellipsoid(p, {0, 0.042, 0.076}, {0.056, 0.011, 0.017}), 0.016);   // brow ridge
+    double d = sd_ellipsoid(p, {0, 0.032, -0.014}, {0.074, 0.103, 0.097});        // cranium
+    d = smooth_min(d, sd_ellipsoid(p, {0, 0.070, -0.030}, {0.070, 0.065, 0.080}), 0.03);   // parietal
+    d = smooth_min(d, sd_ellipsoid(p, {0, 0.060, 0.030}, {0.055, 0.050, 0.058}), 0.02);    // forehead
+    d = smooth_min(d, sd_ellipsoid(p, {0, -0.005, 0.035}, {0.058, 0.055, 0.063}), 0.02);   // midface
+    d = smooth_min(d, sd_ellipsoid(p, {0, -0.058, 0.016}, {0.058, 0.047, 0.075}), 0.025);  // jaw
+    d = smooth_min(d, sd_ellipsoid(p, {0.048, -0.068, -0.010}, {0.016, 0.022, 0.030}), 0.02);  // jaw angle
+    d = smooth_min(d, sd_ellipsoid(p, {0, -0.088, 0.076}, {0.024, 0.016, 0.018}), 0.016);  // chin
+    d = smooth_min(d, sd_ellipsoid(p, {0.048, 0.004, 0.052}, {0.024, 0.020, 0.030}), 0.03);  // cheekbone
+    d = smooth_min(d, sd_ellipsoid(p, {0.040, -0.030, 0.045}, {0.024, 0.030, 0.032}), 0.03);  // cheek
+    d = smooth_min(d, sd_ellipsoid(p, {0, 0.045, 0.079}, {0.048, 0.012, 0.017}), 0.02);   // brow ridge
     // Eye socket: hollow under the brow, then the lids over the eyeball.
-    d = smooth_max(d, -sd_ellipsoid(p, {0.033, 0.019, 0.082}, {0.021, 0.014, 0.018}), 0.008);
+    d = smooth_max(d, -sd_ellipsoid(p, {0.033, 0.023, 0.090}, {0.020, 0.013, 0.018}), 0.012);
     d = smooth_min(d, sd_sphere(p, eye_center, lid_radius), 0.004);
     // Nose: bridge, tip, wings (alae).
-    double nose = sd_tapered_capsule(p, {0, 0.030, 0.081}, {0, -0.011, 0.104}, 0.0050, 0.0070);
-    nose = smooth_min(nose, sd_sphere(p, {0, -0.014, 0.103}, 0.0090), 0.008);
-    nose = smooth_min(nose, sd_ellipsoid(p, {0.0135, -0.020, 0.091}, {0.0085, 0.0075, 0.0095}), 0.006);
+    double nose = sd_tapered_capsule(p, {0, 0.032, 0.090}, {0, -0.010, 0.114}, 0.0055, 0.0075);
+    nose = smooth_min(nose, sd_sphere(p, {0, -0.012, 0.112}, 0.0090), 0.008);
+    nose = smooth_min(nose, sd_ellipsoid(p, {0.0135, -0.019, 0.100}, {0.0085, 0.0075, 0.0095}), 0.006);
     d = smooth_min(d, nose, 0.007);
     // Lips: two volumes meeting in a crease (the lip line).
-    const double upper = sd_ellipsoid(p, {0, slit_y + 0.0065, 0.085}, {0.025, 0.0075, 0.0105});
-    const double lower = sd_ellipsoid(p, {0, slit_y - 0.0075, 0.082}, {0.022, 0.0085, 0.0105});
+    const double upper = sd_ellipsoid(p, {0, slit_y + 0.0060, 0.091}, {0.024, 0.0070, 0.0100});
+    const double lower = sd_ellipsoid(p, {0, slit_y - 0.0070, 0.088}, {0.021, 0.0080, 0.0100});
     d = smooth_min(d, std::min(upper, lower), 0.006);
     // Neck: an elliptic cylinder below the head.
-    const double nx = p.x() / 0.051, nz = (p.z() + 0.016) / 0.056;
-    const double neck = std::max((std::sqrt(nx * nx + nz * nz) - 1.0) * 0.051, p.y() + 0.03);
+    // Its axis leans forward going down, as a neck does.
+    const double axis_z = -0.014 - 0.2 * (p.y() + 0.08);
+    const double nx = p.x() / 0.057, nz = (p.z() - axis_z) / 0.060;
+    const double neck = std::max((std::sqrt(nx * nx + nz * nz) - 1.0) * 0.057, p.y() + 0.03);
     d = smooth_min(d, neck, 0.03);
     return d;
   }
@@ -90,23 +94,24 @@ struct HeadShape {
     return g;
   }
 
-  // First point where the ray from an inside origin leaves the head.
+  // Where the ray from an inside origin leaves the head for the last time,
+  // i.e. the surface seen from outside along the ray. (The first exit would
+  // miss overhangs such as the nose's tip, which rays reach after leaving
+  // the face below it.)
   Vec3 cast(const Vec3& origin, const Vec3& dir) const {
     const Vec3 d = dir.normalized();
-    const double step = 0.0004;
-    double t0 = 0;
-    for (double t = step; t < 0.4; t += step) {
-      if (distance(origin + t * d) > 0) {
-        double lo = t0, hi = t;
+    const double step = 0.0004, far = 0.3;
+    for (double t = far; t > 0; t -= step) {
+      if (distance(origin + t * d) < 0) {
+        double lo = t, hi = t + step;  // lo inside, hi outside
         for (int k = 0; k < 40; ++k) {
           const double mid = 0.5 * (lo + hi);
           (distance(origin + mid * d) > 0 ? hi : lo) = mid;
         }
         return origin + 0.5 * (lo + hi) * d;
       }
-      t0 = t;
     }
-    return origin + 0.4 * d;
+    return origin;
   }
 
   // Newton steps onto the zero level set.
@@ -162,6 +167,14 @@ int wrap(int c) { return ((c % kColumns) + kColumns) % kColumns; }
 Vec3 direction(double azimuth, double elevation) {
   return {std::cos(elevation) * std::sin(azimuth), std::sin(elevation),
           std::cos(elevation) * std::cos(azimuth)};
+}
+
+// Rectangular loops of the grid mapped onto ellipses would put each corner
+// vertex on the ellipse between its two neighbours, leaving a quad with a
+// straight angle; pushing corners out a little keeps those quads convex.
+double corner_bulge(double x, double y) {
+  const double a = std::atan2(std::abs(y), std::abs(x));  // 45 deg at a corner of the square
+  return 1.0 + 0.16 * std::pow(std::sin(2 * a), 4);
 }
 
 enum class Part { Grid, Cap, LowerLipLine, EyePocket, MouthBag, Ear };
@@ -288,8 +301,8 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
   auto cast_towards = [&](const Vec3& target) { return shape.cast(kRayCenter, target - kRayCenter); };
 
   // --- 2. eyes: concentric ellipse around a 4 x 1 opening on the lid sphere --
-  const double lid_half_angle = radians(64);  // half the opening's width, seen from the eyeball
-  const double upper_lid = radians(21), lower_lid = radians(15), canthus = radians(3.5);
+  const double lid_half_angle = radians(68);  // half the opening's width, seen from the eyeball
+  const double upper_lid = radians(25), lower_lid = radians(17), canthus = radians(3.5);
   std::map<int, std::vector<int>> rim_top, rim_bottom;  // by side, medial -> lateral
   for (int side : {1, -1}) {
     const Vec3 eye(side * shape.eye_center.x(), shape.eye_center.y(), shape.eye_center.z());
@@ -303,8 +316,9 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
         const double x = (c - 0.5 * (kEyeCol0 + kEyeCol1)) / (0.5 * (kEyeCol1 - kEyeCol0) + 1);
         const double y = (r - (kRimLowRow + 0.5)) / 1.5;
         const double a = std::atan2(y, x);
-        const double dy = std::sin(a) > 0 ? 0.0115 : 0.0100;
-        const Vec3 target = opening_center + Vec3(side * 0.0165 * std::cos(a), dy * std::sin(a), 0);
+        const double dy = std::sin(a) > 0 ? 0.0120 : 0.0105;
+        const double f = corner_bulge(x, y);
+        const Vec3 target = opening_center + f * Vec3(side * 0.0170 * std::cos(a), dy * std::sin(a), 0);
         b.positions[g(r, side * c)] = cast_towards(target);
       }
     // The opening's rim lies on the lid sphere.
@@ -325,7 +339,7 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
 
   // --- 3. mouth: lip line and two concentric ellipses -----------------------
   const double mouth_half_width = 0.0245;
-  const Vec3 mouth_front(0, shape.slit_y, 0.088);  // near the lips, so rays land close to x, y
+  const Vec3 mouth_front(0, shape.slit_y, 0.098);  // near the lips, so rays land close to x, y
   for (int ring = 1; ring <= 2; ++ring) {
     const int hw = kMouthHalfWidth + ring;
     const double ax = mouth_half_width + (ring == 1 ? 0.0045 : 0.0105);
@@ -333,9 +347,11 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
     for (int r = kSlitRow - ring; r <= kSlitRow + ring; ++r)
       for (int c = -hw; c <= hw; ++c) {
         if (r != kSlitRow - ring && r != kSlitRow + ring && std::abs(c) != hw) continue;
-        const double a = std::atan2(double(r - kSlitRow) / ring, double(c) / hw);
+        const double x = double(c) / hw, y = double(r - kSlitRow) / ring;
+        const double a = std::atan2(y, x);
         const double dy = std::sin(a) * (std::sin(a) > 0 ? up : down);
-        b.positions[g(r, c)] = cast_towards(mouth_front + Vec3(ax * std::cos(a), dy, 0));
+        const double f = corner_bulge(x, y);
+        b.positions[g(r, c)] = cast_towards(mouth_front + f * Vec3(ax * std::cos(a), dy, 0));
       }
   }
   std::vector<int> upper_line, lower_line;  // corner .. corner, from -x to +x
@@ -558,20 +574,35 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
     // The helix (outer rim) outline, by the angle of each loop vertex around the root.
     auto helix = [&](double w, double out_extra, double scale) -> Vec3 {
       const double cw = std::cos(w), sw = std::sin(w);
-      const double bk = 0.008 + scale * 0.0165 * cw;
-      const double u = 0.003 + scale * (sw > 0 ? 0.032 : 0.030) * sw;
-      const double outward = 0.006 + 0.014 * (0.5 + 0.5 * cw) + 0.004 * std::max(0.0, sw) + out_extra;
+      const double lobe = std::max(0.0, -sw);  // the lobe hangs a little behind the root
+      const double bk = 0.007 + scale * 0.017 * cw + 0.005 * lobe * lobe;
+      const double u = -0.002 + scale * (sw > 0 ? 0.034 : 0.031) * sw;
+      const double outward = 0.006 + 0.012 * (0.5 + 0.5 * cw) + 0.004 * std::max(0.0, sw) + 0.003 * lobe + out_extra;
       return at(bk, u, outward);
     };
     std::vector<Vec3> ring_a, ring_b, ring_c;
-    std::vector<double> angle;
-    for (int v : loop) {
-      const Vec3 d = b.positions[v] - root;
-      const double w = std::atan2(d.dot(up) / half_up, d.dot(back) / half_back);
-      angle.push_back(w);
+    // The helix outline is sampled at evenly spaced angles (the root loop's
+    // own angles bunch up at its short top and bottom edges, which would
+    // make a pointed ear), starting from the root's vertex straight above its centre.
+    const int n_loop = static_cast<int>(loop.size());
+    std::vector<double> root_angle(n_loop);
+    int top_k = 0;
+    for (int k = 0; k < n_loop; ++k) {
+      const Vec3 d = b.positions[loop[k]] - root;
+      root_angle[k] = std::atan2(d.dot(up) / half_up, d.dot(back) / half_back);
+      if (std::cos(root_angle[k] - kPi / 2) > std::cos(root_angle[top_k] - kPi / 2)) top_k = k;
+    }
+    const double turn = std::sin(root_angle[(top_k + 1) % n_loop] - root_angle[top_k]) > 0 ? 1 : -1;
+    std::vector<double> angle(n_loop);
+    for (int k = 0; k < n_loop; ++k) {
+      const Vec3 d = b.positions[loop[k]] - root;
+      double even = kPi / 2 + turn * 2 * kPi * ((k - top_k + n_loop) % n_loop) / n_loop;
+      even = root_angle[k] + std::remainder(even - root_angle[k], 2 * kPi);
+      const double w = 0.5 * (even + root_angle[k]);  // halfway, so the walls do not twist
+      angle[k] = w;
       ring_a.push_back(at(1.04 * d.dot(back), 1.04 * d.dot(up), d.dot(n) + 0.0035));
       ring_b.push_back(helix(w, 0, 1.0));
-      ring_c.push_back(helix(w, 0.0025, 0.80));
+      ring_c.push_back(helix(w, 0.0040, 0.82));
     }
     VertexInfo vi;
     vi.part = Part::Ear;
@@ -586,7 +617,7 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
       if (to_cap.count(v)) continue;
       const Vec3 d = b.positions[v] - root;
       const double u = d.dot(up) / half_up;  // -1 .. 1
-      b.positions[v] = at(0.009, 0.003 + 0.021 * u, 0.008 + 0.006 * u * u + 0.003 * std::max(0.0, u));
+      b.positions[v] = at(0.008, -0.001 + 0.022 * u, 0.006 + 0.005 * u * u + 0.004 * std::max(0.0, u));
       b.info[v].part = Part::Ear;
       b.info[v].side = side;
       ear_vertices[side].push_back(v);
@@ -693,7 +724,7 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
     }
   }
 
-  // --- 11. triangles: split quads along their shorter diagonal --------------
+  // --- 11. triangles: split quads along their better diagonal ---------------
   TriMesh& mesh = out.mesh;
   mesh = TriMesh{};
   mesh.positions = b.positions;
@@ -702,8 +733,16 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
       mesh.triangles.push_back({poly[0], poly[1], poly[2]});
       continue;
     }
-    const double d02 = (b.positions[poly[0]] - b.positions[poly[2]]).squaredNorm();
-    const double d13 = (b.positions[poly[1]] - b.positions[poly[3]]).squaredNorm();
+    // Split along the diagonal that gives the larger smallest angle.
+    auto smallest_cos = [&](int a, int c, int d) {  // cosine of the smallest angle
+      const Vec3 &pa = b.positions[a], &pc = b.positions[c], &pd = b.positions[d];
+      auto cos_at = [](const Vec3& o, const Vec3& u, const Vec3& v) {
+        return (u - o).normalized().dot((v - o).normalized());
+      };
+      return std::max({cos_at(pa, pc, pd), cos_at(pc, pd, pa), cos_at(pd, pa, pc)});
+    };
+    const double d02 = std::max(smallest_cos(poly[0], poly[1], poly[2]), smallest_cos(poly[0], poly[2], poly[3]));
+    const double d13 = std::max(smallest_cos(poly[0], poly[1], poly[3]), smallest_cos(poly[1], poly[2], poly[3]));
     if (d02 <= d13) {
       mesh.triangles.push_back({poly[0], poly[1], poly[2]});
       mesh.triangles.push_back({poly[0], poly[2], poly[3]});

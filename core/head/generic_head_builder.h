@@ -17,7 +17,7 @@
 //     the mouth is a slit (upper and lower lip vertices separate) continued
 //     as a closed mouth bag. Ears are a 2 x 6 grid patch extruded into a flap
 //     with a rim and a real concavity behind it.
-//  4. Quads are split along their shorter diagonal; the result is made exactly
+//  4. Quads are split along their better diagonal; the result is made exactly
 //     mirror-symmetric (x -> -x) and annotated.
 //
 // Output shapes: mesh.positions #V by 3 (metres; +z look, +y up, +x = the
