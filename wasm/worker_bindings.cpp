@@ -13,6 +13,8 @@
 // them to the main thread while this heap is reused:
 //   positions Float32Array  #V*3      normals Float32Array #V*3 (or length 0)
 //   colors    Float32Array  #V*3 or 0 indices Uint32Array  #F*3 (0 for points)
+//
+// Jobs: parse_geometry (a dropped scan), check_image (a dropped photo).
 #include "common/progress.h"
 #include "io/io.h"
 #include "mesh/geometry.h"
@@ -114,8 +116,29 @@ val parse_geometry(const std::string& name, std::uintptr_t data, std::size_t siz
   return r;
 }
 
+// Decodes a dropped photo (PNG/JPEG/...) to check it is a whole, usable image
+// and reports its size; the texturing stage decodes it again when it runs, so
+// the pixels are not kept here.
+val check_image(const std::string& name, std::uintptr_t data, std::size_t size) {
+  if (data == 0 && size != 0)
+    return error_result(lk::Status::error(lk::ErrorCode::Internal, name + ": no input buffer"));
+  lk::Image image;
+  lk::Status status = lk::read_image(reinterpret_cast<const std::uint8_t*>(data), size, image);
+  if (!status.ok()) return error_result(lk::with_context(status, name));
+  val r = val::object();
+  r.set("ok", true);
+  r.set("code", std::string("Ok"));
+  r.set("message", std::string());
+  r.set("name", name);
+  r.set("width", image.width);
+  r.set("height", image.height);
+  r.set("channels", image.channels);
+  return r;
+}
+
 }  // namespace
 
 EMSCRIPTEN_BINDINGS(likeness_worker) {
   emscripten::function("parse_geometry", &parse_geometry);
+  emscripten::function("check_image", &check_image);
 }

@@ -44,6 +44,7 @@
     viewer: null,
     worker: null,
     model: null,           // {name, kind, vertexCount, triangleCount} shown now
+    photos: [],            // [{name, file, width, height}] checked photos, for texturing
     lastError: null,
   };
 
@@ -229,13 +230,48 @@
     clearError();
     const photos = files.filter((f) => PHOTO_EXTENSIONS.includes(extension(f.name)));
     const scans = files.filter((f) => !photos.includes(f));
-    for (const p of photos) listFile(p, 'photo, kept for the Texture stage (coming)');
-    if (!scans.length) {
-      setStatus(photos.length + ' photo(s) received. Drop a head scan (PLY, OBJ or XYZ) to start.');
-      return;
-    }
     for (const extra of scans.slice(1)) listFile(extra, 'ignored: one scan at a time', 'ignored');
-    await loadScan(scans[0]);
+    if (scans.length) await loadScan(scans[0]);
+    if (photos.length && document.body.dataset.state !== 'error') await checkPhotos(photos, !scans.length);
+  }
+
+  // Photos are decoded once in the worker to catch broken files now rather
+  // than at the Texture stage; the File objects are kept for that stage.
+  async function checkPhotos(photos, alone) {
+    const before = document.body.dataset.state;
+    setState('working');
+    const failures = [];
+    for (const file of photos) {
+      const meta = listFile(file, 'checking…');
+      if (file.size > MAX_SCAN_BYTES) {
+        meta.textContent = formatBytes(file.size) + ' · too large';
+        failures.push(file.name + ' is ' + formatBytes(file.size) + '; photos up to ' + formatBytes(MAX_SCAN_BYTES) + ' are accepted.');
+        continue;
+      }
+      let result;
+      try {
+        const buffer = await file.arrayBuffer();
+        result = await runJob({ type: 'image', name: file.name, buffer }, [buffer]);
+      } catch (e) {
+        result = { ok: false, message: file.name + ': ' + (e && e.message ? e.message : e) };
+      }
+      if (!result.ok) {
+        meta.textContent = formatBytes(file.size) + ' · not an image';
+        failures.push(result.message);
+        continue;
+      }
+      meta.textContent = formatBytes(file.size) + ' · ' + result.width + '×' + result.height + ' photo';
+      meta.parentElement.title = file.name + ': ' + result.width + '×' + result.height +
+                                 ' photo, kept for the Texture stage (coming)';
+      app.photos.push({ name: file.name, file, width: result.width, height: result.height });
+    }
+    setState(before === 'loading' ? 'ready' : before);
+    if (failures.length) {
+      showError(failures.join(' '));
+    } else if (alone) {
+      setStatus(app.photos.length + ' photo(s) kept for the Texture stage (coming). ' +
+                (app.model ? '' : 'Drop a head scan (PLY, OBJ or XYZ) to start.'));
+    }
   }
 
   const SCAN_EXTENSIONS = ['ply', 'obj', 'xyz', 'vtk'];

@@ -47,6 +47,8 @@ const JOBS = {
   // {name, buffer}: a dropped PLY / OBJ / XYZ / VTK file -> geometry arrays.
   parse: (msg, progress) =>
     withHeapBytes(msg.buffer, (ptr, size) => core.parse_geometry(msg.name, ptr, size, progress)),
+  // {name, buffer}: a dropped photo -> {width, height, channels} once decoded.
+  image: (msg) => withHeapBytes(msg.buffer, (ptr, size) => core.check_image(msg.name, ptr, size)),
 };
 
 function transferables(result) {

@@ -15,7 +15,8 @@
 //     display limit) lead to "error" with a visible message naming the file,
 //     the previous model stays on screen, a worker dying mid-job is replaced,
 //     and a good file (an OBJ cube) loads afterwards; point clouds over the
-//     display limit are thinned, not refused;
+//     display limit are thinned, not refused; a PNG photo is decoded and kept,
+//     a broken JPEG is an error naming it;
 //   - no console errors, no uncaught exceptions, and every network request
 //     goes to the page's own origin.
 // Screenshots go to $LK_SCREENSHOT_DIR when set (web_*.png).
@@ -165,6 +166,28 @@ function cubeObj() {
   const v = ['v -1 -1 -1', 'v 1 -1 -1', 'v 1 1 -1', 'v -1 1 -1', 'v -1 -1 1', 'v 1 -1 1', 'v 1 1 1', 'v -1 1 1'];
   const f = ['f 1 4 3 2', 'f 5 6 7 8', 'f 1 2 6 5', 'f 2 3 7 6', 'f 3 4 8 7', 'f 4 1 5 8'];
   return Buffer.from(['# unit cube, quads', ...v, ...f].join('\n') + '\n');
+}
+
+// A width x height RGB PNG (filter 0 rows), made here so the test needs no files.
+function makePng(width, height) {
+  const table = Array.from({ length: 256 }, (_, n) => {
+    let c = n;
+    for (let k = 0; k < 8; k++) c = c & 1 ? 0xedb88320 ^ (c >>> 1) : c >>> 1;
+    return c >>> 0;
+  });
+  const crc = (buf) => { let c = 0xffffffff; for (const b of buf) c = table[(c ^ b) & 255] ^ (c >>> 8); return (c ^ 0xffffffff) >>> 0; };
+  const chunk = (type, data) => {
+    const len = Buffer.alloc(4); len.writeUInt32BE(data.length);
+    const td = Buffer.concat([Buffer.from(type, 'ascii'), data]);
+    const c = Buffer.alloc(4); c.writeUInt32BE(crc(td));
+    return Buffer.concat([len, td, c]);
+  };
+  const ihdr = Buffer.alloc(13);
+  ihdr.writeUInt32BE(width, 0); ihdr.writeUInt32BE(height, 4); ihdr[8] = 8; ihdr[9] = 2;
+  const raw = Buffer.alloc(height * (1 + 3 * width));
+  for (let y = 0; y < height; y++) for (let x = 0; x < width; x++) raw[y * (1 + 3 * width) + 1 + 3 * x] = (x * 40) & 255;
+  return Buffer.concat([Buffer.from([137, 80, 78, 71, 13, 10, 26, 10]), chunk('IHDR', ihdr),
+                        chunk('IDAT', zlib.deflateSync(raw)), chunk('IEND', Buffer.alloc(0))]);
 }
 
 function truncatedPly() {
@@ -347,6 +370,18 @@ async function main() {
     check('the cube replaces the points', analyse(cube).greenFraction < 0.001 && analyse(cube).fgFraction > 0.03,
           `${(100 * analyse(cube).fgFraction).toFixed(1)}% foreground`);
     await shot(page, 'web_mesh.png');
+
+    // Photos: decoded once in the worker, listed with their size; a broken
+    // one is an error naming it.
+    await page.setInputFiles('#file-input', [{ name: 'front.png', mimeType: 'image/png', buffer: makePng(6, 4) }]);
+    await page.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: JOB_TIMEOUT_MS });
+    const photoRow = await page.textContent('#file-list li:first-child');
+    const photos = await page.evaluate(() => window.likeness.photos.map((p) => `${p.name} ${p.width}x${p.height}`));
+    check('a PNG photo is checked and kept', /6×4 photo/.test(photoRow) && photos.join() === 'front.png 6x4' &&
+          (await state(page)) === 'done', `"${photoRow}"; kept ${JSON.stringify(photos)}`);
+    const sPhoto = await setFile(page, 'side.jpg', Buffer.concat([Buffer.from([0xff, 0xd8, 0xff, 0xe0]), Buffer.alloc(64, 7)]), 'image/jpeg');
+    const msgPhoto = await bannerText(page);
+    check('a broken photo leads to "error" naming it', sPhoto === 'error' && msgPhoto.includes('side.jpg'), `"${msgPhoto}"`);
 
     // 6. The built-in sample, when scripts/demo has put it beside the page
     // (clicking it otherwise would log the 404 as a console error).

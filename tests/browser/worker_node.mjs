@@ -2,8 +2,8 @@
 // embind calls the page makes, without a browser. Checks
 //   - exact counts and bounding boxes on small generated files (PLY point
 //     cloud, OBJ quads fan-triangulated, XYZ with normals);
-//   - the real scans in ../shared/data (counts from SOURCES.md), skipped with
-//     a note when absent;
+//   - the real scans and photos in ../shared/data (counts and sizes from
+//     SOURCES.md; a photo cut in half is refused), skipped when absent;
 //   - every prefix of a binary and an ascii PLY, and byte-flipped copies,
 //     come back as {ok:false, message} or a valid result: never an abort
 //     (an abort kills the page's worker).
@@ -82,6 +82,22 @@ for (const [rel, nv, nf] of real) {
   const r = parse(path.basename(rel), fs.readFileSync(file));
   check(`${path.basename(rel)}: ${nv} vertices, ${nf} triangles`, r.ok && r.vertexCount === nv && r.triangleCount === nf,
         `${r.ok ? r.vertexCount + ' / ' + r.triangleCount : r.message}; ${(performance.now() - t).toFixed(0)} ms`);
+}
+
+// --- photos -------------------------------------------------------------------
+for (const [rel, w, h] of [['head_scans/james_menpo3d/james.jpg', 2400, 1600],
+                           ['eye_photos/Iris_-_left_eye_of_a_girl.jpg', 440, 265]]) {
+  const file = path.join(SHARED, rel);
+  if (!fs.existsSync(file)) { console.log(`skip  worker: ${rel} absent (../shared/data is not in the repo)`); continue; }
+  const bytes = fs.readFileSync(file);
+  const ptr = core._malloc(bytes.length);
+  core.HEAPU8.set(bytes, ptr);
+  const t = performance.now();
+  const r = core.check_image(path.basename(rel), ptr, bytes.length);
+  const cut = core.check_image('cut.jpg', ptr, Math.floor(bytes.length / 2));
+  core._free(ptr);
+  check(`${path.basename(rel)}: ${w}x${h}, and its first half is refused`, r.ok && r.width === w && r.height === h && !cut.ok,
+        `${r.ok ? r.width + 'x' + r.height : r.message}; ${(performance.now() - t).toFixed(0)} ms; half: ${cut.message}`);
 }
 
 // --- broken bytes never abort ---------------------------------------------------
