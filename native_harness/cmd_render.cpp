@@ -4,6 +4,7 @@
 
 #include "io/io.h"
 #include "mesh/geometry.h"
+#include "render/ambient_occlusion.h"
 #include "render/camera.h"
 #include "render/offscreen.h"
 
@@ -34,7 +35,7 @@ std::string directory_of(const std::string& path) {
 int run_render(const Args& args) {
   for (const auto& [key, values] : args.options) {
     static const char* known[] = {"mesh", "points", "texture", "wireframe", "edges-only", "view",
-                                  "size", "out", "point-size", "supersample"};
+                                  "size", "out", "point-size", "supersample", "no-ao"};
     bool ok = false;
     for (const char* k : known) ok = ok || key == k;
     if (!ok) return usage_error("unknown option --" + key + " (see `likeness help`)");
@@ -84,6 +85,15 @@ int run_render(const Args& args) {
     if (!s) return fail(kName, s.message);
   }
 
+  // Baked occlusion shades cavities (eyes, nostrils, ears); skipped on
+  // request or for meshes so large that baking would take long.
+  std::vector<float> occlusion;
+  if (!mesh.positions.empty() && !args.has("no-ao")) {
+    s = vertex_ambient_occlusion(mesh, OcclusionOptions{}, occlusion);
+    if (s.code == ErrorCode::TooLarge) std::cout << "note: " << s.message << "; rendering without it\n";
+    else if (!s) return fail(kName, with_context(s, mesh_path).message);
+  }
+
   const bool edges_only = args.has("edges-only");
   const bool wireframe = args.has("wireframe") || edges_only;
   // Dense clouds read best with small sprites, sparse ones with larger.
@@ -96,6 +106,8 @@ int run_render(const Args& args) {
       DrawableHandle h;
       Status st = r.upload_mesh(mesh, h);
       if (!st) return with_context(st, mesh_path);
+      if (!occlusion.empty()) st = r.set_occlusion(h, occlusion);
+      if (!st) return st;
       DrawStyle& style = *r.style(h);
       style.wireframe = wireframe;
       style.surface = !edges_only;
@@ -140,8 +152,9 @@ int run_render(const Args& args) {
 Registrar reg({"render",
                "likeness render --mesh FILE [--points FILE] [--texture PNG] [--wireframe | --edges-only] "
                "[--view front|left|right|back|top|three-quarter] [--size N] [--point-size PX] "
-               "[--supersample 1..4] --out PNG",
-               "draws a mesh and/or point cloud from a canonical view into a PNG (OSMesa, same shaders as the web app)",
+               "[--supersample 1..4] [--no-ao] --out PNG",
+               "draws a mesh (with baked ambient occlusion) and/or point cloud from a canonical view into a PNG "
+               "(OSMesa, same shaders as the web app)",
                run_render});
 
 }  // namespace

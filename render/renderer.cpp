@@ -17,7 +17,7 @@ namespace lk {
 namespace {
 
 // Attribute locations, fixed by layout qualifiers in shaders/*.vert.
-enum Attribute : GLuint { kPosition = 0, kNormal = 1, kUv = 2, kColor = 3, kBarycentric = 4 };
+enum Attribute : GLuint { kPosition = 0, kNormal = 1, kUv = 2, kColor = 3, kBarycentric = 4, kOcclusion = 5 };
 
 glm::vec3 srgb_to_linear(const glm::vec3& c) {
   glm::vec3 out;
@@ -132,11 +132,11 @@ struct Renderer::Impl {
     bool is_points = false;
     GLuint vao = 0;
     GLuint position_buffer = 0, normal_buffer = 0, uv_buffer = 0, color_buffer = 0,
-           barycentric_buffer = 0;
+           barycentric_buffer = 0, occlusion_buffer = 0;
     GLsizei vertex_count = 0;  // GPU vertices (3 per triangle for meshes)
     int num_vertices = 0;      // source vertices (#V or #P)
     std::vector<Tri> triangles;  // kept for update_mesh: normals and unrolling
-    bool has_colors = false, has_uvs = false, has_normals = false;
+    bool has_colors = false, has_uvs = false, has_normals = false, has_occlusion = false;
     TextureHandle texture = kNoHandle;
     DrawStyle style;
     BBox bbox;
@@ -158,7 +158,7 @@ struct Renderer::Impl {
 
   void release(Drawable& d) {
     GLuint buffers[] = {d.position_buffer, d.normal_buffer, d.uv_buffer, d.color_buffer,
-                        d.barycentric_buffer};
+                        d.barycentric_buffer, d.occlusion_buffer};
     for (GLuint b : buffers)
       if (b) glDeleteBuffers(1, &b);
     if (d.vao) glDeleteVertexArrays(1, &d.vao);
@@ -214,6 +214,7 @@ struct Renderer::Impl {
       albedo_source = 1;
     }
     glUniform1i(u["u_albedo_source"], albedo_source);
+    glUniform1i(u["u_has_occlusion"], d.has_occlusion ? 1 : 0);
     glUniform3fv(u["u_base_color"], 1, glm::value_ptr(srgb_to_linear(s.base_color)));
     glUniform1f(u["u_specular"], s.specular);
     glUniform1f(u["u_shininess"], std::max(s.shininess, 1.0f));
@@ -417,6 +418,34 @@ Status Renderer::update_mesh(DrawableHandle handle, const std::vector<Vec3>& pos
   upload_vec3s(d->normal_buffer, m.unroll3(n, d->triangles), GL_DYNAMIC_DRAW);
   d->bbox = bounding_box(positions);
   return check_gl("update_mesh");
+}
+
+Status Renderer::set_occlusion(DrawableHandle handle, const std::vector<float>& per_vertex) {
+  Impl::Drawable* d = impl_->find(handle);
+  if (!d || d->is_points) return Status::error(ErrorCode::InvalidInput, "set_occlusion: no mesh with handle " + std::to_string(handle));
+  if (per_vertex.empty()) {
+    d->has_occlusion = false;
+    return Status::success();
+  }
+  if (per_vertex.size() != static_cast<size_t>(d->num_vertices))
+    return Status::error(ErrorCode::InvalidInput, "set_occlusion: " + std::to_string(per_vertex.size()) +
+                                                      " values for a mesh of " + std::to_string(d->num_vertices) + " vertices");
+  std::vector<float> unrolled;
+  unrolled.reserve(d->triangles.size() * 3);
+  for (const Tri& t : d->triangles)
+    for (int c = 0; c < 3; ++c) {
+      const float a = per_vertex[t[c]];
+      unrolled.push_back(std::isfinite(a) ? std::clamp(a, 0.0f, 1.0f) : 1.0f);
+    }
+  glBindVertexArray(d->vao);
+  if (!d->occlusion_buffer) glGenBuffers(1, &d->occlusion_buffer);
+  glBindBuffer(GL_ARRAY_BUFFER, d->occlusion_buffer);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(unrolled.size() * sizeof(float)), unrolled.data(),
+               GL_STATIC_DRAW);
+  bind_attribute(d->occlusion_buffer, kOcclusion, 1);
+  glBindVertexArray(0);
+  d->has_occlusion = true;
+  return check_gl("set_occlusion");
 }
 
 Status Renderer::upload_points(const PointCloud& cloud, DrawableHandle& out) {

@@ -52,11 +52,11 @@ enum class PointColoring {
 struct DrawStyle {
   bool visible = true;
   glm::mat4 model = glm::mat4(1.0f);             // object -> world
-  glm::vec3 base_color = {0.86f, 0.70f, 0.62f};  // sRGB albedo (skin tone) when no color/texture
+  glm::vec3 base_color = {0.78f, 0.60f, 0.52f};  // sRGB albedo (skin tone) when no color/texture
   bool use_vertex_colors = true;  // meshes: TriMesh::colors modulate nothing, they replace base_color
   bool use_texture = true;        // meshes: attached texture replaces base_color (needs uvs)
-  float specular = 0.25f;         // Blinn-Phong specular strength (0 = matte)
-  float shininess = 32.0f;        // Blinn-Phong exponent
+  float specular = 0.3f;          // Blinn-Phong specular strength (0 = matte)
+  float shininess = 24.0f;        // Blinn-Phong exponent (skin: broad sheen)
   // Surfaces. With surface = false and wireframe = true only the edges are
   // drawn (a control mesh over its subdivided surface).
   bool surface = true;
@@ -82,14 +82,14 @@ struct Viewport {
 // Lights are fixed to the camera so every view is lit the same way; the
 // directions point from the surface towards the light, in view space.
 struct LightRig {
-  glm::vec3 key_dir = {-0.45f, 0.55f, 0.70f};   // upper left, in front
-  glm::vec3 key_color = {1.00f, 0.96f, 0.90f};  // warm, linear intensity
-  glm::vec3 fill_dir = {0.65f, 0.05f, 0.75f};   // right, soft
-  glm::vec3 fill_color = {0.30f, 0.34f, 0.42f}; // cool
-  glm::vec3 rim_dir = {0.20f, 0.45f, -0.90f};   // behind, outlines the silhouette
-  glm::vec3 rim_color = {0.55f, 0.58f, 0.65f};
-  glm::vec3 ambient_sky = {0.16f, 0.17f, 0.20f};     // hemisphere ambient, from above
-  glm::vec3 ambient_ground = {0.07f, 0.06f, 0.06f};  // from below
+  glm::vec3 key_dir = {-0.60f, 0.60f, 0.50f};   // upper left, in front: models the face
+  glm::vec3 key_color = {1.30f, 1.18f, 1.05f};  // warm, linear intensity
+  glm::vec3 fill_dir = {0.75f, -0.05f, 0.65f};  // right, low and soft
+  glm::vec3 fill_color = {0.16f, 0.19f, 0.26f}; // cool, about 1:6 against the key
+  glm::vec3 rim_dir = {0.35f, 0.55f, -0.75f};   // behind, upper right: outlines the silhouette
+  glm::vec3 rim_color = {1.00f, 1.00f, 1.05f};
+  glm::vec3 ambient_sky = {0.13f, 0.14f, 0.18f};     // hemisphere ambient, from above
+  glm::vec3 ambient_ground = {0.05f, 0.045f, 0.045f};  // from below
   float exposure = 1.0f;
 };
 
@@ -123,6 +123,11 @@ class Renderer {
   // and normals (#V, or empty to recompute them) in place.
   Status update_mesh(DrawableHandle handle, const std::vector<Vec3>& positions,
                      const std::vector<Vec3>& normals = {});
+
+  // Per-vertex ambient occlusion (#V values in [0,1], 1 = open; see
+  // ambient_occlusion.h) darkening ambient and, partly, direct light in
+  // cavities. An empty vector removes it. Kept when update_mesh moves vertices.
+  Status set_occlusion(DrawableHandle handle, const std::vector<float>& per_vertex);
 
   // --- Point clouds -----------------------------------------------------
   Status upload_points(const PointCloud& cloud, DrawableHandle& out);

@@ -11,6 +11,7 @@ in vec3 v_normal_view;
 in vec2 v_uv;
 in vec3 v_color;
 in vec3 v_barycentric;
+in float v_occlusion;
 
 // 0 = u_base_color, 1 = vertex color, 2 = texture
 uniform int u_albedo_source;
@@ -18,6 +19,7 @@ uniform vec3 u_base_color;  // linear
 uniform sampler2D u_texture; // sRGB8_ALPHA8: sampled values are linear
 uniform float u_specular;
 uniform float u_shininess;
+uniform bool u_has_occlusion;
 
 uniform bool u_surface;
 uniform bool u_wireframe;
@@ -93,18 +95,24 @@ void main() {
   vec3 key = normalize(u_key_dir);
   vec3 fill = normalize(u_fill_dir);
   vec3 rim = normalize(u_rim_dir);
+  // Baked occlusion darkens what reaches cavities: all of the ambient, part
+  // of the direct light (a real shadow would need a shadow map).
+  float ao = u_has_occlusion ? v_occlusion : 1.0;
+  float direct_ao = mix(1.0, ao, 0.8);
 
-  float fresnel = 0.04 + 0.96 * pow(1.0 - max(dot(n, v), 0.0), 5.0);
+  float ndv = max(dot(n, v), 0.0);
+  float fresnel = 0.04 + 0.96 * pow(1.0 - ndv, 5.0);
   float ambient_t = 0.5 + 0.5 * n.y;
-  vec3 color = albedo * mix(u_ambient_ground, u_ambient_sky, ambient_t);
-  color += u_key_color * (wrapped_diffuse(n, key, albedo) +
-                          vec3(u_specular * mix(1.0, 2.5, fresnel)) * blinn_phong(n, key, v));
-  color += u_fill_color * (albedo * max(dot(n, fill), 0.0) +
-                           vec3(0.3 * u_specular) * blinn_phong(n, fill, v));
+  vec3 color = albedo * mix(u_ambient_ground, u_ambient_sky, ambient_t) * ao;
+  color += direct_ao * u_key_color *
+           (wrapped_diffuse(n, key, albedo) +
+            vec3(u_specular * mix(1.0, 2.5, fresnel)) * blinn_phong(n, key, v));
+  color += direct_ao * u_fill_color *
+           (albedo * max(dot(n, fill), 0.0) + vec3(0.3 * u_specular) * blinn_phong(n, fill, v));
   // Rim: light from behind grazing the silhouette, strongest where the
   // surface turns away from the viewer.
-  float grazing = pow(1.0 - max(dot(n, v), 0.0), 2.0);
-  color += u_rim_color * grazing * max(dot(n, rim) + 0.3, 0.0) * mix(albedo, vec3(1.0), 0.3);
+  float grazing = pow(1.0 - ndv, 2.0);
+  color += ao * u_rim_color * grazing * max(dot(n, rim) + 0.3, 0.0) * mix(albedo, vec3(1.0), 0.3);
 
   color = tone_map(color * u_exposure);
   color = mix(color, u_wire_color, edge);
