@@ -51,8 +51,8 @@ struct HeadShape {
 
   double distance(const Vec3& p0) const {
     const Vec3 p(std::abs(p0.x()), p0.y(), p0.z());
-    double d = sd_ellipsoid(p, {0, 0.032, -0.014}, {0.074, 0.103, 0.097});        // cranium
-    d = smooth_min(d, sd_ellipsoid(p, {0, 0.070, -0.030}, {0.070, 0.065, 0.080}), 0.03);   // parietal
+    double d = sd_ellipsoid(p, {0, 0.030, -0.014}, {0.074, 0.100, 0.097});        // cranium
+    d = smooth_min(d, sd_ellipsoid(p, {0, 0.062, -0.030}, {0.071, 0.065, 0.080}), 0.03);   // parietal
     d = smooth_min(d, sd_ellipsoid(p, {0, 0.060, 0.030}, {0.055, 0.050, 0.058}), 0.02);    // forehead
     d = smooth_min(d, sd_ellipsoid(p, {0, -0.005, 0.035}, {0.058, 0.055, 0.063}), 0.02);   // midface
     d = smooth_min(d, sd_ellipsoid(p, {0, -0.058, 0.016}, {0.058, 0.047, 0.075}), 0.025);  // jaw
@@ -60,9 +60,9 @@ struct HeadShape {
     d = smooth_min(d, sd_ellipsoid(p, {0, -0.088, 0.076}, {0.024, 0.016, 0.018}), 0.016);  // chin
     d = smooth_min(d, sd_ellipsoid(p, {0.048, 0.004, 0.052}, {0.024, 0.020, 0.030}), 0.03);  // cheekbone
     d = smooth_min(d, sd_ellipsoid(p, {0.040, -0.030, 0.045}, {0.024, 0.030, 0.032}), 0.03);  // cheek
-    d = smooth_min(d, sd_ellipsoid(p, {0, 0.045, 0.079}, {0.048, 0.012, 0.017}), 0.02);   // brow ridge
+    d = smooth_min(d, sd_ellipsoid(p, {0, 0.045, 0.077}, {0.050, 0.013, 0.018}), 0.028);  // brow ridge
     // Eye socket: hollow under the brow, then the lids over the eyeball.
-    d = smooth_max(d, -sd_ellipsoid(p, {0.033, 0.023, 0.090}, {0.020, 0.013, 0.018}), 0.012);
+    d = smooth_max(d, -sd_ellipsoid(p, {0.033, 0.023, 0.090}, {0.020, 0.013, 0.018}), 0.016);
     d = smooth_min(d, sd_sphere(p, eye_center, lid_radius), 0.004);
     // Nose: bridge, tip, wings (alae).
     double nose = sd_tapered_capsule(p, {0, 0.032, 0.090}, {0, -0.010, 0.114}, 0.0055, 0.0075);
@@ -76,8 +76,8 @@ struct HeadShape {
     // Neck: an elliptic cylinder below the head.
     // Its axis leans forward going down, as a neck does.
     const double axis_z = -0.014 - 0.2 * (p.y() + 0.08);
-    const double nx = p.x() / 0.057, nz = (p.z() - axis_z) / 0.060;
-    const double neck = std::max((std::sqrt(nx * nx + nz * nz) - 1.0) * 0.057, p.y() + 0.03);
+    const double nx = p.x() / 0.060, nz = (p.z() - axis_z) / 0.063;
+    const double neck = std::max((std::sqrt(nx * nx + nz * nz) - 1.0) * 0.060, p.y() + 0.03);
     d = smooth_min(d, neck, 0.03);
     return d;
   }
@@ -577,7 +577,7 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
       const double lobe = std::max(0.0, -sw);  // the lobe hangs a little behind the root
       const double bk = 0.007 + scale * 0.017 * cw + 0.005 * lobe * lobe;
       const double u = -0.002 + scale * (sw > 0 ? 0.034 : 0.031) * sw;
-      const double outward = 0.006 + 0.012 * (0.5 + 0.5 * cw) + 0.004 * std::max(0.0, sw) + 0.003 * lobe + out_extra;
+      const double outward = 0.006 + 0.012 * (0.5 + 0.5 * cw) + 0.003 * lobe + out_extra;
       return at(bk, u, outward);
     };
     std::vector<Vec3> ring_a, ring_b, ring_c;
