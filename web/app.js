@@ -33,7 +33,7 @@
     status: $('status'), banner: $('error-banner'), bannerText: $('error-text'),
     dismiss: $('error-dismiss'), dropZone: $('drop-zone'), fileInput: $('file-input'),
     fileList: $('file-list'), reset: $('btn-reset'), generic: $('btn-generic'),
-    pointSize: $('point-size'), maxSize: $('max-size'), sample: $('btn-sample'),
+    pointSize: $('point-size'), maxSize: $('max-size'), sample: $('btn-sample'), cancel: $('btn-cancel'),
   };
 
   // Exposed for the browser test and for debugging from the console.
@@ -59,6 +59,7 @@
     ui.sample.disabled = !interactive || state === 'working';
     ui.pointSize.disabled = !interactive;
     ui.dropZone.classList.toggle('busy', state === 'working');
+    ui.cancel.hidden = state !== 'working';
   }
 
   function setStatus(text) { ui.status.textContent = text; }
@@ -128,24 +129,42 @@
     return workerReady;
   }
 
-  // The core aborted (out of memory or a bug): fail the running jobs with the
-  // reason and start a fresh worker so the page keeps working.
-  function workerDied(worker, why) {
+  // The core aborted (out of memory or a bug), or the user cancelled: fail
+  // the running jobs with the reason and start a fresh worker so the page
+  // keeps working. Terminating is the one cancel that always works, whatever
+  // the job is doing.
+  function workerDied(worker, why, cancelled = false) {
     if (app.worker !== worker) return;
     worker.terminate();
-    for (const [, job] of jobs) job.reject(new Error('the worker stopped (' + why + ') and was restarted'));
+    for (const [, job] of jobs) {
+      const err = new Error(cancelled ? 'cancelled' : 'the worker stopped (' + why + ') and was restarted');
+      err.cancelled = cancelled;
+      job.reject(err);
+    }
     jobs.clear();
     if (document.body.dataset.state !== 'loading') startWorker().catch(() => {});
   }
 
+  // Cancels whatever the worker is doing (the Cancel button).
+  function cancelJobs() {
+    if (jobs.size) workerDied(app.worker, 'cancelled', true);
+  }
+  app.cancel = cancelJobs;
+
   // Runs a worker job; resolves with the core's result object, rejects when
   // the worker dies on the way (the page then has a fresh worker).
+  // The job counts as running from the call on (so Cancel reaches it even
+  // while a fresh worker is still starting).
   function runJob(message, transfer, onProgress) {
-    return workerReady.then(() => new Promise((resolve, reject) => {
+    return new Promise((resolve, reject) => {
       const id = nextJobId++;
       jobs.set(id, { resolve, reject, onProgress });
-      app.worker.postMessage(Object.assign({ id }, message), transfer);
-    }));
+      workerReady.then(() => {
+        if (jobs.has(id)) app.worker.postMessage(Object.assign({ id }, message), transfer);
+      }, (err) => {
+        if (jobs.delete(id)) reject(err);
+      });
+    });
   }
 
   app.runJob = runJob;
@@ -253,6 +272,10 @@
         const buffer = await file.arrayBuffer();
         result = await runJob({ type: 'image', name: file.name, buffer }, [buffer]);
       } catch (e) {
+        if (e && e.cancelled) {
+          meta.textContent = formatBytes(file.size) + ' · cancelled';
+          break;
+        }
         result = { ok: false, message: file.name + ': ' + (e && e.message ? e.message : e) };
       }
       if (!result.ok) {
@@ -323,6 +346,14 @@
         if (stage === 'load') setStage('load', 'parsing', 0.05 + 0.9 * fraction, 'active');
       });
     } catch (e) {
+      if (e && e.cancelled) {
+        meta.textContent = formatBytes(file.size) + ' · cancelled';
+        setStage('load', 'cancelled', 0);
+        setStatus('Cancelled loading ' + file.name + '.' +
+                  (app.model ? ' The previous model (' + app.model.name + ') is still shown.' : ''));
+        setState(app.model ? 'done' : 'ready');
+        return;
+      }
       result = { ok: false, code: 'Internal', message: file.name + ': ' + (e && e.message ? e.message : e) };
     }
     if (!result.ok) {
@@ -418,6 +449,7 @@
     });
     ui.dismiss.addEventListener('click', clearError);
     ui.sample.addEventListener('click', loadSample);
+    ui.cancel.addEventListener('click', cancelJobs);
     ui.reset.addEventListener('click', () => app.viewer && app.viewer.reset_view());
     ui.generic.addEventListener('click', () => {
       if (!app.viewer) return;

@@ -360,6 +360,19 @@ async function main() {
     check('a dying worker fails its job and is replaced', crash.rejected && crash.replaced && /restarted/.test(crash.message),
           JSON.stringify(crash));
 
+    // Cancel: the running job is dropped (the worker is replaced), the page
+    // goes back to what it showed, without an error.
+    const cancelled = await page.evaluate(async () => {
+      const old = window.likeness.worker;
+      const job = window.likeness.runJob({ type: 'parse', name: 'x.ply', buffer: new ArrayBuffer(8) }, []);
+      window.likeness.cancel();
+      try { await job; return { rejected: false }; } catch (e) {
+        return { rejected: true, cancelled: !!e.cancelled, replaced: window.likeness.worker !== old };
+      }
+    });
+    check('cancel drops the running job and replaces the worker', cancelled.rejected && cancelled.cancelled && cancelled.replaced,
+          JSON.stringify(cancelled));
+
     // 5. A good file after the errors.
     const s2 = await setFile(page, 'cube.obj', cubeObj());
     const status2 = await page.textContent('#status');
