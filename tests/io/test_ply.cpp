@@ -467,6 +467,9 @@ TEST_CASE("PLY reader speed on 300k points (informative, generous bound)", "[io]
                                       << " ms");
     REQUIRE(m.num_vertices() == 300000);
     CHECK((m.positions[123456] - cloud.positions[123456]).norm() < (ascii ? 0.0 : 1e-4) + 1e-12);
-    CHECK(ms < (ascii ? 3000 : 1000));  // an order of magnitude above what we measure, to catch regressions only
+    // Far above what we measure (binary ~3 ms, ascii ~100 ms of CPU natively)
+    // so a loaded CI machine or wasm passes; catches only pathological
+    // (e.g. quadratic) regressions. `likeness bench --only io` measures.
+    CHECK(ms < (ascii ? 20000 : 4000));
   }
 }
