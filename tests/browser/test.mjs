@@ -373,6 +373,19 @@ async function main() {
     check('cancel drops the running job and replaces the worker', cancelled.rejected && cancelled.cancelled && cancelled.replaced,
           JSON.stringify(cancelled));
 
+    // Drag and drop: a file dropped on the drop zone loads like a chosen one.
+    await page.evaluate((text) => {
+      const dt = new DataTransfer();
+      dt.items.add(new File([text], 'dropped.xyz'));
+      const zone = document.getElementById('drop-zone');
+      zone.dispatchEvent(new DragEvent('dragenter', { bubbles: true, cancelable: true, dataTransfer: dt }));
+      zone.dispatchEvent(new DragEvent('drop', { bubbles: true, cancelable: true, dataTransfer: dt }));
+    }, '0 0 0\n0.1 0 0\n0 0.1 0\n0 0 0.1\n');
+    await page.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: JOB_TIMEOUT_MS });
+    const statusDrop = await page.textContent('#status');
+    check('a dropped XYZ file loads', (await state(page)) === 'done' && /dropped\.xyz: point cloud, 4 points/.test(statusDrop),
+          `"${statusDrop.trim()}"`);
+
     // 5. A good file after the errors.
     const s2 = await setFile(page, 'cube.obj', cubeObj());
     const status2 = await page.textContent('#status');
