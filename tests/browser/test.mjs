@@ -360,6 +360,22 @@ async function main() {
     check('a dying worker fails its job and is replaced', crash.rejected && crash.replaced && /restarted/.test(crash.message),
           JSON.stringify(crash));
 
+    // The viewer's embind calls check what JS hands them.
+    const bad = await page.evaluate(() => {
+      const v = window.likeness.viewer, F = Float32Array, U = Uint32Array;
+      return [
+        v.show_mesh(new F([0, 0, 0]), new F(), new F(), new U([0, 1, 2])),
+        v.show_mesh(new F([0, 0, 0, 1, 0, 0, 0, 1]), new F(), new F(), new U([0, 1, 2])),
+        v.show_points(new F([0, NaN, 0]), new F(), new F()),
+        v.show_points(new F([0, 0, 0]), new F([0, 0]), new F()),
+        v.show_points(new F(), new F(), new F()),
+      ];
+    });
+    check('the viewer refuses malformed arrays with messages', bad.every((m) => typeof m === 'string' && m.length > 0) &&
+          /vertex 1 of 1/.test(bad[0]) && /multiple of 3/.test(bad[1]) && /NaN/.test(bad[2]) && /normals/.test(bad[3]),
+          bad.join(' | '));
+    check('... and keeps showing the previous model', analyse(await canvasImage(page)).greenFraction > 0.5 * pointStats.greenFraction);
+
     // Cancel: the running job is dropped (the worker is replaced), the page
     // goes back to what it showed, without an error.
     const cancelled = await page.evaluate(async () => {
