@@ -46,13 +46,14 @@
     model: null,           // {name, kind, vertexCount, triangleCount} shown now
     photos: [],            // [{name, file, width, height}] checked photos, for texturing
     lastError: null,
+    startupFailed: false,  // the viewer or the core could not start
   };
 
   let stateBeforeError = 'ready';
   function setState(state) {
     if (state !== 'error') stateBeforeError = state;
     document.body.dataset.state = state;
-    const interactive = state !== 'loading';
+    const interactive = state !== 'loading' && !app.startupFailed;
     ui.fileInput.disabled = !interactive || state === 'working';
     ui.reset.disabled = !interactive;
     ui.generic.disabled = !interactive || state === 'working';
@@ -73,11 +74,15 @@
 
   function clearError() {
     ui.banner.hidden = true;
-    if (document.body.dataset.state === 'error') setState(stateBeforeError);
+    if (document.body.dataset.state === 'error' && !app.startupFailed) setState(stateBeforeError);
   }
 
+  // Without the viewer or the core nothing works: every control stays off.
   function fatalStartup(message) {
+    app.startupFailed = true;
+    ui.overlay.hidden = false;
     ui.overlayText.textContent = 'The app could not start.';
+    setStatus('Likeness could not start in this browser.');
     ui.overlay.classList.add('failed');
     showError(message);
   }

@@ -18,7 +18,8 @@
 //     display limit are thinned, not refused; a PNG photo is decoded and kept,
 //     a broken JPEG is an error naming it;
 //   - no console errors, no uncaught exceptions, and every network request
-//     goes to the page's own origin.
+//     goes to the page's own origin;
+//   - in a Chromium without WebGL the page says so and keeps controls off.
 // Screenshots go to $LK_SCREENSHOT_DIR when set (web_*.png).
 import { chromium } from 'playwright-core';
 import http from 'node:http';
@@ -31,6 +32,10 @@ const WEBDIR = path.resolve(process.argv[2] || '');
 const SHOT_DIR = process.env.LK_SCREENSHOT_DIR || '';
 const READY_TIMEOUT_MS = 180000;  // SwiftShader compiles shaders on the CPU
 const JOB_TIMEOUT_MS = 120000;
+// TOOLCHAIN.md's flags (headless comes from playwright's headless: true).
+const CHROMIUM_ARGS = ['--no-sandbox', '--disable-quic', '--no-first-run', '--disable-background-networking',
+                       '--disable-component-update', '--disable-sync', '--use-angle=swiftshader',
+                       '--enable-unsafe-swiftshader'];
 
 // ---------------------------------------------------------------- results --
 const results = [];
@@ -250,9 +255,7 @@ async function main() {
   const context = await chromium.launchPersistentContext(profile, {
     executablePath: '/usr/bin/chromium',
     headless: true,
-    args: ['--no-sandbox', '--disable-quic', '--no-first-run', '--disable-background-networking',
-           '--disable-component-update', '--disable-sync', '--use-angle=swiftshader',
-           '--enable-unsafe-swiftshader'],
+    args: CHROMIUM_ARGS,
     viewport: { width: 1280, height: 800 },
     deviceScaleFactor: 1,
   });
@@ -464,8 +467,30 @@ async function main() {
     check('test ran to the end', false, e && e.message ? e.message.split('\n')[0] : String(e));
   } finally {
     await context.close().catch(() => {});
-    server.close();
     fs.rmSync(profile, { recursive: true, force: true });
+  }
+
+  // Without WebGL: a clear message in the page and every control off.
+  const profile2 = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-chromium-'));
+  try {
+    const ctx = await chromium.launchPersistentContext(profile2, {
+      executablePath: '/usr/bin/chromium', headless: true, args: [...CHROMIUM_ARGS, '--disable-webgl'],
+      viewport: { width: 1280, height: 800 }, deviceScaleFactor: 1,
+    });
+    const page = ctx.pages()[0] || await ctx.newPage();
+    await page.goto(origin + '/index.html');
+    const s = await waitForState(page, ['ready', 'error'], READY_TIMEOUT_MS);
+    const msg = await bannerText(page);
+    const enabled = await page.evaluate(() => ['file-input', 'btn-sample', 'btn-reset', 'btn-generic', 'point-size']
+      .filter((id) => !document.getElementById(id).disabled));
+    check('without WebGL: "error" with a visible message, controls off', s === 'error' && /WebGL 2/.test(msg) &&
+          enabled.length === 0, `"${msg.slice(0, 90)}…"; enabled: [${enabled}]`);
+    await ctx.close();
+  } catch (e) {
+    check('without WebGL: the page reports it', false, e && e.message ? e.message.split('\n')[0] : String(e));
+  } finally {
+    server.close();
+    fs.rmSync(profile2, { recursive: true, force: true });
   }
 
   const failed = results.filter((r) => !r.ok);
