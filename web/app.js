@@ -245,10 +245,12 @@
   async function handleFiles(fileList) {
     const files = Array.from(fileList || []);
     if (!files.length) return;
+    // One job at a time; a drop meanwhile is declined in the status line
+    // (not as an error: the running job's state must stay "working").
     const state = document.body.dataset.state;
-    if (state === 'loading') return;
+    if (state === 'loading' || app.startupFailed) return;
     if (state === 'working') {
-      showError('Still working on the previous file; drop the new one when it has finished.');
+      setStatus('Still working: drop ' + files[0].name + ' again when the current job has finished (or cancel it).');
       return;
     }
     clearError();
