@@ -53,7 +53,7 @@ struct DrawStyle {
   bool visible = true;
   glm::mat4 model = glm::mat4(1.0f);             // object -> world
   glm::vec3 base_color = {0.78f, 0.60f, 0.52f};  // sRGB albedo (skin tone) when no color/texture
-  bool use_vertex_colors = true;  // meshes: TriMesh::colors modulate nothing, they replace base_color
+  bool use_vertex_colors = true;  // meshes: TriMesh::colors, when present, replace base_color
   bool use_texture = true;        // meshes: attached texture replaces base_color (needs uvs)
   float specular = 0.3f;          // Blinn-Phong specular strength (0 = matte)
   float shininess = 24.0f;        // Blinn-Phong exponent (skin: broad sheen)

@@ -614,3 +614,54 @@ TEST_CASE("the generic head renders plausibly from the front and the side", "[re
     CHECK(sd > 12);
   }
 }
+
+TEST_CASE("visibility, model matrix and sub-viewports are honoured", "[render]") {
+  TriMesh e;
+  append_ellipsoid(e, Vec3::Zero(), Vec3(0.3, 0.3, 0.3), 24, 32);
+  OrbitCamera cam;
+  cam.distance = 3.0f;
+  cam.scene_radius = 1.0f;
+  const CameraMatrices m = cam.matrices(1.0f);
+  const Image hidden = render(
+      [&](Renderer& r) {
+        DrawableHandle hd;
+        Status s = r.upload_mesh(e, hd);
+        if (s) s = r.set_visible(hd, false);
+        return s;
+      },
+      [&](float) { return m; }, 64, 64);
+  CHECK(foreground_stats(hidden).fraction == 0.0);
+  const Image moved = render(
+      [&](Renderer& r) {
+        DrawableHandle hd;
+        Status s = r.upload_mesh(e, hd);
+        if (s) s = r.set_model_matrix(hd, glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, 0.4f, 0.0f)));
+        return s;
+      },
+      [&](float) { return m; }, 64, 64);
+  CHECK(foreground_stats(moved).max_y < 32);  // lifted into the upper half (rows top-down)
+
+  // Drawing into the right half leaves the left half untouched.
+  OffscreenContext ctx;
+  REQUIRE(ctx.create(64, 32).ok());
+  Renderer r;
+  REQUIRE(r.init().ok());
+  glm::vec3 red(1, 0, 0);
+  r.set_background(red);
+  REQUIRE(r.draw(m, Viewport{0, 0, 64, 32}).ok());
+  r.set_background(kKeyGreen);
+  DrawableHandle hd;
+  REQUIRE(r.upload_mesh(e, hd).ok());
+  REQUIRE(r.draw(cam.matrices(1.0f), Viewport{32, 0, 32, 32}).ok());
+  Image im;
+  REQUIRE(ctx.read_image(im).ok());
+  int left_red = 0, right_foreground = 0;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const std::uint8_t* p = im.at(x, y);
+      if (x < 32) left_red += p[0] == 255 && p[1] == 0 && p[2] == 0;
+      else right_foreground += !(p[0] == 0 && p[1] == 255 && p[2] == 0);
+    }
+  CHECK(left_red == 32 * 32);
+  CHECK(right_foreground > 50);
+}
