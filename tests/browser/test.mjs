@@ -6,7 +6,8 @@
 //   - the canvas shows the head: enough pixels differ from the background and
 //     they are shaded (not one flat color);
 //   - dragging on the canvas orbits the view, Reset view restores it; arrow
-//     keys orbit the focused canvas, R resets, Tab still leaves it;
+//     keys orbit the focused canvas, R resets, Tab still leaves it; one
+//     finger orbits and a pinch zooms on a touch screen;
 //   - a generated ASCII PLY point cloud (green torus) set on the file input
 //     leads to "done", the status names its point count and green points
 //     appear on the canvas;
@@ -258,6 +259,7 @@ async function main() {
     args: CHROMIUM_ARGS,
     viewport: { width: 1280, height: 800 },
     deviceScaleFactor: 1,
+    hasTouch: true,
   });
   const consoleErrors = [], foreign = [], requests = [];
   context.on('request', (req) => {
@@ -316,6 +318,25 @@ async function main() {
     await page.keyboard.press('Tab');
     const focused = await page.evaluate(() => document.activeElement && document.activeElement.id);
     check('Tab moves focus on from the canvas', focused !== 'canvas', `focus on #${focused}`);
+
+    // Touch: one finger orbits, a pinch outwards zooms in (the head grows).
+    const cdp = await context.newCDPSession(page);
+    const cx = box.x + box.width / 2, cy = box.y + box.height / 2;
+    const touch = async (type, points) => cdp.send('Input.dispatchTouchEvent', { type, touchPoints: points });
+    await touch('touchStart', [{ x: cx, y: cy, id: 1 }]);
+    for (let i = 1; i <= 10; i++) await touch('touchMove', [{ x: cx + 18 * i, y: cy, id: 1 }]);
+    await touch('touchEnd', []);
+    const touched = await canvasImage(page);
+    check('a one-finger drag orbits', differingFraction(reset, touched) > 0.005,
+          `${(100 * differingFraction(reset, touched)).toFixed(1)}% of pixels changed`);
+    await page.click('#btn-reset');
+    await touch('touchStart', [{ x: cx - 20, y: cy, id: 1 }, { x: cx + 20, y: cy, id: 2 }]);
+    for (let i = 1; i <= 10; i++) await touch('touchMove', [{ x: cx - 20 - 8 * i, y: cy, id: 1 }, { x: cx + 20 + 8 * i, y: cy, id: 2 }]);
+    await touch('touchEnd', []);
+    const pinched = analyse(await canvasImage(page));
+    check('a pinch zooms in', pinched.fgFraction > 1.2 * headStats.fgFraction,
+          `foreground ${(100 * headStats.fgFraction).toFixed(1)}% -> ${(100 * pinched.fgFraction).toFixed(1)}%`);
+    await page.click('#btn-reset');
 
     // 3. A point cloud.
     const before = await canvasImage(page);
