@@ -69,9 +69,15 @@ int run_render(const Args& args) {
     if (!s) return fail(kName, s.message);
   }
   if (!points_path.empty()) {
-    s = load_point_cloud_file(points_path, cloud);
+    TriMesh as_mesh;
+    GeometryKind kind = GeometryKind::PointCloud;
+    s = load_geometry_file(points_path, as_mesh, cloud, kind);
     if (!s) return fail(kName, s.message);
     if (cloud.size() == 0) return fail(kName, points_path + ": no points");
+    // A mesh shown as points: its vertex normals colour the sprites.
+    if (kind == GeometryKind::Mesh && cloud.normals.empty() && as_mesh.num_triangles() > 0 &&
+        as_mesh.num_vertices() == cloud.size())
+      cloud.normals = vertex_normals(as_mesh);
   }
   // An OBJ's material names its texture; use it when no --texture is given.
   std::string tex_path = texture_path;
