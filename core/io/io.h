@@ -49,7 +49,8 @@ std::string write_obj(const TriMesh& mesh, const std::string& mtl_file = "");
 std::string write_mtl(const std::string& texture_file);
 
 // XYZ: one point per line, "x y z" optionally followed by "nx ny nz" (and/or
-// "r g b"); '#' comments.
+// "r g b"); '#' and '//' comments; space, tab or comma separated. Also Leica
+// .pts: a point-count line, then "x y z intensity [r g b]".
 // Six columns are normals if every extra triple has unit length, else colors
 // (0..255 if any exceeds 1); with nine, the unit-length triple is the normal.
 Status read_xyz(const std::uint8_t* data, size_t size, PointCloud& cloud);

@@ -1,6 +1,8 @@
 // XYZ point clouds: one point per line, "x y z" with optional normals and/or
 // colors. Columns may be separated by spaces, tabs or commas; '#' and '//'
-// start comment lines (CloudCompare writes a "//X Y Z ..." header).
+// start comment lines (CloudCompare writes a "//X Y Z ..." header). Leica
+// style .pts is read too: a first line holding the point count, then
+// "x y z intensity [r g b]" (4 or 7 columns; intensity is dropped).
 //
 // Six columns are ambiguous (normals or colors): they are normals when every
 // row's extra triple has unit length, colors otherwise. With nine columns the
@@ -39,6 +41,7 @@ Status read_xyz(const std::uint8_t* data, size_t size, PointCloud& cloud) {
   const char* end = p + size;
   int columns = 0, first_data_line = 0;
   int line = 0;
+  double declared_count = -1;  // from a .pts count line
   std::vector<double> values;
   double row[9];
   while (p < end) {
@@ -64,11 +67,17 @@ Status read_xyz(const std::uint8_t* data, size_t size, PointCloud& cloud) {
         ++n;
         while (q < eol && is_separator(*q)) ++q;
       }
+      if (columns == 0 && n == 1 && declared_count < 0 && row[0] >= 0 && row[0] == std::floor(row[0])) {
+        declared_count = row[0];
+        p = eol < end ? eol + 1 : end;
+        continue;
+      }
       if (columns == 0) {
-        if (n != 3 && n != 6 && n != 9)
+        if (n != 3 && n != 4 && n != 6 && n != 7 && n != 9)
           return Status::error(ErrorCode::Unsupported, "line " + std::to_string(line) + " has " + std::to_string(n) +
-                                                           " values; XYZ supports 3 (x y z), 6 (+ normals or "
-                                                           "colors) or 9 (+ both)");
+                                                           " values; XYZ supports 3 (x y z), 4 (+ intensity), 6 (+ "
+                                                           "normals or colors), 7 (+ intensity and colors) or 9 (+ "
+                                                           "normals and colors)");
         columns = n;
         first_data_line = line;
       } else if (n != columns) {
@@ -82,11 +91,18 @@ Status read_xyz(const std::uint8_t* data, size_t size, PointCloud& cloud) {
     p = eol < end ? eol + 1 : end;
   }
   if (columns == 0) return Status::error(ErrorCode::Empty, "empty: no points (only blank or comment lines)");
+  const size_t rows = values.size() / columns;
+  if (declared_count >= 0 && declared_count != static_cast<double>(rows))
+    return Status::error(ErrorCode::InvalidInput, "wrong counts: the first line declares " +
+                                                      io_detail::format_double(declared_count) + " points but " +
+                                                      std::to_string(rows) + " follow");
 
   int normal_column = -1, color_column = -1;
   if (columns == 6) {
     if (all_unit_length(values, 6, 3)) normal_column = 3;
     else color_column = 3;
+  } else if (columns == 7) {
+    color_column = 4;  // x y z intensity r g b
   } else if (columns == 9) {
     const bool first_is_normal = all_unit_length(values, 9, 3);
     normal_column = first_is_normal ? 3 : 6;
@@ -98,7 +114,6 @@ Status read_xyz(const std::uint8_t* data, size_t size, PointCloud& cloud) {
       for (int k = 0; k < 3; ++k)
         if (values[i + color_column + k] > 1.0) color_scale = 1.0 / 255.0;
   }
-  const size_t rows = values.size() / columns;
   cloud.positions.resize(rows);
   if (normal_column >= 0) cloud.normals.resize(rows);
   if (color_column >= 0) cloud.colors.resize(rows);

@@ -58,6 +58,20 @@ TEST_CASE("XYZ reader: 3, 6 and 9 columns, separators and comments", "[io][xyz]"
   CHECK(c.normals[0] == Vec3(0, 1, 0));
 }
 
+TEST_CASE("XYZ reader: Leica .pts with a count line, intensity and colors", "[io][xyz]") {
+  PointCloud c;
+  REQUIRE(xyz("2\n1 2 3 -1200 255 0 0\n4 5 6 300 0 0 255\n", c).ok());
+  REQUIRE(c.size() == 2);
+  CHECK(c.positions[1] == Vec3(4, 5, 6));
+  REQUIRE(c.colors.size() == 2);
+  CHECK(c.colors[0] == Vec3(1, 0, 0));
+  CHECK(c.colors[1] == Vec3(0, 0, 1));
+  CHECK(c.normals.empty());
+  REQUIRE(xyz("1 2 3 0.5\n4 5 6 0.25\n", c).ok());
+  CHECK(c.size() == 2);
+  CHECK(c.colors.empty());
+}
+
 TEST_CASE("XYZ round trip with normals and colors", "[io][xyz]") {
   PointCloud c;
   for (int i = 0; i < 20; ++i) {
@@ -84,8 +98,11 @@ TEST_CASE("XYZ reader rejects malformed input", "[io][xyz][errors]") {
   require_error(read_xyz(nullptr, 0, c), ErrorCode::Empty, "empty");
   require_error(xyz("\n", c), ErrorCode::Empty, "no points");
   require_error(xyz("# nothing\n// here\n", c), ErrorCode::Empty, "no points");
-  require_error(xyz("1", c), ErrorCode::Unsupported, "line 1 has 1 values");
-  require_error(xyz("1 2 3 4\n", c), ErrorCode::Unsupported, "has 4 values");
+  require_error(xyz("1", c), ErrorCode::Empty, "no points");  // a .pts count line alone
+  require_error(xyz("1.5\n", c), ErrorCode::Unsupported, "line 1 has 1 values");
+  require_error(xyz("1 2 3 4 5\n", c), ErrorCode::Unsupported, "has 5 values");
+  require_error(xyz("3\n1 2 3 4\n5 6 7 8\n", c), ErrorCode::InvalidInput,
+                "wrong counts: the first line declares 3 points but 2 follow");
   require_error(xyz("1 2 3 4 5 6 7 8 9 10\n", c), ErrorCode::Unsupported, "more than 9");
   require_error(xyz("1 2 3\n4 5 6\n7 8\n", c), ErrorCode::InvalidInput, "wrong counts: line 3 has 2 values but line 1 has 3");
   require_error(xyz("1 2 3\n4 nan 6\n", c), ErrorCode::InvalidInput, "line 2: NaN");
