@@ -127,7 +127,8 @@ Status initialize(const TriMesh& generic, const HeadAnnotations& ann, const Poin
   const double width_g = xmax_g - xmin_g;
   if (!(width_g > 0.0) || !(height_g > 0.0))
     return Status::error(ErrorCode::NotAHead, "align: the generic head has no width or height above its neck plane");
-  const BBox full_g = bounding_box(generic.positions);
+  BBox full_g;  // the whole generic head, faced
+  for (const Vec3& p : generic.positions) full_g.extend(model.facing * p);
 
   // Cloud: robust extents, then a fixed point for the scale s that makes the
   // generic's upper-head slab as wide as the cloud's slab of height s * slab.
@@ -135,8 +136,18 @@ Status initialize(const TriMesh& generic, const HeadAnnotations& ann, const Poin
   std::vector<double> ys(cloud.positions.size());
   for (size_t i = 0; i < ys.size(); ++i) ys[i] = cloud.positions[i].y();
   const double top_c = quantile(ys, 1.0 - q);
-  const double extent_c = top_c - quantile(ys, q);
-  double s = extent_c / std::max(1e-300, (model.facing * full_g.size()).cwiseAbs().y());
+  // Start from the smallest ratio of extents: extra body parts in the scan
+  // (neck, shoulders) only make the cloud larger, so the smallest ratio is
+  // the least inflated; missing parts make it too small, which the fixed
+  // point below corrects (a thin slab under-measures the width, but each
+  // step widens the slab).
+  double s = 1e300;
+  for (int axis = 0; axis < 3; ++axis) {
+    std::vector<double> values(cloud.positions.size());
+    for (size_t i = 0; i < values.size(); ++i) values[i] = cloud.positions[i][axis];
+    const double extent_c = quantile(values, 1.0 - q) - quantile(values, q);
+    s = std::min(s, extent_c / std::max(1e-300, full_g.size()[axis]));
+  }
   double cx_c = 0.0, front_c = 0.0;
   std::vector<double> xs, zs;
   for (int iter = 0; iter < 30; ++iter) {

@@ -141,6 +141,22 @@ TEST_CASE("align ignores a longer neck and a missing back behind the clip planes
   CHECK(relative_rms(generic, rn, truth) > 2 * err);
 }
 
+TEST_CASE("align is not misled by shoulders in the scan", "[align]") {
+  // A bust: the head on a long neck over wide shoulders. The bounding box of
+  // such a scan is twice the head's size; the initialization must still
+  // measure the head.
+  const GenericHead generic = test::synthetic_head();
+  GenericHead bust = test::synthetic_head(-0.33);
+  test::add_ellipsoid(bust.mesh, Vec3(0, -0.36, -0.02), Vec3(0.22, 0.07, 0.11));
+  const Affine truth = random_affine(31, 8.0, 0.1, 0.2, 1000.0);
+  AlignResult r;
+  REQUIRE(align_initial(generic.mesh, generic.annotations, transformed(test::sample_surface(bust.mesh, 60000, 4), truth),
+                        AlignOptions{}, r).ok());
+  const double err = relative_rms(generic, r, truth);
+  INFO("relative RMS " << err);
+  CHECK(err < 0.015);
+}
+
 TEST_CASE("align difference images show the XOR the optimizer counts", "[align]") {
   const GenericHead generic = test::synthetic_head();
   const Affine truth = random_affine(5, 10.0, 0.15, 0.2, 1.0);
