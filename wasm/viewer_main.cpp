@@ -5,7 +5,7 @@
 //   show_mesh(positions, normals, colors, indices) -> "" or an error message
 //   show_points(positions, normals, colors)        -> "" or an error message
 //   show_generic_head()                            -> "" or an error message
-//   set_point_size(pixels), reset_view()
+//   set_point_size(pixels), set_wireframe(on), reset_view()
 //   orbit(dx, dy), pan(dx, dy), zoom(amount): camera steps in pixels, as if
 //     dragged (the page's keyboard control)
 //   frames_drawn() -> number of frames drawn so far (0 until the head is up)
@@ -160,6 +160,10 @@ void js_set_point_size(float pixels) {
   if (g_viewer && std::isfinite(pixels)) g_viewer->scene.set_point_size(std::min(64.0f, std::max(1.0f, pixels)));
 }
 
+void js_set_wireframe(bool on) {
+  if (g_viewer) g_viewer->scene.set_wireframe(on);
+}
+
 void js_reset_view() {
   if (g_viewer) g_viewer->scene.reset_view();
 }
@@ -186,6 +190,7 @@ EMSCRIPTEN_BINDINGS(likeness_viewer) {
   emscripten::function("show_points", &js_show_points);
   emscripten::function("show_generic_head", &js_show_generic_head);
   emscripten::function("set_point_size", &js_set_point_size);
+  emscripten::function("set_wireframe", &js_set_wireframe);
   emscripten::function("reset_view", &js_reset_view);
   emscripten::function("orbit", &js_orbit);
   emscripten::function("pan", &js_pan);

@@ -99,6 +99,7 @@ Status ViewerScene::replace(DrawableHandle fresh) {
   model_ = fresh;
   bounds_ = box;
   if (model_is_points_) renderer_.set_point_size(model_, point_size_);
+  else renderer_.set_wireframe(model_, wireframe_);
   reset_view();
   return Status::success();
 }
@@ -120,6 +121,12 @@ Status ViewerScene::show_points(const PointCloud& cloud) {
 void ViewerScene::set_point_size(float pixels) {
   point_size_ = pixels;
   if (model_ != kNoHandle && model_is_points_) renderer_.set_point_size(model_, pixels);
+  dirty_ = true;
+}
+
+void ViewerScene::set_wireframe(bool on) {
+  wireframe_ = on;
+  if (model_ != kNoHandle && !model_is_points_) renderer_.set_wireframe(model_, on);
   dirty_ = true;
 }
 

@@ -40,6 +40,8 @@ class ViewerScene {
   Status show_points(const PointCloud& cloud);
 
   void set_point_size(float pixels);
+  // Triangle edges over the surface (meshes; kept across model changes).
+  void set_wireframe(bool on);
   void reset_view();                 // frames the model from the default view
   void resize(int width_px, int height_px);
 
@@ -61,6 +63,7 @@ class ViewerScene {
   bool model_is_points_ = false;
   BBox bounds_;
   float point_size_ = 3.0f;
+  bool wireframe_ = false;
   int width_ = 1, height_ = 1;
   bool dirty_ = true;
 };

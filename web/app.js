@@ -33,7 +33,7 @@
     status: $('status'), banner: $('error-banner'), bannerText: $('error-text'),
     dismiss: $('error-dismiss'), dropZone: $('drop-zone'), fileInput: $('file-input'),
     fileList: $('file-list'), reset: $('btn-reset'), generic: $('btn-generic'),
-    pointSize: $('point-size'), maxSize: $('max-size'), sample: $('btn-sample'), cancel: $('btn-cancel'),
+    pointSize: $('point-size'), maxSize: $('max-size'), sample: $('btn-sample'), cancel: $('btn-cancel'), wireframe: $('wireframe'),
   };
 
   // Exposed for the browser test and for debugging from the console.
@@ -59,6 +59,7 @@
     ui.generic.disabled = !interactive || state === 'working';
     ui.sample.disabled = !interactive || state === 'working';
     ui.pointSize.disabled = !interactive;
+    ui.wireframe.disabled = !interactive;
     ui.dropZone.classList.toggle('busy', state === 'working');
     ui.cancel.hidden = state !== 'working';
   }
@@ -481,6 +482,7 @@
       else return;
       e.preventDefault();
     });
+    ui.wireframe.addEventListener('change', () => app.viewer && app.viewer.set_wireframe(ui.wireframe.checked));
     ui.pointSize.addEventListener('input', () => app.viewer && app.viewer.set_point_size(Number(ui.pointSize.value)));
   }
 

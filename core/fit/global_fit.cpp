@@ -92,18 +92,60 @@ struct Projection {
   double dist_energy = 0;  // 1/#S sum min(d, tau)^2
 };
 
+// `previous` (same size as set, or empty) holds the last projection: the
+// distance to the same triangle at the new positions bounds the search,
+// which prunes most of the tree when the mesh moved little.
 void project(const std::vector<Vec3>& points, const std::vector<int>& set, TriMesh& work,
-             const VecX& x, double tau, Projection& out) {
+             const VecX& x, double tau, const std::vector<SurfacePoint>* previous, Projection& out) {
   from_vector(x, work.positions);
   ClosestPointTree tree(work);
   out.hits.resize(set.size());
   double sum = 0;
   const double tau2 = tau * tau;
+  const bool warm = previous && previous->size() == set.size();
   for (size_t i = 0; i < set.size(); ++i) {
-    out.hits[i] = tree.closest(points[set[i]]);
+    const Vec3& p = points[set[i]];
+    if (warm && (*previous)[i].face >= 0) {
+      const int f = (*previous)[i].face;
+      const Tri& t = work.triangles[f];
+      SurfacePoint guess = closest_point_on_triangle(p, work.positions[t[0]], work.positions[t[1]], work.positions[t[2]]);
+      guess.face = f;
+      const SurfacePoint better = tree.closest(p, guess.squared_distance);
+      out.hits[i] = better.face >= 0 ? better : guess;
+    } else {
+      out.hits[i] = tree.closest(p);
+    }
     sum += std::min(out.hits[i].squared_distance, tau2);
   }
   out.dist_energy = set.empty() ? 0.0 : sum / set.size();
+}
+
+// Solves H x = g by conjugate gradients preconditioned with the LDLT factor
+// of a nearby matrix, from x0. False when it does not converge quickly (the
+// caller then refactorizes).
+bool preconditioned_cg(const SpMat& H, const VecX& g, const Eigen::SimplicialLDLT<SpMat>& M, const VecX& x0,
+                       VecX& x) {
+  x = x0;
+  VecX r = g - H * x;
+  const double target = 1e-10 * g.squaredNorm();
+  if (r.squaredNorm() <= target) return true;
+  VecX z = M.solve(r);
+  VecX p = z;
+  double rz = r.dot(z);
+  for (int it = 0; it < 12; ++it) {
+    const VecX Hp = H * p;
+    const double pHp = p.dot(Hp);
+    if (!(pHp > 0)) return false;
+    const double alpha = rz / pHp;
+    x += alpha * p;
+    r -= alpha * Hp;
+    if (r.squaredNorm() <= target) return x.allFinite();
+    z = M.solve(r);
+    const double rz_new = r.dot(z);
+    p = z + (rz_new / rz) * p;
+    rz = rz_new;
+  }
+  return false;
 }
 
 bool finite(const Vec3& p) { return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()); }
@@ -165,10 +207,12 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
 
   TriMesh work = mesh;
   VecX x = rest;
-  const int rounds = static_cast<int>(options.smooth_weights.size());
-  const int total_iterations = rounds * std::max(1, options.max_iterations_per_round);
+  const int sub_rounds = static_cast<int>(options.smooth_weights.size());
+  const int rounds = sub_rounds + (options.final_iterations > 0 ? 1 : 0);
+  const int total_iterations = sub_rounds * std::max(1, options.max_iterations_per_round) + options.final_iterations;
   Eigen::SimplicialLDLT<SpMat> solver;
   bool analyzed = false;
+  int factor_fresh_round = -1;  // the round whose matrix `solver` holds
   int done_iterations = 0;
 
   auto energy_parts = [&](const VecX& xx, double dist, double lambda, GlobalFitIteration& it) {
@@ -181,16 +225,17 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
   };
 
   for (int r = 0; r < rounds; ++r) {
-    const double lambda = options.smooth_weights[r];
-    const bool last = r + 1 == rounds;
-    int count = last ? options.final_points : options.subsample_points;
+    const bool final_pass = r >= sub_rounds;
+    const double lambda = options.smooth_weights[std::min(r, sub_rounds - 1)];
+    const int max_iterations = final_pass ? options.final_iterations : options.max_iterations_per_round;
+    int count = final_pass ? 0 : options.subsample_points;
     if (count <= 0 || count > static_cast<int>(points.size())) count = static_cast<int>(points.size());
     const std::vector<int> set(order.begin(), order.begin() + count);
 
     // The trimming distance is fixed for the round so that the round
     // minimizes one well-defined energy.
     Projection proj;
-    project(points, set, work, x, 1e300, proj);
+    project(points, set, work, x, 1e300, nullptr, proj);
     std::vector<double> d(proj.hits.size());
     for (size_t i = 0; i < d.size(); ++i) d[i] = std::sqrt(proj.hits[i].squared_distance);
     std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
@@ -208,7 +253,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
     const double w = 1.0 / set.size();
     const double beta = options.point_to_point_weight;
 
-    for (int it = 0; it < options.max_iterations_per_round; ++it) {
+    for (int it = 0; it < max_iterations; ++it) {
       if (!report(progress, "global_fitting", double(done_iterations) / total_iterations))
         return Status::error(ErrorCode::Cancelled, "global fit cancelled");
       ++done_iterations;
@@ -262,14 +307,25 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       h_data.setFromTriplets(trip.begin(), trip.end());
       const SpMat H = h_data + h_reg;
       g += (tikhonov * w) * x;
-      if (!analyzed) {
-        solver.analyzePattern(H);
-        analyzed = true;
+      // The matrix changes little between iterations (the correspondences
+      // move, lambda steps down), so it is factorized once and later
+      // iterations run conjugate gradients preconditioned by that factor: a
+      // few cheap triangular solves instead of a new factorization. When CG
+      // does not converge quickly the matrix is factorized afresh.
+      VecX x_star;
+      bool solved = false;
+      if (factor_fresh_round >= 0) solved = preconditioned_cg(H, g, solver, x, x_star);
+      if (!solved) {
+        if (!analyzed) {
+          solver.analyzePattern(H);
+          analyzed = true;
+        }
+        solver.factorize(H);
+        if (solver.info() != Eigen::Success)
+          return Status::error(ErrorCode::NotConverged, "global fit: the normal equations are singular");
+        factor_fresh_round = r;
+        x_star = solver.solve(g);
       }
-      solver.factorize(H);
-      if (solver.info() != Eigen::Success)
-        return Status::error(ErrorCode::NotConverged, "global fit: the normal equations are singular");
-      const VecX x_star = solver.solve(g);
       if (!x_star.allFinite())
         return Status::error(ErrorCode::NotConverged, "global fit: the solve produced non-finite positions");
 
@@ -286,7 +342,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       Projection trial;
       for (int bt = 0; bt < 6; ++bt, step *= 0.5) {
         const VecX xt = x + step * (x_star - x);
-        project(points, set, work, xt, tau, trial);
+        project(points, set, work, xt, tau, &proj.hits, trial);
         GlobalFitIteration parts;
         const double e_new = energy_parts(xt, trial.dist_energy, lambda, parts);
         if (e_new <= e_old) {

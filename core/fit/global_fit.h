@@ -31,8 +31,8 @@
 //   for mesh edges (behind the ears) binding the edge VECTOR keeps the ear's
 //   shape without pulling it onto the skull as a pure length penalty would.
 // - The smoothing weight decreases over rounds (as Hoppe's spring constant):
-//   early rounds on a random subsample of the scan with strong smoothing,
-//   the last round on all points.
+//   rounds on a random subsample of the scan, from strong to weak smoothing,
+//   then final_iterations on all points.
 #pragma once
 #include "common/progress.h"
 #include "common/status.h"
@@ -55,10 +55,12 @@ struct GlobalFitOptions {
   // sliding along the surface, keeps the normal equations well conditioned.
   double point_to_point_weight = 0.1;
   bool preserve_rest_shape = true;  // see header comment
-  int max_iterations_per_round = 12;
-  double relative_tolerance = 2e-3;  // stop a round when E changes less than this
-  int subsample_points = 20000;      // points per early round (0: all)
-  int final_points = 0;              // points in the last round (0: all)
+  int max_iterations_per_round = 6;
+  double relative_tolerance = 5e-3;  // stop a round when E changes less than this
+  int subsample_points = 10000;      // points per round (0: all); a random subset
+  // After the rounds, this many iterations on ALL points with the last
+  // lambda (the paper fits a 50k subsample; the last pass sees everything).
+  int final_iterations = 1;
   // Trimming: residuals beyond max(trim_factor * median, trim_floor) count
   // as that distance. trim_floor is in units of the mesh's mean edge length.
   double trim_factor = 4.0;

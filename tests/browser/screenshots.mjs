@@ -1,8 +1,9 @@
 // Screenshots of the web app for the docs (not a test): serves WEBDIR on
 // 127.0.0.1, opens the page in Debian's Chromium and writes
 //   OUTDIR/web_start.png          the page once ready (the generic head)
+//   OUTDIR/web_wireframe.png      the same with its edges (--wireframe)
 //   OUTDIR/web_<stem>.png         after loading each FILE given
-// Usage: node screenshots.mjs WEBDIR OUTDIR [FILE ...] [--point-size N]
+// Usage: node screenshots.mjs WEBDIR OUTDIR [FILE ...] [--point-size N] [--wireframe]
 import { chromium } from 'playwright-core';
 import http from 'node:http';
 import fs from 'node:fs';
@@ -10,12 +11,14 @@ import os from 'node:os';
 import path from 'node:path';
 
 const args = process.argv.slice(2);
+const wire = args.indexOf('--wireframe');
+if (wire >= 0) args.splice(wire, 1);
 let pointSize = null;
 const ps = args.indexOf('--point-size');
 if (ps >= 0) { pointSize = args[ps + 1]; args.splice(ps, 2); }
 const [webdir, outdir, ...files] = args;
 if (!webdir || !outdir) {
-  console.error('usage: node screenshots.mjs WEBDIR OUTDIR [FILE ...] [--point-size N]');
+  console.error('usage: node screenshots.mjs WEBDIR OUTDIR [FILE ...] [--point-size N] [--wireframe]');
   process.exit(2);
 }
 const root = path.resolve(webdir);
@@ -43,6 +46,15 @@ try {
   await settle();
   await page.screenshot({ path: path.join(outdir, 'web_start.png') });
   console.log('wrote', path.join(outdir, 'web_start.png'));
+  if (wire >= 0) {
+    await page.check('#wireframe');
+    await page.evaluate(() => document.activeElement.blur());
+    await settle();
+    await page.screenshot({ path: path.join(outdir, 'web_wireframe.png') });
+    console.log('wrote', path.join(outdir, 'web_wireframe.png'));
+    await page.uncheck('#wireframe');
+    await page.evaluate(() => document.activeElement.blur());
+  }
   if (pointSize) { await page.fill('#point-size', String(pointSize)); await page.evaluate(() => document.activeElement.blur()); }
   for (const f of files) {
     await page.setInputFiles('#file-input', f);

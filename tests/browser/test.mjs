@@ -338,6 +338,15 @@ async function main() {
           `foreground ${(100 * headStats.fgFraction).toFixed(1)}% -> ${(100 * pinched.fgFraction).toFixed(1)}%`);
     await page.click('#btn-reset');
 
+    // Wireframe: the edges darken part of the head; off again restores it.
+    await page.check('#wireframe');
+    const wired = await canvasImage(page);
+    const wireDiff = differingFraction(reset, wired);
+    await page.uncheck('#wireframe');
+    const unwired = differingFraction(reset, await canvasImage(page));
+    check('the wireframe toggle draws the edges and removes them', wireDiff > 0.003 && unwired < 0.002,
+          `on: ${(100 * wireDiff).toFixed(2)}% changed, off: ${(100 * unwired).toFixed(2)}%`);
+
     // 3. A point cloud.
     const before = await canvasImage(page);
     const s1 = await setFile(page, 'torus.ply', torusPly(20000));

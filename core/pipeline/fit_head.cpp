@@ -1,0 +1,199 @@
+#include "pipeline/fit_head.h"
+
+#include "mesh/geometry.h"
+#include "mesh/topology.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace lk {
+namespace {
+
+ClipPlane transform_plane(const ClipPlane& c, const AffineMap& m) {
+  ClipPlane out;
+  out.point = m.apply(c.point);
+  out.normal = (m.A.inverse().transpose() * c.normal).normalized();
+  return out;
+}
+
+std::string pct(double x) {
+  std::ostringstream s;
+  s.precision(3);
+  s << x;
+  return s.str();
+}
+
+// Every stride-th point, so stats on huge scans can be capped.
+std::vector<Vec3> thin(const std::vector<Vec3>& p, int max_points) {
+  if (max_points <= 0 || static_cast<int>(p.size()) <= max_points) return p;
+  const size_t stride = (p.size() + max_points - 1) / max_points;
+  std::vector<Vec3> out;
+  for (size_t i = 0; i < p.size(); i += stride) out.push_back(p[i]);
+  return out;
+}
+
+}  // namespace
+
+Status orientation_from_conventions(const Vec3& up, const Vec3& facing, Mat3& rotation) {
+  if (!up.allFinite() || !facing.allFinite() || up.norm() < 1e-12 || facing.norm() < 1e-12)
+    return Status::error(ErrorCode::InvalidInput, "up and facing must be non-zero vectors");
+  const Vec3 y = up.normalized();
+  Vec3 z = facing - facing.dot(y) * y;
+  if (z.norm() < 0.1 * facing.norm())
+    return Status::error(ErrorCode::InvalidInput, "up and facing are (nearly) parallel");
+  z.normalize();
+  const Vec3 x = y.cross(z);
+  rotation.row(0) = x.transpose();
+  rotation.row(1) = y.transpose();
+  rotation.row(2) = z.transpose();
+  return Status::success();
+}
+
+double guess_unit_to_metres(double d) {
+  const double candidates[3] = {1.0, 0.01, 0.001};
+  double best = 1.0, best_err = 1e300;
+  for (double u : candidates) {
+    const double err = std::abs(std::log(d * u / 0.35));
+    if (err < best_err) {
+      best_err = err;
+      best = u;
+    }
+  }
+  return best;
+}
+
+Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHeadOptions& options,
+                FitHeadResult& out, const FitStageObserver& observer, const ProgressFn& progress) {
+  out = FitHeadResult{};
+  const int n = scan.size();
+  out.points = n;
+  if (n == 0) return Status::error(ErrorCode::Empty, "the scan has no points");
+  for (const Vec3& p : scan.positions)
+    if (!p.allFinite()) return Status::error(ErrorCode::InvalidInput, "the scan has non-finite coordinates");
+  if (options.levels < 0 || options.levels > 5)
+    return Status::error(ErrorCode::InvalidInput, "levels must be in 0..5");
+  if (generic.mesh.triangles.empty())
+    return Status::error(ErrorCode::InvalidInput, "the generic head has no triangles");
+  if (n < options.min_points)
+    return Status::error(ErrorCode::NotAHead, "only " + std::to_string(n) + " points; a head scan needs at least " +
+                                                  std::to_string(options.min_points));
+
+  // Head frame: rotate by the conventions, scale by the guessed unit.
+  Mat3 R;
+  Status st = orientation_from_conventions(options.up, options.facing, R);
+  if (!st) return st;
+  const BBox box = bounding_box(scan.positions);
+  out.bbox_diagonal = box.diagonal();
+  if (!(out.bbox_diagonal > 0)) return Status::error(ErrorCode::NotAHead, "all scan points coincide");
+  out.unit_to_metres = guess_unit_to_metres(out.bbox_diagonal);
+  out.scan_to_head.A = out.unit_to_metres * R;
+  PointCloud cloud;
+  cloud.positions.reserve(n);
+  for (const Vec3& p : scan.positions) cloud.positions.push_back(out.scan_to_head.apply(p));
+  const double diag = out.bbox_diagonal * out.unit_to_metres;
+
+  // A flat cloud (a wall, a sheet of paper) has one tiny principal extent.
+  {
+    Vec3 mean = Vec3::Zero();
+    for (const Vec3& p : cloud.positions) mean += p;
+    mean /= n;
+    Mat3 cov = Mat3::Zero();
+    for (const Vec3& p : cloud.positions) cov += (p - mean) * (p - mean).transpose();
+    cov /= n;
+    Eigen::SelfAdjointEigenSolver<Mat3> eig(cov);
+    const Vec3 ev = eig.eigenvalues().cwiseMax(0.0);
+    const double ratio = std::sqrt(ev[0] / std::max(ev[2], 1e-300));
+    if (ratio < options.min_thickness_ratio)
+      return Status::error(ErrorCode::NotAHead, "the points lie nearly in a plane (thickness ratio " + pct(ratio) +
+                                                    "); a head scan has depth");
+  }
+
+  MeshTopology topo;
+  st = build_topology(generic.mesh, topo);
+  if (!st) return with_context(st, "generic head");
+  const HeadAnnotations& ann = generic.annotations;
+
+  auto stage_done = [&](const char* name, const TriMesh& surface, const std::vector<Vec3>& pts) {
+    if (observer.finished) observer.finished(name, surface);
+    FitStageReport rep;
+    rep.name = name;
+    if (options.measure_stages)
+      rep.distance = point_to_surface_stats(thin(pts, options.stats_max_points), surface, diag);
+    out.stages.push_back(rep);
+    if (observer.measured) observer.measured(rep);
+  };
+  auto cancelled = [&] { return Status::error(ErrorCode::Cancelled, "fit cancelled"); };
+
+  // 1. Initial alignment.
+  if (observer.started) observer.started("initial_alignment");
+  st = align_initial(generic.mesh, ann, cloud, options.align, out.alignment, progress);
+  if (!st) return with_context(st, "initial alignment");
+  out.generic_to_head.A = out.alignment.linear;
+  out.generic_to_head.t = out.alignment.translation;
+  out.aligned = generic.mesh;
+  for (Vec3& p : out.aligned.positions) p = out.generic_to_head.apply(p);
+  out.aligned.normals.clear();
+
+  // The points to fit: the neck below the generic head's neck is not part
+  // of the model, and would drag its boundary down.
+  std::vector<Vec3> pts;
+  pts.reserve(n);
+  const ClipPlane neck = transform_plane(ann.neck_clip, out.generic_to_head);
+  for (const Vec3& p : cloud.positions)
+    if (!options.cut_neck || neck.keeps(p)) pts.push_back(p);
+  out.fitted_points = static_cast<int>(pts.size());
+  if (out.fitted_points < options.min_points)
+    return Status::error(ErrorCode::NotAHead, "only " + std::to_string(out.fitted_points) +
+                                                  " points above the aligned head's neck");
+
+  // Sanity: a head scan lies on (near) the aligned generic head; noise,
+  // furniture or a torso do not.
+  {
+    ClosestPointTree tree(out.aligned);
+    const std::vector<Vec3> probe = thin(pts, 20000);
+    const double near2 = std::pow(options.near_distance_pct / 100.0 * diag, 2);
+    int near = 0;
+    for (const Vec3& p : probe) near += tree.closest(p, near2).face >= 0;
+    out.near_fraction = double(near) / probe.size();
+    if (out.near_fraction < options.min_near_fraction)
+      return Status::error(ErrorCode::NotAHead,
+                           "after alignment only " + pct(100 * out.near_fraction) + "% of the points lie within " +
+                               pct(options.near_distance_pct) + "% of the diagonal of the head surface (need " +
+                               pct(100 * options.min_near_fraction) + "%); this does not look like a head scan");
+  }
+  stage_done("initial_alignment", out.aligned, pts);
+  if (!report(progress, "initial_alignment", 1.0)) return cancelled();
+
+  // 2. Local fitting of ears, nose, mouth.
+  if (observer.started) observer.started("local_fitting");
+  st = fit_local(pts, out.aligned, topo, ann.boxes, out.generic_to_head, diag, options.local, out.local,
+                 out.local_fit, progress);
+  if (!st) return with_context(st, "local fitting");
+  stage_done("local_fitting", out.local, pts);
+
+  // 3. Global fitting.
+  if (observer.started) observer.started("global_fitting");
+  GlobalFitTerms terms;
+  terms.binding_edges = ann.binding_edges;
+  terms.constrained_vertices = ann.constrained_vertices;
+  st = fit_global(pts, out.local, topo, terms, options.global, out.control, out.global_fit, progress);
+  if (!st) return with_context(st, "global fitting");
+  stage_done("global_fitting", out.control, pts);
+
+  // 4. Displaced Butterfly levels.
+  if (observer.started) observer.started("subdivision");
+  st = build_multires(out.control, options.levels, out.multires);
+  if (!st) return with_context(st, "subdivision");
+  PointCloud fitted;
+  fitted.positions = pts;
+  st = measure_displacements(fitted, options.displacement, out.multires, nullptr, progress);
+  if (!st) return with_context(st, "displacements");
+  for (int l = 1; l <= options.levels; ++l) out.level_meshes.push_back(level_mesh(out.multires, l));
+  const TriMesh finest = level_mesh(out.multires, options.levels);
+  stage_done("subdivision", finest, pts);
+  return Status::success();
+}
+
+}  // namespace lk

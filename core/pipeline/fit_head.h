@@ -1,0 +1,110 @@
+// The whole scan -> head job of jeong2002 (Sec. 4.1-5, Table 1), for the CLI
+// and the web app: a raw point cloud in, a fitted control mesh and its
+// displaced Modified Butterfly levels out, with the paper's per-stage
+// accuracy figures.
+//
+//   1. initial alignment   align/initial_alignment.h  (Sec. 4.1)
+//   2. local fitting       fit/local_fit.h             (Sec. 4.2)
+//   3. global fitting      fit/global_fit.h            (Sec. 4.3)
+//   4. subdivision         multires/multires.h         (Sec. 5)
+//
+// Frames. The scan may be in any unit (m, cm, mm: picked from its size) and
+// any position; `up` and `facing` say how it is oriented. Everything is
+// computed and returned in the HEAD frame: metres, +y up, +z facing, the
+// scan's position rotated and scaled but not moved (scan_to_head maps scan
+// coordinates there; its inverse brings results back onto the scan).
+//
+// Timing is not done here (core has no clocks): stage boundaries are
+// reported through FitStageObserver, and the caller times them. Stage names:
+// "initial_alignment", "local_fitting", "global_fitting", "subdivision".
+//
+// Stats per stage: distances from the scan points that are fitted (the neck
+// below the generic head's neck plane is cut away) to the current surface,
+// in percent of the scan's bbox diagonal, as the paper's Table 1.
+//
+// Shapes: scan #P by 3; control #V by 3 / #F by 3 (the generic head's
+// connectivity); level l mesh #V_l by 3 / 4^l #F by 3.
+#pragma once
+#include "align/initial_alignment.h"
+#include "common/progress.h"
+#include "common/status.h"
+#include "fit/closest_point.h"
+#include "fit/global_fit.h"
+#include "fit/local_fit.h"
+#include "head/head_model.h"
+#include "multires/multires.h"
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace lk {
+
+struct FitHeadOptions {
+  Vec3 up = Vec3::UnitY();      // the scan's up direction
+  Vec3 facing = Vec3::UnitZ();  // the direction the scanned face looks
+  int levels = 3;               // Butterfly refinement levels (paper: 2 shown)
+  // Non-head rejection (ErrorCode::NotAHead):
+  int min_points = 1000;             // fewer points cannot describe a head
+  double min_thickness_ratio = 0.05; // smallest / largest PCA extent (std); a plane has ~0
+  // After alignment, at least this share of the points must lie within
+  // near_distance_pct of the aligned generic head (noise or a chair does not).
+  double min_near_fraction = 0.6;
+  double near_distance_pct = 2.0;    // percent of the bbox diagonal
+  bool cut_neck = true;              // drop points below the generic head's neck plane
+  bool measure_stages = true;        // compute the per-stage distance stats
+  int stats_max_points = 0;          // measure on at most this many points (0: all)
+  AlignOptions align;
+  LocalFitOptions local;
+  GlobalFitOptions global;
+  DisplacementOptions displacement;
+};
+
+struct FitStageReport {
+  std::string name;
+  DistanceStats distance;  // scan points to the surface after the stage
+};
+
+// Called by fit_head at stage boundaries. finished() comes right after the
+// stage's work and BEFORE its stats are measured, so a timer stopped there
+// times the work only; measured() follows with the stats.
+struct FitStageObserver {
+  std::function<void(const std::string& stage)> started;
+  std::function<void(const std::string& stage, const TriMesh& surface)> finished;
+  std::function<void(const FitStageReport& report)> measured;
+};
+
+struct FitHeadResult {
+  int points = 0;               // scan points given
+  int fitted_points = 0;        // after the neck cut
+  double bbox_diagonal = 0;     // the scan's, in scan units
+  double unit_to_metres = 1;    // the unit picked: 1 (m), 0.01 (cm), 0.001 (mm)
+  AffineMap scan_to_head;       // rotation * unit scale (no translation)
+  AffineMap generic_to_head;    // the initial alignment
+  TriMesh aligned, local, control;  // control mesh after each fitting stage
+  MultiresMesh multires;        // levels over `control` with displacements
+  std::vector<TriMesh> level_meshes;  // levels 1..L (displaced)
+  std::vector<FitStageReport> stages;
+  AlignResult alignment;
+  LocalFitResult local_fit;
+  GlobalFitResult global_fit;
+  double near_fraction = 0;     // share of points near the aligned head (sanity check)
+};
+
+// Fits generic (the generic head with annotations, in metres) to scan.
+// Errors: Empty (no points), InvalidInput (NaN/inf, bad options),
+// NotAHead (too few points, a flat cloud, points that do not lie on a
+// head-shaped surface after alignment), NotConverged, Cancelled.
+Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHeadOptions& options,
+                FitHeadResult& out, const FitStageObserver& observer = {},
+                const ProgressFn& progress = {});
+
+// The rotation taking a scan with the given up and facing directions to the
+// head frame (+y up, +z facing). Fails when they are (nearly) parallel.
+Status orientation_from_conventions(const Vec3& up, const Vec3& facing, Mat3& rotation);
+
+// 1, 0.01 or 0.001: the unit whose head-sized reading of the diagonal is most
+// plausible (a head's bbox diagonal is about 0.35 m).
+double guess_unit_to_metres(double bbox_diagonal);
+
+}  // namespace lk

@@ -1,0 +1,94 @@
+// Shared by `likeness fit` and the "fit" benchmark: the per-stage table of
+// jeong2002 Table 1 with the paper's figures beside ours, and report.json.
+#pragma once
+#include "pipeline/fit_head.h"
+
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace lk::cli {
+
+struct TimedStage {
+  std::string name;
+  double ms = 0;      // wall time
+  double cpu_ms = 0;  // process CPU time (the machine may be shared)
+  DistanceStats distance;
+};
+
+// jeong2002 Table 1 (percent of the bbox diagonal) and Sec. 7 times (PC, 50k points).
+struct PaperStage {
+  const char* name;
+  double male_mean, male_max, female_mean, female_max;
+  const char* time;
+};
+inline const std::vector<PaperStage>& paper_table() {
+  static const std::vector<PaperStage> t = {
+      {"initial_alignment", 1.51, 13.13, 1.09, 11.35, "6-10 min"},
+      {"local_fitting", 1.42, 13.13, 0.91, 10.26, "~5 min"},
+      {"global_fitting", 0.11, 1.28, 0.12, 1.55, "~40 min"},
+      {"subdivision", 0.04, 1.30, 0.08, 1.55, "n/a"},
+  };
+  return t;
+}
+
+inline void print_fit_table(const std::vector<TimedStage>& stages) {
+  std::printf("  %-18s %9s %9s %10s %10s | %-22s %-22s %s\n", "stage", "mean %", "max %", "wall ms", "cpu ms",
+              "paper male mean/max", "paper female mean/max", "paper time");
+  double total = 0, total_cpu = 0;
+  for (const TimedStage& s : stages) {
+    const PaperStage* p = nullptr;
+    for (const auto& q : paper_table())
+      if (s.name == q.name) p = &q;
+    total += s.ms;
+    total_cpu += s.cpu_ms;
+    std::printf("  %-18s %9.3f %9.3f %10.1f %10.1f | ", s.name.c_str(), s.distance.mean_pct, s.distance.max_pct, s.ms,
+                s.cpu_ms);
+    if (p)
+      std::printf("%6.2f / %-13.2f %6.2f / %-13.2f %s\n", p->male_mean, p->male_max, p->female_mean,
+                  p->female_max, p->time);
+    else
+      std::printf("\n");
+  }
+  std::printf("  %-18s %9s %9s %10.1f %10.1f | paper: about an hour on a 50k-point subsample\n", "total", "", "",
+              total, total_cpu);
+}
+
+// Wall and CPU stopwatch for the stage observer.
+struct StageClock {
+  std::chrono::steady_clock::time_point wall;
+  std::clock_t cpu = 0;
+  void start() {
+    wall = std::chrono::steady_clock::now();
+    cpu = std::clock();
+  }
+  void stop(TimedStage& s) const {
+    s.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - wall).count();
+    s.cpu_ms = 1000.0 * double(std::clock() - cpu) / CLOCKS_PER_SEC;
+  }
+};
+
+inline std::string fit_report_json(const FitHeadResult& r, const std::vector<TimedStage>& stages,
+                                   const std::string& status = "ok") {
+  std::ostringstream j;
+  j.precision(9);
+  double total = 0;
+  for (const auto& s : stages) total += s.ms;
+  j << "{\n  \"status\": \"" << status << "\",\n  \"points\": " << r.points
+    << ",\n  \"fitted_points\": " << r.fitted_points << ",\n  \"bbox_diagonal\": " << r.bbox_diagonal
+    << ",\n  \"unit_to_metres\": " << r.unit_to_metres << ",\n  \"stages\": [";
+  for (size_t i = 0; i < stages.size(); ++i) {
+    const auto& s = stages[i];
+    j << (i ? "," : "") << "\n    {\"name\": \"" << s.name << "\", \"mean_pct\": " << s.distance.mean_pct
+      << ", \"max_pct\": " << s.distance.max_pct << ", \"p95_pct\": "
+      << (r.bbox_diagonal > 0 ? 100.0 * s.distance.p95 / (r.bbox_diagonal * r.unit_to_metres) : 0.0)
+      << ", \"ms\": " << s.ms << ", \"cpu_ms\": " << s.cpu_ms << "}";
+  }
+  j << "\n  ],\n  \"total_ms\": " << total << "\n}\n";
+  return j.str();
+}
+
+}  // namespace lk::cli
