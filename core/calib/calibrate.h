@@ -1,0 +1,54 @@
+// Camera calibration from 2-D/3-D feature correspondences (tarini2002 Sec. 3:
+// "about 12-15 corresponding feature points on the mesh and in the image";
+// the paper uses Tsai's method with pre-calibrated intrinsics, we also
+// estimate intrinsics when they are unknown).
+//
+// Method: normalized DLT (Hartley & Zisserman, Alg. 7.1) for an initial 3x4
+// projection P; RQ decomposition of P into K, R, t (det R = +1, positive
+// focal); then Levenberg-Marquardt on the reprojection error over
+// f (fx = fy unless separate_focal), cx, cy, k1, k2, axis-angle rotation and
+// t. Robustness: RANSAC over minimal 6-point DLT sets followed by iterative
+// outlier rejection (threshold max(outlier_px, 3 * 1.4826 * MAD)).
+//
+// Shapes: correspondences #N (N >= 6); CalibResult::errors and ::outlier #N.
+#pragma once
+#include "calib/camera.h"
+#include "common/status.h"
+
+#include <vector>
+
+namespace lk {
+
+struct CalibOptions {
+  // Known intrinsics: when known_focal > 0, fx = fy = known_focal is fixed
+  // (e.g. the Kira photos: 3813.6 px at 1800x1200) and only the pose (plus
+  // the principal point / distortion if not fixed) is estimated. The
+  // principal point then starts at the image centre.
+  double known_focal = 0;
+  bool separate_focal = false;        // estimate fx and fy separately (default fx = fy)
+  bool fix_principal_point = false;   // keep (cx, cy) at the image centre; forced when N < 8
+  bool estimate_k1 = true;            // radial distortion k1 (needs >= 8 inliers, else fixed at 0)
+  bool estimate_k2 = false;           // radial distortion k2 (needs >= 10 inliers)
+  bool robust = true;                 // RANSAC + outlier rejection
+  double outlier_px = 3.0;            // minimum rejection threshold, pixels
+  int ransac_iterations = 300;        // minimal-set trials (deterministic seed)
+  int max_lm_iterations = 100;        // Levenberg-Marquardt iterations per refinement
+};
+
+struct CalibResult {
+  Camera camera;
+  std::vector<double> errors;   // #N reprojection error of each point, pixels (inf if behind camera)
+  std::vector<char> outlier;    // #N, 1 = flagged (excluded from the final fit)
+  double rms = 0;               // RMS reprojection error over the inliers, pixels
+  int num_inliers = 0;
+};
+
+// Calibrates one photo. Fails with InvalidInput on fewer than 6
+// correspondences, NaN/inf values, non-positive image size, degenerate
+// configurations (collinear points; coplanar points with free intrinsics,
+// which DLT cannot resolve: give known_focal), or a solution that puts the
+// points behind the camera; NotConverged when no consistent camera is found.
+Status calibrate_camera(const std::vector<Correspondence>& correspondences, int image_width,
+                        int image_height, const CalibOptions& options, CalibResult& result);
+
+}  // namespace lk
