@@ -665,3 +665,27 @@ TEST_CASE("visibility, model matrix and sub-viewports are honoured", "[render]")
   CHECK(left_red == 32 * 32);
   CHECK(right_foreground > 50);
 }
+
+TEST_CASE("per-vertex mesh colors replace the base color", "[render]") {
+  TriMesh e;
+  append_ellipsoid(e, Vec3::Zero(), Vec3(0.3, 0.3, 0.3), 24, 32);
+  e.colors.assign(e.positions.size(), Vec3(0.05, 0.1, 0.8));  // linear blue
+  OrbitCamera cam;
+  cam.distance = 3.0f;
+  cam.scene_radius = 1.0f;
+  const CameraMatrices m = cam.matrices(1.0f);
+  for (const bool use_colors : {true, false}) {
+    const Image im = render(
+        [&](Renderer& r) {
+          DrawableHandle hd;
+          Status s = r.upload_mesh(e, hd);
+          if (s) r.style(hd)->use_vertex_colors = use_colors;
+          return s;
+        },
+        [&](float) { return m; }, 64, 64);
+    const std::uint8_t* c = im.at(30, 30);  // lit side of the sphere
+    INFO("use_colors " << use_colors << ": " << int(c[0]) << "," << int(c[1]) << "," << int(c[2]));
+    if (use_colors) CHECK((c[2] > c[0] + 60 && c[2] > c[1] + 30));
+    else CHECK((c[0] > c[1] && c[1] > c[2]));  // skin tone
+  }
+}
