@@ -1,5 +1,5 @@
-// Cameras for the renderer: an orbit camera driven by pixel deltas (mouse,
-// touch) and the canonical views used in docs and tests.
+// Cameras for the renderer (not from the papers): an orbit camera driven by
+// pixel deltas (mouse, touch) and the canonical views used in docs and tests.
 //
 // Head conventions (head_model.h): the head looks along +z, up is +y, +x is
 // the head's LEFT (the viewer's right in a frontal view). So "left" looks at

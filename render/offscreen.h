@@ -1,7 +1,7 @@
-// Native-only headless rendering (library lk_render_native): an OSMesa
-// context (core profile 3.3, which accepts the "#version 300 es" shaders) and
-// a one-call render_offscreen() that returns an lk::Image (top row first; GL
-// reads bottom-up, so rows are flipped).
+// Native-only headless rendering (not from the papers; library
+// lk_render_native): an OSMesa context (core profile 3.3, which accepts the
+// "#version 300 es" shaders) and a one-call render_offscreen() that returns
+// an lk::Image (top row first; GL reads bottom-up, so rows are flipped).
 #pragma once
 #include "common/status.h"
 #include "image/image.h"

@@ -1,4 +1,5 @@
-// The shared GL renderer: one small forward renderer written against the
+// The shared GL renderer (not from the papers: the display layer every stage's
+// results are looked at through): one small forward renderer written against the
 // OpenGL ES 3.0 / WebGL2 subset, used by the wasm viewer (SDL2 + WebGL2) and
 // by the native harness (OSMesa, see offscreen.h). No windowing here: create
 // a Renderer while a GL context is current and use it only on that context.
