@@ -75,9 +75,9 @@ struct HeadShape {
     d = smooth_min(d, std::min(upper, lower), 0.006);
     // Neck: an elliptic cylinder below the head.
     // Its axis leans forward going down, as a neck does.
-    const double axis_z = -0.014 - 0.2 * (p.y() + 0.08);
-    const double nx = p.x() / 0.060, nz = (p.z() - axis_z) / 0.063;
-    const double neck = std::max((std::sqrt(nx * nx + nz * nz) - 1.0) * 0.060, p.y() + 0.03);
+    const double axis_z = -0.020 - 0.1 * (p.y() + 0.08);
+    const double nx = p.x() / 0.058, nz = (p.z() - axis_z) / 0.060;
+    const double neck = smooth_max((std::sqrt(nx * nx + nz * nz) - 1.0) * 0.058, p.y() + 0.035, 0.03);
     d = smooth_min(d, neck, 0.03);
     return d;
   }
@@ -573,17 +573,21 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
     auto at = [&](double bk, double u, double outward) -> Vec3 { return root + bk * back + u * up + outward * n; };
     // The helix (outer rim) outline, by the angle of each loop vertex around the root.
     auto helix = [&](double w, double out_extra, double scale) -> Vec3 {
-      const double cw = std::cos(w), sw = std::sin(w);
+      // A superellipse: rounder than an ellipse, so the ear is not pointed.
+      auto soft = [](double t) { return std::copysign(std::pow(std::abs(t), 0.7), t); };
+      const double cw = soft(std::cos(w)), sw = soft(std::sin(w));
       const double lobe = std::max(0.0, -sw);  // the lobe hangs a little behind the root
       const double bk = 0.007 + scale * 0.017 * cw + 0.005 * lobe * lobe;
       const double u = -0.002 + scale * (sw > 0 ? 0.034 : 0.031) * sw;
-      const double outward = 0.006 + 0.012 * (0.5 + 0.5 * cw) + 0.003 * lobe + out_extra;
+      const double outward = 0.008 + 0.011 * (0.5 + 0.5 * cw) + 0.003 * lobe + out_extra;
       return at(bk, u, outward);
     };
     std::vector<Vec3> ring_a, ring_b, ring_c;
-    // The helix outline is sampled at evenly spaced angles (the root loop's
-    // own angles bunch up at its short top and bottom edges, which would
-    // make a pointed ear), starting from the root's vertex straight above its centre.
+    // Each root vertex maps to the point of the helix outline at the same
+    // fraction of the perimeter, both measured from the top in the same
+    // direction: the walls between root and rim do not twist, and the
+    // outline is sampled evenly (the root's angles bunch up at its short top
+    // and bottom edges, which would make a pointed ear).
     const int n_loop = static_cast<int>(loop.size());
     std::vector<double> root_angle(n_loop);
     int top_k = 0;
@@ -593,12 +597,30 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
       if (std::cos(root_angle[k] - kPi / 2) > std::cos(root_angle[top_k] - kPi / 2)) top_k = k;
     }
     const double turn = std::sin(root_angle[(top_k + 1) % n_loop] - root_angle[top_k]) > 0 ? 1 : -1;
+    std::vector<double> root_fraction(n_loop, 0.0);
+    double root_length = 0;
+    for (int i = 1; i <= n_loop; ++i) {
+      const int k0 = (top_k + i - 1) % n_loop, k1 = (top_k + i) % n_loop;
+      root_length += (b.positions[loop[k1]] - b.positions[loop[k0]]).norm();
+      if (i < n_loop) root_fraction[k1] = root_length;
+    }
+    // Arc length of the outline, always measured counter-clockwise from the
+    // top so that both ears (whose loops turn opposite ways) sample the same points.
+    const int samples = 720;
+    std::vector<double> outline_length(samples + 1, 0.0);
+    for (int i = 1; i <= samples; ++i)
+      outline_length[i] = outline_length[i - 1] + (helix(kPi / 2 + 2 * kPi * i / samples, 0, 1.0) -
+                                                   helix(kPi / 2 + 2 * kPi * (i - 1) / samples, 0, 1.0)).norm();
     std::vector<double> angle(n_loop);
     for (int k = 0; k < n_loop; ++k) {
+      double f = root_fraction[k] / root_length;
+      if (turn < 0 && f > 0) f = 1 - f;
+      const double target = f * outline_length[samples];
+      const int i = std::clamp(static_cast<int>(std::upper_bound(outline_length.begin(), outline_length.end(), target) -
+                                                outline_length.begin()), 1, samples);
+      const double t = (target - outline_length[i - 1]) / (outline_length[i] - outline_length[i - 1]);
+      const double w = kPi / 2 + 2 * kPi * (i - 1 + t) / samples;
       const Vec3 d = b.positions[loop[k]] - root;
-      double even = kPi / 2 + turn * 2 * kPi * ((k - top_k + n_loop) % n_loop) / n_loop;
-      even = root_angle[k] + std::remainder(even - root_angle[k], 2 * kPi);
-      const double w = 0.5 * (even + root_angle[k]);  // halfway, so the walls do not twist
       angle[k] = w;
       ring_a.push_back(at(1.04 * d.dot(back), 1.04 * d.dot(up), d.dot(n) + 0.0035));
       ring_b.push_back(helix(w, 0, 1.0));

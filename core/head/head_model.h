@@ -43,14 +43,18 @@ struct EyeSocket {
 struct HeadAnnotations {
   std::vector<FeatureBox> boxes;                // ear_left, ear_right, nose, mouth
   std::vector<std::array<int, 2>> binding_edges;  // E_binding: mesh edges + virtual lip edges
-  std::vector<int> constrained_vertices;        // E_constraint: inner lip vertices
+  std::vector<int> constrained_vertices;        // E_constraint: inner lip / mouth bag vertices
   ClipPlane neck_clip;                          // removes the neck below it
   ClipPlane back_clip;                          // removes the back of the head (hair)
   Vec3 look = Vec3::UnitZ();
   Vec3 up = Vec3::UnitY();
   // Named vertex sets: "face", "scalp", "ears", "ear_left", "ear_right",
   // "neck", "lips", "upper_lip", "lower_lip", "eye_rim_left", "eye_rim_right",
-  // "nose", "brow", "jaw", "chin", "cheeks".
+  // "nose", "brow", "jaw", "chin", "cheeks". Sets may overlap. "lips" holds
+  // both lips, the mouth corners and the mouth bag; "upper_lip"/"lower_lip"
+  // leave out the two corner vertices, which both lips share. "face"
+  // includes the eye socket pockets and the mouth bag; "ears" does not touch
+  // "face".
   std::map<std::string, std::vector<int>> regions;
   EyeSocket eye_left, eye_right;                // +x is left
   Vec3 mouth_center = Vec3::Zero();             // between the lips, for teeth/tongue
