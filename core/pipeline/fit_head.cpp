@@ -34,6 +34,74 @@ std::vector<Vec3> thin(const std::vector<Vec3>& p, int max_points) {
   return out;
 }
 
+// Normal displacements measured in concave, thin places (lip corners, eye
+// corners, behind the ear) may cross the other side of the feature and fold
+// triangles over. Per level, from coarse to fine: a triangle whose normal
+// turned against the undisplaced one gets its corners' displacements zeroed
+// (there the smooth Butterfly surface is the better guess, Sec. 5's rule for
+// missing data), until no fold is left or `rounds` passes are done.
+Status suppress_folds(MultiresMesh& mr, int rounds, int& zeroed) {
+  zeroed = 0;
+  for (int l = 0; l <= mr.num_levels(); ++l) {
+    for (int pass = 0; pass < rounds; ++pass) {
+      const auto& tris = mr.triangles(l);
+      const auto& base = mr.state.base[l];
+      const auto& disp = mr.state.displaced[l];
+      int changed = 0;
+      for (const Tri& t : tris) {
+        const Vec3 n0 = (base[t[1]] - base[t[0]]).cross(base[t[2]] - base[t[0]]);
+        const Vec3 n1 = (disp[t[1]] - disp[t[0]]).cross(disp[t[2]] - disp[t[0]]);
+        if (n0.dot(n1) > 0) continue;
+        for (int v : t)
+          if (mr.displacements[l][v] != 0) {
+            mr.displacements[l][v] = 0;
+            ++changed;
+          }
+      }
+      if (changed == 0) break;
+      zeroed += changed;
+      const Status st = evaluate(mr);
+      if (!st) return st;
+    }
+  }
+  return Status::success();
+}
+
+// The eye sockets and the mouth bag are pockets the scanner never sees; a
+// normal line from their vertices meets the outer skin (the lids, the lips)
+// and would push the pocket out through it. Their displacements, and those
+// of every finer vertex on an edge touching them, are set to zero.
+Status zero_pocket_displacements(const HeadAnnotations& ann, MultiresMesh& mr, int& zeroed) {
+  zeroed = 0;
+  std::vector<char> inner(mr.num_vertices(0), 1);
+  for (const char* region : {"face", "scalp", "ears", "neck"}) {
+    auto it = ann.regions.find(region);
+    if (it == ann.regions.end()) continue;
+    for (int v : it->second)
+      if (v >= 0 && v < static_cast<int>(inner.size())) inner[v] = 0;
+  }
+  for (int l = 0; l <= mr.num_levels(); ++l) {
+    for (size_t v = 0; v < inner.size(); ++v)
+      if (inner[v] && mr.displacements[l][v] != 0) {
+        mr.displacements[l][v] = 0;
+        ++zeroed;
+      }
+    if (l == mr.num_levels()) break;
+    TriMesh level;
+    level.positions.resize(mr.num_vertices(l));
+    level.triangles = mr.triangles(l);
+    MeshTopology topo;
+    const Status st = build_topology(level, topo);
+    if (!st) return st;
+    std::vector<char> next(mr.num_vertices(l + 1), 0);
+    std::copy(inner.begin(), inner.end(), next.begin());
+    for (size_t e = 0; e < topo.edges.size() && inner.size() + e < next.size(); ++e)
+      next[inner.size() + e] = inner[topo.edges[e].v0] || inner[topo.edges[e].v1];
+    inner.swap(next);
+  }
+  return evaluate(mr);
+}
+
 }  // namespace
 
 Status orientation_from_conventions(const Vec3& up, const Vec3& facing, Mat3& rotation) {
@@ -188,7 +256,15 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   if (!st) return with_context(st, "subdivision");
   PointCloud fitted;
   fitted.positions = pts;
-  st = measure_displacements(fitted, options.displacement, out.multires, nullptr, progress);
+  DisplacementOptions dopt = options.displacement;
+  if (dopt.max_distance <= 0) dopt.max_distance = options.displacement_max_pct / 100.0 * diag;
+  st = measure_displacements(fitted, dopt, out.multires, nullptr, progress);
+  if (!st) return with_context(st, "displacements");
+  int zeroed_pockets = 0;
+  st = zero_pocket_displacements(ann, out.multires, zeroed_pockets);
+  if (!st) return with_context(st, "displacements");
+  st = suppress_folds(out.multires, 4, out.zeroed_displacements);
+  out.zeroed_displacements += zeroed_pockets;
   if (!st) return with_context(st, "displacements");
   for (int l = 1; l <= options.levels; ++l) out.level_meshes.push_back(level_mesh(out.multires, l));
   const TriMesh finest = level_mesh(out.multires, options.levels);

@@ -7,6 +7,8 @@
 //   2. local fitting       fit/local_fit.h             (Sec. 4.2)
 //   3. global fitting      fit/global_fit.h            (Sec. 4.3)
 //   4. subdivision         multires/multires.h         (Sec. 5)
+//      then displacements that fold a triangle over are dropped (set to 0,
+//      the smooth surface stays there), level by level.
 //
 // Frames. The scan may be in any unit (m, cm, mm: picked from its size) and
 // any position; `up` and `facing` say how it is oriented. Everything is
@@ -58,6 +60,12 @@ struct FitHeadOptions {
   LocalFitOptions local;
   GlobalFitOptions global;
   DisplacementOptions displacement;
+  // Cap on |displacement| (percent of the bbox diagonal) when
+  // displacement.max_distance is 0. The control mesh already fits the scan
+  // in the least-squares sense (residuals ~0.1 %), so longer normal lines
+  // only reach the other side of thin features (lips, nostrils, ears) or
+  // hair junk; 0.7 % is about 3 mm on a head.
+  double displacement_max_pct = 0.7;
 };
 
 struct FitStageReport {
@@ -89,6 +97,7 @@ struct FitHeadResult {
   LocalFitResult local_fit;
   GlobalFitResult global_fit;
   double near_fraction = 0;     // share of points near the aligned head (sanity check)
+  int zeroed_displacements = 0; // displacements dropped because they folded triangles
 };
 
 // Fits generic (the generic head with annotations, in metres) to scan.
