@@ -327,6 +327,8 @@ Status Renderer::upload_mesh(const TriMesh& mesh, DrawableHandle& out) {
   if (!mesh.colors.empty() && mesh.colors.size() != nv)
     return Status::error(ErrorCode::InvalidInput, "mesh has " + std::to_string(mesh.colors.size()) +
                                                       " colors for " + std::to_string(nv) + " vertices");
+  for (const Vec3& n : mesh.normals)
+    if (!finite(n)) return Status::error(ErrorCode::InvalidInput, "mesh has a non-finite normal");
   const size_t want_uvs = mesh.uv_per_corner ? 3 * nf : nv;
   if (!mesh.uvs.empty() && mesh.uvs.size() != want_uvs)
     return Status::error(ErrorCode::InvalidInput,
@@ -410,6 +412,8 @@ Status Renderer::update_mesh(DrawableHandle handle, const std::vector<Vec3>& pos
                                                       " normals for " + std::to_string(positions.size()) + " vertices");
   for (const Vec3& p : positions)
     if (!finite(p)) return Status::error(ErrorCode::InvalidInput, "update_mesh: non-finite position");
+  for (const Vec3& n : normals)
+    if (!finite(n)) return Status::error(ErrorCode::InvalidInput, "update_mesh: non-finite normal");
   TriMesh tmp;
   tmp.positions = positions;
   tmp.triangles = d->triangles;

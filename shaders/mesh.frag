@@ -84,7 +84,8 @@ void main() {
     return;
   }
 
-  vec3 n = normalize(v_normal_view);
+  // Degenerate triangles have zero normals: face the viewer rather than NaN.
+  vec3 n = dot(v_normal_view, v_normal_view) > 1e-20 ? normalize(v_normal_view) : vec3(0.0, 0.0, 1.0);
   if (!gl_FrontFacing) n = -n;  // insides (mouth bag, open scans) lit as seen
   vec3 v = normalize(-v_position_view);
 

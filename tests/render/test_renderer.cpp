@@ -482,6 +482,9 @@ TEST_CASE("bad input gives clear errors, not crashes", "[render]") {
   const Status wrong_normals = r.upload_mesh(bad, h);
   CHECK(wrong_normals.code == ErrorCode::InvalidInput);
   CHECK(wrong_normals.message.find("normals") != std::string::npos);
+  bad.normals.assign(3, Vec3(0, 0, 1));
+  bad.normals[2].y() = std::nan("");
+  CHECK(r.upload_mesh(bad, h).code == ErrorCode::InvalidInput);
   bad.normals.clear();
   bad.positions[1].x() = std::nan("");
   CHECK(r.upload_mesh(bad, h).code == ErrorCode::InvalidInput);
