@@ -1,0 +1,171 @@
+// End-to-end fit (jeong2002 Sec. 4-5) on small synthetic scans with known
+// truth, conventions (units, orientation) and the rejection of non-heads.
+#include "head/generic_head.h"
+#include "mesh/geometry.h"
+#include "pipeline/fit_head.h"
+#include "synth/scanner.h"
+#include "synth/synth_head.h"
+
+#include <catch2/catch.hpp>
+#include <random>
+
+using namespace lk;
+
+namespace {
+
+struct Scene {
+  GenericHead generic;
+  TruthSurface truth;
+  PointCloud scan;
+};
+
+const Scene& scene() {
+  static Scene s = [] {
+    Scene sc;
+    REQUIRE(load_generic_head(sc.generic).ok());
+    GenericHead head;
+    REQUIRE(synthesize_head(sc.generic, 1, SynthHeadOptions{}, head).ok());
+    REQUIRE(make_truth_surface(head, 1, TruthOptions{}, sc.truth).ok());
+    ScannerOptions so;
+    so.target_points = 40000;
+    so.hair_triangles = sc.truth.hair;
+    REQUIRE(scan_virtual(sc.truth.mesh, so, 1, sc.scan).ok());
+    return sc;
+  }();
+  return s;
+}
+
+FitHeadOptions quick_options() {
+  FitHeadOptions o;
+  o.levels = 2;
+  return o;
+}
+
+}  // namespace
+
+TEST_CASE("fit_head: a synthetic scan is fitted, each stage closer than the last") {
+  const Scene& s = scene();
+  std::vector<std::string> events;
+  FitStageObserver obs;
+  obs.started = [&](const std::string& n) { events.push_back("start " + n); };
+  obs.finished = [&](const std::string& n, const TriMesh& m) {
+    events.push_back("finish " + n);
+    CHECK(m.num_triangles() > 0);
+  };
+  obs.measured = [&](const FitStageReport& r) { events.push_back("measure " + r.name); };
+  FitHeadResult r;
+  const Status st = fit_head(s.scan, s.generic, quick_options(), r, obs);
+  INFO(st.message);
+  REQUIRE(st.ok());
+  const std::vector<std::string> names = {"initial_alignment", "local_fitting", "global_fitting", "subdivision"};
+  REQUIRE(r.stages.size() == 4);
+  REQUIRE(events.size() == 12);
+  for (size_t i = 0; i < 4; ++i) {
+    CHECK(r.stages[i].name == names[i]);
+    CHECK(events[3 * i] == "start " + names[i]);
+    CHECK(events[3 * i + 1] == "finish " + names[i]);
+    CHECK(events[3 * i + 2] == "measure " + names[i]);
+  }
+  for (const auto& st2 : r.stages) INFO(st2.name << " mean % " << st2.distance.mean_pct);
+  CHECK(r.stages[1].distance.mean_pct <= r.stages[0].distance.mean_pct * 1.02);
+  CHECK(r.stages[2].distance.mean_pct < 0.5 * r.stages[1].distance.mean_pct);
+  CHECK(r.stages[3].distance.mean_pct <= r.stages[2].distance.mean_pct);
+  // Loose accuracy bound on a small scan (the bench measures the real target).
+  CHECK(r.stages[2].distance.mean_pct < 0.15);
+  CHECK(r.stages[3].distance.mean_pct < 0.12);
+  CHECK(r.unit_to_metres == 1.0);
+  // The truth's surface lies on the fitted control mesh within a few mm.
+  const DistanceStats back = point_to_surface_stats(s.truth.mesh.positions, r.control, 1.0);
+  INFO("truth to control mesh: mean " << back.mean << " m, p95 " << back.p95 << " m");
+  CHECK(back.mean < 0.003);
+  // Connectivity is the generic head's; no control triangle turned over.
+  REQUIRE(r.control.triangles == s.generic.mesh.triangles);
+  const auto n0 = face_normals(r.aligned);
+  int flipped = 0;
+  for (int f = 0; f < r.control.num_triangles(); ++f) flipped += face_normal_area(r.control, f).dot(n0[f]) < 0;
+  CHECK(flipped <= 2);
+  REQUIRE(r.level_meshes.size() == 2);
+  CHECK(r.level_meshes[1].num_triangles() == 16 * r.control.num_triangles());
+  // Global fit energies decrease monotonically.
+  for (const auto& it : r.global_fit.iterations) CHECK(it.energy_after <= it.energy_before);
+}
+
+TEST_CASE("fit_head: any unit and orientation give the same head") {
+  const Scene& s = scene();
+  // Millimetres, lying on its back (+z up, facing -y), somewhere else.
+  PointCloud mm = s.scan;
+  const Mat3 R = Eigen::AngleAxisd(M_PI / 2, Vec3::UnitX()).toRotationMatrix();  // y -> z, z -> -y
+  for (Vec3& p : mm.positions) p = 1000.0 * (R * p) + Vec3(500, -200, 80);
+  FitHeadOptions o = quick_options();
+  o.up = R * Vec3::UnitY();
+  o.facing = R * Vec3::UnitZ();
+  FitHeadResult r;
+  const Status st = fit_head(mm, s.generic, o, r);
+  INFO(st.message);
+  REQUIRE(st.ok());
+  CHECK(r.unit_to_metres == 0.001);
+  CHECK(r.stages.back().distance.mean_pct < 0.12);
+  // Mapped back to the scan frame, the control mesh lies on the mm scan.
+  TriMesh back = r.control;
+  const Mat3 inv = r.scan_to_head.A.inverse();
+  for (Vec3& p : back.positions) p = inv * (p - r.scan_to_head.t);
+  const DistanceStats d = point_to_surface_stats(mm.positions, back, r.bbox_diagonal, 7);
+  CHECK(d.mean_pct < 0.5);
+  CHECK(d.mean > 0.0);
+}
+
+TEST_CASE("fit_head rejects what is not a head with a clear error") {
+  const Scene& s = scene();
+  FitHeadResult r;
+  PointCloud none;
+  CHECK(fit_head(none, s.generic, quick_options(), r).code == ErrorCode::Empty);
+  PointCloud few;
+  few.positions.assign(s.scan.positions.begin(), s.scan.positions.begin() + 300);
+  Status st = fit_head(few, s.generic, quick_options(), r);
+  CHECK(st.code == ErrorCode::NotAHead);
+  CHECK(st.message.find("300 points") != std::string::npos);
+  PointCloud bad = s.scan;
+  bad.positions[5].x() = std::nan("");
+  CHECK(fit_head(bad, s.generic, quick_options(), r).code == ErrorCode::InvalidInput);
+
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> U(-0.12, 0.12);
+  PointCloud plane, noise;
+  for (int i = 0; i < 20000; ++i) {
+    plane.positions.emplace_back(U(rng), U(rng), 0.0001 * U(rng));
+    noise.positions.emplace_back(U(rng), 1.2 * U(rng), U(rng));
+  }
+  st = fit_head(plane, s.generic, quick_options(), r);
+  INFO(st.message);
+  CHECK(st.code == ErrorCode::NotAHead);
+  st = fit_head(noise, s.generic, quick_options(), r);
+  INFO(st.message);
+  CHECK(st.code == ErrorCode::NotAHead);
+  // A box-shaped "chair": six noisy faces of a 0.4 x 0.45 x 0.4 m box.
+  PointCloud chair;
+  std::uniform_real_distribution<double> V(0, 1);
+  for (int i = 0; i < 30000; ++i) {
+    Vec3 p(V(rng) * 0.4, V(rng) * 0.45, V(rng) * 0.4);
+    const int face = i % 6;
+    p[face / 2] = (face % 2) ? (face / 2 == 1 ? 0.45 : 0.4) : 0.0;
+    chair.positions.push_back(p);
+  }
+  st = fit_head(chair, s.generic, quick_options(), r);
+  INFO(st.message);
+  CHECK(st.code == ErrorCode::NotAHead);
+  // Parallel conventions are refused.
+  FitHeadOptions o = quick_options();
+  o.facing = o.up;
+  CHECK(fit_head(s.scan, s.generic, o, r).code == ErrorCode::InvalidInput);
+}
+
+TEST_CASE("unit guess picks m, cm or mm from a head-sized diagonal") {
+  CHECK(guess_unit_to_metres(0.4) == 1.0);
+  CHECK(guess_unit_to_metres(38.0) == 0.01);
+  CHECK(guess_unit_to_metres(420.0) == 0.001);
+  Mat3 R;
+  REQUIRE(orientation_from_conventions(Vec3::UnitZ(), -Vec3::UnitY(), R).ok());
+  CHECK((R * Vec3::UnitZ()).isApprox(Vec3::UnitY()));
+  CHECK((R * -Vec3::UnitY()).isApprox(Vec3::UnitZ()));
+  CHECK(R.determinant() == Approx(1.0));
+}
