@@ -15,10 +15,12 @@
 
 (function () {
   const params = new URLSearchParams(location.search);
-  // Largest scan file accepted. Parsing needs a few times the file's size in
-  // wasm memory (32-bit heap, 2 GiB at most), so refuse early with a clear
-  // message rather than let the worker run out of memory. ?max_mb=N overrides.
-  const DEFAULT_MAX_SCAN_MB = 400;
+  // Largest scan file accepted. Parsing needs up to ~5x the file's size in
+  // wasm memory (the bytes, then double-precision positions and the arrays
+  // handed back; 2 GiB heap at most): a 408 MB binary PLY of 34M points ran
+  // the worker out of memory, 150 MB (12.5M points) loaded. Refuse early with
+  // a clear message instead. ?max_mb=N overrides.
+  const DEFAULT_MAX_SCAN_MB = 256;
   const maxScanMb = Number(params.get('max_mb')) > 0 ? Number(params.get('max_mb')) : DEFAULT_MAX_SCAN_MB;
   const MAX_SCAN_BYTES = maxScanMb * 1024 * 1024;
   const PHOTO_EXTENSIONS = ['jpg', 'jpeg', 'png'];
@@ -362,7 +364,8 @@
         setState(app.model ? 'done' : 'ready');
         return;
       }
-      result = { ok: false, code: 'Internal', message: file.name + ': ' + (e && e.message ? e.message : e) };
+      result = { ok: false, code: 'Internal', message: file.name + ': ' + (e && e.message ? e.message : e) +
+                 '. Try a smaller or decimated scan.' };
     }
     if (!result.ok) {
       let message = result.message || (file.name + ': ' + result.code);

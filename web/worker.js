@@ -22,7 +22,9 @@ function fatal(message) {
 LikenessWorker({
   print: (t) => console.log('[worker]', t),
   printErr: (t) => console.warn('[worker]', t),
-  onAbort: (what) => fatal('the core stopped: ' + what),
+  // A release build aborts without a reason on out-of-memory; say what is likely.
+  onAbort: (what) => fatal(what ? 'the core stopped: ' + what
+    : 'the core ran out of memory' + (core ? ' at ' + Math.round(core.HEAP8.length / 1048576) + ' MB of wasm heap' : '')),
 }).then((m) => {
   core = m;
   postMessage({ type: 'ready' });

@@ -3,7 +3,7 @@
 //   OUTDIR/web_start.png          the page once ready (the generic head)
 //   OUTDIR/web_wireframe.png      the same with its edges (--wireframe)
 //   OUTDIR/web_<stem>.png         after loading each FILE given
-// Usage: node screenshots.mjs WEBDIR OUTDIR [FILE ...] [--point-size N] [--wireframe]
+// Usage: node screenshots.mjs WEBDIR OUTDIR [FILE ...] [--point-size N] [--wireframe] [--query "max_mb=N&..."]
 import { chromium } from 'playwright-core';
 import http from 'node:http';
 import fs from 'node:fs';
@@ -13,12 +13,15 @@ import path from 'node:path';
 const args = process.argv.slice(2);
 const wire = args.indexOf('--wireframe');
 if (wire >= 0) args.splice(wire, 1);
+let query = '';
+const q = args.indexOf('--query');
+if (q >= 0) { query = '?' + args[q + 1]; args.splice(q, 2); }
 let pointSize = null;
 const ps = args.indexOf('--point-size');
 if (ps >= 0) { pointSize = args[ps + 1]; args.splice(ps, 2); }
 const [webdir, outdir, ...files] = args;
 if (!webdir || !outdir) {
-  console.error('usage: node screenshots.mjs WEBDIR OUTDIR [FILE ...] [--point-size N] [--wireframe]');
+  console.error('usage: node screenshots.mjs WEBDIR OUTDIR [FILE ...] [--point-size N] [--wireframe] [--query "max_mb=N&..."]');
   process.exit(2);
 }
 const root = path.resolve(webdir);
@@ -39,7 +42,7 @@ const context = await chromium.launchPersistentContext(profile, {
 });
 try {
   const page = context.pages()[0] || await context.newPage();
-  await page.goto(`http://127.0.0.1:${server.address().port}/index.html`);
+  await page.goto(`http://127.0.0.1:${server.address().port}/index.html${query}`);
   await page.waitForFunction(() => ['ready', 'error'].includes(document.body.dataset.state), null, { timeout: 180000 });
   fs.mkdirSync(outdir, { recursive: true });
   const settle = () => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
@@ -62,7 +65,7 @@ try {
     await settle();
     const out = path.join(outdir, 'web_' + path.basename(f).replace(/\.[^.]*$/, '') + '.png');
     await page.screenshot({ path: out });
-    console.log('wrote', out, '(' + (await page.textContent('#status')).trim() + ')');
+    console.log('wrote', out, '(' + (await page.textContent('#status')).trim() + ')' + (await page.evaluate(() => window.likeness.lastError ? ' error: ' + window.likeness.lastError : '')));
   }
 } finally {
   await context.close();
