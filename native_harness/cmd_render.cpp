@@ -35,7 +35,7 @@ std::string directory_of(const std::string& path) {
 int run_render(const Args& args) {
   for (const auto& [key, values] : args.options) {
     static const char* known[] = {"mesh", "points", "texture", "wireframe", "edges-only", "view",
-                                  "size", "out", "point-size", "supersample", "no-ao"};
+                                  "size", "out", "point-size", "supersample", "no-ao", "flat"};
     bool ok = false;
     for (const char* k : known) ok = ok || key == k;
     if (!ok) return usage_error("unknown option --" + key + " (see `likeness help`)");
@@ -117,6 +117,7 @@ int run_render(const Args& args) {
       DrawStyle& style = *r.style(h);
       style.wireframe = wireframe;
       style.surface = !edges_only;
+      style.flat_shading = args.has("flat");
       // Lines keep their look at any supersampling.
       style.wire_width_px = 1.0f * supersample;
       if (!texture.empty()) {
@@ -158,7 +159,7 @@ int run_render(const Args& args) {
 Registrar reg({"render",
                "likeness render --mesh FILE [--points FILE] [--texture PNG] [--wireframe | --edges-only] "
                "[--view front|left|right|back|top|three-quarter] [--size N] [--point-size PX] "
-               "[--supersample 1..4] [--no-ao] --out PNG",
+               "[--flat] [--supersample 1..4] [--no-ao] --out PNG",
                "draws a mesh (with baked ambient occlusion) and/or point cloud from a canonical view into a PNG "
                "(OSMesa, same shaders as the web app)",
                run_render});

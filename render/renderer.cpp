@@ -219,6 +219,7 @@ struct Renderer::Impl {
     glUniform1f(u["u_specular"], s.specular);
     glUniform1f(u["u_shininess"], std::max(s.shininess, 1.0f));
     glUniform1i(u["u_surface"], s.surface ? 1 : 0);
+    glUniform1i(u["u_flat"], s.flat_shading ? 1 : 0);
     glUniform1i(u["u_wireframe"], s.wireframe ? 1 : 0);
     glUniform3fv(u["u_wire_color"], 1, glm::value_ptr(srgb_to_linear(s.wire_color)));
     glUniform1f(u["u_wire_width"], std::max(s.wire_width_px, 0.5f));

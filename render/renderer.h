@@ -58,6 +58,7 @@ struct DrawStyle {
   bool use_texture = true;        // meshes: attached texture replaces base_color (needs uvs)
   float specular = 0.3f;          // Blinn-Phong specular strength (0 = matte)
   float shininess = 24.0f;        // Blinn-Phong exponent (skin: broad sheen)
+  bool flat_shading = false;      // one normal per triangle (facets of a control mesh)
   // Surfaces. With surface = false and wireframe = true only the edges are
   // drawn (a control mesh over its subdivided surface).
   bool surface = true;

@@ -22,6 +22,7 @@ uniform float u_shininess;
 uniform bool u_has_occlusion;
 
 uniform bool u_surface;
+uniform bool u_flat;        // facet normals from screen-space derivatives
 uniform bool u_wireframe;
 uniform vec3 u_wire_color;  // linear
 uniform float u_wire_width; // pixels
@@ -87,6 +88,12 @@ void main() {
   // Degenerate triangles have zero normals: face the viewer rather than NaN.
   vec3 n = dot(v_normal_view, v_normal_view) > 1e-20 ? normalize(v_normal_view) : vec3(0.0, 0.0, 1.0);
   if (!gl_FrontFacing) n = -n;  // insides (mouth bag, open scans) lit as seen
+  if (u_flat) {
+    // The triangle's plane from how the position changes across pixels;
+    // already facing the viewer, so no front/back flip.
+    vec3 facet = cross(dFdx(v_position_view), dFdy(v_position_view));
+    if (dot(facet, facet) > 1e-30) n = normalize(facet);
+  }
   vec3 v = normalize(-v_position_view);
 
   vec3 albedo = u_base_color;

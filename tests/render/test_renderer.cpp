@@ -692,3 +692,51 @@ TEST_CASE("per-vertex mesh colors replace the base color", "[render]") {
     else CHECK((c[0] > c[1] && c[1] > c[2]));  // skin tone
   }
 }
+
+TEST_CASE("flat shading is constant across each facet, smooth shading is not", "[render]") {
+  const int w = 160, h = 160;
+  TriMesh coarse;
+  append_ellipsoid(coarse, Vec3::Zero(), kHeadRadii, 8, 12);
+  const OrbitCamera cam = canonical_view(CanonicalView::Front, coarse.positions, 1.0f);
+  const CameraMatrices m = cam.matrices(1.0f);
+  auto facet_variation = [&](bool flat, double& max_diff) {
+    const Image im = render(
+        [&](Renderer& r) {
+          DrawableHandle hd;
+          Status s = r.upload_mesh(coarse, hd);
+          if (s) r.style(hd)->flat_shading = flat;
+          if (s) r.style(hd)->specular = 0.0f;  // view-dependent; keep the test about normals
+          return s;
+        },
+        [&](float) { return m; }, w, h);
+    double sum = 0;
+    int n = 0;
+    max_diff = 0;
+    for (const Tri& t : coarse.triangles) {
+      glm::vec2 q[3];
+      for (int c = 0; c < 3; ++c) {
+        const Vec3& p = coarse.positions[t[c]];
+        const glm::vec4 cl = m.projection * m.view * glm::vec4(p.x(), p.y(), p.z(), 1.0f);
+        q[c] = glm::vec2((cl.x / cl.w * 0.5f + 0.5f) * w, (0.5f - cl.y / cl.w * 0.5f) * h);
+      }
+      const float area2 = (q[1].x - q[0].x) * (q[2].y - q[0].y) - (q[2].x - q[0].x) * (q[1].y - q[0].y);
+      if (area2 > -300.0f) continue;  // large front-facing triangles only
+      const glm::vec2 c = (q[0] + q[1] + q[2]) / 3.0f;
+      for (int k = 0; k < 3; ++k) {
+        const glm::vec2 toward = c + 0.6f * (q[k] - c);  // still well inside
+        const double d = std::abs(luminance(im.at(int(c.x), int(c.y))) - luminance(im.at(int(toward.x), int(toward.y))));
+        sum += d;
+        max_diff = std::max(max_diff, d);
+        ++n;
+      }
+    }
+    REQUIRE(n > 30);
+    return sum / n;
+  };
+  double flat_max = 0, smooth_max = 0;
+  const double flat_mean = facet_variation(true, flat_max), smooth_mean = facet_variation(false, smooth_max);
+  INFO("luminance change inside facets: flat mean " << flat_mean << " max " << flat_max << "; smooth mean "
+                                                    << smooth_mean << " max " << smooth_max);
+  CHECK(flat_max < 3.0);
+  CHECK(smooth_mean > 5.0 * std::max(flat_mean, 0.5));
+}
