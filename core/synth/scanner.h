@@ -33,10 +33,11 @@ namespace lk {
 
 struct ScannerOptions {
   int stations = 6;                  // camera+projector pairs
-  double arc_degrees = 240.0;        // azimuth span of the stations, centred on the face
+  double arc_degrees = 200.0;        // azimuth span of the stations, centred on the face;
+                                     // wider arcs see into the groove behind the ears
   // Elevations (degrees, + is above the head centre) for stations from the
   // ends of the arc inwards; mirrored so left and right match, cycled if short.
-  std::vector<double> elevations_deg = {0.0, 15.0, -10.0};
+  std::vector<double> elevations_deg = {-5.0, 15.0, 0.0};
   double distance_m = 0.7;           // camera to head centre
   double baseline_m = 0.25;          // camera to projector
   double baseline_angle_deg = 65.0;  // projector direction from the camera in its image

@@ -1,5 +1,6 @@
 // Synthetic heads: deterministic, plausible, smooth, valid, with annotations
 // that follow the mesh; Loop subdivision and the truth surface.
+#include "head/generic_head.h"
 #include "synth/analytic_head.h"
 #include "synth/synth_head.h"
 
@@ -90,8 +91,19 @@ TEST_CASE("variation 0 reproduces the generic head", "[synth]") {
     REQUIRE((h.mesh.positions[v] - base_head().mesh.positions[v]).norm() < 1e-12);
 }
 
+const GenericHead& generic_head() {
+  static const GenericHead h = [] {
+    GenericHead g;
+    REQUIRE(load_generic_head(g).ok());
+    return g;
+  }();
+  return h;
+}
+
 TEST_CASE("heads over many seeds stay valid, plausible and smooth", "[synth]") {
-  const GenericHead& g = base_head();
+  const bool real = GENERATE(true, false);
+  const GenericHead& g = real ? generic_head() : base_head();
+  INFO((real ? "generic head" : "analytic head"));
   const std::vector<Vec3> n0 = face_normals(g.mesh);
   const BBox gb = bounding_box(g.mesh.positions);
   double widest = 0, narrowest = 10;
