@@ -544,7 +544,7 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
   }
 
   // --- 8. ears: the root patch extruded into a flap -------------------------
-  std::map<int, std::vector<int>> ear_vertices, ear_rim, ear_behind;
+  std::map<int, std::vector<int>> ear_vertices, ear_rim;
   std::map<int, std::vector<std::array<int, 2>>> ear_binding;
   for (int side : {1, -1}) {
     std::vector<int> loop;
@@ -661,7 +661,6 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
       if (li.part == Part::Grid && li.col == wrap(c1)) {
         const int behind = g(li.row, c1 + side);
         ear_binding[side].push_back({loop[k], behind});
-        ear_behind[side].push_back(behind);
       }
     }
   }
@@ -900,7 +899,6 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
   const Vec3 slit_mid = 0.5 * (P[upper_line[kMouthHalfWidth]] + P[lower_line[kMouthHalfWidth]]);
   ann.mouth_center = slit_mid - Vec3(0, 0, 0.008);
   ann.mouth_width = (P[upper_line.front()] - P[upper_line.back()]).norm();
-  (void)ear_behind;
   return Status::success();
 }
 
