@@ -320,6 +320,46 @@ TEST_CASE("generic head annotations are consistent with the mesh", "[head]") {
   }
 }
 
+TEST_CASE("generic head ears stand out over a real hollow", "[head]") {
+  const GenericHead& h = asset();
+  const TriMesh& m = h.mesh;
+  for (int side : {1, -1}) {
+    const std::vector<int>& ear = h.annotations.regions.at(side > 0 ? "ear_left" : "ear_right");
+    const std::set<int> ear_set(ear.begin(), ear.end());
+    // The flap stands out: its outermost vertex is well outside the skull.
+    double ear_out = 0, head_out = 0;
+    for (int v = 0; v < m.num_vertices(); ++v) {
+      const double out = side * m.positions[v].x();
+      (ear_set.count(v) ? ear_out : head_out) = std::max(ear_set.count(v) ? ear_out : head_out, out);
+    }
+    INFO("ear reaches " << ear_out << " m, head " << head_out << " m");
+    CHECK(ear_out > head_out + 0.004);
+    // Behind the ear, skin is covered by the ear when looking from the side:
+    // a ray from the skin straight outwards hits the ear (the scanner's
+    // shadow). The skin probed: midpoints of the binding edges that leave the
+    // ear's root backwards over the head.
+    std::set<int> ear_tris;
+    for (int f = 0; f < m.num_triangles(); ++f)
+      for (int v : m.triangles[f])
+        if (ear_set.count(v)) ear_tris.insert(f);
+    int shadowed = 0, probes = 0;
+    for (const auto& e : h.annotations.binding_edges) {
+      if (ear_set.count(e[0]) == ear_set.count(e[1]) || side * m.positions[e[0]].x() < 0.03) continue;
+      ++probes;
+      const Vec3 from = 0.5 * (m.positions[e[0]] + m.positions[e[1]]) + Vec3(side * 1e-4, 0, 0);
+      const Vec3 to = from + Vec3(side * 0.05, 0, 0);
+      bool hit_ear = false;
+      for (int f : ear_tris) {
+        const Tri& t = m.triangles[f];
+        hit_ear = hit_ear || segment_hits_triangle(from, to, m.positions[t[0]], m.positions[t[1]], m.positions[t[2]]);
+      }
+      shadowed += hit_ear ? 1 : 0;
+    }
+    INFO(shadowed << " of " << probes << " skin probes behind the ear are shadowed");
+    CHECK(shadowed >= 3);
+  }
+}
+
 TEST_CASE("generic head asset is what the builder makes", "[head]") {
   GenericHead built;
   Status s = build_generic_head(GenericHeadBuildOptions{}, built);
