@@ -142,11 +142,14 @@ int run(const Args& args) {
                 all_d.size(), 1e3 * as.mean, 1e3 * as.p95, n_hole, 100.0 * n_hole / std::max<size_t>(1, all_d.size()),
                 1e3 * hs.mean, 1e3 * hs.p95);
     int flipped = 0, degenerate = 0, flipped_l = 0, degenerate_l = 0;
-    count_bad(r.control, generic.mesh, 1, flipped, degenerate);
-    const int ratio = 1 << (2 * static_cast<int>(r.level_meshes.size()));
-    count_bad(finest, generic.mesh, ratio, flipped_l, degenerate_l);
-    std::printf("   control: %d flipped, %d degenerate of %d triangles; level %zu: %d flipped, %d degenerate of %d\n",
-                flipped, degenerate, r.control.num_triangles(), r.level_meshes.size(), flipped_l, degenerate_l,
+    count_bad(r.control, r.aligned, 1, flipped, degenerate);
+    // Level L against the smooth (undisplaced) Butterfly surface of the same
+    // control mesh: did a displacement turn a triangle over?
+    MultiresMesh smooth;
+    if (build_multires(r.control, static_cast<int>(r.level_meshes.size()), smooth).ok())
+      count_bad(finest, level_mesh(smooth, smooth.num_levels()), 1, flipped_l, degenerate_l);
+    std::printf("   control vs aligned generic: %d flipped, %d degenerate of %d triangles; level %zu vs smooth level %zu: %d flipped, %d degenerate of %d\n",
+                flipped, degenerate, r.control.num_triangles(), r.level_meshes.size(), r.level_meshes.size(), flipped_l, degenerate_l,
                 finest.num_triangles());
     std::printf("   global fit: %zu iterations in %d rounds; total %.0f ms wall, %.0f ms CPU (target < 2000 ms): %s\n",
                 r.global_fit.iterations.size(), r.global_fit.rounds, total, total_cpu,

@@ -55,7 +55,7 @@ struct GlobalFitOptions {
   // sliding along the surface, keeps the normal equations well conditioned.
   double point_to_point_weight = 0.1;
   bool preserve_rest_shape = true;  // see header comment
-  int max_iterations_per_round = 6;
+  int max_iterations_per_round = 4;
   double relative_tolerance = 5e-3;  // stop a round when E changes less than this
   int subsample_points = 10000;      // points per round (0: all); a random subset
   // After the rounds, this many iterations on ALL points with the last

@@ -64,8 +64,8 @@ struct FitHeadOptions {
   // displacement.max_distance is 0. The control mesh already fits the scan
   // in the least-squares sense (residuals ~0.1 %), so longer normal lines
   // only reach the other side of thin features (lips, nostrils, ears) or
-  // hair junk; 0.7 % is about 3 mm on a head.
-  double displacement_max_pct = 0.7;
+  // hair junk; 1 % is about 4.5 mm on a head.
+  double displacement_max_pct = 1.0;
 };
 
 struct FitStageReport {
