@@ -34,9 +34,9 @@ int run_make_generic_head(const Args& args) {
   const std::string obj_path = out_dir + "/generic_head.obj";
   const std::string json_path = out_dir + "/generic_head.json";
   s = write_file(obj_path, write_obj(head.mesh));
-  if (!s) return fail(kName, with_context(s, obj_path).message);
+  if (!s) return fail(kName, s.message);
   s = write_file(json_path, head_annotations_to_json(head.annotations, head.mesh.num_vertices()));
-  if (!s) return fail(kName, with_context(s, json_path).message);
+  if (!s) return fail(kName, s.message);
 
   MeshTopology topo;
   s = build_topology(head.mesh, topo);
