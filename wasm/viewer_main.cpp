@@ -5,6 +5,10 @@
 //   show_mesh(positions, normals, colors, indices) -> "" or an error message
 //   show_points(positions, normals, colors)        -> "" or an error message
 //   show_generic_head()                            -> "" or an error message
+//   show_mesh_keep_view(...)  as show_mesh, the camera stays (stage/level switch)
+//   update_positions(positions) -> "" or error: animation frame, same #V
+//   set_overlay_points(positions, normals, colors) -> "": the scan under a fit
+//     (empty positions clear it); set_overlay_visible(on)
 //   set_point_size(pixels), set_wireframe(on), reset_view()
 //   orbit(dx, dy), pan(dx, dy), zoom(amount): camera steps in pixels, as if
 //     dragged (the page's keyboard control)
@@ -142,6 +146,43 @@ std::string js_show_mesh(val positions, val normals, val colors, val indices) {
   return s.ok() ? std::string() : s.message;
 }
 
+// Same as show_mesh but keeps the camera where the user left it.
+std::string js_show_mesh_keep_view(val positions, val normals, val colors, val indices) {
+  if (!g_viewer || !g_viewer->startup_error.empty()) return "the viewer is not running";
+  lk::TriMesh mesh;
+  lk::Status s = lk::web::mesh_from_arrays(from_js<float>(positions), from_js<float>(normals),
+                                           from_js<float>(colors), from_js<std::uint32_t>(indices), mesh);
+  if (s.ok()) s = g_viewer->scene.show_mesh(mesh, true);
+  return s.ok() ? std::string() : s.message;
+}
+
+// An animation frame: new positions for the shown mesh (same vertex count).
+std::string js_update_positions(val positions) {
+  if (!g_viewer || !g_viewer->startup_error.empty()) return "the viewer is not running";
+  lk::PointCloud cloud;  // reuses the length/finiteness checks
+  lk::Status s = lk::web::cloud_from_arrays(from_js<float>(positions), {}, {}, cloud);
+  if (s.ok()) s = g_viewer->scene.update_positions(cloud.positions);
+  return s.ok() ? std::string() : s.message;
+}
+
+// The scan's points drawn under a fitted head; empty positions clear them.
+std::string js_set_overlay_points(val positions, val normals, val colors) {
+  if (!g_viewer || !g_viewer->startup_error.empty()) return "the viewer is not running";
+  std::vector<float> flat = from_js<float>(positions);
+  if (flat.empty()) {
+    g_viewer->scene.clear_overlay();
+    return std::string();
+  }
+  lk::PointCloud cloud;
+  lk::Status s = lk::web::cloud_from_arrays(flat, from_js<float>(normals), from_js<float>(colors), cloud);
+  if (s.ok()) s = g_viewer->scene.set_overlay_points(cloud);
+  return s.ok() ? std::string() : s.message;
+}
+
+void js_set_overlay_visible(bool on) {
+  if (g_viewer) g_viewer->scene.set_overlay_visible(on);
+}
+
 std::string js_show_points(val positions, val normals, val colors) {
   if (!g_viewer || !g_viewer->startup_error.empty()) return "the viewer is not running";
   lk::PointCloud cloud;
@@ -188,6 +229,10 @@ std::string js_startup_error() { return g_viewer ? g_viewer->startup_error : std
 EMSCRIPTEN_BINDINGS(likeness_viewer) {
   emscripten::function("show_mesh", &js_show_mesh);
   emscripten::function("show_points", &js_show_points);
+  emscripten::function("show_mesh_keep_view", &js_show_mesh_keep_view);
+  emscripten::function("update_positions", &js_update_positions);
+  emscripten::function("set_overlay_points", &js_set_overlay_points);
+  emscripten::function("set_overlay_visible", &js_set_overlay_visible);
   emscripten::function("show_generic_head", &js_show_generic_head);
   emscripten::function("set_point_size", &js_set_point_size);
   emscripten::function("set_wireframe", &js_set_wireframe);

@@ -89,7 +89,7 @@ Status start_head(TriMesh& out) {
 
 Status ViewerScene::init() { return renderer_.init(); }
 
-Status ViewerScene::replace(DrawableHandle fresh) {
+Status ViewerScene::replace(DrawableHandle fresh, bool keep_view) {
   BBox box;
   if (Status s = renderer_.bounds(fresh, box); !s.ok()) {
     renderer_.remove(fresh);
@@ -100,27 +100,65 @@ Status ViewerScene::replace(DrawableHandle fresh) {
   bounds_ = box;
   if (model_is_points_) renderer_.set_point_size(model_, point_size_);
   else renderer_.set_wireframe(model_, wireframe_);
-  reset_view();
+  if (keep_view) dirty_ = true;
+  else reset_view();
   return Status::success();
 }
 
-Status ViewerScene::show_mesh(const TriMesh& mesh) {
+Status ViewerScene::show_mesh(const TriMesh& mesh, bool keep_view) {
   DrawableHandle fresh = kNoHandle;
   if (Status s = renderer_.upload_mesh(mesh, fresh); !s.ok()) return s;
   model_is_points_ = false;
-  return replace(fresh);
+  model_vertices_ = mesh.positions.size();
+  return replace(fresh, keep_view);
 }
 
 Status ViewerScene::show_points(const PointCloud& cloud) {
   DrawableHandle fresh = kNoHandle;
   if (Status s = renderer_.upload_points(cloud, fresh); !s.ok()) return s;
   model_is_points_ = true;
-  return replace(fresh);
+  model_vertices_ = cloud.positions.size();
+  return replace(fresh, false);
+}
+
+Status ViewerScene::update_positions(const std::vector<Vec3>& positions) {
+  if (model_ == kNoHandle || model_is_points_)
+    return Status::error(ErrorCode::InvalidInput, "no mesh is shown to update");
+  if (positions.size() != model_vertices_)
+    return Status::error(ErrorCode::InvalidInput, std::to_string(positions.size()) + " positions for a mesh of " +
+                                                      std::to_string(model_vertices_) + " vertices");
+  if (Status s = renderer_.update_mesh(model_, positions); !s.ok()) return s;
+  dirty_ = true;
+  return Status::success();
+}
+
+Status ViewerScene::set_overlay_points(const PointCloud& cloud) {
+  DrawableHandle fresh = kNoHandle;
+  if (Status s = renderer_.upload_points(cloud, fresh); !s.ok()) return s;
+  clear_overlay();
+  overlay_ = fresh;
+  renderer_.set_point_size(overlay_, std::max(1.0f, point_size_ - 1.0f));
+  renderer_.set_visible(overlay_, overlay_visible_);
+  dirty_ = true;
+  return Status::success();
+}
+
+void ViewerScene::clear_overlay() {
+  if (overlay_ != kNoHandle) renderer_.remove(overlay_);
+  overlay_ = kNoHandle;
+  dirty_ = true;
+}
+
+void ViewerScene::set_overlay_visible(bool on) {
+  overlay_visible_ = on;
+  if (overlay_ != kNoHandle) renderer_.set_visible(overlay_, on);
+  dirty_ = true;
 }
 
 void ViewerScene::set_point_size(float pixels) {
   point_size_ = pixels;
   if (model_ != kNoHandle && model_is_points_) renderer_.set_point_size(model_, pixels);
+  if (overlay_ != kNoHandle) renderer_.set_point_size(overlay_, std::max(1.0f, pixels - 1.0f));
   dirty_ = true;
 }
 

@@ -34,10 +34,20 @@ class ViewerScene {
   // Needs a current GL context.
   Status init();
 
-  // Replace the shown model; the camera is reframed on it. On failure the
-  // previous model stays.
-  Status show_mesh(const TriMesh& mesh);
+  // Replace the shown model; the camera is reframed on it unless keep_view
+  // (switching between a fit's stages and levels keeps the user's view). On
+  // failure the previous model stays.
+  Status show_mesh(const TriMesh& mesh, bool keep_view = false);
   Status show_points(const PointCloud& cloud);
+  // Animation: new positions (#V, same topology) for the shown mesh; normals
+  // are recomputed. Fails when no mesh is shown or the count differs.
+  Status update_positions(const std::vector<Vec3>& positions);
+
+  // Points drawn together with the model (the scan under a fitted head).
+  // Kept until replaced or cleared; hidden/shown without re-uploading.
+  Status set_overlay_points(const PointCloud& cloud);
+  void clear_overlay();
+  void set_overlay_visible(bool on);
 
   void set_point_size(float pixels);
   // Triangle edges over the surface (meshes; kept across model changes).
@@ -55,12 +65,15 @@ class ViewerScene {
   void invalidate() { dirty_ = true; }
 
  private:
-  Status replace(DrawableHandle fresh);
+  Status replace(DrawableHandle fresh, bool keep_view);
 
   Renderer renderer_;
   OrbitCamera camera_;
   DrawableHandle model_ = kNoHandle;
   bool model_is_points_ = false;
+  size_t model_vertices_ = 0;
+  DrawableHandle overlay_ = kNoHandle;
+  bool overlay_visible_ = true;
   BBox bounds_;
   float point_size_ = 3.0f;
   bool wireframe_ = false;

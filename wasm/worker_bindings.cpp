@@ -14,10 +14,18 @@
 //   positions Float32Array  #V*3      normals Float32Array #V*3 (or length 0)
 //   colors    Float32Array  #V*3 or 0 indices Uint32Array  #F*3 (0 for points)
 //
-// Jobs: parse_geometry (a dropped scan), check_image (a dropped photo).
+// Jobs: parse_geometry (a dropped scan), check_image (a dropped photo),
+// fit_head_job (scan -> fitted multiresolution head, jeong2002 Sec. 4-5),
+// then, on the fitted head kept in this worker: animate_frame (Sec. 6 local
+// update), export_head (OBJ/PLY bytes).
 #include "common/progress.h"
+#include "head/generic_head.h"
 #include "io/io.h"
 #include "mesh/geometry.h"
+#include "pipeline/fit_head.h"
+
+#include <cmath>
+#include <memory>
 
 #include <emscripten/bind.h>
 #include <emscripten/val.h>
@@ -136,9 +144,274 @@ val check_image(const std::string& name, std::uintptr_t data, std::size_t size) 
   return r;
 }
 
+// ---- the fitted head ---------------------------------------------------------
+// Core has no clocks; the binding times stages with the worker's
+// performance.now() from the FitStageObserver callbacks.
+double now_ms() { return val::global("performance").call<double>("now"); }
+
+// The last fit, kept in the worker for animation and export (the page holds
+// only what it displays). Meshes handed to the page are in the SCAN's frame
+// (its units and orientation) so they lie over the scan points it shows.
+struct FitSession {
+  lk::FitHeadResult fit;
+  lk::Mat3 head_to_scan = lk::Mat3::Identity();  // inverse of fit.scan_to_head.A
+  lk::Vec3 head_offset = lk::Vec3::Zero();       // fit.scan_to_head.t
+  // Animation: control vertices moved, their rest positions (head frame) and
+  // how each moves: 0 = brow (raised), 1 = jaw (rotated open).
+  std::vector<int> moved;
+  std::vector<lk::Vec3> rest;
+  std::vector<int> kind;
+  lk::Vec3 jaw_pivot = lk::Vec3::Zero();
+  double head_size = 0.25;  // metres, sets the brow lift
+};
+std::unique_ptr<FitSession> g_session;
+
+std::vector<lk::Vec3> to_scan_frame(const FitSession& s, const std::vector<lk::Vec3>& head_positions) {
+  std::vector<lk::Vec3> out(head_positions.size());
+  for (size_t i = 0; i < out.size(); ++i) out[i] = s.head_to_scan * (head_positions[i] - s.head_offset);
+  return out;
+}
+
+// {positions, indices} of a head-frame mesh, in the scan frame. Normals are
+// left to the viewer (area-weighted on upload), which matches the surface.
+val mesh_arrays(const FitSession& s, const std::vector<lk::Vec3>& positions, const std::vector<lk::Tri>& tris) {
+  val m = val::object();
+  m.set("positions", float32_array(to_scan_frame(s, positions)));
+  m.set("indices", uint32_array(tris));
+  m.set("vertexCount", static_cast<double>(positions.size()));
+  m.set("triangleCount", static_cast<double>(tris.size()));
+  return m;
+}
+
+val stats_object(const lk::DistanceStats& d) {
+  val o = val::object();
+  o.set("meanPct", d.mean_pct);
+  o.set("maxPct", d.max_pct);
+  o.set("rmsPct", d.mean != 0 ? d.rms / d.mean * d.mean_pct : 0.0);
+  o.set("points", d.count);
+  return o;
+}
+
+// Picks the animated control vertices from the generic head's regions:
+// "brow" is lifted, "jaw" + "chin" + "lower_lip" rotate down about a hinge
+// below the ears. The generic head and the control mesh share vertex indices.
+void prepare_animation(FitSession& s, const lk::HeadAnnotations& ann) {
+  s.moved.clear();
+  s.rest.clear();
+  s.kind.clear();
+  std::vector<int> seen(s.fit.control.positions.size(), -1);
+  auto add = [&](const char* region, int kind) {
+    auto it = ann.regions.find(region);
+    if (it == ann.regions.end()) return;
+    for (int v : it->second) {
+      if (v < 0 || v >= static_cast<int>(seen.size()) || seen[v] >= 0) continue;
+      seen[v] = kind;
+      s.moved.push_back(v);
+      s.rest.push_back(s.fit.control.positions[v]);
+      s.kind.push_back(kind);
+    }
+  };
+  add("brow", 0);
+  add("lower_lip", 1);
+  add("chin", 1);
+  add("jaw", 1);
+  const lk::BBox box = lk::bounding_box(s.fit.control.positions);
+  s.head_size = (box.max - box.min).norm();
+  // Hinge: the jaw's highest, rearmost reach (temporomandibular joint sits
+  // behind and above the jaw region).
+  lk::Vec3 top_back(0, -1e9, 1e9);
+  for (size_t i = 0; i < s.moved.size(); ++i)
+    if (s.kind[i] == 1) {
+      top_back.y() = std::max(top_back.y(), s.rest[i].y());
+      top_back.z() = std::min(top_back.z(), s.rest[i].z());
+    }
+  s.jaw_pivot = lk::Vec3(0.5 * (box.min.x() + box.max.x()), top_back.y(), top_back.z());
+}
+
+// Runs the whole fit (jeong2002 Sec. 4-5) on a dropped scan's bytes.
+// options: {levels, up:[x,y,z], facing:[x,y,z]} (all optional).
+// progress(stage, fraction) with stage one of initial_alignment,
+// local_fitting, global_fitting, subdivision; returning false cancels.
+val fit_head_job(const std::string& name, std::uintptr_t data, std::size_t size, val options, val progress) {
+  const lk::ProgressFn report = js_progress(progress);
+  if (data == 0 && size != 0)
+    return error_result(lk::Status::error(lk::ErrorCode::Internal, name + ": no input buffer"));
+  const double t_parse = now_ms();
+  lk::TriMesh mesh;
+  lk::PointCloud cloud;
+  lk::GeometryKind kind = lk::GeometryKind::PointCloud;
+  lk::Status status = lk::read_geometry(name, reinterpret_cast<const std::uint8_t*>(data), size, mesh, cloud, kind);
+  if (!status.ok()) return error_result(lk::with_context(status, name));
+  // A mesh scan is fitted through its vertices.
+  if (kind == lk::GeometryKind::Mesh) {
+    cloud = lk::PointCloud{};
+    cloud.positions = std::move(mesh.positions);
+  }
+  const double parse_ms = now_ms() - t_parse;
+
+  lk::FitHeadOptions opt;
+  auto vec3_option = [&](const char* key, lk::Vec3& out) {
+    const val v = options[key];
+    if (v.isUndefined() || v.isNull()) return true;
+    if (v["length"].as<int>() != 3) return false;
+    for (int k = 0; k < 3; ++k) out[k] = v[k].as<double>();
+    return true;
+  };
+  if (!options.isUndefined() && !options.isNull()) {
+    if (!options["levels"].isUndefined()) opt.levels = options["levels"].as<int>();
+    if (!vec3_option("up", opt.up) || !vec3_option("facing", opt.facing))
+      return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "up and facing take three numbers"));
+  }
+  if (opt.levels < 1 || opt.levels > 4)
+    return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "levels must be 1..4"));
+
+  static lk::GenericHead generic;  // parsed once per worker
+  static bool have_generic = false;
+  if (!have_generic) {
+    if (lk::Status s = lk::load_generic_head(generic); !s.ok())
+      return error_result(lk::with_context(s, "generic head"));
+    have_generic = true;
+  }
+
+  // Stage timing and stats through the observer; progress fractions from the
+  // stages' own ProgressFn are attributed to the stage the observer opened.
+  val stages = val::array();
+  std::string current;
+  double t_stage = 0;
+  val stage_ms = val::object();
+  lk::FitStageObserver observer;
+  observer.started = [&](const std::string& stage) {
+    current = stage;
+    lk::report(report, stage.c_str(), 0.0);
+    t_stage = now_ms();
+  };
+  observer.finished = [&](const std::string& stage, const lk::TriMesh&) {
+    stage_ms.set(stage, now_ms() - t_stage);
+    lk::report(report, stage.c_str(), 1.0);
+  };
+  observer.measured = [&](const lk::FitStageReport& r) {
+    val o = stats_object(r.distance);
+    o.set("name", r.name);
+    o.set("ms", stage_ms[r.name]);
+    stages.call<void>("push", o);
+  };
+  const lk::ProgressFn inner = [&](const char*, double fraction) {
+    if (current.empty()) return true;
+    return lk::report(report, current.c_str(), std::min(0.99, std::max(0.0, fraction)));
+  };
+
+  auto session = std::make_unique<FitSession>();
+  const double t_fit = now_ms();
+  status = lk::fit_head(cloud, generic, opt, session->fit, observer, inner);
+  const double fit_ms = now_ms() - t_fit;
+  if (!status.ok()) return error_result(lk::with_context(status, name));
+
+  FitSession& s = *session;
+  s.head_to_scan = s.fit.scan_to_head.A.inverse();
+  s.head_offset = s.fit.scan_to_head.t;
+  prepare_animation(s, generic.annotations);
+
+  val r = val::object();
+  r.set("ok", true);
+  r.set("code", std::string("Ok"));
+  r.set("message", std::string());
+  r.set("name", name);
+  r.set("points", s.fit.points);
+  r.set("fittedPoints", s.fit.fitted_points);
+  r.set("unitToMetres", s.fit.unit_to_metres);
+  r.set("parseMs", parse_ms);
+  r.set("fitMs", fit_ms);
+  r.set("stages", stages);
+  val meshes = val::object();
+  meshes.set("aligned", mesh_arrays(s, s.fit.aligned.positions, s.fit.aligned.triangles));
+  meshes.set("local", mesh_arrays(s, s.fit.local.positions, s.fit.local.triangles));
+  meshes.set("control", mesh_arrays(s, s.fit.control.positions, s.fit.control.triangles));
+  val levels = val::array();
+  for (const lk::TriMesh& m : s.fit.level_meshes) levels.call<void>("push", mesh_arrays(s, m.positions, m.triangles));
+  meshes.set("levels", levels);
+  r.set("meshes", meshes);
+  r.set("animatedVertices", static_cast<double>(s.moved.size()));
+  g_session = std::move(session);
+  return r;
+}
+
+// One animation frame on the kept fit: brows up and jaw open by `amount` in
+// [0, 1], applied to the rest pose through the multires local update
+// (jeong2002 Sec. 6: only the moved vertices' support is recomputed).
+// Returns {ok, positions (level `level`, scan frame), updateMs, changed}.
+val animate_frame(double amount, int level) {
+  if (!g_session) return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "no fitted head to animate"));
+  FitSession& s = *g_session;
+  lk::MultiresMesh& mr = s.fit.multires;
+  if (level < 0 || level > mr.num_levels())
+    return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "no level " + std::to_string(level)));
+  if (!std::isfinite(amount)) amount = 0;
+  amount = std::min(1.0, std::max(0.0, amount));
+  const double brow_lift = 0.03 * s.head_size * amount;  // ~1 cm on a head
+  const double jaw_angle = 0.14 * amount;                 // ~8 degrees
+  const double c = std::cos(jaw_angle), sn = std::sin(jaw_angle);
+  std::vector<lk::Vec3> target(s.moved.size());
+  for (size_t i = 0; i < s.moved.size(); ++i) {
+    const lk::Vec3& p = s.rest[i];
+    if (s.kind[i] == 0) {
+      target[i] = p + lk::Vec3(0, brow_lift, 0);
+    } else {
+      // Rotation about the x axis through the hinge: the chin swings down.
+      const lk::Vec3 d = p - s.jaw_pivot;
+      target[i] = s.jaw_pivot + lk::Vec3(d.x(), c * d.y() - sn * d.z(), sn * d.y() + c * d.z());
+    }
+  }
+  const double t0 = now_ms();
+  lk::UpdateFootprint footprint;
+  lk::Status st = lk::update_control_vertices(mr, s.moved, target, &footprint);
+  const double update_ms = now_ms() - t0;
+  if (!st.ok()) return error_result(st);
+  val r = val::object();
+  r.set("ok", true);
+  r.set("code", std::string("Ok"));
+  r.set("message", std::string());
+  r.set("level", level);
+  r.set("positions", float32_array(to_scan_frame(s, mr.state.displaced[level])));
+  r.set("updateMs", update_ms);
+  r.set("changed", footprint.displaced_changed.empty() ? 0 : footprint.displaced_changed[level]);
+  r.set("vertexCount", mr.num_vertices(level));
+  return r;
+}
+
+// The kept head as a file: level `level` (0 = control mesh) in the scan's
+// frame, as OBJ text or binary PLY. The current animation pose is exported.
+val export_head(int level, const std::string& format) {
+  if (!g_session) return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "no fitted head to export"));
+  const FitSession& s = *g_session;
+  const lk::MultiresMesh& mr = s.fit.multires;
+  if (level < 0 || level > mr.num_levels())
+    return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "no level " + std::to_string(level)));
+  lk::TriMesh m;
+  m.positions = to_scan_frame(s, mr.state.displaced[level]);
+  m.triangles = mr.triangles(level);
+  val r = val::object();
+  r.set("ok", true);
+  r.set("code", std::string("Ok"));
+  r.set("message", std::string());
+  if (format == "obj") {
+    const std::string text = lk::write_obj(m);
+    r.set("bytes", val::global("Uint8Array").new_(emscripten::typed_memory_view(text.size(),
+                                                   reinterpret_cast<const std::uint8_t*>(text.data()))));
+  } else if (format == "ply") {
+    const lk::Bytes bytes = lk::write_ply(m);
+    r.set("bytes", val::global("Uint8Array").new_(emscripten::typed_memory_view(bytes.size(), bytes.data())));
+  } else {
+    return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "unknown format " + format));
+  }
+  return r;
+}
+
 }  // namespace
 
 EMSCRIPTEN_BINDINGS(likeness_worker) {
+  emscripten::function("fit_head_job", &fit_head_job);
+  emscripten::function("animate_frame", &animate_frame);
+  emscripten::function("export_head", &export_head);
   emscripten::function("parse_geometry", &parse_geometry);
   emscripten::function("check_image", &check_image);
 }

@@ -36,6 +36,9 @@
     dismiss: $('error-dismiss'), dropZone: $('drop-zone'), fileInput: $('file-input'),
     fileList: $('file-list'), reset: $('btn-reset'), generic: $('btn-generic'),
     pointSize: $('point-size'), maxSize: $('max-size'), sample: $('btn-sample'), cancel: $('btn-cancel'), wireframe: $('wireframe'),
+    fit: $('btn-fit'), autoFit: $('auto-fit'), fitTotal: $('fit-total'), fitView: $('fit-view'),
+    level: $('level'), showPoints: $('show-points'), animate: $('animate'), animStats: $('anim-stats'),
+    exportObj: $('btn-export-obj'), exportPly: $('btn-export-ply'),
   };
 
   // Exposed for the browser test and for debugging from the console.
@@ -49,6 +52,12 @@
     photos: [],            // [{name, file, width, height}] checked photos, for texturing
     lastError: null,
     startupFailed: false,  // the viewer or the core could not start
+    scan: null,            // {file, display}: the loaded scan, kept to fit it and draw it under the fit
+    fit: null,             // the last fit: {name, stages, meshes, fitMs, parseMs, wallMs}; its
+                           // multiresolution head lives in the worker (animation, export)
+    shownStage: null,      // which fit mesh is drawn: align|local_fit|global_fit|subdivide
+    animation: { running: false, frames: 0, fps: 0, updateMs: 0 },
+    downloads: [],         // [{name, size}] files handed to the browser (tests)
   };
 
   let stateBeforeError = 'ready';
@@ -64,6 +73,14 @@
     ui.wireframe.disabled = !interactive;
     ui.dropZone.classList.toggle('busy', state === 'working');
     ui.cancel.hidden = state !== 'working';
+    const fitting = state === 'working';
+    ui.fit.disabled = !interactive || fitting || !app.scan;
+    const haveFit = interactive && !fitting && !!app.fit;
+    ui.exportObj.disabled = !haveFit;
+    ui.exportPly.disabled = !haveFit;
+    ui.animate.disabled = !haveFit;
+    ui.level.disabled = !haveFit;
+    ui.showPoints.disabled = !haveFit;
   }
 
   function setStatus(text) { ui.status.textContent = text; }
@@ -150,6 +167,8 @@
       job.reject(err);
     }
     jobs.clear();
+    // The fitted head lived in that worker: animation and export need a new fit.
+    if (app.fit) forgetFit('The fitted head was in the stopped worker: fit again to animate or export.');
     if (document.body.dataset.state !== 'loading') startWorker().catch(() => {});
   }
 
@@ -176,6 +195,7 @@
   }
 
   app.runJob = runJob;
+  app.fitHead = () => runFit();
 
   // ---- the viewer -----------------------------------------------------------
   function loadScript(src) {
@@ -257,6 +277,7 @@
       return;
     }
     clearError();
+    stopAnimation();
     const photos = files.filter((f) => PHOTO_EXTENSIONS.includes(extension(f.name)));
     const scans = files.filter((f) => !photos.includes(f));
     for (const extra of scans.slice(1)) listFile(extra, 'ignored: one scan at a time', 'ignored');
@@ -402,6 +423,11 @@
     }
     app.model = { name: file.name, kind: result.kind, vertexCount: result.vertexCount,
                   triangleCount: result.triangleCount, loadMs: ms, displayStride: stride };
+    // A new scan: the old fit no longer belongs to what is shown.
+    if (app.fit) forgetFit();
+    app.viewer.set_overlay_points(new Float32Array(0), null, null);
+    app.scan = { file, display: { positions: display.positions, normals: display.normals, colors: display.colors } };
+    for (const st of FIT_STAGES) { setStage(st.row, 'waiting', 0); stageItem(st.row).classList.remove('coming'); }
     const what = result.kind === 'mesh'
       ? 'mesh, ' + result.vertexCount.toLocaleString('en') + ' vertices, ' +
         result.triangleCount.toLocaleString('en') + ' triangles'
@@ -414,6 +440,7 @@
     setStage('load', 'done', 1, 'complete');
     setStatus(file.name + ': ' + what + ' (loaded in ' + Math.round(ms) + ' ms).');
     setState('done');
+    if (ui.autoFit.checked) await runFit();
   }
 
   // The built-in sample (a synthetic head from our virtual scanner, no real
@@ -439,9 +466,221 @@
     await loadScan(new File([blob], 'sample_scan.ply'));
   }
 
+
+  // ---- fitting the head (jeong2002 Sec. 4-5) ----------------------------------
+  // Core stage names -> the Pipeline rows, and the mesh each row shows.
+  const FIT_STAGES = [
+    { core: 'initial_alignment', row: 'align', mesh: 'aligned' },
+    { core: 'local_fitting', row: 'local_fit', mesh: 'local' },
+    { core: 'global_fitting', row: 'global_fit', mesh: 'control' },
+    { core: 'subdivision', row: 'subdivide', mesh: 'level' },
+  ];
+  const rowOf = (core) => (FIT_STAGES.find((s) => s.core === core) || {}).row;
+
+  function stageStats(row) { return stageItem(row).querySelector('.stage-stats'); }
+
+  function markShown(row) {
+    app.shownStage = row;
+    for (const st of FIT_STAGES) stageItem(st.row).classList.toggle('shown', st.row === row);
+  }
+
+  // The fit died with its worker, or a new scan came: rows keep their numbers
+  // until the next fit, but nothing can be animated or exported.
+  function forgetFit(why) {
+    stopAnimation(false);
+    app.fit = null;
+    ui.fitView.hidden = true;
+    for (const st of FIT_STAGES) stageItem(st.row).classList.remove('viewable', 'shown');
+    if (why) setStatus(why);
+    setState(document.body.dataset.state);
+  }
+
+  async function runFit() {
+    const state = document.body.dataset.state;
+    if (!app.scan || state === 'working' || state === 'loading' || app.startupFailed) return;
+    clearError();
+    stopAnimation();
+    const file = app.scan.file;
+    setState('working');
+    for (const st of FIT_STAGES) {
+      setStage(st.row, 'waiting', 0);
+      stageStats(st.row).textContent = '';
+    }
+    ui.fitTotal.textContent = '';
+    setStatus('Fitting the generic head to ' + file.name + '…');
+    const t0 = performance.now();
+    let result;
+    try {
+      const buffer = await file.arrayBuffer();
+      result = await runJob({ type: 'fit', name: file.name, buffer, options: { levels: 3 } }, [buffer],
+        (stage, fraction) => {
+          const row = rowOf(stage);
+          if (!row) return;
+          // Earlier rows are complete once a later stage starts.
+          for (const st of FIT_STAGES) {
+            if (st.row === row) break;
+            const li = stageItem(st.row);
+            if (!li.classList.contains('complete')) setStage(st.row, 'done', 1, 'complete');
+          }
+          setStage(row, fraction >= 1 ? 'measuring' : Math.round(fraction * 100) + '%', fraction, 'active');
+        });
+    } catch (e) {
+      if (e && e.cancelled) {
+        for (const st of FIT_STAGES) setStage(st.row, 'cancelled', 0);
+        setStatus('Fit cancelled. ' + (app.model ? app.model.name + ' is still shown.' : ''));
+        setState(app.model ? 'done' : 'ready');
+        return;
+      }
+      result = { ok: false, code: 'Internal', message: file.name + ': ' + (e && e.message ? e.message : e) };
+    }
+    const wallMs = performance.now() - t0;
+    if (!result.ok) {
+      const failedRow = FIT_STAGES.find((st) => stageItem(st.row).classList.contains('active'));
+      for (const st of FIT_STAGES) {
+        if (!stageItem(st.row).classList.contains('complete')) setStage(st.row, st === failedRow ? 'failed' : 'waiting', 0, st === failedRow ? 'failed' : undefined);
+      }
+      let message = result.message || result.code;
+      if (result.code === 'not a head' || result.code === 'NotAHead') message = 'This does not look like a head scan, so no head was fitted: ' + message;
+      setStatus('The fit failed.' + (app.model ? ' ' + app.model.name + ' is still shown.' : ''));
+      showError(message);
+      return;
+    }
+    app.fit = { name: file.name, stages: result.stages, meshes: result.meshes, fitMs: result.fitMs,
+                parseMs: result.parseMs, wallMs, points: result.points, fittedPoints: result.fittedPoints,
+                animatedVertices: result.animatedVertices };
+    for (const st of FIT_STAGES) {
+      const s = result.stages.find((x) => x.name === st.core);
+      setStage(st.row, s ? Math.round(s.ms) + ' ms' : 'done', 1, 'complete');
+      if (s) stageStats(st.row).textContent = 'mean ' + s.meanPct.toFixed(3) + ' % · max ' + s.maxPct.toFixed(2) + ' % of diagonal';
+      const li = stageItem(st.row);
+      li.classList.add('viewable');
+      li.tabIndex = 0;
+      li.setAttribute('role', 'button');
+    }
+    ui.fitTotal.textContent = 'fit ' + (result.fitMs / 1000).toFixed(2) + ' s (+ parse ' + Math.round(result.parseMs) +
+                              ' ms) · ' + result.fittedPoints.toLocaleString('en') + ' points fitted';
+    ui.fitView.hidden = false;
+    const levels = result.meshes.levels.length;
+    for (const opt of ui.level.options) opt.disabled = Number(opt.value) > levels;
+    if (Number(ui.level.value) > levels) ui.level.value = String(levels);
+    app.viewer.set_overlay_points(app.scan.display.positions, app.scan.display.normals, app.scan.display.colors);
+    app.viewer.set_overlay_visible(ui.showPoints.checked);
+    showStage('subdivide');
+    setStatus(file.name + ': head fitted in ' + (result.fitMs / 1000).toFixed(2) + ' s. Click a stage to see its mesh; ' +
+              'pick a level, animate or export.');
+    setState('done');
+  }
+
+  // Shows a fit stage's mesh over the scan points, keeping the view.
+  function fitMesh(row) {
+    const m = app.fit.meshes;
+    if (row === 'align') return m.aligned;
+    if (row === 'local_fit') return m.local;
+    if (row === 'global_fit') return m.control;
+    const level = Number(ui.level.value);
+    return level === 0 ? m.control : m.levels[level - 1];
+  }
+
+  function showStage(row) {
+    if (!app.fit) return;
+    if (row !== 'subdivide') stopAnimation();
+    const mesh = fitMesh(row);
+    const err = app.viewer.show_mesh_keep_view(mesh.positions, null, null, mesh.indices);
+    if (err) { showError('Could not show the ' + row + ' mesh: ' + err); return; }
+    markShown(row);
+    const what = row === 'subdivide' ? (ui.level.value === '0' ? 'control mesh' : 'level ' + ui.level.value)
+      : stageItem(row).querySelector('.stage-name').textContent + ' result';
+    setStatus('Showing the ' + what + ' (' + mesh.vertexCount.toLocaleString('en') + ' vertices, ' +
+              mesh.triangleCount.toLocaleString('en') + ' triangles)' + (ui.showPoints.checked ? ' over the scan points.' : '.'));
+  }
+
+  // ---- animation (jeong2002 Sec. 6: local update of the multires head) --------
+  // The worker owns the MultiresMesh; each frame asks it for one pose and
+  // uploads the returned level positions into the shown mesh.
+  let animT0 = 0, animFpsT = 0, animFpsFrames = 0;
+  function animationStep() {
+    const a = app.animation;
+    if (!a.running || !app.fit) return;
+    const t = (performance.now() - animT0) / 1000;
+    const amount = 0.5 - 0.5 * Math.cos(t * Math.PI);  // open and close every 2 s
+    runJob({ type: 'animate', amount, level: Number(ui.level.value) }, []).then((r) => {
+      if (!a.running) return;
+      if (!r.ok) { stopAnimation(); showError('Animation: ' + r.message); return; }
+      const err = app.viewer.update_positions(r.positions);
+      if (err) { stopAnimation(); showError('Animation: ' + err); return; }
+      a.frames++;
+      animFpsFrames++;
+      a.updateMs = r.updateMs;
+      const now = performance.now();
+      if (now - animFpsT > 500) {
+        a.fps = animFpsFrames * 1000 / (now - animFpsT);
+        animFpsT = now;
+        animFpsFrames = 0;
+      }
+      ui.animStats.textContent = a.fps.toFixed(0) + ' fps · update ' + a.updateMs.toFixed(1) + ' ms · ' +
+                                 r.changed.toLocaleString('en') + ' of ' + r.vertexCount.toLocaleString('en') + ' vertices';
+      requestAnimationFrame(animationStep);
+    }, () => stopAnimation());
+  }
+
+  function startAnimation() {
+    if (!app.fit || app.animation.running) return;
+    if (app.shownStage !== 'subdivide') showStage('subdivide');
+    Object.assign(app.animation, { running: true, frames: 0, fps: 0 });
+    animT0 = animFpsT = performance.now();
+    animFpsFrames = 0;
+    ui.animate.checked = true;
+    requestAnimationFrame(animationStep);
+  }
+
+  // Stops and (restPose) puts the head back at rest, the pose export writes.
+  function stopAnimation(restPose = true) {
+    const a = app.animation;
+    ui.animate.checked = false;
+    if (!a.running) return;
+    a.running = false;
+    if (!app.fit || !restPose) return;
+    runJob({ type: 'animate', amount: 0, level: Number(ui.level.value) }, []).then((r) => {
+      if (r.ok && app.shownStage === 'subdivide' && !app.animation.running) app.viewer.update_positions(r.positions);
+    }, () => {});
+  }
+
+  // ---- export -----------------------------------------------------------------
+  function download(name, bytes, mime) {
+    const url = URL.createObjectURL(new Blob([bytes], { type: mime }));
+    const a = document.createElement('a');
+    a.href = url;
+    a.download = name;
+    document.body.appendChild(a);
+    a.click();
+    a.remove();
+    setTimeout(() => URL.revokeObjectURL(url), 10000);
+    app.downloads.push({ name, size: bytes.length });
+  }
+
+  async function exportHead(format) {
+    if (!app.fit) return;
+    const level = Number(ui.level.value);
+    const base = app.fit.name.replace(/\.[^.]*$/, '') + '_head';
+    const wanted = [{ level, name: base + (level === 0 ? '_control' : '_level' + level) + '.' + format }];
+    if (format === 'obj' && level !== 0) wanted.push({ level: 0, name: base + '_control.obj' });
+    try {
+      for (const w of wanted) {
+        const r = await runJob({ type: 'export', level: w.level, format }, []);
+        if (!r.ok) { showError('Export failed: ' + r.message); return; }
+        download(w.name, r.bytes, format === 'obj' ? 'model/obj' : 'application/octet-stream');
+      }
+      setStatus('Exported ' + wanted.map((w) => w.name).join(' and ') + '.');
+    } catch (e) {
+      showError('Export failed: ' + (e && e.message ? e.message : e));
+    }
+  }
+
   // ---- wiring -----------------------------------------------------------------
   function wire() {
     ui.maxSize.textContent = formatBytes(MAX_SCAN_BYTES);
+    // ?autofit=0 starts with Auto-run off (load scans without fitting them).
+    if (params.get('autofit') === '0') ui.autoFit.checked = false;
     ui.fileInput.addEventListener('change', () => {
       const files = ui.fileInput.files;
       handleFiles(files).finally(() => { ui.fileInput.value = ''; });
@@ -464,7 +703,10 @@
     ui.reset.addEventListener('click', () => app.viewer && app.viewer.reset_view());
     ui.generic.addEventListener('click', () => {
       if (!app.viewer) return;
+      stopAnimation();
       app.viewer.show_generic_head();
+      app.viewer.set_overlay_points(new Float32Array(0), null, null);
+      markShown(null);
       app.model = null;
       clearError();
       setStatus('Showing the generic head model.');
@@ -485,6 +727,24 @@
       else return;
       e.preventDefault();
     });
+    ui.fit.addEventListener('click', runFit);
+    for (const st of FIT_STAGES) {
+      const li = stageItem(st.row);
+      li.addEventListener('click', () => { if (li.classList.contains('viewable')) showStage(st.row); });
+      li.addEventListener('keydown', (e) => {
+        if ((e.key === 'Enter' || e.key === ' ') && li.classList.contains('viewable')) { e.preventDefault(); showStage(st.row); }
+      });
+    }
+    ui.level.addEventListener('change', () => {
+      const wasRunning = app.animation.running;
+      if (wasRunning) { app.animation.running = false; ui.animate.checked = false; }
+      showStage('subdivide');
+      if (wasRunning) startAnimation();
+    });
+    ui.showPoints.addEventListener('change', () => app.viewer && app.viewer.set_overlay_visible(ui.showPoints.checked));
+    ui.animate.addEventListener('change', () => (ui.animate.checked ? startAnimation() : stopAnimation()));
+    ui.exportObj.addEventListener('click', () => exportHead('obj'));
+    ui.exportPly.addEventListener('click', () => exportHead('ply'));
     ui.wireframe.addEventListener('change', () => app.viewer && app.viewer.set_wireframe(ui.wireframe.checked));
     ui.pointSize.addEventListener('input', () => app.viewer && app.viewer.set_point_size(Number(ui.pointSize.value)));
   }

@@ -51,12 +51,22 @@ const JOBS = {
     withHeapBytes(msg.buffer, (ptr, size) => core.parse_geometry(msg.name, ptr, size, progress)),
   // {name, buffer}: a dropped photo -> {width, height, channels} once decoded.
   image: (msg) => withHeapBytes(msg.buffer, (ptr, size) => core.check_image(msg.name, ptr, size)),
+  // {name, buffer, options}: a scan -> the fitted head (jeong2002 Sec. 4-5),
+  // kept in this worker for 'animate' and 'export'. Progress per stage.
+  fit: (msg, progress) =>
+    withHeapBytes(msg.buffer, (ptr, size) => core.fit_head_job(msg.name, ptr, size, msg.options || {}, progress)),
+  // {amount, level}: one animation frame of the kept head (local update).
+  animate: (msg) => core.animate_frame(msg.amount, msg.level),
+  // {level, format: 'obj'|'ply'}: the kept head as file bytes.
+  export: (msg) => core.export_head(msg.level, msg.format),
 };
 
-function transferables(result) {
-  const out = [];
+// Typed arrays anywhere in the result (fit results nest meshes) are
+// transferred, not copied.
+function transferables(result, out = []) {
   for (const value of Object.values(result)) {
-    if (ArrayBuffer.isView(value) && value.buffer.byteLength) out.push(value.buffer);
+    if (ArrayBuffer.isView(value)) { if (value.buffer.byteLength) out.push(value.buffer); }
+    else if (value && typeof value === 'object') transferables(value, out);
   }
   return out;
 }

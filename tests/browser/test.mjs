@@ -20,7 +20,14 @@
 //     a broken JPEG is an error naming it;
 //   - no console errors, no uncaught exceptions, and every network request
 //     goes to the page's own origin;
-//   - in a Chromium without WebGL the page says so and keeps controls off.
+//   - in a Chromium without WebGL the page says so and keeps controls off;
+//   - the fit (when a native `likeness` can make a synthetic scan: env
+//     LK_LIKENESS_BIN, else WEBDIR/../bin/likeness): "Fit head" on a 60k-point
+//     synthetic scan reaches "done", every stage row shows mean/max % and ms,
+//     the canvas changes, stage rows and the level selector switch meshes,
+//     OBJ/PLY exports download files with the level's vertex count, the
+//     animation advances frames and moves pixels, a flat plane is refused as
+//     NotAHead with the previous model kept and the page still working.
 // Screenshots go to $LK_SCREENSHOT_DIR when set (web_*.png).
 import { chromium } from 'playwright-core';
 import http from 'node:http';
@@ -28,6 +35,7 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import zlib from 'node:zlib';
+import { execFileSync } from 'node:child_process';
 
 const WEBDIR = path.resolve(process.argv[2] || '');
 const SHOT_DIR = process.env.LK_SCREENSHOT_DIR || '';
@@ -196,6 +204,31 @@ function makePng(width, height) {
                         chunk('IDAT', zlib.deflateSync(raw)), chunk('IEND', Buffer.alloc(0))]);
 }
 
+// A flat 80 x 80 grid: not a head (the fit must refuse it as NotAHead).
+function planePly() {
+  const lines = [];
+  for (let i = 0; i < 80; i++) for (let j = 0; j < 80; j++) lines.push(`${(i * 0.004).toFixed(4)} ${(j * 0.004).toFixed(4)} 0`);
+  const header = ['ply', 'format ascii 1.0', `element vertex ${lines.length}`, 'property float x', 'property float y',
+    'property float z', 'end_header'];
+  return Buffer.from(header.concat(lines).join('\n') + '\n');
+}
+
+// A 60k-point synthetic head scan made by the native CLI, or null (skip).
+function syntheticScan() {
+  const candidates = [process.env.LK_LIKENESS_BIN, path.join(WEBDIR, '..', 'bin', 'likeness')].filter(Boolean);
+  const bin = candidates.find((c) => fs.existsSync(c));
+  if (!bin) return { skip: 'no native likeness binary (set LK_LIKENESS_BIN)' };
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-synth-'));
+  try {
+    execFileSync(bin, ['synth-scan', '--seed', '2', '--points', '60000', '--out', dir], { stdio: 'pipe' });
+    return { bytes: fs.readFileSync(path.join(dir, 'scan.ply')) };
+  } catch (e) {
+    return { skip: 'likeness synth-scan failed: ' + String(e.message).split('\n')[0] };
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+}
+
 function truncatedPly() {
   const full = torusPly(1000).toString();
   return Buffer.from(full.slice(0, Math.floor(full.length * 0.3)));
@@ -287,6 +320,8 @@ async function main() {
       throw new Error('the page did not start');
     }
     await shot(page, 'web_start.png');
+    // The first part loads non-head files: no automatic fit for them.
+    await page.uncheck('#auto-fit');
     const head = await canvasImage(page);
     const headStats = analyse(head);
     check('canvas shows the head (not blank)', headStats.fgFraction > 0.03,
@@ -472,11 +507,121 @@ async function main() {
       console.log('note  "Try the sample" not exercised: no sample/scan.ply in WEBDIR (scripts/demo makes it)');
     }
 
+    // 6b. The fit of a synthetic head scan, its views, export and animation.
+    const synth = syntheticScan();
+    if (synth.skip) {
+      console.log('note  the fit is not exercised: ' + synth.skip);
+    } else {
+      const sLoad = await setFile(page, 'synthetic_head.ply', synth.bytes);
+      check('the synthetic scan loads without fitting (Auto-run off)', sLoad === 'done' &&
+            (await page.evaluate(() => !window.likeness.fit)), `state ${sLoad}`);
+      const pointsShown = await canvasImage(page);
+      const tFit = Date.now();
+      await page.click('#btn-fit');
+      await page.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: JOB_TIMEOUT_MS });
+      const sFit = await state(page);
+      const fit = await page.evaluate(() => window.likeness.fit && { fitMs: window.likeness.fit.fitMs,
+        stages: window.likeness.fit.stages.map((s) => `${s.name} ${s.meanPct.toFixed(3)}/${s.maxPct.toFixed(2)}% ${Math.round(s.ms)} ms`),
+        levels: window.likeness.fit.meshes.levels.map((m) => m.vertexCount), control: window.likeness.fit.meshes.control.vertexCount });
+      check('"Fit head" reaches "done"', sFit === 'done' && !!fit,
+            `state ${sFit} after ${Date.now() - tFit} ms; ${fit ? 'fit ' + Math.round(fit.fitMs) + ' ms in wasm: ' + fit.stages.join(', ') : await bannerText(page)}`);
+      if (fit) {
+        const rows = await page.evaluate(() => ['align', 'local_fit', 'global_fit', 'subdivide'].map((r) => {
+          const li = document.querySelector(`#stages li[data-stage="${r}"]`);
+          return { r, tag: li.querySelector('.stage-tag').textContent, stats: li.querySelector('.stage-stats').textContent,
+                   value: li.querySelector('progress').value, paper: li.title };
+        }));
+        check('each stage row shows mean/max % and ms, a full bar and the paper\'s figures',
+              rows.every((x) => /^\d+ ms$/.test(x.tag) && /mean \d+\.\d+ % · max \d+\.\d+ %/.test(x.stats) && x.value === 1 &&
+                         /Table 1/.test(x.paper)), rows.map((x) => `${x.r}: ${x.tag}, ${x.stats}`).join('; '));
+        // Accuracy must improve from the rigid alignment to the global fit.
+        const meanOf = (name) => Number(/ (\d+\.\d+)\//.exec(fit.stages.find((t) => t.startsWith(name)))[1]);
+        check('the global fit is closer to the scan than the alignment', meanOf('global_fitting') < 0.5 * meanOf('initial_alignment'),
+              `${meanOf('initial_alignment')} % -> ${meanOf('global_fitting')} %`);
+        const fitted = await canvasImage(page);
+        const fitDiff = differingFraction(pointsShown, fitted);
+        check('the canvas shows the fitted head', fitDiff > 0.02, `${(100 * fitDiff).toFixed(1)}% of pixels changed`);
+        await shot(page, 'web_fit_result.png');
+        await page.screenshot({ path: SHOT_DIR ? path.join(SHOT_DIR, 'web_fit_panel.png') : path.join(os.tmpdir(), 'lk_panel.png'),
+                                clip: await page.locator('#stages').evaluate((el) => {
+                                  const r = el.closest('.card').getBoundingClientRect();
+                                  return { x: r.x, y: r.y, width: r.width, height: r.height };
+                                }) });
+        // Scan points off: fewer pixels differ from the bare mesh.
+        await page.uncheck('#show-points');
+        const noPoints = await canvasImage(page);
+        await page.check('#show-points');
+        check('the scan points toggle', differingFraction(fitted, noPoints) > 0.003,
+              `${(100 * differingFraction(fitted, noPoints)).toFixed(2)}% changed`);
+        // Stage rows: the alignment's mesh differs from the subdivided one.
+        await page.click('#stages li[data-stage="align"]');
+        const alignShown = await canvasImage(page);
+        const stAlign = await page.textContent('#status');
+        check('clicking "Align" shows the aligned generic head', /Align result \(1,358 vertices/.test(stAlign) &&
+              differingFraction(fitted, alignShown) > 0.005, `"${stAlign.trim()}", ${(100 * differingFraction(fitted, alignShown)).toFixed(1)}% changed`);
+        await page.click('#stages li[data-stage="subdivide"]');
+        // Levels: the control mesh and level 3 look different in wireframe.
+        await page.check('#wireframe');
+        await page.selectOption('#level', '0');
+        const lv0 = await canvasImage(page);
+        const st0 = await page.textContent('#status');
+        await page.selectOption('#level', '3');
+        const lv3 = await canvasImage(page);
+        const st3 = await page.textContent('#status');
+        await page.uncheck('#wireframe');
+        check('the level selector switches control mesh / level 3', /control mesh \(1,358 vertices/.test(st0) &&
+              st3.includes('level 3 (' + fit.levels[2].toLocaleString('en') + ' vertices') && differingFraction(lv0, lv3) > 0.01,
+              `"${st0.trim()}" / "${st3.trim()}", ${(100 * differingFraction(lv0, lv3)).toFixed(1)}% changed`);
+        // Export: level 3 OBJ plus the control mesh, then a PLY.
+        const downloads = [];
+        page.on('download', (d) => downloads.push(d));
+        await page.click('#btn-export-obj');
+        await page.waitForFunction(() => window.likeness.downloads.length >= 2, null, { timeout: JOB_TIMEOUT_MS });
+        await page.click('#btn-export-ply');
+        await page.waitForFunction(() => window.likeness.downloads.length >= 3, null, { timeout: JOB_TIMEOUT_MS });
+        await new Promise((r) => setTimeout(r, 500));
+        const files = {};
+        for (const d of downloads) files[d.suggestedFilename()] = fs.readFileSync(await d.path());
+        const obj = files['synthetic_head_head_level3.obj'], ctl = files['synthetic_head_head_control.obj'];
+        const ply = files['synthetic_head_head_level3.ply'];
+        const vCount = (b) => b ? b.toString().split('\n').filter((l) => l.startsWith('v ')).length : 0;
+        check('"Head (OBJ)" downloads level 3 and the control mesh', vCount(obj) === fit.levels[2] && vCount(ctl) === fit.control,
+              `files [${Object.keys(files)}], ${vCount(obj)} and ${vCount(ctl)} vertices`);
+        check('"Head (PLY)" downloads a PLY of level 3', !!ply && ply.toString('latin1', 0, 3) === 'ply' &&
+              new RegExp('element vertex ' + fit.levels[2] + '\\b').test(ply.toString('latin1', 0, 400)), ply ? `${ply.length} bytes` : 'missing');
+        // Animation: frames advance and the head moves.
+        const rest = await canvasImage(page);
+        await page.check('#animate');
+        await page.waitForTimeout(1500);
+        const f1 = await page.evaluate(() => window.likeness.animation.frames);
+        await page.waitForTimeout(1500);
+        const moving = await canvasImage(page);
+        const anim = await page.evaluate(() => Object.assign({}, window.likeness.animation, { text: document.getElementById('anim-stats').textContent }));
+        await shot(page, 'web_fit_animate.png');
+        check('the animation advances frames and moves the head', anim.frames > f1 && f1 > 0 && differingFraction(rest, moving) > 0.002 &&
+              /fps · update/.test(anim.text), `frames ${f1} -> ${anim.frames}, "${anim.text}", ${(100 * differingFraction(rest, moving)).toFixed(2)}% changed`);
+        await page.uncheck('#animate');
+        await page.waitForTimeout(300);
+        const f2 = await page.evaluate(() => window.likeness.animation.frames);
+        await page.waitForTimeout(600);
+        check('unchecking Animate stops it', (await page.evaluate(() => window.likeness.animation.frames)) === f2);
+      }
+      // A flat plane: NotAHead, shown as an error; the page keeps working.
+      await page.check('#auto-fit');
+      const sPlane = await setFile(page, 'plane.ply', planePly());
+      const msgPlane = await bannerText(page);
+      check('a flat plane is refused as not a head, with a visible message', sPlane === 'error' && /not look like a head/.test(msgPlane),
+            `state ${sPlane}; "${msgPlane}"`);
+      await page.uncheck('#auto-fit');
+      const sAfter = await setFile(page, 'cube.obj', cubeObj());
+      check('... and the page still works afterwards', sAfter === 'done', `state ${sAfter}`);
+    }
+
     // 7. The limits, on a page started with small ones: file size 1 MB,
     // display 5,000 points and 10 triangles.
     const page2 = await context.newPage();
     watch(page2);
-    await page2.goto(origin + '/index.html?max_mb=1&max_display_points=5000&max_display_triangles=10');
+    await page2.goto(origin + '/index.html?max_mb=1&max_display_points=5000&max_display_triangles=10&autofit=0');
     await waitForState(page2, ['ready', 'error'], READY_TIMEOUT_MS);
     const s3 = await setFile(page2, 'big.ply', Buffer.alloc(2 * 1024 * 1024, 32));
     const msg3 = await bannerText(page2);

@@ -134,5 +134,25 @@ for (const [name, full] of [['bin.ply', binaryPly(40)], ['ascii.ply', Buffer.fro
         aborted ? 'ABORTED: ' + aborted : `${errors} errors with messages, ${oks} parsed, whole file ok=${whole.ok}`);
 }
 
+// --- the fit's jobs on bad input: messages, never aborts ------------------------
+{
+  const noFit = [core.animate_frame(0.5, 3), core.export_head(3, 'obj')];
+  check('animate/export before any fit say so', noFit.every((r) => !r.ok && /no fitted head/.test(r.message)),
+        noFit.map((r) => r.message).join(' | '));
+  const lines = [];
+  for (let i = 0; i < 60; i++) for (let j = 0; j < 60; j++) lines.push(`${i * 0.005} ${j * 0.005} 0`);
+  const plane = Buffer.from(['ply', 'format ascii 1.0', `element vertex ${lines.length}`, 'property float x',
+    'property float y', 'property float z', 'end_header', ...lines].join('\n') + '\n');
+  const ptr = core._malloc(plane.length);
+  core.HEAPU8.set(plane, ptr);
+  const stages = [];
+  const r = core.fit_head_job('plane.ply', ptr, plane.length, {}, (stage) => { stages.push(stage); });
+  core._free(ptr);
+  check('a flat plane is refused as NotAHead', !aborted && !r.ok && r.code === 'not a head' && /plane\.ply/.test(r.message),
+        `${r.code}: ${r.message}`);
+  const bad = core.fit_head_job('x.ply', 0, 0, { levels: 9 }, undefined);
+  check('bad input to fit_head_job is a message', !bad.ok && bad.message.length > 0, bad.message);
+}
+
 console.log(`worker node test: ${passes}/${passes + failures} checks passed`);
 process.exit(failures ? 1 : 0);
