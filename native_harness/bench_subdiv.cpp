@@ -165,8 +165,13 @@ void compare_with_openmesh(const TriMesh& control, const std::vector<ButterflyLe
     double worst = 0, sum = 0;
     int unmatched = 0;
     for (int k = 0; k < lv.num_new_vertices(); ++k) {
-      const auto a = OMMesh::VertexHandle(map[lv.edge_endpoints[k][0]]);
-      const auto b = OMMesh::VertexHandle(map[lv.edge_endpoints[k][1]]);
+      const int ia = map[lv.edge_endpoints[k][0]], ib = map[lv.edge_endpoints[k][1]];
+      if (ia < 0 || ib < 0 || ia >= static_cast<int>(om.n_vertices()) || ib >= static_cast<int>(om.n_vertices())) {
+        ++unmatched;  // an endpoint was already unmatched on the coarser level
+        continue;
+      }
+      const auto a = OMMesh::VertexHandle(ia);
+      const auto b = OMMesh::VertexHandle(ib);
       std::unordered_set<int> around_a;
       for (auto n : om.vv_range(a)) around_a.insert(n.idx());
       int found = -1;

@@ -313,8 +313,15 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
   for (int l = 0; l <= L; ++l) {
     evaluate_level(mesh, l);  // normals N_l with d_l = 0
     const double edge = mean_edge(mesh.state.base[l], mesh.triangles(l));
-    const double radius = options.radius > 0 ? options.radius : 0.5 * edge;
-    const double max_distance = options.max_distance > 0 ? options.max_distance : 2.0 * edge;
+    // Default footprint: half an edge, but never so small that the cloud's
+    // sampling leaves the cylinder empty on fine levels (a disk of radius
+    // 2 x spacing holds ~12 points where the scan covers the surface).
+    double area = 0;
+    for (int f = 0; f < static_cast<int>(mesh.triangles(l).size()); ++f)
+      area += 0.5 * face_normal(mesh.triangles(l), mesh.state.base[l], f).norm();
+    const double spacing = std::sqrt(area / cloud.size());
+    const double radius = options.radius > 0 ? options.radius : std::max(0.5 * edge, 2.0 * spacing);
+    const double max_distance = options.max_distance > 0 ? options.max_distance : std::max(2.0 * edge, 2.0 * radius);
     const int nv = mesh.num_vertices(l);
     const int first = (l == 0 || options.remeasure_coarse_vertices) ? 0 : mesh.num_vertices(l - 1);
     int measured = 0;

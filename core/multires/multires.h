@@ -85,11 +85,13 @@ TriMesh level_mesh(const MultiresMesh& mesh, int level);
 
 struct DisplacementOptions {
   // Radius of the cylinder around a vertex's normal line that collects scan
-  // points. 0: half the mean edge length of the level being measured, so the
-  // sampling footprint shrinks with the triangles.
+  // points. 0: half the mean edge length of the level being measured (the
+  // footprint shrinks with the triangles), but at least twice the mean point
+  // spacing sqrt(level area / #points), so fine levels still find data.
   double radius = 0.0;
   // Points farther than this along the normal are ignored (another sheet of
-  // the surface, outliers). 0: twice the mean edge length of the level.
+  // the surface, outliers). 0: twice the larger of the mean edge length of
+  // the level and the radius.
   double max_distance = 0.0;
   // Fewer points than this in the cylinder means "no data": displacement 0,
   // and the subdivision surface stays smooth there (Sec. 5).
