@@ -1,0 +1,403 @@
+#include "calib/calibrate.h"
+
+#include "synth/prng.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace lk {
+namespace {
+
+using Mat34 = Eigen::Matrix<double, 3, 4>;
+using VecX = Eigen::VectorXd;
+using MatX = Eigen::MatrixXd;
+
+// Hartley normalization: moves the centroid to 0 and scales the mean distance
+// to sqrt(dim), so the DLT system is well conditioned.
+template <int D>
+Eigen::Matrix<double, D + 1, D + 1> normalizer(const std::vector<Eigen::Matrix<double, D, 1>>& pts) {
+  Eigen::Matrix<double, D, 1> c = Eigen::Matrix<double, D, 1>::Zero();
+  for (const auto& p : pts) c += p;
+  c /= double(pts.size());
+  double mean = 0;
+  for (const auto& p : pts) mean += (p - c).norm();
+  mean /= double(pts.size());
+  const double s = mean > 0 ? std::sqrt(double(D)) / mean : 1.0;
+  Eigen::Matrix<double, D + 1, D + 1> T = Eigen::Matrix<double, D + 1, D + 1>::Identity();
+  T.template topLeftCorner<D, D>() *= s;
+  T.template topRightCorner<D, 1>() = -s * c;
+  return T;
+}
+
+// Normalized DLT (Hartley & Zisserman Alg. 7.1) on the listed correspondences.
+Mat34 dlt(const std::vector<Correspondence>& cs, const std::vector<int>& idx) {
+  std::vector<Vec2> x;
+  std::vector<Vec3> X;
+  for (int i : idx) { x.push_back(cs[i].pixel); X.push_back(cs[i].point); }
+  const Mat3 T = normalizer<2>(x);
+  const Mat4 U = normalizer<3>(X);
+  MatX A = MatX::Zero(2 * idx.size(), 12);
+  for (size_t i = 0; i < idx.size(); ++i) {
+    const Vec3 xn = T * x[i].homogeneous();
+    const Vec4 Xn = U * X[i].homogeneous();
+    A.block<1, 4>(2 * i, 4) = -xn.z() * Xn.transpose();
+    A.block<1, 4>(2 * i, 8) = xn.y() * Xn.transpose();
+    A.block<1, 4>(2 * i + 1, 0) = xn.z() * Xn.transpose();
+    A.block<1, 4>(2 * i + 1, 8) = -xn.x() * Xn.transpose();
+  }
+  Eigen::JacobiSVD<MatX> svd(A, Eigen::ComputeFullV);
+  const VecX p = svd.matrixV().col(11);
+  Mat34 Pn;
+  Pn << p.segment<4>(0).transpose(), p.segment<4>(4).transpose(), p.segment<4>(8).transpose();
+  return T.inverse() * Pn * U;
+}
+
+// P = K [R | t] with K upper triangular, positive diagonal, det R = +1.
+// Returns false when the points would lie behind the camera.
+bool decompose(Mat34 P, const std::vector<Correspondence>& cs, const std::vector<int>& idx,
+               Camera& cam) {
+  Mat3 M = P.leftCols<3>();
+  if (M.determinant() < 0) { P = -P; M = -M; }
+  // RQ via QR of the row-reversed, transposed matrix.
+  Mat3 J = Mat3::Zero();
+  J(0, 2) = J(1, 1) = J(2, 0) = 1;
+  Eigen::HouseholderQR<Mat3> qr((J * M).transpose());
+  const Mat3 Q = qr.householderQ();
+  const Mat3 Ru = qr.matrixQR().triangularView<Eigen::Upper>();
+  Mat3 K = J * Ru.transpose() * J;
+  Mat3 R = J * Q.transpose();
+  const Mat3 D = K.diagonal().cwiseSign().asDiagonal();
+  K = K * D;
+  R = D * R;
+  if (R.determinant() < 0 || K(2, 2) <= 0) return false;
+  const Vec3 t = K.inverse() * P.col(3);
+  K /= K(2, 2);
+  cam.fx = K(0, 0);
+  cam.fy = K(1, 1);
+  cam.cx = K(0, 2);
+  cam.cy = K(1, 2);
+  cam.k1 = cam.k2 = 0;
+  cam.R = R;
+  cam.t = t;
+  int in_front = 0;
+  for (int i : idx) in_front += cam.to_camera(cs[i].point).z() > 0;
+  return 2 * in_front > int(idx.size());
+}
+
+// Coplanar points with known K: pose from the plane homography (Zhang 2000).
+bool pose_from_plane(const std::vector<Correspondence>& cs, const std::vector<int>& idx,
+                     const Vec3& centroid, const Mat3& basis /* e1 e2 n */, Camera& cam) {
+  std::vector<Vec2> x, a;
+  for (int i : idx) {
+    x.push_back(cs[i].pixel);
+    a.push_back((basis.transpose() * (cs[i].point - centroid)).head<2>());
+  }
+  const Mat3 T = normalizer<2>(x), U = normalizer<2>(a);
+  MatX A = MatX::Zero(2 * idx.size(), 9);
+  for (size_t i = 0; i < idx.size(); ++i) {
+    const Vec3 xn = T * x[i].homogeneous(), an = U * a[i].homogeneous();
+    A.block<1, 3>(2 * i, 3) = -xn.z() * an.transpose();
+    A.block<1, 3>(2 * i, 6) = xn.y() * an.transpose();
+    A.block<1, 3>(2 * i + 1, 0) = xn.z() * an.transpose();
+    A.block<1, 3>(2 * i + 1, 6) = -xn.x() * an.transpose();
+  }
+  Eigen::JacobiSVD<MatX> svd(A, Eigen::ComputeFullV);
+  const VecX h = svd.matrixV().col(8);
+  Mat3 Hn;
+  Hn << h.segment<3>(0).transpose(), h.segment<3>(3).transpose(), h.segment<3>(6).transpose();
+  const Mat3 H = T.inverse() * Hn * U;
+  Mat3 K = Mat3::Identity();
+  K(0, 0) = cam.fx; K(1, 1) = cam.fy; K(0, 2) = cam.cx; K(1, 2) = cam.cy;
+  Mat3 B = K.inverse() * H;
+  double lambda = 2.0 / (B.col(0).norm() + B.col(1).norm());
+  if (B(2, 2) * lambda < 0) lambda = -lambda;  // the plane's origin must be in front
+  B *= lambda;
+  Mat3 Rl;
+  Rl.col(0) = B.col(0);
+  Rl.col(1) = B.col(1);
+  Rl.col(2) = B.col(0).cross(B.col(1));
+  Eigen::JacobiSVD<Mat3> r(Rl, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Rl = r.matrixU() * r.matrixV().transpose();
+  if (Rl.determinant() < 0) return false;
+  cam.R = Rl * basis.transpose();
+  cam.t = B.col(2) - cam.R * centroid;
+  return true;
+}
+
+// Which parameters the refinement may change.
+struct FreeParams {
+  bool focal = true, separate = false, principal = true, k1 = true, k2 = false;
+  int count() const { return (focal ? (separate ? 2 : 1) : 0) + (principal ? 2 : 0) + k1 + k2 + 6; }
+};
+
+// Camera from the base camera and a parameter vector. Rotation is a local
+// axis-angle update of base.R, so it never meets the axis-angle singularity.
+Camera apply(const Camera& base, const FreeParams& fp, const VecX& p) {
+  Camera c = base;
+  int j = 0;
+  if (fp.focal) {
+    if (fp.separate) { c.fx = p[j++]; c.fy = p[j++]; }
+    else { c.fx = c.fy = p[j++]; }
+  }
+  if (fp.principal) { c.cx = p[j++]; c.cy = p[j++]; }
+  if (fp.k1) c.k1 = p[j++];
+  if (fp.k2) c.k2 = p[j++];
+  const Vec3 w = p.segment<3>(j);
+  j += 3;
+  const double angle = w.norm();
+  if (angle > 0) c.R = Eigen::AngleAxisd(angle, w / angle).toRotationMatrix() * base.R;
+  c.t = p.segment<3>(j);
+  return c;
+}
+
+VecX pack(const Camera& c, const FreeParams& fp) {
+  VecX p(fp.count());
+  int j = 0;
+  if (fp.focal) {
+    if (fp.separate) { p[j++] = c.fx; p[j++] = c.fy; }
+    else p[j++] = 0.5 * (c.fx + c.fy);
+  }
+  if (fp.principal) { p[j++] = c.cx; p[j++] = c.cy; }
+  if (fp.k1) p[j++] = c.k1;
+  if (fp.k2) p[j++] = c.k2;
+  p.segment<3>(j) = Vec3::Zero();
+  p.segment<3>(j + 3) = c.t;
+  return p;
+}
+
+// Reprojection residuals; a point behind the camera gets a large constant
+// residual so the solver is pushed away from such solutions.
+VecX residuals(const Camera& c, const std::vector<Correspondence>& cs, const std::vector<int>& idx) {
+  VecX r(2 * idx.size());
+  for (size_t i = 0; i < idx.size(); ++i) {
+    Vec2 uv;
+    if (c.project(cs[idx[i]].point, uv)) r.segment<2>(2 * i) = uv - cs[idx[i]].pixel;
+    else r.segment<2>(2 * i) = Vec2::Constant(1e6);
+  }
+  return r;
+}
+
+// Levenberg-Marquardt (Marquardt's diagonal scaling) with a central-difference
+// Jacobian: at most ~15 parameters and a few dozen residuals, so numeric
+// derivatives cost nothing and cannot get out of sync with the model.
+Camera refine(const Camera& start, const FreeParams& fp, const std::vector<Correspondence>& cs,
+              const std::vector<int>& idx, int max_iterations) {
+  Camera base = start;
+  VecX p = pack(base, fp);
+  VecX r = residuals(base, cs, idx);
+  double cost = r.squaredNorm();
+  double lambda = 1e-3;
+  const int n = int(p.size());
+  for (int it = 0; it < max_iterations; ++it) {
+    MatX Jac(r.size(), n);
+    for (int j = 0; j < n; ++j) {
+      const double h = 1e-6 * std::max(1.0, std::abs(p[j]));
+      VecX pp = p, pm = p;
+      pp[j] += h;
+      pm[j] -= h;
+      Jac.col(j) = (residuals(apply(base, fp, pp), cs, idx) - residuals(apply(base, fp, pm), cs, idx)) / (2 * h);
+    }
+    const MatX JtJ = Jac.transpose() * Jac;
+    const VecX g = Jac.transpose() * r;
+    bool improved = false;
+    for (int tries = 0; tries < 12; ++tries) {
+      MatX A = JtJ;
+      for (int j = 0; j < n; ++j) A(j, j) += lambda * std::max(JtJ(j, j), 1e-12);
+      const VecX step = A.ldlt().solve(-g);
+      if (!step.allFinite()) { lambda *= 10; continue; }
+      const VecX pn = p + step;
+      const Camera cn = apply(base, fp, pn);
+      const VecX rn = residuals(cn, cs, idx);
+      const double cn_cost = rn.squaredNorm();
+      if (cn_cost < cost) {
+        const double gain = cost - cn_cost;
+        base = cn;  // re-base the rotation; the axis-angle part restarts at 0
+        p = pack(base, fp);
+        r = rn;
+        cost = cn_cost;
+        lambda = std::max(lambda * 0.3, 1e-12);
+        improved = true;
+        if (gain < 1e-14 * (1 + cost) || step.norm() < 1e-14 * (1 + p.norm())) return base;
+        break;
+      }
+      lambda *= 10;
+    }
+    if (!improved) break;
+  }
+  return base;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  const size_t m = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + m, v.end());
+  return v[m];
+}
+
+std::vector<double> errors_of(const Camera& cam, const std::vector<Correspondence>& cs) {
+  std::vector<double> e(cs.size());
+  for (size_t i = 0; i < cs.size(); ++i) {
+    Vec2 uv;
+    e[i] = cam.project(cs[i].point, uv) ? (uv - cs[i].pixel).norm()
+                                        : std::numeric_limits<double>::infinity();
+  }
+  return e;
+}
+
+}  // namespace
+
+Status calibrate_camera(const std::vector<Correspondence>& cs, int image_width, int image_height,
+                        const CalibOptions& options, CalibResult& result) {
+  result = CalibResult{};
+  const int n = int(cs.size());
+  if (n < 6)
+    return Status::error(ErrorCode::InvalidInput,
+                         "calibration needs at least 6 point correspondences, got " + std::to_string(n));
+  if (image_width <= 0 || image_height <= 0)
+    return Status::error(ErrorCode::InvalidInput, "calibration needs a positive image size");
+  for (int i = 0; i < n; ++i)
+    if (!cs[i].pixel.allFinite() || !cs[i].point.allFinite())
+      return Status::error(ErrorCode::InvalidInput,
+                           "correspondence " + std::to_string(i) + " has a NaN or infinite coordinate");
+  if (options.known_focal < 0 || !std::isfinite(options.known_focal))
+    return Status::error(ErrorCode::InvalidInput, "known_focal must be positive (or 0 = unknown)");
+
+  // Shape of the 3-D point set: collinear sets never determine a camera;
+  // coplanar ones cannot give intrinsics and pose together by DLT.
+  Vec3 centroid = Vec3::Zero();
+  for (const auto& c : cs) centroid += c.point;
+  centroid /= n;
+  Mat3 cov = Mat3::Zero();
+  for (const auto& c : cs) cov += (c.point - centroid) * (c.point - centroid).transpose();
+  Eigen::JacobiSVD<Mat3> shape(cov, Eigen::ComputeFullU);
+  const Vec3 sv = shape.singularValues().cwiseSqrt();
+  if (sv[0] <= 0 || sv[1] < 1e-6 * sv[0])
+    return Status::error(ErrorCode::InvalidInput,
+                         "the 3-D points are collinear (or identical): they cannot determine a camera");
+  const bool known = options.known_focal > 0;
+  const bool coplanar = sv[2] < 1e-3 * sv[0];
+  if (coplanar && !known)
+    return Status::error(ErrorCode::InvalidInput,
+                         "the 3-D points are coplanar: intrinsics and pose cannot both be estimated "
+                         "from them; give the focal length (known_focal) or pick points off the plane");
+
+  // Initial camera from a set of correspondences (DLT, or the plane
+  // homography for coplanar points with known intrinsics).
+  auto initial = [&](const std::vector<int>& idx, Camera& cam) {
+    cam = Camera{};
+    cam.width = image_width;
+    cam.height = image_height;
+    if (coplanar) {
+      cam.fx = cam.fy = options.known_focal;
+      cam.cx = 0.5 * image_width;
+      cam.cy = 0.5 * image_height;
+      return pose_from_plane(cs, idx, centroid, shape.matrixU(), cam);
+    }
+    if (!decompose(dlt(cs, idx), cs, idx, cam)) return false;
+    cam.width = image_width;
+    cam.height = image_height;
+    if (known) {
+      cam.fx = cam.fy = options.known_focal;
+      cam.cx = 0.5 * image_width;
+      cam.cy = 0.5 * image_height;
+    }
+    return std::isfinite(cam.fx) && cam.fx > 0 && cam.fy > 0;
+  };
+
+  std::vector<int> all(n);
+  for (int i = 0; i < n; ++i) all[i] = i;
+  const double diag = std::hypot(double(image_width), double(image_height));
+
+  // RANSAC over minimal sets: a 6-point DLT is an exact fit, so hypotheses are
+  // scored with a generous threshold; the final threshold comes later.
+  std::vector<int> inliers = all;
+  if (options.robust && n > 6) {
+    const double ransac_px = std::max(4 * options.outlier_px, 0.005 * diag);
+    SplitMix64 rng(0x5eed);
+    int best = -1;
+    double best_sum = 0;
+    const int sample = 6;
+    for (int trial = 0; trial < options.ransac_iterations; ++trial) {
+      std::vector<int> pool = all, pick;
+      for (int s = 0; s < sample; ++s) {
+        const int j = s + int(rng.next() % std::uint64_t(n - s));
+        std::swap(pool[s], pool[j]);
+        pick.push_back(pool[s]);
+      }
+      Camera cam;
+      if (!initial(pick, cam)) continue;
+      if (!options.separate_focal) cam.fx = cam.fy = 0.5 * (cam.fx + cam.fy);
+      cam = refine(cam, FreeParams{!known, options.separate_focal, false, false, false}, cs, pick, 10);
+      const std::vector<double> e = errors_of(cam, cs);
+      int count = 0;
+      double sum = 0;
+      for (double v : e)
+        if (v < ransac_px) { ++count; sum += v; }
+      if (count > best || (count == best && sum < best_sum)) {
+        best = count;
+        best_sum = sum;
+        inliers.clear();
+        for (int i = 0; i < n; ++i)
+          if (e[i] < ransac_px) inliers.push_back(i);
+      }
+      if (best == n) break;
+    }
+    if (best < 6) inliers = all;  // no consensus: let the refinement below decide
+  }
+
+  Camera cam;
+  if (!initial(inliers, cam))
+    return Status::error(ErrorCode::InvalidInput,
+                         "no camera puts the 3-D points in front of it (points behind the camera, "
+                         "or mirrored correspondences)");
+
+  // Refine on the inliers, re-classify every point, repeat until stable.
+  std::vector<double> e;
+  for (int round = 0; round < 6; ++round) {
+    const int m = int(inliers.size());
+    FreeParams fp;
+    fp.focal = !known;
+    fp.separate = options.separate_focal;
+    fp.principal = !options.fix_principal_point && m >= 8;
+    fp.k1 = options.estimate_k1 && m >= 8;
+    fp.k2 = options.estimate_k2 && m >= 10;
+    if (!fp.principal) { cam.cx = 0.5 * image_width; cam.cy = 0.5 * image_height; }
+    if (!fp.separate) cam.fx = cam.fy = 0.5 * (cam.fx + cam.fy);  // DLT's K has fx != fy
+    // Pose first (intrinsics held), then everything: a far-off DLT focal
+    // with distortion otherwise lets LM wander.
+    cam = refine(cam, FreeParams{false, false, false, false, false}, cs, inliers, options.max_lm_iterations);
+    cam = refine(cam, fp, cs, inliers, options.max_lm_iterations);
+    e = errors_of(cam, cs);
+    if (!options.robust) break;
+    std::vector<double> in_err;
+    for (int i : inliers) in_err.push_back(e[i]);
+    const double threshold = std::max(options.outlier_px, 3 * 1.4826 * median(in_err));
+    std::vector<int> next;
+    for (int i = 0; i < n; ++i)
+      if (e[i] < threshold) next.push_back(i);
+    if (next.size() < 6 || next == inliers) break;
+    inliers = next;
+  }
+
+  if (!(cam.fx > 0) || !(cam.fy > 0) || !std::isfinite(cam.fx) || !cam.t.allFinite())
+    return Status::error(ErrorCode::NotConverged, "calibration did not converge to a valid camera");
+  int behind = 0;
+  for (int i : inliers) behind += cam.to_camera(cs[i].point).z() <= 0;
+  if (behind > 0)
+    return Status::error(ErrorCode::InvalidInput,
+                         std::to_string(behind) + " of the points are behind the calibrated camera");
+
+  result.camera = cam;
+  result.errors = e;
+  result.outlier.assign(n, 1);
+  double sq = 0;
+  for (int i : inliers) { result.outlier[i] = 0; sq += e[i] * e[i]; }
+  result.num_inliers = int(inliers.size());
+  result.rms = std::sqrt(sq / std::max(1, result.num_inliers));
+  return Status::success();
+}
+
+}  // namespace lk
