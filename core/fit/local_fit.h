@@ -48,7 +48,7 @@ struct LocalFitOptions {
   double stretch_weight = 1.0;       // k of E_stretch (relative to E_dist, see above)
   int max_iterations = 35;           // per box (the paper reports about 35)
   double relative_tolerance = 1e-4;  // stop when E_local changes less than this
-  int max_points_per_box = 6000;     // random subsample of a box's points
+  int max_points_per_box = 3000;     // random subsample of a box's points
   double falloff_fraction = 1.0 / 30.0;  // k_f in units of the cloud's bbox diagonal
   int min_points_per_box = 30;       // fewer points: the box is left as it is
   std::uint32_t seed = 1;
