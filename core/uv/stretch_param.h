@@ -6,6 +6,12 @@
 //   has singular values Gamma >= gamma; L2(T) = sqrt((Gamma^2 + gamma^2) / 2);
 //   L2(M) = sqrt( sum L2(T)^2 w(T) A'(T) / sum w(T) A'(T) ),
 //   w(T) = 1 / (<N(T), V> + k), k in [1.01, 2] (view-dependent weight).
+// Sign of V: the paper wants face triangles LARGER in the texture ("triangles
+// on the face become larger ... backfacing triangles become smaller"). With
+// Sander's stretch (texture -> surface; high stretch = too little texture
+// space) that needs a large weight on the face, i.e. <N,V> = -1 there: V is
+// the direction a viewer looks at the face, V = -look. We therefore use
+// w(T) = 1 / (k - <N(T), look>); UvOptions::view holds the look direction.
 // Stretch is reported after scaling the chart so its area equals the 3-D
 // area (Sander's normalization), so 1 is the optimum (developable surfaces).
 //
@@ -28,7 +34,7 @@
 namespace lk {
 
 struct UvOptions {
-  Vec3 view = Vec3::UnitZ();   // V: the direction the head looks (+z for the generic head)
+  Vec3 view = Vec3::UnitZ();   // the direction the head looks (+z for the generic head); V = -view
   double k = 1.2;              // weight parameter; the paper uses [1.01, 2]; very large = unweighted
   bool view_weighted = true;   // false: plain L2 stretch (w = 1)
   int global_iterations = 30;  // stretch-reweighted global solves
