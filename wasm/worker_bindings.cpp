@@ -161,6 +161,7 @@ struct FitSession {
   std::vector<int> moved;
   std::vector<lk::Vec3> rest;
   std::vector<int> kind;
+  std::vector<double> weight;  // brow falloff in [0, 1]; 1 for the jaw
   lk::Vec3 jaw_pivot = lk::Vec3::Zero();
   double head_size = 0.25;  // metres, sets the brow lift
 };
@@ -192,33 +193,49 @@ val stats_object(const lk::DistanceStats& d) {
   return o;
 }
 
-// Picks the animated control vertices from the generic head's regions:
-// "brow" is lifted, "jaw" + "chin" + "lower_lip" rotate down about a hinge
-// below the ears. The generic head and the control mesh share vertex indices.
+// Picks the animated control vertices from the generic head's regions (the
+// generic head and the control mesh share vertex indices):
+//  - brows: the "brow" region is lifted fully and the skin around it follows
+//    with a smooth falloff (to zero at 3 % of the head's size), so the
+//    forehead stretches instead of tearing at the region's edge;
+//  - jaw: "lower_lip", "chin" and "jaw" rotate down rigidly about a hinge at
+//    the jaw region's top back (the temporomandibular joint's place).
 void prepare_animation(FitSession& s, const lk::HeadAnnotations& ann) {
   s.moved.clear();
   s.rest.clear();
   s.kind.clear();
-  std::vector<int> seen(s.fit.control.positions.size(), -1);
-  auto add = [&](const char* region, int kind) {
-    auto it = ann.regions.find(region);
-    if (it == ann.regions.end()) return;
-    for (int v : it->second) {
-      if (v < 0 || v >= static_cast<int>(seen.size()) || seen[v] >= 0) continue;
-      seen[v] = kind;
-      s.moved.push_back(v);
-      s.rest.push_back(s.fit.control.positions[v]);
-      s.kind.push_back(kind);
-    }
-  };
-  add("brow", 0);
-  add("lower_lip", 1);
-  add("chin", 1);
-  add("jaw", 1);
-  const lk::BBox box = lk::bounding_box(s.fit.control.positions);
+  s.weight.clear();
+  const std::vector<lk::Vec3>& P = s.fit.control.positions;
+  const lk::BBox box = lk::bounding_box(P);
   s.head_size = (box.max - box.min).norm();
-  // Hinge: the jaw's highest, rearmost reach (temporomandibular joint sits
-  // behind and above the jaw region).
+  std::vector<char> taken(P.size(), 0);
+  auto region = [&](const char* name) {
+    auto it = ann.regions.find(name);
+    return it == ann.regions.end() ? std::vector<int>{} : it->second;
+  };
+  for (const char* name : {"lower_lip", "chin", "jaw"})
+    for (int v : region(name)) {
+      if (v < 0 || v >= static_cast<int>(P.size()) || taken[v]) continue;
+      taken[v] = 1;
+      s.moved.push_back(v);
+      s.rest.push_back(P[v]);
+      s.kind.push_back(1);
+      s.weight.push_back(1.0);
+    }
+  const std::vector<int> brow = region("brow");
+  const double falloff = 0.03 * s.head_size;
+  for (size_t v = 0; v < P.size(); ++v) {
+    if (taken[v] || brow.empty()) continue;
+    double nearest = 1e300;
+    for (int b : brow)
+      if (b >= 0 && b < static_cast<int>(P.size())) nearest = std::min(nearest, (P[v] - P[b]).norm());
+    if (nearest >= falloff) continue;
+    const double x = 1.0 - nearest / falloff;  // 1 on the brow, 0 at the falloff radius
+    s.moved.push_back(static_cast<int>(v));
+    s.rest.push_back(P[v]);
+    s.kind.push_back(0);
+    s.weight.push_back(x * x * (3.0 - 2.0 * x));  // smoothstep
+  }
   lk::Vec3 top_back(0, -1e9, 1e9);
   for (size_t i = 0; i < s.moved.size(); ++i)
     if (s.kind[i] == 1) {
@@ -347,14 +364,14 @@ val animate_frame(double amount, int level) {
     return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "no level " + std::to_string(level)));
   if (!std::isfinite(amount)) amount = 0;
   amount = std::min(1.0, std::max(0.0, amount));
-  const double brow_lift = 0.03 * s.head_size * amount;  // ~1 cm on a head
+  const double brow_lift = 0.02 * s.head_size * amount;  // ~7 mm on a head
   const double jaw_angle = 0.14 * amount;                 // ~8 degrees
   const double c = std::cos(jaw_angle), sn = std::sin(jaw_angle);
   std::vector<lk::Vec3> target(s.moved.size());
   for (size_t i = 0; i < s.moved.size(); ++i) {
     const lk::Vec3& p = s.rest[i];
     if (s.kind[i] == 0) {
-      target[i] = p + lk::Vec3(0, brow_lift, 0);
+      target[i] = p + lk::Vec3(0, brow_lift * s.weight[i], 0);
     } else {
       // Rotation about the x axis through the hinge: the chin swings down.
       const lk::Vec3 d = p - s.jaw_pivot;

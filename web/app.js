@@ -612,12 +612,12 @@
       animFpsFrames++;
       a.updateMs = r.updateMs;
       const now = performance.now();
-      if (now - animFpsT > 500) {
+      if (now - animFpsT > 500 || a.fps === 0) {
         a.fps = animFpsFrames * 1000 / (now - animFpsT);
         animFpsT = now;
         animFpsFrames = 0;
       }
-      ui.animStats.textContent = a.fps.toFixed(0) + ' fps · update ' + a.updateMs.toFixed(1) + ' ms · ' +
+      ui.animStats.textContent = (a.fps < 10 ? a.fps.toFixed(1) : a.fps.toFixed(0)) + ' fps · update ' + a.updateMs.toFixed(1) + ' ms · ' +
                                  r.changed.toLocaleString('en') + ' of ' + r.vertexCount.toLocaleString('en') + ' vertices';
       requestAnimationFrame(animationStep);
     }, () => stopAnimation());

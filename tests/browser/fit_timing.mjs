@@ -1,0 +1,97 @@
+// Times the whole scan -> head fit in Chromium (SwiftShader, this machine)
+// on the page's built-in sample (WEBDIR/sample/scan.ply, put there by
+// scripts/demo) or on a given PLY: clicks "Try the sample" / sets the file,
+// runs "Fit head" RUNS times and prints per-stage ms and Table 1 numbers as
+// measured by the worker (performance.now() around each stage), plus the
+// page's wall time from the click to "done". Not a test: a measurement.
+// --shots DIR also writes the docs pictures: DIR/web_fit_result.png (the
+// page after the fit), web_fit_panel.png (the Pipeline card),
+// web_fit_stages.png (Align result over the scan, wireframe) and
+// web_fit_animate.png (mid-animation, points off).
+// Usage: node fit_timing.mjs WEBDIR [SCAN.ply] [--runs N] [--shots DIR]
+import { chromium } from 'playwright-core';
+import http from 'node:http';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+
+const args = process.argv.slice(2);
+let runs = 1;
+const r = args.indexOf('--runs');
+if (r >= 0) { runs = Math.max(1, Number(args[r + 1]) || 1); args.splice(r, 2); }
+let shots = '';
+const sh = args.indexOf('--shots');
+if (sh >= 0) { shots = args[sh + 1]; args.splice(sh, 2); }
+const [webdir, scan] = args;
+if (!webdir) { console.error('usage: node fit_timing.mjs WEBDIR [SCAN.ply] [--runs N]'); process.exit(2); }
+const root = path.resolve(webdir);
+if (!scan && !fs.existsSync(path.join(root, 'sample', 'scan.ply'))) {
+  console.error(`no ${root}/sample/scan.ply (scripts/demo makes it) and no SCAN given`);
+  process.exit(2);
+}
+const MIME = { '.html': 'text/html', '.js': 'text/javascript', '.css': 'text/css', '.wasm': 'application/wasm' };
+const server = http.createServer((req, res) => {
+  const file = path.join(root, path.normalize(decodeURIComponent(new URL(req.url, 'http://x').pathname)));
+  if (!file.startsWith(root) || !fs.existsSync(file) || fs.statSync(file).isDirectory()) { res.writeHead(404); res.end(); return; }
+  res.writeHead(200, { 'content-type': MIME[path.extname(file)] || 'application/octet-stream' });
+  fs.createReadStream(file).pipe(res);
+});
+await new Promise((ok) => server.listen(0, '127.0.0.1', ok));
+const profile = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-timing-'));
+const context = await chromium.launchPersistentContext(profile, {
+  executablePath: '/usr/bin/chromium', headless: true,
+  args: ['--no-sandbox', '--disable-quic', '--no-first-run', '--disable-background-networking',
+         '--disable-component-update', '--disable-sync', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
+  viewport: { width: 1280, height: 1000 }, deviceScaleFactor: 1,
+});
+let status = 0;
+try {
+  const page = context.pages()[0] || await context.newPage();
+  await page.goto(`http://127.0.0.1:${server.address().port}/index.html?autofit=0`);
+  await page.waitForFunction(() => document.body.dataset.state === 'ready', null, { timeout: 180000 });
+  if (scan) await page.setInputFiles('#file-input', path.resolve(scan));
+  else await page.click('#btn-sample');
+  await page.waitForFunction(() => ['done', 'error'].includes(document.body.dataset.state) && window.likeness.model, null, { timeout: 180000 });
+  for (let i = 0; i < runs; i++) {
+    const t0 = Date.now();
+    await page.click('#btn-fit');
+    await page.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: 600000 });
+    const wall = Date.now() - t0;
+    const fit = await page.evaluate(() => window.likeness.fit);
+    if (!fit) { console.log('fit failed:', await page.textContent('#error-text')); status = 1; break; }
+    console.log(`run ${i + 1}: ${fit.points} points (${fit.fittedPoints} fitted); parse ${Math.round(fit.parseMs)} ms, ` +
+                `fit ${Math.round(fit.fitMs)} ms (stages + their stats), click-to-done ${wall} ms`);
+    let sum = 0;
+    for (const s of fit.stages) {
+      sum += s.ms;
+      console.log(`  ${s.name.padEnd(18)} ${s.meanPct.toFixed(3).padStart(7)} % ${s.maxPct.toFixed(3).padStart(7)} % ${Math.round(s.ms).toString().padStart(7)} ms`);
+    }
+    console.log(`  ${'stages total'.padEnd(36)} ${Math.round(sum).toString().padStart(7)} ms`);
+  }
+  if (shots && !status) {
+    fs.mkdirSync(shots, { recursive: true });
+    const settle = () => page.evaluate(() => new Promise((ok) => requestAnimationFrame(() => requestAnimationFrame(ok))));
+    await settle();
+    await page.screenshot({ path: path.join(shots, 'web_fit_result.png') });
+    await page.locator('#stages').evaluate((el) => el.closest('.card').scrollIntoView());
+    await page.locator('#stages').evaluate((el) => el.closest('.card')).then(() => {});
+    await page.locator('.card', { has: page.locator('#stages') }).screenshot({ path: path.join(shots, 'web_fit_panel.png') });
+    await page.click('#stages li[data-stage="align"]');
+    await page.check('#wireframe');
+    await settle();
+    await page.screenshot({ path: path.join(shots, 'web_fit_stages.png') });
+    await page.uncheck('#wireframe');
+    await page.click('#stages li[data-stage="subdivide"]');
+    await page.uncheck('#show-points');
+    await page.check('#animate');
+    await page.waitForTimeout(2500);
+    await page.screenshot({ path: path.join(shots, 'web_fit_animate.png') });
+    console.log('animation:', await page.textContent('#anim-stats'));
+    await page.uncheck('#animate');
+  }
+} finally {
+  await context.close();
+  server.close();
+  fs.rmSync(profile, { recursive: true, force: true });
+}
+process.exit(status);
