@@ -741,7 +741,12 @@
       showStage('subdivide');
       if (wasRunning) startAnimation();
     });
-    ui.showPoints.addEventListener('change', () => app.viewer && app.viewer.set_overlay_visible(ui.showPoints.checked));
+    ui.showPoints.addEventListener('change', () => {
+      if (!app.viewer) return;
+      app.viewer.set_overlay_visible(ui.showPoints.checked);
+      const text = ui.status.textContent;
+      if (/^Showing /.test(text)) setStatus(text.replace(/( over the scan points)?\.$/, ui.showPoints.checked ? ' over the scan points.' : '.'));
+    });
     ui.animate.addEventListener('change', () => (ui.animate.checked ? startAnimation() : stopAnimation()));
     ui.exportObj.addEventListener('click', () => exportHead('obj'));
     ui.exportPly.addEventListener('click', () => exportHead('ply'));
