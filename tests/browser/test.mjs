@@ -606,6 +606,19 @@ async function main() {
         await page.waitForTimeout(600);
         check('unchecking Animate stops it', (await page.evaluate(() => window.likeness.animation.frames)) === f2);
       }
+      // Cancel mid-fit: back to "done" without an error; the stopped worker
+      // took the fitted head with it, so export is off until the next fit.
+      if (fit) {
+        await page.click('#btn-fit');
+        await page.waitForFunction(() => document.querySelector('#stages li.active'), null, { timeout: JOB_TIMEOUT_MS });
+        await page.click('#btn-cancel');
+        await page.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: JOB_TIMEOUT_MS });
+        const after = await page.evaluate(() => ({ state: document.body.dataset.state,
+          tags: Array.from(document.querySelectorAll('#stages li')).slice(1, 5).map((li) => li.querySelector('.stage-tag').textContent),
+          exportOff: document.getElementById('btn-export-obj').disabled, fit: !!window.likeness.fit }));
+        check('Cancel stops a running fit without an error', after.state === 'done' && (await bannerText(page)) === '' &&
+              after.tags.every((t) => t === 'cancelled') && after.exportOff && !after.fit, JSON.stringify(after));
+      }
       // A flat plane: NotAHead, shown as an error; the page keeps working.
       await page.check('#auto-fit');
       const sPlane = await setFile(page, 'plane.ply', planePly());
