@@ -1,0 +1,117 @@
+// likeness eye: eyeball texture from one eye photo (core/iris, Tarini et al.
+// 2002 Sec. 4.1). Optional --debug-dir writes the polar input with removed
+// pixels in black, the reference sector and the synthesized polar iris.
+#include "command.h"
+
+#include "io/io.h"
+#include "iris/iris.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+
+namespace lk::cli {
+namespace {
+
+bool check_known(const char* cmd, const Args& args, std::initializer_list<const char*> known) {
+  for (const auto& [key, values] : args.options) {
+    bool ok = false;
+    for (const char* k : known) ok = ok || key == k;
+    if (!ok) {
+      fail(cmd, "unknown option --" + key + " (see `likeness help`)");
+      return false;
+    }
+  }
+  return true;
+}
+
+// "x,y" in pixels.
+bool parse_point(const std::string& s, Vec2& p) {
+  double x, y;
+  char comma, extra;
+  std::istringstream in(s);
+  if (!(in >> x >> comma >> y) || comma != ',' || (in >> extra) || !std::isfinite(x) || !std::isfinite(y)) return false;
+  p = Vec2(x, y);
+  return true;
+}
+
+Image polar_to_image(const PolarIris& p, bool show_invalid, int sector_begin = -1, int sector_rows = 0) {
+  // Angles run down the image, radii across (pupil on the left).
+  Image im = Image::make(p.radii, p.angles, 3);
+  for (int a = 0; a < p.angles; ++a)
+    for (int r = 0; r < p.radii; ++r) {
+      const float* c = p.at(a, r);
+      const bool ok = !show_invalid || p.valid[static_cast<size_t>(a) * p.radii + r];
+      for (int k = 0; k < 3; ++k)
+        im.at(r, a)[k] = ok ? static_cast<std::uint8_t>(std::lround(std::clamp(c[k], 0.f, 1.f) * 255)) : 0;
+      const int rel = ((a - sector_begin) % p.angles + p.angles) % p.angles;
+      if (sector_begin >= 0 && rel < sector_rows && (r == 0 || r == p.radii - 1)) {
+        im.at(r, a)[0] = 255; im.at(r, a)[1] = 255; im.at(r, a)[2] = 255;
+      }
+    }
+  return im;
+}
+
+int run_eye(const Args& args) {
+  const char* cmd = "eye";
+  if (!check_known(cmd, args, {"photo", "out", "guess", "size", "debug-dir"})) return 2;
+  if (!args.has("photo") || !args.has("out")) {
+    fail(cmd, "needs --photo FILE and --out FILE.png");
+    return 2;
+  }
+  Vec2 guess;
+  const bool has_guess = args.has("guess");
+  if (has_guess && !parse_point(args.get("guess"), guess)) {
+    fail(cmd, "--guess expects x,y in pixels, got '" + args.get("guess") + "'");
+    return 2;
+  }
+  int size = 512;
+  if (!args.get_int("size", 512, size)) return 2;
+  Image photo;
+  if (Status s = load_image_file(args.get("photo"), photo, 3); !s) return fail(cmd, s.message);
+  EyeballTextureOptions topt;
+  topt.size = size;
+  IrisResult res;
+  const auto t0 = std::chrono::steady_clock::now();
+  if (Status s = iris_texture_from_photo(photo, has_guess ? &guess : nullptr, res, topt); !s)
+    return fail(cmd, args.get("photo") + ": " + s.message);
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (Status s = save_png_file(args.get("out"), res.texture); !s) return fail(cmd, s.message);
+  std::printf("iris centre (%.2f, %.2f) px, radius %.2f px, pupil %.2f px\n", res.circle.center.x(),
+              res.circle.center.y(), res.circle.radius, res.circle.pupil_radius);
+  std::printf("valid iris samples %d of %d; %s, reference sector %.1f deg; %.2f s\n",
+              res.report.valid_pixels, res.input_polar.angles * res.input_polar.radii,
+              res.report.used_2d ? "2-D synthesis" : "1-D Markov chain of rows", res.report.sector_deg, secs);
+  std::printf("wrote %s (%dx%d)\n", args.get("out").c_str(), res.texture.width, res.texture.height);
+  if (args.has("debug-dir")) {
+    const std::string d = args.get("debug-dir") + "/";
+    // The photo with the found circles drawn in.
+    Image marked = photo;
+    for (double rad : {res.circle.radius, res.circle.pupil_radius})
+      for (int i = 0; i < 2000; ++i) {
+        const double t = 2 * 3.14159265358979 * i / 2000;
+        const int x = static_cast<int>(std::lround(res.circle.center.x() + rad * std::cos(t)));
+        const int y = static_cast<int>(std::lround(res.circle.center.y() + rad * std::sin(t)));
+        if (x >= 0 && y >= 0 && x < marked.width && y < marked.height) {
+          marked.at(x, y)[0] = 0; marked.at(x, y)[1] = 255; marked.at(x, y)[2] = 0;
+        }
+      }
+    Status s = save_png_file(d + "iris_found.png", marked);
+    if (s) s = save_png_file(d + "iris_polar_valid.png",
+                             polar_to_image(res.input_polar, true, res.report.used_2d ? -1 : res.report.sector_begin,
+                                            res.report.sector_rows));
+    if (s) s = save_png_file(d + "iris_polar_synth.png", polar_to_image(res.synthesized, false));
+    if (!s) return fail(cmd, s.message);
+    std::printf("wrote %siris_found.png, iris_polar_valid.png, iris_polar_synth.png\n", d.c_str());
+  }
+  return 0;
+}
+
+Registrar reg_eye({"eye", "likeness eye --photo F --out iris.png [--guess x,y] [--size 512] [--debug-dir DIR]",
+                   "eyeball texture (frontal hemisphere) from one eye photo: iris found, cleaned, synthesized",
+                   run_eye});
+
+}  // namespace
+}  // namespace lk::cli

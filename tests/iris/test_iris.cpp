@@ -1,0 +1,239 @@
+// Iris finding and synthesis (Tarini et al. 2002, Sec. 4.1) on synthetic eyes
+// with known centre and radius, and on the real eye photo when present.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <random>
+
+#include "io/io.h"
+#include "iris/iris.h"
+#include "test_data.h"
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+struct SyntheticEye {
+  double cx = 121.3, cy = 98.7, radius = 40, pupil = 14;
+  bool eyelid = true, highlight = true;
+};
+
+// Radial fibres: per-angle noise made of sines with random phases, a colour
+// gradient across the radius, a dark limbus ring; the eye sits in white
+// sclera inside skin; an upper eyelid band and a highlight occlude parts.
+lk::Image make_eye(const SyntheticEye& e, int w = 240, int h = 200) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> U(0, 2 * kPi);
+  double ph[6];
+  for (double& p : ph) p = U(rng);
+  const int freq[6] = {37, 53, 71, 89, 23, 61};
+  lk::Image im = lk::Image::make(w, h, 3);
+  const int ss = 3;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      double acc[3] = {0, 0, 0};
+      for (int sy = 0; sy < ss; ++sy)
+        for (int sx = 0; sx < ss; ++sx) {
+          const double px = x + (sx + 0.5) / ss - 0.5, py = y + (sy + 0.5) / ss - 0.5;
+          const double dx = px - e.cx, dy = py - e.cy, r = std::hypot(dx, dy), t = std::atan2(dy, dx);
+          double c[3];
+          const double skin[3] = {0.80, 0.60, 0.50};
+          if (std::hypot(dx / 2.2, dy / 1.3) < e.radius) { c[0] = 0.92; c[1] = 0.90; c[2] = 0.88; }
+          else { c[0] = skin[0]; c[1] = skin[1]; c[2] = skin[2]; }
+          if (r < e.radius) {
+            const double f = (r - e.pupil) / (e.radius - e.pupil);
+            double fib = 0;
+            for (int k = 0; k < 6; ++k) fib += std::sin(freq[k] * t + ph[k] + 3 * f) / 6;
+            const double v = 0.75 + 0.35 * fib;
+            c[0] = (0.25 + 0.15 * f) * v; c[1] = (0.35 - 0.1 * f) * v; c[2] = (0.45 - 0.2 * f) * v;
+            if (f > 0.85) for (double& q : c) q *= 0.7;
+            if (r < e.pupil) c[0] = c[1] = c[2] = 0.03;
+          }
+          if (e.eyelid && py < e.cy - 0.6 * e.radius) { c[0] = skin[0]; c[1] = skin[1]; c[2] = skin[2]; }
+          if (e.highlight && std::hypot(px - (e.cx + 12), py - (e.cy - 15)) < 5) c[0] = c[1] = c[2] = 1.0;
+          for (int k = 0; k < 3; ++k) acc[k] += c[k];
+        }
+      for (int k = 0; k < 3; ++k)
+        im.at(x, y)[k] = static_cast<std::uint8_t>(std::lround(std::clamp(acc[k] / (ss * ss), 0.0, 1.0) * 255));
+    }
+  return im;
+}
+
+}  // namespace
+
+TEST_CASE("find_iris recovers a synthetic iris's centre within 1 px and radius within 2 px") {
+  SyntheticEye e;
+  const lk::Image im = make_eye(e);
+  for (const lk::Vec2& guess : {lk::Vec2(e.cx + 3, e.cy - 2), lk::Vec2(e.cx - 8, e.cy + 6)}) {
+    lk::IrisCircle c;
+    const lk::Status s = lk::find_iris(im, guess, {}, c);
+    REQUIRE(s.ok());
+    INFO("centre " << c.center.transpose() << " radius " << c.radius << " pupil " << c.pupil_radius);
+    CHECK((c.center - lk::Vec2(e.cx, e.cy)).norm() < 1.0);
+    CHECK(std::abs(c.radius - e.radius) < 2.0);
+    CHECK(std::abs(c.pupil_radius - e.pupil) < 2.0);
+  }
+  // Without a guess: the darkest blob near the centre.
+  lk::Vec2 g;
+  REQUIRE(lk::iris_default_guess(im, g).ok());
+  CHECK((g - lk::Vec2(e.cx, e.cy)).norm() < e.pupil);
+}
+
+TEST_CASE("pixel removal drops the eyelid and the highlight, keeps the clean iris") {
+  SyntheticEye e;
+  const lk::Image im = make_eye(e);
+  lk::IrisCircle c{lk::Vec2(e.cx, e.cy), e.radius, e.pupil};
+  lk::PolarIris p;
+  REQUIRE(lk::iris_to_polar(im, c, {}, p).ok());
+  // Rows at the top (angle 90 deg, under the eyelid) are mostly invalid;
+  // rows at the bottom (270 deg) are mostly valid.
+  auto valid_share = [&](double deg) {
+    const int a = static_cast<int>(deg / 360 * p.angles);
+    int n = 0;
+    // The outer half of the band: the eyelid covers radii beyond 24 px.
+    for (int r = p.radii / 2; r < p.radii; ++r) n += p.valid[static_cast<size_t>(a) * p.radii + r];
+    return static_cast<double>(n) / (p.radii - p.radii / 2);
+  };
+  CHECK(valid_share(90) < 0.2);
+  CHECK(valid_share(270) > 0.8);
+  // The highlight centre (dx=12, dy=-15 -> r ~ 19.2, angle ~ 51 deg) is removed.
+  const double hr = std::hypot(12.0, 15.0), ha = std::atan2(15.0, 12.0) * 180 / kPi;
+  const int a = static_cast<int>(ha / 360 * p.angles);
+  const int r = static_cast<int>((hr - e.pupil) / (e.radius - e.pupil) * p.radii);
+  CHECK(p.valid[static_cast<size_t>(a) * p.radii + r] == 0);
+}
+
+namespace {
+
+// Per-ring mean colour and std over valid samples.
+void ring_stats(const lk::PolarIris& p, int r, Eigen::Vector3d& mean, double& sd) {
+  mean.setZero();
+  int n = 0;
+  for (int a = 0; a < p.angles; ++a)
+    if (p.valid[static_cast<size_t>(a) * p.radii + r]) {
+      const float* q = p.at(a, r);
+      mean += Eigen::Vector3d(q[0], q[1], q[2]);
+      ++n;
+    }
+  mean /= std::max(n, 1);
+  double v = 0;
+  for (int a = 0; a < p.angles; ++a)
+    if (p.valid[static_cast<size_t>(a) * p.radii + r]) {
+      const float* q = p.at(a, r);
+      v += (Eigen::Vector3d(q[0], q[1], q[2]) - mean).squaredNorm();
+    }
+  sd = std::sqrt(v / std::max(n, 1));
+}
+
+void check_ring_statistics(const lk::PolarIris& in, const lk::PolarIris& out) {
+  REQUIRE(out.angles == in.angles);
+  REQUIRE(out.radii == in.radii);
+  double worst_mean = 0, worst_sd = 0;
+  // Rings at the pupil edge and the limbus mix iris with pupil/sclera under a
+  // sub-pixel circle error: compare the inner 80% of the band.
+  for (int r = in.radii / 10; r < in.radii - in.radii / 10; ++r) {
+    Eigen::Vector3d mi, mo;
+    double si, so;
+    ring_stats(in, r, mi, si);
+    ring_stats(out, r, mo, so);
+    worst_mean = std::max(worst_mean, (mi - mo).norm());
+    worst_sd = std::max(worst_sd, std::abs(si - so) / std::max(si, 1e-3));
+  }
+  INFO("worst ring mean difference " << worst_mean << ", worst relative std difference " << worst_sd);
+  CHECK(worst_mean < 0.05);
+  CHECK(worst_sd < 0.35);
+}
+
+}  // namespace
+
+TEST_CASE("synthesized iris rings match the input's valid pixels (1-D chain and 2-D fallback)") {
+  SyntheticEye e;
+  const lk::Image im = make_eye(e);
+  lk::IrisCircle c;
+  REQUIRE(lk::find_iris(im, lk::Vec2(e.cx, e.cy), {}, c).ok());
+  lk::PolarIris in;
+  REQUIRE(lk::iris_to_polar(im, c, {}, in).ok());
+
+  lk::PolarIris out;
+  lk::IrisSynthesisReport rep;
+  REQUIRE(lk::iris_synthesize(in, {}, out, &rep).ok());
+  CHECK_FALSE(rep.used_2d);
+  CHECK(rep.sector_deg <= 60.5);
+  CHECK(rep.sector_deg >= 20);
+  check_ring_statistics(in, out);
+
+  lk::IrisSynthesisOptions o2;
+  o2.force_2d = true;
+  lk::PolarIris out2;
+  REQUIRE(lk::iris_synthesize(in, o2, out2, &rep).ok());
+  CHECK(rep.used_2d);
+  check_ring_statistics(in, out2);
+
+  // A scrambled iris would fail the check: rings shifted by a third of the band.
+  lk::PolarIris shifted = out;
+  const int shift = in.radii / 3;
+  for (int a = 0; a < in.angles; ++a)
+    for (int r = 0; r < in.radii; ++r)
+      std::copy(out.at(a, (r + shift) % in.radii), out.at(a, (r + shift) % in.radii) + 3, shifted.at(a, r));
+  double worst = 0;
+  for (int r = 0; r < in.radii; ++r) {
+    Eigen::Vector3d mi, mo;
+    double si, so;
+    ring_stats(in, r, mi, si);
+    ring_stats(shifted, r, mo, so);
+    worst = std::max(worst, (mi - mo).norm());
+  }
+  CHECK(worst > 0.05);
+}
+
+TEST_CASE("eyeball texture: black pupil, iris colour at the iris, white-ish sclera outside") {
+  SyntheticEye e;
+  lk::IrisResult res;
+  const lk::Image im = make_eye(e);
+  REQUIRE(lk::iris_texture_from_photo(im, nullptr, res).ok());
+  const lk::Image& t = res.texture;
+  REQUIRE(t.width == 512);
+  const std::uint8_t* centre = t.at(256, 256);
+  CHECK(centre[0] < 20);
+  const std::uint8_t* corner = t.at(5, 256);  // rho ~ 1: sclera
+  CHECK(corner[0] > 180);
+  CHECK(corner[1] > 170);
+  // Mid-iris (rho = 0.5 * (pupil + iris)): bluish like the synthetic iris (b > r).
+  const double rho_i = 30.0 / 90, rho_p = rho_i * res.circle.pupil_radius / res.circle.radius;
+  const int x = 256 + static_cast<int>(0.5 * (rho_i + rho_p) * 256);
+  CHECK(t.at(x, 256)[2] > t.at(x, 256)[0]);
+}
+
+TEST_CASE("iris: bad input gives clear errors") {
+  lk::IrisCircle c;
+  lk::Vec2 g;
+  CHECK(lk::find_iris(lk::Image{}, lk::Vec2(1, 1), {}, c).code == lk::ErrorCode::InvalidInput);
+  const lk::Image uniform = lk::Image::make(200, 150, 3, 128);
+  const lk::Status s = lk::iris_default_guess(uniform, g);
+  CHECK(s.code == lk::ErrorCode::NotAHead);
+  CHECK(s.message.find("no eye") != std::string::npos);
+  CHECK_FALSE(lk::find_iris(uniform, lk::Vec2(100, 75), {}, c).ok());
+  SyntheticEye e;
+  CHECK(lk::find_iris(make_eye(e), lk::Vec2(-5, 10), {}, c).code == lk::ErrorCode::InvalidInput);
+  // A dark image with one bright stripe: no round dark iris, the circle hits
+  // the stripe on one side only and walks off.
+  lk::Image dark = lk::Image::make(200, 150, 3, 20);
+  for (int y = 0; y < 150; ++y)
+    for (int x = 0; x < 10; ++x) for (int k = 0; k < 3; ++k) dark.at(x, y)[k] = 250;
+  lk::IrisResult res;
+  CHECK_FALSE(lk::iris_texture_from_photo(dark, nullptr, res).ok());
+}
+
+TEST_CASE("real eye photo: iris found and texture synthesized") {
+  LK_REQUIRE_SHARED("eye_photos/Iris_-_left_eye_of_a_girl.jpg");
+  lk::Image im;
+  REQUIRE(lk::load_image_file(lk::test::shared_data_dir() + "/eye_photos/Iris_-_left_eye_of_a_girl.jpg", im, 3).ok());
+  lk::IrisResult res;
+  const lk::Status s = lk::iris_texture_from_photo(im, nullptr, res);
+  INFO(s.message);
+  REQUIRE(s.ok());
+  INFO("centre " << res.circle.center.transpose() << " radius " << res.circle.radius);
+  // The iris is about 140 px across (SOURCES.md).
+  CHECK(res.circle.radius > 55);
+  CHECK(res.circle.radius < 85);
+}
