@@ -38,7 +38,7 @@ struct UvOptions {
   double k = 1.2;              // weight parameter; the paper uses [1.01, 2]; very large = unweighted
   bool view_weighted = true;   // false: plain L2 stretch (w = 1)
   int global_iterations = 30;  // stretch-reweighted global solves
-  int local_sweeps = 20;       // vertex-wise relaxation sweeps after the global phase
+  int local_sweeps = 200;      // vertex-wise relaxation sweeps after the global phase
   double margin = 0.01;        // empty border in [0,1]^2 on each side
   // Optional: vertices of the "face" region, used only for
   // UvStats::face_texture_share / face_area_share. Empty = not reported.

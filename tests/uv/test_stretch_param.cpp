@@ -111,7 +111,7 @@ TEST_CASE("generic head: flip-free, better than Tutte, the face gets more space 
        << st.linf_stretch << " face texture share " << st.face_texture_share << " (3-D share "
        << st.face_area_share << "); k=1e6: L2 " << plain.l2_stretch << " face share "
        << plain.face_texture_share);
-  CHECK(st.face_texture_share > plain.face_texture_share + 0.01);  // measured 0.273 vs 0.259
+  CHECK(st.face_texture_share > plain.face_texture_share + 0.02);  // measured 0.283 vs 0.248
   CHECK(st.face_texture_share > st.face_area_share);
 }
 
