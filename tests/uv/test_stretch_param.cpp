@@ -140,3 +140,13 @@ TEST_CASE("parameterization refuses what is not a disk") {
   CHECK(parameterize_stretch(grid(3, [](double u, double v) { return Vec3(u, v, 0); }), opt, uv, st).code ==
         ErrorCode::InvalidInput);
 }
+
+TEST_CASE("parameterization stops when the progress callback cancels") {
+  const TriMesh flat = grid(8, [](double u, double v) { return Vec3(u, v, 0); });
+  std::vector<Vec2> uv;
+  UvStats st;
+  int calls = 0;
+  const Status s = parameterize_stretch(flat, UvOptions{}, uv, st, [&](const char*, double) { return ++calls < 3; });
+  CHECK(s.code == ErrorCode::Cancelled);
+  CHECK(calls == 3);
+}
