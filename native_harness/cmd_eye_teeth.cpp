@@ -115,3 +115,44 @@ Registrar reg_eye({"eye", "likeness eye --photo F --out iris.png [--guess x,y] [
 
 }  // namespace
 }  // namespace lk::cli
+
+// likeness teeth: RGBA teeth texture (voids transparent) from one photo
+// (core/teeth, Tarini et al. 2002 Sec. 4.2).
+#include "teeth/teeth.h"
+
+namespace lk::cli {
+namespace {
+
+int run_teeth(const Args& args) {
+  const char* cmd = "teeth";
+  for (const auto& [key, values] : args.options)
+    if (key != "photo" && key != "out") {
+      fail(cmd, "unknown option --" + key + " (see `likeness help`)");
+      return 2;
+    }
+  if (!args.has("photo") || !args.has("out")) {
+    fail(cmd, "needs --photo FILE and --out FILE.png");
+    return 2;
+  }
+  Image photo;
+  if (Status s = load_image_file(args.get("photo"), photo, 3); !s) return fail(cmd, s.message);
+  TeethResult r;
+  const auto t0 = std::chrono::steady_clock::now();
+  if (Status s = teeth_texture_from_photo(photo, {}, r); !s) return fail(cmd, args.get("photo") + ": " + s.message);
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (Status s = save_png_file(args.get("out"), r.texture); !s) return fail(cmd, s.message);
+  size_t voids = 0, gums = 0;
+  for (auto c : r.classes) { voids += c == TeethClass::Void; gums += c == TeethClass::Gum; }
+  std::printf("thresholds: void %.3f, gum %.3f (colour distance); teeth %d px, gums %zu px, voids %zu px; %.2f s\n",
+              r.void_threshold, r.gum_threshold, r.teeth_pixels, gums, voids, secs);
+  std::printf("teeth target colour (%.3f, %.3f, %.3f); wrote %s\n", r.target_color[0], r.target_color[1],
+              r.target_color[2], args.get("out").c_str());
+  return 0;
+}
+
+Registrar reg_teeth({"teeth", "likeness teeth --photo F --out teeth.png",
+                     "RGBA teeth texture from one photo: voids transparent, gums recoloured, colour equalized",
+                     run_teeth});
+
+}  // namespace
+}  // namespace lk::cli

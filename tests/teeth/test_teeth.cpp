@@ -1,0 +1,106 @@
+// Teeth texture (Tarini et al. 2002, Sec. 4.2) on a synthetic smile: white
+// blocks (with a left-to-right brightness gradient) separated by dark gaps,
+// on red gums.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "io/io.h"
+#include "teeth/teeth.h"
+#include "test_data.h"
+
+namespace {
+
+struct Smile {
+  lk::Image image;
+  std::vector<lk::TeethClass> truth;
+};
+
+Smile make_smile(int w = 300, int h = 120) {
+  Smile s;
+  s.image = lk::Image::make(w, h, 3);
+  s.truth.assign(static_cast<size_t>(w) * h, lk::TeethClass::Gum);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      double c[3] = {0.78, 0.30, 0.30};  // gums
+      // A little texture on the gums.
+      c[0] += 0.03 * std::sin(x * 0.7 + y * 0.3);
+      lk::TeethClass k = lk::TeethClass::Gum;
+      if (y >= 30 && y < 90) {
+        const int cell = x % 40;
+        if (cell < 4) { c[0] = c[1] = c[2] = 0.05; k = lk::TeethClass::Void; }
+        else if (x >= 10 && x < w - 10) {
+          const double b = 0.60 + 0.35 * x / w;  // uneven lighting
+          c[0] = b; c[1] = 0.96 * b; c[2] = 0.85 * b;
+          k = lk::TeethClass::Tooth;
+        }
+      }
+      for (int j = 0; j < 3; ++j) s.image.at(x, y)[j] = static_cast<std::uint8_t>(std::lround(std::clamp(c[j], 0.0, 1.0) * 255));
+      s.truth[static_cast<size_t>(y) * w + x] = k;
+    }
+  return s;
+}
+
+double luma(const std::uint8_t* p) { return (0.299 * p[0] + 0.587 * p[1] + 0.114 * p[2]) / 255.0; }
+
+}  // namespace
+
+TEST_CASE("teeth: synthetic smile is classified; voids transparent, gums recoloured") {
+  const Smile s = make_smile();
+  lk::TeethResult r;
+  const lk::TeethOptions o;
+  REQUIRE(lk::teeth_texture_from_photo(s.image, o, r).ok());
+  size_t wrong = 0;
+  for (size_t i = 0; i < s.truth.size(); ++i) wrong += r.classes[i] != s.truth[i];
+  INFO("void threshold " << r.void_threshold << ", gum threshold " << r.gum_threshold << ", misclassified " << wrong);
+  CHECK(wrong < s.truth.size() / 100);
+  const int w = s.image.width;
+  for (size_t i = 0; i < s.truth.size(); ++i) {
+    const int x = static_cast<int>(i % w), y = static_cast<int>(i / w);
+    if (s.truth[i] == lk::TeethClass::Void && r.classes[i] == lk::TeethClass::Void) CHECK(r.texture.at(x, y)[3] == 0);
+  }
+  // A gum pixel carries the standard gum colour's hue (green == blue, red dominant).
+  const std::uint8_t* g = r.texture.at(150, 5);
+  CHECK(g[3] == 255);
+  CHECK(std::abs(g[0] / 255.0 - o.gum_color[0] * (g[1] / 255.0) / o.gum_color[1]) < 0.06);
+}
+
+TEST_CASE("teeth: six-stripe equalization removes the left/right brightness gradient") {
+  const Smile s = make_smile();
+  lk::TeethResult r;
+  REQUIRE(lk::teeth_texture_from_photo(s.image, {}, r).ok());
+  // Tooth pixels near the left and right ends.
+  const int y = 60;
+  const double before = luma(s.image.at(275, y)) - luma(s.image.at(25, y));
+  const double after = luma(r.texture.at(275, y)) - luma(r.texture.at(25, y));
+  INFO("right-left brightness before " << before << ", after " << after);
+  CHECK(before > 0.25);
+  CHECK(std::abs(after) < before / 4);
+  // Teeth brightness moves to the target.
+  CHECK(std::abs(luma(r.texture.at(150, y)) - 0.82) < 0.06);
+}
+
+TEST_CASE("teeth: bad input gives clear errors") {
+  lk::TeethResult r;
+  CHECK(lk::teeth_texture_from_photo(lk::Image{}, {}, r).code == lk::ErrorCode::InvalidInput);
+  CHECK(lk::teeth_texture_from_photo(lk::Image::make(50, 50, 1, 200), {}, r).code == lk::ErrorCode::InvalidInput);
+  // All gums: no teeth.
+  lk::Image red = lk::Image::make(80, 60, 3);
+  for (int y = 0; y < 60; ++y)
+    for (int x = 0; x < 80; ++x) { red.at(x, y)[0] = static_cast<std::uint8_t>(190 + x % 20); red.at(x, y)[1] = 70; red.at(x, y)[2] = 75; }
+  const lk::Status s = lk::teeth_texture_from_photo(red, {}, r);
+  CHECK(s.code == lk::ErrorCode::NotAHead);
+  CHECK(s.message.find("no teeth") != std::string::npos);
+}
+
+TEST_CASE("teeth: real intraoral photo gives a texture with teeth kept") {
+  LK_REQUIRE_SHARED("teeth_photos/intraoral_anterior_0-4.png");
+  lk::Image im;
+  REQUIRE(lk::load_image_file(lk::test::shared_data_dir() + "/teeth_photos/intraoral_anterior_0-4.png", im, 3).ok());
+  lk::TeethResult r;
+  const lk::Status s = lk::teeth_texture_from_photo(im, {}, r);
+  INFO(s.message);
+  REQUIRE(s.ok());
+  // The central incisors (around the photo centre, a little above) are teeth.
+  CHECK(r.classes[static_cast<size_t>(im.height * 48 / 100) * im.width + im.width / 2 - im.width / 20] == lk::TeethClass::Tooth);
+}
