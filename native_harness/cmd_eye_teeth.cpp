@@ -156,3 +156,54 @@ Registrar reg_teeth({"teeth", "likeness teeth --photo F --out teeth.png",
 
 }  // namespace
 }  // namespace lk::cli
+
+// likeness components: generic eyes, teeth arch and tongue placed into a
+// head that shares the generic head's topology (core/components).
+#include "components/components.h"
+#include "head/generic_head.h"
+
+namespace lk::cli {
+namespace {
+
+int run_components(const Args& args) {
+  const char* cmd = "components";
+  for (const auto& [key, values] : args.options)
+    if (key != "head" && key != "out") {
+      fail(cmd, "unknown option --" + key + " (see `likeness help`)");
+      return 2;
+    }
+  if (!args.has("out")) {
+    fail(cmd, "needs --out DIR (and --head FILE.obj, default: the generic head)");
+    return 2;
+  }
+  GenericHead generic;
+  if (Status s = load_generic_head(generic); !s) return fail(cmd, s.message);
+  GenericHead fitted = generic;
+  if (args.has("head")) {
+    TriMesh m;
+    if (Status s = load_mesh_file(args.get("head"), m); !s) return fail(cmd, s.message);
+    fitted.mesh = m;
+  }
+  ComponentPlacement p;
+  if (Status s = place_components(fitted, generic, p); !s) return fail(cmd, s.message);
+  const PlacedComponents c = build_placed_components(p);
+  const std::string d = args.get("out") + "/";
+  const std::pair<const char*, const TriMesh*> files[] = {
+      {"eye_left.obj", &c.eye[0]}, {"eye_right.obj", &c.eye[1]}, {"teeth.obj", &c.teeth}, {"tongue.obj", &c.tongue}};
+  for (const auto& [name, mesh] : files)
+    if (Status s = write_file(d + name, write_obj(*mesh)); !s) return fail(cmd, s.message);
+  std::printf("eyes at (%.4f %.4f %.4f) r %.4f and (%.4f %.4f %.4f) r %.4f; mouth (%.4f %.4f %.4f) width %.4f\n",
+              p.eye_center[0].x(), p.eye_center[0].y(), p.eye_center[0].z(), p.eye_radius[0], p.eye_center[1].x(),
+              p.eye_center[1].y(), p.eye_center[1].z(), p.eye_radius[1], p.mouth_center.x(), p.mouth_center.y(),
+              p.mouth_center.z(), p.mouth_width);
+  std::printf("wrote %seye_left.obj eye_right.obj teeth.obj (%zu triangles) tongue.obj\n", d.c_str(),
+              c.teeth.triangles.size());
+  return 0;
+}
+
+Registrar reg_components({"components", "likeness components [--head FILE.obj] --out DIR",
+                          "generic eyeballs, teeth arch and tongue placed into a head from its annotated vertices",
+                          run_components});
+
+}  // namespace
+}  // namespace lk::cli

@@ -1,0 +1,88 @@
+// Generic components placed into the generic head and into a transformed copy.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "components/components.h"
+#include "head/generic_head.h"
+
+namespace {
+
+double max_z(const lk::TriMesh& m) {
+  double z = -1e300;
+  for (const auto& p : m.positions) z = std::max(z, p.z());
+  return z;
+}
+
+}  // namespace
+
+TEST_CASE("components: generic meshes are closed and the eyeball uvs follow the texture layout") {
+  const lk::TriMesh eye = lk::make_eyeball();
+  REQUIRE(eye.uvs.size() == eye.positions.size());
+  // Front pole at the texture centre; equator at rho = 1 (uv on the unit circle around 0.5).
+  CHECK(eye.uvs[0].isApprox(lk::Vec2(0.5, 0.5)));
+  for (size_t i = 0; i < eye.positions.size(); ++i) {
+    CHECK(std::abs(eye.positions[i].norm() - 1) < 1e-12);
+    if (std::abs(eye.positions[i].z()) < 1e-9)
+      CHECK(std::abs((eye.uvs[i] - lk::Vec2(0.5, 0.5)).norm() - 0.5) < 1e-9);
+  }
+  // Closed meshes: every edge used exactly twice (Euler characteristic 2 per shell).
+  for (const lk::TriMesh* m : {&eye}) {
+    const long V = static_cast<long>(m->positions.size()), F = static_cast<long>(m->triangles.size());
+    CHECK(V - F / 2 == 2);  // V - E + F = 2 with E = 3F/2
+  }
+  const lk::TriMesh teeth = lk::make_teeth_arch();
+  CHECK(teeth.triangles.size() >= 300);
+  CHECK(teeth.triangles.size() <= 500);
+}
+
+TEST_CASE("components: placed inside the generic head, following a transformed head") {
+  lk::GenericHead generic;
+  REQUIRE(lk::load_generic_head(generic).ok());
+  lk::ComponentPlacement p;
+  REQUIRE(lk::place_components(generic, generic, p).ok());
+  const auto& a = generic.annotations;
+  CHECK((p.eye_center[0] - a.eye_left.center).norm() < 1e-9);
+  CHECK((p.eye_center[1] - a.eye_right.center).norm() < 1e-9);
+  CHECK(std::abs(p.mouth_width - a.mouth_width) < 1e-12);
+
+  // Eyeballs inside their sockets: behind the rim's front-most vertex.
+  const char* rims[2] = {"eye_rim_left", "eye_rim_right"};
+  for (int e = 0; e < 2; ++e) {
+    double rim_front = -1e300;
+    for (int v : a.regions.at(rims[e])) rim_front = std::max(rim_front, generic.mesh.positions[static_cast<size_t>(v)].z());
+    INFO("eye " << e << " front " << p.eye_center[e].z() + p.eye_radius[e] << " rim front " << rim_front);
+    CHECK(p.eye_center[e].z() + p.eye_radius[e] < rim_front + 0.002);
+    CHECK(p.eye_center[e].z() < rim_front);
+  }
+  // Left eye on +x.
+  CHECK(p.eye_center[0].x() > p.eye_center[1].x());
+  // Teeth and tongue behind the lips.
+  const lk::PlacedComponents c = lk::build_placed_components(p);
+  double lips_front = -1e300;
+  for (int v : a.regions.at("lips")) lips_front = std::max(lips_front, generic.mesh.positions[static_cast<size_t>(v)].z());
+  INFO("teeth front " << max_z(c.teeth) << ", tongue front " << max_z(c.tongue) << ", lips front " << lips_front);
+  CHECK(max_z(c.teeth) < lips_front);
+  CHECK(max_z(c.tongue) < max_z(c.teeth));
+
+  // A fitted head = the generic one scaled by 1.2 and moved: placements follow the vertices.
+  lk::GenericHead fitted = generic;
+  const lk::Vec3 shift(0.01, -0.02, 0.03);
+  for (auto& q : fitted.mesh.positions) q = 1.2 * q + shift;
+  lk::ComponentPlacement pf;
+  REQUIRE(lk::place_components(fitted, generic, pf).ok());
+  CHECK((pf.eye_center[0] - (1.2 * a.eye_left.center + shift)).norm() < 1e-9);
+  CHECK(std::abs(pf.eye_radius[1] - 1.2 * a.eye_right.radius) < 1e-9);
+  CHECK((pf.mouth_center - (1.2 * a.mouth_center + shift)).norm() < 1e-9);
+}
+
+TEST_CASE("components: a head with another topology is refused") {
+  lk::GenericHead generic;
+  REQUIRE(lk::load_generic_head(generic).ok());
+  lk::GenericHead other = generic;
+  other.mesh.positions.pop_back();
+  lk::ComponentPlacement p;
+  const lk::Status s = lk::place_components(other, generic, p);
+  CHECK(s.code == lk::ErrorCode::InvalidInput);
+  CHECK(s.message.find("topology") != std::string::npos);
+}
