@@ -161,6 +161,9 @@ Registrar reg_teeth({"teeth", "likeness teeth --photo F --out teeth.png",
 // head that shares the generic head's topology (core/components).
 #include "components/components.h"
 #include "head/generic_head.h"
+#include "mesh/geometry.h"
+#include "render/camera.h"
+#include "render/offscreen.h"
 
 namespace lk::cli {
 namespace {
@@ -168,7 +171,8 @@ namespace {
 int run_components(const Args& args) {
   const char* cmd = "components";
   for (const auto& [key, values] : args.options)
-    if (key != "head" && key != "out") {
+    if (key != "head" && key != "out" && key != "render" && key != "eye-texture" && key != "teeth-texture" &&
+        key != "view" && key != "no-head") {
       fail(cmd, "unknown option --" + key + " (see `likeness help`)");
       return 2;
     }
@@ -198,10 +202,54 @@ int run_components(const Args& args) {
               p.mouth_center.z(), p.mouth_width);
   std::printf("wrote %seye_left.obj eye_right.obj teeth.obj (%zu triangles) tongue.obj\n", d.c_str(),
               c.teeth.triangles.size());
+  if (!args.has("render")) return 0;
+  // The head (half transparent would need blending; drawn opaque, the eyes show
+  // through the eye openings) with the textured components.
+  Image eye_tex, teeth_tex;
+  if (args.has("eye-texture"))
+    if (Status s = load_image_file(args.get("eye-texture"), eye_tex, 3); !s) return fail(cmd, s.message);
+  if (args.has("teeth-texture"))
+    if (Status s = load_image_file(args.get("teeth-texture"), teeth_tex, 4); !s) return fail(cmd, s.message);
+  CanonicalView view = CanonicalView::Front;
+  if (Status s = parse_canonical_view(args.get("view", "front"), view); !s) return fail(cmd, s.message);
+  TriMesh head = fitted.mesh;
+  if (head.normals.empty()) head.normals = vertex_normals(head);
+  TriMesh parts[4] = {c.eye[0], c.eye[1], c.teeth, c.tongue};
+  parts[2].normals = vertex_normals(parts[2]);
+  parts[3].normals = vertex_normals(parts[3]);
+  auto setup = [&](Renderer& r) -> Status {
+    DrawableHandle h;
+    if (!args.has("no-head"))
+      if (Status st = r.upload_mesh(head, h); !st) return st;
+    for (int i = 0; i < 4; ++i) {
+      DrawableHandle ph;
+      if (Status st = r.upload_mesh(parts[i], ph); !st) return st;
+      const Image& tex = i < 2 ? eye_tex : i == 2 ? teeth_tex : Image{};
+      if (!tex.empty()) {
+        TextureHandle t;
+        Status st = r.upload_texture(tex, t);
+        if (st) st = r.attach_texture(ph, t);
+        if (!st) return st;
+      }
+    }
+    return Status::success();
+  };
+  std::vector<Vec3> framed;
+  for (int e = 0; e < 2; ++e)
+    for (const Vec3& q : c.eye[e].positions) framed.push_back(q);
+  for (const Vec3& q : c.teeth.positions) framed.push_back(q);
+  auto camera_for = [&](float aspect) { return canonical_view(view, framed, aspect).matrices(aspect); };
+  OffscreenOptions options;
+  options.width = options.height = 768;
+  options.supersample = 2;
+  Image image;
+  if (Status s = render_offscreen(setup, camera_for, options, image); !s) return fail(cmd, s.message);
+  if (Status s = save_png_file(args.get("render"), image); !s) return fail(cmd, s.message);
+  std::printf("rendered %s\n", args.get("render").c_str());
   return 0;
 }
 
-Registrar reg_components({"components", "likeness components [--head FILE.obj] --out DIR",
+Registrar reg_components({"components", "likeness components [--head FILE.obj] --out DIR [--render PNG [--eye-texture PNG] [--teeth-texture PNG] [--view front|...] [--no-head]]",
                           "generic eyeballs, teeth arch and tongue placed into a head from its annotated vertices",
                           run_components});
 
