@@ -126,7 +126,7 @@ namespace {
 int run_teeth(const Args& args) {
   const char* cmd = "teeth";
   for (const auto& [key, values] : args.options)
-    if (key != "photo" && key != "out") {
+    if (key != "photo" && key != "out" && key != "generic-out") {
       fail(cmd, "unknown option --" + key + " (see `likeness help`)");
       return 2;
     }
@@ -147,10 +147,16 @@ int run_teeth(const Args& args) {
               r.void_threshold, r.gum_threshold, r.teeth_pixels, gums, voids, secs);
   std::printf("teeth target colour (%.3f, %.3f, %.3f); wrote %s\n", r.target_color[0], r.target_color[1],
               r.target_color[2], args.get("out").c_str());
+  if (args.has("generic-out")) {
+    Image composite;
+    if (Status s = teeth_composite_generic(r, {}, {}, composite); !s) return fail(cmd, s.message);
+    if (Status s = save_png_file(args.get("generic-out"), composite); !s) return fail(cmd, s.message);
+    std::printf("wrote %s (composited into the generic teeth texture)\n", args.get("generic-out").c_str());
+  }
   return 0;
 }
 
-Registrar reg_teeth({"teeth", "likeness teeth --photo F --out teeth.png",
+Registrar reg_teeth({"teeth", "likeness teeth --photo F --out teeth.png [--generic-out arch.png]",
                      "RGBA teeth texture from one photo: voids transparent, gums recoloured, colour equalized",
                      run_teeth});
 

@@ -135,4 +135,58 @@ Status teeth_texture_from_photo(const Image& photo, const TeethOptions& o, Teeth
   return Status::success();
 }
 
+Status teeth_composite_generic(const TeethResult& teeth, const TeethOptions& o,
+                               const TeethCompositeOptions& co, Image& out, std::vector<float>* mask) {
+  const Image& src = teeth.texture;
+  if (src.empty() || src.channels != 4) return Status::error(ErrorCode::InvalidInput, "no teeth texture to composite");
+  if (co.width < 16 || co.height < 16 || co.width > 8192 || co.height > 8192 ||
+      !(co.middle_width > 0 && co.middle_width <= 1) || co.side_teeth < 1)
+    return Status::error(ErrorCode::InvalidInput, "composite options out of range");
+  const int W = co.width, H = co.height;
+  out = Image::make(W, H, 4);
+  if (mask) mask->assign(static_cast<size_t>(W) * H, 0.f);
+  // The middle region (photo) keeps the photo's aspect ratio: its height is H.
+  const double mid_w = co.middle_width * W;
+  const double cx = 0.5 * W, cy = 0.5 * H;
+  const double side_w = (W - mid_w) / 2 / co.side_teeth;
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      // Generic part: rounded teeth along the occlusal line (y = H/2), gums beyond.
+      const bool upper = y < cy;
+      const double v = upper ? (cy - y) / cy : (y - cy) / cy;  // 0 at the bite, 1 at the gum line far end
+      const double dx_mid = std::abs(x - cx) - mid_w / 2;
+      const double along = dx_mid > 0 ? std::fmod(dx_mid, side_w) / side_w : 0.5;  // within one tooth
+      // Side teeth get shorter towards the back of the mouth.
+      const double tooth_len = 0.75 - 0.25 * std::clamp(dx_mid / ((W - mid_w) / 2), 0.0, 1.0);
+      const double edge = std::min(along, 1 - along);
+      double g[4] = {o.gum_color[0], o.gum_color[1], o.gum_color[2], 1.0};
+      if (dx_mid <= 0) {
+        // Behind the photo's region: gums (only visible through the soft boundary).
+      } else if (v < tooth_len * (0.8 + 0.2 * std::sqrt(std::max(0.0, edge * 2))) && edge > 0.04) {
+        const double shade = 0.85 + 0.15 * std::sin(3.14159265 * along);
+        for (int k = 0; k < 3; ++k) g[k] = teeth.target_color[k] * shade;
+      } else if (v < tooth_len) {
+        g[0] = g[1] = g[2] = 0; g[3] = 0;  // gap between teeth: transparent
+      }
+      // Curved boundary: an ellipse through the middle region's corners' sides.
+      const double ex = (x - cx) / (mid_w / 2), ey = (y - cy) / (0.5 * H * 1.15);
+      const double e = std::sqrt(ex * ex + ey * ey);
+      const double soft = co.boundary_softness * W / (mid_w / 2);
+      const double wphoto = std::clamp((1 - e) / soft + 0.5, 0.0, 1.0);
+      double c[4] = {g[0], g[1], g[2], g[3]};
+      if (wphoto > 0) {
+        // Photo sample: the middle region maps onto the whole photo.
+        const double u = (x - (cx - mid_w / 2)) / mid_w, vv = (y + 0.5) / H;
+        const int sx = std::clamp(static_cast<int>(u * src.width), 0, src.width - 1);
+        const int sy = std::clamp(static_cast<int>(vv * src.height), 0, src.height - 1);
+        const std::uint8_t* p = src.at(sx, sy);
+        for (int k = 0; k < 4; ++k) c[k] = (1 - wphoto) * g[k] + wphoto * (p[k] / 255.0);
+      }
+      if (mask) (*mask)[static_cast<size_t>(y) * W + x] = static_cast<float>(wphoto);
+      std::uint8_t* q = out.at(x, y);
+      for (int k = 0; k < 4; ++k) q[k] = static_cast<std::uint8_t>(std::lround(std::clamp(c[k], 0.0, 1.0) * 255));
+    }
+  return Status::success();
+}
+
 }  // namespace lk

@@ -1,8 +1,10 @@
 // Teeth texture from one photo: Tarini, Yamauchi, Haber, Seidel, "Texturing
 // Faces", Graphics Interface 2002, Sec. 4.2 (classification, void
 // transparency, gum recolouring, six-stripe colour equalization).
-// Not yet implemented from Sec. 4.2: reconstruction of tooth parts hidden by
-// the lips, and compositing into a generic side-teeth texture.
+// teeth_composite_generic puts the result into a procedurally generated
+// generic teeth texture (side teeth recoloured with the target colour) along
+// a curved (elliptic) boundary. Not yet implemented from Sec. 4.2:
+// reconstruction of tooth parts hidden by the lips.
 //
 // Input: RGB(A) photo, width x height. Output: RGBA texture of the same size,
 // voids transparent (alpha 0), gums/lips recoloured, teeth equalized.
@@ -46,5 +48,20 @@ struct TeethResult {
 double histogram_jump_threshold(const std::vector<double>& distances, int bins, bool rising);
 
 Status teeth_texture_from_photo(const Image& photo, const TeethOptions& options, TeethResult& result);
+
+struct TeethCompositeOptions {
+  int width = 1024, height = 512;   // output RGBA texture
+  double middle_width = 0.5;        // share of the width given to the photo's teeth
+  double boundary_softness = 0.04;  // blend width across the curved boundary (fraction of width)
+  int side_teeth = 5;               // generic teeth on each side (paper: 4-5)
+};
+
+// Generic texture: upper teeth in the top half, lower teeth in the bottom
+// half, gums beyond; the photo result (scaled to the middle) is composited
+// inside an ellipse whose sides follow the canines' silhouettes.
+// mask (optional, width*height): 1 where the photo was used.
+Status teeth_composite_generic(const TeethResult& teeth, const TeethOptions& options,
+                               const TeethCompositeOptions& composite, Image& texture,
+                               std::vector<float>* mask = nullptr);
 
 }  // namespace lk

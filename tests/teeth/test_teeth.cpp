@@ -104,3 +104,36 @@ TEST_CASE("teeth: real intraoral photo gives a texture with teeth kept") {
   // The central incisors (around the photo centre, a little above) are teeth.
   CHECK(r.classes[static_cast<size_t>(im.height * 48 / 100) * im.width + im.width / 2 - im.width / 20] == lk::TeethClass::Tooth);
 }
+
+TEST_CASE("teeth: composite into the generic texture along a curved boundary") {
+  const Smile s = make_smile();
+  lk::TeethResult r;
+  const lk::TeethOptions o;
+  REQUIRE(lk::teeth_texture_from_photo(s.image, o, r).ok());
+  lk::TeethCompositeOptions co;
+  lk::Image tex;
+  std::vector<float> mask;
+  REQUIRE(lk::teeth_composite_generic(r, o, co, tex, &mask).ok());
+  REQUIRE(tex.width == co.width);
+  REQUIRE(tex.channels == 4);
+  // Centre: the photo; far left/right: generic.
+  CHECK(mask[static_cast<size_t>(co.height / 2) * co.width + co.width / 2] == 1.0f);
+  CHECK(mask[static_cast<size_t>(co.height / 2) * co.width + 5] == 0.0f);
+  // The boundary is curved: the photo spans fewer columns near the top than at the bite line.
+  auto span = [&](int y) {
+    int n = 0;
+    for (int x = 0; x < co.width; ++x) n += mask[static_cast<size_t>(y) * co.width + x] > 0.5f;
+    return n;
+  };
+  CHECK(span(co.height / 2) > span(co.height / 20) + co.width / 20);
+  // Generic side teeth carry the teeth target colour (recoloured), near the bite line.
+  bool found = false;
+  for (int x = 10; x < co.width / 5 && !found; ++x) {
+    const std::uint8_t* p = tex.at(x, co.height / 2 - 10);
+    found = p[3] == 255 && std::abs(p[0] / 255.0 - r.target_color[0]) < 0.2 && std::abs(p[2] / 255.0 - r.target_color[2]) < 0.2 &&
+            p[0] > 150;
+  }
+  CHECK(found);
+  lk::TeethResult empty;
+  CHECK_FALSE(lk::teeth_composite_generic(empty, o, co, tex).ok());
+}
