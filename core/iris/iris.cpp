@@ -397,6 +397,7 @@ Status iris_synthesize(const PolarIris& input, const IrisSynthesisOptions& optio
   output.valid.assign(input.valid.size(), 1);
   std::mt19937 rng(options.seed);
 
+  std::vector<const float*> seam_lead;  // 1-D: reference rows leading into output row 0
   const bool use_2d = options.force_2d || rep.sector_deg < options.min_sector_deg || best_len < 2 * k_angle + 2;
   rep.used_2d = use_2d;
   if (!use_2d) {
@@ -405,7 +406,11 @@ Status iris_synthesize(const PolarIris& input, const IrisSynthesisOptions& optio
     for (int i = 0; i < best_len; ++i) ref.push_back(input.at((best_begin + i) % A, 0));
     const int m = static_cast<int>(ref.size());
     const int k = std::min(k_angle, m / 2);
-    std::uniform_int_distribution<int> start_pick(0, m - k);
+    // The chain starts a few rows into the sector, so the rows just before its
+    // start can close the circle at the seam (below).
+    const int lead = std::min(2 * k, std::max(0, m - 2 * k));
+    seam_lead.clear();
+    std::uniform_int_distribution<int> start_pick(lead, m - k);
     const int s0 = start_pick(rng);
     for (int t = 0; t < k; ++t) std::copy(ref[static_cast<size_t>(s0 + t)], ref[static_cast<size_t>(s0 + t)] + R * 3, output.at(t, 0));
     std::vector<double> dist(static_cast<size_t>(m));
@@ -414,6 +419,7 @@ Status iris_synthesize(const PolarIris& input, const IrisSynthesisOptions& optio
     // end (its neighbourhood matches itself best) and draws plain rings.
     std::vector<int> source(static_cast<size_t>(A), -1);
     for (int t = 0; t < k; ++t) source[static_cast<size_t>(t)] = s0 + t;
+    for (int i = lead; i >= 1; --i) seam_lead.push_back(ref[static_cast<size_t>(s0 - i)]);
     for (int t = k; t < A; ++t) {
       double best = 1e300;
       for (int j = k; j < m; ++j) {
@@ -507,15 +513,16 @@ Status iris_synthesize(const PolarIris& input, const IrisSynthesisOptions& optio
         return Status::error(ErrorCode::Cancelled, "iris synthesis cancelled");
     }
   }
-  // The chain does not close on itself: cross-fade the last rows into the first.
-  const int seam = std::min(k_angle * 2, A / 8);
+  // The chain does not close on itself: cross-fade the last rows into the
+  // reference rows that lead into row 0 (1-D), or towards row 0 (2-D).
+  const int seam = seam_lead.empty() ? std::min(k_angle * 2, A / 8) : static_cast<int>(seam_lead.size());
   for (int i = 0; i < seam; ++i) {
     const int t = A - seam + i;
     const float wgt = static_cast<float>(i + 1) / (seam + 1);
-    const int src = i % std::max(1, seam);
+    const float* target = seam_lead.empty() ? output.at(0, 0) : seam_lead[static_cast<size_t>(i)];
     for (int x = 0; x < R * 3; ++x) {
       float& o = output.at(t, 0)[x];
-      o = (1 - wgt) * o + wgt * output.at(src, 0)[x];
+      o = (1 - wgt) * o + wgt * target[x];
     }
   }
   if (report_out) *report_out = rep;
