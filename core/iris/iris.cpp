@@ -414,17 +414,20 @@ Status iris_synthesize(const PolarIris& input, const IrisSynthesisOptions& optio
     const int s0 = start_pick(rng);
     for (int t = 0; t < k; ++t) std::copy(ref[static_cast<size_t>(s0 + t)], ref[static_cast<size_t>(s0 + t)] + R * 3, output.at(t, 0));
     std::vector<double> dist(static_cast<size_t>(m));
-    // Source row of each output row: a row already used within the last k
+    // Source row of each output row: a row already used within the last few
     // rows is not a candidate, or the chain sticks on one row at the sector's
     // end (its neighbourhood matches itself best) and draws plain rings.
     std::vector<int> source(static_cast<size_t>(A), -1);
+    // A longer no-repeat window keeps the chain from cycling through a few
+    // rows (visible as periodic spots around the iris).
+    const int no_repeat = std::max(k, (m - k) / 3);
     for (int t = 0; t < k; ++t) source[static_cast<size_t>(t)] = s0 + t;
     for (int i = lead; i >= 1; --i) seam_lead.push_back(ref[static_cast<size_t>(s0 - i)]);
     for (int t = k; t < A; ++t) {
       double best = 1e300;
       for (int j = k; j < m; ++j) {
         bool recent = false;
-        for (int i = 1; i <= k; ++i) recent = recent || source[static_cast<size_t>(t - i)] == j;
+        for (int i = 1; i <= std::min(t, no_repeat); ++i) recent = recent || source[static_cast<size_t>(t - i)] == j;
         if (recent) { dist[static_cast<size_t>(j)] = 1e300; continue; }
         dist[static_cast<size_t>(j)] = row_neighbourhood_distance(output, t, ref, j, k, R);
         best = std::min(best, dist[static_cast<size_t>(j)]);
