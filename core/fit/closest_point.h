@@ -4,12 +4,14 @@
 // point p onto the nearest surface point of the mesh G; Sec. 7 (Table 1)
 // reports the mean and maximum of |Pi(G, p) - p| over the scan in percent of
 // the point cloud's bounding-box diagonal. Both come from this exact query
-// (not an approximation through mesh vertices), answered by a bounding-volume
-// hierarchy over the triangles.
+// (not an approximation through mesh vertices), answered by the SAH
+// bounding-volume hierarchy of core/raycast; this header only adapts it to
+// the fitting stages' squared-distance form.
 //
 // Shapes: positions #V by 3, triangles #F by 3, query points #P by 3.
 #pragma once
 #include "mesh/tri_mesh.h"
+#include "raycast/bvh.h"
 
 #include <vector>
 
@@ -31,7 +33,7 @@ class ClosestPointTree {
   explicit ClosestPointTree(const TriMesh& mesh) { build(mesh); }
   void build(const TriMesh& mesh);
 
-  bool empty() const { return triangles_.empty(); }
+  bool empty() const { return bvh_.empty(); }
   // Exact closest point on the mesh. When a finite upper bound on the squared
   // distance is known (e.g. from the previous iteration's triangle) passing
   // it prunes the search; if nothing is nearer than the bound the result's
@@ -39,17 +41,7 @@ class ClosestPointTree {
   SurfacePoint closest(const Vec3& p, double max_squared_distance = 1e300) const;
 
  private:
-  struct Node {
-    Vec3 min = Vec3::Zero(), max = Vec3::Zero();
-    int first = 0, count = 0;  // leaf: range in order_; inner: count == 0
-    int left = -1, right = -1;
-  };
-  int build_node(int first, int count, std::vector<Vec3>& centroids);
-
-  std::vector<Vec3> positions_;
-  std::vector<Tri> triangles_;
-  std::vector<int> order_;  // triangle ids, leaves own contiguous ranges
-  std::vector<Node> nodes_;
+  MeshBvh bvh_;
 };
 
 // Closest point on triangle (a, b, c) to p, with barycentric weights.
