@@ -2,6 +2,7 @@
 // every PLY flavour and XYZ, plus the real OBJ/VTK scans and a photo when
 // ../shared/data (or --data DIR) is present. Median of 5 runs (1 with --quick).
 #include "command.h"
+#include "timing.h"
 
 #include "io/io.h"
 
@@ -16,24 +17,7 @@
 namespace lk::cli {
 namespace {
 
-struct Timing {
-  double wall_ms = 0, cpu_ms = 0;  // medians; CPU time is steadier on a busy machine
-};
 
-Timing median_ms(int reps, const std::function<bool()>& f, bool& ok) {
-  std::vector<double> wall, cpu;
-  ok = true;
-  for (int i = 0; i < reps; ++i) {
-    const auto t0 = std::chrono::steady_clock::now();
-    const std::clock_t c0 = std::clock();
-    ok = f() && ok;
-    cpu.push_back(1000.0 * double(std::clock() - c0) / CLOCKS_PER_SEC);
-    wall.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-  }
-  std::sort(wall.begin(), wall.end());
-  std::sort(cpu.begin(), cpu.end());
-  return {wall[wall.size() / 2], cpu[cpu.size() / 2]};
-}
 
 // A 300k-point helix-wrapped cylinder with normals, like a dense range scan.
 PointCloud synthetic_scan(int n) {

@@ -3,6 +3,7 @@
 // frame (context, shader compile, upload, draw, read back) per image size.
 // Median of 3 runs (1 with --quick). No paper figures: a tool, not a stage.
 #include "command.h"
+#include "timing.h"
 
 #include "head/generic_head.h"
 #include "render/ambient_occlusion.h"
@@ -20,24 +21,7 @@
 namespace lk::cli {
 namespace {
 
-struct Timing {
-  double wall_ms = 0, cpu_ms = 0;  // medians
-};
 
-Timing median_ms(int reps, const std::function<bool()>& f, bool& ok) {
-  std::vector<double> wall, cpu;
-  ok = true;
-  for (int i = 0; i < reps; ++i) {
-    const auto t0 = std::chrono::steady_clock::now();
-    const std::clock_t c0 = std::clock();
-    ok = f() && ok;
-    cpu.push_back(1000.0 * double(std::clock() - c0) / CLOCKS_PER_SEC);
-    wall.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-  }
-  std::sort(wall.begin(), wall.end());
-  std::sort(cpu.begin(), cpu.end());
-  return {wall[wall.size() / 2], cpu[cpu.size() / 2]};
-}
 
 // A UV sphere with about n vertices: a stand-in for subdivided heads.
 TriMesh sphere(int n) {
