@@ -594,12 +594,19 @@ async function main() {
         await page.check('#animate');
         await page.waitForTimeout(1500);
         const f1 = await page.evaluate(() => window.likeness.animation.frames);
-        await page.waitForTimeout(1500);
-        const moving = await canvasImage(page);
+        // The motion is periodic (2 s), so one screenshot may catch the rest
+        // pose: keep the largest change over several samples across a period.
+        let movedMost = -1;
+        for (let i = 0; i < 6; ++i) {
+          await page.waitForTimeout(400);
+          const img = await canvasImage(page);
+          const d = differingFraction(rest, img);
+          movedMost = Math.max(movedMost, d);
+        }
         const anim = await page.evaluate(() => Object.assign({}, window.likeness.animation, { text: document.getElementById('anim-stats').textContent }));
         await shot(page, 'web_fit_animate.png');
-        check('the animation advances frames and moves the head', anim.frames > f1 && f1 > 0 && differingFraction(rest, moving) > 0.002 &&
-              /fps · update/.test(anim.text), `frames ${f1} -> ${anim.frames}, "${anim.text}", ${(100 * differingFraction(rest, moving)).toFixed(2)}% changed`);
+        check('the animation advances frames and moves the head', anim.frames > f1 && f1 > 0 && movedMost > 0.002 &&
+              /fps · update/.test(anim.text), `frames ${f1} -> ${anim.frames}, "${anim.text}", ${(100 * movedMost).toFixed(2)}% changed at most`);
         await page.uncheck('#animate');
         await page.waitForTimeout(300);
         const f2 = await page.evaluate(() => window.likeness.animation.frames);
