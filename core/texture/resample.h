@@ -9,14 +9,16 @@
 //      photos and the texels interpolate these three colours;
 //   3. some vertex is unbound ("dark grey"): as case 2 once hole filling
 //      (hole_fill.h) has given every vertex a colour.
-// Photo lookups are bilinear, in linear light (color.h).
+// Photo lookups are bilinear, in linear light (color.h): the four pixels are
+// decoded from sRGB before they are interpolated, so the photos stay 8-bit in
+// memory (five 3000x2000 photos as floats would take 360 MB of wasm heap).
 //
 // Regions (for the multiresolution spline's masks and for seam measurement):
 // a case-1 triangle belongs to its common photo with the largest summed
 // <N(v), V_i> over its corners (the corners' main photo when they share one);
 // case-2/3 triangles belong to no photo (kRegionFilled).
 //
-// Shapes: mesh #V / #F; photos #P (linear RGB float images, same order as
+// Shapes: mesh #V / #F; photos #P (8-bit sRGB gray/RGB/RGBA, same order as
 // the cameras of the binding); texture width * height * 3 floats, linear.
 #pragma once
 #include "calib/camera.h"
@@ -35,16 +37,16 @@ constexpr int kRegionFilled = -2;      // coloured by interpolation (cases 2 and
 
 enum class TriangleCase : signed char { CommonPhoto = 1, AllBound = 2, SomeUnbound = 3 };
 
-// One photo ready for lookups: linear RGB, with its camera.
-struct LinearPhoto {
-  ImageF image;   // width * height * 3, linear RGB
-  Camera camera;  // camera.width/height == image size
+// A photo with its calibrated camera (camera.width/height == image size).
+struct TexturePhoto {
+  Image image;    // 8-bit sRGB, 1 (gray), 3 (RGB) or 4 (RGBA, alpha ignored) channels
+  Camera camera;
 };
 
 // Bilinear lookup at pixel position (u, v) (pixel centres at integer + 0.5,
-// as Camera::project's top-left-corner origin implies). Positions are clamped
-// to the image. rgb gets 3 floats.
-void sample_bilinear(const ImageF& image, double u, double v, float* rgb);
+// as Camera::project's top-left-corner origin implies), in linear light.
+// Positions are clamped to the image. rgb gets 3 floats.
+void sample_bilinear(const Image& image, double u, double v, float* rgb);
 
 // Classification of every triangle and its region (see above). #F each.
 void classify_triangles(const TriMesh& mesh, const VertexBinding& binding,
@@ -54,7 +56,7 @@ void classify_triangles(const TriMesh& mesh, const VertexBinding& binding,
 // <N(v), V_i> (the paper's case 2). colored[v] = 1 for bound vertices; an
 // unbound vertex gets (0,0,0) and colored 0. #V each.
 void bound_vertex_colors(const TriMesh& mesh, const std::vector<Vec3>& normals,
-                         const VertexBinding& binding, const std::vector<LinearPhoto>& photos,
+                         const VertexBinding& binding, const std::vector<TexturePhoto>& photos,
                          std::vector<Vec3>& colors, std::vector<char>& colored);
 
 struct ResampleStats {
@@ -71,7 +73,7 @@ struct ResampleStats {
 // kRegionBackground. Fails with InvalidInput on inconsistent sizes.
 Status resample_texture(const TriMesh& mesh, const std::vector<Vec3>& normals,
                         const std::vector<Vec2>& uv, const VertexBinding& binding,
-                        const std::vector<LinearPhoto>& photos, const ChartRaster& raster,
+                        const std::vector<TexturePhoto>& photos, const ChartRaster& raster,
                         const std::vector<Vec3>& vertex_colors, ImageF& texture,
                         ResampleStats& stats, std::vector<int>* region_map = nullptr);
 
@@ -82,7 +84,7 @@ Status resample_texture(const TriMesh& mesh, const std::vector<Vec3>& normals,
 // the number of texels written. These are the images the multiresolution
 // spline blends under each photo's mask.
 long resample_single_photo(const TriMesh& mesh, const std::vector<Vec2>& uv,
-                           const VertexBinding& binding, const std::vector<LinearPhoto>& photos,
+                           const VertexBinding& binding, const std::vector<TexturePhoto>& photos,
                            int photo, const ChartRaster& raster, ImageF& texture);
 
 }  // namespace lk

@@ -23,15 +23,15 @@ bool uv_barycentric(const Vec2&, const Vec2&, const Vec2&, const Vec2&, Vec3&) {
 Status rasterize_chart(const std::vector<Vec2>&, const std::vector<Tri>&, int, int, ChartRaster&, double) {
   return not_yet("rasterize_chart");
 }
-void sample_bilinear(const ImageF&, double, double, float* rgb) { rgb[0] = rgb[1] = rgb[2] = 0.f; }
+void sample_bilinear(const Image&, double, double, float* rgb) { rgb[0] = rgb[1] = rgb[2] = 0.f; }
 void classify_triangles(const TriMesh&, const VertexBinding&, std::vector<TriangleCase>&, std::vector<int>&) {}
 void bound_vertex_colors(const TriMesh&, const std::vector<Vec3>&, const VertexBinding&,
-                         const std::vector<LinearPhoto>&, std::vector<Vec3>&, std::vector<char>&) {}
+                         const std::vector<TexturePhoto>&, std::vector<Vec3>&, std::vector<char>&) {}
 Status resample_texture(const TriMesh&, const std::vector<Vec3>&, const std::vector<Vec2>&, const VertexBinding&,
-                        const std::vector<LinearPhoto>&, const ChartRaster&, const std::vector<Vec3>&, ImageF&,
+                        const std::vector<TexturePhoto>&, const ChartRaster&, const std::vector<Vec3>&, ImageF&,
                         ResampleStats&, std::vector<int>*) { return not_yet("resample_texture"); }
 long resample_single_photo(const TriMesh&, const std::vector<Vec2>&, const VertexBinding&,
-                           const std::vector<LinearPhoto>&, int, const ChartRaster&, ImageF&) { return 0; }
+                           const std::vector<TexturePhoto>&, int, const ChartRaster&, ImageF&) { return 0; }
 Status fill_vertex_colors(const MeshTopology&, std::vector<Vec3>&, std::vector<char>&, const HoleFillOptions&,
                           HoleFillReport&, std::vector<int>*) { return not_yet("fill_vertex_colors"); }
 void pyramid_reduce(const ImageF&, ImageF&) {}

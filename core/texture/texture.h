@@ -40,12 +40,6 @@
 
 namespace lk {
 
-// A photo with its calibrated camera (camera.width/height == image size).
-struct TexturePhoto {
-  Image image;
-  Camera camera;
-};
-
 // Calibrates each photo from its correspondences (at least 6 per photo):
 // correspondences #P, image_sizes #P (width, height). results gets #P
 // entries. Fails on the first photo that cannot be calibrated, with a message
