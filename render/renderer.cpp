@@ -534,6 +534,12 @@ Status Renderer::upload_texture(const Image& image, TextureHandle& out) {
       dst[1] = c >= 3 ? src[1] : src[0];
       dst[2] = c >= 3 ? src[2] : src[0];
       dst[3] = c == 4 ? src[3] : (c == 2 ? src[1] : 255);
+      // Premultiplied alpha: filtering then averages only the visible texels'
+      // colours (the shader divides by alpha), so the colour code of a
+      // transparent texel (the teeth voids' blue) never bleeds into its
+      // neighbours or into coarser mip levels.
+      if (dst[3] < 255)
+        for (int k = 0; k < 3; ++k) dst[k] = static_cast<std::uint8_t>((dst[k] * dst[3] + 127) / 255);
     }
   }
   GLuint tex = 0;

@@ -98,7 +98,14 @@ void main() {
 
   vec3 albedo = u_base_color;
   if (u_albedo_source == 1) albedo = v_color;
-  if (u_albedo_source == 2) albedo = texture(u_texture, v_uv).rgb;
+  if (u_albedo_source == 2) {
+    // Textures are uploaded with premultiplied alpha. Alpha test: texels
+    // below half coverage (the teeth texture's voids) are holes that show
+    // whatever lies behind; the rest get their unpremultiplied colour.
+    vec4 texel = texture(u_texture, v_uv);
+    if (texel.a < 0.5) discard;
+    albedo = texel.rgb / texel.a;
+  }
 
   vec3 key = normalize(u_key_dir);
   vec3 fill = normalize(u_fill_dir);

@@ -15,6 +15,7 @@
 
 #include <cmath>
 #include <functional>
+#include <string>
 #include <vector>
 
 using namespace lk;
@@ -739,4 +740,68 @@ TEST_CASE("flat shading is constant across each facet, smooth shading is not", "
                                                     << smooth_mean << " max " << smooth_max);
   CHECK(flat_max < 3.0);
   CHECK(smooth_mean > 5.0 * std::max(flat_mean, 0.5));
+}
+
+TEST_CASE("texture alpha: transparent texels show what lies behind, never their colour code", "[render][alpha]") {
+  // Left half opaque light grey, right half transparent and colour-coded
+  // blue (as the teeth texture's voids are). Behind the quad, a red quad
+  // covers the lower half of the view only.
+  Image tex = Image::make(64, 64, 4);
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      std::uint8_t* p = tex.at(x, y);
+      const bool opaque = x < 32;
+      p[0] = opaque ? 200 : 0;
+      p[1] = opaque ? 200 : 0;
+      p[2] = opaque ? 200 : 255;
+      p[3] = opaque ? 255 : 0;
+    }
+  TriMesh quad;
+  quad.positions = {Vec3(-1, -1, 0), Vec3(1, -1, 0), Vec3(1, 1, 0), Vec3(-1, 1, 0)};
+  quad.triangles = {Tri{0, 1, 2}, Tri{0, 2, 3}};
+  quad.uvs = {Vec2(0, 0), Vec2(1, 0), Vec2(1, 1), Vec2(0, 1)};
+  TriMesh behind;
+  behind.positions = {Vec3(-3, -3, -0.5), Vec3(3, -3, -0.5), Vec3(3, 0, -0.5), Vec3(-3, 0, -0.5)};
+  behind.triangles = {Tri{0, 1, 2}, Tri{0, 2, 3}};
+
+  OrbitCamera cam;
+  cam.distance = 4.0f;
+  cam.scene_radius = 1.5f;
+  const CameraMatrices m = cam.matrices(1.0f);
+  const Image im = render(
+      [&](Renderer& r) {
+        DrawableHandle hq, hb;
+        TextureHandle th;
+        Status s = r.upload_mesh(behind, hb);
+        if (s) s = r.set_base_color(hb, glm::vec3(0.9f, 0.05f, 0.05f));
+        if (s) s = r.upload_mesh(quad, hq);
+        if (s) r.style(hq)->specular = 0.0f;
+        if (s) s = r.upload_texture(tex, th);
+        if (s) s = r.attach_texture(hq, th);
+        return s;
+      },
+      [&](float) { return m; }, 96, 96);
+  auto rgb = [&](int x, int y) {
+    const std::uint8_t* p = im.at(x, y);
+    return std::to_string(p[0]) + "," + std::to_string(p[1]) + "," + std::to_string(p[2]);
+  };
+  INFO("left top " << rgb(38, 38) << " right top " << rgb(58, 38) << " right bottom " << rgb(58, 58));
+  // Opaque half: the grey texture, over both the background and the red quad.
+  for (int y : {38, 58}) {
+    const std::uint8_t* p = im.at(38, y);
+    CHECK((p[0] > 100 && std::abs(p[0] - p[1]) < 40 && std::abs(p[2] - p[1]) < 40));
+  }
+  // Transparent half: the key-green background above, the red quad below.
+  CHECK(is_background(im, 58, 38));
+  const std::uint8_t* red = im.at(58, 58);
+  CHECK((red[0] > 80 && red[1] < 40 && red[2] < 40));
+  // Nowhere (including the filtered and mipmapped border between the halves)
+  // does the blue colour code show.
+  int blue = 0;
+  for (int y = 0; y < im.height; ++y)
+    for (int x = 0; x < im.width; ++x) {
+      const std::uint8_t* p = im.at(x, y);
+      blue += p[2] > std::max(p[0], p[1]) + 50;
+    }
+  CHECK(blue == 0);
 }
