@@ -5,6 +5,7 @@
 
 #include "io/io.h"
 #include "mesh/geometry.h"
+#include "mesh/primitives.h"
 #include "mesh/topology.h"
 #include "multires/multires.h"
 #include "raycast/bvh.h"
@@ -56,38 +57,6 @@ double median_ms(int reps, const std::function<void()>& f) {
   return t[t.size() / 2];
 }
 
-TriMesh icosphere(int times) {
-  TriMesh m;
-  const double g = (1.0 + std::sqrt(5.0)) / 2.0;
-  m.positions = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0}, {0, -1, g}, {0, 1, g},
-                 {0, -1, -g}, {0, 1, -g}, {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};
-  for (Vec3& p : m.positions) p.normalize();
-  m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-                 {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
-  for (int s = 0; s < times; ++s) {
-    TriMesh f;
-    f.positions = m.positions;
-    std::map<std::pair<int, int>, int> mid;
-    auto midpoint = [&](int a, int b) {
-      auto key = std::make_pair(std::min(a, b), std::max(a, b));
-      auto it = mid.find(key);
-      if (it != mid.end()) return it->second;
-      f.positions.push_back((m.positions[a] + m.positions[b]).normalized());
-      return mid[key] = f.num_vertices() - 1;
-    };
-    for (const Tri& t : m.triangles) {
-      const int a = midpoint(t[0], t[1]), b = midpoint(t[1], t[2]), c = midpoint(t[2], t[0]);
-      f.triangles.push_back({t[0], a, c});
-      f.triangles.push_back({t[1], b, a});
-      f.triangles.push_back({t[2], c, b});
-      f.triangles.push_back({a, b, c});
-    }
-    m = f;
-  }
-  return m;
-}
-
 struct NamedMesh {
   std::string name;
   TriMesh mesh;
@@ -108,7 +77,7 @@ std::vector<NamedMesh> bench_meshes(const Args& args) {
   Status s = load_mesh_file(data + "/head_scans/fran_cyberware/fran_cut.vtk", fran);
   if (s.ok()) out.push_back({"fran_cut scan (real, Cyberware)", fran});
   else std::printf("   fran_cut.vtk not used (--data %s): %s\n", data.c_str(), s.message.c_str());
-  out.push_back({"icosphere(3)", icosphere(3)});
+  out.push_back({"icosphere(3)", make_icosphere(3)});
   return out;
 }
 

@@ -3,6 +3,7 @@
 // The ground truth is known exactly, so the tests can tell a wrong fit.
 #pragma once
 #include "mesh/geometry.h"
+#include "mesh/primitives.h"
 #include "mesh/tri_mesh.h"
 
 #include <cmath>
@@ -12,38 +13,7 @@
 namespace lk::test {
 
 // Unit icosphere with `levels` 1:4 splits (levels 3: 642 vertices).
-inline TriMesh icosphere(int levels) {
-  TriMesh m;
-  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  m.positions = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  for (Vec3& p : m.positions) p.normalize();
-  m.triangles = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
-                 {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
-  for (int l = 0; l < levels; ++l) {
-    std::map<std::pair<int, int>, int> mid;
-    auto midpoint = [&](int a, int b) {
-      auto key = std::make_pair(std::min(a, b), std::max(a, b));
-      auto it = mid.find(key);
-      if (it != mid.end()) return it->second;
-      m.positions.push_back((m.positions[a] + m.positions[b]).normalized());
-      const int id = m.num_vertices() - 1;
-      mid[key] = id;
-      return id;
-    };
-    std::vector<Tri> next;
-    for (const Tri& f : m.triangles) {
-      const int a = midpoint(f[0], f[1]), b = midpoint(f[1], f[2]), c = midpoint(f[2], f[0]);
-      next.push_back({f[0], a, c});
-      next.push_back({f[1], b, a});
-      next.push_back({f[2], c, b});
-      next.push_back({a, b, c});
-    }
-    m.triangles = next;
-  }
-  return m;
-}
+inline TriMesh icosphere(int levels) { return make_icosphere(levels); }
 
 // Ellipsoid with semi-axes r plus a Gaussian bump of height h (along the
 // outward direction) centred on direction `at`, of angular width sigma.

@@ -1,6 +1,7 @@
 // Small synthetic meshes with known geometry for the subdivision and
 // multiresolution tests (shared by tests/subdiv and tests/multires).
 #pragma once
+#include "mesh/primitives.h"
 #include "mesh/tri_mesh.h"
 
 #include <algorithm>
@@ -11,17 +12,7 @@
 namespace lk::test {
 
 // Regular icosahedron on the unit sphere (every vertex has valence 5).
-inline TriMesh icosahedron() {
-  TriMesh m;
-  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  m.positions = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  for (Vec3& p : m.positions) p.normalize();
-  m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-                 {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
-  return m;
-}
+inline TriMesh icosahedron() { return make_icosahedron(); }
 
 // Octahedron on the unit sphere (valence 4 everywhere), symmetric under x -> -x.
 inline TriMesh octahedron() {
@@ -33,18 +24,7 @@ inline TriMesh octahedron() {
 
 // (n+1) x (m+1) grid on [0,n] x [0,m] in the z = 0 plane, every cell split by
 // the same diagonal: interior vertices have valence 6 (a regular lattice).
-inline TriMesh regular_grid(int n, int m) {
-  TriMesh g;
-  for (int j = 0; j <= m; ++j)
-    for (int i = 0; i <= n; ++i) g.positions.push_back(Vec3(i, j, 0));
-  auto id = [n](int i, int j) { return j * (n + 1) + i; };
-  for (int j = 0; j < m; ++j)
-    for (int i = 0; i < n; ++i) {
-      g.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-      g.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-    }
-  return g;
-}
+inline TriMesh regular_grid(int n, int m) { return make_regular_grid(n, m); }
 
 // A grid on [-n,n] x [0,m] whose diagonals mirror across x = 0 (so the mesh
 // is symmetric under x -> -x) and alternate in a few cells, which creates
@@ -85,29 +65,6 @@ inline TriMesh planar_fan(int K) {
 
 // Icosahedron refined by midpoint splitting and projected onto the unit
 // sphere `times` times: a smooth closed control mesh with valences 5 and 6.
-inline TriMesh icosphere(int times) {
-  TriMesh m = icosahedron();
-  for (int s = 0; s < times; ++s) {
-    TriMesh f;
-    f.positions = m.positions;
-    std::map<std::pair<int, int>, int> mid;
-    auto midpoint = [&](int a, int b) {
-      auto key = std::make_pair(std::min(a, b), std::max(a, b));
-      auto it = mid.find(key);
-      if (it != mid.end()) return it->second;
-      f.positions.push_back((m.positions[a] + m.positions[b]).normalized());
-      return mid[key] = f.num_vertices() - 1;
-    };
-    for (const Tri& t : m.triangles) {
-      const int a = midpoint(t[0], t[1]), b = midpoint(t[1], t[2]), c = midpoint(t[2], t[0]);
-      f.triangles.push_back({t[0], a, c});
-      f.triangles.push_back({t[1], b, a});
-      f.triangles.push_back({t[2], c, b});
-      f.triangles.push_back({a, b, c});
-    }
-    m = f;
-  }
-  return m;
-}
+inline TriMesh icosphere(int times) { return make_icosphere(times); }
 
 }  // namespace lk::test
