@@ -168,15 +168,40 @@ VecX pack(const Camera& c, const FreeParams& fp) {
   return p;
 }
 
-// Reprojection residuals; a point behind the camera gets a large constant
-// residual so the solver is pushed away from such solutions.
-VecX residuals(const Camera& c, const std::vector<Correspondence>& cs, const std::vector<int>& idx) {
-  VecX r(2 * idx.size());
+// Soft Gaussian prior on the focal: one extra residual weight * (f - focal).
+struct FocalPrior {
+  double focal = 0;   // 0 = none
+  double weight = 0;  // pixels per pixel of focal error
+  bool active() const { return focal > 0 && weight > 0; }
+  double residual(double f) const { return weight * (f - focal); }
+};
+
+FocalPrior focal_prior_of(const CalibOptions& o) {
+  FocalPrior p;
+  if (o.focal_prior > 0 && o.known_focal <= 0) {
+    p.focal = o.focal_prior;
+    p.weight = o.pixel_sigma / (o.focal_prior_sigma * o.focal_prior);
+  }
+  return p;
+}
+
+// Reprojection residuals into r starting at row `at`; a point behind the
+// camera gets a large constant residual so the solver is pushed away from
+// such solutions.
+void reprojection(const Camera& c, const std::vector<Correspondence>& cs, const std::vector<int>& idx, VecX& r,
+                  Eigen::Index at) {
   for (size_t i = 0; i < idx.size(); ++i) {
     Vec2 uv;
-    if (c.project(cs[idx[i]].point, uv)) r.segment<2>(2 * i) = uv - cs[idx[i]].pixel;
-    else r.segment<2>(2 * i) = Vec2::Constant(1e6);
+    if (c.project(cs[idx[i]].point, uv)) r.segment<2>(at + 2 * i) = uv - cs[idx[i]].pixel;
+    else r.segment<2>(at + 2 * i) = Vec2::Constant(1e6);
   }
+}
+
+VecX residuals(const Camera& c, const std::vector<Correspondence>& cs, const std::vector<int>& idx,
+               const FocalPrior& prior = {}) {
+  VecX r(2 * idx.size() + (prior.active() ? 1 : 0));
+  reprojection(c, cs, idx, r, 0);
+  if (prior.active()) r[r.size() - 1] = prior.residual(0.5 * (c.fx + c.fy));
   return r;
 }
 
@@ -184,10 +209,11 @@ VecX residuals(const Camera& c, const std::vector<Correspondence>& cs, const std
 // Jacobian: at most ~15 parameters and a few dozen residuals, so numeric
 // derivatives cost nothing and cannot get out of sync with the model.
 Camera refine(const Camera& start, const FreeParams& fp, const std::vector<Correspondence>& cs,
-              const std::vector<int>& idx, int max_iterations) {
+              const std::vector<int>& idx, int max_iterations, const FocalPrior& focal_prior = {}) {
+  const FocalPrior prior = fp.focal ? focal_prior : FocalPrior{};
   Camera base = start;
   VecX p = pack(base, fp);
-  VecX r = residuals(base, cs, idx);
+  VecX r = residuals(base, cs, idx, prior);
   double cost = r.squaredNorm();
   double lambda = 1e-3;
   const int n = int(p.size());
@@ -198,7 +224,8 @@ Camera refine(const Camera& start, const FreeParams& fp, const std::vector<Corre
       VecX pp = p, pm = p;
       pp[j] += h;
       pm[j] -= h;
-      Jac.col(j) = (residuals(apply(base, fp, pp), cs, idx) - residuals(apply(base, fp, pm), cs, idx)) / (2 * h);
+      Jac.col(j) = (residuals(apply(base, fp, pp), cs, idx, prior) - residuals(apply(base, fp, pm), cs, idx, prior)) /
+                   (2 * h);
     }
     const MatX JtJ = Jac.transpose() * Jac;
     const VecX g = Jac.transpose() * r;
@@ -210,7 +237,7 @@ Camera refine(const Camera& start, const FreeParams& fp, const std::vector<Corre
       if (!step.allFinite()) { lambda *= 10; continue; }
       const VecX pn = p + step;
       const Camera cn = apply(base, fp, pn);
-      const VecX rn = residuals(cn, cs, idx);
+      const VecX rn = residuals(cn, cs, idx, prior);
       const double cn_cost = rn.squaredNorm();
       if (cn_cost < cost) {
         const double gain = cost - cn_cost;
@@ -264,6 +291,11 @@ Status calibrate_camera(const std::vector<Correspondence>& cs, int image_width, 
                            "correspondence " + std::to_string(i) + " has a NaN or infinite coordinate");
   if (options.known_focal < 0 || !std::isfinite(options.known_focal))
     return Status::error(ErrorCode::InvalidInput, "known_focal must be positive (or 0 = unknown)");
+  if (options.focal_prior < 0 || !std::isfinite(options.focal_prior) || !(options.focal_prior_sigma > 0) ||
+      !std::isfinite(options.focal_prior_sigma) || !(options.pixel_sigma > 0) || !std::isfinite(options.pixel_sigma))
+    return Status::error(ErrorCode::InvalidInput,
+                         "focal_prior must be >= 0 (0 = none), focal_prior_sigma and pixel_sigma positive");
+  const FocalPrior prior = focal_prior_of(options);
 
   // Shape of the 3-D point set: collinear sets never determine a camera;
   // coplanar ones cannot give intrinsics and pose together by DLT.
@@ -366,10 +398,13 @@ Status calibrate_camera(const std::vector<Correspondence>& cs, int image_width, 
     fp.k2 = options.estimate_k2 && m >= 10;
     if (!fp.principal) { cam.cx = 0.5 * image_width; cam.cy = 0.5 * image_height; }
     if (!fp.separate) cam.fx = cam.fy = 0.5 * (cam.fx + cam.fy);  // DLT's K has fx != fy
+    // With a prior, the pose is first fitted at the prior's focal: closer to
+    // the truth than a 12-point DLT's focal, which can be 30 % off.
+    if (round == 0 && prior.active()) cam.fx = cam.fy = prior.focal;
     // Pose first (intrinsics held), then everything: a far-off DLT focal
     // with distortion otherwise lets LM wander.
     cam = refine(cam, FreeParams{false, false, false, false, false}, cs, inliers, options.max_lm_iterations);
-    cam = refine(cam, fp, cs, inliers, options.max_lm_iterations);
+    cam = refine(cam, fp, cs, inliers, options.max_lm_iterations, prior);
     e = errors_of(cam, cs);
     if (!options.robust) break;
     std::vector<double> in_err;
@@ -397,6 +432,188 @@ Status calibrate_camera(const std::vector<Correspondence>& cs, int image_width, 
   for (int i : inliers) { result.outlier[i] = 0; sq += e[i] * e[i]; }
   result.num_inliers = int(inliers.size());
   result.rms = std::sqrt(sq / std::max(1, result.num_inliers));
+  return Status::success();
+}
+
+
+namespace {
+
+// Joint LM over [f, (w_1, t_1), ..., (w_P, t_P)]: one shared focal, a pose per
+// photo (rotation as a local axis-angle update, re-based after each step).
+struct JointProblem {
+  const std::vector<std::vector<Correspondence>>* photos = nullptr;
+  const std::vector<std::vector<int>>* inliers = nullptr;
+  FocalPrior prior;
+  Eigen::Index rows = 0;
+
+  std::vector<Camera> apply(const std::vector<Camera>& base, const VecX& p) const {
+    std::vector<Camera> c = base;
+    for (size_t i = 0; i < c.size(); ++i) {
+      c[i].fx = c[i].fy = p[0];
+      const Vec3 w = p.segment<3>(1 + 6 * Eigen::Index(i));
+      const double angle = w.norm();
+      if (angle > 0) c[i].R = Eigen::AngleAxisd(angle, w / angle).toRotationMatrix() * base[i].R;
+      c[i].t = p.segment<3>(4 + 6 * Eigen::Index(i));
+    }
+    return c;
+  }
+  VecX pack(const std::vector<Camera>& c) const {
+    VecX p(1 + 6 * Eigen::Index(c.size()));
+    p[0] = c[0].fx;
+    for (size_t i = 0; i < c.size(); ++i) {
+      p.segment<3>(1 + 6 * Eigen::Index(i)) = Vec3::Zero();
+      p.segment<3>(4 + 6 * Eigen::Index(i)) = c[i].t;
+    }
+    return p;
+  }
+  VecX residuals(const std::vector<Camera>& c) const {
+    VecX r(rows);
+    Eigen::Index at = 0;
+    for (size_t i = 0; i < c.size(); ++i) {
+      reprojection(c[i], (*photos)[i], (*inliers)[i], r, at);
+      at += 2 * Eigen::Index((*inliers)[i].size());
+    }
+    if (prior.active()) r[at] = prior.residual(c[0].fx);
+    return r;
+  }
+};
+
+std::vector<Camera> refine_joint(std::vector<Camera> base, const JointProblem& jp, int max_iterations) {
+  VecX p = jp.pack(base);
+  VecX r = jp.residuals(base);
+  double cost = r.squaredNorm();
+  double lambda = 1e-3;
+  const Eigen::Index n = p.size();
+  for (int it = 0; it < max_iterations; ++it) {
+    // Each pose only moves its own photo's residuals, but a dense numeric
+    // Jacobian of ~30 columns by a few hundred rows costs well under 1 ms.
+    MatX Jac(r.size(), n);
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const double h = 1e-6 * std::max(1.0, std::abs(p[j]));
+      VecX pp = p, pm = p;
+      pp[j] += h;
+      pm[j] -= h;
+      Jac.col(j) = (jp.residuals(jp.apply(base, pp)) - jp.residuals(jp.apply(base, pm))) / (2 * h);
+    }
+    const MatX JtJ = Jac.transpose() * Jac;
+    const VecX g = Jac.transpose() * r;
+    bool improved = false;
+    for (int tries = 0; tries < 12; ++tries) {
+      MatX A = JtJ;
+      for (Eigen::Index j = 0; j < n; ++j) A(j, j) += lambda * std::max(JtJ(j, j), 1e-12);
+      const VecX step = A.ldlt().solve(-g);
+      if (!step.allFinite()) { lambda *= 10; continue; }
+      const std::vector<Camera> cn = jp.apply(base, p + step);
+      if (!(cn[0].fx > 0)) { lambda *= 10; continue; }
+      const VecX rn = jp.residuals(cn);
+      const double cn_cost = rn.squaredNorm();
+      if (cn_cost < cost) {
+        const double gain = cost - cn_cost;
+        base = cn;
+        p = jp.pack(base);
+        r = rn;
+        cost = cn_cost;
+        lambda = std::max(lambda * 0.3, 1e-12);
+        improved = true;
+        if (gain < 1e-14 * (1 + cost) || step.norm() < 1e-14 * (1 + p.norm())) return base;
+        break;
+      }
+      lambda *= 10;
+    }
+    if (!improved) break;
+  }
+  return base;
+}
+
+}  // namespace
+
+Status calibrate_cameras_shared(const std::vector<std::vector<Correspondence>>& photos,
+                                const std::vector<std::array<int, 2>>& image_sizes, const CalibOptions& options,
+                                SharedCalibResult& result) {
+  result = SharedCalibResult{};
+  const size_t np = photos.size();
+  if (np == 0) return Status::error(ErrorCode::InvalidInput, "shared calibration needs at least one photo");
+  if (image_sizes.size() != np)
+    return Status::error(ErrorCode::InvalidInput, std::to_string(np) + " sets of correspondences for " +
+                                                      std::to_string(image_sizes.size()) + " image sizes");
+  if (options.separate_focal || !options.fix_principal_point || options.estimate_k1 || options.estimate_k2)
+    return Status::error(ErrorCode::InvalidInput,
+                         "shared calibration estimates one focal (fx = fy) with centred principal points and "
+                         "no distortion: turn off separate_focal, estimate_k1/k2 and keep fix_principal_point");
+
+  // 1. Each photo alone: poses, inlier sets, one focal estimate per photo.
+  result.photos.resize(np);
+  std::vector<double> focals;
+  for (size_t i = 0; i < np; ++i) {
+    const Status s = calibrate_camera(photos[i], image_sizes[i][0], image_sizes[i][1], options, result.photos[i]);
+    if (!s) return Status::error(s.code, "photo " + std::to_string(i) + ": " + s.message);
+    focals.push_back(result.photos[i].camera.fx);
+  }
+  if (options.known_focal > 0) {  // nothing is shared that is not already known
+    result.focal = options.known_focal;
+  } else {
+    // 2. Start: the prior, else the median single-photo focal; each pose
+    // re-fitted at that focal so LM starts near a consistent solution.
+    const FocalPrior prior = focal_prior_of(options);
+    const double f0 = prior.active() ? prior.focal : median(focals);
+    std::vector<Camera> cams(np);
+    std::vector<std::vector<int>> inliers(np);
+    for (size_t i = 0; i < np; ++i) {
+      for (size_t k = 0; k < photos[i].size(); ++k)
+        if (!result.photos[i].outlier[k]) inliers[i].push_back(int(k));
+      cams[i] = result.photos[i].camera;
+      cams[i].fx = cams[i].fy = f0;
+      cams[i] = refine(cams[i], FreeParams{false, false, false, false, false}, photos[i], inliers[i],
+                       options.max_lm_iterations);
+    }
+    // 3. Joint refinement; re-classify outliers per photo; repeat until stable.
+    JointProblem jp;
+    jp.photos = &photos;
+    jp.inliers = &inliers;
+    jp.prior = prior;
+    for (int round = 0; round < 4; ++round) {
+      jp.rows = prior.active() ? 1 : 0;
+      for (const auto& in : inliers) jp.rows += 2 * Eigen::Index(in.size());
+      cams = refine_joint(cams, jp, options.max_lm_iterations);
+      if (!options.robust) break;
+      bool changed = false;
+      for (size_t i = 0; i < np; ++i) {
+        const std::vector<double> e = errors_of(cams[i], photos[i]);
+        std::vector<double> in_err;
+        for (int k : inliers[i]) in_err.push_back(e[size_t(k)]);
+        const double threshold = std::max(options.outlier_px, 3 * 1.4826 * median(in_err));
+        std::vector<int> next;
+        for (size_t k = 0; k < photos[i].size(); ++k)
+          if (e[k] < threshold) next.push_back(int(k));
+        if (next.size() >= 6 && next != inliers[i]) { inliers[i] = next; changed = true; }
+      }
+      if (!changed) break;
+    }
+    if (!(cams[0].fx > 0) || !std::isfinite(cams[0].fx))
+      return Status::error(ErrorCode::NotConverged, "shared calibration did not converge to a valid focal");
+    result.focal = cams[0].fx;
+    for (size_t i = 0; i < np; ++i) {
+      CalibResult& r = result.photos[i];
+      r.camera = cams[i];
+      r.errors = errors_of(cams[i], photos[i]);
+      r.outlier.assign(photos[i].size(), 1);
+      double sq = 0;
+      for (int k : inliers[i]) { r.outlier[size_t(k)] = 0; sq += r.errors[size_t(k)] * r.errors[size_t(k)]; }
+      r.num_inliers = int(inliers[i].size());
+      r.rms = std::sqrt(sq / std::max(1, r.num_inliers));
+      for (int k : inliers[i])
+        if (cams[i].to_camera(photos[i][size_t(k)].point).z() <= 0)
+          return Status::error(ErrorCode::NotConverged,
+                               "photo " + std::to_string(i) + ": the shared focal puts points behind the camera");
+    }
+  }
+  double sq = 0;
+  int count = 0;
+  for (const CalibResult& r : result.photos) {
+    sq += r.rms * r.rms * r.num_inliers;
+    count += r.num_inliers;
+  }
+  result.rms = std::sqrt(sq / std::max(1, count));
   return Status::success();
 }
 

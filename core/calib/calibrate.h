@@ -8,13 +8,16 @@
 // focal); then Levenberg-Marquardt on the reprojection error over
 // f (fx = fy unless separate_focal), cx, cy, k1, k2, axis-angle rotation and
 // t. Robustness: RANSAC over minimal 6-point DLT sets followed by iterative
-// outlier rejection (threshold max(outlier_px, 3 * 1.4826 * MAD)).
+// outlier rejection (threshold max(outlier_px, 3 * 1.4826 * MAD)). Against
+// the focal/distance ambiguity: an optional soft focal prior (EXIF) and joint
+// calibration of several photos sharing one focal (calibrate_cameras_shared).
 //
 // Shapes: correspondences #N (N >= 6); CalibResult::errors and ::outlier #N.
 #pragma once
 #include "calib/camera.h"
 #include "common/status.h"
 
+#include <array>
 #include <vector>
 
 namespace lk {
@@ -32,6 +35,15 @@ struct CalibOptions {
   bool fix_principal_point = true;    // keep (cx, cy) at the image centre; forced when N < 8
   bool estimate_k1 = false;           // radial distortion k1 (needs >= 8 inliers, else fixed at 0)
   bool estimate_k2 = false;           // radial distortion k2 (needs >= 10 inliers)
+  // Soft focal prior (e.g. from the photo's EXIF, see io/exif.h), used when
+  // the focal is free (known_focal == 0): LM adds the residual
+  // pixel_sigma * (f - focal_prior) / (focal_prior_sigma * focal_prior), i.e.
+  // a Gaussian prior of relative standard deviation focal_prior_sigma against
+  // click noise of pixel_sigma px per coordinate. It fixes the focal/distance
+  // ambiguity of 12-15 points on a head. 0 = no prior.
+  double focal_prior = 0;
+  double focal_prior_sigma = 0.05;    // EXIF 35-mm-equivalent focals are rounded to 1 mm: ~2-5 %
+  double pixel_sigma = 1.0;           // expected click noise per coordinate, pixels
   bool robust = true;                 // RANSAC + outlier rejection
   double outlier_px = 3.0;            // minimum rejection threshold, pixels
   int ransac_iterations = 300;        // minimal-set trials (deterministic seed)
@@ -53,5 +65,26 @@ struct CalibResult {
 // points behind the camera; NotConverged when no consistent camera is found.
 Status calibrate_camera(const std::vector<Correspondence>& correspondences, int image_width,
                         int image_height, const CalibOptions& options, CalibResult& result);
+
+// Several photos taken with ONE camera (same lens and zoom): one focal length
+// fx = fy shared by all photos, a pose per photo, principal points at the
+// image centres, no distortion. Each photo is first calibrated alone (with the
+// options above, RANSAC and outlier flags included); then the focal (starting
+// from the prior, else from the median of the single-photo focals) and all
+// poses are refined jointly by LM on every inlier, and the outliers are
+// re-classified. With 12-15 points per photo the focal is poorly determined
+// by one photo (perspective effects of a head-sized object are weak); N
+// photos give N independent measurements of it.
+//
+// Shapes: photos #P (P >= 1) sets of correspondences (each >= 6),
+// image_sizes #P (width, height); result.photos #P.
+struct SharedCalibResult {
+  double focal = 0;                 // the shared focal, pixels
+  std::vector<CalibResult> photos;  // #P: cameras with fx = fy = focal, per-point errors and outlier flags
+  double rms = 0;                   // RMS reprojection error over all inliers, pixels
+};
+Status calibrate_cameras_shared(const std::vector<std::vector<Correspondence>>& photos,
+                                const std::vector<std::array<int, 2>>& image_sizes,
+                                const CalibOptions& options, SharedCalibResult& result);
 
 }  // namespace lk
