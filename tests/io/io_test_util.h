@@ -4,6 +4,8 @@
 #pragma once
 #include "io/io.h"
 
+#include <catch2/catch.hpp>
+
 #include <cstdint>
 #include <cstring>
 #include <string>
@@ -32,6 +34,21 @@ struct ByteWriter {
     return *this;
   }
 };
+
+// A reader's error: the code and a fragment of the message a user would read.
+inline void require_error(const Status& s, ErrorCode code, const std::string& fragment) {
+  INFO("message: " << s.message);
+  REQUIRE_FALSE(s.ok());
+  CHECK(s.code == code);
+  CHECK(s.message.find(fragment) != std::string::npos);
+}
+
+// n bytes of deterministic noise: no file format's magic, no text.
+inline Bytes garbage_bytes(size_t n) {
+  Bytes garbage(n);
+  for (size_t i = 0; i < garbage.size(); ++i) garbage[i] = static_cast<std::uint8_t>((i * 7919 + 13) % 251);
+  return garbage;
+}
 
 // Largest single operator-new request since reset (counted in alloc_probe.cpp).
 void reset_largest_allocation();

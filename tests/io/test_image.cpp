@@ -9,15 +9,10 @@
 #include <stb/stb_image_write.h>
 
 using namespace lk;
+using lk::test::garbage_bytes;
+using lk::test::require_error;
 
 namespace {
-
-void require_error(const Status& s, ErrorCode code, const std::string& fragment) {
-  INFO("message: " << s.message);
-  REQUIRE_FALSE(s.ok());
-  CHECK(s.code == code);
-  CHECK(s.message.find(fragment) != std::string::npos);
-}
 
 Image gradient(int w, int h, int channels) {
   Image im = Image::make(w, h, channels);
@@ -135,8 +130,7 @@ TEST_CASE("read_image rejects non-images, empty and oversized input", "[io][imag
   const std::string ply = "ply\nformat ascii 1.0\nelement vertex 1\n";
   require_error(read_image(reinterpret_cast<const std::uint8_t*>(ply.data()), ply.size(), im), ErrorCode::InvalidInput,
                 "not an image");
-  Bytes garbage(300);
-  for (size_t i = 0; i < garbage.size(); ++i) garbage[i] = static_cast<std::uint8_t>((i * 7919 + 13) % 251);
+  const Bytes garbage = garbage_bytes(300);
   require_error(read_image(garbage.data(), garbage.size(), im), ErrorCode::InvalidInput, "not an image");
   const Bytes png = write_png(gradient(100, 100, 3));
   require_error(read_image(png.data(), png.size(), im, 0, 5000), ErrorCode::TooLarge,

@@ -5,6 +5,8 @@
 #include <catch2/catch.hpp>
 
 using namespace lk;
+using lk::test::garbage_bytes;
+using lk::test::require_error;
 using lk::test::bytes_of;
 
 namespace {
@@ -13,13 +15,6 @@ Status read(const std::string& text, TriMesh& m, const std::string& mtl = "") {
   GeometryKind kind;
   const Bytes b = bytes_of(text);
   return read_obj(b.data(), b.size(), m, kind, mtl);
-}
-
-void require_error(const Status& s, ErrorCode code, const std::string& fragment) {
-  INFO("message: " << s.message);
-  REQUIRE_FALSE(s.ok());
-  CHECK(s.code == code);
-  CHECK(s.message.find(fragment) != std::string::npos);
 }
 
 }  // namespace
@@ -172,8 +167,7 @@ TEST_CASE("OBJ reader rejects malformed input with the line and problem", "[io][
   require_error(read("v 0 0 0\nvn 0 0\n", m), ErrorCode::InvalidInput, "a normal needs 3");
   require_error(read("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/a 2 3\n", m), ErrorCode::InvalidInput, "texture coordinate 'a'");
   // Binary garbage is not OBJ.
-  Bytes garbage(300);
-  for (size_t i = 0; i < garbage.size(); ++i) garbage[i] = static_cast<std::uint8_t>((i * 7919 + 13) % 251);
+  const Bytes garbage = garbage_bytes(300);
   require_error(read_obj(garbage.data(), garbage.size(), m, kind), ErrorCode::InvalidInput, "not an OBJ statement");
   // An OBJ ending mid-face.
   require_error(read("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2", m), ErrorCode::InvalidInput, "a face has 2 corners");

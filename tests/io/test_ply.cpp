@@ -8,6 +8,8 @@
 #include <limits>
 
 using namespace lk;
+using lk::test::garbage_bytes;
+using lk::test::require_error;
 using lk::test::ByteWriter;
 using lk::test::bytes_of;
 
@@ -44,14 +46,6 @@ void check_same(const TriMesh& a, const TriMesh& b, double tol) {
   CHECK(a.uv_per_corner == b.uv_per_corner);
   for (size_t i = 0; i < a.uvs.size(); ++i) CHECK((a.uvs[i] - b.uvs[i]).norm() <= tol);
   CHECK(a.triangles == b.triangles);
-}
-
-// Shared by the "data ends early" cases.
-void require_error(const Status& s, ErrorCode code, const std::string& fragment) {
-  INFO("message: " << s.message);
-  REQUIRE_FALSE(s.ok());
-  CHECK(s.code == code);
-  CHECK(s.message.find(fragment) != std::string::npos);
 }
 
 }  // namespace
@@ -306,8 +300,7 @@ TEST_CASE("PLY reader rejects empty, tiny and non-PLY input", "[io][ply][errors]
   require_error(read_ply(nullptr, 0, m, kind), ErrorCode::Empty, "empty");
   const Bytes one = {'p'};
   require_error(read(one, m, kind), ErrorCode::InvalidInput, "not a PLY file");
-  Bytes garbage(300);
-  for (size_t i = 0; i < garbage.size(); ++i) garbage[i] = static_cast<std::uint8_t>((i * 7919 + 13) % 251);
+  const Bytes garbage = garbage_bytes(300);
   require_error(read(garbage, m, kind), ErrorCode::InvalidInput, "not a PLY file");
   require_error(read("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n", m), ErrorCode::Truncated,
                 "end_header");

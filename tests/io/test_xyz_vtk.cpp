@@ -5,6 +5,8 @@
 #include <catch2/catch.hpp>
 
 using namespace lk;
+using lk::test::garbage_bytes;
+using lk::test::require_error;
 using lk::test::bytes_of;
 
 namespace {
@@ -18,13 +20,6 @@ Status vtk(const std::string& text, TriMesh& m) {
   GeometryKind kind;
   const Bytes b = bytes_of(text);
   return read_vtk(b.data(), b.size(), m, kind);
-}
-
-void require_error(const Status& s, ErrorCode code, const std::string& fragment) {
-  INFO("message: " << s.message);
-  REQUIRE_FALSE(s.ok());
-  CHECK(s.code == code);
-  CHECK(s.message.find(fragment) != std::string::npos);
 }
 
 }  // namespace
@@ -108,8 +103,7 @@ TEST_CASE("XYZ reader rejects malformed input", "[io][xyz][errors]") {
   require_error(xyz("1 2 3\n4 nan 6\n", c), ErrorCode::InvalidInput, "line 2: NaN");
   require_error(xyz("1 2 3\n4 5 1e999\n", c), ErrorCode::InvalidInput, "line 2: NaN or infinite");
   require_error(xyz("1 2 3\n4 five 6\n", c), ErrorCode::InvalidInput, "'five' is not a number");
-  Bytes garbage(300);
-  for (size_t i = 0; i < garbage.size(); ++i) garbage[i] = static_cast<std::uint8_t>((i * 7919 + 13) % 251);
+  const Bytes garbage = garbage_bytes(300);
   const Status s = read_xyz(garbage.data(), garbage.size(), c);
   CHECK_FALSE(s.ok());
   CHECK(c.positions.empty());
@@ -239,8 +233,7 @@ TEST_CASE("VTK reader rejects malformed and unsupported input", "[io][vtk][error
                 ErrorCode::InvalidInput, "outside a POINT_DATA");
   require_error(vtk(head + "POINTS 3 float\n0 0 0 1 0 0 1 1 0\nBLOB 3\n", m), ErrorCode::InvalidInput,
                 "unknown keyword 'blob'");
-  Bytes garbage(300);
-  for (size_t i = 0; i < garbage.size(); ++i) garbage[i] = static_cast<std::uint8_t>((i * 7919 + 13) % 251);
+  const Bytes garbage = garbage_bytes(300);
   require_error(read_vtk(garbage.data(), garbage.size(), m, kind), ErrorCode::InvalidInput, "not a legacy VTK");
   CHECK(m.positions.empty());
 }
