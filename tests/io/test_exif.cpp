@@ -1,0 +1,214 @@
+// EXIF focal tags from crafted JPEGs (both byte orders), the focal in pixels
+// each rule gives, and malformed bytes: every truncation, random byte
+// mutations, a directory loop. The real Kira photos carry no EXIF.
+#include "io/exif.h"
+#include "test_data.h"
+
+#include "synth/prng.h"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdint>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+using namespace lk;
+
+namespace {
+
+using Bytes = std::vector<std::uint8_t>;
+
+struct Field {
+  std::uint16_t tag, type;
+  std::uint32_t count;
+  Bytes value;  // already in the block's byte order
+};
+
+// Lays out a TIFF block: header, IFD0, the Exif IFD, then out-of-line values.
+struct TiffBuilder {
+  bool big = false;
+  std::vector<Field> ifd0, exif;
+
+  Bytes u16(std::uint32_t v) const {
+    return big ? Bytes{std::uint8_t(v >> 8), std::uint8_t(v)} : Bytes{std::uint8_t(v), std::uint8_t(v >> 8)};
+  }
+  Bytes u32(std::uint32_t v) const {
+    return big ? Bytes{std::uint8_t(v >> 24), std::uint8_t(v >> 16), std::uint8_t(v >> 8), std::uint8_t(v)}
+               : Bytes{std::uint8_t(v), std::uint8_t(v >> 8), std::uint8_t(v >> 16), std::uint8_t(v >> 24)};
+  }
+  Field shrt(std::uint16_t tag, std::uint32_t v) const { return {tag, 3, 1, u16(v)}; }
+  Field lng(std::uint16_t tag, std::uint32_t v) const { return {tag, 4, 1, u32(v)}; }
+  Field rational(std::uint16_t tag, std::uint32_t n, std::uint32_t d) const {
+    Bytes b = u32(n), e = u32(d);
+    b.insert(b.end(), e.begin(), e.end());
+    return {tag, 5, 1, b};
+  }
+  Field ascii(std::uint16_t tag, const std::string& s) const {
+    Bytes b(s.begin(), s.end());
+    b.push_back(0);
+    return {tag, 2, std::uint32_t(b.size()), b};
+  }
+
+  Bytes build() const {
+    Bytes out = big ? Bytes{'M', 'M'} : Bytes{'I', 'I'};
+    auto put = [&](const Bytes& b) { out.insert(out.end(), b.begin(), b.end()); };
+    put(u16(42));
+    put(u32(8));
+    const std::uint32_t ifd0_at = 8, ifd0_size = 2 + 12 * std::uint32_t(ifd0.size() + 1) + 4;
+    const std::uint32_t exif_at = ifd0_at + ifd0_size, exif_size = 2 + 12 * std::uint32_t(exif.size()) + 4;
+    std::uint32_t data_at = exif_at + exif_size;
+    Bytes data;
+    auto directory = [&](std::vector<Field> fields) {
+      put(u16(std::uint32_t(fields.size())));
+      for (const Field& f : fields) {
+        put(u16(f.tag));
+        put(u16(f.type));
+        put(u32(f.count));
+        if (f.value.size() <= 4) {
+          Bytes v = f.value;
+          v.resize(4, 0);
+          put(v);
+        } else {
+          put(u32(data_at + std::uint32_t(data.size())));
+          data.insert(data.end(), f.value.begin(), f.value.end());
+        }
+      }
+      put(u32(0));  // no next IFD
+    };
+    std::vector<Field> first = ifd0;
+    first.push_back(lng(0x8769, exif_at));
+    directory(first);
+    directory(exif);
+    put(data);
+    return out;
+  }
+};
+
+Bytes jpeg_with(const Bytes& tiff, bool with_exif = true) {
+  Bytes j = {0xFF, 0xD8};
+  const Bytes jfif = {0xFF, 0xE0, 0x00, 0x10, 'J', 'F', 'I', 'F', 0, 1, 1, 0, 0, 1, 0, 1, 0, 0};
+  j.insert(j.end(), jfif.begin(), jfif.end());
+  if (with_exif) {
+    const size_t len = 2 + 6 + tiff.size();
+    j.push_back(0xFF);
+    j.push_back(0xE1);
+    j.push_back(std::uint8_t(len >> 8));
+    j.push_back(std::uint8_t(len));
+    const char* hdr = "Exif\0\0";
+    j.insert(j.end(), hdr, hdr + 6);
+    j.insert(j.end(), tiff.begin(), tiff.end());
+  }
+  const Bytes rest = {0xFF, 0xDB, 0x00, 0x04, 0x00, 0x00, 0xFF, 0xDA, 0x00, 0x02, 0x12, 0x34, 0xFF, 0xD9};
+  j.insert(j.end(), rest.begin(), rest.end());
+  return j;
+}
+
+// A Canon-like APS-C body: 50 mm, 6000x4000 sensor pixels over 23.6 mm,
+// focal-plane resolution in pixels per inch; 35-mm equivalent 80 mm.
+TiffBuilder camera_tags(bool big) {
+  TiffBuilder t;
+  t.big = big;
+  t.ifd0 = {t.ascii(0x010F, "Canon"), t.ascii(0x0110, "Canon EOS 80D"), t.shrt(0x0112, 1)};
+  t.exif = {t.rational(0x920A, 50, 1), t.shrt(0xA405, 80), t.rational(0xA20E, 6000 * 254, 236),
+            t.rational(0xA20F, 4000 * 254, 236), t.shrt(0xA210, 2), t.lng(0xA002, 6000), t.lng(0xA003, 4000)};
+  return t;
+}
+
+}  // namespace
+
+TEST_CASE("EXIF focal tags are read in both byte orders", "[io][exif]") {
+  for (bool big : {false, true}) {
+    INFO("big endian " << big);
+    const Bytes jpeg = jpeg_with(camera_tags(big).build());
+    ExifInfo e;
+    REQUIRE(read_jpeg_exif(jpeg.data(), jpeg.size(), e).ok());
+    CHECK(e.present);
+    CHECK(e.make == "Canon");
+    CHECK(e.model == "Canon EOS 80D");
+    CHECK(e.orientation == 1);
+    CHECK(e.focal_length_mm == 50.0);
+    CHECK(e.focal_length_35mm == 80);
+    CHECK(e.focal_plane_x_resolution == Approx(6000 * 254 / 236.0));
+    CHECK(e.focal_plane_resolution_unit == 2);
+    CHECK(e.pixel_x_dimension == 6000);
+    CHECK(e.pixel_y_dimension == 4000);
+    // Downscaled to 1800x1200 (as the Kira photos are): 50 mm over a 23.6 mm
+    // wide sensor of 1800 px is 3813.6 px.
+    std::string source;
+    CHECK(exif_focal_pixels(e, 1800, 1200, 0, &source) == Approx(50 / 23.6 * 1800).epsilon(1e-9));
+    CHECK(source == "FocalLength and FocalPlaneXResolution");
+    // Portrait photo of the same camera: the same focal in pixels.
+    CHECK(exif_focal_pixels(e, 1200, 1800) == Approx(50 / 23.6 * 1800).epsilon(1e-9));
+    CHECK(exif_focal_pixels(e, 1800, 1200, 22.3, &source) == Approx(50 / 22.3 * 1800));
+    CHECK(source == "FocalLength and the given sensor width");
+    // Without the focal-plane tags: the 35-mm equivalent over the diagonal.
+    e.focal_plane_x_resolution = 0;
+    CHECK(exif_focal_pixels(e, 1800, 1200, 0, &source) == Approx(80 / 43.2666 * std::hypot(1800.0, 1200.0)));
+    CHECK(source == "FocalLengthIn35mmFilm");
+    e.focal_length_35mm = 0;
+    CHECK(exif_focal_pixels(e, 1800, 1200) == 0);
+  }
+}
+
+TEST_CASE("a JPEG without EXIF, and bytes that are not a JPEG", "[io][exif]") {
+  const Bytes plain = jpeg_with({}, false);
+  ExifInfo e;
+  REQUIRE(read_jpeg_exif(plain.data(), plain.size(), e).ok());
+  CHECK_FALSE(e.present);
+  CHECK(exif_focal_pixels(e, 1800, 1200) == 0);
+  const std::string png = "\x89PNG\r\n\x1a\n0000";
+  Status s = read_jpeg_exif(reinterpret_cast<const std::uint8_t*>(png.data()), png.size(), e);
+  CHECK(s.code == ErrorCode::InvalidInput);
+  CHECK(s.message.find("not a JPEG") != std::string::npos);
+  CHECK(read_jpeg_exif(nullptr, 0, e).code == ErrorCode::InvalidInput);
+}
+
+TEST_CASE("truncated, mutated and looping EXIF gives errors, never a crash", "[io][exif]") {
+  const Bytes good = jpeg_with(camera_tags(false).build());
+  const size_t exif_end = good.size() - 14;  // before the DQT/SOS/EOI tail
+  // Every prefix that cuts the APP1 segment must be refused.
+  for (size_t n = 0; n < exif_end; ++n) {
+    ExifInfo e;
+    const Status s = read_jpeg_exif(good.data(), n, e);
+    INFO("prefix " << n);
+    CHECK_FALSE(s.ok());
+  }
+  // Random single- and multi-byte mutations: any status, sane values.
+  SplitMix64 rng(7);
+  int failures = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    Bytes b = good;
+    const int flips = 1 + int(rng.next() % 4);
+    for (int k = 0; k < flips; ++k) b[rng.next() % b.size()] = std::uint8_t(rng.next());
+    ExifInfo e;
+    failures += !read_jpeg_exif(b.data(), b.size(), e).ok();
+    CHECK(e.focal_length_35mm >= 0);
+    CHECK(std::isfinite(exif_focal_pixels(e, 1800, 1200)));
+  }
+  CHECK(failures > 0);
+  // The Exif IFD pointer aimed back at IFD0.
+  TiffBuilder t = camera_tags(true);
+  Bytes tiff = t.build();
+  // IFD0's last entry is the Exif pointer: its value (4 bytes) ends 4 bytes
+  // before IFD0's next-IFD offset.
+  const size_t pointer_value = 8 + 2 + 12 * t.ifd0.size() + 8;
+  tiff[pointer_value] = 0; tiff[pointer_value + 1] = 0; tiff[pointer_value + 2] = 0; tiff[pointer_value + 3] = 8;
+  const Bytes looping = jpeg_with(tiff);
+  ExifInfo e;
+  const Status s = read_jpeg_exif(looping.data(), looping.size(), e);
+  CHECK(s.code == ErrorCode::InvalidInput);
+  CHECK(s.message.find("loop") != std::string::npos);
+}
+
+TEST_CASE("the Kira photos carry no EXIF (the known focal comes from the tutorial)", "[io][exif]") {
+  LK_REQUIRE_SHARED("multiview_faces/keentools_kira/0001.jpg");
+  for (const char* name : {"0001.jpg", "0002.jpg", "0009.jpg"}) {
+    std::ifstream in(lk::test::shared_data_dir() + "/multiview_faces/keentools_kira/" + name, std::ios::binary);
+    const Bytes b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    ExifInfo e;
+    REQUIRE(read_jpeg_exif(b.data(), b.size(), e).ok());
+    CHECK_FALSE(e.present);
+  }
+}
