@@ -356,6 +356,160 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
   return Status::success();
 }
 
+namespace {
+
+// Bad against the smooth triangle: turned over or collapsed. Arguments are
+// unnormalised (2 x area) normals. A smooth triangle of zero area gives no
+// reference and is never bad.
+inline bool bad_triangle(const Vec3& displaced, const Vec3& smooth, const FoldLimitOptions& o) {
+  const double ls = smooth.norm();
+  if (ls == 0) return false;
+  const double ld = displaced.norm();
+  if (!(ld > o.min_area_ratio * ls)) return true;
+  return displaced.dot(smooth) <= o.min_normal_cos * ld * ls;
+}
+
+}  // namespace
+
+Status smooth_positions(const MultiresMesh& mesh, std::vector<std::vector<Vec3>>& out) {
+  return apply_all(mesh.levels, mesh.control, out);
+}
+
+void count_bad_triangles(const MultiresMesh& mesh, int level, const std::vector<Vec3>& smooth,
+                         const FoldLimitOptions& options, int& flipped, int& collapsed) {
+  flipped = collapsed = 0;
+  if (level < 0 || level > mesh.num_levels() || static_cast<int>(mesh.state.displaced.size()) <= level) return;
+  const auto& tris = mesh.triangles(level);
+  const auto& P = mesh.state.displaced[level];
+  if (P.size() != smooth.size()) return;
+  for (int f = 0; f < static_cast<int>(tris.size()); ++f) {
+    const Vec3 nd = face_normal(tris, P, f), ns = face_normal(tris, smooth, f);
+    const double ls = ns.norm(), ld = nd.norm();
+    if (ls == 0) continue;
+    if (!(ld > options.min_area_ratio * ls)) ++collapsed;
+    if (nd.dot(ns) <= options.min_normal_cos * ld * ls) ++flipped;
+  }
+}
+
+std::vector<std::vector<char>> propagate_vertex_mask(const MultiresMesh& mesh, const std::vector<char>& control_mask) {
+  const int L = mesh.num_levels();
+  std::vector<std::vector<char>> out(L + 1);
+  out[0] = control_mask;
+  out[0].resize(mesh.num_vertices(0), 0);
+  for (int l = 0; l < L; ++l) {
+    const ButterflyLevel& lv = mesh.levels[l];
+    out[l + 1].assign(lv.num_fine_vertices, 0);
+    std::copy(out[l].begin(), out[l].end(), out[l + 1].begin());
+    for (int k = 0; k < lv.num_new_vertices(); ++k)
+      out[l + 1][lv.num_coarse_vertices + k] = out[l][lv.edge_endpoints[k][0]] && out[l][lv.edge_endpoints[k][1]];
+  }
+  return out;
+}
+
+Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimitStats* stats) {
+  if (!(options.shrink >= 0 && options.shrink < 1) || options.min_area_ratio < 0 || options.max_shrinks < 0 ||
+      options.max_rounds < 0 || !(std::abs(options.min_normal_cos) <= 1))
+    return Status::error(ErrorCode::InvalidInput,
+                         "multires fold limit: shrink must be in [0, 1), the cosine in [-1, 1], ratios and counts >= 0");
+  Status s = check_sizes(mesh);
+  if (!s.ok()) return s;
+  const int L = mesh.num_levels();
+  std::vector<std::vector<Vec3>> smooth;
+  s = smooth_positions(mesh, smooth);
+  if (!s.ok()) return s;
+  s = evaluate(mesh);
+  if (!s.ok()) return s;
+
+  FoldLimitStats st;
+  st.bad_found.assign(L + 1, 0);
+  st.shrunk.assign(L + 1, 0);
+  st.zeroed.assign(L + 1, 0);
+  std::vector<std::vector<Vec3>> smooth_normals(L + 1);
+  std::vector<std::vector<std::uint8_t>> shrinks(L + 1);
+  std::vector<std::vector<int>> shrunk_in_round(L + 1);
+  std::vector<char> checked(L + 1, 0);
+  for (int l = 0; l <= L; ++l) {
+    const auto& tris = mesh.triangles(l);
+    smooth_normals[l].resize(tris.size());
+    for (int f = 0; f < static_cast<int>(tris.size()); ++f) smooth_normals[l][f] = face_normal(tris, smooth[l], f);
+    shrinks[l].assign(mesh.num_vertices(l), 0);
+    shrunk_in_round[l].assign(mesh.num_vertices(l), -1);
+  }
+  // Scales d_k[v] once per round; true when v carries a displacement.
+  auto shrink_one = [&](int k, int v) {
+    double& d = mesh.displacements[k][v];
+    if (d == 0) return false;
+    if (shrunk_in_round[k][v] == st.rounds) return true;
+    shrunk_in_round[k][v] = st.rounds;
+    if (shrinks[k][v]++ == 0) ++st.shrunk[k];
+    if (shrinks[k][v] >= options.max_shrinks) {
+      d = 0;
+      ++st.zeroed[k];
+    } else {
+      d *= options.shrink;
+    }
+    return true;
+  };
+
+  std::vector<int> bad;
+  int l = 0;
+  while (l <= L) {
+    evaluate_level(mesh, l);
+    const auto& tris = mesh.triangles(l);
+    const auto& P = mesh.state.displaced[l];
+    bad.clear();
+    for (int f = 0; f < static_cast<int>(tris.size()); ++f)
+      if (bad_triangle(face_normal(tris, P, f), smooth_normals[l][f], options)) bad.push_back(f);
+    if (!checked[l]) {
+      checked[l] = 1;
+      st.bad_found[l] = static_cast<int>(bad.size());
+    }
+    if (bad.empty() || st.rounds >= options.max_rounds) {
+      if (l == L) st.remaining_bad = static_cast<int>(bad.size());
+      if (l < L) {
+        s = apply(mesh.levels[l], mesh.state.displaced[l], mesh.state.base[l + 1]);
+        if (!s.ok()) return s;
+      }
+      ++l;
+      continue;
+    }
+    ++st.rounds;
+    int restart = l;
+    bool changed = false;
+    for (int f : bad) {
+      bool any = false;
+      for (int v : tris[f]) any |= shrink_one(l, v);
+      // Corners without displacement: the coarser levels bent it. Shrink the
+      // neighbourhood of the parent triangle (its edges' stencils) above.
+      int k = l, g = f;
+      while (!any && k > 0) {
+        g /= 4;  // child c of coarse triangle g is 4 g + c
+        --k;
+        const MultiresLevelLinks& links = mesh.links[k];
+        for (int c : mesh.triangles(k)[g])
+          for (int i = links.vertex_faces.offsets[c]; i < links.vertex_faces.offsets[c + 1]; ++i)
+            for (int v : mesh.triangles(k)[links.vertex_faces.items[i]]) any |= shrink_one(k, v);
+        if (any) restart = std::min(restart, k);
+      }
+      changed |= any;
+    }
+    if (!changed) {
+      // Bad with no displacement anywhere near: the smooth surface itself
+      // (cannot happen for the tests above, which compare with it). Move on.
+      if (l == L) st.remaining_bad = static_cast<int>(bad.size());
+      if (l < L) {
+        s = apply(mesh.levels[l], mesh.state.displaced[l], mesh.state.base[l + 1]);
+        if (!s.ok()) return s;
+      }
+      ++l;
+      continue;
+    }
+    l = restart;  // levels above `restart` are unchanged, so its base P is current
+  }
+  if (stats) *stats = st;
+  return Status::success();
+}
+
 Status update_control_vertices(MultiresMesh& mesh, const std::vector<int>& moved,
                                const std::vector<Vec3>& new_positions, UpdateFootprint* footprint) {
   const int L = mesh.num_levels();

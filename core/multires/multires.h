@@ -123,6 +123,58 @@ struct DisplacementStats {
 Status measure_displacements(const PointCloud& cloud, const DisplacementOptions& options, MultiresMesh& mesh,
                              DisplacementStats* stats = nullptr, const ProgressFn& progress = {});
 
+// Fold-safe limiting (not in jeong2002, whose Sec. 5 displacements are
+// trusted as measured). Where the normal line of a vertex reaches the other
+// side of a thin or concave feature (lip and eye corners, nostrils, the
+// groove behind an ear) the measured displacement turns triangles over. A
+// triangle of level l is bad when, compared with the same triangle of the
+// smooth hierarchy (the Butterfly levels of the control mesh with every
+// displacement 0), its normal turned by more than acos(min_normal_cos) or its
+// area fell below min_area_ratio of the smooth one. Level by level, coarse to
+// fine, the displacements of a bad triangle's corners on its own level are
+// scaled by `shrink` (not dropped: the rest of the detail stays), and the
+// level is re-evaluated, until it has no bad triangle. A corner shrunk
+// max_shrinks times is set to 0. A bad triangle whose corners carry no
+// displacement on its level was bent by the coarser levels: then the
+// displacements of the parent triangle's neighbourhood (the Butterfly stencil
+// of its edges) on the level above are shrunk, and evaluation resumes there.
+// All displacements 0 is the smooth surface itself, so the loop ends with no
+// bad triangle unless max_rounds runs out (remaining_bad says).
+struct FoldLimitOptions {
+  double min_normal_cos = 0.0;  // 0: only triangles turned over by more than 90 degrees
+  double min_area_ratio = 0.02; // displaced / smooth area below this: collapsed
+  double shrink = 0.5;          // factor per round
+  int max_shrinks = 8;          // 0.5^8 = 1/256 of the measured value, then 0
+  int max_rounds = 200;         // over all levels, against endless loops
+};
+
+struct FoldLimitStats {
+  std::vector<int> bad_found;  // L+1: bad triangles found on the first check of each level
+  std::vector<int> shrunk;     // L+1: distinct vertices whose displacement was shrunk
+  std::vector<int> zeroed;     // L+1: of those, set to 0
+  int rounds = 0;              // shrink rounds over all levels
+  int remaining_bad = 0;       // bad triangles left on the finest level (0 unless max_rounds ran out)
+};
+
+// Shrinks mesh.displacements as described above and re-evaluates the mesh.
+// Fails with InvalidInput on mismatched arrays or options out of range
+// (shrink not in [0, 1), negative ratios or counts).
+Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options = {}, FoldLimitStats* stats = nullptr);
+
+// Bad triangles (see FoldLimitOptions) of level l of the evaluated mesh
+// against the smooth hierarchy's level-l positions `smooth` (#V_l): flipped
+// (normal turned over) and collapsed (area below the ratio, incl. zero area).
+void count_bad_triangles(const MultiresMesh& mesh, int level, const std::vector<Vec3>& smooth,
+                         const FoldLimitOptions& options, int& flipped, int& collapsed);
+
+// The control positions refined without displacements: levels 0..L (#V_l each).
+Status smooth_positions(const MultiresMesh& mesh, std::vector<std::vector<Vec3>>& out);
+
+// A vertex set carried down the hierarchy: out[0] = control_mask (#V_0);
+// a level-(l+1) vertex that is a level-l vertex keeps its membership, a new
+// vertex on edge (a, b) belongs when both a and b do. out[l] is #V_l.
+std::vector<std::vector<char>> propagate_vertex_mask(const MultiresMesh& mesh, const std::vector<char>& control_mask);
+
 // How many vertices per level an update recomputed (locality, benchmarks).
 struct UpdateFootprint {
   std::vector<int> base_changed;       // L+1: P_l changed (moved vertices on level 0)

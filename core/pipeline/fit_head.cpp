@@ -34,39 +34,6 @@ std::vector<Vec3> thin(const std::vector<Vec3>& p, int max_points) {
   return out;
 }
 
-// Normal displacements measured in concave, thin places (lip corners, eye
-// corners, behind the ear) may cross the other side of the feature and fold
-// triangles over. Per level, from coarse to fine: a triangle whose normal
-// turned against the undisplaced one gets its corners' displacements zeroed
-// (there the smooth Butterfly surface is the better guess, Sec. 5's rule for
-// missing data), until no fold is left or `rounds` passes are done.
-Status suppress_folds(MultiresMesh& mr, int rounds, int& zeroed) {
-  zeroed = 0;
-  for (int l = 0; l <= mr.num_levels(); ++l) {
-    for (int pass = 0; pass < rounds; ++pass) {
-      const auto& tris = mr.triangles(l);
-      const auto& base = mr.state.base[l];
-      const auto& disp = mr.state.displaced[l];
-      int changed = 0;
-      for (const Tri& t : tris) {
-        const Vec3 n0 = (base[t[1]] - base[t[0]]).cross(base[t[2]] - base[t[0]]);
-        const Vec3 n1 = (disp[t[1]] - disp[t[0]]).cross(disp[t[2]] - disp[t[0]]);
-        if (n0.dot(n1) > 0) continue;
-        for (int v : t)
-          if (mr.displacements[l][v] != 0) {
-            mr.displacements[l][v] = 0;
-            ++changed;
-          }
-      }
-      if (changed == 0) break;
-      zeroed += changed;
-      const Status st = evaluate(mr);
-      if (!st) return st;
-    }
-  }
-  return Status::success();
-}
-
 // The eye sockets and the mouth bag are pockets the scanner never sees; a
 // normal line from their vertices meets the outer skin (the lids, the lips)
 // and would push the pocket out through it. Their displacements, and those
@@ -263,9 +230,10 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   int zeroed_pockets = 0;
   st = zero_pocket_displacements(ann, out.multires, zeroed_pockets);
   if (!st) return with_context(st, "displacements");
-  st = suppress_folds(out.multires, 4, out.zeroed_displacements);
-  out.zeroed_displacements += zeroed_pockets;
+  st = limit_folds(out.multires, options.fold_limit, &out.fold_limit);
   if (!st) return with_context(st, "displacements");
+  out.zeroed_displacements = zeroed_pockets;
+  for (int z : out.fold_limit.zeroed) out.zeroed_displacements += z;
   for (int l = 1; l <= options.levels; ++l) out.level_meshes.push_back(level_mesh(out.multires, l));
   const TriMesh finest = level_mesh(out.multires, options.levels);
   stage_done("subdivision", finest, pts);

@@ -7,8 +7,8 @@
 //   2. local fitting       fit/local_fit.h             (Sec. 4.2)
 //   3. global fitting      fit/global_fit.h            (Sec. 4.3)
 //   4. subdivision         multires/multires.h         (Sec. 5)
-//      then displacements that fold a triangle over are dropped (set to 0,
-//      the smooth surface stays there), level by level.
+//      then displacements that turn a triangle over or collapse it are
+//      shrunk until none does (limit_folds), level by level.
 //
 // Frames. The scan may be in any unit (m, cm, mm: picked from its size) and
 // any position; `up` and `facing` say how it is oriented. Everything is
@@ -74,6 +74,9 @@ struct FitHeadOptions {
   // only reach the other side of thin features (lips, nostrils, ears) or
   // hair junk; 1 % is about 4.5 mm on a head.
   double displacement_max_pct = 1.0;
+  // After measuring: displacements that turn a triangle over or collapse it
+  // (against the smooth Butterfly levels) are shrunk until none does.
+  FoldLimitOptions fold_limit;
 };
 
 struct FitStageReport {
@@ -105,7 +108,8 @@ struct FitHeadResult {
   LocalFitResult local_fit;
   GlobalFitResult global_fit;
   double near_fraction = 0;     // share of points near the aligned head (sanity check)
-  int zeroed_displacements = 0; // displacements dropped because they folded triangles
+  int zeroed_displacements = 0; // displacements dropped in pockets or because they folded triangles
+  FoldLimitStats fold_limit;    // what the fold limiter shrank
 };
 
 // Fits generic (the generic head with annotations, in metres) to scan.

@@ -333,3 +333,119 @@ TEST_CASE("multires: displacements pull a smoothed real scan back onto the scan 
   WARN("fran_cut: mean distance to the scan " << 100 * before / diag << "% -> " << 100 * after2 / diag
                                               << "% of the bbox diagonal (level 2)");
 }
+
+namespace {
+
+int count_flipped(const MultiresMesh& mr, int level, int* collapsed = nullptr) {
+  std::vector<std::vector<Vec3>> smooth;
+  REQUIRE(smooth_positions(mr, smooth).ok());
+  int flipped = 0, coll = 0;
+  count_bad_triangles(mr, level, smooth[level], FoldLimitOptions{}, flipped, coll);
+  if (collapsed) *collapsed = coll;
+  return flipped;
+}
+
+}  // namespace
+
+TEST_CASE("multires: the fold limiter leaves no turned-over triangle where a spike folds the surface", "[multires]") {
+  TriMesh m = icosphere(1);
+  MultiresMesh mr;
+  REQUIRE(build_multires(m, 3, mr).ok());
+  REQUIRE(measure_displacements(sample_target(150000, 0.0005, 3), DisplacementOptions{}, mr).ok());
+  for (int l = 0; l <= 3; ++l) REQUIRE(count_flipped(mr, l) == 0);  // the measured target folds nothing
+  const auto measured = mr.displacements;
+
+  // A spike: one level-2 vertex pulled through the sphere, and its level-3
+  // neighbourhood displaced alternately in and out by several edge lengths.
+  const int spike = mr.num_vertices(1) + 7;
+  const Vec3 spike_at = mr.state.base[2][spike];
+  mr.displacements[2][spike] = -1.6;
+  std::vector<int> touched = {spike};
+  for (int v = mr.num_vertices(2); v < mr.num_vertices(3); ++v)
+    if ((mr.state.base[3][v] - spike_at).norm() < 0.25) {
+      mr.displacements[3][v] = (v % 2 ? 0.3 : -0.3);
+      touched.push_back(v);
+    }
+  REQUIRE(touched.size() > 10);
+  REQUIRE(evaluate(mr).ok());
+  int collapsed_before = 0;
+  const int flipped_before = count_flipped(mr, 3, &collapsed_before);
+  INFO("before: " << flipped_before << " flipped, " << collapsed_before << " collapsed at level 3");
+  REQUIRE(flipped_before > 20);
+
+  FoldLimitStats stats;
+  REQUIRE(limit_folds(mr, FoldLimitOptions{}, &stats).ok());
+  CHECK(stats.remaining_bad == 0);
+  CHECK(stats.rounds > 0);
+  for (int l = 0; l <= 3; ++l) {
+    int collapsed = 0;
+    const int flipped = count_flipped(mr, l, &collapsed);
+    INFO("level " << l);
+    CHECK(flipped == 0);
+    CHECK(collapsed == 0);
+  }
+  // Shrunk, not dropped: some vertices keep part of their displacement.
+  CHECK(stats.shrunk[3] > stats.zeroed[3]);
+  // Far from the spike nothing changed, bit for bit.
+  std::vector<std::vector<Vec3>> smooth;
+  REQUIRE(smooth_positions(mr, smooth).ok());
+  int far = 0, far_changed = 0;
+  for (int l = 0; l <= 3; ++l)
+    for (int v = 0; v < mr.num_vertices(l); ++v)
+      if ((smooth[l][v] - spike_at).norm() > 0.6) {
+        ++far;
+        far_changed += mr.displacements[l][v] != measured[l][v];
+      }
+  CHECK(far > 1000);
+  CHECK(far_changed == 0);
+  // The state is what a full evaluation gives.
+  MultiresMesh again = mr;
+  REQUIRE(evaluate(again).ok());
+  require_identical(mr, again);
+}
+
+TEST_CASE("multires: the fold limiter changes nothing on a fold-free surface, refuses bad options", "[multires]") {
+  TriMesh m = icosphere(1);
+  MultiresMesh mr;
+  REQUIRE(build_multires(m, 2, mr).ok());
+  REQUIRE(measure_displacements(sample_target(80000, 0.0005, 4), DisplacementOptions{}, mr).ok());
+  const auto before = mr.displacements;
+  FoldLimitStats stats;
+  REQUIRE(limit_folds(mr, FoldLimitOptions{}, &stats).ok());
+  CHECK(stats.rounds == 0);
+  CHECK(mr.displacements == before);
+  FoldLimitOptions bad;
+  bad.shrink = 1.0;  // would never end
+  CHECK(limit_folds(mr, bad).code == ErrorCode::InvalidInput);
+  bad = FoldLimitOptions{};
+  bad.min_area_ratio = -1;
+  CHECK(limit_folds(mr, bad).code == ErrorCode::InvalidInput);
+  mr.displacements[1].pop_back();
+  CHECK(limit_folds(mr).code == ErrorCode::InvalidInput);
+}
+
+TEST_CASE("multires: a vertex set carried down the levels keeps old vertices, takes edges inside it", "[multires]") {
+  TriMesh m = icosphere(1);
+  MultiresMesh mr;
+  REQUIRE(build_multires(m, 3, mr).ok());
+  std::vector<char> cap(mr.num_vertices(0), 0);
+  for (int v = 0; v < mr.num_vertices(0); ++v) cap[v] = m.positions[v].z() > 0.2;
+  const auto masks = propagate_vertex_mask(mr, cap);
+  REQUIRE(masks.size() == 4);
+  for (int l = 1; l <= 3; ++l) {
+    REQUIRE(static_cast<int>(masks[l].size()) == mr.num_vertices(l));
+    const ButterflyLevel& lv = mr.levels[l - 1];
+    for (int v = 0; v < lv.num_coarse_vertices; ++v) CHECK(masks[l][v] == masks[l - 1][v]);
+    int inside = 0;
+    for (int k = 0; k < lv.num_new_vertices(); ++k) {
+      const bool both = masks[l - 1][lv.edge_endpoints[k][0]] && masks[l - 1][lv.edge_endpoints[k][1]];
+      CHECK(static_cast<bool>(masks[l][lv.num_coarse_vertices + k]) == both);
+      inside += both;
+    }
+    CHECK(inside > 0);
+    // Geometrically: members lie in the cap (z > 0.2 on the control mesh
+    // shrinks a little under subdivision), non-members of the new ones outside it.
+    for (int v = 0; v < mr.num_vertices(l); ++v)
+      if (masks[l][v]) CHECK(mr.state.base[l][v].z() > 0.1);
+  }
+}

@@ -1,0 +1,176 @@
+#include "raycast/self_intersection.h"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+namespace lk {
+namespace {
+
+// Six times the signed volume of tetrahedron (a, b, c, d): > 0 when d lies on
+// the side of plane abc that its normal (b - a) x (c - a) points to.
+inline double orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  return (b - a).cross(c - a).dot(d - a);
+}
+
+inline double orient2d(const Vec2& a, const Vec2& b, const Vec2& c) {
+  return (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
+}
+
+inline bool opposite_or_zero(double s, double t) { return (s <= 0 && t >= 0) || (s >= 0 && t <= 0); }
+
+bool segments_intersect_2d(const Vec2& p, const Vec2& q, const Vec2& a, const Vec2& b) {
+  const double d1 = orient2d(a, b, p), d2 = orient2d(a, b, q);
+  const double d3 = orient2d(p, q, a), d4 = orient2d(p, q, b);
+  if (d1 == 0 && d2 == 0 && d3 == 0 && d4 == 0) {
+    // Collinear: overlapping extents along the line.
+    const Vec2 dir = q - p;
+    const double ta = (a - p).dot(dir), tb = (b - p).dot(dir), len2 = dir.squaredNorm();
+    return std::max(std::min(ta, tb), 0.0) <= std::min(std::max(ta, tb), len2);
+  }
+  return opposite_or_zero(d1, d2) && opposite_or_zero(d3, d4);
+}
+
+bool point_in_triangle_2d(const Vec2& p, const Vec2& a, const Vec2& b, const Vec2& c) {
+  const double s1 = orient2d(a, b, p), s2 = orient2d(b, c, p), s3 = orient2d(c, a, p);
+  return (s1 >= 0 && s2 >= 0 && s3 >= 0) || (s1 <= 0 && s2 <= 0 && s3 <= 0);
+}
+
+// Segment and triangle in one plane with normal n: drop n's largest axis.
+bool coplanar_segment_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c,
+                               const Vec3& n) {
+  int drop = 0;
+  n.cwiseAbs().maxCoeff(&drop);
+  const int i = (drop + 1) % 3, j = (drop + 2) % 3;
+  auto flat = [&](const Vec3& x) { return Vec2(x[i], x[j]); };
+  const Vec2 P = flat(p), Q = flat(q), A = flat(a), B = flat(b), C = flat(c);
+  if (point_in_triangle_2d(P, A, B, C) || point_in_triangle_2d(Q, A, B, C)) return true;
+  return segments_intersect_2d(P, Q, A, B) || segments_intersect_2d(P, Q, B, C) ||
+         segments_intersect_2d(P, Q, C, A);
+}
+
+inline bool boxes_overlap(const BvhNode& x, const BvhNode& y) {
+  return (x.box_min.array() <= y.box_max.array()).all() && (y.box_min.array() <= x.box_max.array()).all();
+}
+
+struct PairTester {
+  const MeshBvh& bvh;
+  std::vector<std::array<int, 2>>& pairs;
+  int max_pairs;
+
+  bool full() const { return max_pairs > 0 && static_cast<int>(pairs.size()) >= max_pairs; }
+
+  void test(int fa, int fb) {
+    const Tri& ta = bvh.triangles[fa];
+    const Tri& tb = bvh.triangles[fb];
+    const auto& P = bvh.positions;
+    int shared = 0, ia = -1, ib = -1;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (ta[i] == tb[j]) {
+          ++shared;
+          ia = i;
+          ib = j;
+        }
+    bool hit = false;
+    if (shared == 0) {
+      hit = triangles_intersect(P[ta[0]], P[ta[1]], P[ta[2]], P[tb[0]], P[tb[1]], P[tb[2]]);
+    } else if (shared == 1) {
+      // They meet at the shared corner; they cross only if their common
+      // segment leaves it, i.e. reaches the edge opposite it in one of them.
+      hit = segment_intersects_triangle(P[ta[(ia + 1) % 3]], P[ta[(ia + 2) % 3]], P[tb[0]], P[tb[1]], P[tb[2]]) ||
+            segment_intersects_triangle(P[tb[(ib + 1) % 3]], P[tb[(ib + 2) % 3]], P[ta[0]], P[ta[1]], P[ta[2]]);
+    }
+    if (hit) pairs.push_back({std::min(fa, fb), std::max(fa, fb)});
+  }
+
+  void leaf_pairs(const BvhNode& x, const BvhNode& y, bool same) {
+    for (int i = 0; i < x.count && !full(); ++i) {
+      const int fa = bvh.triangle_order[x.first + i];
+      for (int j = same ? i + 1 : 0; j < y.count && !full(); ++j) test(fa, bvh.triangle_order[y.first + j]);
+    }
+  }
+
+  void run() {
+    if (bvh.empty()) return;
+    auto left = [](int n) { return n + 1; };
+    auto right = [&](int n) { return bvh.nodes[n].first; };
+    std::vector<std::pair<int, int>> stack = {{0, 0}};
+    while (!stack.empty() && !full()) {
+      const auto [i, j] = stack.back();
+      stack.pop_back();
+      const BvhNode& x = bvh.nodes[i];
+      const BvhNode& y = bvh.nodes[j];
+      if (i == j) {
+        if (x.leaf()) {
+          leaf_pairs(x, x, true);
+        } else {
+          stack.push_back({left(i), left(i)});
+          stack.push_back({right(i), right(i)});
+          stack.push_back({left(i), right(i)});
+        }
+        continue;
+      }
+      if (!boxes_overlap(x, y)) continue;
+      if (x.leaf() && y.leaf()) {
+        leaf_pairs(x, y, false);
+      } else if (y.leaf() || (!x.leaf() && (x.box_max - x.box_min).squaredNorm() >=
+                                                (y.box_max - y.box_min).squaredNorm())) {
+        stack.push_back({left(i), j});
+        stack.push_back({right(i), j});
+      } else {
+        stack.push_back({i, left(j)});
+        stack.push_back({i, right(j)});
+      }
+    }
+  }
+};
+
+}  // namespace
+
+bool segment_intersects_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const double dp = orient3d(a, b, c, p), dq = orient3d(a, b, c, q);
+  if ((dp > 0 && dq > 0) || (dp < 0 && dq < 0)) return false;
+  if (dp == 0 && dq == 0) {
+    const Vec3 n = (b - a).cross(c - a);
+    if (n.squaredNorm() == 0) return false;  // a degenerate triangle has no plane to share
+    return coplanar_segment_triangle(p, q, a, b, c, n);
+  }
+  // The segment spans the plane: it meets the triangle iff its line passes
+  // on the same side of all three edges.
+  const double s1 = orient3d(p, q, a, b), s2 = orient3d(p, q, b, c), s3 = orient3d(p, q, c, a);
+  return (s1 >= 0 && s2 >= 0 && s3 >= 0) || (s1 <= 0 && s2 <= 0 && s3 <= 0);
+}
+
+bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
+                         const Vec3& b2) {
+  // Cheap rejection: all of one triangle strictly on one side of the other's plane.
+  const double s0 = orient3d(b0, b1, b2, a0), s1 = orient3d(b0, b1, b2, a1), s2 = orient3d(b0, b1, b2, a2);
+  if ((s0 > 0 && s1 > 0 && s2 > 0) || (s0 < 0 && s1 < 0 && s2 < 0)) return false;
+  const double t0 = orient3d(a0, a1, a2, b0), t1 = orient3d(a0, a1, a2, b1), t2 = orient3d(a0, a1, a2, b2);
+  if ((t0 > 0 && t1 > 0 && t2 > 0) || (t0 < 0 && t1 < 0 && t2 < 0)) return false;
+  return segment_intersects_triangle(a0, a1, b0, b1, b2) || segment_intersects_triangle(a1, a2, b0, b1, b2) ||
+         segment_intersects_triangle(a2, a0, b0, b1, b2) || segment_intersects_triangle(b0, b1, a0, a1, a2) ||
+         segment_intersects_triangle(b1, b2, a0, a1, a2) || segment_intersects_triangle(b2, b0, a0, a1, a2);
+}
+
+void find_self_intersections(const MeshBvh& bvh, std::vector<std::array<int, 2>>& pairs,
+                             const SelfIntersectionOptions& options) {
+  pairs.clear();
+  PairTester tester{bvh, pairs, std::max(0, options.max_pairs)};
+  tester.run();
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+}
+
+Status find_self_intersections(const TriMesh& mesh, std::vector<std::array<int, 2>>& pairs,
+                               const SelfIntersectionOptions& options) {
+  pairs.clear();
+  MeshBvh bvh;
+  const Status st = build_bvh(mesh, bvh);
+  if (!st) return st;
+  find_self_intersections(bvh, pairs, options);
+  return Status::success();
+}
+
+}  // namespace lk

@@ -1,0 +1,55 @@
+// Self-intersections of a triangle mesh: pairs of triangles that cross each
+// other although the surface does not connect them there.
+//
+// Not from the papers: a quality check of jeong2002 Sec. 5's displaced
+// levels, whose normal displacements can push one sheet of a thin feature
+// (upper and lower lip, the rim of an ear) through the other.
+//
+// Test. Two non-coplanar triangles intersect exactly when an edge of one
+// crosses the other (the ends of their common segment lie on edges), so each
+// pair is decided by six segment-triangle tests built from signed volumes
+// (orientation determinants), the predicate form of Moller 1997's test. A
+// coplanar pair is decided in the 2-D projection on its plane (edge crossings
+// or one triangle inside the other). Touching counts as crossing.
+// Neighbours: triangles sharing an edge are skipped (they meet along it; a
+// fold between them is a flipped triangle, another check); triangles sharing
+// one vertex count only when the edge opposite the shared vertex in one of
+// them crosses the other (their common segment then leaves the shared vertex).
+// Candidate pairs come from a self-traversal of the mesh's SAH BVH.
+//
+// Shapes: positions #V by 3, triangles #F by 3; result #pairs, each (a, b)
+// with a < b, sorted.
+#pragma once
+#include "common/status.h"
+#include "mesh/tri_mesh.h"
+#include "raycast/bvh.h"
+
+#include <array>
+#include <vector>
+
+namespace lk {
+
+struct SelfIntersectionOptions {
+  // Stop after this many pairs (0: find all). A broken mesh can have
+  // millions; callers that only count or show a few need not wait for them.
+  int max_pairs = 0;
+};
+
+// Every intersecting pair of triangles (see above). Fails with InvalidInput
+// on out-of-range indices or non-finite positions (as build_bvh).
+Status find_self_intersections(const TriMesh& mesh, std::vector<std::array<int, 2>>& pairs,
+                               const SelfIntersectionOptions& options = {});
+
+// The same, on a BVH already built over the mesh.
+void find_self_intersections(const MeshBvh& bvh, std::vector<std::array<int, 2>>& pairs,
+                             const SelfIntersectionOptions& options = {});
+
+// Do triangles (a0, a1, a2) and (b0, b1, b2) share a point? (No adjacency
+// logic: for two triangles given by their corners.)
+bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
+                         const Vec3& b2);
+
+// Does the closed segment p-q meet the triangle (a, b, c)?
+bool segment_intersects_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c);
+
+}  // namespace lk

@@ -1,0 +1,195 @@
+// Self-intersection finder: exact small cases, clean closed surfaces (no
+// pairs), surfaces pushed through themselves (the crossing pairs found), and
+// the BVH traversal against testing every pair.
+#include "raycast/self_intersection.h"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <map>
+#include <set>
+
+using namespace lk;
+
+namespace {
+
+// Icosahedron refined `levels` times by edge midpoints, projected on the unit sphere.
+TriMesh icosphere(int levels) {
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  TriMesh m;
+  m.positions = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8},   {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                 {3, 8, 9},  {4, 9, 5},  {2, 4, 11},  {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  for (Vec3& p : m.positions) p.normalize();
+  for (int l = 0; l < levels; ++l) {
+    std::map<std::pair<int, int>, int> mid;
+    auto midpoint = [&](int a, int b) {
+      const auto key = std::minmax(a, b);
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      m.positions.push_back((m.positions[a] + m.positions[b]).normalized());
+      const int id = static_cast<int>(m.positions.size()) - 1;
+      mid[key] = id;
+      return id;
+    };
+    std::vector<Tri> fine;
+    for (const Tri& f : m.triangles) {
+      const int ab = midpoint(f[0], f[1]), bc = midpoint(f[1], f[2]), ca = midpoint(f[2], f[0]);
+      fine.push_back({f[0], ab, ca});
+      fine.push_back({f[1], bc, ab});
+      fine.push_back({f[2], ca, bc});
+      fine.push_back({ab, bc, ca});
+    }
+    m.triangles = fine;
+  }
+  return m;
+}
+
+// A torus (major radius R, minor r), nu x nv quads split in two.
+TriMesh torus(int nu, int nv, double R, double r) {
+  TriMesh m;
+  const double pi = 3.14159265358979323846;
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const double u = 2 * pi * i / nu, v = 2 * pi * j / nv;
+      m.positions.push_back(Vec3((R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v)));
+    }
+  auto id = [&](int i, int j) { return ((i + nu) % nu) * nv + (j + nv) % nv; };
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  return m;
+}
+
+TriMesh merged(const TriMesh& a, const TriMesh& b, const Vec3& shift) {
+  TriMesh m = a;
+  const int off = static_cast<int>(a.positions.size());
+  for (const Vec3& p : b.positions) m.positions.push_back(p + shift);
+  for (const Tri& t : b.triangles) m.triangles.push_back({t[0] + off, t[1] + off, t[2] + off});
+  return m;
+}
+
+// The rule of the header, pair by pair: the reference for the BVH traversal.
+std::vector<std::array<int, 2>> brute_force(const TriMesh& m) {
+  std::vector<std::array<int, 2>> out;
+  const auto& P = m.positions;
+  for (int a = 0; a < m.num_triangles(); ++a)
+    for (int b = a + 1; b < m.num_triangles(); ++b) {
+      const Tri& ta = m.triangles[a];
+      const Tri& tb = m.triangles[b];
+      int shared = 0, ia = 0, ib = 0;
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          if (ta[i] == tb[j]) ++shared, ia = i, ib = j;
+      bool hit = false;
+      if (shared == 0)
+        hit = triangles_intersect(P[ta[0]], P[ta[1]], P[ta[2]], P[tb[0]], P[tb[1]], P[tb[2]]);
+      else if (shared == 1)
+        hit = segment_intersects_triangle(P[ta[(ia + 1) % 3]], P[ta[(ia + 2) % 3]], P[tb[0]], P[tb[1]], P[tb[2]]) ||
+              segment_intersects_triangle(P[tb[(ib + 1) % 3]], P[tb[(ib + 2) % 3]], P[ta[0]], P[ta[1]], P[ta[2]]);
+      if (hit) out.push_back({a, b});
+    }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("triangle pairs: crossing, apart, touching, coplanar", "[raycast]") {
+  const Vec3 a0(0, 0, 0), a1(1, 0, 0), a2(0, 1, 0);
+  // Pierces the first through its interior.
+  CHECK(triangles_intersect(a0, a1, a2, Vec3(0.2, 0.2, -1), Vec3(0.3, 0.2, 1), Vec3(0.2, 0.4, 1)));
+  // Same shape lifted above the plane: apart.
+  CHECK_FALSE(triangles_intersect(a0, a1, a2, Vec3(0.2, 0.2, 0.1), Vec3(0.3, 0.2, 1), Vec3(0.2, 0.4, 1)));
+  // Crosses the plane but outside the triangle (beyond the hypotenuse).
+  CHECK_FALSE(triangles_intersect(a0, a1, a2, Vec3(0.8, 0.8, -1), Vec3(0.9, 0.8, 1), Vec3(0.8, 0.9, 1)));
+  // A corner touching the interior counts.
+  CHECK(triangles_intersect(a0, a1, a2, Vec3(0.2, 0.2, 0), Vec3(0.3, 0.2, 1), Vec3(0.2, 0.4, 1)));
+  // Coplanar: overlapping, one inside the other, and side by side.
+  CHECK(triangles_intersect(a0, a1, a2, Vec3(0.5, 0.1, 0), Vec3(1.5, 0.1, 0), Vec3(0.5, 1, 0)));
+  CHECK(triangles_intersect(a0, a1, a2, Vec3(0.1, 0.1, 0), Vec3(0.3, 0.1, 0), Vec3(0.1, 0.3, 0)));
+  CHECK_FALSE(triangles_intersect(a0, a1, a2, Vec3(2, 0, 0), Vec3(3, 0, 0), Vec3(2, 1, 0)));
+  // Segment against triangle.
+  CHECK(segment_intersects_triangle(Vec3(0.25, 0.25, -1), Vec3(0.25, 0.25, 1), a0, a1, a2));
+  CHECK_FALSE(segment_intersects_triangle(Vec3(0.25, 0.25, 0.01), Vec3(0.25, 0.25, 1), a0, a1, a2));
+  CHECK_FALSE(segment_intersects_triangle(Vec3(0.75, 0.75, -1), Vec3(0.75, 0.75, 1), a0, a1, a2));
+}
+
+TEST_CASE("self-intersections: a known crossing pair is found, neighbours are not reported", "[raycast]") {
+  TriMesh m;
+  // Triangles 0 and 1 share an edge (a fan), triangle 2 pierces triangle 0,
+  // triangle 3 shares vertex 0 with triangle 0 and folds back through it.
+  m.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0.2),                  // 0..3
+                 Vec3(0.7, 0.1, -1), Vec3(0.8, 0.1, 1), Vec3(0.7, 0.2, 1),                      // 4..6
+                 Vec3(0.6, 0.1, -0.5), Vec3(0.1, 0.6, 0.5)};                                    // 7, 8
+  m.triangles = {{0, 1, 2}, {1, 3, 2}, {4, 5, 6}, {0, 7, 8}};
+  std::vector<std::array<int, 2>> pairs;
+  REQUIRE(find_self_intersections(m, pairs).ok());
+  const std::vector<std::array<int, 2>> expected = {{0, 2}, {0, 3}};
+  CHECK(pairs == expected);
+  CHECK(pairs == brute_force(m));
+  // max_pairs stops early.
+  SelfIntersectionOptions one;
+  one.max_pairs = 1;
+  REQUIRE(find_self_intersections(m, pairs, one).ok());
+  CHECK(pairs.size() == 1);
+}
+
+TEST_CASE("self-intersections: none on an icosphere and a torus", "[raycast]") {
+  std::vector<std::array<int, 2>> pairs;
+  const TriMesh sphere = icosphere(4);  // 5120 triangles
+  REQUIRE(find_self_intersections(sphere, pairs).ok());
+  CHECK(pairs.empty());
+  const TriMesh ring = torus(96, 32, 1.0, 0.3);
+  REQUIRE(find_self_intersections(ring, pairs).ok());
+  CHECK(pairs.empty());
+  // A thin torus: sheets close together but apart (like the lips).
+  const TriMesh thin = torus(128, 12, 1.0, 0.002);
+  REQUIRE(find_self_intersections(thin, pairs).ok());
+  CHECK(pairs.empty());
+}
+
+TEST_CASE("self-intersections: surfaces pushed through each other", "[raycast]") {
+  // Two spheres overlapping: every pair joins one triangle of each, along
+  // the circle where they cross, and the BVH finds exactly the brute-force set.
+  const TriMesh a = icosphere(2);
+  const int na = a.num_triangles();
+  const TriMesh two = merged(a, a, Vec3(1.2, 0.1, 0.05));
+  std::vector<std::array<int, 2>> pairs;
+  REQUIRE(find_self_intersections(two, pairs).ok());
+  CHECK(pairs.size() > 20);
+  for (const auto& p : pairs) CHECK((p[0] < na && p[1] >= na));
+  CHECK(pairs == brute_force(two));
+  // Moved apart: none.
+  REQUIRE(find_self_intersections(merged(a, a, Vec3(2.1, 0, 0)), pairs).ok());
+  CHECK(pairs.empty());
+
+  // One vertex of a torus pulled through the opposite side of its tube.
+  TriMesh ring = torus(48, 16, 1.0, 0.3);
+  ring.positions[0] = Vec3(1.0 - 0.5, 0.0, 0.01);  // was (1.3, 0, 0), now past the inner wall at 0.7
+  REQUIRE(find_self_intersections(ring, pairs).ok());
+  CHECK(!pairs.empty());
+  CHECK(pairs == brute_force(ring));
+  std::set<int> involved;
+  for (const auto& p : pairs) involved.insert(p[0]), involved.insert(p[1]);
+  bool touches_moved = false;
+  for (int f : involved)
+    for (int v : ring.triangles[f]) touches_moved |= v == 0;
+  CHECK(touches_moved);
+}
+
+TEST_CASE("self-intersections: bad input is refused, empty input gives nothing", "[raycast]") {
+  std::vector<std::array<int, 2>> pairs = {{1, 2}};
+  TriMesh bad;
+  bad.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0)};
+  bad.triangles = {{0, 1, 2}};
+  CHECK(find_self_intersections(bad, pairs).code == ErrorCode::InvalidInput);
+  CHECK(pairs.empty());
+  bad.positions.push_back(Vec3(0, std::nan(""), 0));
+  CHECK(find_self_intersections(bad, pairs).code == ErrorCode::InvalidInput);
+  REQUIRE(find_self_intersections(TriMesh{}, pairs).ok());
+  CHECK(pairs.empty());
+}
