@@ -42,6 +42,120 @@ double histogram_jump_threshold(const std::vector<double>& d, int bins, bool ris
   return (best + 1.0) / bins * hi;
 }
 
+namespace {
+
+// The occlusal row: the row of the teeth region where the most central
+// columns are void (the dark line between upper and lower incisal edges);
+// without such a line (teeth in tight occlusion), the middle of the region.
+int estimate_bite_row(int w, int h, const std::vector<TeethClass>& classes) {
+  const int x0 = w / 5, x1 = w - w / 5, span = std::max(1, x1 - x0);
+  std::vector<int> voids(static_cast<size_t>(h), 0), teeth(static_cast<size_t>(h), 0);
+  for (int y = 0; y < h; ++y)
+    for (int x = x0; x < x1; ++x) {
+      const TeethClass c = classes[static_cast<size_t>(y) * w + x];
+      voids[static_cast<size_t>(y)] += c == TeethClass::Void;
+      teeth[static_cast<size_t>(y)] += c == TeethClass::Tooth;
+    }
+  int top = -1, bottom = -1;
+  for (int y = 0; y < h; ++y)
+    if (teeth[static_cast<size_t>(y)] > span / 20) { if (top < 0) top = y; bottom = y; }
+  if (top < 0) return h / 2;
+  int best = top;
+  for (int y = top; y <= bottom; ++y)
+    if (voids[static_cast<size_t>(y)] > voids[static_cast<size_t>(best)]) best = y;
+  if (voids[static_cast<size_t>(best)] < 0.3 * span) return (top + bottom) / 2;
+  // The middle of the dark line's rows.
+  int a = best, b = best;
+  const double near = 0.9 * voids[static_cast<size_t>(best)];
+  while (a > top && voids[static_cast<size_t>(a - 1)] >= near) --a;
+  while (b < bottom && voids[static_cast<size_t>(b + 1)] >= near) ++b;
+  return (a + b) / 2;
+}
+
+}  // namespace
+
+int reconstruct_hidden_teeth(int w, int h, const TeethOptions& o, std::vector<TeethClass>& classes,
+                             std::vector<float>& rgb, std::vector<std::uint8_t>& filled) {
+  filled.assign(static_cast<size_t>(w) * h, 0);
+  if (w < 2 || h < 2) return 0;
+  const int bite = o.bite_row >= 0 && o.bite_row < h ? o.bite_row : estimate_bite_row(w, h, classes);
+  auto cls = [&](int x, int y) -> TeethClass& { return classes[static_cast<size_t>(y) * w + x]; };
+  const int window = std::max(2, static_cast<int>(o.max_tooth_width * w));
+  for (int dir : {-1, +1}) {  // upper teeth (rows above the bite), lower teeth
+    const int start = dir < 0 ? bite : bite + 1;
+    if (start < 0 || start >= h) continue;
+    // Each column's visible run of teeth/voids away from the bite.
+    std::vector<int> run(static_cast<size_t>(w), 0);
+    std::vector<char> gap(static_cast<size_t>(w), 1);
+    for (int x = 0; x < w; ++x) {
+      int n = 0, voids = 0;
+      for (int y = start; y >= 0 && y < h && cls(x, y) != TeethClass::Gum; y += dir) {
+        ++n;
+        voids += cls(x, y) == TeethClass::Void;
+      }
+      run[static_cast<size_t>(x)] = n;
+      gap[static_cast<size_t>(x)] = n == 0 || voids >= o.gap_void_fraction * n;
+    }
+    // Teeth: runs of non-gap columns, cut into windows when no gap separates
+    // them (tight contacts).
+    struct Tooth { int a, b, tallest; };
+    std::vector<Tooth> teeth;
+    for (int a = 0; a < w;) {
+      if (gap[static_cast<size_t>(a)]) { ++a; continue; }
+      int b = a;
+      while (b + 1 < w && !gap[static_cast<size_t>(b + 1)] && b + 1 - a < window) ++b;
+      int tallest = 0;
+      for (int x = a; x <= b; ++x) tallest = std::max(tallest, run[static_cast<size_t>(x)]);
+      teeth.push_back({a, b, tallest});
+      a = b + 1;
+    }
+    for (size_t t = 0; t < teeth.size(); ++t) {
+      const int a = teeth[t].a, b = teeth[t].b;
+      // A tooth the lip hides across its whole width shows no full-height
+      // column: its neighbours (two on each side) tell how tall it should be.
+      std::vector<int> near;
+      for (size_t u = t >= 2 ? t - 2 : 0; u <= std::min(teeth.size() - 1, t + 2); ++u)
+        if (u != t) near.push_back(teeth[u].tallest);
+      double tallest = teeth[t].tallest;
+      if (!near.empty() && o.neighbour_height_factor > 0) {
+        // The lower median: with two neighbours, the shorter one.
+        const size_t m = (near.size() - 1) / 2;
+        std::nth_element(near.begin(), near.begin() + static_cast<long>(m), near.end());
+        tallest = std::max(tallest, o.neighbour_height_factor * near[m]);
+      }
+      const double centre = 0.5 * (a + b), half = std::max(0.5, 0.5 * (b - a + 1));
+      const double sag = o.crown_arc * (b - a + 1);
+      for (int x = a; x <= b; ++x) {
+        const double u = (x - centre) / half;
+        const int outline = static_cast<int>(std::lround(tallest - sag * u * u));
+        const int seen = run[static_cast<size_t>(x)];
+        if (outline <= seen) continue;
+        // Fill colour: the column's outermost visible tooth pixels.
+        double c[3] = {0, 0, 0};
+        int k = 0;
+        for (int i = seen - 1; i >= 0 && k < o.colour_rows; --i) {
+          const int y = start + dir * i;
+          if (cls(x, y) != TeethClass::Tooth) continue;
+          for (int j = 0; j < 3; ++j) c[j] += rgb[(static_cast<size_t>(y) * w + x) * 3 + j];
+          ++k;
+        }
+        const int outer_y = start + dir * (seen - 1);
+        const TeethClass fill = cls(x, outer_y) == TeethClass::Void || k == 0 ? TeethClass::Void : TeethClass::Tooth;
+        for (int i = seen; i < outline; ++i) {
+          const int y = start + dir * i;
+          if (y < 0 || y >= h || cls(x, y) != TeethClass::Gum) break;
+          const size_t id = static_cast<size_t>(y) * w + x;
+          cls(x, y) = fill;
+          filled[id] = 1;
+          if (fill == TeethClass::Tooth)
+            for (int j = 0; j < 3; ++j) rgb[id * 3 + j] = static_cast<float>(c[j] / k);
+        }
+      }
+    }
+  }
+  return bite;
+}
+
 Status teeth_texture_from_photo(const Image& photo, const TeethOptions& o, TeethResult& res) {
   if (photo.empty() || photo.channels < 3 ||
       photo.pixels.size() != static_cast<size_t>(photo.width) * photo.height * photo.channels)
@@ -74,6 +188,17 @@ Status teeth_texture_from_photo(const Image& photo, const TeethOptions& o, Teeth
   }
   if (res.teeth_pixels < o.min_teeth_fraction * static_cast<double>(n))
     return Status::error(ErrorCode::NotAHead, "no teeth found: too few bright, non-red, non-dark pixels");
+  // Working colours (0..1); the hidden-part step paints into them.
+  std::vector<float> rgb(n * 3);
+  for (size_t i = 0; i < n; ++i)
+    for (int k = 0; k < 3; ++k) rgb[i * 3 + k] = photo.pixels[i * static_cast<size_t>(photo.channels) + k] / 255.f;
+  res.reconstructed.assign(n, 0);
+  res.reconstructed_pixels = 0;
+  res.bite_row = -1;
+  if (o.reconstruct_hidden) {
+    res.bite_row = reconstruct_hidden_teeth(w, h, o, res.classes, rgb, res.reconstructed);
+    for (std::uint8_t f : res.reconstructed) res.reconstructed_pixels += f;
+  }
   // Target colour: the teeth's mean hue at a fixed brightness.
   double mean[3] = {sum[0] / res.teeth_pixels, sum[1] / res.teeth_pixels, sum[2] / res.teeth_pixels};
   const double ml = std::max(1e-3, luma(mean));
@@ -100,7 +225,8 @@ Status teeth_texture_from_photo(const Image& photo, const TeethOptions& o, Teeth
     int cnt = 0;
     for (int y = 0; y < h; ++y)
       for (int x = s * w / S; x < (s + 1) * w / S; ++x)
-        if (res.classes[static_cast<size_t>(y) * w + x] == TeethClass::Tooth) {
+        if (res.classes[static_cast<size_t>(y) * w + x] == TeethClass::Tooth &&
+            !res.reconstructed[static_cast<size_t>(y) * w + x]) {  // visible teeth only
           for (int k = 0; k < 3; ++k) acc[k] += photo.at(x, y)[k] / 255.0;
           ++cnt;
         }
@@ -115,9 +241,8 @@ Status teeth_texture_from_photo(const Image& photo, const TeethOptions& o, Teeth
     for (int k = 0; k < 3; ++k) c[k] = (1 - f) * corr[static_cast<size_t>(s0) * 3 + k] + f * corr[static_cast<size_t>(s1) * 3 + k];
     for (int y = 0; y < h; ++y) {
       const size_t i = static_cast<size_t>(y) * w + x;
-      const std::uint8_t* p = photo.at(x, y);
       std::uint8_t* q = res.texture.at(x, y);
-      double out[3] = {p[0] / 255.0, p[1] / 255.0, p[2] / 255.0};
+      double out[3] = {rgb[i * 3], rgb[i * 3 + 1], rgb[i * 3 + 2]};
       q[3] = 255;
       if (res.classes[i] == TeethClass::Void) {
         q[3] = 0;

@@ -3,8 +3,19 @@
 // transparency, gum recolouring, six-stripe colour equalization).
 // teeth_composite_generic puts the result into a procedurally generated
 // generic teeth texture (side teeth recoloured with the target colour) along
-// a curved (elliptic) boundary. Not yet implemented from Sec. 4.2:
-// reconstruction of tooth parts hidden by the lips.
+// a curved (elliptic) boundary.
+//
+// Hidden parts (Sec. 4.2: "we expand teeth into those parts of the gums that
+// have been covered by the lips ... some simple heuristics to include the
+// missing part of the tooth roots"): the upper teeth are the run of non-gum
+// pixels above the occlusal (bite) row, the lower ones the run below it. A
+// tooth is a run of columns between interdental gap columns; its outline is
+// a generic crown top: flat at the tooth's tallest visible column, rounded
+// down towards its sides (an arc of sag crown_arc * tooth width), and at
+// least neighbour_height_factor of its neighbours' median height. Gum pixels
+// (the lip) between a column's visible tooth end and that outline become
+// tooth, coloured from the same column's own outermost visible tooth pixels
+// (or void, where the column's visible end is a gap).
 //
 // Input: RGB(A) photo, width x height. Output: RGBA texture of the same size,
 // voids transparent (alpha 0), gums/lips recoloured, teeth equalized.
@@ -31,6 +42,18 @@ struct TeethOptions {
   double target_brightness = 0.82;  // luminance of the teeth target colour (hue kept)
   int stripes = 6;                  // paper: six vertical stripes
   double min_teeth_fraction = 0.02; // fewer teeth pixels than this: "no teeth found"
+  // Hidden tooth parts.
+  bool reconstruct_hidden = true;
+  int bite_row = -1;                // occlusal row between upper and lower teeth; -1 = estimated
+  double gap_void_fraction = 0.5;   // a column whose visible run is at least this void is an interdental gap
+  double max_tooth_width = 0.25;    // a tooth spans at most this share of the photo width (no gaps found: windows)
+  double crown_arc = 0.15;          // sag of the crown outline at the tooth's sides, fraction of its width
+  // A tooth is at least this share of the (lower) median visible height of
+  // its two neighbours on each side: a lip can hide a whole tooth's top.
+  // Crowns differ (upper laterals ~85 % of the centrals, premolars ~80 %),
+  // so a lower share invents less. 0 = each tooth from its own pixels only.
+  double neighbour_height_factor = 0.85;
+  int colour_rows = 6;              // outermost visible tooth pixels of a column averaged for its fill colour
 };
 
 struct TeethResult {
@@ -38,7 +61,10 @@ struct TeethResult {
   std::vector<TeethClass> classes;   // width * height
   double void_threshold = 0, gum_threshold = 0;  // colour distances (0..sqrt(3))
   float target_color[3] = {0, 0, 0};
-  int teeth_pixels = 0;
+  int teeth_pixels = 0;              // visible teeth pixels (before reconstruction)
+  int bite_row = -1;                 // the occlusal row used
+  std::vector<std::uint8_t> reconstructed;  // width * height, 1 = hidden part filled in (tooth or gap)
+  int reconstructed_pixels = 0;
 };
 
 // Threshold from a histogram of colour distances to a target (black for
@@ -48,6 +74,13 @@ struct TeethResult {
 double histogram_jump_threshold(const std::vector<double>& distances, int bins, bool rising);
 
 Status teeth_texture_from_photo(const Image& photo, const TeethOptions& options, TeethResult& result);
+
+// The hidden-part step alone, on classes (width * height) and a float RGB
+// buffer (width * height * 3, 0..1) that it updates in place; used by
+// teeth_texture_from_photo when options.reconstruct_hidden. Returns the bite
+// row used; `filled` (width * height) marks the changed pixels.
+int reconstruct_hidden_teeth(int width, int height, const TeethOptions& options, std::vector<TeethClass>& classes,
+                             std::vector<float>& rgb, std::vector<std::uint8_t>& filled);
 
 struct TeethCompositeOptions {
   int width = 1024, height = 512;   // output RGBA texture
