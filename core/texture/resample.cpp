@@ -246,7 +246,7 @@ Status resample_texture(const TriMesh& mesh, const std::vector<Vec3>& normals, c
 
 long resample_single_photo(const TriMesh& mesh, const std::vector<Vec2>& uv, const VertexBinding& binding,
                            const std::vector<TexturePhoto>& photos, int photo, const ChartRaster& raster,
-                           ImageF& texture) {
+                           ImageF& texture, std::vector<char>* written_mask) {
   if (!check_inputs(mesh, binding, photos) || photo < 0 || photo >= binding.num_photos ||
       uv.size() != mesh.positions.size() || texture.width != raster.width || texture.height != raster.height ||
       texture.channels != 3 || raster.triangle.size() != texture.pixels.size() / 3)
@@ -261,6 +261,7 @@ long resample_single_photo(const TriMesh& mesh, const std::vector<Vec2>& uv, con
   const std::array<float, 256> table = decode_table();
   const TexturePhoto& ph = photos[photo];
   long written = 0;
+  if (written_mask) written_mask->assign(raster.triangle.size(), 0);
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       const int f = raster.triangle[static_cast<size_t>(y) * w + x];
@@ -272,9 +273,69 @@ long resample_single_photo(const TriMesh& mesh, const std::vector<Vec2>& uv, con
       if (!ph.camera.project(p, px)) continue;
       sample_linear(ph.image, table.data(), px.x(), px.y(), texture.at(x, y));
       ++written;
+      if (written_mask) (*written_mask)[static_cast<size_t>(y) * w + x] = 1;
     }
   }
   return written;
+}
+
+Status resample_feathered(const TriMesh& mesh, const std::vector<Vec2>& uv, const VertexBinding& binding,
+                          const std::vector<TexturePhoto>& photos, const ChartRaster& raster,
+                          const std::vector<Vec3>& vertex_colors, ImageF& texture) {
+  Status s = check_inputs(mesh, binding, photos);
+  if (!s) return s;
+  const size_t nv = mesh.positions.size();
+  if (uv.size() != nv || vertex_colors.size() != nv)
+    return Status::error(ErrorCode::InvalidInput, "resample: uvs and vertex colours need one entry per vertex");
+  const int w = raster.width, h = raster.height, np = binding.num_photos;
+  if (w <= 0 || h <= 0 || raster.triangle.size() != static_cast<size_t>(w) * h)
+    return Status::error(ErrorCode::InvalidInput, "resample: empty or inconsistent chart raster");
+  const std::vector<TexelToBary> maps = texel_maps(uv, mesh.triangles, w, h);
+  const std::array<float, 256> table = decode_table();
+  texture = ImageF::make(w, h, 3, 0.f);
+  std::vector<float> lookups(static_cast<size_t>(np) * 3);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const int f = raster.triangle[static_cast<size_t>(y) * w + x];
+      if (f < 0) continue;
+      const Tri& t = mesh.triangles[f];
+      const Vec3 b = maps[f].ok ? maps[f].at(x, y) : Vec3(1.0 / 3, 1.0 / 3, 1.0 / 3);
+      const Vec3 p = b[0] * mesh.positions[t[0]] + b[1] * mesh.positions[t[1]] + b[2] * mesh.positions[t[2]];
+      const std::uint64_t any = binding.valid[t[0]] | binding.valid[t[1]] | binding.valid[t[2]];
+      // One lookup per photo valid at any corner; a photo that cannot
+      // project P is dropped from every corner's sum.
+      std::uint64_t usable = 0;
+      for (int i = 0; i < np; ++i) {
+        if (!((any >> i) & 1u)) continue;
+        Vec2 px;
+        if (!photos[i].camera.project(p, px)) continue;
+        sample_linear(photos[i].image, table.data(), px.x(), px.y(), &lookups[static_cast<size_t>(i) * 3]);
+        usable |= std::uint64_t{1} << i;
+      }
+      Vec3 color = Vec3::Zero();
+      for (int k = 0; k < 3; ++k) {
+        const int v = t[k];
+        const std::uint64_t mine = binding.valid[v] & usable;
+        Vec3 corner = vertex_colors[v];
+        if (mine != 0) {
+          Vec3 sum = Vec3::Zero();
+          double weight = 0;
+          for (int i = 0; i < np; ++i) {
+            if (!((mine >> i) & 1u)) continue;
+            const double wi = binding.facing[static_cast<size_t>(v) * np + i];
+            const float* l = &lookups[static_cast<size_t>(i) * 3];
+            sum += wi * Vec3(l[0], l[1], l[2]);
+            weight += wi;
+          }
+          if (weight > 0) corner = sum / weight;
+        }
+        color += b[k] * corner;
+      }
+      float* out = texture.at(x, y);
+      for (int k = 0; k < 3; ++k) out[k] = static_cast<float>(color[k]);
+    }
+  }
+  return Status::success();
 }
 
 }  // namespace lk

@@ -80,11 +80,28 @@ Status resample_texture(const TriMesh& mesh, const std::vector<Vec3>& normals,
 // The texture "as if coloured only from photo `photo`": the texels of every
 // triangle whose three corners are all valid for that photo are overwritten
 // with that photo's colour alone; every other texel keeps the value already
-// in `texture` (callers start from a copy of the blended texture). Returns
-// the number of texels written. These are the images the multiresolution
+// in `texture`. Returns the number of texels written; written (optional,
+// width * height) gets 1 on them. These are the images the multiresolution
 // spline blends under each photo's mask.
 long resample_single_photo(const TriMesh& mesh, const std::vector<Vec2>& uv,
                            const VertexBinding& binding, const std::vector<TexturePhoto>& photos,
-                           int photo, const ChartRaster& raster, ImageF& texture);
+                           int photo, const ChartRaster& raster, ImageF& texture,
+                           std::vector<char>* written = nullptr);
+
+// A seam-free variant of the blended texture (ours, not the paper's), used
+// as the spline's complement image. Each corner v_k of a texel's triangle
+// colours the texel's surface point P with its own weights,
+//   C_k(P) = sum_i <N(v_k), V_i> Color_i(P) / sum_i <N(v_k), V_i> over v_k's
+// valid photos (an unbound corner gives its hole-filled colour), and the
+// texel gets sum_k b_k C_k(P). Photo weights thus vary continuously over the
+// surface (they are shared along edges), so gain differences between photos
+// give no jumps at triangle edges, while P keeps the photos' full detail.
+// The paper's blended texture switches weights per triangle, and the gap
+// band the shrunk masks leave between regions would carry those jumps
+// through the spline's finest levels. Same inputs and failures as
+// resample_texture.
+Status resample_feathered(const TriMesh& mesh, const std::vector<Vec2>& uv, const VertexBinding& binding,
+                          const std::vector<TexturePhoto>& photos, const ChartRaster& raster,
+                          const std::vector<Vec3>& vertex_colors, ImageF& texture);
 
 }  // namespace lk

@@ -194,13 +194,17 @@ Status texture_head(const TriMesh& mesh, const std::vector<TexturePhoto>& photos
   ImageF final_texture;
   if (options.multiresolution_spline) {
     if (!report(progress, "spline", 0)) return cancelled("spline");
-    ImageF filled = blended;
-    push_pull_fill(filled, chart);
     if (options.keep_unblended) {
       ImageF shown = blended;
       fill_background(shown);
       out.unblended = linear_to_srgb(shown);
     }
+    // The complement image: the seam-free (feathered) resampling, filled
+    // past the chart so the pyramids see no black border.
+    ImageF complement_image;
+    s = resample_feathered(mesh, uv, binding, photos, raster, vertex_colors, complement_image);
+    if (!s) return s;
+    push_pull_fill(complement_image, chart);
     std::vector<TriangleCase> cases;
     std::vector<int> tri_region;
     classify_triangles(mesh, binding, cases, tri_region);
@@ -211,6 +215,7 @@ Status texture_head(const TriMesh& mesh, const std::vector<TexturePhoto>& photos
     ImageF complement = ImageF::make(size, size, 1, 1.f);
     ImageF mask = ImageF::make(size, size, 1, 0.f);
     ImageF photo_image;
+    std::vector<char> seen;
     for (int i = 0; i < np; ++i) {
       const std::vector<char> keep = shrunk_region_triangles(mesh, tri_region, i);
       long in_mask = 0;
@@ -223,14 +228,18 @@ Status texture_head(const TriMesh& mesh, const std::vector<TexturePhoto>& photos
           ++in_mask;
         }
       }
-      photo_image = filled;
-      rep.photos[i].texels_seen = resample_single_photo(mesh, uv, binding, photos, i, raster, photo_image);
-      if (in_mask == 0) continue;  // nothing of this photo's own under its mask
+      // Photo i alone where it sees the surface, continued smoothly from its
+      // own colours elsewhere: an image without seams of its own, so only
+      // the masks decide where its light ends (Burt & Adelson's premise).
+      photo_image = ImageF::make(size, size, 3, 0.f);
+      rep.photos[i].texels_seen = resample_single_photo(mesh, uv, binding, photos, i, raster, photo_image, &seen);
+      if (in_mask == 0) continue;  // its shrunk region is empty: nothing of its own to add
+      push_pull_fill(photo_image, seen);
       s = blender.add(photo_image, mask);
       if (!s) return s;
       if (!report(progress, "spline", (i + 1.0) / (np + 1.0))) return cancelled("spline");
     }
-    s = blender.add(filled, complement);
+    s = blender.add(complement_image, complement);
     if (s) s = blender.finish(final_texture);
     if (!s) return s;
     if (!report(progress, "spline", 1)) return cancelled("spline");
