@@ -13,6 +13,7 @@
 //   orbit(dx, dy), pan(dx, dy), zoom(amount): camera steps in pixels, as if
 //     dragged (the page's keyboard control)
 //   frames_drawn() -> number of frames drawn so far (0 until the head is up)
+//   set_profiling(on), last_draw_ms(): glFinish after each draw and its ms
 //   startup_error() -> "" or why the viewer could not start
 // Arrays are JS typed arrays (Float32Array / Uint32Array), shapes as in
 // viewer_scene.h. Nothing throws: failures come back as messages.
@@ -24,6 +25,7 @@
 // no CPU (WebGL2 runs on the CPU under SwiftShader).
 #include "viewer_scene.h"
 
+#include <GLES3/gl3.h>
 #include <SDL.h>
 #include <emscripten.h>
 #include <emscripten/bind.h>
@@ -31,6 +33,7 @@
 #include <emscripten/val.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <string>
 
@@ -45,6 +48,14 @@ struct Viewer {
   SDL_GLContext context = nullptr;
   lk::web::ViewerScene scene;
   int frames_drawn = 0;
+  // Profiling (the page's ?profile=1): glFinish after each draw so the time
+  // spent rasterizing (SwiftShader: on the CPU, in the GPU process) is
+  // measured here instead of showing up later as a slow frame.
+  bool profiling = false;
+  // Drawing-buffer pixels per CSS pixel, times devicePixelRatio (the page
+  // lowers it while animating: SwiftShader's cost grows with the pixels).
+  double render_scale = 1.0;
+  double last_draw_ms = 0;
   std::string startup_error;
   bool panning = false, orbiting = false;
 };
@@ -57,7 +68,7 @@ constexpr const char* kCanvas = "#canvas";
 void fit_canvas(Viewer& v) {
   double css_w = 0, css_h = 0;
   emscripten_get_element_css_size(kCanvas, &css_w, &css_h);
-  const double dpr = emscripten_get_device_pixel_ratio();
+  const double dpr = emscripten_get_device_pixel_ratio() * v.render_scale;
   const int want_w = std::max(1, int(std::lround(css_w * dpr)));
   const int want_h = std::max(1, int(std::lround(css_h * dpr)));
   int w = 0, h = 0;
@@ -116,7 +127,14 @@ void frame() {
   while (SDL_PollEvent(&e)) handle_event(v, e);
   fit_canvas(v);
   lk::Status status;
+  const double t0 = emscripten_get_now();
   if (v.scene.draw_if_needed(status)) {
+    if (v.profiling) {
+      // glFinish does not wait in Chromium's WebGL; reading a pixel does.
+      unsigned char pixel[4];
+      glReadPixels(0, 0, 1, 1, GL_RGBA, GL_UNSIGNED_BYTE, pixel);
+      v.last_draw_ms = emscripten_get_now() - t0;
+    }
     if (status.ok()) ++v.frames_drawn;
     else std::fprintf(stderr, "likeness viewer: draw failed: %s\n", status.message.c_str());
   }
@@ -221,6 +239,15 @@ void js_zoom(float amount) {
   if (g_viewer && std::isfinite(amount)) g_viewer->scene.zoom(amount);
 }
 
+void js_set_render_scale(double scale) {
+  if (g_viewer && std::isfinite(scale)) g_viewer->render_scale = std::min(2.0, std::max(0.25, scale));
+}
+
+void js_set_profiling(bool on) {
+  if (g_viewer) g_viewer->profiling = on;
+}
+double js_last_draw_ms() { return g_viewer ? g_viewer->last_draw_ms : 0; }
+
 int js_frames_drawn() { return g_viewer ? g_viewer->frames_drawn : 0; }
 std::string js_startup_error() { return g_viewer ? g_viewer->startup_error : std::string("not started"); }
 
@@ -241,12 +268,19 @@ EMSCRIPTEN_BINDINGS(likeness_viewer) {
   emscripten::function("pan", &js_pan);
   emscripten::function("zoom", &js_zoom);
   emscripten::function("frames_drawn", &js_frames_drawn);
+  emscripten::function("set_profiling", &js_set_profiling);
+  emscripten::function("set_render_scale", &js_set_render_scale);
+  emscripten::function("last_draw_ms", &js_last_draw_ms);
   emscripten::function("startup_error", &js_startup_error);
 }
 
-int main() {
+int main(int argc, char** argv) {
   g_viewer = new Viewer();
   Viewer& v = *g_viewer;
+  // Arguments from the page (Module.arguments): --msaa N (samples, 0 = off).
+  int msaa = 4;
+  for (int i = 1; i + 1 < argc; ++i)
+    if (std::string(argv[i]) == "--msaa") msaa = std::max(0, std::min(8, std::atoi(argv[i + 1])));
   // SDL listens for keys on the canvas (default: the whole window, where it
   // would swallow Tab and the arrows for the rest of the page); see below.
   SDL_SetHint(SDL_HINT_EMSCRIPTEN_KEYBOARD_ELEMENT, kCanvas);
@@ -258,8 +292,8 @@ int main() {
   SDL_GL_SetAttribute(SDL_GL_CONTEXT_MAJOR_VERSION, 3);
   SDL_GL_SetAttribute(SDL_GL_CONTEXT_MINOR_VERSION, 0);
   SDL_GL_SetAttribute(SDL_GL_DEPTH_SIZE, 24);
-  SDL_GL_SetAttribute(SDL_GL_MULTISAMPLEBUFFERS, 1);  // WebGL antialias
-  SDL_GL_SetAttribute(SDL_GL_MULTISAMPLESAMPLES, 4);
+  SDL_GL_SetAttribute(SDL_GL_MULTISAMPLEBUFFERS, msaa > 0 ? 1 : 0);  // WebGL antialias
+  SDL_GL_SetAttribute(SDL_GL_MULTISAMPLESAMPLES, msaa);
   v.window = SDL_CreateWindow("Likeness", SDL_WINDOWPOS_UNDEFINED, SDL_WINDOWPOS_UNDEFINED, 960, 720,
                               SDL_WINDOW_OPENGL);
   if (!v.window) {

@@ -221,10 +221,31 @@
     });
   }
 
+  // True when WebGL2 is drawn on the CPU (SwiftShader, llvmpipe): no GPU.
+  function softwareWebGL() {
+    try {
+      const gl = document.createElement('canvas').getContext('webgl2');
+      if (!gl) return false;
+      let name = String(gl.getParameter(gl.RENDERER));
+      const info = gl.getExtension('WEBGL_debug_renderer_info');
+      if (info) name += ' ' + gl.getParameter(info.UNMASKED_RENDERER_WEBGL);
+      const lose = gl.getExtension('WEBGL_lose_context');
+      if (lose) lose.loseContext();
+      return /swiftshader|llvmpipe|softpipe|software/i.test(name);
+    } catch (e) {
+      return false;
+    }
+  }
+
   async function startViewer() {
     await loadScript('likeness_viewer.js');
+    // Multisampling doubles SwiftShader's cost of a level-3 frame (measured:
+    // docs/web.md), so a software WebGL gets none; ?msaa=N overrides.
+    app.software = softwareWebGL();
+    app.msaa = params.has('msaa') ? Math.max(0, Number(params.get('msaa')) || 0) : app.software ? 0 : 4;
     const viewer = await LikenessViewer({
       canvas: ui.canvas,
+      arguments: ['--msaa', String(app.msaa)],
       print: (t) => console.log('[viewer]', t),
       printErr: (t) => console.warn('[viewer]', t),
       onAbort: (what) => fatalStartup('The 3D viewer stopped: ' + what),
@@ -597,40 +618,70 @@
   // ---- animation (jeong2002 Sec. 6: local update of the multires head) --------
   // The worker owns the MultiresMesh; each frame asks it for one pose and
   // uploads the returned level positions into the shown mesh.
-  let animT0 = 0, animFpsT = 0, animFpsFrames = 0;
-  function animationStep() {
+  // Frames are double-buffered: the next pose is requested as soon as one is
+  // handed to the viewer, so the worker computes frame n+1 while frame n is
+  // uploaded and drawn. At most one job is in flight, and a pose is uploaded
+  // only after the previous one was drawn, so no work is thrown away (on two
+  // cores a worker running ahead would steal the CPU the drawing needs).
+  let animT0 = 0, animFpsT = 0, animFpsFrames = 0, animGeneration = 0, animDrawnAtUpload = -1;
+  function requestPose() {
     const a = app.animation;
     if (!a.running || !app.fit) return;
+    const generation = animGeneration;
     const t = (performance.now() - animT0) / 1000;
     const amount = 0.5 - 0.5 * Math.cos(t * Math.PI);  // open and close every 2 s
+    const tJob = performance.now();
     runJob({ type: 'animate', amount, level: Number(ui.level.value) }, []).then((r) => {
-      if (!a.running) return;
+      if (!a.running || generation !== animGeneration) return;
       if (!r.ok) { stopAnimation(); showError('Animation: ' + r.message); return; }
-      const err = app.viewer.update_positions(r.positions);
-      if (err) { stopAnimation(); showError('Animation: ' + err); return; }
-      a.frames++;
-      animFpsFrames++;
-      a.updateMs = r.updateMs;
-      const now = performance.now();
-      if (now - animFpsT > 500 || a.fps === 0) {
-        a.fps = animFpsFrames * 1000 / (now - animFpsT);
-        animFpsT = now;
-        animFpsFrames = 0;
-      }
-      ui.animStats.textContent = (a.fps < 10 ? a.fps.toFixed(1) : a.fps.toFixed(0)) + ' fps · update ' + a.updateMs.toFixed(1) + ' ms · ' +
-                                 r.changed.toLocaleString('en') + ' of ' + r.vertexCount.toLocaleString('en') + ' vertices';
-      requestAnimationFrame(animationStep);
+      a.profile.jobMs += performance.now() - tJob;
+      applyPose(r, generation);
     }, () => stopAnimation());
+  }
+
+  function applyPose(r, generation) {
+    const a = app.animation;
+    if (!a.running || generation !== animGeneration) return;
+    const viewer = app.viewer;
+    if (viewer.frames_drawn() === animDrawnAtUpload) {  // the last pose is not on screen yet
+      requestAnimationFrame(() => applyPose(r, generation));
+      return;
+    }
+    const tUpload = performance.now();
+    const err = viewer.update_positions(r.positions);
+    if (err) { stopAnimation(); showError('Animation: ' + err); return; }
+    animDrawnAtUpload = viewer.frames_drawn();
+    const p = a.profile;
+    p.frames++;
+    p.workerMs += r.workerMs || 0;
+    p.coreMs += r.updateMs;
+    p.uploadMs += performance.now() - tUpload;
+    p.drawMs += viewer.last_draw_ms();
+    requestPose();
+    a.frames++;
+    animFpsFrames++;
+    a.updateMs = r.updateMs;
+    const now = performance.now();
+    if (now - animFpsT > 500 || a.fps === 0) {
+      a.fps = animFpsFrames * 1000 / (now - animFpsT);
+      animFpsT = now;
+      animFpsFrames = 0;
+    }
+    ui.animStats.textContent = (a.fps < 10 ? a.fps.toFixed(1) : a.fps.toFixed(0)) + ' fps · update ' + a.updateMs.toFixed(1) + ' ms · ' +
+                               r.changed.toLocaleString('en') + ' of ' + r.vertexCount.toLocaleString('en') + ' vertices';
   }
 
   function startAnimation() {
     if (!app.fit || app.animation.running) return;
     if (app.shownStage !== 'subdivide') showStage('subdivide');
-    Object.assign(app.animation, { running: true, frames: 0, fps: 0 });
+    Object.assign(app.animation, { running: true, frames: 0, fps: 0,
+      profile: { frames: 0, jobMs: 0, workerMs: 0, coreMs: 0, uploadMs: 0, drawMs: 0 } });
     animT0 = animFpsT = performance.now();
     animFpsFrames = 0;
+    animGeneration++;
+    animDrawnAtUpload = -1;
     ui.animate.checked = true;
-    requestAnimationFrame(animationStep);
+    requestPose();
   }
 
   // Stops and (restPose) puts the head back at rest, the pose export writes.
@@ -763,6 +814,9 @@
       const viewer = await startViewer();
       await workerUp;
       viewer.set_point_size(Number(ui.pointSize.value));
+      // ?profile=1: the viewer waits for each draw to finish (glFinish) so
+      // animation.profile can split a frame's time; it slows drawing down.
+      if (params.get('profile') === '1') viewer.set_profiling(true);
       app.loadMs = performance.now() - app.startedAt;
       setState('ready');
       setStatus('Ready. Showing the generic head. Drop a head scan to begin.');

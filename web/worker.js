@@ -79,6 +79,7 @@ function handle(msg) {
   }
   const progress = (stage, fraction) => { postMessage({ type: 'progress', id: msg.id, stage, fraction }); };
   let result;
+  const t0 = performance.now();
   try {
     result = job(msg, progress);
   } catch (e) {
@@ -87,6 +88,9 @@ function handle(msg) {
     fatal(msg.type + ': ' + (e && e.message ? e.message : e));
     return;
   }
+  // The job's time inside the worker (core + copies out of the heap), so the
+  // page can tell it from the message round trip.
+  if (result && typeof result === 'object') result.workerMs = performance.now() - t0;
   postMessage({ type: 'result', id: msg.id, result }, transferables(result));
 }
 
