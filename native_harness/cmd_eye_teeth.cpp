@@ -117,7 +117,9 @@ Registrar reg_eye({"eye", "likeness eye --photo F --out iris.png [--guess x,y] [
 }  // namespace lk::cli
 
 // likeness teeth: RGBA teeth texture (voids transparent) from one photo
-// (core/teeth, Tarini et al. 2002 Sec. 4.2).
+// (core/teeth, Tarini et al. 2002 Sec. 4.2), or from the synthetic smile
+// with lips hiding parts of the teeth (--synthetic-smile).
+#include "teeth/synthetic_smile.h"
 #include "teeth/teeth.h"
 
 namespace lk::cli {
@@ -126,37 +128,58 @@ namespace {
 int run_teeth(const Args& args) {
   const char* cmd = "teeth";
   for (const auto& [key, values] : args.options)
-    if (key != "photo" && key != "out" && key != "generic-out") {
+    if (key != "photo" && key != "out" && key != "generic-out" && key != "synthetic-smile" && key != "upper-dip" &&
+        key != "lower-rise" && key != "no-reconstruct" && key != "input-out") {
       fail(cmd, "unknown option --" + key + " (see `likeness help`)");
       return 2;
     }
-  if (!args.has("photo") || !args.has("out")) {
-    fail(cmd, "needs --photo FILE and --out FILE.png");
+  if ((!args.has("photo") && !args.has("synthetic-smile")) || !args.has("out")) {
+    fail(cmd, "needs --photo FILE (or --synthetic-smile) and --out FILE.png");
     return 2;
   }
   Image photo;
-  if (Status s = load_image_file(args.get("photo"), photo, 3); !s) return fail(cmd, s.message);
+  std::string input = args.get("photo");
+  if (args.has("synthetic-smile")) {
+    SyntheticSmileOptions so;
+    so.width = 640;
+    so.height = 320;
+    try {
+      so.upper_dip = std::stod(args.get("upper-dip", "40"));
+      so.lower_rise = std::stod(args.get("lower-rise", "34"));
+    } catch (...) {
+      return fail(cmd, "--upper-dip and --lower-rise take numbers (rows at 320x160)");
+    }
+    photo = make_synthetic_smile(so).image;
+    input = "synthetic smile";
+    if (args.has("input-out"))
+      if (Status s = save_png_file(args.get("input-out"), photo); !s) return fail(cmd, s.message);
+  } else if (Status s = load_image_file(args.get("photo"), photo, 3); !s) {
+    return fail(cmd, s.message);
+  }
+  TeethOptions options;
+  options.reconstruct_hidden = !args.has("no-reconstruct");
   TeethResult r;
   const auto t0 = std::chrono::steady_clock::now();
-  if (Status s = teeth_texture_from_photo(photo, {}, r); !s) return fail(cmd, args.get("photo") + ": " + s.message);
+  if (Status s = teeth_texture_from_photo(photo, options, r); !s) return fail(cmd, input + ": " + s.message);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (Status s = save_png_file(args.get("out"), r.texture); !s) return fail(cmd, s.message);
   size_t voids = 0, gums = 0;
   for (auto c : r.classes) { voids += c == TeethClass::Void; gums += c == TeethClass::Gum; }
   std::printf("thresholds: void %.3f, gum %.3f (colour distance); teeth %d px, gums %zu px, voids %zu px; %.2f s\n",
               r.void_threshold, r.gum_threshold, r.teeth_pixels, gums, voids, secs);
+  std::printf("bite row %d; %d hidden pixels reconstructed\n", r.bite_row, r.reconstructed_pixels);
   std::printf("teeth target colour (%.3f, %.3f, %.3f); wrote %s\n", r.target_color[0], r.target_color[1],
               r.target_color[2], args.get("out").c_str());
   if (args.has("generic-out")) {
     Image composite;
-    if (Status s = teeth_composite_generic(r, {}, {}, composite); !s) return fail(cmd, s.message);
+    if (Status s = teeth_composite_generic(r, options, {}, composite); !s) return fail(cmd, s.message);
     if (Status s = save_png_file(args.get("generic-out"), composite); !s) return fail(cmd, s.message);
     std::printf("wrote %s (composited into the generic teeth texture)\n", args.get("generic-out").c_str());
   }
   return 0;
 }
 
-Registrar reg_teeth({"teeth", "likeness teeth --photo F --out teeth.png [--generic-out arch.png]",
+Registrar reg_teeth({"teeth", "likeness teeth --photo F|--synthetic-smile [--upper-dip R --lower-rise R --input-out smile.png] --out teeth.png [--generic-out arch.png] [--no-reconstruct]",
                      "RGBA teeth texture from one photo: voids transparent, gums recoloured, colour equalized",
                      run_teeth});
 
@@ -258,6 +281,94 @@ int run_components(const Args& args) {
 Registrar reg_components({"components", "likeness components [--head FILE.obj] --out DIR [--render PNG [--eye-texture PNG] [--teeth-texture PNG] [--view front|...] [--no-head]]",
                           "generic eyeballs, teeth arch and tongue placed into a head from its annotated vertices",
                           run_components});
+
+}  // namespace
+}  // namespace lk::cli
+
+// likeness teeth-model: the paper's teeth model (billboard for the six front
+// teeth, 3-D side teeth; core/components) with a teeth texture, rendered in
+// front of a dark mouth-interior backdrop so transparent voids show dark.
+namespace lk::cli {
+namespace {
+
+int run_teeth_model(const Args& args) {
+  const char* cmd = "teeth-model";
+  for (const auto& [key, values] : args.options)
+    if (key != "out" && key != "texture" && key != "render" && key != "view" && key != "wireframe" &&
+        key != "no-backdrop") {
+      fail(cmd, "unknown option --" + key + " (see `likeness help`)");
+      return 2;
+    }
+  if (!args.has("out") && !args.has("render")) {
+    fail(cmd, "needs --out FILE.obj and/or --render FILE.png");
+    return 2;
+  }
+  const TeethModel model = make_teeth_model();
+  int parts[3] = {0, 0, 0};
+  for (TeethPart p : model.part) ++parts[static_cast<int>(p)];
+  std::printf("teeth model: %zu triangles (billboard %d, front volume %d, side teeth %d)\n",
+              model.mesh.triangles.size(), parts[0], parts[1], parts[2]);
+  if (args.has("out")) {
+    if (Status s = write_file(args.get("out"), write_obj(model.mesh)); !s) return fail(cmd, s.message);
+    std::printf("wrote %s\n", args.get("out").c_str());
+  }
+  if (!args.has("render")) return 0;
+  Image tex;
+  if (args.has("texture"))
+    if (Status s = load_image_file(args.get("texture"), tex, 4); !s) return fail(cmd, s.message);
+  CanonicalView view = CanonicalView::Front;
+  if (Status s = parse_canonical_view(args.get("view", "front"), view); !s) return fail(cmd, s.message);
+  TriMesh teeth = model.mesh;
+  teeth.normals = vertex_normals(teeth);
+  // The mouth's inside: a dark curved wall behind the arch.
+  TriMesh backdrop;
+  for (int i = 0; i <= 16; ++i) {
+    const double a = -1.5 + 3.0 * i / 16;
+    for (int j = 0; j < 2; ++j)
+      backdrop.positions.push_back(Vec3(1.1 * std::sin(a), j ? 0.7 : -0.7, -0.1 - 0.8 * std::cos(a)));
+  }
+  for (int i = 0; i < 16; ++i) {
+    backdrop.triangles.push_back({2 * i, 2 * i + 2, 2 * i + 3});
+    backdrop.triangles.push_back({2 * i, 2 * i + 3, 2 * i + 1});
+  }
+  const bool with_backdrop = !args.has("no-backdrop");
+  auto setup = [&](Renderer& r) -> Status {
+    DrawableHandle h;
+    if (Status st = r.upload_mesh(teeth, h); !st) return st;
+    r.style(h)->specular = 0.25f;
+    if (args.has("wireframe")) r.set_wireframe(h, true);
+    if (!tex.empty()) {
+      TextureHandle t;
+      Status st = r.upload_texture(tex, t);
+      if (st) st = r.attach_texture(h, t);
+      if (!st) return st;
+    } else {
+      r.set_base_color(h, glm::vec3(0.92f, 0.90f, 0.84f));
+    }
+    if (with_backdrop) {
+      DrawableHandle b;
+      if (Status st = r.upload_mesh(backdrop, b); !st) return st;
+      r.set_base_color(b, glm::vec3(0.22f, 0.06f, 0.07f));
+      r.style(b)->specular = 0.0f;
+    }
+    return Status::success();
+  };
+  auto camera_for = [&](float aspect) { return canonical_view(view, teeth.positions, aspect).matrices(aspect); };
+  OffscreenOptions options;
+  options.width = options.height = 768;
+  options.supersample = 2;
+  Image image;
+  if (Status s = render_offscreen(setup, camera_for, options, image); !s) return fail(cmd, s.message);
+  if (Status s = save_png_file(args.get("render"), image); !s) return fail(cmd, s.message);
+  std::printf("rendered %s (%s view%s)\n", args.get("render").c_str(), to_string(view),
+              tex.empty() ? ", untextured" : "");
+  return 0;
+}
+
+Registrar reg_teeth_model({"teeth-model",
+                           "likeness teeth-model [--out teeth.obj] [--render PNG [--texture arch.png] [--view front|three-quarter|...] [--wireframe] [--no-backdrop]]",
+                           "the paper's teeth model: billboard front teeth, 3-D side teeth, rendered with a teeth texture",
+                           run_teeth_model});
 
 }  // namespace
 }  // namespace lk::cli

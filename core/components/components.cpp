@@ -1,6 +1,7 @@
 // Generic component meshes and their placement (Tarini et al. 2002, Sec. 4).
 #include "components/components.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace lk {
@@ -100,6 +101,140 @@ TriMesh make_teeth_arch(int segments) {
   return m;
 }
 
+namespace {
+
+double smoothstep(double a, double b, double x) {
+  if (b <= a) return x < a ? 0.0 : 1.0;
+  const double t = std::clamp((x - a) / (b - a), 0.0, 1.0);
+  return t * t * (3 - 2 * t);
+}
+
+// x positions along z = -depth (2x)^2, x in [-0.5, 0.5], at the given
+// normalized arc lengths (from a fine cumulative-length table).
+std::vector<double> arc_length_to_x(double depth, const std::vector<double>& s_values) {
+  const int n = 4096;
+  std::vector<double> len(n + 1, 0.0);
+  auto point = [&](int i) {
+    const double x = -0.5 + static_cast<double>(i) / n;
+    return Vec2(x, -depth * 4 * x * x);
+  };
+  for (int i = 1; i <= n; ++i) len[static_cast<size_t>(i)] = len[static_cast<size_t>(i - 1)] + (point(i) - point(i - 1)).norm();
+  std::vector<double> xs;
+  for (double sv : s_values) {
+    const double target = std::clamp(sv, 0.0, 1.0) * len[static_cast<size_t>(n)];
+    const auto it = std::lower_bound(len.begin(), len.end(), target);
+    const int i = std::clamp(static_cast<int>(it - len.begin()), 1, n);
+    const double l0 = len[static_cast<size_t>(i - 1)], l1 = len[static_cast<size_t>(i)];
+    const double f = l1 > l0 ? (target - l0) / (l1 - l0) : 0.0;
+    xs.push_back(-0.5 + (i - 1 + f) / n);
+  }
+  return xs;
+}
+
+}  // namespace
+
+TeethModel make_teeth_model(const TeethModelOptions& o) {
+  TeethModel model;
+  TriMesh& m = model.mesh;
+  const int segments = std::max(o.segments, 8), rows = std::max(o.rows, 2);
+  const double mid = std::clamp(o.middle_width, 0.05, 0.95);
+  // Rings uniform in arc length, plus the front/side boundaries exactly.
+  std::vector<double> s_values;
+  for (int i = 0; i <= segments; ++i) s_values.push_back(static_cast<double>(i) / segments);
+  s_values.push_back(0.5 - mid / 2);
+  s_values.push_back(0.5 + mid / 2);
+  std::sort(s_values.begin(), s_values.end());
+  s_values.erase(std::unique(s_values.begin(), s_values.end(), [](double a, double b) { return std::abs(a - b) < 1e-9; }),
+                 s_values.end());
+  const int rings = static_cast<int>(s_values.size());
+  const std::vector<double> xs = arc_length_to_x(o.depth, s_values);
+
+  auto add_quad = [&](int a, int b, int c, int d, const Vec3& outward, TeethPart part) {
+    // Winding from the wanted outward direction, so every piece faces out.
+    const Vec3 n = (m.positions[static_cast<size_t>(b)] - m.positions[static_cast<size_t>(a)])
+                       .cross(m.positions[static_cast<size_t>(c)] - m.positions[static_cast<size_t>(a)]);
+    if (n.dot(outward) >= 0) {
+      m.triangles.push_back({a, b, c});
+      m.triangles.push_back({a, c, d});
+    } else {
+      m.triangles.push_back({a, c, b});
+      m.triangles.push_back({a, d, c});
+    }
+    model.part.push_back(part);
+    model.part.push_back(part);
+  };
+
+  for (int arch = 0; arch < 2; ++arch) {  // 0 upper, 1 lower
+    const double scale = arch == 0 ? 1.0 : o.lower_scale, back = arch == 0 ? 0.0 : o.lower_inset;
+    const double height = arch == 0 ? o.upper_height : o.lower_height, up = arch == 0 ? 1.0 : -1.0;
+    const int base = static_cast<int>(m.positions.size());
+    std::vector<double> thickness(static_cast<size_t>(rings) * (rows + 1));
+    std::vector<double> side(static_cast<size_t>(rings));
+    std::vector<Vec3> outward(static_cast<size_t>(rings));
+    // Front vertices [ring][row], then back vertices.
+    for (int pass = 0; pass < 2; ++pass)
+      for (int i = 0; i < rings; ++i) {
+        const double x = xs[static_cast<size_t>(i)];
+        const Vec3 p(scale * x, 0, scale * (-o.depth * 4 * x * x) - back);
+        const Vec3 tangent = Vec3(1, 0, -o.depth * 8 * x).normalized();
+        const Vec3 n(-tangent.z(), 0, tangent.x());  // +z at the front
+        outward[static_cast<size_t>(i)] = n;
+        const double s = s_values[static_cast<size_t>(i)];
+        const double beyond = std::abs(s - 0.5) - mid / 2;  // < 0 inside the six front teeth
+        const double sigma = smoothstep(-o.transition / 2, o.transition / 2, beyond);
+        side[static_cast<size_t>(i)] = sigma;
+        for (int j = 0; j <= rows; ++j) {
+          const double f = static_cast<double>(j) / rows;
+          const double t = o.side_thickness * sigma +
+                           (1 - sigma) * o.root_thickness * smoothstep(o.billboard_fraction, 1.0, f);
+          thickness[static_cast<size_t>(i) * (rows + 1) + j] = t;
+          const Vec3 q = p + Vec3(0, up * f * height, 0) - (pass == 0 ? 0.0 : t) * n;
+          m.positions.push_back(q);
+          m.uvs.push_back(Vec2(s, 0.5 + 0.5 * up * f));
+        }
+      }
+    auto F = [&](int i, int j) { return base + i * (rows + 1) + j; };
+    auto B = [&](int i, int j) { return base + (rings + i) * (rows + 1) + j; };
+    auto T = [&](int i, int j) { return thickness[static_cast<size_t>(i) * (rows + 1) + j]; };
+    auto part_of = [&](double tmax, double sigma) {
+      return tmax < 1e-12 ? TeethPart::Billboard : sigma < 0.5 ? TeethPart::FrontVolume : TeethPart::Side;
+    };
+    const Vec3 y_up(0, up, 0);
+    auto copy = [&](int v) {
+      m.positions.push_back(m.positions[static_cast<size_t>(v)]);
+      m.uvs.push_back(m.uvs[static_cast<size_t>(v)]);
+      return static_cast<int>(m.positions.size()) - 1;
+    };
+    for (int i = 0; i + 1 < rings; ++i) {
+      const Vec3 n = (outward[static_cast<size_t>(i)] + outward[static_cast<size_t>(i + 1)]).normalized();
+      const double sigma = 0.5 * (side[static_cast<size_t>(i)] + side[static_cast<size_t>(i + 1)]);
+      for (int j = 0; j < rows; ++j) {
+        const double tmax = std::max({T(i, j), T(i + 1, j), T(i, j + 1), T(i + 1, j + 1)});
+        add_quad(F(i, j), F(i + 1, j), F(i + 1, j + 1), F(i, j + 1), n, part_of(tmax, sigma));
+        // The back sheet only where the teeth have thickness (no second,
+        // coincident sheet behind the billboard).
+        if (tmax > 1e-12) add_quad(B(i, j), B(i, j + 1), B(i + 1, j + 1), B(i + 1, j), -n, part_of(tmax, sigma));
+      }
+      // Caps: the gum end and the bite edge, where there is thickness. Own
+      // vertex copies, so the crown edges stay sharp in smooth shading.
+      if (std::max(T(i, rows), T(i + 1, rows)) > 1e-12)
+        add_quad(copy(F(i, rows)), copy(B(i, rows)), copy(B(i + 1, rows)), copy(F(i + 1, rows)), y_up, part_of(1, sigma));
+      if (std::max(T(i, 0), T(i + 1, 0)) > 1e-12)
+        add_quad(copy(F(i, 0)), copy(F(i + 1, 0)), copy(B(i + 1, 0)), copy(B(i, 0)), -y_up, part_of(1, sigma));
+    }
+    // The arch's two back ends: close the crown band's cross-section.
+    for (int end = 0; end < 2; ++end) {
+      const int i = end == 0 ? 0 : rings - 1;
+      const double x = xs[static_cast<size_t>(i)];
+      const Vec3 along = Vec3(1, 0, -o.depth * 8 * x).normalized() * (end == 0 ? -1.0 : 1.0);
+      for (int j = 0; j < rows; ++j)
+        if (std::max(T(i, j), T(i, j + 1)) > 1e-12)
+          add_quad(copy(F(i, j)), copy(F(i, j + 1)), copy(B(i, j + 1)), copy(B(i, j)), along, TeethPart::Side);
+    }
+  }
+  return model;
+}
+
 TriMesh make_tongue(int rings, int segments) {
   TriMesh m = make_eyeball(std::max(rings, 4), std::max(segments, 6));
   // Flatten and stretch the sphere: 0.8 wide, 0.25 high, 1 long (along -z).
@@ -148,7 +283,7 @@ PlacedComponents build_placed_components(const ComponentPlacement& p) {
   }
   // Teeth: 90% of the mouth width, set back behind the lips by 10% of it.
   const double w = 0.9 * p.mouth_width;
-  c.teeth = make_teeth_arch();
+  c.teeth = make_teeth_model().mesh;
   transform(c.teeth, Vec3(w, w, w), p.mouth_center - Vec3(0, 0, 0.1 * p.mouth_width));
   c.tongue = make_tongue();
   transform(c.tongue, Vec3(0.8 * w, w, w), p.mouth_center - Vec3(0, 0.1 * w, 0.25 * p.mouth_width));

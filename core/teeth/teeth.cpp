@@ -290,20 +290,28 @@ Status teeth_composite_generic(const TeethResult& teeth, const TeethOptions& o,
       } else if (v < tooth_len * (0.8 + 0.2 * std::sqrt(std::max(0.0, edge * 2))) && edge > 0.04) {
         const double shade = 0.85 + 0.15 * std::sin(3.14159265 * along);
         for (int k = 0; k < 3; ++k) g[k] = teeth.target_color[k] * shade;
-      } else if (v < tooth_len) {
-        g[0] = g[1] = g[2] = 0; g[3] = 0;  // gap between teeth: transparent
+      } else if (v < 0.8 * tooth_len && edge <= 0.04) {
+        // Interdental gap below the contact: transparent. Above the rounded
+        // crown tops the gums stay (an opaque papilla, as in a mouth).
+        g[0] = g[1] = g[2] = 0; g[3] = 0;
       }
       // Curved boundary: an ellipse through the middle region's corners' sides.
       const double ex = (x - cx) / (mid_w / 2), ey = (y - cy) / (0.5 * H * 1.15);
       const double e = std::sqrt(ex * ex + ey * ey);
       const double soft = co.boundary_softness * W / (mid_w / 2);
-      const double wphoto = std::clamp((1 - e) / soft + 0.5, 0.0, 1.0);
+      const double wellipse = std::clamp((1 - e) / soft + 0.5, 0.0, 1.0);
       double c[4] = {g[0], g[1], g[2], g[3]};
+      // Photo row: the photo's height spans the texture's; its bite row (when
+      // known) lands on the texture's bite line (H / 2), where the teeth
+      // model's billboard has its bite edge.
+      const double bite = teeth.bite_row >= 0 ? teeth.bite_row + 0.5 : 0.5 * src.height;
+      const double sy_f = bite + (y + 0.5 - cy) * src.height / H;
+      const double wphoto = sy_f >= 0 && sy_f < src.height ? wellipse : 0.0;
       if (wphoto > 0) {
-        // Photo sample: the middle region maps onto the whole photo.
-        const double u = (x - (cx - mid_w / 2)) / mid_w, vv = (y + 0.5) / H;
+        // Photo sample: the middle region spans the photo's width.
+        const double u = (x - (cx - mid_w / 2)) / mid_w;
         const int sx = std::clamp(static_cast<int>(u * src.width), 0, src.width - 1);
-        const int sy = std::clamp(static_cast<int>(vv * src.height), 0, src.height - 1);
+        const int sy = std::clamp(static_cast<int>(sy_f), 0, src.height - 1);
         const std::uint8_t* p = src.at(sx, sy);
         for (int k = 0; k < 4; ++k) c[k] = (1 - wphoto) * g[k] + wphoto * (p[k] / 255.0);
       }

@@ -91,7 +91,8 @@ struct TeethCompositeOptions {
 
 // Generic texture: upper teeth in the top half, lower teeth in the bottom
 // half, gums beyond; the photo result (scaled to the middle) is composited
-// inside an ellipse whose sides follow the canines' silhouettes.
+// inside an ellipse whose sides follow the canines' silhouettes; the photo's
+// bite row (TeethResult::bite_row, when >= 0) is put on the bite line H / 2.
 // mask (optional, width*height): 1 where the photo was used.
 Status teeth_composite_generic(const TeethResult& teeth, const TeethOptions& options,
                                const TeethCompositeOptions& composite, Image& texture,

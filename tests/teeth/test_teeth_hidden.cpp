@@ -9,85 +9,22 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstdlib>
 #include <string>
 
 #include "io/io.h"
+#include "teeth/synthetic_smile.h"
 #include "teeth/teeth.h"
-#include <cstdlib>
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using lk::SyntheticSmile;
 
-struct SyntheticSmile {
-  lk::Image image;
-  std::vector<char> tooth;  // truth: tooth pixel (regardless of the lips)
-  std::vector<char> lip;    // the lips cover this pixel
-};
-
-// upper_dip / lower_rise: how far (rows) the lips reach over the teeth at
-// the middle of their bump.
 SyntheticSmile make_occluded_smile(double upper_dip, double lower_rise) {
-  const int w = 320, h = 160, bite = 80;
-  SyntheticSmile s;
-  s.image = lk::Image::make(w, h, 3);
-  s.tooth.assign(static_cast<size_t>(w) * h, 0);
-  s.lip.assign(static_cast<size_t>(w) * h, 0);
-  // Premolar, canine, lateral, central, central, lateral, canine, premolar.
-  const int widths[8] = {30, 34, 32, 40, 40, 32, 34, 30};
-  const int upper_h[8] = {40, 50, 44, 52, 52, 44, 50, 40};
-  const int lower_h[8] = {36, 42, 38, 36, 36, 38, 42, 36};
-  int x0 = 24;
-  for (int t = 0; t < 8; ++t) {
-    for (int x = x0; x < x0 + widths[t]; ++x) {
-      const double u = (x - x0 + 0.5) / widths[t] * 2 - 1;  // -1..1 across the tooth
-      const bool gap = x - x0 < 3;                          // dark interdental gap
-      for (int arch = 0; arch < 2; ++arch) {
-        const int height = arch == 0 ? upper_h[t] : lower_h[t];
-        // Crown outline: rounded towards the sides (sag 12 % of the width).
-        const double top = height - 0.12 * widths[t] * u * u;
-        for (int i = 0; i < top; ++i) {
-          const int y = arch == 0 ? bite - 2 - i : bite + 2 + i;
-          std::uint8_t* p = s.image.at(x, y);
-          if (gap) { p[0] = p[1] = p[2] = 12; continue; }
-          const double g = i / top;  // 0 at the bite, 1 at the gum
-          const double shade = 0.88 + 0.12 * std::cos(0.5 * kPi * u);
-          const double base[3] = {0.93, 0.90, 0.82}, cervical[3] = {0.86, 0.76, 0.58};
-          const double mix = std::max(0.0, g - 0.6) / 0.4;  // yellower in the last 40 %
-          for (int k = 0; k < 3; ++k)
-            p[k] = static_cast<std::uint8_t>(std::lround(255 * shade * ((1 - mix) * base[k] + mix * cervical[k])));
-          s.tooth[static_cast<size_t>(y) * w + x] = 1;
-        }
-      }
-    }
-    x0 += widths[t];
-  }
-  // Gums everywhere else, the bite line dark.
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      std::uint8_t* p = s.image.at(x, y);
-      const bool painted = p[0] || p[1] || p[2];
-      if (!painted) {
-        const bool bite_line = y >= bite - 2 && y < bite + 2 && x >= 24 && x < x0;
-        const double c[3] = {0.80 + 0.03 * std::sin(0.4 * x + 0.2 * y), 0.30, 0.32};
-        for (int k = 0; k < 3; ++k) p[k] = bite_line ? 10 : static_cast<std::uint8_t>(std::lround(255 * c[k]));
-      }
-    }
-  // Lips: the upper lip's edge 8 rows above the tallest crown, dipping (a
-  // cosine bump) over x = 70..170; the lower lip rising over x = 170..260.
-  for (int x = 0; x < w; ++x) {
-    const double bu = x > 70 && x < 170 ? 0.5 - 0.5 * std::cos(2 * kPi * (x - 70) / 100.0) : 0;
-    const double bl = x > 170 && x < 260 ? 0.5 - 0.5 * std::cos(2 * kPi * (x - 170) / 90.0) : 0;
-    const double upper_edge = bite - 2 - 52 - 8 + upper_dip * bu;
-    const double lower_edge = bite + 2 + 42 + 8 - lower_rise * bl;
-    for (int y = 0; y < h; ++y)
-      if (y < upper_edge || y > lower_edge) {
-        std::uint8_t* p = s.image.at(x, y);
-        p[0] = 176; p[1] = 66; p[2] = 72;  // lip red
-        s.lip[static_cast<size_t>(y) * w + x] = 1;
-      }
-  }
-  return s;
+  lk::SyntheticSmileOptions o;
+  o.upper_dip = upper_dip;
+  o.lower_rise = lower_rise;
+  return lk::make_synthetic_smile(o);
 }
 
 struct BandError {
