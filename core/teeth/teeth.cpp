@@ -1,6 +1,7 @@
 // Tarini et al. 2002, Sec. 4.2: teeth texture from one photo.
 #include "teeth/teeth.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 
@@ -96,40 +97,117 @@ int reconstruct_hidden_teeth(int w, int h, const TeethOptions& o, std::vector<Te
       run[static_cast<size_t>(x)] = n;
       gap[static_cast<size_t>(x)] = n == 0 || voids >= o.gap_void_fraction * n;
     }
-    // Teeth: runs of non-gap columns, cut into windows when no gap separates
-    // them (tight contacts).
-    struct Tooth { int a, b, tallest; };
+    // Teeth: runs of non-gap columns, split where the visible height has a
+    // marked local minimum (the gum papilla between two teeth in tight
+    // contact) and cut into windows when nothing separates them.
+    struct Tooth { int a, b, tallest; double fit[3]; bool arched; };
     std::vector<Tooth> teeth;
+    const int radius = std::max(1, w / 200), min_width = std::max(3, w / 50);
+    std::vector<double> smooth(static_cast<size_t>(w), 0.0);
+    for (int x = 0; x < w; ++x) {
+      double acc = 0;
+      int n = 0;
+      for (int k = std::max(0, x - radius); k <= std::min(w - 1, x + radius); ++k) { acc += run[static_cast<size_t>(k)]; ++n; }
+      smooth[static_cast<size_t>(x)] = acc / n;
+    }
+    auto is_split = [&](int x, int lo, int hi) {
+      if (x - lo < min_width || hi - x < min_width) return false;
+      double left = 0, right = 0;
+      const double here = smooth[static_cast<size_t>(x)];
+      for (int k = x - min_width; k <= x + min_width; ++k) {
+        if (smooth[static_cast<size_t>(k)] < here) return false;  // not the minimum of its neighbourhood
+        (k < x ? left : right) = std::max(k < x ? left : right, smooth[static_cast<size_t>(k)]);
+      }
+      return std::min(left, right) - here > 0.1 * std::max(left, right);
+    };
     for (int a = 0; a < w;) {
       if (gap[static_cast<size_t>(a)]) { ++a; continue; }
-      int b = a;
-      while (b + 1 < w && !gap[static_cast<size_t>(b + 1)] && b + 1 - a < window) ++b;
-      int tallest = 0;
-      for (int x = a; x <= b; ++x) tallest = std::max(tallest, run[static_cast<size_t>(x)]);
-      teeth.push_back({a, b, tallest});
-      a = b + 1;
-    }
-    for (size_t t = 0; t < teeth.size(); ++t) {
-      const int a = teeth[t].a, b = teeth[t].b;
-      // A tooth the lip hides across its whole width shows no full-height
-      // column: its neighbours (two on each side) tell how tall it should be.
-      std::vector<int> near;
-      for (size_t u = t >= 2 ? t - 2 : 0; u <= std::min(teeth.size() - 1, t + 2); ++u)
-        if (u != t) near.push_back(teeth[u].tallest);
-      double tallest = teeth[t].tallest;
-      if (!near.empty() && o.neighbour_height_factor > 0) {
-        // The lower median: with two neighbours, the shorter one.
-        const size_t m = (near.size() - 1) / 2;
-        std::nth_element(near.begin(), near.begin() + static_cast<long>(m), near.end());
-        tallest = std::max(tallest, o.neighbour_height_factor * near[m]);
+      int end = a;
+      while (end + 1 < w && !gap[static_cast<size_t>(end + 1)]) ++end;
+      for (int lo = a; lo <= end;) {
+        int hi = lo;
+        while (hi + 1 <= end && hi + 1 - lo < window && !is_split(hi + 1, lo, end)) ++hi;
+        Tooth t{lo, hi, 0, {0, 0, 0}, false};
+        for (int x = lo; x <= hi; ++x) t.tallest = std::max(t.tallest, run[static_cast<size_t>(x)]);
+        teeth.push_back(t);
+        lo = hi + 1;
       }
-      const double centre = 0.5 * (a + b), half = std::max(0.5, 0.5 * (b - a + 1));
-      const double sag = o.crown_arc * (b - a + 1);
-      for (int x = a; x <= b; ++x) {
+      a = end + 1;
+    }
+    // Each tooth's end as seen: a parabola (in the column offset across the
+    // tooth) fitted to its upper points only, so columns a lip cuts lower do
+    // not pull it down. A crown whose gum line is visible is arched (higher in
+    // its middle); a lip's edge runs flat or concave across a tooth.
+    for (Tooth& t : teeth) {
+      const double centre = 0.5 * (t.a + t.b), half = std::max(0.5, 0.5 * (t.b - t.a + 1));
+      const double tol = std::max(2.0, 0.03 * t.tallest);
+      std::vector<char> use(static_cast<size_t>(t.b - t.a + 1), 1);
+      for (int iter = 0; iter < 6; ++iter) {
+        Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+        Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+        for (int x = t.a; x <= t.b; ++x) {
+          if (!use[static_cast<size_t>(x - t.a)]) continue;
+          const double u = (x - centre) / half;
+          const Eigen::Vector3d phi(1, u, u * u);
+          A += phi * phi.transpose();
+          rhs += phi * run[static_cast<size_t>(x)];
+        }
+        Eigen::Vector3d c = A.ldlt().solve(rhs);
+        if (!c.allFinite()) c = Eigen::Vector3d(t.tallest, 0, 0);
+        if (c[2] > 0) {  // concave: a lip's edge; keep the line through it
+          Eigen::Matrix2d A2 = A.topLeftCorner<2, 2>();
+          const Eigen::Vector2d l = A2.ldlt().solve(rhs.head<2>());
+          c = l.allFinite() ? Eigen::Vector3d(l[0], l[1], 0) : Eigen::Vector3d(t.tallest, 0, 0);
+        }
+        for (int k = 0; k < 3; ++k) t.fit[k] = c[k];
+        bool changed = false;
+        for (int x = t.a; x <= t.b; ++x) {
+          const double u = (x - centre) / half;
+          const char keep = run[static_cast<size_t>(x)] >= c[0] + c[1] * u + c[2] * u * u - tol;
+          changed |= keep != use[static_cast<size_t>(x - t.a)];
+          use[static_cast<size_t>(x - t.a)] = keep;
+        }
+        if (!changed) break;
+      }
+      t.arched = -t.fit[2] > 0.3 * o.crown_arc * (t.b - t.a + 1);
+    }
+    std::vector<int> outline(static_cast<size_t>(w), 0);
+    std::vector<double> tolerance(static_cast<size_t>(w), 0.0);
+    for (size_t t = 0; t < teeth.size(); ++t) {
+      const Tooth& tooth = teeth[t];
+      const double centre = 0.5 * (tooth.a + tooth.b), half = std::max(0.5, 0.5 * (tooth.b - tooth.a + 1));
+      // A flat-topped tooth may be hidden across its whole width: its
+      // neighbours (two on each side) tell how tall it should be; the crown
+      // outline then is the generic arc.
+      double generic = 0;
+      if (!tooth.arched && o.neighbour_height_factor > 0) {
+        std::vector<int> near;
+        for (size_t u = t >= 2 ? t - 2 : 0; u <= std::min(teeth.size() - 1, t + 2); ++u)
+          if (u != t) near.push_back(teeth[u].tallest);
+        if (!near.empty()) {
+          const size_t m = (near.size() - 1) / 2;  // the lower median: with two neighbours, the shorter
+          std::nth_element(near.begin(), near.begin() + static_cast<long>(m), near.end());
+          generic = std::max<double>(tooth.tallest, o.neighbour_height_factor * near[m]);
+        }
+      }
+      for (int x = tooth.a; x <= tooth.b; ++x) {
         const double u = (x - centre) / half;
-        const int outline = static_cast<int>(std::lround(tallest - sag * u * u));
+        const double fitted = tooth.fit[0] + tooth.fit[1] * u + tooth.fit[2] * u * u;
+        const double arc = generic - o.crown_arc * (tooth.b - tooth.a + 1) * u * u;
+        // Never above the tooth's own tallest column unless the neighbours
+        // vouch for it (a fitted parabola can overshoot at the sides).
+        const double limit = std::max<double>(tooth.tallest, generic);
+        outline[static_cast<size_t>(x)] = static_cast<int>(std::lround(std::min(limit, std::max(fitted, arc))));
+        // A visible gum line is not a parabola exactly: columns within the
+        // fit's tolerance are as seen.
+        tolerance[static_cast<size_t>(x)] = std::max(2.0, 0.03 * tooth.tallest);
+      }
+    }
+    for (int x = 0; x < w; ++x) {
+      {
         const int seen = run[static_cast<size_t>(x)];
-        if (outline <= seen) continue;
+        const int outline_x = outline[static_cast<size_t>(x)];
+        if (gap[static_cast<size_t>(x)] || outline_x <= seen + tolerance[static_cast<size_t>(x)]) continue;
         // Fill colour: the column's outermost visible tooth pixels.
         double c[3] = {0, 0, 0};
         int k = 0;
@@ -141,7 +219,7 @@ int reconstruct_hidden_teeth(int w, int h, const TeethOptions& o, std::vector<Te
         }
         const int outer_y = start + dir * (seen - 1);
         const TeethClass fill = cls(x, outer_y) == TeethClass::Void || k == 0 ? TeethClass::Void : TeethClass::Tooth;
-        for (int i = seen; i < outline; ++i) {
+        for (int i = seen; i < outline_x; ++i) {
           const int y = start + dir * i;
           if (y < 0 || y >= h || cls(x, y) != TeethClass::Gum) break;
           const size_t id = static_cast<size_t>(y) * w + x;

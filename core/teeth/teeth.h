@@ -9,13 +9,17 @@
 // have been covered by the lips ... some simple heuristics to include the
 // missing part of the tooth roots"): the upper teeth are the run of non-gum
 // pixels above the occlusal (bite) row, the lower ones the run below it. A
-// tooth is a run of columns between interdental gap columns; its outline is
-// a generic crown top: flat at the tooth's tallest visible column, rounded
-// down towards its sides (an arc of sag crown_arc * tooth width), and at
-// least neighbour_height_factor of its neighbours' median height. Gum pixels
-// (the lip) between a column's visible tooth end and that outline become
-// tooth, coloured from the same column's own outermost visible tooth pixels
-// (or void, where the column's visible end is a gap).
+// tooth is a run of columns between interdental gap columns (or marked
+// minima of the visible height: papillae between teeth in contact). Its
+// visible end is fitted by a parabola through its upper points only, so
+// columns a lip cuts short do not pull it down; those columns are filled up
+// to the fit. A tooth whose end is flat or concave (a lip's edge, not an
+// arched gum line) may be hidden across its whole width: it is raised to
+// neighbour_height_factor of its neighbours' median height, with a generic
+// crown arc (sag crown_arc * width). Fills take the colour of the column's
+// own outermost visible tooth pixels (void where that end is a gap).
+// Photos whose gums are visible (intraoral, retracted lips) have nothing
+// hidden; there the fill invents 1.6-2.8 % of the teeth pixels (premolars).
 //
 // Input: RGB(A) photo, width x height. Output: RGBA texture of the same size,
 // voids transparent (alpha 0), gums/lips recoloured, teeth equalized.
