@@ -49,50 +49,57 @@ long dilate_rings(ImageF& image, std::vector<char>& known, int texels) {
 
 long push_pull_fill(ImageF& image, const std::vector<char>& known) {
   const int w0 = image.width, h0 = image.height, c = image.channels;
-  if (w0 <= 0 || h0 <= 0 || c <= 0 || known.size() != static_cast<size_t>(w0) * h0) return 0;
-  // Push: level k+1 averages the known texels of each 2x2 block of level k.
-  // Colours are stored normalized, weight 1 where anything was known.
+  if (w0 <= 0 || h0 <= 0 || c <= 0 || c > 8 || known.size() != static_cast<size_t>(w0) * h0) return 0;
+  if (std::none_of(known.begin(), known.end(), [](char k) { return k != 0; })) return 0;
+  // Push: level k+1 holds, per 2x2 block of level k, the weighted mean
+  // colour and the mean weight (the block's coverage). Coverage fractions,
+  // not "any child known" flags: a coarse texel that is only partly covered
+  // must not overrule the smooth fill around it, or the fill shows the
+  // power-of-two block grid (lines along the texture's middle).
   struct Level {
     int w, h;
-    std::vector<float> color;   // w * h * c
-    std::vector<char> has;      // w * h
+    std::vector<float> color;   // w * h * c, weighted mean
+    std::vector<float> weight;  // w * h, coverage in [0, 1]
   };
   std::vector<Level> levels;
-  levels.push_back({w0, h0, {}, known});
-  levels[0].color = image.pixels;
-  bool any = std::any_of(known.begin(), known.end(), [](char k) { return k != 0; });
-  if (!any) return 0;
+  {
+    Level l0{w0, h0, image.pixels, std::vector<float>(known.size())};
+    for (size_t i = 0; i < known.size(); ++i) l0.weight[i] = known[i] ? 1.f : 0.f;
+    levels.push_back(std::move(l0));
+  }
   while (levels.back().w > 1 || levels.back().h > 1) {
     const Level& f = levels.back();
     Level g{(f.w + 1) / 2, (f.h + 1) / 2, {}, {}};
     g.color.assign(static_cast<size_t>(g.w) * g.h * c, 0.f);
-    g.has.assign(static_cast<size_t>(g.w) * g.h, 0);
+    g.weight.assign(static_cast<size_t>(g.w) * g.h, 0.f);
     for (int y = 0; y < g.h; ++y) {
       for (int x = 0; x < g.w; ++x) {
         float sum[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-        int n = 0;
+        float wsum = 0;
+        int children = 0;
         for (int dy = 0; dy < 2; ++dy) {
           for (int dx = 0; dx < 2; ++dx) {
             const int xx = 2 * x + dx, yy = 2 * y + dy;
             if (xx >= f.w || yy >= f.h) continue;
+            ++children;
             const size_t i = static_cast<size_t>(yy) * f.w + xx;
-            if (!f.has[i]) continue;
-            for (int k = 0; k < c && k < 8; ++k) sum[k] += f.color[i * c + k];
-            ++n;
+            const float wi = f.weight[i];
+            if (wi <= 0.f) continue;
+            for (int k = 0; k < c; ++k) sum[k] += wi * f.color[i * c + k];
+            wsum += wi;
           }
         }
-        if (n == 0) continue;
         const size_t o = static_cast<size_t>(y) * g.w + x;
-        g.has[o] = 1;
-        for (int k = 0; k < c && k < 8; ++k) g.color[o * c + k] = sum[k] / n;
+        if (wsum <= 0.f) continue;
+        g.weight[o] = wsum / children;
+        for (int k = 0; k < c; ++k) g.color[o * c + k] = sum[k] / wsum;
       }
     }
     levels.push_back(std::move(g));
   }
-  // Pull: from the coarsest level (1x1, known since something is known)
-  // down, each unknown texel takes the bilinear interpolation of the (now
-  // complete) coarser level at its centre, so the fill is smooth.
-  long filled = 0;
+  // Pull: from the coarsest level (1x1, coverage > 0) down, every texel
+  // becomes w * own + (1 - w) * (bilinear interpolation of the completed
+  // coarser level at its centre); known texels of level 0 (w = 1) stay.
   for (int k = static_cast<int>(levels.size()) - 2; k >= 0; --k) {
     Level& f = levels[k];
     const Level& g = levels[k + 1];
@@ -102,7 +109,8 @@ long push_pull_fill(ImageF& image, const std::vector<char>& known) {
       const float ty = static_cast<float>(gy - y0);
       for (int x = 0; x < f.w; ++x) {
         const size_t i = static_cast<size_t>(y) * f.w + x;
-        if (f.has[i]) continue;
+        const float wi = f.weight[i];
+        if (wi >= 1.f) continue;
         const double gx = std::clamp((x + 0.5) / 2.0 - 0.5, 0.0, static_cast<double>(g.w - 1));
         const int x0 = static_cast<int>(gx), x1 = std::min(x0 + 1, g.w - 1);
         const float tx = static_cast<float>(gx - x0);
@@ -110,12 +118,15 @@ long push_pull_fill(ImageF& image, const std::vector<char>& known) {
         const float* b = &g.color[(static_cast<size_t>(y0) * g.w + x1) * c];
         const float* d = &g.color[(static_cast<size_t>(y1) * g.w + x0) * c];
         const float* e = &g.color[(static_cast<size_t>(y1) * g.w + x1) * c];
-        for (int ch = 0; ch < c; ++ch)
-          f.color[i * c + ch] = (1 - ty) * ((1 - tx) * a[ch] + tx * b[ch]) + ty * ((1 - tx) * d[ch] + tx * e[ch]);
-        if (k == 0) ++filled;
+        for (int ch = 0; ch < c; ++ch) {
+          const float up = (1 - ty) * ((1 - tx) * a[ch] + tx * b[ch]) + ty * ((1 - tx) * d[ch] + tx * e[ch]);
+          f.color[i * c + ch] = wi * f.color[i * c + ch] + (1 - wi) * up;
+        }
       }
     }
   }
+  long filled = 0;
+  for (char k : known) filled += k == 0;
   image.pixels = std::move(levels[0].color);
   return filled;
 }

@@ -301,6 +301,15 @@ Status resample_feathered(const TriMesh& mesh, const std::vector<Vec2>& uv, cons
       const Tri& t = mesh.triangles[f];
       const Vec3 b = maps[f].ok ? maps[f].at(x, y) : Vec3(1.0 / 3, 1.0 / 3, 1.0 / 3);
       const Vec3 p = b[0] * mesh.positions[t[0]] + b[1] * mesh.positions[t[1]] + b[2] * mesh.positions[t[2]];
+      // A triangle with an unbound corner (case 3) lies, at least partly,
+      // where no photo sees the surface: photo lookups inside it could read
+      // whatever occludes it. It keeps the hole-filled interpolation.
+      if (!binding.bound(t[0]) || !binding.bound(t[1]) || !binding.bound(t[2])) {
+        const Vec3 c = b[0] * vertex_colors[t[0]] + b[1] * vertex_colors[t[1]] + b[2] * vertex_colors[t[2]];
+        float* out = texture.at(x, y);
+        for (int k = 0; k < 3; ++k) out[k] = static_cast<float>(c[k]);
+        continue;
+      }
       const std::uint64_t any = binding.valid[t[0]] | binding.valid[t[1]] | binding.valid[t[2]];
       // One lookup per photo valid at any corner; a photo that cannot
       // project P is dropped from every corner's sum.
