@@ -129,7 +129,7 @@ int run_teeth(const Args& args) {
   const char* cmd = "teeth";
   for (const auto& [key, values] : args.options)
     if (key != "photo" && key != "out" && key != "generic-out" && key != "synthetic-smile" && key != "upper-dip" &&
-        key != "lower-rise" && key != "no-reconstruct" && key != "input-out") {
+        key != "lower-rise" && key != "no-reconstruct" && key != "input-out" && key != "crop") {
       fail(cmd, "unknown option --" + key + " (see `likeness help`)");
       return 2;
     }
@@ -156,6 +156,21 @@ int run_teeth(const Args& args) {
   } else if (Status s = load_image_file(args.get("photo"), photo, 3); !s) {
     return fail(cmd, s.message);
   }
+  if (args.has("crop")) {  // X,Y,W,H: the front teeth's part of a larger photo
+    int cx = 0, cy = 0, cw = 0, ch = 0;
+    char tail = 0;
+    if (std::sscanf(args.get("crop").c_str(), "%d,%d,%d,%d%c", &cx, &cy, &cw, &ch, &tail) != 4 || cx < 0 || cy < 0 ||
+        cw < 8 || ch < 8 || cx + cw > photo.width || cy + ch > photo.height)
+      return fail(cmd, "--crop takes X,Y,W,H inside the " + std::to_string(photo.width) + "x" +
+                           std::to_string(photo.height) + " photo (W, H >= 8)");
+    Image cropped = Image::make(cw, ch, photo.channels);
+    for (int y = 0; y < ch; ++y)
+      for (int x = 0; x < cw; ++x)
+        for (int k = 0; k < photo.channels; ++k) cropped.at(x, y)[k] = photo.at(cx + x, cy + y)[k];
+    photo = std::move(cropped);
+    if (args.has("input-out"))
+      if (Status s = save_png_file(args.get("input-out"), photo); !s) return fail(cmd, s.message);
+  }
   TeethOptions options;
   options.reconstruct_hidden = !args.has("no-reconstruct");
   TeethResult r;
@@ -179,7 +194,7 @@ int run_teeth(const Args& args) {
   return 0;
 }
 
-Registrar reg_teeth({"teeth", "likeness teeth --photo F|--synthetic-smile [--upper-dip R --lower-rise R --input-out smile.png] --out teeth.png [--generic-out arch.png] [--no-reconstruct]",
+Registrar reg_teeth({"teeth", "likeness teeth --photo F [--crop X,Y,W,H] | --synthetic-smile [--upper-dip R --lower-rise R] [--input-out in.png] --out teeth.png [--generic-out arch.png] [--no-reconstruct]",
                      "RGBA teeth texture from one photo: voids transparent, gums recoloured, colour equalized",
                      run_teeth});
 
