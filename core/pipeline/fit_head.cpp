@@ -69,6 +69,40 @@ Status zero_pocket_displacements(const HeadAnnotations& ann, MultiresMesh& mr, i
   return evaluate(mr);
 }
 
+// Searches orientations (face_alignment.h) for the cloud in the head frame;
+// when another fits clearly better, either rotates the cloud
+// (and scan_to_head) to it with a note, or fails with the options to pass.
+Status check_orientation(const GenericHead& generic, const FitHeadOptions& options, const Mat3& given,
+                         PointCloud& cloud, FitHeadResult& out, const ProgressFn& progress) {
+  if (options.orientation_check == FitHeadOptions::OrientationCheck::Off) return Status::success();
+  const Status st = guess_orientation(generic.mesh, generic.annotations, cloud, options.orientation,
+                                      out.orientation, progress);
+  if (st.code == ErrorCode::Cancelled) return st;
+  if (!st) return Status::success();  // nothing aligns: the head checks below give the reason
+  out.orientation_checked = true;
+  if (!out.orientation.differs) return Status::success();
+  // The better orientation in the scan's own frame.
+  const Mat3 scan_to_upright = out.orientation.rotation * given;
+  const Vec3 facing = scan_to_upright.transpose() * Vec3::UnitZ();
+  const Vec3 up = scan_to_upright.transpose() * Vec3::UnitY();
+  auto numbers = [](const Vec3& v) {
+    std::ostringstream s;
+    s.precision(2);
+    for (int k = 0; k < 3; ++k) s << (k ? " " : "") << (std::abs(v[k]) < 5e-3 ? 0.0 : v[k]);
+    return s.str();
+  };
+  const std::string what = "the scan seems to face " + axis_name(facing) + " with " + axis_name(up) +
+                           " up (there its closest-point error is " + pct(out.orientation.score_given / out.orientation.score_best) +
+                           "x smaller than as given)";
+  const std::string flags = "--facing " + numbers(facing) + " --up " + numbers(up);
+  if (options.orientation_check == FitHeadOptions::OrientationCheck::Hint)
+    return Status::error(ErrorCode::NotAHead, what + "; try " + flags);
+  for (Vec3& p : cloud.positions) p = out.orientation.rotation * p;
+  out.scan_to_head.A = out.unit_to_metres * scan_to_upright;
+  out.notes.push_back(what + ": turned it that way; pass " + flags + " to say so");
+  return Status::success();
+}
+
 }  // namespace
 
 Status orientation_from_conventions(const Vec3& up, const Vec3& facing, Mat3& rotation) {
@@ -163,8 +197,26 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
 
   // 1. Initial alignment.
   if (observer.started) observer.started("initial_alignment");
-  st = align_initial(generic.mesh, ann, cloud, options.align, out.alignment, progress);
-  if (!st) return with_context(st, "initial alignment");
+  st = check_orientation(generic, options, R, cloud, out, progress);
+  if (!st) return st;
+  st = estimate_coverage(cloud, options.coverage, out.coverage);
+  if (!st) return with_context(st, "coverage");
+  out.face_only = options.scan_kind == FitHeadOptions::ScanKind::FaceOnly ||
+                  (options.scan_kind == FitHeadOptions::ScanKind::Auto && out.coverage.face_only);
+  if (out.face_only) {
+    st = align_face(generic.mesh, ann, cloud, options.face_align, out.face_alignment, progress);
+    if (!st) return with_context(st, "initial alignment (face-only scan)");
+    out.alignment.linear = out.alignment.initial_linear = out.face_alignment.linear;
+    out.alignment.translation = out.alignment.initial_translation = out.face_alignment.translation;
+    out.alignment.aligned = generic.mesh;
+    transform(out.alignment.aligned, out.alignment.linear, out.alignment.translation);
+    out.notes.push_back("face-only scan (its upper part is " + pct(out.coverage.depth_to_width) +
+                        "x as deep as wide; a whole head is about 1.2x): aligned by closest points, and the "
+                        "unscanned back, scalp and ears keep the generic head's shape");
+  } else {
+    st = align_initial(generic.mesh, ann, cloud, options.align, out.alignment, progress);
+    if (!st) return with_context(st, "initial alignment");
+  }
   out.generic_to_head.A = out.alignment.linear;
   out.generic_to_head.t = out.alignment.translation;
   out.aligned = generic.mesh;

@@ -3,7 +3,12 @@
 // displaced Modified Butterfly levels out, with the paper's per-stage
 // accuracy figures.
 //
-//   1. initial alignment   align/initial_alignment.h  (Sec. 4.1)
+//   1. initial alignment   align/initial_alignment.h  (Sec. 4.1); a face-only
+//      scan (face_alignment.h: shallow upper part) is aligned by trimmed ICP
+//      instead, and the unobserved rest of the head keeps the generic shape.
+//      Before that, the orientation is checked by coarse ICP from every up
+//      axis and eight yaws (guess_orientation), so a scan in another
+//      convention is turned round with a note, or refused with a hint.
 //   2. local fitting       fit/local_fit.h             (Sec. 4.2)
 //   3. global fitting      fit/global_fit.h            (Sec. 4.3)
 //   4. subdivision         multires/multires.h         (Sec. 5)
@@ -27,6 +32,7 @@
 // Shapes: scan #P by 3; control #V by 3 / #F by 3 (the generic head's
 // connectivity); level l mesh #V_l by 3 / 4^l #F by 3.
 #pragma once
+#include "align/face_alignment.h"
 #include "align/initial_alignment.h"
 #include "common/progress.h"
 #include "common/status.h"
@@ -57,6 +63,19 @@ struct FitHeadOptions {
   bool measure_stages = true;        // compute the per-stage distance stats
   int stats_max_points = 0;          // measure on at most this many points (0: all)
   AlignOptions align;
+  // Partial scans: Auto measures the coverage (face_alignment.h); the
+  // others force one alignment.
+  enum class ScanKind { Auto, WholeHead, FaceOnly };
+  ScanKind scan_kind = ScanKind::Auto;
+  CoverageOptions coverage;
+  FaceAlignOptions face_align;
+  // Orientation check: Off trusts up/facing; Hint fails with NotAHead and a
+  // message naming the likely --up/--facing when the scan clearly fits
+  // better in another orientation; Auto rotates the scan to it and adds a
+  // note instead.
+  enum class OrientationCheck { Off, Hint, Auto };
+  OrientationCheck orientation_check = OrientationCheck::Auto;
+  OrientationOptions orientation;
   LocalFitOptions local;
   GlobalFitOptions global;
   // Displacement measurement; min_points raised from 3 to 12 so the sparse
@@ -104,7 +123,13 @@ struct FitHeadResult {
   MultiresMesh multires;        // levels over `control` with displacements
   std::vector<TriMesh> level_meshes;  // levels 1..L (displaced)
   std::vector<FitStageReport> stages;
-  AlignResult alignment;
+  AlignResult alignment;        // silhouette alignment (whole heads)
+  ScanCoverage coverage;
+  bool face_only = false;       // aligned by align_face
+  FaceAlignResult face_alignment;
+  OrientationGuess orientation; // when the check ran
+  bool orientation_checked = false;
+  std::vector<std::string> notes;  // what the user should know (auto-orientation, partial scan)
   LocalFitResult local_fit;
   GlobalFitResult global_fit;
   double near_fraction = 0;     // share of points near the aligned head (sanity check)

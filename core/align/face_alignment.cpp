@@ -1,0 +1,380 @@
+// ICP alignment for partial scans, coverage and orientation checks; see the header.
+#include "align/face_alignment.h"
+
+#include "mesh/geometry.h"
+#include "raycast/bvh.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+namespace lk {
+namespace {
+
+constexpr int kMinPoints = 10;
+
+double quantile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  const size_t k = static_cast<size_t>(std::clamp(q, 0.0, 1.0) * (values.size() - 1) + 0.5);
+  std::nth_element(values.begin(), values.begin() + k, values.end());
+  return values[k];
+}
+
+Status check_cloud(const PointCloud& cloud, const char* who) {
+  if (cloud.positions.empty()) return Status::error(ErrorCode::Empty, std::string(who) + ": the cloud has no points");
+  for (const Vec3& p : cloud.positions)
+    if (!p.allFinite()) return Status::error(ErrorCode::InvalidInput, std::string(who) + ": non-finite point");
+  if (cloud.size() < kMinPoints)
+    return Status::error(ErrorCode::InvalidInput, std::string(who) + ": fewer than " + std::to_string(kMinPoints) +
+                                                      " points");
+  return Status::success();
+}
+
+// Generic frame -> world axes: look -> +z, up -> +y (as align_initial).
+Status facing_matrix(const HeadAnnotations& ann, Mat3& facing) {
+  Vec3 look = ann.look.normalized(), up = ann.up.normalized();
+  if (!look.allFinite() || !up.allFinite() || std::fabs(look.dot(up)) > 0.5)
+    return Status::error(ErrorCode::InvalidInput, "align: the generic head's look and up directions are unusable");
+  up = (up - up.dot(look) * look).normalized();
+  Mat3 axes;
+  axes << up.cross(look), up, look;
+  facing = axes.transpose();
+  return Status::success();
+}
+
+// Mean of the points at or beyond the top `fraction` along +z: a nose tip
+// that one stray point does not move.
+Vec3 front_tip(const std::vector<Vec3>& points, double fraction) {
+  std::vector<double> z(points.size());
+  for (size_t i = 0; i < z.size(); ++i) z[i] = points[i].z();
+  const double cut = quantile(z, 1.0 - fraction);
+  Vec3 sum = Vec3::Zero();
+  int n = 0;
+  for (const Vec3& p : points)
+    if (p.z() >= cut) {
+      sum += p;
+      ++n;
+    }
+  return n ? Vec3(sum / n) : Vec3::Zero();
+}
+
+struct Similarity {
+  double s = 1;
+  Mat3 R = Mat3::Identity();
+  Vec3 t = Vec3::Zero();
+  Vec3 apply(const Vec3& g) const { return s * (R * g) + t; }
+  Vec3 inverse(const Vec3& p) const { return R.transpose() * (p - t) / s; }
+};
+
+struct IcpRun {
+  Similarity T;
+  double rms = 0, score = 0, inliers = 0;
+  int iterations = 0;
+};
+
+// Point-to-point ICP of the faced generic (tree over it) onto the samples.
+IcpRun run_icp(const MeshBvh& tree, const std::vector<Vec3>& samples, Similarity T, const FaceAlignOptions& o,
+               double clamp) {
+  IcpRun run;
+  std::vector<Vec3> model(samples.size());
+  std::vector<double> dist(samples.size());
+  double previous = -1;
+  for (int it = 0; it < o.max_iterations; ++it) {
+    for (size_t i = 0; i < samples.size(); ++i) {
+      const ClosestPoint c = closest_point(tree, T.inverse(samples[i]));
+      model[i] = c.point;
+      dist[i] = (T.apply(c.point) - samples[i]).norm();
+    }
+    const double median = quantile(dist, 0.5);
+    const double trim = std::max(o.trim_factor * median, 1e-12);
+    std::vector<int> keep;
+    for (size_t i = 0; i < samples.size(); ++i)
+      if (dist[i] <= trim) keep.push_back(static_cast<int>(i));
+    run.iterations = it + 1;
+    double sum2 = 0;
+    for (int i : keep) sum2 += dist[i] * dist[i];
+    run.rms = keep.empty() ? 0 : std::sqrt(sum2 / keep.size());
+    run.inliers = double(keep.size()) / samples.size();
+    double score = 0;
+    for (double d : dist) score += std::min(d, clamp) * std::min(d, clamp);
+    run.score = score / samples.size();
+    run.T = T;
+    if (keep.size() < 4) break;
+    if (previous >= 0 && std::fabs(previous - run.rms) <= o.relative_tolerance * previous) break;
+    previous = run.rms;
+    Eigen::Matrix3Xd src(3, keep.size()), dst(3, keep.size());
+    for (size_t k = 0; k < keep.size(); ++k) {
+      src.col(k) = model[keep[k]];
+      dst.col(k) = samples[keep[k]];
+    }
+    const Eigen::Matrix4d M = Eigen::umeyama(src, dst, true);
+    Similarity next;
+    const Mat3 sR = M.topLeftCorner<3, 3>();
+    next.s = std::cbrt(sR.determinant());
+    if (!(next.s > 0) || !std::isfinite(next.s)) break;
+    next.R = sR / next.s;
+    next.t = M.topRightCorner<3, 1>();
+    T = next;
+  }
+  return run;
+}
+
+}  // namespace
+
+Status estimate_coverage(const PointCloud& cloud, const CoverageOptions& o, ScanCoverage& out) {
+  out = ScanCoverage{};
+  Status st = check_cloud(cloud, "coverage");
+  if (!st) return st;
+  if (!(o.slab_fraction > 0 && o.slab_fraction <= 1) || !(o.outlier_fraction >= 0 && o.outlier_fraction < 0.2))
+    return Status::error(ErrorCode::InvalidInput, "coverage: slab or outlier fraction out of range");
+  const double q = o.outlier_fraction;
+  std::vector<double> v(cloud.positions.size());
+  Vec3 lo, hi;
+  for (int a = 0; a < 3; ++a) {
+    for (size_t i = 0; i < v.size(); ++i) v[i] = cloud.positions[i][a];
+    lo[a] = quantile(v, q);
+    hi[a] = quantile(v, 1 - q);
+  }
+  out.extent = hi - lo;
+  const double bottom = hi.y() - o.slab_fraction * out.extent.y();
+  std::vector<double> xs, zs;
+  for (const Vec3& p : cloud.positions)
+    if (p.y() >= bottom) {
+      xs.push_back(p.x());
+      zs.push_back(p.z());
+    }
+  if (xs.size() < 3) return Status::error(ErrorCode::NotAHead, "coverage: no points in the upper part of the cloud");
+  out.slab_width = quantile(xs, 1 - q) - quantile(xs, q);
+  out.slab_depth = quantile(zs, 1 - q) - quantile(zs, q);
+  out.depth_to_width = out.slab_width > 0 ? out.slab_depth / out.slab_width : 0;
+  out.face_only = out.depth_to_width < o.face_only_depth_ratio;
+  return Status::success();
+}
+
+namespace {
+
+struct Searcher {
+  MeshBvh tree;
+  Mat3 facing = Mat3::Identity();
+  std::vector<Vec3> faced;  // generic positions, faced
+  Vec3 tip_g = Vec3::Zero();
+  double clamp = 0;
+
+  Status build(const TriMesh& generic, const HeadAnnotations& ann, const PointCloud& cloud, double clamp_fraction) {
+    Status st = facing_matrix(ann, facing);
+    if (!st) return st;
+    TriMesh m;
+    m.triangles = generic.triangles;
+    m.positions.reserve(generic.positions.size());
+    for (const Vec3& p : generic.positions) m.positions.push_back(facing * p);
+    faced = m.positions;
+    st = build_bvh(m, tree);
+    if (!st) return with_context(st, "align_face");
+    tip_g = front_tip(faced, 0.002);
+    clamp = clamp_fraction * bounding_box(cloud.positions).diagonal();
+    return Status::success();
+  }
+
+  // The start for a cloud seen through Q (cloud -> a frame where it is
+  // upright and faces +z): nose tips together, and the scale that makes the
+  // generic's part inside the cloud's nose-relative box as wide as the cloud
+  // (a fixed point: that box in generic units shrinks as the scale grows).
+  bool start(const std::vector<Vec3>& cloud, const Mat3& Q, double relative_scale, Similarity& T) const {
+    std::vector<Vec3> turned;
+    turned.reserve(cloud.size());
+    for (const Vec3& p : cloud) turned.push_back(Q * p);
+    const Vec3 tip_c = front_tip(turned, 0.002);
+    const BBox box = bounding_box(turned);
+    const Vec3 lo = box.min - tip_c, hi = box.max - tip_c;
+    const double width_c = box.size().x();
+    double s = width_c / std::max(1e-300, bounding_box(faced).size().x());
+    for (int iter = 0; iter < 20; ++iter) {
+      double x0 = 1e300, x1 = -1e300;
+      for (const Vec3& p : faced) {
+        const Vec3 r = s * (p - tip_g);
+        if (r.y() < lo.y() || r.y() > hi.y() || r.z() < lo.z()) continue;
+        x0 = std::min(x0, r.x());
+        x1 = std::max(x1, r.x());
+      }
+      if (!(x1 > x0)) break;
+      const double s_new = s * width_c / (x1 - x0);
+      const bool settled = std::fabs(s_new - s) < 1e-4 * s;
+      s = s_new;
+      if (settled) break;
+    }
+    if (!(s > 0) || !std::isfinite(s)) return false;
+    // In the turned frame: x' = s g + (tip_c - s tip_g); back: x = Q^T x'.
+    T.s = s * relative_scale;
+    T.R = Q.transpose();
+    T.t = Q.transpose() * (tip_c - T.s * tip_g);
+    return true;
+  }
+};
+
+std::vector<Vec3> subset(const std::vector<Vec3>& points, int n, std::uint32_t seed) {
+  std::vector<Vec3> out = points;
+  if (static_cast<int>(out.size()) > n) {
+    std::mt19937 rng(seed);
+    std::shuffle(out.begin(), out.end(), rng);
+    out.resize(n);
+  }
+  return out;
+}
+
+Mat3 yaw(double degrees) {
+  return Eigen::AngleAxisd(degrees * 3.14159265358979323846 / 180.0, Vec3::UnitY()).toRotationMatrix();
+}
+
+}  // namespace
+
+Status align_face(const TriMesh& generic, const HeadAnnotations& ann, const PointCloud& cloud,
+                  const FaceAlignOptions& o, FaceAlignResult& out, const ProgressFn& progress) {
+  out = FaceAlignResult{};
+  Status st = check_cloud(cloud, "align_face");
+  if (!st) return st;
+  if (generic.triangles.empty()) return Status::error(ErrorCode::Empty, "align_face: the generic head has no triangles");
+  if (o.max_points < kMinPoints || o.coarse_points < kMinPoints || o.max_iterations < 1 ||
+      o.coarse_iterations < 1 || o.start_scales.empty() || o.start_yaws_deg.empty() || !(o.trim_factor > 1) ||
+      !(o.score_clamp_fraction > 0))
+    return Status::error(ErrorCode::InvalidInput, "align_face: an option is out of range");
+  Searcher search;
+  st = search.build(generic, ann, cloud, o.score_clamp_fraction);
+  if (!st) return st;
+
+  const std::vector<Vec3> coarse = subset(cloud.positions, o.coarse_points, o.seed);
+  FaceAlignOptions coarse_options = o;
+  coarse_options.max_iterations = o.coarse_iterations;
+  bool have = false;
+  IcpRun best;
+  const int total = static_cast<int>(o.start_yaws_deg.size() * o.start_scales.size());
+  for (double yaw_deg : o.start_yaws_deg)
+    for (double relative : o.start_scales) {
+      Similarity T0;
+      if (!search.start(cloud.positions, yaw(yaw_deg), relative, T0)) continue;
+      const IcpRun run = run_icp(search.tree, coarse, T0, coarse_options, search.clamp);
+      out.iterations += run.iterations;
+      ++out.starts;
+      if (run.inliers > 0 && (!have || run.score < best.score)) {
+        best = run;
+        have = true;
+      }
+      if (!report(progress, "align", 0.7 * out.starts / total))
+        return Status::error(ErrorCode::Cancelled, "align_face: cancelled");
+    }
+  if (!have) return Status::error(ErrorCode::NotAHead, "align_face: no scan point corresponds to the head");
+  best = run_icp(search.tree, subset(cloud.positions, o.max_points, o.seed + 1), best.T, o, search.clamp);
+  out.iterations += best.iterations;
+  if (!(best.inliers > 0)) return Status::error(ErrorCode::NotAHead, "align_face: no scan point corresponds to the head");
+  out.scale = best.T.s;
+  out.rotation = best.T.R;
+  out.linear = best.T.s * best.T.R * search.facing;
+  out.translation = best.T.t;
+  out.facing = best.T.R * Vec3::UnitZ();
+  out.up = best.T.R * Vec3::UnitY();
+  out.rms = best.rms;
+  out.score = best.score;
+  out.inlier_fraction = best.inliers;
+  return report(progress, "align", 1.0) ? Status::success()
+                                        : Status::error(ErrorCode::Cancelled, "align_face: cancelled");
+}
+
+namespace {
+
+double angle_deg(const Vec3& a, const Vec3& b) {
+  return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180.0 / 3.14159265358979323846;
+}
+
+Vec3 snap(const Vec3& d, double snap_deg) {
+  for (int a = 0; a < 3; ++a)
+    for (int sign : {1, -1}) {
+      Vec3 e = Vec3::Zero();
+      e[a] = sign;
+      if (angle_deg(d, e) <= snap_deg) return e;
+    }
+  return d.normalized();
+}
+
+}  // namespace
+
+Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, const PointCloud& cloud,
+                         const OrientationOptions& o, OrientationGuess& out, const ProgressFn& progress) {
+  out = OrientationGuess{};
+  Status st = check_cloud(cloud, "guess_orientation");
+  if (!st) return st;
+  if (!(o.better_ratio > 0 && o.better_ratio <= 1) || o.points < kMinPoints || o.iterations < 1)
+    return Status::error(ErrorCode::InvalidInput, "guess_orientation: an option is out of range");
+  if (generic.triangles.empty())
+    return Status::error(ErrorCode::Empty, "guess_orientation: the generic head has no triangles");
+  Searcher search;
+  FaceAlignOptions fo;
+  fo.max_iterations = o.iterations;
+  st = search.build(generic, ann, cloud, fo.score_clamp_fraction);
+  if (!st) return st;
+  const std::vector<Vec3> samples = subset(cloud.positions, o.points, fo.seed);
+  const std::vector<Vec3> axes = {Vec3::UnitX(), -Vec3::UnitX(), Vec3::UnitY(), -Vec3::UnitY(),
+                                  Vec3::UnitZ(), -Vec3::UnitZ()};
+  bool have_best = false, have_given = false;
+  IcpRun best;
+  int done = 0;
+  for (const Vec3& up : axes) {
+    // A facing axis perpendicular to up, then yaws about up in 45 degree steps.
+    const Vec3 look0 = std::fabs(up.z()) < 0.5 ? Vec3(Vec3::UnitZ()) : Vec3(Vec3::UnitX());
+    for (int k = 0; k < 8; ++k) {
+      const Vec3 look = Eigen::AngleAxisd(k * 3.14159265358979323846 / 4, up) * look0;
+      Mat3 Q;  // cloud -> candidate upright frame
+      Q.row(0) = up.cross(look).transpose();
+      Q.row(1) = up.transpose();
+      Q.row(2) = look.transpose();
+      Similarity T0;
+      ++done;
+      if (!report(progress, "orientation", done / 48.0))
+        return Status::error(ErrorCode::Cancelled, "guess_orientation: cancelled");
+      if (!search.start(samples, Q, 1.0, T0)) continue;
+      const IcpRun run = run_icp(search.tree, samples, T0, fo, search.clamp);
+      if (!(run.inliers > 0)) continue;
+      const Vec3 run_up = run.T.R * Vec3::UnitY(), run_facing = run.T.R * Vec3::UnitZ();
+      const bool consistent = angle_deg(run_up, Vec3::UnitY()) <= o.up_tolerance_deg &&
+                              angle_deg(run_facing, Vec3::UnitZ()) <= o.facing_tolerance_deg;
+      if (consistent && (!have_given || run.score < out.score_given)) {
+        out.score_given = run.score;
+        have_given = true;
+      }
+      if (!have_best || run.score < best.score) {
+        best = run;
+        have_best = true;
+      }
+    }
+  }
+  if (!have_best) return Status::error(ErrorCode::NotAHead, "guess_orientation: no orientation could be aligned");
+  out.score_best = best.score;
+  const Vec3 facing = best.T.R * Vec3::UnitZ(), up = best.T.R * Vec3::UnitY();
+  const bool consistent = angle_deg(up, Vec3::UnitY()) <= o.up_tolerance_deg &&
+                          angle_deg(facing, Vec3::UnitZ()) <= o.facing_tolerance_deg;
+  out.differs = !consistent && (!have_given || best.score < o.better_ratio * out.score_given);
+  out.up = snap(up, o.snap_deg);
+  // Facing: perpendicular to the (snapped) up, then snapped, then made
+  // exactly perpendicular again (a snapped up and an unsnapped facing).
+  out.facing = snap(facing - facing.dot(out.up) * out.up, o.snap_deg);
+  out.facing = (out.facing - out.facing.dot(out.up) * out.up).normalized();
+  out.rotation.row(0) = out.up.cross(out.facing).transpose();
+  out.rotation.row(1) = out.up.transpose();
+  out.rotation.row(2) = out.facing.transpose();
+  return Status::success();
+}
+
+std::string axis_name(const Vec3& d) {
+  const char* names[3] = {"x", "y", "z"};
+  for (int a = 0; a < 3; ++a)
+    for (int sign : {1, -1}) {
+      Vec3 e = Vec3::Zero();
+      e[a] = sign;
+      if ((d.normalized() - e).norm() < 1e-9) return std::string(sign > 0 ? "+" : "-") + names[a];
+    }
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "(%.3g, %.3g, %.3g)", d.x(), d.y(), d.z());
+  return buf;
+}
+
+}  // namespace lk

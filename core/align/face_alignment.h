@@ -1,0 +1,139 @@
+// Initial alignment for PARTIAL scans (a face patch from one frontal
+// structured-light or photogrammetry station, a Cyberware scan cut to the
+// face) and the checks that decide which alignment a scan needs.
+//
+// jeong2002 Sec. 4.1 aligns silhouettes of the whole head in three views and
+// cuts away the neck and the back of the head with planes that "may have to
+// be modified by the user ... according to the specifics of the range scan
+// data". For a face patch no clip plane makes the silhouettes comparable: the
+// patch's outline is wherever the scanner or the user cut it, so the front
+// view compares an arbitrary outline with the head's, and the side and top
+// views compare the head's full depth with a shell a few cm deep. What the
+// patch does constrain is where its points lie, so here every scan point
+// must lie ON the (similarity-transformed) generic head while the head may
+// extend beyond the scan: iterative closest points (Besl & McKay 1992) with
+// Umeyama's closed-form similarity per iteration (rotation, translation, one
+// scale), trimmed (pairs farther than a multiple of the median are ignored),
+// from a few start scales. The non-uniform scales of Sec. 4.1 are left to
+// the local and global fits: a face patch does not determine the head's depth.
+//
+// Coverage: an upright (+y), +z-facing cloud is called face-only when its
+// upper part (the crown of a full head, the forehead of a face) is much
+// shallower than it is wide: a head's crown is about 1.2x deeper than wide,
+// a frontal capture's forehead shell 0.3-0.7x.
+//
+// Orientation: the same ICP, cheaper, from each up axis and eight yaws; a
+// scan whose best alignment turns the head far from the given up / facing,
+// and fits much better so, is in another convention (facing +x, lying on
+// its back ...).
+//
+// Shapes: generic.positions #V by 3, generic.triangles #F by 3,
+// cloud.positions #P by 3. Results map a generic point p to
+// linear * p + translation (cloud coordinates).
+#pragma once
+#include "common/progress.h"
+#include "common/status.h"
+#include "head/head_model.h"
+#include "mesh/tri_mesh.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace lk {
+
+struct CoverageOptions {
+  // The upper part measured: this fraction of the cloud's height, from the top.
+  double slab_fraction = 0.35;
+  // Upper-part depth / width below this: face-only. Whole heads measured:
+  // 1.1-1.3 (synthetic), the front 40 % of a head 0.5, Fran's face 0.6.
+  double face_only_depth_ratio = 0.85;
+  double outlier_fraction = 0.005;  // extreme points ignored per side
+};
+
+struct ScanCoverage {
+  Vec3 extent = Vec3::Zero();  // robust x (width), y (height), z (depth) extents, cloud units
+  double slab_width = 0, slab_depth = 0;  // of the upper part
+  double depth_to_width = 0;   // slab_depth / slab_width
+  bool face_only = false;
+};
+
+// cloud: upright (+y) and facing +z, any unit. Fails on fewer than 10 points
+// or non-finite coordinates.
+Status estimate_coverage(const PointCloud& cloud, const CoverageOptions& options, ScanCoverage& out);
+
+struct FaceAlignOptions {
+  // Starts: each yaw (rotation about +y, degrees) times each scale, relative
+  // to the scale that makes the generic head's part inside the cloud's box
+  // (measured from the nose tip) as wide as the cloud. Every start is run
+  // coarsely; the best is refined. Yaw starts matter for scans whose face
+  // looks diagonally (Fran's Cyberware patch looks 45 degrees off its axes):
+  // ICP from a single start turns only part of the way.
+  std::vector<double> start_yaws_deg = {-45.0, 0.0, 45.0};
+  std::vector<double> start_scales = {0.9, 1.0, 1.1};
+  int coarse_points = 800;     // random subset per coarse start
+  int coarse_iterations = 20;
+  int max_points = 3000;       // random subset for the refinement
+  int max_iterations = 60;
+  double relative_tolerance = 1e-4;  // stop when the trimmed RMS changes less than this
+  // Pairs farther than trim_factor * median distance do not pull (the part
+  // of a scan the head does not model: shoulders, hair strands, a collar).
+  double trim_factor = 2.5;
+  // Score of a result: mean of min(d, score_clamp)^2 over the subset, with
+  // score_clamp this fraction of the cloud's bbox diagonal.
+  double score_clamp_fraction = 0.03;
+  std::uint32_t seed = 7;
+};
+
+struct FaceAlignResult {
+  Mat3 linear = Mat3::Identity();  // cloud point = linear * generic point + translation
+  Vec3 translation = Vec3::Zero();
+  double scale = 1;                // uniform scale inside linear
+  Mat3 rotation = Mat3::Identity();  // linear = scale * rotation * (generic facing -> +z, +y)
+  Vec3 facing = Vec3::UnitZ();     // where the aligned face looks, cloud frame (rotation * +z)
+  Vec3 up = Vec3::UnitY();         // rotation * +y
+  double rms = 0;                  // trimmed RMS distance of the last iteration, cloud units
+  double score = 0;                // see FaceAlignOptions::score_clamp_fraction, cloud units^2
+  double inlier_fraction = 0;      // share of the subset within the trim distance
+  int iterations = 0;              // over all starts
+  int starts = 0;
+};
+
+// Aligns generic (ann.look / ann.up give its facing) to a cloud that is
+// roughly upright (+y) and faces +z (within the yaw starts). Errors: Empty,
+// InvalidInput (non-finite or too few points, bad options), NotAHead (no
+// usable correspondences), Cancelled.
+Status align_face(const TriMesh& generic, const HeadAnnotations& ann, const PointCloud& cloud,
+                  const FaceAlignOptions& options, FaceAlignResult& out, const ProgressFn& progress = {});
+
+struct OrientationOptions {
+  // Coarse ICP from every up axis (6) times yaws 0, 45, ..., 315 degrees.
+  int points = 600;
+  int iterations = 30;
+  // The given orientation is kept unless the best start ends with its up
+  // more than up_tolerance_deg, or its facing more than facing_tolerance_deg,
+  // away from +y / +z, AND scores below better_ratio times the best start
+  // that ends consistent with the given orientation.
+  double up_tolerance_deg = 40.0;
+  double facing_tolerance_deg = 70.0;
+  double better_ratio = 0.8;
+  double snap_deg = 25.0;  // directions this close to an axis are reported as that axis
+};
+
+struct OrientationGuess {
+  Vec3 facing = Vec3::UnitZ();       // where the face looks, in the given cloud's frame
+  Vec3 up = Vec3::UnitY();           // (snapped to an axis when close to one)
+  Mat3 rotation = Mat3::Identity();  // apply to the cloud: up -> +y, facing -> +z
+  double score_given = 0;            // best score consistent with the given orientation (0: none)
+  double score_best = 0;
+  bool differs = false;              // the scan is clearly in another orientation
+};
+
+Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, const PointCloud& cloud,
+                         const OrientationOptions& options, OrientationGuess& out,
+                         const ProgressFn& progress = {});
+
+// "+x", "-z", ... for an axis direction; "(0.1, 0.7, 0.7)" otherwise.
+std::string axis_name(const Vec3& direction);
+
+}  // namespace lk

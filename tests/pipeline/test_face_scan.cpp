@@ -1,0 +1,198 @@
+// Partial scans and odd conventions (align/face_alignment.h through
+// fit_head): a frontal face-only capture, the front of a head cropped by
+// depth, a head facing +x, and the real Fran (Cyberware face) and James
+// (menpo3d face capture) scans when ../shared/data is present.
+#include "head/generic_head.h"
+#include "io/io.h"
+#include "mesh/geometry.h"
+#include "pipeline/fit_head.h"
+#include "synth/scanner.h"
+#include "synth/synth_head.h"
+#include "test_data.h"
+
+#include <catch2/catch.hpp>
+
+using namespace lk;
+
+namespace {
+
+struct Truth {
+  GenericHead generic;
+  TruthSurface truth;
+  PointCloud whole;    // six stations around the head
+  PointCloud frontal;  // one station in front of the face
+};
+
+const Truth& truth() {
+  static Truth t = [] {
+    Truth s;
+    REQUIRE(load_generic_head(s.generic).ok());
+    GenericHead head;
+    SynthHeadOptions ho;
+    REQUIRE(synthesize_head(s.generic, 4, ho, head).ok());
+    REQUIRE(make_truth_surface(head, 1, TruthOptions{}, s.truth).ok());
+    ScannerOptions so;
+    so.target_points = 20000;
+    so.hair_triangles = s.truth.hair;
+    REQUIRE(scan_virtual(s.truth.mesh, so, 2, s.whole).ok());
+    so.stations = 1;
+    so.arc_degrees = 0;
+    so.elevations_deg = {0.0};
+    REQUIRE(scan_virtual(s.truth.mesh, so, 3, s.frontal).ok());
+    return s;
+  }();
+  return t;
+}
+
+FitHeadOptions quick() {
+  FitHeadOptions o;
+  o.levels = 2;
+  return o;
+}
+
+// Mean distance (m) from the truth's FACE vertices to a fitted mesh: the
+// part a face scan observes must be fitted, whatever the rest does.
+double truth_face_to_mesh(const Truth& t, const TriMesh& mesh, double max_depth_behind_tip) {
+  double tip = -1e300;
+  for (const Vec3& p : t.truth.mesh.positions) tip = std::max(tip, p.z());
+  std::vector<Vec3> face;
+  for (const Vec3& p : t.truth.mesh.positions)
+    if (p.z() > tip - max_depth_behind_tip && p.y() > -0.08) face.push_back(p);
+  return point_to_surface_stats(face, mesh, 1.0).mean;
+}
+
+}  // namespace
+
+TEST_CASE("coverage: whole heads are deep, face captures and the front of a head are shallow") {
+  const Truth& t = truth();
+  ScanCoverage whole, frontal, cropped;
+  REQUIRE(estimate_coverage(t.whole, CoverageOptions{}, whole).ok());
+  REQUIRE(estimate_coverage(t.frontal, CoverageOptions{}, frontal).ok());
+  const BBox box = bounding_box(t.whole.positions);
+  PointCloud front;
+  for (const Vec3& p : t.whole.positions)
+    if (p.z() > box.max.z() - 0.4 * box.size().z()) front.positions.push_back(p);
+  REQUIRE(estimate_coverage(front, CoverageOptions{}, cropped).ok());
+  INFO("depth/width: whole " << whole.depth_to_width << ", frontal " << frontal.depth_to_width << ", front 40% "
+                             << cropped.depth_to_width);
+  CHECK_FALSE(whole.face_only);
+  CHECK(whole.depth_to_width > 1.0);
+  CHECK(frontal.face_only);
+  CHECK(cropped.face_only);
+  PointCloud few;
+  few.positions.assign(3, Vec3::Zero());
+  CHECK(estimate_coverage(few, CoverageOptions{}, whole).code == ErrorCode::InvalidInput);
+}
+
+TEST_CASE("fit_head: a frontal face-only capture gives a head, not NotAHead") {
+  const Truth& t = truth();
+  FitHeadResult r;
+  const Status st = fit_head(t.frontal, t.generic, quick(), r);
+  INFO(st.message);
+  REQUIRE(st.ok());
+  CHECK(r.face_only);
+  CHECK_FALSE(r.orientation.differs);
+  REQUIRE(r.stages.size() == 4);
+  for (const auto& s : r.stages) INFO(s.name << " mean " << s.distance.mean_pct << " %");
+  INFO("face align rms " << r.face_alignment.rms << " scale " << r.face_alignment.scale);
+  CHECK(r.stages[0].distance.mean_pct < 1.0);
+  CHECK(r.stages[2].distance.mean_pct < 0.25);
+  CHECK(r.stages[3].distance.mean_pct < 0.2);
+  const double face_err = truth_face_to_mesh(t, r.control, 0.08);
+  INFO("truth face to control: " << face_err * 1000 << " mm");
+  CHECK(face_err < 0.003);
+  // The unscanned back of the head is still there, head-sized and smooth:
+  // the control mesh spans a head's depth, not just the scan's.
+  const BBox cb = bounding_box(r.control.positions), tb = bounding_box(t.truth.mesh.positions);
+  INFO("control depth " << cb.size().z() << " m, truth depth " << tb.size().z() << " m");
+  CHECK(std::abs(cb.size().z() - tb.size().z()) < 0.15 * tb.size().z());
+  CHECK(r.notes.size() >= 1);
+}
+
+TEST_CASE("fit_head: the front 40 % of a head scan fits with a loose bound") {
+  const Truth& t = truth();
+  const BBox box = bounding_box(t.whole.positions);
+  PointCloud front;
+  for (const Vec3& p : t.whole.positions)
+    if (p.z() > box.max.z() - 0.4 * box.size().z()) front.positions.push_back(p);
+  FitHeadResult r;
+  const Status st = fit_head(front, t.generic, quick(), r);
+  INFO(st.message);
+  REQUIRE(st.ok());
+  CHECK(r.face_only);
+  for (const auto& s : r.stages) INFO(s.name << " mean " << s.distance.mean_pct << " %");
+  CHECK(r.stages[3].distance.mean_pct < 0.2);
+  const double face_err = truth_face_to_mesh(t, r.control, 0.08);
+  INFO("truth face to control: " << face_err * 1000 << " mm");
+  CHECK(face_err < 0.003);
+}
+
+TEST_CASE("fit_head: a head facing +x is turned round with a note, or refused with the flags to pass") {
+  const Truth& t = truth();
+  // Facing +x, +y up: head x -> scan -z, head z -> scan +x.
+  const Mat3 R = Eigen::AngleAxisd(M_PI / 2, Vec3::UnitY()).toRotationMatrix();
+  REQUIRE((R * Vec3::UnitZ()).isApprox(Vec3::UnitX()));
+  PointCloud turned;
+  for (const Vec3& p : t.whole.positions) turned.positions.push_back(R * p);
+  FitHeadOptions o = quick();
+  FitHeadResult r;
+  Status st = fit_head(turned, t.generic, o, r);
+  INFO(st.message);
+  REQUIRE(st.ok());
+  REQUIRE(r.orientation.differs);
+  CHECK((r.scan_to_head.A * Vec3::UnitX()).isApprox(Vec3::UnitZ(), 1e-9));
+  CHECK((r.scan_to_head.A * Vec3::UnitY()).isApprox(Vec3::UnitY(), 1e-9));
+  REQUIRE_FALSE(r.notes.empty());
+  CHECK(r.notes[0].find("+x") != std::string::npos);
+  CHECK(r.stages.back().distance.mean_pct < 0.15);
+
+  o.orientation_check = FitHeadOptions::OrientationCheck::Hint;
+  st = fit_head(turned, t.generic, o, r);
+  CHECK(st.code == ErrorCode::NotAHead);
+  CHECK(st.message.find("--facing 1 0 0 --up 0 1 0") != std::string::npos);
+
+  // Told the truth, the check does not object.
+  o.facing = Vec3::UnitX();
+  o.levels = 0;
+  st = fit_head(turned, t.generic, o, r);
+  INFO(st.message);
+  CHECK(st.ok());
+  CHECK_FALSE(r.orientation.differs);
+}
+
+// The real scans: bounds from what we measured, with margin (docs/fit_real.md).
+TEST_CASE("fit_head: the real Fran (Cyberware face patch) is turned to face +z and fitted") {
+  LK_REQUIRE_SHARED("head_scans/fran_cyberware/fran_cut.vtk");
+  PointCloud fran;
+  REQUIRE(load_point_cloud_file(lk::test::shared_data_dir() + "/head_scans/fran_cyberware/fran_cut.vtk", fran).ok());
+  FitHeadResult r;
+  const Status st = fit_head(fran, truth().generic, quick(), r);
+  INFO(st.message);
+  for (const auto& n : r.notes) INFO(n);
+  REQUIRE(st.ok());
+  for (const auto& s : r.stages) INFO(s.name << " mean " << s.distance.mean_pct << " %");
+  // It looks about 45 degrees between +x and -z, upright.
+  CHECK(r.orientation.differs);
+  CHECK(r.orientation.up.isApprox(Vec3::UnitY()));
+  CHECK(r.orientation.facing.x() > 0.5);
+  CHECK(r.orientation.facing.z() < -0.5);
+  CHECK(r.face_only);
+  CHECK(r.near_fraction > 0.7);
+  CHECK(r.stages[2].distance.mean_pct < 0.2);
+  CHECK(r.stages[3].distance.mean_pct < 0.2);
+}
+
+TEST_CASE("fit_head: the real James (menpo3d face capture in mm)") {
+  LK_REQUIRE_SHARED("head_scans/james_menpo3d/james.obj");
+  PointCloud james;
+  REQUIRE(load_point_cloud_file(lk::test::shared_data_dir() + "/head_scans/james_menpo3d/james.obj", james).ok());
+  FitHeadResult r;
+  const Status st = fit_head(james, truth().generic, quick(), r);
+  INFO(st.message);
+  for (const auto& n : r.notes) INFO(n);
+  REQUIRE(st.ok());
+  for (const auto& s : r.stages) INFO(s.name << " mean " << s.distance.mean_pct << " %");
+  CHECK(r.unit_to_metres == 0.001);
+  CHECK_FALSE(r.orientation.differs);
+  CHECK(r.stages[3].distance.mean_pct < 0.2);
+}
