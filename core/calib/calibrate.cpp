@@ -257,6 +257,61 @@ Camera refine(const Camera& start, const FreeParams& fp, const std::vector<Corre
   return base;
 }
 
+// Known intrinsics, no usable DLT: the pose with the lowest reprojection
+// error among LM runs started from cameras looking at the points' centroid
+// from around their principal axes (basis: e1 e2 n, by decreasing spread),
+// both ways up, at the distance that matches their spread in the image.
+// A shallow, nearly symmetric point set (face landmarks) has a mirrored
+// solution seen from behind; starting from all sides lets LM find both and
+// the error decide.
+bool multi_start_pose(const std::vector<Correspondence>& cs, const std::vector<int>& idx, const Vec3& centroid,
+                      const Mat3& basis, double focal, int width, int height, Camera& best) {
+  Vec2 mean2 = Vec2::Zero();
+  for (int i : idx) mean2 += cs[size_t(i)].pixel;
+  mean2 /= double(idx.size());
+  double spread2 = 0, spread3 = 0;
+  for (int i : idx) {
+    spread2 += (cs[size_t(i)].pixel - mean2).norm();
+    spread3 += (cs[size_t(i)].point - centroid).norm();
+  }
+  if (!(spread2 > 0) || !(spread3 > 0)) return false;
+  const double distance = focal * spread3 / spread2;
+  const Vec3 e1 = basis.col(0), e2 = basis.col(1), n = basis.col(2);
+  std::vector<Vec3> directions = {n, -n, e1, -e1, e2, -e2};
+  for (double a : {-1.0, 1.0})
+    for (double b : {-1.0, 1.0}) {
+      directions.push_back((b * n + a * e1).normalized());
+      directions.push_back((b * n + a * e2).normalized());
+    }
+  double best_cost = std::numeric_limits<double>::infinity();
+  for (const Vec3& dir : directions)
+    for (double up_sign : {-1.0, 1.0}) {
+      Camera c;
+      c.width = width;
+      c.height = height;
+      c.fx = c.fy = focal;
+      c.cx = 0.5 * width;
+      c.cy = 0.5 * height;
+      const Vec3 z = -dir;  // looking at the centroid
+      Vec3 up = up_sign * (std::abs(z.dot(e2)) < 0.9 ? e2 : e1);
+      const Vec3 y = -(up - up.dot(z) * z).normalized();  // image y runs down
+      const Vec3 x = y.cross(z);
+      c.R.row(0) = x;
+      c.R.row(1) = y;
+      c.R.row(2) = z;
+      c.t = -c.R * (centroid + distance * dir);
+      c = refine(c, FreeParams{false, false, false, false, false}, cs, idx, 40);
+      const double cost = residuals(c, cs, idx).squaredNorm();
+      int in_front = 0;
+      for (int i : idx) in_front += c.to_camera(cs[size_t(i)].point).z() > 0;
+      if (in_front == int(idx.size()) && cost < best_cost) {
+        best_cost = cost;
+        best = c;
+      }
+    }
+  return std::isfinite(best_cost);
+}
+
 double median(std::vector<double> v) {
   if (v.empty()) return 0;
   const size_t m = v.size() / 2;
@@ -328,7 +383,14 @@ Status calibrate_camera(const std::vector<Correspondence>& cs, int image_width, 
       cam.cy = 0.5 * image_height;
       return pose_from_plane(cs, idx, centroid, shape.matrixU(), cam);
     }
-    if (!decompose(dlt(cs, idx), cs, idx, cam)) return false;
+    if (!decompose(dlt(cs, idx), cs, idx, cam)) {
+      // Face landmarks are shallow (depth ~ half their width): with clicking
+      // errors and a head that is not the subject's, DLT can come out
+      // mirrored. With known intrinsics the pose of the best-fit plane is a
+      // usable start for LM.
+      if (!known) return false;
+      return multi_start_pose(cs, idx, centroid, shape.matrixU(), options.known_focal, image_width, image_height, cam);
+    }
     cam.width = image_width;
     cam.height = image_height;
     if (known) {
@@ -544,10 +606,26 @@ Status calibrate_cameras_shared(const std::vector<std::vector<Correspondence>>& 
   // 1. Each photo alone: poses, inlier sets, one focal estimate per photo.
   result.photos.resize(np);
   std::vector<double> focals;
+  std::vector<Status> alone(np);
   for (size_t i = 0; i < np; ++i) {
-    const Status s = calibrate_camera(photos[i], image_sizes[i][0], image_sizes[i][1], options, result.photos[i]);
+    alone[i] = calibrate_camera(photos[i], image_sizes[i][0], image_sizes[i][1], options, result.photos[i]);
+    if (alone[i]) focals.push_back(result.photos[i].camera.fx);
+    else if (alone[i].code != ErrorCode::InvalidInput && alone[i].code != ErrorCode::NotConverged)
+      return Status::error(alone[i].code, "photo " + std::to_string(i) + ": " + alone[i].message);
+  }
+  // A photo that cannot be calibrated alone (e.g. shallow, mismatched face
+  // landmarks that DLT mirrors) gets its pose at the focal the others (or the
+  // prior) give, then joins the joint refinement.
+  const double fallback_focal = options.focal_prior > 0 ? options.focal_prior : focals.empty() ? 0 : median(focals);
+  for (size_t i = 0; i < np; ++i) {
+    if (alone[i]) continue;
+    if (fallback_focal <= 0 || options.known_focal > 0 || int(photos[i].size()) < 6 ||
+        alone[i].message.find("NaN") != std::string::npos)
+      return Status::error(alone[i].code, "photo " + std::to_string(i) + ": " + alone[i].message);
+    CalibOptions at_focal = options;
+    at_focal.known_focal = fallback_focal;
+    const Status s = calibrate_camera(photos[i], image_sizes[i][0], image_sizes[i][1], at_focal, result.photos[i]);
     if (!s) return Status::error(s.code, "photo " + std::to_string(i) + ": " + s.message);
-    focals.push_back(result.photos[i].camera.fx);
   }
   if (options.known_focal > 0) {  // nothing is shared that is not already known
     result.focal = options.known_focal;
