@@ -55,23 +55,24 @@ long push_pull_fill(ImageF& image, const std::vector<char>& known) {
   // colour and the mean weight (the block's coverage). Coverage fractions,
   // not "any child known" flags: a coarse texel that is only partly covered
   // must not overrule the smooth fill around it, or the fill shows the
-  // power-of-two block grid (lines along the texture's middle).
+  // power-of-two block grid (lines along the texture's middle). Level 0 is
+  // the image itself, its weights the known flags.
   struct Level {
     int w, h;
     std::vector<float> color;   // w * h * c, weighted mean
     std::vector<float> weight;  // w * h, coverage in [0, 1]
   };
-  std::vector<Level> levels;
-  {
-    Level l0{w0, h0, image.pixels, std::vector<float>(known.size())};
-    for (size_t i = 0; i < known.size(); ++i) l0.weight[i] = known[i] ? 1.f : 0.f;
-    levels.push_back(std::move(l0));
-  }
-  while (levels.back().w > 1 || levels.back().h > 1) {
-    const Level& f = levels.back();
-    Level g{(f.w + 1) / 2, (f.h + 1) / 2, {}, {}};
+  std::vector<Level> levels;  // levels[k] is pyramid level k + 1
+  auto fine_color = [&](int k) -> const float* { return k == 0 ? image.pixels.data() : levels[k - 1].color.data(); };
+  auto fine_weight = [&](int k, size_t i) -> float {
+    return k == 0 ? (known[i] ? 1.f : 0.f) : levels[k - 1].weight[i];
+  };
+  int fw = w0, fh = h0;
+  for (int k = 0; fw > 1 || fh > 1; ++k) {
+    Level g{(fw + 1) / 2, (fh + 1) / 2, {}, {}};
     g.color.assign(static_cast<size_t>(g.w) * g.h * c, 0.f);
     g.weight.assign(static_cast<size_t>(g.w) * g.h, 0.f);
+    const float* fc = fine_color(k);
     for (int y = 0; y < g.h; ++y) {
       for (int x = 0; x < g.w; ++x) {
         float sum[8] = {0, 0, 0, 0, 0, 0, 0, 0};
@@ -80,36 +81,40 @@ long push_pull_fill(ImageF& image, const std::vector<char>& known) {
         for (int dy = 0; dy < 2; ++dy) {
           for (int dx = 0; dx < 2; ++dx) {
             const int xx = 2 * x + dx, yy = 2 * y + dy;
-            if (xx >= f.w || yy >= f.h) continue;
+            if (xx >= fw || yy >= fh) continue;
             ++children;
-            const size_t i = static_cast<size_t>(yy) * f.w + xx;
-            const float wi = f.weight[i];
+            const size_t i = static_cast<size_t>(yy) * fw + xx;
+            const float wi = fine_weight(k, i);
             if (wi <= 0.f) continue;
-            for (int k = 0; k < c; ++k) sum[k] += wi * f.color[i * c + k];
+            for (int ch = 0; ch < c; ++ch) sum[ch] += wi * fc[i * c + ch];
             wsum += wi;
           }
         }
-        const size_t o = static_cast<size_t>(y) * g.w + x;
         if (wsum <= 0.f) continue;
+        const size_t o = static_cast<size_t>(y) * g.w + x;
         g.weight[o] = wsum / children;
-        for (int k = 0; k < c; ++k) g.color[o * c + k] = sum[k] / wsum;
+        for (int ch = 0; ch < c; ++ch) g.color[o * c + ch] = sum[ch] / wsum;
       }
     }
+    fw = g.w;
+    fh = g.h;
     levels.push_back(std::move(g));
   }
   // Pull: from the coarsest level (1x1, coverage > 0) down, every texel
   // becomes w * own + (1 - w) * (bilinear interpolation of the completed
   // coarser level at its centre); known texels of level 0 (w = 1) stay.
-  for (int k = static_cast<int>(levels.size()) - 2; k >= 0; --k) {
-    Level& f = levels[k];
-    const Level& g = levels[k + 1];
-    for (int y = 0; y < f.h; ++y) {
+  long filled = 0;
+  for (int k = static_cast<int>(levels.size()) - 1; k >= 0; --k) {
+    const Level& g = levels[k];
+    const int w = k == 0 ? w0 : levels[k - 1].w, h = k == 0 ? h0 : levels[k - 1].h;
+    float* fc = k == 0 ? image.pixels.data() : levels[k - 1].color.data();
+    for (int y = 0; y < h; ++y) {
       const double gy = std::clamp((y + 0.5) / 2.0 - 0.5, 0.0, static_cast<double>(g.h - 1));
       const int y0 = static_cast<int>(gy), y1 = std::min(y0 + 1, g.h - 1);
       const float ty = static_cast<float>(gy - y0);
-      for (int x = 0; x < f.w; ++x) {
-        const size_t i = static_cast<size_t>(y) * f.w + x;
-        const float wi = f.weight[i];
+      for (int x = 0; x < w; ++x) {
+        const size_t i = static_cast<size_t>(y) * w + x;
+        const float wi = fine_weight(k, i);
         if (wi >= 1.f) continue;
         const double gx = std::clamp((x + 0.5) / 2.0 - 0.5, 0.0, static_cast<double>(g.w - 1));
         const int x0 = static_cast<int>(gx), x1 = std::min(x0 + 1, g.w - 1);
@@ -120,14 +125,12 @@ long push_pull_fill(ImageF& image, const std::vector<char>& known) {
         const float* e = &g.color[(static_cast<size_t>(y1) * g.w + x1) * c];
         for (int ch = 0; ch < c; ++ch) {
           const float up = (1 - ty) * ((1 - tx) * a[ch] + tx * b[ch]) + ty * ((1 - tx) * d[ch] + tx * e[ch]);
-          f.color[i * c + ch] = wi * f.color[i * c + ch] + (1 - wi) * up;
+          fc[i * c + ch] = wi * fc[i * c + ch] + (1 - wi) * up;
         }
+        if (k == 0) ++filled;
       }
     }
   }
-  long filled = 0;
-  for (char k : known) filled += k == 0;
-  image.pixels = std::move(levels[0].color);
   return filled;
 }
 

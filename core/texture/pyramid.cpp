@@ -27,7 +27,8 @@ void reshape(ImageF& im, int w, int h, int c) {
   im.pixels.resize(static_cast<size_t>(w) * h * c);
 }
 
-// Horizontal pass of REDUCE: (w, h) -> ((w+1)/2, h).
+// Horizontal pass of REDUCE: (w, h) -> ((w+1)/2, h). Interior samples
+// index directly; only the two outermost on each side reflect.
 void reduce_rows(const ImageF& in, ImageF& out) {
   const int w = in.width, h = in.height, c = in.channels, w2 = (w + 1) / 2;
   reshape(out, w2, h, c);
@@ -36,12 +37,19 @@ void reduce_rows(const ImageF& in, ImageF& out) {
     float* dst = out.at(0, y);
     for (int x2 = 0; x2 < w2; ++x2) {
       const int x = 2 * x2;
+      float* o = dst + static_cast<size_t>(x2) * c;
+      if (x >= 2 && x + 2 < w) {
+        const float* m = row + static_cast<size_t>(x) * c;
+        for (int k = 0; k < c; ++k)
+          o[k] = kW2 * (m[k - 2 * c] + m[k + 2 * c]) + kW1 * (m[k - c] + m[k + c]) + kW0 * m[k];
+        continue;
+      }
       const float* a = row + static_cast<size_t>(reflect(x - 2, w)) * c;
       const float* b = row + static_cast<size_t>(reflect(x - 1, w)) * c;
       const float* m = row + static_cast<size_t>(x) * c;
       const float* d = row + static_cast<size_t>(reflect(x + 1, w)) * c;
       const float* e = row + static_cast<size_t>(reflect(x + 2, w)) * c;
-      for (int k = 0; k < c; ++k) dst[x2 * c + k] = kW2 * (a[k] + e[k]) + kW1 * (b[k] + d[k]) + kW0 * m[k];
+      for (int k = 0; k < c; ++k) o[k] = kW2 * (a[k] + e[k]) + kW1 * (b[k] + d[k]) + kW0 * m[k];
     }
   }
 }
@@ -74,18 +82,16 @@ void expand_rows(const ImageF& in, int w, ImageF& out) {
   for (int y = 0; y < h; ++y) {
     const float* row = in.at(0, y);
     float* dst = out.at(0, y);
-    for (int x = 0; x < w; ++x) {
-      const int j = x / 2;
-      float* o = dst + static_cast<size_t>(x) * c;
-      if ((x & 1) == 0) {
-        const float* l = row + static_cast<size_t>(reflect(j - 1, wc)) * c;
-        const float* m = row + static_cast<size_t>(reflect(j, wc)) * c;
-        const float* r = row + static_cast<size_t>(reflect(j + 1, wc)) * c;
-        for (int k = 0; k < c; ++k) o[k] = kEvenSide * (l[k] + r[k]) + kEvenMid * m[k];
-      } else {
-        const float* m = row + static_cast<size_t>(reflect(j, wc)) * c;
-        const float* r = row + static_cast<size_t>(reflect(j + 1, wc)) * c;
-        for (int k = 0; k < c; ++k) o[k] = kOdd * (m[k] + r[k]);
+    for (int j = 0; 2 * j < w; ++j) {
+      // Fine samples 2j and 2j+1 from coarse j-1, j, j+1.
+      const float* m = row + static_cast<size_t>(reflect(j, wc)) * c;
+      const float* l = (j >= 1 && j < wc) ? m - c : row + static_cast<size_t>(reflect(j - 1, wc)) * c;
+      const float* r = (j + 1 < wc) ? m + c : row + static_cast<size_t>(reflect(j + 1, wc)) * c;
+      float* even = dst + static_cast<size_t>(2 * j) * c;
+      for (int k = 0; k < c; ++k) even[k] = kEvenSide * (l[k] + r[k]) + kEvenMid * m[k];
+      if (2 * j + 1 < w) {
+        float* odd = even + c;
+        for (int k = 0; k < c; ++k) odd[k] = kOdd * (m[k] + r[k]);
       }
     }
   }
@@ -227,12 +233,13 @@ Status SplineBlender::add(const ImageF& image, const ImageF& mask) {
   if (mask.width != width_ || mask.height != height_ || mask.channels != 1 ||
       mask.pixels.size() != static_cast<size_t>(width_) * height_)
     return Status::error(ErrorCode::InvalidInput, "spline: mask must be one channel of the image's size");
-  Scratch s;
-  ImageF expanded;
-  build_laplacian(image, levels_, image_pyr_, expanded, s);
+  Scratch s{std::move(half_)};
+  build_laplacian(image, levels_, image_pyr_, expanded_, s);
   mask_pyr_.resize(static_cast<size_t>(levels_));
-  mask_pyr_[0] = mask;
+  reshape(mask_pyr_[0], width_, height_, 1);
+  std::copy(mask.pixels.begin(), mask.pixels.end(), mask_pyr_[0].pixels.begin());
   for (int k = 0; k + 1 < levels_; ++k) reduce_with(mask_pyr_[k], mask_pyr_[k + 1], s);
+  half_ = std::move(s.half);
   const int c = channels_;
   for (int k = 0; k < levels_; ++k) {
     const float* m = mask_pyr_[k].pixels.data();

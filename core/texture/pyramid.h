@@ -53,6 +53,7 @@ class SplineBlender {
   int width_ = 0, height_ = 0, channels_ = 0, levels_ = 0;
   std::vector<ImageF> sum_;                  // the output's Laplacian pyramid
   std::vector<ImageF> image_pyr_, mask_pyr_;  // per-add scratch, reused
+  ImageF expanded_, half_;                    // filter scratch, reused
 };
 
 // All at once: images and masks of the same size, masks summing to 1.

@@ -231,7 +231,7 @@ Status texture_head(const TriMesh& mesh, const std::vector<TexturePhoto>& photos
       // Photo i alone where it sees the surface, continued smoothly from its
       // own colours elsewhere: an image without seams of its own, so only
       // the masks decide where its light ends (Burt & Adelson's premise).
-      photo_image = ImageF::make(size, size, 3, 0.f);
+      if (photo_image.empty()) photo_image = ImageF::make(size, size, 3, 0.f);
       rep.photos[i].texels_seen = resample_single_photo(mesh, uv, binding, photos, i, raster, photo_image, &seen);
       if (in_mask == 0) continue;  // its shrunk region is empty: nothing of its own to add
       push_pull_fill(photo_image, seen);
