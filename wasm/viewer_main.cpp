@@ -7,6 +7,10 @@
 //   show_generic_head()                            -> "" or an error message
 //   show_mesh_keep_view(...)  as show_mesh, the camera stays (stage/level switch)
 //   update_positions(positions) -> "" or error: animation frame, same #V
+//   show_textured_mesh(positions, indices, uvs, width, height, channels, pixels)
+//     -> "" or error: a head with its skin texture (camera kept)
+//   set_markers(positions, colors) -> "": big points over the model (the
+//     landmark asked for); empty positions clear them
 //   set_overlay_points(positions, normals, colors) -> "": the scan under a fit
 //     (empty positions clear it); set_overlay_visible(on)
 //   set_point_size(pixels), set_wireframe(on), reset_view()
@@ -183,6 +187,50 @@ std::string js_update_positions(val positions) {
   return s.ok() ? std::string() : s.message;
 }
 
+// A head with its skin texture: the mesh as show_mesh_keep_view plus uvs
+// (#V*2) and the texture (width*height*channels sRGB bytes, 3 or 4 channels).
+std::string js_show_textured_mesh(val positions, val indices, val uvs, int width, int height, int channels,
+                                  val pixels) {
+  if (!g_viewer || !g_viewer->startup_error.empty()) return "the viewer is not running";
+  lk::TriMesh mesh;
+  lk::Status s = lk::web::mesh_from_arrays(from_js<float>(positions), {}, {}, from_js<std::uint32_t>(indices), mesh);
+  if (!s.ok()) return s.message;
+  const std::vector<float> uv = from_js<float>(uvs);
+  if (uv.size() != 2 * mesh.positions.size())
+    return "uvs: " + std::to_string(uv.size()) + " values for " + std::to_string(mesh.positions.size()) +
+           " vertices (need 2 per vertex)";
+  mesh.uvs.resize(mesh.positions.size());
+  for (size_t i = 0; i < mesh.uvs.size(); ++i) {
+    if (!std::isfinite(uv[2 * i]) || !std::isfinite(uv[2 * i + 1])) return "uvs: NaN or infinite values";
+    mesh.uvs[i] = lk::Vec2(uv[2 * i], uv[2 * i + 1]);
+  }
+  if (width <= 0 || height <= 0 || (channels != 3 && channels != 4)) return "texture: bad size or channel count";
+  lk::Image image;
+  image.width = width;
+  image.height = height;
+  image.channels = channels;
+  image.pixels = from_js<std::uint8_t>(pixels);
+  if (image.pixels.size() != static_cast<size_t>(width) * height * channels)
+    return "texture: " + std::to_string(image.pixels.size()) + " bytes for " + std::to_string(width) + "x" +
+           std::to_string(height) + "x" + std::to_string(channels);
+  s = g_viewer->scene.show_mesh(mesh, true);
+  if (s.ok()) s = g_viewer->scene.set_texture(image);
+  return s.ok() ? std::string() : s.message;
+}
+
+// Big marker points (positions #N*3, colors #N*3 sRGB); empty clears them.
+std::string js_set_markers(val positions, val colors) {
+  if (!g_viewer || !g_viewer->startup_error.empty()) return "the viewer is not running";
+  std::vector<float> flat = from_js<float>(positions);
+  lk::PointCloud cloud;
+  if (!flat.empty()) {
+    lk::Status s = lk::web::cloud_from_arrays(flat, {}, from_js<float>(colors), cloud);
+    if (!s.ok()) return s.message;
+  }
+  lk::Status s = g_viewer->scene.set_markers(cloud);
+  return s.ok() ? std::string() : s.message;
+}
+
 // The scan's points drawn under a fitted head; empty positions clear them.
 std::string js_set_overlay_points(val positions, val normals, val colors) {
   if (!g_viewer || !g_viewer->startup_error.empty()) return "the viewer is not running";
@@ -259,6 +307,8 @@ EMSCRIPTEN_BINDINGS(likeness_viewer) {
   emscripten::function("show_mesh_keep_view", &js_show_mesh_keep_view);
   emscripten::function("update_positions", &js_update_positions);
   emscripten::function("set_overlay_points", &js_set_overlay_points);
+  emscripten::function("show_textured_mesh", &js_show_textured_mesh);
+  emscripten::function("set_markers", &js_set_markers);
   emscripten::function("set_overlay_visible", &js_set_overlay_visible);
   emscripten::function("show_generic_head", &js_show_generic_head);
   emscripten::function("set_point_size", &js_set_point_size);

@@ -96,6 +96,8 @@ Status ViewerScene::replace(DrawableHandle fresh, bool keep_view) {
     return s;
   }
   if (model_ != kNoHandle) renderer_.remove(model_);
+  if (texture_ != kNoHandle) renderer_.remove_texture(texture_);
+  texture_ = kNoHandle;
   model_ = fresh;
   bounds_ = box;
   if (model_is_points_) renderer_.set_point_size(model_, point_size_);
@@ -129,6 +131,34 @@ Status ViewerScene::update_positions(const std::vector<Vec3>& positions) {
                                                       std::to_string(model_vertices_) + " vertices");
   if (Status s = renderer_.update_mesh(model_, positions); !s.ok()) return s;
   dirty_ = true;
+  return Status::success();
+}
+
+Status ViewerScene::set_texture(const Image& image) {
+  if (model_ == kNoHandle || model_is_points_)
+    return Status::error(ErrorCode::InvalidInput, "no mesh is shown to texture");
+  TextureHandle fresh = kNoHandle;
+  if (Status s = renderer_.upload_texture(image, fresh); !s.ok()) return s;
+  if (Status s = renderer_.attach_texture(model_, fresh); !s.ok()) {
+    renderer_.remove_texture(fresh);
+    return s;
+  }
+  if (texture_ != kNoHandle) renderer_.remove_texture(texture_);
+  texture_ = fresh;
+  // Skin from photos already carries its shading's colour: a little less
+  // specular than the bare skin-tone default.
+  if (DrawStyle* style = renderer_.style(model_)) style->specular = 0.15f;
+  dirty_ = true;
+  return Status::success();
+}
+
+Status ViewerScene::set_markers(const PointCloud& cloud) {
+  if (markers_ != kNoHandle) renderer_.remove(markers_);
+  markers_ = kNoHandle;
+  dirty_ = true;
+  if (cloud.positions.empty()) return Status::success();
+  if (Status s = renderer_.upload_points(cloud, markers_); !s.ok()) return s;
+  renderer_.set_point_size(markers_, 16.0f);
   return Status::success();
 }
 

@@ -5,7 +5,8 @@
 //
 // Array shapes of the flat arrays coming from JS (worker results):
 //   positions #V*3 floats, normals #V*3 or 0, colors #V*3 or 0 (in [0,1]),
-//   indices #F*3 (unsigned, < #V).
+//   indices #F*3 (unsigned, < #V), uvs #V*2 (in [0,1]), texture pixels
+//   width*height*channels bytes (sRGB).
 #pragma once
 #include "common/status.h"
 #include "render/camera.h"
@@ -43,6 +44,14 @@ class ViewerScene {
   // are recomputed. Fails when no mesh is shown or the count differs.
   Status update_positions(const std::vector<Vec3>& positions);
 
+  // The skin texture of a textured head: the shown mesh must carry uvs
+  // (show_mesh with TriMesh::uvs). Replaced with the model.
+  Status set_texture(const Image& image);
+
+  // A few big points drawn over everything else (the landmark the page asks
+  // the user to click); an empty cloud clears them.
+  Status set_markers(const PointCloud& cloud);
+
   // Points drawn together with the model (the scan under a fitted head).
   // Kept until replaced or cleared; hidden/shown without re-uploading.
   Status set_overlay_points(const PointCloud& cloud);
@@ -72,6 +81,8 @@ class ViewerScene {
   DrawableHandle model_ = kNoHandle;
   bool model_is_points_ = false;
   size_t model_vertices_ = 0;
+  TextureHandle texture_ = kNoHandle;
+  DrawableHandle markers_ = kNoHandle;
   DrawableHandle overlay_ = kNoHandle;
   bool overlay_visible_ = true;
   BBox bounds_;

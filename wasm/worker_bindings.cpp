@@ -15,15 +15,23 @@
 //   colors    Float32Array  #V*3 or 0 indices Uint32Array  #F*3 (0 for points)
 //
 // Jobs: parse_geometry (a dropped scan), check_image (a dropped photo),
-// fit_head_job (scan -> fitted multiresolution head, jeong2002 Sec. 4-5),
-// then, on the fitted head kept in this worker: animate_frame (Sec. 6 local
-// update), export_head (OBJ/PLY bytes).
+// parse_points (a photo's points file), fit_head_job (scan -> fitted
+// multiresolution head, jeong2002 Sec. 4-5, with the texture landmarks'
+// places), then, on the fitted head kept in this worker: animate_frame
+// (Sec. 6 local update), export_head (OBJ/PLY bytes), texture_job (photos +
+// correspondences -> cameras, chart, skin texture; tarini2002 Sec. 3) and
+// export_textured (OBJ + MTL + PNG).
 #include "common/progress.h"
 #include "head/generic_head.h"
 #include "io/io.h"
 #include "mesh/geometry.h"
 #include "pipeline/fit_head.h"
+#include "texture/correspondences.h"
+#include "texture/refine_uv.h"
+#include "texture/texture.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 
@@ -164,6 +172,10 @@ struct FitSession {
   std::vector<double> weight;  // brow falloff in [0, 1]; 1 for the jaw
   lk::Vec3 jaw_pivot = lk::Vec3::Zero();
   double head_size = 0.25;  // metres, sets the brow lift
+  // The last texture (texture_job): the chart on the finest level (a
+  // coarser level's uvs are its prefix, see refine_uv.h) and the skin image.
+  std::vector<lk::Vec2> uvs;
+  lk::Image skin;
 };
 std::unique_ptr<FitSession> g_session;
 
@@ -245,6 +257,104 @@ void prepare_animation(FitSession& s, const lk::HeadAnnotations& ann) {
   s.jaw_pivot = lk::Vec3(0.5 * (box.min.x() + box.max.x()), top_back.y(), top_back.z());
 }
 
+// Named points a user clicks in each photo to calibrate it (tarini2002
+// Sec. 3: "about 12-15 corresponding feature points"). Each is a control
+// vertex of the generic head picked from its annotations (extremes of the
+// eye rims, lips, ears, nose, chin, brow), so the fitted head (same vertex
+// indices) knows where it is. "right"/"left" are the person's own sides:
+// +x is the head's left. Order = the order the page asks for them in.
+struct Landmark {
+  const char* id;
+  const char* label;
+  int vertex;
+};
+
+std::vector<Landmark> texture_landmarks(const lk::GenericHead& g) {
+  const lk::HeadAnnotations& ann = g.annotations;
+  const std::vector<lk::Vec3>& P = g.mesh.positions;
+  auto region = [&](const char* name) {
+    auto it = ann.regions.find(name);
+    return it == ann.regions.end() ? std::vector<int>{} : it->second;
+  };
+  // The region's vertex that maximizes score (or -1 for an empty region).
+  auto best = [&](const std::vector<int>& set, auto score) {
+    int pick = -1;
+    double top = -1e300;
+    for (int v : set)
+      if (v >= 0 && v < static_cast<int>(P.size()) && score(P[v]) > top) {
+        top = score(P[v]);
+        pick = v;
+      }
+    return pick;
+  };
+  std::vector<int> corners;  // the two mouth corners: in "lips" but in neither lip
+  {
+    const std::vector<int> up = region("upper_lip"), low = region("lower_lip");
+    for (int v : region("lips"))
+      if (std::find(up.begin(), up.end(), v) == up.end() && std::find(low.begin(), low.end(), v) == low.end() &&
+          v >= 0 && v < static_cast<int>(P.size()))
+        corners.push_back(v);
+    // The mouth bag is in "lips" too: keep the frontmost candidates.
+    std::sort(corners.begin(), corners.end(), [&](int a, int b) { return P[a].z() > P[b].z(); });
+  }
+  const double front_z = [&] {
+    double z = -1e300;
+    for (const lk::Vec3& p : P) z = std::max(z, p.z());
+    return z;
+  }();
+  auto frontal = [&](const lk::Vec3& p) { return p.z() - front_z; };
+  std::vector<Landmark> out = {
+      {"eye_right_outer", "Right eye, outer corner", best(ann.eye_right.rim, [](const lk::Vec3& p) { return -p.x(); })},
+      {"eye_right_inner", "Right eye, inner corner", best(ann.eye_right.rim, [](const lk::Vec3& p) { return p.x(); })},
+      {"eye_left_inner", "Left eye, inner corner", best(ann.eye_left.rim, [](const lk::Vec3& p) { return -p.x(); })},
+      {"eye_left_outer", "Left eye, outer corner", best(ann.eye_left.rim, [](const lk::Vec3& p) { return p.x(); })},
+      {"brow_middle", "Between the brows", best(region("brow"), [&](const lk::Vec3& p) { return frontal(p) - 4 * std::abs(p.x()); })},
+      {"nose_tip", "Tip of the nose", best(region("nose"), [](const lk::Vec3& p) { return p.z(); })},
+      {"mouth_right", "Right mouth corner", best(corners, [&](const lk::Vec3& p) { return -p.x() + 0.1 * frontal(p); })},
+      {"mouth_left", "Left mouth corner", best(corners, [&](const lk::Vec3& p) { return p.x() + 0.1 * frontal(p); })},
+      {"upper_lip", "Middle of the upper lip", best(region("upper_lip"), [](const lk::Vec3& p) { return p.z() - 4 * std::abs(p.x()); })},
+      {"chin", "Tip of the chin", best(region("chin"), [](const lk::Vec3& p) { return p.z() - p.y() - 4 * std::abs(p.x()); })},
+      {"ear_right_lobe", "Right ear lobe (bottom)", best(region("ear_right"), [](const lk::Vec3& p) { return -p.y(); })},
+      {"ear_right_top", "Right ear, top", best(region("ear_right"), [](const lk::Vec3& p) { return p.y(); })},
+      {"ear_left_lobe", "Left ear lobe (bottom)", best(region("ear_left"), [](const lk::Vec3& p) { return -p.y(); })},
+      {"ear_left_top", "Left ear, top", best(region("ear_left"), [](const lk::Vec3& p) { return p.y(); })},
+  };
+  out.erase(std::remove_if(out.begin(), out.end(), [](const Landmark& l) { return l.vertex < 0; }), out.end());
+  return out;
+}
+
+// Poses the kept head: brows up and jaw open by amount in [0, 1] (0 = rest),
+// through the multires local update (jeong2002 Sec. 6).
+lk::Status set_pose(FitSession& s, double amount, lk::UpdateFootprint* footprint) {
+  const double brow_lift = 0.02 * s.head_size * amount;  // ~7 mm on a head
+  const double jaw_angle = 0.14 * amount;                 // ~8 degrees
+  const double c = std::cos(jaw_angle), sn = std::sin(jaw_angle);
+  std::vector<lk::Vec3> target(s.moved.size());
+  for (size_t i = 0; i < s.moved.size(); ++i) {
+    const lk::Vec3& p = s.rest[i];
+    if (s.kind[i] == 0) {
+      target[i] = p + lk::Vec3(0, brow_lift * s.weight[i], 0);
+    } else {
+      // Rotation about the x axis through the hinge: the chin swings down.
+      const lk::Vec3 d = p - s.jaw_pivot;
+      target[i] = s.jaw_pivot + lk::Vec3(d.x(), c * d.y() - sn * d.z(), sn * d.y() + c * d.z());
+    }
+  }
+  return lk::update_control_vertices(s.fit.multires, s.moved, target, footprint);
+}
+
+const lk::GenericHead* generic_head(lk::Status& status) {
+  static lk::GenericHead generic;  // parsed once per worker
+  static bool have_generic = false;
+  if (!have_generic) {
+    status = lk::load_generic_head(generic);
+    if (!status.ok()) return nullptr;
+    have_generic = true;
+  }
+  status = lk::Status::success();
+  return &generic;
+}
+
 // Runs the whole fit (jeong2002 Sec. 4-5) on a dropped scan's bytes.
 // options: {levels, up:[x,y,z], facing:[x,y,z]} (all optional).
 // progress(stage, fraction) with stage one of initial_alignment,
@@ -282,13 +392,10 @@ val fit_head_job(const std::string& name, std::uintptr_t data, std::size_t size,
   if (opt.levels < 1 || opt.levels > 4)
     return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "levels must be 1..4"));
 
-  static lk::GenericHead generic;  // parsed once per worker
-  static bool have_generic = false;
-  if (!have_generic) {
-    if (lk::Status s = lk::load_generic_head(generic); !s.ok())
-      return error_result(lk::with_context(s, "generic head"));
-    have_generic = true;
-  }
+  lk::Status generic_status;
+  const lk::GenericHead* generic_ptr = generic_head(generic_status);
+  if (!generic_ptr) return error_result(lk::with_context(generic_status, "generic head"));
+  const lk::GenericHead& generic = *generic_ptr;
 
   // Stage timing and stats through the observer; progress fractions from the
   // stages' own ProgressFn are attributed to the stage the observer opened.
@@ -348,6 +455,20 @@ val fit_head_job(const std::string& name, std::uintptr_t data, std::size_t size,
   meshes.set("levels", levels);
   r.set("meshes", meshes);
   r.set("animatedVertices", static_cast<double>(s.moved.size()));
+  // Texture landmarks where they are on the fitted surface (finest level,
+  // rest pose, scan frame): control vertices keep their index on every level.
+  val landmarks = val::array();
+  const std::vector<lk::Vec3>& finest = s.fit.multires.state.displaced[s.fit.multires.num_levels()];
+  for (const Landmark& l : texture_landmarks(generic)) {
+    if (l.vertex >= static_cast<int>(finest.size())) continue;
+    val o = val::object();
+    o.set("id", std::string(l.id));
+    o.set("label", std::string(l.label));
+    o.set("vertex", l.vertex);
+    o.set("position", vec3_array(s.head_to_scan * (finest[l.vertex] - s.head_offset)));
+    landmarks.call<void>("push", o);
+  }
+  r.set("landmarks", landmarks);
   g_session = std::move(session);
   return r;
 }
@@ -364,23 +485,9 @@ val animate_frame(double amount, int level) {
     return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "no level " + std::to_string(level)));
   if (!std::isfinite(amount)) amount = 0;
   amount = std::min(1.0, std::max(0.0, amount));
-  const double brow_lift = 0.02 * s.head_size * amount;  // ~7 mm on a head
-  const double jaw_angle = 0.14 * amount;                 // ~8 degrees
-  const double c = std::cos(jaw_angle), sn = std::sin(jaw_angle);
-  std::vector<lk::Vec3> target(s.moved.size());
-  for (size_t i = 0; i < s.moved.size(); ++i) {
-    const lk::Vec3& p = s.rest[i];
-    if (s.kind[i] == 0) {
-      target[i] = p + lk::Vec3(0, brow_lift * s.weight[i], 0);
-    } else {
-      // Rotation about the x axis through the hinge: the chin swings down.
-      const lk::Vec3 d = p - s.jaw_pivot;
-      target[i] = s.jaw_pivot + lk::Vec3(d.x(), c * d.y() - sn * d.z(), sn * d.y() + c * d.z());
-    }
-  }
   const double t0 = now_ms();
   lk::UpdateFootprint footprint;
-  lk::Status st = lk::update_control_vertices(mr, s.moved, target, &footprint);
+  lk::Status st = set_pose(s, amount, &footprint);
   const double update_ms = now_ms() - t0;
   if (!st.ok()) return error_result(st);
   val r = val::object();
@@ -423,6 +530,284 @@ val export_head(int level, const std::string& format) {
   return r;
 }
 
+
+// ---- texturing (tarini2002 Sec. 3) ------------------------------------------
+// The steps the Texture job reports, in order: progress(stage, fraction) gets
+// stage "texture" and the job's overall fraction; the current step's name
+// goes in the result's steps[] with its ms.
+// "chart" is the control mesh's stretch-minimizing chart refined to the
+// level; texture_head's own "parameterize" then only measures its stretch.
+const char* const kTextureSteps[] = {"decode", "calibrate", "chart", "parameterize", "bind", "fill holes",
+                                     "resample", "spline", "dilate"};
+constexpr int kNumTextureSteps = 9;
+
+int texture_step_index(const std::string& name) {
+  for (int i = 0; i < kNumTextureSteps; ++i)
+    if (name == kTextureSteps[i]) return i;
+  return -1;
+}
+
+val calib_object(const lk::CalibResult& c) {
+  val o = val::object();
+  o.set("ok", true);
+  o.set("rms", c.rms);
+  o.set("inliers", c.num_inliers);
+  o.set("focal", c.camera.fx);
+  val errors = val::array(), outlier = val::array();
+  for (size_t k = 0; k < c.errors.size(); ++k) {
+    errors.call<void>("push", std::isfinite(c.errors[k]) ? c.errors[k] : -1.0);  // -1: behind the camera
+    outlier.call<void>("push", k < c.outlier.size() && c.outlier[k] != 0);
+  }
+  o.set("errors", errors);
+  o.set("outlier", outlier);
+  return o;
+}
+
+// Textures the kept head from photos: photos is an array of
+// {name, ptr, size, points} with the photo file's bytes at (ptr, size) and
+// points a Float64Array of u v X Y Z per correspondence (pixels, top-left
+// origin; the point on the head in the scan's frame, as the fit result's
+// landmarks and exported meshes). options: {level (default finest), size
+// (texture texels, default 1024)}. Each photo is calibrated on its own
+// (core/calib), the control mesh gets the stretch-minimizing chart and the
+// level its refinement (refine_uv.h), then lk::texture_head.
+// Returns {ok, code, message, calib: [per photo {ok, rms, inliers, focal,
+// errors[], outlier[]} or {ok:false, message}], uvs Float32Array #V*2,
+// skin {width, height, channels, pixels Uint8Array}, steps [{name, ms}],
+// level, vertexCount, textureMs}. On a calibration failure calib still holds
+// every photo's outcome (the page marks the bad points).
+val texture_job(val photos, val options, val progress) {
+  const lk::ProgressFn report = js_progress(progress);
+  if (!g_session) return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "fit a head first: there is no head to texture"));
+  FitSession& s = *g_session;
+  lk::MultiresMesh& mr = s.fit.multires;
+  int level = mr.num_levels();
+  int size = 1024;
+  if (!options.isUndefined() && !options.isNull()) {
+    if (!options["level"].isUndefined()) level = options["level"].as<int>();
+    if (!options["size"].isUndefined()) size = options["size"].as<int>();
+  }
+  if (level < 0 || level > mr.num_levels())
+    return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "no level " + std::to_string(level)));
+  if (size < 16 || size > 4096)
+    return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "texture size must be 16..4096 texels"));
+  const int count = photos.isArray() ? photos["length"].as<int>() : 0;
+  if (count == 0) return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "no photo to texture from"));
+  if (count > lk::kMaxTexturePhotos)
+    return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, std::to_string(count) + " photos; at most " +
+                                                                         std::to_string(lk::kMaxTexturePhotos) + " are used"));
+
+  val steps = val::array();
+  int step = -1;
+  double t_step = 0;
+  auto begin_step = [&](const std::string& name) {
+    step = texture_step_index(name);
+    t_step = now_ms();
+    return lk::report(report, "texture", std::max(0, step) / double(kNumTextureSteps));
+  };
+  auto end_step = [&](const std::string& name) {
+    val o = val::object();
+    o.set("name", name);
+    o.set("ms", now_ms() - t_step);
+    steps.call<void>("push", o);
+  };
+  auto cancelled = [](const std::string& where) {
+    return error_result(lk::Status::error(lk::ErrorCode::Cancelled, "texturing cancelled at " + where));
+  };
+  const double t_job = now_ms();
+
+  // 1. Decode the photos and read their correspondences.
+  if (!begin_step("decode")) return cancelled("decode");
+  std::vector<std::string> names(count);
+  std::vector<lk::TexturePhoto> tex_photos(count);
+  std::vector<std::vector<lk::Correspondence>> points(count);
+  for (int i = 0; i < count; ++i) {
+    const val p = photos[i];
+    names[i] = p["name"].isString() ? p["name"].as<std::string>() : "photo " + std::to_string(i + 1);
+    const std::uintptr_t ptr = p["ptr"].as<std::uintptr_t>();
+    const std::size_t bytes = p["size"].as<std::size_t>();
+    if (ptr == 0) return error_result(lk::Status::error(lk::ErrorCode::Internal, names[i] + ": no input buffer"));
+    lk::Status st = lk::read_image(reinterpret_cast<const std::uint8_t*>(ptr), bytes, tex_photos[i].image, 3);
+    if (!st.ok()) return error_result(lk::with_context(st, names[i]));
+    const std::vector<double> flat = emscripten::convertJSArrayToNumberVector<double>(p["points"]);
+    if (flat.size() % 5 != 0)
+      return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, names[i] + ": points need 5 numbers each (u v X Y Z)"));
+    for (size_t k = 0; k + 4 < flat.size(); k += 5) {
+      lk::Correspondence c;
+      c.pixel = lk::Vec2(flat[k], flat[k + 1]);
+      c.point = lk::Vec3(flat[k + 2], flat[k + 3], flat[k + 4]);
+      points[i].push_back(c);
+    }
+    if (points[i].size() < 6)
+      return error_result(lk::Status::error(lk::ErrorCode::InvalidInput,
+                                            names[i] + ": " + std::to_string(points[i].size()) +
+                                                " points; calibrating a photo needs at least 6 (12-15 are best)"));
+    if (!lk::report(report, "texture", (i + 1.0) / count / kNumTextureSteps)) return cancelled("decode");
+  }
+  end_step("decode");
+
+  // 2. One camera per photo (each alone, so every photo's outcome is known).
+  if (!begin_step("calibrate")) return cancelled("calibrate");
+  lk::CalibOptions calib_options;
+  std::vector<lk::CalibResult> calib(count);
+  val calib_out = val::array();
+  std::string calib_failure;
+  lk::ErrorCode calib_code = lk::ErrorCode::Ok;
+  for (int i = 0; i < count; ++i) {
+    const lk::Image& im = tex_photos[i].image;
+    lk::Status st = lk::calibrate_camera(points[i], im.width, im.height, calib_options, calib[i]);
+    if (st.ok()) {
+      calib_out.call<void>("push", calib_object(calib[i]));
+      tex_photos[i].camera = calib[i].camera;
+    } else {
+      val o = val::object();
+      o.set("ok", false);
+      o.set("message", st.message);
+      calib_out.call<void>("push", o);
+      if (calib_failure.empty()) {
+        calib_failure = names[i] + ": calibration failed: " + st.message;
+        calib_code = st.code;
+      }
+    }
+  }
+  end_step("calibrate");
+  if (!calib_failure.empty()) {
+    val r = error_result(lk::Status::error(calib_code, calib_failure));
+    r.set("calib", calib_out);
+    return r;
+  }
+
+  // 3. The chart on the control mesh (head frame: the view weight assumes
+  // the head looks along +z), refined to the level.
+  if (!begin_step("chart")) return cancelled("chart");
+  lk::Status st = set_pose(s, 0.0, nullptr);  // texture the rest pose
+  if (!st.ok()) return error_result(st);
+  lk::TriMesh control;
+  control.positions = s.fit.control.positions;
+  control.triangles = s.fit.control.triangles;
+  std::vector<lk::Vec2> control_uv;
+  lk::UvStats uv_stats;
+  st = lk::parameterize_stretch(control, lk::UvOptions{}, control_uv, uv_stats);
+  if (!st.ok()) return error_result(lk::with_context(st, "parameterization of the control mesh"));
+  std::vector<lk::Vec2> finest_uv = control_uv;
+  if (mr.num_levels() > 0) {
+    st = lk::refine_chart_uvs(mr.levels, control_uv, finest_uv);
+    if (!st.ok()) return error_result(st);
+  }
+  end_step("chart");
+
+  lk::TriMesh mesh;
+  mesh.positions = to_scan_frame(s, mr.state.displaced[level]);
+  mesh.triangles = mr.triangles(level);
+  mesh.uvs.assign(finest_uv.begin(), finest_uv.begin() + mesh.positions.size());
+  lk::TextureOptions topt;
+  topt.size = size;
+  lk::TexturedHead out;
+  std::string current;
+  const lk::ProgressFn inner = [&](const char* name, double fraction) {
+    const int index = texture_step_index(name);
+    if (index < 0) return lk::report(report, "texture", std::max(0, step) / double(kNumTextureSteps));
+    if (fraction <= 0 && current != name) {
+      if (!current.empty()) end_step(current);
+      current = name;
+      step = index;
+      t_step = now_ms();
+    }
+    const double overall = (index + std::min(1.0, std::max(0.0, fraction))) / kNumTextureSteps;
+    return lk::report(report, "texture", std::min(0.999, overall));
+  };
+  st = lk::texture_head(mesh, tex_photos, topt, out, inner);
+  if (!current.empty()) end_step(current);
+  if (!st.ok()) {
+    // texture_head names photos by index ("photo 1 ..."): use the file names.
+    for (int i = 0; i < count; ++i) {
+      const std::string tag = "photo " + std::to_string(i) + " ";
+      if (st.message.rfind(tag, 0) == 0) st.message = names[i] + st.message.substr(tag.size() - 1);
+    }
+    val r = error_result(st);
+    r.set("calib", calib_out);
+    return r;
+  }
+  s.uvs = finest_uv;
+  s.skin = out.skin;
+  lk::report(report, "texture", 1.0);
+
+  val r = val::object();
+  r.set("ok", true);
+  r.set("code", std::string("Ok"));
+  r.set("message", std::string());
+  r.set("calib", calib_out);
+  std::vector<float> uv_flat(2 * finest_uv.size());
+  for (size_t i = 0; i < finest_uv.size(); ++i) {
+    uv_flat[2 * i] = static_cast<float>(finest_uv[i].x());
+    uv_flat[2 * i + 1] = static_cast<float>(finest_uv[i].y());
+  }
+  r.set("uvs", val::global("Float32Array").new_(emscripten::typed_memory_view(uv_flat.size(), uv_flat.data())));
+  val skin = val::object();
+  skin.set("width", out.skin.width);
+  skin.set("height", out.skin.height);
+  skin.set("channels", out.skin.channels);
+  skin.set("pixels", val::global("Uint8Array").new_(emscripten::typed_memory_view(out.skin.pixels.size(), out.skin.pixels.data())));
+  r.set("skin", skin);
+  r.set("steps", steps);
+  r.set("level", level);
+  r.set("vertexCount", static_cast<double>(mesh.positions.size()));
+  r.set("chartL2", uv_stats.l2_stretch);
+  r.set("textureMs", now_ms() - t_job);
+  return r;
+}
+
+// The textured head as three files: level `level` with the texture's uvs
+// (OBJ, "mtllib <base>.mtl"), the material (map_Kd <base>.png) and the skin
+// PNG. Current pose, scan frame, like export_head.
+val export_textured(int level, const std::string& base) {
+  if (!g_session) return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "no fitted head to export"));
+  const FitSession& s = *g_session;
+  if (s.skin.empty() || s.uvs.empty())
+    return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "the head is not textured yet"));
+  const lk::MultiresMesh& mr = s.fit.multires;
+  if (level < 0 || level > mr.num_levels())
+    return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "no level " + std::to_string(level)));
+  lk::TriMesh m;
+  m.positions = to_scan_frame(s, mr.state.displaced[level]);
+  m.triangles = mr.triangles(level);
+  if (m.positions.size() > s.uvs.size())
+    return error_result(lk::Status::error(lk::ErrorCode::Internal, "the texture chart is smaller than the level"));
+  m.uvs.assign(s.uvs.begin(), s.uvs.begin() + m.positions.size());
+  const std::string obj = lk::write_obj(m, base + ".mtl");
+  const std::string mtl = lk::write_mtl(base + ".png");
+  const lk::Bytes png = lk::write_png(s.skin);
+  if (png.empty()) return error_result(lk::Status::error(lk::ErrorCode::Internal, "could not encode the skin PNG"));
+  auto bytes = [](const std::uint8_t* data, size_t n) {
+    return val::global("Uint8Array").new_(emscripten::typed_memory_view(n, data));
+  };
+  val r = val::object();
+  r.set("ok", true);
+  r.set("code", std::string("Ok"));
+  r.set("message", std::string());
+  r.set("obj", bytes(reinterpret_cast<const std::uint8_t*>(obj.data()), obj.size()));
+  r.set("mtl", bytes(reinterpret_cast<const std::uint8_t*>(mtl.data()), mtl.size()));
+  r.set("png", bytes(png.data(), png.size()));
+  return r;
+}
+
+// Points files as `likeness texture --points` reads them ("u v X Y Z" per
+// line): the text -> {ok, points Float64Array 5*N} or the parser's message.
+val parse_points(const std::string& text) {
+  std::vector<lk::Correspondence> pts;
+  lk::Status st = lk::parse_correspondences(text, pts);
+  if (!st.ok()) return error_result(st);
+  std::vector<double> flat;
+  for (const lk::Correspondence& c : pts)
+    flat.insert(flat.end(), {c.pixel.x(), c.pixel.y(), c.point.x(), c.point.y(), c.point.z()});
+  val r = val::object();
+  r.set("ok", true);
+  r.set("code", std::string("Ok"));
+  r.set("message", std::string());
+  r.set("points", val::global("Float64Array").new_(emscripten::typed_memory_view(flat.size(), flat.data())));
+  return r;
+}
+
 }  // namespace
 
 EMSCRIPTEN_BINDINGS(likeness_worker) {
@@ -431,4 +816,7 @@ EMSCRIPTEN_BINDINGS(likeness_worker) {
   emscripten::function("export_head", &export_head);
   emscripten::function("parse_geometry", &parse_geometry);
   emscripten::function("check_image", &check_image);
+  emscripten::function("texture_job", &texture_job);
+  emscripten::function("export_textured", &export_textured);
+  emscripten::function("parse_points", &parse_points);
 }

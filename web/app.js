@@ -38,7 +38,11 @@
     pointSize: $('point-size'), maxSize: $('max-size'), sample: $('btn-sample'), cancel: $('btn-cancel'), wireframe: $('wireframe'),
     fit: $('btn-fit'), autoFit: $('auto-fit'), fitTotal: $('fit-total'), fitView: $('fit-view'),
     level: $('level'), showPoints: $('show-points'), animate: $('animate'), animStats: $('anim-stats'),
-    exportObj: $('btn-export-obj'), exportPly: $('btn-export-ply'),
+    exportObj: $('btn-export-obj'), exportPly: $('btn-export-ply'), exportTextured: $('btn-export-textured'),
+    photoList: $('photo-list'), photoCount: $('photo-count'), texture: $('btn-texture'), textureTotal: $('texture-total'),
+    viewerPane: document.querySelector('.viewer-pane'), clicker: $('clicker'), clickerPrompt: $('clicker-prompt'),
+    clickerCanvas: $('clicker-canvas'), clickerList: $('clicker-list'), clickerUndo: $('clicker-undo'),
+    clickerSkip: $('clicker-skip'), clickerClear: $('clicker-clear'), clickerClose: $('clicker-close'),
   };
 
   // Exposed for the browser test and for debugging from the console.
@@ -49,7 +53,10 @@
     viewer: null,
     worker: null,
     model: null,           // {name, kind, vertexCount, triangleCount} shown now
-    photos: [],            // [{name, file, width, height}] checked photos, for texturing
+    photos: [],            // checked photos, for texturing: [{name, file, width, height, url (thumbnail),
+                           //   filePoints (Float64Array u v X Y Z from a points file, or null), pointsName,
+                           //   clicks (landmark id -> {u, v} or 'skip'), calib (the last calibration), sent}]
+    texture: null,         // the last texture: {uvs, skin {width, height, channels, pixels}, steps, textureMs, wallMs}
     lastError: null,
     startupFailed: false,  // the viewer or the core could not start
     scan: null,            // {file, display}: the loaded scan, kept to fit it and draw it under the fit
@@ -81,6 +88,8 @@
     ui.animate.disabled = !haveFit;
     ui.level.disabled = !haveFit;
     ui.showPoints.disabled = !haveFit;
+    ui.texture.disabled = !haveFit || !app.photos.length;
+    ui.exportTextured.disabled = !haveFit || !app.texture;
   }
 
   function setStatus(text) { ui.status.textContent = text; }
@@ -300,10 +309,14 @@
     clearError();
     stopAnimation();
     const photos = files.filter((f) => PHOTO_EXTENSIONS.includes(extension(f.name)));
-    const scans = files.filter((f) => !photos.includes(f));
+    const pointFiles = files.filter((f) => extension(f.name) === 'txt');
+    const scans = files.filter((f) => !photos.includes(f) && !pointFiles.includes(f));
     for (const extra of scans.slice(1)) listFile(extra, 'ignored: one scan at a time', 'ignored');
     if (scans.length) await loadScan(scans[0]);
     if (photos.length && document.body.dataset.state !== 'error') await checkPhotos(photos, !scans.length);
+    if (pointFiles.length && document.body.dataset.state !== 'error') await readPointFiles(pointFiles);
+    if ((photos.length || pointFiles.length) && ui.autoFit.checked && app.fit && texturable().length &&
+        document.body.dataset.state === 'done') await runTexture();
   }
 
   // Photos are decoded once in the worker to catch broken files now rather
@@ -337,17 +350,331 @@
       }
       meta.textContent = formatBytes(file.size) + ' · ' + result.width + '×' + result.height + ' photo';
       meta.parentElement.title = file.name + ': ' + result.width + '×' + result.height +
-                                 ' photo, kept for the Texture stage (coming)';
-      app.photos.push({ name: file.name, file, width: result.width, height: result.height });
+                                 ' photo, kept for the Texture stage';
+      addPhoto({ name: file.name, file, width: result.width, height: result.height });
     }
+    renderPhotos();
     setState(before === 'loading' ? 'ready' : before);
     if (failures.length) {
       showError(failures.join(' '));
     } else if (alone) {
-      setStatus(app.photos.length + ' photo(s) kept for the Texture stage (coming). ' +
-                (app.model ? '' : 'Drop a head scan (PLY, OBJ or XYZ) to start.'));
+      setStatus(app.photos.length + ' photo(s) kept for the Texture stage. ' +
+                (app.fit ? 'Give each its points (a .txt of the same name, or click the photo), then Texture.'
+                  : app.model ? 'Fit the head, then texture it.' : 'Drop a head scan (PLY, OBJ or XYZ) to start.'));
     }
   }
+
+  // ---- photos and their correspondences (tarini2002 Sec. 3) -------------------
+  const baseName = (name) => name.replace(/\.[^.]*$/, '').toLowerCase();
+
+  // A photo dropped again under the same name replaces the old one but keeps
+  // its points and clicks (they are the user's work).
+  function addPhoto(entry) {
+    const old = app.photos.findIndex((p) => p.name === entry.name);
+    entry.url = URL.createObjectURL(entry.file);
+    entry.filePoints = null;
+    entry.pointsName = '';
+    entry.clicks = new Map();
+    entry.calib = null;
+    entry.sent = null;
+    if (old >= 0) {
+      const prev = app.photos[old];
+      URL.revokeObjectURL(prev.url);
+      Object.assign(entry, { filePoints: prev.filePoints, pointsName: prev.pointsName, clicks: prev.clicks });
+      app.photos[old] = entry;
+    } else {
+      app.photos.push(entry);
+    }
+  }
+
+  // Points files (u v X Y Z per line, read by the core's parser) go to the
+  // photo of the same base name.
+  async function readPointFiles(files) {
+    const failures = [];
+    const before = document.body.dataset.state;
+    setState('working');
+    for (const file of files) {
+      const photo = app.photos.find((p) => baseName(p.name) === baseName(file.name));
+      const meta = listFile(file, 'reading…');
+      if (!photo) {
+        meta.textContent = formatBytes(file.size) + ' · no photo named ' + baseName(file.name) + '.jpg/.png';
+        meta.parentElement.classList.add('ignored');
+        continue;
+      }
+      let result;
+      try {
+        result = file.size > 4 * 1024 * 1024 ? { ok: false, message: 'larger than 4 MB: not a points file' }
+          : await runJob({ type: 'points', text: await file.text() }, []);
+      } catch (e) {
+        result = { ok: false, message: e && e.message ? e.message : String(e) };
+      }
+      if (!result.ok) {
+        meta.textContent = formatBytes(file.size) + ' · not a points file';
+        failures.push(file.name + ': ' + result.message + ' (expected one "u v X Y Z" per line)');
+        continue;
+      }
+      photo.filePoints = result.points;
+      photo.pointsName = file.name;
+      photo.calib = null;
+      meta.textContent = formatBytes(file.size) + ' · ' + result.points.length / 5 + ' points for ' + photo.name;
+    }
+    renderPhotos();
+    setState(before === 'loading' ? 'ready' : before);
+    if (failures.length) showError(failures.join(' '));
+  }
+
+  // The correspondences a photo contributes: its clicks when it has any
+  // (landmarks placed on the fitted head), else its points file.
+  function photoPoints(photo) {
+    const clicked = [];
+    if (app.fit && app.fit.landmarks) {
+      for (const lm of app.fit.landmarks) {
+        const c = photo.clicks.get(lm.id);
+        if (c && c !== 'skip') clicked.push({ u: c.u, v: c.v, p: lm.position, label: lm.label });
+      }
+    }
+    if (clicked.length || !photo.filePoints) return { source: clicked.length ? 'clicks' : 'none', list: clicked };
+    const list = [];
+    const f = photo.filePoints;
+    for (let k = 0; k + 4 < f.length; k += 5) list.push({ u: f[k], v: f[k + 1], p: [f[k + 2], f[k + 3], f[k + 4]], label: 'point ' + (k / 5 + 1) });
+    return { source: 'file', list };
+  }
+
+  // Photos that take part in texturing: those with any correspondence.
+  function texturable() { return app.photos.filter((p) => photoPoints(p).list.length > 0); }
+
+  function renderPhotos() {
+    ui.photoList.textContent = '';
+    for (const [index, photo] of app.photos.entries()) {
+      const li = document.createElement('li');
+      li.tabIndex = 0;
+      li.setAttribute('role', 'button');
+      li.dataset.index = String(index);
+      li.classList.toggle('open', clicker.photo === photo);
+      const img = document.createElement('img');
+      img.src = photo.url;
+      img.alt = '';
+      const text = document.createElement('div');
+      const name = document.createElement('div');
+      name.className = 'photo-name';
+      name.textContent = photo.name;
+      const meta = document.createElement('div');
+      meta.className = 'photo-meta';
+      const pts = photoPoints(photo);
+      let note = photo.width + '×' + photo.height + ' · ';
+      if (pts.source === 'clicks') note += pts.list.length + ' of ' + app.fit.landmarks.length + ' landmarks clicked';
+      else if (pts.source === 'file') note += pts.list.length + ' points from ' + photo.pointsName;
+      else note += app.fit ? 'no points yet: click to mark landmarks' : 'no points yet';
+      if (pts.list.length > 0 && pts.list.length < 6) { note += ' (6 needed)'; meta.classList.add('bad'); }
+      if (photo.calib) {
+        if (photo.calib.ok) {
+          const outliers = photo.calib.outlier.filter(Boolean).length;
+          note += ' · calibrated, rms ' + photo.calib.rms.toFixed(2) + ' px' + (outliers ? ', ' + outliers + ' outlier(s)' : '');
+        } else {
+          note += ' · calibration failed';
+          meta.classList.add('bad');
+        }
+      }
+      meta.textContent = note;
+      text.append(name, meta);
+      li.append(img, text);
+      li.title = photo.name + ': click to mark landmarks on it' + (photo.calib && !photo.calib.ok ? ' (' + photo.calib.message + ')' : '');
+      li.addEventListener('click', () => openClicker(photo));
+      li.addEventListener('keydown', (e) => { if (e.key === 'Enter' || e.key === ' ') { e.preventDefault(); openClicker(photo); } });
+      ui.photoList.append(li);
+    }
+    ui.photoCount.textContent = app.photos.length ? app.photos.length + ' photo(s), ' + texturable().length + ' with points' : '';
+    setState(document.body.dataset.state);
+  }
+
+  // ---- the landmark clicker ------------------------------------------------------
+  // The photo large beside the 3D view; the landmarks are asked in turn, the
+  // one asked is marked red on the head. Clicks live in photo.clicks, so they
+  // survive picking another photo, an error, or a new fit of the same scan.
+  const clicker = { photo: null, image: null, current: 0, view: null };
+
+  function openClicker(photo) {
+    if (!app.fit || !app.fit.landmarks || !app.fit.landmarks.length) {
+      setStatus('Fit the head first: the landmarks are placed on the fitted head.');
+      return;
+    }
+    stopAnimation();
+    clicker.photo = photo;
+    clicker.image = new Image();
+    clicker.image.onload = () => drawClicker();
+    clicker.image.src = photo.url;
+    clicker.current = nextLandmark(0);
+    ui.clicker.hidden = false;
+    ui.viewerPane.classList.add('clicking');
+    renderPhotos();
+    updateClicker();
+  }
+
+  function closeClicker() {
+    if (!clicker.photo) return;
+    clicker.photo = null;
+    ui.clicker.hidden = true;
+    ui.viewerPane.classList.remove('clicking');
+    if (app.viewer) app.viewer.set_markers(new Float32Array(0), null);
+    renderPhotos();
+  }
+
+  // The first landmark from `from` on that has neither a click nor a skip.
+  function nextLandmark(from) {
+    const lms = app.fit.landmarks;
+    for (let k = 0; k < lms.length; k++) {
+      const i = (from + k) % lms.length;
+      if (!clicker.photo.clicks.has(lms[i].id)) return i;
+    }
+    return -1;
+  }
+
+  function updateClicker() {
+    const photo = clicker.photo;
+    if (!photo) return;
+    const lms = app.fit.landmarks;
+    const done = lms.filter((l) => photo.clicks.has(l.id) && photo.clicks.get(l.id) !== 'skip').length;
+    const lm = clicker.current >= 0 ? lms[clicker.current] : null;
+    ui.clickerPrompt.textContent = '';
+    if (lm) {
+      ui.clickerPrompt.append(photo.name + ': click ');
+      const b = document.createElement('strong');
+      b.textContent = lm.label;
+      ui.clickerPrompt.append(b, ' (' + (clicker.current + 1) + ' of ' + lms.length + '; ' + done + ' clicked)');
+    } else {
+      ui.clickerPrompt.textContent = photo.name + ': every landmark is clicked or skipped (' + done + ' clicked).' +
+        (done < 6 ? ' At least 6 are needed.' : ' Texture when the other photos are done.');
+    }
+    ui.clickerList.textContent = '';
+    const sentIndex = new Map((photo.sent || []).map((s, k) => [s.label, k]));
+    for (const [i, l] of lms.entries()) {
+      const li = document.createElement('li');
+      const c = photo.clicks.get(l.id);
+      let text = l.label;
+      const k = sentIndex.get(l.label);
+      if (c && c !== 'skip' && photo.calib && photo.calib.ok && k !== undefined) {
+        const err = photo.calib.errors[k];
+        text += ' · ' + (err < 0 ? 'behind the camera' : err.toFixed(1) + ' px');
+        if (photo.calib.outlier[k]) { li.classList.add('outlier'); text += ' (outlier)'; }
+      }
+      li.textContent = text;
+      if (c === 'skip') li.classList.add('skipped');
+      else if (c) li.classList.add('done');
+      if (i === clicker.current) li.classList.add('current');
+      li.addEventListener('click', () => { clicker.current = i; updateClicker(); });
+      ui.clickerList.append(li);
+    }
+    ui.clickerUndo.disabled = photo.clicks.size === 0;
+    ui.clickerSkip.disabled = !lm;
+    // The asked landmark in red on the 3D head; clicked ones green.
+    if (app.viewer) {
+      const pos = [], col = [];
+      for (const [i, l] of lms.entries()) {
+        const c = photo.clicks.get(l.id);
+        if (i === clicker.current) { pos.push(...l.position); col.push(1, 0.15, 0.1); }
+        else if (c && c !== 'skip') { pos.push(...l.position); col.push(0.3, 0.9, 0.5); }
+      }
+      app.viewer.set_markers(new Float32Array(pos), new Float32Array(col));
+    }
+    drawClicker();
+  }
+
+  function drawClicker() {
+    const photo = clicker.photo, img = clicker.image;
+    const canvas = ui.clickerCanvas;
+    if (!photo) return;
+    const dpr = window.devicePixelRatio || 1;
+    const w = Math.max(1, Math.round(canvas.clientWidth * dpr)), h = Math.max(1, Math.round(canvas.clientHeight * dpr));
+    if (canvas.width !== w || canvas.height !== h) { canvas.width = w; canvas.height = h; }
+    const g = canvas.getContext('2d');
+    g.fillStyle = '#000';
+    g.fillRect(0, 0, w, h);
+    if (!img || !img.complete || !img.naturalWidth) return;
+    const scale = Math.min(w / photo.width, h / photo.height);
+    const ox = (w - photo.width * scale) / 2, oy = (h - photo.height * scale) / 2;
+    clicker.view = { scale, ox, oy, dpr };
+    g.drawImage(img, ox, oy, photo.width * scale, photo.height * scale);
+    // Points: clicked (or from the file), numbered; after a calibration each
+    // shows its reprojection error, outliers in red.
+    const pts = photoPoints(photo);
+    const sentIndex = new Map((photo.sent || []).map((s, k) => [s.label, k]));
+    g.font = Math.round(12 * dpr) + 'px system-ui, sans-serif';
+    g.lineWidth = 2 * dpr;
+    for (const [n, pt] of pts.list.entries()) {
+      const x = ox + pt.u * scale, y = oy + pt.v * scale;
+      const k = sentIndex.get(pt.label);
+      const calib = photo.calib && photo.calib.ok && k !== undefined ? photo.calib : null;
+      const outlier = calib && calib.outlier[k];
+      g.strokeStyle = outlier ? '#ff4d4d' : '#7de2c3';
+      g.beginPath();
+      g.arc(x, y, 6 * dpr, 0, 2 * Math.PI);
+      g.stroke();
+      g.fillStyle = outlier ? '#ff4d4d' : '#ffffff';
+      const label = String(n + 1) + (calib ? ' · ' + (calib.errors[k] < 0 ? '∞' : calib.errors[k].toFixed(1)) + ' px' : '');
+      g.fillText(label, x + 8 * dpr, y - 8 * dpr);
+    }
+  }
+
+  function clickerClick(e) {
+    const photo = clicker.photo, v = clicker.view;
+    if (!photo || !v || clicker.current < 0) return;
+    const rect = ui.clickerCanvas.getBoundingClientRect();
+    const u = ((e.clientX - rect.left) * v.dpr - v.ox) / v.scale;
+    const w = ((e.clientY - rect.top) * v.dpr - v.oy) / v.scale;
+    if (u < 0 || w < 0 || u > photo.width || w > photo.height) return;  // outside the photo
+    const lm = app.fit.landmarks[clicker.current];
+    photo.clicks.delete(lm.id);  // re-clicking a landmark moves it (and puts it last for Undo)
+    photo.clicks.set(lm.id, { u, v: w });
+    photo.calib = null;
+    clicker.current = nextLandmark(clicker.current + 1);
+    updateClicker();
+    renderPhotos();
+  }
+
+  function clickerUndo() {
+    const photo = clicker.photo;
+    if (!photo || !photo.clicks.size) return;
+    const last = Array.from(photo.clicks.keys()).pop();
+    photo.clicks.delete(last);
+    photo.calib = null;
+    clicker.current = app.fit.landmarks.findIndex((l) => l.id === last);
+    updateClicker();
+    renderPhotos();
+  }
+
+  function clickerSkip() {
+    const photo = clicker.photo;
+    if (!photo || clicker.current < 0) return;
+    const lm = app.fit.landmarks[clicker.current];
+    photo.clicks.delete(lm.id);
+    photo.clicks.set(lm.id, 'skip');
+    clicker.current = nextLandmark(clicker.current + 1);
+    updateClicker();
+  }
+
+  function clickerClear() {
+    const photo = clicker.photo;
+    if (!photo) return;
+    photo.clicks = new Map();
+    photo.calib = null;
+    clicker.current = nextLandmark(0);
+    updateClicker();
+    renderPhotos();
+  }
+  app.openClicker = (i) => openClicker(app.photos[i]);
+  app.clickPhoto = (i, u, v) => {  // for tests: a click at photo pixel (u, v)
+    const photo = app.photos[i];
+    if (clicker.photo !== photo) openClicker(photo);
+    const lm = app.fit.landmarks[clicker.current];
+    if (!lm) return false;
+    photo.clicks.delete(lm.id);
+    photo.clicks.set(lm.id, { u, v });
+    photo.calib = null;
+    clicker.current = nextLandmark(clicker.current + 1);
+    updateClicker();
+    renderPhotos();
+    return lm.id;
+  };
 
   const SCAN_EXTENSIONS = ['ply', 'obj', 'xyz', 'vtk'];
 
@@ -484,8 +811,27 @@
       return;
     }
     const blob = await response.blob();
-    await loadScan(new File([blob], 'sample_scan.ply'));
+    // Synthetic photos of the sample head with their points files (made by
+    // `likeness texture --make-synthetic`, listed in sample/texture.json by
+    // scripts/demo): the Texture stage's demo. Missing ones are skipped.
+    const extra = [];
+    try {
+      const list = await fetch(SAMPLE_TEXTURE_URL, { cache: 'no-store' });
+      const manifest = list.ok ? await list.json() : { photos: [] };
+      for (const name of (manifest.photos || []).slice(0, 8)) {
+        if (typeof name !== 'string' || !/^[\w.-]+\.(png|jpe?g)$/i.test(name)) continue;
+        const txt = name.replace(/\.[^.]*$/, '.txt');
+        const [photo, points] = await Promise.all([fetch('sample/' + name, { cache: 'no-store' }),
+                                                   fetch('sample/' + txt, { cache: 'no-store' })]);
+        if (photo.ok) extra.push(new File([await photo.blob()], name));
+        if (photo.ok && points.ok) extra.push(new File([await points.blob()], txt));
+      }
+    } catch (e) {
+      console.warn('sample photos not loaded:', e && e.message ? e.message : e);
+    }
+    await handleFiles([new File([blob], 'sample_scan.ply'), ...extra]);
   }
+  const SAMPLE_TEXTURE_URL = 'sample/texture.json';
 
 
   // ---- fitting the head (jeong2002 Sec. 4-5) ----------------------------------
@@ -509,7 +855,9 @@
   // until the next fit, but nothing can be animated or exported.
   function forgetFit(why) {
     stopAnimation(false);
+    closeClicker();
     app.fit = null;
+    forgetTexture();
     ui.fitView.hidden = true;
     for (const st of FIT_STAGES) stageItem(st.row).classList.remove('viewable', 'shown');
     if (why) setStatus(why);
@@ -568,7 +916,8 @@
     }
     app.fit = { name: file.name, stages: result.stages, meshes: result.meshes, fitMs: result.fitMs,
                 parseMs: result.parseMs, wallMs, points: result.points, fittedPoints: result.fittedPoints,
-                animatedVertices: result.animatedVertices };
+                animatedVertices: result.animatedVertices, landmarks: result.landmarks || [] };
+    forgetTexture();
     for (const st of FIT_STAGES) {
       const s = result.stages.find((x) => x.name === st.core);
       setStage(st.row, s ? Math.round(s.ms) + ' ms' : 'done', 1, 'complete');
@@ -588,8 +937,10 @@
     app.viewer.set_overlay_visible(ui.showPoints.checked);
     showStage('subdivide');
     setStatus(file.name + ': head fitted in ' + (result.fitMs / 1000).toFixed(2) + ' s. Click a stage to see its mesh; ' +
-              'pick a level, animate or export.');
+              'pick a level, animate or export.' + (app.photos.length ? ' Photos: give them points, then Texture.' : ''));
     setState('done');
+    renderPhotos();
+    if (ui.autoFit.checked && texturable().length) await runTexture();
   }
 
   // Shows a fit stage's mesh over the scan points, keeping the view.
@@ -606,13 +957,120 @@
     if (!app.fit) return;
     if (row !== 'subdivide') stopAnimation();
     const mesh = fitMesh(row);
-    const err = app.viewer.show_mesh_keep_view(mesh.positions, null, null, mesh.indices);
+    const t = app.texture;
+    const textured = row === 'subdivide' && t;
+    const err = textured
+      ? app.viewer.show_textured_mesh(mesh.positions, mesh.indices, t.uvs.subarray(0, 2 * mesh.vertexCount),
+                                      t.skin.width, t.skin.height, t.skin.channels, t.skin.pixels)
+      : app.viewer.show_mesh_keep_view(mesh.positions, null, null, mesh.indices);
     if (err) { showError('Could not show the ' + row + ' mesh: ' + err); return; }
     markShown(row);
     const what = row === 'subdivide' ? (ui.level.value === '0' ? 'control mesh' : 'level ' + ui.level.value)
       : stageItem(row).querySelector('.stage-name').textContent + ' result';
-    setStatus('Showing the ' + what + ' (' + mesh.vertexCount.toLocaleString('en') + ' vertices, ' +
+    setStatus('Showing the ' + (textured ? 'textured ' : '') + what + ' (' + mesh.vertexCount.toLocaleString('en') + ' vertices, ' +
               mesh.triangleCount.toLocaleString('en') + ' triangles)' + (ui.showPoints.checked ? ' over the scan points.' : '.'));
+  }
+
+  // ---- texturing (tarini2002 Sec. 3) ---------------------------------------------
+  function forgetTexture() {
+    app.texture = null;
+    setStage('texture', 'waiting', 0);
+    stageItem('texture').querySelector('.stage-stats').textContent = '';
+    ui.textureTotal.textContent = '';
+  }
+
+  // Calibrates every photo that has correspondences and textures the fitted
+  // head in the worker; the viewer then shows the skin on the chosen level.
+  async function runTexture() {
+    const state = document.body.dataset.state;
+    if (state === 'working' || state === 'loading' || app.startupFailed) return;
+    clearError();
+    if (!app.fit) { showError('Fit the head before texturing it: the texture is laid on the fitted head.'); return; }
+    const using = texturable();
+    if (!app.photos.length) { showError('Drop one or more photos of the head (JPG or PNG) to texture it.'); return; }
+    if (!using.length) {
+      showError('No photo has correspondences yet: drop each photo\'s points file (same name, .txt) or click a photo ' +
+                'to mark its landmarks (at least 6 each).');
+      return;
+    }
+    const few = using.filter((p) => photoPoints(p).list.length < 6);
+    if (few.length) {
+      showError(few.map((p) => p.name + ' has ' + photoPoints(p).list.length + ' point(s)').join('; ') +
+                '. Calibrating a photo needs at least 6 correspondences (12-15 spread over the face are best): ' +
+                'click more landmarks or skip the photo by clearing its clicks.');
+      return;
+    }
+    stopAnimation();
+    setState('working');
+    stageItem('texture').classList.remove('coming');
+    setStage('texture', '0%', 0, 'active');
+    setStatus('Texturing the head from ' + using.length + ' photo(s)…');
+    const t0 = performance.now();
+    let result;
+    try {
+      const photos = [];
+      for (const p of using) {
+        const pts = photoPoints(p);
+        p.sent = pts.list.map((x) => ({ label: x.label }));
+        const flat = new Float64Array(pts.list.length * 5);
+        pts.list.forEach((x, k) => flat.set([x.u, x.v, x.p[0], x.p[1], x.p[2]], 5 * k));
+        photos.push({ name: p.name, buffer: await p.file.arrayBuffer(), points: flat });
+      }
+      const size = Number(params.get('texture_size')) > 0 ? Number(params.get('texture_size')) : 1024;
+      result = await runJob({ type: 'texture', photos, options: { size } }, photos.map((p) => p.buffer),
+        (stage, fraction) => { if (stage === 'texture') setStage('texture', Math.round(fraction * 100) + '%', fraction, 'active'); });
+    } catch (e) {
+      if (e && e.cancelled) {
+        setStage('texture', 'cancelled', 0);
+        setStatus('Texturing cancelled.');
+        setState('done');
+        return;
+      }
+      result = { ok: false, code: 'Internal', message: e && e.message ? e.message : String(e) };
+    }
+    const wallMs = performance.now() - t0;
+    // Per-photo calibration outcomes (also on failure: the page marks bad points).
+    if (result.calib) using.forEach((p, i) => { p.calib = result.calib[i] || null; });
+    renderPhotos();
+    if (clicker.photo) updateClicker();
+    if (!result.ok) {
+      setStage('texture', 'failed', 0, 'failed');
+      setStatus('Texturing failed; your points and clicks are kept.' + (app.fit ? ' The fitted head is still shown.' : ''));
+      showError('Texture: ' + (result.message || result.code));
+      return;
+    }
+    app.texture = { uvs: result.uvs, skin: result.skin, steps: result.steps, textureMs: result.textureMs, wallMs,
+                    level: result.level, photos: using.length };
+    setStage('texture', Math.round(result.textureMs) + ' ms', 1, 'complete');
+    const rms = using.map((p) => p.calib && p.calib.ok ? p.calib.rms : NaN).filter((x) => !Number.isNaN(x));
+    stageItem('texture').querySelector('.stage-stats').textContent = using.length + ' photo(s), calibration rms ' +
+      (rms.length ? Math.min(...rms).toFixed(2) + '-' + Math.max(...rms).toFixed(2) : '?') + ' px · ' +
+      result.skin.width + '² texels · ' + result.steps.map((x) => x.name + ' ' + Math.round(x.ms)).join(', ') + ' ms';
+    ui.textureTotal.textContent = 'textured in ' + (result.textureMs / 1000).toFixed(2) + ' s';
+    ui.showPoints.checked = false;
+    app.viewer.set_overlay_visible(false);
+    closeClicker();
+    showStage('subdivide');
+    setStatus('Textured from ' + using.length + ' photo(s) in ' + (result.textureMs / 1000).toFixed(2) + ' s. ' +
+              'Animate it, pick a level, or export the textured head.');
+    setState('done');
+  }
+  app.textureHead = () => runTexture();
+
+  async function exportTextured() {
+    if (!app.fit || !app.texture) return;
+    const level = Number(ui.level.value);
+    const base = app.fit.name.replace(/\.[^.]*$/, '') + '_textured' + (level === 0 ? '_control' : '_level' + level);
+    try {
+      const r = await runJob({ type: 'exportTextured', level, base }, []);
+      if (!r.ok) { showError('Export failed: ' + r.message); return; }
+      download(base + '.obj', r.obj, 'model/obj');
+      download(base + '.mtl', r.mtl, 'model/mtl');
+      download(base + '.png', r.png, 'image/png');
+      setStatus('Exported ' + base + '.obj, .mtl and .png.');
+    } catch (e) {
+      showError('Export failed: ' + (e && e.message ? e.message : e));
+    }
   }
 
   // ---- animation (jeong2002 Sec. 6: local update of the multires head) --------
@@ -801,6 +1259,18 @@
     ui.animate.addEventListener('change', () => (ui.animate.checked ? startAnimation() : stopAnimation()));
     ui.exportObj.addEventListener('click', () => exportHead('obj'));
     ui.exportPly.addEventListener('click', () => exportHead('ply'));
+    ui.exportTextured.addEventListener('click', exportTextured);
+    ui.texture.addEventListener('click', runTexture);
+    ui.clickerCanvas.addEventListener('click', clickerClick);
+    ui.clickerUndo.addEventListener('click', clickerUndo);
+    ui.clickerSkip.addEventListener('click', clickerSkip);
+    ui.clickerClear.addEventListener('click', clickerClear);
+    ui.clickerClose.addEventListener('click', closeClicker);
+    window.addEventListener('resize', () => drawClicker());
+    ui.clicker.addEventListener('keydown', (e) => {
+      if (e.key === 'Escape') closeClicker();
+      else if ((e.ctrlKey || e.metaKey) && e.key === 'z') { e.preventDefault(); clickerUndo(); }
+    });
     ui.wireframe.addEventListener('change', () => app.viewer && app.viewer.set_wireframe(ui.wireframe.checked));
     ui.pointSize.addEventListener('input', () => app.viewer && app.viewer.set_point_size(Number(ui.pointSize.value)));
   }

@@ -59,7 +59,33 @@ const JOBS = {
   animate: (msg) => core.animate_frame(msg.amount, msg.level),
   // {level, format: 'obj'|'ply'}: the kept head as file bytes.
   export: (msg) => core.export_head(msg.level, msg.format),
+  // {text}: a points file (u v X Y Z per line) -> {points: Float64Array}.
+  points: (msg) => core.parse_points(String(msg.text)),
+  // {photos: [{name, buffer, points: Float64Array}], options}: calibrate each
+  // photo and texture the kept head (tarini2002 Sec. 3). Progress 'texture'.
+  texture: (msg, progress) => withManyHeapBytes(msg.photos || [], (placed) =>
+    core.texture_job(placed, msg.options || {}, progress)),
+  // {level, base}: the textured head as {obj, mtl, png} bytes.
+  exportTextured: (msg) => core.export_textured(msg.level, String(msg.base)),
 };
+
+// withHeapBytes for a list of {name, buffer, points}: fn gets
+// [{name, ptr, size, points}]; every copy is freed afterwards.
+function withManyHeapBytes(items, fn) {
+  const placed = [];
+  try {
+    for (const item of items) {
+      const bytes = new Uint8Array(item.buffer || new ArrayBuffer(0));
+      const ptr = core._malloc(Math.max(1, bytes.length));
+      if (!ptr) return { ok: false, code: 'TooLarge', message: 'not enough memory to hold ' + item.name + ' (' + bytes.length + ' bytes)' };
+      placed.push({ name: String(item.name), ptr, size: bytes.length, points: item.points || new Float64Array(0) });
+      core.HEAPU8.set(bytes, ptr);
+    }
+    return fn(placed);
+  } finally {
+    for (const p of placed) core._free(p.ptr);
+  }
+}
 
 // Typed arrays anywhere in the result (fit results nest meshes) are
 // transferred, not copied.
