@@ -180,6 +180,7 @@ Status texture_seam(const Image& texture, const std::vector<int>& labels, const 
   // Signed per-channel sums of colour(q) - colour(p) and absolute sums.
   struct Sums {
     double signed_sum[3] = {0, 0, 0};
+    double square_sum[3] = {0, 0, 0};
     double abs_sum = 0;
     long long count = 0;
   };
@@ -198,6 +199,7 @@ Status texture_seam(const Image& texture, const std::vector<int>& labels, const 
         for (int c = 0; c < nc; ++c) {
           const double d = static_cast<double>(texture.pixels[j * stride + c]) - texture.pixels[i * stride + c];
           sums.signed_sum[c] += d;
+          sums.square_sum[c] += d * d;
           abs_mean += std::abs(d);
         }
         sums.abs_sum += abs_mean / nc;
@@ -218,17 +220,22 @@ Status texture_seam(const Image& texture, const std::vector<int>& labels, const 
     if (cross_count == 0 || same.count == 0) continue;
     for (const auto& entry : cross) {
       const Sums& sums = entry.second;
-      double mean_step = 0;
-      for (int c = 0; c < nc; ++c)
-        mean_step += std::abs(sums.signed_sum[c] / sums.count - same.signed_sum[c] / same.count);
-      seam_sum += sums.count * (mean_step / nc);
+      const double pairs = static_cast<double>(sums.count);
+      for (int c = 0; c < nc; ++c) {
+        const double mean = sums.signed_sum[c] / pairs;
+        const double variance =
+            pairs > 1 ? std::max(0.0, (sums.square_sum[c] - pairs * mean * mean) / (pairs - 1)) : 0.0;
+        const double step_c = mean - same.signed_sum[c] / same.count;
+        // E[mean^2] = step^2 + variance / pairs: remove the noise's share.
+        seam_sum += pairs * (step_c * step_c - variance / pairs) / nc;
+      }
     }
     abs_excess_sum += cross_abs - static_cast<double>(cross_count) * (same.abs_sum / same.count);
     seam_pairs += cross_count;
   }
   if (seam_pairs == 0)
     return Status::error(ErrorCode::Empty, "seam: no texel pair crosses a region boundary, or none stays inside one");
-  result.seam = seam_sum / static_cast<double>(seam_pairs);
+  result.seam = std::sqrt(std::max(0.0, seam_sum / static_cast<double>(seam_pairs)));
   result.abs_excess = abs_excess_sum / static_cast<double>(seam_pairs);
   result.cross_pairs = cross_all;
   result.same_pairs = same_all;

@@ -74,16 +74,17 @@ Status compute_ssim(const Image& a, const Image& b, const PixelMask& mask, const
 // both texels labelled (and inside the chart mask, if given) are "cross"
 // pairs when their labels differ and "same" pairs otherwise.
 //
-// seam: the colour step across region boundaries, in 8-bit units. For each
-//   direction and ordered label pair (a, b), the mean SIGNED difference
-//   colour(q) - colour(p) per colour channel, minus the same direction's
-//   mean signed difference over same-label pairs (the texture's own slope);
-//   seam = the cross-pair-weighted mean over (direction, a, b) of the mean
-//   over channels of |that step|. A lighting mismatch between two photos
-//   shifts the colour consistently across their boundary, so the signed
-//   means keep it while texture detail and noise average out: ~0 without a
-//   seam (up to ~noise / sqrt(#pairs)), s for a colour step of s. A blend
-//   that spreads the step into a ramp over w texels scores ~s / w.
+// seam: the RMS colour step across region boundaries, in 8-bit units. For
+//   each direction and ordered label pair (a, b) ("group"), the mean SIGNED
+//   difference colour(q) - colour(p) per colour channel minus the same
+//   direction's mean over same-label pairs (the texture's own slope) is that
+//   group's step; seam^2 = the cross-pair-weighted mean over groups and
+//   channels of step^2 - variance / n (n the group's pairs, variance of its
+//   signed differences: what texture detail and noise add to a squared mean
+//   on average), clamped at 0. A lighting mismatch between two photos shifts
+//   the colour consistently across their boundary, so the signed means keep
+//   it while detail averages out: ~0 without a seam, s for a colour step of
+//   s, ~s / w when a blend spreads the step into a ramp over w texels.
 // abs_excess: the plainer D_cross - D_same, with D = mean over pairs of the
 //   channel-mean absolute difference (weighted per direction like seam). It
 //   is 0 without a seam too, but noise hides small steps in it: with noise
@@ -94,7 +95,7 @@ struct SeamOptions {
 };
 
 struct SeamResult {
-  double seam = 0;           // signed-step measure above, 8-bit units
+  double seam = 0;           // RMS step measure above, 8-bit units
   double abs_excess = 0;     // D_cross - D_same, 8-bit units
   double cross_mean = 0;     // D_cross pooled over both directions
   double same_mean = 0;      // D_same pooled over both directions
