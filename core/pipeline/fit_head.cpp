@@ -34,19 +34,54 @@ std::vector<Vec3> thin(const std::vector<Vec3>& p, int max_points) {
   return out;
 }
 
+// The pockets of the generic head (head_model.h): each eye socket is the
+// part of the mesh the eye rim loop cuts off from the rest of the head, the
+// mouth bag is the inner lip / bag set of constrained vertices. #V flags.
+std::vector<char> pocket_vertices(const TriMesh& mesh, const MeshTopology& topo, const HeadAnnotations& ann) {
+  const int nv = mesh.num_vertices();
+  std::vector<char> pocket(nv, 0);
+  for (const EyeSocket* eye : {&ann.eye_left, &ann.eye_right}) {
+    if (eye->rim.empty()) continue;
+    // Components of the mesh without the rim: all but the largest are inside.
+    std::vector<int> component(nv, -1);
+    for (int v : eye->rim)
+      if (v >= 0 && v < nv) component[v] = -2;
+    std::vector<int> sizes;
+    for (int seed = 0; seed < nv; ++seed) {
+      if (component[seed] != -1) continue;
+      const int id = static_cast<int>(sizes.size());
+      sizes.push_back(0);
+      std::vector<int> stack = {seed};
+      component[seed] = id;
+      while (!stack.empty()) {
+        const int v = stack.back();
+        stack.pop_back();
+        ++sizes[id];
+        for (int w : topo.rings[v])
+          if (component[w] == -1) {
+            component[w] = id;
+            stack.push_back(w);
+          }
+      }
+    }
+    if (sizes.size() < 2) continue;  // the rim cuts nothing off: no pocket
+    const int largest = static_cast<int>(std::max_element(sizes.begin(), sizes.end()) - sizes.begin());
+    for (int v = 0; v < nv; ++v)
+      if (component[v] >= 0 && component[v] != largest) pocket[v] = 1;
+  }
+  for (int v : ann.constrained_vertices)
+    if (v >= 0 && v < nv) pocket[v] = 1;
+  return pocket;
+}
+
 // The eye sockets and the mouth bag are pockets the scanner never sees; a
 // normal line from their vertices meets the outer skin (the lids, the lips)
 // and would push the pocket out through it. Their displacements, and those
 // of every finer vertex on an edge touching them, are set to zero.
-Status zero_pocket_displacements(const HeadAnnotations& ann, MultiresMesh& mr, int& zeroed) {
+Status zero_pocket_displacements(const std::vector<char>& pocket, MultiresMesh& mr, int& zeroed) {
   zeroed = 0;
-  std::vector<char> inner(mr.num_vertices(0), 1);
-  for (const char* region : {"face", "scalp", "ears", "neck"}) {
-    auto it = ann.regions.find(region);
-    if (it == ann.regions.end()) continue;
-    for (int v : it->second)
-      if (v >= 0 && v < static_cast<int>(inner.size())) inner[v] = 0;
-  }
+  std::vector<char> inner = pocket;
+  inner.resize(mr.num_vertices(0), 0);
   for (int l = 0; l <= mr.num_levels(); ++l) {
     for (size_t v = 0; v < inner.size(); ++v)
       if (inner[v] && mr.displacements[l][v] != 0) {
@@ -211,7 +246,7 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
     out.alignment.aligned = generic.mesh;
     transform(out.alignment.aligned, out.alignment.linear, out.alignment.translation);
     out.notes.push_back("face-only scan (its upper part is " + pct(out.coverage.depth_to_width) +
-                        "x as deep as wide; a whole head is about 1.2x): aligned by closest points, and the "
+                        "x as deep as wide; a whole head is 1x or more): aligned by closest points, and the "
                         "unscanned back, scalp and ears keep the generic head's shape");
   } else {
     st = align_initial(generic.mesh, ann, cloud, options.align, out.alignment, progress);
@@ -262,10 +297,34 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
 
   // 3. Global fitting.
   if (observer.started) observer.started("global_fitting");
+  // The pockets (eye sockets, mouth bag) are not skin: a scanner sees the
+  // eyeball or the closed lips in front of them, and points there pulled
+  // the sockets out through the lids (creases from the eye corners on the
+  // menpo3d James scan). They stay where local fitting put them, as the
+  // paper's E_constraint keeps the inner lips, and the points whose nearest
+  // surface is a pocket do not pull the skin either.
+  const std::vector<char> pocket = pocket_vertices(generic.mesh, topo, ann);
   GlobalFitTerms terms;
   terms.binding_edges = ann.binding_edges;
-  terms.constrained_vertices = ann.constrained_vertices;
-  st = fit_global(pts, out.local, topo, terms, options.global, out.control, out.global_fit, progress);
+  for (int v = 0; v < static_cast<int>(pocket.size()); ++v)
+    if (pocket[v]) terms.constrained_vertices.push_back(v);
+  std::vector<Vec3> skin_pts;
+  skin_pts.reserve(pts.size());
+  {
+    ClosestPointTree tree(out.local);
+    for (const Vec3& p : pts) {
+      const SurfacePoint c = tree.closest(p);
+      bool on_pocket = false;
+      if (c.face >= 0)
+        for (int v : out.local.triangles[c.face]) on_pocket = on_pocket || pocket[v];
+      if (!on_pocket) skin_pts.push_back(p);
+    }
+  }
+  out.pocket_points = static_cast<int>(pts.size() - skin_pts.size());
+  if (static_cast<int>(skin_pts.size()) < options.min_points)
+    return Status::error(ErrorCode::NotAHead, "only " + std::to_string(skin_pts.size()) +
+                                                  " points lie on the skin of the aligned head");
+  st = fit_global(skin_pts, out.local, topo, terms, options.global, out.control, out.global_fit, progress);
   if (!st) return with_context(st, "global fitting");
   stage_done("global_fitting", out.control, pts);
 
@@ -274,13 +333,13 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   st = build_multires(out.control, options.levels, out.multires);
   if (!st) return with_context(st, "subdivision");
   PointCloud fitted;
-  fitted.positions = pts;
+  fitted.positions = skin_pts;
   DisplacementOptions dopt = options.displacement;
   if (dopt.max_distance <= 0) dopt.max_distance = options.displacement_max_pct / 100.0 * diag;
   st = measure_displacements(fitted, dopt, out.multires, nullptr, progress);
   if (!st) return with_context(st, "displacements");
   int zeroed_pockets = 0;
-  st = zero_pocket_displacements(ann, out.multires, zeroed_pockets);
+  st = zero_pocket_displacements(pocket, out.multires, zeroed_pockets);
   if (!st) return with_context(st, "displacements");
   st = limit_folds(out.multires, options.fold_limit, &out.fold_limit);
   if (!st) return with_context(st, "displacements");
