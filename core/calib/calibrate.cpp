@@ -265,7 +265,7 @@ Camera refine(const Camera& start, const FreeParams& fp, const std::vector<Corre
 // solution seen from behind; starting from all sides lets LM find both and
 // the error decide.
 bool multi_start_pose(const std::vector<Correspondence>& cs, const std::vector<int>& idx, const Vec3& centroid,
-                      const Mat3& basis, double focal, int width, int height, Camera& best) {
+                      const Mat3& basis, double focal, int width, int height, const Vec3& seen_from, Camera& best) {
   Vec2 mean2 = Vec2::Zero();
   for (int i : idx) mean2 += cs[size_t(i)].pixel;
   mean2 /= double(idx.size());
@@ -304,7 +304,8 @@ bool multi_start_pose(const std::vector<Correspondence>& cs, const std::vector<i
       const double cost = residuals(c, cs, idx).squaredNorm();
       int in_front = 0;
       for (int i : idx) in_front += c.to_camera(cs[size_t(i)].point).z() > 0;
-      if (in_front == int(idx.size()) && cost < best_cost) {
+      const bool right_side = seen_from.isZero() || (c.center() - centroid).dot(seen_from) > 0;
+      if (in_front == int(idx.size()) && right_side && cost < best_cost) {
         best_cost = cost;
         best = c;
       }
@@ -347,9 +348,11 @@ Status calibrate_camera(const std::vector<Correspondence>& cs, int image_width, 
   if (options.known_focal < 0 || !std::isfinite(options.known_focal))
     return Status::error(ErrorCode::InvalidInput, "known_focal must be positive (or 0 = unknown)");
   if (options.focal_prior < 0 || !std::isfinite(options.focal_prior) || !(options.focal_prior_sigma > 0) ||
-      !std::isfinite(options.focal_prior_sigma) || !(options.pixel_sigma > 0) || !std::isfinite(options.pixel_sigma))
+      !std::isfinite(options.focal_prior_sigma) || !(options.pixel_sigma > 0) || !std::isfinite(options.pixel_sigma) ||
+      !options.seen_from.allFinite())
     return Status::error(ErrorCode::InvalidInput,
-                         "focal_prior must be >= 0 (0 = none), focal_prior_sigma and pixel_sigma positive");
+                         "focal_prior must be >= 0 (0 = none), focal_prior_sigma and pixel_sigma positive, "
+                         "seen_from finite");
   const FocalPrior prior = focal_prior_of(options);
 
   // Shape of the 3-D point set: collinear sets never determine a camera;
@@ -389,7 +392,8 @@ Status calibrate_camera(const std::vector<Correspondence>& cs, int image_width, 
       // mirrored. With known intrinsics the pose of the best-fit plane is a
       // usable start for LM.
       if (!known) return false;
-      return multi_start_pose(cs, idx, centroid, shape.matrixU(), options.known_focal, image_width, image_height, cam);
+      return multi_start_pose(cs, idx, centroid, shape.matrixU(), options.known_focal, image_width, image_height,
+                              options.seen_from, cam);
     }
     cam.width = image_width;
     cam.height = image_height;
@@ -397,6 +401,9 @@ Status calibrate_camera(const std::vector<Correspondence>& cs, int image_width, 
       cam.fx = cam.fy = options.known_focal;
       cam.cx = 0.5 * image_width;
       cam.cy = 0.5 * image_height;
+      if (!options.seen_from.isZero() && (cam.center() - centroid).dot(options.seen_from) <= 0)
+        return multi_start_pose(cs, idx, centroid, shape.matrixU(), options.known_focal, image_width, image_height,
+                                options.seen_from, cam);
     }
     return std::isfinite(cam.fx) && cam.fx > 0 && cam.fy > 0;
   };
@@ -445,8 +452,10 @@ Status calibrate_camera(const std::vector<Correspondence>& cs, int image_width, 
   Camera cam;
   if (!initial(inliers, cam))
     return Status::error(ErrorCode::InvalidInput,
-                         "no camera puts the 3-D points in front of it (points behind the camera, "
-                         "or mirrored correspondences)");
+                         options.seen_from.isZero()
+                             ? "no camera puts the 3-D points in front of it (points behind the camera, "
+                               "or mirrored correspondences)"
+                             : "no camera on the seen_from side puts the 3-D points in front of it");
 
   // Refine on the inliers, re-classify every point, repeat until stable.
   std::vector<double> e;
@@ -486,6 +495,9 @@ Status calibrate_camera(const std::vector<Correspondence>& cs, int image_width, 
   if (behind > 0)
     return Status::error(ErrorCode::InvalidInput,
                          std::to_string(behind) + " of the points are behind the calibrated camera");
+  if (!options.seen_from.isZero() && (cam.center() - centroid).dot(options.seen_from) <= 0)
+    return Status::error(ErrorCode::NotConverged,
+                         "the calibrated camera is on the wrong side of the points (seen_from): a mirrored pose");
 
   result.camera = cam;
   result.errors = e;

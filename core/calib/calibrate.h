@@ -44,6 +44,11 @@ struct CalibOptions {
   double focal_prior = 0;
   double focal_prior_sigma = 0.05;    // EXIF 35-mm-equivalent focals are rounded to 1 mm: ~2-5 %
   double pixel_sigma = 1.0;           // expected click noise per coordinate, pixels
+  // When non-zero: the camera must be on this side of the points (e.g. the
+  // head's look direction: a face is photographed from the front). Shallow,
+  // symmetric landmark sets also fit a camera mirrored through them; this
+  // picks the right one. Zero = no constraint.
+  Vec3 seen_from = Vec3::Zero();
   bool robust = true;                 // RANSAC + outlier rejection
   double outlier_px = 3.0;            // minimum rejection threshold, pixels
   int ransac_iterations = 300;        // minimal-set trials (deterministic seed)
