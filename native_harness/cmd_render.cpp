@@ -82,8 +82,11 @@ int run_render(const Args& args) {
   // An OBJ's material names its texture; use it when no --texture is given.
   std::string tex_path = texture_path;
   if (tex_path.empty() && !mesh.texture_name.empty()) {
+    // load_mesh_file already resolves map_Kd against the MTL's folder; a bare
+    // name is tried beside the mesh too.
     const std::string beside = directory_of(mesh_path) + mesh.texture_name;
-    if (file_exists(beside)) tex_path = beside;
+    if (file_exists(mesh.texture_name)) tex_path = mesh.texture_name;
+    else if (file_exists(beside)) tex_path = beside;
   }
   if (!tex_path.empty()) {
     if (mesh.uvs.empty()) return fail(kName, mesh_path + ": the mesh has no uvs, so a texture cannot be applied");

@@ -128,7 +128,17 @@ int make_synthetic(const Args& args, const HeadInput& head, const std::string& d
   const TriMesh& mesh = head.mesh;
   const BBox box = bounding_box(mesh.positions);
   const double scale = 0.1 * box.size().y();  // the colour field's finest wavelength
-  const SurfaceColorFn field = [scale](const Vec3& p, const Vec3&) { return procedural_color_field(p, scale); };
+  // "bands": the colourful test field; "skin": one skin tone with faint
+  // mottling, on which a lighting seam is as visible as on a real face.
+  const std::string kind = args.get("field", "bands");
+  if (kind != "bands" && kind != "skin") return usage_error("--field must be 'bands' or 'skin'");
+  const bool skin = kind == "skin";
+  const SurfaceColorFn field = [scale, skin](const Vec3& p, const Vec3&) {
+    const Vec3 f = procedural_color_field(p, scale);
+    if (!skin) return f;
+    const double mottle = 0.92 + 0.35 * (f.x() - 0.45) + 0.15 * (f.z() - 0.25);
+    return Vec3(Vec3(0.58, 0.36, 0.27) * mottle);
+  };
   const double even[] = {1, 1, 1, 1, 1}, uneven[] = {1.0, 0.7, 1.25, 0.8, 1.15};
   const double* gains = args.has("even-light") ? even : uneven;
   const Vec3 c = box.center();
@@ -186,7 +196,7 @@ int make_synthetic(const Args& args, const HeadInput& head, const std::string& d
 int run_texture(const Args& args) {
   for (const auto& [key, values] : args.options) {
     static const char* known[] = {"head", "photos", "points", "size", "focal", "out", "no-spline", "dump",
-                                  "make-synthetic", "photo-width", "photo-height", "even-light"};
+                                  "make-synthetic", "photo-width", "photo-height", "even-light", "field"};
     bool ok = false;
     for (const char* k : known) ok = ok || key == k;
     if (!ok) return usage_error("unknown option --" + key + " (see `likeness help`)");
@@ -227,7 +237,7 @@ int run_texture(const Args& args) {
   std::vector<std::array<int, 2>> sizes;
   for (size_t i = 0; i < photo_paths.size(); ++i) {
     s = load_image_file(photo_paths[i], photos[i].image, 3);
-    if (!s) return fail(kName, photo_paths[i] + ": " + s.message);
+    if (!s) return fail(kName, s.message);  // names the file
     sizes.push_back({photos[i].image.width, photos[i].image.height});
     Bytes bytes;
     s = read_file(point_paths[i], bytes, 16 << 20);
@@ -378,7 +388,7 @@ int run_texture(const Args& args) {
 const Registrar reg({kName,
                      "likeness texture --head DIR|MESH|generic --photos P1 P2 ... --points F1 F2 ... --out DIR "
                      "[--size 2048] [--focal PX] [--no-spline] [--dump] | --head ... --make-synthetic DIR "
-                     "[--photo-width 3000 --photo-height 2000] [--even-light]",
+                     "[--photo-width 3000 --photo-height 2000] [--even-light] [--field bands|skin]",
                      "skin texture from calibrated photos (tarini2002 Sec. 3.2): binding, resampling, hole filling, "
                      "multiresolution spline",
                      run_texture});

@@ -23,6 +23,8 @@ Status fill_vertex_colors(const MeshTopology& topology, std::vector<Vec3>& color
   std::vector<int> pending;  // uncoloured vertices, in index order (the paper's loop)
   for (int v = 0; v < nv; ++v)
     if (!colored[v]) pending.push_back(v);
+  std::vector<char> initially_uncolored(nv, 0);
+  for (int v : pending) initially_uncolored[v] = 1;
 
   for (int pass = 0; pass <= passes && !pending.empty(); ++pass) {
     // The last pass needs one coloured neighbour: any fraction above 0.
@@ -58,11 +60,27 @@ Status fill_vertex_colors(const MeshTopology& topology, std::vector<Vec3>& color
       pending.resize(keep);
     }
   }
+  std::vector<char> reached_by_passes(nv, 1);
+  for (int v = 0; v < nv; ++v)
+    if (!colored[v]) reached_by_passes[v] = 0;
   for (int v : pending) {
     colors[v] = options.fallback_color;
     colored[v] = 1;
     ++report.uncolorable;
     if (fill_pass) (*fill_pass)[v] = passes + 1;
+  }
+  // Relaxation of the filled vertices (the ones not coloured on input).
+  std::vector<int> filled;
+  for (int v = 0; v < nv; ++v)
+    if (initially_uncolored[v] && reached_by_passes[v]) filled.push_back(v);
+  for (int sweep = 0; sweep < options.smoothing_sweeps && !filled.empty(); ++sweep) {
+    for (int v : filled) {
+      const std::vector<int>& ring = topology.rings[v];
+      if (ring.empty()) continue;
+      Vec3 sum = Vec3::Zero();
+      for (int u : ring) sum += colors[u];
+      colors[v] = sum / static_cast<double>(ring.size());
+    }
   }
   return Status::success();
 }

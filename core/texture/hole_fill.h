@@ -22,6 +22,14 @@ struct HoleFillOptions {
   // Colour given to vertices of components with no coloured vertex at all
   // (linear RGB); they are counted in HoleFillReport::uncolorable.
   Vec3 fallback_color = Vec3(0.5, 0.5, 0.5);
+  // Ours, after the paper's passes: Gauss-Seidel sweeps that replace each
+  // filled vertex's colour by the mean of its neighbours (vertices coloured
+  // on input stay fixed), i.e. relaxation towards the membrane (harmonic)
+  // fill. The paper's passes fill a hole from its rim inwards, so the fronts
+  // coming from two photos of different brightness meet in a hard line in
+  // the middle of the hole (seen across the back of the head); relaxing
+  // spreads that step over the whole hole. 0 = the paper's fill exactly.
+  int smoothing_sweeps = 300;
 };
 
 struct HoleFillReport {
