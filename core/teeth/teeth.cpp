@@ -272,10 +272,12 @@ Status teeth_texture_from_photo(const Image& photo, const TeethOptions& o, Teeth
     for (int k = 0; k < 3; ++k) rgb[i * 3 + k] = photo.pixels[i * static_cast<size_t>(photo.channels) + k] / 255.f;
   res.reconstructed.assign(n, 0);
   res.reconstructed_pixels = 0;
-  res.bite_row = -1;
   if (o.reconstruct_hidden) {
     res.bite_row = reconstruct_hidden_teeth(w, h, o, res.classes, rgb, res.reconstructed);
     for (std::uint8_t f : res.reconstructed) res.reconstructed_pixels += f;
+  } else {
+    // Still wanted: the composite puts this row on the texture's bite line.
+    res.bite_row = o.bite_row >= 0 && o.bite_row < h ? o.bite_row : estimate_bite_row(w, h, res.classes);
   }
   // Target colour: the teeth's mean hue at a fixed brightness.
   double mean[3] = {sum[0] / res.teeth_pixels, sum[1] / res.teeth_pixels, sum[2] / res.teeth_pixels};

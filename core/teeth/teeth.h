@@ -66,7 +66,7 @@ struct TeethResult {
   double void_threshold = 0, gum_threshold = 0;  // colour distances (0..sqrt(3))
   float target_color[3] = {0, 0, 0};
   int teeth_pixels = 0;              // visible teeth pixels (before reconstruction)
-  int bite_row = -1;                 // the occlusal row used
+  int bite_row = -1;                 // the occlusal row (given or estimated)
   std::vector<std::uint8_t> reconstructed;  // width * height, 1 = hidden part filled in (tooth or gap)
   int reconstructed_pixels = 0;
 };
