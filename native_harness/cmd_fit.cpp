@@ -14,9 +14,17 @@
 namespace lk::cli {
 namespace {
 
+// Three numbers ("0 0 1") or an axis name ("+x", "-z").
 bool get_vec3(const Args& a, const std::string& key, Vec3& v) {
   if (!a.has(key)) return true;
   const auto vals = a.get_all(key);
+  if (vals.size() == 1) {
+    const std::string& name = vals[0];
+    if (name.size() != 2 || (name[0] != '+' && name[0] != '-') || name[1] < 'x' || name[1] > 'z') return false;
+    v = Vec3::Zero();
+    v[name[1] - 'x'] = name[0] == '+' ? 1.0 : -1.0;
+    return true;
+  }
   if (vals.size() != 3) return false;
   for (int k = 0; k < 3; ++k) {
     char* end = nullptr;
@@ -42,7 +50,14 @@ int run_fit(const Args& args) {
   FitHeadOptions opt;
   if (!args.get_int("levels", 3, opt.levels)) return 2;
   if (!get_vec3(args, "up", opt.up) || !get_vec3(args, "facing", opt.facing))
-    return fail(cmd, "--up and --facing take three numbers, e.g. --up 0 0 1");
+    return fail(cmd, "--up and --facing take an axis (+x, -y, ...) or three numbers, e.g. --up +z or --up 0 0 1");
+  // Conventions the user gave are checked, not overridden: a scan that
+  // clearly fits better otherwise is refused with the flags to pass.
+  if (args.has("up") || args.has("facing")) opt.orientation_check = FitHeadOptions::OrientationCheck::Hint;
+  if (args.has("no-orientation-check")) opt.orientation_check = FitHeadOptions::OrientationCheck::Off;
+  if (args.has("face-only") && args.has("whole-head")) return fail(cmd, "give --face-only or --whole-head, not both");
+  if (args.has("face-only")) opt.scan_kind = FitHeadOptions::ScanKind::FaceOnly;
+  if (args.has("whole-head")) opt.scan_kind = FitHeadOptions::ScanKind::WholeHead;
   const bool dump = args.has("dump"), scan_frame = args.has("scan-frame");
 
   PointCloud scan;
@@ -81,6 +96,7 @@ int run_fit(const Args& args) {
   std::printf("likeness fit: %s (%d points), %d levels\n", scan_path.c_str(), scan.size(), opt.levels);
   FitHeadResult r;
   st = fit_head(scan, generic, opt, r, obs);
+  for (const std::string& note : r.notes) std::printf("  note: %s\n", note.c_str());
   if (!st) {
     write_file(out_dir + "/report.json", fit_report_json(r, stages, std::string(to_string(st.code)) + ": " + st.message));
     return fail(cmd, std::string(to_string(st.code)) + ": " + st.message);
@@ -106,7 +122,8 @@ int run_fit(const Args& args) {
 }
 
 Registrar reg({"fit",
-               "likeness fit --scan FILE --out DIR [--levels L] [--up X Y Z] [--facing X Y Z] [--dump] [--scan-frame]",
+               "likeness fit --scan FILE --out DIR [--levels L] [--up X Y Z|+x..-z] [--facing X Y Z|+x..-z] "
+               "[--no-orientation-check] [--face-only|--whole-head] [--dump] [--scan-frame]",
                "fits the generic head to a scan (jeong2002): control.obj, level1..L.obj, report.json", run_fit});
 
 }  // namespace
