@@ -10,6 +10,7 @@
 #include "io/io.h"
 #include "mesh/geometry.h"
 #include "pipeline/fit_head.h"
+#include "raycast/self_intersection.h"
 #include "synth/scanner.h"
 #include "synth/synth_head.h"
 
@@ -20,6 +21,7 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <map>
 
 namespace lk::cli {
 namespace {
@@ -52,6 +54,113 @@ void count_bad(const TriMesh& m, const TriMesh& ref, int ratio, int& flipped, in
   }
 }
 
+// Floor of the Table 1 metric: the scan's own distance to the TRUTH surface
+// (noise, outliers, hair junk), over the fitted points (above the neck cut)
+// and over the inliers only (scanner label "surface"), beside the fit's.
+void print_floor(const PointCloud& cloud, const ScanStats& scan_stats, const TriMesh& truth, const TriMesh& finest,
+                 const FitHeadResult& r, const HeadAnnotations& ann) {
+  ClipPlane neck;
+  neck.point = r.generic_to_head.apply(ann.neck_clip.point);
+  neck.normal = (r.generic_to_head.A.inverse().transpose() * ann.neck_clip.normal).normalized();
+  const double diag = r.bbox_diagonal * r.unit_to_metres;
+  ClosestPointTree truth_tree(truth), fit_tree(finest);
+  std::vector<double> truth_all, fit_all, truth_in, fit_in;
+  for (size_t i = 0; i < cloud.positions.size(); ++i) {
+    const Vec3 p = r.scan_to_head.apply(cloud.positions[i]);
+    if (!neck.keeps(p)) continue;
+    const double dt = std::sqrt(truth_tree.closest(p).squared_distance);
+    const double df = std::sqrt(fit_tree.closest(p).squared_distance);
+    truth_all.push_back(dt);
+    fit_all.push_back(df);
+    if (i < scan_stats.point_kind.size() && scan_stats.point_kind[i] == 0) {
+      truth_in.push_back(dt);
+      fit_in.push_back(df);
+    }
+  }
+  const size_t n_all = truth_all.size(), n_in = truth_in.size();
+  const DistanceStats ta = summarize_distances(truth_all, diag), fa = summarize_distances(fit_all, diag);
+  const DistanceStats ti = summarize_distances(truth_in, diag), fi = summarize_distances(fit_in, diag);
+  std::printf("   floor (scan->truth) vs fit (scan->level %zu), mean %% of diagonal: all %zu fitted points %.4f vs %.4f; "
+              "inliers %zu (no outliers/hair junk) %.4f vs %.4f (paper: 0.04 male, 0.08 female)\n",
+              r.level_meshes.size(), n_all, ta.mean_pct, fa.mean_pct, n_in, ti.mean_pct, fi.mean_pct);
+}
+
+// Crossing pairs of the finest level of mr by region (annotations carried down).
+void region_counts(const MultiresMesh& mr, const std::vector<std::array<int, 2>>& pairs, const HeadAnnotations& ann,
+                   int& lips, int& ears, int& rest) {
+  const int L = mr.num_levels();
+  auto mask_of = [&](const char* name) {
+    std::vector<char> m(mr.num_vertices(0), 0);
+    auto it = ann.regions.find(name);
+    if (it != ann.regions.end())
+      for (int v : it->second)
+        if (v >= 0 && v < static_cast<int>(m.size())) m[v] = 1;
+    return propagate_vertex_mask(mr, m)[L];
+  };
+  const std::vector<char> lm = mask_of("lips"), em = mask_of("ears");
+  const auto& tris = mr.triangles(L);
+  auto touches = [&](const std::vector<char>& m, int f) { return m[tris[f][0]] || m[tris[f][1]] || m[tris[f][2]]; };
+  lips = ears = rest = 0;
+  for (const auto& p : pairs) {
+    if (touches(lm, p[0]) || touches(lm, p[1])) ++lips;
+    else if (touches(em, p[0]) || touches(em, p[1])) ++ears;
+    else ++rest;
+  }
+}
+
+// Self-intersecting triangle pairs of the finest level, by region: lips,
+// ears (head annotations carried down the levels), rest.
+int print_self_intersections(const FitHeadResult& r, const HeadAnnotations& ann, const std::string& save_prefix) {
+  const int L = r.multires.num_levels();
+  const TriMesh finest = level_mesh(r.multires, L);
+  std::vector<std::array<int, 2>> pairs;
+  if (!find_self_intersections(finest, pairs).ok()) return 0;
+  auto mask_of = [&](const char* name) {
+    std::vector<char> m(r.multires.num_vertices(0), 0);
+    auto it = ann.regions.find(name);
+    if (it != ann.regions.end())
+      for (int v : it->second)
+        if (v >= 0 && v < static_cast<int>(m.size())) m[v] = 1;
+    return propagate_vertex_mask(r.multires, m)[L];
+  };
+  const std::vector<char> lips = mask_of("lips"), ears = mask_of("ears");
+  auto touches = [&](const std::vector<char>& m, int f) {
+    for (int v : finest.triangles[f])
+      if (m[v]) return true;
+    return false;
+  };
+  int n_lips = 0, n_ears = 0, n_rest = 0;
+  std::map<std::string, int> rest_by_region;
+  std::map<std::string, std::vector<char>> masks;
+  for (const auto& kv : ann.regions) masks[kv.first] = mask_of(kv.first.c_str());
+  for (const auto& p : pairs) {
+    if (touches(lips, p[0]) || touches(lips, p[1])) ++n_lips;
+    else if (touches(ears, p[0]) || touches(ears, p[1])) ++n_ears;
+    else {
+      ++n_rest;
+      for (const auto& kv : masks)
+        if (touches(kv.second, p[0]) || touches(kv.second, p[1])) ++rest_by_region[kv.first];
+    }
+  }
+  if (!save_prefix.empty()) {
+    TriMesh crossing;
+    crossing.positions = finest.positions;
+    for (const auto& p : pairs) crossing.triangles.push_back(finest.triangles[p[0]]), crossing.triangles.push_back(finest.triangles[p[1]]);
+    write_file(save_prefix + "_crossing.obj", write_obj(crossing));
+    write_file(save_prefix + "_level" + std::to_string(L) + ".obj", write_obj(finest));
+  }
+  if (n_rest) {
+    std::printf("   rest touches:");
+    for (const auto& kv : rest_by_region) std::printf(" %s %d", kv.first.c_str(), kv.second);
+    std::printf("\n");
+  }
+  std::vector<std::array<int, 2>> control_pairs;
+  find_self_intersections(r.control, control_pairs);
+  std::printf("   self-intersecting triangle pairs: level %d %zu (lips %d, ears %d, rest %d); control mesh %zu\n", L,
+              pairs.size(), n_lips, n_ears, n_rest, control_pairs.size());
+  return static_cast<int>(pairs.size());
+}
+
 int run(const Args& args) {
   const bool quick = args.has("quick");
   const int n_points = quick ? 100000 : 300000;
@@ -68,6 +177,7 @@ int run(const Args& args) {
   std::printf(" (virtual structured-light scanner: holes, 0.2 mm noise, 0.5%% outliers, hair junk)\n");
   int failures = 0;
   double sum_final_mean = 0, worst_total = 0;
+  int sum_flipped = 0, sum_degenerate = 0, sum_intersections = 0;
   for (int seed : seeds) {
     GenericHead head;
     st = synthesize_head(generic, seed, SynthHeadOptions{}, head);
@@ -77,7 +187,8 @@ int run(const Args& args) {
     so.target_points = n_points;
     so.hair_triangles = truth.hair;
     PointCloud cloud;
-    if (st) st = scan_virtual(truth.mesh, so, seed, cloud);
+    ScanStats scan_stats;
+    if (st) st = scan_virtual(truth.mesh, so, seed, cloud, &scan_stats);
     if (!st) {
       std::printf("   seed %d: synthetic data failed: %s\n", seed, st.message.c_str());
       ++failures;
@@ -103,6 +214,13 @@ int run(const Args& args) {
     };
     FitHeadResult r;
     FitHeadOptions opt;
+    // Experiment knobs (defaults: fit_head's).
+    args.get_int("fit-separate-rounds", opt.fold_limit.max_intersection_rounds, opt.fold_limit.max_intersection_rounds);
+    args.get_double("fit-area-ratio", opt.fold_limit.min_area_ratio, opt.fold_limit.min_area_ratio);
+    args.get_double("fit-cap-pct", opt.displacement_max_pct, opt.displacement_max_pct);
+    args.get_int("fit-levels", opt.levels, opt.levels);
+    if (args.has("fit-no-climb")) opt.fold_limit.shrink_coarser_levels = false;
+    if (args.has("fit-remeasure")) opt.displacement.remeasure_coarse_vertices = true;
     st = fit_head(cloud, generic, opt, r, obs);
     std::printf("\n   seed %d: %d points (%d above the neck cut), bbox diagonal %.3f m\n", seed, r.points,
                 r.fitted_points, r.bbox_diagonal);
@@ -141,20 +259,75 @@ int run(const Args& args) {
     std::printf("   truth->surface: all %zu truth vertices mean %.3f mm p95 %.3f mm; in holes (%zu, %.1f%%) mean %.3f mm p95 %.3f mm\n",
                 all_d.size(), 1e3 * as.mean, 1e3 * as.p95, n_hole, 100.0 * n_hole / std::max<size_t>(1, all_d.size()),
                 1e3 * hs.mean, 1e3 * hs.p95);
+    print_floor(cloud, scan_stats, truth.mesh, finest, r, generic.annotations);
     int flipped = 0, degenerate = 0, flipped_l = 0, degenerate_l = 0;
     count_bad(r.control, r.aligned, 1, flipped, degenerate);
     // Level L against the smooth (undisplaced) Butterfly surface of the same
     // control mesh: did a displacement turn a triangle over?
     MultiresMesh smooth;
-    if (build_multires(r.control, static_cast<int>(r.level_meshes.size()), smooth).ok())
+    std::vector<std::array<int, 2>> smooth_pairs;
+    if (build_multires(r.control, static_cast<int>(r.level_meshes.size()), smooth).ok()) {
       count_bad(finest, level_mesh(smooth, smooth.num_levels()), 1, flipped_l, degenerate_l);
+      find_self_intersections(level_mesh(smooth, smooth.num_levels()), smooth_pairs);
+      MultiresMesh generic_smooth;
+      std::vector<std::array<int, 2>> generic_pairs, generic_control_pairs;
+      if (build_multires(r.aligned, smooth.num_levels(), generic_smooth).ok())
+        find_self_intersections(level_mesh(generic_smooth, smooth.num_levels()), generic_pairs);
+      find_self_intersections(r.aligned, generic_control_pairs);
+      int sl = 0, se = 0, sr = 0;
+      region_counts(smooth, smooth_pairs, generic.annotations, sl, se, sr);
+      std::printf("   smooth (undisplaced) level %d: %zu self-intersecting pairs (lips %d, ears %d, rest %d); the aligned generic head's: %zu (its control mesh %zu)\n",
+                  smooth.num_levels(), smooth_pairs.size(), sl, se, sr, generic_pairs.size(), generic_control_pairs.size());
+      if (!save.empty()) {
+        TriMesh sm = level_mesh(smooth, smooth.num_levels()), crossing;
+        crossing.positions = sm.positions;
+        for (const auto& p : smooth_pairs) crossing.triangles.push_back(sm.triangles[p[0]]), crossing.triangles.push_back(sm.triangles[p[1]]);
+        write_file(save + "/smooth_seed" + std::to_string(seed) + "_crossing.obj", write_obj(crossing));
+      }
+    }
     std::printf("   control vs aligned generic: %d flipped, %d degenerate of %d triangles; level %zu vs smooth level %zu: %d flipped, %d degenerate of %d\n",
                 flipped, degenerate, r.control.num_triangles(), r.level_meshes.size(), r.level_meshes.size(), flipped_l, degenerate_l,
                 finest.num_triangles());
+    sum_flipped += flipped_l;
+    sum_degenerate += degenerate_l;
+    {
+      const FoldLimitStats& fl = r.fold_limit;
+      std::printf("   fold limiter: %d rounds; per level bad found / vertices shrunk / zeroed:", fl.rounds);
+      for (size_t l = 0; l < fl.bad_found.size(); ++l)
+        std::printf(" L%zu %d/%d/%d", l, fl.bad_found[l], fl.shrunk[l], fl.zeroed[l]);
+      std::printf("; left %d; %d restarts; crossing pairs %d before separating, %d after\n", fl.remaining_bad,
+                  fl.restarts, fl.intersections_found, fl.intersections_left);
+    }
+    sum_intersections += print_self_intersections(r, generic.annotations,
+                                                  save.empty() ? "" : save + "/fit_seed" + std::to_string(seed));
     std::printf("   global fit: %zu iterations in %d rounds; total %.0f ms wall, %.0f ms CPU (target < 2000 ms): %s\n",
                 r.global_fit.iterations.size(), r.global_fit.rounds, total, total_cpu,
                 total_cpu < 2000 ? "met (CPU)" : "MISSED");
     if (seed == seeds.front()) {
+      // The displacement stage's parts, re-run on the fitted control mesh
+      // (without fit_head's pocket zeroing): where its time goes.
+      MultiresMesh again;
+      const auto t0 = clock_type::now();
+      build_multires(r.control, opt.levels, again);
+      const double build_ms = ms_since(t0);
+      PointCloud fitted;
+      for (const Vec3& p : cloud.positions) fitted.positions.push_back(r.scan_to_head.apply(p));
+      DisplacementOptions dopt = opt.displacement;
+      dopt.max_distance = opt.displacement_max_pct / 100.0 * r.bbox_diagonal * r.unit_to_metres;
+      const auto t1 = clock_type::now();
+      measure_displacements(fitted, dopt, again);
+      const double measure_ms = ms_since(t1);
+      FoldLimitStats fl;
+      const auto t2 = clock_type::now();
+      limit_folds(again, opt.fold_limit, &fl);
+      const double limit_ms = ms_since(t2);
+      const auto t3 = clock_type::now();
+      std::vector<std::array<int, 2>> pairs;
+      find_self_intersections(level_mesh(again, again.num_levels()), pairs);
+      const double si_ms = ms_since(t3);
+      std::printf("   displacement stage parts (wall): build %.0f ms, measure %.0f ms, fold + intersection limit %.0f ms (%d rounds), "
+                  "self-intersection search at level %d %.0f ms\n",
+                  build_ms, measure_ms, limit_ms, fl.rounds, again.num_levels(), si_ms);
       // Local update of one control vertex (Sec. 6), at the finest level.
       MultiresMesh& mr = r.multires;
       const int reps = 2000;
@@ -175,6 +348,9 @@ int run(const Args& args) {
   if (ok > 0)
     std::printf("\n   summary: final mean %.4f %% of the diagonal over %d seeds (target <= 0.04; paper 0.04 male, 0.08 female); slowest fit %.0f ms CPU (target 2000)\n",
                 sum_final_mean / ok, ok, worst_total);
+  if (ok > 0)
+    std::printf("   summary: level-L flipped %d, degenerate %d, self-intersecting pairs %d over %d seeds (target 0 each)\n",
+                sum_flipped, sum_degenerate, sum_intersections, ok);
   return failures ? 1 : 0;
 }
 

@@ -163,6 +163,40 @@ void find_self_intersections(const MeshBvh& bvh, std::vector<std::array<int, 2>>
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
 }
 
+void find_intersections_with(const MeshBvh& bvh, const std::vector<int>& triangles,
+                             std::vector<std::array<int, 2>>& pairs) {
+  pairs.clear();
+  if (bvh.empty()) return;
+  PairTester tester{bvh, pairs, 0};
+  std::vector<int> stack;
+  for (int t : triangles) {
+    if (t < 0 || t >= bvh.num_triangles()) continue;
+    Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
+    for (int v : bvh.triangles[t]) {
+      lo = lo.cwiseMin(bvh.positions[v]);
+      hi = hi.cwiseMax(bvh.positions[v]);
+    }
+    stack.assign(1, 0);
+    while (!stack.empty()) {
+      const BvhNode& n = bvh.nodes[stack.back()];
+      const int id = stack.back();
+      stack.pop_back();
+      if (!(n.box_min.array() <= hi.array()).all() || !(lo.array() <= n.box_max.array()).all()) continue;
+      if (n.leaf()) {
+        for (int i = 0; i < n.count; ++i) {
+          const int other = bvh.triangle_order[n.first + i];
+          if (other != t) tester.test(t, other);
+        }
+      } else {
+        stack.push_back(id + 1);
+        stack.push_back(n.first);
+      }
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+}
+
 Status find_self_intersections(const TriMesh& mesh, std::vector<std::array<int, 2>>& pairs,
                                const SelfIntersectionOptions& options) {
   pairs.clear();

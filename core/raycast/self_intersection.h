@@ -44,6 +44,12 @@ Status find_self_intersections(const TriMesh& mesh, std::vector<std::array<int, 
 void find_self_intersections(const MeshBvh& bvh, std::vector<std::array<int, 2>>& pairs,
                              const SelfIntersectionOptions& options = {});
 
+// Only the pairs in which one triangle is in `triangles` (mesh triangle
+// ids), each tested against every triangle of the BVH: the re-check after a
+// local change. Same rules; pairs (a, b) with a < b, sorted, no duplicates.
+void find_intersections_with(const MeshBvh& bvh, const std::vector<int>& triangles,
+                             std::vector<std::array<int, 2>>& pairs);
+
 // Do triangles (a0, a1, a2) and (b0, b1, b2) share a point? (No adjacency
 // logic: for two triangles given by their corners.)
 bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,

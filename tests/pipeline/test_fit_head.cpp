@@ -86,6 +86,19 @@ TEST_CASE("fit_head: a synthetic scan is fitted, each stage closer than the last
   CHECK(flipped <= 2);
   REQUIRE(r.level_meshes.size() == 2);
   CHECK(r.level_meshes[1].num_triangles() == 16 * r.control.num_triangles());
+  // The displaced levels turn no triangle over and collapse none, against
+  // the smooth Butterfly levels of the same control mesh.
+  std::vector<std::vector<Vec3>> smooth;
+  REQUIRE(smooth_positions(r.multires, smooth).ok());
+  for (int l = 0; l <= 2; ++l) {
+    int flipped_l = 0, collapsed_l = 0;
+    count_bad_triangles(r.multires, l, smooth[l], FoldLimitOptions{}, flipped_l, collapsed_l);
+    INFO("level " << l);
+    CHECK(flipped_l == 0);
+    CHECK(collapsed_l == 0);
+  }
+  CHECK(r.fold_limit.remaining_bad == 0);
+  CHECK(r.fold_limit.bad_found[2] > 0);  // there was something to limit
   // Global fit energies decrease monotonically.
   for (const auto& it : r.global_fit.iterations) CHECK(it.energy_after <= it.energy_before);
 }
