@@ -11,6 +11,9 @@
 //     -> "" or error: a head with its skin texture (camera kept)
 //   set_markers(positions, colors) -> "": big points over the model (the
 //     landmark asked for); empty positions clear them
+//   add_component(positions, indices, colors, uvs, width, height, channels, pixels)
+//     -> "" or error: an extra mesh (eyeball, teeth, tongue) drawn with the
+//     model; clear_components(), set_components_visible(on)
 //   set_overlay_points(positions, normals, colors) -> "": the scan under a fit
 //     (empty positions clear it); set_overlay_visible(on)
 //   set_point_size(pixels), set_wireframe(on), reset_view()
@@ -218,6 +221,43 @@ std::string js_show_textured_mesh(val positions, val indices, val uvs, int width
   return s.ok() ? std::string() : s.message;
 }
 
+// One extra mesh drawn with the model (eyeball, teeth, tongue): colors #V*3
+// linear RGB or empty; uvs #V*2 with a texture (width*height*channels bytes)
+// or empty.
+std::string js_add_component(val positions, val indices, val colors, val uvs, int width, int height, int channels,
+                             val pixels) {
+  if (!g_viewer || !g_viewer->startup_error.empty()) return "the viewer is not running";
+  lk::TriMesh mesh;
+  lk::Status s = lk::web::mesh_from_arrays(from_js<float>(positions), {}, from_js<float>(colors),
+                                           from_js<std::uint32_t>(indices), mesh);
+  if (!s.ok()) return s.message;
+  const std::vector<float> uv = from_js<float>(uvs);
+  if (uv.empty()) {
+    s = g_viewer->scene.add_component(mesh, nullptr);
+    return s.ok() ? std::string() : s.message;
+  }
+  if (uv.size() != 2 * mesh.positions.size()) return "uvs: need 2 per vertex";
+  mesh.uvs.resize(mesh.positions.size());
+  for (size_t i = 0; i < mesh.uvs.size(); ++i) mesh.uvs[i] = lk::Vec2(uv[2 * i], uv[2 * i + 1]);
+  lk::Image image;
+  image.width = width;
+  image.height = height;
+  image.channels = channels;
+  image.pixels = from_js<std::uint8_t>(pixels);
+  if (width <= 0 || height <= 0 || (channels != 3 && channels != 4) ||
+      image.pixels.size() != static_cast<size_t>(width) * height * channels)
+    return "texture: size and bytes disagree";
+  s = g_viewer->scene.add_component(mesh, &image);
+  return s.ok() ? std::string() : s.message;
+}
+
+void js_clear_components() {
+  if (g_viewer) g_viewer->scene.clear_components();
+}
+void js_set_components_visible(bool on) {
+  if (g_viewer) g_viewer->scene.set_components_visible(on);
+}
+
 // Big marker points (positions #N*3, colors #N*3 sRGB); empty clears them.
 std::string js_set_markers(val positions, val colors) {
   if (!g_viewer || !g_viewer->startup_error.empty()) return "the viewer is not running";
@@ -309,6 +349,9 @@ EMSCRIPTEN_BINDINGS(likeness_viewer) {
   emscripten::function("set_overlay_points", &js_set_overlay_points);
   emscripten::function("show_textured_mesh", &js_show_textured_mesh);
   emscripten::function("set_markers", &js_set_markers);
+  emscripten::function("add_component", &js_add_component);
+  emscripten::function("clear_components", &js_clear_components);
+  emscripten::function("set_components_visible", &js_set_components_visible);
   emscripten::function("set_overlay_visible", &js_set_overlay_visible);
   emscripten::function("show_generic_head", &js_show_generic_head);
   emscripten::function("set_point_size", &js_set_point_size);

@@ -152,6 +152,41 @@ Status ViewerScene::set_texture(const Image& image) {
   return Status::success();
 }
 
+Status ViewerScene::add_component(const TriMesh& mesh, const Image* texture) {
+  DrawableHandle fresh = kNoHandle;
+  if (Status s = renderer_.upload_mesh(mesh, fresh); !s.ok()) return s;
+  if (texture) {
+    TextureHandle t = kNoHandle;
+    Status s = renderer_.upload_texture(*texture, t);
+    if (s.ok()) s = renderer_.attach_texture(fresh, t);
+    if (!s.ok()) {
+      if (t != kNoHandle) renderer_.remove_texture(t);
+      renderer_.remove(fresh);
+      return s;
+    }
+    component_textures_.push_back(t);
+  }
+  renderer_.set_visible(fresh, components_visible_);
+  if (DrawStyle* style = renderer_.style(fresh)) style->specular = 0.6f;  // wet eyes and teeth
+  components_.push_back(fresh);
+  dirty_ = true;
+  return Status::success();
+}
+
+void ViewerScene::clear_components() {
+  for (DrawableHandle h : components_) renderer_.remove(h);
+  for (TextureHandle t : component_textures_) renderer_.remove_texture(t);
+  components_.clear();
+  component_textures_.clear();
+  dirty_ = true;
+}
+
+void ViewerScene::set_components_visible(bool on) {
+  components_visible_ = on;
+  for (DrawableHandle h : components_) renderer_.set_visible(h, on);
+  dirty_ = true;
+}
+
 Status ViewerScene::set_markers(const PointCloud& cloud) {
   if (markers_ != kNoHandle) renderer_.remove(markers_);
   markers_ = kNoHandle;

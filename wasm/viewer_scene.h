@@ -48,6 +48,13 @@ class ViewerScene {
   // (show_mesh with TriMesh::uvs). Replaced with the model.
   Status set_texture(const Image& image);
 
+  // Extra meshes drawn with the model (the fitted head's eyeballs, teeth and
+  // tongue), each optionally textured (the mesh then carries uvs). Kept when
+  // the model changes; cleared or hidden by the page.
+  Status add_component(const TriMesh& mesh, const Image* texture);
+  void clear_components();
+  void set_components_visible(bool on);
+
   // A few big points drawn over everything else (the landmark the page asks
   // the user to click); an empty cloud clears them.
   Status set_markers(const PointCloud& cloud);
@@ -82,6 +89,9 @@ class ViewerScene {
   bool model_is_points_ = false;
   size_t model_vertices_ = 0;
   TextureHandle texture_ = kNoHandle;
+  std::vector<DrawableHandle> components_;
+  std::vector<TextureHandle> component_textures_;
+  bool components_visible_ = true;
   DrawableHandle markers_ = kNoHandle;
   DrawableHandle overlay_ = kNoHandle;
   bool overlay_visible_ = true;

@@ -22,7 +22,9 @@
 // correspondences -> cameras, chart, skin texture; tarini2002 Sec. 3) and
 // export_textured (OBJ + MTL + PNG).
 #include "common/progress.h"
+#include "components/components.h"
 #include "head/generic_head.h"
+#include "iris/iris.h"
 #include "io/io.h"
 #include "mesh/geometry.h"
 #include "pipeline/fit_head.h"
@@ -355,6 +357,76 @@ const lk::GenericHead* generic_head(lk::Status& status) {
   return &generic;
 }
 
+// A generic iris for the eyeballs while no eye photo is given (tarini2002
+// Sec. 4.1 synthesizes one from a photo; this stands in for it): a brown
+// iris with radial streaks, darker towards the limbus, as a polar image.
+lk::PolarIris generic_polar_iris() {
+  lk::PolarIris iris;
+  iris.angles = 96;
+  iris.radii = 24;
+  iris.rgb.resize(static_cast<size_t>(iris.angles) * iris.radii * 3);
+  iris.valid.assign(static_cast<size_t>(iris.angles) * iris.radii, 1);
+  for (int a = 0; a < iris.angles; ++a)
+    for (int r = 0; r < iris.radii; ++r) {
+      const double t = r / double(iris.radii - 1);  // 0 at the pupil, 1 at the limbus
+      const double streak = 0.85 + 0.15 * std::sin(a * 1.7) * std::sin(a * 0.37 + r * 0.5);
+      const double shade = streak * (1.0 - 0.45 * t * t);
+      float* px = iris.at(a, r);
+      px[0] = static_cast<float>(0.42 * shade);
+      px[1] = static_cast<float>(0.27 * shade);
+      px[2] = static_cast<float>(0.14 * shade);
+    }
+  return iris;
+}
+
+// {positions, indices, uvs?, colors?} of a head-frame component mesh, in the
+// scan frame. colors: one linear RGB for every vertex (none when textured).
+val component_arrays(const FitSession& s, const lk::TriMesh& m, const lk::Vec3* color) {
+  val o = mesh_arrays(s, m.positions, m.triangles);
+  if (m.uvs.size() == m.positions.size() && !color) {
+    std::vector<float> uv(2 * m.uvs.size());
+    for (size_t i = 0; i < m.uvs.size(); ++i) {
+      uv[2 * i] = static_cast<float>(m.uvs[i].x());
+      uv[2 * i + 1] = static_cast<float>(m.uvs[i].y());
+    }
+    o.set("uvs", val::global("Float32Array").new_(emscripten::typed_memory_view(uv.size(), uv.data())));
+  }
+  if (color) o.set("colors", float32_array(std::vector<lk::Vec3>(m.positions.size(), *color)));
+  return o;
+}
+
+// The generic eyeballs (with the generic iris texture), teeth and tongue of
+// tarini2002 Sec. 4, placed from the fitted control mesh's eye rims and lips
+// (core/components), in the scan frame. At rest: they do not follow the jaw.
+val components_object(const FitSession& s, const lk::GenericHead& generic) {
+  lk::GenericHead fitted;
+  fitted.mesh.positions = s.fit.control.positions;
+  fitted.mesh.triangles = s.fit.control.triangles;
+  fitted.annotations = generic.annotations;
+  lk::ComponentPlacement placement;
+  if (!lk::place_components(fitted, generic, placement).ok()) return val::null();
+  const lk::PlacedComponents parts = lk::build_placed_components(placement);
+  val o = val::object();
+  val eyes = val::array();
+  for (const lk::TriMesh& eye : parts.eye) eyes.call<void>("push", component_arrays(s, eye, nullptr));
+  o.set("eyes", eyes);
+  const lk::Vec3 ivory(0.80, 0.74, 0.60), tongue_pink(0.55, 0.16, 0.16);  // linear RGB
+  o.set("teeth", component_arrays(s, parts.teeth, &ivory));
+  o.set("tongue", component_arrays(s, parts.tongue, &tongue_pink));
+  lk::Image eye_texture;
+  lk::EyeballTextureOptions eto;
+  eto.size = 256;
+  if (lk::eyeball_texture(generic_polar_iris(), 0.35, eto, eye_texture).ok()) {
+    val t = val::object();
+    t.set("width", eye_texture.width);
+    t.set("height", eye_texture.height);
+    t.set("channels", eye_texture.channels);
+    t.set("pixels", val::global("Uint8Array").new_(emscripten::typed_memory_view(eye_texture.pixels.size(), eye_texture.pixels.data())));
+    o.set("eyeTexture", t);
+  }
+  return o;
+}
+
 // Runs the whole fit (jeong2002 Sec. 4-5) on a dropped scan's bytes.
 // options: {levels, up:[x,y,z], facing:[x,y,z]} (all optional).
 // progress(stage, fraction) with stage one of initial_alignment,
@@ -469,6 +541,7 @@ val fit_head_job(const std::string& name, std::uintptr_t data, std::size_t size,
     landmarks.call<void>("push", o);
   }
   r.set("landmarks", landmarks);
+  r.set("components", components_object(s, generic));
   g_session = std::move(session);
   return r;
 }

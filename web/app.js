@@ -38,6 +38,7 @@
     pointSize: $('point-size'), maxSize: $('max-size'), sample: $('btn-sample'), cancel: $('btn-cancel'), wireframe: $('wireframe'),
     fit: $('btn-fit'), autoFit: $('auto-fit'), fitTotal: $('fit-total'), fitView: $('fit-view'),
     level: $('level'), showPoints: $('show-points'), animate: $('animate'), animStats: $('anim-stats'),
+    showComponents: $('show-components'),
     exportObj: $('btn-export-obj'), exportPly: $('btn-export-ply'), exportTextured: $('btn-export-textured'),
     photoList: $('photo-list'), photoCount: $('photo-count'), texture: $('btn-texture'), textureTotal: $('texture-total'),
     viewerPane: document.querySelector('.viewer-pane'), clicker: $('clicker'), clickerPrompt: $('clicker-prompt'),
@@ -88,6 +89,7 @@
     ui.animate.disabled = !haveFit;
     ui.level.disabled = !haveFit;
     ui.showPoints.disabled = !haveFit;
+    ui.showComponents.disabled = !haveFit;
     ui.texture.disabled = !haveFit || !app.photos.length;
     ui.exportTextured.disabled = !haveFit || !app.texture;
   }
@@ -387,6 +389,15 @@
     }
   }
 
+  function removePhoto(photo) {
+    if (document.body.dataset.state === 'working') return;
+    if (clicker.photo === photo) closeClicker();
+    app.photos = app.photos.filter((p) => p !== photo);
+    URL.revokeObjectURL(photo.url);
+    renderPhotos();
+    setStatus('Removed ' + photo.name + ' from the photos.');
+  }
+
   // Points files (u v X Y Z per line, read by the core's parser) go to the
   // photo of the same base name.
   async function readPointFiles(files) {
@@ -399,6 +410,8 @@
       if (!photo) {
         meta.textContent = formatBytes(file.size) + ' · no photo named ' + baseName(file.name) + '.jpg/.png';
         meta.parentElement.classList.add('ignored');
+        failures.push(file.name + ' is not a scan, and no photo is named ' + baseName(file.name) + '.jpg or .png: a points ' +
+                      'file (.txt, "u v X Y Z" per line) goes with the photo of the same name; drop both together.');
         continue;
       }
       let result;
@@ -477,7 +490,14 @@
       }
       meta.textContent = note;
       text.append(name, meta);
-      li.append(img, text);
+      const remove = document.createElement('button');
+      remove.type = 'button';
+      remove.className = 'photo-remove small';
+      remove.textContent = '×';
+      remove.title = 'Remove ' + photo.name + ' (and its points) from the texture';
+      remove.setAttribute('aria-label', 'Remove ' + photo.name);
+      remove.addEventListener('click', (e) => { e.stopPropagation(); removePhoto(photo); });
+      li.append(img, text, remove);
       li.title = photo.name + ': click to mark landmarks on it' + (photo.calib && !photo.calib.ok ? ' (' + photo.calib.message + ')' : '');
       li.addEventListener('click', () => openClicker(photo));
       li.addEventListener('keydown', (e) => { if (e.key === 'Enter' || e.key === ' ') { e.preventDefault(); openClicker(photo); } });
@@ -662,19 +682,7 @@
     renderPhotos();
   }
   app.openClicker = (i) => openClicker(app.photos[i]);
-  app.clickPhoto = (i, u, v) => {  // for tests: a click at photo pixel (u, v)
-    const photo = app.photos[i];
-    if (clicker.photo !== photo) openClicker(photo);
-    const lm = app.fit.landmarks[clicker.current];
-    if (!lm) return false;
-    photo.clicks.delete(lm.id);
-    photo.clicks.set(lm.id, { u, v });
-    photo.calib = null;
-    clicker.current = nextLandmark(clicker.current + 1);
-    updateClicker();
-    renderPhotos();
-    return lm.id;
-  };
+
 
   const SCAN_EXTENSIONS = ['ply', 'obj', 'xyz', 'vtk'];
 
@@ -858,6 +866,7 @@
     closeClicker();
     app.fit = null;
     forgetTexture();
+    if (app.viewer) app.viewer.clear_components();
     ui.fitView.hidden = true;
     for (const st of FIT_STAGES) stageItem(st.row).classList.remove('viewable', 'shown');
     if (why) setStatus(why);
@@ -935,9 +944,10 @@
     if (Number(ui.level.value) > levels) ui.level.value = String(levels);
     app.viewer.set_overlay_points(app.scan.display.positions, app.scan.display.normals, app.scan.display.colors);
     app.viewer.set_overlay_visible(ui.showPoints.checked);
+    showComponents(result.components);
     showStage('subdivide');
     setStatus(file.name + ': head fitted in ' + (result.fitMs / 1000).toFixed(2) + ' s. Click a stage to see its mesh; ' +
-              'pick a level, animate or export.' + (app.photos.length ? ' Photos: give them points, then Texture.' : ''));
+              'pick a level, animate or export.');
     setState('done');
     renderPhotos();
     if (ui.autoFit.checked && texturable().length) await runTexture();
@@ -953,8 +963,31 @@
     return level === 0 ? m.control : m.levels[level - 1];
   }
 
+  // The generic eyeballs (iris texture), teeth and tongue of tarini2002
+  // Sec. 4, placed by the worker from the fitted eye rims and lips. Drawn
+  // with the subdivided head only (the earlier stages are not the final
+  // shape); at rest, they do not follow the animated jaw.
+  function showComponents(c) {
+    app.viewer.clear_components();
+    app.components = 0;
+    if (!c) return;
+    const none = new Float32Array(0);
+    const errors = [];
+    const add = (m, texture) => {
+      const t = texture || { width: 0, height: 0, channels: 0, pixels: new Uint8Array(0) };
+      const err = app.viewer.add_component(m.positions, m.indices, m.colors || none, texture ? m.uvs : none,
+                                           t.width, t.height, t.channels, t.pixels);
+      if (err) errors.push(err); else app.components++;
+    };
+    for (const eye of c.eyes || []) add(eye, eye.uvs && c.eyeTexture ? c.eyeTexture : null);
+    if (c.teeth) add(c.teeth, null);
+    if (c.tongue) add(c.tongue, null);
+    if (errors.length) console.warn('components not shown:', errors.join('; '));
+  }
+
   function showStage(row) {
     if (!app.fit) return;
+    app.viewer.set_components_visible(row === 'subdivide' && ui.showComponents.checked);
     if (row !== 'subdivide') stopAnimation();
     const mesh = fitMesh(row);
     const t = app.texture;
@@ -1215,6 +1248,7 @@
       stopAnimation();
       app.viewer.show_generic_head();
       app.viewer.set_overlay_points(new Float32Array(0), null, null);
+      app.viewer.set_components_visible(false);
       markShown(null);
       app.model = null;
       clearError();
@@ -1257,6 +1291,9 @@
       if (/^Showing /.test(text)) setStatus(text.replace(/( over the scan points)?\.$/, ui.showPoints.checked ? ' over the scan points.' : '.'));
     });
     ui.animate.addEventListener('change', () => (ui.animate.checked ? startAnimation() : stopAnimation()));
+    ui.showComponents.addEventListener('change', () => {
+      if (app.viewer) app.viewer.set_components_visible(ui.showComponents.checked && app.shownStage === 'subdivide');
+    });
     ui.exportObj.addEventListener('click', () => exportHead('obj'));
     ui.exportPly.addEventListener('click', () => exportHead('ply'));
     ui.exportTextured.addEventListener('click', exportTextured);

@@ -240,6 +240,188 @@ function hugeCountPly() {
     'only a few bytes follow');
 }
 
+// A width x height RGB PNG whose pixel (x, y) is color(x, y) -> [r, g, b].
+function makePhotoPng(width, height, color) {
+  const table = Array.from({ length: 256 }, (_, n) => {
+    let c = n;
+    for (let k = 0; k < 8; k++) c = c & 1 ? 0xedb88320 ^ (c >>> 1) : c >>> 1;
+    return c >>> 0;
+  });
+  const crc = (buf) => { let c = 0xffffffff; for (const b of buf) c = table[(c ^ b) & 255] ^ (c >>> 8); return (c ^ 0xffffffff) >>> 0; };
+  const chunk = (type, data) => {
+    const len = Buffer.alloc(4); len.writeUInt32BE(data.length);
+    const td = Buffer.concat([Buffer.from(type, 'ascii'), data]);
+    const c = Buffer.alloc(4); c.writeUInt32BE(crc(td));
+    return Buffer.concat([len, td, c]);
+  };
+  const ihdr = Buffer.alloc(13);
+  ihdr.writeUInt32BE(width, 0); ihdr.writeUInt32BE(height, 4); ihdr[8] = 8; ihdr[9] = 2;
+  const raw = Buffer.alloc(height * (1 + 3 * width));
+  for (let y = 0; y < height; y++) for (let x = 0; x < width; x++) raw.set(color(x, y), y * (1 + 3 * width) + 1 + 3 * x);
+  return Buffer.concat([Buffer.from([137, 80, 78, 71, 13, 10, 26, 10]), chunk('IHDR', ihdr),
+                        chunk('IDAT', zlib.deflateSync(raw)), chunk('IEND', Buffer.alloc(0))]);
+}
+
+// A pinhole camera in front of the fitted head (from the page's landmarks:
+// it looks from the ears' midpoint past the nose tip), f pixels, W x H.
+// project(p) -> [u, v] with the top-left-corner origin of the points files.
+function frontCamera(landmarks, W, H, f) {
+  const get = (id) => landmarks.find((l) => l.id === id).position;
+  const a = get('ear_left_lobe'), b = get('ear_right_lobe'), nose = get('nose_tip');
+  const mid = [0, 1, 2].map((k) => (a[k] + b[k]) / 2);
+  const unit = (v) => { const n = Math.hypot(...v); return v.map((x) => x / n); };
+  const cross = (p, q) => [p[1] * q[2] - p[2] * q[1], p[2] * q[0] - p[0] * q[2], p[0] * q[1] - p[1] * q[0]];
+  const dot = (p, q) => p[0] * q[0] + p[1] * q[1] + p[2] * q[2];
+  const fwd = unit([0, 1, 2].map((k) => nose[k] - mid[k]));
+  const right = unit(cross([0, 1, 0], fwd)), up = cross(fwd, right);
+  const eye = [0, 1, 2].map((k) => mid[k] + 0.6 * fwd[k]);
+  return (p) => {
+    const d = [0, 1, 2].map((k) => p[k] - eye[k]);
+    const z = -dot(d, fwd);
+    return [W / 2 + f * dot(d, right) / z, H / 2 - f * dot(d, up) / z];
+  };
+}
+
+// The Texture stage end to end on the fitted synthetic head: a photo that is
+// not an image, a points file with too few points, a good photo + points
+// file (calibration, texture_head in the worker, the skin on the canvas),
+// landmark clicks with undo/skip, textured export.
+async function textureStage(page, untextured) {
+  const landmarks = await page.evaluate(() => window.likeness.fit.landmarks);
+  check('the fit places the texture landmarks', landmarks.length >= 12 &&
+        landmarks.every((l) => l.label && l.position.length === 3 && l.position.every(Number.isFinite)),
+        `${landmarks.length}: ${landmarks.map((l) => l.id).join(', ')}`);
+  if (landmarks.length < 12) return;
+  const W = 640, H = 480;
+  const project = frontCamera(landmarks, W, H, 900);
+  // A saturated blue-violet photo: nothing like the untextured skin tone.
+  const photo = makePhotoPng(W, H, (x, y) => [40 + Math.round(60 * x / W), 50, 230 - Math.round(40 * y / H)]);
+  const line = (l) => { const [u, v] = project(l.position); return `${u.toFixed(2)} ${v.toFixed(2)} ${l.position.join(' ')}`; };
+
+  // Not an image: an error naming it, and the page keeps working.
+  await page.setInputFiles('#file-input', { name: 'holiday.jpg', mimeType: 'image/jpeg', buffer: Buffer.from('not a jpeg at all') });
+  await page.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: JOB_TIMEOUT_MS });
+  const notImage = await bannerText(page);
+  check('a photo that is not an image gives an error banner', (await state(page)) === 'error' && /holiday\.jpg/.test(notImage),
+        `"${notImage}"`);
+  await page.click('#error-dismiss');
+
+  // Only this test's photo: the others (the sample's, front.png) are removed
+  // with their rows' buttons.
+  for (let k = 0; k < 12; k++) {
+    const others = page.locator('#photo-list li', { hasNotText: 'head_front.png' }).locator('.photo-remove');
+    if (!(await others.count())) break;
+    await others.first().click();
+  }
+  check('photos can be removed from the list', (await page.evaluate(() => window.likeness.photos.length)) === 0,
+        await page.evaluate(() => window.likeness.photos.map((p) => p.name).join(', ') || 'none left'));
+
+  // Four points: a clear message before anything runs.
+  await page.setInputFiles('#file-input', [
+    { name: 'head_front.png', mimeType: 'image/png', buffer: photo },
+    { name: 'head_front.txt', mimeType: 'text/plain', buffer: Buffer.from(landmarks.slice(0, 4).map(line).join('\n') + '\n') }]);
+  await page.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: JOB_TIMEOUT_MS });
+  const listed = await page.textContent('#photo-list');
+  check('the photo is listed with a thumbnail and its points file', /head_front\.png/.test(listed) && /4 points from head_front\.txt/.test(listed) &&
+        (await page.locator('#photo-list img').count()) >= 1, listed.replace(/\s+/g, ' ').trim());
+  await page.click('#btn-texture');
+  await page.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: JOB_TIMEOUT_MS });
+  const few = await bannerText(page);
+  check('fewer than 6 points give a clear message', (await state(page)) === 'error' && /head_front\.png has 4 point/.test(few) &&
+        /at least 6/.test(few), `"${few}"`);
+  await page.click('#error-dismiss');
+
+  // A whole points file (14 landmarks, exact projections): the texture.
+  await page.setInputFiles('#file-input', { name: 'head_front.txt', mimeType: 'text/plain',
+                                            buffer: Buffer.from('# u v X Y Z\n' + landmarks.map(line).join('\n') + '\n') });
+  await page.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: JOB_TIMEOUT_MS });
+  const progress = [];
+  await page.exposeFunction('lkTextureProgress', (v) => progress.push(v)).catch(() => {});
+  await page.evaluate(() => {
+    const bar = document.querySelector('#stages li[data-stage="texture"] progress');
+    new MutationObserver(() => window.lkTextureProgress(bar.value)).observe(bar, { attributes: true });
+    const tag = document.querySelector('#stages li[data-stage="texture"] .stage-tag');
+    new MutationObserver(() => window.lkTextureProgress(tag.textContent)).observe(tag, { childList: true, characterData: true, subtree: true });
+  });
+  const tTex = Date.now();
+  await page.click('#btn-texture');
+  await page.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: JOB_TIMEOUT_MS });
+  const tex = await page.evaluate(() => ({
+    state: document.body.dataset.state, texture: window.likeness.texture && { ms: window.likeness.texture.textureMs,
+      steps: window.likeness.texture.steps.map((s) => s.name + ' ' + Math.round(s.ms)), size: window.likeness.texture.skin.width },
+    tag: document.querySelector('#stages li[data-stage="texture"] .stage-tag').textContent,
+    bar: document.querySelector('#stages li[data-stage="texture"] progress').value,
+    calib: window.likeness.photos.find((p) => p.name === 'head_front.png').calib }));
+  const percents = progress.filter((v) => typeof v === 'string' && /%$/.test(v));
+  check('"Texture" reaches done with per-step progress', tex.state === 'done' && !!tex.texture && tex.bar === 1 && / ms$/.test(tex.tag) &&
+        percents.length >= 3, tex.texture ? `${Date.now() - tTex} ms wall; ${Math.round(tex.texture.ms)} ms in the worker: ` +
+        `${tex.texture.steps.join(', ')}; progress ${percents.slice(0, 8).join(' ')}` : `state ${tex.state}: ${await bannerText(page)}`);
+  check('the photo calibrates from exact points (rms < 0.5 px, no outlier)', tex.calib && tex.calib.ok && tex.calib.rms < 0.5 &&
+        !tex.calib.outlier.some(Boolean), tex.calib ? `rms ${tex.calib.rms.toFixed(3)} px, ${tex.calib.inliers} inliers` : 'no calibration');
+  const textured = await canvasImage(page);
+  let blue = 0, blueBefore = 0;
+  const bluish = (img, i) => img.data[i + 2] > img.data[i] + 40 && img.data[i + 2] > img.data[i + 1] + 40;
+  for (let i = 0; i < textured.data.length; i += 4) { if (bluish(textured, i)) blue++; if (bluish(untextured, i)) blueBefore++; }
+  const n = textured.width * textured.height;
+  check('the canvas shows the photo\'s colour on the head', blue / n > 0.03 && blue > 5 * blueBefore + 100,
+        `${(100 * blue / n).toFixed(1)}% blue-violet pixels (untextured ${(100 * blueBefore / n).toFixed(2)}%)`);
+  await shot(page, 'web_texture_result.png');
+
+  // Clicking landmarks: undo and skip, clicks kept per photo.
+  await page.evaluate(() => window.likeness.openClicker(window.likeness.photos.findIndex((p) => p.name === 'head_front.png')));
+  await page.click('#clicker-clear');
+  await page.waitForTimeout(100);
+  const box = await page.locator('#clicker-canvas').boundingBox();
+  const clickLandmark = async (l) => {
+    const [u, v] = project(l.position);
+    const scale = Math.min(box.width / W, box.height / H);
+    await page.mouse.click(box.x + (box.width - W * scale) / 2 + u * scale, box.y + (box.height - H * scale) / 2 + v * scale);
+  };
+  for (const l of landmarks.slice(0, 9)) await clickLandmark(l);
+  await page.click('#clicker-undo');
+  await page.click('#clicker-skip');  // the 9th landmark, skipped instead
+  for (const l of landmarks.slice(9)) await clickLandmark(l);
+  const clicked = await page.evaluate(() => {
+    const p = window.likeness.photos.find((x) => x.name === 'head_front.png');
+    return { n: Array.from(p.clicks.values()).filter((c) => c !== 'skip').length,
+             skipped: Array.from(p.clicks.values()).filter((c) => c === 'skip').length,
+             prompt: document.getElementById('clicker-prompt').textContent,
+             listed: document.getElementById('photo-list').textContent };
+  });
+  check('clicks, undo and skip build the photo\'s landmarks', clicked.n === landmarks.length - 1 && clicked.skipped === 1 &&
+        new RegExp((landmarks.length - 1) + ' of ' + landmarks.length + ' landmarks clicked').test(clicked.listed),
+        `${clicked.n} clicked, ${clicked.skipped} skipped; "${clicked.prompt}"`);
+  await page.click('#btn-texture');
+  await page.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: JOB_TIMEOUT_MS });
+  const byClicks = await page.evaluate(() => ({ state: document.body.dataset.state,
+    calib: window.likeness.photos.find((p) => p.name === 'head_front.png').calib,
+    outliersShown: document.querySelectorAll('#clicker-list li.outlier').length }));
+  // Clicks land on CSS pixels of a photo shown at about half size: ~1 px error.
+  check('the clicked landmarks calibrate the photo (rms < 3 px) and texture it', byClicks.state === 'done' && byClicks.calib &&
+        byClicks.calib.ok && byClicks.calib.rms < 3, byClicks.calib ? `rms ${byClicks.calib.rms.toFixed(2)} px, ` +
+        `${byClicks.calib.inliers} inliers, ${byClicks.outliersShown} marked as outliers` : `state ${byClicks.state}`);
+  await page.evaluate(() => window.likeness.openClicker(window.likeness.photos.findIndex((p) => p.name === 'head_front.png')));
+  await shot(page, 'web_texture_clicks.png');
+  await page.click('#clicker-close');
+
+  // Textured export: OBJ with uvs, its MTL and the PNG.
+  const before = await page.evaluate(() => window.likeness.downloads.length);
+  const files = [];
+  const onDownload = async (d) => files.push({ name: d.suggestedFilename(), bytes: fs.readFileSync(await d.path()) });
+  page.on('download', onDownload);
+  await page.click('#btn-export-textured');
+  await page.waitForFunction((n) => window.likeness.downloads.length >= n + 3, before, { timeout: JOB_TIMEOUT_MS });
+  await page.waitForTimeout(500);
+  page.off('download', onDownload);
+  const obj = files.find((f) => f.name.endsWith('.obj')), mtl = files.find((f) => f.name.endsWith('.mtl')),
+        png = files.find((f) => f.name.endsWith('.png'));
+  const objText = obj ? obj.bytes.toString('latin1') : '';
+  const vts = (objText.match(/^vt /gm) || []).length, vs = (objText.match(/^v /gm) || []).length;
+  check('"Textured" exports OBJ (with uvs) + MTL + PNG', !!obj && !!mtl && !!png && vs > 0 && vts === vs &&
+        /mtllib .*\.mtl/.test(objText) && /map_Kd .*\.png/.test(mtl.bytes.toString()) && png.bytes.toString('latin1', 1, 4) === 'PNG',
+        files.map((f) => `${f.name} ${f.bytes.length} B`).join(', ') + `; ${vs} v, ${vts} vt`);
+}
+
 // ------------------------------------------------------------------ steps --
 async function shot(page, name) {
   if (!SHOT_DIR) return;
@@ -612,6 +794,7 @@ async function main() {
         const f2 = await page.evaluate(() => window.likeness.animation.frames);
         await page.waitForTimeout(600);
         check('unchecking Animate stops it', (await page.evaluate(() => window.likeness.animation.frames)) === f2);
+        await textureStage(page, rest);
       }
       // Cancel mid-fit: back to "done" without an error; the stopped worker
       // took the fitted head with it, so export is off until the next fit.

@@ -154,5 +154,17 @@ for (const [name, full] of [['bin.ply', binaryPly(40)], ['ascii.ply', Buffer.fro
   check('bad input to fit_head_job is a message', !bad.ok && bad.message.length > 0, bad.message);
 }
 
+// --- the Texture stage's jobs without a head, and points files -------------------
+{
+  const noHead = [core.texture_job([], {}, undefined), core.export_textured(3, 'x')];
+  check('texture/export textured before any fit say so', noHead.every((r) => !r.ok && /fit a head first|no fitted head/.test(r.message)),
+        noHead.map((r) => r.message).join(' | '));
+  const good = core.parse_points('# u v X Y Z\n10 20 0.1 0.2 0.3\n\n30.5 40 -1 -2 -3 # a comment\n');
+  check('a points file parses to u v X Y Z', good.ok && Array.from(good.points).join(' ') === '10 20 0.1 0.2 0.3 30.5 40 -1 -2 -3',
+        good.ok ? Array.from(good.points).join(' ') : good.message);
+  const bad = core.parse_points('10 20 0.1 0.2\n');
+  check('a short points line is a message naming the line', !bad.ok && /line 1/.test(bad.message), bad.message);
+}
+
 console.log(`worker node test: ${passes}/${passes + failures} checks passed`);
 process.exit(failures ? 1 : 0);
