@@ -71,7 +71,14 @@ Status load_head(const std::string& spec, const UvOptions& uv_options, HeadInput
   }
   if (is_file(spec)) {
     out.description = spec;
-    return with_context(load_mesh_file(spec, out.mesh), spec);
+    Status s = with_context(load_mesh_file(spec, out.mesh), spec);
+    if (s && out.mesh.uv_per_corner) {
+      // A scanner's atlas (seams, several charts): the paper wants one chart.
+      std::printf("note: %s has per-corner uvs (an atlas with seams); making one chart instead\n", spec.c_str());
+      out.mesh.uvs.clear();
+      out.mesh.uv_per_corner = false;
+    }
+    return s;
   }
   if (!is_directory(spec))
     return Status::error(ErrorCode::InvalidInput,
@@ -196,7 +203,7 @@ int make_synthetic(const Args& args, const HeadInput& head, const std::string& d
 int run_texture(const Args& args) {
   for (const auto& [key, values] : args.options) {
     static const char* known[] = {"head", "photos", "points", "size", "focal", "out", "no-spline", "dump",
-                                  "make-synthetic", "photo-width", "photo-height", "even-light", "field"};
+                                  "make-synthetic", "photo-width", "photo-height", "even-light", "field", "same-camera"};
     bool ok = false;
     for (const char* k : known) ok = ok || key == k;
     if (!ok) return usage_error("unknown option --" + key + " (see `likeness help`)");
@@ -255,7 +262,7 @@ int run_texture(const Args& args) {
   CalibOptions copt;
   copt.known_focal = focal;
   std::vector<CalibResult> calib;
-  s = calibrate_photos(points, sizes, copt, calib);
+  s = calibrate_photos(points, sizes, copt, calib, args.has("same-camera"));
   if (!s) {
     for (size_t i = 0; i < photo_paths.size(); ++i)
       if (s.message.rfind("photo " + std::to_string(i) + ":", 0) == 0)
@@ -387,7 +394,7 @@ int run_texture(const Args& args) {
 
 const Registrar reg({kName,
                      "likeness texture --head DIR|MESH|generic --photos P1 P2 ... --points F1 F2 ... --out DIR "
-                     "[--size 2048] [--focal PX] [--no-spline] [--dump] | --head ... --make-synthetic DIR "
+                     "[--size 2048] [--focal PX] [--same-camera] [--no-spline] [--dump] | --head ... --make-synthetic DIR "
                      "[--photo-width 3000 --photo-height 2000] [--even-light] [--field bands|skin]",
                      "skin texture from calibrated photos (tarini2002 Sec. 3.2): binding, resampling, hole filling, "
                      "multiresolution spline",

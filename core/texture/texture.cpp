@@ -86,11 +86,24 @@ Status check_inputs(const TriMesh& mesh, const std::vector<TexturePhoto>& photos
 
 Status calibrate_photos(const std::vector<std::vector<Correspondence>>& correspondences,
                         const std::vector<std::array<int, 2>>& image_sizes, const CalibOptions& options,
-                        std::vector<CalibResult>& results) {
+                        std::vector<CalibResult>& results, bool same_camera) {
   if (correspondences.size() != image_sizes.size())
     return Status::error(ErrorCode::InvalidInput,
                          std::to_string(correspondences.size()) + " sets of correspondences for " +
                              std::to_string(image_sizes.size()) + " photos");
+  if (same_camera && correspondences.size() > 1) {
+    // Each photo alone first, so a failure names its photo.
+    for (size_t i = 0; i < correspondences.size(); ++i)
+      if (correspondences[i].size() < 6)
+        return Status::error(ErrorCode::InvalidInput, "photo " + std::to_string(i) + ": " +
+                                                          std::to_string(correspondences[i].size()) +
+                                                          " correspondences, at least 6 are needed");
+    SharedCalibResult shared;
+    Status s = calibrate_cameras_shared(correspondences, image_sizes, options, shared);
+    if (!s) return s;
+    results = std::move(shared.photos);
+    return Status::success();
+  }
   results.assign(correspondences.size(), CalibResult());
   for (size_t i = 0; i < correspondences.size(); ++i) {
     Status s = calibrate_camera(correspondences[i], image_sizes[i][0], image_sizes[i][1], options, results[i]);

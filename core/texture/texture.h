@@ -42,11 +42,15 @@ namespace lk {
 
 // Calibrates each photo from its correspondences (at least 6 per photo):
 // correspondences #P, image_sizes #P (width, height). results gets #P
-// entries. Fails on the first photo that cannot be calibrated, with a message
-// naming it ("photo 2: ..."), or InvalidInput when the counts differ.
+// entries. With same_camera, the photos share one focal length
+// (calibrate_cameras_shared: one joint LM over the focal and all poses,
+// much steadier than one focal per photo from 12-15 points). Fails on the
+// first photo that cannot be calibrated, with a message naming it
+// ("photo 2: ..."), or InvalidInput when the counts differ.
 Status calibrate_photos(const std::vector<std::vector<Correspondence>>& correspondences,
                         const std::vector<std::array<int, 2>>& image_sizes,
-                        const CalibOptions& options, std::vector<CalibResult>& results);
+                        const CalibOptions& options, std::vector<CalibResult>& results,
+                        bool same_camera = false);
 
 struct TextureOptions {
   int size = 2048;                      // texture width = height, texels (16 .. 16384)

@@ -273,7 +273,16 @@ TEST_CASE("calibrate_photos recovers the cameras of the synthetic photos") {
     CHECK(res[i].rms < 0.05);
     CHECK((res[i].camera.center() - s.photos[i].camera.center()).norm() < 1e-3);
   }
+  // Same camera: one focal for both, still the true cameras.
+  std::vector<CalibResult> shared;
+  REQUIRE(calibrate_photos(pairs, sizes, CalibOptions(), shared, true).ok());
+  REQUIRE(shared.size() == 2);
+  CHECK(shared[0].camera.fx == shared[1].camera.fx);
+  CHECK(shared[0].camera.fx == Approx(s.photos[0].camera.fx).epsilon(1e-3));
+  for (int i = 0; i < 2; ++i) CHECK((shared[i].camera.center() - s.photos[i].camera.center()).norm() < 1e-3);
   pairs[1].resize(5);
+  const Status st_shared = calibrate_photos(pairs, sizes, CalibOptions(), res, true);
+  CHECK(st_shared.message.find("photo 1") != std::string::npos);
   const Status st = calibrate_photos(pairs, sizes, CalibOptions(), res);
   CHECK_FALSE(st.ok());
   CHECK(st.message.find("photo 1") != std::string::npos);
