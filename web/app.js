@@ -526,6 +526,7 @@
     clicker.current = nextLandmark(0);
     ui.clicker.hidden = false;
     ui.viewerPane.classList.add('clicking');
+    reframeSoon();
     renderPhotos();
     updateClicker();
   }
@@ -535,8 +536,15 @@
     clicker.photo = null;
     ui.clicker.hidden = true;
     ui.viewerPane.classList.remove('clicking');
+    reframeSoon();
     if (app.viewer) app.viewer.set_markers(new Float32Array(0), null);
     renderPhotos();
+  }
+
+  // The 3D view's width changes with the clicker: frame the head again once
+  // the viewer has taken the new canvas size (it does so each frame).
+  function reframeSoon() {
+    requestAnimationFrame(() => requestAnimationFrame(() => { if (app.viewer) app.viewer.reset_view(); }));
   }
 
   // The first landmark from `from` on that has neither a click nor a skip.
