@@ -46,7 +46,7 @@ const Truth& truth() {
 
 FitHeadOptions quick() {
   FitHeadOptions o;
-  o.levels = 2;
+  o.levels = 1;
   return o;
 }
 
