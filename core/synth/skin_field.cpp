@@ -74,12 +74,15 @@ double freckles(const SkinField& f, const Vec3& p) {
   return dark;
 }
 
-// Weight in [0, 1] of an ellipsoid (half extents along side, up, look) with
-// a soft edge over the outer 35 % of its radius.
-double ellipsoid_weight(const SkinField& f, const Vec3& p, const Vec3& centre, const Vec3& half) {
-  const Vec3 d = p - centre;
+// Weight in [0, 1] of the lips: a rounded box (superellipse of exponent 4,
+// whose corners reach the box's corners, where the lip outline's ends are)
+// across the face, fading in depth; soft edges.
+double lip_weight(const SkinField& f, const Vec3& p) {
+  const Vec3 d = p - f.lip_center;
+  const Vec3& half = f.lip_half_extent;
   const double a = d.dot(f.side) / half.x(), b = d.dot(f.up) / half.y(), c = d.dot(f.look) / half.z();
-  return 1.0 - smoothstep(0.65, 1.0, std::sqrt(a * a + b * b + c * c));
+  const double r = std::sqrt(std::sqrt(a * a * a * a + b * b * b * b));
+  return (1.0 - smoothstep(0.9, 1.2, r)) * (1.0 - smoothstep(1.0, 1.6, std::abs(c)));
 }
 
 // An eyebrow: an arched band over the eye, denser towards its inner half,
@@ -96,7 +99,7 @@ double brow_weight(const SkinField& f, const Vec3& p, int which) {
   const double v = (d.dot(f.up) - arch) / thickness;
   const double band = (1.0 - smoothstep(0.6, 1.0, std::abs(v))) * (1.0 - smoothstep(0.85, 1.15, std::abs(t)));
   const Vec3 stretched(across / 0.010, d.dot(f.up) / 0.0009, d.dot(f.look) / 0.0009);
-  const double hairs = 0.75 + 0.25 * value_noise(f.seed + 91 + which, stretched);
+  const double hairs = std::clamp(0.9 + 0.35 * value_noise(f.seed + 91 + which, stretched), 0.0, 1.0);
   return std::clamp(band * hairs * depth, 0.0, 1.0);
 }
 
@@ -150,8 +153,8 @@ Status make_skin_field(const GenericHead& head, std::uint32_t seed, const SkinFi
     }
   const Vec3 mid = 0.5 * (lo + hi);
   f.lip_center = mid.x() * f.side + mid.y() * f.up + mid.z() * f.look;
-  f.lip_half_extent = Vec3(0.5 * (hi.x() - lo.x()) * 1.05, 0.5 * (hi.y() - lo.y()) * 1.1,
-                           std::max(0.5 * (hi.z() - lo.z()), 0.01) * 1.5);
+  f.lip_half_extent = Vec3(0.5 * (hi.x() - lo.x()) * 1.05, 0.5 * (hi.y() - lo.y()) * 1.05,
+                           std::max(0.5 * (hi.z() - lo.z()), 0.01));
 
   // Face centre: the face region's centroid, radius its RMS spread.
   Vec3 c = Vec3::Zero();
@@ -185,7 +188,7 @@ Vec3 skin_albedo(const SkinField& f, const Vec3& p) {
   const double dark = o.freckle_darkening * freckles(f, p);
   c = c.cwiseProduct(Vec3(1 - dark * 0.8, 1 - dark, 1 - dark * 1.1).cwiseMax(0.0));
   if (o.lip_strength > 0) {
-    const double w = o.lip_strength * ellipsoid_weight(f, p, f.lip_center, f.lip_half_extent);
+    const double w = o.lip_strength * lip_weight(f, p);
     const Vec3 lip = f.lip_color * (1 + 0.5 * mottle);
     c = (1 - w) * c + w * lip;
   }
@@ -316,8 +319,13 @@ std::vector<int> feature_vertices(const GenericHead& head) {
     add(extreme(ear, -f));
     add(extreme(ear, f + side * s));
     add(extreme(region("cheeks"), side * s + 0.3 * f));
+    add(extreme(region("cheeks"), side * s - u));
     add(extreme(region("jaw"), side * s - u));
+    add(extreme(region("jaw"), side * s + f));
     add(extreme(region("face"), side * s + u));
+    add(extreme(region("scalp"), side * s + u));
+    add(extreme(region("scalp"), side * s - f));
+    add(extreme(region("neck"), side * s + 0.5 * f));
   }
   return out;
 }

@@ -56,7 +56,7 @@ struct SkinField {
   Vec3 look = Vec3::UnitZ(), up = Vec3::UnitY(), side = Vec3::UnitX();  // head frame (side = up x look)
   Vec3 face_center = Vec3::Zero();        // freckles are densest within face_radius of it
   double face_radius = 0.08;
-  Vec3 lip_center = Vec3::Zero();         // ellipsoid around both lips
+  Vec3 lip_center = Vec3::Zero();         // rounded box around both lips
   Vec3 lip_half_extent = Vec3(0.025, 0.011, 0.02);  // along side, up, look
   Vec3 brow_center[2] = {Vec3::Zero(), Vec3::Zero()};  // left (+x), right
   double brow_half_width = 0.024, brow_half_height = 0.0045, brow_arch = 0.006;
@@ -111,7 +111,8 @@ Camera look_at(const Vec3& eye, const Vec3& target, const Vec3& up, double focal
 // points"): eye corners and top of each eye rim, nose and mouth landmarks,
 // ear landmarks, the chin's lowest front vertex, the forehead's top centre,
 // and per side what a profile photo shows (ear top, lobe, back and front,
-// cheekbone, jaw angle, temple); indices into head.mesh (about 36). Which
+// cheekbone, lower cheek, jaw angle and middle, temple, two scalp points,
+// the side of the neck); indices into head.mesh (about 46). Which
 // of them a photo sees is the caller's business (it depends on the camera).
 std::vector<int> feature_vertices(const GenericHead& head);
 
