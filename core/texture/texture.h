@@ -10,9 +10,12 @@
 //   3. rasterize_chart + resample_texture (chart_raster.h, resample.h):
 //      the paper's three triangle cases, <N,V>-weighted, in linear light;
 //   4. fill_vertex_colors (hole_fill.h): 80/60/40/20 % one-ring passes,
-//      then any coloured neighbour, so every chart texel gets a colour;
+//      then any coloured neighbour, then (ours) relaxation of the filled
+//      colours, so every chart texel gets a colour and holes have no ridge;
 //   5. SplineBlender (pyramid.h): per photo a mask = its region shrunk by one
-//      triangle ring, plus the complement mask over the blended texture;
+//      triangle ring, under the image "photo i alone where it sees the
+//      surface, push-pull continued elsewhere"; plus the complement mask
+//      under the feathered resampling (resample_feathered, seam-free);
 //      Laplacian pyramids blended under Gaussian pyramids of the masks;
 //   6. push_pull_fill / dilate_rings (dilate.h) into the unused texture space.
 //
@@ -72,7 +75,7 @@ struct TexturePhotoReport {
   int vertices_valid = 0;   // vertices for which the photo is valid
   int vertices_main = 0;    // vertices whose main photo it is
   long texels_colored = 0;  // texels of its region (case-1 triangles it dominates)
-  long texels_seen = 0;     // texels of triangles whose three corners it sees
+  long texels_seen = 0;     // texels of triangles whose three corners it sees (spline on; else 0)
 };
 
 struct TextureReport {
