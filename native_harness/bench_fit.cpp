@@ -219,6 +219,7 @@ int run(const Args& args) {
     args.get_double("fit-area-ratio", opt.fold_limit.min_area_ratio, opt.fold_limit.min_area_ratio);
     args.get_double("fit-cap-pct", opt.displacement_max_pct, opt.displacement_max_pct);
     args.get_int("fit-levels", opt.levels, opt.levels);
+    args.get_double("fit-line-edges", opt.displacement.fine_line_edges, opt.displacement.fine_line_edges);
     if (args.has("fit-no-climb")) opt.fold_limit.shrink_coarser_levels = false;
     if (args.has("fit-remeasure")) opt.displacement.remeasure_coarse_vertices = true;
     st = fit_head(cloud, generic, opt, r, obs);

@@ -324,7 +324,9 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
       area += 0.5 * face_normal(mesh.triangles(l), mesh.state.base[l], f).norm();
     const double spacing = std::sqrt(area / cloud.size());
     const double radius = options.radius > 0 ? options.radius : std::max(0.5 * edge, 2.0 * spacing);
-    const double max_distance = options.max_distance > 0 ? options.max_distance : std::max(2.0 * edge, 2.0 * radius);
+    double max_distance = options.max_distance > 0 ? options.max_distance : std::max(2.0 * edge, 2.0 * radius);
+    if (l > 0 && options.fine_line_edges > 0)
+      max_distance = std::min(max_distance, options.fine_line_edges * std::max(edge, radius));
     const int nv = mesh.num_vertices(l);
     const int first = (l == 0 || options.remeasure_coarse_vertices) ? 0 : mesh.num_vertices(l - 1);
     int measured = 0;

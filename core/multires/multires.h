@@ -93,6 +93,13 @@ struct DisplacementOptions {
   // the surface, outliers). 0: twice the larger of the mean edge length of
   // the level and the radius.
   double max_distance = 0.0;
+  // On levels >= 1 the line is also at most this many times the larger of
+  // the level's mean edge and the radius long (each side): the coarser
+  // levels already put the surface near the data, and a long line only
+  // reaches the other sheet of thin features and costs search time (1 vs
+  // off on the synthetic heads: same mean distance, a third fewer folded
+  // triangles to limit, ~20 % fewer crossing pairs). 0: off.
+  double fine_line_edges = 1.0;
   // Fewer points than this in the cylinder means "no data": displacement 0,
   // and the subdivision surface stays smooth there (Sec. 5).
   int min_points = 3;
