@@ -13,7 +13,8 @@
 //     landmark asked for); empty positions clear them
 //   add_component(positions, indices, colors, uvs, width, height, channels, pixels)
 //     -> "" or error: an extra mesh (eyeball, teeth, tongue) drawn with the
-//     model; clear_components(), set_components_visible(on)
+//     model; clear_components(), set_components_visible(on),
+//     set_component_matrix(index, m16) (column-major object -> world)
 //   set_overlay_points(positions, normals, colors) -> "": the scan under a fit
 //     (empty positions clear it); set_overlay_visible(on)
 //   set_point_size(pixels), set_wireframe(on), reset_view()
@@ -251,6 +252,22 @@ std::string js_add_component(val positions, val indices, val colors, val uvs, in
   return s.ok() ? std::string() : s.message;
 }
 
+// Rigid motion of component `index` (order of add_component): 16 floats,
+// column-major (the jaw's motion for the lower teeth and the tongue).
+std::string js_set_component_matrix(int index, val matrix) {
+  if (!g_viewer || !g_viewer->startup_error.empty()) return "the viewer is not running";
+  const std::vector<float> m = from_js<float>(matrix);
+  if (m.size() != 16) return "a 4x4 matrix needs 16 numbers";
+  glm::mat4 model(1.0f);
+  for (int i = 0; i < 16; ++i) {
+    if (!std::isfinite(m[i])) return "matrix: NaN or infinite values";
+    model[i / 4][i % 4] = m[i];
+  }
+  if (index < 0) return "no component " + std::to_string(index);
+  lk::Status s = g_viewer->scene.set_component_matrix(static_cast<size_t>(index), model);
+  return s.ok() ? std::string() : s.message;
+}
+
 void js_clear_components() {
   if (g_viewer) g_viewer->scene.clear_components();
 }
@@ -351,6 +368,7 @@ EMSCRIPTEN_BINDINGS(likeness_viewer) {
   emscripten::function("set_markers", &js_set_markers);
   emscripten::function("add_component", &js_add_component);
   emscripten::function("clear_components", &js_clear_components);
+  emscripten::function("set_component_matrix", &js_set_component_matrix);
   emscripten::function("set_components_visible", &js_set_components_visible);
   emscripten::function("set_overlay_visible", &js_set_overlay_visible);
   emscripten::function("show_generic_head", &js_show_generic_head);

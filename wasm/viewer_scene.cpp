@@ -181,6 +181,13 @@ void ViewerScene::clear_components() {
   dirty_ = true;
 }
 
+Status ViewerScene::set_component_matrix(size_t index, const glm::mat4& model) {
+  if (index >= components_.size())
+    return Status::error(ErrorCode::InvalidInput, "no component " + std::to_string(index));
+  dirty_ = true;
+  return renderer_.set_model_matrix(components_[index], model);
+}
+
 void ViewerScene::set_components_visible(bool on) {
   components_visible_ = on;
   for (DrawableHandle h : components_) renderer_.set_visible(h, on);

@@ -54,6 +54,8 @@ class ViewerScene {
   Status add_component(const TriMesh& mesh, const Image* texture);
   void clear_components();
   void set_components_visible(bool on);
+  // Moves component `index` (in the order added) rigidly: object -> world.
+  Status set_component_matrix(size_t index, const glm::mat4& model);
 
   // A few big points drawn over everything else (the landmark the page asks
   // the user to click); an empty cloud clears them.

@@ -395,9 +395,48 @@ val component_arrays(const FitSession& s, const lk::TriMesh& m, const lk::Vec3* 
   return o;
 }
 
+// Splits a mesh by its triangles' centroids: below height y (head frame)
+// or not; each part keeps only its own vertices.
+void split_below(const lk::TriMesh& m, double y, lk::TriMesh& above, lk::TriMesh& below) {
+  std::vector<int> map_above(m.positions.size(), -1), map_below(m.positions.size(), -1);
+  for (const lk::Tri& t : m.triangles) {
+    const double cy = (m.positions[t[0]].y() + m.positions[t[1]].y() + m.positions[t[2]].y()) / 3.0;
+    lk::TriMesh& part = cy < y ? below : above;
+    std::vector<int>& map = cy < y ? map_below : map_above;
+    lk::Tri out;
+    for (int k = 0; k < 3; ++k) {
+      if (map[t[k]] < 0) {
+        map[t[k]] = static_cast<int>(part.positions.size());
+        part.positions.push_back(m.positions[t[k]]);
+      }
+      out[k] = map[t[k]];
+    }
+    part.triangles.push_back(out);
+  }
+}
+
+// The jaw's rigid motion for `amount` (the rotation set_pose gives the jaw
+// vertices), as a column-major 4x4 matrix in the scan frame: p_scan' =
+// A^-1 (c + R (A p_scan + t - c) - t) with the scan -> head map (A, t).
+val jaw_matrix(const FitSession& s, double amount) {
+  const double angle = 0.14 * amount, c = std::cos(angle), sn = std::sin(angle);
+  lk::Mat3 R;
+  R << 1, 0, 0, 0, c, -sn, 0, sn, c;
+  const lk::Mat3 A = s.head_to_scan.inverse();
+  const lk::Mat3 M = s.head_to_scan * R * A;
+  const lk::Vec3 t = s.head_to_scan * (s.jaw_pivot + R * (s.head_offset - s.jaw_pivot) - s.head_offset);
+  std::vector<float> m(16, 0.0f);
+  for (int col = 0; col < 3; ++col)
+    for (int row = 0; row < 3; ++row) m[4 * col + row] = static_cast<float>(M(row, col));
+  for (int row = 0; row < 3; ++row) m[12 + row] = static_cast<float>(t[row]);
+  m[15] = 1.0f;
+  return val::global("Float32Array").new_(emscripten::typed_memory_view(m.size(), m.data()));
+}
+
 // The generic eyeballs (with the generic iris texture), teeth and tongue of
 // tarini2002 Sec. 4, placed from the fitted control mesh's eye rims and lips
-// (core/components), in the scan frame. At rest: they do not follow the jaw.
+// (core/components), in the scan frame, at rest; the lower teeth and the
+// tongue follow the jaw through animate_frame's jawMatrix.
 val components_object(const FitSession& s, const lk::GenericHead& generic) {
   lk::GenericHead fitted;
   fitted.mesh.positions = s.fit.control.positions;
@@ -411,7 +450,12 @@ val components_object(const FitSession& s, const lk::GenericHead& generic) {
   for (const lk::TriMesh& eye : parts.eye) eyes.call<void>("push", component_arrays(s, eye, nullptr));
   o.set("eyes", eyes);
   const lk::Vec3 ivory(0.80, 0.74, 0.60), tongue_pink(0.55, 0.16, 0.16);  // linear RGB
-  o.set("teeth", component_arrays(s, parts.teeth, &ivory));
+  // The lower arch (below the bite plane, which sits at the mouth centre)
+  // and the tongue ride on the jaw: animate_frame returns its motion.
+  lk::TriMesh upper, lower;
+  split_below(parts.teeth, placement.mouth_center.y(), upper, lower);
+  o.set("teeth", component_arrays(s, upper, &ivory));
+  o.set("lowerTeeth", component_arrays(s, lower, &ivory));
   o.set("tongue", component_arrays(s, parts.tongue, &tongue_pink));
   lk::Image eye_texture;
   lk::EyeballTextureOptions eto;
@@ -572,6 +616,7 @@ val animate_frame(double amount, int level) {
   r.set("updateMs", update_ms);
   r.set("changed", footprint.displaced_changed.empty() ? 0 : footprint.displaced_changed[level]);
   r.set("vertexCount", mr.num_vertices(level));
+  r.set("jawMatrix", jaw_matrix(s, amount));
   return r;
 }
 

@@ -987,9 +987,16 @@
                                            t.width, t.height, t.channels, t.pixels);
       if (err) errors.push(err); else app.components++;
     };
+    app.jawComponents = [];
     for (const eye of c.eyes || []) add(eye, eye.uvs && c.eyeTexture ? c.eyeTexture : null);
     if (c.teeth) add(c.teeth, null);
-    if (c.tongue) add(c.tongue, null);
+    // The lower teeth and the tongue ride on the jaw (animate's jawMatrix).
+    for (const m of [c.lowerTeeth, c.tongue]) {
+      if (!m) continue;
+      const before = app.components;
+      add(m, null);
+      if (app.components > before) app.jawComponents.push(before);
+    }
     if (errors.length) console.warn('components not shown:', errors.join('; '));
   }
 
@@ -1149,6 +1156,7 @@
     const tUpload = performance.now();
     const err = viewer.update_positions(r.positions);
     if (err) { stopAnimation(); showError('Animation: ' + err); return; }
+    moveJaw(r.jawMatrix);
     animDrawnAtUpload = viewer.frames_drawn();
     const p = a.profile;
     p.frames++;
@@ -1183,6 +1191,11 @@
     requestPose();
   }
 
+  function moveJaw(matrix) {
+    if (!matrix || !app.jawComponents) return;
+    for (const i of app.jawComponents) app.viewer.set_component_matrix(i, matrix);
+  }
+
   // Stops and (restPose) puts the head back at rest, the pose export writes.
   function stopAnimation(restPose = true) {
     const a = app.animation;
@@ -1191,7 +1204,10 @@
     a.running = false;
     if (!app.fit || !restPose) return;
     runJob({ type: 'animate', amount: 0, level: Number(ui.level.value) }, []).then((r) => {
-      if (r.ok && app.shownStage === 'subdivide' && !app.animation.running) app.viewer.update_positions(r.positions);
+      if (r.ok && app.shownStage === 'subdivide' && !app.animation.running) {
+        app.viewer.update_positions(r.positions);
+        moveJaw(r.jawMatrix);
+      }
     }, () => {});
   }
 

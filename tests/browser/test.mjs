@@ -291,6 +291,21 @@ async function textureStage(page, untextured) {
   check('the fit places the texture landmarks', landmarks.length >= 12 &&
         landmarks.every((l) => l.label && l.position.length === 3 && l.position.every(Number.isFinite)),
         `${landmarks.length}: ${landmarks.map((l) => l.id).join(', ')}`);
+  // Eyes, teeth and tongue come with the fit; the jaw's motion reaches the
+  // lower teeth: identity at rest, a rotation of ~8 degrees fully open.
+  const parts = await page.evaluate(async () => {
+    const run = (amount) => window.likeness.runJob({ type: 'animate', amount, level: 3 }, []);
+    const rest = await run(0), open = await run(1);
+    await run(0);
+    return { components: window.likeness.components, jaw: window.likeness.jawComponents,
+             rest: Array.from(rest.jawMatrix || []), open: Array.from(open.jawMatrix || []) };
+  });
+  const identity = [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1];
+  const maxDiff = (m) => Math.max(...m.map((x, i) => Math.abs(x - identity[i])));
+  const angle = parts.open.length === 16 ? Math.acos(Math.min(1, (parts.open[0] + parts.open[5] + parts.open[10] - 1) / 2)) * 180 / Math.PI : 0;
+  check('eyes, teeth and tongue are shown; the lower teeth and tongue follow the jaw', parts.components === 5 &&
+        parts.jaw && parts.jaw.length === 2 && parts.rest.length === 16 && maxDiff(parts.rest) < 1e-5 && angle > 6 && angle < 10,
+        `${parts.components} components, jaw-driven ${JSON.stringify(parts.jaw)}, rest off identity by ${parts.rest.length ? maxDiff(parts.rest).toExponential(1) : '?'}, open ${angle.toFixed(1)} deg`);
   if (landmarks.length < 12) return;
   const W = 640, H = 480;
   const project = frontCamera(landmarks, W, H, 900);
