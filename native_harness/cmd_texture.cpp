@@ -215,7 +215,7 @@ int run_texture(const Args& args) {
   double focal = 0;
   if (!args.get_int("size", 2048, opt.size) || !args.get_double("focal", 0, focal)) return 2;
   opt.multiresolution_spline = !args.has("no-spline");
-  if (opt.size < 16 || opt.size > 8192) return usage_error("--size must be in [16, 8192]");
+  if (opt.size < 16 || opt.size > 4096) return usage_error("--size must be in [16, 4096]");
 
   HeadInput head;
   std::map<std::string, double> timings;

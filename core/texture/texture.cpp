@@ -76,9 +76,14 @@ Status check_inputs(const TriMesh& mesh, const std::vector<TexturePhoto>& photos
                                std::to_string(photos[i].camera.height) + " but the image is " +
                                std::to_string(im.width) + "x" + std::to_string(im.height));
   }
-  if (options.size < 16 || options.size > 16384)
-    return Status::error(ErrorCode::InvalidInput,
-                         "texture size " + std::to_string(options.size) + " is outside 16..16384");
+  if (options.size < 16)
+    return Status::error(ErrorCode::InvalidInput, "texture size " + std::to_string(options.size) + " is below 16");
+  // About 120 bytes per texel at the spline's peak (float images and
+  // pyramids; measured 612 MB peak RSS for 2048^2 with five 3000x2000
+  // photos and an 85k-vertex head): ~2 GB at 4096^2.
+  if (options.size > 4096)
+    return Status::error(ErrorCode::TooLarge, "texture size " + std::to_string(options.size) +
+                                                  " is above 4096 (the spline needs ~120 bytes per texel)");
   return Status::success();
 }
 
@@ -212,12 +217,7 @@ Status texture_head(const TriMesh& mesh, const std::vector<TexturePhoto>& photos
       fill_background(shown);
       out.unblended = linear_to_srgb(shown);
     }
-    // The complement image: the seam-free (feathered) resampling, filled
-    // past the chart so the pyramids see no black border.
-    ImageF complement_image;
-    s = resample_feathered(mesh, uv, binding, photos, raster, vertex_colors, complement_image);
-    if (!s) return s;
-    push_pull_fill(complement_image, chart);
+    ImageF().pixels.swap(blended.pixels);  // not needed any more: give its memory back
     std::vector<TriangleCase> cases;
     std::vector<int> tri_region;
     classify_triangles(mesh, binding, cases, tri_region);
@@ -252,6 +252,14 @@ Status texture_head(const TriMesh& mesh, const std::vector<TexturePhoto>& photos
       if (!s) return s;
       if (!report(progress, "spline", (i + 1.0) / (np + 1.0))) return cancelled("spline");
     }
+    ImageF().pixels.swap(photo_image.pixels);
+    // The complement image: the seam-free (feathered) resampling, filled
+    // past the chart so the pyramids see no black border. Made last, so at
+    // most one full-size image besides the blender's pyramids is alive.
+    ImageF complement_image;
+    s = resample_feathered(mesh, uv, binding, photos, raster, vertex_colors, complement_image);
+    if (!s) return s;
+    push_pull_fill(complement_image, chart);
     s = blender.add(complement_image, complement);
     if (s) s = blender.finish(final_texture);
     if (!s) return s;

@@ -56,7 +56,7 @@ Status calibrate_photos(const std::vector<std::vector<Correspondence>>& correspo
                         bool same_camera = false);
 
 struct TextureOptions {
-  int size = 2048;                      // texture width = height, texels (16 .. 16384)
+  int size = 2048;                      // texture width = height, texels (16 .. 4096; ~120 B/texel peak)
   BindingOptions binding;               // visibility tests (min_facing 0.1, 2 px margin, ...)
   HoleFillOptions hole_fill;            // 80/60/40/20 % passes (paper)
   bool multiresolution_spline = true;   // blend the regions (paper: "if necessary")
