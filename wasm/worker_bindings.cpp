@@ -651,7 +651,7 @@ val export_head(int level, const std::string& format) {
 
 // ---- texturing (tarini2002 Sec. 3) ------------------------------------------
 // The steps the Texture job reports, in order: progress(stage, fraction) gets
-// stage "texture" and the job's overall fraction; the current step's name
+// stage "texture:<step>" and the job's overall fraction; each step's name
 // goes in the result's steps[] with its ms.
 // "chart" is the control mesh's stretch-minimizing chart refined to the
 // level; texture_head's own "parameterize" then only measures its stretch.
@@ -721,7 +721,7 @@ val texture_job(val photos, val options, val progress) {
   auto begin_step = [&](const std::string& name) {
     step = texture_step_index(name);
     t_step = now_ms();
-    return lk::report(report, "texture", std::max(0, step) / double(kNumTextureSteps));
+    return lk::report(report, ("texture:" + name).c_str(), std::max(0, step) / double(kNumTextureSteps));
   };
   auto end_step = [&](const std::string& name) {
     val o = val::object();
@@ -760,7 +760,7 @@ val texture_job(val photos, val options, val progress) {
       return error_result(lk::Status::error(lk::ErrorCode::InvalidInput,
                                             names[i] + ": " + std::to_string(points[i].size()) +
                                                 " points; calibrating a photo needs at least 6 (12-15 are best)"));
-    if (!lk::report(report, "texture", (i + 1.0) / count / kNumTextureSteps)) return cancelled("decode");
+    if (!lk::report(report, "texture:decode", (i + 1.0) / count / kNumTextureSteps)) return cancelled("decode");
   }
   end_step("decode");
 
@@ -824,7 +824,7 @@ val texture_job(val photos, val options, val progress) {
   std::string current;
   const lk::ProgressFn inner = [&](const char* name, double fraction) {
     const int index = texture_step_index(name);
-    if (index < 0) return lk::report(report, "texture", std::max(0, step) / double(kNumTextureSteps));
+    if (index < 0) return lk::report(report, ("texture:" + std::string(name)).c_str(), std::max(0, step) / double(kNumTextureSteps));
     if (fraction <= 0 && current != name) {
       if (!current.empty()) end_step(current);
       current = name;
@@ -832,7 +832,7 @@ val texture_job(val photos, val options, val progress) {
       t_step = now_ms();
     }
     const double overall = (index + std::min(1.0, std::max(0.0, fraction))) / kNumTextureSteps;
-    return lk::report(report, "texture", std::min(0.999, overall));
+    return lk::report(report, ("texture:" + std::string(name)).c_str(), std::min(0.999, overall));
   };
   st = lk::texture_head(mesh, tex_photos, topt, out, inner);
   if (!current.empty()) end_step(current);
@@ -848,7 +848,7 @@ val texture_job(val photos, val options, val progress) {
   }
   s.uvs = finest_uv;
   s.skin = out.skin;
-  lk::report(report, "texture", 1.0);
+  lk::report(report, "texture:done", 1.0);
 
   val r = val::object();
   r.set("ok", true);

@@ -1066,7 +1066,12 @@
       }
       const size = Number(params.get('texture_size')) > 0 ? Number(params.get('texture_size')) : 1024;
       result = await runJob({ type: 'texture', photos, options: { size } }, photos.map((p) => p.buffer),
-        (stage, fraction) => { if (stage === 'texture') setStage('texture', Math.round(fraction * 100) + '%', fraction, 'active'); });
+        (stage, fraction) => {
+          // stage is "texture:<step>" (decode, calibrate, chart, bind, resample, ...).
+          if (!/^texture/.test(stage)) return;
+          const step = stage.slice(8);
+          setStage('texture', (step && step !== 'done' ? step + ' ' : '') + Math.round(fraction * 100) + '%', fraction, 'active');
+        });
     } catch (e) {
       if (e && e.cancelled) {
         setStage('texture', 'cancelled', 0);
