@@ -7,6 +7,8 @@
 #include "texture/chart_raster.h"
 #include "texture/color.h"
 #include "texture/texture.h"
+#include "texture/refine_uv.h"
+#include "subdiv/butterfly.h"
 
 #include <algorithm>
 #include <catch2/catch.hpp>
@@ -241,6 +243,9 @@ TEST_CASE("texture_head parameterizes a mesh without uvs and rejects bad inputs"
   TextureOptions tiny = opt;
   tiny.size = 4;
   CHECK(texture_head(s.mesh, s.photos, tiny, out).code == ErrorCode::InvalidInput);
+  TextureOptions huge = opt;
+  huge.size = 5000;
+  CHECK(texture_head(s.mesh, s.photos, huge, out).code == ErrorCode::TooLarge);
   // A camera looking away from the head: the photo sees no vertex.
   std::vector<TexturePhoto> away = {s.photos[0], s.photos[1]};
   const Vec3 c = bounding_box(s.mesh.positions).center();
@@ -287,4 +292,29 @@ TEST_CASE("calibrate_photos recovers the cameras of the synthetic photos") {
   CHECK_FALSE(st.ok());
   CHECK(st.message.find("photo 1") != std::string::npos);
   CHECK(calibrate_photos(pairs, {sizes[0]}, CalibOptions(), res).code == ErrorCode::InvalidInput);
+}
+
+TEST_CASE("a chart refined to Butterfly levels stays flip-free with midpoint uvs") {
+  const HeadScene& s = head_scene();
+  std::vector<ButterflyLevel> levels;
+  REQUIRE(build_butterfly_levels(s.mesh, 2, levels).ok());
+  std::vector<std::vector<Vec3>> pos;
+  REQUIRE(apply_all(levels, s.mesh.positions, pos).ok());
+  TriMesh fine;
+  fine.positions = pos.back();
+  fine.triangles = levels.back().fine_triangles;
+  REQUIRE(refine_chart_uvs(levels, s.mesh.uvs, fine.uvs).ok());
+  REQUIRE(fine.uvs.size() == fine.positions.size());
+  for (int v = 0; v < s.mesh.num_vertices(); ++v) CHECK(fine.uvs[v] == s.mesh.uvs[v]);
+  const auto& e = levels[0].edge_endpoints[5];
+  const int mid = levels[0].num_coarse_vertices + 5;
+  std::vector<Vec2> level1;
+  REQUIRE(refine_chart_uvs({levels[0]}, s.mesh.uvs, level1).ok());
+  CHECK((level1[mid] - 0.5 * (s.mesh.uvs[e[0]] + s.mesh.uvs[e[1]])).norm() < 1e-15);
+  UvStats st;
+  REQUIRE(measure_stretch(fine, fine.uvs, UvOptions(), st).ok());
+  CHECK(st.flipped == 0);
+  WARN("refined chart on the level-2 mesh: L2 " << st.l2_stretch << ", Linf " << st.linf_stretch);
+  std::vector<Vec2> bad;
+  CHECK(refine_chart_uvs(levels, {Vec2(0, 0)}, bad).code == ErrorCode::InvalidInput);
 }
