@@ -4,6 +4,13 @@
 // and outliers). Prints Table 1 beside the paper's, the surface error in the
 // scan's holes against the truth, flipped/degenerate triangles, the total
 // time against the 2 s target, and a level-3 local update against 1 ms.
+// Also the floor of the Table 1 metric (the scan's own distance to the
+// truth: noise, outliers, hair junk), self-intersecting triangle pairs by
+// region beside those of the smooth (undisplaced) surface, and the fold
+// limiter's work. Experiment knobs (see docs/fit.md): --fit-separate-rounds N,
+// --fit-area-ratio R, --fit-cap-pct P, --fit-levels L, --fit-line-edges E,
+// --fit-no-climb, --fit-remeasure; --save-scans DIR writes scans, truths,
+// the finest level and its crossing triangles.
 #include "command.h"
 #include "fit_table.h"
 #include "head/generic_head.h"
