@@ -47,91 +47,128 @@ long dilate_rings(ImageF& image, std::vector<char>& known, int texels) {
   return filled;
 }
 
+namespace {
+
+// One push step: per 2x2 block of the finer level, the weighted mean colour
+// and the mean weight (the block's coverage). WeightAt(i) gives the finer
+// level's weights (flags on level 0, floats above), so level 0 needs no
+// float copy of its known flags.
+template <class WeightAt>
+void push_level(const float* fc, WeightAt weight_at, int fw, int fh, int c, std::vector<float>& gc,
+                std::vector<float>& gw, int gw_w, int gw_h) {
+  gc.assign(static_cast<size_t>(gw_w) * gw_h * c, 0.f);
+  gw.assign(static_cast<size_t>(gw_w) * gw_h, 0.f);
+  for (int y = 0; y < gw_h; ++y) {
+    const int y0 = 2 * y, ny = (y0 + 1 < fh) ? 2 : 1;
+    for (int x = 0; x < gw_w; ++x) {
+      const int x0 = 2 * x, nx = (x0 + 1 < fw) ? 2 : 1;
+      float sum[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+      float wsum = 0;
+      for (int dy = 0; dy < ny; ++dy) {
+        const size_t row = static_cast<size_t>(y0 + dy) * fw;
+        for (int dx = 0; dx < nx; ++dx) {
+          const size_t i = row + x0 + dx;
+          const float wi = weight_at(i);
+          if (wi <= 0.f) continue;
+          const float* p = fc + i * c;
+          for (int ch = 0; ch < c; ++ch) sum[ch] += wi * p[ch];
+          wsum += wi;
+        }
+      }
+      if (wsum <= 0.f) continue;
+      const size_t o = static_cast<size_t>(y) * gw_w + x;
+      gw[o] = wsum / static_cast<float>(nx * ny);
+      const float inv = 1.f / wsum;
+      for (int ch = 0; ch < c; ++ch) gc[o * c + ch] = sum[ch] * inv;
+    }
+  }
+}
+
+// Bilinear lookup positions of fine samples 0..n-1 in a coarse axis of m
+// samples: centre (i + 0.5) / 2 - 0.5, clamped.
+void pull_axis(int n, int m, std::vector<int>& lo, std::vector<int>& hi, std::vector<float>& t) {
+  lo.resize(n);
+  hi.resize(n);
+  t.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const double g = std::clamp((i + 0.5) / 2.0 - 0.5, 0.0, static_cast<double>(m - 1));
+    lo[i] = static_cast<int>(g);
+    hi[i] = std::min(lo[i] + 1, m - 1);
+    t[i] = static_cast<float>(g - lo[i]);
+  }
+}
+
+// One pull step: every finer texel with weight w < 1 becomes
+// w * own + (1 - w) * bilinear(coarser).
+template <class WeightAt>
+long pull_level(float* fc, WeightAt weight_at, int fw, int fh, int c, const std::vector<float>& gc, int gw_w,
+                int gw_h) {
+  std::vector<int> xl, xh, yl, yh;
+  std::vector<float> tx, ty;
+  pull_axis(fw, gw_w, xl, xh, tx);
+  pull_axis(fh, gw_h, yl, yh, ty);
+  long changed = 0;
+  for (int y = 0; y < fh; ++y) {
+    const float* r0 = &gc[static_cast<size_t>(yl[y]) * gw_w * c];
+    const float* r1 = &gc[static_cast<size_t>(yh[y]) * gw_w * c];
+    const float vy = ty[y];
+    for (int x = 0; x < fw; ++x) {
+      const size_t i = static_cast<size_t>(y) * fw + x;
+      const float wi = weight_at(i);
+      if (wi >= 1.f) continue;
+      const float* a = r0 + static_cast<size_t>(xl[x]) * c;
+      const float* b = r0 + static_cast<size_t>(xh[x]) * c;
+      const float* d = r1 + static_cast<size_t>(xl[x]) * c;
+      const float* e = r1 + static_cast<size_t>(xh[x]) * c;
+      const float vx = tx[x];
+      float* o = fc + i * c;
+      for (int ch = 0; ch < c; ++ch) {
+        const float up = (1 - vy) * ((1 - vx) * a[ch] + vx * b[ch]) + vy * ((1 - vx) * d[ch] + vx * e[ch]);
+        o[ch] = wi * o[ch] + (1 - wi) * up;
+      }
+      ++changed;
+    }
+  }
+  return changed;
+}
+
+}  // namespace
+
 long push_pull_fill(ImageF& image, const std::vector<char>& known) {
   const int w0 = image.width, h0 = image.height, c = image.channels;
   if (w0 <= 0 || h0 <= 0 || c <= 0 || c > 8 || known.size() != static_cast<size_t>(w0) * h0) return 0;
   if (std::none_of(known.begin(), known.end(), [](char k) { return k != 0; })) return 0;
-  // Push: level k+1 holds, per 2x2 block of level k, the weighted mean
-  // colour and the mean weight (the block's coverage). Coverage fractions,
-  // not "any child known" flags: a coarse texel that is only partly covered
-  // must not overrule the smooth fill around it, or the fill shows the
-  // power-of-two block grid (lines along the texture's middle). Level 0 is
-  // the image itself, its weights the known flags.
+  // Coverage fractions, not "any child known" flags: a coarse texel that is
+  // only partly covered must not overrule the smooth fill around it, or the
+  // fill shows the power-of-two block grid (lines along the texture's
+  // middle). Level 0 is the image itself, its weights the known flags.
   struct Level {
     int w, h;
     std::vector<float> color;   // w * h * c, weighted mean
     std::vector<float> weight;  // w * h, coverage in [0, 1]
   };
   std::vector<Level> levels;  // levels[k] is pyramid level k + 1
-  auto fine_color = [&](int k) -> const float* { return k == 0 ? image.pixels.data() : levels[k - 1].color.data(); };
-  auto fine_weight = [&](int k, size_t i) -> float {
-    return k == 0 ? (known[i] ? 1.f : 0.f) : levels[k - 1].weight[i];
-  };
+  const auto known_weight = [&known](size_t i) { return known[i] ? 1.f : 0.f; };
   int fw = w0, fh = h0;
-  for (int k = 0; fw > 1 || fh > 1; ++k) {
+  while (fw > 1 || fh > 1) {
     Level g{(fw + 1) / 2, (fh + 1) / 2, {}, {}};
-    g.color.assign(static_cast<size_t>(g.w) * g.h * c, 0.f);
-    g.weight.assign(static_cast<size_t>(g.w) * g.h, 0.f);
-    const float* fc = fine_color(k);
-    for (int y = 0; y < g.h; ++y) {
-      for (int x = 0; x < g.w; ++x) {
-        float sum[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-        float wsum = 0;
-        int children = 0;
-        for (int dy = 0; dy < 2; ++dy) {
-          for (int dx = 0; dx < 2; ++dx) {
-            const int xx = 2 * x + dx, yy = 2 * y + dy;
-            if (xx >= fw || yy >= fh) continue;
-            ++children;
-            const size_t i = static_cast<size_t>(yy) * fw + xx;
-            const float wi = fine_weight(k, i);
-            if (wi <= 0.f) continue;
-            for (int ch = 0; ch < c; ++ch) sum[ch] += wi * fc[i * c + ch];
-            wsum += wi;
-          }
-        }
-        if (wsum <= 0.f) continue;
-        const size_t o = static_cast<size_t>(y) * g.w + x;
-        g.weight[o] = wsum / children;
-        for (int ch = 0; ch < c; ++ch) g.color[o * c + ch] = sum[ch] / wsum;
-      }
+    if (levels.empty()) {
+      push_level(image.pixels.data(), known_weight, fw, fh, c, g.color, g.weight, g.w, g.h);
+    } else {
+      const Level& f = levels.back();
+      push_level(f.color.data(), [&f](size_t i) { return f.weight[i]; }, fw, fh, c, g.color, g.weight, g.w, g.h);
     }
     fw = g.w;
     fh = g.h;
     levels.push_back(std::move(g));
   }
-  // Pull: from the coarsest level (1x1, coverage > 0) down, every texel
-  // becomes w * own + (1 - w) * (bilinear interpolation of the completed
-  // coarser level at its centre); known texels of level 0 (w = 1) stay.
-  long filled = 0;
-  for (int k = static_cast<int>(levels.size()) - 1; k >= 0; --k) {
-    const Level& g = levels[k];
-    const int w = k == 0 ? w0 : levels[k - 1].w, h = k == 0 ? h0 : levels[k - 1].h;
-    float* fc = k == 0 ? image.pixels.data() : levels[k - 1].color.data();
-    for (int y = 0; y < h; ++y) {
-      const double gy = std::clamp((y + 0.5) / 2.0 - 0.5, 0.0, static_cast<double>(g.h - 1));
-      const int y0 = static_cast<int>(gy), y1 = std::min(y0 + 1, g.h - 1);
-      const float ty = static_cast<float>(gy - y0);
-      for (int x = 0; x < w; ++x) {
-        const size_t i = static_cast<size_t>(y) * w + x;
-        const float wi = fine_weight(k, i);
-        if (wi >= 1.f) continue;
-        const double gx = std::clamp((x + 0.5) / 2.0 - 0.5, 0.0, static_cast<double>(g.w - 1));
-        const int x0 = static_cast<int>(gx), x1 = std::min(x0 + 1, g.w - 1);
-        const float tx = static_cast<float>(gx - x0);
-        const float* a = &g.color[(static_cast<size_t>(y0) * g.w + x0) * c];
-        const float* b = &g.color[(static_cast<size_t>(y0) * g.w + x1) * c];
-        const float* d = &g.color[(static_cast<size_t>(y1) * g.w + x0) * c];
-        const float* e = &g.color[(static_cast<size_t>(y1) * g.w + x1) * c];
-        for (int ch = 0; ch < c; ++ch) {
-          const float up = (1 - ty) * ((1 - tx) * a[ch] + tx * b[ch]) + ty * ((1 - tx) * d[ch] + tx * e[ch]);
-          fc[i * c + ch] = wi * fc[i * c + ch] + (1 - wi) * up;
-        }
-        if (k == 0) ++filled;
-      }
-    }
+  // Pull: from the coarsest level (1x1, coverage > 0) down.
+  for (int k = static_cast<int>(levels.size()) - 1; k >= 1; --k) {
+    Level& f = levels[k - 1];
+    pull_level(f.color.data(), [&f](size_t i) { return f.weight[i]; }, f.w, f.h, c, levels[k].color, levels[k].w,
+               levels[k].h);
   }
-  return filled;
+  return pull_level(image.pixels.data(), known_weight, w0, h0, c, levels[0].color, levels[0].w, levels[0].h);
 }
 
 }  // namespace lk
