@@ -6,7 +6,7 @@
 // the worker job round trip (of which: the core's local update, the rest of
 // the worker's job, the message transfer), the viewer's upload and the draw.
 // Not a test: a measurement.
-// Usage: node anim_profile.mjs WEBDIR [SCAN.ply] [--level 3] [--seconds 6] [--profile]
+// Usage: node anim_profile.mjs WEBDIR [SCAN.ply] [--level 3] [--seconds 6] [--profile] [--msaa N]
 import { chromium } from 'playwright-core';
 import http from 'node:http';
 import fs from 'node:fs';
@@ -23,6 +23,7 @@ function option(name, fallback) {
 }
 const level = Number(option('--level', 3));
 const seconds = Number(option('--seconds', 6));
+const msaa = option('--msaa', '');  // samples; default: the page's choice (none on software WebGL)
 const pi = args.indexOf('--profile');
 const profile = pi >= 0;
 if (profile) args.splice(pi, 1);
@@ -52,7 +53,7 @@ let status = 0;
 try {
   const page = context.pages()[0] || await context.newPage();
   if (process.env.LK_CONSOLE) page.on('console', (m) => console.log('console:', m.text()));
-  await page.goto(`http://127.0.0.1:${server.address().port}/index.html?autofit=0${profile ? '&profile=1' : ''}`);
+  await page.goto(`http://127.0.0.1:${server.address().port}/index.html?autofit=0${profile ? '&profile=1' : ''}${msaa !== '' ? '&msaa=' + Number(msaa) : ''}`);
   await page.waitForFunction(() => document.body.dataset.state === 'ready', null, { timeout: 180000 });
   if (scan) await page.setInputFiles('#file-input', path.resolve(scan));
   else await page.click('#btn-sample');
@@ -73,7 +74,7 @@ try {
   await page.uncheck('#animate');
   const frames = end.frames - start.frames;
   const fps = frames * 1000 / (end.t - start.t);
-  console.log(`level ${level}: ${frames} frames in ${((end.t - start.t) / 1000).toFixed(1)} s = ${fps.toFixed(1)} fps` +
+  console.log(`msaa ${await page.evaluate(() => window.likeness.msaa)}, level ${level}: ${frames} frames in ${((end.t - start.t) / 1000).toFixed(1)} s = ${fps.toFixed(1)} fps` +
               `${profile ? ' (profiling: draws are glFinish()ed)' : ''}; page shows "${end.text}"`);
   const n = end.p.frames - start.p.frames;
   if (n > 0) {
