@@ -320,6 +320,7 @@ int run(const Args& args) {
       const double build_ms = ms_since(t0);
       PointCloud fitted;
       for (const Vec3& p : cloud.positions) fitted.positions.push_back(r.scan_to_head.apply(p));
+      for (const Vec3& n : cloud.normals) fitted.normals.push_back(r.scan_to_head.A * n);
       DisplacementOptions dopt = opt.displacement;
       dopt.max_distance = opt.displacement_max_pct / 100.0 * r.bbox_diagonal * r.unit_to_metres;
       const auto t1 = clock_type::now();

@@ -190,7 +190,8 @@ bool fit_crossing(const std::vector<LinePoint>& pts, const std::vector<char>& us
 
 // Signed distance along n from p to the sampled surface, or false when the
 // cylinder around the normal line holds too few points.
-bool measure_one(const CloudTree& tree, const std::vector<Vec3>& pts, const Vec3& p, const Vec3& n, double radius,
+bool measure_one(const CloudTree& tree, const std::vector<Vec3>& pts, const std::vector<Vec3>* point_normals,
+                 const Vec3& p, const Vec3& n, double radius,
                  double max_distance, const DisplacementOptions& opt,
                  std::vector<std::pair<size_t, double>>& matches, std::vector<LinePoint>& line_pts,
                  std::vector<double>& scratch, double& out) {
@@ -205,6 +206,10 @@ bool measure_one(const CloudTree& tree, const std::vector<Vec3>& pts, const Vec3
     const double t = delta.dot(n);
     if (std::abs(t) > max_distance) continue;
     if (delta.squaredNorm() - t * t > r2) continue;
+    if (point_normals) {
+      const Vec3& pn = (*point_normals)[m.first];
+      if (!(pn.dot(n) > opt.min_normal_agreement * pn.norm())) continue;
+    }
     line_pts.push_back({delta.dot(e1), delta.dot(e2), t});
   }
   const int min_points = std::max(1, opt.min_points);
@@ -300,6 +305,8 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
   Status s = check_sizes(mesh);
   if (!s.ok()) return s;
 
+  const bool use_normals = options.min_normal_agreement >= -1 && cloud.normals.size() == cloud.positions.size();
+  const std::vector<Vec3>* point_normals = use_normals ? &cloud.normals : nullptr;
   CloudAdaptor adaptor{cloud.positions};
   CloudTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   tree.buildIndex();
@@ -333,7 +340,8 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
     double sum_abs = 0, max_abs = 0;
     for (int v = first; v < nv; ++v) {
       double d = 0;
-      if (measure_one(tree, cloud.positions, mesh.state.base[l][v], mesh.state.normals[l][v], radius, max_distance,
+      if (measure_one(tree, cloud.positions, point_normals, mesh.state.base[l][v], mesh.state.normals[l][v], radius,
+                      max_distance,
                       options, matches, line_pts, scratch, d)) {
         mesh.displacements[l][v] = d;
         ++measured;

@@ -100,6 +100,13 @@ struct DisplacementOptions {
   // off on the synthetic heads: same mean distance, a third fewer folded
   // triangles to limit, ~20 % fewer crossing pairs). 0: off.
   double fine_line_edges = 1.0;
+  // When the cloud has normals (#P, as scanners give them), a point counts
+  // only if its normal and the vertex normal agree: dot of the unit normals
+  // above this. Thin features put two sheets facing away from each other
+  // within a normal line (upper against lower lip, the two sides of an ear
+  // rim, lid against socket); their points face the other way and are not
+  // taken for the vertex's own sheet. Below -1: off.
+  double min_normal_agreement = 0.0;
   // Fewer points than this in the cylinder means "no data": displacement 0,
   // and the subdivision surface stays smooth there (Sec. 5).
   int min_points = 3;

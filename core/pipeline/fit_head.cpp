@@ -261,10 +261,11 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   // The points to fit: the neck below the generic head's neck is not part
   // of the model, and would drag its boundary down.
   std::vector<Vec3> pts;
+  std::vector<int> pts_index;  // into the scan, for its normals
   pts.reserve(n);
   const ClipPlane neck = transform_plane(ann.neck_clip, out.generic_to_head);
-  for (const Vec3& p : cloud.positions)
-    if (!options.cut_neck || neck.keeps(p)) pts.push_back(p);
+  for (int i = 0; i < n; ++i)
+    if (!options.cut_neck || neck.keeps(cloud.positions[i])) pts.push_back(cloud.positions[i]), pts_index.push_back(i);
   out.fitted_points = static_cast<int>(pts.size());
   if (out.fitted_points < options.min_points)
     return Status::error(ErrorCode::NotAHead, "only " + std::to_string(out.fitted_points) +
@@ -309,15 +310,16 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   for (int v = 0; v < static_cast<int>(pocket.size()); ++v)
     if (pocket[v]) terms.constrained_vertices.push_back(v);
   std::vector<Vec3> skin_pts;
+  std::vector<int> skin_index;
   skin_pts.reserve(pts.size());
   {
     ClosestPointTree tree(out.local);
-    for (const Vec3& p : pts) {
-      const SurfacePoint c = tree.closest(p);
+    for (size_t i = 0; i < pts.size(); ++i) {
+      const SurfacePoint c = tree.closest(pts[i]);
       bool on_pocket = false;
       if (c.face >= 0)
         for (int v : out.local.triangles[c.face]) on_pocket = on_pocket || pocket[v];
-      if (!on_pocket) skin_pts.push_back(p);
+      if (!on_pocket) skin_pts.push_back(pts[i]), skin_index.push_back(pts_index[i]);
     }
   }
   out.pocket_points = static_cast<int>(pts.size() - skin_pts.size());
@@ -334,6 +336,12 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   if (!st) return with_context(st, "subdivision");
   PointCloud fitted;
   fitted.positions = skin_pts;
+  if (scan.normals.size() == scan.positions.size()) {
+    // The scanner's normals, in the head frame, tell thin features' two
+    // sheets apart when measuring (DisplacementOptions::min_normal_agreement).
+    fitted.normals.reserve(skin_index.size());
+    for (int i : skin_index) fitted.normals.push_back(out.scan_to_head.A * scan.normals[i]);
+  }
   DisplacementOptions dopt = options.displacement;
   if (dopt.max_distance <= 0) dopt.max_distance = options.displacement_max_pct / 100.0 * diag;
   st = measure_displacements(fitted, dopt, out.multires, nullptr, progress);

@@ -491,3 +491,32 @@ TEST_CASE("multires: the limiter separates two displaced sheets that cross", "[m
   REQUIRE(limit_folds(off).ok());
   CHECK(off.displacements[0][0] == 0.15);
 }
+
+TEST_CASE("multires: point normals keep a thin shell's inner sheet from pulling the outer one", "[multires]") {
+  // A shell 0.02 thick: the outer unit sphere (normals out) and the inner
+  // sheet (normals in), both inside every normal line's reach.
+  std::mt19937 rng(21);
+  std::normal_distribution<double> g(0, 1);
+  PointCloud cloud;
+  for (int i = 0; i < 160000; ++i) {
+    Vec3 d(g(rng), g(rng), g(rng));
+    d.normalize();
+    const bool inner = i % 2;
+    cloud.positions.push_back(d * (inner ? 0.98 : 1.0));
+    cloud.normals.push_back(inner ? -d : d);
+  }
+  auto mean_error = [&](double agreement) {
+    MultiresMesh mr;
+    REQUIRE(build_multires(icosphere(1), 2, mr).ok());
+    DisplacementOptions o;
+    o.min_normal_agreement = agreement;
+    REQUIRE(measure_displacements(cloud, o, mr).ok());
+    double sum = 0;
+    for (const Vec3& p : mr.state.displaced[2]) sum += std::abs(p.norm() - 1.0);
+    return sum / mr.num_vertices(2);
+  };
+  const double with_normals = mean_error(0.0), without = mean_error(-2.0);
+  INFO("mean distance to the outer sheet: with normals " << with_normals << ", without " << without);
+  CHECK(with_normals < 0.001);
+  CHECK(without > 3 * with_normals);
+}
