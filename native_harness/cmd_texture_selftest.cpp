@@ -45,7 +45,10 @@ int run_texture_selftest_command(const Args& args) {
   opt.photo_height = opt.eval_height = photo_size * 2 / 3;
   opt.shared_focal = !args.has("per-photo-focal");
   opt.diagnostics = args.has("diagnose");
+  // Fail before minutes of work when the results cannot be written.
   ::mkdir(out.c_str(), 0755);
+  struct stat folder;
+  if (::stat(out.c_str(), &folder) != 0 || !S_ISDIR(folder.st_mode)) return fail(kName, out + ": cannot create the folder");
 
   SelftestResult r;
   Status s = run_texture_selftest(opt, r, [](const std::string& line) { std::cout << line << "\n" << std::flush; });

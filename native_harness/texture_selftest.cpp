@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <map>
 
 namespace lk::cli {
@@ -224,10 +225,13 @@ Status score_texture(const Scene& scene, const Image& skin, SelftestScores& scor
   SsimResult ssim;
   s = compute_ssim(scene.truth, ours, scene.face_mask, SsimOptions{}, ssim);
   if (!s) return s;
+  // One photo (or photos that never meet) leaves no boundary: no seam to
+  // measure, reported as NaN (null in report.json).
   SeamResult seam, raw;
   s = texture_seam(error_texture(skin, scene.truth_texture), region, {}, SeamOptions{}, seam);
   if (s) s = texture_seam(skin, region, {}, SeamOptions{}, raw);
-  if (!s) return with_context(s, "seam measure");
+  if (s.code == ErrorCode::Empty) seam.seam = raw.seam = std::numeric_limits<double>::quiet_NaN();
+  else if (!s) return with_context(s, "seam measure");
   scores.psnr_db = psnr.psnr_db;
   scores.ssim = ssim.ssim;
   scores.seam = seam.seam;
