@@ -52,7 +52,10 @@ struct Problem {
   double total_area3d = 0, total_weight = 0;
 };
 
-Status setup(const TriMesh& mesh, const UvOptions& options, Problem& pb) {
+// Measuring needs only the per-triangle areas and weights; the solvers also
+// need the topology (a disk: one boundary loop), which is the costly part on
+// a 171k-triangle level 3 (a hash map of every edge), so it is optional.
+Status setup(const TriMesh& mesh, const UvOptions& options, Problem& pb, bool with_topology = true) {
   pb.mesh = &mesh;
   if (mesh.num_vertices() < 3 || mesh.num_triangles() < 1)
     return Status::error(ErrorCode::Empty, "parameterization needs a mesh with triangles");
@@ -63,23 +66,25 @@ Status setup(const TriMesh& mesh, const UvOptions& options, Problem& pb) {
                          "k must be finite and above 1 so every weight 1/(<N,V>+k) is positive (the paper uses 1.01..2)");
   if (!(options.margin >= 0 && options.margin < 0.5))
     return Status::error(ErrorCode::InvalidInput, "margin must be in [0, 0.5)");
-  Status s = build_topology(mesh, pb.topo);
-  if (!s.ok()) return s;
-  if (pb.topo.boundary_loops.size() != 1)
-    return Status::error(ErrorCode::InvalidInput,
-                         "one-chart parameterization needs a disk (exactly one boundary loop), this mesh has " +
-                             std::to_string(pb.topo.boundary_loops.size()));
-  if (euler_characteristic(pb.topo, mesh.num_triangles()) != 1)
-    return Status::error(ErrorCode::InvalidInput, "mesh is not a topological disk (it has handles)");
-  pb.boundary = pb.topo.boundary_loops[0];
-  for (int v = 0; v < mesh.num_vertices(); ++v)
-    if (pb.topo.valence(v) == 0)
-      return Status::error(ErrorCode::InvalidInput, "vertex " + std::to_string(v) + " is in no triangle");
+  if (with_topology) {
+    Status s = build_topology(mesh, pb.topo);
+    if (!s.ok()) return s;
+    if (pb.topo.boundary_loops.size() != 1)
+      return Status::error(ErrorCode::InvalidInput,
+                           "one-chart parameterization needs a disk (exactly one boundary loop), this mesh has " +
+                               std::to_string(pb.topo.boundary_loops.size()));
+    if (euler_characteristic(pb.topo, mesh.num_triangles()) != 1)
+      return Status::error(ErrorCode::InvalidInput, "mesh is not a topological disk (it has handles)");
+    pb.boundary = pb.topo.boundary_loops[0];
+    for (int v = 0; v < mesh.num_vertices(); ++v)
+      if (pb.topo.valence(v) == 0)
+        return Status::error(ErrorCode::InvalidInput, "vertex " + std::to_string(v) + " is in no triangle");
+    pb.vertex_faces.assign(mesh.num_vertices(), {});
+  }
   const Vec3 view = options.view.normalized();
   const int nf = mesh.num_triangles();
   pb.area3d.resize(nf);
   pb.weight.resize(nf);
-  pb.vertex_faces.assign(mesh.num_vertices(), {});
   double mean_area = 0;
   for (int f = 0; f < nf; ++f) {
     const Tri& t = mesh.triangles[f];
@@ -94,7 +99,8 @@ Status setup(const TriMesh& mesh, const UvOptions& options, Problem& pb) {
     pb.weight[f] = w * pb.area3d[f];
     pb.total_area3d += pb.area3d[f];
     pb.total_weight += pb.weight[f];
-    for (int k = 0; k < 3; ++k) pb.vertex_faces[t[k]].push_back(f);
+    if (with_topology)
+      for (int k = 0; k < 3; ++k) pb.vertex_faces[t[k]].push_back(f);
   }
   for (int f = 0; f < nf; ++f)
     if (!(pb.area3d[f] > 1e-12 * mean_area))
@@ -248,7 +254,7 @@ Status measure_stretch(const TriMesh& mesh, const std::vector<Vec2>& uv, const U
                        UvStats& stats) {
   stats = UvStats{};
   Problem pb;
-  Status s = setup(mesh, options, pb);
+  Status s = setup(mesh, options, pb, /*with_topology=*/false);
   if (!s.ok()) return s;
   if (uv.size() != mesh.positions.size())
     return Status::error(ErrorCode::InvalidInput, "uv must have one entry per vertex");

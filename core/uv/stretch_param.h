@@ -69,7 +69,8 @@ Status parameterize_tutte(const TriMesh& mesh, const UvOptions& options, std::ve
 
 // Stretch statistics of any map uv (#V) of mesh (e.g. from another
 // parameterizer), with the weights of options. Leaves iterations/evaluations
-// and initial_l2_stretch at 0.
+// and initial_l2_stretch at 0. Works on any triangle mesh (the disk check
+// of the solvers is not needed to measure).
 Status measure_stretch(const TriMesh& mesh, const std::vector<Vec2>& uv, const UvOptions& options,
                        UvStats& stats);
 
