@@ -421,7 +421,8 @@ std::vector<std::vector<char>> propagate_vertex_mask(const MultiresMesh& mesh, c
 
 Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimitStats* stats) {
   if (!(options.shrink >= 0 && options.shrink < 1) || options.min_area_ratio < 0 || options.max_shrinks < 0 ||
-      options.max_rounds < 0 || options.max_intersection_rounds < 0 || !(std::abs(options.min_normal_cos) <= 1))
+      options.max_rounds < 0 || options.max_intersection_rounds < 0 || options.max_intersection_restarts < 0 ||
+      !(std::abs(options.min_normal_cos) <= 1))
     return Status::error(ErrorCode::InvalidInput,
                          "multires fold limit: shrink must be in [0, 1), the cosine in [-1, 1], ratios and counts >= 0");
   Status s = check_sizes(mesh);
@@ -600,11 +601,23 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
     std::vector<int> tris, next_bad;
     std::vector<char> in_set(finest.triangles.size(), 0);
     int rounds = 0, full_searches = 0;
-    constexpr int kMaxFullSearches = 4;
     std::set<std::array<int, 2>> unfixable;
     while ((!pairs.empty() || !next_bad.empty()) && rounds < options.max_intersection_rounds) {
       ++rounds;
       ++st.rounds;
+      // A pair that crosses on the smooth surface too is not the
+      // displacements' doing: shrinking would only lose detail. Counted.
+      {
+        size_t kept = 0;
+        for (const auto& p : pairs) {
+          if (mesh_triangles_cross(smooth[L], mesh.triangles(L)[p[0]], mesh.triangles(L)[p[1]])) {
+            unfixable.insert(p);
+            continue;
+          }
+          pairs[kept++] = p;
+        }
+        pairs.resize(kept);
+      }
       tris.clear();
       for (const auto& p : pairs)
         for (int f : p)
@@ -626,7 +639,7 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
         for (int f : p)
           for (int v : mesh.triangles(L)[f]) movable |= shrunk_in_round[L][v] == st.rounds;
         if (movable) continue;
-        if (full_searches < kMaxFullSearches)
+        if (full_searches < options.max_intersection_restarts)
           for (int f : p) {
             const int k = shrink_above(L, f);
             if (k >= 0) restart = restart < 0 ? k : std::min(restart, k);

@@ -61,27 +61,8 @@ struct PairTester {
   bool full() const { return max_pairs > 0 && static_cast<int>(pairs.size()) >= max_pairs; }
 
   void test(int fa, int fb) {
-    const Tri& ta = bvh.triangles[fa];
-    const Tri& tb = bvh.triangles[fb];
-    const auto& P = bvh.positions;
-    int shared = 0, ia = -1, ib = -1;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j)
-        if (ta[i] == tb[j]) {
-          ++shared;
-          ia = i;
-          ib = j;
-        }
-    bool hit = false;
-    if (shared == 0) {
-      hit = triangles_intersect(P[ta[0]], P[ta[1]], P[ta[2]], P[tb[0]], P[tb[1]], P[tb[2]]);
-    } else if (shared == 1) {
-      // They meet at the shared corner; they cross only if their common
-      // segment leaves it, i.e. reaches the edge opposite it in one of them.
-      hit = segment_intersects_triangle(P[ta[(ia + 1) % 3]], P[ta[(ia + 2) % 3]], P[tb[0]], P[tb[1]], P[tb[2]]) ||
-            segment_intersects_triangle(P[tb[(ib + 1) % 3]], P[tb[(ib + 2) % 3]], P[ta[0]], P[ta[1]], P[ta[2]]);
-    }
-    if (hit) pairs.push_back({std::min(fa, fb), std::max(fa, fb)});
+    if (mesh_triangles_cross(bvh.positions, bvh.triangles[fa], bvh.triangles[fb]))
+      pairs.push_back({std::min(fa, fb), std::max(fa, fb)});
   }
 
   void leaf_pairs(const BvhNode& x, const BvhNode& y, bool same) {
@@ -127,6 +108,23 @@ struct PairTester {
 };
 
 }  // namespace
+
+bool mesh_triangles_cross(const std::vector<Vec3>& P, const Tri& ta, const Tri& tb) {
+  int shared = 0, ia = -1, ib = -1;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (ta[i] == tb[j]) {
+        ++shared;
+        ia = i;
+        ib = j;
+      }
+  if (shared == 0) return triangles_intersect(P[ta[0]], P[ta[1]], P[ta[2]], P[tb[0]], P[tb[1]], P[tb[2]]);
+  if (shared > 1) return false;
+  // They meet at the shared corner; they cross only if their common
+  // segment leaves it, i.e. reaches the edge opposite it in one of them.
+  return segment_intersects_triangle(P[ta[(ia + 1) % 3]], P[ta[(ia + 2) % 3]], P[tb[0]], P[tb[1]], P[tb[2]]) ||
+         segment_intersects_triangle(P[tb[(ib + 1) % 3]], P[tb[(ib + 2) % 3]], P[ta[0]], P[ta[1]], P[ta[2]]);
+}
 
 bool segment_intersects_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
   const double dp = orient3d(a, b, c, p), dq = orient3d(a, b, c, q);

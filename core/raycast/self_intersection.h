@@ -50,6 +50,10 @@ void find_self_intersections(const MeshBvh& bvh, std::vector<std::array<int, 2>>
 void find_intersections_with(const MeshBvh& bvh, const std::vector<int>& triangles,
                              std::vector<std::array<int, 2>>& pairs);
 
+// One pair under the rules above (shared edge: no; one shared vertex: only
+// if the common segment leaves it), corners read from positions.
+bool mesh_triangles_cross(const std::vector<Vec3>& positions, const Tri& a, const Tri& b);
+
 // Do triangles (a0, a1, a2) and (b0, b1, b2) share a point? (No adjacency
 // logic: for two triangles given by their corners.)
 bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
