@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 
@@ -330,6 +331,23 @@ std::vector<double> errors_of(const Camera& cam, const std::vector<Correspondenc
   return e;
 }
 
+
+// A free focal length outside [0.2, 50] image diagonals (fields of view of
+// about 160 deg down to 1.2 deg) is not a photo of a head: it is what LM
+// reaches when the points cannot separate focal length from distance (too
+// few, nearly coplanar, or very noisy clicks) and drifts towards an affine
+// camera at infinity. Say so instead of returning it.
+Status check_focal_plausible(double focal, int width, int height, const std::string& who) {
+  const double diagonal = std::hypot(double(width), double(height));
+  if (std::isfinite(focal) && focal >= 0.2 * diagonal && focal <= 50 * diagonal) return Status::success();
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.4g", focal);
+  return Status::error(ErrorCode::NotConverged,
+                       who + "the focal length came out as " + buf + " px for a " + std::to_string(width) + "x" +
+                           std::to_string(height) + " photo, which no camera has: the points cannot determine it "
+                           "(too few, too noisy, or nearly flat). Give the focal length, add photos taken with the "
+                           "same camera, or click more points.");
+}
 }  // namespace
 
 Status calibrate_camera(const std::vector<Correspondence>& cs, int image_width, int image_height,
@@ -490,6 +508,10 @@ Status calibrate_camera(const std::vector<Correspondence>& cs, int image_width, 
 
   if (!(cam.fx > 0) || !(cam.fy > 0) || !std::isfinite(cam.fx) || !cam.t.allFinite())
     return Status::error(ErrorCode::NotConverged, "calibration did not converge to a valid camera");
+  if (options.known_focal <= 0) {
+    const Status plausible = check_focal_plausible(cam.fx, image_width, image_height, "");
+    if (!plausible) return plausible;
+  }
   int behind = 0;
   for (int i : inliers) behind += cam.to_camera(cs[i].point).z() <= 0;
   if (behind > 0)
@@ -682,6 +704,11 @@ Status calibrate_cameras_shared(const std::vector<std::vector<Correspondence>>& 
     if (!(cams[0].fx > 0) || !std::isfinite(cams[0].fx))
       return Status::error(ErrorCode::NotConverged, "shared calibration did not converge to a valid focal");
     result.focal = cams[0].fx;
+    for (size_t i = 0; i < np; ++i) {
+      const Status plausible = check_focal_plausible(result.focal, image_sizes[i][0], image_sizes[i][1],
+                                                     "shared calibration, photo " + std::to_string(i) + ": ");
+      if (!plausible) return plausible;
+    }
     for (size_t i = 0; i < np; ++i) {
       CalibResult& r = result.photos[i];
       r.camera = cams[i];

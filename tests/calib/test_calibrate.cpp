@@ -146,3 +146,36 @@ TEST_CASE("bad calibration input gives clear errors") {
   s = calibrate_camera(cs, 0, 1200, CalibOptions{}, res);
   CHECK(s.code == ErrorCode::InvalidInput);
 }
+
+TEST_CASE("a free focal length never comes out absurd: noisy, nearly flat points fail clearly instead") {
+  // Six points on a shallow patch (2 mm deep over 15 cm) seen from 3 m with
+  // 6 px click noise: focal length and distance can trade off freely, and
+  // LM can drift towards an affine camera. Every result is either a focal
+  // within [0.2, 50] image diagonals or NotConverged naming the focal.
+  SplitMix64 rng(77);
+  const double diagonal = std::hypot(1800.0, 1200.0);
+  int refused = 0, accepted = 0, implausible = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    std::vector<Vec3> pts;
+    for (int i = 0; i < 6; ++i)
+      pts.push_back(Vec3(rng.uniform(-0.075, 0.075), rng.uniform(-0.075, 0.075), rng.uniform(0, 0.002)));
+    const Camera truth = look_at_head(rng.uniform(-10, 10), rng.uniform(-10, 10), 0, 3.0, 12000, 900, 600);
+    const std::vector<Correspondence> cs = observe(truth, pts, &rng, 6.0);
+    CalibOptions options;
+    options.robust = false;
+    CalibResult r;
+    const Status s = calibrate_camera(cs, 1800, 1200, options, r);
+    if (s.ok()) {
+      ++accepted;
+      CHECK(r.camera.fx >= 0.2 * diagonal);
+      CHECK(r.camera.fx <= 50 * diagonal);
+    } else {
+      ++refused;
+      CHECK(!s.message.empty());
+      implausible += s.message.find("no camera has") != std::string::npos;
+    }
+  }
+  INFO("accepted " << accepted << ", refused " << refused << " (" << implausible << " for an absurd focal)");
+  CHECK(accepted + refused == 60);
+  CHECK(implausible > 0);  // the case happens here: without the check these would be returned
+}
