@@ -238,9 +238,11 @@ bool measure_one(const CloudTree& tree, const std::vector<Vec3>& pts, const std:
       for (size_t i = 0; i < line_pts.size(); ++i)
         if (use[i]) scratch.push_back(std::abs(line_pts[i].t - quadric_row(line_pts[i], radius).dot(q)));
       const double limit = 4.0 * median(scratch) + 1e-12 * max_distance;
+      int dropped = 0;
       for (size_t i = 0; i < line_pts.size(); ++i)
-        if (use[i] && std::abs(line_pts[i].t - quadric_row(line_pts[i], radius).dot(q)) > limit) use[i] = 0;
-      if (fit_crossing(line_pts, use, radius, q)) t0 = q[0];
+        if (use[i] && std::abs(line_pts[i].t - quadric_row(line_pts[i], radius).dot(q)) > limit) use[i] = 0, ++dropped;
+      // Nothing dropped: the refit would be the same fit.
+      if (dropped > 0 && fit_crossing(line_pts, use, radius, q)) t0 = q[0];
     }
     out = std::abs(t0) <= max_distance ? t0 : fallback;
     return true;
