@@ -89,6 +89,14 @@ Status check_inputs(const TriMesh& mesh, const std::vector<TexturePhoto>& photos
 
 }  // namespace
 
+bool photos_look_like_one_camera(const std::vector<std::array<int, 2>>& image_sizes) {
+  if (image_sizes.size() < 2) return false;
+  const std::array<int, 2> first = image_sizes[0], turned = {first[1], first[0]};
+  for (const auto& size : image_sizes)
+    if (size != first && size != turned) return false;
+  return true;
+}
+
 Status calibrate_photos(const std::vector<std::vector<Correspondence>>& correspondences,
                         const std::vector<std::array<int, 2>>& image_sizes, const CalibOptions& options,
                         std::vector<CalibResult>& results, bool same_camera) {

@@ -50,6 +50,12 @@ namespace lk {
 // much steadier than one focal per photo from 12-15 points). Fails on the
 // first photo that cannot be calibrated, with a message naming it
 // ("photo 2: ..."), or InvalidInput when the counts differ.
+// True when there are at least two photos and all have the size of the
+// first, or that size turned by 90 degrees: most likely one camera, whose
+// focal length in pixels is then the same in every photo, so
+// calibrate_photos(..., same_camera = true) is the better choice.
+bool photos_look_like_one_camera(const std::vector<std::array<int, 2>>& image_sizes);
+
 Status calibrate_photos(const std::vector<std::vector<Correspondence>>& correspondences,
                         const std::vector<std::array<int, 2>>& image_sizes,
                         const CalibOptions& options, std::vector<CalibResult>& results,
