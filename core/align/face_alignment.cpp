@@ -313,8 +313,10 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
   st = search.build(generic, ann, cloud, fo.score_clamp_fraction);
   if (!st) return st;
   const std::vector<Vec3> samples = subset(cloud.positions, o.points, fo.seed);
-  const std::vector<Vec3> axes = {Vec3::UnitX(), -Vec3::UnitX(), Vec3::UnitY(), -Vec3::UnitY(),
+  // +y first: its first yaw is the given orientation (see accept_given_fraction).
+  const std::vector<Vec3> axes = {Vec3::UnitY(), Vec3::UnitX(), -Vec3::UnitX(), -Vec3::UnitY(),
                                   Vec3::UnitZ(), -Vec3::UnitZ()};
+  const double diagonal = search.clamp / fo.score_clamp_fraction;
   bool have_best = false, have_given = false;
   IcpRun best;
   int done = 0;
@@ -344,6 +346,10 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
       if (!have_best || run.score < best.score) {
         best = run;
         have_best = true;
+      }
+      if (done == 1 && consistent && std::sqrt(run.score) < o.accept_given_fraction * diagonal) {
+        out.score_given = out.score_best = run.score;
+        return Status::success();  // up +y, facing +z, identity rotation, differs = false
       }
     }
   }

@@ -118,6 +118,12 @@ struct OrientationOptions {
   double up_tolerance_deg = 40.0;
   double facing_tolerance_deg = 70.0;
   double better_ratio = 0.8;
+  // The given orientation is tried first; when its trimmed RMS distance is
+  // below this fraction of the cloud's bbox diagonal (a synthetic head in
+  // the right orientation scores 0.4 %, the best orientations of real face
+  // scans 1.4-1.7 %), no other orientation can be clearly better and the
+  // other 47 starts are skipped (about 0.6 s on every well-posed fit).
+  double accept_given_fraction = 0.006;
   double snap_deg = 25.0;  // directions this close to an axis are reported as that axis
 };
 
