@@ -9,10 +9,8 @@
 // web_fit_stages.png (Align result over the scan, wireframe) and
 // web_fit_animate.png (mid-animation, points off).
 // Usage: node fit_timing.mjs WEBDIR [SCAN.ply] [--runs N] [--shots DIR]
-import { chromium } from 'playwright-core';
-import http from 'node:http';
+import { launchChromium, serveDir } from './harness.mjs';
 import fs from 'node:fs';
-import os from 'node:os';
 import path from 'node:path';
 
 const args = process.argv.slice(2);
@@ -29,21 +27,8 @@ if (!scan && !fs.existsSync(path.join(root, 'sample', 'scan.ply'))) {
   console.error(`no ${root}/sample/scan.ply (scripts/demo makes it) and no SCAN given`);
   process.exit(2);
 }
-const MIME = { '.html': 'text/html', '.js': 'text/javascript', '.css': 'text/css', '.wasm': 'application/wasm' };
-const server = http.createServer((req, res) => {
-  const file = path.join(root, path.normalize(decodeURIComponent(new URL(req.url, 'http://x').pathname)));
-  if (!file.startsWith(root) || !fs.existsSync(file) || fs.statSync(file).isDirectory()) { res.writeHead(404); res.end(); return; }
-  res.writeHead(200, { 'content-type': MIME[path.extname(file)] || 'application/octet-stream' });
-  fs.createReadStream(file).pipe(res);
-});
-await new Promise((ok) => server.listen(0, '127.0.0.1', ok));
-const profile = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-timing-'));
-const context = await chromium.launchPersistentContext(profile, {
-  executablePath: '/usr/bin/chromium', headless: true,
-  args: ['--no-sandbox', '--disable-quic', '--no-first-run', '--disable-background-networking',
-         '--disable-component-update', '--disable-sync', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
-  viewport: { width: 1280, height: 1000 }, deviceScaleFactor: 1,
-});
+const server = await serveDir(root);
+const context = await launchChromium('timing', { width: 1280, height: 1000 });
 let status = 0;
 try {
   const page = context.pages()[0] || await context.newPage();
@@ -92,6 +77,6 @@ try {
 } finally {
   await context.close();
   server.close();
-  fs.rmSync(profile, { recursive: true, force: true });
+  fs.rmSync(context.userDir, { recursive: true, force: true });
 }
 process.exit(status);

@@ -4,10 +4,8 @@
 //   OUTDIR/web_wireframe.png      the same with its edges (--wireframe)
 //   OUTDIR/web_<stem>.png         after loading each FILE given
 // Usage: node screenshots.mjs WEBDIR OUTDIR [FILE ...] [--point-size N] [--wireframe] [--query "max_mb=N&..."]
-import { chromium } from 'playwright-core';
-import http from 'node:http';
+import { launchChromium, serveDir } from './harness.mjs';
 import fs from 'node:fs';
-import os from 'node:os';
 import path from 'node:path';
 
 const args = process.argv.slice(2);
@@ -25,21 +23,8 @@ if (!webdir || !outdir) {
   process.exit(2);
 }
 const root = path.resolve(webdir);
-const MIME = { '.html': 'text/html', '.js': 'text/javascript', '.css': 'text/css', '.wasm': 'application/wasm' };
-const server = http.createServer((req, res) => {
-  const file = path.join(root, path.normalize(decodeURIComponent(new URL(req.url, 'http://x').pathname)));
-  if (!file.startsWith(root) || !fs.existsSync(file) || fs.statSync(file).isDirectory()) { res.writeHead(404); res.end(); return; }
-  res.writeHead(200, { 'content-type': MIME[path.extname(file)] || 'application/octet-stream' });
-  fs.createReadStream(file).pipe(res);
-});
-await new Promise((r) => server.listen(0, '127.0.0.1', r));
-const profile = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-shots-'));
-const context = await chromium.launchPersistentContext(profile, {
-  executablePath: '/usr/bin/chromium', headless: true,
-  args: ['--no-sandbox', '--disable-quic', '--no-first-run', '--disable-background-networking',
-         '--disable-component-update', '--disable-sync', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
-  viewport: { width: 1280, height: 800 }, deviceScaleFactor: 1,
-});
+const server = await serveDir(root);
+const context = await launchChromium('shots', { width: 1280, height: 800 });
 try {
   const page = context.pages()[0] || await context.newPage();
   await page.goto(`http://127.0.0.1:${server.address().port}/index.html${query}`);
@@ -70,5 +55,5 @@ try {
 } finally {
   await context.close();
   server.close();
-  fs.rmSync(profile, { recursive: true, force: true });
+  fs.rmSync(context.userDir, { recursive: true, force: true });
 }

@@ -8,8 +8,7 @@
 // photo in the clicker with its points and reprojection errors) and
 // web_fit_animate.png (the textured head mid-animation, eyes and teeth shown).
 // Usage: node texture_timing.mjs WEBDIR [--runs N] [--shots DIR]
-import { chromium } from 'playwright-core';
-import http from 'node:http';
+import { launchChromium, serveDir } from './harness.mjs';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
@@ -28,22 +27,8 @@ if (!fs.existsSync(path.join(root, 'sample', 'texture.json'))) {
   console.error(`no ${root}/sample/texture.json: scripts/demo makes the sample photos`);
   process.exit(2);
 }
-const MIME = { '.html': 'text/html', '.js': 'text/javascript', '.css': 'text/css', '.wasm': 'application/wasm',
-               '.json': 'application/json', '.png': 'image/png' };
-const server = http.createServer((req, res) => {
-  const file = path.join(root, path.normalize(decodeURIComponent(new URL(req.url, 'http://x').pathname)));
-  if (!file.startsWith(root) || !fs.existsSync(file) || fs.statSync(file).isDirectory()) { res.writeHead(404); res.end(); return; }
-  res.writeHead(200, { 'content-type': MIME[path.extname(file)] || 'application/octet-stream' });
-  fs.createReadStream(file).pipe(res);
-});
-await new Promise((ok) => server.listen(0, '127.0.0.1', ok));
-const userDir = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-texture-'));
-const context = await chromium.launchPersistentContext(userDir, {
-  executablePath: '/usr/bin/chromium', headless: true,
-  args: ['--no-sandbox', '--disable-quic', '--no-first-run', '--disable-background-networking',
-         '--disable-component-update', '--disable-sync', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
-  viewport: { width: 1280, height: 1000 }, deviceScaleFactor: 1,
-});
+const server = await serveDir(root);
+const context = await launchChromium('texture', { width: 1280, height: 1000 });
 let status = 0;
 const settle = (page) => page.evaluate(() => new Promise((ok) => requestAnimationFrame(() => requestAnimationFrame(ok))));
 try {
@@ -93,6 +78,6 @@ try {
 } finally {
   await context.close();
   server.close();
-  fs.rmSync(userDir, { recursive: true, force: true });
+  fs.rmSync(context.userDir, { recursive: true, force: true });
 }
 process.exit(status);
