@@ -20,7 +20,8 @@
 // places), then, on the fitted head kept in this worker: animate_frame
 // (Sec. 6 local update), export_head (OBJ/PLY bytes), texture_job (photos +
 // correspondences -> cameras, chart, skin texture; tarini2002 Sec. 3) and
-// export_textured (OBJ + MTL + PNG).
+// export_textured (OBJ + MTL + PNG); eye_photo_job and smile_photo_job
+// (tarini2002 Sec. 4: iris and teeth textures from the user's photos).
 #include "common/progress.h"
 #include "components/components.h"
 #include "head/generic_head.h"
@@ -28,6 +29,8 @@
 #include "io/io.h"
 #include "mesh/geometry.h"
 #include "pipeline/fit_head.h"
+#include "teeth/synthetic_smile.h"
+#include "teeth/teeth.h"
 #include "texture/correspondences.h"
 #include "texture/refine_uv.h"
 #include "texture/texture.h"
@@ -396,7 +399,7 @@ val component_arrays(const FitSession& s, const lk::TriMesh& m, const lk::Vec3* 
 }
 
 // Splits a mesh by its triangles' centroids: below height y (head frame)
-// or not; each part keeps only its own vertices.
+// or not; each part keeps only its own vertices (and their uvs).
 void split_below(const lk::TriMesh& m, double y, lk::TriMesh& above, lk::TriMesh& below) {
   std::vector<int> map_above(m.positions.size(), -1), map_below(m.positions.size(), -1);
   for (const lk::Tri& t : m.triangles) {
@@ -408,6 +411,7 @@ void split_below(const lk::TriMesh& m, double y, lk::TriMesh& above, lk::TriMesh
       if (map[t[k]] < 0) {
         map[t[k]] = static_cast<int>(part.positions.size());
         part.positions.push_back(m.positions[t[k]]);
+        if (m.uvs.size() == m.positions.size()) part.uvs.push_back(m.uvs[t[k]]);
       }
       out[k] = map[t[k]];
     }
@@ -433,6 +437,48 @@ val jaw_matrix(const FitSession& s, double amount) {
   return val::global("Float32Array").new_(emscripten::typed_memory_view(m.size(), m.data()));
 }
 
+// {width, height, channels, pixels} of an image (a copy out of the heap).
+val image_object(const lk::Image& image) {
+  val t = val::object();
+  t.set("width", image.width);
+  t.set("height", image.height);
+  t.set("channels", image.channels);
+  t.set("pixels", val::global("Uint8Array").new_(emscripten::typed_memory_view(image.pixels.size(), image.pixels.data())));
+  return t;
+}
+
+// Teeth photo -> the composite texture in make_teeth_model's uv layout
+// (tarini2002 Sec. 4.2): classification, voids transparent, equalization,
+// hidden parts, then the generic side teeth around it.
+lk::Status teeth_texture(const lk::Image& photo, lk::Image& texture) {
+  const lk::TeethOptions options;
+  lk::TeethResult teeth;
+  if (lk::Status s = lk::teeth_texture_from_photo(photo, options, teeth); !s.ok()) return s;
+  lk::TeethCompositeOptions composite;
+  composite.width = 512;  // half the CLI's size: the teeth cover few pixels on screen
+  composite.height = 256;
+  return lk::teeth_composite_generic(teeth, options, composite, texture);
+}
+
+// The generic teeth texture when no smile photo is given, made by our own
+// tools (a synthetic smile whose lips hide parts of two teeth, as the CLI's
+// --synthetic-smile) once per worker; empty if that ever fails. made_ms:
+// the time it took (0 after the first call).
+const lk::Image& generic_teeth_texture(double& made_ms) {
+  made_ms = 0;
+  static const lk::Image texture = [&made_ms] {
+    const double t0 = now_ms();
+    lk::SyntheticSmileOptions so;
+    so.upper_dip = 40;
+    so.lower_rise = 34;
+    lk::Image t;
+    if (!teeth_texture(lk::make_synthetic_smile(so).image, t).ok()) t = lk::Image{};
+    made_ms = now_ms() - t0;
+    return t;
+  }();
+  return texture;
+}
+
 // The generic eyeballs (with the generic iris texture), teeth and tongue of
 // tarini2002 Sec. 4, placed from the fitted control mesh's eye rims and lips
 // (core/components), in the scan frame, at rest; the lower teeth and the
@@ -454,20 +500,20 @@ val components_object(const FitSession& s, const lk::GenericHead& generic) {
   // and the tongue ride on the jaw: animate_frame returns its motion.
   lk::TriMesh upper, lower;
   split_below(parts.teeth, placement.mouth_center.y(), upper, lower);
-  o.set("teeth", component_arrays(s, upper, &ivory));
-  o.set("lowerTeeth", component_arrays(s, lower, &ivory));
+  // Textured teeth (uvs passed) when the generic teeth texture exists;
+  // ivory otherwise. Voids are transparent (alpha 0): the renderer alpha-tests.
+  double teeth_ms = 0;
+  const lk::Image& teeth_tex = generic_teeth_texture(teeth_ms);
+  const lk::Vec3* teeth_color = teeth_tex.empty() ? &ivory : nullptr;
+  o.set("teeth", component_arrays(s, upper, teeth_color));
+  o.set("lowerTeeth", component_arrays(s, lower, teeth_color));
+  if (!teeth_tex.empty()) o.set("teethTexture", image_object(teeth_tex));
+  o.set("teethTextureMs", teeth_ms);
   o.set("tongue", component_arrays(s, parts.tongue, &tongue_pink));
   lk::Image eye_texture;
   lk::EyeballTextureOptions eto;
   eto.size = 256;
-  if (lk::eyeball_texture(generic_polar_iris(), 0.35, eto, eye_texture).ok()) {
-    val t = val::object();
-    t.set("width", eye_texture.width);
-    t.set("height", eye_texture.height);
-    t.set("channels", eye_texture.channels);
-    t.set("pixels", val::global("Uint8Array").new_(emscripten::typed_memory_view(eye_texture.pixels.size(), eye_texture.pixels.data())));
-    o.set("eyeTexture", t);
-  }
+  if (lk::eyeball_texture(generic_polar_iris(), 0.35, eto, eye_texture).ok()) o.set("eyeTexture", image_object(eye_texture));
   return o;
 }
 
@@ -943,6 +989,65 @@ val parse_points(const std::string& text) {
   return r;
 }
 
+// An eye photo (role "Eye (iris)") -> the eyeball texture (tarini2002 Sec.
+// 4.1): the iris found from the darkest blob near the centre (or from
+// guess [x, y] in pixels, optional), its valid part resynthesized around the
+// whole circle. {ok, texture, circle: {x, y, radius, pupilRadius}, usedTwoD,
+// sectorDeg, ms} or the core's error (no dark blob, the circle never stops).
+val eye_photo_job(const std::string& name, std::uintptr_t data, std::size_t size, val guess) {
+  if (data == 0 && size != 0)
+    return error_result(lk::Status::error(lk::ErrorCode::Internal, name + ": no input buffer"));
+  const double t0 = now_ms();
+  lk::Image photo;
+  lk::Status status = lk::read_image(reinterpret_cast<const std::uint8_t*>(data), size, photo);
+  if (!status.ok()) return error_result(lk::with_context(status, name));
+  lk::Vec2 guess_px;
+  const bool have_guess = !guess.isUndefined() && !guess.isNull() && guess["length"].as<int>() == 2;
+  if (have_guess) guess_px = lk::Vec2(guess[0].as<double>(), guess[1].as<double>());
+  lk::IrisResult iris;
+  lk::EyeballTextureOptions eto;
+  eto.size = 256;  // as the generic eyes
+  status = lk::iris_texture_from_photo(photo, have_guess ? &guess_px : nullptr, iris, eto);
+  if (!status.ok()) return error_result(lk::with_context(status, name + ": no iris found"));
+  val r = val::object();
+  r.set("ok", true);
+  r.set("code", std::string("Ok"));
+  r.set("message", std::string());
+  r.set("texture", image_object(iris.texture));
+  val c = val::object();
+  c.set("x", iris.circle.center.x());
+  c.set("y", iris.circle.center.y());
+  c.set("radius", iris.circle.radius);
+  c.set("pupilRadius", iris.circle.pupil_radius);
+  r.set("circle", c);
+  r.set("usedTwoD", iris.report.used_2d);
+  r.set("sectorDeg", iris.report.sector_deg);
+  r.set("ms", now_ms() - t0);
+  return r;
+}
+
+// A smile photo (role "Smile (teeth)") -> the teeth texture in the teeth
+// model's uv layout (tarini2002 Sec. 4.2). {ok, texture (RGBA), ms} or the
+// core's error (e.g. no teeth found).
+val smile_photo_job(const std::string& name, std::uintptr_t data, std::size_t size) {
+  if (data == 0 && size != 0)
+    return error_result(lk::Status::error(lk::ErrorCode::Internal, name + ": no input buffer"));
+  const double t0 = now_ms();
+  lk::Image photo;
+  lk::Status status = lk::read_image(reinterpret_cast<const std::uint8_t*>(data), size, photo);
+  if (!status.ok()) return error_result(lk::with_context(status, name));
+  lk::Image texture;
+  status = teeth_texture(photo, texture);
+  if (!status.ok()) return error_result(lk::with_context(status, name));
+  val r = val::object();
+  r.set("ok", true);
+  r.set("code", std::string("Ok"));
+  r.set("message", std::string());
+  r.set("texture", image_object(texture));
+  r.set("ms", now_ms() - t0);
+  return r;
+}
+
 }  // namespace
 
 EMSCRIPTEN_BINDINGS(likeness_worker) {
@@ -954,4 +1059,6 @@ EMSCRIPTEN_BINDINGS(likeness_worker) {
   emscripten::function("texture_job", &texture_job);
   emscripten::function("export_textured", &export_textured);
   emscripten::function("parse_points", &parse_points);
+  emscripten::function("eye_photo_job", &eye_photo_job);
+  emscripten::function("smile_photo_job", &smile_photo_job);
 }

@@ -66,6 +66,12 @@
     shownStage: null,      // which fit mesh is drawn: align|local_fit|global_fit|subdivide
     animation: { running: false, frames: 0, fps: 0, updateMs: 0 },
     downloads: [],         // [{name, size}] files handed to the browser (tests)
+    componentsData: null,  // the worker's last components (meshes, generic eye and teeth textures)
+    eyePhoto: null,        // {name, texture, circle, ms}: the iris from a photo of role "eye", on both eyeballs
+    smilePhoto: null,      // {name, texture, ms}: the teeth texture from a photo of role "smile"
+    // What the shown components wear: eyes/teeth 'generic', 'photo:<name>' or
+    // 'none' (untextured), teethTextured true once the teeth have a texture.
+    componentTextures: { eyes: 'none', teeth: 'none', teethTextured: false },
   };
 
   let stateBeforeError = 'ready';
@@ -92,6 +98,7 @@
     ui.showComponents.disabled = !haveFit;
     ui.texture.disabled = !haveFit || !app.photos.length;
     ui.exportTextured.disabled = !haveFit || !app.texture;
+    for (const role of ui.photoList.querySelectorAll('select.photo-role')) role.disabled = !interactive || state === 'working';
   }
 
   function setStatus(text) { ui.status.textContent = text; }
@@ -379,10 +386,11 @@
     entry.clicks = new Map();
     entry.calib = null;
     entry.sent = null;
+    entry.role = 'face';
     if (old >= 0) {
       const prev = app.photos[old];
       URL.revokeObjectURL(prev.url);
-      Object.assign(entry, { filePoints: prev.filePoints, pointsName: prev.pointsName, clicks: prev.clicks });
+      Object.assign(entry, { filePoints: prev.filePoints, pointsName: prev.pointsName, clicks: prev.clicks, role: prev.role || 'face' });
       app.photos[old] = entry;
     } else {
       app.photos.push(entry);
@@ -394,6 +402,7 @@
     if (clicker.photo === photo) closeClicker();
     app.photos = app.photos.filter((p) => p !== photo);
     URL.revokeObjectURL(photo.url);
+    dropRoleTexture(photo);
     renderPhotos();
     setStatus('Removed ' + photo.name + ' from the photos.');
   }
@@ -454,7 +463,10 @@
   }
 
   // Photos that take part in texturing: those with any correspondence.
-  function texturable() { return app.photos.filter((p) => photoPoints(p).list.length > 0); }
+  function texturable() { return facePhotos().filter((p) => photoPoints(p).list.length > 0); }
+  // Photos of role "face" (the default) texture the skin; "eye" and "smile"
+  // photos only make the iris and teeth textures.
+  function facePhotos() { return app.photos.filter((p) => (p.role || 'face') === 'face'); }
 
   function renderPhotos() {
     ui.photoList.textContent = '';
@@ -489,7 +501,19 @@
         }
       }
       meta.textContent = note;
-      text.append(name, meta);
+      const role = document.createElement('select');
+      role.className = 'photo-role small';
+      role.setAttribute('aria-label', 'Role of ' + photo.name);
+      for (const [value, label] of PHOTO_ROLES) role.append(new Option(label, value, false, value === (photo.role || 'face')));
+      role.addEventListener('click', (e) => e.stopPropagation());
+      role.addEventListener('keydown', (e) => e.stopPropagation());
+      role.addEventListener('change', () => setPhotoRole(photo, role.value));
+      if ((photo.role || 'face') !== 'face') {
+        meta.classList.remove('bad');
+        meta.textContent = photo.width + '×' + photo.height + ' · ' + (photo.roleNote || '');
+        if (photo.roleFailed) meta.classList.add('bad');
+      }
+      text.append(name, meta, role);
       const remove = document.createElement('button');
       remove.type = 'button';
       remove.className = 'photo-remove small';
@@ -506,6 +530,78 @@
     ui.photoCount.textContent = app.photos.length ? app.photos.length + ' photo(s), ' + texturable().length + ' with points' : '';
     setState(document.body.dataset.state);
   }
+
+  // ---- photo roles: eye (iris) and smile (teeth) photos (tarini2002 Sec. 4) ---
+  const PHOTO_ROLES = [['face', 'Face (skin)'], ['eye', 'Eye (iris)'], ['smile', 'Smile (teeth)']];
+
+  // Forgets the iris / teeth texture this photo made (role changed, photo
+  // removed); the components go back to the generic textures.
+  function dropRoleTexture(photo) {
+    let changed = false;
+    if (app.eyePhoto && app.eyePhoto.name === photo.name) { app.eyePhoto = null; changed = true; }
+    if (app.smilePhoto && app.smilePhoto.name === photo.name) { app.smilePhoto = null; changed = true; }
+    if (changed && app.viewer && app.componentsData) showComponents(app.componentsData);
+  }
+
+  // An eye photo runs the iris synthesis in the worker and dresses both
+  // eyeballs; a smile photo makes the teeth texture. Errors go to the banner;
+  // the photo keeps its role (and its clicks), the textures stay as they were.
+  async function setPhotoRole(photo, role) {
+    const state = document.body.dataset.state;
+    if (state === 'working' || state === 'loading' || app.startupFailed) { renderPhotos(); return; }
+    clearError();
+    dropRoleTexture(photo);
+    photo.role = role;
+    photo.roleNote = '';
+    photo.roleFailed = false;
+    if (role === 'face') {
+      renderPhotos();
+      setStatus(photo.name + ' is a face photo again: it textures the skin.');
+      return;
+    }
+    if (clicker.photo === photo) closeClicker();
+    const before = document.body.dataset.state;
+    const eye = role === 'eye';
+    photo.roleNote = eye ? 'finding the iris…' : 'making the teeth texture…';
+    setState('working');
+    renderPhotos();
+    setStatus((eye ? 'Synthesizing the iris from ' : 'Making the teeth texture from ') + photo.name + '…');
+    const t0 = performance.now();
+    let result;
+    try {
+      const buffer = await photo.file.arrayBuffer();
+      result = await runJob({ type: eye ? 'eye' : 'smile', name: photo.name, buffer }, [buffer]);
+    } catch (e) {
+      result = { ok: false, message: photo.name + ': ' + (e && e.cancelled ? 'cancelled' : e && e.message ? e.message : e) };
+    }
+    const wallMs = performance.now() - t0;
+    setState(before === 'error' ? stateBeforeError : before);
+    if (photo.role !== role || !app.photos.includes(photo)) { renderPhotos(); return; }
+    if (!result.ok) {
+      photo.roleFailed = true;
+      photo.roleNote = eye ? 'no iris found' : 'no teeth found';
+      renderPhotos();
+      setStatus(photo.name + ': ' + photo.roleNote + '; the ' + (eye ? 'eyes' : 'teeth') + ' keep their texture.');
+      // The worker's message starts with the photo's name.
+      showError((eye ? 'Eye photo ' : 'Smile photo ') + (result.message || photo.name + ': ' + result.code) +
+                (eye ? '. An eye photo is a close-up of one open eye, the iris near the middle.'
+                  : '. A smile photo shows the front teeth, lips apart, filling most of the picture.'));
+      return;
+    }
+    // Only one eye photo and one smile photo at a time: the newest wins.
+    for (const other of app.photos) {
+      if (other !== photo && other.role === role) { other.role = 'face'; other.roleNote = ''; other.roleFailed = false; }
+    }
+    const entry = { name: photo.name, texture: result.texture, ms: result.ms, wallMs };
+    if (eye) { entry.circle = result.circle; app.eyePhoto = entry; } else { app.smilePhoto = entry; }
+    photo.roleNote = eye ? 'iris r ' + result.circle.radius.toFixed(0) + ' px, on both eyes (' + Math.round(result.ms) + ' ms)'
+      : 'teeth texture (' + Math.round(result.ms) + ' ms)';
+    if (app.viewer && app.componentsData) showComponents(app.componentsData);
+    renderPhotos();
+    setStatus((eye ? 'Iris from ' : 'Teeth from ') + photo.name + ' in ' + (result.ms / 1000).toFixed(2) + ' s' +
+              (app.componentsData ? '; shown with the subdivided head (Show eyes, teeth).' : '; shown once the head is fitted.'));
+  }
+  app.setPhotoRole = (index, role) => setPhotoRole(app.photos[index], role);
 
   // ---- the landmark clicker ------------------------------------------------------
   // The photo large beside the 3D view; the landmarks are asked in turn, the
@@ -978,7 +1074,12 @@
   function showComponents(c) {
     app.viewer.clear_components();
     app.components = 0;
+    app.componentsData = c || null;
+    app.componentTextures = { eyes: 'none', teeth: 'none', teethTextured: false };
     if (!c) return;
+    // A photo's iris / teeth texture replaces the generic one.
+    const eyeTexture = app.eyePhoto ? app.eyePhoto.texture : c.eyeTexture;
+    const teethTexture = app.smilePhoto ? app.smilePhoto.texture : c.teethTexture;
     const none = new Float32Array(0);
     const errors = [];
     const add = (m, texture) => {
@@ -988,16 +1089,23 @@
       if (err) errors.push(err); else app.components++;
     };
     app.jawComponents = [];
-    for (const eye of c.eyes || []) add(eye, eye.uvs && c.eyeTexture ? c.eyeTexture : null);
-    if (c.teeth) add(c.teeth, null);
+    const eyeTextured = !!eyeTexture && (c.eyes || []).every((eye) => !!eye.uvs);
+    for (const eye of c.eyes || []) add(eye, eyeTextured ? eyeTexture : null);
+    const teethTextured = !!teethTexture && !!c.teeth && !!c.teeth.uvs;
+    if (c.teeth) add(c.teeth, teethTextured ? teethTexture : null);
     // The lower teeth and the tongue ride on the jaw (animate's jawMatrix).
-    for (const m of [c.lowerTeeth, c.tongue]) {
+    for (const [m, tex] of [[c.lowerTeeth, teethTextured && c.lowerTeeth && c.lowerTeeth.uvs ? teethTexture : null], [c.tongue, null]]) {
       if (!m) continue;
       const before = app.components;
-      add(m, null);
+      add(m, tex);
       if (app.components > before) app.jawComponents.push(before);
     }
     if (errors.length) console.warn('components not shown:', errors.join('; '));
+    app.componentTextures = {
+      eyes: !eyeTextured ? 'none' : app.eyePhoto ? 'photo:' + app.eyePhoto.name : 'generic',
+      teeth: !teethTextured ? 'none' : app.smilePhoto ? 'photo:' + app.smilePhoto.name : 'generic',
+      teethTextured: teethTextured && !errors.length,
+    };
   }
 
   function showStage(row) {
@@ -1035,7 +1143,11 @@
     clearError();
     if (!app.fit) { showError('Fit the head before texturing it: the texture is laid on the fitted head.'); return; }
     const using = texturable();
-    if (!app.photos.length) { showError('Drop one or more photos of the head (JPG or PNG) to texture it.'); return; }
+    if (!facePhotos().length) {
+      showError(app.photos.length ? 'No photo has the role "Face (skin)": only face photos texture the skin.'
+        : 'Drop one or more photos of the head (JPG or PNG) to texture it.');
+      return;
+    }
     if (!using.length) {
       showError('No photo has correspondences yet: drop each photo\'s points file (same name, .txt) or click a photo ' +
                 'to mark its landmarks (at least 6 each).');

@@ -67,6 +67,10 @@ const JOBS = {
     core.texture_job(placed, msg.options || {}, progress)),
   // {level, base}: the textured head as {obj, mtl, png} bytes.
   exportTextured: (msg) => core.export_textured(msg.level, String(msg.base)),
+  // {name, buffer, guess?: [x, y]}: an eye photo -> the eyeball (iris) texture.
+  eye: (msg) => withHeapBytes(msg.buffer, (ptr, size) => core.eye_photo_job(msg.name, ptr, size, msg.guess || null)),
+  // {name, buffer}: a smile photo -> the teeth texture (teeth model's uvs).
+  smile: (msg) => withHeapBytes(msg.buffer, (ptr, size) => core.smile_photo_job(msg.name, ptr, size)),
 };
 
 // withHeapBytes for a list of {name, buffer, points}: fn gets

@@ -282,6 +282,86 @@ function frontCamera(landmarks, W, H, f) {
   };
 }
 
+// The synthetic eye of tests/iris/test_iris.cpp (make_eye): radial fibres
+// of random-phase sines, a dark limbus, a dark pupil, white sclera in skin,
+// an upper eyelid band and a highlight; 2x2 supersampled.
+function makeEyePng(e = { cx: 121.3, cy: 98.7, radius: 40, pupil: 14 }, w = 240, h = 200) {
+  const freq = [37, 53, 71, 89, 23, 61], ph = [0.7, 2.9, 4.1, 1.3, 5.6, 3.3];
+  const skin = [0.80, 0.60, 0.50];
+  const colour = (px, py) => {
+    const dx = px - e.cx, dy = py - e.cy, r = Math.hypot(dx, dy), t = Math.atan2(dy, dx);
+    let c = Math.hypot(dx / 2.2, dy / 1.3) < e.radius ? [0.92, 0.90, 0.88] : skin.slice();
+    if (r < e.radius) {
+      const f = (r - e.pupil) / (e.radius - e.pupil);
+      let fib = 0;
+      for (let k = 0; k < 6; k++) fib += Math.sin(freq[k] * t + ph[k] + 3 * f) / 6;
+      const v = 0.75 + 0.35 * fib;
+      c = [(0.25 + 0.15 * f) * v, (0.35 - 0.1 * f) * v, (0.45 - 0.2 * f) * v];
+      if (f > 0.85) c = c.map((q) => q * 0.7);
+      if (r < e.pupil) c = [0.03, 0.03, 0.03];
+    }
+    if (py < e.cy - 0.6 * e.radius) c = skin.slice();
+    if (Math.hypot(px - (e.cx + 12), py - (e.cy - 15)) < 5) c = [1, 1, 1];
+    return c;
+  };
+  return makePhotoPng(w, h, (x, y) => {
+    const acc = [0, 0, 0];
+    for (const [sx, sy] of [[-0.25, -0.25], [0.25, -0.25], [-0.25, 0.25], [0.25, 0.25]]) {
+      const c = colour(x + sx, y + sy);
+      for (let k = 0; k < 3; k++) acc[k] += c[k] / 4;
+    }
+    return acc.map((q) => Math.round(255 * Math.min(1, Math.max(0, q))));
+  });
+}
+
+// tarini2002 Sec. 4 in the page: the teeth wear the generic teeth texture
+// after a fit; a photo set to "Eye (iris)" dresses both eyeballs with its
+// synthesized iris; a photo that is no eye, as Eye, gives a clear error and
+// keeps the other photos' clicks; eye photos are not used for the skin.
+async function eyeAndSmilePhotos(page) {
+  const before = await page.evaluate(() => ({ tex: window.likeness.componentTextures, n: window.likeness.components,
+    teeth: window.likeness.componentsData && window.likeness.componentsData.teethTexture,
+    teethMs: window.likeness.componentsData && window.likeness.componentsData.teethTextureMs,
+    clicks: window.likeness.photos.map((p) => [p.name, p.clicks.size]) }));
+  const tt = before.teeth;
+  check('the teeth wear the generic teeth texture after a fit (RGBA, transparent voids)', before.tex.teethTextured &&
+        before.tex.teeth === 'generic' && before.tex.eyes === 'generic' && before.n === 5 && !!tt && tt.channels === 4 &&
+        (() => { let clear = 0, solid = 0; for (let i = 3; i < tt.pixels.length; i += 4) { if (tt.pixels[i] === 0) clear++; else if (tt.pixels[i] === 255) solid++; }
+                 return clear > 0 && solid > 0.3 * tt.pixels.length / 4; })(),
+        JSON.stringify(before.tex) + (tt ? ` ${tt.width}x${tt.height}x${tt.channels}, made in ${Math.round(before.teethMs)} ms in the worker` : ' no teeth texture'));
+  // A good synthetic eye, then a grey card, both dropped as photos.
+  await page.setInputFiles('#file-input', [
+    { name: 'eye_close.png', mimeType: 'image/png', buffer: makeEyePng() },
+    { name: 'grey_card.png', mimeType: 'image/png', buffer: makePhotoPng(200, 150, () => [128, 128, 128]) }]);
+  await page.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: JOB_TIMEOUT_MS });
+  const roleSelect = (name) => page.locator('#photo-list li', { hasText: name }).locator('select.photo-role');
+  const t0 = Date.now();
+  await roleSelect('eye_close.png').selectOption('eye');
+  await page.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: JOB_TIMEOUT_MS });
+  const eye = await page.evaluate(() => ({ photo: window.likeness.eyePhoto && { circle: window.likeness.eyePhoto.circle, ms: window.likeness.eyePhoto.ms,
+    w: window.likeness.eyePhoto.texture.width }, tex: window.likeness.componentTextures, n: window.likeness.components,
+    state: document.body.dataset.state, faces: window.likeness.photos.filter((p) => (p.role || 'face') === 'face').map((p) => p.name) }));
+  const c = eye.photo && eye.photo.circle;
+  check('an eye photo set to "Eye (iris)" puts its iris on both eyeballs without errors', eye.state === 'done' && (await bannerText(page)) === '' &&
+        !!c && Math.hypot(c.x - 121.3, c.y - 98.7) < 3 && Math.abs(c.radius - 40) < 3 && eye.tex.eyes === 'photo:eye_close.png' &&
+        eye.tex.teethTextured && eye.n === 5 && !eye.faces.includes('eye_close.png'),
+        c ? `centre (${c.x.toFixed(1)}, ${c.y.toFixed(1)}) r ${c.radius.toFixed(1)} (truth (121.3, 98.7) r 40), iris job ${Math.round(eye.photo.ms)} ms in the worker, ` +
+            `${Date.now() - t0} ms wall; ${JSON.stringify(eye.tex)}` : `state ${eye.state}: ${await bannerText(page)}`);
+  await roleSelect('grey_card.png').selectOption('eye');
+  await page.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: JOB_TIMEOUT_MS });
+  const bad = await bannerText(page);
+  const after = await page.evaluate(() => ({ tex: window.likeness.componentTextures, state: document.body.dataset.state,
+    clicks: window.likeness.photos.filter((p) => p.name !== 'grey_card.png' && p.name !== 'eye_close.png').map((p) => [p.name, p.clicks.size]) }));
+  check('a non-eye image as "Eye (iris)" gives a clear error; the eyes and the clicks stay', after.state === 'error' &&
+        /grey_card\.png/.test(bad) && /iris|eye/i.test(bad) && after.tex.eyes === 'photo:eye_close.png' &&
+        JSON.stringify(after.clicks) === JSON.stringify(before.clicks), `"${bad}"; ${JSON.stringify(after)}`);
+  await shot(page, 'web_eye_photo.png');
+  // The test's photos leave; the eyes go back to the generic iris.
+  for (const name of ['grey_card.png', 'eye_close.png']) await page.locator('#photo-list li', { hasText: name }).locator('.photo-remove').click();
+  const reset = await page.evaluate(() => window.likeness.componentTextures.eyes);
+  check('removing the eye photo gives the eyes the generic iris back', reset === 'generic', reset);
+}
+
 // The Texture stage end to end on the fitted synthetic head: a photo that is
 // not an image, a points file with too few points, a good photo + points
 // file (calibration, texture_head in the worker, the skin on the canvas),
@@ -810,6 +890,7 @@ async function main() {
         await page.waitForTimeout(600);
         check('unchecking Animate stops it', (await page.evaluate(() => window.likeness.animation.frames)) === f2);
         await textureStage(page, rest);
+        await eyeAndSmilePhotos(page);
       }
       // Cancel mid-fit: back to "done" without an error; the stopped worker
       // took the fitted head with it, so export is off until the next fit.
