@@ -282,6 +282,30 @@ function frontCamera(landmarks, W, H, f) {
   };
 }
 
+// A synthetic smile photo (lips hiding parts of two teeth) made by the
+// native CLI (`likeness teeth --synthetic-smile --input-out`), tinted
+// yellow, or null.
+function syntheticSmile() {
+  const candidates = [process.env.LK_LIKENESS_BIN, path.join(WEBDIR, '..', 'bin', 'likeness')].filter(Boolean);
+  const bin = candidates.find((c) => fs.existsSync(c));
+  if (!bin) return null;
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-smile-'));
+  try {
+    execFileSync(bin, ['teeth', '--synthetic-smile', '--input-out', path.join(dir, 'smile.png'), '--out', path.join(dir, 'teeth.png')], { stdio: 'pipe' });
+    // Yellower than the generic teeth (made from the same synthetic smile),
+    // so the photo's texture must differ from the generic one.
+    const img = decodePng(fs.readFileSync(path.join(dir, 'smile.png')));
+    return makePhotoPng(img.width, img.height, (x, y) => {
+      const i = 4 * (y * img.width + x);
+      return [img.data[i], img.data[i + 1], Math.round(0.55 * img.data[i + 2])];
+    });
+  } catch (e) {
+    return null;
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+}
+
 // The synthetic eye of tests/iris/test_iris.cpp (make_eye): radial fibres
 // of random-phase sines, a dark limbus, a dark pupil, white sclera in skin,
 // an upper eyelid band and a highlight; 2x2 supersampled.
@@ -356,10 +380,34 @@ async function eyeAndSmilePhotos(page) {
         /grey_card\.png/.test(bad) && /iris|eye/i.test(bad) && after.tex.eyes === 'photo:eye_close.png' &&
         JSON.stringify(after.clicks) === JSON.stringify(before.clicks), `"${bad}"; ${JSON.stringify(after)}`);
   await shot(page, 'web_eye_photo.png');
-  // The test's photos leave; the eyes go back to the generic iris.
-  for (const name of ['grey_card.png', 'eye_close.png']) await page.locator('#photo-list li', { hasText: name }).locator('.photo-remove').click();
-  const reset = await page.evaluate(() => window.likeness.componentTextures.eyes);
-  check('removing the eye photo gives the eyes the generic iris back', reset === 'generic', reset);
+  // A smile photo as "Smile (teeth)" replaces the generic teeth texture.
+  const smile = syntheticSmile();
+  const names = ['grey_card.png', 'eye_close.png'];
+  if (smile) {
+    await page.setInputFiles('#file-input', { name: 'smile.png', mimeType: 'image/png', buffer: smile });
+    await page.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: JOB_TIMEOUT_MS });
+    await roleSelect('smile.png').selectOption('smile');
+    await page.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: JOB_TIMEOUT_MS });
+    const teeth = await page.evaluate(() => ({ tex: window.likeness.componentTextures, state: document.body.dataset.state,
+      ms: window.likeness.smilePhoto && window.likeness.smilePhoto.ms,
+      differs: (() => {
+        const a = window.likeness.smilePhoto && window.likeness.smilePhoto.texture.pixels, b = window.likeness.componentsData.teethTexture.pixels;
+        if (!a || a.length !== b.length) return -1;
+        let n = 0;
+        for (let i = 0; i < a.length; i++) if (Math.abs(a[i] - b[i]) > 8) n++;
+        return n / a.length;
+      })() }));
+    check('a smile photo set to "Smile (teeth)" replaces the teeth texture', teeth.state === 'done' && teeth.tex.teeth === 'photo:smile.png' &&
+          teeth.tex.teethTextured && teeth.differs > 0.01, `${JSON.stringify(teeth.tex)}, teeth job ${Math.round(teeth.ms)} ms in the worker, ` +
+          `${(100 * teeth.differs).toFixed(1)}% of bytes differ from the generic texture; ${await bannerText(page)}`);
+    names.push('smile.png');
+  } else {
+    console.log('note  the smile photo is not exercised: no native likeness binary (set LK_LIKENESS_BIN)');
+  }
+  // The test's photos leave; the eyes and teeth go back to the generic textures.
+  for (const name of names) await page.locator('#photo-list li', { hasText: name }).locator('.photo-remove').click();
+  const reset = await page.evaluate(() => window.likeness.componentTextures);
+  check('removing the eye and smile photos gives the generic textures back', reset.eyes === 'generic' && reset.teeth === 'generic', JSON.stringify(reset));
 }
 
 // The Texture stage end to end on the fitted synthetic head: a photo that is
