@@ -610,6 +610,11 @@
   const clicker = { photo: null, image: null, current: 0, view: null };
 
   function openClicker(photo) {
+    if (photo && (photo.role || 'face') !== 'face') {
+      setStatus(photo.name + ' is ' + (photo.role === 'eye' ? 'an eye' : 'a smile') + ' photo: it needs no landmarks ' +
+                '(set its role to "Face (skin)" to texture the skin with it).');
+      return;
+    }
     if (!app.fit || !app.fit.landmarks || !app.fit.landmarks.length) {
       setStatus('Fit the head first: the landmarks are placed on the fitted head.');
       return;
