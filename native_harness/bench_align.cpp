@@ -4,6 +4,7 @@
 // figures (Sec. 7). --dump DIR writes the XOR difference images before and
 // after (like the paper's Fig. 2) as align_xor_{before,after}.png.
 #include "command.h"
+#include "timing.h"
 
 #include "align/initial_alignment.h"
 #include "io/io.h"
@@ -25,15 +26,6 @@
 
 namespace lk::cli {
 namespace {
-
-double cpu_ms() {
-  timespec ts{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
-}
-double wall_ms() {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 // The scan's known pose: 7 degrees about a tilted axis, anisotropic scale,
 // millimetres, and an arbitrary position (a scanner's own frame).
@@ -110,9 +102,9 @@ int run_align_bench(const Args& args) {
     o.resolution = run.resolution;
     o.coarse_resolutions = run.coarse;
     AlignResult r;
-    const double c0 = cpu_ms(), w0 = wall_ms();
+    const double c0 = cpu_clock_ms(), w0 = wall_clock_ms();
     st = align_initial(generic.mesh, generic.annotations, cloud, o, r);
-    const double cpu = cpu_ms() - c0, wall = wall_ms() - w0;
+    const double cpu = cpu_clock_ms() - c0, wall = wall_clock_ms() - w0;
     if (!st) {
       std::printf("   %-22s failed: %s\n", run.name, st.message.c_str());
       ++failures;
@@ -124,7 +116,7 @@ int run_align_bench(const Args& args) {
     rasterize_point_silhouettes(cloud.positions, r.frame.window, r.frame.clips, o.splat, cloud_masks);
     const int reps = 200;
     long long sink = 0;
-    const double e0 = cpu_ms();
+    const double e0 = cpu_clock_ms();
     for (int k = 0; k < reps; ++k) {
       std::vector<Vec3> moved(generic.mesh.positions.size());
       for (size_t i = 0; i < moved.size(); ++i) moved[i] = r.linear * generic.mesh.positions[i] + r.translation;
@@ -132,7 +124,7 @@ int run_align_bench(const Args& args) {
                                  o.cull_back_faces);
       for (int v = 0; v < kSilhouetteViews; ++v) sink += xor_count(mesh_masks[v], cloud_masks[v]);
     }
-    const double per_eval = (cpu_ms() - e0) / reps;
+    const double per_eval = (cpu_clock_ms() - e0) / reps;
     char xor_text[48];
     std::snprintf(xor_text, sizeof xor_text, "%d -> %d", total_xor(r.xor_before), total_xor(r.xor_after));
     char total_text[40];

@@ -2,6 +2,7 @@
 // multiresolution head and its local update (jeong2002 Sec. 5-6), timed and
 // compared with OpenMesh's ModifiedButterflyT on the same meshes.
 #include "command.h"
+#include "timing.h"
 
 #include "io/io.h"
 #include "mesh/geometry.h"
@@ -37,21 +38,15 @@
 namespace lk::cli {
 namespace {
 
-// CPU time of this thread, in milliseconds. The build machine is shared (its
-// load average is printed), so wall time would mostly measure the neighbours.
-double now_ms() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
-}
-
-// Median CPU time of `reps` runs, in milliseconds.
+// Median CPU time of `reps` runs, in milliseconds. The build machine is
+// shared (its load average is printed), so wall time would mostly measure
+// the neighbours.
 double median_ms(int reps, const std::function<void()>& f) {
   std::vector<double> t;
   for (int i = 0; i < reps; ++i) {
-    const double t0 = now_ms();
+    const double t0 = cpu_clock_ms();
     f();
-    t.push_back(now_ms() - t0);
+    t.push_back(cpu_clock_ms() - t0);
   }
   std::sort(t.begin(), t.end());
   return t[t.size() / 2];
@@ -226,9 +221,9 @@ void bench_mesh(const NamedMesh& nm, bool quick) {
   for (int i = 0; i < updates; ++i) {
     const int v = pick(rng);
     const Vec3 to = mr.control[v] + Vec3(step(rng), step(rng), step(rng));
-    const double t0 = now_ms();
+    const double t0 = cpu_clock_ms();
     update_control_vertices(mr, {v}, {to}, &fp);
-    times.push_back(now_ms() - t0);
+    times.push_back(cpu_clock_ms() - t0);
     touched3 += fp.displaced_changed[L];
   }
   std::sort(times.begin(), times.end());
@@ -317,9 +312,9 @@ void bench_round_trip(const NamedMesh& nm, bool quick) {
   double mean0, max0, mean1, max1;
   distances(mr, mean0, max0);
   DisplacementStats stats;
-  const double t0 = now_ms();
+  const double t0 = cpu_clock_ms();
   Status s = measure_displacements(cloud, DisplacementOptions{}, mr, &stats);
-  const double t_measure = now_ms() - t0;
+  const double t_measure = cpu_clock_ms() - t0;
   if (!s.ok()) {
     std::printf("   round trip failed: %s\n", s.message.c_str());
     return;

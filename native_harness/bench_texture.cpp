@@ -7,6 +7,7 @@
 // renders of a 3-D colour field under five different light gains (their
 // rendering is not timed), calibrated from 15 clicked points each.
 #include "command.h"
+#include "timing.h"
 
 #include "head/generic_head.h"
 #include "mesh/geometry.h"
@@ -25,17 +26,6 @@
 
 namespace lk::cli {
 namespace {
-
-double cpu_ms() {
-  timespec ts{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
-}
-double wall_ms() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
-}
 
 int run(const Args& args) {
   int size = 2048, width = 3000, height = 2000;
@@ -83,13 +73,13 @@ int run(const Args& args) {
 
   std::map<std::string, double> cpu, wall;
   std::vector<CalibResult> calib;
-  double c0 = cpu_ms(), w0 = wall_ms();
+  double c0 = cpu_clock_ms(), w0 = wall_clock_ms();
   if (!calibrate_photos(clicks, sizes, CalibOptions(), calib).ok()) {
     std::printf("texture: calibration failed\n");
     return 1;
   }
-  cpu["calibrate (5 photos)"] = cpu_ms() - c0;
-  wall["calibrate (5 photos)"] = wall_ms() - w0;
+  cpu["calibrate (5 photos)"] = cpu_clock_ms() - c0;
+  wall["calibrate (5 photos)"] = wall_clock_ms() - w0;
   std::vector<TexturePhoto> photos = truth;
   double rms = 0;
   for (int i = 0; i < 5; ++i) {
@@ -97,15 +87,15 @@ int run(const Args& args) {
     rms = std::max(rms, calib[i].rms);
   }
 
-  c0 = cpu_ms();
-  w0 = wall_ms();
+  c0 = cpu_clock_ms();
+  w0 = wall_clock_ms();
   std::vector<Vec2> control_uv;
   UvStats uv_stats;
   if (!parameterize_stretch(head.mesh, UvOptions(), control_uv, uv_stats).ok() ||
       !refine_chart_uvs(levels, control_uv, mesh.uvs).ok())
     return 1;
-  cpu["parameterize"] = cpu_ms() - c0;
-  wall["parameterize"] = wall_ms() - w0;
+  cpu["parameterize"] = cpu_clock_ms() - c0;
+  wall["parameterize"] = wall_clock_ms() - w0;
 
   TextureOptions opt;
   opt.size = size;
@@ -114,20 +104,20 @@ int run(const Args& args) {
   const ProgressFn progress = [&](const char* step, double f) {
     if (f == 0 && current != step) {
       current = step;
-      cs = cpu_ms();
-      ws = wall_ms();
+      cs = cpu_clock_ms();
+      ws = wall_clock_ms();
     } else if (f == 1 && current == step) {
-      cpu[step] += cpu_ms() - cs;
-      wall[step] += wall_ms() - ws;
+      cpu[step] += cpu_clock_ms() - cs;
+      wall[step] += wall_clock_ms() - ws;
       current.clear();
     }
     return true;
   };
   TexturedHead out;
-  c0 = cpu_ms();
-  w0 = wall_ms();
+  c0 = cpu_clock_ms();
+  w0 = wall_clock_ms();
   const Status s = texture_head(mesh, photos, opt, out, progress);
-  const double job_cpu = cpu_ms() - c0, job_wall = wall_ms() - w0;
+  const double job_cpu = cpu_clock_ms() - c0, job_wall = wall_clock_ms() - w0;
   if (!s) {
     std::printf("texture: %s\n", s.message.c_str());
     return 1;

@@ -4,6 +4,7 @@
 // when CGAL was found at configure time, CGAL's LSCM and ARAP on the same
 // mesh. Also a calibration timing line (tarini2002 Sec. 3).
 #include "command.h"
+#include "timing.h"
 
 #include "calib/calibrate.h"
 #include "head/generic_head.h"
@@ -27,12 +28,6 @@
 
 namespace lk::cli {
 namespace {
-
-double cpu_ms() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
-}
 
 void row(const char* name, double ms, const UvStats& st) {
   std::printf("  %-28s %9.1f %9.4f %9.4f %9.4f %8.1f%% %7d\n", name, ms, st.l2_stretch, st.l2_stretch_unweighted,
@@ -76,9 +71,9 @@ int run_bench_uv(const Args&) {
   auto median_of = [](int reps, const std::function<void()>& f) {
     std::vector<double> t;
     for (int i = 0; i < reps; ++i) {
-      const double t0 = cpu_ms();
+      const double t0 = cpu_clock_ms();
       f();
-      t.push_back(cpu_ms() - t0);
+      t.push_back(cpu_clock_ms() - t0);
     }
     std::sort(t.begin(), t.end());
     return t[t.size() / 2];

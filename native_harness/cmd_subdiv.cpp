@@ -3,6 +3,7 @@
 // scan, and writes every level's mesh so it can be looked at
 // (`likeness render --mesh PREFIX_level2.ply`).
 #include "command.h"
+#include "timing.h"
 
 #include "io/io.h"
 #include "mesh/geometry.h"
@@ -15,12 +16,6 @@ namespace lk::cli {
 namespace {
 
 const char* kName = "subdiv";
-
-double cpu_ms() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
-}
 
 int usage_error(const std::string& message) {
   fail(kName, message);
@@ -49,21 +44,21 @@ int run_subdiv(const Args& args) {
   Status s = load_mesh_file(mesh_path, control);
   if (!s) return fail(kName, s.message);
   MultiresMesh mr;
-  double t0 = cpu_ms();
+  double t0 = cpu_clock_ms();
   s = build_multires(control, levels, mr);
   if (!s) return fail(kName, mesh_path + ": " + s.message);
   std::printf("built %d levels over %d vertices / %d triangles in %.1f ms\n", levels, control.num_vertices(),
-              control.num_triangles(), cpu_ms() - t0);
+              control.num_triangles(), cpu_clock_ms() - t0);
 
   if (!points_path.empty()) {
     PointCloud cloud;
     s = load_point_cloud_file(points_path, cloud);
     if (!s) return fail(kName, s.message);
     DisplacementStats stats;
-    t0 = cpu_ms();
+    t0 = cpu_clock_ms();
     s = measure_displacements(cloud, options, mr, &stats);
     if (!s) return fail(kName, points_path + ": " + s.message);
-    std::printf("measured displacements from %d points in %.1f ms\n", cloud.size(), cpu_ms() - t0);
+    std::printf("measured displacements from %d points in %.1f ms\n", cloud.size(), cpu_clock_ms() - t0);
     for (int l = 0; l <= levels; ++l)
       std::printf("  level %d: %d of %d vertices had data, mean |d| %.4g, max |d| %.4g\n", l, stats.measured[l],
                   stats.candidates[l], stats.mean_abs[l], stats.max_abs[l]);

@@ -4,6 +4,7 @@
 // textured.mtl + skin.png + report.json. With --make-synthetic it instead
 // writes ground-truth photos and points files of a head to try it on.
 #include "command.h"
+#include "timing.h"
 
 #include "head/generic_head.h"
 #include "io/io.h"
@@ -43,10 +44,6 @@ bool is_directory(const std::string& path) {
 bool is_file(const std::string& path) {
   struct stat st;
   return ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
-}
-
-double now_ms() {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 // The head to texture and, when it is a fit's finest level, the chart
@@ -107,9 +104,9 @@ Status load_head(const std::string& spec, const UvOptions& uv_options, HeadInput
       levels.back().fine_triangles == out.mesh.triangles &&
       levels.back().num_fine_vertices == out.mesh.num_vertices()) {
     std::vector<Vec2> control_uv;
-    const double t0 = now_ms();
+    const double t0 = wall_clock_ms();
     s = parameterize_stretch(control, uv_options, control_uv, out.control_uv);
-    out.control_uv_ms = now_ms() - t0;
+    out.control_uv_ms = wall_clock_ms() - t0;
     if (!s) return with_context(s, control_path);
     s = refine_chart_uvs(levels, control_uv, out.mesh.uvs);
     if (!s) return s;
@@ -208,7 +205,7 @@ int run_texture(const Args& args) {
     for (const char* k : known) ok = ok || key == k;
     if (!ok) return usage_error("unknown option --" + key + " (see `likeness help`)");
   }
-  const double t_start = now_ms();
+  const double t_start = wall_clock_ms();
   const std::string head_spec = args.get("head"), out_dir = args.get("out");
   if (head_spec.empty()) return usage_error("--head DIR (a `likeness fit` output), a mesh file or 'generic' is required");
   TextureOptions opt;
@@ -219,10 +216,10 @@ int run_texture(const Args& args) {
 
   HeadInput head;
   std::map<std::string, double> timings;
-  double t0 = now_ms();
+  double t0 = wall_clock_ms();
   Status s = load_head(head_spec, opt.uv, head);
   if (!s) return fail(kName, s.message);
-  timings["load head"] = now_ms() - t0 - head.control_uv_ms;
+  timings["load head"] = wall_clock_ms() - t0 - head.control_uv_ms;
 
   if (args.has("make-synthetic")) {
     const std::string dir = args.get("make-synthetic");
@@ -238,7 +235,7 @@ int run_texture(const Args& args) {
                        " points files: give one points file per photo, in the same order");
 
   // Photos and points.
-  t0 = now_ms();
+  t0 = wall_clock_ms();
   std::vector<TexturePhoto> photos(photo_paths.size());
   std::vector<std::vector<Correspondence>> points(photo_paths.size());
   std::vector<std::array<int, 2>> sizes;
@@ -255,10 +252,10 @@ int run_texture(const Args& args) {
       return fail(kName, point_paths[i] + ": " + std::to_string(points[i].size()) +
                              " points; calibrating a photo needs at least 6 (the paper clicks 12-15)");
   }
-  timings["load photos"] = now_ms() - t0;
+  timings["load photos"] = wall_clock_ms() - t0;
 
   // Calibration.
-  t0 = now_ms();
+  t0 = wall_clock_ms();
   CalibOptions copt;
   copt.known_focal = focal;
   std::vector<CalibResult> calib;
@@ -278,7 +275,7 @@ int run_texture(const Args& args) {
     return fail(kName, "calibration failed: " + s.message);
   }
   for (size_t i = 0; i < photos.size(); ++i) photos[i].camera = calib[i].camera;
-  timings["calibrate"] = now_ms() - t0;
+  timings["calibrate"] = wall_clock_ms() - t0;
 
   // Texturing, timed step by step from the progress callback.
   std::string current;
@@ -286,9 +283,9 @@ int run_texture(const Args& args) {
   const ProgressFn progress = [&](const char* step, double f) {
     if (f == 0 && current != step) {
       current = step;
-      step_start = now_ms();
+      step_start = wall_clock_ms();
     } else if (f == 1 && current == step) {
-      timings[step] = now_ms() - step_start;
+      timings[step] = wall_clock_ms() - step_start;
       current.clear();
     }
     return true;
@@ -307,7 +304,7 @@ int run_texture(const Args& args) {
   if (head.uv_from_control) timings["parameterize"] += head.control_uv_ms;
 
   // Outputs.
-  t0 = now_ms();
+  t0 = wall_clock_ms();
   ::mkdir(out_dir.c_str(), 0755);
   s = write_file(out_dir + "/textured.obj", write_obj(out.mesh, "textured.mtl"));
   if (s) s = write_file(out_dir + "/textured.mtl", write_mtl("skin.png"));
@@ -326,8 +323,8 @@ int run_texture(const Args& args) {
     if (s) s = save_png_file(out_dir + "/regions.png", regions);
   }
   if (!s) return fail(kName, s.message);
-  timings["write"] = now_ms() - t0;
-  timings["total"] = now_ms() - t_start;
+  timings["write"] = wall_clock_ms() - t0;
+  timings["total"] = wall_clock_ms() - t_start;
 
   const TextureReport& rep = out.report;
   nlohmann::json j;

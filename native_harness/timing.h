@@ -8,6 +8,17 @@
 
 namespace lk::cli {
 
+// Clock readings in milliseconds: CPU time of the process (the harness is
+// single-threaded) and monotonic wall time.
+inline double cpu_clock_ms() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return 1e3 * static_cast<double>(ts.tv_sec) + 1e-6 * static_cast<double>(ts.tv_nsec);
+}
+inline double wall_clock_ms() {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
 // Medians over repeated runs; CPU time is steadier than wall time on a busy machine.
 struct Timing {
   double wall_ms = 0, cpu_ms = 0;
