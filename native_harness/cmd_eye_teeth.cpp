@@ -15,18 +15,6 @@
 namespace lk::cli {
 namespace {
 
-bool check_known(const char* cmd, const Args& args, std::initializer_list<const char*> known) {
-  for (const auto& [key, values] : args.options) {
-    bool ok = false;
-    for (const char* k : known) ok = ok || key == k;
-    if (!ok) {
-      fail(cmd, "unknown option --" + key + " (see `likeness help`)");
-      return false;
-    }
-  }
-  return true;
-}
-
 // "x,y" in pixels.
 bool parse_point(const std::string& s, Vec2& p) {
   double x, y;
@@ -56,7 +44,7 @@ Image polar_to_image(const PolarIris& p, bool show_invalid, int sector_begin = -
 
 int run_eye(const Args& args) {
   const char* cmd = "eye";
-  if (!check_known(cmd, args, {"photo", "out", "guess", "size", "debug-dir"})) return 2;
+  if (!only_known_options(cmd, args, {"photo", "out", "guess", "size", "debug-dir"})) return 2;
   if (!args.has("photo") || !args.has("out")) {
     fail(cmd, "needs --photo FILE and --out FILE.png");
     return 2;
@@ -127,12 +115,10 @@ namespace {
 
 int run_teeth(const Args& args) {
   const char* cmd = "teeth";
-  for (const auto& [key, values] : args.options)
-    if (key != "photo" && key != "out" && key != "generic-out" && key != "synthetic-smile" && key != "upper-dip" &&
-        key != "lower-rise" && key != "no-reconstruct" && key != "input-out" && key != "crop") {
-      fail(cmd, "unknown option --" + key + " (see `likeness help`)");
-      return 2;
-    }
+  if (!only_known_options(cmd, args,
+                          {"photo", "out", "generic-out", "synthetic-smile", "upper-dip", "lower-rise",
+                           "no-reconstruct", "input-out", "crop"}))
+    return 2;
   if ((!args.has("photo") && !args.has("synthetic-smile")) || !args.has("out")) {
     fail(cmd, "needs --photo FILE (or --synthetic-smile) and --out FILE.png");
     return 2;
@@ -214,12 +200,9 @@ namespace {
 
 int run_components(const Args& args) {
   const char* cmd = "components";
-  for (const auto& [key, values] : args.options)
-    if (key != "head" && key != "out" && key != "render" && key != "eye-texture" && key != "teeth-texture" &&
-        key != "view" && key != "no-head") {
-      fail(cmd, "unknown option --" + key + " (see `likeness help`)");
-      return 2;
-    }
+  if (!only_known_options(cmd, args,
+                          {"head", "out", "render", "eye-texture", "teeth-texture", "view", "no-head"}))
+    return 2;
   if (!args.has("out")) {
     fail(cmd, "needs --out DIR (and --head FILE.obj, default: the generic head)");
     return 2;
@@ -308,12 +291,7 @@ namespace {
 
 int run_teeth_model(const Args& args) {
   const char* cmd = "teeth-model";
-  for (const auto& [key, values] : args.options)
-    if (key != "out" && key != "texture" && key != "render" && key != "view" && key != "wireframe" &&
-        key != "no-backdrop") {
-      fail(cmd, "unknown option --" + key + " (see `likeness help`)");
-      return 2;
-    }
+  if (!only_known_options(cmd, args, {"out", "texture", "render", "view", "wireframe", "no-backdrop"})) return 2;
   if (!args.has("out") && !args.has("render")) {
     fail(cmd, "needs --out FILE.obj and/or --render FILE.png");
     return 2;

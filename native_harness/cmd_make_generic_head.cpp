@@ -17,11 +17,7 @@ namespace {
 const char* kName = "make-generic-head";
 
 int run_make_generic_head(const Args& args) {
-  for (const auto& [key, values] : args.options)
-    if (key != "out") {
-      fail(kName, "unknown option --" + key + " (see `likeness help`)");
-      return 2;
-    }
+  if (!only_known_options(kName, args, {"out"})) return 2;
   const std::string out_dir = args.get("out");
   if (out_dir.empty()) {
     fail(kName, "--out DIR is required (the asset lives in core/head/data)");

@@ -33,13 +33,10 @@ std::string directory_of(const std::string& path) {
 }
 
 int run_render(const Args& args) {
-  for (const auto& [key, values] : args.options) {
-    static const char* known[] = {"mesh", "points", "texture", "wireframe", "edges-only", "view",
-                                  "size", "out", "point-size", "supersample", "no-ao", "flat"};
-    bool ok = false;
-    for (const char* k : known) ok = ok || key == k;
-    if (!ok) return usage_error("unknown option --" + key + " (see `likeness help`)");
-  }
+  if (!only_known_options(kName, args,
+                          {"mesh", "points", "texture", "wireframe", "edges-only", "view", "size", "out",
+                           "point-size", "supersample", "no-ao", "flat"}))
+    return 2;
   const std::string mesh_path = args.get("mesh"), points_path = args.get("points");
   const std::string out_path = args.get("out"), texture_path = args.get("texture");
   if (mesh_path.empty() && points_path.empty())

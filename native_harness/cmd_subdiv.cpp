@@ -23,12 +23,9 @@ int usage_error(const std::string& message) {
 }
 
 int run_subdiv(const Args& args) {
-  for (const auto& [key, values] : args.options) {
-    static const char* known[] = {"mesh", "points", "levels", "radius", "max-distance", "min-points", "out"};
-    bool ok = false;
-    for (const char* k : known) ok = ok || key == k;
-    if (!ok) return usage_error("unknown option --" + key + " (see `likeness help`)");
-  }
+  if (!only_known_options(kName, args,
+                          {"mesh", "points", "levels", "radius", "max-distance", "min-points", "out"}))
+    return 2;
   const std::string mesh_path = args.get("mesh"), points_path = args.get("points"), out = args.get("out");
   if (mesh_path.empty()) return usage_error("--mesh FILE is required");
   if (out.empty()) return usage_error("--out PREFIX is required (writes PREFIX_level<l>.ply)");

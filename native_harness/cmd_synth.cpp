@@ -23,18 +23,6 @@ int usage_error(const char* cmd, const std::string& message) {
   return 2;
 }
 
-bool check_known(const char* cmd, const Args& args, std::initializer_list<const char*> known) {
-  for (const auto& [key, values] : args.options) {
-    bool ok = false;
-    for (const char* k : known) ok = ok || key == k;
-    if (!ok) {
-      fail(cmd, "unknown option --" + key + " (see `likeness help`)");
-      return false;
-    }
-  }
-  return true;
-}
-
 // --seed: a non-negative integer that fits 32 bits.
 bool get_seed(const char* cmd, const Args& args, std::uint32_t& seed) {
   const std::string v = args.get("seed", "1");
@@ -62,7 +50,7 @@ nlohmann::json vec(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
 int run_synth_head(const Args& args) {
   const char* cmd = "synth-head";
-  if (!check_known(cmd, args, {"seed", "out", "annotations", "base", "variation"})) return 2;
+  if (!only_known_options(cmd, args, {"seed", "out", "annotations", "base", "variation"})) return 2;
   std::uint32_t seed = 0;
   if (!get_seed(cmd, args, seed)) return 2;
   const std::string out = args.get("out");
@@ -92,7 +80,7 @@ int run_synth_head(const Args& args) {
 
 int run_synth_scan(const Args& args) {
   const char* cmd = "synth-scan";
-  if (!check_known(cmd, args, {"seed", "out", "points", "noise-mm", "base", "outliers", "stations",
+  if (!only_known_options(cmd, args, {"seed", "out", "points", "noise-mm", "base", "outliers", "stations",
                                "arc", "levels", "detail-mm"}))
     return 2;
   std::uint32_t seed = 0;

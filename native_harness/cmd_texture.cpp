@@ -198,13 +198,11 @@ int make_synthetic(const Args& args, const HeadInput& head, const std::string& d
 }
 
 int run_texture(const Args& args) {
-  for (const auto& [key, values] : args.options) {
-    static const char* known[] = {"head", "photos", "points", "size", "focal", "out", "no-spline", "dump",
-                                  "make-synthetic", "photo-width", "photo-height", "even-light", "field", "same-camera", "separate-cameras"};
-    bool ok = false;
-    for (const char* k : known) ok = ok || key == k;
-    if (!ok) return usage_error("unknown option --" + key + " (see `likeness help`)");
-  }
+  if (!only_known_options(kName, args,
+                          {"head", "photos", "points", "size", "focal", "out", "no-spline", "dump",
+                           "make-synthetic", "photo-width", "photo-height", "even-light", "field",
+                           "same-camera", "separate-cameras"}))
+    return 2;
   const double t_start = wall_clock_ms();
   const std::string head_spec = args.get("head"), out_dir = args.get("out");
   if (head_spec.empty()) return usage_error("--head DIR (a `likeness fit` output), a mesh file or 'generic' is required");

@@ -21,13 +21,10 @@ int usage_error(const std::string& message) {
 }
 
 int run_texture_selftest_command(const Args& args) {
-  for (const auto& [key, values] : args.options) {
-    static const char* known[] = {"seed", "out", "size", "photos", "photo-size", "levels", "light-spread",
-                                  "noise", "per-photo-focal", "diagnose", "supersample"};
-    bool ok = false;
-    for (const char* k : known) ok = ok || key == k;
-    if (!ok) return usage_error("unknown option --" + key + " (see `likeness help`)");
-  }
+  if (!only_known_options(kName, args,
+                          {"seed", "out", "size", "photos", "photo-size", "levels", "light-spread", "noise",
+                           "per-photo-focal", "diagnose", "supersample"}))
+    return 2;
   const std::string out = args.get("out");
   if (out.empty()) return usage_error("--out DIR is required");
   SelftestOptions opt;

@@ -68,12 +68,7 @@ Image draw_layout(const TriMesh& mesh, const std::vector<Vec2>& uv, int size) {
 }
 
 int run_uv(const Args& args) {
-  for (const auto& [key, values] : args.options) {
-    static const char* known[] = {"mesh", "out", "k", "png", "size", "unweighted"};
-    bool ok = false;
-    for (const char* k : known) ok = ok || key == k;
-    if (!ok) return usage_error("unknown option --" + key + " (see `likeness help`)");
-  }
+  if (!only_known_options(kName, args, {"mesh", "out", "k", "png", "size", "unweighted"})) return 2;
   const std::string mesh_path = args.get("mesh"), out = args.get("out"), png = args.get("png");
   if (mesh_path.empty()) return usage_error("--mesh FILE (or --mesh generic) is required");
   if (out.empty() && png.empty()) return usage_error("--out FILE.obj and/or --png FILE is required");

@@ -3,6 +3,7 @@
 // read files, call core/, write files, print.
 #pragma once
 #include <functional>
+#include <initializer_list>
 #include <map>
 #include <string>
 #include <vector>
@@ -39,6 +40,10 @@ struct Registrar {
 
 // Prints "likeness <command>: error: <message>" to stderr and returns 1.
 int fail(const std::string& command, const std::string& message);
+
+// False (after printing "unknown option --key (see `likeness help`)" through
+// fail) when args has an option not in known; commands then exit with 2.
+bool only_known_options(const std::string& command, const Args& args, std::initializer_list<const char*> known);
 
 }  // namespace lk::cli
 

@@ -72,6 +72,18 @@ int fail(const std::string& command, const std::string& message) {
   return 1;
 }
 
+bool only_known_options(const std::string& command, const Args& args, std::initializer_list<const char*> known) {
+  for (const auto& [key, values] : args.options) {
+    bool ok = false;
+    for (const char* k : known) ok = ok || key == k;
+    if (!ok) {
+      fail(command, "unknown option --" + key + " (see `likeness help`)");
+      return false;
+    }
+  }
+  return true;
+}
+
 }  // namespace lk::cli
 
 static void usage() {
