@@ -207,43 +207,45 @@ VecX residuals(const Camera& c, const std::vector<Correspondence>& cs, const std
 }
 
 // Levenberg-Marquardt (Marquardt's diagonal scaling) with a central-difference
-// Jacobian: at most ~15 parameters and a few dozen residuals, so numeric
-// derivatives cost nothing and cannot get out of sync with the model.
-Camera refine(const Camera& start, const FreeParams& fp, const std::vector<Correspondence>& cs,
-              const std::vector<int>& idx, int max_iterations, const FocalPrior& focal_prior = {}) {
-  const FocalPrior prior = fp.focal ? focal_prior : FocalPrior{};
-  Camera base = start;
-  VecX p = pack(base, fp);
-  VecX r = residuals(base, cs, idx, prior);
+// Jacobian: at most a few dozen parameters and a few hundred residuals, so
+// numeric derivatives cost little and cannot get out of sync with the model.
+// The parameters p are an increment on a base State (apply(base, p)); after
+// every accepted step the base moves there and pack(base) restarts p (the
+// axis-angle parts restart at 0). A trial state that valid() rejects counts
+// as a failed step.
+template <typename State, typename Pack, typename Apply, typename Residuals, typename Valid>
+State levenberg_marquardt(State base, const Pack& pack, const Apply& apply, const Residuals& residuals,
+                          const Valid& valid, int max_iterations) {
+  VecX p = pack(base);
+  VecX r = residuals(base);
   double cost = r.squaredNorm();
   double lambda = 1e-3;
-  const int n = int(p.size());
+  const Eigen::Index n = p.size();
   for (int it = 0; it < max_iterations; ++it) {
     MatX Jac(r.size(), n);
-    for (int j = 0; j < n; ++j) {
+    for (Eigen::Index j = 0; j < n; ++j) {
       const double h = 1e-6 * std::max(1.0, std::abs(p[j]));
       VecX pp = p, pm = p;
       pp[j] += h;
       pm[j] -= h;
-      Jac.col(j) = (residuals(apply(base, fp, pp), cs, idx, prior) - residuals(apply(base, fp, pm), cs, idx, prior)) /
-                   (2 * h);
+      Jac.col(j) = (residuals(apply(base, pp)) - residuals(apply(base, pm))) / (2 * h);
     }
     const MatX JtJ = Jac.transpose() * Jac;
     const VecX g = Jac.transpose() * r;
     bool improved = false;
     for (int tries = 0; tries < 12; ++tries) {
       MatX A = JtJ;
-      for (int j = 0; j < n; ++j) A(j, j) += lambda * std::max(JtJ(j, j), 1e-12);
+      for (Eigen::Index j = 0; j < n; ++j) A(j, j) += lambda * std::max(JtJ(j, j), 1e-12);
       const VecX step = A.ldlt().solve(-g);
       if (!step.allFinite()) { lambda *= 10; continue; }
-      const VecX pn = p + step;
-      const Camera cn = apply(base, fp, pn);
-      const VecX rn = residuals(cn, cs, idx, prior);
+      const State cn = apply(base, p + step);
+      if (!valid(cn)) { lambda *= 10; continue; }
+      const VecX rn = residuals(cn);
       const double cn_cost = rn.squaredNorm();
       if (cn_cost < cost) {
         const double gain = cost - cn_cost;
-        base = cn;  // re-base the rotation; the axis-angle part restarts at 0
-        p = pack(base, fp);
+        base = cn;
+        p = pack(base);
         r = rn;
         cost = cn_cost;
         lambda = std::max(lambda * 0.3, 1e-12);
@@ -256,6 +258,17 @@ Camera refine(const Camera& start, const FreeParams& fp, const std::vector<Corre
     if (!improved) break;
   }
   return base;
+}
+
+// One camera: its free parameters (fp) against the reprojection error.
+Camera refine(const Camera& start, const FreeParams& fp, const std::vector<Correspondence>& cs,
+              const std::vector<int>& idx, int max_iterations, const FocalPrior& focal_prior = {}) {
+  const FocalPrior prior = fp.focal ? focal_prior : FocalPrior{};
+  return levenberg_marquardt(
+      start, [&](const Camera& c) { return pack(c, fp); },
+      [&](const Camera& c, const VecX& p) { return apply(c, fp, p); },
+      [&](const Camera& c) { return residuals(c, cs, idx, prior); }, [](const Camera&) { return true; },
+      max_iterations);
 }
 
 // Known intrinsics, no usable DLT: the pose with the lowest reprojection
@@ -574,51 +587,14 @@ struct JointProblem {
   }
 };
 
-std::vector<Camera> refine_joint(std::vector<Camera> base, const JointProblem& jp, int max_iterations) {
-  VecX p = jp.pack(base);
-  VecX r = jp.residuals(base);
-  double cost = r.squaredNorm();
-  double lambda = 1e-3;
-  const Eigen::Index n = p.size();
-  for (int it = 0; it < max_iterations; ++it) {
-    // Each pose only moves its own photo's residuals, but a dense numeric
-    // Jacobian of ~30 columns by a few hundred rows costs well under 1 ms.
-    MatX Jac(r.size(), n);
-    for (Eigen::Index j = 0; j < n; ++j) {
-      const double h = 1e-6 * std::max(1.0, std::abs(p[j]));
-      VecX pp = p, pm = p;
-      pp[j] += h;
-      pm[j] -= h;
-      Jac.col(j) = (jp.residuals(jp.apply(base, pp)) - jp.residuals(jp.apply(base, pm))) / (2 * h);
-    }
-    const MatX JtJ = Jac.transpose() * Jac;
-    const VecX g = Jac.transpose() * r;
-    bool improved = false;
-    for (int tries = 0; tries < 12; ++tries) {
-      MatX A = JtJ;
-      for (Eigen::Index j = 0; j < n; ++j) A(j, j) += lambda * std::max(JtJ(j, j), 1e-12);
-      const VecX step = A.ldlt().solve(-g);
-      if (!step.allFinite()) { lambda *= 10; continue; }
-      const std::vector<Camera> cn = jp.apply(base, p + step);
-      if (!(cn[0].fx > 0)) { lambda *= 10; continue; }
-      const VecX rn = jp.residuals(cn);
-      const double cn_cost = rn.squaredNorm();
-      if (cn_cost < cost) {
-        const double gain = cost - cn_cost;
-        base = cn;
-        p = jp.pack(base);
-        r = rn;
-        cost = cn_cost;
-        lambda = std::max(lambda * 0.3, 1e-12);
-        improved = true;
-        if (gain < 1e-14 * (1 + cost) || step.norm() < 1e-14 * (1 + p.norm())) return base;
-        break;
-      }
-      lambda *= 10;
-    }
-    if (!improved) break;
-  }
-  return base;
+// Each pose only moves its own photo's residuals, but a dense numeric
+// Jacobian of ~30 columns by a few hundred rows costs well under 1 ms.
+std::vector<Camera> refine_joint(const std::vector<Camera>& base, const JointProblem& jp, int max_iterations) {
+  return levenberg_marquardt(
+      base, [&](const std::vector<Camera>& c) { return jp.pack(c); },
+      [&](const std::vector<Camera>& c, const VecX& p) { return jp.apply(c, p); },
+      [&](const std::vector<Camera>& c) { return jp.residuals(c); },
+      [](const std::vector<Camera>& c) { return c[0].fx > 0; }, max_iterations);
 }
 
 }  // namespace
