@@ -80,6 +80,24 @@ val error_result(const lk::Status& s) {
   return r;
 }
 
+// The success object every job returns, to be filled with its results.
+val ok_result() {
+  val r = val::object();
+  r.set("ok", true);
+  r.set("code", std::string("Ok"));
+  r.set("message", std::string());
+  return r;
+}
+
+// Decodes an image the page handed over as bytes in the heap; errors name
+// the file.
+lk::Status decode_image(const std::string& name, std::uintptr_t data, std::size_t size, lk::Image& image,
+                        int channels = 0) {
+  if (data == 0 && size != 0) return lk::Status::error(lk::ErrorCode::Internal, name + ": no input buffer");
+  const lk::Status status = lk::read_image(reinterpret_cast<const std::uint8_t*>(data), size, image, channels);
+  return status.ok() ? status : lk::with_context(status, name);
+}
+
 // Wraps a JS function (stage, fraction) -> bool|undefined as an lk::ProgressFn.
 // Only an explicit `false` cancels, so a callback that returns nothing is fine.
 lk::ProgressFn js_progress(val fn) {
@@ -119,10 +137,7 @@ val parse_geometry(const std::string& name, std::uintptr_t data, std::size_t siz
   const std::vector<lk::Vec3>& colors = is_mesh ? mesh.colors : cloud.colors;
   const lk::BBox box = lk::bounding_box(positions);
 
-  val r = val::object();
-  r.set("ok", true);
-  r.set("code", std::string("Ok"));
-  r.set("message", std::string());
+  val r = ok_result();
   r.set("name", name);
   r.set("kind", std::string(is_mesh ? "mesh" : "points"));
   r.set("vertexCount", static_cast<double>(positions.size()));
@@ -141,15 +156,10 @@ val parse_geometry(const std::string& name, std::uintptr_t data, std::size_t siz
 // and reports its size; the texturing stage decodes it again when it runs, so
 // the pixels are not kept here.
 val check_image(const std::string& name, std::uintptr_t data, std::size_t size) {
-  if (data == 0 && size != 0)
-    return error_result(lk::Status::error(lk::ErrorCode::Internal, name + ": no input buffer"));
   lk::Image image;
-  lk::Status status = lk::read_image(reinterpret_cast<const std::uint8_t*>(data), size, image);
-  if (!status.ok()) return error_result(lk::with_context(status, name));
-  val r = val::object();
-  r.set("ok", true);
-  r.set("code", std::string("Ok"));
-  r.set("message", std::string());
+  lk::Status status = decode_image(name, data, size, image);
+  if (!status.ok()) return error_result(status);
+  val r = ok_result();
   r.set("name", name);
   r.set("width", image.width);
   r.set("height", image.height);
@@ -597,10 +607,7 @@ val fit_head_job(const std::string& name, std::uintptr_t data, std::size_t size,
   s.head_offset = s.fit.scan_to_head.t;
   prepare_animation(s, generic.annotations);
 
-  val r = val::object();
-  r.set("ok", true);
-  r.set("code", std::string("Ok"));
-  r.set("message", std::string());
+  val r = ok_result();
   r.set("name", name);
   r.set("points", s.fit.points);
   r.set("fittedPoints", s.fit.fitted_points);
@@ -653,10 +660,7 @@ val animate_frame(double amount, int level) {
   lk::Status st = set_pose(s, amount, &footprint);
   const double update_ms = now_ms() - t0;
   if (!st.ok()) return error_result(st);
-  val r = val::object();
-  r.set("ok", true);
-  r.set("code", std::string("Ok"));
-  r.set("message", std::string());
+  val r = ok_result();
   r.set("level", level);
   r.set("positions", float32_array(to_scan_frame(s, mr.state.displaced[level])));
   r.set("updateMs", update_ms);
@@ -677,10 +681,7 @@ val export_head(int level, const std::string& format) {
   lk::TriMesh m;
   m.positions = to_scan_frame(s, mr.state.displaced[level]);
   m.triangles = mr.triangles(level);
-  val r = val::object();
-  r.set("ok", true);
-  r.set("code", std::string("Ok"));
-  r.set("message", std::string());
+  val r = ok_result();
   if (format == "obj") {
     const std::string text = lk::write_obj(m);
     r.set("bytes", val::global("Uint8Array").new_(emscripten::typed_memory_view(text.size(),
@@ -791,8 +792,8 @@ val texture_job(val photos, val options, val progress) {
     const std::uintptr_t ptr = p["ptr"].as<std::uintptr_t>();
     const std::size_t bytes = p["size"].as<std::size_t>();
     if (ptr == 0) return error_result(lk::Status::error(lk::ErrorCode::Internal, names[i] + ": no input buffer"));
-    lk::Status st = lk::read_image(reinterpret_cast<const std::uint8_t*>(ptr), bytes, tex_photos[i].image, 3);
-    if (!st.ok()) return error_result(lk::with_context(st, names[i]));
+    const lk::Status st = decode_image(names[i], ptr, bytes, tex_photos[i].image, 3);
+    if (!st.ok()) return error_result(st);
     const std::vector<double> flat = emscripten::convertJSArrayToNumberVector<double>(p["points"]);
     if (flat.size() % 5 != 0)
       return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, names[i] + ": points need 5 numbers each (u v X Y Z)"));
@@ -913,10 +914,7 @@ val texture_job(val photos, val options, val progress) {
   s.skin = out.skin;
   lk::report(report, "texture:done", 1.0);
 
-  val r = val::object();
-  r.set("ok", true);
-  r.set("code", std::string("Ok"));
-  r.set("message", std::string());
+  val r = ok_result();
   r.set("calib", calib_out);
   std::vector<float> uv_flat(2 * finest_uv.size());
   for (size_t i = 0; i < finest_uv.size(); ++i) {
@@ -962,10 +960,7 @@ val export_textured(int level, const std::string& base) {
   auto bytes = [](const std::uint8_t* data, size_t n) {
     return val::global("Uint8Array").new_(emscripten::typed_memory_view(n, data));
   };
-  val r = val::object();
-  r.set("ok", true);
-  r.set("code", std::string("Ok"));
-  r.set("message", std::string());
+  val r = ok_result();
   r.set("obj", bytes(reinterpret_cast<const std::uint8_t*>(obj.data()), obj.size()));
   r.set("mtl", bytes(reinterpret_cast<const std::uint8_t*>(mtl.data()), mtl.size()));
   r.set("png", bytes(png.data(), png.size()));
@@ -981,10 +976,7 @@ val parse_points(const std::string& text) {
   std::vector<double> flat;
   for (const lk::Correspondence& c : pts)
     flat.insert(flat.end(), {c.pixel.x(), c.pixel.y(), c.point.x(), c.point.y(), c.point.z()});
-  val r = val::object();
-  r.set("ok", true);
-  r.set("code", std::string("Ok"));
-  r.set("message", std::string());
+  val r = ok_result();
   r.set("points", val::global("Float64Array").new_(emscripten::typed_memory_view(flat.size(), flat.data())));
   return r;
 }
@@ -995,12 +987,10 @@ val parse_points(const std::string& text) {
 // whole circle. {ok, texture, circle: {x, y, radius, pupilRadius}, usedTwoD,
 // sectorDeg, ms} or the core's error (no dark blob, the circle never stops).
 val eye_photo_job(const std::string& name, std::uintptr_t data, std::size_t size, val guess) {
-  if (data == 0 && size != 0)
-    return error_result(lk::Status::error(lk::ErrorCode::Internal, name + ": no input buffer"));
   const double t0 = now_ms();
   lk::Image photo;
-  lk::Status status = lk::read_image(reinterpret_cast<const std::uint8_t*>(data), size, photo);
-  if (!status.ok()) return error_result(lk::with_context(status, name));
+  lk::Status status = decode_image(name, data, size, photo);
+  if (!status.ok()) return error_result(status);
   lk::Vec2 guess_px;
   const bool have_guess = !guess.isUndefined() && !guess.isNull() && guess["length"].as<int>() == 2;
   if (have_guess) guess_px = lk::Vec2(guess[0].as<double>(), guess[1].as<double>());
@@ -1009,10 +999,7 @@ val eye_photo_job(const std::string& name, std::uintptr_t data, std::size_t size
   eto.size = 256;  // as the generic eyes
   status = lk::iris_texture_from_photo(photo, have_guess ? &guess_px : nullptr, iris, eto);
   if (!status.ok()) return error_result(lk::with_context(status, name + ": no iris found"));
-  val r = val::object();
-  r.set("ok", true);
-  r.set("code", std::string("Ok"));
-  r.set("message", std::string());
+  val r = ok_result();
   r.set("texture", image_object(iris.texture));
   val c = val::object();
   c.set("x", iris.circle.center.x());
@@ -1030,19 +1017,14 @@ val eye_photo_job(const std::string& name, std::uintptr_t data, std::size_t size
 // model's uv layout (tarini2002 Sec. 4.2). {ok, texture (RGBA), ms} or the
 // core's error (e.g. no teeth found).
 val smile_photo_job(const std::string& name, std::uintptr_t data, std::size_t size) {
-  if (data == 0 && size != 0)
-    return error_result(lk::Status::error(lk::ErrorCode::Internal, name + ": no input buffer"));
   const double t0 = now_ms();
   lk::Image photo;
-  lk::Status status = lk::read_image(reinterpret_cast<const std::uint8_t*>(data), size, photo);
-  if (!status.ok()) return error_result(lk::with_context(status, name));
+  lk::Status status = decode_image(name, data, size, photo);
+  if (!status.ok()) return error_result(status);
   lk::Image texture;
   status = teeth_texture(photo, texture);
   if (!status.ok()) return error_result(lk::with_context(status, name));
-  val r = val::object();
-  r.set("ok", true);
-  r.set("code", std::string("Ok"));
-  r.set("message", std::string());
+  val r = ok_result();
   r.set("texture", image_object(texture));
   r.set("ms", now_ms() - t0);
   return r;
