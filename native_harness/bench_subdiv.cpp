@@ -8,6 +8,8 @@
 #include "mesh/geometry.h"
 #include "mesh/primitives.h"
 #include "mesh/topology.h"
+#include "multires/displacement.h"
+#include "multires/fold_limit.h"
 #include "multires/multires.h"
 #include "raycast/bvh.h"
 #include "subdiv/butterfly.h"

@@ -7,6 +7,8 @@
 
 #include "io/io.h"
 #include "mesh/geometry.h"
+#include "multires/displacement.h"
+#include "multires/fold_limit.h"
 #include "multires/multires.h"
 
 #include <cstdio>

@@ -40,6 +40,8 @@
 #include "fit/global_fit.h"
 #include "fit/local_fit.h"
 #include "head/head_model.h"
+#include "multires/displacement.h"
+#include "multires/fold_limit.h"
 #include "multires/multires.h"
 
 #include <functional>

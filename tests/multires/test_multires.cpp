@@ -1,3 +1,5 @@
+#include "multires/displacement.h"
+#include "multires/fold_limit.h"
 #include "multires/multires.h"
 
 #include "io/io.h"

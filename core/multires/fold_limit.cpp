@@ -1,0 +1,324 @@
+#include "multires/fold_limit.h"
+
+#include "multires/multires_detail.h"
+#include "raycast/bvh.h"
+#include "raycast/self_intersection.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <set>
+
+namespace lk {
+
+using namespace multires_detail;
+
+namespace {
+
+// Bad against the smooth triangle: turned over or collapsed. Arguments are
+// unnormalised (2 x area) normals. A smooth triangle of zero area gives no
+// reference and is never bad.
+inline bool bad_triangle(const Vec3& displaced, const Vec3& smooth, const FoldLimitOptions& o) {
+  const double ls = smooth.norm();
+  if (ls == 0) return false;
+  const double ld = displaced.norm();
+  if (!(ld > o.min_area_ratio * ls)) return true;
+  return displaced.dot(smooth) <= o.min_normal_cos * ld * ls;
+}
+
+}  // namespace
+
+Status smooth_positions(const MultiresMesh& mesh, std::vector<std::vector<Vec3>>& out) {
+  return apply_all(mesh.levels, mesh.control, out);
+}
+
+void count_bad_triangles(const MultiresMesh& mesh, int level, const std::vector<Vec3>& smooth,
+                         const FoldLimitOptions& options, int& flipped, int& collapsed) {
+  flipped = collapsed = 0;
+  if (level < 0 || level > mesh.num_levels() || static_cast<int>(mesh.state.displaced.size()) <= level) return;
+  const auto& tris = mesh.triangles(level);
+  const auto& P = mesh.state.displaced[level];
+  if (P.size() != smooth.size()) return;
+  for (int f = 0; f < static_cast<int>(tris.size()); ++f) {
+    const Vec3 nd = face_normal(tris, P, f), ns = face_normal(tris, smooth, f);
+    const double ls = ns.norm(), ld = nd.norm();
+    if (ls == 0) continue;
+    if (!(ld > options.min_area_ratio * ls)) ++collapsed;
+    if (nd.dot(ns) <= options.min_normal_cos * ld * ls) ++flipped;
+  }
+}
+
+Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimitStats* stats) {
+  if (!(options.shrink >= 0 && options.shrink < 1) || options.min_area_ratio < 0 || options.max_shrinks < 0 ||
+      options.max_rounds < 0 || options.max_intersection_rounds < 0 || options.max_intersection_restarts < 0 ||
+      !(std::abs(options.min_normal_cos) <= 1))
+    return Status::error(ErrorCode::InvalidInput,
+                         "multires fold limit: shrink must be in [0, 1), the cosine in [-1, 1], ratios and counts >= 0");
+  Status s = check_sizes(mesh);
+  if (!s.ok()) return s;
+  const int L = mesh.num_levels();
+  std::vector<std::vector<Vec3>> smooth;
+  s = smooth_positions(mesh, smooth);
+  if (!s.ok()) return s;
+  s = evaluate(mesh);
+  if (!s.ok()) return s;
+  MultiresState& state = mesh.state;
+
+  FoldLimitStats st;
+  st.bad_found.assign(L + 1, 0);
+  st.shrunk.assign(L + 1, 0);
+  st.zeroed.assign(L + 1, 0);
+  std::vector<std::vector<Vec3>> smooth_normals(L + 1);
+  std::vector<std::vector<std::uint8_t>> shrinks(L + 1);
+  std::vector<std::vector<int>> shrunk_in_round(L + 1), face_checked(L + 1);
+  std::vector<char> checked(L + 1, 0);
+  for (int l = 0; l <= L; ++l) {
+    const auto& tris = mesh.triangles(l);
+    smooth_normals[l].resize(tris.size());
+    for (int f = 0; f < static_cast<int>(tris.size()); ++f) smooth_normals[l][f] = face_normal(tris, smooth[l], f);
+    shrinks[l].assign(mesh.num_vertices(l), 0);
+    shrunk_in_round[l].assign(mesh.num_vertices(l), -1);
+    face_checked[l].assign(tris.size(), -1);
+  }
+  auto is_bad = [&](int l, int f) {
+    return bad_triangle(face_normal(mesh.triangles(l), state.displaced[l], f), smooth_normals[l][f], options);
+  };
+  // Scales d_k[v] once per round; true when v carries a displacement.
+  auto shrink_one = [&](int k, int v, bool to_zero = false) {
+    double& d = mesh.displacements[k][v];
+    if (d == 0) return false;
+    if (shrunk_in_round[k][v] == st.rounds) return true;
+    shrunk_in_round[k][v] = st.rounds;
+    if (shrinks[k][v]++ == 0) ++st.shrunk[k];
+    if (to_zero || shrinks[k][v] >= options.max_shrinks) {
+      d = 0;
+      ++st.zeroed[k];
+    } else {
+      d *= options.shrink;
+    }
+    return true;
+  };
+  // A triangle's own corners on its level; the changed ones are re-displaced
+  // at once (N_l does not depend on d_l, so nothing else on level l moves).
+  std::vector<int> changed;
+  auto shrink_corners = [&](int l, int f) {
+    bool any = false;
+    for (int v : mesh.triangles(l)[f])
+      if (shrink_one(l, v)) {
+        any = true;
+        changed.push_back(v);
+        state.displaced[l][v] = displace(state.base[l][v], mesh.displacements[l][v], state.normals[l][v]);
+      }
+    return any;
+  };
+  // Corners without displacement (pockets, holes): the coarser levels bent
+  // the triangle. First their displacement is set to reach the smooth
+  // surface along the normal (what the smooth levels would have there);
+  // shrinking coarser levels (below) is the last resort.
+  std::vector<std::vector<char>> corrected(L + 1);
+  for (int k = 0; k <= L; ++k) corrected[k].assign(mesh.num_vertices(k), 0);
+  auto correct_corners = [&](int l, int f) {
+    bool any = false;
+    for (int v : mesh.triangles(l)[f]) {
+      if (corrected[l][v] || mesh.displacements[l][v] != 0) continue;
+      corrected[l][v] = 1;
+      const double d = (smooth[l][v] - state.base[l][v]).dot(state.normals[l][v]);
+      if (d == 0) continue;
+      mesh.displacements[l][v] = d;
+      shrunk_in_round[l][v] = st.rounds;  // not shrunk again in this round
+      ++st.corrected;
+      any = true;
+      changed.push_back(v);
+      state.displaced[l][v] = displace(state.base[l][v], d, state.normals[l][v]);
+    }
+    return any;
+  };
+  // Corners without displacement: the coarser levels bent the triangle.
+  // Shrinks the neighbourhood of its parent (the Butterfly stencils of the
+  // parent's edges) on the first level above that has displacement there;
+  // returns that level, or -1.
+  auto shrink_above = [&](int l, int f) {
+    for (int k = l, g = f; k > 0;) {
+      g /= 4;  // child c of coarse triangle g is 4 g + c
+      --k;
+      // The parent's own corners first; their neighbourhood only when they
+      // carry nothing (less detail lost for the same effect).
+      // Zeroed at once: each step up costs a re-evaluation of the levels below.
+      bool any = false;
+      for (int c : mesh.triangles(k)[g]) any |= shrink_one(k, c, true);
+      const MultiresLevelLinks& links = mesh.links[k];
+      if (!any)
+        for (int c : mesh.triangles(k)[g])
+          for (int i = links.vertex_faces.offsets[c]; i < links.vertex_faces.offsets[c + 1]; ++i)
+            for (int v : mesh.triangles(k)[links.vertex_faces.items[i]]) any |= shrink_one(k, v, true);
+      if (any) return k;
+    }
+    return -1;
+  };
+  // Triangles of level l around the changed vertices, each once per round.
+  auto around_changed = [&](int l, std::vector<int>& out) {
+    out.clear();
+    const IndexRows& vf = mesh.links[l].vertex_faces;
+    for (int v : changed)
+      for (int i = vf.offsets[v]; i < vf.offsets[v + 1]; ++i) {
+        const int f = vf.items[i];
+        if (face_checked[l][f] == st.rounds) continue;
+        face_checked[l][f] = st.rounds;
+        out.push_back(f);
+      }
+  };
+  // 1. Folds, level by level (again after step 2 if that turned any over).
+  std::vector<int> bad, stuck, around;
+  auto fold_pass = [&](int round_limit) -> Status {
+    int l = 0;
+    while (l <= L) {
+      evaluate_level(mesh, l);
+      const int nf = static_cast<int>(mesh.triangles(l).size());
+      bad.clear();
+      for (int f = 0; f < nf; ++f)
+        if (is_bad(l, f)) bad.push_back(f);
+      if (!checked[l]) {
+        checked[l] = 1;
+        st.bad_found[l] = static_cast<int>(bad.size());
+      }
+      int restart = -1;
+      while (!bad.empty() && st.rounds < round_limit) {
+        ++st.rounds;
+        changed.clear();
+        stuck.clear();
+        for (int f : bad)
+          if (!shrink_corners(l, f) && !correct_corners(l, f)) stuck.push_back(f);
+        if (!options.shrink_coarser_levels) stuck.clear();
+        for (int f : stuck) {
+          const int k = shrink_above(l, f);
+          if (k >= 0) restart = restart < 0 ? k : std::min(restart, k);
+        }
+        if (restart >= 0) break;  // the coarser levels changed: evaluate again from there
+        around_changed(l, around);
+        bad.clear();
+        for (int f : around)
+          if (is_bad(l, f)) bad.push_back(f);
+      }
+      if (restart >= 0) {
+        ++st.restarts;
+        l = restart;  // levels above it are unchanged, so its base P is current
+        continue;
+      }
+      if (l < L) {
+        s = apply(mesh.levels[l], state.displaced[l], state.base[l + 1]);
+        if (!s.ok()) return s;
+      }
+      ++l;
+    }
+    return Status::success();
+  };
+  s = fold_pass(options.max_rounds);
+  if (!s.ok()) return s;
+
+  // 2. Self-intersections of the finest level: the triangles of each
+  // crossing pair are shrunk towards the smooth surface like bad ones.
+  if (options.max_intersection_rounds > 0) {
+    TriMesh finest;
+    finest.positions = state.displaced[L];
+    finest.triangles = mesh.triangles(L);
+    MeshBvh bvh;
+    s = build_bvh(finest, bvh);
+    if (!s.ok()) return s;
+    std::vector<std::array<int, 2>> pairs;
+    find_self_intersections(bvh, pairs);
+    st.intersections_found = static_cast<int>(pairs.size());
+    std::vector<int> tris, next_bad;
+    std::vector<char> in_set(finest.triangles.size(), 0);
+    int rounds = 0, full_searches = 0;
+    std::set<std::array<int, 2>> unfixable;
+    while ((!pairs.empty() || !next_bad.empty()) && rounds < options.max_intersection_rounds) {
+      ++rounds;
+      ++st.rounds;
+      // A pair that crosses on the smooth surface too is not the
+      // displacements' doing: shrinking would only lose detail. Counted.
+      {
+        size_t kept = 0;
+        for (const auto& p : pairs) {
+          if (mesh_triangles_cross(smooth[L], mesh.triangles(L)[p[0]], mesh.triangles(L)[p[1]])) {
+            unfixable.insert(p);
+            continue;
+          }
+          pairs[kept++] = p;
+        }
+        pairs.resize(kept);
+      }
+      tris.clear();
+      for (const auto& p : pairs)
+        for (int f : p)
+          if (!in_set[f]) in_set[f] = 1, tris.push_back(f);
+      for (int f : next_bad)
+        if (!in_set[f]) in_set[f] = 1, tris.push_back(f);
+      for (int f : tris) in_set[f] = 0;
+      changed.clear();
+      for (int f : tris) shrink_corners(L, f);
+      // A pair whose triangles carry no displacement on this level was
+      // crossed by the coarser levels: their parents' displacements are
+      // zeroed and everything is evaluated and searched again (a few times
+      // at most: each costs a full search). What still crosses then is the
+      // smooth Butterfly surface's own doing (a control mesh with sheets
+      // ~0.3 mm apart crosses itself at eye and mouth corners): counted.
+      int restart = -1;
+      for (const auto& p : pairs) {
+        bool movable = false;
+        for (int f : p)
+          for (int v : mesh.triangles(L)[f]) movable |= shrunk_in_round[L][v] == st.rounds;
+        if (movable) continue;
+        if (full_searches < options.max_intersection_restarts)
+          for (int f : p) {
+            const int k = shrink_above(L, f);
+            if (k >= 0) restart = restart < 0 ? k : std::min(restart, k);
+          }
+        if (restart < 0) unfixable.insert(p);
+      }
+      if (restart >= 0) {
+        ++st.restarts;
+        ++full_searches;
+        for (int k = restart; k <= L; ++k) {
+          evaluate_level(mesh, k);
+          if (k < L) {
+            s = apply(mesh.levels[k], state.displaced[k], state.base[k + 1]);
+            if (!s.ok()) return s;
+          }
+        }
+        finest.positions = state.displaced[L];
+        s = refit_bvh(finest, bvh);
+        if (!s.ok()) return s;
+        find_self_intersections(bvh, pairs);
+        unfixable.clear();
+        next_bad.clear();
+        for (int f = 0; f < static_cast<int>(finest.triangles.size()); ++f)
+          if (is_bad(L, f)) next_bad.push_back(f);
+        continue;
+      }
+      for (int v : changed) finest.positions[v] = state.displaced[L][v];
+      s = refit_bvh(finest, bvh);
+      if (!s.ok()) return s;
+      around_changed(L, around);
+      find_intersections_with(bvh, around, pairs);
+      next_bad.clear();
+      for (int f : around)
+        if (is_bad(L, f)) next_bad.push_back(f);
+    }
+    for (const auto& p : pairs) unfixable.insert(p);
+    st.intersections_left = static_cast<int>(unfixable.size());
+    // Shrinking towards the smooth surface can turn a triangle over
+    // against its neighbours: one more fold pass.
+    bool any_bad = false;
+    for (int f = 0; f < static_cast<int>(mesh.triangles(L).size()) && !any_bad; ++f) any_bad = is_bad(L, f);
+    if (any_bad) {
+      std::fill(checked.begin(), checked.end(), 1);  // keep the first pass's counts
+      s = fold_pass(st.rounds + options.max_rounds);
+      if (!s.ok()) return s;
+    }
+  }
+  for (int f = 0; f < static_cast<int>(mesh.triangles(L).size()); ++f) st.remaining_bad += is_bad(L, f);
+  if (stats) *stats = st;
+  return Status::success();
+}
+
+}  // namespace lk

@@ -1,0 +1,84 @@
+// Keeping the displaced hierarchy a clean surface: no turned-over or
+// collapsed triangles, and sheets that do not cross on the finest level.
+// Not in jeong2002 (its Sec. 5 displacements are trusted as measured).
+#pragma once
+#include "common/status.h"
+#include "multires/multires.h"
+
+#include <vector>
+
+namespace lk {
+
+// Fold-safe limiting (not in jeong2002, whose Sec. 5 displacements are
+// trusted as measured). Where the normal line of a vertex reaches the other
+// side of a thin or concave feature (lip and eye corners, nostrils, the
+// groove behind an ear) the measured displacement turns triangles over. A
+// triangle of level l is bad when, compared with the same triangle of the
+// smooth hierarchy (the Butterfly levels of the control mesh with every
+// displacement 0), its normal turned by more than acos(min_normal_cos) or its
+// area fell below min_area_ratio of the smooth one. Level by level, coarse to
+// fine, the displacements of a bad triangle's corners on its own level are
+// scaled by `shrink` (not dropped: the rest of the detail stays), and the
+// level is re-evaluated, until it has no bad triangle. A corner shrunk
+// max_shrinks times is set to 0. A bad triangle whose corners carry no
+// displacement on its level was bent by the coarser levels: then its corners
+// get the displacement that puts them on the smooth surface along their
+// normal (pockets and holes have no data anyway), and if that is not enough
+// the displacements of the parent triangle's corners (then of its
+// neighbourhood, the Butterfly stencil of its edges) on the level above are
+// set to 0 (at once: every step up re-evaluates the levels below), and
+// evaluation resumes there.
+// All displacements 0 is the smooth surface itself, so the loop ends with no
+// bad triangle unless max_rounds runs out (remaining_bad says). The same
+// shrinking then separates sheets that cross on the finest level (lips, ear
+// rims, eyelids against the eye pockets).
+struct FoldLimitOptions {
+  double min_normal_cos = 0.0;  // 0: only triangles turned over by more than 90 degrees
+  double min_area_ratio = 0.02; // displaced / smooth area below this: collapsed
+  double shrink = 0.5;          // factor per round
+  int max_shrinks = 8;          // 0.5^8 = 1/256 of the measured value, then 0
+  int max_rounds = 200;         // over all levels, against endless loops
+  bool shrink_coarser_levels = true;  // false: a bad triangle without displacement of its own stays bad
+  // Then the finest level's self-intersections (raycast/self_intersection.h):
+  // the corners of both triangles of a crossing pair are shrunk the same way,
+  // re-checking only around what moved, for at most this many rounds (0: off).
+  // Pairs that cross on the smooth surface too are left alone (the smooth
+  // Butterfly surface of a control mesh with sheets ~0.3 mm apart crosses
+  // itself at eye and mouth corners; no shrinking undoes that). Synthetic
+  // heads, seeds 1-2: ears 39-85 -> 0 pairs, lips 223-364 -> 172-244 (the
+  // smooth surface has 84-152 there), mean distance +0.001 %, +0.15 s.
+  int max_intersection_rounds = 40;
+  // A pair whose triangles have no displacement on the finest level was
+  // crossed by coarser levels: up to this many times their parents'
+  // displacements are zeroed and everything is evaluated and searched again
+  // (0: never; on the heads this cost 0.008 % of mean distance for little).
+  int max_intersection_restarts = 0;
+};
+
+struct FoldLimitStats {
+  std::vector<int> bad_found;  // L+1: bad triangles found on the first check of each level
+  std::vector<int> shrunk;     // L+1: distinct vertices whose displacement was shrunk
+  std::vector<int> zeroed;     // L+1: of those, set to 0
+  int rounds = 0;              // shrink rounds over all levels
+  int remaining_bad = 0;       // bad triangles left on the finest level (0 unless max_rounds ran out)
+  int corrected = 0;           // zero displacements set to reach the smooth surface
+  int restarts = 0;            // evaluations resumed on a coarser level
+  int intersections_found = 0; // crossing triangle pairs on the finest level before separating
+  int intersections_left = 0;  // after (0 unless rounds ran out or the smooth surface itself crosses)
+};
+
+// Shrinks mesh.displacements as described above and re-evaluates the mesh.
+// Fails with InvalidInput on mismatched arrays or options out of range
+// (shrink not in [0, 1), negative ratios or counts).
+Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options = {}, FoldLimitStats* stats = nullptr);
+
+// Bad triangles (see FoldLimitOptions) of level l of the evaluated mesh
+// against the smooth hierarchy's level-l positions `smooth` (#V_l): flipped
+// (normal turned over) and collapsed (area below the ratio, incl. zero area).
+void count_bad_triangles(const MultiresMesh& mesh, int level, const std::vector<Vec3>& smooth,
+                         const FoldLimitOptions& options, int& flipped, int& collapsed);
+
+// The control positions refined without displacements: levels 0..L (#V_l each).
+Status smooth_positions(const MultiresMesh& mesh, std::vector<std::vector<Vec3>>& out);
+
+}  // namespace lk
