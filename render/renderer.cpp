@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <map>
 #include <string>
 
@@ -130,12 +131,30 @@ void bind_attribute(GLuint buffer, GLuint location, int components) {
 struct Renderer::Impl {
   struct Drawable {
     bool is_points = false;
+    MeshLayout layout = MeshLayout::Indexed;
     GLuint vao = 0;
-    GLuint position_buffer = 0, normal_buffer = 0, uv_buffer = 0, color_buffer = 0,
-           barycentric_buffer = 0, occlusion_buffer = 0;
-    GLsizei vertex_count = 0;  // GPU vertices (3 per triangle for meshes)
+    // Meshes: position + normal interleaved (6 floats per GPU vertex).
+    // Point clouds: position_buffer and normal_buffer.
+    GLuint geometry_buffer = 0, position_buffer = 0, normal_buffer = 0, uv_buffer = 0, color_buffer = 0,
+           barycentric_buffer = 0, occlusion_buffer = 0, index_buffer = 0;
+    GLuint edge_vao = 0, edge_buffer = 0;  // indexed wireframe (built on first use)
+    GLsizei vertex_count = 0;  // GPU vertices (unrolled: 3 per triangle; indexed: #V + seam copies)
+    GLsizei index_count = 0;   // indexed: 3 * #F
+    GLsizei edge_index_count = 0;
     int num_vertices = 0;      // source vertices (#V or #P)
-    std::vector<Tri> triangles;  // kept for update_mesh: normals and unrolling
+    std::vector<Tri> triangles;  // kept for normals and edges
+    // The GPU vertex each extra vertex copies: unrolled, the source vertex
+    // of every corner (3 * #F); indexed, the source vertex of each seam copy
+    // appended after the first #V (GPU vertex i < #V is source vertex i).
+    std::vector<std::uint32_t> gpu_source;
+    // CPU copies for incremental animation updates (#V by 3 floats each),
+    // unnormalized area-weighted face normals (#F by 3), the triangles
+    // around each vertex (CSR: vertex_faces[vertex_face_start[v] ..
+    // vertex_face_start[v + 1]]), and the interleaved GPU data (#GPU by 6).
+    std::vector<float> positions, normals, face_normals, gpu_geometry;
+    std::vector<std::uint32_t> vertex_face_start, vertex_faces;
+    std::vector<std::uint32_t> face_stamp, vertex_stamp;  // "touched in update number n"
+    std::uint32_t update_number = 0;
     bool has_colors = false, has_uvs = false, has_normals = false, has_occlusion = false;
     TextureHandle texture = kNoHandle;
     DrawStyle style;
@@ -144,8 +163,9 @@ struct Renderer::Impl {
 
   bool ready = false;
   RendererOptions options;
-  GLuint mesh_program = 0, points_program = 0, background_program = 0;
-  Uniforms mesh_u, points_u, background_u;
+  GLuint mesh_program = 0, points_program = 0, background_program = 0, lines_program = 0;
+  Uniforms mesh_u, points_u, background_u, lines_u;
+  float max_line_width = 1.0f;
   GLuint background_vao = 0;
   std::map<DrawableHandle, Drawable> drawables;
   std::map<TextureHandle, GLuint> textures;
@@ -157,11 +177,12 @@ struct Renderer::Impl {
   ~Impl() { release_all(); }
 
   void release(Drawable& d) {
-    GLuint buffers[] = {d.position_buffer, d.normal_buffer, d.uv_buffer, d.color_buffer,
-                        d.barycentric_buffer, d.occlusion_buffer};
+    GLuint buffers[] = {d.geometry_buffer, d.position_buffer, d.normal_buffer, d.uv_buffer, d.color_buffer,
+                        d.barycentric_buffer, d.occlusion_buffer, d.index_buffer, d.edge_buffer};
     for (GLuint b : buffers)
       if (b) glDeleteBuffers(1, &b);
     if (d.vao) glDeleteVertexArrays(1, &d.vao);
+    if (d.edge_vao) glDeleteVertexArrays(1, &d.edge_vao);
   }
 
   void release_all() {
@@ -174,7 +195,8 @@ struct Renderer::Impl {
     if (mesh_program) glDeleteProgram(mesh_program);
     if (points_program) glDeleteProgram(points_program);
     if (background_program) glDeleteProgram(background_program);
-    background_vao = mesh_program = points_program = background_program = 0;
+    if (lines_program) glDeleteProgram(lines_program);
+    background_vao = mesh_program = points_program = background_program = lines_program = 0;
     ready = false;
   }
 
@@ -183,17 +205,137 @@ struct Renderer::Impl {
     return it == drawables.end() ? nullptr : &it->second;
   }
 
-  // Unrolls per-vertex data to three GPU vertices per triangle.
-  std::vector<float> unroll3(const std::vector<Vec3>& per_vertex, const std::vector<Tri>& tris) {
-    std::vector<float> out;
-    out.reserve(tris.size() * 9);
-    for (const Tri& t : tris)
-      for (int c = 0; c < 3; ++c)
-        for (int k = 0; k < 3; ++k) out.push_back(static_cast<float>(per_vertex[t[c]][k]));
+  // The source vertex GPU vertex g shows.
+  static std::uint32_t source_of(const Drawable& d, size_t g) {
+    if (d.layout == MeshLayout::Unrolled) return d.gpu_source[g];
+    return g < static_cast<size_t>(d.num_vertices) ? static_cast<std::uint32_t>(g)
+                                                   : d.gpu_source[g - static_cast<size_t>(d.num_vertices)];
+  }
+
+  // Per-vertex float data (#V by k) laid out per GPU vertex.
+  static std::vector<float> per_gpu_vertex(const Drawable& d, const std::vector<float>& per_vertex, int k) {
+    std::vector<float> out(static_cast<size_t>(d.vertex_count) * k);
+    for (size_t g = 0; g < static_cast<size_t>(d.vertex_count); ++g) {
+      const size_t v = source_of(d, g);
+      for (int c = 0; c < k; ++c) out[g * k + c] = per_vertex[v * k + c];
+    }
     return out;
   }
 
+  // Unnormalized face normal (twice the area) of triangle f, from d.positions.
+  static void compute_face_normal(Drawable& d, size_t f) {
+    const Tri& t = d.triangles[f];
+    const float* a = &d.positions[3 * static_cast<size_t>(t[0])];
+    const float* b = &d.positions[3 * static_cast<size_t>(t[1])];
+    const float* c = &d.positions[3 * static_cast<size_t>(t[2])];
+    const float e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const float e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    float* n = &d.face_normals[3 * f];
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+  }
+
+  // Vertex normal of v: the normalized sum of its triangles' face normals,
+  // always summed in the same (CSR) order so an incremental update gives
+  // bit-identical normals to a full recompute.
+  static void compute_vertex_normal(Drawable& d, size_t v) {
+    double sum[3] = {0, 0, 0};
+    for (std::uint32_t i = d.vertex_face_start[v]; i < d.vertex_face_start[v + 1]; ++i) {
+      const float* n = &d.face_normals[3 * static_cast<size_t>(d.vertex_faces[i])];
+      for (int k = 0; k < 3; ++k) sum[k] += n[k];
+    }
+    const double len = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
+    for (int k = 0; k < 3; ++k) d.normals[3 * v + k] = len > 0 ? static_cast<float>(sum[k] / len) : 0.0f;
+  }
+
+  static void build_vertex_faces(Drawable& d) {
+    const size_t nv = static_cast<size_t>(d.num_vertices);
+    d.vertex_face_start.assign(nv + 1, 0);
+    for (const Tri& t : d.triangles)
+      for (int c = 0; c < 3; ++c) ++d.vertex_face_start[static_cast<size_t>(t[c]) + 1];
+    for (size_t v = 0; v < nv; ++v) d.vertex_face_start[v + 1] += d.vertex_face_start[v];
+    d.vertex_faces.resize(d.vertex_face_start[nv]);
+    std::vector<std::uint32_t> fill(d.vertex_face_start.begin(), d.vertex_face_start.end() - 1);
+    for (size_t f = 0; f < d.triangles.size(); ++f)
+      for (int c = 0; c < 3; ++c) d.vertex_faces[fill[static_cast<size_t>(d.triangles[f][c])]++] = static_cast<std::uint32_t>(f);
+  }
+
+  static void compute_all_normals(Drawable& d) {
+    d.face_normals.resize(d.triangles.size() * 3);
+    for (size_t f = 0; f < d.triangles.size(); ++f) compute_face_normal(d, f);
+    d.normals.resize(d.positions.size());
+    for (size_t v = 0; v < static_cast<size_t>(d.num_vertices); ++v) compute_vertex_normal(d, v);
+  }
+
+  // Writes GPU vertices [first, last) of the interleaved array from
+  // d.positions / d.normals and sends them; `allocate` (re)creates the
+  // buffer with the whole array instead.
+  static void send_geometry(Drawable& d, size_t first, size_t last, bool allocate) {
+    float* out = d.gpu_geometry.data();
+    for (size_t g = first; g < last; ++g) {
+      const size_t v = source_of(d, g);
+      for (int k = 0; k < 3; ++k) {
+        out[6 * g + k] = d.positions[3 * v + k];
+        out[6 * g + 3 + k] = d.normals[3 * v + k];
+      }
+    }
+    glBindBuffer(GL_ARRAY_BUFFER, d.geometry_buffer);
+    if (allocate)
+      glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(d.gpu_geometry.size() * sizeof(float)),
+                   d.gpu_geometry.data(), GL_DYNAMIC_DRAW);
+    else if (last > first)
+      glBufferSubData(GL_ARRAY_BUFFER, static_cast<GLintptr>(first * 6 * sizeof(float)),
+                      static_cast<GLsizeiptr>((last - first) * 6 * sizeof(float)), out + 6 * first);
+  }
+
+  // The indexed wireframe: every edge once, as GL_LINES indices.
+  void build_edges(Drawable& d) {
+    std::vector<std::uint64_t> keys;
+    keys.reserve(d.triangles.size() * 3);
+    for (const Tri& t : d.triangles)
+      for (int c = 0; c < 3; ++c) {
+        const std::uint64_t a = static_cast<std::uint32_t>(t[c]), b = static_cast<std::uint32_t>(t[(c + 1) % 3]);
+        keys.push_back(a < b ? (a << 32 | b) : (b << 32 | a));
+      }
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    std::vector<std::uint32_t> lines;
+    lines.reserve(keys.size() * 2);
+    for (std::uint64_t k : keys) {
+      lines.push_back(static_cast<std::uint32_t>(k >> 32));
+      lines.push_back(static_cast<std::uint32_t>(k & 0xffffffffu));
+    }
+    glGenVertexArrays(1, &d.edge_vao);
+    glBindVertexArray(d.edge_vao);
+    glBindBuffer(GL_ARRAY_BUFFER, d.geometry_buffer);
+    glEnableVertexAttribArray(kPosition);
+    glVertexAttribPointer(kPosition, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
+    glGenBuffers(1, &d.edge_buffer);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, d.edge_buffer);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(lines.size() * sizeof(std::uint32_t)),
+                 lines.data(), GL_STATIC_DRAW);
+    glBindVertexArray(0);
+    d.edge_index_count = static_cast<GLsizei>(lines.size());
+  }
+
+  void draw_edges(Drawable& d, const CameraMatrices& cam) {
+    if (!d.edge_vao) build_edges(d);
+    const DrawStyle& s = d.style;
+    glUseProgram(lines_program);
+    glUniformMatrix4fv(lines_u["u_model"], 1, GL_FALSE, glm::value_ptr(s.model));
+    glUniformMatrix4fv(lines_u["u_view"], 1, GL_FALSE, glm::value_ptr(cam.view));
+    glUniformMatrix4fv(lines_u["u_projection"], 1, GL_FALSE, glm::value_ptr(cam.projection));
+    const glm::vec3 c = glm::clamp(s.wire_color, 0.0f, 1.0f);
+    glUniform3fv(lines_u["u_wire_color"], 1, glm::value_ptr(c));
+    glLineWidth(std::clamp(s.wire_width_px, 1.0f, max_line_width));
+    glBindVertexArray(d.edge_vao);
+    glDrawElements(GL_LINES, d.edge_index_count, GL_UNSIGNED_INT, nullptr);
+    glLineWidth(1.0f);
+  }
+
   void draw_mesh(const Drawable& d, const CameraMatrices& cam) {
+    const bool indexed = d.layout == MeshLayout::Indexed;
     const DrawStyle& s = d.style;
     Uniforms& u = mesh_u;
     glUseProgram(mesh_program);
@@ -220,7 +362,7 @@ struct Renderer::Impl {
     glUniform1f(u["u_shininess"], std::max(s.shininess, 1.0f));
     glUniform1i(u["u_surface"], s.surface ? 1 : 0);
     glUniform1i(u["u_flat"], s.flat_shading ? 1 : 0);
-    glUniform1i(u["u_wireframe"], s.wireframe ? 1 : 0);
+    glUniform1i(u["u_wireframe"], s.wireframe && !indexed ? 1 : 0);
     glUniform3fv(u["u_wire_color"], 1, glm::value_ptr(srgb_to_linear(s.wire_color)));
     glUniform1f(u["u_wire_width"], std::max(s.wire_width_px, 0.5f));
 
@@ -241,8 +383,17 @@ struct Renderer::Impl {
       glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
       glDepthMask(GL_FALSE);
     }
+    // Indexed edges are lines drawn afterwards: push the surface back so they
+    // win the depth test where they lie on it.
+    const bool offset = indexed && s.wireframe && s.surface;
+    if (offset) {
+      glEnable(GL_POLYGON_OFFSET_FILL);
+      glPolygonOffset(1.0f, 1.0f);
+    }
     glBindVertexArray(d.vao);
-    glDrawArrays(GL_TRIANGLES, 0, d.vertex_count);
+    if (indexed) glDrawElements(GL_TRIANGLES, d.index_count, GL_UNSIGNED_INT, nullptr);
+    else glDrawArrays(GL_TRIANGLES, 0, d.vertex_count);
+    if (offset) glDisable(GL_POLYGON_OFFSET_FILL);
     if (!s.surface) {
       glDisable(GL_BLEND);
       glDepthMask(GL_TRUE);
@@ -292,6 +443,8 @@ Status Renderer::init(const RendererOptions& options) {
   if (s) s = link_program(text(shaders_background_vert, shaders_background_vert_size),
                           text(shaders_background_frag, shaders_background_frag_size),
                           "background", m.background_program);
+  if (s) s = link_program(text(shaders_lines_vert, shaders_lines_vert_size),
+                          text(shaders_lines_frag, shaders_lines_frag_size), "lines", m.lines_program);
   if (!s) {
     m.ready = true;  // so release_all frees what was made
     m.release_all();
@@ -300,11 +453,15 @@ Status Renderer::init(const RendererOptions& options) {
   m.mesh_u = Uniforms{m.mesh_program, {}};
   m.points_u = Uniforms{m.points_program, {}};
   m.background_u = Uniforms{m.background_program, {}};
+  m.lines_u = Uniforms{m.lines_program, {}};
   glGenVertexArrays(1, &m.background_vao);  // core profiles need a VAO bound even without attributes
 
   GLfloat range[2] = {1.0f, 64.0f};
   glGetFloatv(GL_ALIASED_POINT_SIZE_RANGE, range);
   m.max_point_size = std::max(range[1], 1.0f);
+  GLfloat line_range[2] = {1.0f, 1.0f};  // WebGL: [1, 1]
+  glGetFloatv(GL_ALIASED_LINE_WIDTH_RANGE, line_range);
+  m.max_line_width = std::max(line_range[1], 1.0f);
   glGetIntegerv(GL_MAX_TEXTURE_SIZE, &m.max_texture_size);
 #ifdef GL_PROGRAM_POINT_SIZE
   // Desktop GL needs this for gl_PointSize; GLES3/WebGL2 always honours it.
@@ -314,7 +471,7 @@ Status Renderer::init(const RendererOptions& options) {
   return check_gl("Renderer::init");
 }
 
-Status Renderer::upload_mesh(const TriMesh& mesh, DrawableHandle& out) {
+Status Renderer::upload_mesh(const TriMesh& mesh, DrawableHandle& out, MeshLayout layout) {
   out = kNoHandle;
   if (!impl_->ready) return Status::error(ErrorCode::InvalidInput, "renderer not initialized (call init() on a current GL context)");
   if (mesh.positions.empty() || mesh.triangles.empty())
@@ -340,47 +497,120 @@ Status Renderer::upload_mesh(const TriMesh& mesh, DrawableHandle& out) {
 
   Impl& m = *impl_;
   Impl::Drawable d;
+  d.layout = layout;
   d.num_vertices = static_cast<int>(nv);
   d.triangles = mesh.triangles;
-  d.vertex_count = static_cast<GLsizei>(nf * 3);
   d.bbox = bounding_box(mesh.positions);
   d.has_normals = true;
   d.has_colors = !mesh.colors.empty();
   d.has_uvs = !mesh.uvs.empty();
 
+  // GPU vertices and, for indexed meshes, the indices. Per-corner uvs: a
+  // vertex keeps its first corner's uv; each further distinct uv at it
+  // (a seam) becomes one appended copy.
+  std::vector<std::uint32_t> indices;
+  std::vector<Vec2> gpu_uvs;  // per GPU vertex
+  if (layout == MeshLayout::Unrolled) {
+    d.gpu_source.resize(nf * 3);
+    for (size_t f = 0; f < nf; ++f)
+      for (int c = 0; c < 3; ++c) d.gpu_source[f * 3 + c] = static_cast<std::uint32_t>(mesh.triangles[f][c]);
+    if (d.has_uvs) {
+      gpu_uvs.resize(nf * 3);
+      for (size_t f = 0; f < nf; ++f)
+        for (int c = 0; c < 3; ++c)
+          gpu_uvs[f * 3 + c] = mesh.uv_per_corner ? mesh.uvs[f * 3 + c] : mesh.uvs[mesh.triangles[f][c]];
+    }
+  } else {
+    indices.resize(nf * 3);
+    for (size_t f = 0; f < nf; ++f)
+      for (int c = 0; c < 3; ++c) indices[f * 3 + c] = static_cast<std::uint32_t>(mesh.triangles[f][c]);
+    if (d.has_uvs && !mesh.uv_per_corner) {
+      gpu_uvs = mesh.uvs;
+    } else if (d.has_uvs) {
+      gpu_uvs.assign(nv, Vec2::Zero());
+      std::vector<char> assigned(nv, 0);
+      // Copies of vertex v: a chain through next_copy (GPU indices), so
+      // finding a matching uv looks only at v's own copies.
+      std::vector<std::uint32_t> next_copy(nv, UINT32_MAX);
+      for (size_t k = 0; k < nf * 3; ++k) {
+        const std::uint32_t v = indices[k];
+        const Vec2& uv = mesh.uvs[k];
+        if (!assigned[v]) {
+          assigned[v] = 1;
+          gpu_uvs[v] = uv;
+          continue;
+        }
+        std::uint32_t g = v, last = v;
+        for (; g != UINT32_MAX; last = g, g = next_copy[g])
+          if (gpu_uvs[g] == uv) break;
+        if (g == UINT32_MAX) {
+          g = static_cast<std::uint32_t>(gpu_uvs.size());
+          gpu_uvs.push_back(uv);
+          next_copy.push_back(UINT32_MAX);
+          next_copy[last] = g;
+          d.gpu_source.push_back(v);
+        }
+        indices[k] = g;
+      }
+    }
+    d.index_count = static_cast<GLsizei>(indices.size());
+  }
+  d.vertex_count = static_cast<GLsizei>(layout == MeshLayout::Unrolled ? nf * 3 : nv + d.gpu_source.size());
+
+  d.positions.resize(nv * 3);
+  for (size_t v = 0; v < nv; ++v)
+    for (int k = 0; k < 3; ++k) d.positions[3 * v + k] = static_cast<float>(mesh.positions[v][k]);
+  Impl::build_vertex_faces(d);
+  Impl::compute_all_normals(d);  // face normals are needed by later updates either way
+  if (!mesh.normals.empty())
+    for (size_t v = 0; v < nv; ++v)
+      for (int k = 0; k < 3; ++k) d.normals[3 * v + k] = static_cast<float>(mesh.normals[v][k]);
+  d.face_stamp.assign(nf, 0);
+  d.vertex_stamp.assign(nv, 0);
+  d.gpu_geometry.resize(static_cast<size_t>(d.vertex_count) * 6);
+
   glGenVertexArrays(1, &d.vao);
   glBindVertexArray(d.vao);
-  glGenBuffers(1, &d.position_buffer);
-  glGenBuffers(1, &d.normal_buffer);
-  glGenBuffers(1, &d.barycentric_buffer);
-  upload_vec3s(d.position_buffer, m.unroll3(mesh.positions, mesh.triangles), GL_DYNAMIC_DRAW);
-  bind_attribute(d.position_buffer, kPosition, 3);
-  const std::vector<Vec3> normals = mesh.normals.empty() ? vertex_normals(mesh) : mesh.normals;
-  upload_vec3s(d.normal_buffer, m.unroll3(normals, mesh.triangles), GL_DYNAMIC_DRAW);
-  bind_attribute(d.normal_buffer, kNormal, 3);
+  glGenBuffers(1, &d.geometry_buffer);
+  Impl::send_geometry(d, 0, static_cast<size_t>(d.vertex_count), true);
+  glEnableVertexAttribArray(kPosition);
+  glVertexAttribPointer(kPosition, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
+  glEnableVertexAttribArray(kNormal);
+  glVertexAttribPointer(kNormal, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float),
+                        reinterpret_cast<const void*>(3 * sizeof(float)));
 
-  std::vector<float> bary(nf * 9, 0.0f);
-  for (size_t f = 0; f < nf; ++f)
-    for (int c = 0; c < 3; ++c) bary[f * 9 + c * 3 + c] = 1.0f;
-  upload_vec3s(d.barycentric_buffer, bary, GL_STATIC_DRAW);
-  bind_attribute(d.barycentric_buffer, kBarycentric, 3);
+  if (layout == MeshLayout::Unrolled) {
+    std::vector<float> bary(nf * 9, 0.0f);
+    for (size_t f = 0; f < nf; ++f)
+      for (int c = 0; c < 3; ++c) bary[f * 9 + c * 3 + c] = 1.0f;
+    glGenBuffers(1, &d.barycentric_buffer);
+    upload_vec3s(d.barycentric_buffer, bary, GL_STATIC_DRAW);
+    bind_attribute(d.barycentric_buffer, kBarycentric, 3);
+  } else {
+    glDisableVertexAttribArray(kBarycentric);
+    glGenBuffers(1, &d.index_buffer);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, d.index_buffer);  // recorded in the VAO
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)),
+                 indices.data(), GL_STATIC_DRAW);
+  }
 
   if (d.has_colors) {
+    std::vector<float> colors(nv * 3);
+    for (size_t v = 0; v < nv; ++v)
+      for (int k = 0; k < 3; ++k) colors[3 * v + k] = static_cast<float>(mesh.colors[v][k]);
     glGenBuffers(1, &d.color_buffer);
-    upload_vec3s(d.color_buffer, m.unroll3(mesh.colors, mesh.triangles), GL_STATIC_DRAW);
+    upload_vec3s(d.color_buffer, Impl::per_gpu_vertex(d, colors, 3), GL_STATIC_DRAW);
     bind_attribute(d.color_buffer, kColor, 3);
   } else {
     glDisableVertexAttribArray(kColor);
   }
   if (d.has_uvs) {
     std::vector<float> uv;
-    uv.reserve(nf * 6);
-    for (size_t f = 0; f < nf; ++f)
-      for (int c = 0; c < 3; ++c) {
-        const Vec2& t = mesh.uv_per_corner ? mesh.uvs[f * 3 + c] : mesh.uvs[mesh.triangles[f][c]];
-        uv.push_back(static_cast<float>(t.x()));
-        uv.push_back(static_cast<float>(t.y()));
-      }
+    uv.reserve(gpu_uvs.size() * 2);
+    for (const Vec2& t : gpu_uvs) {
+      uv.push_back(static_cast<float>(t.x()));
+      uv.push_back(static_cast<float>(t.y()));
+    }
     glGenBuffers(1, &d.uv_buffer);
     glBindBuffer(GL_ARRAY_BUFFER, d.uv_buffer);
     glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(uv.size() * sizeof(float)), uv.data(),
@@ -411,18 +641,118 @@ Status Renderer::update_mesh(DrawableHandle handle, const std::vector<Vec3>& pos
   if (!normals.empty() && normals.size() != positions.size())
     return Status::error(ErrorCode::InvalidInput, "update_mesh: " + std::to_string(normals.size()) +
                                                       " normals for " + std::to_string(positions.size()) + " vertices");
-  for (const Vec3& p : positions)
-    if (!finite(p)) return Status::error(ErrorCode::InvalidInput, "update_mesh: non-finite position");
   for (const Vec3& n : normals)
     if (!finite(n)) return Status::error(ErrorCode::InvalidInput, "update_mesh: non-finite normal");
-  TriMesh tmp;
-  tmp.positions = positions;
-  tmp.triangles = d->triangles;
-  const std::vector<Vec3> n = normals.empty() ? vertex_normals(tmp) : normals;
-  upload_vec3s(d->position_buffer, m.unroll3(positions, d->triangles), GL_DYNAMIC_DRAW);
-  upload_vec3s(d->normal_buffer, m.unroll3(n, d->triangles), GL_DYNAMIC_DRAW);
+  std::vector<float> xyz(positions.size() * 3);
+  for (size_t v = 0; v < positions.size(); ++v)
+    for (int k = 0; k < 3; ++k) xyz[3 * v + k] = static_cast<float>(positions[v][k]);
+  if (normals.empty()) return update_mesh_positions(handle, xyz.data(), positions.size());
+  for (float x : xyz)
+    if (!std::isfinite(x)) return Status::error(ErrorCode::InvalidInput, "update_mesh: non-finite position");
+  // Given normals replace everything: the face normals still follow the
+  // positions, for later updates without normals.
+  d->positions = std::move(xyz);
+  for (size_t f = 0; f < d->triangles.size(); ++f) Impl::compute_face_normal(*d, f);
+  for (size_t v = 0; v < normals.size(); ++v)
+    for (int k = 0; k < 3; ++k) d->normals[3 * v + k] = static_cast<float>(normals[v][k]);
+  Impl::send_geometry(*d, 0, static_cast<size_t>(d->vertex_count), false);
   d->bbox = bounding_box(positions);
   return check_gl("update_mesh");
+}
+
+Status Renderer::update_mesh_positions(DrawableHandle handle, const float* xyz, size_t vertex_count,
+                                       MeshUpdateStats* stats) {
+  Impl& m = *impl_;
+  if (stats) *stats = MeshUpdateStats{};
+  Impl::Drawable* d = m.find(handle);
+  if (!d || d->is_points)
+    return Status::error(ErrorCode::InvalidInput, "update_mesh_positions: no mesh with handle " + std::to_string(handle));
+  const size_t nv = static_cast<size_t>(d->num_vertices);
+  if (vertex_count != nv)
+    return Status::error(ErrorCode::InvalidInput, "update_mesh_positions: " + std::to_string(vertex_count) +
+                                                      " positions for a mesh of " + std::to_string(nv) + " vertices");
+  if (nv > 0 && !xyz) return Status::error(ErrorCode::InvalidInput, "update_mesh_positions: no position array");
+  for (size_t i = 0; i < nv * 3; ++i)
+    if (!std::isfinite(xyz[i])) return Status::error(ErrorCode::InvalidInput, "update_mesh_positions: non-finite position");
+
+  // Stamps instead of clearing flags: one number per update.
+  if (++d->update_number == 0) {
+    std::fill(d->face_stamp.begin(), d->face_stamp.end(), 0);
+    std::fill(d->vertex_stamp.begin(), d->vertex_stamp.end(), 0);
+    d->update_number = 1;
+  }
+  const std::uint32_t stamp = d->update_number;
+  // 1. Moved vertices: new positions, and the faces around them get new normals.
+  std::vector<std::uint32_t> touched_faces;
+  int moved = 0;
+  float lo[3] = {xyz[0], xyz[1], xyz[2]}, hi[3] = {xyz[0], xyz[1], xyz[2]};
+  for (size_t v = 0; v < nv; ++v) {
+    const float* p = xyz + 3 * v;
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], p[k]);
+      hi[k] = std::max(hi[k], p[k]);
+    }
+    float* q = &d->positions[3 * v];
+    if (p[0] == q[0] && p[1] == q[1] && p[2] == q[2]) continue;
+    q[0] = p[0];
+    q[1] = p[1];
+    q[2] = p[2];
+    ++moved;
+    for (std::uint32_t i = d->vertex_face_start[v]; i < d->vertex_face_start[v + 1]; ++i) {
+      const std::uint32_t f = d->vertex_faces[i];
+      if (d->face_stamp[f] == stamp) continue;
+      d->face_stamp[f] = stamp;
+      touched_faces.push_back(f);
+    }
+  }
+  for (std::uint32_t f : touched_faces) Impl::compute_face_normal(*d, f);
+  // 2. Corners of touched faces get new vertex normals; the GPU range to send
+  // spans them (moved vertices are corners of touched faces, or isolated).
+  size_t first = nv, last = 0;
+  int renormalized = 0;
+  for (std::uint32_t f : touched_faces)
+    for (int c = 0; c < 3; ++c) {
+      const size_t v = static_cast<size_t>(d->triangles[f][c]);
+      if (d->vertex_stamp[v] == stamp) continue;
+      d->vertex_stamp[v] = stamp;
+      Impl::compute_vertex_normal(*d, v);
+      ++renormalized;
+      first = std::min(first, v);
+      last = std::max(last, v + 1);
+    }
+  d->bbox.min = Vec3(lo[0], lo[1], lo[2]);
+  d->bbox.max = Vec3(hi[0], hi[1], hi[2]);
+  if (stats) {
+    stats->moved_vertices = moved;
+    stats->renormalized = renormalized;
+  }
+  if (moved == 0) return Status::success();
+
+  // 3. Upload. Unrolled meshes and the whole-array option send everything.
+  size_t uploaded = 0;
+  const size_t total = static_cast<size_t>(d->vertex_count);
+  if (d->layout == MeshLayout::Unrolled || !m.options.upload_dirty_range) {
+    Impl::send_geometry(*d, 0, total, false);
+    uploaded = total;
+  } else {
+    if (first < last) {
+      Impl::send_geometry(*d, first, last, false);
+      uploaded += last - first;
+    }
+    // Seam copies sit after the first #V GPU vertices.
+    size_t copy_first = total, copy_last = nv;
+    for (size_t g = nv; g < total; ++g)
+      if (d->vertex_stamp[d->gpu_source[g - nv]] == stamp) {
+        copy_first = std::min(copy_first, g);
+        copy_last = g + 1;
+      }
+    if (copy_first < copy_last) {
+      Impl::send_geometry(*d, copy_first, copy_last, false);
+      uploaded += copy_last - copy_first;
+    }
+  }
+  if (stats) stats->uploaded_vertices = static_cast<int>(uploaded);
+  return check_gl("update_mesh_positions");
 }
 
 Status Renderer::set_occlusion(DrawableHandle handle, const std::vector<float>& per_vertex) {
@@ -435,18 +765,14 @@ Status Renderer::set_occlusion(DrawableHandle handle, const std::vector<float>& 
   if (per_vertex.size() != static_cast<size_t>(d->num_vertices))
     return Status::error(ErrorCode::InvalidInput, "set_occlusion: " + std::to_string(per_vertex.size()) +
                                                       " values for a mesh of " + std::to_string(d->num_vertices) + " vertices");
-  std::vector<float> unrolled;
-  unrolled.reserve(d->triangles.size() * 3);
-  for (const Tri& t : d->triangles)
-    for (int c = 0; c < 3; ++c) {
-      const float a = per_vertex[t[c]];
-      unrolled.push_back(std::isfinite(a) ? std::clamp(a, 0.0f, 1.0f) : 1.0f);
-    }
+  std::vector<float> clamped(per_vertex.size());
+  for (size_t v = 0; v < per_vertex.size(); ++v)
+    clamped[v] = std::isfinite(per_vertex[v]) ? std::clamp(per_vertex[v], 0.0f, 1.0f) : 1.0f;
+  const std::vector<float> gpu = Impl::per_gpu_vertex(*d, clamped, 1);
   glBindVertexArray(d->vao);
   if (!d->occlusion_buffer) glGenBuffers(1, &d->occlusion_buffer);
   glBindBuffer(GL_ARRAY_BUFFER, d->occlusion_buffer);
-  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(unrolled.size() * sizeof(float)), unrolled.data(),
-               GL_STATIC_DRAW);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(gpu.size() * sizeof(float)), gpu.data(), GL_STATIC_DRAW);
   bind_attribute(d->occlusion_buffer, kOcclusion, 1);
   glBindVertexArray(0);
   d->has_occlusion = true;
@@ -688,11 +1014,23 @@ Status Renderer::draw(const CameraMatrices& camera, const Viewport& viewport) {
   // Opaque things first, then blended edge-only meshes.
   for (auto& [h, d] : m.drawables) {
     if (!d.style.visible) continue;
-    if (d.is_points) m.draw_points(d, camera);
-    else if (d.style.surface) m.draw_mesh(d, camera);
+    if (d.is_points) {
+      m.draw_points(d, camera);
+    } else if (d.style.surface) {
+      m.draw_mesh(d, camera);
+      if (d.style.wireframe && d.layout == MeshLayout::Indexed) m.draw_edges(d, camera);
+    }
   }
-  for (auto& [h, d] : m.drawables)
-    if (d.style.visible && !d.is_points && !d.style.surface && d.style.wireframe) m.draw_mesh(d, camera);
+  for (auto& [h, d] : m.drawables) {
+    if (!d.style.visible || d.is_points || d.style.surface || !d.style.wireframe) continue;
+    if (d.layout == MeshLayout::Unrolled) {
+      m.draw_mesh(d, camera);
+    } else {
+      glDepthMask(GL_FALSE);  // as the unrolled edges: over, never hiding, what follows
+      m.draw_edges(d, camera);
+      glDepthMask(GL_TRUE);
+    }
+  }
 
   glBindVertexArray(0);
   glUseProgram(0);

@@ -9,7 +9,7 @@
 //     normals #V by 3, colors #V by 3, uvs #V by 2 or 3*#F by 2 per corner),
 //     shaded with a key + fill + rim light rig (Blinn-Phong with a skin-tone
 //     default albedo), optionally textured (RGB/RGBA image) and optionally with
-//     a wireframe overlay (barycentric edge distance, no geometry shader);
+//     a wireframe overlay;
 //   - point clouds (PointCloud: positions #P by 3, optional normals, colors)
 //     as round point sprites of a settable size in pixels.
 // Shading is done in linear RGB and written gamma-encoded (sRGB), so the
@@ -20,9 +20,20 @@
 // PointCloud::colors are taken as sRGB (scanner colors as stored in files);
 // textures are sRGB-encoded images.
 //
-// Meshes are uploaded unrolled (three GPU vertices per triangle) so that
-// per-corner uvs and the wireframe's barycentrics need no index tricks; a
-// 100k-triangle mesh costs about 17 MB of GPU memory.
+// Mesh layouts (MeshLayout): meshes are drawn INDEXED by default: one GPU
+// vertex per mesh vertex (position + normal interleaved, 24 bytes) and one
+// 32-bit index buffer (glDrawElements, GL_UNSIGNED_INT: WebGL2 core), so the
+// vertex shader runs once per vertex instead of three times per triangle and
+// an animation frame re-uploads only the vertices that moved (and their
+// neighbours' normals), never the indices. Per-corner uvs with seams split a
+// seam vertex once per distinct uv at upload (the copies are moved with their
+// vertex). The wireframe of an indexed mesh is a GL_LINES index buffer of the
+// unique edges (built on first use), drawn over the surface pushed back by
+// polygon offset; lines are aliased and as wide as the GL allows (WebGL: 1 px).
+// The UNROLLED layout (three GPU vertices per triangle) is the old path, kept
+// for its wireframe: antialiased barycentric edges of any width, no geometry
+// shader; it costs three times the vertex work and memory (~17 MB per 100k
+// triangles against ~3.6 MB indexed).
 #pragma once
 #include "common/status.h"
 #include "image/image.h"
@@ -40,6 +51,19 @@ namespace lk {
 using DrawableHandle = int;
 using TextureHandle = int;
 constexpr int kNoHandle = -1;
+
+// How a mesh is laid out on the GPU (see the top of this file).
+enum class MeshLayout {
+  Indexed,   // one GPU vertex per mesh vertex + 32-bit indices; line wireframe
+  Unrolled,  // three GPU vertices per triangle; antialiased barycentric wireframe
+};
+
+// What an animation update did (for profiling and tests).
+struct MeshUpdateStats {
+  int moved_vertices = 0;     // vertices whose position changed
+  int renormalized = 0;       // vertices whose normal was recomputed
+  int uploaded_vertices = 0;  // GPU vertices re-sent (the dirty range, or all)
+};
 
 // How point sprites get their color.
 enum class PointColoring {
@@ -101,6 +125,11 @@ struct RendererOptions {
   glm::vec3 background_top = {0.30f, 0.32f, 0.36f};
   glm::vec3 background_bottom = {0.13f, 0.14f, 0.16f};
   LightRig lights;
+  // Animation updates of indexed meshes send only the range of GPU vertices
+  // that changed (glBufferSubData); false sends the whole vertex array each
+  // time (still without re-allocating it). Measured in `likeness bench --only
+  // render` (docs/render.md).
+  bool upload_dirty_range = true;
 };
 
 class Renderer {
@@ -120,11 +149,21 @@ class Renderer {
   // Uploads a mesh; normals are computed (area-weighted) when absent. Fails
   // on empty or invalid meshes (bad indices, NaN) and on attribute arrays of
   // the wrong length.
-  Status upload_mesh(const TriMesh& mesh, DrawableHandle& out);
+  Status upload_mesh(const TriMesh& mesh, DrawableHandle& out, MeshLayout layout = MeshLayout::Indexed);
   // Animation: replaces positions (#V, same count and triangles as uploaded)
-  // and normals (#V, or empty to recompute them) in place.
+  // and normals (#V, or empty to recompute them) in place. Without normals
+  // this is update_mesh_positions (only what moved is recomputed and sent).
   Status update_mesh(DrawableHandle handle, const std::vector<Vec3>& positions,
                      const std::vector<Vec3>& normals = {});
+  // Animation, the fast path: positions_xyz holds vertex_count * 3 floats
+  // (x, y, z per vertex; vertex_count must be the uploaded #V). Vertices
+  // whose position did not change are skipped: face normals are recomputed
+  // for the triangles around moved vertices, vertex normals for those
+  // triangles' corners (area-weighted, as at upload), and only the changed
+  // GPU vertex range is re-sent. Non-finite values are refused (nothing is
+  // changed then). `stats` (optional) says how much was done.
+  Status update_mesh_positions(DrawableHandle handle, const float* positions_xyz, size_t vertex_count,
+                               MeshUpdateStats* stats = nullptr);
 
   // Per-vertex ambient occlusion (#V values in [0,1], 1 = open; see
   // ambient_occlusion.h) darkening ambient and, partly, direct light in

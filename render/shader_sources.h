@@ -16,6 +16,10 @@ extern const unsigned char shaders_background_vert[];
 extern const std::size_t shaders_background_vert_size;
 extern const unsigned char shaders_background_frag[];
 extern const std::size_t shaders_background_frag_size;
+extern const unsigned char shaders_lines_vert[];
+extern const std::size_t shaders_lines_vert_size;
+extern const unsigned char shaders_lines_frag[];
+extern const std::size_t shaders_lines_frag_size;
 }  // namespace likeness_embedded
 
 namespace lk::shader_sources {

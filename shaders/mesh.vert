@@ -1,5 +1,7 @@
 #version 300 es
-// Triangle meshes, unrolled to three vertices per triangle (see renderer.h).
+// Triangle meshes, indexed or unrolled to three vertices per triangle (see
+// renderer.h; barycentrics are only set, and the wireframe only drawn here,
+// for unrolled meshes).
 // Lighting happens in view space, where the light rig is defined.
 precision highp float;
 
