@@ -132,14 +132,19 @@ double mean_edge(const std::vector<Vec3>& P, const std::vector<Tri>& tris) {
 using namespace multires_detail;
 
 Status build_multires(const TriMesh& control, int levels, MultiresMesh& out) {
+  return build_multires(control, ButterflyCreases{}, levels, out);
+}
+
+Status build_multires(const TriMesh& control, const ButterflyCreases& creases, int levels, MultiresMesh& out) {
   out = MultiresMesh{};
   for (const Vec3& p : control.positions)
     if (!p.allFinite()) return Status::error(ErrorCode::InvalidInput, "multires: a control position is not finite");
-  Status s = build_butterfly_levels(control, levels, out.levels);
+  Status s = build_butterfly_levels(control, creases, levels, out.levels);
   if (!s.ok()) {
     out = MultiresMesh{};
     return s;
   }
+  out.creases = creases;
   out.control = control.positions;
   out.control_triangles = control.triangles;
   const int L = out.num_levels();

@@ -52,6 +52,7 @@ struct MultiresMesh {
   std::vector<Vec3> control;                       // #V_0 control positions (P_0)
   std::vector<Tri> control_triangles;              // #F_0
   std::vector<ButterflyLevel> levels;              // L refinement steps
+  ButterflyCreases creases;                        // the control mesh's crease curves the levels were built with
   std::vector<std::vector<double>> displacements;  // L+1 arrays: d_l, #V_l each
   std::vector<MultiresLevelLinks> links;           // L+1
   MultiresState state;
@@ -75,6 +76,9 @@ struct MultiresMesh {
 // Builds the hierarchy over the control mesh (topology, stencils, links), with
 // zero displacements, and evaluates it. Fails like build_butterfly_levels.
 Status build_multires(const TriMesh& control, int levels, MultiresMesh& out);
+// The same with crease curves (subdiv/butterfly.h): the two sides of a crease
+// refine independently (eye and lip rims against their pockets).
+Status build_multires(const TriMesh& control, const ButterflyCreases& creases, int levels, MultiresMesh& out);
 
 // Full recompute of state from control + displacements (sizes must match).
 Status evaluate(MultiresMesh& mesh);

@@ -43,6 +43,11 @@ struct LevelTopo {
   std::vector<char> boundary;                   // #V
   std::vector<std::array<int, 2>> boundary_edges;  // #V: the two boundary edges at a boundary vertex
   std::vector<std::vector<int>> ring_edges;     // #V: ordered edges around interior extraordinary vertices
+  // Creases (all empty/zero without them).
+  std::vector<char> crease;                     // #E: tagged (never a boundary edge)
+  std::vector<char> corner;                     // #V: curves do not continue through it
+  std::vector<int> crease_count;                // #V: tagged edges at the vertex
+  std::vector<std::array<int, 2>> crease_pair;  // #V: the two tagged edges where there are exactly two
 
   int other_end(int e, int v) const { return edges[e].v0 == v ? edges[e].v1 : edges[e].v0; }
   int opposite(int f, int e) const {
@@ -51,16 +56,46 @@ struct LevelTopo {
       if (v != edges[e].v0 && v != edges[e].v1) return v;
     return -1;
   }
-  bool irregular_interior(int v) const { return !boundary[v] && valence[v] != 6; }
+  // A crease vertex is not interior: the mesh is cut there.
+  bool irregular_interior(int v) const { return !boundary[v] && crease_count[v] == 0 && valence[v] != 6; }
+  bool cut(int e) const { return edges[e].boundary() || crease[e]; }
 };
 
-Status topo_from_mesh(const std::vector<Tri>& triangles, int num_vertices, LevelTopo& out) {
+Status topo_from_mesh(const std::vector<Tri>& triangles, int num_vertices, const ButterflyCreases& creases,
+                      LevelTopo& out) {
   TriMesh mesh;  // connectivity only; build_topology takes #V from positions
   mesh.positions.assign(num_vertices, Vec3::Zero());
   mesh.triangles = triangles;
   MeshTopology topo;
   Status s = build_topology(mesh, topo);
   if (!s.ok()) return s;
+  out.crease.assign(topo.edges.size(), 0);
+  out.corner.assign(num_vertices, 0);
+  out.crease_count.assign(num_vertices, 0);
+  out.crease_pair.assign(num_vertices, {-1, -1});
+  auto in_range = [&](int v) { return v >= 0 && v < num_vertices; };
+  for (const auto& ce : creases.edges) {
+    const std::string name = "crease edge (" + std::to_string(ce[0]) + ", " + std::to_string(ce[1]) + ")";
+    if (!in_range(ce[0]) || !in_range(ce[1]))
+      return Status::error(ErrorCode::InvalidInput, name + ": vertex out of range [0, " +
+                                                        std::to_string(num_vertices) + ")");
+    const int e = ce[0] == ce[1] ? -1 : topo.find_edge(ce[0], ce[1]);
+    if (e < 0) return Status::error(ErrorCode::InvalidInput, name + " is not an edge of the mesh");
+    if (topo.edges[e].boundary() || out.crease[e]) continue;
+    out.crease[e] = 1;
+    for (int v : {ce[0], ce[1]}) {
+      if (out.crease_count[v] < 2) out.crease_pair[v][out.crease_count[v]] = e;
+      ++out.crease_count[v];
+    }
+  }
+  for (int v = 0; v < num_vertices; ++v)
+    if (out.crease_count[v] != 2) out.crease_pair[v] = {-1, -1};
+  for (int v : creases.corners) {
+    if (!in_range(v))
+      return Status::error(ErrorCode::InvalidInput, "crease corner " + std::to_string(v) + " out of range [0, " +
+                                                        std::to_string(num_vertices) + ")");
+    out.corner[v] = 1;
+  }
   out.num_vertices = num_vertices;
   out.triangles = &triangles;
   out.edges = std::move(topo.edges);
@@ -131,17 +166,29 @@ void topo_refined(const LevelTopo& c, const std::vector<Tri>& fine_triangles, Le
   f.boundary.resize(f.num_vertices);
   f.boundary_edges.assign(f.num_vertices, {-1, -1});
   f.ring_edges.assign(f.num_vertices, {});
+  f.crease.assign(f.edges.size(), 0);
+  f.corner.assign(f.num_vertices, 0);
+  f.crease_count.assign(f.num_vertices, 0);
+  f.crease_pair.assign(f.num_vertices, {-1, -1});
   for (int v = 0; v < nc; ++v) {
     f.valence[v] = c.valence[v];
     f.boundary[v] = c.boundary[v];
     if (c.boundary[v]) f.boundary_edges[v] = {half(c.boundary_edges[v][0], v), half(c.boundary_edges[v][1], v)};
     for (int e : c.ring_edges[v]) f.ring_edges[v].push_back(half(e, v));
+    f.corner[v] = c.corner[v];
+    f.crease_count[v] = c.crease_count[v];
+    if (c.crease_pair[v][0] >= 0) f.crease_pair[v] = {half(c.crease_pair[v][0], v), half(c.crease_pair[v][1], v)};
   }
   for (int e = 0; e < ne; ++e) {
     const bool b = c.edges[e].boundary();
     f.valence[nc + e] = b ? 4 : 6;
     f.boundary[nc + e] = b;
     if (b) f.boundary_edges[nc + e] = {2 * e, 2 * e + 1};
+    if (c.crease[e]) {  // children of a tagged edge are tagged
+      f.crease[2 * e] = f.crease[2 * e + 1] = 1;
+      f.crease_count[nc + e] = 2;
+      f.crease_pair[nc + e] = {2 * e, 2 * e + 1};
+    }
   }
 }
 
@@ -155,11 +202,26 @@ struct StencilBuilder {
     return weight_table[K];
   }
 
-  // The other boundary neighbour of boundary vertex v, across the boundary
-  // edge that is not `along`.
-  int boundary_neighbour(int v, int along) const {
-    const auto& be = topo.boundary_edges[v];
-    return topo.other_end(be[0] == along ? be[1] : be[0], v);
+  // The next vertex beyond v on the curve (boundary or crease) of edge
+  // `along`, or -1 where the curve does not continue through v (a corner,
+  // an open crease end, a crease junction).
+  int curve_neighbour(int v, int along) const {
+    if (topo.corner[v]) return -1;
+    const auto& pair = topo.crease[along] ? topo.crease_pair[v] : topo.boundary_edges[v];
+    if (pair[0] < 0) return -1;
+    return topo.other_end(pair[0] == along ? pair[1] : pair[0], v);
+  }
+
+  // The 4-point rule's outer term at end v (the other end w): the next
+  // curve vertex, or the reflection 2 v - w where there is none.
+  void add_curve_outer(int v, int w, int along, std::vector<Term>& terms) const {
+    const int next = curve_neighbour(v, along);
+    if (next >= 0) {
+      terms.push_back({next, -1.0 / 16});
+    } else {
+      terms.push_back({v, -2.0 / 16});
+      terms.push_back({w, 1.0 / 16});
+    }
   }
 
   // Wing across edge x-apex, seen from triangle `face` = (x, y, apex); when
@@ -171,7 +233,7 @@ struct StencilBuilder {
       if ((cand.v0 == x && cand.v1 == apex) || (cand.v0 == apex && cand.v1 == x)) e = topo.face_edges[face][k];
     }
     const Edge& edge = topo.edges[e];
-    if (edge.boundary()) {
+    if (topo.cut(e)) {
       terms.push_back({x, w});
       terms.push_back({apex, w});
       terms.push_back({y, -w});
@@ -195,11 +257,11 @@ struct StencilBuilder {
     terms.clear();
     const Edge& edge = topo.edges[e];
     const int a = edge.v0, b = edge.v1;
-    if (edge.boundary()) {
+    if (topo.cut(e)) {  // boundary or crease: the 4-point rule along the curve
       terms.push_back({a, 9.0 / 16});
       terms.push_back({b, 9.0 / 16});
-      terms.push_back({boundary_neighbour(a, e), -1.0 / 16});
-      terms.push_back({boundary_neighbour(b, e), -1.0 / 16});
+      add_curve_outer(a, b, e, terms);
+      add_curve_outer(b, a, e, terms);
       return;
     }
     const bool irr_a = topo.irregular_interior(a), irr_b = topo.irregular_interior(b);
@@ -248,6 +310,7 @@ void build_one_level(const LevelTopo& topo, ButterflyLevel& level) {
   level.stencil_weights.clear();
   level.stencil_indices.reserve(static_cast<size_t>(ne) * 8);
   level.stencil_weights.reserve(static_cast<size_t>(ne) * 8);
+  level.crease_edges = topo.crease;
 
   StencilBuilder builder{topo, {}};
   std::vector<Term> terms;
@@ -279,8 +342,25 @@ void build_one_level(const LevelTopo& topo, ButterflyLevel& level) {
 
 }  // namespace
 
+void add_crease_polyline(const std::vector<int>& vertices, bool closed, ButterflyCreases& creases) {
+  const size_t n = vertices.size();
+  if (n < 2) return;
+  for (size_t k = 0; k + 1 < n; ++k) creases.edges.push_back({vertices[k], vertices[k + 1]});
+  if (closed && n > 2) {
+    creases.edges.push_back({vertices[n - 1], vertices[0]});
+  } else {
+    creases.corners.push_back(vertices.front());
+    creases.corners.push_back(vertices.back());
+  }
+}
+
 Status build_butterfly_levels(const TriMesh& control, int levels, std::vector<ButterflyLevel>& out,
                               int max_fine_triangles) {
+  return build_butterfly_levels(control, ButterflyCreases{}, levels, out, max_fine_triangles);
+}
+
+Status build_butterfly_levels(const TriMesh& control, const ButterflyCreases& creases, int levels,
+                              std::vector<ButterflyLevel>& out, int max_fine_triangles) {
   out.clear();
   if (levels < 0) return Status::error(ErrorCode::InvalidInput, "butterfly: negative number of levels");
   if (control.triangles.empty()) return Status::error(ErrorCode::Empty, "butterfly: the control mesh has no triangles");
@@ -295,7 +375,7 @@ Status build_butterfly_levels(const TriMesh& control, int levels, std::vector<Bu
   if (levels == 0) return Status::success();
   out[0].coarse_triangles = control.triangles;
   LevelTopo topo, next;
-  Status s = topo_from_mesh(out[0].coarse_triangles, control.num_vertices(), topo);
+  Status s = topo_from_mesh(out[0].coarse_triangles, control.num_vertices(), creases, topo);
   if (!s.ok()) {
     out.clear();
     return with_context(s, "butterfly level 0");

@@ -36,11 +36,29 @@
 // boundary stencils of Zorin's thesis (which distinguish boundary vertex
 // valences), but every stencil is affine (weights sum to 1), so planes and
 // straight boundaries are reproduced.
+//
+// Creases (feature curves; Hoppe et al. 1994, "Piecewise smooth surface
+// reconstruction", Sec. 3; Zorin's thesis Ch. 5 for the butterfly): tagged
+// control edges, whose children are tagged on every finer level. The mesh
+// is treated as if it were cut along them:
+//   a tagged edge's new vertex uses the 4-point rule along its crease
+//     polyline, like a boundary edge;
+//   every other stencil treats tagged edges as boundary: a wing across a
+//     tagged edge is replaced by its reflection, and a vertex on a crease is
+//     not interior (no extraordinary rule around it).
+// So the two sides of a crease do not influence each other; only the crease
+// curve, which depends on its own vertices alone, is shared. A curve
+// (boundary or crease) continues through a vertex that has exactly two edges
+// of its kind and is not a corner; elsewhere (a corner, a crease's open end,
+// a junction of three or more crease edges) the missing curve neighbour is
+// the reflection 2 v - w, i.e. weights 7/16 v, 10/16 w, -1/16 next.
+// Without creases and corners the stencils are exactly the ones above.
 #pragma once
 #include "common/status.h"
 #include "mesh/tri_mesh.h"
 
 #include <algorithm>
+#include <array>
 #include <string>
 #include <vector>
 
@@ -60,6 +78,7 @@ struct ButterflyLevel {
   std::vector<int> stencil_offsets;       // #Ec + 1
   std::vector<int> stencil_indices;       // coarse vertex indices, distinct within a row
   std::vector<double> stencil_weights;    // same length, each row sums to 1
+  std::vector<char> crease_edges;         // #Ec: 1 where coarse edge k is a crease (tagged or a tagged edge's child)
 
   int num_new_vertices() const { return num_fine_vertices - num_coarse_vertices; }
 };
@@ -72,6 +91,26 @@ struct ButterflyLevel {
 // max_fine_triangles.
 Status build_butterfly_levels(const TriMesh& control, int levels, std::vector<ButterflyLevel>& out,
                               int max_fine_triangles = 1 << 24);
+
+// Crease curves of a control mesh (see the rules above).
+struct ButterflyCreases {
+  std::vector<std::array<int, 2>> edges;  // tagged control edges, vertex pairs in either order;
+                                          // boundary edges are ignored (already a curve)
+  std::vector<int> corners;               // vertices where a crease or boundary curve has a corner:
+                                          // the 4-point rule does not reach past them
+  bool empty() const { return edges.empty() && corners.empty(); }
+};
+
+// Adds a polyline of control vertices (consecutive ones must share a mesh
+// edge) as tagged edges; closed joins the last vertex to the first, an open
+// polyline's two ends become corners.
+void add_crease_polyline(const std::vector<int>& vertices, bool closed, ButterflyCreases& creases);
+
+// The same with creases. Fails (InvalidInput) also when a crease names a
+// vertex out of range or two vertices that share no edge; with empty creases
+// the result is identical to the overload above.
+Status build_butterfly_levels(const TriMesh& control, const ButterflyCreases& creases, int levels,
+                              std::vector<ButterflyLevel>& out, int max_fine_triangles = 1 << 24);
 
 // The value of new vertex k (0 <= k < #Ec) from coarse data of any type T that
 // supports T * double and +=  (double, Vec2, Vec3, Vec4, ...). Exposed so
