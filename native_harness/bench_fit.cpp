@@ -9,7 +9,8 @@
 // region beside those of the smooth (undisplaced) surface, and the fold
 // limiter's work. Experiment knobs (see docs/fit.md): --fit-separate-rounds N,
 // --fit-area-ratio R, --fit-cap-pct P, --fit-levels L, --fit-line-edges E,
-// --fit-no-climb, --fit-remeasure; --save-scans DIR writes scans, truths,
+// --fit-no-climb, --fit-remeasure, --fit-no-creases (plain Butterfly at the
+// eye and lip rims), --fit-seeds N (seeds 1..N); --save-scans DIR writes scans, truths,
 // the finest level and its crossing triangles.
 #include "command.h"
 #include "fit_table.h"
@@ -172,6 +173,12 @@ int run(const Args& args) {
   const bool quick = args.has("quick");
   const int n_points = quick ? 100000 : 300000;
   std::vector<int> seeds = quick ? std::vector<int>{1, 2} : std::vector<int>{1, 2, 3, 4, 5};
+  int first_seeds = 0;  // --fit-seeds N: seeds 1..N only (full-size scans)
+  args.get_int("fit-seeds", 0, first_seeds);
+  if (first_seeds > 0) {
+    seeds.clear();
+    for (int s = 1; s <= first_seeds; ++s) seeds.push_back(s);
+  }
   const std::string save = args.get("save-scans");
   GenericHead generic;
   Status st = load_generic_head(generic);
@@ -229,6 +236,7 @@ int run(const Args& args) {
     args.get_double("fit-line-edges", opt.displacement.fine_line_edges, opt.displacement.fine_line_edges);
     if (args.has("fit-no-climb")) opt.fold_limit.shrink_coarser_levels = false;
     if (args.has("fit-remeasure")) opt.displacement.remeasure_coarse_vertices = true;
+    if (args.has("fit-no-creases")) opt.rim_creases = false;
     st = fit_head(cloud, generic, opt, r, obs);
     std::printf("\n   seed %d: %d points (%d above the neck cut), bbox diagonal %.3f m\n", seed, r.points,
                 r.fitted_points, r.bbox_diagonal);
@@ -274,18 +282,22 @@ int run(const Args& args) {
     // control mesh: did a displacement turn a triangle over?
     MultiresMesh smooth;
     std::vector<std::array<int, 2>> smooth_pairs;
-    if (build_multires(r.control, static_cast<int>(r.level_meshes.size()), smooth).ok()) {
+    if (build_multires(r.control, r.multires.creases, static_cast<int>(r.level_meshes.size()), smooth).ok()) {
       count_bad(finest, level_mesh(smooth, smooth.num_levels()), 1, flipped_l, degenerate_l);
       find_self_intersections(level_mesh(smooth, smooth.num_levels()), smooth_pairs);
-      MultiresMesh generic_smooth;
-      std::vector<std::array<int, 2>> generic_pairs, generic_control_pairs;
-      if (build_multires(r.aligned, smooth.num_levels(), generic_smooth).ok())
+      // The aligned generic head refined with the fit's creases and without.
+      MultiresMesh generic_smooth, generic_plain;
+      std::vector<std::array<int, 2>> generic_pairs, generic_plain_pairs, generic_control_pairs;
+      if (build_multires(r.aligned, r.multires.creases, smooth.num_levels(), generic_smooth).ok())
         find_self_intersections(level_mesh(generic_smooth, smooth.num_levels()), generic_pairs);
+      if (build_multires(r.aligned, smooth.num_levels(), generic_plain).ok())
+        find_self_intersections(level_mesh(generic_plain, smooth.num_levels()), generic_plain_pairs);
       find_self_intersections(r.aligned, generic_control_pairs);
       int sl = 0, se = 0, sr = 0;
       region_counts(smooth, smooth_pairs, generic.annotations, sl, se, sr);
-      std::printf("   smooth (undisplaced) level %d: %zu self-intersecting pairs (lips %d, ears %d, rest %d); the aligned generic head's: %zu (its control mesh %zu)\n",
-                  smooth.num_levels(), smooth_pairs.size(), sl, se, sr, generic_pairs.size(), generic_control_pairs.size());
+      std::printf("   smooth (undisplaced) level %d: %zu self-intersecting pairs (lips %d, ears %d, rest %d); the aligned generic head's: %zu with %zu crease edges, %zu without (its control mesh %zu)\n",
+                  smooth.num_levels(), smooth_pairs.size(), sl, se, sr, generic_pairs.size(),
+                  r.multires.creases.edges.size(), generic_plain_pairs.size(), generic_control_pairs.size());
       if (!save.empty()) {
         TriMesh sm = level_mesh(smooth, smooth.num_levels()), crossing;
         crossing.positions = sm.positions;
@@ -316,7 +328,7 @@ int run(const Args& args) {
       // (without fit_head's pocket zeroing): where its time goes.
       MultiresMesh again;
       const auto t0 = clock_type::now();
-      build_multires(r.control, opt.levels, again);
+      build_multires(r.control, r.multires.creases, opt.levels, again);
       const double build_ms = ms_since(t0);
       PointCloud fitted;
       for (const Vec3& p : cloud.positions) fitted.positions.push_back(r.scan_to_head.apply(p));

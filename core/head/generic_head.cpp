@@ -200,6 +200,29 @@ Status parse_head_annotations(const std::string& text, int num_vertices, HeadAnn
   if (!s.ok()) return s;
   if (!(a.mouth_width > 0)) return invalid("mouth.width", "must be positive");
 
+  // Crease curves: optional (older files have none).
+  if (const Json* creases = member(root, "creases")) {
+    if (!creases->is_array()) return invalid("creases", "must be an array of curves");
+    for (size_t k = 0; k < creases->size(); ++k) {
+      const Json& jc = (*creases)[k];
+      const std::string where = "creases[" + std::to_string(k) + "].";
+      if (!jc.is_object()) return invalid(where, "must be an object with name, closed and vertices");
+      CreaseCurve c;
+      const Json* name = member(jc, "name");
+      if (!name || !name->is_string()) return invalid(where + "name", "missing or not a string");
+      c.name = name->get<std::string>();
+      const Json* closed = member(jc, "closed");
+      if (!closed || !closed->is_boolean()) return invalid(where + "closed", "missing or not true/false");
+      c.closed = closed->get<bool>();
+      s = read_indices(jc, "vertices", where, num_vertices, c.vertices);
+      if (!s.ok()) return s;
+      if (c.vertices.size() < (c.closed ? 3u : 2u))
+        return invalid(where + "vertices", c.closed ? "a closed curve needs at least 3 vertices"
+                                                    : "an open curve needs at least 2 vertices");
+      a.creases.push_back(std::move(c));
+    }
+  }
+
   const Json* regions = member(root, "regions");
   if (!regions || !regions->is_object()) return invalid("regions", "missing or not an object");
   for (auto it = regions->begin(); it != regions->end(); ++it) {
@@ -241,6 +264,12 @@ std::string head_annotations_to_json(const HeadAnnotations& a, int num_vertices)
   root["eye_left"] = eye(a.eye_left);
   root["eye_right"] = eye(a.eye_right);
   root["mouth"] = {{"center", vec_json(a.mouth_center)}, {"width", a.mouth_width}};
+  if (!a.creases.empty()) {
+    Json creases = Json::array();
+    for (const CreaseCurve& c : a.creases)
+      creases.push_back({{"name", c.name}, {"closed", c.closed}, {"vertices", c.vertices}});
+    root["creases"] = creases;
+  }
   Json regions = Json::object();
   for (const auto& [name, ids] : a.regions) regions[name] = ids;
   root["regions"] = regions;

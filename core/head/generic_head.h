@@ -1,6 +1,7 @@
 // Loading the generic head of jeong2002 (Sec. 4, Fig. 4) and reading/writing
 // its annotations (feature boxes with landmarks, binding edges, constrained
-// lip vertices, clipping planes, named regions, eye sockets, mouth).
+// lip vertices, clipping planes, named regions, eye sockets, mouth, crease
+// curves along the eye rims and lip lines).
 //
 // The asset is core/head/data/generic_head.obj (#V vertices, #F triangles,
 // metres) and core/head/data/generic_head.json (annotations, indices into the
@@ -31,7 +32,8 @@ std::string generic_head_json_text();
 // checked: vectors are 3 finite numbers, indices are integers in
 // [0, num_vertices), boxes are exactly ear_left, ear_right, nose, mouth with
 // 3/3/4/4 landmarks inside them, planes have non-zero normals, all required
-// regions are present. Fails with InvalidInput and a message naming the field.
+// regions are present; "creases" (optional) are named curves of >= 2 (open)
+// or >= 3 (closed) vertices. Fails with InvalidInput and a message naming the field.
 Status parse_head_annotations(const std::string& json, int num_vertices, HeadAnnotations& out);
 
 // The JSON text parse_head_annotations reads (round trip is exact up to

@@ -896,6 +896,15 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
   ann.look = Vec3::UnitZ();
   ann.up = Vec3::UnitY();
   ann.regions = R;
+  // Rims where the skin folds back into a pocket ~0.3-1.3 mm behind it: as
+  // creases, the skin's Butterfly stencils no longer reach over the rim into
+  // the pocket (which made the refined lips and lids cross themselves and
+  // the rims ragged). The lip lines are open curves: the mouth corners,
+  // where the upper and lower lines meet, are corners of both.
+  ann.creases.push_back({"eye_rim_left", ann.eye_left.rim, true});
+  ann.creases.push_back({"eye_rim_right", ann.eye_right.rim, true});
+  ann.creases.push_back({"upper_lip_line", upper_line, false});
+  ann.creases.push_back({"lower_lip_line", lower_line, false});
   const Vec3 slit_mid = 0.5 * (P[upper_line[kMouthHalfWidth]] + P[lower_line[kMouthHalfWidth]]);
   ann.mouth_center = slit_mid - Vec3(0, 0, 0.008);
   ann.mouth_width = (P[upper_line.front()] - P[upper_line.back()]).norm();

@@ -40,6 +40,16 @@ struct EyeSocket {
   std::vector<int> rim;         // vertex loop of the eyelid opening (ordered)
 };
 
+// A crease curve of the control mesh (subdiv/butterfly.h, ButterflyCreases):
+// a polyline of vertices joined by mesh edges along which the surface turns
+// sharply (the eye rims and the lip lines, where the skin folds back into
+// the pockets). Refined as a curve, with the two sides kept apart.
+struct CreaseCurve {
+  std::string name;           // "eye_rim_left", "eye_rim_right", "upper_lip_line", "lower_lip_line"
+  std::vector<int> vertices;  // consecutive vertices share a mesh edge
+  bool closed = false;        // closed: the last joins the first; open: the ends are corners
+};
+
 struct HeadAnnotations {
   std::vector<FeatureBox> boxes;                // ear_left, ear_right, nose, mouth
   std::vector<std::array<int, 2>> binding_edges;  // E_binding: mesh edges + virtual lip edges
@@ -59,6 +69,7 @@ struct HeadAnnotations {
   EyeSocket eye_left, eye_right;                // +x is left
   Vec3 mouth_center = Vec3::Zero();             // between the lips, for teeth/tongue
   double mouth_width = 0.05;
+  std::vector<CreaseCurve> creases;             // rims refined as creases (may be empty)
 };
 
 struct GenericHead {

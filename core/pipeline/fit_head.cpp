@@ -332,7 +332,10 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
 
   // 4. Displaced Butterfly levels.
   if (observer.started) observer.started("subdivision");
-  st = build_multires(out.control, options.levels, out.multires);
+  ButterflyCreases creases;
+  if (options.rim_creases)
+    for (const CreaseCurve& c : ann.creases) add_crease_polyline(c.vertices, c.closed, creases);
+  st = build_multires(out.control, creases, options.levels, out.multires);
   if (!st) return with_context(st, "subdivision");
   PointCloud fitted;
   fitted.positions = skin_pts;

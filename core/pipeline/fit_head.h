@@ -98,6 +98,10 @@ struct FitHeadOptions {
   // After measuring: displacements that turn a triangle over or collapse it
   // (against the smooth Butterfly levels) are shrunk until none does.
   FoldLimitOptions fold_limit;
+  // Refine the generic head's crease curves (eye rims, lip lines:
+  // HeadAnnotations::creases) as creases, so the skin's Butterfly stencils
+  // do not reach over the rims into the pockets (false: the plain scheme).
+  bool rim_creases = true;
 };
 
 struct FitStageReport {
