@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <set>
 #include <string>
 
 namespace lk {
@@ -155,6 +156,13 @@ struct Renderer::Impl {
     std::vector<std::uint32_t> vertex_face_start, vertex_faces;
     std::vector<std::uint32_t> face_stamp, vertex_stamp;  // "touched in update number n"
     std::uint32_t update_number = 0;
+    // Back-face culling is safe (see DrawStyle::cull_hidden_back_faces) when
+    // the topology allows it (closable) and the eye is inside every hole's
+    // half-space; holes are the boundary loops (source vertex indices, in
+    // the boundary half-edges' direction), their planes taken at draw time
+    // so they follow animation.
+    bool closable = false;
+    std::vector<std::vector<std::uint32_t>> holes;
     bool has_colors = false, has_uvs = false, has_normals = false, has_occlusion = false;
     TextureHandle texture = kNoHandle;
     DrawStyle style;
@@ -169,6 +177,7 @@ struct Renderer::Impl {
   GLuint background_vao = 0;
   std::map<DrawableHandle, Drawable> drawables;
   std::map<TextureHandle, GLuint> textures;
+  std::set<TextureHandle> transparent_textures;  // some alpha below 255 (alpha-tested)
   int next_handle = 0;
   int next_texture = 0;
   float max_point_size = 64.0f;
@@ -191,6 +200,7 @@ struct Renderer::Impl {
     drawables.clear();
     for (auto& [h, t] : textures) glDeleteTextures(1, &t);
     textures.clear();
+    transparent_textures.clear();
     if (background_vao) glDeleteVertexArrays(1, &background_vao);
     if (mesh_program) glDeleteProgram(mesh_program);
     if (points_program) glDeleteProgram(points_program);
@@ -203,6 +213,80 @@ struct Renderer::Impl {
   Drawable* find(DrawableHandle h) {
     auto it = drawables.find(h);
     return it == drawables.end() ? nullptr : &it->second;
+  }
+
+  // Whether back faces can only be seen through holes, and the holes:
+  // every directed edge once (consistent orientation, at most two triangles
+  // per edge), boundary half-edges forming simple loops.
+  static void find_holes(Drawable& d) {
+    d.closable = false;
+    d.holes.clear();
+    std::vector<std::uint64_t> directed;
+    directed.reserve(d.triangles.size() * 3);
+    auto key = [](std::uint32_t a, std::uint32_t b) { return std::uint64_t(a) << 32 | b; };
+    for (const Tri& t : d.triangles)
+      for (int c = 0; c < 3; ++c)
+        directed.push_back(key(static_cast<std::uint32_t>(t[c]), static_cast<std::uint32_t>(t[(c + 1) % 3])));
+    std::sort(directed.begin(), directed.end());
+    if (std::adjacent_find(directed.begin(), directed.end()) != directed.end()) return;
+    std::map<std::uint32_t, std::uint32_t> next;  // boundary half-edge a -> b
+    for (std::uint64_t e : directed) {
+      const std::uint32_t a = static_cast<std::uint32_t>(e >> 32), b = static_cast<std::uint32_t>(e & 0xffffffffu);
+      if (std::binary_search(directed.begin(), directed.end(), key(b, a))) continue;
+      if (!next.emplace(a, b).second) return;  // two boundary edges leave a: not a simple loop
+    }
+    std::map<std::uint32_t, bool> done;
+    for (const auto& [start, unused] : next) {
+      (void)unused;
+      if (done.count(start)) continue;
+      std::vector<std::uint32_t> loop;
+      std::uint32_t v = start;
+      do {
+        done[v] = true;
+        loop.push_back(v);
+        auto it = next.find(v);
+        if (it == next.end() || loop.size() > next.size()) return;
+        v = it->second;
+      } while (v != start);
+      d.holes.push_back(std::move(loop));
+    }
+    d.closable = true;
+  }
+
+  // Whether the eye can see a back face of d (through a hole, or because of
+  // its topology, or through an alpha-tested texture).
+  bool back_faces_visible(const Drawable& d, const CameraMatrices& cam) const {
+    if (!d.style.cull_hidden_back_faces || !d.closable) return true;
+    if (d.style.use_texture && d.has_uvs && transparent_textures.count(d.texture)) return true;
+    if (cam.projection[3][3] != 0.0f) return true;  // orthographic: not handled, draw all
+    const glm::vec4 eye = glm::inverse(cam.view * d.style.model) * glm::vec4(0.0f, 0.0f, 0.0f, 1.0f);
+    if (!(std::abs(eye.w) > 0.0f)) return true;
+    const glm::vec3 e = glm::vec3(eye) / eye.w;
+    // A ray from the eye can only reach the inside through a hole after
+    // crossing its plane outward-to-inward; an eye beyond the plane on the
+    // mesh's side (by more than the loop's own unevenness) never does.
+    for (const std::vector<std::uint32_t>& loop : d.holes) {
+      auto at = [&](size_t i) {
+        const float* p = &d.positions[3 * size_t(loop[i % loop.size()])];
+        return glm::vec3(p[0], p[1], p[2]);
+      };
+      // Newell's normal of the loop as the boundary half-edges run; a cap
+      // closing the hole would run the other way, so out of the mesh is minus it.
+      glm::vec3 centre(0.0f), newell(0.0f);
+      for (size_t i = 0; i < loop.size(); ++i) {
+        const glm::vec3 p = at(i), q = at(i + 1);
+        centre += p;
+        newell += glm::vec3((p.y - q.y) * (p.z + q.z), (p.z - q.z) * (p.x + q.x), (p.x - q.x) * (p.y + q.y));
+      }
+      centre /= float(loop.size());
+      const float len = glm::length(newell);
+      if (!(len > 0.0f)) return true;
+      const glm::vec3 outward = -newell / len;
+      float thickness = 0;
+      for (size_t i = 0; i < loop.size(); ++i) thickness = std::max(thickness, std::abs(glm::dot(at(i) - centre, outward)));
+      if (glm::dot(e - centre, outward) > -thickness) return true;
+    }
+    return false;
   }
 
   // The source vertex GPU vertex g shows.
@@ -390,10 +474,13 @@ struct Renderer::Impl {
       glEnable(GL_POLYGON_OFFSET_FILL);
       glPolygonOffset(1.0f, 1.0f);
     }
+    const bool cull = s.surface && !back_faces_visible(d, cam);
+    if (cull) glEnable(GL_CULL_FACE);  // front faces are CCW (GL's default)
     glBindVertexArray(d.vao);
     if (indexed) glDrawElements(GL_TRIANGLES, d.index_count, GL_UNSIGNED_INT, nullptr);
     else glDrawArrays(GL_TRIANGLES, 0, d.vertex_count);
     if (offset) glDisable(GL_POLYGON_OFFSET_FILL);
+    if (cull) glDisable(GL_CULL_FACE);
     if (!s.surface) {
       glDisable(GL_BLEND);
       glDepthMask(GL_TRUE);
@@ -561,6 +648,7 @@ Status Renderer::upload_mesh(const TriMesh& mesh, DrawableHandle& out, MeshLayou
   for (size_t v = 0; v < nv; ++v)
     for (int k = 0; k < 3; ++k) d.positions[3 * v + k] = static_cast<float>(mesh.positions[v][k]);
   Impl::build_vertex_faces(d);
+  Impl::find_holes(d);
   Impl::compute_all_normals(d);  // face normals are needed by later updates either way
   if (!mesh.normals.empty())
     for (size_t v = 0; v < nv; ++v)
@@ -886,6 +974,11 @@ Status Renderer::upload_texture(const Image& image, TextureHandle& out) {
   }
   out = m.next_texture++;
   m.textures[out] = tex;
+  for (size_t i = 3; i < rgba.size(); i += 4)
+    if (rgba[i] < 255) {
+      m.transparent_textures.insert(out);
+      break;
+    }
   return Status::success();
 }
 
@@ -966,6 +1059,7 @@ void Renderer::remove_texture(TextureHandle texture) {
   if (it == impl_->textures.end()) return;
   glDeleteTextures(1, &it->second);
   impl_->textures.erase(it);
+  impl_->transparent_textures.erase(texture);
   for (auto& [h, d] : impl_->drawables)
     if (d.texture == texture) d.texture = kNoHandle;
 }
@@ -975,6 +1069,7 @@ void Renderer::clear() {
   impl_->drawables.clear();
   for (auto& [h, t] : impl_->textures) glDeleteTextures(1, &t);
   impl_->textures.clear();
+  impl_->transparent_textures.clear();
 }
 
 void Renderer::set_background(const glm::vec3& srgb) { set_background_gradient(srgb, srgb); }
@@ -995,7 +1090,9 @@ Status Renderer::draw(const CameraMatrices& camera, const Viewport& viewport) {
   glScissor(viewport.x, viewport.y, viewport.width, viewport.height);
   glEnable(GL_SCISSOR_TEST);
   glDisable(GL_BLEND);
-  glDisable(GL_CULL_FACE);  // open scans and mouth/eye pockets show their insides
+  // Back faces are drawn (open scans show their insides, lit as seen)
+  // unless a mesh proves they cannot be seen (draw_mesh).
+  glDisable(GL_CULL_FACE);
 
   // Background: drawn, not cleared, so it can be a gradient.
   glDisable(GL_DEPTH_TEST);

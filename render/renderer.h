@@ -83,6 +83,13 @@ struct DrawStyle {
   float specular = 0.3f;          // Blinn-Phong specular strength (0 = matte)
   float shininess = 24.0f;        // Blinn-Phong exponent (skin: broad sheen)
   bool flat_shading = false;      // one normal per triangle (facets of a control mesh)
+  // Meshes: skip back faces when none can be seen: the mesh is consistently
+  // oriented, every edge has at most two triangles, the camera is on the
+  // mesh's side of every hole's plane (a head's neck opening: unless it looks
+  // up into the neck) and no alpha-tested texture lets one look through.
+  // Same image (up to self-intersections), about half the triangles to
+  // rasterize: software WebGL's cost. false draws every face, always.
+  bool cull_hidden_back_faces = true;
   // Surfaces. With surface = false and wireframe = true only the edges are
   // drawn (a control mesh over its subdivided surface).
   bool surface = true;

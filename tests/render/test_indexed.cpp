@@ -52,6 +52,31 @@ TriMesh seamed_ellipsoid(const Vec3& radii, int rings, int segments) {
   return m;
 }
 
+// A watertight ellipsoid: one vertex per pole, outward CCW faces.
+TriMesh closed_ellipsoid(const Vec3& radii, int rings, int segments) {
+  TriMesh m;
+  m.positions.emplace_back(0.0, radii.y(), 0.0);
+  for (int i = 1; i < rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      const double theta = kPi * i / rings, phi = 2 * kPi * j / segments;
+      m.positions.emplace_back(radii.x() * std::sin(theta) * std::sin(phi), radii.y() * std::cos(theta),
+                               radii.z() * std::sin(theta) * std::cos(phi));
+    }
+  m.positions.emplace_back(0.0, -radii.y(), 0.0);
+  const int south = m.num_vertices() - 1;
+  auto id = [&](int i, int j) { return 1 + (i - 1) * segments + (j % segments); };
+  for (int j = 0; j < segments; ++j) {
+    m.triangles.push_back({0, id(1, j), id(1, j + 1)});
+    m.triangles.push_back({south, id(rings - 1, j + 1), id(rings - 1, j)});
+  }
+  for (int i = 1; i < rings - 1; ++i)
+    for (int j = 0; j < segments; ++j) {
+      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  return m;
+}
+
 // 8x8 checker of saturated colours, so a wrong uv at a seam shows.
 Image checker_texture() {
   Image tex = Image::make(64, 64, 3);
@@ -332,4 +357,55 @@ TEST_CASE("the indexed wireframe draws every edge once, over the surface", "[ren
   CHECK(line_ink < 1.6 * bary_ink);
   // And the lines lie where the unrolled layout draws the edges.
   CHECK(near > 0.95 * line_px);
+}
+
+TEST_CASE("hidden back faces are culled only when none can be seen", "[render][indexed][cull]") {
+  // Renders with DrawStyle::cull_hidden_back_faces on and off; they must
+  // agree whenever the renderer decides to cull, and a case where culling
+  // would show must prove it does cull.
+  const TriMesh closed = closed_ellipsoid(kRadii, 24, 32);
+  // An open "neck": the bottom cap's triangles (around the -y pole) removed.
+  TriMesh open = closed;
+  open.triangles.erase(std::remove_if(open.triangles.begin(), open.triangles.end(),
+                                      [&](const Tri& t) {
+                                        for (int c = 0; c < 3; ++c)
+                                          if (open.positions[t[c]].y() < -0.1) return true;
+                                        return false;
+                                      }),
+                       open.triangles.end());
+  // The same shell with every other triangle flipped: no consistent outside.
+  TriMesh mixed = closed;
+  for (size_t f = 0; f < mixed.triangles.size(); f += 2) std::swap(mixed.triangles[f][1], mixed.triangles[f][2]);
+  // Inside out: consistently oriented, so culled, and then the far side shows.
+  TriMesh inverted = closed;
+  for (Tri& t : inverted.triangles) std::swap(t[1], t[2]);
+
+  auto draw = [&](const TriMesh& m, const OrbitCamera& cam, bool cull) {
+    return render(
+        [&, cull](Renderer& r) {
+          DrawableHandle h;
+          Status s = r.upload_mesh(m, h);
+          if (s) r.style(h)->cull_hidden_back_faces = cull;
+          return s;
+        },
+        cam.matrices(1.0f));
+  };
+  OrbitCamera side = canonical_view(CanonicalView::ThreeQuarter, bounding_box(closed.positions), 1.0f);
+  OrbitCamera below = side;
+  below.pitch_deg = -70.0f;  // looking up into the open bottom
+  for (const OrbitCamera& cam : {side, below}) {
+    for (const TriMesh* m : std::vector<const TriMesh*>{&closed, &open, &mixed}) {
+      const ImageDiff d = compare(draw(*m, cam, true), draw(*m, cam, false));
+      INFO("pitch " << cam.pitch_deg << ", mesh of " << m->triangles.size() << " triangles: max difference " << d.max);
+      CHECK(d.max == 0);
+    }
+  }
+  // From below the open shell's inside shows (lit, not background): the
+  // hole test kept the back faces.
+  const Image up = draw(open, below, true);
+  const Image up_closed = draw(closed, below, true);
+  CHECK(compare(up, up_closed).fraction > 0.01);
+  const ImageDiff inv = compare(draw(inverted, side, true), draw(inverted, side, false));
+  INFO("inside-out shell, culled vs not: " << 100 * inv.fraction << " % differ");
+  CHECK(inv.fraction > 0.05);
 }
