@@ -137,6 +137,12 @@ struct RendererOptions {
   // time (still without re-allocating it). Measured in `likeness bench --only
   // render` (docs/render.md).
   bool upload_dirty_range = true;
+  // glGetError after every draw() and animation update. Natively it is
+  // cheap; in a browser it is a synchronous round trip to the GPU process
+  // that waits for every queued command (SwiftShader: the whole previous
+  // draw), which stalls the page once per frame. The web viewer turns it off;
+  // uploads always check.
+  bool check_errors_every_frame = true;
 };
 
 class Renderer {

@@ -74,10 +74,15 @@ float blinn_phong(vec3 n, vec3 l, vec3 v) {
 void main() {
   // Barycentrics are 0 on an edge and grow inwards; fwidth turns them into
   // pixels. Each of the two triangles sharing an edge draws half the line.
-  vec3 d = fwidth(v_barycentric);
-  float half_width = 0.5 * u_wire_width;
-  vec3 edge_ramp = smoothstep(d * (half_width - 0.5), d * (half_width + 0.5), v_barycentric);
-  float edge = u_wireframe ? 1.0 - min(min(edge_ramp.x, edge_ramp.y), edge_ramp.z) : 0.0;
+  // (Unrolled meshes only; a uniform branch, so derivatives stay defined,
+  // and the common case pays nothing for it.)
+  float edge = 0.0;
+  if (u_wireframe) {
+    vec3 d = fwidth(v_barycentric);
+    float half_width = 0.5 * u_wire_width;
+    vec3 edge_ramp = smoothstep(d * (half_width - 0.5), d * (half_width + 0.5), v_barycentric);
+    edge = 1.0 - min(min(edge_ramp.x, edge_ramp.y), edge_ramp.z);
+  }
 
   if (!u_surface) {
     if (edge < 0.02) discard;
@@ -116,7 +121,9 @@ void main() {
   float direct_ao = mix(1.0, ao, 0.8);
 
   float ndv = max(dot(n, v), 0.0);
-  float fresnel = 0.04 + 0.96 * pow(1.0 - ndv, 5.0);
+  // Powers by multiplication: software rasterizers pay for every pow().
+  float m1 = 1.0 - ndv, m2 = m1 * m1;
+  float fresnel = 0.04 + 0.96 * (m2 * m2 * m1);
   float ambient_t = 0.5 + 0.5 * n.y;
   vec3 color = albedo * mix(u_ambient_ground, u_ambient_sky, ambient_t) * ao;
   color += direct_ao * u_key_color *
@@ -126,7 +133,7 @@ void main() {
            (albedo * max(dot(n, fill), 0.0) + vec3(0.3 * u_specular) * blinn_phong(n, fill, v));
   // Rim: light from behind grazing the silhouette, strongest where the
   // surface turns away from the viewer.
-  float grazing = pow(1.0 - ndv, 2.0);
+  float grazing = m2;
   color += ao * u_rim_color * grazing * max(dot(n, rim) + 0.3, 0.0) * mix(albedo, vec3(1.0), 0.3);
 
   color = tone_map(color * u_exposure);

@@ -7,6 +7,8 @@
 //   show_generic_head()                            -> "" or an error message
 //   show_mesh_keep_view(...)  as show_mesh, the camera stays (stage/level switch)
 //   update_positions(positions) -> "" or error: animation frame, same #V
+//     (Float32Array #V*3; only moved vertices are renormalized and re-sent);
+//     last_update() -> {moved, renormalized, uploaded} vertex counts of it
 //   show_textured_mesh(positions, indices, uvs, width, height, channels, pixels)
 //     -> "" or error: a head with its skin texture (camera kept)
 //   set_markers(positions, colors) -> "": big points over the model (the
@@ -66,6 +68,10 @@ struct Viewer {
   double last_draw_ms = 0;
   std::string startup_error;
   bool panning = false, orbiting = false;
+  // Animation: the last frame's positions (reused, #V*3) and what its
+  // update did.
+  std::vector<float> animation_positions;
+  lk::MeshUpdateStats last_update;
 };
 Viewer* g_viewer = nullptr;
 
@@ -182,13 +188,24 @@ std::string js_show_mesh_keep_view(val positions, val normals, val colors, val i
   return s.ok() ? std::string() : s.message;
 }
 
-// An animation frame: new positions for the shown mesh (same vertex count).
+// An animation frame: new positions for the shown mesh (same vertex count),
+// a Float32Array of #V*3. Copied once into a buffer kept between frames (no
+// allocation per frame); the renderer re-sends only what moved.
 std::string js_update_positions(val positions) {
   if (!g_viewer || !g_viewer->startup_error.empty()) return "the viewer is not running";
-  lk::PointCloud cloud;  // reuses the length/finiteness checks
-  lk::Status s = lk::web::cloud_from_arrays(from_js<float>(positions), {}, {}, cloud);
-  if (s.ok()) s = g_viewer->scene.update_positions(cloud.positions);
-  return s.ok() ? std::string() : s.message;
+  if (positions.isUndefined() || positions.isNull()) return "no positions";
+  const size_t n = positions["length"].as<size_t>();
+  if (n == 0 || n % 3 != 0) return "positions: length " + std::to_string(n) + " is not a positive multiple of 3";
+  std::vector<float>& staging = g_viewer->animation_positions;
+  if (staging.size() != n) staging.resize(n);
+  // Float32Array.set into a view of the heap: one memcpy for a typed array
+  // (a plain JS array is converted element by element).
+  val(emscripten::typed_memory_view(n, staging.data())).call<void>("set", positions);
+  lk::MeshUpdateStats stats;
+  const lk::Status s = g_viewer->scene.update_positions(staging.data(), n / 3, &stats);
+  if (!s.ok()) return s.message;
+  g_viewer->last_update = stats;
+  return std::string();
 }
 
 // A head with its skin texture: the mesh as show_mesh_keep_view plus uvs
@@ -352,6 +369,15 @@ void js_set_profiling(bool on) {
   if (g_viewer) g_viewer->profiling = on;
 }
 double js_last_draw_ms() { return g_viewer ? g_viewer->last_draw_ms : 0; }
+// What the last update_positions did: {moved, renormalized, uploaded} vertices.
+val js_last_update() {
+  val o = val::object();
+  const lk::MeshUpdateStats s = g_viewer ? g_viewer->last_update : lk::MeshUpdateStats{};
+  o.set("moved", s.moved_vertices);
+  o.set("renormalized", s.renormalized);
+  o.set("uploaded", s.uploaded_vertices);
+  return o;
+}
 
 int js_frames_drawn() { return g_viewer ? g_viewer->frames_drawn : 0; }
 std::string js_startup_error() { return g_viewer ? g_viewer->startup_error : std::string("not started"); }
@@ -382,6 +408,7 @@ EMSCRIPTEN_BINDINGS(likeness_viewer) {
   emscripten::function("set_profiling", &js_set_profiling);
   emscripten::function("set_render_scale", &js_set_render_scale);
   emscripten::function("last_draw_ms", &js_last_draw_ms);
+  emscripten::function("last_update", &js_last_update);
   emscripten::function("startup_error", &js_startup_error);
 }
 

@@ -87,7 +87,13 @@ Status start_head(TriMesh& out) {
   return Status::success();
 }
 
-Status ViewerScene::init() { return renderer_.init(); }
+Status ViewerScene::init() {
+  RendererOptions options;
+  // glGetError per frame would make the page wait for each draw to finish
+  // in the GPU process (see RendererOptions); uploads still check.
+  options.check_errors_every_frame = false;
+  return renderer_.init(options);
+}
 
 Status ViewerScene::replace(DrawableHandle fresh, bool keep_view) {
   BBox box;
@@ -130,6 +136,17 @@ Status ViewerScene::update_positions(const std::vector<Vec3>& positions) {
     return Status::error(ErrorCode::InvalidInput, std::to_string(positions.size()) + " positions for a mesh of " +
                                                       std::to_string(model_vertices_) + " vertices");
   if (Status s = renderer_.update_mesh(model_, positions); !s.ok()) return s;
+  dirty_ = true;
+  return Status::success();
+}
+
+Status ViewerScene::update_positions(const float* positions_xyz, size_t vertex_count, MeshUpdateStats* stats) {
+  if (model_ == kNoHandle || model_is_points_)
+    return Status::error(ErrorCode::InvalidInput, "no mesh is shown to update");
+  if (vertex_count != model_vertices_)
+    return Status::error(ErrorCode::InvalidInput, std::to_string(vertex_count) + " positions for a mesh of " +
+                                                      std::to_string(model_vertices_) + " vertices");
+  if (Status s = renderer_.update_mesh_positions(model_, positions_xyz, vertex_count, stats); !s.ok()) return s;
   dirty_ = true;
   return Status::success();
 }

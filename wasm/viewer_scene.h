@@ -43,6 +43,10 @@ class ViewerScene {
   // Animation: new positions (#V, same topology) for the shown mesh; normals
   // are recomputed. Fails when no mesh is shown or the count differs.
   Status update_positions(const std::vector<Vec3>& positions);
+  // The same from #V by 3 floats (the worker's Float32Array, copied into the
+  // heap): only the vertices that moved are renormalized and re-sent (see
+  // Renderer::update_mesh_positions). `stats` is optional.
+  Status update_positions(const float* positions_xyz, size_t vertex_count, MeshUpdateStats* stats = nullptr);
 
   // The skin texture of a textured head: the shown mesh must carry uvs
   // (show_mesh with TriMesh::uvs). Replaced with the model.
