@@ -12,6 +12,7 @@
 #include "multires/fold_limit.h"
 #include "multires/multires.h"
 #include "raycast/bvh.h"
+#include "raycast/self_intersection.h"
 #include "subdiv/butterfly.h"
 
 #if __has_include("head/generic_head.h") && !defined(LK_BENCH_NO_HEAD)
@@ -255,6 +256,39 @@ void bench_mesh(const NamedMesh& nm, bool quick) {
   }
 }
 
+#ifdef LK_BENCH_HAVE_HEAD
+// The generic head's rims (eye rims, lip lines) as crease curves against the
+// plain scheme: level-3 self-intersections of the smooth surface and the
+// cost of the creased stencils. (The OpenMesh comparison above is without
+// creases: OpenMesh's ModifiedButterflyT has no crease rules.)
+void bench_head_creases(bool quick) {
+  GenericHead head;
+  if (!load_generic_head(head).ok()) return;
+  ButterflyCreases creases;
+  for (const CreaseCurve& c : head.annotations.creases) add_crease_polyline(c.vertices, c.closed, creases);
+  const int L = 3, reps = quick ? 3 : 11;
+  std::printf("\n-- generic head with its %zu crease curves (%zu tagged control edges, %zu corners)\n",
+              head.annotations.creases.size(), creases.edges.size(), creases.corners.size());
+  for (int with = 0; with < 2; ++with) {
+    const ButterflyCreases used = with ? creases : ButterflyCreases{};
+    std::vector<ButterflyLevel> levels;
+    if (!build_butterfly_levels(head.mesh, used, L, levels).ok()) return;
+    const double t_build = median_ms(reps, [&] { build_butterfly_levels(head.mesh, used, L, levels); });
+    std::vector<std::vector<Vec3>> P;
+    apply_all(levels, head.mesh.positions, P);
+    TriMesh fine;
+    fine.positions = P[L];
+    fine.triangles = levels.back().fine_triangles;
+    std::vector<std::array<int, 2>> pairs;
+    find_self_intersections(fine, pairs);
+    size_t entries = 0;
+    for (const auto& lv : levels) entries += lv.stencil_weights.size();
+    std::printf("   %s: build %.2f ms, %zu stencil entries; smooth level %d self-intersecting pairs: %zu\n",
+                with ? "creased" : "plain  ", t_build, entries, L, pairs.size());
+  }
+}
+#endif
+
 // The displacement round trip on a synthetic scan: the "scan" is the
 // refined control surface plus a smooth relief along its normals (a few mm
 // on a head) and noise, sampled densely; measured displacements should bring
@@ -344,6 +378,9 @@ int run(const Args& args) {
               load.c_str());
   const auto meshes = bench_meshes(args);
   for (const NamedMesh& nm : meshes) bench_mesh(nm, quick);
+#ifdef LK_BENCH_HAVE_HEAD
+  bench_head_creases(quick);
+#endif
   if (!meshes.empty()) bench_round_trip(meshes.front(), quick);
   return 0;
 }
