@@ -150,7 +150,90 @@ bool preconditioned_cg(const SpMat& H, const VecX& g, const Eigen::SimplicialLDL
 
 bool finite(const Vec3& p) { return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()); }
 
+Vec3 triangle_normal(const VecX& x, const Tri& t) {
+  const Vec3 a = x.segment<3>(3 * t[0]), b = x.segment<3>(3 * t[1]), c = x.segment<3>(3 * t[2]);
+  return (b - a).cross(c - a);
+}
+
+// The fold guard (header comment): per-vertex anchors a_v with weights g_v,
+// E_guard = 1/#V sum_v g_v |x_v - a_v|^2, and the reference's triangle
+// normals that say which way each triangle must face.
+struct FoldGuard {
+  std::vector<Vec3> reference_normals;  // #F, unnormalized
+  VecX anchor;                          // 3#V: a_v (meaningful where g_v > 0)
+  std::vector<double> weight;           // #V: g_v
+  SpMat hessian;                        // diag(g) / #V, per coordinate
+  VecX gradient;                        // diag(g) a / #V
+
+  std::vector<int> turned(const std::vector<Tri>& triangles, const VecX& x) const {
+    std::vector<int> out;
+    for (size_t f = 0; f < triangles.size(); ++f)
+      if (!(triangle_normal(x, triangles[f]).dot(reference_normals[f]) > 0)) out.push_back(static_cast<int>(f));
+    return out;
+  }
+
+  double energy(const VecX& x, double inv_v) const {
+    double e = 0;
+    for (size_t v = 0; v < weight.size(); ++v)
+      if (weight[v] > 0) e += weight[v] * (x.segment<3>(3 * v) - anchor.segment<3>(3 * v)).squaredNorm();
+    return e * inv_v;
+  }
+
+  void reset(int nv, double inv_v) {
+    weight.assign(nv, 0.0);
+    anchor = VecX::Zero(3 * nv);
+    rebuild(inv_v);
+  }
+
+  // The hessian keeps the full diagonal as its pattern (explicit zeros), so
+  // the solver's symbolic analysis stays valid when weights change.
+  void rebuild(double inv_v) {
+    const int n = static_cast<int>(weight.size());
+    std::vector<Triplet> t;
+    t.reserve(3 * n);
+    gradient = VecX::Zero(3 * n);
+    for (int v = 0; v < n; ++v)
+      for (int c = 0; c < 3; ++c) {
+        t.emplace_back(3 * v + c, 3 * v + c, weight[v] * inv_v);
+        gradient[3 * v + c] = weight[v] * inv_v * anchor[3 * v + c];
+      }
+    hessian.resize(3 * n, 3 * n);
+    hessian.setFromTriplets(t.begin(), t.end());
+  }
+
+  // Raises g_v on the corners of the given triangles, anchoring a vertex
+  // where it is now (x) when it is first guarded; returns how many rose.
+  int stiffen(const std::vector<int>& faces, const std::vector<Tri>& triangles, const VecX& x,
+              const GlobalFitOptions& o) {
+    std::vector<char> corner(weight.size(), 0);
+    for (int f : faces)
+      for (int v : triangles[f]) corner[v] = 1;
+    int raised = 0;
+    for (size_t v = 0; v < weight.size(); ++v) {
+      if (!corner[v]) continue;
+      const double g = weight[v] > 0 ? std::min(weight[v] * o.fold_stiffen_factor, o.fold_max_stiffness)
+                                     : o.fold_stiffness;
+      if (!(g > weight[v])) continue;
+      if (weight[v] == 0) anchor.segment<3>(3 * v) = x.segment<3>(3 * v);
+      weight[v] = g;
+      ++raised;
+    }
+    return raised;
+  }
+};
+
 }  // namespace
+
+std::vector<int> turned_triangles(const std::vector<Vec3>& reference, const TriMesh& mesh) {
+  std::vector<int> out;
+  if (reference.size() != mesh.positions.size()) return out;
+  for (int f = 0; f < mesh.num_triangles(); ++f) {
+    const Tri& t = mesh.triangles[f];
+    const Vec3 n0 = (reference[t[1]] - reference[t[0]]).cross(reference[t[2]] - reference[t[0]]);
+    if (!(face_normal_area(mesh, f).dot(n0) > 0)) out.push_back(f);
+  }
+  return out;
+}
 
 Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const MeshTopology& topology,
                   const GlobalFitTerms& terms, const GlobalFitOptions& options, TriMesh& out,
@@ -174,9 +257,39 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
   for (int v : terms.constrained_vertices)
     if (v < 0 || v >= nv)
       return Status::error(ErrorCode::InvalidInput, "global fit: constrained vertex index out of range");
+  if (!terms.fold_reference.empty() && static_cast<int>(terms.fold_reference.size()) != nv)
+    return Status::error(ErrorCode::InvalidInput, "global fit: the fold reference has " +
+                                                      std::to_string(terms.fold_reference.size()) +
+                                                      " vertices, the mesh " + std::to_string(nv));
+  for (const Vec3& p : terms.fold_reference)
+    if (!finite(p)) return Status::error(ErrorCode::InvalidInput, "global fit: non-finite fold reference vertex");
 
   const VecX rest = to_vector(mesh.positions);
-  const LinearTerm smooth = smooth_term(topology, rest, options.preserve_rest_shape);
+  const VecX reference = terms.fold_reference.empty() ? rest : to_vector(terms.fold_reference);
+  std::vector<Vec3> reference_normals(mesh.triangles.size());
+  for (size_t f = 0; f < mesh.triangles.size(); ++f)
+    reference_normals[f] = triangle_normal(reference, mesh.triangles[f]);
+  std::vector<int> turned_in_input;
+  for (size_t f = 0; f < mesh.triangles.size(); ++f)
+    if (!(triangle_normal(rest, mesh.triangles[f]).dot(reference_normals[f]) > 0))
+      turned_in_input.push_back(static_cast<int>(f));
+  result.turned_before = static_cast<int>(turned_in_input.size());
+  LinearTerm smooth = smooth_term(topology, rest, options.preserve_rest_shape);
+  if (options.preserve_rest_shape && !turned_in_input.empty()) {
+    // L0 is the input's umbrella vector, except around triangles the input
+    // has turned against the reference (local fitting's blend squashes the
+    // box of a hair-covered ear): there the reference's, so that E_smooth
+    // pulls them back instead of holding them turned.
+    const VecX lap_reference = smooth.R * reference;
+    std::vector<char> repaired(nv, 0);
+    for (int f : turned_in_input)
+      for (int v : mesh.triangles[f]) {
+        repaired[v] = 1;
+        for (int u : topology.rings[v]) repaired[u] = 1;
+      }
+    for (int v = 0; v < nv; ++v)
+      if (repaired[v]) smooth.b.segment<3>(3 * v) = lap_reference.segment<3>(3 * v);
+  }
   const LinearTerm binding = binding_term(terms.binding_edges, nv, rest);
   const LinearTerm constraint = constraint_term(terms.constrained_vertices, nv, rest);
   const double inv_v = 1.0 / nv;
@@ -192,6 +305,11 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
     h_fixed += SpMat(constraint.R.transpose() * constraint.R) * (options.constraint_weight * inv_v);
     g_fixed += constraint.R.transpose() * constraint.b * (options.constraint_weight * inv_v);
   }
+
+  FoldGuard guard;
+  guard.reference_normals = std::move(reference_normals);
+  guard.reset(nv, inv_v);
+  const bool guarding = options.fold_guard_attempts > 0;
 
   const double edge = mean_edge_length(mesh);
   // A tiny pull towards the current positions keeps the system definite for
@@ -220,10 +338,10 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
     it.e_smooth = smooth.energy(xx) * inv_v;
     it.e_binding = binding.energy(xx) * inv_v;
     it.e_constraint = constraint.energy(xx) * inv_v;
+    it.e_guard = guard.energy(xx, inv_v);
     return it.e_dist + lambda * it.e_smooth + options.binding_weight * it.e_binding +
-           options.constraint_weight * it.e_constraint;
+           options.constraint_weight * it.e_constraint + it.e_guard;
   };
-
   for (int r = 0; r < rounds; ++r) {
     const bool final_pass = r >= sub_rounds;
     const double lambda = options.smooth_weights[std::min(r, sub_rounds - 1)];
@@ -245,6 +363,9 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       for (const auto& h : proj.hits) sum += std::min(h.squared_distance, tau * tau);
       proj.dist_energy = sum / set.size();
     }
+    // The guard starts afresh each round: anchors a stiff round needed
+    // would hold vertices off the data in the relaxed rounds.
+    if (guarding) guard.reset(nv, inv_v);
     GlobalFitIteration scratch;
     double e_old = energy_parts(x, proj.dist_energy, lambda, scratch);
 
@@ -305,67 +426,112 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       for (int i = 0; i < 3 * nv; ++i) trip.emplace_back(i, i, tikhonov * w);
       SpMat h_data(3 * nv, 3 * nv);
       h_data.setFromTriplets(trip.begin(), trip.end());
-      const SpMat H = h_data + h_reg;
       g += (tikhonov * w) * x;
-      // The matrix changes little between iterations (the correspondences
-      // move, lambda steps down), so it is factorized once and later
-      // iterations run conjugate gradients preconditioned by that factor: a
-      // few cheap triangular solves instead of a new factorization. When CG
-      // does not converge quickly the matrix is factorized afresh.
-      VecX x_star;
-      bool solved = false;
-      if (factor_fresh_round >= 0) solved = preconditioned_cg(H, g, solver, x, x_star);
-      if (!solved) {
-        if (!analyzed) {
-          solver.analyzePattern(H);
-          analyzed = true;
-        }
-        solver.factorize(H);
-        if (solver.info() != Eigen::Success)
-          return Status::error(ErrorCode::NotConverged, "global fit: the normal equations are singular");
-        factor_fresh_round = r;
-        x_star = solver.solve(g);
-      }
-      if (!x_star.allFinite())
-        return Status::error(ErrorCode::NotConverged, "global fit: the solve produced non-finite positions");
+      const SpMat h_data_reg = h_data + h_reg;
 
-      // Backtracking on the true energy: the linearization is exact only at
-      // the current correspondences.
       GlobalFitIteration rec;
       rec.round = r;
       rec.points = count;
       rec.smooth_weight = lambda;
       rec.trim_distance = tau;
-      rec.energy_before = e_old;
-      double step = 1.0;
       bool accepted = false;
-      Projection trial;
-      for (int bt = 0; bt < 6; ++bt, step *= 0.5) {
-        const VecX xt = x + step * (x_star - x);
-        project(points, set, work, xt, tau, &proj.hits, trial);
-        GlobalFitIteration parts;
-        const double e_new = energy_parts(xt, trial.dist_energy, lambda, parts);
-        if (e_new <= e_old) {
-          accepted = true;
-          x = xt;
-          proj = std::move(trial);
-          rec.energy_after = e_new;
-          rec.e_dist = parts.e_dist;
-          rec.e_smooth = parts.e_smooth;
-          rec.e_binding = parts.e_binding;
-          rec.e_constraint = parts.e_constraint;
-          rec.step = step;
-          break;
+      VecX x_new;
+      Projection proj_new;
+      // Triangles already turned at x may stay so (the guard works on
+      // them); no other may turn in this step.
+      std::vector<char> turned_at_x(mesh.triangles.size(), 0);
+      if (guarding)
+        for (int f : guard.turned(mesh.triangles, x)) turned_at_x[f] = 1;
+      auto new_turns = [&](const VecX& xt) {
+        std::vector<int> fresh;
+        for (int f : guard.turned(mesh.triangles, xt))
+          if (!turned_at_x[f]) fresh.push_back(f);
+        return fresh;
+      };
+      // Solve; backtrack to the longest step that lowers E_global and turns
+      // no triangle; when the full step would have turned some, stiffen
+      // around them (fold guard) and solve again from the same x, at most
+      // fold_guard_attempts times.
+      for (int attempt = 0;; ++attempt) {
+        const SpMat H = h_data_reg + guard.hessian;
+        const VecX rhs = g + guard.gradient;
+        // The matrix changes little between iterations (the correspondences
+        // move, lambda steps down), so it is factorized once and later
+        // iterations run conjugate gradients preconditioned by that factor:
+        // a few cheap triangular solves instead of a new factorization. When
+        // CG does not converge quickly the matrix is factorized afresh.
+        VecX x_star;
+        bool solved = false;
+        if (factor_fresh_round >= 0) solved = preconditioned_cg(H, rhs, solver, x, x_star);
+        if (!solved) {
+          if (!analyzed) {
+            solver.analyzePattern(H);
+            analyzed = true;
+          }
+          solver.factorize(H);
+          if (solver.info() != Eigen::Success)
+            return Status::error(ErrorCode::NotConverged, "global fit: the normal equations are singular");
+          factor_fresh_round = r;
+          x_star = solver.solve(rhs);
         }
+        if (!x_star.allFinite())
+          return Status::error(ErrorCode::NotConverged, "global fit: the solve produced non-finite positions");
+
+        // The fold check is cheap, the energy (a projection) is not: a full
+        // step that would turn triangles is answered by stiffening at once.
+        rec.energy_before = e_old;
+        accepted = false;
+        std::vector<int> folds_of_full_step;
+        if (guarding) folds_of_full_step = new_turns(x_star);
+        if (!folds_of_full_step.empty() && attempt < options.fold_guard_attempts) {
+          const int raised = guard.stiffen(folds_of_full_step, mesh.triangles, x, options);
+          if (raised > 0) {
+            rec.stiffened += raised;
+            guard.rebuild(inv_v);
+            e_old = energy_parts(x, proj.dist_energy, lambda, scratch);
+            continue;
+          }
+        }
+        // Backtracking on the true energy: the linearization is exact only
+        // at the current correspondences.
+        double step = 1.0;
+        for (int bt = 0; bt < 6; ++bt, step *= 0.5) {
+          const VecX xt = x + step * (x_star - x);
+          if (guarding && !new_turns(xt).empty()) continue;
+          Projection trial;
+          project(points, set, work, xt, tau, &proj.hits, trial);
+          GlobalFitIteration parts;
+          const double e_new = energy_parts(xt, trial.dist_energy, lambda, parts);
+          if (e_new <= e_old) {
+            accepted = true;
+            x_new = xt;
+            proj_new = std::move(trial);
+            rec.energy_after = e_new;
+            rec.e_dist = parts.e_dist;
+            rec.e_smooth = parts.e_smooth;
+            rec.e_binding = parts.e_binding;
+            rec.e_constraint = parts.e_constraint;
+            rec.e_guard = parts.e_guard;
+            rec.step = step;
+            break;
+          }
+        }
+        break;
       }
       if (!accepted) {
         from_vector(x, work.positions);  // project() left a trial in work
+        rec.energy_before = e_old;
         rec.energy_after = e_old;
         energy_parts(x, proj.dist_energy, lambda, rec);
         rec.step = 0;
+        rec.turned = static_cast<int>(guard.turned(mesh.triangles, x).size());
         result.iterations.push_back(rec);
         break;
       }
+      from_vector(x_new, work.positions);
+      x = std::move(x_new);
+      proj = std::move(proj_new);
+      rec.turned = static_cast<int>(guard.turned(mesh.triangles, x).size());
       result.iterations.push_back(rec);
       const double change = (e_old - rec.energy_after) / std::max(e_old, 1e-300);
       e_old = rec.energy_after;
@@ -373,6 +539,8 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
     }
   }
   result.rounds = rounds;
+  result.turned_after = static_cast<int>(guard.turned(mesh.triangles, x).size());
+  for (const auto& it : result.iterations) result.guard_raises += it.stiffened;
   out = mesh;
   from_vector(x, out.positions);
   report(progress, "global_fitting", 1.0);

@@ -89,16 +89,14 @@ Status zero_pocket_displacements(const std::vector<char>& pocket, MultiresMesh& 
         ++zeroed;
       }
     if (l == mr.num_levels()) break;
-    TriMesh level;
-    level.positions.resize(mr.num_vertices(l));
-    level.triangles = mr.triangles(l);
-    MeshTopology topo;
-    const Status st = build_topology(level, topo);
-    if (!st) return st;
-    std::vector<char> next(mr.num_vertices(l + 1), 0);
+    // New vertex k of the level sits on edge_endpoints[k] (the Butterfly's
+    // own edge order; a MeshTopology of the level numbers its edges
+    // differently from level 2 on, which left displacements in the pockets).
+    const ButterflyLevel& level = mr.levels[l];
+    std::vector<char> next(level.num_fine_vertices, 0);
     std::copy(inner.begin(), inner.end(), next.begin());
-    for (size_t e = 0; e < topo.edges.size() && inner.size() + e < next.size(); ++e)
-      next[inner.size() + e] = inner[topo.edges[e].v0] || inner[topo.edges[e].v1];
+    for (int k = 0; k < level.num_new_vertices(); ++k)
+      next[level.num_coarse_vertices + k] = inner[level.edge_endpoints[k][0]] || inner[level.edge_endpoints[k][1]];
     inner.swap(next);
   }
   return evaluate(mr);
@@ -301,14 +299,30 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   // The pockets (eye sockets, mouth bag) are not skin: a scanner sees the
   // eyeball or the closed lips in front of them, and points there pulled
   // the sockets out through the lids (creases from the eye corners on the
-  // menpo3d James scan). They stay where local fitting put them, as the
-  // paper's E_constraint keeps the inner lips, and the points whose nearest
-  // surface is a pocket do not pull the skin either.
+  // menpo3d James scan), so the points whose nearest surface is a pocket do
+  // not pull. The mouth bag stays where local fitting put it, as the
+  // paper's E_constraint keeps the inner lips. An eye socket instead keeps
+  // its SHAPE and follows its rim (its edges are binding edges, E_binding
+  // binds edge vectors): held in place, it made the lid margin between rim
+  // and socket turn over wherever the lids moved (James: the eyes lie 10 mm
+  // below where the alignment put the generic ones).
   const std::vector<char> pocket = pocket_vertices(generic.mesh, topo, ann);
   GlobalFitTerms terms;
   terms.binding_edges = ann.binding_edges;
-  for (int v = 0; v < static_cast<int>(pocket.size()); ++v)
-    if (pocket[v]) terms.constrained_vertices.push_back(v);
+  {
+    std::vector<char> mouth_bag(pocket.size(), 0);
+    for (int v : ann.constrained_vertices)
+      if (v >= 0 && v < static_cast<int>(mouth_bag.size())) mouth_bag[v] = 1;
+    auto in_eye_socket = [&](int v) { return pocket[v] && !mouth_bag[v]; };
+    for (int v = 0; v < static_cast<int>(pocket.size()); ++v)
+      if (mouth_bag[v]) terms.constrained_vertices.push_back(v);
+    for (const Edge& e : topo.edges)
+      if (in_eye_socket(e.v0) || in_eye_socket(e.v1)) terms.binding_edges.push_back({{e.v0, e.v1}});
+  }
+  // The template as aligned: the orientation every triangle must keep
+  // (global_fit.h, fold guard), and the rest shape where local fitting's
+  // blend already turned some (hair-covered ears squash their box).
+  terms.fold_reference = out.aligned.positions;
   std::vector<Vec3> skin_pts;
   std::vector<int> skin_index;
   skin_pts.reserve(pts.size());

@@ -170,8 +170,11 @@ TEST_CASE("fit_head: the real Fran (Cyberware face patch) is turned to face +z a
   CHECK(r.orientation.facing.z() < -0.5);
   CHECK(r.face_only);
   CHECK(r.near_fraction > 0.7);
-  CHECK(r.stages[2].distance.mean_pct < 0.2);
+  CHECK(r.stages[2].distance.mean_pct < 0.14);  // 0.116 measured (docs/fit_real.md)
   CHECK(r.stages[3].distance.mean_pct < 0.2);
+  // No control triangle turned over against the aligned generic head (11
+  // did before the fold guard).
+  CHECK(turned_triangles(r.aligned.positions, r.control).empty());
 }
 
 TEST_CASE("fit_head: the real James (menpo3d face capture in mm)") {
@@ -186,5 +189,13 @@ TEST_CASE("fit_head: the real James (menpo3d face capture in mm)") {
   for (const auto& s : r.stages) INFO(s.name << " mean " << s.distance.mean_pct << " %");
   CHECK(r.unit_to_metres == 0.001);
   CHECK_FALSE(r.orientation.differs);
+  CHECK(r.stages[2].distance.mean_pct < 0.14);  // 0.116 measured (docs/fit_real.md)
   CHECK(r.stages[3].distance.mean_pct < 0.2);
+  // The crease band from the eye corners to the ears was 36 control
+  // triangles turned over against the aligned generic head (local fitting
+  // handed 12 over); the fold guard and the rest shape repair leave none.
+  INFO("turned by local fitting: " << r.global_fit.turned_before);
+  CHECK(r.global_fit.turned_before > 0);
+  CHECK(r.global_fit.turned_after == 0);
+  CHECK(turned_triangles(r.aligned.positions, r.control).empty());
 }

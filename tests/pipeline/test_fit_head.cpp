@@ -111,7 +111,11 @@ TEST_CASE("fit_head: a synthetic scan is fitted, each stage closer than the last
     made_by_displacement += !mesh_triangles_cross(smooth[2], r.level_meshes[1].triangles[p[0]], r.level_meshes[1].triangles[p[1]]);
   INFO(pairs.size() << " crossing pairs at level 2, found before separating " << r.fold_limit.intersections_found);
   CHECK(static_cast<int>(pairs.size()) < r.fold_limit.intersections_found);
-  CHECK(4 * made_by_displacement < r.fold_limit.intersections_found);
+  // Under half: since the eye sockets follow their rims in global fitting
+  // (fit_head.cpp), lids displaced inwards cross the nearer socket more
+  // often (about a third of the pairs found; under a quarter with the
+  // sockets held in place, when this bound was a quarter).
+  CHECK(2 * made_by_displacement < r.fold_limit.intersections_found);
   // Global fit energies decrease monotonically.
   for (const auto& it : r.global_fit.iterations) CHECK(it.energy_after <= it.energy_before);
 }
