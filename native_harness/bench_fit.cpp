@@ -233,10 +233,12 @@ int run(const Args& args) {
     args.get_double("fit-area-ratio", opt.fold_limit.min_area_ratio, opt.fold_limit.min_area_ratio);
     args.get_double("fit-cap-pct", opt.displacement_max_pct, opt.displacement_max_pct);
     args.get_int("fit-levels", opt.levels, opt.levels);
+    args.get_int("fit-restarts", opt.fold_limit.max_intersection_restarts, opt.fold_limit.max_intersection_restarts);
     args.get_double("fit-line-edges", opt.displacement.fine_line_edges, opt.displacement.fine_line_edges);
     if (args.has("fit-no-climb")) opt.fold_limit.shrink_coarser_levels = false;
     if (args.has("fit-remeasure")) opt.displacement.remeasure_coarse_vertices = true;
     if (args.has("fit-no-creases")) opt.rim_creases = false;
+    if (args.has("fit-displaced-creases")) opt.fold_limit.undisplaced_creases = false;
     st = fit_head(cloud, generic, opt, r, obs);
     std::printf("\n   seed %d: %d points (%d above the neck cut), bbox diagonal %.3f m\n", seed, r.points,
                 r.fitted_points, r.bbox_diagonal);
@@ -315,8 +317,9 @@ int run(const Args& args) {
       std::printf("   fold limiter: %d rounds; per level bad found / vertices shrunk / zeroed:", fl.rounds);
       for (size_t l = 0; l < fl.bad_found.size(); ++l)
         std::printf(" L%zu %d/%d/%d", l, fl.bad_found[l], fl.shrunk[l], fl.zeroed[l]);
-      std::printf("; left %d; %d restarts; crossing pairs %d before separating, %d after\n", fl.remaining_bad,
-                  fl.restarts, fl.intersections_found, fl.intersections_left);
+      std::printf("; left %d; %d restarts; crossing pairs %d before separating, %d after; %d crease vertex displacements zeroed, %d corners of crossing pairs put on the smooth surface\n",
+                  fl.remaining_bad, fl.restarts, fl.intersections_found, fl.intersections_left, fl.crease_zeroed,
+                  fl.crossing_corrected);
     }
     sum_intersections += print_self_intersections(r, generic.annotations,
                                                   save.empty() ? "" : save + "/fit_seed" + std::to_string(seed));

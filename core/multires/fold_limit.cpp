@@ -28,6 +28,22 @@ inline bool bad_triangle(const Vec3& displaced, const Vec3& smooth, const FoldLi
 
 }  // namespace
 
+std::vector<std::vector<char>> crease_vertex_masks(const MultiresMesh& mesh) {
+  const int L = mesh.num_levels();
+  std::vector<std::vector<char>> out(L + 1);
+  for (int l = 0; l <= L; ++l) out[l].assign(mesh.num_vertices(l), 0);
+  for (int l = 0; l < L; ++l) {
+    const ButterflyLevel& lv = mesh.levels[l];
+    for (int k = 0; k < lv.num_new_vertices(); ++k) {
+      if (k >= static_cast<int>(lv.crease_edges.size()) || !lv.crease_edges[k]) continue;
+      for (int v : lv.edge_endpoints[k]) out[l][v] = 1;
+      out[l + 1][lv.num_coarse_vertices + k] = 1;
+    }
+    for (int v = 0; v < lv.num_coarse_vertices; ++v) out[l + 1][v] |= out[l][v];
+  }
+  return out;
+}
+
 Status smooth_positions(const MultiresMesh& mesh, std::vector<std::vector<Vec3>>& out) {
   return apply_all(mesh.levels, mesh.control, out);
 }
@@ -51,6 +67,7 @@ void count_bad_triangles(const MultiresMesh& mesh, int level, const std::vector<
 Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimitStats* stats) {
   if (!(options.shrink >= 0 && options.shrink < 1) || options.min_area_ratio < 0 || options.max_shrinks < 0 ||
       options.max_rounds < 0 || options.max_intersection_rounds < 0 || options.max_intersection_restarts < 0 ||
+      options.separation_repeats < 0 ||
       !(std::abs(options.min_normal_cos) <= 1))
     return Status::error(ErrorCode::InvalidInput,
                          "multires fold limit: shrink must be in [0, 1), the cosine in [-1, 1], ratios and counts >= 0");
@@ -60,11 +77,20 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
   std::vector<std::vector<Vec3>> smooth;
   s = smooth_positions(mesh, smooth);
   if (!s.ok()) return s;
+  FoldLimitStats st;
+  if (options.undisplaced_creases) {
+    const auto crease = crease_vertex_masks(mesh);
+    for (int l = 0; l <= L; ++l)
+      for (int v = 0; v < mesh.num_vertices(l); ++v)
+        if (crease[l][v] && mesh.displacements[l][v] != 0) {
+          mesh.displacements[l][v] = 0;
+          ++st.crease_zeroed;
+        }
+  }
   s = evaluate(mesh);
   if (!s.ok()) return s;
   MultiresState& state = mesh.state;
 
-  FoldLimitStats st;
   st.bad_found.assign(L + 1, 0);
   st.shrunk.assign(L + 1, 0);
   st.zeroed.assign(L + 1, 0);
@@ -101,10 +127,10 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
   // A triangle's own corners on its level; the changed ones are re-displaced
   // at once (N_l does not depend on d_l, so nothing else on level l moves).
   std::vector<int> changed;
-  auto shrink_corners = [&](int l, int f) {
+  auto shrink_corners = [&](int l, int f, const std::vector<char>* hold = nullptr) {
     bool any = false;
     for (int v : mesh.triangles(l)[f])
-      if (shrink_one(l, v)) {
+      if ((!hold || !(*hold)[v]) && shrink_one(l, v)) {
         any = true;
         changed.push_back(v);
         state.displaced[l][v] = displace(state.base[l][v], mesh.displacements[l][v], state.normals[l][v]);
@@ -231,89 +257,132 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
     std::vector<char> in_set(finest.triangles.size(), 0);
     int rounds = 0, full_searches = 0;
     std::set<std::array<int, 2>> unfixable;
-    while ((!pairs.empty() || !next_bad.empty()) && rounds < options.max_intersection_rounds) {
-      ++rounds;
-      ++st.rounds;
-      // A pair that crosses on the smooth surface too is not the
-      // displacements' doing: shrinking would only lose detail. Counted.
-      {
-        size_t kept = 0;
-        for (const auto& p : pairs) {
-          if (mesh_triangles_cross(smooth[L], mesh.triangles(L)[p[0]], mesh.triangles(L)[p[1]])) {
-            unfixable.insert(p);
-            continue;
+    std::vector<char> held(finest.positions.size(), 0);
+    for (int pass = 0;; ++pass) {
+      while ((!pairs.empty() || !next_bad.empty()) && rounds < options.max_intersection_rounds) {
+        ++rounds;
+        ++st.rounds;
+        // A pair that crosses on the smooth surface too is not the
+        // displacements' doing: shrinking would only lose detail. Counted.
+        {
+          size_t kept = 0;
+          for (const auto& p : pairs) {
+            if (mesh_triangles_cross(smooth[L], mesh.triangles(L)[p[0]], mesh.triangles(L)[p[1]])) {
+              unfixable.insert(p);
+              continue;
+            }
+            pairs[kept++] = p;
           }
-          pairs[kept++] = p;
+          pairs.resize(kept);
         }
-        pairs.resize(kept);
-      }
-      tris.clear();
-      for (const auto& p : pairs)
-        for (int f : p)
+        tris.clear();
+        for (const auto& p : pairs)
+          for (int f : p)
+            if (!in_set[f]) in_set[f] = 1, tris.push_back(f);
+        const size_t crossing_tris = tris.size();
+        for (int f : next_bad)
           if (!in_set[f]) in_set[f] = 1, tris.push_back(f);
-      for (int f : next_bad)
-        if (!in_set[f]) in_set[f] = 1, tris.push_back(f);
-      for (int f : tris) in_set[f] = 0;
-      changed.clear();
-      for (int f : tris) shrink_corners(L, f);
-      // A pair whose triangles carry no displacement on this level was
-      // crossed by the coarser levels: their parents' displacements are
-      // zeroed and everything is evaluated and searched again (a few times
-      // at most: each costs a full search). What still crosses then is the
-      // smooth Butterfly surface's own doing (a control mesh with sheets
-      // ~0.3 mm apart crosses itself at eye and mouth corners): counted.
-      int restart = -1;
-      for (const auto& p : pairs) {
-        bool movable = false;
-        for (int f : p)
-          for (int v : mesh.triangles(L)[f]) movable |= shrunk_in_round[L][v] == st.rounds;
-        if (movable) continue;
-        if (full_searches < options.max_intersection_restarts)
-          for (int f : p) {
-            const int k = shrink_above(L, f);
-            if (k >= 0) restart = restart < 0 ? k : std::min(restart, k);
+        for (int f : tris) in_set[f] = 0;
+        changed.clear();
+        // Corners put on the smooth surface (below) are not shrunk back
+        // towards the crossing; a fold they cause may shrink them.
+        for (size_t i = 0; i < tris.size(); ++i) shrink_corners(L, tris[i], i < crossing_tris ? &held : nullptr);
+        // A pair whose triangles carry no displacement on this level was
+        // crossed by the coarser levels: their parents' displacements are
+        // zeroed and everything is evaluated and searched again (a few times
+        // at most: each costs a full search). What still crosses then is the
+        // smooth Butterfly surface's own doing (a control mesh with sheets
+        // ~0.3 mm apart crosses itself at eye and mouth corners): counted.
+        int restart = -1;
+        for (const auto& p : pairs) {
+          bool movable = false;
+          for (int f : p)
+            for (int v : mesh.triangles(L)[f]) movable |= shrunk_in_round[L][v] == st.rounds;
+          if (movable) continue;
+          // Coarser levels crossed it, but the smooth surface does not: the
+          // corners go onto the smooth surface along their normals (a local
+          // dent; no re-evaluation of the levels above, no detail lost
+          // elsewhere).
+          // When the corners already are there, their neighbourhood (the
+          // triangles around them) follows, one ring per round.
+          if (options.crossing_corners_to_smooth) {
+            const size_t before = changed.size();
+            bool any = false;
+            for (int f : p) any |= correct_corners(L, f);
+            if (!any) {
+              const IndexRows& vf = mesh.links[L].vertex_faces;
+              for (int f : p)
+                for (int c : mesh.triangles(L)[f])
+                  for (int i = vf.offsets[c]; i < vf.offsets[c + 1]; ++i) any |= correct_corners(L, vf.items[i]);
+            }
+            for (size_t i = before; i < changed.size(); ++i) held[changed[i]] = 1, ++st.crossing_corrected;
+            if (any) continue;
           }
-        if (restart < 0) unfixable.insert(p);
-      }
-      if (restart >= 0) {
-        ++st.restarts;
-        ++full_searches;
-        for (int k = restart; k <= L; ++k) {
-          evaluate_level(mesh, k);
-          if (k < L) {
-            s = apply(mesh.levels[k], state.displaced[k], state.base[k + 1]);
-            if (!s.ok()) return s;
-          }
+          if (full_searches < options.max_intersection_restarts)
+            for (int f : p) {
+              const int k = shrink_above(L, f);
+              if (k >= 0) restart = restart < 0 ? k : std::min(restart, k);
+            }
+          if (restart < 0) unfixable.insert(p);
         }
-        finest.positions = state.displaced[L];
+        if (restart >= 0) {
+          ++st.restarts;
+          ++full_searches;
+          for (int k = restart; k <= L; ++k) {
+            evaluate_level(mesh, k);
+            if (k < L) {
+              s = apply(mesh.levels[k], state.displaced[k], state.base[k + 1]);
+              if (!s.ok()) return s;
+            }
+          }
+          // Only what moved is searched again (the levels' evaluation is
+          // cheap, a full search is not).
+          changed.clear();
+          for (int v = 0; v < static_cast<int>(finest.positions.size()); ++v)
+            if (state.displaced[L][v] != finest.positions[v]) changed.push_back(v), finest.positions[v] = state.displaced[L][v];
+          s = refit_bvh(finest, bvh);
+          if (!s.ok()) return s;
+          around_changed(L, around);
+          find_intersections_with(bvh, around, pairs);
+          next_bad.clear();
+          for (int f : around)
+            if (is_bad(L, f)) next_bad.push_back(f);
+          continue;
+        }
+        for (int v : changed) finest.positions[v] = state.displaced[L][v];
         s = refit_bvh(finest, bvh);
         if (!s.ok()) return s;
-        find_self_intersections(bvh, pairs);
-        unfixable.clear();
+        around_changed(L, around);
+        find_intersections_with(bvh, around, pairs);
         next_bad.clear();
-        for (int f = 0; f < static_cast<int>(finest.triangles.size()); ++f)
+        for (int f : around)
           if (is_bad(L, f)) next_bad.push_back(f);
-        continue;
       }
-      for (int v : changed) finest.positions[v] = state.displaced[L][v];
-      s = refit_bvh(finest, bvh);
-      if (!s.ok()) return s;
-      around_changed(L, around);
-      find_intersections_with(bvh, around, pairs);
-      next_bad.clear();
-      for (int f : around)
-        if (is_bad(L, f)) next_bad.push_back(f);
-    }
-    for (const auto& p : pairs) unfixable.insert(p);
-    st.intersections_left = static_cast<int>(unfixable.size());
-    // Shrinking towards the smooth surface can turn a triangle over
-    // against its neighbours: one more fold pass.
-    bool any_bad = false;
-    for (int f = 0; f < static_cast<int>(mesh.triangles(L).size()) && !any_bad; ++f) any_bad = is_bad(L, f);
-    if (any_bad) {
+      for (const auto& p : pairs) unfixable.insert(p);
+      st.intersections_left = static_cast<int>(unfixable.size());
+      // Shrinking towards the smooth surface can turn a triangle over
+      // against its neighbours: one more fold pass.
+      bool any_bad = false;
+      for (int f = 0; f < static_cast<int>(mesh.triangles(L).size()) && !any_bad; ++f) any_bad = is_bad(L, f);
+      if (!any_bad) break;
+      const std::vector<Vec3> before_folds = state.displaced[L];
       std::fill(checked.begin(), checked.end(), 1);  // keep the first pass's counts
       s = fold_pass(st.rounds + options.max_rounds);
       if (!s.ok()) return s;
+      if (pass >= options.separation_repeats) break;
+      // The fold pass may shrink corners back into a crossing: separate again
+      // around what it moved (a local search, not a full one).
+      changed.clear();
+      for (int v = 0; v < static_cast<int>(before_folds.size()); ++v)
+        if (state.displaced[L][v] != before_folds[v]) changed.push_back(v), finest.positions[v] = state.displaced[L][v];
+      if (changed.empty()) break;
+      s = refit_bvh(finest, bvh);
+      if (!s.ok()) return s;
+      ++st.rounds;  // a fresh round stamp for the visit marks
+      around_changed(L, around);
+      find_intersections_with(bvh, around, pairs);
+      next_bad.clear();
+      rounds = 0;
     }
   }
   for (int f = 0; f < static_cast<int>(mesh.triangles(L).size()); ++f) st.remaining_bad += is_bad(L, f);

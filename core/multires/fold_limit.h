@@ -53,6 +53,23 @@ struct FoldLimitOptions {
   // displacements are zeroed and everything is evaluated and searched again
   // (0: never; on the heads this cost 0.008 % of mean distance for little).
   int max_intersection_restarts = 0;
+  // A crossing pair whose corners carry no displacement on the finest level
+  // (crossed by coarser levels) but does not cross on the smooth surface:
+  // its corners get the displacement that puts them on the smooth surface
+  // along their normals, and are not shrunk back (false: left crossing,
+  // unless restarts are allowed). On the synthetic heads this took the ears'
+  // last crossings away without a full re-evaluation.
+  bool crossing_corners_to_smooth = true;
+  // The closing fold pass (below) may shrink corners back into a crossing:
+  // this many times, the crossings around what it moved are separated again
+  // and the fold pass repeated (searches are local, not full).
+  int separation_repeats = 2;
+  // Vertices on crease curves (MultiresMesh::creases, e.g. the eye rims and
+  // lip lines) keep no displacement on any level: their normal averages the
+  // two sheets meeting at the crease (skin and pocket), so it is no surface
+  // normal, and measuring along it reaches the other lip. The rims then
+  // follow the fitted control mesh's crease curves.
+  bool undisplaced_creases = true;
 };
 
 struct FoldLimitStats {
@@ -65,6 +82,8 @@ struct FoldLimitStats {
   int restarts = 0;            // evaluations resumed on a coarser level
   int intersections_found = 0; // crossing triangle pairs on the finest level before separating
   int intersections_left = 0;  // after (0 unless rounds ran out or the smooth surface itself crosses)
+  int crease_zeroed = 0;       // displacements of crease vertices set to 0 (all levels)
+  int crossing_corrected = 0;  // finest-level corners of crossing pairs put on the smooth surface
 };
 
 // Shrinks mesh.displacements as described above and re-evaluates the mesh.
@@ -77,6 +96,10 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options = {}, Fol
 // (normal turned over) and collapsed (area below the ratio, incl. zero area).
 void count_bad_triangles(const MultiresMesh& mesh, int level, const std::vector<Vec3>& smooth,
                          const FoldLimitOptions& options, int& flipped, int& collapsed);
+
+// Vertices on the crease curves of each level: L+1 masks, #V_l each (1 on a
+// tagged control edge's endpoints and every vertex refined from one).
+std::vector<std::vector<char>> crease_vertex_masks(const MultiresMesh& mesh);
 
 // The control positions refined without displacements: levels 0..L (#V_l each).
 Status smooth_positions(const MultiresMesh& mesh, std::vector<std::vector<Vec3>>& out);

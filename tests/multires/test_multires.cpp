@@ -486,14 +486,82 @@ TEST_CASE("multires: the limiter separates two displaced sheets that cross", "[m
     if (std::abs(mr.control[v].x() - 1.1) > 0.8) ++far, kept += mr.displacements[0][v] == 0.15;
   CHECK(far > 10);
   CHECK(kept == far);
-  // Without restarts the finest level cannot undo a crossing made on level 0.
+  // Without restarts, and without putting the corners on the smooth
+  // surface, the finest level cannot undo a crossing made on level 0.
   MultiresMesh off;
   REQUIRE(build_multires(two, 2, off).ok());
   for (int v = 0; v < off.num_vertices(0); ++v) off.displacements[0][v] = 0.15;
+  MultiresMesh on = off;
+  FoldLimitOptions no_correction;
+  no_correction.crossing_corners_to_smooth = false;
   FoldLimitStats off_stats;
-  REQUIRE(limit_folds(off, FoldLimitOptions{}, &off_stats).ok());
+  REQUIRE(limit_folds(off, no_correction, &off_stats).ok());
   CHECK(off_stats.intersections_left > 0);
   for (double d : off.displacements[0]) CHECK(d == 0.15);
+  // By default the finest level's corners there go onto the smooth surface
+  // (the spheres do not cross): no crossing left, level 0 untouched, no
+  // turned-over triangle, and the dent stays local.
+  FoldLimitStats on_stats;
+  REQUIRE(limit_folds(on, FoldLimitOptions{}, &on_stats).ok());
+  REQUIRE(find_self_intersections(level_mesh(on, 2), pairs).ok());
+  CHECK(pairs.empty());
+  CHECK(on_stats.crossing_corrected > 0);
+  CHECK(on_stats.restarts == 0);
+  for (double d : on.displacements[0]) CHECK(d == 0.15);
+  CHECK(count_flipped(on, 2) == 0);
+  int moved = 0;
+  for (double d : on.displacements[2]) moved += d != 0;
+  CHECK(moved < on.num_vertices(2) / 4);
+}
+
+TEST_CASE("multires: crease vertices keep no displacement through the fold limiter", "[multires][crease]") {
+  const int n = 6, height = 10;
+  TriMesh m = bumpy_patch(n, height);
+  auto id = [&](int i, int j) { return j * (2 * n + 1) + i; };
+  std::vector<int> column;
+  for (int j = 0; j <= height; ++j) column.push_back(id(n, j));
+  ButterflyCreases creases;
+  add_crease_polyline(column, false, creases);
+  MultiresMesh mr;
+  REQUIRE(build_multires(m, creases, 3, mr).ok());
+  const auto masks = crease_vertex_masks(mr);
+  // Level 0: the column; each level adds one vertex per crease edge, and
+  // the column's edges double.
+  int expected = height + 1, edges = height;
+  for (int l = 0; l <= 3; ++l) {
+    int count = 0;
+    for (char c : masks[l]) count += c;
+    INFO("level " << l);
+    CHECK(count == expected);
+    for (int v = 0; v < mr.num_vertices(l); ++v)
+      if (masks[l][v]) CHECK(std::abs(mr.state.base[l][v].x()) < 1e-12);  // on the column x = 0
+    expected += edges;
+    edges *= 2;
+  }
+  random_displacements(mr, 3, 0.02);
+  REQUIRE(evaluate(mr).ok());
+  FoldLimitStats stats;
+  REQUIRE(limit_folds(mr, FoldLimitOptions{}, &stats).ok());
+  int crease_left = 0, others = 0;
+  for (int l = 0; l <= 3; ++l)
+    for (int v = 0; v < mr.num_vertices(l); ++v) {
+      if (masks[l][v]) crease_left += mr.displacements[l][v] != 0;
+      else others += mr.displacements[l][v] != 0;
+    }
+  CHECK(crease_left == 0);
+  CHECK(stats.crease_zeroed > 0);
+  CHECK(others > mr.num_vertices(3) / 2);  // the rest keeps its detail
+  // The option off keeps them.
+  MultiresMesh kept;
+  REQUIRE(build_multires(m, creases, 3, kept).ok());
+  random_displacements(kept, 3, 0.02);
+  FoldLimitOptions keep;
+  keep.undisplaced_creases = false;
+  REQUIRE(limit_folds(kept, keep).ok());
+  int crease_kept = 0;
+  for (int l = 0; l <= 3; ++l)
+    for (int v = 0; v < kept.num_vertices(l); ++v) crease_kept += masks[l][v] && kept.displacements[l][v] != 0;
+  CHECK(crease_kept > 0);
 }
 
 TEST_CASE("multires: point normals keep a thin shell's inner sheet from pulling the outer one", "[multires]") {
