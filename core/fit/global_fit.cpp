@@ -269,27 +269,11 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
   std::vector<Vec3> reference_normals(mesh.triangles.size());
   for (size_t f = 0; f < mesh.triangles.size(); ++f)
     reference_normals[f] = triangle_normal(reference, mesh.triangles[f]);
-  std::vector<int> turned_in_input;
   for (size_t f = 0; f < mesh.triangles.size(); ++f)
-    if (!(triangle_normal(rest, mesh.triangles[f]).dot(reference_normals[f]) > 0))
-      turned_in_input.push_back(static_cast<int>(f));
-  result.turned_before = static_cast<int>(turned_in_input.size());
-  LinearTerm smooth = smooth_term(topology, rest, options.preserve_rest_shape);
-  if (options.preserve_rest_shape && !turned_in_input.empty()) {
-    // L0 is the input's umbrella vector, except around triangles the input
-    // has turned against the reference (local fitting's blend squashes the
-    // box of a hair-covered ear): there the reference's, so that E_smooth
-    // pulls them back instead of holding them turned.
-    const VecX lap_reference = smooth.R * reference;
-    std::vector<char> repaired(nv, 0);
-    for (int f : turned_in_input)
-      for (int v : mesh.triangles[f]) {
-        repaired[v] = 1;
-        for (int u : topology.rings[v]) repaired[u] = 1;
-      }
-    for (int v = 0; v < nv; ++v)
-      if (repaired[v]) smooth.b.segment<3>(3 * v) = lap_reference.segment<3>(3 * v);
-  }
+    result.turned_before += !(triangle_normal(rest, mesh.triangles[f]).dot(reference_normals[f]) > 0);
+  // The rest shape is the template as aligned (the reference), not the
+  // local fit: see the header.
+  const LinearTerm smooth = smooth_term(topology, reference, options.preserve_rest_shape);
   const LinearTerm binding = binding_term(terms.binding_edges, nv, rest);
   const LinearTerm constraint = constraint_term(terms.constrained_vertices, nv, rest);
   const double inv_v = 1.0 / nv;

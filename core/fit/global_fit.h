@@ -22,12 +22,11 @@
 // residual count as tau, and do not pull).
 //
 // Deviations from the paper, chosen on purpose:
-// - L0(v) is the umbrella vector of the mesh before global fitting when
+// - L0(v) is the umbrella vector of the generic head as aligned (the
+//   reference mesh, below; without one, of the input) when
 //   preserve_rest_shape is set (default): in holes the surface keeps the
-//   shape of the locally fitted generic head instead of shrinking towards
-//   its one-ring centroids (the paper's pure umbrella, L0 = 0, is available).
-//   Around triangles that the input already has turned against the
-//   reference mesh (below), L0 is the reference's umbrella vector.
+//   generic head's shape instead of shrinking towards its one-ring
+//   centroids (the paper's pure umbrella, L0 = 0, is available).
 // - r_e is the edge vector before global fitting. For the virtual lip edges,
 //   whose ends coincide in the generic head, that is the paper's sum of l_e^2;
 //   for mesh edges (behind the ears) binding the edge VECTOR keeps the ear's
@@ -53,17 +52,17 @@
 //   step that lowers E_global and turns nothing. Anchors are cleared at each
 //   round. So vertices are held only where and when the fit would fold, and
 //   no step turns a triangle: the result has at most the triangles the input
-//   already had turned (and E_smooth pulls those back, next point).
+//   already had turned (and E_smooth pulls those back, next points).
 //   g_v enters E_global, so the energy changes definition at
 //   iterations with stiffened > 0; their energy_before is measured with the
 //   new weights.
-// - Local fitting can hand over turned triangles (its blend squashed the box
-//   of James's hair-covered ears: 12 turned). A rest shape taken from them
-//   would hold them turned, so on their corners and one-rings L0 is the
-//   reference's umbrella vector and E_smooth pulls them back (James: 36 -> 18
-//   turned without the guard). Taking L0 from the reference everywhere did
-//   as well on the folds but undid the local fit of the lips (more crossing
-//   sheets at the lips on the synthetic heads).
+// - Why the aligned template and not the local fit as rest shape: local
+//   fitting moves each feature box by an affine map and blends the rest, so
+//   its shape has steps at the box walls (a ridge across James's nose bridge
+//   at the nose box's top) and may hand over turned triangles (its blend
+//   squashed the box of James's hair-covered ears: 12 turned). A rest shape
+//   taken from it holds both. With the template's (measured without the
+//   guard): James 33 -> 18 turned, the same mean distance, the ridge gone.
 #pragma once
 #include "common/progress.h"
 #include "common/status.h"
@@ -114,9 +113,9 @@ struct GlobalFitOptions {
 struct GlobalFitTerms {
   std::vector<std::array<int, 2>> binding_edges;  // vertex pairs (mesh or virtual edges)
   std::vector<int> constrained_vertices;
-  // #V by 3: the template as aligned (before local fitting): the
-  // orientation the fold guard keeps for every triangle, and the rest shape
-  // around triangles the input has turned. Empty: the input mesh.
+  // #V by 3: the template as aligned (before local fitting): the rest shape
+  // of E_smooth and the orientation the fold guard keeps for every
+  // triangle. Empty: the input mesh serves as both.
   std::vector<Vec3> fold_reference;
 };
 

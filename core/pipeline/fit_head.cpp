@@ -319,9 +319,10 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
     for (const Edge& e : topo.edges)
       if (in_eye_socket(e.v0) || in_eye_socket(e.v1)) terms.binding_edges.push_back({{e.v0, e.v1}});
   }
-  // The template as aligned: the orientation every triangle must keep
-  // (global_fit.h, fold guard), and the rest shape where local fitting's
-  // blend already turned some (hair-covered ears squash their box).
+  // The template as aligned: the rest shape of E_smooth and the orientation
+  // every triangle must keep (global_fit.h: local fitting's blend leaves
+  // steps at the box walls and may turn triangles, which a rest shape taken
+  // after it would hold).
   terms.fold_reference = out.aligned.positions;
   std::vector<Vec3> skin_pts;
   std::vector<int> skin_index;
