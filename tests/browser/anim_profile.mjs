@@ -55,12 +55,16 @@ try {
   await page.waitForTimeout(seconds * 1000);
   const end = await page.evaluate(() => ({ frames: window.likeness.animation.frames, t: performance.now(),
                                            p: Object.assign({}, window.likeness.animation.profile),
-                                           text: document.getElementById('anim-stats').textContent }));
+                                           text: document.getElementById('anim-stats').textContent,
+                                           update: window.likeness.viewer.last_update ? window.likeness.viewer.last_update() : null }));
   await page.uncheck('#animate');
   const frames = end.frames - start.frames;
   const fps = frames * 1000 / (end.t - start.t);
   console.log(`msaa ${await page.evaluate(() => window.likeness.msaa)}, level ${level}: ${frames} frames in ${((end.t - start.t) / 1000).toFixed(1)} s = ${fps.toFixed(1)} fps` +
               `${profile ? ' (profiling: draws are glFinish()ed)' : ''}; page shows "${end.text}"`);
+  // What the viewer's last update_positions did (indexed path: vertices
+  // that moved, normals recomputed, GPU vertices re-sent).
+  if (end.update) console.log(`last frame: ${end.update.moved} vertices moved, ${end.update.renormalized} renormalized, ${end.update.uploaded} sent`);
   const n = end.p.frames - start.p.frames;
   if (n > 0) {
     const per = (k) => (end.p[k] - start.p[k]) / n;
