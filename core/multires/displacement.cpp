@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numeric>
 
 namespace lk {
@@ -34,98 +35,316 @@ double median(std::vector<double>& xs) {
   return 0.5 * (*std::max_element(xs.begin(), xs.begin() + h) + upper);
 }
 
-// Cylinder points in the vertex's frame: (u, v) across the normal line, t along it.
+// A point in the vertex's frame: (u, v) across the normal line, t along it,
+// rho2 = u^2 + v^2; h = t minus the base surface's height at (u, v).
 struct LinePoint {
-  double u, v, t;
+  double u, v, t, rho2, h;
 };
 
-// Least-squares height field t = t0 + a u + b v + c u^2 + d uv + e v^2 over
-// the points; its value t0 at the line is where the line meets the sampled
-// surface. A quadric, not a plane or a median: a curved surface sags by
-// rho^2 / 2R across the cylinder, which would otherwise bias the result.
+// Compactly supported smooth kernel (Wendland-like): 1 on the line, 0 with
+// zero slope at the footprint's rim, so a point entering or leaving the
+// footprint as the vertex moves changes the fit continuously.
+inline double kernel(double rho2, double radius2) {
+  const double s = 1.0 - rho2 / radius2;
+  return s > 0 ? s * s : 0.0;
+}
+
+// Height field h = c0 + c1 u + c2 v + c3 u^2 + c4 uv + c5 v^2, (u, v) scaled
+// by the footprint radius for conditioning. A quadric, not a plane or a
+// median: a curved surface sags by rho^2 / 2R across the footprint.
 using Quadric = Eigen::Matrix<double, 6, 1>;
-inline Quadric quadric_row(const LinePoint& p, double scale) {
-  const double u = p.u / scale, v = p.v / scale;  // O(1) for conditioning
+inline Quadric quadric_row(double u, double v) {
   Quadric row;
   row << 1, u, v, u * u, u * v, v * v;
   return row;
 }
 
-bool fit_crossing(const std::vector<LinePoint>& pts, const std::vector<char>& use, double scale, Quadric& x) {
+// Weighted least squares of the heights above the base surface, with a
+// ridge on every coefficient but c0: sum w_i (h_i - row_i . c)^2 + ridge * sum(w) * |c_1..5|^2. The ridge
+// pulls slope and curvature towards 0 where the points cannot determine them.
+bool fit_quadric(const std::vector<LinePoint>& pts, const std::vector<double>& weights, double scale, double ridge,
+                 Quadric& c) {
   Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
-  Eigen::Matrix<double, 6, 1> rhs = Eigen::Matrix<double, 6, 1>::Zero();
-  int n = 0;
+  Quadric rhs = Quadric::Zero();
+  double sum_w = 0;
   for (size_t i = 0; i < pts.size(); ++i) {
-    if (!use[i]) continue;
-    const Quadric row = quadric_row(pts[i], scale);
-    A += row * row.transpose();
-    rhs += row * pts[i].t;
-    ++n;
+    if (!(weights[i] > 0)) continue;
+    const Quadric row = quadric_row(pts[i].u / scale, pts[i].v / scale);
+    A.noalias() += weights[i] * row * row.transpose();
+    rhs += weights[i] * row * pts[i].h;
+    sum_w += weights[i];
   }
-  if (n < 10) return false;
+  if (!(sum_w > 0)) return false;
+  for (int k = 1; k < 6; ++k) A(k, k) += std::max(ridge, 1e-9) * sum_w;
   Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(A);
   if (ldlt.info() != Eigen::Success) return false;
-  x = ldlt.solve(rhs);
-  return x.allFinite() && ldlt.rcond() > 1e-10;
+  c = ldlt.solve(rhs);
+  return c.allFinite();
 }
 
-// Signed distance along n from p to the sampled surface, or false when the
-// cylinder around the normal line holds too few points.
-bool measure_one(const CloudTree& tree, const std::vector<Vec3>& pts, const std::vector<Vec3>* point_normals,
-                 const Vec3& p, const Vec3& n, double radius,
-                 double max_distance, const DisplacementOptions& opt,
-                 std::vector<std::pair<size_t, double>>& matches, std::vector<LinePoint>& line_pts,
-                 std::vector<double>& scratch, double& out) {
-  if (n.squaredNorm() == 0) return false;  // no normal (isolated vertex)
-  matches.clear();
+// The shape of the level's undisplaced surface around a vertex, as heights
+// above its tangent plane: t = b0 u + b1 v + b2 u^2 + b3 uv + b4 v^2 (no
+// constant: the vertex lies on it), fitted to the level's vertices within
+// the footprint with the same kernel as the points.
+struct BaseShape {
+  double b[5] = {0, 0, 0, 0, 0};
+  double height(double u, double v) const { return b[0] * u + b[1] * v + b[2] * u * u + b[3] * u * v + b[4] * v * v; }
+};
+
+// Per-level scratch of the base-shape search (a breadth-first walk over the
+// level's one-rings, kept within the footprint).
+struct RingWalk {
+  std::vector<std::uint32_t> mark;
+  std::uint32_t stamp = 0;
+  std::vector<int> queue;
+};
+
+BaseShape base_shape(const MultiresMesh& mesh, int level, int vertex, const Vec3& e1, const Vec3& e2, const Vec3& n,
+                     double radius, RingWalk& walk) {
+  BaseShape shape;
+  const std::vector<Vec3>& P = mesh.state.base[level];
+  const IndexRows& ring = mesh.links[level].normal_reach;  // itself + one-ring
+  const Vec3& p = P[vertex];
   const double r2 = radius * radius;
-  tree.radiusSearch(p.data(), max_distance * max_distance + r2, matches, nanoflann::SearchParams(32, 0, false));
-  const Vec3 e1 = n.unitOrthogonal(), e2 = n.cross(e1);
-  line_pts.clear();
-  for (const auto& m : matches) {
+  if (++walk.stamp == 0) {
+    std::fill(walk.mark.begin(), walk.mark.end(), 0);
+    walk.stamp = 1;
+  }
+  // At most this many vertices: a footprint many edges wide needs no more
+  // than a few rings of them to show its curvature.
+  constexpr size_t kMaxVertices = 256;
+  walk.queue.clear();
+  walk.queue.push_back(vertex);
+  walk.mark[vertex] = walk.stamp;
+  Eigen::Matrix<double, 5, 5> A = Eigen::Matrix<double, 5, 5>::Zero();
+  Eigen::Matrix<double, 5, 1> rhs = Eigen::Matrix<double, 5, 1>::Zero();
+  double sum_w = 0;
+  int used = 0;
+  size_t one_ring_end = 1;  // queue[1 .. one_ring_end) is the one-ring
+  for (size_t head = 0; head < walk.queue.size(); ++head) {
+    const int q = walk.queue[head];
+    const Vec3 delta = P[q] - p;
+    if (q != vertex) {
+      const double t = delta.dot(n);
+      const double u = delta.dot(e1) / radius, v = delta.dot(e2) / radius;
+      // A one-ring vertex always counts (even beyond a small footprint):
+      // the curvature needs neighbours on every side.
+      const double w = std::max(kernel(delta.squaredNorm() - t * t, r2), head < one_ring_end ? 0.05 : 0.0);
+      if (w > 0) {
+        Eigen::Matrix<double, 5, 1> row;
+        row << u, v, u * u, u * v, v * v;
+        A.noalias() += w * row * row.transpose();
+        rhs += w * row * t;
+        sum_w += w;
+        ++used;
+      }
+    }
+    if (q != vertex && delta.squaredNorm() > r2) continue;  // do not walk beyond the footprint
+    for (int i = ring.offsets[q]; i < ring.offsets[q + 1] && walk.queue.size() < kMaxVertices; ++i) {
+      const int next = ring.items[i];
+      if (walk.mark[next] == walk.stamp) continue;
+      walk.mark[next] = walk.stamp;
+      walk.queue.push_back(next);
+    }
+    if (head == 0) one_ring_end = walk.queue.size();
+  }
+  if (used < 3 || !(sum_w > 0)) return shape;
+  // A light ridge: a valence-3 vertex or a mesh boundary leaves some of the
+  // five coefficients undetermined; those stay 0 (the tangent plane).
+  for (int k = 0; k < 5; ++k) A(k, k) += 1e-3 * sum_w;
+  Eigen::LDLT<Eigen::Matrix<double, 5, 5>> ldlt(A);
+  if (ldlt.info() != Eigen::Success) return shape;
+  const Eigen::Matrix<double, 5, 1> c = ldlt.solve(rhs);
+  if (!c.allFinite()) return shape;
+  shape.b[0] = c[0] / radius;
+  shape.b[1] = c[1] / radius;
+  shape.b[2] = c[2] / (radius * radius);
+  shape.b[3] = c[3] / (radius * radius);
+  shape.b[4] = c[4] / (radius * radius);
+  return shape;
+}
+
+// Per-level constants of the measurement.
+struct LevelGeometry {
+  double min_radius;     // half the level's mean edge (or the fixed radius)
+  double max_radius;     // no data beyond this
+  double first_radius;   // first search: where footprint_points are expected
+  double max_distance;   // half-length of the normal line
+  bool adaptive;
+};
+
+struct Scratch {
+  std::vector<std::pair<size_t, double>> matches;
+  std::vector<LinePoint> line_pts;
+  std::vector<double> weights, values;
+  std::vector<char> use;
+  std::vector<std::pair<double, std::pair<size_t, size_t>>> sheets;
+  RingWalk walk;
+};
+
+// Gathers the points in the cylinder of radius `radius` around the line, as
+// far along it as the search ball sqrt(radius^2 + max_distance^2) reaches.
+// The line's length is applied later to the heights above the base surface
+// (a tangent-plane slab would cut a curved surface off near the rim).
+void gather(const CloudTree& tree, const std::vector<Vec3>& pts, const std::vector<Vec3>* point_normals,
+            const Vec3& p, const Vec3& n, const Vec3& e1, const Vec3& e2, double radius, double max_distance,
+            double min_normal_agreement, Scratch& s) {
+  s.matches.clear();
+  s.line_pts.clear();
+  const double r2 = radius * radius;
+  tree.radiusSearch(p.data(), max_distance * max_distance + r2, s.matches, nanoflann::SearchParams(32, 0, false));
+  for (const auto& m : s.matches) {
     const Vec3 delta = pts[m.first] - p;
     const double t = delta.dot(n);
-    if (std::abs(t) > max_distance) continue;
-    if (delta.squaredNorm() - t * t > r2) continue;
+    const double rho2 = delta.squaredNorm() - t * t;
+    if (rho2 > r2) continue;
     if (point_normals) {
       const Vec3& pn = (*point_normals)[m.first];
-      if (!(pn.dot(n) > opt.min_normal_agreement * pn.norm())) continue;
+      if (!(pn.dot(n) > min_normal_agreement * pn.norm())) continue;
     }
-    line_pts.push_back({delta.dot(e1), delta.dot(e2), t});
+    s.line_pts.push_back({delta.dot(e1), delta.dot(e2), t, rho2, t});
   }
+}
+
+// Heights above the base surface (h = t - base) for the gathered points;
+// keeps those within the line's reach of it.
+void heights_above(const BaseShape& base, double max_distance, std::vector<LinePoint>& line_pts) {
+  for (LinePoint& q : line_pts) q.h = q.t - base.height(q.u, q.v);
+  line_pts.erase(std::remove_if(line_pts.begin(), line_pts.end(),
+                                [max_distance](const LinePoint& q) { return !(std::abs(q.h) <= max_distance); }),
+                 line_pts.end());
+}
+
+// Measures one vertex: the signed distance along n from p to the sampled
+// surface (already multiplied by the support taper), or false when the
+// footprint holds too few points. radius_out/taper_out: what was used.
+bool measure_one(const CloudTree& tree, const std::vector<Vec3>& pts, const std::vector<Vec3>* point_normals,
+                 const MultiresMesh& mesh, int level, int vertex, const LevelGeometry& g,
+                 const DisplacementOptions& opt, Scratch& s, double& out, double& radius_out, double& taper_out) {
+  const Vec3& p = mesh.state.base[level][vertex];
+  const Vec3& n = mesh.state.normals[level][vertex];
+  if (n.squaredNorm() == 0) return false;  // no normal (isolated vertex)
+  const Vec3 e1 = n.unitOrthogonal(), e2 = n.cross(e1);
   const int min_points = std::max(1, opt.min_points);
-  if (static_cast<int>(line_pts.size()) < min_points) return false;
-  std::sort(line_pts.begin(), line_pts.end(),
-            [](const LinePoint& a, const LinePoint& b) { return std::abs(a.t) < std::abs(b.t); });
-  // The nearest crossing that enough points agree on; a lone stray point
-  // near the vertex does not count as a crossing.
-  const double width = opt.cluster_fraction * max_distance;
-  std::vector<char> use(line_pts.size(), 0);
-  for (const LinePoint& centre : line_pts) {
-    scratch.clear();
-    for (size_t i = 0; i < line_pts.size(); ++i) {
-      use[i] = std::abs(line_pts[i].t - centre.t) <= width;
-      if (use[i]) scratch.push_back(line_pts[i].t);
+
+  // Footprint: the disk holding footprint_points points within the line's
+  // reach of the base surface (at least half an edge, at most max_radius).
+  // The first search usually holds them; a sparser neighbourhood is
+  // searched again at the largest radius. Each step depends continuously on
+  // the vertex's position (the k-th nearest point, a kernel that vanishes at
+  // the rim), so neighbouring vertices get nearly the same footprint.
+  const size_t k = static_cast<size_t>(std::max(opt.footprint_points, 1));
+  double radius = g.first_radius;
+  gather(tree, pts, point_normals, p, n, e1, e2, radius, g.max_distance, opt.min_normal_agreement, s);
+  BaseShape base = base_shape(mesh, level, vertex, e1, e2, n, radius, s.walk);
+  heights_above(base, g.max_distance, s.line_pts);
+  // A first search without any point is a hole or off the data: the wider
+  // search could only find its edge, where the support taper gives ~0.
+  if (g.adaptive && s.line_pts.size() < k && !s.line_pts.empty() && radius < g.max_radius) {
+    radius = g.max_radius;
+    gather(tree, pts, point_normals, p, n, e1, e2, radius, g.max_distance, opt.min_normal_agreement, s);
+    base = base_shape(mesh, level, vertex, e1, e2, n, radius, s.walk);
+    heights_above(base, g.max_distance, s.line_pts);
+  }
+  if (g.adaptive && s.line_pts.size() >= k) {
+    std::nth_element(s.line_pts.begin(), s.line_pts.begin() + (k - 1), s.line_pts.end(),
+                     [](const LinePoint& a, const LinePoint& b) { return a.rho2 < b.rho2; });
+    // The kernel is 0 at the rim: keep the k-th point just inside it.
+    const double footprint = std::max(g.min_radius, std::sqrt(s.line_pts[k - 1].rho2) * (1.0 + 1e-9));
+    if (footprint < radius) {
+      // The base shape over the footprint itself when it is much smaller
+      // than the search (sparse data searched at max_radius); within a
+      // factor of 1.5 the two shapes are the same to well below the noise.
+      const bool reshape = footprint * 1.5 < radius;
+      radius = footprint;
+      const double footprint2 = radius * radius;
+      s.line_pts.erase(std::remove_if(s.line_pts.begin(), s.line_pts.end(),
+                                      [footprint2](const LinePoint& q) { return !(q.rho2 < footprint2); }),
+                       s.line_pts.end());
+      if (reshape) {
+        base = base_shape(mesh, level, vertex, e1, e2, n, radius, s.walk);
+        heights_above(base, g.max_distance, s.line_pts);
+      }
     }
-    if (static_cast<int>(scratch.size()) < min_points) continue;
-    const double fallback = median(scratch);
-    double t0 = fallback;
-    Quadric q;
-    if (fit_crossing(line_pts, use, radius, q)) {
-      t0 = q[0];
-      // One robust pass: drop points far from the first fit (outliers,
-      // the edge of another sheet), then refit.
-      scratch.clear();
-      for (size_t i = 0; i < line_pts.size(); ++i)
-        if (use[i]) scratch.push_back(std::abs(line_pts[i].t - quadric_row(line_pts[i], radius).dot(q)));
-      const double limit = 4.0 * median(scratch) + 1e-12 * max_distance;
+  }
+  const double r2 = radius * radius;
+  if (static_cast<int>(s.line_pts.size()) < min_points) return false;
+  // Sheets: the line may cross the scan more than once (lips, ear rims,
+  // lids). Sorted by height above the base surface, the points of one sheet
+  // follow each other closely however much the sheet departs from the base
+  // shape over the footprint: neighbours a point spacing apart differ by
+  // the noise plus the sheet's slope against the base over that spacing. A
+  // wider gap (cluster_fraction x the line's half-length, plus half the
+  // local spacing for a slope of up to 1:2) separates two sheets. The
+  // nearest sheet that enough points agree on is measured; a lone stray
+  // point does not count as a crossing.
+  std::sort(s.line_pts.begin(), s.line_pts.end(), [](const LinePoint& a, const LinePoint& b) { return a.h < b.h; });
+  const size_t count = s.line_pts.size();
+  const double local_spacing = radius * std::sqrt(M_PI / static_cast<double>(count));
+  const double gap = opt.cluster_fraction * g.max_distance + 0.5 * local_spacing;
+  s.sheets.clear();  // [begin, end) ranges, then ordered by their height nearest to 0
+  for (size_t i = 0; i < count;) {
+    size_t j = i + 1;
+    while (j < count && s.line_pts[j].h - s.line_pts[j - 1].h <= gap) ++j;
+    double nearest = std::abs(s.line_pts[i].h);
+    for (size_t k2 = i; k2 < j; ++k2) nearest = std::min(nearest, std::abs(s.line_pts[k2].h));
+    s.sheets.push_back({nearest, {i, j}});
+    i = j;
+  }
+  std::sort(s.sheets.begin(), s.sheets.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
+  s.use.assign(count, 0);
+  s.weights.assign(count, 0.0);
+  for (const auto& sheet : s.sheets) {
+    const auto [first_point, end_point] = sheet.second;
+    if (static_cast<int>(end_point - first_point) < min_points) continue;
+    for (size_t i = 0; i < count; ++i) s.use[i] = i >= first_point && i < end_point;
+    s.values.clear();
+    double sum_w = 0, cu = 0, cv = 0;
+    for (size_t i = 0; i < count; ++i) {
+      s.weights[i] = s.use[i] ? kernel(s.line_pts[i].rho2, r2) : 0.0;
+      if (!s.use[i]) continue;
+      s.values.push_back(s.line_pts[i].h);
+      sum_w += s.weights[i];
+      cu += s.weights[i] * s.line_pts[i].u;
+      cv += s.weights[i] * s.line_pts[i].v;
+    }
+    if (!(sum_w > 0)) continue;
+    const double fallback = median(s.values);
+    double h0 = fallback;
+    // Data support: how far off the line the points' weighted centroid lies.
+    const double offset = std::sqrt(cu * cu + cv * cv) / (sum_w * radius);
+    double taper = 1.0;
+    if (offset > opt.support_full_offset) {
+      const double x = std::clamp((opt.support_zero_offset - offset) /
+                                      std::max(opt.support_zero_offset - opt.support_full_offset, 1e-12),
+                                  0.0, 1.0);
+      taper = x * x * (3 - 2 * x);  // smoothstep: no kink where the taper starts or ends
+    }
+    Quadric c;
+    if (fit_quadric(s.line_pts, s.weights, radius, opt.ridge, c)) {
+      h0 = c[0];
+      // One robust pass: drop points far from the first fit (outliers, the
+      // edge of another sheet), then refit.
+      s.values.clear();
+      for (size_t i = 0; i < count; ++i)
+        if (s.weights[i] > 0)
+          s.values.push_back(std::abs(s.line_pts[i].h -
+                                      quadric_row(s.line_pts[i].u / radius, s.line_pts[i].v / radius).dot(c)));
+      const double limit = 4.0 * median(s.values) + 1e-12 * g.max_distance;
       int dropped = 0;
-      for (size_t i = 0; i < line_pts.size(); ++i)
-        if (use[i] && std::abs(line_pts[i].t - quadric_row(line_pts[i], radius).dot(q)) > limit) use[i] = 0, ++dropped;
+      for (size_t i = 0; i < count; ++i)
+        if (s.weights[i] > 0 &&
+            std::abs(s.line_pts[i].h - quadric_row(s.line_pts[i].u / radius, s.line_pts[i].v / radius).dot(c)) >
+                limit)
+          s.weights[i] = 0, ++dropped;
       // Nothing dropped: the refit would be the same fit.
-      if (dropped > 0 && fit_crossing(line_pts, use, radius, q)) t0 = q[0];
+      if (dropped > 0 && fit_quadric(s.line_pts, s.weights, radius, opt.ridge, c)) h0 = c[0];
     }
-    out = std::abs(t0) <= max_distance ? t0 : fallback;
+    if (!(std::abs(h0) <= g.max_distance)) h0 = fallback;
+    out = taper * h0;
+    radius_out = radius;
+    taper_out = taper;
     return true;
   }
   return false;
@@ -138,8 +357,15 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
   if (cloud.positions.empty()) return Status::error(ErrorCode::Empty, "multires: the point cloud is empty");
   for (const Vec3& p : cloud.positions)
     if (!p.allFinite()) return Status::error(ErrorCode::InvalidInput, "multires: a point of the cloud is not finite");
-  if (options.radius < 0 || options.max_distance < 0 || !(options.cluster_fraction > 0))
-    return Status::error(ErrorCode::InvalidInput, "multires: negative radius/max distance or non-positive cluster fraction");
+  if (!(options.radius >= 0) || !(options.max_distance >= 0) || !(options.max_radius >= 0) ||
+      !(options.cluster_fraction > 0))
+    return Status::error(ErrorCode::InvalidInput,
+                         "multires: negative radius/max radius/max distance or non-positive cluster fraction");
+  if (options.footprint_points < 1 || !(options.ridge >= 0) || !(options.support_full_offset >= 0) ||
+      !(options.support_zero_offset > options.support_full_offset))
+    return Status::error(ErrorCode::InvalidInput,
+                         "multires: footprint_points must be >= 1, ridge >= 0, and 0 <= support_full_offset < "
+                         "support_zero_offset");
   Status s = check_sizes(mesh);
   if (!s.ok()) return s;
 
@@ -152,39 +378,55 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
   const int L = mesh.num_levels();
   for (auto& d : mesh.displacements) std::fill(d.begin(), d.end(), 0.0);
   resize_state(mesh);
-  if (stats) *stats = DisplacementStats{std::vector<int>(L + 1, 0), std::vector<int>(L + 1, 0),
-                                        std::vector<double>(L + 1, 0.0), std::vector<double>(L + 1, 0.0)};
-  std::vector<std::pair<size_t, double>> matches;
-  std::vector<LinePoint> line_pts;
-  std::vector<double> scratch;
+  if (stats)
+    *stats = DisplacementStats{std::vector<int>(L + 1, 0),    std::vector<int>(L + 1, 0),
+                               std::vector<double>(L + 1, 0), std::vector<double>(L + 1, 0),
+                               std::vector<int>(L + 1, 0),    std::vector<double>(L + 1, 0)};
+  Scratch scratch;
   mesh.state.base[0] = mesh.control;
   for (int l = 0; l <= L; ++l) {
     evaluate_level(mesh, l);  // normals N_l with d_l = 0
     const double edge = mean_edge(mesh.state.base[l], mesh.triangles(l));
-    // Default footprint: half an edge, but never so small that the cloud's
-    // sampling leaves the cylinder empty on fine levels (a disk of radius
-    // 2 x spacing holds ~12 points where the scan covers the surface).
     double area = 0;
     for (int f = 0; f < static_cast<int>(mesh.triangles(l).size()); ++f)
       area += 0.5 * face_normal(mesh.triangles(l), mesh.state.base[l], f).norm();
+    // Mean spacing if the cloud covered the whole level: a lower bound on
+    // its density where it has data (it covers part of the head).
     const double spacing = std::sqrt(area / cloud.size());
-    const double radius = options.radius > 0 ? options.radius : std::max(0.5 * edge, 2.0 * spacing);
-    double max_distance = options.max_distance > 0 ? options.max_distance : std::max(2.0 * edge, 2.0 * radius);
+    LevelGeometry g;
+    g.adaptive = options.radius <= 0;
+    if (g.adaptive) {
+      g.min_radius = 0.5 * edge;
+      g.max_radius = options.max_radius > 0 ? options.max_radius : std::max(g.min_radius, 2.0 * spacing);
+      // Where footprint_points points are expected at the mean spacing,
+      // with margin so the first search usually suffices.
+      const double expected = spacing * std::sqrt(options.footprint_points / M_PI);
+      g.first_radius = std::clamp(1.1 * expected, g.min_radius, std::max(g.min_radius, g.max_radius));
+    } else {
+      g.min_radius = g.max_radius = g.first_radius = options.radius;
+    }
+    const double typical_radius =
+        g.adaptive ? std::clamp(spacing * std::sqrt(options.footprint_points / M_PI), g.min_radius, g.max_radius)
+                   : options.radius;
+    g.max_distance = options.max_distance > 0 ? options.max_distance : 2.0 * std::max(edge, typical_radius);
     if (l > 0 && options.fine_line_edges > 0)
-      max_distance = std::min(max_distance, options.fine_line_edges * std::max(edge, radius));
+      g.max_distance = std::min(g.max_distance, options.fine_line_edges * std::max(edge, typical_radius));
+    scratch.walk.mark.assign(mesh.num_vertices(l), 0);
+    scratch.walk.stamp = 0;
+
     const int nv = mesh.num_vertices(l);
     const int first = (l == 0 || options.remeasure_coarse_vertices) ? 0 : mesh.num_vertices(l - 1);
-    int measured = 0;
-    double sum_abs = 0, max_abs = 0;
+    int measured = 0, tapered = 0;
+    double sum_abs = 0, max_abs = 0, sum_radius = 0;
     for (int v = first; v < nv; ++v) {
-      double d = 0;
-      if (measure_one(tree, cloud.positions, point_normals, mesh.state.base[l][v], mesh.state.normals[l][v], radius,
-                      max_distance,
-                      options, matches, line_pts, scratch, d)) {
+      double d = 0, radius = 0, taper = 1;
+      if (measure_one(tree, cloud.positions, point_normals, mesh, l, v, g, options, scratch, d, radius, taper)) {
         mesh.displacements[l][v] = d;
         ++measured;
+        tapered += taper < 1;
         sum_abs += std::abs(d);
         max_abs = std::max(max_abs, std::abs(d));
+        sum_radius += radius;
       }
     }
     if (stats) {
@@ -192,6 +434,8 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
       stats->measured[l] = measured;
       stats->mean_abs[l] = measured ? sum_abs / measured : 0.0;
       stats->max_abs[l] = max_abs;
+      stats->tapered[l] = tapered;
+      stats->mean_radius[l] = measured ? sum_radius / measured : 0.0;
     }
     evaluate_level(mesh, l);  // now with d_l
     if (l < L) {
