@@ -566,6 +566,68 @@ async function textureStage(page, untextured) {
 }
 
 // ------------------------------------------------------------------ steps --
+// Adaptive detail while animating, with a budget no frame can meet (1 ms):
+// the page steps down to the ladder's last step (level 1 at half the
+// drawing-buffer resolution) and says so, export still writes the chosen
+// level, stopping brings back the chosen level at full resolution (same
+// image as before the animation), and "Full detail while animating" turns it
+// off, also mid-animation.
+async function adaptiveDetail(page, rest, fit, downloads) {
+  const fullWidth = await page.evaluate(() => document.getElementById('canvas').width);
+  const adaptive = () => page.evaluate(() => {
+    const a = window.likeness.animation, ad = a.adaptive;
+    return { step: ad.step, last: ad.ladder.length - 1, level: ad.level, scale: ad.scale, running: a.running,
+             width: document.getElementById('canvas').width, text: document.getElementById('anim-stats').textContent,
+             select: document.getElementById('level').value, status: document.getElementById('status').textContent.trim() };
+  });
+  await page.evaluate(() => { window.likeness.animation.adaptive.budgetMs = 1; });
+  await page.check('#animate');
+  await page.waitForFunction(() => { const ad = window.likeness.animation.adaptive;
+    return ad.ladder.length && ad.step === ad.ladder.length - 1 && /level 1 while moving/.test(document.getElementById('anim-stats').textContent); },
+  null, { timeout: 30000 }).catch(() => {});
+  await page.waitForTimeout(500);
+  const down = await adaptive();
+  check('with a budget no frame meets, the animation steps down to level 1 at half resolution and says so',
+        down.running && down.step === down.last && down.level === 1 && down.scale === 0.5 &&
+        Math.abs(down.width - fullWidth / 2) <= 1 && /level 1 while moving · 50 % resolution/.test(down.text) && down.select === '3',
+        `step ${down.step}/${down.last}, level ${down.level}, scale ${down.scale}, canvas ${fullWidth} -> ${down.width}, "${down.text}", select ${down.select}`);
+  // Export while moving on level 1: the file is the chosen level 3.
+  const before = downloads.length;
+  await page.click('#btn-export-ply');
+  await page.waitForFunction((n) => window.likeness.downloads.length > n, (await page.evaluate(() => window.likeness.downloads.length)), { timeout: JOB_TIMEOUT_MS });
+  await page.waitForTimeout(300);
+  const ply = downloads.length > before ? fs.readFileSync(await downloads[downloads.length - 1].path()) : null;
+  check('... export while stepped down still writes the chosen level', !!ply &&
+        new RegExp('element vertex ' + fit.levels[2] + '\\b').test(ply.toString('latin1', 0, 400)),
+        ply ? /element vertex \d+/.exec(ply.toString('latin1', 0, 400))[0] + ' for level 3 ' + fit.levels[2] : 'no download');
+  await page.uncheck('#animate');
+  await page.waitForTimeout(1500);  // the rest pose comes back from the worker
+  const stopped = await adaptive();
+  const restAgain = await canvasImage(page);
+  const restDiff = differingFraction(rest, restAgain);
+  check('stopping restores the chosen level at full resolution (the rest image as before)', !stopped.running &&
+        stopped.level === null && stopped.scale === 1 && stopped.width === fullWidth &&
+        stopped.status.includes('level 3 (' + fit.levels[2].toLocaleString('en') + ' vertices') && restDiff < 0.002,
+        `canvas ${stopped.width}, "${stopped.status}", ${(100 * restDiff).toFixed(3)}% of pixels differ from before`);
+  // The toggle: turned on mid-animation it puts full detail back at once and keeps it.
+  await page.check('#animate');
+  await page.waitForFunction(() => window.likeness.animation.adaptive.step > 0, null, { timeout: 30000 }).catch(() => {});
+  const stepped = await adaptive();
+  await page.check('#full-detail');
+  const atOnce = await adaptive();
+  await page.waitForTimeout(3000);
+  const later = await adaptive();
+  check('"Full detail while animating" turns the adaptation off (at once, and it stays off)',
+        stepped.step > 0 && atOnce.step === 0 && atOnce.width === fullWidth && atOnce.level === 3 &&
+        later.running && later.step === 0 && later.width === fullWidth && later.level === 3 && /full detail/.test(later.text) &&
+        !/while moving|resolution/.test(later.text),
+        `step ${stepped.step} -> ${atOnce.step}, 3 s later step ${later.step}, canvas ${later.width}, "${later.text}"`);
+  await page.uncheck('#animate');
+  await page.uncheck('#full-detail');
+  await page.evaluate(() => { window.likeness.animation.adaptive.budgetMs = 1000 / 15; });
+  await page.waitForTimeout(1000);
+}
+
 async function shot(page, name) {
   if (!SHOT_DIR) return;
   fs.mkdirSync(SHOT_DIR, { recursive: true });
@@ -931,12 +993,13 @@ async function main() {
         const anim = await page.evaluate(() => Object.assign({}, window.likeness.animation, { text: document.getElementById('anim-stats').textContent }));
         await shot(page, 'web_fit_animate.png');
         check('the animation advances frames and moves the head', anim.frames > f1 && f1 > 0 && movedMost > 0.002 &&
-              /fps · update/.test(anim.text), `frames ${f1} -> ${anim.frames}, "${anim.text}", ${(100 * movedMost).toFixed(2)}% changed at most`);
+              /fps · (.* · )?update/.test(anim.text), `frames ${f1} -> ${anim.frames}, "${anim.text}", ${(100 * movedMost).toFixed(2)}% changed at most`);
         await page.uncheck('#animate');
         await page.waitForTimeout(300);
         const f2 = await page.evaluate(() => window.likeness.animation.frames);
         await page.waitForTimeout(600);
         check('unchecking Animate stops it', (await page.evaluate(() => window.likeness.animation.frames)) === f2);
+        await adaptiveDetail(page, rest, fit, downloads);
         await textureStage(page, rest);
         await eyeAndSmilePhotos(page);
       }
