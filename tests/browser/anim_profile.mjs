@@ -10,12 +10,13 @@
 //   --full-detail   adaptation off (?full_detail=1): the chosen level at full resolution
 //   --budget MS     the adaptation's frame budget (?anim_budget_ms; default 1000/15)
 //   --both N        N alternating runs of adaptation on and off in the same page
-//   --grid          with adaptation off, every level 1-3 x scale 1/0.75/0.5: fps while
+//   --grid          with adaptation off, every level 1-3 x scale 1/0.75/0.5 (--levels 3,2,1
+//                   --scales 1,0.75,0.5 to choose): fps while
 //                   moving, and the rest pose's difference from level 3 at full
 //                   resolution (the visual loss the adaptation's ladder trades)
 // Not a test: a measurement.
 // Usage: node anim_profile.mjs WEBDIR [SCAN.ply] [--level 3] [--seconds 6] [--profile] [--msaa N]
-//                              [--full-detail] [--budget MS] [--both N] [--grid]
+//                              [--full-detail] [--budget MS] [--both N] [--grid [--levels L,..] [--scales S,..]]
 import { launchChromium, serveDir, decodePng } from './harness.mjs';
 import fs from 'node:fs';
 import os from 'node:os';
@@ -42,6 +43,8 @@ const both = Number(option('--both', 0));
 const profile = flag('--profile');
 const fullDetail = flag('--full-detail');
 const grid = flag('--grid');
+const gridLevels = option('--levels', '3,2,1').split(',').map(Number);
+const gridScales = option('--scales', '1,0.75,0.5').split(',').map(Number);
 const [webdir, scan] = args;
 if (!webdir) {
   console.error('usage: node anim_profile.mjs WEBDIR [SCAN.ply] [--level 3] [--seconds 6] [--profile] [--msaa N] ' +
@@ -139,8 +142,8 @@ try {
     await page.check('#full-detail');
     await page.selectOption('#level', '3');
     const reference = await canvasPixels(page);
-    for (const lv of [3, 2, 1]) {
-      for (const scale of [1, 0.75, 0.5]) {
+    for (const lv of gridLevels) {
+      for (const scale of gridScales) {
         await page.selectOption('#level', String(lv));
         await page.evaluate((s) => window.likeness.viewer.set_render_scale(s), scale);
         const rest = difference(reference, await canvasPixels(page));
