@@ -967,6 +967,7 @@
 
   function markShown(row) {
     app.shownStage = row;
+    if (row !== 'subdivide') viewerLevel = null;
     for (const st of FIT_STAGES) stageItem(st.row).classList.toggle('shown', st.row === row);
   }
 
@@ -1115,8 +1116,9 @@
     };
   }
 
-  // quiet: no status line (the adaptation swapping levels while moving).
-  function showStage(row, quiet = false) {
+  // quiet: no status line; posed: positions to show instead of the rest pose
+  // (the adaptation swapping levels while moving).
+  function showStage(row, quiet = false, posed = null) {
     if (!app.fit) return;
     app.viewer.set_components_visible(row === 'subdivide' && ui.showComponents.checked);
     if (row !== 'subdivide') stopAnimation(true, false);
@@ -1124,10 +1126,11 @@
     const t = app.texture;
     const textured = row === 'subdivide' && t;
     const err = textured
-      ? app.viewer.show_textured_mesh(mesh.positions, mesh.indices, t.uvs.subarray(0, 2 * mesh.vertexCount),
+      ? app.viewer.show_textured_mesh(posed || mesh.positions, mesh.indices, t.uvs.subarray(0, 2 * mesh.vertexCount),
                                       t.skin.width, t.skin.height, t.skin.channels, t.skin.pixels)
-      : app.viewer.show_mesh_keep_view(mesh.positions, null, null, mesh.indices);
+      : app.viewer.show_mesh_keep_view(posed || mesh.positions, null, null, mesh.indices);
     if (err) { showError('Could not show the ' + row + ' mesh: ' + err); return; }
+    viewerLevel = row === 'subdivide' ? shownLevel() : null;
     markShown(row);
     if (quiet) return;
     const what = row === 'subdivide' ? (ui.level.value === '0' ? 'control mesh' : 'level ' + ui.level.value)
@@ -1257,11 +1260,11 @@
   // cores a worker running ahead would steal the CPU the drawing needs).
   //
   // Adaptive detail while moving: without a GPU (SwiftShader, llvmpipe, VMs)
-  // a level-3 frame costs 140-250 ms, mostly per-pixel work, so while the
-  // head moves the page steps down along a ladder of cheaper renderings
-  // (drawing-buffer scale first, then the subdivision level; the order was
-  // measured, docs/web.md "Adaptive detail") whenever the frames of a short
-  // window are slower than the budget, and back up when there is headroom.
+  // a level-3 frame costs 140-250 ms, so while the head moves the page steps
+  // down along a ladder of cheaper renderings (subdivision level and
+  // drawing-buffer scale, in the order measured in docs/web.md "Adaptive
+  // detail while animating") whenever the frames of a short window are
+  // slower than the budget, and back up when there is headroom.
   // Only what is drawn while moving changes: the Level select, export and
   // texturing always use the chosen level, and stopping shows the chosen
   // level at full resolution again. "Full detail while animating" turns it off.
@@ -1288,6 +1291,7 @@
   // Last settled step per chosen level, so the next start begins there.
   const adaptStartStep = {};
   let adaptIntervals = [], adaptLastPoseT = 0, adaptSlow = {};
+  let viewerLevel = null;  // the level of the fit mesh in the viewer (null: another stage or mesh)
 
   // The level drawn now: the chosen one, or the adaptation's while moving.
   function shownLevel() {
@@ -1295,9 +1299,9 @@
     return a.running && a.adaptive.level !== null ? a.adaptive.level : Number(ui.level.value);
   }
 
-  // Puts step `step` of the ladder on screen (scale at once; a level change
-  // re-shows the mesh and drops poses of the old level).
-  function showFitLevel() { showStage('subdivide', true); }
+  // Puts step `step` of the ladder on screen: the scale at once; a new level
+  // with its first pose (applyPose swaps the mesh, so the head never jumps
+  // back to the rest pose), dropping a pose of the old level in flight.
   function applyAdaptStep(step) {
     const ad = app.animation.adaptive;
     const s = ad.ladder[step];
@@ -1311,8 +1315,6 @@
     adaptLastPoseT = 0;
     if (levelChanged) {
       animGeneration++;               // an in-flight pose of the old level is dropped
-      animDrawnAtUpload = -1;
-      showFitLevel();
       requestPose();
     }
   }
@@ -1328,7 +1330,7 @@
     adaptIntervals = [];
     adaptLastPoseT = 0;
     if (app.viewer) app.viewer.set_render_scale(1);
-    return wasLevel !== null && wasLevel !== Number(ui.level.value);
+    return (wasLevel !== null && wasLevel !== Number(ui.level.value)) || viewerLevel !== Number(ui.level.value);
   }
 
   // Called once per pose put on screen: measures the frame time over a short
@@ -1386,25 +1388,31 @@
     const t = (performance.now() - animT0) / 1000;
     const amount = 0.5 - 0.5 * Math.cos(t * Math.PI);  // open and close every 2 s
     const tJob = performance.now();
-    runJob({ type: 'animate', amount, level: shownLevel() }, []).then((r) => {
+    const level = shownLevel();
+    runJob({ type: 'animate', amount, level }, []).then((r) => {
       if (!a.running || generation !== animGeneration) return;
       if (!r.ok) { stopAnimation(); showError('Animation: ' + r.message); return; }
       a.profile.jobMs += performance.now() - tJob;
-      applyPose(r, generation);
+      applyPose(r, generation, level);
     }, () => stopAnimation());
   }
 
-  function applyPose(r, generation) {
+  function applyPose(r, generation, level) {
     const a = app.animation;
     if (!a.running || generation !== animGeneration) return;
     const viewer = app.viewer;
     if (viewer.frames_drawn() === animDrawnAtUpload) {  // the last pose is not on screen yet
-      requestAnimationFrame(() => applyPose(r, generation));
+      requestAnimationFrame(() => applyPose(r, generation, level));
       return;
     }
     const tUpload = performance.now();
-    const err = viewer.update_positions(r.positions);
-    if (err) { stopAnimation(); showError('Animation: ' + err); return; }
+    if (level !== viewerLevel) {  // the adaptation's new level: its mesh, in this pose
+      showStage('subdivide', true, r.positions);
+      if (viewerLevel !== level) { stopAnimation(); return; }  // showStage said why
+    } else {
+      const err = viewer.update_positions(r.positions);
+      if (err) { stopAnimation(); showError('Animation: ' + err); return; }
+    }
     moveJaw(r.jawMatrix);
     animDrawnAtUpload = viewer.frames_drawn();
     const p = a.profile;
@@ -1470,7 +1478,7 @@
     if (!app.fit || !restPose) return;
     const level = Number(ui.level.value);
     runJob({ type: 'animate', amount: 0, level }, []).then((r) => {
-      if (r.ok && app.shownStage === 'subdivide' && !app.animation.running && shownLevel() === level &&
+      if (r.ok && app.shownStage === 'subdivide' && !app.animation.running && viewerLevel === level &&
           r.vertexCount === fitMesh('subdivide').vertexCount) {
         app.viewer.update_positions(r.positions);
         moveJaw(r.jawMatrix);

@@ -574,7 +574,9 @@ async function textureStage(page, untextured) {
 // off, also mid-animation.
 async function adaptiveDetail(page, rest, fit, downloads) {
   const fullWidth = await page.evaluate(() => document.getElementById('canvas').width);
-  const adaptive = () => page.evaluate(() => {
+  // Read after two animation frames: the viewer sizes the drawing buffer in its next frame.
+  const adaptive = () => page.evaluate(async () => {
+    await new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
     const a = window.likeness.animation, ad = a.adaptive;
     return { step: ad.step, last: ad.ladder.length - 1, level: ad.level, scale: ad.scale, running: a.running,
              width: document.getElementById('canvas').width, text: document.getElementById('anim-stats').textContent,
@@ -609,6 +611,36 @@ async function adaptiveDetail(page, rest, fit, downloads) {
         stopped.level === null && stopped.scale === 1 && stopped.width === fullWidth &&
         stopped.status.includes('level 3 (' + fit.levels[2].toLocaleString('en') + ' vertices') && restDiff < 0.002,
         `canvas ${stopped.width}, "${stopped.status}", ${(100 * restDiff).toFixed(3)}% of pixels differ from before`);
+  // Stopped in the middle of a step: the first level change is decided, its
+  // pose is still in the worker; Animate goes off in the same task. The late
+  // pose must not land, and the chosen level comes back at full resolution.
+  await page.check('#full-detail');  // forgets where the last run settled: start at full detail
+  await page.uncheck('#full-detail');
+  await page.check('#animate');
+  const midStep = await page.evaluate(() => new Promise((resolve) => {
+    const ad = window.likeness.animation.adaptive;
+    const t0 = performance.now();
+    const poll = () => {
+      if (ad.step >= 1 || performance.now() - t0 > 30000) {
+        const step = ad.step, level = ad.level;
+        const box = document.getElementById('animate');
+        box.checked = false;
+        box.dispatchEvent(new Event('change'));
+        resolve({ step, level });
+      } else setTimeout(poll, 0);
+    };
+    poll();
+  }));
+  await page.waitForTimeout(2000);
+  const afterMid = await adaptive();
+  const midImage = await canvasImage(page);
+  const midDiff = differingFraction(rest, midImage);
+  check('stopping right after a step down leaves nothing half-done (level 3, full resolution, rest image)',
+        midStep.step === 1 && midStep.level === 2 && !afterMid.running && afterMid.width === fullWidth && afterMid.level === null &&
+        afterMid.status.includes('level 3 (' + fit.levels[2].toLocaleString('en') + ' vertices') && midDiff < 0.002 &&
+        (await bannerText(page)) === '',
+        `stopped at step ${midStep.step} (level ${midStep.level}); canvas ${afterMid.width}, "${afterMid.status}", ` +
+        `${(100 * midDiff).toFixed(3)}% of pixels differ from the rest image`);
   // The toggle: turned on mid-animation it puts full detail back at once and keeps it.
   await page.check('#animate');
   await page.waitForFunction(() => window.likeness.animation.adaptive.step > 0, null, { timeout: 30000 }).catch(() => {});
