@@ -258,6 +258,7 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
     int rounds = 0, full_searches = 0;
     std::set<std::array<int, 2>> unfixable;
     std::vector<char> held(finest.positions.size(), 0);
+    std::vector<char> parent_done(L > 0 ? mesh.num_vertices(L - 1) : 0, 0);
     for (int pass = 0;; ++pass) {
       while ((!pairs.empty() || !next_bad.empty()) && rounds < options.max_intersection_rounds) {
         ++rounds;
@@ -317,6 +318,25 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
             }
             for (size_t i = before; i < changed.size(); ++i) held[changed[i]] = 1, ++st.crossing_corrected;
             if (any) continue;
+            // Still crossing with everything around on the smooth surface
+            // along the normals: the level above moved it sideways. Its
+            // parent triangle's corners go onto the smooth surface there
+            // (once each), and the two finest levels are evaluated again.
+            if (options.crossing_parents_to_smooth && L > 0) {
+              bool moved_parent = false;
+              for (int f : p)
+                for (int c : mesh.triangles(L - 1)[f / 4]) {
+                  if (parent_done[c]) continue;
+                  parent_done[c] = 1;
+                  const double d = (smooth[L - 1][c] - state.base[L - 1][c]).dot(state.normals[L - 1][c]);
+                  if (d == mesh.displacements[L - 1][c]) continue;
+                  mesh.displacements[L - 1][c] = d;
+                  ++st.crossing_corrected;
+                  moved_parent = true;
+                  restart = restart < 0 ? L - 1 : std::min(restart, L - 1);
+                }
+              if (moved_parent) continue;
+            }
           }
           if (full_searches < options.max_intersection_restarts)
             for (int f : p) {

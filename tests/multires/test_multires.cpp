@@ -512,6 +512,17 @@ TEST_CASE("multires: the limiter separates two displaced sheets that cross", "[m
   int moved = 0;
   for (double d : on.displacements[2]) moved += d != 0;
   CHECK(moved < on.num_vertices(2) / 4);
+  // The optional step onto the level above keeps all that.
+  MultiresMesh parents;
+  REQUIRE(build_multires(two, 2, parents).ok());
+  for (int v = 0; v < parents.num_vertices(0); ++v) parents.displacements[0][v] = 0.15;
+  FoldLimitOptions with_parents;
+  with_parents.crossing_parents_to_smooth = true;
+  REQUIRE(limit_folds(parents, with_parents).ok());
+  REQUIRE(find_self_intersections(level_mesh(parents, 2), pairs).ok());
+  CHECK(pairs.empty());
+  CHECK(count_flipped(parents, 2) == 0);
+  for (double d : parents.displacements[0]) CHECK(d == 0.15);
 }
 
 TEST_CASE("multires: crease vertices keep no displacement through the fold limiter", "[multires][crease]") {
