@@ -595,8 +595,9 @@ async function adaptiveDetail(page, rest, fit, downloads) {
         `step ${down.step}/${down.last}, level ${down.level}, scale ${down.scale}, canvas ${fullWidth} -> ${down.width}, "${down.text}", select ${down.select}`);
   // Export while moving on level 1: the file is the chosen level 3.
   const before = downloads.length;
+  const handed = await page.evaluate(() => window.likeness.downloads.length);  // before the click: the export may be quick
   await page.click('#btn-export-ply');
-  await page.waitForFunction((n) => window.likeness.downloads.length > n, (await page.evaluate(() => window.likeness.downloads.length)), { timeout: JOB_TIMEOUT_MS });
+  await page.waitForFunction((n) => window.likeness.downloads.length > n, handed, { timeout: JOB_TIMEOUT_MS });
   await page.waitForTimeout(300);
   const ply = downloads.length > before ? fs.readFileSync(await downloads[downloads.length - 1].path()) : null;
   check('... export while stepped down still writes the chosen level', !!ply &&
