@@ -40,9 +40,10 @@ struct DisplacementOptions {
   double radius = 0.0;
   // Points the adaptive footprint gathers. The kernel weights them (1 -
   // (rho/R)^2)^2, so about half of them count: 16 points weigh like 9, a
-  // margin over the 6 coefficients of the quadric. (Fran, 5-fold held-out
-  // points: 12 / 16 / 20 / 30 gave 0.109 / 0.089 / 0.105 / 0.118 % with the
-  // other settings of the time; larger footprints blur the face.)
+  // margin over the 6 coefficients of the quadric. (Fran, a fifth of the
+  // points held out: 16 / 20 gave 0.089 / 0.092 %; with an earlier ridge of
+  // 0.02, 12 / 20 / 30 gave 0.109 / 0.105 / 0.118 %: larger footprints blur
+  // the face.)
   int footprint_points = 16;
   // Largest adaptive radius. 0: the larger of half the level's mean edge and
   // twice the mean point spacing sqrt(level area / #points) over the whole
