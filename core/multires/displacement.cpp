@@ -16,6 +16,9 @@ using namespace multires_detail;
 
 namespace {
 
+// Not M_PI: it is not standard C++ (the wasm build's libc hides it).
+constexpr double kPi = 3.14159265358979323846;
+
 struct CloudAdaptor {
   const std::vector<Vec3>& pts;
   size_t kdtree_get_point_count() const { return pts.size(); }
@@ -282,7 +285,7 @@ bool measure_one(const CloudTree& tree, const std::vector<Vec3>& pts, const std:
   // point does not count as a crossing.
   std::sort(s.line_pts.begin(), s.line_pts.end(), [](const LinePoint& a, const LinePoint& b) { return a.h < b.h; });
   const size_t count = s.line_pts.size();
-  const double local_spacing = radius * std::sqrt(M_PI / static_cast<double>(count));
+  const double local_spacing = radius * std::sqrt(kPi / static_cast<double>(count));
   const double gap = opt.cluster_fraction * g.max_distance + 0.5 * local_spacing;
   s.sheets.clear();  // [begin, end) ranges, then ordered by their height nearest to 0
   for (size_t i = 0; i < count;) {
@@ -402,13 +405,13 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
       g.max_radius = options.max_radius > 0 ? options.max_radius : std::max(g.min_radius, 2.0 * spacing);
       // Where footprint_points points are expected at the mean spacing,
       // with margin so the first search usually suffices.
-      const double expected = spacing * std::sqrt(options.footprint_points / M_PI);
+      const double expected = spacing * std::sqrt(options.footprint_points / kPi);
       g.first_radius = std::clamp(1.1 * expected, g.min_radius, std::max(g.min_radius, g.max_radius));
     } else {
       g.min_radius = g.max_radius = g.first_radius = options.radius;
     }
     const double typical_radius =
-        g.adaptive ? std::clamp(spacing * std::sqrt(options.footprint_points / M_PI), g.min_radius, g.max_radius)
+        g.adaptive ? std::clamp(spacing * std::sqrt(options.footprint_points / kPi), g.min_radius, g.max_radius)
                    : options.radius;
     g.max_distance = options.max_distance > 0 ? options.max_distance : 2.0 * std::max(edge, typical_radius);
     if (l > 0 && options.fine_line_edges > 0)

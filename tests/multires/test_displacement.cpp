@@ -53,7 +53,7 @@ SphereResult measure_sphere(const PointCloud& cloud, const DisplacementOptions& 
   for (int v = 0; v < m.num_vertices(); ++v) {
     r.mean_radial_error += std::abs(m.positions[v].norm() - 1.0);
     const double c = std::clamp(m.normals[v].dot(m.positions[v].normalized()), -1.0, 1.0);
-    r.mean_normal_angle += std::acos(c) * 180.0 / M_PI;
+    r.mean_normal_angle += std::acos(c) * 180.0 / 3.14159265358979323846;
   }
   r.mean_radial_error /= m.num_vertices();
   r.mean_normal_angle /= m.num_vertices();
