@@ -339,8 +339,9 @@ std::vector<Landmark> texture_landmarks(const lk::GenericHead& g) {
 }
 
 // Poses the kept head: brows up and jaw open by amount in [0, 1] (0 = rest),
-// through the multires local update (jeong2002 Sec. 6).
-lk::Status set_pose(FitSession& s, double amount, lk::UpdateFootprint* footprint) {
+// through the multires local update (jeong2002 Sec. 6), up to level
+// max_level (-1: all; the levels above are brought up to date when read).
+lk::Status set_pose(FitSession& s, double amount, lk::UpdateFootprint* footprint, int max_level = -1) {
   const double brow_lift = 0.02 * s.head_size * amount;  // ~7 mm on a head
   const double jaw_angle = 0.14 * amount;                 // ~8 degrees
   const double c = std::cos(jaw_angle), sn = std::sin(jaw_angle);
@@ -355,7 +356,7 @@ lk::Status set_pose(FitSession& s, double amount, lk::UpdateFootprint* footprint
       target[i] = s.jaw_pivot + lk::Vec3(d.x(), c * d.y() - sn * d.z(), sn * d.y() + c * d.z());
     }
   }
-  return lk::update_control_vertices(s.fit.multires, s.moved, target, footprint);
+  return lk::update_control_vertices(s.fit.multires, s.moved, target, footprint, max_level);
 }
 
 const lk::GenericHead* generic_head(lk::Status& status) {
@@ -657,7 +658,9 @@ val animate_frame(double amount, int level) {
   amount = std::min(1.0, std::max(0.0, amount));
   const double t0 = now_ms();
   lk::UpdateFootprint footprint;
-  lk::Status st = set_pose(s, amount, &footprint);
+  // Only up to the level shown: an animation drawn at level 1 (adaptive
+  // detail) does not pay for level 3.
+  lk::Status st = set_pose(s, amount, &footprint, level);
   const double update_ms = now_ms() - t0;
   if (!st.ok()) return error_result(st);
   val r = ok_result();
@@ -674,10 +677,12 @@ val animate_frame(double amount, int level) {
 // frame, as OBJ text or binary PLY. The current animation pose is exported.
 val export_head(int level, const std::string& format) {
   if (!g_session) return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "no fitted head to export"));
-  const FitSession& s = *g_session;
-  const lk::MultiresMesh& mr = s.fit.multires;
+  FitSession& s = *g_session;
+  lk::MultiresMesh& mr = s.fit.multires;
   if (level < 0 || level > mr.num_levels())
     return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "no level " + std::to_string(level)));
+  const lk::Status current = lk::ensure_current(mr);  // an animation may have updated only coarser levels
+  if (!current.ok()) return error_result(current);
   lk::TriMesh m;
   m.positions = to_scan_frame(s, mr.state.displaced[level]);
   m.triangles = mr.triangles(level);
@@ -941,12 +946,14 @@ val texture_job(val photos, val options, val progress) {
 // PNG. Current pose, scan frame, like export_head.
 val export_textured(int level, const std::string& base) {
   if (!g_session) return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "no fitted head to export"));
-  const FitSession& s = *g_session;
+  FitSession& s = *g_session;
   if (s.skin.empty() || s.uvs.empty())
     return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "the head is not textured yet"));
-  const lk::MultiresMesh& mr = s.fit.multires;
+  lk::MultiresMesh& mr = s.fit.multires;
   if (level < 0 || level > mr.num_levels())
     return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "no level " + std::to_string(level)));
+  const lk::Status current = lk::ensure_current(mr);  // an animation may have updated only coarser levels
+  if (!current.ok()) return error_result(current);
   lk::TriMesh m;
   m.positions = to_scan_frame(s, mr.state.displaced[level]);
   m.triangles = mr.triangles(level);

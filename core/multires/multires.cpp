@@ -161,6 +161,7 @@ Status evaluate(MultiresMesh& mesh) {
   Status s = check_sizes(mesh);
   if (!s.ok()) return s;
   resize_state(mesh);
+  mesh.stale_from = -1;
   mesh.state.base[0] = mesh.control;
   for (int l = 0; l <= mesh.num_levels(); ++l) {
     evaluate_level(mesh, l);
@@ -195,9 +196,12 @@ std::vector<std::vector<char>> propagate_vertex_mask(const MultiresMesh& mesh, c
   return out;
 }
 
+Status ensure_current(MultiresMesh& mesh) { return mesh.stale_from < 0 ? Status::success() : evaluate(mesh); }
+
 Status update_control_vertices(MultiresMesh& mesh, const std::vector<int>& moved,
-                               const std::vector<Vec3>& new_positions, UpdateFootprint* footprint) {
+                               const std::vector<Vec3>& new_positions, UpdateFootprint* footprint, int max_level) {
   const int L = mesh.num_levels();
+  const int top = max_level < 0 || max_level > L ? L : max_level;
   if (moved.size() != new_positions.size())
     return Status::error(ErrorCode::InvalidInput, "multires update: " + std::to_string(moved.size()) +
                                                       " indices but " + std::to_string(new_positions.size()) +
@@ -215,6 +219,10 @@ Status update_control_vertices(MultiresMesh& mesh, const std::vector<int>& moved
       static_cast<int>(st.displaced[L].size()) != mesh.num_vertices(L) ||
       st.face_normals.size() != st.displaced.size())
     return Status::error(ErrorCode::InvalidInput, "multires update: the mesh has not been built and evaluated");
+  if (mesh.stale_from >= 0 && top >= mesh.stale_from) {
+    Status s = evaluate(mesh);  // the stale levels missed earlier moves: start from a full recompute
+    if (!s.ok()) return s;
+  }
 
   auto& sc = mesh.scratch;
   if (static_cast<int>(sc.base_mark.size()) != L + 1) {
@@ -295,7 +303,7 @@ Status update_control_vertices(MultiresMesh& mesh, const std::vector<int>& moved
       footprint->base_changed[l] = static_cast<int>(changed.size());
       footprint->displaced_changed[l] = static_cast<int>(reached.size());
     }
-    if (l == L) break;
+    if (l == top) break;
 
     const ButterflyLevel& next = mesh.levels[l];
     const int nc = next.num_coarse_vertices;
@@ -320,6 +328,7 @@ Status update_control_vertices(MultiresMesh& mesh, const std::vector<int>& moved
       }
     }
   }
+  if (top < L) mesh.stale_from = mesh.stale_from < 0 ? top + 1 : std::min(mesh.stale_from, top + 1);
   return Status::success();
 }
 

@@ -56,6 +56,10 @@ struct MultiresMesh {
   std::vector<std::vector<double>> displacements;  // L+1 arrays: d_l, #V_l each
   std::vector<MultiresLevelLinks> links;           // L+1
   MultiresState state;
+  // After an update limited to level l < L (see update_control_vertices), the
+  // levels above l are out of date from this level on; -1: every level is
+  // current. evaluate() and ensure_current() bring them back.
+  int stale_from = -1;
   // Scratch of update_control_vertices (visit marks per level); not
   // thread-safe: one update at a time per mesh.
   struct Scratch {
@@ -98,11 +102,21 @@ struct UpdateFootprint {
 };
 
 // Moves control vertices (indices into control, with their new positions) and
-// recomputes state only inside their support on every level; everything else
-// is left untouched. A repeated index takes its last position. Fails with
-// InvalidInput on mismatched sizes, an index out of range, a non-finite
-// position, or a mesh that was not evaluated (nothing is changed then).
+// recomputes state only inside their support on every level up to
+// max_level (< 0 or >= L: all levels); everything else is left untouched. A
+// repeated index takes its last position. Levels above max_level are then
+// out of date (stale_from): an animation shown at level 1 need not pay for
+// level 3. An update that reaches a stale level first re-evaluates the whole
+// hierarchy, so its result is again bit-identical to a full recompute. Fails
+// with InvalidInput on mismatched sizes, an index out of range, a
+// non-finite position, or a mesh that was not evaluated (nothing is changed
+// then).
 Status update_control_vertices(MultiresMesh& mesh, const std::vector<int>& moved,
-                               const std::vector<Vec3>& new_positions, UpdateFootprint* footprint = nullptr);
+                               const std::vector<Vec3>& new_positions, UpdateFootprint* footprint = nullptr,
+                               int max_level = -1);
+
+// Re-evaluates the hierarchy if a limited update left levels out of date;
+// call before reading state of a level above the last update's max_level.
+Status ensure_current(MultiresMesh& mesh);
 
 }  // namespace lk
