@@ -11,7 +11,7 @@
 // --fit-area-ratio R, --fit-cap-pct P, --fit-levels L, --fit-line-edges E,
 // --fit-no-climb, --fit-remeasure, --fit-no-creases (plain Butterfly at the
 // eye and lip rims), --fit-displaced-creases, --fit-no-corners-to-smooth,
-// --fit-parents-to-smooth, --fit-separation-repeats N, --fit-restarts N (fold_limit.h), --fit-seeds N
+// --fit-no-parents-to-smooth, --fit-separation-repeats N, --fit-restarts N (fold_limit.h), --fit-seeds N
 // (seeds 1..N); --save-scans DIR writes scans, truths,
 // the finest level and its crossing triangles.
 #include "command.h"
@@ -242,7 +242,7 @@ int run(const Args& args) {
     if (args.has("fit-no-creases")) opt.rim_creases = false;
     if (args.has("fit-displaced-creases")) opt.fold_limit.undisplaced_creases = false;
     if (args.has("fit-no-corners-to-smooth")) opt.fold_limit.crossing_corners_to_smooth = false;
-    if (args.has("fit-parents-to-smooth")) opt.fold_limit.crossing_parents_to_smooth = true;
+    if (args.has("fit-no-parents-to-smooth")) opt.fold_limit.crossing_parents_to_smooth = false;
     args.get_int("fit-separation-repeats", opt.fold_limit.separation_repeats, opt.fold_limit.separation_repeats);
     st = fit_head(cloud, generic, opt, r, obs);
     std::printf("\n   seed %d: %d points (%d above the neck cut), bbox diagonal %.3f m\n", seed, r.points,
