@@ -15,6 +15,7 @@
 // (seeds 1..N); --save-scans DIR writes scans, truths,
 // the finest level and its crossing triangles.
 #include "command.h"
+#include "common/parallel.h"
 #include "fit_table.h"
 #include "head/generic_head.h"
 #include "io/io.h"
@@ -190,9 +191,11 @@ int run(const Args& args) {
   }
   std::printf("   synthetic scans: %d points, seeds", n_points);
   for (int s : seeds) std::printf(" %d", s);
-  std::printf(" (virtual structured-light scanner: holes, 0.2 mm noise, 0.5%% outliers, hair junk)\n");
+  const ScannerOptions scanner_defaults;
+  std::printf(" (virtual structured-light scanner: holes, %.2g mm noise, %.2g%% outliers, hair junk)\n",
+              1000 * scanner_defaults.noise_sigma_m, 100 * scanner_defaults.outlier_fraction);
   int failures = 0;
-  double sum_final_mean = 0, worst_total = 0;
+  double sum_final_mean = 0, worst_total = 0, worst_total_cpu = 0;
   int sum_flipped = 0, sum_degenerate = 0, sum_intersections = 0;
   for (int seed : seeds) {
     GenericHead head;
@@ -258,7 +261,8 @@ int run(const Args& args) {
       total += s.ms;
       total_cpu += s.cpu_ms;
     }
-    worst_total = std::max(worst_total, total_cpu);
+    worst_total = std::max(worst_total, total);
+    worst_total_cpu = std::max(worst_total_cpu, total_cpu);
     sum_final_mean += stages.back().distance.mean_pct;
 
     // Holes: truth vertices with no scan point within 3 mm. Their distance
@@ -328,9 +332,11 @@ int run(const Args& args) {
     }
     sum_intersections += print_self_intersections(r, generic.annotations,
                                                   save.empty() ? "" : save + "/fit_seed" + std::to_string(seed));
-    std::printf("   global fit: %zu iterations in %d rounds; total %.0f ms wall, %.0f ms CPU (target < 2000 ms): %s\n",
-                r.global_fit.iterations.size(), r.global_fit.rounds, total, total_cpu,
-                total_cpu < 2000 ? "met (CPU)" : "MISSED");
+    // The target is the time a user waits (wall); CPU is summed over the
+    // threads of the parallel loops (closest points, displacements).
+    std::printf("   global fit: %zu iterations in %d rounds; total %.0f ms wall, %.0f ms CPU on up to %d threads (target < 2000 ms wall): %s\n",
+                r.global_fit.iterations.size(), r.global_fit.rounds, total, total_cpu, parallel_workers(),
+                total < 2000 ? "met" : "MISSED");
     if (seed == seeds.front()) {
       // The displacement stage's parts, re-run on the fitted control mesh
       // (without fit_head's pocket zeroing): where its time goes.
@@ -375,8 +381,8 @@ int run(const Args& args) {
   }
   const int ok = static_cast<int>(seeds.size()) - failures;
   if (ok > 0)
-    std::printf("\n   summary: final mean %.4f %% of the diagonal over %d seeds (target <= 0.04; paper 0.04 male, 0.08 female); slowest fit %.0f ms CPU (target 2000)\n",
-                sum_final_mean / ok, ok, worst_total);
+    std::printf("\n   summary: final mean %.4f %% of the diagonal over %d seeds (target <= 0.04; paper 0.04 male, 0.08 female); slowest fit %.0f ms wall, %.0f ms CPU (target 2000 wall)\n",
+                sum_final_mean / ok, ok, worst_total, worst_total_cpu);
   if (ok > 0)
     std::printf("   summary: level-L flipped %d, degenerate %d, self-intersecting pairs %d over %d seeds (target 0 each)\n",
                 sum_flipped, sum_degenerate, sum_intersections, ok);

@@ -1,5 +1,6 @@
 #include "fit/global_fit.h"
 
+#include "common/parallel.h"
 #include "fit/closest_point.h"
 #include "mesh/geometry.h"
 
@@ -100,10 +101,9 @@ void project(const std::vector<Vec3>& points, const std::vector<int>& set, TriMe
   from_vector(x, work.positions);
   ClosestPointTree tree(work);
   out.hits.resize(set.size());
-  double sum = 0;
-  const double tau2 = tau * tau;
   const bool warm = previous && previous->size() == set.size();
-  for (size_t i = 0; i < set.size(); ++i) {
+  // Independent queries: in parallel, each writing its own hit.
+  parallel_for(0, static_cast<int>(set.size()), 1024, [&](int i, int) {
     const Vec3& p = points[set[i]];
     if (warm && (*previous)[i].face >= 0) {
       const int f = (*previous)[i].face;
@@ -115,8 +115,10 @@ void project(const std::vector<Vec3>& points, const std::vector<int>& set, TriMe
     } else {
       out.hits[i] = tree.closest(p);
     }
-    sum += std::min(out.hits[i].squared_distance, tau2);
-  }
+  });
+  double sum = 0;  // in point order: the same sum on any number of threads
+  const double tau2 = tau * tau;
+  for (const SurfacePoint& h : out.hits) sum += std::min(h.squared_distance, tau2);
   out.dist_energy = set.empty() ? 0.0 : sum / set.size();
 }
 

@@ -1,5 +1,6 @@
 #include "multires/displacement.h"
 
+#include "common/parallel.h"
 #include "multires/multires_detail.h"
 
 #include <Eigen/Cholesky>
@@ -387,7 +388,7 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
     *stats = DisplacementStats{std::vector<int>(L + 1, 0),    std::vector<int>(L + 1, 0),
                                std::vector<double>(L + 1, 0), std::vector<double>(L + 1, 0),
                                std::vector<int>(L + 1, 0),    std::vector<double>(L + 1, 0)};
-  Scratch scratch;
+  std::vector<Scratch> scratch(parallel_workers());  // one per worker
   mesh.state.base[0] = mesh.control;
   for (int l = 0; l <= L; ++l) {
     evaluate_level(mesh, l);  // normals N_l with d_l = 0
@@ -416,23 +417,34 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
     g.max_distance = options.max_distance > 0 ? options.max_distance : 2.0 * std::max(edge, typical_radius);
     if (l > 0 && options.fine_line_edges > 0)
       g.max_distance = std::min(g.max_distance, options.fine_line_edges * std::max(edge, typical_radius));
-    scratch.walk.mark.assign(mesh.num_vertices(l), 0);
-    scratch.walk.stamp = 0;
+    for (Scratch& sc : scratch) {
+      sc.walk.mark.assign(mesh.num_vertices(l), 0);
+      sc.walk.stamp = 0;
+    }
 
     const int nv = mesh.num_vertices(l);
     const int first = (l == 0 || options.remeasure_coarse_vertices) ? 0 : mesh.num_vertices(l - 1);
+    // Each vertex is measured on its own (the mesh is read, not written):
+    // in parallel, then summed in vertex order.
+    std::vector<char> found(nv - first, 0);
+    std::vector<double> found_d(nv - first, 0.0), found_radius(nv - first, 0.0), found_taper(nv - first, 1.0);
+    parallel_for(first, nv, 256, [&](int v, int worker) {
+      const int k = v - first;
+      found[k] = measure_one(tree, cloud.positions, point_normals, mesh, l, v, g, options, scratch[worker], found_d[k],
+                             found_radius[k], found_taper[k]);
+    });
     int measured = 0, tapered = 0;
     double sum_abs = 0, max_abs = 0, sum_radius = 0;
     for (int v = first; v < nv; ++v) {
-      double d = 0, radius = 0, taper = 1;
-      if (measure_one(tree, cloud.positions, point_normals, mesh, l, v, g, options, scratch, d, radius, taper)) {
-        mesh.displacements[l][v] = d;
-        ++measured;
-        tapered += taper < 1;
-        sum_abs += std::abs(d);
-        max_abs = std::max(max_abs, std::abs(d));
-        sum_radius += radius;
-      }
+      const int k = v - first;
+      if (!found[k]) continue;
+      const double d = found_d[k];
+      mesh.displacements[l][v] = d;
+      ++measured;
+      tapered += found_taper[k] < 1;
+      sum_abs += std::abs(d);
+      max_abs = std::max(max_abs, std::abs(d));
+      sum_radius += found_radius[k];
     }
     if (stats) {
       stats->candidates[l] = nv - first;
