@@ -259,6 +259,18 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
     std::set<std::array<int, 2>> unfixable;
     std::vector<char> held(finest.positions.size(), 0);
     std::vector<char> parent_done(L > 0 ? mesh.num_vertices(L - 1) : 0, 0);
+    // After `changed` moved on the finest level (finest.positions already
+    // updated): crossings and bad triangles are searched again around it only.
+    auto search_around_changed = [&]() -> Status {
+      Status r = refit_bvh(finest, bvh);
+      if (!r.ok()) return r;
+      around_changed(L, around);
+      find_intersections_with(bvh, around, pairs);
+      next_bad.clear();
+      for (int f : around)
+        if (is_bad(L, f)) next_bad.push_back(f);
+      return Status::success();
+    };
     for (int pass = 0;; ++pass) {
       while ((!pairs.empty() || !next_bad.empty()) && rounds < options.max_intersection_rounds) {
         ++rounds;
@@ -360,23 +372,13 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
           changed.clear();
           for (int v = 0; v < static_cast<int>(finest.positions.size()); ++v)
             if (state.displaced[L][v] != finest.positions[v]) changed.push_back(v), finest.positions[v] = state.displaced[L][v];
-          s = refit_bvh(finest, bvh);
+          s = search_around_changed();
           if (!s.ok()) return s;
-          around_changed(L, around);
-          find_intersections_with(bvh, around, pairs);
-          next_bad.clear();
-          for (int f : around)
-            if (is_bad(L, f)) next_bad.push_back(f);
           continue;
         }
         for (int v : changed) finest.positions[v] = state.displaced[L][v];
-        s = refit_bvh(finest, bvh);
+        s = search_around_changed();
         if (!s.ok()) return s;
-        around_changed(L, around);
-        find_intersections_with(bvh, around, pairs);
-        next_bad.clear();
-        for (int f : around)
-          if (is_bad(L, f)) next_bad.push_back(f);
       }
       for (const auto& p : pairs) unfixable.insert(p);
       st.intersections_left = static_cast<int>(unfixable.size());

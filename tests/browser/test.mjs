@@ -36,6 +36,7 @@ import os from 'node:os';
 import path from 'node:path';
 import zlib from 'node:zlib';
 import { execFileSync } from 'node:child_process';
+import { decodePng } from './harness.mjs';
 
 const WEBDIR = path.resolve(process.argv[2] || '');
 const SHOT_DIR = process.env.LK_SCREENSHOT_DIR || '';
@@ -77,54 +78,6 @@ function startServer(root) {
     fs.createReadStream(file).pipe(res);
   });
   return new Promise((resolve) => server.listen(0, '127.0.0.1', () => resolve(server)));
-}
-
-// ------------------------------------------------------------ PNG decoding --
-// Enough of PNG for Chromium's screenshots: 8-bit RGB/RGBA, not interlaced.
-function decodePng(buf) {
-  let pos = 8, width = 0, height = 0, colorType = 0;
-  const idat = [];
-  while (pos < buf.length) {
-    const len = buf.readUInt32BE(pos);
-    const type = buf.toString('ascii', pos + 4, pos + 8);
-    const data = buf.subarray(pos + 8, pos + 8 + len);
-    if (type === 'IHDR') {
-      width = data.readUInt32BE(0); height = data.readUInt32BE(4);
-      if (data[8] !== 8 || data[12] !== 0) throw new Error('unsupported PNG (bit depth/interlace)');
-      colorType = data[9];
-    } else if (type === 'IDAT') idat.push(data);
-    pos += 12 + len;
-  }
-  const channels = colorType === 6 ? 4 : colorType === 2 ? 3 : 0;
-  if (!channels) throw new Error('unsupported PNG color type ' + colorType);
-  const raw = zlib.inflateSync(Buffer.concat(idat));
-  const stride = width * channels;
-  const out = Buffer.alloc(width * height * 4);
-  const prev = Buffer.alloc(stride), cur = Buffer.alloc(stride);
-  for (let y = 0; y < height; y++) {
-    const filter = raw[y * (stride + 1)];
-    const line = raw.subarray(y * (stride + 1) + 1, (y + 1) * (stride + 1));
-    for (let i = 0; i < stride; i++) {
-      const a = i >= channels ? cur[i - channels] : 0, b = prev[i], c = i >= channels ? prev[i - channels] : 0;
-      let v = line[i];
-      if (filter === 1) v += a;
-      else if (filter === 2) v += b;
-      else if (filter === 3) v += (a + b) >> 1;
-      else if (filter === 4) {
-        const p = a + b - c, pa = Math.abs(p - a), pb = Math.abs(p - b), pc = Math.abs(p - c);
-        v += pa <= pb && pa <= pc ? a : pb <= pc ? b : c;
-      }
-      cur[i] = v & 255;
-    }
-    for (let x = 0; x < width; x++) {
-      out[(y * width + x) * 4] = cur[x * channels];
-      out[(y * width + x) * 4 + 1] = cur[x * channels + 1];
-      out[(y * width + x) * 4 + 2] = cur[x * channels + 2];
-      out[(y * width + x) * 4 + 3] = channels === 4 ? cur[x * channels + 3] : 255;
-    }
-    cur.copy(prev);
-  }
-  return { width, height, data: out };
 }
 
 // The background is a vertical gradient, so each row's background color is
