@@ -11,7 +11,9 @@
 // --fit-area-ratio R, --fit-cap-pct P, --fit-levels L, --fit-line-edges E,
 // --fit-no-climb, --fit-remeasure, --fit-no-creases (plain Butterfly at the
 // eye and lip rims), --fit-displaced-creases, --fit-no-corners-to-smooth,
-// --fit-no-parents-to-smooth, --fit-separation-repeats N, --fit-restarts N (fold_limit.h), --fit-seeds N
+// --fit-no-parents-to-smooth, --fit-separation-repeats N, --fit-restarts N (fold_limit.h), --fit-seeds N,
+// --fit-isolated R (points R times sparser than the scan's sampling are
+// left out of fitting; 0 keeps them)
 // (seeds 1..N); --save-scans DIR writes scans, truths,
 // the finest level and its crossing triangles.
 #include "command.h"
@@ -239,6 +241,7 @@ int run(const Args& args) {
     args.get_double("fit-cap-pct", opt.displacement_max_pct, opt.displacement_max_pct);
     args.get_int("fit-levels", opt.levels, opt.levels);
     args.get_int("fit-restarts", opt.fold_limit.max_intersection_restarts, opt.fold_limit.max_intersection_restarts);
+    args.get_double("fit-isolated", opt.displacement.isolated_density_ratio, opt.displacement.isolated_density_ratio);
     args.get_double("fit-line-edges", opt.displacement.fine_line_edges, opt.displacement.fine_line_edges);
     if (args.has("fit-no-climb")) opt.fold_limit.shrink_coarser_levels = false;
     if (args.has("fit-remeasure")) opt.displacement.remeasure_coarse_vertices = true;

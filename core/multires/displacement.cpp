@@ -7,6 +7,8 @@
 #include <nanoflann.hpp>
 
 #include <algorithm>
+#include <cstdint>
+#include <unordered_map>
 #include <cmath>
 #include <cstdint>
 #include <numeric>
@@ -358,6 +360,47 @@ bool measure_one(const CloudTree& tree, const std::vector<Vec3>& pts, const std:
 
 }  // namespace
 
+std::vector<char> isolated_scan_points(const std::vector<Vec3>& points, double density_ratio) {
+  const size_t n = points.size();
+  std::vector<char> isolated(n, 0);
+  if (n < 16 || !(density_ratio > 0)) return isolated;
+  // Typical spacing: median nearest-neighbour distance of a spread sample.
+  CloudAdaptor adaptor{points};
+  CloudTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  tree.buildIndex();
+  const size_t step = std::max<size_t>(1, n / 4096);
+  std::vector<double> nearest;
+  for (size_t i = 0; i < n; i += step) {
+    size_t idx[2];
+    double d2[2];
+    if (tree.knnSearch(points[i].data(), 2, idx, d2) == 2 && d2[1] > 0) nearest.push_back(std::sqrt(d2[1]));
+  }
+  if (nearest.empty()) return isolated;
+  const double spacing = median(nearest);
+  const double cell = 4.0 * spacing;
+  // A surface through the 3x3x3 cells holds about (3 cell / spacing)^2 points.
+  const double expected = (3.0 * cell / spacing) * (3.0 * cell / spacing);
+  const double needed = expected / density_ratio;
+  auto key = [&](const Vec3& p, int dx, int dy, int dz) {
+    const auto c = [&](double v, int d) { return static_cast<std::int64_t>(std::floor(v / cell)) + d + (1 << 20); };
+    return (c(p.x(), dx) << 42) ^ (c(p.y(), dy) << 21) ^ c(p.z(), dz);
+  };
+  std::unordered_map<std::int64_t, int> count;
+  count.reserve(n);
+  for (const Vec3& p : points) ++count[key(p, 0, 0, 0)];
+  for (size_t i = 0; i < n; ++i) {
+    int around = 0;
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto it = count.find(key(points[i], dx, dy, dz));
+          if (it != count.end()) around += it->second;
+        }
+    isolated[i] = around < needed;
+  }
+  return isolated;
+}
+
 Status measure_displacements(const PointCloud& cloud, const DisplacementOptions& options, MultiresMesh& mesh,
                              DisplacementStats* stats, const ProgressFn& progress) {
   if (cloud.positions.empty()) return Status::error(ErrorCode::Empty, "multires: the point cloud is empty");
@@ -367,6 +410,8 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
       !(options.cluster_fraction > 0))
     return Status::error(ErrorCode::InvalidInput,
                          "multires: negative radius/max radius/max distance or non-positive cluster fraction");
+  if (!(options.isolated_density_ratio >= 0))
+    return Status::error(ErrorCode::InvalidInput, "multires: isolated_density_ratio must be >= 0");
   if (options.footprint_points < 1 || !(options.ridge >= 0) || !(options.support_full_offset >= 0) ||
       !(options.support_zero_offset > options.support_full_offset))
     return Status::error(ErrorCode::InvalidInput,
@@ -376,8 +421,24 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
   if (!s.ok()) return s;
 
   const bool use_normals = options.min_normal_agreement >= -1 && cloud.normals.size() == cloud.positions.size();
+  // The points measured from: without the isolated ones (hair returns).
+  std::vector<Vec3> kept_positions, kept_normals;
+  const std::vector<Vec3>* positions = &cloud.positions;
   const std::vector<Vec3>* point_normals = use_normals ? &cloud.normals : nullptr;
-  CloudAdaptor adaptor{cloud.positions};
+  if (options.isolated_density_ratio > 0) {
+    const std::vector<char> isolated = isolated_scan_points(cloud.positions, options.isolated_density_ratio);
+    const size_t n_isolated = static_cast<size_t>(std::count(isolated.begin(), isolated.end(), 1));
+    if (n_isolated > 0 && n_isolated < cloud.positions.size()) {
+      for (size_t i = 0; i < cloud.positions.size(); ++i) {
+        if (isolated[i]) continue;
+        kept_positions.push_back(cloud.positions[i]);
+        if (use_normals) kept_normals.push_back(cloud.normals[i]);
+      }
+      positions = &kept_positions;
+      if (use_normals) point_normals = &kept_normals;
+    }
+  }
+  CloudAdaptor adaptor{*positions};
   CloudTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   tree.buildIndex();
 
@@ -398,7 +459,7 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
       area += 0.5 * face_normal(mesh.triangles(l), mesh.state.base[l], f).norm();
     // Mean spacing if the cloud covered the whole level: a lower bound on
     // its density where it has data (it covers part of the head).
-    const double spacing = std::sqrt(area / cloud.size());
+    const double spacing = std::sqrt(area / positions->size());
     LevelGeometry g;
     g.adaptive = options.radius <= 0;
     if (g.adaptive) {
@@ -430,7 +491,7 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
     std::vector<double> found_d(nv - first, 0.0), found_radius(nv - first, 0.0), found_taper(nv - first, 1.0);
     parallel_for(first, nv, 256, [&](int v, int worker) {
       const int k = v - first;
-      found[k] = measure_one(tree, cloud.positions, point_normals, mesh, l, v, g, options, scratch[worker], found_d[k],
+      found[k] = measure_one(tree, *positions, point_normals, mesh, l, v, g, options, scratch[worker], found_d[k],
                              found_radius[k], found_taper[k]);
     });
     int measured = 0, tapered = 0;

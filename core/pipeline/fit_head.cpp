@@ -338,6 +338,19 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
     }
   }
   out.pocket_points = static_cast<int>(pts.size() - skin_pts.size());
+  // Points far sparser than the scan's own sampling (hair returns, stray
+  // reflections) are not skin: fitted as a surface they raised bumps along
+  // the hairline. They stay in the reported distances (Table 1 is over all
+  // points).
+  if (options.displacement.isolated_density_ratio > 0) {
+    const std::vector<char> isolated = isolated_scan_points(skin_pts, options.displacement.isolated_density_ratio);
+    size_t kept = 0;
+    for (size_t i = 0; i < skin_pts.size(); ++i)
+      if (!isolated[i]) skin_pts[kept] = skin_pts[i], skin_index[kept] = skin_index[i], ++kept;
+    out.isolated_points = static_cast<int>(skin_pts.size() - kept);
+    skin_pts.resize(kept);
+    skin_index.resize(kept);
+  }
   if (static_cast<int>(skin_pts.size()) < options.min_points)
     return Status::error(ErrorCode::NotAHead, "only " + std::to_string(skin_pts.size()) +
                                                   " points lie on the skin of the aligned head");
@@ -361,6 +374,7 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
     for (int i : skin_index) fitted.normals.push_back(out.scan_to_head.A * scan.normals[i]);
   }
   DisplacementOptions dopt = options.displacement;
+  dopt.isolated_density_ratio = 0;  // already left out above
   if (dopt.max_distance <= 0) dopt.max_distance = options.displacement_max_pct / 100.0 * diag;
   st = measure_displacements(fitted, dopt, out.multires, nullptr, progress);
   if (!st) return with_context(st, "displacements");

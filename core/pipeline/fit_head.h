@@ -140,6 +140,7 @@ struct FitHeadResult {
   GlobalFitResult global_fit;
   double near_fraction = 0;     // share of points near the aligned head (sanity check)
   int pocket_points = 0;        // fitted points nearest to an eye socket / the mouth bag: not fitted
+  int isolated_points = 0;  // skin points left out of fitting as isolated (DisplacementOptions::isolated_density_ratio)
   int zeroed_displacements = 0; // displacements dropped in pockets or because they folded triangles
   FoldLimitStats fold_limit;    // what the fold limiter shrank
 };
