@@ -13,7 +13,8 @@
 // eye and lip rims), --fit-displaced-creases, --fit-no-corners-to-smooth,
 // --fit-no-parents-to-smooth, --fit-separation-repeats N, --fit-restarts N (fold_limit.h), --fit-seeds N,
 // --fit-isolated R (points R times sparser than the scan's sampling are
-// left out of fitting; 0 keeps them)
+// left out of fitting; 0 keeps them), --fit-footprint N (points per
+// displacement footprint)
 // (seeds 1..N); --save-scans DIR writes scans, truths,
 // the finest level and its crossing triangles.
 #include "command.h"
@@ -242,6 +243,7 @@ int run(const Args& args) {
     args.get_int("fit-levels", opt.levels, opt.levels);
     args.get_int("fit-restarts", opt.fold_limit.max_intersection_restarts, opt.fold_limit.max_intersection_restarts);
     args.get_double("fit-isolated", opt.displacement.isolated_density_ratio, opt.displacement.isolated_density_ratio);
+    args.get_int("fit-footprint", opt.displacement.footprint_points, opt.displacement.footprint_points);
     args.get_double("fit-line-edges", opt.displacement.fine_line_edges, opt.displacement.fine_line_edges);
     if (args.has("fit-no-climb")) opt.fold_limit.shrink_coarser_levels = false;
     if (args.has("fit-remeasure")) opt.displacement.remeasure_coarse_vertices = true;
