@@ -17,24 +17,14 @@
 // Not a test: a measurement.
 // Usage: node anim_profile.mjs WEBDIR [SCAN.ply] [--level 3] [--seconds 6] [--profile] [--msaa N]
 //                              [--full-detail] [--budget MS] [--both N] [--grid [--levels L,..] [--scales S,..]]
-import { launchChromium, serveDir, decodePng } from './harness.mjs';
+import { closeChromium, decodePng, launchChromium, serveDir, takeFlag, takeOption } from './harness.mjs';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 
 const args = process.argv.slice(2);
-function option(name, fallback) {
-  const i = args.indexOf(name);
-  if (i < 0) return fallback;
-  const v = args[i + 1];
-  args.splice(i, 2);
-  return v;
-}
-function flag(name) {
-  const i = args.indexOf(name);
-  if (i >= 0) args.splice(i, 1);
-  return i >= 0;
-}
+const option = (name, fallback) => takeOption(args, name, fallback);
+const flag = (name) => takeFlag(args, name);
 const level = Number(option('--level', 3));
 const seconds = Number(option('--seconds', 6));
 const msaa = option('--msaa', '');  // samples; default: the page's choice (none on software WebGL)
@@ -174,9 +164,7 @@ try {
   console.error(String(e && e.message ? e.message : e));
   status = 1;
 } finally {
-  await context.close();
-  server.close();
-  fs.rmSync(context.userDir, { recursive: true, force: true });
+  await closeChromium(context, server);
 }
 process.exit(status);
 

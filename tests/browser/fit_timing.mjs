@@ -9,17 +9,13 @@
 // web_fit_stages.png (Align result over the scan, wireframe) and
 // web_fit_animate.png (mid-animation, points off).
 // Usage: node fit_timing.mjs WEBDIR [SCAN.ply] [--runs N] [--shots DIR]
-import { launchChromium, serveDir } from './harness.mjs';
+import { closeChromium, launchChromium, serveDir, takeFlag, takeOption } from './harness.mjs';
 import fs from 'node:fs';
 import path from 'node:path';
 
 const args = process.argv.slice(2);
-let runs = 1;
-const r = args.indexOf('--runs');
-if (r >= 0) { runs = Math.max(1, Number(args[r + 1]) || 1); args.splice(r, 2); }
-let shots = '';
-const sh = args.indexOf('--shots');
-if (sh >= 0) { shots = args[sh + 1]; args.splice(sh, 2); }
+const runs = Math.max(1, Number(takeOption(args, '--runs', 1)) || 1);
+const shots = takeOption(args, '--shots', '');
 const [webdir, scan] = args;
 if (!webdir) { console.error('usage: node fit_timing.mjs WEBDIR [SCAN.ply] [--runs N]'); process.exit(2); }
 const root = path.resolve(webdir);
@@ -75,8 +71,6 @@ try {
     await page.uncheck('#animate');
   }
 } finally {
-  await context.close();
-  server.close();
-  fs.rmSync(context.userDir, { recursive: true, force: true });
+  await closeChromium(context, server);
 }
 process.exit(status);

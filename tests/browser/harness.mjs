@@ -24,7 +24,30 @@ export async function serveDir(root) {
   return server;
 }
 
-// The context's profile folder is context.userDir (remove it when done).
+// Removes `--name value` from args and returns value, or fallback if absent.
+export function takeOption(args, name, fallback) {
+  const i = args.indexOf(name);
+  if (i < 0) return fallback;
+  const v = args[i + 1];
+  args.splice(i, 2);
+  return v;
+}
+
+// Removes `--name` from args; true if it was there.
+export function takeFlag(args, name) {
+  const i = args.indexOf(name);
+  if (i >= 0) args.splice(i, 1);
+  return i >= 0;
+}
+
+// Closes what launchChromium and serveDir opened, and the profile folder.
+export async function closeChromium(context, server) {
+  await context.close();
+  server.close();
+  fs.rmSync(context.userDir, { recursive: true, force: true });
+}
+
+// The context's profile folder is context.userDir (remove it with closeChromium).
 export async function launchChromium(name, viewport) {
   const userDir = fs.mkdtempSync(path.join(os.tmpdir(), `likeness-${name}-`));
   const context = await chromium.launchPersistentContext(userDir, {

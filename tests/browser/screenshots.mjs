@@ -4,19 +4,15 @@
 //   OUTDIR/web_wireframe.png      the same with its edges (--wireframe)
 //   OUTDIR/web_<stem>.png         after loading each FILE given
 // Usage: node screenshots.mjs WEBDIR OUTDIR [FILE ...] [--point-size N] [--wireframe] [--query "max_mb=N&..."]
-import { launchChromium, serveDir } from './harness.mjs';
+import { closeChromium, launchChromium, serveDir, takeFlag, takeOption } from './harness.mjs';
 import fs from 'node:fs';
 import path from 'node:path';
 
 const args = process.argv.slice(2);
-const wire = args.indexOf('--wireframe');
-if (wire >= 0) args.splice(wire, 1);
-let query = '';
-const q = args.indexOf('--query');
-if (q >= 0) { query = '?' + args[q + 1]; args.splice(q, 2); }
-let pointSize = null;
-const ps = args.indexOf('--point-size');
-if (ps >= 0) { pointSize = args[ps + 1]; args.splice(ps, 2); }
+const wireframe = takeFlag(args, '--wireframe');
+const queryValue = takeOption(args, '--query', null);
+const query = queryValue === null ? '' : '?' + queryValue;
+const pointSize = takeOption(args, '--point-size', null);
 const [webdir, outdir, ...files] = args;
 if (!webdir || !outdir) {
   console.error('usage: node screenshots.mjs WEBDIR OUTDIR [FILE ...] [--point-size N] [--wireframe] [--query "max_mb=N&..."]');
@@ -34,7 +30,7 @@ try {
   await settle();
   await page.screenshot({ path: path.join(outdir, 'web_start.png') });
   console.log('wrote', path.join(outdir, 'web_start.png'));
-  if (wire >= 0) {
+  if (wireframe) {
     await page.check('#wireframe');
     await page.evaluate(() => document.activeElement.blur());
     await settle();
@@ -53,7 +49,5 @@ try {
     console.log('wrote', out, '(' + (await page.textContent('#status')).trim() + ')' + (await page.evaluate(() => window.likeness.lastError ? ' error: ' + window.likeness.lastError : '')));
   }
 } finally {
-  await context.close();
-  server.close();
-  fs.rmSync(context.userDir, { recursive: true, force: true });
+  await closeChromium(context, server);
 }

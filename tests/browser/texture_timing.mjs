@@ -8,18 +8,14 @@
 // photo in the clicker with its points and reprojection errors) and
 // web_fit_animate.png (the textured head mid-animation, eyes and teeth shown).
 // Usage: node texture_timing.mjs WEBDIR [--runs N] [--shots DIR]
-import { launchChromium, serveDir } from './harness.mjs';
+import { closeChromium, launchChromium, serveDir, takeFlag, takeOption } from './harness.mjs';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 
 const args = process.argv.slice(2);
-let runs = 1;
-const r = args.indexOf('--runs');
-if (r >= 0) { runs = Math.max(1, Number(args[r + 1]) || 1); args.splice(r, 2); }
-let shots = '';
-const sh = args.indexOf('--shots');
-if (sh >= 0) { shots = args[sh + 1]; args.splice(sh, 2); }
+const runs = Math.max(1, Number(takeOption(args, '--runs', 1)) || 1);
+const shots = takeOption(args, '--shots', '');
 const [webdir] = args;
 if (!webdir) { console.error('usage: node texture_timing.mjs WEBDIR [--runs N] [--shots DIR]'); process.exit(2); }
 const root = path.resolve(webdir);
@@ -76,8 +72,6 @@ try {
   console.error(String(e && e.message ? e.message : e));
   status = 1;
 } finally {
-  await context.close();
-  server.close();
-  fs.rmSync(context.userDir, { recursive: true, force: true });
+  await closeChromium(context, server);
 }
 process.exit(status);
