@@ -14,6 +14,11 @@ inline bool exists(const std::string& p) {
 }
 // A fresh scratch folder for a test's files (under the build tree).
 std::string scratch_dir(const std::string& name);
+// The whole file as bytes ("" when it cannot be read).
+std::string read_file_text(const std::string& path);
+// Runs `likeness <args>` from the build's bin folder, stdout discarded and
+// stderr into stderr_path; returns its exit code (-1 if it did not exit).
+int run_likeness(const std::string& args, const std::string& stderr_path = "/dev/null");
 
 }  // namespace lk::test
 

@@ -5,25 +5,12 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
-#include <cstdlib>
-#include <fstream>
-#include <sstream>
-#include <sys/wait.h>
 
 namespace {
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
+using lk::test::read_file_text;
 
-int run(const std::string& args) {
-  const std::string cmd = std::string(LK_BIN_DIR) + "/likeness " + args + " > /dev/null 2>&1";
-  const int r = std::system(cmd.c_str());
-  return WIFEXITED(r) ? WEXITSTATUS(r) : -1;
-}
+int run(const std::string& args) { return lk::test::run_likeness(args); }
 
 }  // namespace
 
@@ -38,13 +25,13 @@ TEST_CASE("synth-scan writes the scan and its truth, deterministically", "[synth
   REQUIRE(run("synth-scan --seed 4 --points 20000 --out " + dir + "/c") == 0);
   for (const char* f : {"scan.ply", "truth.obj", "truth_control.obj", "truth_annotations.json", "scan_info.json"}) {
     INFO(f);
-    const std::string a = slurp(dir + "/a/" + f);
+    const std::string a = read_file_text(dir + "/a/" + f);
     CHECK(a.size() > 100);
-    CHECK(a == slurp(dir + "/b/" + f));
+    CHECK(a == read_file_text(dir + "/b/" + f));
   }
-  CHECK(slurp(dir + "/a/scan.ply") != slurp(dir + "/c/scan.ply"));
-  CHECK(slurp(dir + "/a/truth_control.obj") != slurp(dir + "/c/truth_control.obj"));
-  const auto info = nlohmann::json::parse(slurp(dir + "/a/scan_info.json"));
+  CHECK(read_file_text(dir + "/a/scan.ply") != read_file_text(dir + "/c/scan.ply"));
+  CHECK(read_file_text(dir + "/a/truth_control.obj") != read_file_text(dir + "/c/truth_control.obj"));
+  const auto info = nlohmann::json::parse(read_file_text(dir + "/a/scan_info.json"));
   CHECK(info["seed"] == 3);
   CHECK(info["points"].get<int>() >= 19400);
   CHECK(info["points"].get<int>() <= 20000);
@@ -52,7 +39,7 @@ TEST_CASE("synth-scan writes the scan and its truth, deterministically", "[synth
   CHECK(info["head_parameters"].contains("nose_length"));
 
   REQUIRE(run("synth-head --seed 3 --out " + dir + "/h.obj --annotations " + dir + "/h.json") == 0);
-  CHECK(slurp(dir + "/h.obj") == slurp(dir + "/a/truth_control.obj"));
+  CHECK(read_file_text(dir + "/h.obj") == read_file_text(dir + "/a/truth_control.obj"));
   CHECK(run("synth-head --seed -1 --out " + dir + "/x.obj") == 2);
   CHECK(run("synth-head --seed 3") == 2);
   CHECK(run("synth-scan --seed 3 --out " + dir + "/d --points 0") == 1);

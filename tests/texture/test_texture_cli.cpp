@@ -7,25 +7,16 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
-#include <cstdlib>
 #include <fstream>
 #include <sstream>
-#include <sys/wait.h>
 
 namespace {
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
+using lk::test::read_file_text;
 
 // Exit code; stderr goes to err_file.
 int run(const std::string& args, const std::string& err_file) {
-  const std::string cmd = std::string(LK_BIN_DIR) + "/likeness texture " + args + " > /dev/null 2> " + err_file;
-  const int r = std::system(cmd.c_str());
-  return WIFEXITED(r) ? WEXITSTATUS(r) : -1;
+  return lk::test::run_likeness("texture " + args, err_file);
 }
 
 void write(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
@@ -48,12 +39,12 @@ TEST_CASE("likeness texture: synthetic photos in, textured head out; clear error
   REQUIRE(run("--head generic --photos" + photos + " --points" + points + " --size 256 --same-camera --out " + dir +
                   "/out",
               err) == 0);
-  const std::string obj = slurp(dir + "/out/textured.obj");
+  const std::string obj = read_file_text(dir + "/out/textured.obj");
   CHECK(obj.find("mtllib textured.mtl") != std::string::npos);
   CHECK(obj.find("\nvt ") != std::string::npos);
-  CHECK(slurp(dir + "/out/textured.mtl").find("map_Kd skin.png") != std::string::npos);
-  CHECK(slurp(dir + "/out/skin.png").size() > 1000);
-  const auto rep = nlohmann::json::parse(slurp(dir + "/out/report.json"));
+  CHECK(read_file_text(dir + "/out/textured.mtl").find("map_Kd skin.png") != std::string::npos);
+  CHECK(read_file_text(dir + "/out/skin.png").size() > 1000);
+  const auto rep = nlohmann::json::parse(read_file_text(dir + "/out/report.json"));
   REQUIRE(rep["photos"].size() == 5);
   for (const auto& p : rep["photos"]) {
     CHECK(p["calibration"]["rms_px"].get<double>() < 1.0);  // clicks carry up to 0.5 px of error
@@ -68,20 +59,20 @@ TEST_CASE("likeness texture: synthetic photos in, textured head out; clear error
   // Not an image.
   write(dir + "/not_image.jpg", "hello");
   CHECK(run("--head generic --photos " + dir + "/not_image.jpg --points " + q0 + out, err) == 1);
-  CHECK(slurp(err).find("not_image.jpg") != std::string::npos);
+  CHECK(read_file_text(err).find("not_image.jpg") != std::string::npos);
   // Garbled points file: names file and line.
   write(dir + "/garbled.txt", "# header\n1 2 3 4 5\n1 2 three 4 5\n");
   CHECK(run("--head generic --photos " + p0 + " --points " + dir + "/garbled.txt" + out, err) == 1);
-  CHECK(slurp(err).find("garbled.txt: line 3") != std::string::npos);
+  CHECK(read_file_text(err).find("garbled.txt: line 3") != std::string::npos);
   // Fewer than 6 points.
   write(dir + "/few.txt", "1 2 3 4 5\n1 2 3 4 6\n1 2 3 4 7\n");
   CHECK(run("--head generic --photos " + p0 + " --points " + dir + "/few.txt" + out, err) == 1);
-  CHECK(slurp(err).find("at least 6") != std::string::npos);
+  CHECK(read_file_text(err).find("at least 6") != std::string::npos);
   // Counts differ: usage error.
   CHECK(run("--head generic --photos " + p0 + " " + p0 + " --points " + q0 + out, err) == 2);
   // A photo whose points are 2 m away from the head: it sees no vertex.
   std::string shifted, line;
-  std::istringstream in(slurp(dir + "/in/points1.txt"));
+  std::istringstream in(read_file_text(dir + "/in/points1.txt"));
   while (std::getline(in, line)) {
     if (line.empty() || line[0] == '#') continue;
     std::istringstream ls(line);
@@ -94,9 +85,9 @@ TEST_CASE("likeness texture: synthetic photos in, textured head out; clear error
   CHECK(run("--head generic --photos " + p0 + " " + dir + "/in/photo1.png --points " + q0 + " " + dir +
                 "/shifted.txt" + out,
             err) == 1);
-  CHECK(slurp(err).find("photo1.png sees no vertex") != std::string::npos);
+  CHECK(read_file_text(err).find("photo1.png sees no vertex") != std::string::npos);
   // Missing head directory, unknown option.
   CHECK(run("--head " + dir + "/no_such_fit --photos " + p0 + " --points " + q0 + out, err) == 1);
-  CHECK(slurp(err).find("no_such_fit") != std::string::npos);
+  CHECK(read_file_text(err).find("no_such_fit") != std::string::npos);
   CHECK(run("--head generic --photos " + p0 + " --points " + q0 + out + " --bogus", err) == 2);
 }
