@@ -35,6 +35,7 @@ void parallel_for(int begin, int end, int grain, const Body& body) {
     for (int i = begin; i < end; ++i) body(i, 0);
     return;
   }
+#ifndef LK_SINGLE_THREADED  // (single-threaded: parallel_workers() is 1, the loop above ran)
   std::atomic<int> next{begin};
   auto run = [&](int worker) {
     for (;;) {
@@ -44,14 +45,11 @@ void parallel_for(int begin, int end, int grain, const Body& body) {
       for (int i = b; i < e; ++i) body(i, worker);
     }
   };
-#ifndef LK_SINGLE_THREADED
   std::vector<std::thread> threads;
   threads.reserve(workers - 1);
   for (int w = 1; w < workers; ++w) threads.emplace_back(run, w);
   run(0);
   for (std::thread& t : threads) t.join();
-#else
-  run(0);
 #endif
 }
 
