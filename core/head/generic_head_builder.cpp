@@ -307,7 +307,16 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
   for (int side : {1, -1}) {
     const Vec3 eye(side * shape.eye_center.x(), shape.eye_center.y(), shape.eye_center.z());
     const Vec3 opening_center = eye + Vec3(0, 0.0008, shape.lid_radius);
-    // Ring around the opening (columns 1..7, rows rim-1..rim+2).
+    // Ring around the opening (columns 1..7, rows rim-1..rim+2). Its points
+    // are cast from inside the head towards targets in a plane in front of
+    // the eye; where the face turns back (lateral, and towards the nose) a
+    // ray lands short of its target. With a 17 mm half-width on both sides
+    // the lateral ring landed 0.5 mm medial of the opening's lateral corner
+    // and the lid skin folded back over the canthus: the smooth level 3
+    // crossed itself there (315 of its 397 level-3 triangle pairs, inherited by
+    // every fit). Wider half-widths leave the skin room to turn into the
+    // opening; 23-25 mm laterally and 18-21 mm medially all give 0 pairs.
+    const double ring_half_width_lateral = 0.0240, ring_half_width_medial = 0.0195;
     for (int r = kRimLowRow - 1; r <= kRimLowRow + 2; ++r)
       for (int c = kEyeCol0 - 1; c <= kEyeCol1 + 1; ++c) {
         const bool perimeter = r == kRimLowRow - 1 || r == kRimLowRow + 2 || c == kEyeCol0 - 1 ||
@@ -318,7 +327,8 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
         const double a = std::atan2(y, x);
         const double dy = std::sin(a) > 0 ? 0.0120 : 0.0105;
         const double f = corner_bulge(x, y);
-        const Vec3 target = opening_center + f * Vec3(side * 0.0170 * std::cos(a), dy * std::sin(a), 0);
+        const double half_width = std::cos(a) > 0 ? ring_half_width_lateral : ring_half_width_medial;
+        const Vec3 target = opening_center + f * Vec3(side * half_width * std::cos(a), dy * std::sin(a), 0);
         b.positions[g(r, side * c)] = cast_towards(target);
       }
     // The opening's rim lies on the lid sphere.
@@ -492,7 +502,18 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
         const Vec3 u = (b.positions[loop[k]] - eye).normalized();  // rim direction
         const double chi = std::atan2(u.y(), side * u.x());
         const double even = chi_even[loop[k]];
-        if (step == 0) next.push_back(eye + pocket_radius * u);  // inner edge of the lid
+        if (step == 0) {
+          // The inner edge of the lid, behind the rim. At the four corner
+          // vertices (the canthi, 1.7 mm apart) straight behind would make
+          // the pocket's first quad at each corner a 1.5 mm sliver between
+          // rings 6 mm apart, and its Butterfly refinement folded (58 level-3
+          // pairs at the inner corners); a third of the way towards the
+          // evenly spaced angles widens it (0.2-0.5 of the way all give 0).
+          const bool corner = loop[k] == top.front() || loop[k] == top.back() ||
+                              loop[k] == bottom.front() || loop[k] == bottom.back();
+          if (!corner) next.push_back(eye + pocket_radius * u);
+          else next.push_back(sphere_point(chi + 0.35 * (even - chi), std::acos(std::clamp(u.z(), -1.0, 1.0))));
+        }
         if (step == 1) next.push_back(sphere_point(0.5 * (chi + even), radians(95)));
         if (step == 2) next.push_back(sphere_point(even, radians(140)));
       }
