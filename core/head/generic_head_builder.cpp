@@ -313,7 +313,7 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
     // ray lands short of its target. With a 17 mm half-width on both sides
     // the lateral ring landed 0.5 mm medial of the opening's lateral corner
     // and the lid skin folded back over the canthus: the smooth level 3
-    // crossed itself there (315 of its 397 level-3 triangle pairs, inherited by
+    // crossed itself there (307 of its 397 level-3 triangle pairs, inherited by
     // every fit). Wider half-widths leave the skin room to turn into the
     // opening; 23-25 mm laterally and 18-21 mm medially all give 0 pairs.
     const double ring_half_width_lateral = 0.0240, ring_half_width_medial = 0.0195;
