@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <numeric>
 #include <set>
 
@@ -109,6 +110,67 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
   auto is_bad = [&](int l, int f) {
     return bad_triangle(face_normal(mesh.triangles(l), state.displaced[l], f), smooth_normals[l][f], options);
   };
+  // Rounds and restarts change a few hundred vertices, yet every visit of a
+  // level used to evaluate it whole, scan all its triangles and refine all
+  // of the next level. Instead, what each of those last saw is kept, and a
+  // visit recomputes only where the inputs differ bit-wise from it, with
+  // the same kernels (multires_detail.h): the same bits as the full passes.
+  struct SeenLevel {
+    std::vector<Vec3> base;       // base positions the normals were computed from
+    std::vector<Vec3> refined;    // displaced positions the next level was refined from
+    std::vector<Vec3> flagged;    // displaced positions the bad flags were computed from
+    std::vector<char> bad;        // #F_l: is_bad at `flagged`
+  };
+  std::vector<SeenLevel> seen(options.incremental ? L + 1 : 0);
+  for (int l = 0; l < static_cast<int>(seen.size()); ++l) {
+    SeenLevel& sl = seen[l];
+    sl.base = state.base[l];
+    sl.refined = sl.flagged = state.displaced[l];
+    sl.bad.resize(mesh.triangles(l).size());
+    for (int f = 0; f < static_cast<int>(sl.bad.size()); ++f) sl.bad[f] = is_bad(l, f);
+  }
+  // Indices where now differs bit-wise from before; before is brought up to date.
+  auto differences = [](const auto& now, auto& before, std::vector<int>& out) {
+    out.clear();
+    for (int i = 0; i < static_cast<int>(now.size()); ++i)
+      if (std::memcmp(&now[i], &before[i], sizeof(now[i])) != 0) {
+        out.push_back(i);
+        before[i] = now[i];
+      }
+  };
+  std::vector<int> moved_base, moved_displaced;
+  // = evaluate_level(mesh, l)
+  auto evaluate_changes = [&](int l) {
+    if (!options.incremental) return evaluate_level(mesh, l);
+    differences(state.base[l], seen[l].base, moved_base);
+    update_level(mesh, l, moved_base);
+  };
+  // = apply(mesh.levels[l], state.displaced[l], state.base[l + 1])
+  auto refine_changes = [&](int l) {
+    if (!options.incremental) {
+      apply(mesh.levels[l], state.displaced[l], state.base[l + 1]);  // sizes match (check_sizes)
+      return;
+    }
+    differences(state.displaced[l], seen[l].refined, moved_displaced);
+    update_refinement(mesh, l, moved_displaced);
+  };
+  // = every bad triangle of level l, ascending
+  auto all_bad = [&](int l, std::vector<int>& out) {
+    out.clear();
+    if (!options.incremental) {
+      for (int f = 0; f < static_cast<int>(mesh.triangles(l).size()); ++f)
+        if (is_bad(l, f)) out.push_back(f);
+      return;
+    }
+    SeenLevel& sl = seen[l];
+    differences(state.displaced[l], sl.flagged, moved_displaced);
+    const IndexRows& vf = mesh.links[l].vertex_faces;
+    for (int v : moved_displaced)
+      for (int i = vf.offsets[v]; i < vf.offsets[v + 1]; ++i) sl.bad[vf.items[i]] = is_bad(l, vf.items[i]);
+    out.clear();
+    for (int f = 0; f < static_cast<int>(sl.bad.size()); ++f)
+      if (sl.bad[f]) out.push_back(f);
+  };
   // Scales d_k[v] once per round; true when v carries a displacement.
   auto shrink_one = [&](int k, int v, bool to_zero = false) {
     double& d = mesh.displacements[k][v];
@@ -198,11 +260,8 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
   auto fold_pass = [&](int round_limit) -> Status {
     int l = 0;
     while (l <= L) {
-      evaluate_level(mesh, l);
-      const int nf = static_cast<int>(mesh.triangles(l).size());
-      bad.clear();
-      for (int f = 0; f < nf; ++f)
-        if (is_bad(l, f)) bad.push_back(f);
+      evaluate_changes(l);
+      all_bad(l, bad);
       if (!checked[l]) {
         checked[l] = 1;
         st.bad_found[l] = static_cast<int>(bad.size());
@@ -230,10 +289,7 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
         l = restart;  // levels above it are unchanged, so its base P is current
         continue;
       }
-      if (l < L) {
-        s = apply(mesh.levels[l], state.displaced[l], state.base[l + 1]);
-        if (!s.ok()) return s;
-      }
+      if (l < L) refine_changes(l);
       ++l;
     }
     return Status::success();
@@ -250,6 +306,16 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
     MeshBvh bvh;
     s = build_bvh(finest, bvh);
     if (!s.ok()) return s;
+    // Rounds move a few hundred of the finest level's vertices: only the
+    // boxes holding them are refitted (bvh.positions are the positions the
+    // boxes were fitted to).
+    BvhRefitIndex refit_index;
+    build_refit_index(bvh, refit_index);
+    // The reference path: the moved vertices copied, every box refitted.
+    auto refit_moved = [&](const std::vector<int>& moved) {
+      for (int v : moved) finest.positions[v] = state.displaced[L][v];
+      return refit_bvh(finest, bvh);
+    };
     std::vector<std::array<int, 2>> pairs;
     find_self_intersections(bvh, pairs);
     st.intersections_found = static_cast<int>(pairs.size());
@@ -259,10 +325,11 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
     std::set<std::array<int, 2>> unfixable;
     std::vector<char> held(finest.positions.size(), 0);
     std::vector<char> parent_done(L > 0 ? mesh.num_vertices(L - 1) : 0, 0);
-    // After `changed` moved on the finest level (finest.positions already
-    // updated): crossings and bad triangles are searched again around it only.
+    // After `changed` moved on the finest level: crossings and bad triangles
+    // are searched again around it only.
     auto search_around_changed = [&]() -> Status {
-      Status r = refit_bvh(finest, bvh);
+      Status r = options.incremental ? refit_bvh_vertices(bvh, refit_index, state.displaced[L], changed)
+                                     : refit_moved(changed);
       if (!r.ok()) return r;
       around_changed(L, around);
       find_intersections_with(bvh, around, pairs);
@@ -361,22 +428,18 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
           ++st.restarts;
           ++full_searches;
           for (int k = restart; k <= L; ++k) {
-            evaluate_level(mesh, k);
-            if (k < L) {
-              s = apply(mesh.levels[k], state.displaced[k], state.base[k + 1]);
-              if (!s.ok()) return s;
-            }
+            evaluate_changes(k);
+            if (k < L) refine_changes(k);
           }
           // Only what moved is searched again (the levels' evaluation is
           // cheap, a full search is not).
           changed.clear();
-          for (int v = 0; v < static_cast<int>(finest.positions.size()); ++v)
-            if (state.displaced[L][v] != finest.positions[v]) changed.push_back(v), finest.positions[v] = state.displaced[L][v];
+          for (int v = 0; v < static_cast<int>(bvh.positions.size()); ++v)
+            if (state.displaced[L][v] != bvh.positions[v]) changed.push_back(v);
           s = search_around_changed();
           if (!s.ok()) return s;
           continue;
         }
-        for (int v : changed) finest.positions[v] = state.displaced[L][v];
         s = search_around_changed();
         if (!s.ok()) return s;
       }
@@ -384,9 +447,8 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
       st.intersections_left = static_cast<int>(unfixable.size());
       // Shrinking towards the smooth surface can turn a triangle over
       // against its neighbours: one more fold pass.
-      bool any_bad = false;
-      for (int f = 0; f < static_cast<int>(mesh.triangles(L).size()) && !any_bad; ++f) any_bad = is_bad(L, f);
-      if (!any_bad) break;
+      all_bad(L, bad);
+      if (bad.empty()) break;
       const std::vector<Vec3> before_folds = state.displaced[L];
       std::fill(checked.begin(), checked.end(), 1);  // keep the first pass's counts
       s = fold_pass(st.rounds + options.max_rounds);
@@ -396,9 +458,10 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
       // around what it moved (a local search, not a full one).
       changed.clear();
       for (int v = 0; v < static_cast<int>(before_folds.size()); ++v)
-        if (state.displaced[L][v] != before_folds[v]) changed.push_back(v), finest.positions[v] = state.displaced[L][v];
+        if (state.displaced[L][v] != before_folds[v]) changed.push_back(v);
       if (changed.empty()) break;
-      s = refit_bvh(finest, bvh);
+      s = options.incremental ? refit_bvh_vertices(bvh, refit_index, state.displaced[L], changed)
+                              : refit_moved(changed);
       if (!s.ok()) return s;
       ++st.rounds;  // a fresh round stamp for the visit marks
       around_changed(L, around);

@@ -76,6 +76,12 @@ struct FoldLimitOptions {
   // normal, and measuring along it reaches the other lip. The rims then
   // follow the fitted control mesh's crease curves.
   bool undisplaced_creases = true;
+  // Each visit of a level recomputes only what changed since the last one
+  // (normals, bad triangles, the next level's base, the BVH's boxes); false
+  // evaluates, scans and refits everything on every visit. Same result bit
+  // for bit (tests/multires/test_fold_incremental.cpp compares the two);
+  // on the synthetic heads about 0.2 s CPU less per fit (docs/fit.md).
+  bool incremental = true;
 };
 
 struct FoldLimitStats {

@@ -98,6 +98,41 @@ void evaluate_level(MultiresMesh& m, int l) {
   }
 }
 
+void update_level(MultiresMesh& m, int l, const std::vector<int>& moved_base) {
+  MultiresState& s = m.state;
+  const MultiresLevelLinks& links = m.links[l];
+  const auto& tris = m.triangles(l);
+  std::vector<int> faces, vertices;
+  for (int u : moved_base) {
+    for (int i = links.vertex_faces.offsets[u]; i < links.vertex_faces.offsets[u + 1]; ++i)
+      faces.push_back(links.vertex_faces.items[i]);
+    for (int i = links.normal_reach.offsets[u]; i < links.normal_reach.offsets[u + 1]; ++i)
+      vertices.push_back(links.normal_reach.items[i]);
+  }
+  std::sort(faces.begin(), faces.end());
+  faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+  for (int f : faces) s.face_normals[l][f] = face_normal(tris, s.base[l], f);
+  std::sort(vertices.begin(), vertices.end());
+  vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+  for (int v : vertices) s.normals[l][v] = vertex_normal(links.vertex_faces, s.face_normals[l], v);
+  const int nv = m.num_vertices(l);
+  for (int v = 0; v < nv; ++v) s.displaced[l][v] = displace(s.base[l][v], m.displacements[l][v], s.normals[l][v]);
+}
+
+void update_refinement(MultiresMesh& m, int l, const std::vector<int>& moved) {
+  const ButterflyLevel& next = m.levels[l];
+  const IndexRows& reach = m.links[l].refine_reach;
+  const int nc = next.num_coarse_vertices;
+  std::vector<int> targets;
+  for (int u : moved)
+    for (int i = reach.offsets[u]; i < reach.offsets[u + 1]; ++i) targets.push_back(reach.items[i]);
+  std::sort(targets.begin(), targets.end());
+  targets.erase(std::unique(targets.begin(), targets.end()), targets.end());
+  const std::vector<Vec3>& coarse = m.state.displaced[l];
+  std::vector<Vec3>& fine = m.state.base[l + 1];
+  for (int f : targets) fine[f] = f < nc ? coarse[f] : butterfly_new_vertex(next, f - nc, coarse);
+}
+
 void resize_state(MultiresMesh& m) {
   const int L = m.num_levels();
   m.state.base.resize(L + 1);

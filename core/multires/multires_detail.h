@@ -22,6 +22,18 @@ inline Vec3 displace(const Vec3& p, double d, const Vec3& n) { return p + d * n;
 
 // Normals and displaced positions of level l from its base positions.
 void evaluate_level(MultiresMesh& m, int l);
+// The same after the base positions of moved_base changed (repeats
+// allowed): recomputes the face normals around them and the normals of
+// their normal_reach with the kernels of evaluate_level, and every displaced
+// position (cheap, and displacements may have changed anywhere, even back
+// to an earlier value). The level ends bit-identical to a full
+// evaluate_level provided its face normals and normals were current for
+// the other base positions.
+void update_level(MultiresMesh& m, int l, const std::vector<int>& moved_base);
+// Level l+1's base positions refined again where they read the displaced
+// level-l positions of `moved` (refine_reach; l < L), bit-identical to a
+// full apply provided the rest was current.
+void update_refinement(MultiresMesh& m, int l, const std::vector<int>& moved);
 // Sizes the state arrays for the mesh's levels.
 void resize_state(MultiresMesh& m);
 // InvalidInput unless the displacement and link arrays match the levels.

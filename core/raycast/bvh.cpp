@@ -1,5 +1,7 @@
 #include "raycast/bvh.h"
 
+#include "common/parallel.h"
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -12,6 +14,9 @@ namespace {
 // traversal stacks below can never overflow (one entry per level).
 constexpr int kMaxDepth = 48;
 constexpr int kStackSize = 2 * kMaxDepth + 8;
+// Meshes with at least this many triangles build their two top subtrees on
+// two threads (natively; a thread start costs more than small builds).
+constexpr int kMinParallelBuild = 20000;
 
 struct BuildTri {
   Vec3 box_min, box_max, centroid;
@@ -68,6 +73,26 @@ struct Builder {
                          return a < b;  // ties broken by id: the build stays deterministic
                        });
     }
+    if (depth == 0 && opt.threads && count >= kMinParallelBuild && parallel_workers() > 1) {
+      // The two halves are independent (disjoint runs of `order`): built on
+      // two threads into their own arrays, then spliced in the serial
+      // depth-first layout (node, left subtree, right subtree), so the tree
+      // is the same as a serial build's.
+      std::vector<BvhNode> halves[2];
+      parallel_for(0, 2, 1, [&](int side, int) {
+        halves[side].emplace_back();
+        Builder half{opt, tris, order, halves[side]};
+        if (side == 0) half.build(0, begin, mid, depth + 1);
+        else half.build(0, mid, end, depth + 1);
+      });
+      const int left = static_cast<int>(nodes.size());
+      splice(halves[0], left);
+      const int right = static_cast<int>(nodes.size());
+      splice(halves[1], right);
+      nodes[node].first = right;
+      nodes[node].count = 0;
+      return;
+    }
     const int left = static_cast<int>(nodes.size());
     nodes.emplace_back();
     build(left, begin, mid, depth + 1);
@@ -76,6 +101,16 @@ struct Builder {
     build(right, mid, end, depth + 1);
     nodes[node].first = right;
     nodes[node].count = 0;
+  }
+
+  // Appends a subtree built with its root at index 0, its inner nodes'
+  // right-child indices moved by the offset it lands at (leaves index
+  // `order`, which the halves share).
+  void splice(const std::vector<BvhNode>& sub, int offset) {
+    for (BvhNode n : sub) {
+      if (!n.leaf()) n.first += offset;
+      nodes.push_back(n);
+    }
   }
 
   // Binned SAH; returns the partition point or -1 when splitting does not pay.
@@ -280,6 +315,32 @@ Status build_bvh(const TriMesh& mesh, MeshBvh& out, const BvhOptions& options) {
   return Status::success();
 }
 
+namespace {
+
+// A leaf's box from its triangles, in leaf order; an inner node's from its
+// children. The only box kernels of refit_bvh and refit_bvh_vertices, so the
+// two agree bit for bit.
+inline void refit_leaf(MeshBvh& bvh, BvhNode& n) {
+  Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300), tlo, thi;
+  for (int k = n.first; k < n.first + n.count; ++k) {
+    triangle_box(bvh, bvh.triangle_order[k], tlo, thi);
+    lo = lo.cwiseMin(tlo);
+    hi = hi.cwiseMax(thi);
+  }
+  n.box_min = lo;
+  n.box_max = hi;
+}
+
+inline void refit_inner(MeshBvh& bvh, int i) {
+  BvhNode& n = bvh.nodes[i];
+  const BvhNode& l = bvh.nodes[i + 1];
+  const BvhNode& r = bvh.nodes[n.first];
+  n.box_min = l.box_min.cwiseMin(r.box_min);
+  n.box_max = l.box_max.cwiseMax(r.box_max);
+}
+
+}  // namespace
+
 Status refit_bvh(const TriMesh& mesh, MeshBvh& bvh) {
   if (mesh.num_vertices() != static_cast<int>(bvh.positions.size()) ||
       mesh.num_triangles() != bvh.num_triangles())
@@ -293,22 +354,70 @@ Status refit_bvh(const TriMesh& mesh, MeshBvh& bvh) {
   // Children always follow their parent in the array, so a reverse sweep
   // sees both children before the parent.
   for (int i = static_cast<int>(bvh.nodes.size()) - 1; i >= 0; --i) {
-    BvhNode& n = bvh.nodes[i];
+    if (bvh.nodes[i].leaf()) refit_leaf(bvh, bvh.nodes[i]);
+    else refit_inner(bvh, i);
+  }
+  return Status::success();
+}
+
+void build_refit_index(const MeshBvh& bvh, BvhRefitIndex& out) {
+  const int nn = static_cast<int>(bvh.nodes.size());
+  const int nf = bvh.num_triangles();
+  const int nv = static_cast<int>(bvh.positions.size());
+  out.parent.assign(nn, -1);
+  out.leaf_of_triangle.assign(nf, -1);
+  for (int i = 0; i < nn; ++i) {
+    const BvhNode& n = bvh.nodes[i];
     if (n.leaf()) {
-      Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300), tlo, thi;
-      for (int k = n.first; k < n.first + n.count; ++k) {
-        triangle_box(bvh, bvh.triangle_order[k], tlo, thi);
-        lo = lo.cwiseMin(tlo);
-        hi = hi.cwiseMax(thi);
-      }
-      n.box_min = lo;
-      n.box_max = hi;
+      for (int k = n.first; k < n.first + n.count; ++k) out.leaf_of_triangle[bvh.triangle_order[k]] = i;
     } else {
-      const BvhNode& l = bvh.nodes[i + 1];
-      const BvhNode& r = bvh.nodes[n.first];
-      n.box_min = l.box_min.cwiseMin(r.box_min);
-      n.box_max = l.box_max.cwiseMax(r.box_max);
+      out.parent[i + 1] = i;
+      out.parent[n.first] = i;
     }
+  }
+  out.vertex_offsets.assign(nv + 1, 0);
+  for (const Tri& t : bvh.triangles)
+    for (int v : t) ++out.vertex_offsets[v + 1];
+  for (int v = 0; v < nv; ++v) out.vertex_offsets[v + 1] += out.vertex_offsets[v];
+  out.vertex_triangles.resize(out.vertex_offsets[nv]);
+  std::vector<int> fill(out.vertex_offsets.begin(), out.vertex_offsets.end() - 1);
+  for (int f = 0; f < nf; ++f)
+    for (int v : bvh.triangles[f]) out.vertex_triangles[fill[v]++] = f;
+}
+
+Status refit_bvh_vertices(MeshBvh& bvh, const BvhRefitIndex& index, const std::vector<Vec3>& positions,
+                          const std::vector<int>& moved) {
+  const int nv = static_cast<int>(bvh.positions.size());
+  if (static_cast<int>(positions.size()) != nv || static_cast<int>(index.vertex_offsets.size()) != nv + 1 ||
+      index.parent.size() != bvh.nodes.size() || static_cast<int>(index.leaf_of_triangle.size()) != bvh.num_triangles())
+    return Status::error(ErrorCode::InvalidInput,
+                         "refit_bvh_vertices: the positions or the refit index do not match the BVH");
+  for (int v : moved) {
+    if (v < 0 || v >= nv)
+      return Status::error(ErrorCode::InvalidInput, "refit_bvh_vertices: vertex " + std::to_string(v) +
+                                                        " of " + std::to_string(nv));
+    if (!positions[v].allFinite())
+      return Status::error(ErrorCode::InvalidInput,
+                           "vertex " + std::to_string(v) + " has a non-finite coordinate");
+  }
+  // The leaves holding the moved vertices' triangles and their ancestors,
+  // recomputed in descending node order: children follow their parent in
+  // the array, so every node comes after both of its children.
+  std::vector<char> marked(bvh.nodes.size(), 0);
+  std::vector<int> dirty;
+  for (int v : moved) {
+    bvh.positions[v] = positions[v];
+    for (int i = index.vertex_offsets[v]; i < index.vertex_offsets[v + 1]; ++i)
+      for (int node = index.leaf_of_triangle[index.vertex_triangles[i]]; node >= 0 && !marked[node];
+           node = index.parent[node]) {
+        marked[node] = 1;
+        dirty.push_back(node);
+      }
+  }
+  std::sort(dirty.begin(), dirty.end(), [](int a, int b) { return a > b; });
+  for (int i : dirty) {
+    if (bvh.nodes[i].leaf()) refit_leaf(bvh, bvh.nodes[i]);
+    else refit_inner(bvh, i);
   }
   return Status::success();
 }

@@ -26,6 +26,9 @@ namespace lk {
 struct BvhOptions {
   int max_leaf_triangles = 4;  // leaves hold at most this many triangles
   int sah_bins = 16;           // candidate split planes per axis and node
+  // Natively, meshes of 20k+ triangles build their two top subtrees on two
+  // threads; the tree is the same as a serial build's (false: serial).
+  bool threads = true;
 };
 
 struct BvhNode {
@@ -53,6 +56,28 @@ Status build_bvh(const TriMesh& mesh, MeshBvh& out, const BvhOptions& options = 
 // the node boxes bottom-up. Cheaper than a rebuild for small deformations,
 // at the price of looser boxes as the shape drifts.
 Status refit_bvh(const TriMesh& mesh, MeshBvh& bvh);
+
+// What a refit after a few vertices moved needs: each node's parent, the
+// leaf holding each triangle, and each vertex's triangles. Built once per
+// BVH (same triangles; positions may change).
+struct BvhRefitIndex {
+  std::vector<int> parent;            // #nodes, -1 for the root
+  std::vector<int> leaf_of_triangle;  // #F: node index of the leaf holding the triangle
+  std::vector<int> vertex_offsets;    // #V + 1: vertex v's triangles are
+  std::vector<int> vertex_triangles;  //   vertex_triangles[vertex_offsets[v] .. vertex_offsets[v+1])
+};
+void build_refit_index(const MeshBvh& bvh, BvhRefitIndex& out);
+
+// Moves the listed vertices of the BVH to positions[v] (positions is #V
+// long; only the listed entries are read) and recomputes exactly the boxes
+// that contain them: the leaves of their triangles and those leaves'
+// ancestors. The boxes come out bit-identical to refit_bvh with the same
+// positions (each box is recomputed from scratch in the same order), at a
+// cost proportional to the moved vertices, not to #F. Fails with
+// InvalidInput on a size mismatch, an index out of range or a non-finite
+// position (the BVH is then unchanged). Repeated indices are fine.
+Status refit_bvh_vertices(MeshBvh& bvh, const BvhRefitIndex& index, const std::vector<Vec3>& positions,
+                          const std::vector<int>& moved);
 
 struct Ray {
   Vec3 origin = Vec3::Zero();

@@ -1,7 +1,10 @@
 #include "raycast/self_intersection.h"
 
+#include "common/parallel.h"
+
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <utility>
 
 namespace lk {
@@ -72,37 +75,44 @@ struct PairTester {
     }
   }
 
-  void run() {
-    if (bvh.empty()) return;
+  // One step of the self-traversal: node pair (i, j) is tested (leaves) or
+  // split into the node pairs that may still hold crossings (pushed).
+  template <class Stack>
+  void step(int i, int j, Stack& stack) {
     auto left = [](int n) { return n + 1; };
     auto right = [&](int n) { return bvh.nodes[n].first; };
-    std::vector<std::pair<int, int>> stack = {{0, 0}};
+    const BvhNode& x = bvh.nodes[i];
+    const BvhNode& y = bvh.nodes[j];
+    if (i == j) {
+      if (x.leaf()) {
+        leaf_pairs(x, x, true);
+      } else {
+        stack.push_back({left(i), left(i)});
+        stack.push_back({right(i), right(i)});
+        stack.push_back({left(i), right(i)});
+      }
+      return;
+    }
+    if (!boxes_overlap(x, y)) return;
+    if (x.leaf() && y.leaf()) {
+      leaf_pairs(x, y, false);
+    } else if (y.leaf() || (!x.leaf() && (x.box_max - x.box_min).squaredNorm() >=
+                                              (y.box_max - y.box_min).squaredNorm())) {
+      stack.push_back({left(i), j});
+      stack.push_back({right(i), j});
+    } else {
+      stack.push_back({i, left(j)});
+      stack.push_back({i, right(j)});
+    }
+  }
+
+  // Depth first from the node pairs on the stack.
+  void run(std::vector<std::pair<int, int>>& stack) {
+    if (bvh.empty()) return;
     while (!stack.empty() && !full()) {
       const auto [i, j] = stack.back();
       stack.pop_back();
-      const BvhNode& x = bvh.nodes[i];
-      const BvhNode& y = bvh.nodes[j];
-      if (i == j) {
-        if (x.leaf()) {
-          leaf_pairs(x, x, true);
-        } else {
-          stack.push_back({left(i), left(i)});
-          stack.push_back({right(i), right(i)});
-          stack.push_back({left(i), right(i)});
-        }
-        continue;
-      }
-      if (!boxes_overlap(x, y)) continue;
-      if (x.leaf() && y.leaf()) {
-        leaf_pairs(x, y, false);
-      } else if (y.leaf() || (!x.leaf() && (x.box_max - x.box_min).squaredNorm() >=
-                                                (y.box_max - y.box_min).squaredNorm())) {
-        stack.push_back({left(i), j});
-        stack.push_back({right(i), j});
-      } else {
-        stack.push_back({i, left(j)});
-        stack.push_back({i, right(j)});
-      }
+      step(i, j, stack);
     }
   }
 };
@@ -156,7 +166,30 @@ void find_self_intersections(const MeshBvh& bvh, std::vector<std::array<int, 2>>
                              const SelfIntersectionOptions& options) {
   pairs.clear();
   PairTester tester{bvh, pairs, std::max(0, options.max_pairs)};
-  tester.run();
+  // Natively the traversal is split breadth first into independent node
+  // pairs searched on all cores; the result is sorted and deduplicated, so
+  // it is the same set on any number of threads. (A capped search stays
+  // serial: which pairs a cap keeps would depend on the order.)
+  constexpr size_t kTasks = 256;
+  constexpr int kMinTrianglesToSplit = 4096;
+  if (options.max_pairs <= 0 && parallel_workers() > 1 && bvh.num_triangles() >= kMinTrianglesToSplit) {
+    std::deque<std::pair<int, int>> tasks = {{0, 0}};
+    while (!tasks.empty() && tasks.size() < kTasks) {
+      const auto [i, j] = tasks.front();
+      tasks.pop_front();
+      tester.step(i, j, tasks);
+    }
+    std::vector<std::vector<std::array<int, 2>>> found(tasks.size());
+    parallel_for(0, static_cast<int>(tasks.size()), 1, [&](int task, int) {
+      std::vector<std::pair<int, int>> own = {tasks[task]};
+      PairTester part{bvh, found[task], 0};
+      part.run(own);
+    });
+    for (const auto& f : found) pairs.insert(pairs.end(), f.begin(), f.end());
+  } else if (!bvh.empty()) {
+    std::vector<std::pair<int, int>> stack = {{0, 0}};
+    tester.run(stack);
+  }
   std::sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
 }

@@ -252,3 +252,71 @@ TEST_CASE("closest point on a triangle lands in each Voronoi region", "[raycast]
   // A degenerate triangle (a segment) still gives the nearest point on it.
   CHECK((closest_point_on_triangle(Vec3(0.5, 1, 0), a, b, b, bary) - Vec3(0.5, 0, 0)).norm() < 1e-15);
 }
+
+namespace {
+
+void require_same_tree(const MeshBvh& a, const MeshBvh& b) {
+  REQUIRE(a.nodes.size() == b.nodes.size());
+  REQUIRE(a.triangle_order == b.triangle_order);
+  for (size_t i = 0; i < a.nodes.size(); ++i) {
+    REQUIRE(a.nodes[i].first == b.nodes[i].first);
+    REQUIRE(a.nodes[i].count == b.nodes[i].count);
+    // Bit for bit: the boxes are minima and maxima of the same coordinates.
+    REQUIRE(a.nodes[i].box_min == b.nodes[i].box_min);
+    REQUIRE(a.nodes[i].box_max == b.nodes[i].box_max);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("a threaded build gives the serial build's tree", "[raycast]") {
+  Rng rng{11};
+  const TriMesh m = lumpy_sphere(200, 100, rng);  // 39600 triangles: above the threading threshold
+  REQUIRE(m.num_triangles() >= 20000);
+  MeshBvh threaded, serial;
+  BvhOptions one_thread;
+  one_thread.threads = false;
+  REQUIRE(build_bvh(m, threaded).ok());
+  REQUIRE(build_bvh(m, serial, one_thread).ok());
+  require_same_tree(threaded, serial);
+}
+
+TEST_CASE("refitting the moved vertices only equals a full refit", "[raycast]") {
+  Rng rng{5};
+  TriMesh m = lumpy_sphere(64, 32, rng);
+  MeshBvh partial;
+  REQUIRE(build_bvh(m, partial).ok());
+  MeshBvh full = partial;
+  BvhRefitIndex index;
+  build_refit_index(partial, index);
+  // Several rounds of a few moved vertices (some repeated), as the fold
+  // limiter does; after each the boxes must equal a full refit's exactly.
+  for (int round = 0; round < 20; ++round) {
+    std::vector<int> moved;
+    for (int k = 0; k < 1 + round * 3; ++k) {
+      const int v = static_cast<int>(rng.next() % m.positions.size());
+      m.positions[v] += rng.in_box(0.3);
+      moved.push_back(v);
+      if (k % 4 == 0) moved.push_back(v);
+    }
+    REQUIRE(refit_bvh_vertices(partial, index, m.positions, moved).ok());
+    REQUIRE(refit_bvh(m, full).ok());
+    REQUIRE(partial.positions == full.positions);
+    require_same_tree(partial, full);
+  }
+  // A vertex not listed keeps its old position in the BVH.
+  const Vec3 old = partial.positions[0];
+  m.positions[0] += Vec3(1, 0, 0);
+  REQUIRE(refit_bvh_vertices(partial, index, m.positions, {1}).ok());
+  CHECK(partial.positions[0] == old);
+  // Bad input: nothing changes.
+  CHECK(refit_bvh_vertices(partial, index, m.positions, {-1}).code == ErrorCode::InvalidInput);
+  CHECK(refit_bvh_vertices(partial, index, m.positions, {m.num_vertices()}).code == ErrorCode::InvalidInput);
+  std::vector<Vec3> fewer(m.positions.begin(), m.positions.end() - 1);
+  CHECK(refit_bvh_vertices(partial, index, fewer, {1}).code == ErrorCode::InvalidInput);
+  m.positions[2] = Vec3(std::nan(""), 0, 0);
+  CHECK(refit_bvh_vertices(partial, index, m.positions, {2}).code == ErrorCode::InvalidInput);
+  CHECK(partial.positions[2].allFinite());
+  BvhRefitIndex empty;
+  CHECK(refit_bvh_vertices(partial, empty, m.positions, {1}).code == ErrorCode::InvalidInput);
+}

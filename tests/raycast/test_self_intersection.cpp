@@ -193,3 +193,27 @@ TEST_CASE("self-intersections: bad input is refused, empty input gives nothing",
   REQUIRE(find_self_intersections(TriMesh{}, pairs).ok());
   CHECK(pairs.empty());
 }
+
+TEST_CASE("self-intersections: the threaded search finds the serial search's set", "[raycast]") {
+  // Large enough to be split over threads (>= 4096 triangles): two
+  // overlapping spheres and a torus with dents pushed through its tube.
+  const TriMesh sphere = icosphere(4);  // 5120 triangles
+  TriMesh big = merged(sphere, sphere, Vec3(1.1, 0.2, 0.05));
+  TriMesh ring = torus(96, 32, 1.0, 0.3);
+  for (int k = 0; k < 12; ++k) ring.positions[k * 97 % ring.positions.size()] *= 0.5;
+  big = merged(big, ring, Vec3(0, 0, 3));
+  REQUIRE(big.num_triangles() > 4096);
+  std::vector<std::array<int, 2>> threaded, serial;
+  REQUIRE(find_self_intersections(big, threaded).ok());
+  SelfIntersectionOptions capped;  // a cap keeps the search on one thread
+  capped.max_pairs = 1 << 30;
+  REQUIRE(find_self_intersections(big, serial, capped).ok());
+  CHECK(threaded.size() > 100);
+  CHECK(threaded == serial);
+  // Both torus dents and sphere crossings are in it.
+  const int ns = 2 * sphere.num_triangles();
+  int in_spheres = 0, in_ring = 0;
+  for (const auto& p : threaded) (p[0] < ns ? in_spheres : in_ring) += 1;
+  CHECK(in_spheres > 0);
+  CHECK(in_ring > 0);
+}

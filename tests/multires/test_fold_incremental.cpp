@@ -1,0 +1,132 @@
+// The fold limiter's incremental bookkeeping (FoldLimitOptions::incremental:
+// each visit of a level recomputes only what changed since the last one,
+// and the BVH refits only the moved vertices' boxes) against the reference
+// that evaluates, scans and refits everything on every visit: the same
+// displacements, statistics and evaluated state, bit for bit, on surfaces
+// that exercise shrinking, corrections, restarts on coarser levels and the
+// separation of crossing sheets.
+#include "mesh/primitives.h"
+#include "multires/fold_limit.h"
+#include "multires/multires.h"
+
+#include <catch2/catch.hpp>
+
+#include <cstring>
+#include <random>
+
+using namespace lk;
+
+namespace {
+
+bool same_bits(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(Vec3)) == 0;
+}
+
+void require_same_run(const MultiresMesh& fast, const FoldLimitStats& fs, const MultiresMesh& full,
+                      const FoldLimitStats& ss) {
+  CHECK(fs.rounds == ss.rounds);
+  CHECK(fs.restarts == ss.restarts);
+  CHECK(fs.corrected == ss.corrected);
+  CHECK(fs.remaining_bad == ss.remaining_bad);
+  CHECK(fs.bad_found == ss.bad_found);
+  CHECK(fs.shrunk == ss.shrunk);
+  CHECK(fs.zeroed == ss.zeroed);
+  CHECK(fs.intersections_found == ss.intersections_found);
+  CHECK(fs.intersections_left == ss.intersections_left);
+  CHECK(fs.crossing_corrected == ss.crossing_corrected);
+  REQUIRE(fast.num_levels() == full.num_levels());
+  for (int l = 0; l <= fast.num_levels(); ++l) {
+    INFO("level " << l);
+    CHECK(std::memcmp(fast.displacements[l].data(), full.displacements[l].data(),
+                      full.displacements[l].size() * sizeof(double)) == 0);
+    CHECK(same_bits(fast.state.base[l], full.state.base[l]));
+    CHECK(same_bits(fast.state.normals[l], full.state.normals[l]));
+    CHECK(same_bits(fast.state.displaced[l], full.state.displaced[l]));
+    CHECK(same_bits(fast.state.face_normals[l], full.state.face_normals[l]));
+  }
+  // And both are what a full evaluation of the final displacements gives.
+  MultiresMesh again = fast;
+  REQUIRE(evaluate(again).ok());
+  for (int l = 0; l <= fast.num_levels(); ++l) {
+    INFO("level " << l << " against evaluate()");
+    CHECK(same_bits(fast.state.displaced[l], again.state.displaced[l]));
+    CHECK(same_bits(fast.state.face_normals[l], again.state.face_normals[l]));
+  }
+}
+
+void run_both(const MultiresMesh& input, FoldLimitOptions options, FoldLimitStats& fast_stats) {
+  MultiresMesh fast = input, full = input;
+  FoldLimitStats full_stats;
+  options.incremental = true;
+  REQUIRE(limit_folds(fast, options, &fast_stats).ok());
+  options.incremental = false;
+  REQUIRE(limit_folds(full, options, &full_stats).ok());
+  require_same_run(fast, fast_stats, full, full_stats);
+}
+
+// Displacements of a few edge lengths, random in sign, on every level: the
+// levels fold everywhere. Over a cap the finest level carries none, and
+// over part of it level 2 neither, so bad triangles there are bent by
+// coarser levels: corrections, and restarts that zero coarser displacements
+// (some of them corrections made earlier, i.e. back to their old value).
+MultiresMesh randomly_folded_sphere(unsigned seed) {
+  std::mt19937 rng(seed);
+  MultiresMesh mr;
+  REQUIRE(build_multires(make_icosphere(1), 3, mr).ok());
+  for (int l = 0; l <= 3; ++l) {
+    const double amplitude = 0.4 / (1 + l);  // level-l edges are ~0.6 / 2^l long
+    std::uniform_real_distribution<double> d(-amplitude, amplitude);
+    for (double& x : mr.displacements[l]) x = d(rng);
+  }
+  for (int v = 0; v < mr.num_vertices(3); ++v)
+    if (mr.state.base[3][v].z() > 0.3) mr.displacements[3][v] = 0;
+  for (int v = 0; v < mr.num_vertices(2); ++v)
+    if (mr.state.base[2][v].z() > 0.3 && mr.state.base[2][v].x() > 0) mr.displacements[2][v] = 0;
+  REQUIRE(evaluate(mr).ok());
+  return mr;
+}
+
+}  // namespace
+
+TEST_CASE("fold limit: incremental visits equal full ones on randomly folded spheres", "[multires]") {
+  for (unsigned seed : {7u, 8u, 9u, 10u}) {
+    INFO("seed " << seed);
+    FoldLimitStats stats;
+    run_both(randomly_folded_sphere(seed), FoldLimitOptions{}, stats);
+    // The paths under test were taken.
+    CHECK(stats.rounds > 10);
+    CHECK(stats.restarts > 0);
+    CHECK(stats.corrected > 0);
+    CHECK(stats.bad_found[3] > 50);
+    CHECK(stats.remaining_bad == 0);
+  }
+}
+
+TEST_CASE("fold limit: incremental visits equal full ones when crossing sheets are separated", "[multires]") {
+  // Two spheres pushed into each other by level-0 displacements, with
+  // random detail on the finer levels: separation rounds, corners put on
+  // the smooth surface, parents on the level above, restarts.
+  const TriMesh a = make_icosphere(1);
+  TriMesh two = a;
+  const int na = static_cast<int>(a.positions.size());
+  for (const Vec3& p : a.positions) two.positions.push_back(p + Vec3(2.2, 0, 0));
+  for (const Tri& t : a.triangles) two.triangles.push_back({t[0] + na, t[1] + na, t[2] + na});
+  MultiresMesh mr;
+  REQUIRE(build_multires(two, 3, mr).ok());
+  std::mt19937 rng(11);
+  for (int l = 1; l <= 3; ++l) {
+    std::uniform_real_distribution<double> d(-0.04 / (1 << l), 0.04 / (1 << l));
+    for (double& x : mr.displacements[l]) x = d(rng);
+  }
+  for (double& x : mr.displacements[0]) x = 0.15;
+  REQUIRE(evaluate(mr).ok());
+  for (int restarts : {0, 3}) {
+    INFO("restarts " << restarts);
+    FoldLimitOptions options;
+    options.max_intersection_restarts = restarts;
+    FoldLimitStats stats;
+    run_both(mr, options, stats);
+    CHECK(stats.intersections_found > 10);
+    CHECK(stats.crossing_corrected > 0);
+  }
+}
