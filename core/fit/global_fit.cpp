@@ -3,6 +3,7 @@
 #include "common/parallel.h"
 #include "fit/closest_point.h"
 #include "mesh/geometry.h"
+#include "raycast/self_intersection.h"
 
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
@@ -224,6 +225,64 @@ struct FoldGuard {
   }
 };
 
+// The no-crossing guard's check (header comment): control triangle pairs
+// that cross at positions x (self_intersection.h rules), sorted. `scratch`
+// holds the mesh's triangles; its positions are overwritten.
+std::vector<std::array<int, 2>> crossing_pairs(const VecX& x, TriMesh& scratch) {
+  from_vector(x, scratch.positions);
+  std::vector<std::array<int, 2>> pairs;
+  find_self_intersections(scratch, pairs);  // x is finite (checked by the caller), indices valid
+  return pairs;
+}
+
+bool share_edge(const Tri& a, const Tri& b) {
+  int shared = 0;
+  for (int i : a)
+    for (int j : b) shared += i == j;
+  return shared >= 2;
+}
+
+// The pairs that may cross anywhere on the step from x0 to x1: a corner
+// moves on a segment, so a triangle stays inside the box of its corners at
+// both ends, and two triangles can meet only where those boxes overlap.
+// Found once per solve by sweeping the boxes along their longest axis;
+// each trial step then tests only these pairs (a full self-intersection
+// search per trial cost about as much as the rest of the global fit).
+// Pairs sharing an edge never count (self_intersection.h) and are left out.
+std::vector<std::array<int, 2>> swept_candidates(const std::vector<Tri>& triangles, const VecX& x0,
+                                                 const VecX& x1) {
+  const int nf = static_cast<int>(triangles.size());
+  std::vector<Vec3> lo(nf), hi(nf);
+  Vec3 all_lo = Vec3::Constant(1e300), all_hi = Vec3::Constant(-1e300);
+  for (int f = 0; f < nf; ++f) {
+    lo[f] = Vec3::Constant(1e300);
+    hi[f] = Vec3::Constant(-1e300);
+    for (int v : triangles[f]) {
+      lo[f] = lo[f].cwiseMin(x0.segment<3>(3 * v)).cwiseMin(x1.segment<3>(3 * v));
+      hi[f] = hi[f].cwiseMax(x0.segment<3>(3 * v)).cwiseMax(x1.segment<3>(3 * v));
+    }
+    all_lo = all_lo.cwiseMin(lo[f]);
+    all_hi = all_hi.cwiseMax(hi[f]);
+  }
+  int axis = 0;
+  (all_hi - all_lo).maxCoeff(&axis);
+  std::vector<int> order(nf);
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return lo[a][axis] < lo[b][axis]; });
+  std::vector<std::array<int, 2>> pairs;
+  for (int i = 0; i < nf; ++i) {
+    const int a = order[i];
+    for (int j = i + 1; j < nf && lo[order[j]][axis] <= hi[a][axis]; ++j) {
+      const int b = order[j];
+      if (!((lo[a].array() <= hi[b].array()).all() && (lo[b].array() <= hi[a].array()).all())) continue;
+      if (share_edge(triangles[a], triangles[b])) continue;
+      pairs.push_back({std::min(a, b), std::max(a, b)});
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  return pairs;
+}
+
 }  // namespace
 
 std::vector<int> turned_triangles(const std::vector<Vec3>& reference, const TriMesh& mesh) {
@@ -296,6 +355,10 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
   guard.reference_normals = std::move(reference_normals);
   guard.reset(nv, inv_v);
   const bool guarding = options.fold_guard_attempts > 0;
+  const bool crossing_guarded = guarding && options.crossing_guard;
+  TriMesh check_mesh = mesh;                         // scratch of the crossing check
+  std::vector<std::array<int, 2>> crossing_at_x = crossing_pairs(rest, check_mesh);  // at x, sorted
+  result.crossing_before = static_cast<int>(crossing_at_x.size());
 
   const double edge = mean_edge_length(mesh);
   // A tiny pull towards the current positions keeps the system definite for
@@ -434,6 +497,30 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
           if (!turned_at_x[f]) fresh.push_back(f);
         return fresh;
       };
+      // Likewise pairs already crossing at x may stay (the input's); no
+      // other pair may come to cross. Returns the triangles of new pairs.
+      // `candidates` are the swept_candidates of the current solve: every
+      // pair that can cross at xt on the segment from x to x_star, so the
+      // pairs found crossing are all that cross at xt.
+      std::vector<std::array<int, 2>> candidates;
+      auto new_crossings = [&](const VecX& xt, std::vector<std::array<int, 2>>* all) {
+        std::vector<int> faces;
+        if (!crossing_guarded) return faces;
+        from_vector(xt, check_mesh.positions);
+        std::vector<std::array<int, 2>> pairs;
+        for (const auto& p : candidates)
+          if (mesh_triangles_cross(check_mesh.positions, mesh.triangles[p[0]], mesh.triangles[p[1]])) {
+            pairs.push_back(p);
+            if (!std::binary_search(crossing_at_x.begin(), crossing_at_x.end(), p)) {
+              faces.push_back(p[0]);
+              faces.push_back(p[1]);
+            }
+          }
+        if (all) *all = std::move(pairs);
+        return faces;
+      };
+      std::vector<std::array<int, 2>> crossing_at_new, crossing_at_full_step;
+      bool full_step_crosses = false;
       // Solve; backtrack to the longest step that lowers E_global and turns
       // no triangle; when the full step would have turned some, stiffen
       // around them (fold guard) and solve again from the same x, at most
@@ -468,7 +555,13 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
         rec.energy_before = e_old;
         accepted = false;
         std::vector<int> folds_of_full_step;
-        if (guarding) folds_of_full_step = new_turns(x_star);
+        if (guarding) {
+          folds_of_full_step = new_turns(x_star);
+          if (crossing_guarded) candidates = swept_candidates(mesh.triangles, x, x_star);
+          const std::vector<int> crossed = new_crossings(x_star, &crossing_at_full_step);
+          full_step_crosses = !crossed.empty();
+          folds_of_full_step.insert(folds_of_full_step.end(), crossed.begin(), crossed.end());
+        }
         if (!folds_of_full_step.empty() && attempt < options.fold_guard_attempts) {
           const int raised = guard.stiffen(folds_of_full_step, mesh.triangles, x, options);
           if (raised > 0) {
@@ -484,6 +577,15 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
         for (int bt = 0; bt < 6; ++bt, step *= 0.5) {
           const VecX xt = x + step * (x_star - x);
           if (guarding && !new_turns(xt).empty()) continue;
+          if (crossing_guarded) {
+            // The full step was checked above.
+            if (bt == 0) {
+              if (full_step_crosses) continue;
+              crossing_at_new = crossing_at_full_step;
+            } else if (!new_crossings(xt, &crossing_at_new).empty()) {
+              continue;
+            }
+          }
           Projection trial;
           project(points, set, work, xt, tau, &proj.hits, trial);
           GlobalFitIteration parts;
@@ -516,6 +618,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       }
       from_vector(x_new, work.positions);
       x = std::move(x_new);
+      if (crossing_guarded) crossing_at_x = std::move(crossing_at_new);
       proj = std::move(proj_new);
       rec.turned = static_cast<int>(guard.turned(mesh.triangles, x).size());
       result.iterations.push_back(rec);
@@ -526,6 +629,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
   }
   result.rounds = rounds;
   result.turned_after = static_cast<int>(guard.turned(mesh.triangles, x).size());
+  result.crossing_after = static_cast<int>(crossing_pairs(x, check_mesh).size());
   for (const auto& it : result.iterations) result.guard_raises += it.stiffened;
   out = mesh;
   from_vector(x, out.positions);

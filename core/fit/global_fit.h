@@ -56,6 +56,20 @@
 //   g_v enters E_global, so the energy changes definition at
 //   iterations with stiffened > 0; their energy_before is measured with the
 //   new weights.
+// - No-crossing guard (not in the paper; GlobalFitOptions::crossing_guard).
+//   The fold guard keeps each triangle facing its way, but two triangles
+//   that share no edge can still pass through each other: lid skin through
+//   the eye-socket pocket behind it at the outer eye corners (the synthetic
+//   heads: 13-18 crossing pairs in the fitted control mesh), sheets of an
+//   ear, the lips. The same mechanism answers it: after each solve the
+//   triangle pairs that cross at the full step and did not cross at x
+//   (self_intersection.h rules) have all six corners anchored and
+//   stiffened, and the backtracking accepts no step with a new crossing
+//   pair. Pairs already crossing in the input may stay. The check looks
+//   only at pairs whose boxes, swept over the step (a corner moves on a
+//   segment, so each trial of the backtracking lies inside), overlap: found
+//   once per solve by a sweep along the longest axis, then each trial step
+//   tests those few thousand pairs instead of a full BVH search.
 // - Why the aligned template and not the local fit as rest shape: local
 //   fitting moves each feature box by an affine map and blends the rest, so
 //   its shape has steps at the box walls (a ridge across James's nose bridge
@@ -107,6 +121,11 @@ struct GlobalFitOptions {
   double fold_stiffness = 1.0;
   double fold_stiffen_factor = 4.0;
   double fold_max_stiffness = 1e4;
+  // No-crossing guard (see header comment; needs fold_guard_attempts > 0):
+  // no step may make two control triangles cross that did not cross before.
+  // (With the generic head before c092934, whose lid skin crossed its eye
+  // pockets, it held the outer eye corners off their data: docs/fit.md.)
+  bool crossing_guard = true;
 };
 
 // Terms of E_binding and E_constraint, from the head's annotations.
@@ -139,6 +158,8 @@ struct GlobalFitResult {
   int turned_before = 0;       // triangles of the input turned against the reference
   int turned_after = 0;        // ... of the result
   int guard_raises = 0;        // sum of stiffened over all iterations
+  int crossing_before = 0;     // control triangle pairs crossing in the input (self_intersection.h)
+  int crossing_after = 0;      // ... in the result (counted with the guard on or off)
 };
 
 // points: the scan points to fit (already stripped of clipped regions), #P.

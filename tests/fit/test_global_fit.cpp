@@ -1,6 +1,8 @@
 #include "fit/closest_point.h"
 #include "fit/global_fit.h"
 #include "head/generic_head.h"
+#include "mesh/primitives.h"
+#include "raycast/self_intersection.h"
 #include "synth/scanner.h"
 #include "synth/synth_head.h"
 #include "toy_shapes.h"
@@ -236,4 +238,66 @@ TEST_CASE("global fit: a fold reference of the wrong size is refused") {
   terms.fold_reference = c.start.positions;
   terms.fold_reference[3].x() = std::nan("");
   CHECK(fit_global(pts, c.start, c.topo, terms, {}, out, r).code == ErrorCode::InvalidInput);
+}
+
+// The no-crossing guard on two sheets: A lies flat (z = 0, x in [0, 1]),
+// B stands upright beside it (x = 1.2, z in [-1, 1]). B's data lie at
+// x = 0.8, above and below A only (|z| >= 0.5), so E_smooth carries B's
+// middle, which no point pulls, through A's edge strip: unguarded, the fit
+// makes the sheets cross. Guarded, no pair may cross, and B still reaches
+// its data above and below.
+TEST_CASE("global fit: sheets pulled through each other do not cross with the guard") {
+  TriMesh start;
+  const TriMesh a = make_regular_grid(10, 10), b = make_regular_grid(10, 20);
+  for (const Vec3& p : a.positions) start.positions.push_back(Vec3(0.1 * p.x(), 0.1 * p.y(), 0));
+  for (const Tri& t : a.triangles) start.triangles.push_back(t);
+  const int offset = a.num_vertices();
+  for (const Vec3& p : b.positions) start.positions.push_back(Vec3(1.2, 0.1 * p.x(), -1 + 0.1 * p.y()));
+  for (const Tri& t : b.triangles) start.triangles.push_back({{t[0] + offset, t[1] + offset, t[2] + offset}});
+  MeshTopology topo;
+  REQUIRE(build_topology(start, topo).ok());
+  std::vector<std::array<int, 2>> pairs;
+  REQUIRE(find_self_intersections(start, pairs).ok());
+  REQUIRE(pairs.empty());
+
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> U(0, 1);
+  std::vector<Vec3> pts, b_pts;
+  for (int i = 0; i < 3000; ++i) pts.push_back(Vec3(U(rng), U(rng), 0));
+  for (int i = 0; i < 6000; ++i) {
+    const double z = 0.5 + 0.5 * U(rng);
+    b_pts.push_back(Vec3(0.8, U(rng), i % 2 ? z : -z));
+  }
+  pts.insert(pts.end(), b_pts.begin(), b_pts.end());
+  const double diag = bounding_box(pts).diagonal();
+
+  GlobalFitOptions unguarded;
+  unguarded.crossing_guard = false;
+  TriMesh out_unguarded;
+  GlobalFitResult r_unguarded;
+  REQUIRE(fit_global(pts, start, topo, {}, unguarded, out_unguarded, r_unguarded).ok());
+  REQUIRE(find_self_intersections(out_unguarded, pairs).ok());
+  INFO("without the guard: " << pairs.size() << " crossing pairs");
+  CHECK(pairs.size() >= 10);  // 39 measured
+  CHECK(r_unguarded.crossing_after == static_cast<int>(pairs.size()));
+
+  GlobalFitOptions guarded;
+  guarded.crossing_guard = true;
+  TriMesh out;
+  GlobalFitResult r;
+  REQUIRE(fit_global(pts, start, topo, {}, guarded, out, r).ok());
+  check_monotonic(r);
+  REQUIRE(find_self_intersections(out, pairs).ok());
+  CHECK(pairs.empty());
+  CHECK(r.crossing_before == 0);
+  CHECK(r.crossing_after == 0);
+  CHECK(r.guard_raises > 0);
+  // B still follows its data where they are (the guard holds it only
+  // around A's edge).
+  const double b_mean = point_to_surface_stats(b_pts, out, diag).mean_pct;
+  const double b_mean_unguarded = point_to_surface_stats(b_pts, out_unguarded, diag).mean_pct;
+  const double b_mean_start = point_to_surface_stats(b_pts, start, diag).mean_pct;
+  INFO("B's points: mean % " << b_mean << " guarded, " << b_mean_unguarded << " unguarded, " << b_mean_start
+                            << " at the start");
+  CHECK(b_mean < 0.25 * b_mean_start);
 }
