@@ -30,10 +30,32 @@ struct BoxTransform {
   }
 };
 
+// Directions in the 12 parameters (A row-major, t) that a motion may take.
+Eigen::Matrix<double, 12, Eigen::Dynamic> motion_basis(RegionMotion motion) {
+  Eigen::Matrix<double, 12, Eigen::Dynamic> B;
+  switch (motion) {
+    case RegionMotion::Affine:
+      B = Mat12::Identity();
+      break;
+    case RegionMotion::TranslationScale:
+      B = Eigen::Matrix<double, 12, 4>::Zero();
+      B(0, 0) = B(4, 0) = B(8, 0) = 1;  // A = s I
+      for (int k = 0; k < 3; ++k) B(9 + k, 1 + k) = 1;
+      break;
+    case RegionMotion::Translation:
+      B = Eigen::Matrix<double, 12, 3>::Zero();
+      for (int k = 0; k < 3; ++k) B(9 + k, k) = 1;
+      break;
+  }
+  return B;
+}
+
 // The box's part of the mesh and its data, in local indices.
 struct BoxProblem {
   std::vector<Vec3> rest;       // box vertices (and their outside neighbours) as aligned
-  std::vector<char> moving;     // 1 for vertices inside the box (they follow T)
+  // How far each vertex follows T: y -> y + w (T(y) - y). 1 inside a box, 0
+  // on the ring outside it; between 0 and 1 in a soft region's falloff.
+  std::vector<double> weight;
   std::vector<Tri> triangles;   // local indices
   std::vector<std::array<int, 2>> edges;
   std::vector<double> rest_lengths;
@@ -50,7 +72,7 @@ struct BoxProblem {
   void evaluate(const BoxTransform& T, Eval& ev) const {
     TriMesh m;
     m.positions.resize(rest.size());
-    for (size_t i = 0; i < rest.size(); ++i) m.positions[i] = moving[i] ? T.apply(rest[i]) : rest[i];
+    for (size_t i = 0; i < rest.size(); ++i) m.positions[i] = rest[i] + weight[i] * (T.apply(rest[i]) - rest[i]);
     m.triangles = triangles;
     ClosestPointTree tree(m);
     ev.hits.resize(points.size());
@@ -78,16 +100,15 @@ struct BoxProblem {
       const SurfacePoint& h = ev.hits[i];
       if (h.face < 0) continue;
       const Tri& tri = triangles[h.face];
-      // Only corners inside the box follow T: q collects their weighted
+      // Corners follow T by their weights: q collects their weighted
       // offsets from the centre, wm their total weight.
       Vec3 x = Vec3::Zero(), q = Vec3::Zero();
       double wm = 0;
       for (int k = 0; k < 3; ++k) {
         x += h.barycentric[k] * ev.moved[tri[k]];
-        if (moving[tri[k]]) {
-          q += h.barycentric[k] * (rest[tri[k]] - T.c);
-          wm += h.barycentric[k];
-        }
+        const double w = h.barycentric[k] * weight[tri[k]];
+        q += w * (rest[tri[k]] - T.c);
+        wm += w;
       }
       Vec3 n = points[i] - x;
       const double len = n.norm();
@@ -134,6 +155,61 @@ struct BoxProblem {
 
 bool finite(const Vec3& p) { return p.allFinite(); }
 
+// Levenberg-Marquardt on E_local within the motion's parameters; a step is
+// taken only when it lowers the true energy. T starts as given.
+void minimize(const BoxProblem& prob, RegionMotion motion, const LocalFitOptions& options, BoxTransform& T,
+              BoxFit& fit) {
+  const Eigen::Matrix<double, 12, Eigen::Dynamic> B = motion_basis(motion);
+  const int k = static_cast<int>(B.cols());
+  BoxProblem::Eval ev, trial;
+  prob.evaluate(T, ev);
+  fit.energies.push_back(ev.energy);
+  double damping = 1e-4;
+  for (int it = 0; it < options.max_iterations; ++it) {
+    Mat12 JtJ;
+    Vec12 Jtr;
+    prob.linearize(T, ev, JtJ, Jtr);
+    const Eigen::MatrixXd H0 = B.transpose() * JtJ * B;
+    const Eigen::VectorXd g = B.transpose() * Jtr;
+    bool accepted = false;
+    for (int tries = 0; tries < 10 && !accepted; ++tries) {
+      Eigen::MatrixXd H = H0;
+      for (int j = 0; j < k; ++j) H(j, j) += damping * (H0(j, j) + 1e-12);
+      const Vec12 delta = B * H.ldlt().solve(-g);
+      if (!delta.allFinite()) break;
+      const BoxTransform Tn = T.plus(delta);
+      prob.evaluate(Tn, trial);
+      if (trial.energy < ev.energy) {
+        accepted = true;
+        T = Tn;
+        std::swap(ev, trial);
+        damping = std::max(1e-7, damping / 3);
+      } else {
+        damping *= 4;
+      }
+    }
+    if (!accepted) break;
+    const double previous = fit.energies.back();
+    fit.energies.push_back(ev.energy);
+    if ((previous - ev.energy) < options.relative_tolerance * previous) break;
+  }
+}
+
+Status check_mesh_and_frame(const TriMesh& mesh, const MeshTopology& topology, const AffineMap& generic_to_mesh,
+                            const char* who) {
+  const std::string w = who;
+  if (mesh.num_vertices() == 0 || mesh.triangles.empty())
+    return Status::error(ErrorCode::Empty, w + ": the mesh has no triangles");
+  if (topology.num_vertices != mesh.num_vertices())
+    return Status::error(ErrorCode::InvalidInput, w + ": topology does not match the mesh");
+  const double det = generic_to_mesh.A.determinant();
+  if (!std::isfinite(det) || std::abs(det) < 1e-12 || !generic_to_mesh.t.allFinite())
+    return Status::error(ErrorCode::InvalidInput, w + ": the alignment transform is singular");
+  for (const Vec3& p : mesh.positions)
+    if (!finite(p)) return Status::error(ErrorCode::InvalidInput, w + ": non-finite mesh vertex");
+  return Status::success();
+}
+
 }  // namespace
 
 Status fit_local(const std::vector<Vec3>& points, const TriMesh& mesh, const MeshTopology& topology,
@@ -142,17 +218,10 @@ Status fit_local(const std::vector<Vec3>& points, const TriMesh& mesh, const Mes
                  LocalFitResult& result, const ProgressFn& progress) {
   result = LocalFitResult{};
   const int nv = mesh.num_vertices();
-  if (nv == 0 || mesh.triangles.empty())
-    return Status::error(ErrorCode::Empty, "local fit: the mesh has no triangles");
-  if (topology.num_vertices != nv)
-    return Status::error(ErrorCode::InvalidInput, "local fit: topology does not match the mesh");
+  Status st = check_mesh_and_frame(mesh, topology, generic_to_mesh, "local fit");
+  if (!st) return st;
   if (!(cloud_diagonal > 0) || !std::isfinite(cloud_diagonal))
     return Status::error(ErrorCode::InvalidInput, "local fit: the cloud's diagonal must be positive");
-  const double det = generic_to_mesh.A.determinant();
-  if (!std::isfinite(det) || std::abs(det) < 1e-12)
-    return Status::error(ErrorCode::InvalidInput, "local fit: the alignment transform is singular");
-  for (const Vec3& p : mesh.positions)
-    if (!finite(p)) return Status::error(ErrorCode::InvalidInput, "local fit: non-finite mesh vertex");
   const Mat3 A_inv = generic_to_mesh.A.inverse();
   auto to_generic = [&](const Vec3& p) { return Vec3(A_inv * (p - generic_to_mesh.t)); };
 
@@ -194,7 +263,7 @@ Status fit_local(const std::vector<Vec3>& points, const TriMesh& mesh, const Mes
         if (local[t[k]] < 0) {
           local[t[k]] = static_cast<int>(prob.rest.size());
           prob.rest.push_back(mesh.positions[t[k]]);
-          prob.moving.push_back(inside[bi][t[k]]);
+          prob.weight.push_back(inside[bi][t[k]] ? 1.0 : 0.0);
         }
         lt[k] = local[t[k]];
       }
@@ -216,7 +285,7 @@ Status fit_local(const std::vector<Vec3>& points, const TriMesh& mesh, const Mes
     fit.points = static_cast<int>(prob.points.size());
     BoxTransform T;
     for (size_t i = 0; i < prob.rest.size(); ++i)
-      if (prob.moving[i]) {
+      if (prob.weight[i] > 0) {
         T.c += prob.rest[i];
         ++fit.vertices;
       }
@@ -227,36 +296,7 @@ Status fit_local(const std::vector<Vec3>& points, const TriMesh& mesh, const Mes
       // feature keeps the shape the alignment gave it.
       fit.skipped = true;
     } else {
-      BoxProblem::Eval ev, trial;
-      prob.evaluate(T, ev);
-      fit.energies.push_back(ev.energy);
-      double damping = 1e-4;
-      for (int it = 0; it < options.max_iterations; ++it) {
-        Mat12 JtJ;
-        Vec12 Jtr;
-        prob.linearize(T, ev, JtJ, Jtr);
-        bool accepted = false;
-        for (int tries = 0; tries < 10 && !accepted; ++tries) {
-          Mat12 H = JtJ;
-          for (int k = 0; k < 12; ++k) H(k, k) += damping * (JtJ(k, k) + 1e-12);
-          const Vec12 delta = H.ldlt().solve(-Jtr);
-          if (!delta.allFinite()) break;
-          const BoxTransform Tn = T.plus(delta);
-          prob.evaluate(Tn, trial);
-          if (trial.energy < ev.energy) {
-            accepted = true;
-            T = Tn;
-            std::swap(ev, trial);
-            damping = std::max(1e-7, damping / 3);
-          } else {
-            damping *= 4;
-          }
-        }
-        if (!accepted) break;
-        const double previous = fit.energies.back();
-        fit.energies.push_back(ev.energy);
-        if ((previous - ev.energy) < options.relative_tolerance * previous) break;
-      }
+      minimize(prob, RegionMotion::Affine, options, T, fit);
     }
     transforms[bi] = T;
     // Express about the origin for callers: c + A (y - c) + t = A y + (c - A c + t).
@@ -299,6 +339,124 @@ Status fit_local(const std::vector<Vec3>& points, const TriMesh& mesh, const Mes
   }
   report(progress, "local_fitting", 1.0);
   return Status::success();
+}
+
+double SoftRegion::radius(const Vec3& generic_point) const {
+  return ((generic_point - center).array() / radii.array()).matrix().norm();
+}
+
+double SoftRegion::weight(const Vec3& generic_point) const {
+  const double rho = radius(generic_point);
+  if (rho <= 1) return 1;
+  if (rho >= falloff) return 0;
+  const double u = (rho - 1) / (falloff - 1);
+  return 1 - u * u * (3 - 2 * u);
+}
+
+Status eye_region(const TriMesh& generic, const HeadAnnotations& ann, const EyeRegionOptions& options,
+                  SoftRegion& out) {
+  out = SoftRegion{};
+  if (!(options.falloff > 1) || !std::isfinite(options.falloff) ||
+      !(options.radii_per_eye_distance.array() > 0).all() || !options.radii_per_eye_distance.allFinite() ||
+      !(options.data_extent > 0) || !std::isfinite(options.data_extent))
+    return Status::error(ErrorCode::InvalidInput, "eye region: radii must be positive and the falloff above 1");
+  Vec3 centroid[2];
+  const std::vector<int>* rims[2] = {&ann.eye_left.rim, &ann.eye_right.rim};
+  for (int e = 0; e < 2; ++e) {
+    if (rims[e]->empty()) return Status::error(ErrorCode::InvalidInput, "eye region: the head has no eye rim");
+    centroid[e] = Vec3::Zero();
+    for (int v : *rims[e]) {
+      if (v < 0 || v >= generic.num_vertices())
+        return Status::error(ErrorCode::InvalidInput, "eye region: eye rim vertex out of range");
+      centroid[e] += generic.positions[v];
+    }
+    centroid[e] /= double(rims[e]->size());
+  }
+  const double distance = (centroid[0] - centroid[1]).norm();
+  if (!(distance > 0) || !std::isfinite(distance))
+    return Status::error(ErrorCode::InvalidInput, "eye region: the two eye rims coincide");
+  out.name = "eyes";
+  out.center = 0.5 * (centroid[0] + centroid[1]);
+  out.radii = distance * options.radii_per_eye_distance;
+  out.falloff = options.falloff;
+  out.data_extent = options.data_extent;
+  out.motion = options.motion;
+  return Status::success();
+}
+
+Status fit_soft_region(const std::vector<Vec3>& points, const TriMesh& mesh, const MeshTopology& topology,
+                       const SoftRegion& region, const AffineMap& generic_to_mesh, const LocalFitOptions& options,
+                       TriMesh& out, BoxFit& result, const ProgressFn& progress) {
+  result = BoxFit{};
+  result.name = region.name;
+  const int nv = mesh.num_vertices();
+  Status st = check_mesh_and_frame(mesh, topology, generic_to_mesh, "soft region fit");
+  if (!st) return st;
+  if (!(region.falloff > 1) || !(region.radii.array() > 0).all() || !region.center.allFinite() ||
+      !region.radii.allFinite() || !std::isfinite(region.falloff) || !(region.data_extent > 0) ||
+      !std::isfinite(region.data_extent))
+    return Status::error(ErrorCode::InvalidInput, "soft region fit: region '" + region.name +
+                                                      "' needs positive radii and data extent and a falloff above 1");
+  if (!report(progress, "local_fitting", 0.0)) return Status::error(ErrorCode::Cancelled, "local fit cancelled");
+  const Mat3 A_inv = generic_to_mesh.A.inverse();
+  auto to_generic = [&](const Vec3& p) { return Vec3(A_inv * (p - generic_to_mesh.t)); };
+
+  std::vector<double> weight(nv);
+  for (int v = 0; v < nv; ++v) weight[v] = region.weight(to_generic(mesh.positions[v]));
+
+  // The region's mesh: triangles with a moving corner (their still corners
+  // are the ring outside the falloff).
+  BoxProblem prob;
+  prob.stretch_k = options.stretch_weight;
+  std::vector<int> local(nv, -1);
+  for (const Tri& t : mesh.triangles) {
+    if (weight[t[0]] <= 0 && weight[t[1]] <= 0 && weight[t[2]] <= 0) continue;
+    Tri lt;
+    for (int k = 0; k < 3; ++k) {
+      if (local[t[k]] < 0) {
+        local[t[k]] = static_cast<int>(prob.rest.size());
+        prob.rest.push_back(mesh.positions[t[k]]);
+        prob.weight.push_back(weight[t[k]]);
+      }
+      lt[k] = local[t[k]];
+    }
+    prob.triangles.push_back(lt);
+  }
+  // E_stretch on the edges that move fully: it holds the scale, while the
+  // falloff's edges stretch by design.
+  for (const Edge& e : topology.edges)
+    if (local[e.v0] >= 0 && local[e.v1] >= 0 && weight[e.v0] >= 1 && weight[e.v1] >= 1) {
+      prob.edges.push_back({local[e.v0], local[e.v1]});
+      prob.rest_lengths.push_back((mesh.positions[e.v0] - mesh.positions[e.v1]).norm());
+    }
+  std::vector<int> idx;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (!finite(points[i])) return Status::error(ErrorCode::InvalidInput, "soft region fit: non-finite scan point");
+    if (region.radius(to_generic(points[i])) <= region.data_extent) idx.push_back(static_cast<int>(i));
+  }
+  if (static_cast<int>(idx.size()) > options.max_points_per_box) {
+    std::mt19937 rng(options.seed);
+    std::shuffle(idx.begin(), idx.end(), rng);
+    idx.resize(options.max_points_per_box);
+  }
+  for (int i : idx) prob.points.push_back(points[i]);
+  result.points = static_cast<int>(prob.points.size());
+  for (int v = 0; v < nv; ++v) result.vertices += weight[v] > 0;
+
+  BoxTransform T;
+  T.c = generic_to_mesh.apply(region.center);
+  if (prob.triangles.empty() || result.points < options.min_points_per_box) {
+    result.skipped = true;  // nothing to fit against: the region stays where the alignment put it
+  } else {
+    minimize(prob, region.motion, options, T, result);
+  }
+  result.transform.A = T.A;
+  result.transform.t = T.c - T.A * T.c + T.t;
+  out = mesh;
+  if (!result.skipped)
+    for (int v = 0; v < nv; ++v)
+      if (weight[v] > 0) out.positions[v] += weight[v] * (T.apply(mesh.positions[v]) - mesh.positions[v]);
+  return Status::success();  // no "done" report: fit_local follows and reports the stage from 0 to 1
 }
 
 }  // namespace lk

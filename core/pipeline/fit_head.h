@@ -9,7 +9,8 @@
 //      Before that, the orientation is checked by coarse ICP from every up
 //      axis and eight yaws (guess_orientation), so a scan in another
 //      convention is turned round with a note, or refused with a hint.
-//   2. local fitting       fit/local_fit.h             (Sec. 4.2)
+//   2. local fitting       fit/local_fit.h             (Sec. 4.2), after
+//      moving the eye region (ours, same header) to the scan's eyes
 //   3. global fitting      fit/global_fit.h            (Sec. 4.3)
 //   4. subdivision         multires/multires.h         (Sec. 5)
 //      then displacements that turn a triangle over or collapse it are
@@ -79,6 +80,11 @@ struct FitHeadOptions {
   OrientationCheck orientation_check = OrientationCheck::Auto;
   OrientationOptions orientation;
   LocalFitOptions local;
+  // Before the feature boxes, the eyes and brows move as one soft region
+  // (fit/local_fit.h: translation and scale, fitted to the scan) when the
+  // head has eye rims; false keeps them where the alignment put them.
+  bool fit_eye_region = true;
+  EyeRegionOptions eye_region;
   GlobalFitOptions global;
   // Displacement measurement; min_points raised from 3 to 12 so the sparse
   // junk a scanner returns from hair (a few points per normal line) counts
@@ -137,6 +143,7 @@ struct FitHeadResult {
   bool orientation_checked = false;
   std::vector<std::string> notes;  // what the user should know (auto-orientation, partial scan)
   LocalFitResult local_fit;
+  BoxFit eye_fit;               // the eye region (skipped when off or the head has no eye rims)
   GlobalFitResult global_fit;
   double near_fraction = 0;     // share of points near the aligned head (sanity check)
   int pocket_points = 0;        // fitted points nearest to an eye socket / the mouth bag: not fitted

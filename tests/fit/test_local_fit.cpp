@@ -118,3 +118,147 @@ TEST_CASE("local fit leaves a box without data alone and rejects bad input") {
   bad.landmarks = {-1};
   CHECK(fit_local(pts, c.mesh, c.topo, {bad}, AffineMap{}, 0.3, {}, out, r).code == ErrorCode::InvalidInput);
 }
+
+namespace {
+
+// Two "eyes": Gaussian dents in the front of an ellipsoid (a head-sized
+// 0.08 x 0.11 x 0.10 m), under a ridge (the "brow") above them. The truth
+// has the same features centred `drop` metres lower; the surface between
+// them and around is the same ellipsoid.
+TriMesh eye_ellipsoid(double drop) {
+  TriMesh m = test::icosphere(4);
+  const Vec3 r(0.08, 0.11, 0.10);
+  for (Vec3& p : m.positions) {
+    const Vec3 u = p.normalized();
+    Vec3 q(u.x() * r.x(), u.y() * r.y(), u.z() * r.z());
+    double h = 0;
+    if (q.z() > 0) {
+      for (double side : {-1.0, 1.0}) {
+        const double dx = q.x() - side * 0.032, dy = q.y() - (0.02 - drop);
+        h -= 0.008 * std::exp(-(dx * dx + dy * dy) / (2 * 0.010 * 0.010));
+      }
+      const double by = q.y() - (0.038 - drop);
+      h += 0.006 * std::exp(-(by * by) / (2 * 0.006 * 0.006)) * std::exp(-(q.x() * q.x()) / (2 * 0.05 * 0.05));
+    }
+    p = q + h * u;
+  }
+  return m;
+}
+
+SoftRegion eye_ellipsoid_region(RegionMotion motion) {
+  SoftRegion region;
+  region.name = "eyes";
+  region.center = Vec3(0, 0.025, 0.09);
+  region.radii = Vec3(0.055, 0.025, 0.04);
+  region.motion = motion;
+  return region;
+}
+
+// Mean distance (m) from the mesh's front-feature vertices (the dents and
+// the ridge, |x| < 0.05, 0 < y < 0.05 before the move) to the truth surface.
+double feature_error(const TriMesh& fitted, const TriMesh& original, const TriMesh& truth) {
+  ClosestPointTree tree(truth);
+  double sum = 0;
+  int n = 0;
+  for (int v = 0; v < original.num_vertices(); ++v) {
+    const Vec3& p = original.positions[v];
+    if (p.z() > 0.05 && std::abs(p.x()) < 0.05 && p.y() > 0 && p.y() < 0.05) {
+      sum += std::sqrt(tree.closest(fitted.positions[v]).squared_distance);
+      ++n;
+    }
+  }
+  return sum / std::max(1, n);
+}
+
+}  // namespace
+
+TEST_CASE("soft region: eyes 8 mm lower than the template are found by translation and scale") {
+  const TriMesh mesh = eye_ellipsoid(0.0), truth = eye_ellipsoid(0.008);
+  MeshTopology topo;
+  REQUIRE(build_topology(mesh, topo).ok());
+  const auto pts = test::sample_surface(truth, 40000, 0.0002, 5);
+  for (RegionMotion motion : {RegionMotion::TranslationScale, RegionMotion::Translation}) {
+    TriMesh out;
+    BoxFit fit;
+    REQUIRE(fit_soft_region(pts, mesh, topo, eye_ellipsoid_region(motion), AffineMap{}, LocalFitOptions{}, out,
+                            fit).ok());
+    CHECK_FALSE(fit.skipped);
+    CHECK(fit.points > 300);
+    REQUIRE(fit.energies.size() >= 3);
+    for (size_t i = 1; i < fit.energies.size(); ++i) CHECK(fit.energies[i] <= fit.energies[i - 1]);
+    // The transform is what the motion allows: A = s I (s = 1 for a translation).
+    const double s = fit.transform.A(0, 0);
+    CHECK((fit.transform.A - s * Mat3::Identity()).norm() < 1e-12);
+    if (motion == RegionMotion::Translation) CHECK(s == 1.0);
+    const double before = feature_error(mesh, mesh, truth), after = feature_error(out, mesh, truth);
+    INFO("motion " << int(motion) << ": shift (" << 1000 * fit.transform.t.transpose() << ") mm, scale " << s
+                   << "; features to truth " << 1000 * before << " -> " << 1000 * after << " mm");
+    // The dents moved down by about the 8 mm, the features sit on the truth.
+    CHECK(fit.transform.t.y() < -0.006);
+    CHECK(fit.transform.t.y() > -0.010);
+    CHECK(before > 0.0015);
+    CHECK(after < 0.35 * before);
+    // The back of the ellipsoid (weight 0) does not move at all.
+    for (int v = 0; v < mesh.num_vertices(); ++v)
+      if (mesh.positions[v].z() < 0) REQUIRE(out.positions[v] == mesh.positions[v]);
+  }
+}
+
+TEST_CASE("soft region: weights fall smoothly to zero, no data leaves the mesh alone, bad input is refused") {
+  SoftRegion region = eye_ellipsoid_region(RegionMotion::TranslationScale);
+  CHECK(region.weight(region.center) == 1.0);
+  CHECK(region.weight(region.center + Vec3(0, 0.025, 0)) == 1.0);  // on the core ellipsoid
+  const double mid = region.weight(region.center + Vec3(0, 0.0375, 0));
+  CHECK(mid == Approx(0.5));
+  CHECK(region.weight(region.center + Vec3(0.11, 0, 0)) == 0.0);  // at falloff x radius
+  double previous = 1;
+  for (double y = 0.025; y <= 0.05; y += 0.001) {
+    const double w = region.weight(region.center + Vec3(0, y, 0));
+    CHECK(w <= previous);
+    previous = w;
+  }
+
+  const TriMesh mesh = eye_ellipsoid(0.0);
+  MeshTopology topo;
+  REQUIRE(build_topology(mesh, topo).ok());
+  std::vector<Vec3> behind = test::sample_surface(mesh, 2000, 0.0, 6);
+  behind.erase(std::remove_if(behind.begin(), behind.end(), [](const Vec3& p) { return p.z() > -0.02; }),
+               behind.end());
+  TriMesh out;
+  BoxFit fit;
+  REQUIRE(fit_soft_region(behind, mesh, topo, region, AffineMap{}, LocalFitOptions{}, out, fit).ok());
+  CHECK(fit.skipped);
+  for (int v = 0; v < mesh.num_vertices(); ++v) REQUIRE(out.positions[v] == mesh.positions[v]);
+
+  const auto pts = test::sample_surface(mesh, 2000, 0.0, 7);
+  SoftRegion bad = region;
+  bad.falloff = 1.0;
+  CHECK(fit_soft_region(pts, mesh, topo, bad, AffineMap{}, {}, out, fit).code == ErrorCode::InvalidInput);
+  bad = region;
+  bad.radii.y() = 0;
+  CHECK(fit_soft_region(pts, mesh, topo, bad, AffineMap{}, {}, out, fit).code == ErrorCode::InvalidInput);
+  AffineMap singular;
+  singular.A.setZero();
+  CHECK(fit_soft_region(pts, mesh, topo, region, singular, {}, out, fit).code == ErrorCode::InvalidInput);
+  std::vector<Vec3> nan_pts = pts;
+  nan_pts[5].x() = std::nan("");
+  CHECK(fit_soft_region(nan_pts, mesh, topo, region, AffineMap{}, {}, out, fit).code == ErrorCode::InvalidInput);
+}
+
+TEST_CASE("eye region: centred between the eye rims, sized by their distance") {
+  TriMesh mesh;
+  mesh.positions = {Vec3(0.03, 0.02, 0.08), Vec3(0.034, 0.02, 0.08), Vec3(-0.03, 0.02, 0.08),
+                    Vec3(-0.034, 0.02, 0.08)};
+  mesh.triangles = {{0, 1, 2}, {1, 3, 2}};
+  HeadAnnotations ann;
+  ann.eye_left.rim = {0, 1};
+  ann.eye_right.rim = {2, 3};
+  SoftRegion region;
+  REQUIRE(eye_region(mesh, ann, EyeRegionOptions{}, region).ok());
+  CHECK(region.center.isApprox(Vec3(0, 0.02, 0.08)));
+  CHECK(region.radii.x() == Approx(0.064 * EyeRegionOptions{}.radii_per_eye_distance.x()));
+  ann.eye_right.rim.clear();
+  CHECK(eye_region(mesh, ann, EyeRegionOptions{}, region).code == ErrorCode::InvalidInput);
+  ann.eye_right.rim = {7};
+  CHECK(eye_region(mesh, ann, EyeRegionOptions{}, region).code == ErrorCode::InvalidInput);
+}

@@ -11,6 +11,10 @@
 #include "test_data.h"
 
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+#include <sstream>
 
 using namespace lk;
 
@@ -61,7 +65,78 @@ double truth_face_to_mesh(const Truth& t, const TriMesh& mesh, double max_depth_
   return point_to_surface_stats(face, mesh, 1.0).mean;
 }
 
+Vec3 rim_centroid(const TriMesh& mesh, const std::vector<int>& rim) {
+  Vec3 c = Vec3::Zero();
+  for (int v : rim) c += mesh.positions[v];
+  return c / double(rim.size());
+}
+
+// A synthetic head whose eyes, lids and brows sit 8 mm lower than the
+// generic head's proportions put them: a smooth field, full within 22 mm
+// of either eye socket's centre and gone at 45 mm, so the face between
+// (nose bridge, upper cheeks) stretches and nothing folds.
+GenericHead head_with_eyes_lowered(const GenericHead& generic, double drop) {
+  GenericHead head;
+  REQUIRE(synthesize_head(generic, 4, SynthHeadOptions{}, head).ok());
+  const Vec3 eyes[2] = {head.annotations.eye_left.center, head.annotations.eye_right.center};
+  for (Vec3& p : head.mesh.positions) {
+    const double d = std::min((p - eyes[0]).norm(), (p - eyes[1]).norm());
+    const double u = std::clamp((d - 0.022) / (0.045 - 0.022), 0.0, 1.0);
+    p.y() -= drop * (1 - u * u * (3 - 2 * u));
+  }
+  head.annotations.eye_left.center.y() -= drop;
+  head.annotations.eye_right.center.y() -= drop;
+  return head;
+}
+
 }  // namespace
+
+TEST_CASE("fit_head: eyes 8 mm lower than the generic head's land on the scan's eyes") {
+  const GenericHead& generic = truth().generic;
+  const GenericHead head = head_with_eyes_lowered(generic, 0.008);
+  TruthSurface surface;
+  REQUIRE(make_truth_surface(head, 1, TruthOptions{}, surface).ok());
+  ScannerOptions so;
+  so.target_points = 30000;
+  so.hair_triangles = surface.hair;
+  PointCloud scan;
+  REQUIRE(scan_virtual(surface.mesh, so, 5, scan).ok());
+  const std::vector<int>* rims[2] = {&generic.annotations.eye_left.rim, &generic.annotations.eye_right.rim};
+  double error[2][2] = {}, local_error[2][2] = {};  // [eye region off, on][eye]: control mesh, after local fitting
+  std::ostringstream where;
+  for (int on = 0; on < 2; ++on) {
+    FitHeadOptions o = quick();
+    o.fit_eye_region = on == 1;
+    FitHeadResult r;
+    const Status st = fit_head(scan, generic, o, r);
+    INFO(st.message);
+    REQUIRE(st.ok());
+    CHECK(r.eye_fit.skipped == (on == 0));
+    for (int e = 0; e < 2; ++e) {
+      const Vec3 truth_rim = rim_centroid(head.mesh, *rims[e]);
+      const Vec3 d = rim_centroid(r.control, *rims[e]) - truth_rim;
+      const Vec3 dl = rim_centroid(r.local, *rims[e]) - truth_rim;
+      error[on][e] = d.norm();
+      local_error[on][e] = dl.norm();
+      where << "eye region " << (on ? "on" : "off") << ", eye " << e << ": fitted rim off by (" << 1000 * d.transpose()
+            << ") mm, after local fitting (" << 1000 * dl.transpose() << "), aligned generic's ("
+            << 1000 * (rim_centroid(r.aligned, *rims[e]) - truth_rim).transpose() << ") mm\n";
+    }
+    CHECK(turned_triangles(r.aligned.positions, r.control).empty());
+    CHECK(r.stages[3].distance.mean_pct < 0.15);
+  }
+  INFO(where.str());
+  // The alignment leaves the generic eyes about 6 mm high; the paper's local
+  // fitting keeps them there (no box holds the eyes), the eye region brings
+  // them within 2.5 mm (1.8), and the fitted control mesh's rims land within 2 mm
+  // (measured: 0.5 and 0.8 mm; global fitting alone gets to 3.7-4.1 mm at
+  // a9937b5, closer with later global-fit changes).
+  for (int e = 0; e < 2; ++e) {
+    CHECK(local_error[0][e] > 0.004);
+    CHECK(local_error[1][e] < 0.0025);
+    CHECK(error[1][e] < 0.002);
+  }
+}
 
 TEST_CASE("coverage: whole heads are deep, face captures and the front of a head are shallow") {
   const Truth& t = truth();
@@ -198,4 +273,36 @@ TEST_CASE("fit_head: the real James (menpo3d face capture in mm)") {
   CHECK(r.global_fit.turned_before > 0);
   CHECK(r.global_fit.turned_after == 0);
   CHECK(turned_triangles(r.aligned.positions, r.control).empty());
+
+  // The eyes land on his eyes: the eye rims' centroids against the centroids
+  // of the six iBUG landmarks around each eye (james.ljson; the fit does not
+  // read them). The alignment leaves the generic eyes 10 mm too high.
+  LK_REQUIRE_SHARED("head_scans/james_menpo3d/james.ljson");
+  std::ifstream file(lk::test::shared_data_dir() + "/head_scans/james_menpo3d/james.ljson");
+  nlohmann::json landmarks;
+  REQUIRE_NOTHROW(file >> landmarks);
+  const auto& group = landmarks["groups"]["LJSON"];
+  // iBUG "leye" is the eye on the image's left: the subject's right (-x).
+  const std::pair<const char*, const EyeSocket*> eyes[2] = {{"reye", &truth().generic.annotations.eye_left},
+                                                            {"leye", &truth().generic.annotations.eye_right}};
+  for (const auto& [label, socket] : eyes) {
+    Vec3 expected = Vec3::Zero();
+    int count = 0;
+    for (const auto& l : group["labels"])
+      if (l["label"] == label)
+        for (int i : l["mask"]) {
+          const auto& p = group["landmarks"]["points"][i];
+          expected += r.scan_to_head.apply(Vec3(p[0].get<double>(), p[1].get<double>(), p[2].get<double>()));
+          ++count;
+        }
+    REQUIRE(count == 6);
+    expected /= count;
+    const Vec3 aligned = rim_centroid(r.aligned, socket->rim) - expected;
+    const Vec3 fitted = rim_centroid(r.control, socket->rim) - expected;
+    INFO(label << ": rim centroid off by (" << 1000 * fitted.transpose() << ") mm, aligned generic's ("
+               << 1000 * aligned.transpose() << ") mm");
+    CHECK(aligned.y() > 0.008);
+    CHECK(std::abs(fitted.y()) < 0.003);
+    CHECK(fitted.norm() < 0.0045);
+  }
 }
