@@ -391,6 +391,8 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
     return it.e_dist + lambda * it.e_smooth + options.binding_weight * it.e_binding +
            options.constraint_weight * it.e_constraint + it.e_guard;
   };
+  Projection carried;     // the last round's projection at x
+  int carried_count = -1;  // ... of its first carried_count points of `order`
   for (int r = 0; r < rounds; ++r) {
     const bool final_pass = r >= sub_rounds;
     const double lambda = options.smooth_weights[std::min(r, sub_rounds - 1)];
@@ -401,8 +403,19 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
 
     // The trimming distance is fixed for the round so that the round
     // minimizes one well-defined energy.
+    // The previous round ended with the projection of its points at x (the
+    // accepted step's, or the round's first): the same points are not
+    // projected again, and a larger set starts its prefix from those hits.
     Projection proj;
-    project(points, set, work, x, 1e300, nullptr, proj);
+    if (carried_count == count) {
+      proj = std::move(carried);
+    } else if (carried_count > 0 && carried_count < count) {
+      std::vector<SurfacePoint> start(count);  // face -1: searched from scratch
+      std::copy(carried.hits.begin(), carried.hits.end(), start.begin());
+      project(points, set, work, x, 1e300, &start, proj);
+    } else {
+      project(points, set, work, x, 1e300, nullptr, proj);
+    }
     std::vector<double> d(proj.hits.size());
     for (size_t i = 0; i < d.size(); ++i) d[i] = std::sqrt(proj.hits[i].squared_distance);
     std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
@@ -626,6 +639,8 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       e_old = rec.energy_after;
       if (change < options.relative_tolerance) break;
     }
+    carried = std::move(proj);
+    carried_count = count;
   }
   result.rounds = rounds;
   result.turned_after = static_cast<int>(guard.turned(mesh.triangles, x).size());
