@@ -7,10 +7,10 @@
 #include <nanoflann.hpp>
 
 #include <algorithm>
-#include <cstdint>
 #include <unordered_map>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numeric>
 
 namespace lk {
@@ -21,6 +21,8 @@ namespace {
 
 // Not M_PI: it is not standard C++ (the wasm build's libc hides it).
 constexpr double kPi = 3.14159265358979323846;
+
+inline double sqr(double x) { return x * x; }
 
 struct CloudAdaptor {
   const std::vector<Vec3>& pts;
@@ -63,29 +65,6 @@ inline Quadric quadric_row(double u, double v) {
   Quadric row;
   row << 1, u, v, u * u, u * v, v * v;
   return row;
-}
-
-// Weighted least squares of the heights above the base surface, with a
-// ridge on every coefficient but c0: sum w_i (h_i - row_i . c)^2 + ridge * sum(w) * |c_1..5|^2. The ridge
-// pulls slope and curvature towards 0 where the points cannot determine them.
-bool fit_quadric(const std::vector<LinePoint>& pts, const std::vector<double>& weights, double scale, double ridge,
-                 Quadric& c) {
-  Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
-  Quadric rhs = Quadric::Zero();
-  double sum_w = 0;
-  for (size_t i = 0; i < pts.size(); ++i) {
-    if (!(weights[i] > 0)) continue;
-    const Quadric row = quadric_row(pts[i].u / scale, pts[i].v / scale);
-    A.noalias() += weights[i] * row * row.transpose();
-    rhs += weights[i] * row * pts[i].h;
-    sum_w += weights[i];
-  }
-  if (!(sum_w > 0)) return false;
-  for (int k = 1; k < 6; ++k) A(k, k) += std::max(ridge, 1e-9) * sum_w;
-  Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(A);
-  if (ldlt.info() != Eigen::Success) return false;
-  c = ldlt.solve(rhs);
-  return c.allFinite();
 }
 
 // The shape of the level's undisplaced surface around a vertex, as heights
@@ -173,18 +152,49 @@ BaseShape base_shape(const MultiresMesh& mesh, int level, int vertex, const Vec3
 }
 
 // Per-level constants of the measurement.
+// One footprint's estimate of the height of the sampled surface above the
+// vertex (before the support taper), with what its noise costs.
+struct FootprintFit {
+  double height = 0;
+  double taper = 1;
+  double radius = 0;
+  // var(height) = noise variance x variance_factor: the weighted least
+  // squares' (A^-1 B A^-1)_00, A = sum w x x^T (+ ridge), B = sum w^2 x x^T.
+  double variance_factor = 0;
+  // The noise variance from the residuals, sum w r^2 / (sum w - tr(A^-1 B))
+  // (the expectation of the numerator is sigma^2 times the denominator);
+  // -1 when the quadric leaves too few degrees of freedom to tell.
+  double noise_variance = -1;
+  int points = 0;  // in the footprint's disk (all sheets)
+  int sheets = 0;  // sheets the normal line crosses within the footprint
+};
+
+// Data support: the kernel-weighted centroid of the points `offset` (a
+// fraction of the radius) off the line gives the full displacement up to
+// support_full_offset, none from support_zero_offset on.
+double support_taper(double offset, const DisplacementOptions& opt) {
+  if (offset <= opt.support_full_offset) return 1.0;
+  const double x = std::clamp((opt.support_zero_offset - offset) /
+                                  std::max(opt.support_zero_offset - opt.support_full_offset, 1e-12),
+                              0.0, 1.0);
+  return x * x * (3 - 2 * x);  // smoothstep: no kink where the taper starts or ends
+}
+
 struct LevelGeometry {
   double min_radius;     // half the level's mean edge (or the fixed radius)
   double max_radius;     // no data beyond this
   double first_radius;   // first search: where footprint_points are expected
   double max_distance;   // half-length of the normal line
+  double edge;           // the level's mean edge length
   bool adaptive;
+  bool widen;            // footprints may widen against the noise on this level
 };
 
 struct Scratch {
   std::vector<std::pair<size_t, double>> matches;
-  std::vector<LinePoint> line_pts;
-  std::vector<double> weights, values;
+  std::vector<LinePoint> line_pts, pool;
+  std::vector<FootprintFit> fits;  // the footprints tried at one vertex, narrowest first
+  std::vector<double> weights, values, between_weights, residuals;
   std::vector<char> use;
   std::vector<std::pair<double, std::pair<size_t, size_t>>> sheets;
   RingWalk walk;
@@ -223,37 +233,68 @@ void heights_above(const BaseShape& base, double max_distance, std::vector<LineP
                  line_pts.end());
 }
 
-// Measures one vertex: the signed distance along n from p to the sampled
-// surface (already multiplied by the support taper), or false when the
-// footprint holds too few points. radius_out/taper_out: what was used.
-bool measure_one(const CloudTree& tree, const std::vector<Vec3>& pts, const std::vector<Vec3>* point_normals,
-                 const MultiresMesh& mesh, int level, int vertex, const LevelGeometry& g,
-                 const DisplacementOptions& opt, Scratch& s, double& out, double& radius_out, double& taper_out) {
-  const Vec3& p = mesh.state.base[level][vertex];
-  const Vec3& n = mesh.state.normals[level][vertex];
-  if (n.squaredNorm() == 0) return false;  // no normal (isolated vertex)
-  const Vec3 e1 = n.unitOrthogonal(), e2 = n.cross(e1);
-  const int min_points = std::max(1, opt.min_points);
-
-  // Footprint: the disk holding footprint_points points within the line's
-  // reach of the base surface (at least half an edge, at most max_radius).
-  // The first search usually holds them; a sparser neighbourhood is
-  // searched again at the largest radius. Each step depends continuously on
-  // the vertex's position (the k-th nearest point, a kernel that vanishes at
-  // the rim), so neighbouring vertices get nearly the same footprint.
-  const size_t k = static_cast<size_t>(std::max(opt.footprint_points, 1));
-  double radius = g.first_radius;
-  gather(tree, pts, point_normals, p, n, e1, e2, radius, g.max_distance, opt.min_normal_agreement, s);
-  BaseShape base = base_shape(mesh, level, vertex, e1, e2, n, radius, s.walk);
-  heights_above(base, g.max_distance, s.line_pts);
-  // A first search without any point is a hole or off the data: the wider
-  // search could only find its edge, where the support taper gives ~0.
-  if (g.adaptive && s.line_pts.size() < k && !s.line_pts.empty() && radius < g.max_radius) {
-    radius = g.max_radius;
-    gather(tree, pts, point_normals, p, n, e1, e2, radius, g.max_distance, opt.min_normal_agreement, s);
-    base = base_shape(mesh, level, vertex, e1, e2, n, radius, s.walk);
-    heights_above(base, g.max_distance, s.line_pts);
+// Weighted least squares of the heights above the base surface, with a
+// ridge on every coefficient but c0: sum w_i (h_i - row_i . c)^2 + ridge *
+// sum(w) * |c_1..5|^2. The ridge pulls slope and curvature towards 0 where
+// the points cannot determine them. With `fit`, also c0's variance factor
+// and the noise variance (see FootprintFit).
+bool fit_quadric(const std::vector<LinePoint>& pts, const std::vector<double>& weights, double scale, double ridge,
+                 Quadric& c, FootprintFit* fit = nullptr) {
+  // Lower triangles only (the matrices are symmetric): this is the
+  // innermost loop of the measurement.
+  Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero(), B = Eigen::Matrix<double, 6, 6>::Zero();
+  Quadric rhs = Quadric::Zero();
+  double sum_w = 0;
+  const double inv_scale = 1.0 / scale;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    const double w = weights[i];
+    if (!(w > 0)) continue;
+    const Quadric row = quadric_row(pts[i].u * inv_scale, pts[i].v * inv_scale);
+    const Quadric weighted = w * row;
+    for (int b = 0; b < 6; ++b)
+      for (int a = b; a < 6; ++a) A(a, b) += weighted[a] * row[b];
+    if (fit) {
+      const Quadric weighted2 = w * weighted;
+      for (int b = 0; b < 6; ++b)
+        for (int a = b; a < 6; ++a) B(a, b) += weighted2[a] * row[b];
+    }
+    rhs += weighted * pts[i].h;
+    sum_w += w;
   }
+  if (!(sum_w > 0)) return false;
+  for (int k = 1; k < 6; ++k) A(k, k) += std::max(ridge, 1e-9) * sum_w;
+  Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(A);  // reads the lower triangle
+  if (ldlt.info() != Eigen::Success) return false;
+  c = ldlt.solve(rhs);
+  if (!c.allFinite()) return false;
+  if (fit) {
+    B.triangularView<Eigen::StrictlyUpper>() = B.transpose();
+    const Quadric z = ldlt.solve(Quadric::Unit(0));  // A^-1 e0 (A is symmetric)
+    fit->variance_factor = z.dot(B * z);
+    const double dof = sum_w - ldlt.solve(B).trace();
+    double sum_wr2 = 0;
+    for (size_t i = 0; i < pts.size(); ++i) {
+      if (!(weights[i] > 0)) continue;
+      const double r = pts[i].h - quadric_row(pts[i].u * inv_scale, pts[i].v * inv_scale).dot(c);
+      sum_wr2 += weights[i] * r * r;
+    }
+    // Fewer than about one weighted point beyond the six coefficients: the
+    // residuals say nothing about the noise.
+    fit->noise_variance = dof > 0.1 * sum_w && std::isfinite(dof) ? sum_wr2 / dof : -1.0;
+  }
+  return true;
+}
+
+// The footprint of k points within the pool (the points gathered within
+// pool_radius of the line, heights above `base` fitted over pool_radius):
+// the disk holding the k nearest (at least min_radius), its nearest sheet,
+// a robust quadric fit. False when the footprint holds no sheet of enough
+// points.
+bool fit_footprint(const MultiresMesh& mesh, int level, int vertex, const Vec3& e1, const Vec3& e2, const Vec3& n,
+                   const LevelGeometry& g, const DisplacementOptions& opt, size_t k, double pool_radius,
+                   Scratch& s, FootprintFit& out) {
+  const int min_points = std::max(1, opt.min_points);
+  double radius = pool_radius;
   if (g.adaptive && s.line_pts.size() >= k) {
     std::nth_element(s.line_pts.begin(), s.line_pts.begin() + (k - 1), s.line_pts.end(),
                      [](const LinePoint& a, const LinePoint& b) { return a.rho2 < b.rho2; });
@@ -270,13 +311,14 @@ bool measure_one(const CloudTree& tree, const std::vector<Vec3>& pts, const std:
                                       [footprint2](const LinePoint& q) { return !(q.rho2 < footprint2); }),
                        s.line_pts.end());
       if (reshape) {
-        base = base_shape(mesh, level, vertex, e1, e2, n, radius, s.walk);
+        const BaseShape base = base_shape(mesh, level, vertex, e1, e2, n, radius, s.walk);
         heights_above(base, g.max_distance, s.line_pts);
       }
     }
   }
   const double r2 = radius * radius;
-  if (static_cast<int>(s.line_pts.size()) < min_points) return false;
+  out.points = static_cast<int>(s.line_pts.size());
+  if (out.points < min_points) return false;
   // Sheets: the line may cross the scan more than once (lips, ear rims,
   // lids). Sorted by height above the base surface, the points of one sheet
   // follow each other closely however much the sheet departs from the base
@@ -299,6 +341,7 @@ bool measure_one(const CloudTree& tree, const std::vector<Vec3>& pts, const std:
     s.sheets.push_back({nearest, {i, j}});
     i = j;
   }
+  out.sheets = static_cast<int>(s.sheets.size());
   std::sort(s.sheets.begin(), s.sheets.end(),
             [](const auto& a, const auto& b) { return a.first < b.first; });
   s.use.assign(count, 0);
@@ -307,55 +350,203 @@ bool measure_one(const CloudTree& tree, const std::vector<Vec3>& pts, const std:
     const auto [first_point, end_point] = sheet.second;
     if (static_cast<int>(end_point - first_point) < min_points) continue;
     for (size_t i = 0; i < count; ++i) s.use[i] = i >= first_point && i < end_point;
-    s.values.clear();
     double sum_w = 0, cu = 0, cv = 0;
     for (size_t i = 0; i < count; ++i) {
       s.weights[i] = s.use[i] ? kernel(s.line_pts[i].rho2, r2) : 0.0;
       if (!s.use[i]) continue;
-      s.values.push_back(s.line_pts[i].h);
       sum_w += s.weights[i];
       cu += s.weights[i] * s.line_pts[i].u;
       cv += s.weights[i] * s.line_pts[i].v;
     }
     if (!(sum_w > 0)) continue;
-    const double fallback = median(s.values);
-    double h0 = fallback;
+    // Where the quadric fails: the sheet's median height.
+    auto fallback = [&] {
+      s.values.clear();
+      for (size_t i = 0; i < count; ++i)
+        if (s.use[i]) s.values.push_back(s.line_pts[i].h);
+      return median(s.values);
+    };
     // Data support: how far off the line the points' weighted centroid lies.
     const double offset = std::sqrt(cu * cu + cv * cv) / (sum_w * radius);
-    double taper = 1.0;
-    if (offset > opt.support_full_offset) {
-      const double x = std::clamp((opt.support_zero_offset - offset) /
-                                      std::max(opt.support_zero_offset - opt.support_full_offset, 1e-12),
-                                  0.0, 1.0);
-      taper = x * x * (3 - 2 * x);  // smoothstep: no kink where the taper starts or ends
-    }
+    const double taper = support_taper(offset, opt);
     Quadric c;
-    if (fit_quadric(s.line_pts, s.weights, radius, opt.ridge, c)) {
+    out.variance_factor = 0;
+    out.noise_variance = -1;
+    // The noise figures only where a wider footprint may be tried.
+    FootprintFit* noise_figures = g.adaptive && g.widen && opt.max_footprint_points > opt.footprint_points ? &out : nullptr;
+    double h0 = 0;
+    if (fit_quadric(s.line_pts, s.weights, radius, opt.ridge, c, noise_figures)) {
       h0 = c[0];
       // One robust pass: drop points far from the first fit (outliers, the
       // edge of another sheet), then refit.
       s.values.clear();
+      s.residuals.assign(count, 0.0);
       for (size_t i = 0; i < count; ++i)
-        if (s.weights[i] > 0)
-          s.values.push_back(std::abs(s.line_pts[i].h -
-                                      quadric_row(s.line_pts[i].u / radius, s.line_pts[i].v / radius).dot(c)));
+        if (s.weights[i] > 0) {
+          s.residuals[i] =
+              std::abs(s.line_pts[i].h - quadric_row(s.line_pts[i].u / radius, s.line_pts[i].v / radius).dot(c));
+          s.values.push_back(s.residuals[i]);
+        }
       const double limit = 4.0 * median(s.values) + 1e-12 * g.max_distance;
       int dropped = 0;
       for (size_t i = 0; i < count; ++i)
-        if (s.weights[i] > 0 &&
-            std::abs(s.line_pts[i].h - quadric_row(s.line_pts[i].u / radius, s.line_pts[i].v / radius).dot(c)) >
-                limit)
-          s.weights[i] = 0, ++dropped;
+        if (s.weights[i] > 0 && s.residuals[i] > limit) s.weights[i] = 0, ++dropped;
       // Nothing dropped: the refit would be the same fit.
-      if (dropped > 0 && fit_quadric(s.line_pts, s.weights, radius, opt.ridge, c)) h0 = c[0];
+      if (dropped > 0 && fit_quadric(s.line_pts, s.weights, radius, opt.ridge, c, noise_figures)) h0 = c[0];
+      if (!(std::abs(h0) <= g.max_distance)) h0 = fallback(), out.noise_variance = -1;
+    } else {
+      h0 = fallback();
     }
-    if (!(std::abs(h0) <= g.max_distance)) h0 = fallback;
-    out = taper * h0;
-    radius_out = radius;
-    taper_out = taper;
+    out.height = h0;
+    out.taper = taper;
+    out.radius = radius;
     return true;
   }
   return false;
+}
+
+// A footprint between the first and the widest: the kernel-weighted quadric
+// of the widest footprint's inliers (weights > 0: its sheet, its robust
+// pass) within `radius`.
+bool fit_between(const std::vector<LinePoint>& pts, const std::vector<double>& inliers, double radius,
+                 const LevelGeometry& g, const DisplacementOptions& opt, std::vector<double>& weights,
+                 FootprintFit& out) {
+  const double r2 = radius * radius;
+  weights.assign(pts.size(), 0.0);
+  double sum_w = 0, cu = 0, cv = 0;
+  int points = 0;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    points += pts[i].rho2 < r2;
+    if (!(inliers[i] > 0)) continue;
+    weights[i] = kernel(pts[i].rho2, r2);
+    sum_w += weights[i];
+    cu += weights[i] * pts[i].u;
+    cv += weights[i] * pts[i].v;
+  }
+  if (points < std::max(1, opt.min_points) || !(sum_w > 0)) return false;
+  Quadric c;
+  if (!fit_quadric(pts, weights, radius, opt.ridge, c, &out) || !(std::abs(c[0]) <= g.max_distance)) return false;
+  const double offset = std::sqrt(cu * cu + cv * cv) / (sum_w * radius);
+  const double taper = support_taper(offset, opt);
+  out.height = c[0];
+  out.taper = taper;
+  out.radius = radius;
+  out.points = points;
+  return true;
+}
+
+// Measures one vertex: the signed distance along n from p to the sampled
+// surface (already multiplied by the support taper), or false when the
+// footprint holds too few points. radius_out/taper_out/widened_out: what
+// was used.
+bool measure_one(const CloudTree& tree, const std::vector<Vec3>& pts, const std::vector<Vec3>* point_normals,
+                 const MultiresMesh& mesh, int level, int vertex, const LevelGeometry& g,
+                 const DisplacementOptions& opt, Scratch& s, double& out, double& radius_out, double& taper_out,
+                 char& widened_out) {
+  const Vec3& p = mesh.state.base[level][vertex];
+  const Vec3& n = mesh.state.normals[level][vertex];
+  if (n.squaredNorm() == 0) return false;  // no normal (isolated vertex)
+  const Vec3 e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+
+  // Footprint: the disk holding footprint_points points within the line's
+  // reach of the base surface (at least half an edge, at most max_radius).
+  // The first search usually holds them; a sparser neighbourhood is
+  // searched again at the largest radius. Each step depends continuously on
+  // the vertex's position (the k-th nearest point, a kernel that vanishes at
+  // the rim), so neighbouring vertices get nearly the same footprint.
+  const size_t k = static_cast<size_t>(std::max(opt.footprint_points, 1));
+  double pool_radius = g.first_radius;
+  gather(tree, pts, point_normals, p, n, e1, e2, pool_radius, g.max_distance, opt.min_normal_agreement, s);
+  BaseShape base = base_shape(mesh, level, vertex, e1, e2, n, pool_radius, s.walk);
+  heights_above(base, g.max_distance, s.line_pts);
+  // A first search without any point is a hole or off the data: the wider
+  // search could only find its edge, where the support taper gives ~0.
+  if (g.adaptive && s.line_pts.size() < k && !s.line_pts.empty() && pool_radius < g.max_radius) {
+    pool_radius = g.max_radius;
+    gather(tree, pts, point_normals, p, n, e1, e2, pool_radius, g.max_distance, opt.min_normal_agreement, s);
+    base = base_shape(mesh, level, vertex, e1, e2, n, pool_radius, s.walk);
+    heights_above(base, g.max_distance, s.line_pts);
+  }
+  const bool may_widen = g.adaptive && g.widen && opt.max_footprint_points > opt.footprint_points;
+  if (may_widen) s.pool = s.line_pts;
+  s.fits.clear();
+  s.fits.emplace_back();
+  if (!fit_footprint(mesh, level, vertex, e1, e2, n, g, opt, k, pool_radius, s, s.fits[0])) return false;
+  size_t chosen = 0;
+
+  // Noise: where the first footprint's height is less certain than
+  // noise_edge_fraction of the level's edge (dense noisy scans: neighbouring
+  // vertices a level-3 edge apart with independent errors tilt the faces,
+  // the orange-peel), footprints of 2, 4, ... times the points are fitted as
+  // well, and the widest one whose height agrees with every narrower one
+  // within noise_confidence standard errors is kept (Katkovnik's
+  // intersection of confidence intervals, the adaptive bandwidth choice of
+  // local polynomial regression): a wider footprint that bends away from
+  // the narrow ones is smoothing away real detail, not noise. The noise is
+  // the smaller of the two narrowest fits' residual estimates (the wider
+  // one has more degrees of freedom, the narrower less unfitted detail).
+  const double first_noise = s.fits[0].noise_variance;
+  const size_t first_points = static_cast<size_t>(s.fits[0].points);
+  // Only on one sheet: near thin features (lips, lids, ear rims) a wider
+  // footprint reaches the other sheet's edge.
+  if (may_widen && first_noise > 0 && s.fits[0].sheets == 1 && s.fits[0].radius > g.min_radius &&
+      2 * first_points <= static_cast<size_t>(opt.max_footprint_points) &&
+      first_noise * s.fits[0].variance_factor > sqr(opt.noise_edge_fraction * g.edge)) {
+    const double widest = std::max(s.fits[0].radius, opt.noise_max_radius_edges * g.edge);
+    // One search for the widest footprint: by the first one's density, with
+    // margin, within the widest radius.
+    size_t most = first_points;
+    while (2 * most <= static_cast<size_t>(opt.max_footprint_points)) most *= 2;
+    const double wanted = s.fits[0].radius * std::sqrt(static_cast<double>(most) / first_points) * 1.15;
+    if (s.pool.size() < most && pool_radius < widest) {
+      pool_radius = std::min(widest, wanted);
+      gather(tree, pts, point_normals, p, n, e1, e2, pool_radius, g.max_distance, opt.min_normal_agreement, s);
+      base = base_shape(mesh, level, vertex, e1, e2, n, pool_radius, s.walk);
+      heights_above(base, g.max_distance, s.line_pts);
+    } else {
+      s.line_pts = s.pool;
+    }
+    while (most > first_points && s.line_pts.size() < most) most /= 2;
+    // The widest footprint is fitted in full (its sheet, its robust pass);
+    // the ones between reuse its points and outliers (a kernel-weighted
+    // quadric each, no search, no sorting).
+    FootprintFit wide;
+    if (most > first_points && fit_footprint(mesh, level, vertex, e1, e2, n, g, opt, most, pool_radius, s, wide) &&
+        wide.radius > s.fits[0].radius && wide.radius <= widest * (1 + 1e-9) && wide.noise_variance > 0 &&
+        wide.sheets == 1) {
+      s.values.clear();
+      for (const LinePoint& q : s.line_pts) s.values.push_back(q.rho2);
+      for (size_t kj = 2 * first_points; kj < most; kj *= 2) {
+        std::nth_element(s.values.begin(), s.values.begin() + (kj - 1), s.values.end());
+        const double radius = std::max(g.min_radius, std::sqrt(s.values[kj - 1]) * (1.0 + 1e-9));
+        FootprintFit between;
+        if (!(radius > s.fits.back().radius) || !(radius < wide.radius) ||
+            !fit_between(s.line_pts, s.weights, radius, g, opt, s.between_weights, between))
+          break;
+        s.fits.push_back(between);
+      }
+      s.fits.push_back(wide);
+      // Intersection of the confidence intervals, narrowest first, with one
+      // noise level for all: the smaller of the two narrowest estimates.
+      const double noise = std::min(first_noise, s.fits[1].noise_variance > 0 ? s.fits[1].noise_variance : first_noise);
+      double lo = -std::numeric_limits<double>::infinity(), hi = std::numeric_limits<double>::infinity();
+      for (size_t j = 0; j < s.fits.size(); ++j) {
+        const FootprintFit& f = s.fits[j];
+        const double half = opt.noise_confidence * std::sqrt(noise * f.variance_factor);
+        lo = std::max(lo, f.height - half);
+        hi = std::min(hi, f.height + half);
+        if (lo > hi) break;
+        chosen = j;
+        if (noise * f.variance_factor <= sqr(opt.noise_edge_fraction * g.edge)) break;  // certain enough
+      }
+    }
+  }
+  const FootprintFit& fit = s.fits[chosen];
+  out = fit.taper * fit.height;
+  radius_out = fit.radius;
+  taper_out = fit.taper;
+  widened_out = chosen > 0;
+  return true;
 }
 
 }  // namespace
@@ -412,6 +603,11 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
                          "multires: negative radius/max radius/max distance or non-positive cluster fraction");
   if (!(options.isolated_density_ratio >= 0))
     return Status::error(ErrorCode::InvalidInput, "multires: isolated_density_ratio must be >= 0");
+  if (!(options.noise_edge_fraction > 0) || !(options.noise_max_radius_edges >= 0) ||
+      !(options.noise_confidence > 0) || options.max_footprint_points > (1 << 16) || options.noise_finest_levels < 0)
+    return Status::error(ErrorCode::InvalidInput,
+                         "multires: noise_edge_fraction and noise_confidence must be > 0, noise_max_radius_edges and "
+                         "noise_finest_levels >= 0, max_footprint_points <= 65536");
   if (options.footprint_points < 1 || !(options.ridge >= 0) || !(options.support_full_offset >= 0) ||
       !(options.support_zero_offset > options.support_full_offset))
     return Status::error(ErrorCode::InvalidInput,
@@ -448,7 +644,8 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
   if (stats)
     *stats = DisplacementStats{std::vector<int>(L + 1, 0),    std::vector<int>(L + 1, 0),
                                std::vector<double>(L + 1, 0), std::vector<double>(L + 1, 0),
-                               std::vector<int>(L + 1, 0),    std::vector<double>(L + 1, 0)};
+                               std::vector<int>(L + 1, 0),    std::vector<double>(L + 1, 0),
+                               std::vector<int>(L + 1, 0)};
   std::vector<Scratch> scratch(parallel_workers());  // one per worker
   mesh.state.base[0] = mesh.control;
   for (int l = 0; l <= L; ++l) {
@@ -475,6 +672,8 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
     const double typical_radius =
         g.adaptive ? std::clamp(spacing * std::sqrt(options.footprint_points / kPi), g.min_radius, g.max_radius)
                    : options.radius;
+    g.edge = edge;
+    g.widen = l > L - options.noise_finest_levels;
     g.max_distance = options.max_distance > 0 ? options.max_distance : 2.0 * std::max(edge, typical_radius);
     if (l > 0 && options.fine_line_edges > 0)
       g.max_distance = std::min(g.max_distance, options.fine_line_edges * std::max(edge, typical_radius));
@@ -489,12 +688,13 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
     // in parallel, then summed in vertex order.
     std::vector<char> found(nv - first, 0);
     std::vector<double> found_d(nv - first, 0.0), found_radius(nv - first, 0.0), found_taper(nv - first, 1.0);
+    std::vector<char> found_widened(nv - first, 0);
     parallel_for(first, nv, 256, [&](int v, int worker) {
       const int k = v - first;
       found[k] = measure_one(tree, *positions, point_normals, mesh, l, v, g, options, scratch[worker], found_d[k],
-                             found_radius[k], found_taper[k]);
+                             found_radius[k], found_taper[k], found_widened[k]);
     });
-    int measured = 0, tapered = 0;
+    int measured = 0, tapered = 0, widened = 0;
     double sum_abs = 0, max_abs = 0, sum_radius = 0;
     for (int v = first; v < nv; ++v) {
       const int k = v - first;
@@ -506,6 +706,7 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
       sum_abs += std::abs(d);
       max_abs = std::max(max_abs, std::abs(d));
       sum_radius += found_radius[k];
+      widened += found_widened[k];
     }
     if (stats) {
       stats->candidates[l] = nv - first;
@@ -514,6 +715,7 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
       stats->max_abs[l] = max_abs;
       stats->tapered[l] = tapered;
       stats->mean_radius[l] = measured ? sum_radius / measured : 0.0;
+      stats->widened[l] = widened;
     }
     evaluate_level(mesh, l);  // now with d_l
     if (l < L) {
