@@ -61,11 +61,6 @@ inline double kernel(double rho2, double radius2) {
 // by the footprint radius for conditioning. A quadric, not a plane or a
 // median: a curved surface sags by rho^2 / 2R across the footprint.
 using Quadric = Eigen::Matrix<double, 6, 1>;
-inline Quadric quadric_row(double u, double v) {
-  Quadric row;
-  row << 1, u, v, u * u, u * v, v * v;
-  return row;
-}
 
 // The shape of the level's undisplaced surface around a vertex, as heights
 // above its tangent plane: t = b0 u + b1 v + b2 u^2 + b3 uv + b4 v^2 (no
@@ -194,9 +189,9 @@ struct Scratch {
   std::vector<std::pair<size_t, double>> matches;
   std::vector<LinePoint> line_pts, pool;
   std::vector<FootprintFit> fits;  // the footprints tried at one vertex, narrowest first
-  std::vector<double> weights, values, between_weights, residuals;
-  std::vector<char> use;
+  std::vector<double> weights, values, residuals;
   std::vector<std::pair<double, std::pair<size_t, size_t>>> sheets;
+  std::vector<std::pair<double, double>> buckets;  // (lowest, highest) height
   RingWalk walk;
 };
 
@@ -218,7 +213,9 @@ void gather(const CloudTree& tree, const std::vector<Vec3>& pts, const std::vect
     if (rho2 > r2) continue;
     if (point_normals) {
       const Vec3& pn = (*point_normals)[m.first];
-      if (!(pn.dot(n) > min_normal_agreement * pn.norm())) continue;
+      // (No square root for the default agreement of 0: the sign suffices.)
+      const double needed = min_normal_agreement == 0 ? 0.0 : min_normal_agreement * pn.norm();
+      if (!(pn.dot(n) > needed)) continue;
     }
     s.line_pts.push_back({delta.dot(e1), delta.dot(e2), t, rho2, t});
   }
@@ -236,70 +233,130 @@ void heights_above(const BaseShape& base, double max_distance, std::vector<LineP
 // Weighted least squares of the heights above the base surface, with a
 // ridge on every coefficient but c0: sum w_i (h_i - row_i . c)^2 + ridge *
 // sum(w) * |c_1..5|^2. The ridge pulls slope and curvature towards 0 where
-// the points cannot determine them. With `fit`, also c0's variance factor
-// and the noise variance (see FootprintFit).
-bool fit_quadric(const std::vector<LinePoint>& pts, const std::vector<double>& weights, double scale, double ridge,
-                 Quadric& c, FootprintFit* fit = nullptr) {
-  // Lower triangles only (the matrices are symmetric): this is the
-  // innermost loop of the measurement.
-  Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero(), B = Eigen::Matrix<double, 6, 6>::Zero();
-  Quadric rhs = Quadric::Zero();
-  double sum_w = 0;
-  const double inv_scale = 1.0 / scale;
-  for (size_t i = 0; i < pts.size(); ++i) {
-    const double w = weights[i];
-    if (!(w > 0)) continue;
-    const Quadric row = quadric_row(pts[i].u * inv_scale, pts[i].v * inv_scale);
-    const Quadric weighted = w * row;
-    for (int b = 0; b < 6; ++b)
-      for (int a = b; a < 6; ++a) A(a, b) += weighted[a] * row[b];
-    if (fit) {
-      const Quadric weighted2 = w * weighted;
-      for (int b = 0; b < 6; ++b)
-        for (int a = b; a < 6; ++a) B(a, b) += weighted2[a] * row[b];
+// the points cannot determine them.
+//
+// The normal equations as sums over the points: the products row_a row_b of
+// the monomials (1, u, v, u^2, uv, v^2) are the 15 monomials u^i v^j of
+// degree <= 4, so each point adds to 15 sums (and 15 more with w^2 for the
+// noise figures), not to the 21 + 21 entries of two lower triangles. This
+// is the innermost loop of the measurement. Sums also let a robust pass
+// take its few outliers out instead of summing the rest again.
+struct QuadricSums {
+  double a[15] = {};   // sum w u^i v^j: A's entries
+  double b[15] = {};   // sum w^2 u^i v^j: B's entries (the noise figures)
+  double rhs[6] = {};  // sum w h row
+  // (u, v) already scaled by the footprint radius; sign -1 takes a point out.
+  void add(double u, double v, double h, double w, bool with_b, double sign = 1.0) {
+    const double uu = u * u, uv = u * v, vv = v * v;
+    const double m[15] = {1, u, v, uu, uv, vv, uu * u, uu * v, vv * u, vv * v, uu * uu, uu * uv, uu * vv, uv * vv, vv * vv};
+    const double sw = sign * w;
+    for (int k = 0; k < 15; ++k) a[k] += sw * m[k];
+    if (with_b) {
+      const double sw2 = sw * w;
+      for (int k = 0; k < 15; ++k) b[k] += sw2 * m[k];
     }
-    rhs += weighted * pts[i].h;
-    sum_w += w;
+    const double swh = sw * h;
+    for (int k = 0; k < 6; ++k) rhs[k] += swh * m[k];
   }
+  double sum_w() const { return a[0]; }
+};
+
+// The monomial of row_a row_b (index into QuadricSums::a, b).
+constexpr int kProduct[6][6] = {{0, 1, 2, 3, 4, 5},      {1, 3, 4, 6, 7, 8},      {2, 4, 5, 7, 8, 9},
+                                {3, 6, 7, 10, 11, 12},   {4, 7, 8, 11, 12, 13},   {5, 8, 9, 12, 13, 14}};
+
+inline double quadric_at(const Quadric& c, double u, double v) {
+  return c[0] + c[1] * u + c[2] * v + c[3] * u * u + c[4] * u * v + c[5] * v * v;
+}
+
+// Solves the sums' normal equations for c.
+bool solve_quadric(const QuadricSums& sums, double ridge, Quadric& c) {
+  const double sum_w = sums.sum_w();
   if (!(sum_w > 0)) return false;
+  Eigen::Matrix<double, 6, 6> A;
+  for (int b = 0; b < 6; ++b)
+    for (int a = b; a < 6; ++a) A(a, b) = sums.a[kProduct[a][b]];
   for (int k = 1; k < 6; ++k) A(k, k) += std::max(ridge, 1e-9) * sum_w;
   Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(A);  // reads the lower triangle
   if (ldlt.info() != Eigen::Success) return false;
-  c = ldlt.solve(rhs);
-  if (!c.allFinite()) return false;
-  if (fit) {
-    B.triangularView<Eigen::StrictlyUpper>() = B.transpose();
-    const Quadric z = ldlt.solve(Quadric::Unit(0));  // A^-1 e0 (A is symmetric)
-    fit->variance_factor = z.dot(B * z);
-    const double dof = sum_w - ldlt.solve(B).trace();
-    double sum_wr2 = 0;
-    for (size_t i = 0; i < pts.size(); ++i) {
-      if (!(weights[i] > 0)) continue;
-      const double r = pts[i].h - quadric_row(pts[i].u * inv_scale, pts[i].v * inv_scale).dot(c);
-      sum_wr2 += weights[i] * r * r;
+  c = ldlt.solve(Eigen::Map<const Quadric>(sums.rhs));
+  return c.allFinite();
+}
+
+// c0's variance factor, (A^-1 B A^-1)_00 (see FootprintFit), and with
+// `dof` the denominator of the noise estimate, sum w - tr(A^-1 B); the
+// numerator, sum w r^2, needs the points. Sums with B (with_b).
+bool variance_figures(const QuadricSums& sums, double ridge, double& variance_factor, double* dof) {
+  const double sum_w = sums.sum_w();
+  if (!(sum_w > 0)) return false;
+  Eigen::Matrix<double, 6, 6> A, B;
+  for (int b = 0; b < 6; ++b)
+    for (int a = 0; a < 6; ++a) {
+      A(a, b) = sums.a[kProduct[a][b]];
+      B(a, b) = sums.b[kProduct[a][b]];
     }
-    // Fewer than about one weighted point beyond the six coefficients: the
-    // residuals say nothing about the noise.
-    fit->noise_variance = dof > 0.1 * sum_w && std::isfinite(dof) ? sum_wr2 / dof : -1.0;
+  for (int k = 1; k < 6; ++k) A(k, k) += std::max(ridge, 1e-9) * sum_w;
+  Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(A);
+  if (ldlt.info() != Eigen::Success) return false;
+  const Quadric z = ldlt.solve(Quadric::Unit(0));  // A^-1 e0 (A is symmetric)
+  variance_factor = z.dot(B * z);
+  if (dof) *dof = sum_w - ldlt.solve(B).trace();
+  return std::isfinite(variance_factor);
+}
+
+// The noise variance from the residuals: sum w r^2 / dof. Fewer than about
+// one weighted point beyond the six coefficients: the residuals say nothing
+// about the noise (-1).
+double noise_variance(double sum_wr2, double dof, double sum_w) {
+  return dof > 0.1 * sum_w && std::isfinite(dof) ? sum_wr2 / dof : -1.0;
+}
+
+// Whether points sorted by height would hold a gap wider than `gap`
+// between neighbours, without sorting: in buckets `gap` tall, a bucket's
+// points are closer than that; a wider gap lies across an empty bucket or
+// between one bucket's highest and the next one's lowest point. Unknown
+// when the heights span too many buckets to be worth it.
+enum class SheetCount { One, More, Unknown };
+SheetCount count_sheets(const std::vector<LinePoint>& pts, double gap, std::vector<std::pair<double, double>>& buckets) {
+  if (pts.empty() || !(gap > 0)) return SheetCount::Unknown;
+  double lo = pts[0].h, hi = pts[0].h;
+  for (const LinePoint& q : pts) lo = std::min(lo, q.h), hi = std::max(hi, q.h);
+  if (hi - lo <= gap) return SheetCount::One;
+  const double span = (hi - lo) / gap;
+  if (!(span < static_cast<double>(pts.size()))) return SheetCount::Unknown;
+  const size_t n = static_cast<size_t>(span) + 1;
+  buckets.assign(n, {std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()});
+  for (const LinePoint& q : pts) {
+    auto& b = buckets[std::min(n - 1, static_cast<size_t>((q.h - lo) / gap))];
+    b.first = std::min(b.first, q.h);
+    b.second = std::max(b.second, q.h);
   }
-  return true;
+  double previous_highest = buckets[0].second;
+  for (size_t i = 1; i < n; ++i) {
+    if (buckets[i].first > buckets[i].second) return SheetCount::More;  // empty
+    if (buckets[i].first - previous_highest > gap) return SheetCount::More;
+    previous_highest = buckets[i].second;
+  }
+  return SheetCount::One;
 }
 
 // The footprint of k points within the pool (the points gathered within
 // pool_radius of the line, heights above `base` fitted over pool_radius):
 // the disk holding the k nearest (at least min_radius), its nearest sheet,
 // a robust quadric fit. False when the footprint holds no sheet of enough
-// points.
+// points, or more than one sheet and one_sheet_only (nothing is fitted).
 bool fit_footprint(const MultiresMesh& mesh, int level, int vertex, const Vec3& e1, const Vec3& e2, const Vec3& n,
                    const LevelGeometry& g, const DisplacementOptions& opt, size_t k, double pool_radius,
-                   Scratch& s, FootprintFit& out) {
+                   bool one_sheet_only, Scratch& s, FootprintFit& out) {
   const int min_points = std::max(1, opt.min_points);
   double radius = pool_radius;
   if (g.adaptive && s.line_pts.size() >= k) {
-    std::nth_element(s.line_pts.begin(), s.line_pts.begin() + (k - 1), s.line_pts.end(),
-                     [](const LinePoint& a, const LinePoint& b) { return a.rho2 < b.rho2; });
+    // (The k-th distance from a copy: moving doubles, not whole points.)
+    s.values.clear();
+    for (const LinePoint& q : s.line_pts) s.values.push_back(q.rho2);
+    std::nth_element(s.values.begin(), s.values.begin() + (k - 1), s.values.end());
     // The kernel is 0 at the rim: keep the k-th point just inside it.
-    const double footprint = std::max(g.min_radius, std::sqrt(s.line_pts[k - 1].rho2) * (1.0 + 1e-9));
+    const double footprint = std::max(g.min_radius, std::sqrt(s.values[k - 1]) * (1.0 + 1e-9));
     if (footprint < radius) {
       // The base shape over the footprint itself when it is much smaller
       // than the search (sparse data searched at max_radius); within a
@@ -328,42 +385,62 @@ bool fit_footprint(const MultiresMesh& mesh, int level, int vertex, const Vec3& 
   // local spacing for a slope of up to 1:2) separates two sheets. The
   // nearest sheet that enough points agree on is measured; a lone stray
   // point does not count as a crossing.
-  std::sort(s.line_pts.begin(), s.line_pts.end(), [](const LinePoint& a, const LinePoint& b) { return a.h < b.h; });
   const size_t count = s.line_pts.size();
   const double local_spacing = radius * std::sqrt(kPi / static_cast<double>(count));
   const double gap = opt.cluster_fraction * g.max_distance + 0.5 * local_spacing;
   s.sheets.clear();  // [begin, end) ranges, then ordered by their height nearest to 0
-  for (size_t i = 0; i < count;) {
-    size_t j = i + 1;
-    while (j < count && s.line_pts[j].h - s.line_pts[j - 1].h <= gap) ++j;
-    double nearest = std::abs(s.line_pts[i].h);
-    for (size_t k2 = i; k2 < j; ++k2) nearest = std::min(nearest, std::abs(s.line_pts[k2].h));
-    s.sheets.push_back({nearest, {i, j}});
-    i = j;
+  if (one_sheet_only) {
+    // Whether the points form one sheet needs no sorting (the widest
+    // footprints: the most points, and more than one sheet is no use).
+    switch (count_sheets(s.line_pts, gap, s.buckets)) {
+      case SheetCount::One:
+        s.sheets.push_back({0.0, {0, count}});
+        break;
+      case SheetCount::More:
+        out.sheets = 2;  // at least
+        return false;
+      case SheetCount::Unknown:
+        break;
+    }
+  }
+  if (s.sheets.empty()) {
+    std::sort(s.line_pts.begin(), s.line_pts.end(), [](const LinePoint& a, const LinePoint& b) { return a.h < b.h; });
+    for (size_t i = 0; i < count;) {
+      size_t j = i + 1;
+      while (j < count && s.line_pts[j].h - s.line_pts[j - 1].h <= gap) ++j;
+      double nearest = std::abs(s.line_pts[i].h);
+      for (size_t k2 = i; k2 < j; ++k2) nearest = std::min(nearest, std::abs(s.line_pts[k2].h));
+      s.sheets.push_back({nearest, {i, j}});
+      i = j;
+    }
   }
   out.sheets = static_cast<int>(s.sheets.size());
   std::sort(s.sheets.begin(), s.sheets.end(),
             [](const auto& a, const auto& b) { return a.first < b.first; });
-  s.use.assign(count, 0);
+  if (one_sheet_only && s.sheets.size() > 1) return false;
   s.weights.assign(count, 0.0);
+  const bool noise_figures = g.adaptive && g.widen && opt.max_footprint_points > opt.footprint_points;
+  const double inv_radius = 1.0 / radius;
   for (const auto& sheet : s.sheets) {
     const auto [first_point, end_point] = sheet.second;
     if (static_cast<int>(end_point - first_point) < min_points) continue;
-    for (size_t i = 0; i < count; ++i) s.use[i] = i >= first_point && i < end_point;
-    double sum_w = 0, cu = 0, cv = 0;
-    for (size_t i = 0; i < count; ++i) {
-      s.weights[i] = s.use[i] ? kernel(s.line_pts[i].rho2, r2) : 0.0;
-      if (!s.use[i]) continue;
-      sum_w += s.weights[i];
-      cu += s.weights[i] * s.line_pts[i].u;
-      cv += s.weights[i] * s.line_pts[i].v;
+    QuadricSums sums;
+    double cu = 0, cv = 0;
+    for (size_t i = first_point; i < end_point; ++i) {
+      const LinePoint& q = s.line_pts[i];
+      const double w = kernel(q.rho2, r2);
+      s.weights[i] = w;
+      if (!(w > 0)) continue;
+      sums.add(q.u * inv_radius, q.v * inv_radius, q.h, w, noise_figures);
+      cu += w * q.u;
+      cv += w * q.v;
     }
+    const double sum_w = sums.sum_w();
     if (!(sum_w > 0)) continue;
     // Where the quadric fails: the sheet's median height.
     auto fallback = [&] {
       s.values.clear();
-      for (size_t i = 0; i < count; ++i)
-        if (s.use[i]) s.values.push_back(s.line_pts[i].h);
+      for (size_t i = first_point; i < end_point; ++i) s.values.push_back(s.line_pts[i].h);
       return median(s.values);
     };
     // Data support: how far off the line the points' weighted centroid lies.
@@ -372,27 +449,48 @@ bool fit_footprint(const MultiresMesh& mesh, int level, int vertex, const Vec3& 
     Quadric c;
     out.variance_factor = 0;
     out.noise_variance = -1;
-    // The noise figures only where a wider footprint may be tried.
-    FootprintFit* noise_figures = g.adaptive && g.widen && opt.max_footprint_points > opt.footprint_points ? &out : nullptr;
     double h0 = 0;
-    if (fit_quadric(s.line_pts, s.weights, radius, opt.ridge, c, noise_figures)) {
-      h0 = c[0];
+    if (solve_quadric(sums, opt.ridge, c)) {
       // One robust pass: drop points far from the first fit (outliers, the
-      // edge of another sheet), then refit.
+      // edge of another sheet), then refit: their sums taken out.
       s.values.clear();
       s.residuals.assign(count, 0.0);
-      for (size_t i = 0; i < count; ++i)
+      double sum_wr2 = 0;  // the first fit's, should the refit fail
+      for (size_t i = first_point; i < end_point; ++i)
         if (s.weights[i] > 0) {
-          s.residuals[i] =
-              std::abs(s.line_pts[i].h - quadric_row(s.line_pts[i].u / radius, s.line_pts[i].v / radius).dot(c));
+          const LinePoint& q = s.line_pts[i];
+          const double r = q.h - quadric_at(c, q.u * inv_radius, q.v * inv_radius);
+          s.residuals[i] = std::abs(r);
           s.values.push_back(s.residuals[i]);
+          sum_wr2 += s.weights[i] * r * r;
         }
       const double limit = 4.0 * median(s.values) + 1e-12 * g.max_distance;
+      QuadricSums kept = sums;
       int dropped = 0;
-      for (size_t i = 0; i < count; ++i)
-        if (s.weights[i] > 0 && s.residuals[i] > limit) s.weights[i] = 0, ++dropped;
+      for (size_t i = first_point; i < end_point; ++i)
+        if (s.weights[i] > 0 && s.residuals[i] > limit) {
+          const LinePoint& q = s.line_pts[i];
+          kept.add(q.u * inv_radius, q.v * inv_radius, q.h, s.weights[i], noise_figures, -1.0);
+          s.weights[i] = 0, ++dropped;
+        }
+      const QuadricSums* final_sums = &sums;
       // Nothing dropped: the refit would be the same fit.
-      if (dropped > 0 && fit_quadric(s.line_pts, s.weights, radius, opt.ridge, c, noise_figures)) h0 = c[0];
+      Quadric refit;
+      if (dropped > 0 && solve_quadric(kept, opt.ridge, refit)) {
+        c = refit;
+        final_sums = &kept;
+        sum_wr2 = 0;
+        for (size_t i = first_point; i < end_point; ++i)
+          if (s.weights[i] > 0) {
+            const LinePoint& q = s.line_pts[i];
+            sum_wr2 += s.weights[i] * sqr(q.h - quadric_at(c, q.u * inv_radius, q.v * inv_radius));
+          }
+      }
+      h0 = c[0];
+      // The noise figures only where a wider footprint may be tried.
+      double dof = 0;
+      if (noise_figures && variance_figures(*final_sums, opt.ridge, out.variance_factor, &dof))
+        out.noise_variance = noise_variance(sum_wr2, dof, final_sums->sum_w());
       if (!(std::abs(h0) <= g.max_distance)) h0 = fallback(), out.noise_variance = -1;
     } else {
       h0 = fallback();
@@ -407,29 +505,43 @@ bool fit_footprint(const MultiresMesh& mesh, int level, int vertex, const Vec3& 
 
 // A footprint between the first and the widest: the kernel-weighted quadric
 // of the widest footprint's inliers (weights > 0: its sheet, its robust
-// pass) within `radius`.
+// pass) within `radius`; the noise variance only `with_noise`.
 bool fit_between(const std::vector<LinePoint>& pts, const std::vector<double>& inliers, double radius,
-                 const LevelGeometry& g, const DisplacementOptions& opt, std::vector<double>& weights,
-                 FootprintFit& out) {
-  const double r2 = radius * radius;
-  weights.assign(pts.size(), 0.0);
-  double sum_w = 0, cu = 0, cv = 0;
+                 const LevelGeometry& g, const DisplacementOptions& opt, bool with_noise, FootprintFit& out) {
+  const double r2 = radius * radius, inv_radius = 1.0 / radius;
+  QuadricSums sums;
+  double cu = 0, cv = 0;
   int points = 0;
   for (size_t i = 0; i < pts.size(); ++i) {
-    points += pts[i].rho2 < r2;
+    const LinePoint& q = pts[i];
+    if (!(q.rho2 < r2)) continue;
+    ++points;
     if (!(inliers[i] > 0)) continue;
-    weights[i] = kernel(pts[i].rho2, r2);
-    sum_w += weights[i];
-    cu += weights[i] * pts[i].u;
-    cv += weights[i] * pts[i].v;
+    const double w = kernel(q.rho2, r2);
+    sums.add(q.u * inv_radius, q.v * inv_radius, q.h, w, true);
+    cu += w * q.u;
+    cv += w * q.v;
   }
+  const double sum_w = sums.sum_w();
   if (points < std::max(1, opt.min_points) || !(sum_w > 0)) return false;
   Quadric c;
-  if (!fit_quadric(pts, weights, radius, opt.ridge, c, &out) || !(std::abs(c[0]) <= g.max_distance)) return false;
+  double dof = 0;
+  if (!solve_quadric(sums, opt.ridge, c) || !(std::abs(c[0]) <= g.max_distance) ||
+      !variance_figures(sums, opt.ridge, out.variance_factor, with_noise ? &dof : nullptr))
+    return false;
+  out.noise_variance = -1;
+  if (with_noise) {
+    double sum_wr2 = 0;
+    for (size_t i = 0; i < pts.size(); ++i) {
+      const LinePoint& q = pts[i];
+      if (q.rho2 < r2 && inliers[i] > 0)
+        sum_wr2 += kernel(q.rho2, r2) * sqr(q.h - quadric_at(c, q.u * inv_radius, q.v * inv_radius));
+    }
+    out.noise_variance = noise_variance(sum_wr2, dof, sum_w);
+  }
   const double offset = std::sqrt(cu * cu + cv * cv) / (sum_w * radius);
-  const double taper = support_taper(offset, opt);
   out.height = c[0];
-  out.taper = taper;
+  out.taper = support_taper(offset, opt);
   out.radius = radius;
   out.points = points;
   return true;
@@ -471,7 +583,7 @@ bool measure_one(const CloudTree& tree, const std::vector<Vec3>& pts, const std:
   if (may_widen) s.pool = s.line_pts;
   s.fits.clear();
   s.fits.emplace_back();
-  if (!fit_footprint(mesh, level, vertex, e1, e2, n, g, opt, k, pool_radius, s, s.fits[0])) return false;
+  if (!fit_footprint(mesh, level, vertex, e1, e2, n, g, opt, k, pool_radius, false, s, s.fits[0])) return false;
   size_t chosen = 0;
 
   // Noise: where the first footprint's height is less certain than
@@ -511,26 +623,47 @@ bool measure_one(const CloudTree& tree, const std::vector<Vec3>& pts, const std:
     // the ones between reuse its points and outliers (a kernel-weighted
     // quadric each, no search, no sorting).
     FootprintFit wide;
-    if (most > first_points && fit_footprint(mesh, level, vertex, e1, e2, n, g, opt, most, pool_radius, s, wide) &&
-        wide.radius > s.fits[0].radius && wide.radius <= widest * (1 + 1e-9) && wide.noise_variance > 0 &&
-        wide.sheets == 1) {
+    if (most > first_points &&
+        fit_footprint(mesh, level, vertex, e1, e2, n, g, opt, most, pool_radius, true, s, wide) &&
+        wide.radius > s.fits[0].radius && wide.radius <= widest * (1 + 1e-9) && wide.noise_variance > 0) {
       s.values.clear();
       for (const LinePoint& q : s.line_pts) s.values.push_back(q.rho2);
-      for (size_t kj = 2 * first_points; kj < most; kj *= 2) {
-        std::nth_element(s.values.begin(), s.values.begin() + (kj - 1), s.values.end());
-        const double radius = std::max(g.min_radius, std::sqrt(s.values[kj - 1]) * (1.0 + 1e-9));
-        FootprintFit between;
-        if (!(radius > s.fits.back().radius) || !(radius < wide.radius) ||
-            !fit_between(s.line_pts, s.weights, radius, g, opt, s.between_weights, between))
-          break;
-        s.fits.push_back(between);
-      }
-      s.fits.push_back(wide);
+      // The footprints in order, each fitted only when the intervals of the
+      // narrower ones still intersect (the choice is the same as with all
+      // of them fitted first): 2, 4, ... times the first one's points, then
+      // the widest.
+      size_t kj = 2 * first_points, selected = 0;
+      bool between_left = kj < most, wide_left = true;
+      auto next_fit = [&]() {
+        while (between_left) {
+          // values[selected..] are no nearer than the previous k-th.
+          std::nth_element(s.values.begin() + selected, s.values.begin() + (kj - 1), s.values.end());
+          selected = kj;
+          const double radius = std::max(g.min_radius, std::sqrt(s.values[kj - 1]) * (1.0 + 1e-9));
+          FootprintFit between;
+          // Only the first one after the narrowest needs its noise (below).
+          const bool with_noise = s.fits.size() == 1;
+          if (!(radius > s.fits.back().radius) || !(radius < wide.radius) ||
+              !fit_between(s.line_pts, s.weights, radius, g, opt, with_noise, between)) {
+            between_left = false;
+            break;
+          }
+          kj *= 2;
+          between_left = kj < most;
+          s.fits.push_back(between);
+          return true;
+        }
+        if (!wide_left) return false;
+        wide_left = false;
+        s.fits.push_back(wide);
+        return true;
+      };
+      next_fit();
       // Intersection of the confidence intervals, narrowest first, with one
       // noise level for all: the smaller of the two narrowest estimates.
       const double noise = std::min(first_noise, s.fits[1].noise_variance > 0 ? s.fits[1].noise_variance : first_noise);
       double lo = -std::numeric_limits<double>::infinity(), hi = std::numeric_limits<double>::infinity();
-      for (size_t j = 0; j < s.fits.size(); ++j) {
+      for (size_t j = 0; j < s.fits.size() || next_fit(); ++j) {
         const FootprintFit& f = s.fits[j];
         const double half = opt.noise_confidence * std::sqrt(noise * f.variance_factor);
         lo = std::max(lo, f.height - half);

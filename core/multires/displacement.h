@@ -68,7 +68,8 @@ struct DisplacementOptions {
   // footprint reaches the other sheet). max_footprint_points <=
   // footprint_points: off. Synthetic seeds 1-5 (docs/fit.md): 128 points
   // halve the level-3 roughness on cheeks and brow (8.4 -> 4.1 deg) at
-  // +1.2 s CPU; 64 points gave 4.5 deg for +0.5 s but 4 lip crossing pairs
+  // +1.2 s CPU at first, +0.6 s since the fits are summed as moments (docs/fit.md);
+  // 64 points gave 4.5 deg for +0.5 s (before) but 4 lip crossing pairs
   // on seed 2.
   int max_footprint_points = 128;
   double noise_edge_fraction = 0.01;
