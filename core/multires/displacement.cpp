@@ -273,7 +273,7 @@ inline double quadric_at(const Quadric& c, double u, double v) {
 bool solve_quadric(const QuadricSums& sums, double ridge, Quadric& c) {
   const double sum_w = sums.sum_w();
   if (!(sum_w > 0)) return false;
-  Eigen::Matrix<double, 6, 6> A;
+  Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();  // LDLT reads the lower triangle
   for (int b = 0; b < 6; ++b)
     for (int a = b; a < 6; ++a) A(a, b) = sums.a[kProduct[a][b]];
   for (int k = 1; k < 6; ++k) A(k, k) += std::max(ridge, 1e-9) * sum_w;
