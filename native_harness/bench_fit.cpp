@@ -9,14 +9,14 @@
 // region beside those of the smooth (undisplaced) surface, and the fold
 // limiter's work. Experiment knobs (see docs/fit.md): --fit-separate-rounds N,
 // --fit-area-ratio R, --fit-cap-pct P, --fit-levels L, --fit-line-edges E,
-// --fit-no-climb, --fit-remeasure, --fit-eye-region (move the eye region first, FitHeadOptions::fit_eye_region), --fit-no-creases (plain Butterfly at the
+// --fit-no-climb, --fit-remeasure, --fit-no-eye-region (leave the eyes where the alignment put them, FitHeadOptions::fit_eye_region), --fit-no-creases (plain Butterfly at the
 // eye and lip rims), --fit-displaced-creases, --fit-no-corners-to-smooth,
 // --fit-no-parents-to-smooth, --fit-separation-repeats N, --fit-restarts N (fold_limit.h), --fit-seeds N,
 // --fit-isolated R (points R times sparser than the scan's sampling are
 // left out of fitting; 0 keeps them), --fit-footprint N (points per
 // displacement footprint), --fit-noise-points N / --fit-noise-edge F /
 // --fit-noise-radius E / --fit-noise-confidence G (footprints widened
-// against the noise, DisplacementOptions; --fit-noise-points 16 turns it off)
+// against the noise, DisplacementOptions; --fit-noise-points 128 turns it on)
 // (seeds 1..N); --save-scans DIR writes scans, truths,
 // the finest level and its crossing triangles.
 #include "command.h"
@@ -331,7 +331,7 @@ int run(const Args& args) {
     if (args.has("fit-no-climb")) opt.fold_limit.shrink_coarser_levels = false;
     if (args.has("fit-remeasure")) opt.displacement.remeasure_coarse_vertices = true;
     if (args.has("fit-no-creases")) opt.rim_creases = false;
-    if (args.has("fit-eye-region")) opt.fit_eye_region = true;
+    if (args.has("fit-no-eye-region")) opt.fit_eye_region = false;
     if (args.has("fit-displaced-creases")) opt.fold_limit.undisplaced_creases = false;
     if (args.has("fit-no-corners-to-smooth")) opt.fold_limit.crossing_corners_to_smooth = false;
     if (args.has("fit-no-parents-to-smooth")) opt.fold_limit.crossing_parents_to_smooth = false;

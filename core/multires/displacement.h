@@ -70,8 +70,12 @@ struct DisplacementOptions {
   // halve the level-3 roughness on cheeks and brow (8.4 -> 4.1 deg) at
   // +1.2 s CPU at first, +0.6 s since the fits are summed as moments (docs/fit.md);
   // 64 points gave 4.5 deg for +0.5 s (before) but 4 lip crossing pairs
-  // on seed 2.
-  int max_footprint_points = 128;
+  // on seed 2. Off by default (16 = footprint_points): with the eye region
+  // on (pipeline/fit_head.h), 128 points leave 6 lip crossing pairs on
+  // seed 5 and put the slowest seed at 1.9 s wall against 1.5 s
+  // (docs/fit.md); `likeness fit --denoise` and the bench's
+  // --fit-noise-points 128 turn it on.
+  int max_footprint_points = 16;
   double noise_edge_fraction = 0.01;
   double noise_max_radius_edges = 2.5;
   double noise_confidence = 2.0;

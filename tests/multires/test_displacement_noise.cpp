@@ -94,6 +94,12 @@ DisplacementOptions sixteen_points() {
   return o;
 }
 
+DisplacementOptions widened() {
+  DisplacementOptions o;
+  o.max_footprint_points = 128;  // `likeness fit --denoise` (off by default)
+  return o;
+}
+
 }  // namespace
 
 TEST_CASE("displacement noise: dense noisy data is averaged, the bump's peak kept", "[multires][displacement]") {
@@ -102,7 +108,7 @@ TEST_CASE("displacement noise: dense noisy data is averaged, the bump's peak kep
   const double sigma = 0.02;
   const PointCloud cloud = scan_bump(36864, sigma, 11);
   const BumpResult fixed = measure_bump(cloud, sixteen_points());
-  const BumpResult adaptive = measure_bump(cloud, {});
+  const BumpResult adaptive = measure_bump(cloud, widened());
   INFO("flat mean error: 16 points " << fixed.flat_error << ", adaptive " << adaptive.flat_error);
   INFO("flat roughness (deg): 16 points " << fixed.flat_angle << ", adaptive " << adaptive.flat_angle);
   INFO("peak (truth " << kBumpHeight << "): 16 points " << fixed.peak << ", adaptive " << adaptive.peak
@@ -124,7 +130,7 @@ TEST_CASE("displacement noise: nearly clean dense data is measured as before", "
   const double sigma = 0.0005;
   const PointCloud cloud = scan_bump(36864, sigma, 12);
   const BumpResult fixed = measure_bump(cloud, sixteen_points());
-  const BumpResult adaptive = measure_bump(cloud, {});
+  const BumpResult adaptive = measure_bump(cloud, widened());
   INFO("flat mean error: 16 points " << fixed.flat_error << ", adaptive " << adaptive.flat_error << "; peak "
                                      << fixed.peak << " / " << adaptive.peak << "; widened " << adaptive.widened);
   CHECK(adaptive.flat_error < 1.2 * fixed.flat_error + 1e-4);
@@ -137,7 +143,7 @@ TEST_CASE("displacement noise: a sparse clean bump is reproduced, not smoothed",
   // widening may go (coarser levels may widen where their fits agree).
   const PointCloud cloud = scan_bump(2304, 0.0, 13);
   const BumpResult fixed = measure_bump(cloud, sixteen_points());
-  const BumpResult adaptive = measure_bump(cloud, {});
+  const BumpResult adaptive = measure_bump(cloud, widened());
   INFO("peak (truth " << kBumpHeight << "): 16 points " << fixed.peak << ", adaptive " << adaptive.peak
                       << "; widened " << adaptive.widened);
   CHECK(std::abs(adaptive.peak - kBumpHeight) < 0.02 * kBumpHeight);
@@ -149,16 +155,16 @@ TEST_CASE("displacement noise: bad options are refused", "[multires][displacemen
   MultiresMesh mr;
   REQUIRE(build_multires(regular_grid(4, 4), 1, mr).ok());
   const PointCloud cloud = scan_bump(200, 0.0, 1);
-  DisplacementOptions o;
+  DisplacementOptions o = widened();
   o.noise_edge_fraction = 0;
   CHECK(measure_displacements(cloud, o, mr).code == ErrorCode::InvalidInput);
-  o = {};
+  o = widened();
   o.noise_confidence = std::nan("");
   CHECK(measure_displacements(cloud, o, mr).code == ErrorCode::InvalidInput);
-  o = {};
+  o = widened();
   o.noise_max_radius_edges = -1;
   CHECK(measure_displacements(cloud, o, mr).code == ErrorCode::InvalidInput);
-  o = {};
+  o = widened();
   o.noise_finest_levels = -1;
   CHECK(measure_displacements(cloud, o, mr).code == ErrorCode::InvalidInput);
 }
