@@ -422,7 +422,9 @@ bool fit_footprint(const MultiresMesh& mesh, int level, int vertex, const Vec3& 
   const bool noise_figures = g.adaptive && g.widen && opt.max_footprint_points > opt.footprint_points;
   const double inv_radius = 1.0 / radius;
   for (const auto& sheet : s.sheets) {
-    const auto [first_point, end_point] = sheet.second;
+    // Not a structured binding: C++17 lambdas (the fallback below) cannot
+    // capture those, and Emscripten's clang refuses it.
+    const size_t first_point = sheet.second.first, end_point = sheet.second.second;
     if (static_cast<int>(end_point - first_point) < min_points) continue;
     QuadricSums sums;
     double cu = 0, cv = 0;
