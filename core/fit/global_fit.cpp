@@ -235,20 +235,14 @@ std::vector<std::array<int, 2>> crossing_pairs(const VecX& x, TriMesh& scratch) 
   return pairs;
 }
 
-bool share_edge(const Tri& a, const Tri& b) {
-  int shared = 0;
-  for (int i : a)
-    for (int j : b) shared += i == j;
-  return shared >= 2;
-}
-
 // The pairs that may cross anywhere on the step from x0 to x1: a corner
 // moves on a segment, so a triangle stays inside the box of its corners at
 // both ends, and two triangles can meet only where those boxes overlap.
 // Found once per solve by sweeping the boxes along their longest axis;
 // each trial step then tests only these pairs (a full self-intersection
 // search per trial cost about as much as the rest of the global fit).
-// Pairs sharing an edge never count (self_intersection.h) and are left out.
+// Pairs sharing an edge stay in: mesh_triangles_cross, which decides each
+// pair, already says no to them (self_intersection.h rules).
 std::vector<std::array<int, 2>> swept_candidates(const std::vector<Tri>& triangles, const VecX& x0,
                                                  const VecX& x1) {
   const int nf = static_cast<int>(triangles.size());
@@ -275,7 +269,6 @@ std::vector<std::array<int, 2>> swept_candidates(const std::vector<Tri>& triangl
     for (int j = i + 1; j < nf && lo[order[j]][axis] <= hi[a][axis]; ++j) {
       const int b = order[j];
       if (!((lo[a].array() <= hi[b].array()).all() && (lo[b].array() <= hi[a].array()).all())) continue;
-      if (share_edge(triangles[a], triangles[b])) continue;
       pairs.push_back({std::min(a, b), std::max(a, b)});
     }
   }
