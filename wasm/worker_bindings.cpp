@@ -22,6 +22,7 @@
 // correspondences -> cameras, chart, skin texture; tarini2002 Sec. 3) and
 // export_textured (OBJ + MTL + PNG); eye_photo_job and smile_photo_job
 // (tarini2002 Sec. 4: iris and teeth textures from the user's photos).
+#include "common/parallel.h"
 #include "common/progress.h"
 #include "components/components.h"
 #include "head/generic_head.h"
@@ -1041,6 +1042,8 @@ val smile_photo_job(const std::string& name, std::uintptr_t data, std::size_t si
 
 EMSCRIPTEN_BINDINGS(likeness_worker) {
   emscripten::function("fit_head_job", &fit_head_job);
+  // Threads the core's parallel loops use here (1 in the single-threaded build).
+  emscripten::function("parallel_workers", &lk::parallel_workers);
   emscripten::function("animate_frame", &animate_frame);
   emscripten::function("export_head", &export_head);
   emscripten::function("parse_geometry", &parse_geometry);

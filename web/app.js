@@ -54,6 +54,8 @@
     timings: {},           // ms since page start: viewerModule, firstFrame, worker
     viewer: null,
     worker: null,
+    workerThreads: null,   // {variant: 'threads'|'single', threads}: which core the worker runs
+                           // (threads when the page is cross-origin isolated, see worker.js)
     model: null,           // {name, kind, vertexCount, triangleCount} shown now
     photos: [],            // checked photos, for texturing: [{name, file, width, height, url (thumbnail),
                            //   filePoints (Float64Array u v X Y Z from a points file, or null), pointsName,
@@ -144,13 +146,15 @@
   let workerReady = null;  // promise resolved when the worker's core is up
 
   function startWorker() {
-    const worker = new Worker('worker.js');
+    // ?threads=1 keeps the single-threaded core even where threads are possible.
+    const worker = new Worker(params.get('threads') === '1' ? 'worker.js?threads=1' : 'worker.js');
     app.worker = worker;
     workerReady = new Promise((resolve, reject) => {
       worker.onmessage = (e) => {
         const msg = e.data;
         if (msg.type === 'ready') {
           if (app.timings.worker === undefined) app.timings.worker = performance.now() - app.startedAt;
+          app.workerThreads = { variant: msg.variant || 'single', threads: msg.threads || 1 };
           resolve();
         } else if (msg.type === 'progress') {
           const job = jobs.get(msg.id);
@@ -1049,7 +1053,8 @@
       li.setAttribute('role', 'button');
     }
     ui.fitTotal.textContent = 'fit ' + (result.fitMs / 1000).toFixed(2) + ' s (+ parse ' + Math.round(result.parseMs) +
-                              ' ms) · ' + result.fittedPoints.toLocaleString('en') + ' points fitted';
+                              ' ms) · ' + result.fittedPoints.toLocaleString('en') + ' points fitted' +
+                              (app.workerThreads ? ' · ' + app.workerThreads.threads + (app.workerThreads.threads === 1 ? ' thread' : ' threads') : '');
     ui.fitView.hidden = false;
     const levels = result.meshes.levels.length;
     for (const opt of ui.level.options) opt.disabled = Number(opt.value) > levels;

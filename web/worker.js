@@ -1,7 +1,8 @@
 // The Web Worker that runs the core (likeness_worker.wasm) off the main thread.
 //
 // Messages in:  {type:<job>, id, ...job fields}; ArrayBuffers are transferred.
-// Messages out: {type:'ready'}                        the core is up
+// Messages out: {type:'ready', threads, variant}      the core is up; threads = how many
+//                                                     threads a loop of the core uses
 //               {type:'progress', id, stage, fraction} from the job's ProgressFn
 //               {type:'result', id, result}           the core's {ok, code, message, ...};
 //                                                     typed arrays are transferred back
@@ -9,27 +10,72 @@
 //                                                     a bug): the page starts a new worker
 // To add a stage: bind it in wasm/worker_bindings.cpp (bytes as pointer+size,
 // a progress function, a {ok, code, message, ...} result) and add it to JOBS.
+//
+// Two builds of the same core: likeness_worker_mt (pthreads: the fit's
+// parallel loops on up to 4 cores, same results as one thread) needs
+// SharedArrayBuffer, which the browser only gives a cross-origin isolated
+// page (served with COOP: same-origin + COEP: require-corp, as scripts/serve.py
+// does); anywhere else, or with worker.js?threads=1, the single-threaded
+// likeness_worker runs.
 'use strict';
-importScripts('likeness_worker.js');
+const wantThreads = self.crossOriginIsolated === true && typeof SharedArrayBuffer === 'function'
+  && new URLSearchParams(self.location.search).get('threads') !== '1';
 
 let core = null;
+let variant = null;  // 'threads' | 'single': the core that runs
 const pending = [];
 
 function fatal(message) {
   postMessage({ type: 'fatal', message: String(message) });
 }
 
-LikenessWorker({
-  print: (t) => console.log('[worker]', t),
-  printErr: (t) => console.warn('[worker]', t),
-  // A release build aborts without a reason on out-of-memory; say what is likely.
-  onAbort: (what) => fatal(what ? 'the core stopped: ' + what
-    : 'the core ran out of memory' + (core ? ' at ' + Math.round(core.HEAP8.length / 1048576) + ' MB of wasm heap' : '')),
-}).then((m) => {
-  core = m;
-  postMessage({ type: 'ready' });
-  while (pending.length) handle(pending.shift());
-}, (err) => fatal('could not start the core: ' + err));
+// The wasm heap as bytes. In the threaded build the memory is shared and may
+// have been grown by another thread since the module's own views were made,
+// so the view is taken over the memory's current buffer.
+function heapBytes() {
+  return core.wasmMemory ? new Uint8Array(core.wasmMemory.buffer) : core.HEAPU8;
+}
+
+// Loads and starts one core. The threaded one falls back to the single-
+// threaded one when its files are missing or it cannot start (e.g. a
+// browser that refuses nested workers), so the page always gets a core.
+function startCore(which) {
+  try {
+    importScripts(which === 'threads' ? 'likeness_worker_mt.js' : 'likeness_worker.js');
+  } catch (e) {
+    if (which === 'threads') {
+      console.warn('[worker] the threaded core did not load (' + (e && e.message ? e.message : e) + '): one thread');
+      startCore('single');
+    } else {
+      fatal('could not load the core: ' + (e && e.message ? e.message : e));
+    }
+    return;
+  }
+  LikenessWorker({
+    // The pthread workers load the module's script by URL (this worker's
+    // own URL is worker.js, which they must not run).
+    mainScriptUrlOrBlob: new URL('likeness_worker_mt.js', self.location.href).href,
+    print: (t) => console.log('[worker]', t),
+    printErr: (t) => console.warn('[worker]', t),
+    // A release build aborts without a reason on out-of-memory; say what is
+    // likely. (Before the core is up, the rejection below handles it.)
+    onAbort: (what) => { if (core) fatal(what ? 'the core stopped: ' + what
+      : 'the core ran out of memory at ' + Math.round(heapBytes().length / 1048576) + ' MB of wasm heap'); },
+  }).then((m) => {
+    core = m;
+    variant = which;
+    postMessage({ type: 'ready', variant, threads: core.parallel_workers() });
+    while (pending.length) handle(pending.shift());
+  }, (err) => {
+    if (which === 'threads') {
+      console.warn('[worker] the threaded core did not start (' + err + '): one thread');
+      startCore('single');
+    } else {
+      fatal('could not start the core: ' + err);
+    }
+  });
+}
+startCore(wantThreads ? 'threads' : 'single');
 
 // Copies the bytes into the wasm heap, runs fn(pointer, size), frees the copy.
 function withHeapBytes(buffer, fn) {
@@ -37,7 +83,7 @@ function withHeapBytes(buffer, fn) {
   const ptr = core._malloc(Math.max(1, bytes.length));
   if (!ptr) return { ok: false, code: 'TooLarge', message: 'not enough memory to hold the file (' + bytes.length + ' bytes)' };
   try {
-    core.HEAPU8.set(bytes, ptr);
+    heapBytes().set(bytes, ptr);
     return fn(ptr, bytes.length);
   } finally {
     core._free(ptr);
@@ -83,7 +129,7 @@ function withManyHeapBytes(items, fn) {
       const ptr = core._malloc(Math.max(1, bytes.length));
       if (!ptr) return { ok: false, code: 'TooLarge', message: 'not enough memory to hold ' + item.name + ' (' + bytes.length + ' bytes)' };
       placed.push({ name: String(item.name), ptr, size: bytes.length, points: item.points || new Float64Array(0) });
-      core.HEAPU8.set(bytes, ptr);
+      heapBytes().set(bytes, ptr);
     }
     return fn(placed);
   } finally {

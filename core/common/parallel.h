@@ -3,7 +3,9 @@
 // a shared counter, so uneven work balances; each item must write only its
 // own outputs, and any reduction is done afterwards in item order, so results
 // do not depend on the number of threads. Native builds use std::thread; with
-// LK_SINGLE_THREADED (the wasm build) everything runs on the calling thread.
+// LK_SINGLE_THREADED (the wasm build) everything runs on the calling thread;
+// the threaded wasm build (LK_WASM_THREADS) uses Emscripten pthreads, at most
+// LK_MAX_WORKERS of them.
 #pragma once
 #include <algorithm>
 #include <atomic>
@@ -18,9 +20,25 @@ inline int parallel_workers() {
   return 1;
 #else
   const unsigned n = std::thread::hardware_concurrency();
-  return n == 0 ? 1 : static_cast<int>(std::min(n, 8u));
+#ifdef LK_MAX_WORKERS  // threaded wasm: no more threads than its pre-made pthread pool + the caller
+  const unsigned cap = LK_MAX_WORKERS;
+#else
+  const unsigned cap = 8u;
+#endif
+  return n == 0 ? 1 : static_cast<int>(std::min(n, cap));
 #endif
 }
+
+#ifdef LK_MAX_WORKERS
+// Threaded wasm only: true while this thread runs a parallel_for's items. A
+// loop nested in one then runs on its thread: a pthread cannot start another
+// while the pool's owner is blocked joining it, and the pool is sized for one
+// level of loops. (Native builds nest freely.) Results are the same either way.
+inline bool& parallel_for_running_here() {
+  static thread_local bool running = false;
+  return running;
+}
+#endif
 
 // Calls body(i, worker) for every i in [begin, end), worker in
 // [0, parallel_workers()), in blocks of `grain` items; a worker index is used
@@ -31,6 +49,12 @@ void parallel_for(int begin, int end, int grain, const Body& body) {
   grain = std::max(1, grain);
   const int n = end - begin;
   const int workers = std::min(parallel_workers(), n / grain);
+#ifdef LK_MAX_WORKERS
+  if (workers > 1 && parallel_for_running_here()) {
+    for (int i = begin; i < end; ++i) body(i, 0);
+    return;
+  }
+#endif
   if (workers <= 1) {
     for (int i = begin; i < end; ++i) body(i, 0);
     return;
@@ -38,6 +62,14 @@ void parallel_for(int begin, int end, int grain, const Body& body) {
 #ifndef LK_SINGLE_THREADED  // (single-threaded: parallel_workers() is 1, the loop above ran)
   std::atomic<int> next{begin};
   auto run = [&](int worker) {
+#ifdef LK_MAX_WORKERS
+    const bool was_running = parallel_for_running_here();
+    parallel_for_running_here() = true;
+    struct Restore {
+      bool value;
+      ~Restore() { parallel_for_running_here() = value; }
+    } restore{was_running};
+#endif
     for (;;) {
       const int b = next.fetch_add(grain);
       if (b >= end) return;

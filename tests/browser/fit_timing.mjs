@@ -8,7 +8,10 @@
 // page after the fit), web_fit_panel.png (the Pipeline card),
 // web_fit_stages.png (Align result over the scan, wireframe) and
 // web_fit_animate.png (mid-animation, points off).
-// Usage: node fit_timing.mjs WEBDIR [SCAN.ply] [--runs N] [--shots DIR]
+// The page is served with the cross-origin isolation headers, so the worker
+// runs the threaded core (worker.js); --no-isolation serves it without them
+// (the single-threaded core, as on a host that does not send them).
+// Usage: node fit_timing.mjs WEBDIR [SCAN.ply] [--runs N] [--shots DIR] [--no-isolation]
 import { closeChromium, launchChromium, serveDir, takeFlag, takeOption } from './harness.mjs';
 import fs from 'node:fs';
 import path from 'node:path';
@@ -16,6 +19,7 @@ import path from 'node:path';
 const args = process.argv.slice(2);
 const runs = Math.max(1, Number(takeOption(args, '--runs', 1)) || 1);
 const shots = takeOption(args, '--shots', '');
+const isolation = !takeFlag(args, '--no-isolation');
 const [webdir, scan] = args;
 if (!webdir) { console.error('usage: node fit_timing.mjs WEBDIR [SCAN.ply] [--runs N]'); process.exit(2); }
 const root = path.resolve(webdir);
@@ -23,13 +27,17 @@ if (!scan && !fs.existsSync(path.join(root, 'sample', 'scan.ply'))) {
   console.error(`no ${root}/sample/scan.ply (scripts/demo makes it) and no SCAN given`);
   process.exit(2);
 }
-const server = await serveDir(root);
+const server = await serveDir(root, { isolation });
 const context = await launchChromium('timing', { width: 1280, height: 1000 });
 let status = 0;
 try {
   const page = context.pages()[0] || await context.newPage();
   await page.goto(`http://127.0.0.1:${server.address().port}/index.html?autofit=0`);
   await page.waitForFunction(() => document.body.dataset.state === 'ready', null, { timeout: 180000 });
+  const worker = await page.evaluate(() => ({ coi: window.crossOriginIsolated, cores: navigator.hardwareConcurrency,
+                                               ...window.likeness.workerThreads }));
+  console.log(`worker core: ${worker.variant}, ${worker.threads} thread(s); crossOriginIsolated ${worker.coi}, ` +
+              `navigator.hardwareConcurrency ${worker.cores}`);
   if (scan) await page.setInputFiles('#file-input', path.resolve(scan));
   else await page.click('#btn-sample');
   await page.waitForFunction(() => ['done', 'error'].includes(document.body.dataset.state) && window.likeness.model, null, { timeout: 180000 });

@@ -13,14 +13,23 @@ const MIME = { '.html': 'text/html', '.js': 'text/javascript', '.css': 'text/css
                '.json': 'application/json', '.png': 'image/png', '.txt': 'text/plain' };
 
 // Serves the files under root; anything outside it or missing is a 404.
-export async function serveDir(root) {
+// Like scripts/serve.py, every response carries COOP: same-origin + COEP:
+// require-corp, so the page is cross-origin isolated and its worker runs the
+// threaded core; { isolation: false } leaves them out (a host without the
+// headers: the single-threaded core). server.requests lists every path asked.
+export async function serveDir(root, { isolation = true } = {}) {
+  const requests = [];
+  const isolationHeaders = isolation
+    ? { 'cross-origin-opener-policy': 'same-origin', 'cross-origin-embedder-policy': 'require-corp' } : {};
   const server = http.createServer((req, res) => {
+    requests.push(req.url);
     const file = path.join(root, path.normalize(decodeURIComponent(new URL(req.url, 'http://x').pathname)));
-    if (!file.startsWith(root) || !fs.existsSync(file) || fs.statSync(file).isDirectory()) { res.writeHead(404); res.end(); return; }
-    res.writeHead(200, { 'content-type': MIME[path.extname(file)] || 'application/octet-stream' });
+    if (!file.startsWith(root) || !fs.existsSync(file) || fs.statSync(file).isDirectory()) { res.writeHead(404, isolationHeaders); res.end(); return; }
+    res.writeHead(200, { 'content-type': MIME[path.extname(file)] || 'application/octet-stream', ...isolationHeaders });
     fs.createReadStream(file).pipe(res);
   });
   await new Promise((ok) => server.listen(0, '127.0.0.1', ok));
+  server.requests = requests;
   return server;
 }
 

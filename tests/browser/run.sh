@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Tests of the web app in WEBDIR (build/web): first the worker's wasm core
-# under Node (worker_node.mjs), then the page itself, served on 127.0.0.1 and
+# under Node (worker_node.mjs; worker_threads_node.mjs: the pthreads build
+# gives the single-threaded build's fit bit for bit), then the page itself,
+# served on 127.0.0.1 with and without the cross-origin isolation headers and
 # driven in Debian's Chromium by playwright-core (test.mjs).
 # Usage: tests/browser/run.sh WEBDIR     (env LK_SCREENSHOT_DIR=dir keeps screenshots)
 # Exit: 0 pass, 1 fail, 77 skipped (no /usr/bin/chromium, or WEBDIR not built).
@@ -11,7 +13,8 @@ if [ -z "$WEBDIR" ]; then
   echo "usage: tests/browser/run.sh WEBDIR" >&2
   exit 2
 fi
-for f in index.html app.js worker.js likeness_viewer.js likeness_viewer.wasm likeness_worker.js likeness_worker.wasm; do
+for f in index.html app.js worker.js likeness_viewer.js likeness_viewer.wasm likeness_worker.js likeness_worker.wasm \
+         likeness_worker_mt.js likeness_worker_mt.wasm likeness_worker_mt.worker.js; do
   if [ ! -f "$WEBDIR/$f" ]; then
     echo "SKIPPED: $WEBDIR/$f is missing: the wasm build has not run (scripts/build)"
     exit 77
@@ -19,6 +22,7 @@ for f in index.html app.js worker.js likeness_viewer.js likeness_viewer.wasm lik
 done
 # 1. The worker's wasm core under Node (no browser needed).
 node --no-experimental-fetch "$HERE/worker_node.mjs" "$WEBDIR"
+node --no-experimental-fetch "$HERE/worker_threads_node.mjs" "$WEBDIR"
 # 2. The page in Chromium.
 if [ ! -x /usr/bin/chromium ]; then
   echo "SKIPPED: the browser part: /usr/bin/chromium is missing (apt-get install chromium, or run scripts/setup)"

@@ -18,6 +18,8 @@
 //     and a good file (an OBJ cube) loads afterwards; point clouds over the
 //     display limit are thinned, not refused; a PNG photo is decoded and kept,
 //     a broken JPEG is an error naming it;
+//   - served with COOP/COEP (as scripts/serve.py) the page is cross-origin
+//     isolated and its worker runs the threaded core (min(4, cores) threads);
 //   - no console errors, no uncaught exceptions, and every network request
 //     goes to the page's own origin;
 //   - in a Chromium without WebGL the page says so and keeps controls off;
@@ -27,7 +29,10 @@
 //     the canvas changes, stage rows and the level selector switch meshes,
 //     OBJ/PLY exports download files with the level's vertex count, the
 //     animation advances frames and moves pixels, a flat plane is refused as
-//     NotAHead with the previous model kept and the page still working.
+//     NotAHead with the previous model kept and the page still working; the
+//     same folder served WITHOUT the isolation headers starts the
+//     single-threaded core, whose fit gives the threaded fit's stage numbers
+//     and meshes bit for bit.
 // Screenshots go to $LK_SCREENSHOT_DIR when set (web_*.png).
 import { chromium } from 'playwright-core';
 import http from 'node:http';
@@ -62,19 +67,24 @@ const MIME = {
   '.wasm': 'application/wasm', '.png': 'image/png', '.json': 'application/json',
 };
 const served = [];
-function startServer(root) {
+// Like scripts/serve.py: COOP/COEP on every response (cross-origin isolation:
+// the worker runs the threaded core), unless isolation is false (a host
+// without those headers: the single-threaded core).
+function startServer(root, { isolation = true } = {}) {
+  const isolationHeaders = isolation
+    ? { 'cross-origin-opener-policy': 'same-origin', 'cross-origin-embedder-policy': 'require-corp' } : {};
   const server = http.createServer((req, res) => {
     const url = new URL(req.url, 'http://x');
     const rel = decodeURIComponent(url.pathname === '/' ? '/index.html' : url.pathname);
     const file = path.join(root, path.normalize(rel));
     served.push(rel);
     if (!file.startsWith(root) || !fs.existsSync(file) || fs.statSync(file).isDirectory()) {
-      res.writeHead(404, { 'content-type': 'text/plain' });
+      res.writeHead(404, { 'content-type': 'text/plain', ...isolationHeaders });
       res.end('not found');
       return;
     }
     res.writeHead(200, { 'content-type': MIME[path.extname(file)] || 'application/octet-stream',
-                         'cache-control': 'no-store' });
+                         'cache-control': 'no-store', ...isolationHeaders });
     fs.createReadStream(file).pipe(res);
   });
   return new Promise((resolve) => server.listen(0, '127.0.0.1', () => resolve(server)));
@@ -613,6 +623,27 @@ async function canvasImage(page) {
 
 async function state(page) { return page.evaluate(() => document.body.dataset.state); }
 
+// The last fit as comparable text: every stage's numbers at full precision
+// (not the times) and a checksum of every mesh's vertex and index bytes.
+async function fitFingerprint(page) {
+  return page.evaluate(() => {
+    const fit = window.likeness.fit;
+    const report = JSON.stringify(fit.stages.map((s) => Object.fromEntries(Object.entries(s)
+      .filter(([k, v]) => typeof v === 'number' && !/ms$/i.test(k)))));
+    // FNV-1a over the bytes of every typed array in the meshes, in key order.
+    let hash = 0x811c9dc5, bytes = 0;
+    const visit = (v) => {
+      if (ArrayBuffer.isView(v)) {
+        const b = new Uint8Array(v.buffer, v.byteOffset, v.byteLength);
+        for (let i = 0; i < b.length; i++) { hash ^= b[i]; hash = Math.imul(hash, 0x01000193) >>> 0; }
+        bytes += b.length;
+      } else if (v && typeof v === 'object') for (const k of Object.keys(v).sort()) visit(v[k]);
+    };
+    visit(fit.meshes);
+    return { report, meshes: `${bytes} bytes, fnv ${hash.toString(16)}`, fitMs: fit.fitMs };
+  });
+}
+
 async function waitForState(page, wanted, timeout = JOB_TIMEOUT_MS) {
   await page.waitForFunction((w) => w.includes(document.body.dataset.state), wanted, { timeout });
   return state(page);
@@ -651,10 +682,11 @@ async function main() {
     hasTouch: true,
   });
   const consoleErrors = [], foreign = [], requests = [];
+  const ownOrigins = [origin];  // + the same folder served without the isolation headers (the fit part)
   context.on('request', (req) => {
     const url = req.url();
     requests.push(url);
-    if (!(url.startsWith(origin + '/') || url.startsWith('data:') || url.startsWith('blob:'))) foreign.push(url);
+    if (!(ownOrigins.some((o) => url.startsWith(o + '/')) || url.startsWith('data:') || url.startsWith('blob:'))) foreign.push(url);
   });
   const watch = (page) => {
     page.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(m.text()); });
@@ -676,6 +708,14 @@ async function main() {
       throw new Error('the page did not start');
     }
     await shot(page, 'web_start.png');
+    // Served with COOP/COEP: the page is cross-origin isolated and the worker
+    // runs the threaded core, one thread per core up to 4.
+    const isolated = await page.evaluate(() => ({ coi: window.crossOriginIsolated, cores: navigator.hardwareConcurrency,
+                                                   worker: window.likeness.workerThreads }));
+    const wantThreads = Math.max(1, Math.min(4, isolated.cores));
+    check('cross-origin isolated: the worker runs the threaded core', isolated.coi === true && isolated.worker &&
+          isolated.worker.variant === 'threads' && isolated.worker.threads === wantThreads,
+          `crossOriginIsolated ${isolated.coi}, ${isolated.cores} cores, worker ${JSON.stringify(isolated.worker)}`);
     // The first part loads non-head files: no automatic fit for them.
     await page.uncheck('#auto-fit');
     const head = await canvasImage(page);
@@ -894,6 +934,37 @@ async function main() {
         const meanOf = (name) => Number(/ (\d+\.\d+)\//.exec(fit.stages.find((t) => t.startsWith(name)))[1]);
         check('the global fit is closer to the scan than the alignment', meanOf('global_fitting') < 0.5 * meanOf('initial_alignment'),
               `${meanOf('initial_alignment')} % -> ${meanOf('global_fitting')} %`);
+        // The same fit on one thread (a page served WITHOUT the isolation
+        // headers, as many hosts do: the fallback core) must give the same
+        // numbers and the same meshes, bit for bit (parallel_for's results
+        // do not depend on the thread count).
+        const threadedFit = await fitFingerprint(page);
+        const plain = await startServer(WEBDIR, { isolation: false });
+        const plainOrigin = `http://127.0.0.1:${plain.address().port}`;
+        ownOrigins.push(plainOrigin);
+        const pagePlain = await context.newPage();
+        watch(pagePlain);
+        try {
+          await pagePlain.goto(plainOrigin + '/index.html?autofit=0');
+          const sPlain = await waitForState(pagePlain, ['ready', 'error'], READY_TIMEOUT_MS);
+          const plainWorker = await pagePlain.evaluate(() => ({ coi: window.crossOriginIsolated, worker: window.likeness.workerThreads }));
+          check('served without COOP/COEP: the page starts with the single-threaded core', sPlain === 'ready' &&
+                plainWorker.coi === false && plainWorker.worker && plainWorker.worker.variant === 'single' &&
+                plainWorker.worker.threads === 1, `state ${sPlain}, ${JSON.stringify(plainWorker)}`);
+          const sPlainLoad = await setFile(pagePlain, 'synthetic_head.ply', synth.bytes);
+          await pagePlain.click('#btn-fit');
+          await pagePlain.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: JOB_TIMEOUT_MS });
+          const plainFit = sPlainLoad === 'done' && (await state(pagePlain)) === 'done' ? await fitFingerprint(pagePlain) : null;
+          check('... its fit reaches "done" with the same stage numbers and meshes as the threaded fit',
+                !!plainFit && plainFit.report === threadedFit.report && plainFit.meshes === threadedFit.meshes,
+                plainFit ? `${isolated.worker.threads} threads ${Math.round(threadedFit.fitMs)} ms, 1 thread ${Math.round(plainFit.fitMs)} ms; ` +
+                           `report ${plainFit.report === threadedFit.report ? 'equal' : 'DIFFERS: ' + plainFit.report + ' vs ' + threadedFit.report}; ` +
+                           `meshes ${plainFit.meshes === threadedFit.meshes ? 'equal (' + threadedFit.meshes + ')' : 'DIFFER'}`
+                         : 'state ' + (await state(pagePlain)) + ': ' + await bannerText(pagePlain));
+        } finally {
+          await pagePlain.close();
+          plain.close();
+        }
         const fitted = await canvasImage(page);
         const fitDiff = differingFraction(pointsShown, fitted);
         check('the canvas shows the fitted head', fitDiff > 0.02, `${(100 * fitDiff).toFixed(1)}% of pixels changed`);
@@ -1016,7 +1087,7 @@ async function main() {
 
     check('no console errors', consoleErrors.length === 0, consoleErrors.slice(0, 5).join(' | '));
     check('every request goes to the page\'s own origin', foreign.length === 0 && requests.length > 0,
-          foreign.length ? foreign.slice(0, 5).join(', ') : `${requests.length} requests, all to ${origin}`);
+          foreign.length ? foreign.slice(0, 5).join(', ') : `${requests.length} requests, all to ${ownOrigins.join(' and ')}`);
   } catch (e) {
     check('test ran to the end', false, e && e.message ? e.message.split('\n')[0] : String(e));
   } finally {
