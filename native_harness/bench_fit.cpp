@@ -16,7 +16,10 @@
 // left out of fitting; 0 keeps them), --fit-footprint N (points per
 // displacement footprint), --fit-noise-points N / --fit-noise-edge F /
 // --fit-noise-radius E / --fit-noise-confidence G (footprints widened
-// against the noise, DisplacementOptions; --fit-noise-points 128 turns it on)
+// against the noise, DisplacementOptions; --fit-noise-points 128 turns it on),
+// --fit-smooth-levels N / --fit-smooth-strength S / --fit-smooth-iterations K /
+// --fit-smooth-agreement C (denoising by smoothing over the mesh,
+// DisplacementOptions::smooth_*; --fit-smooth-levels 0 turns it off)
 // (seeds 1..N); --save-scans DIR writes scans, truths,
 // the finest level and its crossing triangles.
 #include "command.h"
@@ -327,6 +330,10 @@ int run(const Args& args) {
     args.get_double("fit-noise-edge", opt.displacement.noise_edge_fraction, opt.displacement.noise_edge_fraction);
     args.get_double("fit-noise-radius", opt.displacement.noise_max_radius_edges, opt.displacement.noise_max_radius_edges);
     args.get_double("fit-noise-confidence", opt.displacement.noise_confidence, opt.displacement.noise_confidence);
+    args.get_int("fit-smooth-levels", opt.displacement.smooth_finest_levels, opt.displacement.smooth_finest_levels);
+    args.get_double("fit-smooth-strength", opt.displacement.smooth_strength, opt.displacement.smooth_strength);
+    args.get_int("fit-smooth-iterations", opt.displacement.smooth_iterations, opt.displacement.smooth_iterations);
+    args.get_double("fit-smooth-agreement", opt.displacement.smooth_agreement, opt.displacement.smooth_agreement);
     args.get_double("fit-line-edges", opt.displacement.fine_line_edges, opt.displacement.fine_line_edges);
     if (args.has("fit-no-climb")) opt.fold_limit.shrink_coarser_levels = false;
     if (args.has("fit-remeasure")) opt.displacement.remeasure_coarse_vertices = true;
@@ -507,6 +514,9 @@ int run(const Args& args) {
       std::printf("   displacement footprints per level (measured / widened against the noise / mean radius mm):");
       for (size_t l = 0; l < dstats.measured.size(); ++l)
         std::printf(" L%zu %d/%d/%.2f", l, dstats.measured[l], dstats.widened[l], 1e3 * dstats.mean_radius[l]);
+      std::printf("\n   smoothing over the mesh per level (vertices moved / mean |change| mm):");
+      for (size_t l = 0; l < dstats.smoothed.size(); ++l)
+        std::printf(" L%zu %d/%.3f", l, dstats.smoothed[l], 1e3 * dstats.mean_smoothing[l]);
       std::printf("\n");
       // Local update of one control vertex (Sec. 6), at the finest level.
       MultiresMesh& mr = r.multires;

@@ -59,9 +59,14 @@ int run_fit(const Args& args) {
   if (args.has("face-only")) opt.scan_kind = FitHeadOptions::ScanKind::FaceOnly;
   if (args.has("whole-head")) opt.scan_kind = FitHeadOptions::ScanKind::WholeHead;
   if (args.has("no-eye-region")) opt.fit_eye_region = false;  // see FitHeadOptions
-  // Level-L footprints widened against the scan's noise (DisplacementOptions):
-  // smoother skin on dense noisy scans, about +0.3 s.
-  if (args.has("denoise")) opt.displacement.max_footprint_points = 128;
+  // Denoising of the finest level's displacements by smoothing over the mesh
+  // (DisplacementOptions::smooth_*) is on by default; --denoise (its name
+  // when it was opt-in) is accepted and changes nothing.
+  if (args.has("denoise") && args.has("no-denoise")) return fail(cmd, "give --denoise or --no-denoise, not both");
+  if (args.has("no-denoise")) opt.displacement.smooth_finest_levels = 0;
+  // The earlier opt-in: level-L footprints widened against the scan's noise
+  // (up to 128 points each; about +0.3 s, docs/fit.md).
+  if (args.has("widen-footprints")) opt.displacement.max_footprint_points = 128;
   const bool dump = args.has("dump"), scan_frame = args.has("scan-frame");
 
   PointCloud scan;
@@ -127,7 +132,8 @@ int run_fit(const Args& args) {
 
 Registrar reg({"fit",
                "likeness fit --scan FILE --out DIR [--levels L] [--up X Y Z|+x..-z] [--facing X Y Z|+x..-z] "
-               "[--no-orientation-check] [--face-only|--whole-head] [--no-eye-region] [--denoise] [--dump] [--scan-frame]",
+               "[--no-orientation-check] [--face-only|--whole-head] [--no-eye-region] [--no-denoise] [--widen-footprints] "
+               "[--dump] [--scan-frame]",
                "fits the generic head to a scan (jeong2002): control.obj, level1..L.obj, report.json", run_fit});
 
 }  // namespace

@@ -183,6 +183,8 @@ struct LevelGeometry {
   double edge;           // the level's mean edge length
   bool adaptive;
   bool widen;            // footprints may widen against the noise on this level
+  bool smooth;           // the level's heights are smoothed over the mesh (denoising)
+  bool noise_figures;    // fits estimate their height's standard error (widen or smooth)
 };
 
 struct Scratch {
@@ -419,7 +421,7 @@ bool fit_footprint(const MultiresMesh& mesh, int level, int vertex, const Vec3& 
             [](const auto& a, const auto& b) { return a.first < b.first; });
   if (one_sheet_only && s.sheets.size() > 1) return false;
   s.weights.assign(count, 0.0);
-  const bool noise_figures = g.adaptive && g.widen && opt.max_footprint_points > opt.footprint_points;
+  const bool noise_figures = g.noise_figures;
   const double inv_radius = 1.0 / radius;
   for (const auto& sheet : s.sheets) {
     // Not a structured binding: C++17 lambdas (the fallback below) cannot
@@ -556,7 +558,7 @@ bool fit_between(const std::vector<LinePoint>& pts, const std::vector<double>& i
 bool measure_one(const CloudTree& tree, const std::vector<Vec3>& pts, const std::vector<Vec3>* point_normals,
                  const MultiresMesh& mesh, int level, int vertex, const LevelGeometry& g,
                  const DisplacementOptions& opt, Scratch& s, double& out, double& radius_out, double& taper_out,
-                 char& widened_out) {
+                 char& widened_out, double& noise_out, double& variance_factor_out) {
   const Vec3& p = mesh.state.base[level][vertex];
   const Vec3& n = mesh.state.normals[level][vertex];
   if (n.squaredNorm() == 0) return false;  // no normal (isolated vertex)
@@ -681,7 +683,92 @@ bool measure_one(const CloudTree& tree, const std::vector<Vec3>& pts, const std:
   radius_out = fit.radius;
   taper_out = fit.taper;
   widened_out = chosen > 0;
+  // The first fit's noise (a widened footprint's interval used the smaller
+  // of the two narrowest; close enough for weighting neighbours).
+  noise_out = s.fits[0].noise_variance;
+  variance_factor_out = fit.variance_factor * fit.taper * fit.taper;
   return true;
+}
+
+// Denoising of one level's heights by smoothing over the mesh (see
+// DisplacementOptions::smooth_*). heights (#V_l): h_v above the level's
+// base surface, smoothed in place; noise, variance_factor (#V_l): the
+// noise variance the vertex's fit estimated from its residuals and its
+// height's variance per unit noise (var h_v = noise x factor); noise <= 0
+// where unknown: such a vertex neither moves nor counts as a neighbour.
+// Vertices below first_free (a coarser level's, which jeong2002 does not
+// measure again) count as neighbours but do not move. moved / sum_change:
+// how many heights changed and by how much in all.
+void smooth_heights(const MultiresMesh& mesh, int level, const DisplacementOptions& opt, double edge,
+                    const std::vector<double>& noise, const std::vector<double>& variance_factor,
+                    const std::vector<double>& radius, int first_free, std::vector<double>& heights, int& moved,
+                    double& sum_change) {
+  moved = 0;
+  sum_change = 0;
+  const IndexRows& ring = mesh.links[level].normal_reach;  // itself + one-ring
+  const int nv = mesh.num_vertices(level);
+  // Each height's variance: the noise pooled over the one-ring (a 16-point
+  // fit's own estimate rests on about three degrees of freedom: alone it
+  // would make the weights as noisy as the heights) times its own factor.
+  std::vector<double> variance(nv, -1.0), known;
+  const double widest = opt.smooth_max_radius_edges * edge;
+  for (int v = 0; v < nv; ++v) {
+    if (!(noise[v] > 0) || !(variance_factor[v] > 0) || !(radius[v] <= widest)) continue;
+    double sum = 0;
+    int count = 0;
+    for (int i = ring.offsets[v]; i < ring.offsets[v + 1]; ++i) {
+      const int u = ring.items[i];
+      if (noise[u] > 0) sum += noise[u], ++count;
+    }
+    variance[v] = sum / count * variance_factor[v];
+    known.push_back(variance[v]);
+  }
+  if (known.empty()) return;
+  const double typical = median(known);
+  if (!(typical > 0) || !std::isfinite(typical)) return;
+  // A neighbour's pull per unit weight, against a vertex's own 1 / s_v^2.
+  const double coupling = opt.smooth_strength / typical;
+  const double c = opt.smooth_agreement;
+  // Neighbour weights from the measured heights (fixed, so the iteration
+  // solves one linear system): 1 while the two agree within c combined
+  // standard errors, smoothly 0 at 2c.
+  std::vector<double> weight(ring.items.size(), 0.0);
+  for (int v = 0; v < nv; ++v) {
+    if (!(variance[v] > 0)) continue;
+    for (int i = ring.offsets[v]; i < ring.offsets[v + 1]; ++i) {
+      const int u = ring.items[i];
+      if (u == v || !(variance[u] > 0)) continue;
+      const double t = std::abs(heights[u] - heights[v]) / (c * std::sqrt(variance[u] + variance[v]));
+      const double x = std::clamp(2.0 - t, 0.0, 1.0);
+      weight[i] = x * x * (3 - 2 * x);
+    }
+  }
+  // Jacobi steps, each height kept within c standard errors of its own
+  // measurement (its confidence interval).
+  std::vector<double> x = heights, next(nv);
+  for (int iteration = 0; iteration < opt.smooth_iterations; ++iteration) {
+    for (int v = 0; v < nv; ++v) {
+      if (!(variance[v] > 0) || v < first_free) {
+        next[v] = x[v];
+        continue;
+      }
+      double num = heights[v] / variance[v], den = 1.0 / variance[v];
+      for (int i = ring.offsets[v]; i < ring.offsets[v + 1]; ++i) {
+        if (!(weight[i] > 0)) continue;
+        num += coupling * weight[i] * x[ring.items[i]];
+        den += coupling * weight[i];
+      }
+      const double limit = c * std::sqrt(variance[v]);
+      next[v] = std::clamp(num / den, heights[v] - limit, heights[v] + limit);
+    }
+    x.swap(next);
+  }
+  for (int v = 0; v < nv; ++v) {
+    if (x[v] == heights[v]) continue;
+    ++moved;
+    sum_change += std::abs(x[v] - heights[v]);
+    heights[v] = x[v];
+  }
 }
 
 }  // namespace
@@ -743,6 +830,12 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
     return Status::error(ErrorCode::InvalidInput,
                          "multires: noise_edge_fraction and noise_confidence must be > 0, noise_max_radius_edges and "
                          "noise_finest_levels >= 0, max_footprint_points <= 65536");
+  if (options.smooth_finest_levels < 0 || options.smooth_iterations < 0 || options.smooth_iterations > 1000 ||
+      !(options.smooth_strength >= 0) || !(options.smooth_strength < 1e6) || !(options.smooth_agreement > 0) ||
+      !(options.smooth_agreement < 1e6) || !(options.smooth_max_radius_edges >= 0))
+    return Status::error(ErrorCode::InvalidInput,
+                         "multires: smooth_finest_levels >= 0, 0 <= smooth_iterations <= 1000, 0 <= smooth_strength "
+                         "< 1e6, 0 < smooth_agreement < 1e6 and smooth_max_radius_edges >= 0 required");
   if (options.footprint_points < 1 || !(options.ridge >= 0) || !(options.support_full_offset >= 0) ||
       !(options.support_zero_offset > options.support_full_offset))
     return Status::error(ErrorCode::InvalidInput,
@@ -780,8 +873,14 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
     *stats = DisplacementStats{std::vector<int>(L + 1, 0),    std::vector<int>(L + 1, 0),
                                std::vector<double>(L + 1, 0), std::vector<double>(L + 1, 0),
                                std::vector<int>(L + 1, 0),    std::vector<double>(L + 1, 0),
-                               std::vector<int>(L + 1, 0)};
+                               std::vector<int>(L + 1, 0),    std::vector<int>(L + 1, 0),
+                               std::vector<double>(L + 1, 0)};
   std::vector<Scratch> scratch(parallel_workers());  // one per worker
+  // Per vertex of the finest level (a coarser level's vertices keep their
+  // indices): the noise figures of the fit that measured it, for the
+  // smoothing over the mesh.
+  std::vector<double> vertex_noise(mesh.num_vertices(L), -1.0), vertex_variance_factor(mesh.num_vertices(L), 0.0),
+      vertex_radius(mesh.num_vertices(L), 0.0);
   mesh.state.base[0] = mesh.control;
   for (int l = 0; l <= L; ++l) {
     evaluate_level(mesh, l);  // normals N_l with d_l = 0
@@ -809,6 +908,11 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
                    : options.radius;
     g.edge = edge;
     g.widen = l > L - options.noise_finest_levels;
+    g.smooth = l > L - options.smooth_finest_levels && options.smooth_iterations > 0 && options.smooth_strength > 0;
+    // The fits' standard errors: for the smoothing on its levels and the
+    // level before (its vertices are part of the next level's heights).
+    g.noise_figures = g.adaptive && ((g.widen && options.max_footprint_points > options.footprint_points) ||
+                                     l >= L - options.smooth_finest_levels);
     g.max_distance = options.max_distance > 0 ? options.max_distance : 2.0 * std::max(edge, typical_radius);
     if (l > 0 && options.fine_line_edges > 0)
       g.max_distance = std::min(g.max_distance, options.fine_line_edges * std::max(edge, typical_radius));
@@ -827,7 +931,10 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
     parallel_for(first, nv, 256, [&](int v, int worker) {
       const int k = v - first;
       found[k] = measure_one(tree, *positions, point_normals, mesh, l, v, g, options, scratch[worker], found_d[k],
-                             found_radius[k], found_taper[k], found_widened[k]);
+                             found_radius[k], found_taper[k], found_widened[k], vertex_noise[v],
+                             vertex_variance_factor[v]);
+      if (!found[k]) vertex_noise[v] = -1.0;
+      vertex_radius[v] = found_radius[k];
     });
     int measured = 0, tapered = 0, widened = 0;
     double sum_abs = 0, max_abs = 0, sum_radius = 0;
@@ -843,6 +950,19 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
       sum_radius += found_radius[k];
       widened += found_widened[k];
     }
+    int smoothed = 0;
+    double sum_smoothing = 0;
+    if (g.smooth) {
+      // Heights above this level's base: the coarser vertices lie where
+      // their own level measured them (0 here, with that level's error);
+      // they steady their neighbours but keep their place (one
+      // displacement per vertex, on the level that introduced it).
+      std::vector<double> heights(nv, 0.0);
+      for (int v = first; v < nv; ++v) heights[v] = mesh.displacements[l][v];
+      smooth_heights(mesh, l, options, edge, vertex_noise, vertex_variance_factor, vertex_radius, first, heights, smoothed,
+                     sum_smoothing);
+      for (int v = first; v < nv; ++v) mesh.displacements[l][v] = heights[v];
+    }
     if (stats) {
       stats->candidates[l] = nv - first;
       stats->measured[l] = measured;
@@ -851,6 +971,8 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
       stats->tapered[l] = tapered;
       stats->mean_radius[l] = measured ? sum_radius / measured : 0.0;
       stats->widened[l] = widened;
+      stats->smoothed[l] = smoothed;
+      stats->mean_smoothing[l] = smoothed ? sum_smoothing / smoothed : 0.0;
     }
     evaluate_level(mesh, l);  // now with d_l
     if (l < L) {

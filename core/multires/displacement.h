@@ -27,7 +27,11 @@
 //     widest that agrees with all narrower ones is kept (intersection of
 //     confidence intervals, Goldenshluger & Nemirovski 1997, Katkovnik
 //     1999): the noise is averaged, the detail the narrow fits agree on
-//     is kept.
+//     is kept (opt-in);
+//   - and, by default, the finest level's heights are smoothed over the
+//     mesh's one-rings, each weighted by its standard error, only between
+//     neighbours that agree within their errors (DisplacementOptions::
+//     smooth_*).
 #pragma once
 #include "common/progress.h"
 #include "common/status.h"
@@ -73,8 +77,9 @@ struct DisplacementOptions {
   // on seed 2. Off by default (16 = footprint_points): with the eye region
   // on (pipeline/fit_head.h), 128 points leave 6 lip crossing pairs on
   // seed 5 and put the slowest seed at 1.9 s wall against 1.5 s
-  // (docs/fit.md); `likeness fit --denoise` and the bench's
-  // --fit-noise-points 128 turn it on.
+  // (docs/fit.md); `likeness fit --widen-footprints` and the bench's
+  // --fit-noise-points 128 turn it on. The smoothing over the mesh below
+  // (on by default) reaches the same roughness for a fraction of the time.
   int max_footprint_points = 16;
   double noise_edge_fraction = 0.01;
   double noise_max_radius_edges = 2.5;
@@ -87,6 +92,43 @@ struct DisplacementOptions {
   // which the interval test takes for noise: on Fran and James, widening
   // every level cost 0.054 -> 0.072 % and 0.050 -> 0.061 %.
   int noise_finest_levels = 1;
+  // Denoising by smoothing over the mesh (on by default): on this many of
+  // the finest levels, the measured heights (#V_l, above the level's base
+  // surface; a vertex a coarser level measured has height 0 there, with
+  // that level's error) are smoothed over the level's one-rings, each
+  // vertex weighted by its own height's standard error (the
+  // footprint_points fit's, from its residuals pooled over the one-ring):
+  // smooth_iterations Jacobi steps of the screened smoothing
+  //   min sum_v (x_v - h_v)^2 / s_v^2
+  //       + smooth_strength / median(s^2) sum_edges w_uv (x_u - x_v)^2,
+  // where a neighbour counts fully (w_uv = 1) while the two heights agree
+  // within smooth_agreement x sqrt(s_u^2 + s_v^2) and not at all from twice
+  // that on (a lip edge, a nostril, a lid: real detail the noise cannot
+  // explain), and no vertex moves farther than smooth_agreement x s_v from
+  // its own measurement (the result stays inside its confidence interval).
+  // Work shared between neighbours instead of wider footprints: O(#V x
+  // ring x iterations), no search. Neighbours are neighbours on the mesh,
+  // so the smoothing never reaches across closed lips to the other lip
+  // (the widened 3-D footprints did). 0 levels: off
+  // (`likeness fit --no-denoise`). Synthetic seeds 1-5: docs/fit.md,
+  // "Denoising by smoothing over the mesh".
+  // Strength 0.3 (a neighbour's pull, at the level's typical error, is 0.3
+  // of a vertex's own measurement's) over 8 steps: cheeks + brow 8.2-8.6
+  // -> 3.8-4.1 deg, truth -> surface slightly closer on every seed, lips 0;
+  // 1.0 gave 3.0-3.2 deg (as smooth as no level-3 displacement at all) and
+  // Table 1 above the noise floor; 0.15 gave 4.8-5.0 deg.
+  int smooth_finest_levels = 1;
+  int smooth_iterations = 8;
+  double smooth_strength = 0.3;
+  double smooth_agreement = 2.0;
+  // Only vertices whose footprint radius is at most this many of the
+  // level's mean edges take part: neighbours a wider footprint apart see
+  // nearly the same points already (sparse scans: Fran's and James's
+  // level-3 footprints are several edges wide), their heights are as
+  // smooth as the data allows, and their residuals are the misfit of real
+  // detail, not noise (smoothing them cost Fran 0.050 -> 0.057 %, James
+  // 0.048 -> 0.053 %).
+  double smooth_max_radius_edges = 2.0;
   // Largest adaptive radius. 0: the larger of half the level's mean edge and
   // twice the mean point spacing sqrt(level area / #points) over the whole
   // level (a patchy scan is denser where it has data, so its footprints fit
@@ -160,6 +202,8 @@ struct DisplacementStats {
   std::vector<int> tapered;        // L+1: measured vertices whose d the support taper reduced
   std::vector<double> mean_radius; // L+1: mean footprint radius over measured vertices
   std::vector<int> widened;        // L+1: measured vertices whose footprint the noise widened
+  std::vector<int> smoothed;       // L+1: vertices the smoothing over the mesh moved (denoising)
+  std::vector<double> mean_smoothing;  // L+1: their mean |change| of d
 };
 
 // Flags (#P, 1 = isolated) the points whose neighbourhood holds fewer than

@@ -91,12 +91,13 @@ BumpResult measure_bump(const PointCloud& cloud, const DisplacementOptions& opti
 DisplacementOptions sixteen_points() {
   DisplacementOptions o;
   o.max_footprint_points = o.footprint_points;  // the footprint as it was: no widening
+  o.smooth_finest_levels = 0;                   // and no smoothing over the mesh
   return o;
 }
 
 DisplacementOptions widened() {
-  DisplacementOptions o;
-  o.max_footprint_points = 128;  // `likeness fit --denoise` (off by default)
+  DisplacementOptions o = sixteen_points();
+  o.max_footprint_points = 128;  // `likeness fit --widen-footprints` (off by default)
   return o;
 }
 
