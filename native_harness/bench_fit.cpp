@@ -18,7 +18,7 @@
 // --fit-noise-radius E / --fit-noise-confidence G (footprints widened
 // against the noise, DisplacementOptions; --fit-noise-points 128 turns it on),
 // --fit-smooth-levels N / --fit-smooth-strength S / --fit-smooth-iterations K /
-// --fit-smooth-agreement C (denoising by smoothing over the mesh,
+// --fit-smooth-agreement C / --fit-smooth-max-radius E (denoising by smoothing over the mesh,
 // DisplacementOptions::smooth_*; --fit-smooth-levels 0 turns it off)
 // (seeds 1..N); --save-scans DIR writes scans, truths,
 // the finest level and its crossing triangles.
@@ -334,6 +334,8 @@ int run(const Args& args) {
     args.get_double("fit-smooth-strength", opt.displacement.smooth_strength, opt.displacement.smooth_strength);
     args.get_int("fit-smooth-iterations", opt.displacement.smooth_iterations, opt.displacement.smooth_iterations);
     args.get_double("fit-smooth-agreement", opt.displacement.smooth_agreement, opt.displacement.smooth_agreement);
+    args.get_double("fit-smooth-max-radius", opt.displacement.smooth_max_radius_edges,
+                    opt.displacement.smooth_max_radius_edges);
     args.get_double("fit-line-edges", opt.displacement.fine_line_edges, opt.displacement.fine_line_edges);
     if (args.has("fit-no-climb")) opt.fold_limit.shrink_coarser_levels = false;
     if (args.has("fit-remeasure")) opt.displacement.remeasure_coarse_vertices = true;
