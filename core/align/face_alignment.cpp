@@ -1,11 +1,13 @@
 // ICP alignment for partial scans, coverage and orientation checks; see the header.
 #include "align/face_alignment.h"
 
+#include "common/parallel.h"
 #include "mesh/geometry.h"
 #include "raycast/bvh.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -74,18 +76,47 @@ struct IcpRun {
   int iterations = 0;
 };
 
+// Closest point on the tree's mesh to q, searched within the distance to
+// `guess` (a triangle index, or -1): the previous ICP iteration's triangle
+// is usually still the nearest or close to it, so most of the tree is
+// pruned. The bound is widened by a relative 1e-9 so that the guess itself
+// stays inside; the search still returns the exact nearest triangle (the
+// first one visited among exact ties, as an unbounded search does).
+ClosestPoint closest_point_near(const MeshBvh& tree, const Vec3& q, int guess) {
+  if (guess >= 0) {
+    const Tri& t = tree.triangles[guess];
+    Vec3 bary;
+    const Vec3 on = closest_point_on_triangle(q, tree.positions[t[0]], tree.positions[t[1]], tree.positions[t[2]], bary);
+    const double bound = (on - q).norm() * (1 + 1e-9) + 1e-300;
+    const ClosestPoint c = closest_point(tree, q, bound);
+    if (c.found()) return c;
+  }
+  return closest_point(tree, q);
+}
+
 // Point-to-point ICP of the faced generic (tree over it) onto the samples.
+// parallel: the closest points of an iteration on parallel_for's threads
+// (false when the caller already runs several ICPs in parallel); the
+// result does not depend on it.
 IcpRun run_icp(const MeshBvh& tree, const std::vector<Vec3>& samples, Similarity T, const FaceAlignOptions& o,
-               double clamp) {
+               double clamp, bool parallel) {
   IcpRun run;
   std::vector<Vec3> model(samples.size());
   std::vector<double> dist(samples.size());
+  std::vector<int> face(samples.size(), -1);  // the last iteration's nearest triangle per sample
   double previous = -1;
   for (int it = 0; it < o.max_iterations; ++it) {
-    for (size_t i = 0; i < samples.size(); ++i) {
-      const ClosestPoint c = closest_point(tree, T.inverse(samples[i]));
+    const auto correspond = [&](int i, int) {
+      const ClosestPoint c = closest_point_near(tree, T.inverse(samples[i]), face[i]);
+      face[i] = c.triangle;
       model[i] = c.point;
       dist[i] = (T.apply(c.point) - samples[i]).norm();
+    };
+    const int n = static_cast<int>(samples.size());
+    if (parallel) {
+      parallel_for(0, n, 256, correspond);
+    } else {
+      for (int i = 0; i < n; ++i) correspond(i, 0);
     }
     const double median = quantile(dist, 0.5);
     const double trim = std::max(o.trim_factor * median, 1e-12);
@@ -248,23 +279,35 @@ Status align_face(const TriMesh& generic, const HeadAnnotations& ann, const Poin
   coarse_options.max_iterations = o.coarse_iterations;
   bool have = false;
   IcpRun best;
-  const int total = static_cast<int>(o.start_yaws_deg.size() * o.start_scales.size());
-  for (double yaw_deg : o.start_yaws_deg)
-    for (double relative : o.start_scales) {
+  // The starts are independent: run on parallel_for's threads, one start
+  // each, then compared in their fixed order (the same choice on any number
+  // of threads). Progress is reported after each yaw's starts.
+  const int num_scales = static_cast<int>(o.start_scales.size());
+  const int total = static_cast<int>(o.start_yaws_deg.size()) * num_scales;
+  std::vector<IcpRun> runs(num_scales);
+  std::vector<char> started(num_scales);
+  for (size_t y = 0; y < o.start_yaws_deg.size(); ++y) {
+    const Mat3 Q = yaw(o.start_yaws_deg[y]);
+    parallel_for(0, num_scales, 1, [&](int k, int) {
       Similarity T0;
-      if (!search.start(cloud.positions, yaw(yaw_deg), relative, T0)) continue;
-      const IcpRun run = run_icp(search.tree, coarse, T0, coarse_options, search.clamp);
+      started[k] = search.start(cloud.positions, Q, o.start_scales[k], T0);
+      if (started[k]) runs[k] = run_icp(search.tree, coarse, T0, coarse_options, search.clamp, false);
+    });
+    for (int k = 0; k < num_scales; ++k) {
+      if (!started[k]) continue;
+      const IcpRun& run = runs[k];
       out.iterations += run.iterations;
       ++out.starts;
       if (run.inliers > 0 && (!have || run.score < best.score)) {
         best = run;
         have = true;
       }
-      if (!report(progress, "align", 0.7 * out.starts / total))
-        return Status::error(ErrorCode::Cancelled, "align_face: cancelled");
     }
+    if (!report(progress, "align", 0.7 * (y + 1) * num_scales / total))
+      return Status::error(ErrorCode::Cancelled, "align_face: cancelled");
+  }
   if (!have) return Status::error(ErrorCode::NotAHead, "align_face: no scan point corresponds to the head");
-  best = run_icp(search.tree, subset(cloud.positions, o.max_points, o.seed + 1), best.T, o, search.clamp);
+  best = run_icp(search.tree, subset(cloud.positions, o.max_points, o.seed + 1), best.T, o, search.clamp, true);
   out.iterations += best.iterations;
   if (!(best.inliers > 0)) return Status::error(ErrorCode::NotAHead, "align_face: no scan point corresponds to the head");
   out.scale = best.T.s;
@@ -320,21 +363,35 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
   bool have_best = false, have_given = false;
   IcpRun best;
   int done = 0;
+  // Per up axis: the given orientation (the first start) alone, as it may
+  // end the search; the other starts of the axis on parallel_for's threads
+  // (independent), then compared in their fixed order, so the outcome does
+  // not depend on the number of threads.
+  constexpr int kYaws = 8;
+  std::array<IcpRun, kYaws> runs;
+  std::array<char, kYaws> ran{};
   for (const Vec3& up : axes) {
     // A facing axis perpendicular to up, then yaws about up in 45 degree steps.
     const Vec3 look0 = std::fabs(up.z()) < 0.5 ? Vec3(Vec3::UnitZ()) : Vec3(Vec3::UnitX());
-    for (int k = 0; k < 8; ++k) {
+    const auto run_start = [&](int k, int) {
       const Vec3 look = Eigen::AngleAxisd(k * 3.14159265358979323846 / 4, up) * look0;
       Mat3 Q;  // cloud -> candidate upright frame
       Q.row(0) = up.cross(look).transpose();
       Q.row(1) = up.transpose();
       Q.row(2) = look.transpose();
       Similarity T0;
+      ran[k] = search.start(samples, Q, 1.0, T0);
+      if (ran[k]) runs[k] = run_icp(search.tree, samples, T0, fo, search.clamp, false);
+    };
+    const int parallel_from = done == 0 ? 1 : 0;  // the given orientation's start runs alone, first
+    if (parallel_from == 1) run_start(0, 0);
+    for (int k = 0; k < kYaws; ++k) {
+      if (k == parallel_from) parallel_for(k, kYaws, 1, run_start);
       ++done;
       if (!report(progress, "orientation", done / 48.0))
         return Status::error(ErrorCode::Cancelled, "guess_orientation: cancelled");
-      if (!search.start(samples, Q, 1.0, T0)) continue;
-      const IcpRun run = run_icp(search.tree, samples, T0, fo, search.clamp);
+      if (!ran[k]) continue;
+      const IcpRun& run = runs[k];
       if (!(run.inliers > 0)) continue;
       const Vec3 run_up = run.T.R * Vec3::UnitY(), run_facing = run.T.R * Vec3::UnitZ();
       const bool consistent = angle_deg(run_up, Vec3::UnitY()) <= o.up_tolerance_deg &&

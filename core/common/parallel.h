@@ -9,16 +9,32 @@
 #pragma once
 #include <algorithm>
 #include <atomic>
+#include <cstdlib>
 #include <thread>
 #include <vector>
 
 namespace lk {
+
+// Native runs: the environment variable LK_THREADS=N (N >= 1) sets the
+// number of threads, e.g. LK_THREADS=1 times natively what the
+// single-threaded wasm build does. Read once; 0 when unset or invalid.
+inline int parallel_workers_from_environment() {
+  static const int workers = [] {
+    const char* value = std::getenv("LK_THREADS");
+    const int n = value ? std::atoi(value) : 0;
+    return n >= 1 ? n : 0;
+  }();
+  return workers;
+}
 
 // Threads a loop may use (1 when single-threaded).
 inline int parallel_workers() {
 #ifdef LK_SINGLE_THREADED
   return 1;
 #else
+#ifndef LK_MAX_WORKERS  // (a threaded wasm build has no more threads than its pool)
+  if (const int asked = parallel_workers_from_environment()) return asked;
+#endif
   const unsigned n = std::thread::hardware_concurrency();
 #ifdef LK_MAX_WORKERS  // threaded wasm: no more threads than its pre-made pthread pool + the caller
   const unsigned cap = LK_MAX_WORKERS;

@@ -1,5 +1,7 @@
 #include "fit/closest_point.h"
 
+#include "common/parallel.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -23,6 +25,24 @@ SurfacePoint ClosestPointTree::closest(const Vec3& p, double max_squared_distanc
   best.squared_distance = max_squared_distance;
   const ClosestPoint c = closest_point(bvh_, p, std::sqrt(max_squared_distance));
   if (!c.found()) return best;
+  best.face = c.triangle;
+  best.point = c.point;
+  best.barycentric = c.barycentric;
+  best.squared_distance = (c.point - p).squaredNorm();
+  return best;
+}
+
+SurfacePoint ClosestPointTree::closest_near(const Vec3& p, int guess) const {
+  if (guess < 0 || guess >= bvh_.num_triangles()) return closest(p);
+  const Tri& t = bvh_.triangles[guess];
+  Vec3 bary;
+  const Vec3 on = lk::closest_point_on_triangle(p, bvh_.positions[t[0]], bvh_.positions[t[1]], bvh_.positions[t[2]], bary);
+  // Widened: the search then meets every triangle an unbounded search would
+  // keep, in the same order, and keeps the same one.
+  const double bound = (on - p).norm() * (1 + 1e-9) + 1e-300;
+  const ClosestPoint c = closest_point(bvh_, p, bound);
+  if (!c.found()) return closest(p);  // (not expected: the guess lies within the bound)
+  SurfacePoint best;
   best.face = c.triangle;
   best.point = c.point;
   best.barycentric = c.barycentric;
@@ -56,12 +76,19 @@ DistanceStats summarize_distances(std::vector<double>& d, double reference_diago
 DistanceStats point_to_surface_stats(const std::vector<Vec3>& points, const TriMesh& mesh,
                                      double reference_diagonal, int stride) {
   ClosestPointTree tree(mesh);
-  std::vector<double> d;
   if (tree.empty()) return DistanceStats{};
   stride = std::max(1, stride);
-  d.reserve(points.size() / stride + 1);
-  for (size_t i = 0; i < points.size(); i += stride)
-    d.push_back(std::sqrt(tree.closest(points[i]).squared_distance));
+  const int n = static_cast<int>((points.size() + stride - 1) / stride);
+  std::vector<double> d(n);
+  constexpr int kRun = 512;  // points per run (one guess chain)
+  parallel_for(0, (n + kRun - 1) / kRun, 1, [&](int run, int) {
+    int face = -1;
+    for (int k = run * kRun; k < std::min(n, (run + 1) * kRun); ++k) {
+      const SurfacePoint c = tree.closest_near(points[size_t(k) * stride], face);
+      face = c.face;
+      d[k] = std::sqrt(c.squared_distance);
+    }
+  });
   return summarize_distances(d, reference_diagonal);
 }
 

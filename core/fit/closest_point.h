@@ -39,6 +39,12 @@ class ClosestPointTree {
   // it prunes the search; if nothing is nearer than the bound the result's
   // face is -1.
   SurfacePoint closest(const Vec3& p, double max_squared_distance = 1e300) const;
+  // Exact closest point, searched first within the distance to triangle
+  // `guess` (e.g. the triangle found for a neighbouring point; -1: none).
+  // Same answer as closest(p), bit for bit (the bound is widened a little
+  // so that the nearest triangle, and the first of exact ties, is always
+  // inside it), only faster when the guess is near.
+  SurfacePoint closest_near(const Vec3& p, int guess) const;
 
  private:
   MeshBvh bvh_;
@@ -60,6 +66,9 @@ struct DistanceStats {
 
 // Distances from every point (or every stride-th point when stride > 1) to
 // the mesh, normalized by reference_diagonal (the cloud's bbox diagonal).
+// Runs of consecutive points are measured on parallel_for's threads, each
+// point searched near its predecessor's triangle (scans list neighbours
+// together); the figures do not depend on either.
 DistanceStats point_to_surface_stats(const std::vector<Vec3>& points, const TriMesh& mesh,
                                      double reference_diagonal, int stride = 1);
 

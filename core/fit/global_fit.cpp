@@ -123,10 +123,37 @@ void project(const std::vector<Vec3>& points, const std::vector<int>& set, TriMe
   out.dist_energy = set.empty() ? 0.0 : sum / set.size();
 }
 
+// Fill-reducing ordering of the normal equations by vertices: approximate
+// minimum degree (Eigen's AMD) on the graph of the vertices, each vertex's
+// x, y, z kept together. The system has 3 by 3 blocks (point-to-plane
+// couples a vertex's coordinates); ordering the scalars by AMD gave a
+// factor with 9 % more entries on James's guarded global fit, a
+// factorization 1.2x and a solve 1.17x slower (docs/fit.md).
+struct VertexBlockOrdering {
+  using PermutationType = Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int>;
+  template <class MatrixType>
+  void operator()(const MatrixType& A, PermutationType& perm) {
+    const int nv = static_cast<int>(A.rows() / 3);
+    std::vector<Triplet> t;
+    t.reserve(A.nonZeros() / 4);
+    for (int k = 0; k < A.outerSize(); ++k)
+      for (typename MatrixType::InnerIterator it(A, k); it; ++it)
+        if (it.row() % 3 == 0 && it.col() % 3 == 0) t.emplace_back(it.row() / 3, it.col() / 3, 1.0);
+    SpMat graph(nv, nv);
+    graph.setFromTriplets(t.begin(), t.end());
+    PermutationType by_vertex;
+    Eigen::AMDOrdering<int>()(graph, by_vertex);
+    perm.resize(3 * nv);
+    for (int v = 0; v < nv; ++v)
+      for (int c = 0; c < 3; ++c) perm.indices()[3 * v + c] = 3 * by_vertex.indices()[v] + c;
+  }
+};
+using NormalSolver = Eigen::SimplicialLDLT<SpMat, Eigen::Lower, VertexBlockOrdering>;
+
 // Solves H x = g by conjugate gradients preconditioned with the LDLT factor
 // of a nearby matrix, from x0. False when it does not converge quickly (the
 // caller then refactorizes).
-bool preconditioned_cg(const SpMat& H, const VecX& g, const Eigen::SimplicialLDLT<SpMat>& M, const VecX& x0,
+bool preconditioned_cg(const SpMat& H, const VecX& g, const NormalSolver& M, const VecX& x0,
                        VecX& x) {
   x = x0;
   VecX r = g - H * x;
@@ -370,7 +397,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
   const int sub_rounds = static_cast<int>(options.smooth_weights.size());
   const int rounds = sub_rounds + (options.final_iterations > 0 ? 1 : 0);
   const int total_iterations = sub_rounds * std::max(1, options.max_iterations_per_round) + options.final_iterations;
-  Eigen::SimplicialLDLT<SpMat> solver;
+  NormalSolver solver;
   bool analyzed = false;
   int factor_fresh_round = -1;  // the round whose matrix `solver` holds
   int done_iterations = 0;
