@@ -39,6 +39,13 @@ struct FoldLimitOptions {
   int max_shrinks = 8;          // 0.5^8 = 1/256 of the measured value, then 0
   int max_rounds = 200;         // over all levels, against endless loops
   bool shrink_coarser_levels = true;  // false: a bad triangle without displacement of its own stays bad
+  // Before the folds: the crossings of every level but the finest, coarse to
+  // fine, are separated the same way (see max_intersection_rounds), each
+  // level before it is refined into the next (false: only the finest).
+  // With the untangled control mesh (pipeline/fit_head.h) the menpo3d James
+  // scan's level-3 pairs went 1079 -> 646, Fran's 134 -> 104 (mean of four
+  // runs), Table 1 within the scans' own noise (docs/fit_real.md).
+  bool separate_coarser_levels = true;
   // Then the finest level's self-intersections (raycast/self_intersection.h):
   // the corners of both triangles of a crossing pair are shrunk the same way,
   // re-checking only around what moved, for at most this many rounds (0: off).
@@ -96,6 +103,8 @@ struct FoldLimitStats {
   int intersections_left = 0;  // after (0 unless rounds ran out or the smooth surface itself crosses)
   int crease_zeroed = 0;       // displacements of crease vertices set to 0 (all levels)
   int crossing_corrected = 0;  // finest-level corners of crossing pairs put on the smooth surface
+  std::vector<int> coarse_intersections_found;  // L: crossing pairs of levels 0..L-1 before separating them
+  std::vector<int> coarse_intersections_left;   // L: after (incl. pairs that cross on the smooth level too)
 };
 
 // Shrinks mesh.displacements as described above and re-evaluates the mesh.

@@ -115,6 +115,17 @@ struct FitHeadOptions {
   // HeadAnnotations::creases) as creases, so the skin's Butterfly stencils
   // do not reach over the rims into the pockets (false: the plain scheme).
   bool rim_creases = true;
+  // Before subdividing: where the fitted control mesh's smooth Butterfly
+  // level untangle_level crosses itself and the aligned generic head's does
+  // not (two sheets pulled onto the same points: an ear's back against the
+  // scalp), the corners of the control faces under those pairs move
+  // untangle_erode_pct of the diagonal into the head along their normals,
+  // up to untangle_iterations times (and not after two steps without
+  // fewer pairs); the state with the fewest such pairs is kept (fit_head.cpp).
+  // untangle_level 0: off.
+  int untangle_level = 2;
+  int untangle_iterations = 6;
+  double untangle_erode_pct = 0.03;
 };
 
 struct FitStageReport {
@@ -157,6 +168,10 @@ struct FitHeadResult {
   int isolated_points = 0;  // skin points left out of fitting as isolated (DisplacementOptions::isolated_density_ratio)
   int zeroed_displacements = 0; // displacements dropped in pockets or because they folded triangles
   FoldLimitStats fold_limit;    // what the fold limiter shrank
+  // Crossing pairs of the control mesh's smooth level untangle_level that the
+  // aligned generic head's does not have, before and after untangling (the
+  // control mesh above is the untangled one).
+  int smooth_crossings_before = 0, smooth_crossings_after = 0;
 };
 
 // Fits generic (the generic head with annotations, in metres) to scan.

@@ -124,6 +124,7 @@ TEST_CASE("fold limit: incremental visits equal full ones when crossing sheets a
     INFO("restarts " << restarts);
     FoldLimitOptions options;
     options.max_intersection_restarts = restarts;
+    options.separate_coarser_levels = false;  // the finest level's separation (coarser: test_fold_coarse.cpp)
     FoldLimitStats stats;
     run_both(mr, options, stats);
     CHECK(stats.intersections_found > 10);

@@ -473,6 +473,9 @@ TEST_CASE("multires: the limiter separates two displaced sheets that cross", "[m
 
   FoldLimitOptions opt;
   opt.max_intersection_restarts = 4;  // the crossing comes from level 0
+  // The finest level's own separation is tested here (the coarser levels'
+  // would remove the crossing on level 0 first: test_fold_coarse.cpp).
+  opt.separate_coarser_levels = false;
   FoldLimitStats stats;
   REQUIRE(limit_folds(mr, opt, &stats).ok());
   CHECK(stats.intersections_found == static_cast<int>(pairs.size()));
@@ -494,6 +497,7 @@ TEST_CASE("multires: the limiter separates two displaced sheets that cross", "[m
   MultiresMesh on = off;
   FoldLimitOptions no_correction;
   no_correction.crossing_corners_to_smooth = false;
+  no_correction.separate_coarser_levels = false;
   FoldLimitStats off_stats;
   REQUIRE(limit_folds(off, no_correction, &off_stats).ok());
   CHECK(off_stats.intersections_left > 0);
@@ -501,8 +505,10 @@ TEST_CASE("multires: the limiter separates two displaced sheets that cross", "[m
   // By default the finest level's corners there go onto the smooth surface
   // (the spheres do not cross): no crossing left, level 0 untouched, no
   // turned-over triangle, and the dent stays local.
+  FoldLimitOptions finest_only;
+  finest_only.separate_coarser_levels = false;
   FoldLimitStats on_stats;
-  REQUIRE(limit_folds(on, FoldLimitOptions{}, &on_stats).ok());
+  REQUIRE(limit_folds(on, finest_only, &on_stats).ok());
   REQUIRE(find_self_intersections(level_mesh(on, 2), pairs).ok());
   CHECK(pairs.empty());
   CHECK(on_stats.crossing_corrected > 0);
@@ -518,6 +524,7 @@ TEST_CASE("multires: the limiter separates two displaced sheets that cross", "[m
   for (int v = 0; v < parents.num_vertices(0); ++v) parents.displacements[0][v] = 0.15;
   FoldLimitOptions with_parents;
   with_parents.crossing_parents_to_smooth = true;
+  with_parents.separate_coarser_levels = false;
   REQUIRE(limit_folds(parents, with_parents).ok());
   REQUIRE(find_self_intersections(level_mesh(parents, 2), pairs).ok());
   CHECK(pairs.empty());
