@@ -7,10 +7,9 @@
 #include "io/io.h"
 #include "mesh/geometry.h"
 #include "synth/analytic_head.h"
-#include "synth/scanner.h"
-#include "synth/synth_head.h"
 #include "synthetic_head.h"
 #include "test_data.h"
+#include "test_scan.h"
 
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -239,17 +238,12 @@ TEST_CASE("align puts the generic on a virtual structured-light scan of another 
   // holes, hair junk and outliers, then posed in millimetres: the aligned
   // generic must land on that person's own control vertices.
   const GenericHead generic = analytic_head();
-  GenericHead person;
-  REQUIRE(synthesize_head(generic, 3, SynthHeadOptions{}, person).ok());
-  TruthSurface truth;
-  TruthOptions truth_options;
-  truth_options.subdivision_levels = 1;
-  REQUIRE(make_truth_surface(person, 3, truth_options, truth).ok());
-  ScannerOptions scanner;
-  scanner.target_points = 60000;
-  scanner.hair_triangles = truth.hair;
-  PointCloud scan;
-  REQUIRE(scan_virtual(truth.mesh, scanner, 3, scan).ok());
+  test::TestScanOptions setup;
+  setup.generic = &generic;
+  setup.truth.subdivision_levels = 1;
+  const test::TestScan scanned = test::make_test_scan(3, 60000, setup);
+  const GenericHead& person = scanned.head;
+  const PointCloud& scan = scanned.scan;
   const Affine pose = random_affine(8, 8.0, 0.1, 0.2, 1000.0);
   AlignResult r;
   REQUIRE(align_initial(generic.mesh, generic.annotations, transformed(scan, pose), AlignOptions{}, r).ok());

@@ -1,10 +1,8 @@
 #include "fit/closest_point.h"
 #include "fit/global_fit.h"
-#include "head/generic_head.h"
 #include "mesh/primitives.h"
 #include "raycast/self_intersection.h"
-#include "synth/scanner.h"
-#include "synth/synth_head.h"
+#include "test_scan.h"
 #include "toy_shapes.h"
 
 #include <catch2/catch.hpp>
@@ -169,17 +167,8 @@ TEST_CASE("turned_triangles: a triangle turned over is found, a moved or scaled 
 // or a misplaced feature drags the data): without the guard, triangles
 // turn over there; with it none may, and the fit elsewhere stays as good.
 TEST_CASE("global fit: a corrupted band of points turns no control triangle over") {
-  GenericHead generic;
-  REQUIRE(load_generic_head(generic).ok());
-  GenericHead head;
-  REQUIRE(synthesize_head(generic, 3, SynthHeadOptions{}, head).ok());
-  TruthSurface truth;
-  REQUIRE(make_truth_surface(head, 3, TruthOptions{}, truth).ok());
-  ScannerOptions so;
-  so.target_points = 20000;
-  so.hair_triangles = truth.hair;
-  PointCloud scan;
-  REQUIRE(scan_virtual(truth.mesh, so, 3, scan).ok());
+  const GenericHead& generic = test::generic_head();
+  PointCloud scan = test::make_test_scan(3, 20000).scan;
   REQUIRE(scan.normals.size() == scan.positions.size());
   const double band_y = generic.annotations.eye_left.center.y();
   std::vector<char> corrupted(scan.positions.size(), 0);

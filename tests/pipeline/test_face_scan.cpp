@@ -6,9 +6,8 @@
 #include "io/io.h"
 #include "mesh/geometry.h"
 #include "pipeline/fit_head.h"
-#include "synth/scanner.h"
-#include "synth/synth_head.h"
 #include "test_data.h"
+#include "test_scan.h"
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
@@ -30,19 +29,14 @@ struct Truth {
 const Truth& truth() {
   static Truth t = [] {
     Truth s;
-    REQUIRE(load_generic_head(s.generic).ok());
-    GenericHead head;
-    SynthHeadOptions ho;
-    REQUIRE(synthesize_head(s.generic, 4, ho, head).ok());
-    REQUIRE(make_truth_surface(head, 1, TruthOptions{}, s.truth).ok());
-    ScannerOptions so;
-    so.target_points = 20000;
-    so.hair_triangles = s.truth.hair;
-    REQUIRE(scan_virtual(s.truth.mesh, so, 2, s.whole).ok());
-    so.stations = 1;
-    so.arc_degrees = 0;
-    so.elevations_deg = {0.0};
-    REQUIRE(scan_virtual(s.truth.mesh, so, 3, s.frontal).ok());
+    s.generic = test::generic_head();
+    s.truth = test::make_test_truth(test::make_test_head(4), 1);
+    s.whole = test::scan_test_truth(s.truth, 2, 20000);
+    ScannerOptions front;
+    front.stations = 1;
+    front.arc_degrees = 0;
+    front.elevations_deg = {0.0};
+    s.frontal = test::scan_test_truth(s.truth, 3, 20000, front);
     return s;
   }();
   return t;
@@ -76,8 +70,7 @@ Vec3 rim_centroid(const TriMesh& mesh, const std::vector<int>& rim) {
 // of either eye socket's centre and gone at 45 mm, so the face between
 // (nose bridge, upper cheeks) stretches and nothing folds.
 GenericHead head_with_eyes_lowered(const GenericHead& generic, double drop) {
-  GenericHead head;
-  REQUIRE(synthesize_head(generic, 4, SynthHeadOptions{}, head).ok());
+  GenericHead head = test::make_test_head(4, {}, generic);
   const Vec3 eyes[2] = {head.annotations.eye_left.center, head.annotations.eye_right.center};
   for (Vec3& p : head.mesh.positions) {
     const double d = std::min((p - eyes[0]).norm(), (p - eyes[1]).norm());
@@ -94,13 +87,7 @@ GenericHead head_with_eyes_lowered(const GenericHead& generic, double drop) {
 TEST_CASE("fit_head: eyes 8 mm lower than the generic head's land on the scan's eyes") {
   const GenericHead& generic = truth().generic;
   const GenericHead head = head_with_eyes_lowered(generic, 0.008);
-  TruthSurface surface;
-  REQUIRE(make_truth_surface(head, 1, TruthOptions{}, surface).ok());
-  ScannerOptions so;
-  so.target_points = 30000;
-  so.hair_triangles = surface.hair;
-  PointCloud scan;
-  REQUIRE(scan_virtual(surface.mesh, so, 5, scan).ok());
+  const PointCloud scan = test::scan_test_truth(test::make_test_truth(head, 1), 5, 30000);
   const std::vector<int>* rims[2] = {&generic.annotations.eye_left.rim, &generic.annotations.eye_right.rim};
   double error[2][2] = {}, local_error[2][2] = {};  // [eye region off, on][eye]: control mesh, after local fitting
   std::ostringstream where;

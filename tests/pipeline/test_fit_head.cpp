@@ -4,8 +4,7 @@
 #include "mesh/geometry.h"
 #include "pipeline/fit_head.h"
 #include "raycast/self_intersection.h"
-#include "synth/scanner.h"
-#include "synth/synth_head.h"
+#include "test_scan.h"
 
 #include <catch2/catch.hpp>
 #include <random>
@@ -14,25 +13,17 @@ using namespace lk;
 
 namespace {
 
+// The generic head and a 40k-point scan of a person made from it (seed 1),
+// shared by the tests below.
 struct Scene {
-  GenericHead generic;
-  TruthSurface truth;
-  PointCloud scan;
+  const GenericHead& generic = test::generic_head();
+  test::TestScan person = test::make_test_scan(1, 40000);
+  const TruthSurface& truth = person.truth;
+  const PointCloud& scan = person.scan;
 };
 
 const Scene& scene() {
-  static Scene s = [] {
-    Scene sc;
-    REQUIRE(load_generic_head(sc.generic).ok());
-    GenericHead head;
-    REQUIRE(synthesize_head(sc.generic, 1, SynthHeadOptions{}, head).ok());
-    REQUIRE(make_truth_surface(head, 1, TruthOptions{}, sc.truth).ok());
-    ScannerOptions so;
-    so.target_points = 40000;
-    so.hair_triangles = sc.truth.hair;
-    REQUIRE(scan_virtual(sc.truth.mesh, so, 1, sc.scan).ok());
-    return sc;
-  }();
+  static const Scene s;
   return s;
 }
 

@@ -1,8 +1,7 @@
 // The virtual scanner: count, noise, outliers, holes where a structured-light
 // scanner has them, empty hair, determinism, clear errors.
-#include "head/generic_head.h"
 #include "synth/scanner.h"
-#include "synth/synth_head.h"
+#include "test_scan.h"
 
 #include "mesh/geometry.h"
 #include "raycast/bvh.h"
@@ -18,26 +17,15 @@ using namespace lk;
 
 namespace {
 
-struct Scene {
-  GenericHead head;
-  TruthSurface truth;
-  ScannerOptions options;
-  PointCloud cloud;
-  ScanStats stats;
-  MeshBvh bvh;
+struct Scene : test::TestScan {
+  MeshBvh bvh;  // of the truth surface
 };
 
 // One synthetic head (from the embedded generic head) scanned with the
 // defaults (300k points), shared by the tests below: it takes about a second.
 const Scene& scene() {
   static const Scene s = [] {
-    Scene sc;
-    GenericHead generic;
-    REQUIRE(load_generic_head(generic).ok());
-    REQUIRE(synthesize_head(generic, 21, {}, sc.head).ok());
-    REQUIRE(make_truth_surface(sc.head, 21, {}, sc.truth).ok());
-    sc.options.hair_triangles = sc.truth.hair;
-    REQUIRE(scan_virtual(sc.truth.mesh, sc.options, 21, sc.cloud, &sc.stats).ok());
+    Scene sc{test::make_test_scan(21, ScannerOptions{}.target_points), {}};
     REQUIRE(build_bvh(sc.truth.mesh, sc.bvh).ok());
     return sc;
   }();
@@ -117,28 +105,28 @@ std::vector<Vec3> probes_where(const Scene& s, const std::function<bool(int, con
 
 TEST_CASE("the scan has about the requested number of points", "[synth][scanner]") {
   const Scene& s = scene();
-  CHECK(s.cloud.size() >= 0.97 * 300000);
-  CHECK(s.cloud.size() <= 300000);
-  CHECK(s.stats.points == s.cloud.size());
-  CHECK(s.cloud.normals.size() == s.cloud.positions.size());
+  CHECK(s.scan.size() >= 0.97 * 300000);
+  CHECK(s.scan.size() <= 300000);
+  CHECK(s.stats.points == s.scan.size());
+  CHECK(s.scan.normals.size() == s.scan.positions.size());
   CHECK(s.stats.stations.size() == 6);
   int sum = 0, shadowed = 0;
   for (const auto& st : s.stats.stations) {
-    CHECK(st.points > 0.05 * s.cloud.size());  // every station contributes
+    CHECK(st.points > 0.05 * s.scan.size());  // every station contributes
     sum += st.points;
     shadowed += st.shadowed;
   }
-  CHECK(sum == s.cloud.size());
+  CHECK(sum == s.scan.size());
   CHECK(shadowed > 0);  // the projectors cast shadows
 }
 
 TEST_CASE("depth noise along the ray has the requested sigma", "[synth][scanner]") {
   const Scene& s = scene();
-  const std::vector<double> err = depth_errors(s, s.cloud, s.stats);
+  const std::vector<double> err = depth_errors(s, s.scan, s.stats);
   REQUIRE(err.size() > 100000);
   CHECK(robust_std(err) == Approx(0.0002).epsilon(0.2));
   // And with another sigma, on a smaller scan.
-  ScannerOptions o = s.options;
+  ScannerOptions o = s.scanner;
   o.noise_sigma_m = 0.0005;
   o.target_points = 40000;
   PointCloud c;
@@ -152,12 +140,12 @@ TEST_CASE("depth noise along the ray has the requested sigma", "[synth][scanner]
 
 TEST_CASE("outliers: the requested share, off the surface, where scans overlap", "[synth][scanner]") {
   const Scene& s = scene();
-  const int want = static_cast<int>(std::lround(0.005 * s.cloud.size()));
+  const int want = static_cast<int>(std::lround(0.005 * s.scan.size()));
   CHECK(s.stats.outliers == want);
   // Measured independently: skin points farther than 5 sigma from the truth.
   int far = 0, skin = 0, outliers_far = 0;
-  for (int k = 0; k < s.cloud.size(); ++k) {
-    const ClosestPoint cp = closest_point(s.bvh, s.cloud.positions[k]);
+  for (int k = 0; k < s.scan.size(); ++k) {
+    const ClosestPoint cp = closest_point(s.bvh, s.scan.positions[k]);
     if (s.truth.hair[cp.triangle]) continue;
     ++skin;
     if (cp.distance > 0.001) {
@@ -174,7 +162,7 @@ TEST_CASE("outliers: the requested share, off the surface, where scans overlap",
 
 TEST_CASE("the scanner leaves holes behind the ears and under the chin", "[synth][scanner]") {
   const Scene& s = scene();
-  const PointGrid grid(s.cloud.positions, 0.002);
+  const PointGrid grid(s.scan.positions, 0.002);
   const auto& regions = s.head.annotations.regions;
   std::vector<char> in_ear(s.head.mesh.positions.size(), 0), in_cheek(in_ear.size(), 0);
   for (int v : regions.at("ears")) in_ear[v] = 1;
@@ -242,12 +230,12 @@ TEST_CASE("the scanner leaves holes behind the ears and under the chin", "[synth
   CHECK(cov_chin < 0.25);
   CHECK(cov_scalp < 0.2);  // hair returns only sparse junk
   CHECK(s.stats.junk > 0);
-  CHECK(s.stats.junk < 0.05 * s.cloud.size());
+  CHECK(s.stats.junk < 0.05 * s.scan.size());
 }
 
 TEST_CASE("scans are deterministic per seed", "[synth][scanner]") {
   const Scene& s = scene();
-  ScannerOptions o = s.options;
+  ScannerOptions o = s.scanner;
   o.target_points = 20000;
   PointCloud a, b, c;
   REQUIRE(scan_virtual(s.truth.mesh, o, 5, a).ok());

@@ -1,0 +1,58 @@
+#include "test_scan.h"
+
+#include "head/generic_head.h"
+
+#include <catch2/catch.hpp>
+
+namespace lk::test {
+
+const GenericHead& generic_head() {
+  static const GenericHead generic = [] {
+    GenericHead g;
+    const Status st = load_generic_head(g);
+    INFO(st.message);
+    REQUIRE(st.ok());
+    return g;
+  }();
+  return generic;
+}
+
+GenericHead make_test_head(std::uint32_t seed, const SynthHeadOptions& options, const GenericHead& generic) {
+  GenericHead head;
+  const Status st = synthesize_head(generic, seed, options, head);
+  INFO(st.message);
+  REQUIRE(st.ok());
+  return head;
+}
+
+TruthSurface make_test_truth(const GenericHead& head, std::uint32_t seed, const TruthOptions& options) {
+  TruthSurface truth;
+  const Status st = make_truth_surface(head, seed, options, truth);
+  INFO(st.message);
+  REQUIRE(st.ok());
+  return truth;
+}
+
+PointCloud scan_test_truth(const TruthSurface& truth, std::uint32_t seed, int points, ScannerOptions options,
+                           ScanStats* stats) {
+  options.target_points = points;
+  options.hair_triangles = truth.hair;
+  PointCloud scan;
+  const Status st = scan_virtual(truth.mesh, options, seed, scan, stats);
+  INFO(st.message);
+  REQUIRE(st.ok());
+  return scan;
+}
+
+TestScan make_test_scan(std::uint32_t seed, int points, const TestScanOptions& options) {
+  TestScan s;
+  s.head = make_test_head(seed, options.head, options.generic ? *options.generic : generic_head());
+  s.truth = make_test_truth(s.head, seed, options.truth);
+  s.scanner = options.scanner;
+  s.scanner.target_points = points;
+  s.scanner.hair_triangles = s.truth.hair;
+  s.scan = scan_test_truth(s.truth, seed, points, s.scanner, &s.stats);
+  return s;
+}
+
+}  // namespace lk::test

@@ -1,0 +1,59 @@
+// Ground-truth scan set-ups shared by the tests (jeong2002 Sec. 3 input made
+// from a known surface): the embedded generic head, a synthetic person
+// deformed from it (synth/synth_head.h), that person's finer truth surface,
+// and a virtual structured-light scan of it (synth/scanner.h).
+//
+// Each helper REQUIREs that its step succeeds (with the Status message), so
+// a broken stage fails the test that set it up. The same seeds and options
+// give the same bytes as calling synthesize_head, make_truth_surface and
+// scan_virtual directly: porting a test to these helpers keeps its data.
+//
+// Shapes: head.mesh #V by 3 (the generic head's triangles); truth.mesh #Vt
+// by 3, #Ft by 3 (4^levels #F); scan.positions/normals #P by 3.
+#pragma once
+#include "head/head_model.h"
+#include "mesh/tri_mesh.h"
+#include "synth/scanner.h"
+#include "synth/synth_head.h"
+
+#include <cstdint>
+
+namespace lk::test {
+
+// The embedded generic head (load_generic_head), loaded once per test binary.
+const GenericHead& generic_head();
+
+// A synthetic person: `generic` deformed by synthesize_head(seed, options).
+GenericHead make_test_head(std::uint32_t seed, const SynthHeadOptions& options = {},
+                           const GenericHead& generic = generic_head());
+
+// The surface the scanner sees: make_truth_surface(head, seed, options).
+TruthSurface make_test_truth(const GenericHead& head, std::uint32_t seed,
+                             const TruthOptions& options = {});
+
+// scan_virtual of truth.mesh with `options`, except that target_points is
+// `points` and the hair mask is the truth's own (so the scalp returns junk,
+// as every scan test wants).
+PointCloud scan_test_truth(const TruthSurface& truth, std::uint32_t seed, int points,
+                           ScannerOptions options = {}, ScanStats* stats = nullptr);
+
+struct TestScanOptions {
+  SynthHeadOptions head;                 // synthesize_head's ranges (defaults)
+  TruthOptions truth;                    // make_truth_surface's (defaults: 2 Loop steps, 0.5 mm detail)
+  ScannerOptions scanner;                // target_points and hair_triangles are set from the call
+  const GenericHead* generic = nullptr;  // the head to deform; nullptr: the embedded generic head
+};
+
+struct TestScan {
+  GenericHead head;         // the synthetic person, control level
+  TruthSurface truth;       // what was scanned
+  ScannerOptions scanner;   // the options the scan used (target and hair mask filled in)
+  PointCloud scan;
+  ScanStats stats;
+};
+
+// Person, skin detail and scan all from `seed` (how most tests draw them),
+// about `points` points.
+TestScan make_test_scan(std::uint32_t seed, int points, const TestScanOptions& options = {});
+
+}  // namespace lk::test
