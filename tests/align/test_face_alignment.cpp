@@ -3,8 +3,8 @@
 // must be put back exactly; the orientation search must find the axes a
 // head was turned by; bad input is refused.
 #include "align/face_alignment.h"
-#include "head/generic_head.h"
 #include "mesh/geometry.h"
+#include "test_scan.h"
 
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -14,14 +14,7 @@ using namespace lk;
 
 namespace {
 
-const GenericHead& generic() {
-  static GenericHead g = [] {
-    GenericHead h;
-    REQUIRE(load_generic_head(h).ok());
-    return h;
-  }();
-  return g;
-}
+const GenericHead& generic() { return test::generic_head(); }
 
 // Points sampled on the generic head's triangles (area-uniform), the ones
 // within `depth` m behind the nose tip and above the chin (a face patch).

@@ -7,6 +7,7 @@
 #include "mesh/topology.h"
 #include "multires/multires.h"
 #include "raycast/self_intersection.h"
+#include "test_scan.h"
 
 #include <catch2/catch.hpp>
 
@@ -19,17 +20,8 @@ using namespace lk;
 
 namespace {
 
-const GenericHead& asset() {
-  static GenericHead head;
-  static bool loaded = false;
-  if (!loaded) {
-    Status s = load_generic_head(head);
-    INFO(s.message);
-    REQUIRE(s.ok());
-    loaded = true;
-  }
-  return head;
-}
+// The embedded asset, loaded once (load_generic_head; fails with its message).
+const GenericHead& asset() { return test::generic_head(); }
 
 const FeatureBox& box_named(const HeadAnnotations& a, const std::string& name) {
   for (const FeatureBox& b : a.boxes)

@@ -4,7 +4,7 @@
 // and feature vertices a profile photo can still see.
 #include "synth/skin_field.h"
 
-#include "head/generic_head.h"
+#include "test_scan.h"
 
 #include <catch2/catch.hpp>
 #include <algorithm>
@@ -15,14 +15,7 @@ using namespace lk;
 
 namespace {
 
-const GenericHead& generic() {
-  static GenericHead head = [] {
-    GenericHead h;
-    REQUIRE(load_generic_head(h).ok());
-    return h;
-  }();
-  return head;
-}
+const GenericHead& generic() { return test::generic_head(); }
 
 Vec3 mean_albedo(const SkinField& f, const GenericHead& head, const char* region) {
   Vec3 sum = Vec3::Zero();

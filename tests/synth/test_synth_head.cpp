@@ -1,11 +1,12 @@
 // Synthetic heads: deterministic, plausible, smooth, valid, with annotations
 // that follow the mesh; Loop subdivision and the truth surface.
-#include "head/generic_head.h"
 #include "synth/analytic_head.h"
 #include "synth/synth_head.h"
 
 #include "mesh/geometry.h"
+#include "mesh/primitives.h"
 #include "mesh/topology.h"
+#include "test_scan.h"
 
 #include <catch2/catch.hpp>
 
@@ -13,6 +14,7 @@
 #include <cstring>
 
 using namespace lk;
+using lk::test::generic_head;
 
 namespace {
 
@@ -89,15 +91,6 @@ TEST_CASE("variation 0 reproduces the generic head", "[synth]") {
   REQUIRE(synthesize_head(base_head(), 3, o, h).ok());
   for (size_t v = 0; v < h.mesh.positions.size(); ++v)
     REQUIRE((h.mesh.positions[v] - base_head().mesh.positions[v]).norm() < 1e-12);
-}
-
-const GenericHead& generic_head() {
-  static const GenericHead h = [] {
-    GenericHead g;
-    REQUIRE(load_generic_head(g).ok());
-    return g;
-  }();
-  return h;
 }
 
 TEST_CASE("heads over many seeds stay valid, plausible and smooth", "[synth]") {
@@ -239,16 +232,9 @@ TEST_CASE("bad generic heads are refused", "[synth]") {
 
 TEST_CASE("Loop subdivision: counts, affine invariance, smoothing", "[synth]") {
   // A flat grid on a tilted plane stays on that plane (weights sum to 1).
-  TriMesh grid;
   const int n = 6;
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) grid.positions.push_back(Vec3(i, j, 0.3 * i - 0.2 * j));
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      const int a = j * (n + 1) + i;
-      grid.triangles.push_back({a, a + 1, a + n + 2});
-      grid.triangles.push_back({a, a + n + 2, a + n + 1});
-    }
+  TriMesh grid = make_regular_grid(n, n);  // vertex (i, j) at (i, j, 0)
+  for (Vec3& p : grid.positions) p.z() = 0.3 * p.x() - 0.2 * p.y();
   TriMesh fine;
   REQUIRE(loop_subdivide(grid, fine).ok());
   MeshTopology topo;
