@@ -4,6 +4,7 @@
 // rest of the pipeline relies on (indices in range, attribute sizes, finite
 // positions). Run under -fsanitize=address during development.
 #include "io/io.h"
+#include "mesh/primitives.h"
 #include "io_test_util.h"
 
 #include <catch2/catch.hpp>
@@ -16,20 +17,14 @@ using lk::test::bytes_of;
 namespace {
 
 TriMesh textured_grid(int n) {
-  TriMesh m;
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) {
-      m.positions.push_back(Vec3(i, j, 0.1 * i * j));
-      m.normals.push_back(Vec3(0, 0, 1));
-      m.colors.push_back(Vec3(i / double(n), j / double(n), 0.5));
-      m.uvs.push_back(Vec2(i / double(n), j / double(n)));
-    }
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      const int a = j * (n + 1) + i;
-      m.triangles.push_back({a, a + 1, a + n + 2});
-      m.triangles.push_back({a, a + n + 2, a + n + 1});
-    }
+  TriMesh m = make_regular_grid(n, n);  // vertex (i, j) at (i, j, 0)
+  for (Vec3& p : m.positions) {
+    const double i = p.x(), j = p.y();
+    p.z() = 0.1 * i * j;
+    m.normals.push_back(Vec3(0, 0, 1));
+    m.colors.push_back(Vec3(i / n, j / n, 0.5));
+    m.uvs.push_back(Vec2(i / n, j / n));
+  }
   return m;
 }
 

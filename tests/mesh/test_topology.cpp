@@ -1,4 +1,5 @@
 #include "mesh/geometry.h"
+#include "mesh/primitives.h"
 #include "mesh/topology.h"
 
 #include <catch2/catch.hpp>
@@ -12,19 +13,6 @@ TriMesh octahedron() {
   TriMesh m;
   m.positions = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
   m.triangles = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
-  return m;
-}
-
-TriMesh square_grid(int n) {
-  TriMesh m;
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) m.positions.push_back(Vec3(i, j, 0));
-  auto id = [n](int i, int j) { return j * (n + 1) + i; };
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-    }
   return m;
 }
 
@@ -57,7 +45,7 @@ TEST_CASE("closed octahedron: edges, valence, no boundary", "[mesh]") {
 }
 
 TEST_CASE("grid disk: one boundary loop, ordered rings", "[mesh]") {
-  TriMesh m = square_grid(4);
+  TriMesh m = make_regular_grid(4, 4);
   MeshTopology t;
   REQUIRE(build_topology(m, t).ok());
   CHECK(euler_characteristic(t, m.num_triangles()) == 1);

@@ -1,5 +1,6 @@
 // The BVH against brute force: every query must agree with testing every
 // triangle, on meshes that stress the build (soups, flat grids, duplicates).
+#include "mesh/primitives.h"
 #include "raycast/bvh.h"
 
 #include <catch2/catch.hpp>
@@ -71,15 +72,8 @@ TriMesh soup(int n, Rng& rng) {
 
 // A flat grid: every box is flat in z, many centroids share coordinates.
 TriMesh flat_grid(int n) {
-  TriMesh m;
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) m.positions.push_back(Vec3(i, j, 0) / n);
-  auto id = [n](int i, int j) { return j * (n + 1) + i; };
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-    }
+  TriMesh m = make_regular_grid(n, n);  // on [0,n]^2
+  for (Vec3& p : m.positions) p /= n;
   return m;
 }
 

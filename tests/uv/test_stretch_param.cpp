@@ -2,6 +2,7 @@
 // et al. 2001): flip-free, lower stretch than the initial map, ~1 on
 // developable patches, view weighting gives the face more texture space.
 #include "head/generic_head.h"
+#include "mesh/primitives.h"
 #include "uv/stretch_param.h"
 
 #include <catch2/catch.hpp>
@@ -14,15 +15,8 @@ namespace {
 // An n x n grid over [0,1]^2 mapped through f: a disk with one boundary loop.
 template <class F>
 TriMesh grid(int n, F f) {
-  TriMesh m;
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) m.positions.push_back(f(double(i) / n, double(j) / n));
-  auto id = [n](int i, int j) { return j * (n + 1) + i; };
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-    }
+  TriMesh m = make_regular_grid(n, n);  // vertex (i, j) at (i, j, 0)
+  for (Vec3& p : m.positions) p = f(p.x() / n, p.y() / n);
   return m;
 }
 
