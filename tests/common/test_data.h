@@ -30,3 +30,13 @@ int run_likeness(const std::string& args, const std::string& stderr_path = "/dev
       return;                                                                       \
     }                                                                               \
   } while (0)
+
+// Use at the top of a TEST_CASE that runs the `likeness` CLI (run_likeness):
+// skips with a message when the harness is not built.
+#define LK_REQUIRE_LIKENESS()                                                       \
+  do {                                                                              \
+    if (!lk::test::exists(std::string(LK_BIN_DIR) + "/likeness")) {                \
+      WARN("skipped: " << LK_BIN_DIR << "/likeness is not built");                 \
+      return;                                                                       \
+    }                                                                               \
+  } while (0)

@@ -15,10 +15,7 @@ int run(const std::string& args) { return lk::test::run_likeness(args); }
 }  // namespace
 
 TEST_CASE("synth-scan writes the scan and its truth, deterministically", "[synth][cli]") {
-  if (!lk::test::exists(std::string(LK_BIN_DIR) + "/likeness")) {
-    WARN("skipped: " << LK_BIN_DIR << "/likeness is not built");
-    return;
-  }
+  LK_REQUIRE_LIKENESS();
   const std::string dir = lk::test::scratch_dir("synth_cli");
   REQUIRE(run("synth-scan --seed 3 --points 20000 --out " + dir + "/a") == 0);
   REQUIRE(run("synth-scan --seed 3 --points 20000 --out " + dir + "/b") == 0);

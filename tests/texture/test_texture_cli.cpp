@@ -24,10 +24,7 @@ void write(const std::string& path, const std::string& text) { std::ofstream(pat
 }  // namespace
 
 TEST_CASE("likeness texture: synthetic photos in, textured head out; clear errors", "[texture][cli]") {
-  if (!lk::test::exists(std::string(LK_BIN_DIR) + "/likeness")) {
-    WARN("skipped: " << LK_BIN_DIR << "/likeness is not built");
-    return;
-  }
+  LK_REQUIRE_LIKENESS();
   const std::string dir = lk::test::scratch_dir("texture_cli");
   const std::string err = dir + "/err.txt";
   REQUIRE(run("--head generic --make-synthetic " + dir + "/in --photo-width 600 --photo-height 400", err) == 0);
