@@ -141,6 +141,16 @@ MaskStats foreground_stats(const Image& im) {
   return s;
 }
 
+
+// The default orbit camera (on +z, looking at the origin) `distance` away,
+// framing a scene of `scene_radius`, for a square image.
+CameraMatrices orbit_view(float distance, float scene_radius) {
+  OrbitCamera cam;
+  cam.distance = distance;
+  cam.scene_radius = scene_radius;
+  return cam.matrices(1.0f);
+}
+
 }  // namespace
 
 TEST_CASE("silhouette matches the analytic ray-cast for every canonical view", "[render]") {
@@ -294,10 +304,7 @@ TEST_CASE("points render as round sprites of the requested size where they proje
                      Vec3(0.45, -0.45, -0.2)};
   cloud.colors.assign(cloud.positions.size(), Vec3(1.0, 0.2, 0.2));
   const float size = 11.0f;
-  OrbitCamera cam;
-  cam.distance = 3.0f;
-  cam.scene_radius = 1.0f;
-  const CameraMatrices m = cam.matrices(1.0f);
+  const CameraMatrices m = orbit_view(3.0f, 1.0f);
   const Image im = render(
       [&](Renderer& r) {
         DrawableHandle hd;
@@ -338,10 +345,7 @@ TEST_CASE("points without colors are colored by their normals", "[render]") {
   PointCloud cloud;
   cloud.positions = {Vec3(-0.3, 0, 0), Vec3(0.3, 0, 0)};
   cloud.normals = {Vec3(-1, 0, 0), Vec3(1, 0, 0)};  // -x -> cyan-ish, +x -> red-ish
-  OrbitCamera cam;
-  cam.distance = 2.0f;
-  cam.scene_radius = 1.0f;
-  const CameraMatrices m = cam.matrices(1.0f);
+  const CameraMatrices m = orbit_view(2.0f, 1.0f);
   const Image im = render(
       [&](Renderer& r) {
         DrawableHandle hd;
@@ -382,10 +386,7 @@ TEST_CASE("a texture shows up the right way round, per-vertex and per-corner uvs
   corner_quad.uv_per_corner = true;
   corner_quad.uvs = {Vec2(0, 0), Vec2(1, 0), Vec2(1, 1), Vec2(0, 0), Vec2(1, 1), Vec2(0, 1)};
 
-  OrbitCamera cam;
-  cam.distance = 4.0f;
-  cam.scene_radius = 1.5f;
-  const CameraMatrices m = cam.matrices(1.0f);
+  const CameraMatrices m = orbit_view(4.0f, 1.5f);
   for (const TriMesh* q : {&quad, &corner_quad}) {
     const Image im = render(
         [&](Renderer& r) {
@@ -445,10 +446,7 @@ TEST_CASE("baked occlusion darkens the surface it is given for", "[render][ao]")
 TEST_CASE("update_mesh moves the drawn mesh", "[render]") {
   TriMesh e;
   append_ellipsoid(e, Vec3::Zero(), Vec3(0.3, 0.3, 0.3), 24, 32);
-  OrbitCamera cam;
-  cam.distance = 3.0f;
-  cam.scene_radius = 1.0f;
-  const CameraMatrices m = cam.matrices(1.0f);
+  const CameraMatrices m = orbit_view(3.0f, 1.0f);
   std::vector<Vec3> moved = e.positions;
   for (Vec3& p : moved) p.x() += 0.4;
   const Image im = render(
@@ -622,10 +620,7 @@ TEST_CASE("the generic head renders plausibly from the front and the side", "[re
 TEST_CASE("visibility, model matrix and sub-viewports are honoured", "[render]") {
   TriMesh e;
   append_ellipsoid(e, Vec3::Zero(), Vec3(0.3, 0.3, 0.3), 24, 32);
-  OrbitCamera cam;
-  cam.distance = 3.0f;
-  cam.scene_radius = 1.0f;
-  const CameraMatrices m = cam.matrices(1.0f);
+  const CameraMatrices m = orbit_view(3.0f, 1.0f);
   const Image hidden = render(
       [&](Renderer& r) {
         DrawableHandle hd;
@@ -656,7 +651,7 @@ TEST_CASE("visibility, model matrix and sub-viewports are honoured", "[render]")
   r.set_background(kKeyGreen);
   DrawableHandle hd;
   REQUIRE(r.upload_mesh(e, hd).ok());
-  REQUIRE(r.draw(cam.matrices(1.0f), Viewport{32, 0, 32, 32}).ok());
+  REQUIRE(r.draw(m, Viewport{32, 0, 32, 32}).ok());
   Image im;
   REQUIRE(ctx.read_image(im).ok());
   int left_red = 0, right_foreground = 0;
@@ -674,10 +669,7 @@ TEST_CASE("per-vertex mesh colors replace the base color", "[render]") {
   TriMesh e;
   append_ellipsoid(e, Vec3::Zero(), Vec3(0.3, 0.3, 0.3), 24, 32);
   e.colors.assign(e.positions.size(), Vec3(0.05, 0.1, 0.8));  // linear blue
-  OrbitCamera cam;
-  cam.distance = 3.0f;
-  cam.scene_radius = 1.0f;
-  const CameraMatrices m = cam.matrices(1.0f);
+  const CameraMatrices m = orbit_view(3.0f, 1.0f);
   for (const bool use_colors : {true, false}) {
     const Image im = render(
         [&](Renderer& r) {
@@ -764,10 +756,7 @@ TEST_CASE("texture alpha: transparent texels show what lies behind, never their 
   behind.positions = {Vec3(-3, -3, -0.5), Vec3(3, -3, -0.5), Vec3(3, 0, -0.5), Vec3(-3, 0, -0.5)};
   behind.triangles = {Tri{0, 1, 2}, Tri{0, 2, 3}};
 
-  OrbitCamera cam;
-  cam.distance = 4.0f;
-  cam.scene_radius = 1.5f;
-  const CameraMatrices m = cam.matrices(1.0f);
+  const CameraMatrices m = orbit_view(4.0f, 1.5f);
   const Image im = render(
       [&](Renderer& r) {
         DrawableHandle hq, hb;
