@@ -41,20 +41,6 @@
 namespace lk::cli {
 namespace {
 
-// Median CPU time of `reps` runs, in milliseconds. The build machine is
-// shared (its load average is printed), so wall time would mostly measure
-// the neighbours.
-double median_ms(int reps, const std::function<void()>& f) {
-  std::vector<double> t;
-  for (int i = 0; i < reps; ++i) {
-    const double t0 = cpu_clock_ms();
-    f();
-    t.push_back(cpu_clock_ms() - t0);
-  }
-  std::sort(t.begin(), t.end());
-  return t[t.size() / 2];
-}
-
 struct NamedMesh {
   std::string name;
   TriMesh mesh;
@@ -105,14 +91,14 @@ void compare_with_openmesh(const TriMesh& control, const std::vector<ButterflyLe
                 control.num_triangles() - static_cast<int>(probe.n_faces()), control.num_triangles());
     return;
   }
-  double t_om = median_ms(reps, [&] {
+  double t_om = median_cpu_ms(reps, [&] {
     OMMesh om = to_openmesh(control);
     OpenMesh::Subdivider::Uniform::ModifiedButterflyT<OMMesh> sub;
     sub.attach(om);
     sub(L);
     sub.detach();
   });
-  double t_copy = median_ms(reps, [&] { OMMesh om = to_openmesh(control); });
+  double t_copy = median_cpu_ms(reps, [&] { OMMesh om = to_openmesh(control); });
   std::printf("   OpenMesh ModifiedButterflyT, %d levels: %.2f ms (after %.2f ms to build its mesh)\n", L,
               t_om - t_copy, t_copy);
 
@@ -187,9 +173,9 @@ void bench_mesh(const NamedMesh& nm, bool quick) {
     std::printf("   butterfly failed: %s\n", s.message.c_str());
     return;
   }
-  const double t_build = median_ms(reps, [&] { build_butterfly_levels(m, L, levels); });
+  const double t_build = median_cpu_ms(reps, [&] { build_butterfly_levels(m, L, levels); });
   std::vector<std::vector<Vec3>> P;
-  const double t_apply = median_ms(reps * 3, [&] { apply_all(levels, m.positions, P); });
+  const double t_apply = median_cpu_ms(reps * 3, [&] { apply_all(levels, m.positions, P); });
   size_t stencil_entries = 0;
   for (const auto& lv : levels) stencil_entries += lv.stencil_weights.size();
   std::printf("   ours: build topology+stencils for %d levels %.2f ms (once); apply positions to level %d: "
@@ -214,7 +200,7 @@ void bench_mesh(const NamedMesh& nm, bool quick) {
     std::uniform_real_distribution<double> d(-0.002 * diag / (1 << l), 0.002 * diag / (1 << l));
     for (double& x : mr.displacements[l]) x = d(rng);
   }
-  const double t_eval = median_ms(reps, [&] { evaluate(mr); });
+  const double t_eval = median_cpu_ms(reps, [&] { evaluate(mr); });
   std::uniform_int_distribution<int> pick(0, m.num_vertices() - 1);
   std::normal_distribution<double> step(0, 0.005 * diag);
   const int updates = quick ? 200 : 2000;
@@ -246,7 +232,7 @@ void bench_mesh(const NamedMesh& nm, bool quick) {
     std::vector<int> all(m.num_vertices());
     for (int v = 0; v < m.num_vertices(); ++v) all[v] = v;
     std::vector<Vec3> to(m.num_vertices());
-    const double t_all = median_ms(reps, [&] {
+    const double t_all = median_cpu_ms(reps, [&] {
       for (int v = 0; v < m.num_vertices(); ++v) to[v] = frame.control[v] + Vec3(step(rng), step(rng), step(rng));
       update_control_vertices(frame, all, to);
     });
@@ -273,7 +259,7 @@ void bench_head_creases(bool quick) {
     const ButterflyCreases used = with ? creases : ButterflyCreases{};
     std::vector<ButterflyLevel> levels;
     if (!build_butterfly_levels(head.mesh, used, L, levels).ok()) return;
-    const double t_build = median_ms(reps, [&] { build_butterfly_levels(head.mesh, used, L, levels); });
+    const double t_build = median_cpu_ms(reps, [&] { build_butterfly_levels(head.mesh, used, L, levels); });
     std::vector<std::vector<Vec3>> P;
     apply_all(levels, head.mesh.positions, P);
     TriMesh fine;

@@ -68,34 +68,24 @@ int run_bench_uv(const Args&) {
               mesh.num_vertices(), mesh.num_triangles(), opt.k);
   std::printf("  paper (tarini2002 Sec. 3.1): 80 minutes for ~1,600 triangles (spring mesh, Sander's L2 norm)\n");
   std::printf("  %-28s %9s %9s %9s %9s %9s %7s\n", "method", "CPU ms", "L2(w)", "L2", "Linf", "face", "flipped");
-  auto median_of = [](int reps, const std::function<void()>& f) {
-    std::vector<double> t;
-    for (int i = 0; i < reps; ++i) {
-      const double t0 = cpu_clock_ms();
-      f();
-      t.push_back(cpu_clock_ms() - t0);
-    }
-    std::sort(t.begin(), t.end());
-    return t[t.size() / 2];
-  };
   std::vector<Vec2> uv;
   UvStats st;
-  double ms = median_of(3, [&] { parameterize_tutte(mesh, opt, uv); });
+  double ms = median_cpu_ms(3, [&] { parameterize_tutte(mesh, opt, uv); });
   measure_stretch(mesh, uv, opt, st);
   row("mean-value (initial map)", ms, st);
-  ms = median_of(3, [&] { parameterize_stretch(mesh, opt, uv, st); });
+  ms = median_cpu_ms(3, [&] { parameterize_stretch(mesh, opt, uv, st); });
   row("ours, k = 1.2", ms, st);
   UvOptions plain = opt;
   plain.view_weighted = false;
-  ms = median_of(3, [&] { parameterize_stretch(mesh, plain, uv, st); });
+  ms = median_cpu_ms(3, [&] { parameterize_stretch(mesh, plain, uv, st); });
   measure_stretch(mesh, uv, opt, st);  // columns use the k = 1.2 weights
   row("ours, unweighted", ms, st);
 #ifdef LK_HAVE_CGAL
   bool ok = true;
-  ms = median_of(3, [&] { ok = cgal_param<SMP::LSCM_parameterizer_3<SurfaceMesh>>(mesh, uv); });
+  ms = median_cpu_ms(3, [&] { ok = cgal_param<SMP::LSCM_parameterizer_3<SurfaceMesh>>(mesh, uv); });
   if (ok && measure_stretch(mesh, uv, opt, st).ok()) row("CGAL LSCM", ms, st);
   else std::printf("  CGAL LSCM failed on this mesh\n");
-  ms = median_of(1, [&] { ok = cgal_param<SMP::ARAP_parameterizer_3<SurfaceMesh>>(mesh, uv); });
+  ms = median_cpu_ms(1, [&] { ok = cgal_param<SMP::ARAP_parameterizer_3<SurfaceMesh>>(mesh, uv); });
   if (ok && measure_stretch(mesh, uv, opt, st).ok()) row("CGAL ARAP", ms, st);
   else std::printf("  CGAL ARAP failed on this mesh\n");
 #else
@@ -126,7 +116,7 @@ int run_bench_uv(const Args&) {
   copt.estimate_k1 = true;
   CalibResult res;
   Status s;
-  ms = median_of(5, [&] { s = calibrate_camera(cs, 1800, 1200, copt, res); });
+  ms = median_cpu_ms(5, [&] { s = calibrate_camera(cs, 1800, 1200, copt, res); });
   std::printf("calib: %zu correspondences (one off by 50 px), free focal/centre/k1, RANSAC %d trials: %.1f ms CPU,\n"
               "  inlier RMS %.2g px, %d inliers, focal %.1f px (true 3813.6) (%s)\n",
               cs.size(), copt.ransac_iterations, ms, res.rms, res.num_inliers, res.camera.fx,

@@ -40,4 +40,18 @@ inline Timing median_ms(int reps, const std::function<bool()>& f, bool& ok) {
   return {wall[wall.size() / 2], cpu[cpu.size() / 2]};
 }
 
+// Median CPU time (ms) of reps runs of f (at least one run). The build
+// machine is shared (the benches print its load average), so wall time
+// would mostly measure the neighbours.
+inline double median_cpu_ms(int reps, const std::function<void()>& f) {
+  std::vector<double> t;
+  for (int i = 0; i < std::max(1, reps); ++i) {
+    const double t0 = cpu_clock_ms();
+    f();
+    t.push_back(cpu_clock_ms() - t0);
+  }
+  std::sort(t.begin(), t.end());
+  return t[t.size() / 2];
+}
+
 }  // namespace lk::cli
