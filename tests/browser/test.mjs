@@ -42,6 +42,7 @@ import path from 'node:path';
 import zlib from 'node:zlib';
 import { execFileSync } from 'node:child_process';
 import { decodePng } from './harness.mjs';
+import { syntheticScan } from './synth_scan.mjs';
 
 const WEBDIR = path.resolve(process.argv[2] || '');
 const SHOT_DIR = process.env.LK_SCREENSHOT_DIR || '';
@@ -157,22 +158,6 @@ function planePly() {
   const header = ['ply', 'format ascii 1.0', `element vertex ${lines.length}`, 'property float x', 'property float y',
     'property float z', 'end_header'];
   return Buffer.from(header.concat(lines).join('\n') + '\n');
-}
-
-// A 60k-point synthetic head scan made by the native CLI, or null (skip).
-function syntheticScan() {
-  const candidates = [process.env.LK_LIKENESS_BIN, path.join(WEBDIR, '..', 'bin', 'likeness')].filter(Boolean);
-  const bin = candidates.find((c) => fs.existsSync(c));
-  if (!bin) return { skip: 'no native likeness binary (set LK_LIKENESS_BIN)' };
-  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-synth-'));
-  try {
-    execFileSync(bin, ['synth-scan', '--seed', '2', '--points', '60000', '--out', dir], { stdio: 'pipe' });
-    return { bytes: fs.readFileSync(path.join(dir, 'scan.ply')) };
-  } catch (e) {
-    return { skip: 'likeness synth-scan failed: ' + String(e.message).split('\n')[0] };
-  } finally {
-    fs.rmSync(dir, { recursive: true, force: true });
-  }
 }
 
 function truncatedPly() {
@@ -904,7 +889,7 @@ async function main() {
     }
 
     // 6b. The fit of a synthetic head scan, its views, export and animation.
-    const synth = syntheticScan();
+    const synth = syntheticScan(WEBDIR, 2);
     if (synth.skip) {
       console.log('note  the fit is not exercised: ' + synth.skip);
     } else {

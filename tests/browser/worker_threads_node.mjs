@@ -11,10 +11,9 @@
 // else WEBDIR/../bin/likeness); without it the fit part is skipped.
 // Usage: node --no-experimental-fetch worker_threads_node.mjs WEBDIR
 import { createRequire } from 'node:module';
-import { execFileSync } from 'node:child_process';
-import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
+import { syntheticScan } from './synth_scan.mjs';
 
 const WEBDIR = path.resolve(process.argv[2] || '');
 const require = createRequire(import.meta.url);
@@ -61,21 +60,6 @@ function fit(core, bytes) {
   return { ok: true, report, meshes: `${count} bytes, fnv ${hash.toString(16)}`, ms };
 }
 
-function syntheticScan() {
-  const candidates = [process.env.LK_LIKENESS_BIN, path.join(WEBDIR, '..', 'bin', 'likeness')].filter(Boolean);
-  const bin = candidates.find((c) => fs.existsSync(c));
-  if (!bin) return { skip: 'no native likeness binary (set LK_LIKENESS_BIN)' };
-  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-synth-'));
-  try {
-    execFileSync(bin, ['synth-scan', '--seed', '3', '--points', '60000', '--out', dir], { stdio: 'pipe' });
-    return { bytes: fs.readFileSync(path.join(dir, 'scan.ply')) };
-  } catch (e) {
-    return { skip: 'likeness synth-scan failed: ' + String(e.message).split('\n')[0] };
-  } finally {
-    fs.rmSync(dir, { recursive: true, force: true });
-  }
-}
-
 const single = await load('likeness_worker.js');
 const threaded = await load('likeness_worker_mt.js');
 const cores = os.cpus().length;
@@ -85,7 +69,7 @@ check('the threaded core uses min(4, cores) threads, the other one',
       `${threaded.parallel_workers()} and ${single.parallel_workers()} threads on ${cores} cores`);
 check('the threaded core has shared memory', threaded.wasmMemory && threaded.wasmMemory.buffer instanceof SharedArrayBuffer);
 
-const scan = syntheticScan();
+const scan = syntheticScan(WEBDIR, 3);
 if (scan.skip) {
   console.log('note  worker threads: the fit is not compared: ' + scan.skip);
 } else {

@@ -3,6 +3,7 @@
 #include "head/generic_head.h"
 
 #include <catch2/catch.hpp>
+#include <random>
 
 namespace lk::test {
 
@@ -53,6 +54,19 @@ TestScan make_test_scan(std::uint32_t seed, int points, const TestScanOptions& o
   s.scanner.hair_triangles = s.truth.hair;
   s.scan = scan_test_truth(s.truth, seed, points, s.scanner, &s.stats);
   return s;
+}
+
+PointCloud scan_height_field(const std::function<double(double, double)>& surface, double size,
+                             int count, double sigma, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0, size);
+  std::normal_distribution<double> g(0, 1);
+  PointCloud c;
+  for (int i = 0; i < count; ++i) {
+    const double x = u(rng), y = u(rng);
+    c.positions.push_back(Vec3(x, y, surface(x, y) + sigma * g(rng)));
+  }
+  return c;
 }
 
 }  // namespace lk::test

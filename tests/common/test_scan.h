@@ -17,6 +17,7 @@
 #include "synth/synth_head.h"
 
 #include <cstdint>
+#include <functional>
 
 namespace lk::test {
 
@@ -55,5 +56,11 @@ struct TestScan {
 // Person, skin detail and scan all from `seed` (how most tests draw them),
 // about `points` points.
 TestScan make_test_scan(std::uint32_t seed, int points, const TestScanOptions& options = {});
+
+// `count` points uniformly over the square [0, size]^2 on the height field
+// z = surface(x, y), with Gaussian depth noise sigma (a scanner seen from
+// above, for displacement tests on flat patches).
+PointCloud scan_height_field(const std::function<double(double, double)>& surface, double size,
+                             int count, double sigma, unsigned seed);
 
 }  // namespace lk::test

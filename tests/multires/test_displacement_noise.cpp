@@ -11,12 +11,12 @@
 #include "multires/multires.h"
 
 #include "../subdiv/shapes.h"
+#include "test_scan.h"
 
 #include <catch2/catch.hpp>
 
 #include <algorithm>
 #include <cmath>
-#include <random>
 
 using namespace lk;
 using namespace lk::test;
@@ -42,15 +42,7 @@ Vec3 truth_normal(double x, double y) {
 
 // `count` points uniformly over the patch, depth noise sigma.
 PointCloud scan_bump(int count, double sigma, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(0, 12);
-  std::normal_distribution<double> g(0, 1);
-  PointCloud c;
-  for (int i = 0; i < count; ++i) {
-    const double x = u(rng), y = u(rng);
-    c.positions.push_back(Vec3(x, y, truth_height(x, y) + sigma * g(rng)));
-  }
-  return c;
+  return test::scan_height_field(truth_height, 12, count, sigma, seed);
 }
 
 struct BumpResult {

@@ -13,13 +13,13 @@
 #include "multires/multires.h"
 
 #include "../subdiv/shapes.h"
+#include "test_scan.h"
 
 #include <catch2/catch.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <functional>
-#include <random>
 
 using namespace lk;
 using namespace lk::test;
@@ -39,15 +39,7 @@ double bump(double x, double y) {
 double cliff(double x, double) { return x > kStepX ? kHeight : 0.0; }
 
 PointCloud scan(const std::function<double(double, double)>& surface, int count, double sigma, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(0, 12);
-  std::normal_distribution<double> g(0, 1);
-  PointCloud c;
-  for (int i = 0; i < count; ++i) {
-    const double x = u(rng), y = u(rng);
-    c.positions.push_back(Vec3(x, y, surface(x, y) + sigma * g(rng)));
-  }
-  return c;
+  return test::scan_height_field(surface, 12, count, sigma, seed);
 }
 
 DisplacementOptions raw() {

@@ -1,0 +1,24 @@
+// A synthetic head scan made by the native CLI, for the browser and Node
+// tests. No Playwright here: worker_threads_node.mjs runs under
+// --no-experimental-fetch, where playwright-core does not load.
+import { execFileSync } from 'node:child_process';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+
+// `points` points of synthetic head `seed`, made by `likeness synth-scan`
+// (env LK_LIKENESS_BIN, else WEBDIR/../bin/likeness): { bytes } or { skip: why }.
+export function syntheticScan(webdir, seed, points = 60000) {
+  const candidates = [process.env.LK_LIKENESS_BIN, path.join(webdir, '..', 'bin', 'likeness')].filter(Boolean);
+  const bin = candidates.find((c) => fs.existsSync(c));
+  if (!bin) return { skip: 'no native likeness binary (set LK_LIKENESS_BIN)' };
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-synth-'));
+  try {
+    execFileSync(bin, ['synth-scan', '--seed', String(seed), '--points', String(points), '--out', dir], { stdio: 'pipe' });
+    return { bytes: fs.readFileSync(path.join(dir, 'scan.ply')) };
+  } catch (e) {
+    return { skip: 'likeness synth-scan failed: ' + String(e.message).split('\n')[0] };
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+}
