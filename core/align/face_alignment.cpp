@@ -76,24 +76,6 @@ struct IcpRun {
   int iterations = 0;
 };
 
-// Closest point on the tree's mesh to q, searched within the distance to
-// `guess` (a triangle index, or -1): the previous ICP iteration's triangle
-// is usually still the nearest or close to it, so most of the tree is
-// pruned. The bound is widened by a relative 1e-9 so that the guess itself
-// stays inside; the search still returns the exact nearest triangle (the
-// first one visited among exact ties, as an unbounded search does).
-ClosestPoint closest_point_near(const MeshBvh& tree, const Vec3& q, int guess) {
-  if (guess >= 0) {
-    const Tri& t = tree.triangles[guess];
-    Vec3 bary;
-    const Vec3 on = closest_point_on_triangle(q, tree.positions[t[0]], tree.positions[t[1]], tree.positions[t[2]], bary);
-    const double bound = (on - q).norm() * (1 + 1e-9) + 1e-300;
-    const ClosestPoint c = closest_point(tree, q, bound);
-    if (c.found()) return c;
-  }
-  return closest_point(tree, q);
-}
-
 // Point-to-point ICP of the faced generic (tree over it) onto the samples.
 // parallel: the closest points of an iteration on parallel_for's threads
 // (false when the caller already runs several ICPs in parallel); the

@@ -20,34 +20,29 @@ void ClosestPointTree::build(const TriMesh& mesh) {
   if (!build_bvh(mesh, bvh_).ok()) bvh_ = MeshBvh{};
 }
 
+namespace {
+SurfacePoint to_surface_point(const ClosestPoint& c, const Vec3& p) {
+  SurfacePoint s;
+  s.face = c.triangle;
+  s.point = c.point;
+  s.barycentric = c.barycentric;
+  s.squared_distance = (c.point - p).squaredNorm();
+  return s;
+}
+}  // namespace
+
 SurfacePoint ClosestPointTree::closest(const Vec3& p, double max_squared_distance) const {
-  SurfacePoint best;
-  best.squared_distance = max_squared_distance;
   const ClosestPoint c = closest_point(bvh_, p, std::sqrt(max_squared_distance));
-  if (!c.found()) return best;
-  best.face = c.triangle;
-  best.point = c.point;
-  best.barycentric = c.barycentric;
-  best.squared_distance = (c.point - p).squaredNorm();
-  return best;
+  if (c.found()) return to_surface_point(c, p);
+  SurfacePoint none;
+  none.squared_distance = max_squared_distance;
+  return none;
 }
 
 SurfacePoint ClosestPointTree::closest_near(const Vec3& p, int guess) const {
-  if (guess < 0 || guess >= bvh_.num_triangles()) return closest(p);
-  const Tri& t = bvh_.triangles[guess];
-  Vec3 bary;
-  const Vec3 on = lk::closest_point_on_triangle(p, bvh_.positions[t[0]], bvh_.positions[t[1]], bvh_.positions[t[2]], bary);
-  // Widened: the search then meets every triangle an unbounded search would
-  // keep, in the same order, and keeps the same one.
-  const double bound = (on - p).norm() * (1 + 1e-9) + 1e-300;
-  const ClosestPoint c = closest_point(bvh_, p, bound);
-  if (!c.found()) return closest(p);  // (not expected: the guess lies within the bound)
-  SurfacePoint best;
-  best.face = c.triangle;
-  best.point = c.point;
-  best.barycentric = c.barycentric;
-  best.squared_distance = (c.point - p).squaredNorm();
-  return best;
+  const ClosestPoint c = closest_point_near(bvh_, p, guess);
+  if (c.found()) return to_surface_point(c, p);
+  return SurfacePoint{};  // (an empty tree)
 }
 
 DistanceStats summarize_distances(std::vector<double>& d, double reference_diagonal) {

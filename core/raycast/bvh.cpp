@@ -534,4 +534,15 @@ ClosestPoint closest_point(const MeshBvh& bvh, const Vec3& p, double max_distanc
   return best;
 }
 
+ClosestPoint closest_point_near(const MeshBvh& bvh, const Vec3& p, int guess) {
+  if (guess >= 0 && guess < bvh.num_triangles()) {
+    const Tri& t = bvh.triangles[guess];
+    Vec3 bary;
+    const Vec3 on = closest_point_on_triangle(p, bvh.positions[t[0]], bvh.positions[t[1]], bvh.positions[t[2]], bary);
+    const ClosestPoint c = closest_point(bvh, p, (on - p).norm() * (1 + 1e-9) + 1e-300);
+    if (c.found()) return c;  // (not found is not expected: the guess lies within the bound)
+  }
+  return closest_point(bvh, p);
+}
+
 }  // namespace lk

@@ -113,6 +113,14 @@ struct ClosestPoint {
 ClosestPoint closest_point(const MeshBvh& bvh, const Vec3& p,
                            double max_distance = std::numeric_limits<double>::infinity());
 
+// Closest point on the mesh to p, searched first within the distance to
+// triangle `guess` (e.g. the triangle found for a neighbouring point or in a
+// previous iteration; -1 or out of range: none), so most of the tree is
+// pruned when the guess is near. The same answer as closest_point(bvh, p),
+// bit for bit: the bound is widened by a relative 1e-9 so that the nearest
+// triangle, and the first of exact ties, stays inside it.
+ClosestPoint closest_point_near(const MeshBvh& bvh, const Vec3& p, int guess);
+
 // Closest point on one triangle (a, b, c) to p; barycentric gets the weights.
 // Exposed for tests and for callers that already know the triangle.
 Vec3 closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c,
