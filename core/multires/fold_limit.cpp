@@ -270,6 +270,21 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
   // smooth level l too are left alone. The first visit searches the whole
   // level, later visits only around what moved since (restarts zero coarser
   // displacements, which moves sheets too).
+  // A pair that crosses on the smooth level l too is not the displacements'
+  // doing: shrinking would only lose detail. Such pairs leave `pairs` (into
+  // `left_alone` when given, to be counted).
+  auto drop_smooth_crossings = [&](int l, std::vector<std::array<int, 2>>& pairs,
+                                   std::set<std::array<int, 2>>* left_alone) {
+    size_t kept = 0;
+    for (const auto& p : pairs) {
+      if (mesh_triangles_cross(smooth[l], mesh.triangles(l)[p[0]], mesh.triangles(l)[p[1]])) {
+        if (left_alone) left_alone->insert(p);
+        continue;
+      }
+      pairs[kept++] = p;
+    }
+    pairs.resize(kept);
+  };
   struct LevelSeparation {
     bool built = false;
     MeshBvh bvh;  // bvh.positions: where the boxes were fitted
@@ -310,11 +325,7 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
     in_pair_set.assign(mesh.triangles(l).size(), 0);
     for (int round = 0; round < options.max_intersection_rounds && !level_pairs.empty(); ++round) {
       ++stamp;  // separation rounds are not counted in st.rounds (the fold rounds' limit)
-      size_t kept = 0;
-      for (const auto& p : level_pairs)
-        if (!mesh_triangles_cross(smooth[l], mesh.triangles(l)[p[0]], mesh.triangles(l)[p[1]]))
-          level_pairs[kept++] = p;
-      level_pairs.resize(kept);
+      drop_smooth_crossings(l, level_pairs, nullptr);
       pair_tris.clear();
       for (const auto& p : level_pairs)
         for (int f : p)
@@ -437,19 +448,7 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
       while ((!pairs.empty() || !next_bad.empty()) && rounds < options.max_intersection_rounds) {
         ++rounds;
         ++st.rounds, ++stamp;
-        // A pair that crosses on the smooth surface too is not the
-        // displacements' doing: shrinking would only lose detail. Counted.
-        {
-          size_t kept = 0;
-          for (const auto& p : pairs) {
-            if (mesh_triangles_cross(smooth[L], mesh.triangles(L)[p[0]], mesh.triangles(L)[p[1]])) {
-              unfixable.insert(p);
-              continue;
-            }
-            pairs[kept++] = p;
-          }
-          pairs.resize(kept);
-        }
+        drop_smooth_crossings(L, pairs, &unfixable);
         tris.clear();
         for (const auto& p : pairs)
           for (int f : p)
