@@ -146,15 +146,22 @@
   let workerReady = null;  // promise resolved when the worker's core is up
 
   function startWorker() {
-    // ?threads=1 keeps the single-threaded core even where threads are possible.
-    const worker = new Worker(params.get('threads') === '1' ? 'worker.js?threads=1' : 'worker.js');
+    // ?threads=1 keeps the single-threaded core even where threads are possible;
+    // so does a threaded core that could not start before (a restarted worker
+    // goes straight to one thread). ?thread_start_ms=N: see worker.js.
+    const workerParams = new URLSearchParams();
+    if (params.get('threads') === '1' || (app.workerThreads && app.workerThreads.fallback)) workerParams.set('threads', '1');
+    if (params.get('thread_start_ms')) workerParams.set('thread_start_ms', params.get('thread_start_ms'));
+    const worker = new Worker('worker.js' + (workerParams.toString() ? '?' + workerParams : ''));
     app.worker = worker;
     workerReady = new Promise((resolve, reject) => {
       worker.onmessage = (e) => {
         const msg = e.data;
         if (msg.type === 'ready') {
           if (app.timings.worker === undefined) app.timings.worker = performance.now() - app.startedAt;
-          app.workerThreads = { variant: msg.variant || 'single', threads: msg.threads || 1 };
+          // fallback: why the threaded core did not start (kept across restarts).
+          app.workerThreads = { variant: msg.variant || 'single', threads: msg.threads || 1,
+                                fallback: msg.fallback || (app.workerThreads && app.workerThreads.fallback) || null };
           resolve();
         } else if (msg.type === 'progress') {
           const job = jobs.get(msg.id);
@@ -1054,7 +1061,8 @@
     }
     ui.fitTotal.textContent = 'fit ' + (result.fitMs / 1000).toFixed(2) + ' s (+ parse ' + Math.round(result.parseMs) +
                               ' ms) · ' + result.fittedPoints.toLocaleString('en') + ' points fitted' +
-                              (app.workerThreads ? ' · ' + app.workerThreads.threads + (app.workerThreads.threads === 1 ? ' thread' : ' threads') : '');
+                              (app.workerThreads ? ' · ' + app.workerThreads.threads + (app.workerThreads.threads === 1 ? ' thread' : ' threads') +
+                               (app.workerThreads.fallback ? ' (threads could not start here)' : '') : '');
     ui.fitView.hidden = false;
     const levels = result.meshes.levels.length;
     for (const opt of ui.level.options) opt.disabled = Number(opt.value) > levels;
@@ -1619,6 +1627,14 @@
     ui.pointSize.addEventListener('input', () => app.viewer && app.viewer.set_point_size(Number(ui.pointSize.value)));
   }
 
+  // Said when the page could have run the threaded core but it did not start
+  // (worker.js fell back to one thread): the fit is slower, its result the same.
+  function threadsNote() {
+    const why = app.workerThreads && app.workerThreads.fallback;
+    return why ? ' Note: the multi-threaded core could not start in this browser (' + why +
+                 '), so the core runs on one thread: slower, same results.' : '';
+  }
+
   async function start() {
     setState('loading');
     wire();
@@ -1633,7 +1649,7 @@
       if (params.get('profile') === '1') viewer.set_profiling(true);
       app.loadMs = performance.now() - app.startedAt;
       setState('ready');
-      setStatus('Ready. Showing the generic head. Drop a head scan to begin.');
+      setStatus('Ready. Showing the generic head. Drop a head scan to begin.' + threadsNote());
     } catch (e) {
       fatalStartup('Could not start Likeness: ' + (e && e.message ? e.message : e) +
                    '. This app needs WebGL 2 and WebAssembly.');

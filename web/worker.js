@@ -17,17 +17,34 @@
 // page (served with COOP: same-origin + COEP: require-corp, as scripts/serve.py
 // does); anywhere else, or with worker.js?threads=1, the single-threaded
 // likeness_worker runs.
+//
+// The threaded core needs its pool of pthread workers (nested Web Workers)
+// before it can start. Emscripten 3.1.6 waits for every pool worker to say
+// 'loaded' and never gives up: a pool worker whose script fails to load, or
+// a browser that never starts nested workers, would leave the page waiting
+// for 'ready' forever. So the pool is watched (see startThreadedCore): an
+// error from a pool worker, or a pool that is not up THREAD_START_MS after
+// the module was compiled, stops the threaded core and starts the single-
+// threaded one; 'ready' then carries {fallback: why} and the page says so.
 'use strict';
+const params = new URLSearchParams(self.location.search);
 const wantThreads = self.crossOriginIsolated === true && typeof SharedArrayBuffer === 'function'
-  && new URLSearchParams(self.location.search).get('threads') !== '1';
+  && params.get('threads') !== '1';
+// The pool of 1-3 workers loads in ~0.1 s on an idle machine (each only
+// instantiates the already compiled module); 10 s leaves room for a busy one.
+// ?thread_start_ms=N (forwarded by the page) shortens it for the tests.
+const THREAD_START_MS = Number(params.get('thread_start_ms')) > 0 ? Number(params.get('thread_start_ms')) : 10000;
 
 let core = null;
 let variant = null;  // 'threads' | 'single': the core that runs
+let fallback = null;  // why the threaded core did not start (null: it did, or was not tried)
 const pending = [];
 
 function fatal(message) {
   postMessage({ type: 'fatal', message: String(message) });
 }
+
+function errorText(e) { return e && e.message ? e.message : String(e); }
 
 // The wasm heap as bytes. In the threaded build the memory is shared and may
 // have been grown by another thread since the module's own views were made,
@@ -36,46 +53,113 @@ function heapBytes() {
   return core.wasmMemory ? new Uint8Array(core.wasmMemory.buffer) : core.HEAPU8;
 }
 
-// Loads and starts one core. The threaded one falls back to the single-
-// threaded one when its files are missing or it cannot start (e.g. a
-// browser that refuses nested workers), so the page always gets a core.
-function startCore(which) {
+function coreReady(m, which) {
+  core = m;
+  variant = which;
+  postMessage({ type: 'ready', variant, threads: core.parallel_workers(), fallback });
+  while (pending.length) handle(pending.shift());
+}
+
+// A release build aborts without a reason on out-of-memory; say what is
+// likely. (Before the core is up, the start-up's rejection handles it.)
+function onAbort(what) {
+  if (core) fatal(what ? 'the core stopped: ' + what
+    : 'the core ran out of memory at ' + Math.round(heapBytes().length / 1048576) + ' MB of wasm heap');
+}
+
+// The single-threaded core: the last resort, so its failures are fatal.
+function startSingleCore() {
   try {
-    importScripts(which === 'threads' ? 'likeness_worker_mt.js' : 'likeness_worker.js');
+    importScripts('likeness_worker.js');
   } catch (e) {
-    if (which === 'threads') {
-      console.warn('[worker] the threaded core did not load (' + (e && e.message ? e.message : e) + '): one thread');
-      startCore('single');
-    } else {
-      fatal('could not load the core: ' + (e && e.message ? e.message : e));
-    }
+    fatal('could not load the core: ' + errorText(e));
     return;
   }
   LikenessWorker({
-    // The pthread workers load the module's script by URL (this worker's
-    // own URL is worker.js, which they must not run).
-    mainScriptUrlOrBlob: new URL('likeness_worker_mt.js', self.location.href).href,
     print: (t) => console.log('[worker]', t),
     printErr: (t) => console.warn('[worker]', t),
-    // A release build aborts without a reason on out-of-memory; say what is
-    // likely. (Before the core is up, the rejection below handles it.)
-    onAbort: (what) => { if (core) fatal(what ? 'the core stopped: ' + what
-      : 'the core ran out of memory at ' + Math.round(heapBytes().length / 1048576) + ' MB of wasm heap'); },
-  }).then((m) => {
-    core = m;
-    variant = which;
-    postMessage({ type: 'ready', variant, threads: core.parallel_workers() });
-    while (pending.length) handle(pending.shift());
-  }, (err) => {
-    if (which === 'threads') {
-      console.warn('[worker] the threaded core did not start (' + err + '): one thread');
-      startCore('single');
-    } else {
-      fatal('could not start the core: ' + err);
-    }
-  });
+    onAbort,
+  }).then((m) => coreReady(m, 'single'), (err) => fatal('could not start the core: ' + err));
 }
-startCore(wantThreads ? 'threads' : 'single');
+
+// The threaded core, watched while its pthread pool starts. Every Web Worker
+// the module makes during start-up is a pool worker: self.Worker is wrapped
+// for that time so each one is seen (its errors, its 'loaded' message, and
+// the module's 'load' command to it, which is sent once the module is
+// compiled). giveUp() terminates them and starts the single-threaded core.
+function startThreadedCore() {
+  const NativeWorker = self.Worker;
+  const poolWorkers = [];
+  let settled = false;  // the threaded core either started or was given up
+  let watchdog = 0;
+  const settle = () => {
+    settled = true;
+    clearTimeout(watchdog);
+    self.Worker = NativeWorker;
+  };
+  const giveUp = (why) => {
+    if (settled) return;
+    settle();
+    for (const w of poolWorkers) w.terminate();
+    fallback = why;
+    console.warn('[worker] the threaded core did not start (' + why + '): one thread');
+    startSingleCore();
+  };
+  if (typeof NativeWorker !== 'function') {
+    giveUp('this browser cannot start workers inside a worker');
+    return;
+  }
+  try {
+    importScripts('likeness_worker_mt.js');
+  } catch (e) {
+    giveUp('its script did not load: ' + errorText(e));
+    return;
+  }
+  self.Worker = function PoolWorker(url, options) {
+    const w = new NativeWorker(url, options);
+    poolWorkers.push(w);
+    // Registered before Emscripten's own onerror (which rethrows, and would
+    // reach the page as this worker's error): handled here instead.
+    w.addEventListener('error', (e) => {
+      e.preventDefault();
+      e.stopImmediatePropagation();
+      giveUp('a thread of its pool did not start: ' + (e.message || 'its script did not load'));
+    });
+    const post = w.postMessage.bind(w);
+    w.postMessage = (message, transfer) => {
+      if (message && message.cmd === 'load' && !watchdog && !settled) {
+        watchdog = setTimeout(() => giveUp('its pool of ' + poolWorkers.length + ' thread(s) was not up after ' +
+                                           THREAD_START_MS + ' ms'), THREAD_START_MS);
+      }
+      return transfer ? post(message, transfer) : post(message);
+    };
+    return w;
+  };
+  let starting;
+  try {
+    starting = LikenessWorker({
+      // The pthread workers load the module's script by URL (this worker's
+      // own URL is worker.js, which they must not run).
+      mainScriptUrlOrBlob: new URL('likeness_worker_mt.js', self.location.href).href,
+      print: (t) => console.log('[worker]', t),
+      printErr: (t) => console.warn('[worker]', t),
+      onAbort: (what) => { if (!settled) giveUp('it stopped: ' + what); else onAbort(what); },
+    });
+  } catch (e) {  // e.g. no memory for the shared heap, or workers refused
+    giveUp(errorText(e));
+    return;
+  }
+  starting.then((m) => {
+    if (settled) {  // given up already (too late): its pool is gone
+      return;
+    }
+    settle();
+    coreReady(m, 'threads');
+  }, (err) => giveUp(errorText(err)));
+}
+
+if (wantThreads) startThreadedCore();
+else startSingleCore();
 
 // Copies the bytes into the wasm heap, runs fn(pointer, size), frees the copy.
 function withHeapBytes(buffer, fn) {

@@ -57,12 +57,15 @@ export async function closeChromium(context, server) {
 }
 
 // The context's profile folder is context.userDir (remove it with closeChromium).
+// Env LK_CHROMIUM_FLAGS adds Chromium flags for an experiment (space-separated,
+// e.g. "--js-flags=--no-wasm-dynamic-tiering").
 export async function launchChromium(name, viewport) {
   const userDir = fs.mkdtempSync(path.join(os.tmpdir(), `likeness-${name}-`));
   const context = await chromium.launchPersistentContext(userDir, {
     executablePath: '/usr/bin/chromium', headless: true,
     args: ['--no-sandbox', '--disable-quic', '--no-first-run', '--disable-background-networking',
-           '--disable-component-update', '--disable-sync', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
+           '--disable-component-update', '--disable-sync', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+           ...(process.env.LK_CHROMIUM_FLAGS || '').split(' ').filter(Boolean)],
     viewport, deviceScaleFactor: 1,
   });
   context.userDir = userDir;

@@ -32,7 +32,9 @@
 //     NotAHead with the previous model kept and the page still working; the
 //     same folder served WITHOUT the isolation headers starts the
 //     single-threaded core, whose fit gives the threaded fit's stage numbers
-//     and meshes bit for bit.
+//     and meshes bit for bit; served with them but with the threaded core's
+//     pool workers unable to start (their script refused, or never sent), the
+//     page falls back to the single-threaded core, says so, and fits the same.
 // Screenshots go to $LK_SCREENSHOT_DIR when set (web_*.png).
 import { chromium } from 'playwright-core';
 import http from 'node:http';
@@ -70,16 +72,23 @@ const MIME = {
 const served = [];
 // Like scripts/serve.py: COOP/COEP on every response (cross-origin isolation:
 // the worker runs the threaded core), unless isolation is false (a host
-// without those headers: the single-threaded core).
-function startServer(root, { isolation = true } = {}) {
+// without those headers: the single-threaded core). broken: {path: '404' |
+// 'hang'} answers that file with a 404, or never (a browser that cannot
+// start a worker from it); server.closeAll() ends the unanswered requests.
+function startServer(root, { isolation = true, broken = {} } = {}) {
   const isolationHeaders = isolation
     ? { 'cross-origin-opener-policy': 'same-origin', 'cross-origin-embedder-policy': 'require-corp' } : {};
+  const held = [];
   const server = http.createServer((req, res) => {
     const url = new URL(req.url, 'http://x');
     const rel = decodeURIComponent(url.pathname === '/' ? '/index.html' : url.pathname);
     const file = path.join(root, path.normalize(rel));
     served.push(rel);
-    if (!file.startsWith(root) || !fs.existsSync(file) || fs.statSync(file).isDirectory()) {
+    if (broken[rel] === 'hang') {
+      held.push(res);
+      return;
+    }
+    if (broken[rel] === '404' || !file.startsWith(root) || !fs.existsSync(file) || fs.statSync(file).isDirectory()) {
       res.writeHead(404, { 'content-type': 'text/plain', ...isolationHeaders });
       res.end('not found');
       return;
@@ -88,6 +97,10 @@ function startServer(root, { isolation = true } = {}) {
                          'cache-control': 'no-store', ...isolationHeaders });
     fs.createReadStream(file).pipe(res);
   });
+  server.closeAll = () => {
+    for (const res of held) res.destroy();
+    server.close();
+  };
   return new Promise((resolve) => server.listen(0, '127.0.0.1', () => resolve(server)));
 }
 
@@ -949,6 +962,51 @@ async function main() {
         } finally {
           await pagePlain.close();
           plain.close();
+        }
+        // A cross-origin isolated page whose threaded core cannot start its
+        // pthread pool (the pool workers' script is refused with a 404, or
+        // never arrives, as in a browser that blocks or stalls nested
+        // workers): the page must not hang but fall back to the single-
+        // threaded core, say so, and fit as before. (Emscripten 3.1.6 alone
+        // waits for the pool forever: without worker.js's watch the page
+        // stays "loading".) thread_start_ms=3000: the stalled pool is given
+        // up after 3 s instead of 10.
+        for (const [how, what] of [['404', 'its pool workers\' script fails to load'], ['hang', 'its pool workers never start']]) {
+          const broken = await startServer(WEBDIR, { broken: { '/likeness_worker_mt.worker.js': how } });
+          const brokenOrigin = `http://127.0.0.1:${broken.address().port}`;
+          ownOrigins.push(brokenOrigin);
+          const pageBroken = await context.newPage();
+          const uncaught = [];
+          pageBroken.on('pageerror', (e) => uncaught.push(e.message));  // (the refused script's console errors are expected)
+          try {
+            const tStart = Date.now();
+            await pageBroken.goto(brokenOrigin + '/index.html?autofit=0&thread_start_ms=3000');
+            const sBroken = await waitForState(pageBroken, ['ready', 'error'], READY_TIMEOUT_MS);
+            const info = await pageBroken.evaluate(() => ({ coi: window.crossOriginIsolated, worker: window.likeness.workerThreads,
+                                                            status: document.getElementById('status').textContent }));
+            check(`threaded core cannot start (${what}): the page falls back to one thread and says so`,
+                  sBroken === 'ready' && info.coi === true && info.worker && info.worker.variant === 'single' &&
+                  info.worker.threads === 1 && !!info.worker.fallback && /could not start/.test(info.status) &&
+                  uncaught.length === 0,
+                  `state ${sBroken} after ${Date.now() - tStart} ms; worker ${JSON.stringify(info.worker)}; "${info.status.trim()}"` +
+                  (uncaught.length ? '; uncaught: ' + uncaught.join(' | ') : ''));
+            if (how === '404' && sBroken === 'ready') {
+              const sLoad = await setFile(pageBroken, 'synthetic_head.ply', synth.bytes);
+              await pageBroken.click('#btn-fit');
+              await pageBroken.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: JOB_TIMEOUT_MS });
+              const brokenFit = sLoad === 'done' && (await state(pageBroken)) === 'done' ? await fitFingerprint(pageBroken) : null;
+              const total = await pageBroken.textContent('#fit-total');
+              check('... its fit reaches "done", equals the threaded fit and its summary names the fallback',
+                    !!brokenFit && brokenFit.report === threadedFit.report && brokenFit.meshes === threadedFit.meshes &&
+                    /1 thread \(threads could not start here\)/.test(total),
+                    brokenFit ? `"${total.trim()}"; report ${brokenFit.report === threadedFit.report ? 'equal' : 'DIFFERS'}; ` +
+                                `meshes ${brokenFit.meshes === threadedFit.meshes ? 'equal' : 'DIFFER'}`
+                              : 'state ' + (await state(pageBroken)) + ': ' + await bannerText(pageBroken));
+            }
+          } finally {
+            await pageBroken.close();
+            broken.closeAll();
+          }
         }
         const fitted = await canvasImage(page);
         const fitDiff = differingFraction(pointsShown, fitted);
