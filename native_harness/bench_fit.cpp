@@ -29,6 +29,7 @@
 #include "io/io.h"
 #include "mesh/geometry.h"
 #include "pipeline/fit_head.h"
+#include "pipeline/fit_quality.h"
 #include "raycast/self_intersection.h"
 #include "synth/scanner.h"
 #include "synth/synth_head.h"
@@ -59,20 +60,6 @@ struct PointsAdaptor {
 };
 using PointsTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, PointsAdaptor>,
                                                        PointsAdaptor, 3>;
-
-// Triangles whose normal turned against the reference's (same connectivity
-// or, with `ratio` > 1, children 4^L f + k of reference triangle f), and
-// triangles of (near) zero area.
-void count_bad(const TriMesh& m, const TriMesh& ref, int ratio, int& flipped, int& degenerate) {
-  flipped = degenerate = 0;
-  const auto rn = face_normals(ref);
-  const double area_eps = 1e-6 * surface_area(m) / std::max(1, m.num_triangles());
-  for (int f = 0; f < m.num_triangles(); ++f) {
-    const Vec3 n = face_normal_area(m, f);
-    if (0.5 * n.norm() < area_eps) ++degenerate;
-    if (n.dot(rn[f / ratio]) < 0) ++flipped;
-  }
-}
 
 // Floor of the Table 1 metric: the scan's own distance to the TRUTH surface
 // (noise, outliers, hair junk), over the fitted points (above the neck cut)
@@ -180,29 +167,6 @@ PointCloud sample_truth(const TriMesh& truth, int count, unsigned seed) {
   return c;
 }
 
-// Crossing pairs of the finest level of mr by region (annotations carried down).
-void region_counts(const MultiresMesh& mr, const std::vector<std::array<int, 2>>& pairs, const HeadAnnotations& ann,
-                   int& lips, int& ears, int& rest) {
-  const int L = mr.num_levels();
-  auto mask_of = [&](const char* name) {
-    std::vector<char> m(mr.num_vertices(0), 0);
-    auto it = ann.regions.find(name);
-    if (it != ann.regions.end())
-      for (int v : it->second)
-        if (v >= 0 && v < static_cast<int>(m.size())) m[v] = 1;
-    return propagate_vertex_mask(mr, m)[L];
-  };
-  const std::vector<char> lm = mask_of("lips"), em = mask_of("ears");
-  const auto& tris = mr.triangles(L);
-  auto touches = [&](const std::vector<char>& m, int f) { return m[tris[f][0]] || m[tris[f][1]] || m[tris[f][2]]; };
-  lips = ears = rest = 0;
-  for (const auto& p : pairs) {
-    if (touches(lm, p[0]) || touches(lm, p[1])) ++lips;
-    else if (touches(em, p[0]) || touches(em, p[1])) ++ears;
-    else ++rest;
-  }
-}
-
 // Self-intersecting triangle pairs of the finest level, by region: lips,
 // ears (head annotations carried down the levels), rest.
 int print_self_intersections(const FitHeadResult& r, const HeadAnnotations& ann, const std::string& save_prefix) {
@@ -210,33 +174,7 @@ int print_self_intersections(const FitHeadResult& r, const HeadAnnotations& ann,
   const TriMesh finest = level_mesh(r.multires, L);
   std::vector<std::array<int, 2>> pairs;
   if (!find_self_intersections(finest, pairs).ok()) return 0;
-  auto mask_of = [&](const char* name) {
-    std::vector<char> m(r.multires.num_vertices(0), 0);
-    auto it = ann.regions.find(name);
-    if (it != ann.regions.end())
-      for (int v : it->second)
-        if (v >= 0 && v < static_cast<int>(m.size())) m[v] = 1;
-    return propagate_vertex_mask(r.multires, m)[L];
-  };
-  const std::vector<char> lips = mask_of("lips"), ears = mask_of("ears");
-  auto touches = [&](const std::vector<char>& m, int f) {
-    for (int v : finest.triangles[f])
-      if (m[v]) return true;
-    return false;
-  };
-  int n_lips = 0, n_ears = 0, n_rest = 0;
-  std::map<std::string, int> rest_by_region;
-  std::map<std::string, std::vector<char>> masks;
-  for (const auto& kv : ann.regions) masks[kv.first] = mask_of(kv.first.c_str());
-  for (const auto& p : pairs) {
-    if (touches(lips, p[0]) || touches(lips, p[1])) ++n_lips;
-    else if (touches(ears, p[0]) || touches(ears, p[1])) ++n_ears;
-    else {
-      ++n_rest;
-      for (const auto& kv : masks)
-        if (touches(kv.second, p[0]) || touches(kv.second, p[1])) ++rest_by_region[kv.first];
-    }
-  }
+  const CrossingCounts c = count_crossings_by_region(r.multires, L, pairs, ann);
   if (!save_prefix.empty()) {
     TriMesh crossing;
     crossing.positions = finest.positions;
@@ -244,15 +182,15 @@ int print_self_intersections(const FitHeadResult& r, const HeadAnnotations& ann,
     write_file(save_prefix + "_crossing.obj", write_obj(crossing));
     write_file(save_prefix + "_level" + std::to_string(L) + ".obj", write_obj(finest));
   }
-  if (n_rest) {
+  if (c.rest) {
     std::printf("   rest touches:");
-    for (const auto& kv : rest_by_region) std::printf(" %s %d", kv.first.c_str(), kv.second);
+    for (const auto& kv : c.rest_by_region) std::printf(" %s %d", kv.first.c_str(), kv.second);
     std::printf("\n");
   }
   std::vector<std::array<int, 2>> control_pairs;
   find_self_intersections(r.control, control_pairs);
   std::printf("   self-intersecting triangle pairs: level %d %zu (lips %d, ears %d, rest %d); control mesh %zu\n", L,
-              pairs.size(), n_lips, n_ears, n_rest, control_pairs.size());
+              pairs.size(), c.lips, c.ears, c.rest, control_pairs.size());
   return static_cast<int>(pairs.size());
 }
 
@@ -437,13 +375,13 @@ int run(const Args& args) {
     }
     print_floor(cloud, scan_stats, truth.mesh, finest, r, generic.annotations);
     int flipped = 0, degenerate = 0, flipped_l = 0, degenerate_l = 0;
-    count_bad(r.control, r.aligned, 1, flipped, degenerate);
+    count_turned_and_degenerate(r.control, r.aligned, flipped, degenerate);
     // Level L against the smooth (undisplaced) Butterfly surface of the same
     // control mesh: did a displacement turn a triangle over?
     MultiresMesh smooth;
     std::vector<std::array<int, 2>> smooth_pairs;
     if (build_multires(r.control, r.multires.creases, static_cast<int>(r.level_meshes.size()), smooth).ok()) {
-      count_bad(finest, level_mesh(smooth, smooth.num_levels()), 1, flipped_l, degenerate_l);
+      count_turned_and_degenerate(finest, level_mesh(smooth, smooth.num_levels()), flipped_l, degenerate_l);
       find_self_intersections(level_mesh(smooth, smooth.num_levels()), smooth_pairs);
       // The aligned generic head refined with the fit's creases and without.
       MultiresMesh generic_smooth, generic_plain;
@@ -453,10 +391,9 @@ int run(const Args& args) {
       if (build_multires(r.aligned, smooth.num_levels(), generic_plain).ok())
         find_self_intersections(level_mesh(generic_plain, smooth.num_levels()), generic_plain_pairs);
       find_self_intersections(r.aligned, generic_control_pairs);
-      int sl = 0, se = 0, sr = 0;
-      region_counts(smooth, smooth_pairs, generic.annotations, sl, se, sr);
+      const CrossingCounts sc = count_crossings_by_region(smooth, smooth.num_levels(), smooth_pairs, generic.annotations);
       std::printf("   smooth (undisplaced) level %d: %zu self-intersecting pairs (lips %d, ears %d, rest %d); the aligned generic head's: %zu with %zu crease edges, %zu without (its control mesh %zu)\n",
-                  smooth.num_levels(), smooth_pairs.size(), sl, se, sr, generic_pairs.size(),
+                  smooth.num_levels(), smooth_pairs.size(), sc.lips, sc.ears, sc.rest, generic_pairs.size(),
                   r.multires.creases.edges.size(), generic_plain_pairs.size(), generic_control_pairs.size());
       if (!save.empty()) {
         TriMesh sm = level_mesh(smooth, smooth.num_levels()), crossing;

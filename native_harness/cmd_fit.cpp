@@ -114,6 +114,12 @@ int run_fit(const Args& args) {
               r.unit_to_metres == 1 ? "m" : r.unit_to_metres == 0.01 ? "cm" : "mm", r.bbox_diagonal,
               r.bbox_diagonal * r.unit_to_metres, r.fitted_points, r.points);
   print_fit_table(stages);
+  // Checked after the fit and outside its timed stages: the user learns
+  // whether the head crosses itself before animating it.
+  FitQuality quality;
+  const Status qs = measure_fit_quality(r, generic.annotations, quality);
+  if (qs) print_fit_quality(quality);
+  else std::cerr << "likeness fit: warning: quality check: " << qs.message << "\n";
 
   write_mesh("control.obj", r.control, &r);
   for (size_t l = 0; l < r.level_meshes.size(); ++l)
@@ -123,7 +129,7 @@ int run_fit(const Args& args) {
     write_mesh("stage_local_fitting.obj", r.local, &r);
     write_mesh("stage_global_fitting.obj", r.control, &r);
   }
-  st = write_file(out_dir + "/report.json", fit_report_json(r, stages));
+  st = write_file(out_dir + "/report.json", fit_report_json(r, stages, "ok", qs ? &quality : nullptr));
   if (!st) return fail(cmd, st.message);
   std::printf("  wrote %s/control.obj, level1..%d.obj, report.json (%s frame)\n", out_dir.c_str(), opt.levels,
               scan_frame ? "scan" : "head: metres, +y up, +z facing");

@@ -2,6 +2,7 @@
 // jeong2002 Table 1 with the paper's figures beside ours, and report.json.
 #pragma once
 #include "pipeline/fit_head.h"
+#include "pipeline/fit_quality.h"
 
 #include <chrono>
 #include <cstdio>
@@ -33,6 +34,18 @@ inline const std::vector<PaperStage>& paper_table() {
       {"subdivision", 0.04, 1.30, 0.08, 1.55, "n/a"},
   };
   return t;
+}
+
+// The checks of the finest level, in two lines under the table.
+inline void print_fit_quality(const FitQuality& q) {
+  std::printf("  level %d: %d triangles, %d turned over by a displacement, %d degenerate; %d self-intersecting pairs "
+              "(lips %d, ears %d, rest %d)\n",
+              q.level, q.triangles, q.flipped, q.degenerate, q.crossings.total, q.crossings.lips, q.crossings.ears,
+              q.crossings.rest);
+  std::printf("  the fitted control mesh crosses itself in %d triangle pairs; its smooth level %d in %d (lips %d, ears %d, "
+              "rest %d)\n",
+              q.control_crossings, q.level, q.smooth_crossings.total, q.smooth_crossings.lips, q.smooth_crossings.ears,
+              q.smooth_crossings.rest);
 }
 
 inline void print_fit_table(const std::vector<TimedStage>& stages) {
@@ -71,8 +84,14 @@ struct StageClock {
   }
 };
 
+inline void json_crossings(std::ostringstream& j, const char* name, const CrossingCounts& c) {
+  j << "\"" << name << "\": {\"total\": " << c.total << ", \"lips\": " << c.lips << ", \"ears\": " << c.ears
+    << ", \"rest\": " << c.rest << "}";
+}
+
+// report.json; `quality` (may be null) adds the checks of the finest level.
 inline std::string fit_report_json(const FitHeadResult& r, const std::vector<TimedStage>& stages,
-                                   const std::string& status = "ok") {
+                                   const std::string& status = "ok", const FitQuality* quality = nullptr) {
   std::ostringstream j;
   j.precision(9);
   double total = 0;
@@ -87,7 +106,17 @@ inline std::string fit_report_json(const FitHeadResult& r, const std::vector<Tim
       << (r.bbox_diagonal > 0 ? 100.0 * s.distance.p95 / (r.bbox_diagonal * r.unit_to_metres) : 0.0)
       << ", \"ms\": " << s.ms << ", \"cpu_ms\": " << s.cpu_ms << "}";
   }
-  j << "\n  ],\n  \"total_ms\": " << total << "\n}\n";
+  j << "\n  ],\n  \"total_ms\": " << total;
+  if (quality) {
+    const FitQuality& q = *quality;
+    j << ",\n  \"quality\": {\"level\": " << q.level << ", \"triangles\": " << q.triangles
+      << ", \"flipped\": " << q.flipped << ", \"degenerate\": " << q.degenerate << ",\n    ";
+    json_crossings(j, "self_intersecting_pairs", q.crossings);
+    j << ",\n    ";
+    json_crossings(j, "smooth_surface_pairs", q.smooth_crossings);
+    j << ",\n    \"control_mesh_pairs\": " << q.control_crossings << "}";
+  }
+  j << "\n}\n";
   return j.str();
 }
 

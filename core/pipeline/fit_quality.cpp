@@ -1,0 +1,92 @@
+#include "pipeline/fit_quality.h"
+
+#include "mesh/geometry.h"
+#include "pipeline/fit_head.h"
+#include "raycast/self_intersection.h"
+
+#include <algorithm>
+
+namespace lk {
+
+CrossingCounts count_crossings_by_region(const MultiresMesh& mesh, int level,
+                                         const std::vector<std::array<int, 2>>& pairs,
+                                         const HeadAnnotations& annotations) {
+  const std::vector<Tri>& tris = mesh.triangles(level);
+  auto mask_of = [&](const std::vector<int>& vertices) {
+    std::vector<char> m(mesh.num_vertices(0), 0);
+    for (int v : vertices)
+      if (v >= 0 && v < static_cast<int>(m.size())) m[v] = 1;
+    return propagate_vertex_mask(mesh, m)[level];
+  };
+  std::map<std::string, std::vector<char>> masks;
+  for (const auto& kv : annotations.regions) masks[kv.first] = mask_of(kv.second);
+  const std::vector<char> none(mesh.num_vertices(level), 0);
+  auto region = [&](const char* name) -> const std::vector<char>& {
+    auto it = masks.find(name);
+    return it == masks.end() ? none : it->second;
+  };
+  const std::vector<char>&lips = region("lips"), &ears = region("ears");
+  auto touches = [&](const std::vector<char>& m, const std::array<int, 2>& p) {
+    for (int f : p)
+      for (int v : tris[f])
+        if (m[v]) return true;
+    return false;
+  };
+  CrossingCounts c;
+  c.total = static_cast<int>(pairs.size());
+  for (const auto& p : pairs) {
+    if (touches(lips, p)) {
+      ++c.lips;
+    } else if (touches(ears, p)) {
+      ++c.ears;
+    } else {
+      ++c.rest;
+      for (const auto& kv : masks)
+        if (touches(kv.second, p)) ++c.rest_by_region[kv.first];
+    }
+  }
+  return c;
+}
+
+void count_turned_and_degenerate(const TriMesh& m, const TriMesh& reference, int& flipped, int& degenerate) {
+  flipped = degenerate = 0;
+  const auto rn = face_normals(reference);
+  const double area_eps = 1e-6 * surface_area(m) / std::max(1, m.num_triangles());
+  for (int f = 0; f < m.num_triangles(); ++f) {
+    const Vec3 n = face_normal_area(m, f);
+    if (0.5 * n.norm() < area_eps) ++degenerate;
+    if (f < static_cast<int>(rn.size()) && n.dot(rn[f]) < 0) ++flipped;
+  }
+}
+
+Status measure_fit_quality(const FitHeadResult& fit, const HeadAnnotations& annotations, FitQuality& out) {
+  out = FitQuality();
+  const int L = fit.multires.num_levels();
+  if (L < 1) return Status::error(ErrorCode::InvalidInput, "fit quality: the fit holds no subdivision levels");
+  out.level = L;
+  const TriMesh finest = level_mesh(fit.multires, L);
+  out.triangles = finest.num_triangles();
+
+  std::vector<std::array<int, 2>> pairs;
+  Status st = find_self_intersections(finest, pairs);
+  if (!st) return st;
+  out.crossings = count_crossings_by_region(fit.multires, L, pairs, annotations);
+
+  MultiresMesh smooth;
+  st = build_multires(fit.control, fit.multires.creases, L, smooth);
+  if (!st) return st;
+  const TriMesh smooth_finest = level_mesh(smooth, L);
+  count_turned_and_degenerate(finest, smooth_finest, out.flipped, out.degenerate);
+  pairs.clear();
+  st = find_self_intersections(smooth_finest, pairs);
+  if (!st) return st;
+  out.smooth_crossings = count_crossings_by_region(smooth, L, pairs, annotations);
+
+  pairs.clear();
+  st = find_self_intersections(fit.control, pairs);
+  if (!st) return st;
+  out.control_crossings = static_cast<int>(pairs.size());
+  return Status::success();
+}
+
+}  // namespace lk

@@ -1,0 +1,59 @@
+// What a user should know about a fitted head before animating it: triangles
+// a displacement turned over, degenerate triangles, and self-intersecting
+// triangle pairs by head region.
+//
+// Not from the papers. jeong2002 Sec. 5's normal displacements can push one
+// sheet of a thin feature (upper and lower lip, an ear's rim) through
+// another; Sec. 6 animates the result, and a crossing shows as a dark seam
+// or a lip that pokes through. `likeness fit` prints these figures and
+// writes them to report.json; the fit benchmark prints them per seed.
+//
+// Shapes: pairs #pairs by 2 (triangle ids of the level, a < b).
+#pragma once
+#include "common/status.h"
+#include "head/head_model.h"
+#include "mesh/tri_mesh.h"
+#include "multires/multires.h"
+
+#include <array>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace lk {
+
+struct FitHeadResult;
+
+// Crossing pairs split by head region (annotations carried down the
+// levels): a pair touching a lip vertex counts as lips, else one touching an
+// ear vertex as ears, else rest.
+struct CrossingCounts {
+  int total = 0, lips = 0, ears = 0, rest = 0;
+  std::map<std::string, int> rest_by_region;  // "rest" pairs touching each named region (regions overlap)
+};
+
+struct FitQuality {
+  int level = 0;                 // the finest level checked (L)
+  int triangles = 0;             // of level L
+  int flipped = 0;               // level-L triangles turned against the smooth (undisplaced) level L
+  int degenerate = 0;            // level-L triangles of (near) zero area
+  CrossingCounts crossings;      // level L, displaced
+  CrossingCounts smooth_crossings;  // level L of the fitted control mesh without displacements
+  int control_crossings = 0;     // pairs of the control mesh itself
+};
+
+// Pairs of mesh's level `level` (1..L; 0 is the control mesh) by region.
+CrossingCounts count_crossings_by_region(const MultiresMesh& mesh, int level,
+                                         const std::vector<std::array<int, 2>>& pairs,
+                                         const HeadAnnotations& annotations);
+
+// Triangles of m whose normal points against the same triangle's of
+// reference (same connectivity), and triangles of m whose area is below
+// 1e-6 of m's mean triangle area.
+void count_turned_and_degenerate(const TriMesh& m, const TriMesh& reference, int& flipped, int& degenerate);
+
+// All of FitQuality for a fit's finest level. InvalidInput when the result
+// holds no levels or non-finite positions.
+Status measure_fit_quality(const FitHeadResult& fit, const HeadAnnotations& annotations, FitQuality& out);
+
+}  // namespace lk

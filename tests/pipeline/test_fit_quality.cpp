@@ -1,0 +1,108 @@
+// The fit's quality checks (pipeline/fit_quality.h): crossing pairs by head
+// region, turned-over and degenerate triangles.
+#include "multires/multires.h"
+#include "pipeline/fit_head.h"
+#include "pipeline/fit_quality.h"
+#include "raycast/self_intersection.h"
+
+#include <catch2/catch.hpp>
+
+using namespace lk;
+
+namespace {
+
+// Two unit squares crossing at right angles along the x axis: sheet A
+// (vertices 0-3) in the plane z = 0, sheet B (4-7) in the plane y = 0.
+TriMesh crossing_sheets() {
+  TriMesh m;
+  m.positions = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0},
+                 {-1, 0, -1}, {1, 0, -1}, {1, 0, 1}, {-1, 0, 1}};
+  m.triangles = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}};
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("crossing pairs are counted by the region they touch, lips before ears before rest", "[fit_quality]") {
+  MultiresMesh mr;
+  REQUIRE(build_multires(crossing_sheets(), 2, mr).ok());
+  std::vector<std::array<int, 2>> pairs;
+  REQUIRE(find_self_intersections(level_mesh(mr, 2), pairs).ok());
+  REQUIRE(pairs.size() > 0);
+  const int n = static_cast<int>(pairs.size());
+
+  HeadAnnotations ann;
+  CrossingCounts c = count_crossings_by_region(mr, 2, pairs, ann);
+  CHECK(c.total == n);
+  CHECK(c.rest == n);
+  CHECK(c.lips + c.ears == 0);
+
+  // Sheet A is the ears, sheet B the nose: every pair has one triangle on
+  // each sheet, so every pair is an ear pair.
+  ann.regions["ears"] = {0, 1, 2, 3};
+  ann.regions["nose"] = {4, 5, 6, 7};
+  c = count_crossings_by_region(mr, 2, pairs, ann);
+  CHECK(c.ears == n);
+  CHECK(c.rest == 0);
+
+  // Lips win over ears.
+  ann.regions["lips"] = {4, 5, 6, 7};
+  c = count_crossings_by_region(mr, 2, pairs, ann);
+  CHECK(c.lips == n);
+  CHECK(c.ears == 0);
+
+  // Neither lips nor ears: rest, listed under the regions they touch.
+  ann.regions.erase("lips");
+  ann.regions.erase("ears");
+  c = count_crossings_by_region(mr, 2, pairs, ann);
+  CHECK(c.rest == n);
+  CHECK(c.rest_by_region["nose"] == n);
+
+  // Regions are carried down from the control mesh: the corners of sheet
+  // B's triangle (4, 5, 6) hold the level-2 vertices inside it, which meet
+  // sheet A on part of the crossing line only; the corners of its edge
+  // (4, 5), far from the line, hold none that cross.
+  ann.regions["lips"] = {4, 5};
+  c = count_crossings_by_region(mr, 2, pairs, ann);
+  CHECK(c.lips == 0);
+  ann.regions["lips"] = {4, 5, 6};
+  c = count_crossings_by_region(mr, 2, pairs, ann);
+  CHECK(c.lips > 0);
+  CHECK(c.lips < n);
+}
+
+TEST_CASE("turned-over and degenerate triangles are counted against a reference", "[fit_quality]") {
+  const TriMesh ref = crossing_sheets();
+  int flipped = -1, degenerate = -1;
+  count_turned_and_degenerate(ref, ref, flipped, degenerate);
+  CHECK(flipped == 0);
+  CHECK(degenerate == 0);
+
+  TriMesh m = ref;
+  m.positions[6] = {1, 0, -1.5};  // triangle 2 (4, 5, 6) now faces the other way; (4, 6, 7) keeps facing +y
+  count_turned_and_degenerate(m, ref, flipped, degenerate);
+  CHECK(flipped == 1);
+  CHECK(degenerate == 0);
+
+  m = ref;
+  m.positions[2] = m.positions[0];  // triangles (0, 1, 2) and (0, 2, 3) get a repeated corner: zero area
+  count_turned_and_degenerate(m, ref, flipped, degenerate);
+  CHECK(degenerate == 2);
+}
+
+TEST_CASE("fit quality of a fit result: crossings of the displaced and the smooth level, control mesh", "[fit_quality]") {
+  FitHeadResult fit;
+  FitQuality q;
+  CHECK(measure_fit_quality(fit, HeadAnnotations(), q).code == ErrorCode::InvalidInput);
+
+  fit.control = crossing_sheets();
+  REQUIRE(build_multires(fit.control, 2, fit.multires).ok());
+  REQUIRE(measure_fit_quality(fit, HeadAnnotations(), q).ok());
+  CHECK(q.level == 2);
+  CHECK(q.triangles == 4 * 16);
+  CHECK(q.flipped == 0);
+  CHECK(q.degenerate == 0);
+  CHECK(q.control_crossings > 0);
+  CHECK(q.crossings.total > 0);
+  CHECK(q.crossings.total == q.smooth_crossings.total);  // no displacements: the same surface
+}
