@@ -5,6 +5,7 @@
 #include "raycast/self_intersection.h"
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -150,7 +151,8 @@ Status check_orientation(const GenericHead& generic, const FitHeadOptions& optio
 // under the new pairs of the smooth level `untangle_level` (pairs the
 // aligned generic head's smooth level does not have) by untangle_erode_pct
 // of the diagonal against their vertex normals. The state with the fewest
-// pairs is kept, so a step that does not help changes nothing (a fold
+// pairs that turns no more control triangles against the template than the
+// start did is kept, so a step that does not help changes nothing (a fold
 // within one sheet, as at Fran's lips and eye rims, is not opened this
 // way). The displacements measured afterwards put the detail back.
 Status untangle_smooth_surface(const std::vector<Vec3>& reference, const ButterflyCreases& creases,
@@ -186,6 +188,7 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
   st = new_pairs();
   if (!st) return st;
   pairs_before = pairs_after = static_cast<int>(pairs.size());
+  const size_t turned_at_start = turned_triangles(reference, control).size();
   std::vector<Vec3> best = control.positions;
   const int nv = control.num_vertices();
   std::vector<char> in_set(nv, 0);
@@ -205,7 +208,10 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
     for (int v : set) control.positions[v] -= step * normals[v];
     st = new_pairs();
     if (!st) return st;
-    if (static_cast<int>(pairs.size()) < pairs_after) {
+    // A step that turns a control triangle over against the template is not
+    // kept (Fran: a lid triangle of the right eye socket turned).
+    const bool turns = turned_triangles(reference, control).size() > turned_at_start;
+    if (!turns && static_cast<int>(pairs.size()) < pairs_after) {
       pairs_after = static_cast<int>(pairs.size());
       best = control.positions;
       idle = 0;
@@ -245,6 +251,45 @@ double guess_unit_to_metres(double d) {
     }
   }
   return best;
+}
+
+// See fit_head.h and FitHeadOptions::carry_mouth_bag.
+Status carry_mouth_bag(const std::vector<char>& mouth_bag, const MeshTopology& topo, const TriMesh& before,
+                       TriMesh& control) {
+  const int nv = control.num_vertices();
+  if (before.num_vertices() != nv || topo.num_vertices != nv || static_cast<int>(mouth_bag.size()) != nv)
+    return Status::error(ErrorCode::InvalidInput, "carry_mouth_bag: the meshes, topology and flags differ in size");
+  std::vector<int> index(nv, -1), bag;
+  for (int v = 0; v < nv; ++v)
+    if (mouth_bag[v]) index[v] = static_cast<int>(bag.size()), bag.push_back(v);
+  if (bag.empty()) return Status::success();
+  const int n = static_cast<int>(bag.size());
+  std::vector<Eigen::Triplet<double>> entries;
+  Eigen::MatrixXd boundary = Eigen::MatrixXd::Zero(n, 3);
+  bool touches_boundary = false;
+  for (int i = 0; i < n; ++i) {
+    const int v = bag[i];
+    entries.emplace_back(i, i, static_cast<double>(topo.rings[v].size()));
+    for (int w : topo.rings[v]) {
+      if (index[w] >= 0) {
+        entries.emplace_back(i, index[w], -1.0);
+      } else {
+        boundary.row(i) += (control.positions[w] - before.positions[w]).transpose();
+        touches_boundary = true;
+      }
+    }
+  }
+  if (!touches_boundary) return Status::success();  // a closed-off bag: nothing carries it
+  Eigen::SparseMatrix<double> laplacian(n, n);
+  laplacian.setFromTriplets(entries.begin(), entries.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(laplacian);
+  if (solver.info() != Eigen::Success)
+    return Status::error(ErrorCode::NotConverged, "the mouth bag has a part not joined to the lips");
+  const Eigen::MatrixXd moved = solver.solve(boundary);
+  if (solver.info() != Eigen::Success || !moved.allFinite())
+    return Status::error(ErrorCode::NotConverged, "the mouth bag's movement could not be solved");
+  for (int i = 0; i < n; ++i) control.positions[bag[i]] = before.positions[bag[i]] + moved.row(i).transpose();
+  return Status::success();
 }
 
 Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHeadOptions& options,
@@ -400,17 +445,27 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   // and socket turn over wherever the lids moved (James: the eyes lie 10 mm
   // below where the alignment put the generic ones).
   const std::vector<char> pocket = pocket_vertices(generic.mesh, topo, ann);
+  std::vector<char> mouth_bag(pocket.size(), 0);
+  for (int v : ann.constrained_vertices)
+    if (v >= 0 && v < static_cast<int>(mouth_bag.size())) mouth_bag[v] = 1;
   GlobalFitTerms terms;
   terms.binding_edges = ann.binding_edges;
   {
-    std::vector<char> mouth_bag(pocket.size(), 0);
-    for (int v : ann.constrained_vertices)
-      if (v >= 0 && v < static_cast<int>(mouth_bag.size())) mouth_bag[v] = 1;
     auto in_eye_socket = [&](int v) { return pocket[v] && !mouth_bag[v]; };
     for (int v = 0; v < static_cast<int>(pocket.size()); ++v)
       if (mouth_bag[v]) terms.constrained_vertices.push_back(v);
     for (const Edge& e : topo.edges)
       if (in_eye_socket(e.v0) || in_eye_socket(e.v1)) terms.binding_edges.push_back({{e.v0, e.v1}});
+    const auto ears = ann.regions.find("ears");
+    const bool bind_ears = options.bind_ear_edges == FitHeadOptions::EarBinding::Always ||
+                           (options.bind_ear_edges == FitHeadOptions::EarBinding::FaceOnlyScans && out.face_only);
+    if (bind_ears && ears != ann.regions.end()) {
+      std::vector<char> in_ear(pocket.size(), 0);
+      for (int v : ears->second)
+        if (v >= 0 && v < static_cast<int>(in_ear.size())) in_ear[v] = 1;
+      for (const Edge& e : topo.edges)
+        if (in_ear[e.v0] && in_ear[e.v1]) terms.binding_edges.push_back({{e.v0, e.v1}});
+    }
   }
   // The template as aligned: the rest shape of E_smooth and the orientation
   // every triangle must keep (global_fit.h: local fitting's blend leaves
@@ -449,6 +504,10 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
                                                   " points lie on the skin of the aligned head");
   st = fit_global(skin_pts, out.local, topo, terms, options.global, out.control, out.global_fit, progress);
   if (!st) return with_context(st, "global fitting");
+  if (options.carry_mouth_bag) {
+    st = carry_mouth_bag(mouth_bag, topo, out.local, out.control);
+    if (!st) return with_context(st, "global fitting (mouth bag)");
+  }
   stage_done("global_fitting", out.control, pts);
 
   // 4. Displaced Butterfly levels.

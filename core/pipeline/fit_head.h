@@ -126,6 +126,24 @@ struct FitHeadOptions {
   int untangle_level = 2;
   int untangle_iterations = 6;
   double untangle_erode_pct = 0.03;
+  // After global fitting, the mouth bag (held where local fitting put it)
+  // follows its lips (carry_mouth_bag below). Held in place, it poked out
+  // through the skin where the lips moved back: Fran's mouth corner went
+  // 3.5 mm back and her smooth level 3 crossed itself in 35 pairs there.
+  bool carry_mouth_bag = true;
+  // Every edge of the ears (region "ears") becomes a binding edge of global
+  // fitting (E_binding keeps its edge VECTOR), as the eye sockets' are: the
+  // ear keeps its shape and follows the scan as a whole. On face-only
+  // captures (FaceOnlyScans), whose ears are seen from the side under hair:
+  // free, the thin flap of James's ears was pulled onto the points of the
+  // scalp and of its own bowl at once and folded (13 crossing control pairs,
+  // 262 ear pairs on his smooth level 3, 473 on the displaced one; bound: 0,
+  // 39 and 53, level-3 mean 0.0476 -> 0.0477 %). Not on whole-head scans,
+  // which see the ears: bound there, synthetic seeds 1-5 lost accuracy
+  // (Table 1 +0.002-0.003 % on three seeds, truth -> surface up to +0.12 mm)
+  // and seed 3 got 37 ear crossings (docs/fit_real.md).
+  enum class EarBinding { Off, FaceOnlyScans, Always };
+  EarBinding bind_ear_edges = EarBinding::FaceOnlyScans;
 };
 
 struct FitStageReport {
@@ -181,6 +199,21 @@ struct FitHeadResult {
 Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHeadOptions& options,
                 FitHeadResult& out, const FitStageObserver& observer = {},
                 const ProgressFn& progress = {});
+
+// The mouth bag follows its lips (FitHeadOptions::carry_mouth_bag). The bag
+// is held where local fitting put it during global fitting (E_constraint:
+// its points are not skin) while the lips around its opening follow the
+// scan; where they move back by more than the bag's depth behind them (5 mm
+// at the inner lip), the bag's wall comes out through the skin. So the
+// movement of the bag's vertices becomes the harmonic interpolation (uniform
+// weights over the bag's edges) of the movement of the vertices around it,
+// which are the boundary condition: a translation of the lips carries the
+// bag unchanged, and the bag bends smoothly where the lips moved apart.
+// mouth_bag: #V flags; before: the mesh global fitting started from;
+// control: its result (#V by 3, same triangles), whose bag vertices are
+// replaced. A bag with no vertex outside it as a neighbour is left as it is.
+Status carry_mouth_bag(const std::vector<char>& mouth_bag, const MeshTopology& topology, const TriMesh& before,
+                       TriMesh& control);
 
 // The rotation taking a scan with the given up and facing directions to the
 // head frame (+y up, +z facing). Fails when they are (nearly) parallel.

@@ -6,6 +6,7 @@
 #include "io/io.h"
 #include "mesh/geometry.h"
 #include "pipeline/fit_head.h"
+#include "smooth_pairs.h"
 #include "test_data.h"
 #include "test_scan.h"
 
@@ -237,6 +238,10 @@ TEST_CASE("fit_head: the real Fran (Cyberware face patch) is turned to face +z a
   // No control triangle turned over against the aligned generic head (11
   // did before the fold guard).
   CHECK(turned_triangles(r.aligned.positions, r.control).empty());
+  // Her mouth corner lies 3.5 mm behind where local fitting put it: with the
+  // mouth bag held there, the bag came out through her lower lip (35 lip
+  // pairs on the smooth level 3); the bag now follows the lips.
+  CHECK(test::smooth_region_pairs(r.control, truth().generic.annotations, 3, "lips") == 0);
 }
 
 TEST_CASE("fit_head: the real James (menpo3d face capture in mm)") {
@@ -262,6 +267,16 @@ TEST_CASE("fit_head: the real James (menpo3d face capture in mm)") {
   CHECK(r.global_fit.turned_before > 0);
   CHECK(r.global_fit.turned_after == 0);
   CHECK(turned_triangles(r.aligned.positions, r.control).empty());
+  // The mouth bag follows his lips (10 lip pairs on the smooth level 3 while
+  // it was held where local fitting put it).
+  CHECK(test::smooth_region_pairs(r.control, truth().generic.annotations, 3, "lips") == 0);
+  // His ears keep their shape (bound edges): their flaps folded onto the
+  // hair and their own bowls, 13 crossing control pairs and 262 ear pairs on
+  // the smooth level 3 when free (measured bound: 0 and 39).
+  std::vector<std::array<int, 2>> control_pairs;
+  REQUIRE(find_self_intersections(r.control, control_pairs).ok());
+  CHECK(control_pairs.size() <= 3);
+  CHECK(test::smooth_region_pairs(r.control, truth().generic.annotations, 3, "ears") < 100);
 
   // The eyes land on his eyes: the eye rims' centroids against the centroids
   // of the six iBUG landmarks around each eye (james.ljson; the fit does not
