@@ -8,7 +8,9 @@
 // barycentric combination of the projecting triangle's corners (Hoppe et al.
 // 1994; Marschner et al. 2000) plus a small point-to-point share for
 // conditioning, and solves the resulting sparse 3#V by 3#V normal equations
-// with Eigen's SimplicialLDLT. A backtracking step on the TRUE energy (true
+// with a sparse LDL^T by 3x3 vertex blocks (block_ldlt.h), whose factor
+// later iterations reuse as the preconditioner of conjugate gradients while
+// the matrix changes little. A backtracking step on the TRUE energy (true
 // closest-point distances) makes every iteration decrease E_global, which
 // the returned per-iteration energies show.
 //
