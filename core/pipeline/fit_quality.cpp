@@ -7,31 +7,46 @@
 #include <algorithm>
 
 namespace lk {
+namespace {
+
+// Level-`level` vertices of a region given by its control vertices.
+std::vector<char> level_mask(const MultiresMesh& mesh, int level, const std::vector<int>& control_vertices) {
+  std::vector<char> m(mesh.num_vertices(0), 0);
+  for (int v : control_vertices)
+    if (v >= 0 && v < static_cast<int>(m.size())) m[v] = 1;
+  return propagate_vertex_mask(mesh, m)[level];
+}
+
+bool pair_touches(const std::vector<Tri>& tris, const std::vector<char>& mask, const std::array<int, 2>& p) {
+  for (int f : p)
+    for (int v : tris[f])
+      if (mask[v]) return true;
+  return false;
+}
+
+}  // namespace
+
+int count_pairs_touching(const MultiresMesh& mesh, int level, const std::vector<std::array<int, 2>>& pairs,
+                         const std::vector<int>& control_vertices) {
+  const std::vector<char> mask = level_mask(mesh, level, control_vertices);
+  int n = 0;
+  for (const auto& p : pairs) n += pair_touches(mesh.triangles(level), mask, p);
+  return n;
+}
 
 CrossingCounts count_crossings_by_region(const MultiresMesh& mesh, int level,
                                          const std::vector<std::array<int, 2>>& pairs,
                                          const HeadAnnotations& annotations) {
   const std::vector<Tri>& tris = mesh.triangles(level);
-  auto mask_of = [&](const std::vector<int>& vertices) {
-    std::vector<char> m(mesh.num_vertices(0), 0);
-    for (int v : vertices)
-      if (v >= 0 && v < static_cast<int>(m.size())) m[v] = 1;
-    return propagate_vertex_mask(mesh, m)[level];
-  };
   std::map<std::string, std::vector<char>> masks;
-  for (const auto& kv : annotations.regions) masks[kv.first] = mask_of(kv.second);
+  for (const auto& kv : annotations.regions) masks[kv.first] = level_mask(mesh, level, kv.second);
   const std::vector<char> none(mesh.num_vertices(level), 0);
   auto region = [&](const char* name) -> const std::vector<char>& {
     auto it = masks.find(name);
     return it == masks.end() ? none : it->second;
   };
   const std::vector<char>&lips = region("lips"), &ears = region("ears");
-  auto touches = [&](const std::vector<char>& m, const std::array<int, 2>& p) {
-    for (int f : p)
-      for (int v : tris[f])
-        if (m[v]) return true;
-    return false;
-  };
+  auto touches = [&](const std::vector<char>& m, const std::array<int, 2>& p) { return pair_touches(tris, m, p); };
   CrossingCounts c;
   c.total = static_cast<int>(pairs.size());
   for (const auto& p : pairs) {

@@ -47,6 +47,11 @@ CrossingCounts count_crossings_by_region(const MultiresMesh& mesh, int level,
                                          const std::vector<std::array<int, 2>>& pairs,
                                          const HeadAnnotations& annotations);
 
+// How many pairs have a triangle touching a level-`level` vertex of the
+// region given by its control vertices (carried down the levels).
+int count_pairs_touching(const MultiresMesh& mesh, int level, const std::vector<std::array<int, 2>>& pairs,
+                         const std::vector<int>& control_vertices);
+
 // Triangles of m whose normal points against the same triangle's of
 // reference (same connectivity), and triangles of m whose area is below
 // 1e-6 of m's mean triangle area.

@@ -5,6 +5,7 @@
 #pragma once
 #include "head/head_model.h"
 #include "multires/multires.h"
+#include "pipeline/fit_quality.h"
 #include "raycast/self_intersection.h"
 
 #include <catch2/catch.hpp>
@@ -21,15 +22,9 @@ inline int smooth_region_pairs(const TriMesh& control, const HeadAnnotations& an
   const TriMesh mesh = level_mesh(mr, level);
   std::vector<std::array<int, 2>> pairs;
   REQUIRE(find_self_intersections(mesh, pairs).ok());
-  std::vector<char> mask(control.num_vertices(), 0);
   const auto it = ann.regions.find(region);
   REQUIRE(it != ann.regions.end());
-  for (int v : it->second) mask[v] = 1;
-  const std::vector<char> fine = propagate_vertex_mask(mr, mask)[level];
-  auto touches = [&](int f) { return fine[mesh.triangles[f][0]] || fine[mesh.triangles[f][1]] || fine[mesh.triangles[f][2]]; };
-  int count = 0;
-  for (const auto& p : pairs) count += touches(p[0]) || touches(p[1]);
-  return count;
+  return count_pairs_touching(mr, level, pairs, it->second);
 }
 
 }  // namespace lk::test

@@ -69,6 +69,9 @@ TEST_CASE("crossing pairs are counted by the region they touch, lips before ears
   c = count_crossings_by_region(mr, 2, pairs, ann);
   CHECK(c.lips > 0);
   CHECK(c.lips < n);
+  CHECK(count_pairs_touching(mr, 2, pairs, {4, 5, 6}) == c.lips);
+  CHECK(count_pairs_touching(mr, 2, pairs, {4, 5}) == 0);
+  CHECK(count_pairs_touching(mr, 2, pairs, {0, 1, 2, 3}) == n);
 }
 
 TEST_CASE("turned-over and degenerate triangles are counted against a reference", "[fit_quality]") {
