@@ -173,9 +173,29 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
   };
   // Visit marks of the rounds below (fold, separation): a fresh value per round.
   int stamp = 0;
+  // keep_finer_heights: a vertex of the two finest levels holding its height
+  // (below) is first let go (its displacement as measured, over the new
+  // base) when a fold or a crossing needs it to move; shrinking follows from
+  // there. Shrinking from the held height instead left synthetic seed 1 with
+  // 72 ear pairs (12 when letting go on the finest level only); letting go
+  // on every level left James 678 level-3 pairs (640 this way, 646 without
+  // holding).
+  const int let_go_from = std::max(L - 1, 0);
+  std::vector<std::vector<double>> let_go(L + 1);  // #V_l, NaN: not holding
   // Scales d_k[v] once per round; true when v carries a displacement.
   auto shrink_one = [&](int k, int v, bool to_zero = false) {
     double& d = mesh.displacements[k][v];
+    if (k >= let_go_from && !let_go[k].empty() && !std::isnan(let_go[k][v])) {
+      const double measured = let_go[k][v];
+      let_go[k][v] = std::nan("");
+      if (!to_zero) {
+        if (shrunk_in_round[k][v] == stamp) return true;
+        shrunk_in_round[k][v] = stamp;
+        d = measured;
+        return true;
+      }
+      if (d == 0) return false;
+    }
     if (d == 0) return false;
     if (shrunk_in_round[k][v] == stamp) return true;
     shrunk_in_round[k][v] = stamp;
@@ -297,6 +317,15 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
   std::vector<char> in_pair_set;
   st.coarse_intersections_found.assign(L, 0);
   st.coarse_intersections_left.assign(L, 0);
+  // FoldLimitOptions::keep_finer_heights: per level, the vertices whose base
+  // moved because a coarser displacement changed, with the displaced
+  // position each had before (marks #V_l, and the list); and each coarser
+  // level's displaced positions as last refined into the next.
+  std::vector<std::vector<char>> held_mark(L + 1);
+  std::vector<std::vector<std::pair<int, Vec3>>> held_heights(L + 1);
+  std::vector<std::vector<Vec3>> refined_from(L);
+  for (int l = 0; l < L; ++l) refined_from[l] = state.displaced[l];
+  std::vector<int> moved_level;
   // Returns with moved_total = the level-l vertices it moved (repeats allowed).
   auto separate_level = [&](int l) -> Status {
     moved_total.clear();
@@ -350,6 +379,21 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
     int l = 0;
     while (l <= L) {
       evaluate_changes(l);
+      // Shrinking on the coarser levels (separation, fold restarts) moved
+      // this level's base: its vertices that carry a displacement get back
+      // the position they had before (the height they were measured for).
+      for (const auto& [w, target] : held_heights[l]) {
+        held_mark[l][w] = 0;
+        double& d = mesh.displacements[l][w];
+        if (d == 0) continue;
+        if (l >= let_go_from) {
+          if (let_go[l].empty()) let_go[l].assign(mesh.num_vertices(l), std::nan(""));
+          if (std::isnan(let_go[l][w])) let_go[l][w] = d;
+        }
+        d = (target - state.base[l][w]).dot(state.normals[l][w]);
+        state.displaced[l][w] = displace(state.base[l][w], d, state.normals[l][w]);
+      }
+      held_heights[l].clear();
       all_bad(l, bad);
       if (!checked[l]) {
         checked[l] = 1;
@@ -395,7 +439,24 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
         l = restart;  // levels above it are unchanged, so its base P is current
         continue;
       }
-      if (l < L) refine_changes(l);
+      if (l < L) {
+        if (options.keep_finer_heights) {
+          // What moved on level l since it was last refined: the level-(l+1)
+          // vertices refined from it keep their displaced positions as
+          // targets (their displacements were measured from the old base).
+          differences(state.displaced[l], refined_from[l], moved_level);
+          if (held_mark[l + 1].empty()) held_mark[l + 1].assign(mesh.num_vertices(l + 1), 0);
+          const IndexRows& reach = mesh.links[l].refine_reach;
+          for (int v : moved_level)
+            for (int i = reach.offsets[v]; i < reach.offsets[v + 1]; ++i) {
+              const int w = reach.items[i];
+              if (held_mark[l + 1][w]) continue;
+              held_mark[l + 1][w] = 1;
+              held_heights[l + 1].emplace_back(w, state.displaced[l + 1][w]);
+            }
+        }
+        refine_changes(l);
+      }
       ++l;
     }
     return Status::success();
@@ -523,7 +584,10 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
           ++full_searches;
           for (int k = restart; k <= L; ++k) {
             evaluate_changes(k);
-            if (k < L) refine_changes(k);
+            if (k < L) {
+              refine_changes(k);
+              refined_from[k] = state.displaced[k];  // meant to move the finer levels: nothing held
+            }
           }
           // Only what moved is searched again (the levels' evaluation is
           // cheap, a full search is not).

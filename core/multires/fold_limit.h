@@ -46,6 +46,19 @@ struct FoldLimitOptions {
   // scan's level-3 pairs went 1079 -> 646, Fran's 134 -> 104 (mean of four
   // runs), Table 1 within the scans' own noise (docs/fit_real.md).
   bool separate_coarser_levels = true;
+  // Each level's displacements were measured from the coarser levels as
+  // they were: where the fold pass shrinks a level-l displacement (its
+  // crossings' separation, or a restart for a finer fold), every finer level
+  // over that vertex's footprint (tens of mm on level 0) used to move with
+  // it, crossing or not. With this, the finer vertices refined from what
+  // moved keep the positions they had (their displacement re-taken along
+  // their normal over the new base, where they carry one), and are let go
+  // (back to the displacement as measured, over the new base) the first
+  // time a fold or a crossing of their own level needs them to move;
+  // shrinking follows from there. Fran's chin: level 3 0.0546 -> 0.049 %
+  // (separation off: 0.0502 %); synthetic seeds 1-5 and James closer too
+  // (docs/fit_real.md, "Fran's loss from the coarser levels' separation").
+  bool keep_finer_heights = true;
   // Then the finest level's self-intersections (raycast/self_intersection.h):
   // the corners of both triangles of a crossing pair are shrunk the same way,
   // re-checking only around what moved, for at most this many rounds (0: off).
