@@ -159,6 +159,26 @@ bool preconditioned_cg(const SpMat& H, const VecX& g, const NormalSolver& M, con
   return false;
 }
 
+// 1/#S sum_p min(d_p, tau)^2 with d_p the distance from point p to the
+// triangle it projected to before (hits; a point without one counts tau):
+// an upper bound of E_dist at positions x.
+double distance_energy_bound(const std::vector<Vec3>& points, const std::vector<int>& set,
+                             const std::vector<Tri>& triangles, const VecX& x, double tau,
+                             const std::vector<SurfacePoint>& hits) {
+  const double tau2 = tau * tau;
+  std::vector<double> d2(set.size(), tau2);
+  parallel_for(0, static_cast<int>(set.size()), 4096, [&](int i, int) {
+    const int f = hits[i].face;
+    if (f < 0) return;
+    const Tri& t = triangles[f];
+    const Vec3 a = x.segment<3>(3 * t[0]), b = x.segment<3>(3 * t[1]), c = x.segment<3>(3 * t[2]);
+    d2[i] = closest_point_on_triangle(points[set[i]], a, b, c).squared_distance;
+  });
+  double sum = 0;  // in point order: the same sum on any number of threads
+  for (double v : d2) sum += std::min(v, tau2);
+  return set.empty() ? 0.0 : sum / set.size();
+}
+
 bool finite(const Vec3& p) { return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()); }
 
 Vec3 triangle_normal(const VecX& x, const Tri& t) {
@@ -397,6 +417,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
     const bool final_pass = r >= sub_rounds;
     const double lambda = options.smooth_weights[std::min(r, sub_rounds - 1)];
     const int max_iterations = final_pass ? options.final_iterations : options.max_iterations_per_round;
+    const bool last_round = r == rounds - 1;
     int count = final_pass ? 0 : options.subsample_points;
     if (count <= 0 || count > static_cast<int>(points.size())) count = static_cast<int>(points.size());
     const std::vector<int> set(order.begin(), order.begin() + count);
@@ -491,6 +512,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       g += (tikhonov * w) * x;
       const SpMat h_data_reg = h_data + h_reg;
 
+      const bool last_step_of_fit = last_round && it == max_iterations - 1;
       GlobalFitIteration rec;
       rec.round = r;
       rec.points = count;
@@ -598,10 +620,27 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
             }
           }
           Projection trial;
-          project(points, set, work, xt, tau, &proj.hits, trial);
           GlobalFitIteration parts;
-          const double e_new = energy_parts(xt, trial.dist_energy, lambda, parts);
+          // The fit's last step: nothing uses its projection afterwards, so
+          // an upper bound of E_dist (each point's distance to the triangle
+          // it projected to at x, which its true closest point can only
+          // beat) accepts the step when it already lowers E_global, and the
+          // points are projected only otherwise. Same steps as with exact
+          // projections (a step the bound accepts, they accept too); only
+          // this iteration's energy_after and e_dist are the bound.
+          bool bounded = false;
+          double e_new = 0;
+          if (last_step_of_fit) {
+            const double bound = distance_energy_bound(points, set, mesh.triangles, xt, tau, proj.hits);
+            e_new = energy_parts(xt, bound, lambda, parts);
+            bounded = e_new <= e_old;
+          }
+          if (!bounded) {
+            project(points, set, work, xt, tau, &proj.hits, trial);
+            e_new = energy_parts(xt, trial.dist_energy, lambda, parts);
+          }
           if (e_new <= e_old) {
+            rec.energy_after_is_bound = bounded;
             accepted = true;
             x_new = xt;
             proj_new = std::move(trial);

@@ -147,6 +147,11 @@ struct GlobalFitIteration {
   double trim_distance = 0;    // tau in this round
   double energy_before = 0;    // E_global at the start of the iteration
   double energy_after = 0;     // E_global after the accepted step (<= energy_before)
+  // The fit's last iteration may accept its step on an upper bound of
+  // E_dist (distances to the triangles the points projected to before the
+  // step) without projecting again; then energy_after and e_dist are that
+  // bound, still <= energy_before, and the true energy is lower.
+  bool energy_after_is_bound = false;
   double e_dist = 0, e_smooth = 0, e_binding = 0, e_constraint = 0;  // after, unweighted
   double e_guard = 0;          // after, weighted by g_v (the anchors)
   double step = 1;             // accepted fraction of the linear solve's step (0: none)
