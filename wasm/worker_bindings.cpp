@@ -1038,12 +1038,44 @@ val smile_photo_job(const std::string& name, std::uintptr_t data, std::size_t si
   return r;
 }
 
+// Micro-benchmark of what a parallel_for costs beyond its items
+// (tests/browser/parallel_overhead_node.mjs): `loops` loops of `items` small
+// items (a few hundred flops each, grain 64) on parallel_for, or as plain
+// loops when parallel is false. Wall ms of the whole run.
+double parallel_loops_ms(int loops, int items, bool parallel) {
+  items = std::max(1, items);
+  std::vector<double> out(items);
+  const auto item = [&out](int i) {
+    double x = i * 1e-3;
+    for (int k = 0; k < 32; ++k) x = std::sin(x) + 0.5 * x;
+    out[i] = x;
+  };
+  const double t0 = now_ms();
+  for (int l = 0; l < loops; ++l) {
+    if (parallel) {
+      lk::parallel_for(0, items, 64, [&item](int i, int) { item(i); });
+    } else {
+      for (int i = 0; i < items; ++i) item(i);
+    }
+  }
+  const double ms = now_ms() - t0;
+  volatile double keep = out[items / 2];  // (the items' results are used)
+  (void)keep;
+  return ms;
+}
+
+double parallel_loops_run() { return static_cast<double>(lk::parallel_loops_run().load()); }
+
 }  // namespace
 
 EMSCRIPTEN_BINDINGS(likeness_worker) {
   emscripten::function("fit_head_job", &fit_head_job);
   // Threads the core's parallel loops use here (1 in the single-threaded build).
   emscripten::function("parallel_workers", &lk::parallel_workers);
+  emscripten::function("parallel_loops_ms", &parallel_loops_ms);
+  // parallel_for loops that could use more than one thread so far
+  // (fit_timing.mjs reads it around a fit: each loop starts the threads once).
+  emscripten::function("parallel_loops_run", &parallel_loops_run);
   emscripten::function("animate_frame", &animate_frame);
   emscripten::function("export_head", &export_head);
   emscripten::function("parse_geometry", &parse_geometry);

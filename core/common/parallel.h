@@ -45,6 +45,15 @@ inline int parallel_workers() {
 #endif
 }
 
+// How many parallel_for calls this process made that could use more than
+// one thread (a measurement for the benchmarks: each wakes the threads once,
+// so this times the per-loop cost is what starting them costs a whole job;
+// a seed-1 fit makes about 30, docs/web.md "Threads").
+inline std::atomic<long>& parallel_loops_run() {
+  static std::atomic<long> loops{0};
+  return loops;
+}
+
 #ifdef LK_MAX_WORKERS
 // Threaded wasm only: true while this thread runs a parallel_for's items. A
 // loop nested in one then runs on its thread: a pthread cannot start another
@@ -76,6 +85,7 @@ void parallel_for(int begin, int end, int grain, const Body& body) {
     return;
   }
 #ifndef LK_SINGLE_THREADED  // (single-threaded: parallel_workers() is 1, the loop above ran)
+  parallel_loops_run().fetch_add(1, std::memory_order_relaxed);
   std::atomic<int> next{begin};
   auto run = [&](int worker) {
 #ifdef LK_MAX_WORKERS

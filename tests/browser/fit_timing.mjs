@@ -41,7 +41,18 @@ try {
   if (scan) await page.setInputFiles('#file-input', path.resolve(scan));
   else await page.click('#btn-sample');
   await page.waitForFunction(() => ['done', 'error'].includes(document.body.dataset.state) && window.likeness.model, null, { timeout: 180000 });
+  // The worker's own numbers, read inside it (its core is a top-level
+  // binding of worker.js): the wasm heap's size (a first fit grows it) and
+  // how many multi-threaded parallel_for loops ran (builds that count them).
+  const coreStats = async () => {
+    const w = page.workers().find((x) => x.url().includes('worker.js'));
+    if (!w) return null;
+    return w.evaluate(() => (typeof core === 'object' && core ? {
+      heapMB: (core.wasmMemory ? core.wasmMemory.buffer : core.HEAPU8.buffer).byteLength / 1048576,
+      loops: core.parallel_loops_run ? core.parallel_loops_run() : null } : null)).catch(() => null);
+  };
   for (let i = 0; i < runs; i++) {
+    const before = await coreStats();
     const t0 = Date.now();
     await page.click('#btn-fit');
     await page.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: 600000 });
@@ -56,6 +67,11 @@ try {
       console.log(`  ${s.name.padEnd(18)} ${s.meanPct.toFixed(3).padStart(7)} % ${s.maxPct.toFixed(3).padStart(7)} % ${Math.round(s.ms).toString().padStart(7)} ms`);
     }
     console.log(`  ${'stages total'.padEnd(36)} ${Math.round(sum).toString().padStart(7)} ms`);
+    const after = await coreStats();
+    if (before && after) {
+      console.log(`  wasm heap ${Math.round(before.heapMB)} -> ${Math.round(after.heapMB)} MB` +
+                  (after.loops !== null ? `; ${after.loops - before.loops} multi-threaded parallel_for loops` : ''));
+    }
   }
   if (shots && !status) {
     fs.mkdirSync(shots, { recursive: true });
