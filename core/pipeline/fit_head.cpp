@@ -1,5 +1,6 @@
 #include "pipeline/fit_head.h"
 
+#include "common/parallel.h"
 #include "mesh/geometry.h"
 #include "mesh/topology.h"
 #include "raycast/self_intersection.h"
@@ -475,15 +476,16 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   std::vector<Vec3> skin_pts;
   std::vector<int> skin_index;
   skin_pts.reserve(pts.size());
+  const ClosestPointTree local_tree(out.local);
   {
-    ClosestPointTree tree(out.local);
-    for (size_t i = 0; i < pts.size(); ++i) {
-      const SurfacePoint c = tree.closest(pts[i]);
-      bool on_pocket = false;
+    std::vector<char> on_pocket(pts.size(), 0);
+    parallel_for(0, static_cast<int>(pts.size()), 2048, [&](int i, int) {
+      const SurfacePoint c = local_tree.closest(pts[i]);
       if (c.face >= 0)
-        for (int v : out.local.triangles[c.face]) on_pocket = on_pocket || pocket[v];
-      if (!on_pocket) skin_pts.push_back(pts[i]), skin_index.push_back(pts_index[i]);
-    }
+        for (int v : out.local.triangles[c.face]) on_pocket[i] = on_pocket[i] || pocket[v];
+    });
+    for (size_t i = 0; i < pts.size(); ++i)
+      if (!on_pocket[i]) skin_pts.push_back(pts[i]), skin_index.push_back(pts_index[i]);
   }
   out.pocket_points = static_cast<int>(pts.size() - skin_pts.size());
   // Points far sparser than the scan's own sampling (hair returns, stray
@@ -522,11 +524,37 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   if (!st) return with_context(st, "subdivision");
   PointCloud fitted;
   fitted.positions = skin_pts;
+  std::vector<int> measured_index = skin_index;  // into the scan
+  const auto neck_region = ann.regions.find("neck");
+  if (options.cut_neck && options.displacement_below_neck_cut > 0 && neck_region != ann.regions.end()) {
+    // The band just below the neck cut (see FitHeadOptions) where its
+    // nearest surface is the neck's (on a face scan the cut passes under
+    // the ear lobes: 20 mm of band with no such test tripled James's ear
+    // crossings), without its isolated returns, like the points above.
+    std::vector<char> in_neck(out.local.num_vertices(), 0);
+    for (int v : neck_region->second)
+      if (v >= 0 && v < static_cast<int>(in_neck.size())) in_neck[v] = 1;
+    std::vector<Vec3> band;
+    std::vector<int> band_index;
+    for (int i = 0; i < n; ++i) {
+      const double h = neck.normal.dot(cloud.positions[i] - neck.point);
+      if (h >= 0 || h < -options.displacement_below_neck_cut) continue;
+      const SurfacePoint c = local_tree.closest(cloud.positions[i]);
+      if (c.face < 0) continue;
+      const Tri& t = out.local.triangles[c.face];
+      if (in_neck[t[0]] && in_neck[t[1]] && in_neck[t[2]]) band.push_back(cloud.positions[i]), band_index.push_back(i);
+    }
+    std::vector<char> isolated(band.size(), 0);
+    if (options.displacement.isolated_density_ratio > 0 && !band.empty())
+      isolated = isolated_scan_points(band, options.displacement.isolated_density_ratio);
+    for (size_t k = 0; k < band.size(); ++k)
+      if (!isolated[k]) fitted.positions.push_back(band[k]), measured_index.push_back(band_index[k]);
+  }
   if (scan.normals.size() == scan.positions.size()) {
     // The scanner's normals, in the head frame, tell thin features' two
     // sheets apart when measuring (DisplacementOptions::min_normal_agreement).
-    fitted.normals.reserve(skin_index.size());
-    for (int i : skin_index) fitted.normals.push_back(out.scan_to_head.A * scan.normals[i]);
+    fitted.normals.reserve(measured_index.size());
+    for (int i : measured_index) fitted.normals.push_back(out.scan_to_head.A * scan.normals[i]);
   }
   DisplacementOptions dopt = options.displacement;
   dopt.isolated_density_ratio = 0;  // already left out above
