@@ -22,3 +22,23 @@ export function syntheticScan(webdir, seed, points = 60000) {
     fs.rmSync(dir, { recursive: true, force: true });
   }
 }
+
+// The native CLI's fit of the same scan bytes (`likeness fit`): its
+// report.json stages [{name, mean_pct, ...}], or { skip: why }. The Node
+// tests compare the wasm core's stage distances with it: a compiler that
+// miscompiles the core for wasm (it happened: docs/web.md) shows there.
+export function nativeFit(webdir, bytes) {
+  const candidates = [process.env.LK_LIKENESS_BIN, path.join(webdir, '..', 'bin', 'likeness')].filter(Boolean);
+  const bin = candidates.find((c) => fs.existsSync(c));
+  if (!bin) return { skip: 'no native likeness binary (set LK_LIKENESS_BIN)' };
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-fit-'));
+  try {
+    fs.writeFileSync(path.join(dir, 'scan.ply'), bytes);
+    execFileSync(bin, ['fit', '--scan', path.join(dir, 'scan.ply'), '--out', path.join(dir, 'out')], { stdio: 'pipe' });
+    return { stages: JSON.parse(fs.readFileSync(path.join(dir, 'out', 'report.json'), 'utf8')).stages };
+  } catch (e) {
+    return { skip: 'likeness fit failed: ' + String(e.message).split('\n')[0] };
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+}
