@@ -6,6 +6,7 @@
 // the ears, docs/fit_real.md).
 #include "multires/fold_limit.h"
 #include "multires/multires.h"
+#include "displaced_crossings.h"
 #include "raycast/self_intersection.h"
 
 #include <catch2/catch.hpp>
@@ -46,20 +47,6 @@ TriMesh facing_sheets(int n, double h, double gap) {
   return m;
 }
 
-// Crossing pairs of level `level` that do not cross on the smooth level too
-// (the Butterfly corner rules fold a flat grid's corners over in its plane:
-// the fold limiter leaves those alone).
-size_t crossing_pairs(const MultiresMesh& mr, int level) {
-  std::vector<std::vector<Vec3>> smooth;
-  REQUIRE(smooth_positions(mr, smooth).ok());
-  std::vector<std::array<int, 2>> pairs;
-  REQUIRE(find_self_intersections(level_mesh(mr, level), pairs).ok());
-  size_t n = 0;
-  for (const auto& p : pairs)
-    n += !mesh_triangles_cross(smooth[level], mr.triangles(level)[p[0]], mr.triangles(level)[p[1]]);
-  return n;
-}
-
 // Sheet A's interior pushed 4 mm up on level 0, through sheet B 2 mm above.
 MultiresMesh pushed_through(int levels) {
   const int n = 8;
@@ -81,7 +68,7 @@ TEST_CASE("fold limit: a sheet pushed through another on level 0 crosses on no l
   const int L = 3;
   MultiresMesh before = pushed_through(L);
   // The setup does what it says: every level crosses where the smooth one does not.
-  for (int l = 0; l <= L; ++l) CHECK(crossing_pairs(before, l) > 0);
+  for (int l = 0; l <= L; ++l) CHECK(test::displaced_crossing_pairs(before, l) > 0);
 
   SECTION("with the coarser levels separated") {
     MultiresMesh mr = before;
@@ -91,7 +78,7 @@ TEST_CASE("fold limit: a sheet pushed through another on level 0 crosses on no l
     REQUIRE(limit_folds(mr, o, &stats).ok());
     for (int l = 0; l <= L; ++l) {
       INFO("level " << l);
-      CHECK(crossing_pairs(mr, l) == 0);
+      CHECK(test::displaced_crossing_pairs(mr, l) == 0);
     }
     REQUIRE(stats.coarse_intersections_found.size() == static_cast<size_t>(L));
     CHECK(stats.coarse_intersections_found[0] > 0);
@@ -108,7 +95,7 @@ TEST_CASE("fold limit: a sheet pushed through another on level 0 crosses on no l
     FoldLimitOptions o;
     o.separate_coarser_levels = false;
     REQUIRE(limit_folds(mr, o).ok());
-    CHECK(crossing_pairs(mr, 1) > 0);
+    CHECK(test::displaced_crossing_pairs(mr, 1) > 0);
   }
 }
 

@@ -7,6 +7,7 @@
 // Table 1 went 0.0502 -> 0.0546 % (docs/fit_real.md).
 #include "multires/fold_limit.h"
 #include "multires/multires.h"
+#include "displaced_crossings.h"
 #include "raycast/self_intersection.h"
 
 #include <catch2/catch.hpp>
@@ -89,23 +90,12 @@ Moved finest_moves(const MultiresMesh& before, const MultiresMesh& after) {
   return m;
 }
 
-size_t crossing_pairs(const MultiresMesh& mr, int level) {
-  std::vector<std::vector<Vec3>> smooth;
-  REQUIRE(smooth_positions(mr, smooth).ok());
-  std::vector<std::array<int, 2>> pairs;
-  REQUIRE(find_self_intersections(level_mesh(mr, level), pairs).ok());
-  size_t n = 0;
-  for (const auto& p : pairs)
-    n += !mesh_triangles_cross(smooth[level], mr.triangles(level)[p[0]], mr.triangles(level)[p[1]]);
-  return n;
-}
-
 }  // namespace
 
 TEST_CASE("fold limit: separating a coarser crossing keeps the finer heights away from it") {
   const int L = 3;
   const MultiresMesh before = raised(L);
-  REQUIRE(crossing_pairs(before, 0) > 0);  // the bump goes through B on level 0 already
+  REQUIRE(test::displaced_crossing_pairs(before, 0) > 0);  // the bump goes through B on level 0 already
 
   MultiresMesh kept = before;
   FoldLimitOptions o;
@@ -114,7 +104,7 @@ TEST_CASE("fold limit: separating a coarser crossing keeps the finer heights awa
   REQUIRE(stats.coarse_intersections_found[0] > 0);
   for (int l = 0; l <= L; ++l) {
     INFO("level " << l);
-    CHECK(crossing_pairs(kept, l) == 0);
+    CHECK(test::displaced_crossing_pairs(kept, l) == 0);
   }
   const Moved m = finest_moves(before, kept);
   INFO("finest heights: changed by " << 1000 * m.far_max << " mm away from B, moved " << 1000 * m.near_max << " mm under it");
