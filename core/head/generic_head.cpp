@@ -1,5 +1,7 @@
 #include "head/generic_head.h"
 
+#include <algorithm>
+
 #include "io/io.h"
 
 #include <nlohmann/json.hpp>
@@ -117,6 +119,13 @@ Status read_eye(const Json& obj, const std::string& key, int num_vertices, EyeSo
 }
 
 }  // namespace
+
+std::vector<char> vertex_mask(const std::vector<int>& vertices, int num_vertices) {
+  std::vector<char> mask(std::max(0, num_vertices), 0);
+  for (int v : vertices)
+    if (v >= 0 && v < num_vertices) mask[v] = 1;
+  return mask;
+}
 
 Status parse_head_annotations(const std::string& text, int num_vertices, HeadAnnotations& out) {
   if (num_vertices <= 0) return invalid("num_vertices", "the mesh has no vertices");

@@ -36,6 +36,10 @@ std::string generic_head_json_text();
 // or >= 3 (closed) vertices. Fails with InvalidInput and a message naming the field.
 Status parse_head_annotations(const std::string& json, int num_vertices, HeadAnnotations& out);
 
+// #V flags, 1 for the listed vertices (a region, the constrained vertices);
+// indices outside [0, num_vertices) are ignored.
+std::vector<char> vertex_mask(const std::vector<int>& vertices, int num_vertices);
+
 // The JSON text parse_head_annotations reads (round trip is exact up to
 // printing doubles with 17 significant digits).
 std::string head_annotations_to_json(const HeadAnnotations& annotations, int num_vertices = -1);

@@ -1,6 +1,7 @@
 #include "pipeline/fit_head.h"
 
 #include "common/parallel.h"
+#include "head/generic_head.h"
 #include "mesh/geometry.h"
 #include "mesh/topology.h"
 #include "raycast/self_intersection.h"
@@ -137,6 +138,21 @@ Status check_orientation(const GenericHead& generic, const FitHeadOptions& optio
   out.scan_to_head.A = out.unit_to_metres * scan_to_upright;
   out.notes.push_back(what + ": turned it that way; pass " + flags + " to say so");
   return Status::success();
+}
+
+// Leaves out the points far sparser than the scan's own sampling
+// (isolated_scan_points; ratio 0: none), and their entries of `index`, in
+// order. Returns how many were left out.
+int drop_isolated_points(double density_ratio, std::vector<Vec3>& points, std::vector<int>& index) {
+  if (!(density_ratio > 0) || points.empty()) return 0;
+  const std::vector<char> isolated = isolated_scan_points(points, density_ratio);
+  size_t kept = 0;
+  for (size_t i = 0; i < points.size(); ++i)
+    if (!isolated[i]) points[kept] = points[i], index[kept] = index[i], ++kept;
+  const int dropped = static_cast<int>(points.size() - kept);
+  points.resize(kept);
+  index.resize(kept);
+  return dropped;
 }
 
 // The fitted control mesh's own smooth Butterfly surface may cross itself
@@ -446,9 +462,7 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   // and socket turn over wherever the lids moved (James: the eyes lie 10 mm
   // below where the alignment put the generic ones).
   const std::vector<char> pocket = pocket_vertices(generic.mesh, topo, ann);
-  std::vector<char> mouth_bag(pocket.size(), 0);
-  for (int v : ann.constrained_vertices)
-    if (v >= 0 && v < static_cast<int>(mouth_bag.size())) mouth_bag[v] = 1;
+  const std::vector<char> mouth_bag = vertex_mask(ann.constrained_vertices, static_cast<int>(pocket.size()));
   GlobalFitTerms terms;
   terms.binding_edges = ann.binding_edges;
   {
@@ -461,9 +475,7 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
     const bool bind_ears = options.bind_ear_edges == FitHeadOptions::EarBinding::Always ||
                            (options.bind_ear_edges == FitHeadOptions::EarBinding::FaceOnlyScans && out.face_only);
     if (bind_ears && ears != ann.regions.end()) {
-      std::vector<char> in_ear(pocket.size(), 0);
-      for (int v : ears->second)
-        if (v >= 0 && v < static_cast<int>(in_ear.size())) in_ear[v] = 1;
+      const std::vector<char> in_ear = vertex_mask(ears->second, static_cast<int>(pocket.size()));
       for (const Edge& e : topo.edges)
         if (in_ear[e.v0] && in_ear[e.v1]) terms.binding_edges.push_back({{e.v0, e.v1}});
     }
@@ -492,15 +504,7 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   // reflections) are not skin: fitted as a surface they raised bumps along
   // the hairline. They stay in the reported distances (Table 1 is over all
   // points).
-  if (options.displacement.isolated_density_ratio > 0) {
-    const std::vector<char> isolated = isolated_scan_points(skin_pts, options.displacement.isolated_density_ratio);
-    size_t kept = 0;
-    for (size_t i = 0; i < skin_pts.size(); ++i)
-      if (!isolated[i]) skin_pts[kept] = skin_pts[i], skin_index[kept] = skin_index[i], ++kept;
-    out.isolated_points = static_cast<int>(skin_pts.size() - kept);
-    skin_pts.resize(kept);
-    skin_index.resize(kept);
-  }
+  out.isolated_points = drop_isolated_points(options.displacement.isolated_density_ratio, skin_pts, skin_index);
   if (static_cast<int>(skin_pts.size()) < options.min_points)
     return Status::error(ErrorCode::NotAHead, "only " + std::to_string(skin_pts.size()) +
                                                   " points lie on the skin of the aligned head");
@@ -531,9 +535,7 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
     // nearest surface is the neck's (on a face scan the cut passes under
     // the ear lobes: 20 mm of band with no such test tripled James's ear
     // crossings), without its isolated returns, like the points above.
-    std::vector<char> in_neck(out.local.num_vertices(), 0);
-    for (int v : neck_region->second)
-      if (v >= 0 && v < static_cast<int>(in_neck.size())) in_neck[v] = 1;
+    const std::vector<char> in_neck = vertex_mask(neck_region->second, out.local.num_vertices());
     std::vector<Vec3> band;
     std::vector<int> band_index;
     for (int i = 0; i < n; ++i) {
@@ -544,11 +546,9 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
       const Tri& t = out.local.triangles[c.face];
       if (in_neck[t[0]] && in_neck[t[1]] && in_neck[t[2]]) band.push_back(cloud.positions[i]), band_index.push_back(i);
     }
-    std::vector<char> isolated(band.size(), 0);
-    if (options.displacement.isolated_density_ratio > 0 && !band.empty())
-      isolated = isolated_scan_points(band, options.displacement.isolated_density_ratio);
-    for (size_t k = 0; k < band.size(); ++k)
-      if (!isolated[k]) fitted.positions.push_back(band[k]), measured_index.push_back(band_index[k]);
+    drop_isolated_points(options.displacement.isolated_density_ratio, band, band_index);
+    fitted.positions.insert(fitted.positions.end(), band.begin(), band.end());
+    measured_index.insert(measured_index.end(), band_index.begin(), band_index.end());
   }
   if (scan.normals.size() == scan.positions.size()) {
     // The scanner's normals, in the head frame, tell thin features' two

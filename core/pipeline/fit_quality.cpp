@@ -1,5 +1,6 @@
 #include "pipeline/fit_quality.h"
 
+#include "head/generic_head.h"
 #include "mesh/geometry.h"
 #include "pipeline/fit_head.h"
 #include "raycast/self_intersection.h"
@@ -11,10 +12,7 @@ namespace {
 
 // Level-`level` vertices of a region given by its control vertices.
 std::vector<char> level_mask(const MultiresMesh& mesh, int level, const std::vector<int>& control_vertices) {
-  std::vector<char> m(mesh.num_vertices(0), 0);
-  for (int v : control_vertices)
-    if (v >= 0 && v < static_cast<int>(m.size())) m[v] = 1;
-  return propagate_vertex_mask(mesh, m)[level];
+  return propagate_vertex_mask(mesh, vertex_mask(control_vertices, mesh.num_vertices(0)))[level];
 }
 
 bool pair_touches(const std::vector<Tri>& tris, const std::vector<char>& mask, const std::array<int, 2>& p) {

@@ -1,5 +1,6 @@
 #include "synth/synth_head.h"
 
+#include "head/generic_head.h"
 #include "mesh/geometry.h"
 #include "mesh/topology.h"
 #include "synth/prng.h"
@@ -440,11 +441,9 @@ Status make_truth_surface(const GenericHead& head, std::uint32_t seed, const Tru
       mesh.positions[v] += o.detail_amplitude_m * h * n[v];
     }
   }
-  std::vector<char> scalp(head.mesh.positions.size(), 0);
-  auto it = head.annotations.regions.find("scalp");
-  if (it != head.annotations.regions.end())
-    for (int v : it->second)
-      if (v >= 0 && v < static_cast<int>(scalp.size())) scalp[v] = 1;
+  const auto it = head.annotations.regions.find("scalp");
+  const std::vector<char> scalp = vertex_mask(it != head.annotations.regions.end() ? it->second : std::vector<int>{},
+                                              head.mesh.num_vertices());
   out.hair.resize(mesh.triangles.size());
   for (size_t f = 0; f < parent.size(); ++f) {
     const Tri& t = head.mesh.triangles[parent[f]];
