@@ -4,14 +4,13 @@
 // figures (Sec. 7). --dump DIR writes the XOR difference images before and
 // after (like the paper's Fig. 2) as align_xor_{before,after}.png.
 #include "command.h"
+#include "synthetic_scan.h"
 #include "timing.h"
 
 #include "align/initial_alignment.h"
 #include "io/io.h"
 #include "mesh/geometry.h"
 #include "synth/analytic_head.h"
-#include "synth/scanner.h"
-#include "synth/synth_head.h"
 
 #if __has_include("head/generic_head.h")
 #include "head/generic_head.h"
@@ -65,15 +64,10 @@ int run_align_bench(const Args& args) {
   generic = analytic_head();
 #endif
   // The person: the generic head with other proportions, scanned.
-  GenericHead person;
-  Status st = synthesize_head(generic, 7, SynthHeadOptions{}, person);
-  TruthSurface truth;
-  if (st) st = make_truth_surface(person, 7, TruthOptions{}, truth);
-  ScannerOptions scanner;
-  scanner.target_points = quick ? 100000 : 300000;
-  scanner.hair_triangles = truth.hair;
-  PointCloud cloud;
-  if (st) st = scan_virtual(truth.mesh, scanner, 7, cloud);
+  SyntheticScan data;
+  Status st = make_synthetic_scan(generic, 7, quick ? 100000 : 300000, data);
+  const GenericHead& person = data.person;
+  PointCloud& cloud = data.cloud;
   if (!st) {
     std::printf("   could not make the scan: %s\n", st.message.c_str());
     return 1;

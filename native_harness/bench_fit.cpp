@@ -31,6 +31,7 @@
 #include "pipeline/fit_head.h"
 #include "pipeline/fit_quality.h"
 #include "raycast/self_intersection.h"
+#include "synthetic_scan.h"
 #include "synth/scanner.h"
 #include "synth/synth_head.h"
 
@@ -221,16 +222,11 @@ int run(const Args& args) {
   int sum_flipped = 0, sum_degenerate = 0, sum_intersections = 0;
   double sum_roughness = 0, sum_region_roughness = 0, sum_scanned_mm = 0;
   for (int seed : seeds) {
-    GenericHead head;
-    st = synthesize_head(generic, seed, SynthHeadOptions{}, head);
-    TruthSurface truth;
-    if (st) st = make_truth_surface(head, seed, TruthOptions{}, truth);
-    ScannerOptions so;
-    so.target_points = n_points;
-    so.hair_triangles = truth.hair;
-    PointCloud cloud;
-    ScanStats scan_stats;
-    if (st) st = scan_virtual(truth.mesh, so, seed, cloud, &scan_stats);
+    SyntheticScan data;
+    st = make_synthetic_scan(generic, seed, n_points, data);
+    const TruthSurface& truth = data.truth;
+    const PointCloud& cloud = data.cloud;
+    const ScanStats& scan_stats = data.stats;
     if (!st) {
       std::printf("   seed %d: synthetic data failed: %s\n", seed, st.message.c_str());
       ++failures;

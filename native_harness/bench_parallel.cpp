@@ -11,8 +11,7 @@
 #include "common/parallel.h"
 #include "head/generic_head.h"
 #include "pipeline/fit_head.h"
-#include "synth/scanner.h"
-#include "synth/synth_head.h"
+#include "synthetic_scan.h"
 
 #include <algorithm>
 #include <cmath>
@@ -69,15 +68,9 @@ int run(const Args& args) {
 
   GenericHead generic;
   Status st = load_generic_head(generic);
-  GenericHead head;
-  if (st) st = synthesize_head(generic, 1, SynthHeadOptions{}, head);
-  TruthSurface truth;
-  if (st) st = make_truth_surface(head, 1, TruthOptions{}, truth);
-  ScannerOptions so;
-  so.target_points = 300000;
-  so.hair_triangles = truth.hair;
-  PointCloud cloud;
-  if (st) st = scan_virtual(truth.mesh, so, 1, cloud, nullptr);
+  SyntheticScan data;
+  if (st) st = make_synthetic_scan(generic, 1, 300000, data);
+  const PointCloud& cloud = data.cloud;
   if (!st) {
     std::printf("   seed-1 scan failed: %s\n", st.message.c_str());
     return 1;
