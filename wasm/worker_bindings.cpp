@@ -17,7 +17,8 @@
 // Jobs: parse_geometry (a dropped scan), check_image (a dropped photo),
 // parse_points (a photo's points file), fit_head_job (scan -> fitted
 // multiresolution head, jeong2002 Sec. 4-5, with the texture landmarks'
-// places), then, on the fitted head kept in this worker: animate_frame
+// places), then, on the fitted head kept in this worker: fit_quality_job
+// (the finest level's checks, as `likeness fit` prints them), animate_frame
 // (Sec. 6 local update), export_head (OBJ/PLY bytes), texture_job (photos +
 // correspondences -> cameras, chart, skin texture; tarini2002 Sec. 3) and
 // export_textured (OBJ + MTL + PNG); eye_photo_job and smile_photo_job
@@ -30,6 +31,7 @@
 #include "io/io.h"
 #include "mesh/geometry.h"
 #include "pipeline/fit_head.h"
+#include "pipeline/fit_quality.h"
 #include "teeth/synthetic_smile.h"
 #include "teeth/teeth.h"
 #include "texture/correspondences.h"
@@ -192,6 +194,11 @@ struct FitSession {
   // coarser level's uvs are its prefix, see refine_uv.h) and the skin image.
   std::vector<lk::Vec2> uvs;
   lk::Image skin;
+  bool posed = false;  // the last animation frame left the head off its rest pose
+  // The finest level's checks (fit_quality_job), measured once on the rest pose.
+  bool have_quality = false;
+  lk::FitQuality quality;
+  double quality_ms = 0;
 };
 std::unique_ptr<FitSession> g_session;
 
@@ -645,6 +652,36 @@ val fit_head_job(const std::string& name, std::uintptr_t data, std::size_t size,
   return r;
 }
 
+// A small fit whose only purpose is to run the fit's code once, in a
+// throw-away worker (web/worker.js ?warmup=1) started beside the one that
+// fits the user's scan. V8 compiles a wasm function with its optimizing tier
+// only after it has run for a while, so the first fit in a page ran its hot
+// loops on the baseline tier (+0.6-1.5 s, mostly in the alignment:
+// docs/web.md); the compiled code belongs to the module's bytes and is shared
+// by every worker of the page that instantiates them. The input is the
+// generic head itself (its vertices and triangle centroids as a point cloud):
+// nothing is shipped for it. The fitted head is discarded; the kept fit
+// (g_session) is untouched. Returns {ok, code, message, points, fitMs}.
+val warm_up_job(int levels) {
+  lk::Status status;
+  const lk::GenericHead* generic = generic_head(status);
+  if (!generic) return error_result(lk::with_context(status, "generic head"));
+  lk::PointCloud cloud;
+  const std::vector<lk::Vec3>& P = generic->mesh.positions;
+  cloud.positions = P;
+  for (const lk::Tri& t : generic->mesh.triangles) cloud.positions.push_back((P[t[0]] + P[t[1]] + P[t[2]]) / 3.0);
+  lk::FitHeadOptions opt;
+  opt.levels = std::min(4, std::max(1, levels));
+  lk::FitHeadResult discarded;
+  const double t0 = now_ms();
+  status = lk::fit_head(cloud, *generic, opt, discarded);
+  if (!status.ok()) return error_result(lk::with_context(status, "warm-up"));
+  val r = ok_result();
+  r.set("points", static_cast<double>(cloud.positions.size()));
+  r.set("fitMs", now_ms() - t0);
+  return r;
+}
+
 // One animation frame on the kept fit: brows up and jaw open by `amount` in
 // [0, 1], applied to the rest pose through the multires local update
 // (jeong2002 Sec. 6: only the moved vertices' support is recomputed).
@@ -664,6 +701,7 @@ val animate_frame(double amount, int level) {
   lk::Status st = set_pose(s, amount, &footprint, level);
   const double update_ms = now_ms() - t0;
   if (!st.ok()) return error_result(st);
+  s.posed = amount != 0;
   val r = ok_result();
   r.set("level", level);
   r.set("positions", float32_array(to_scan_frame(s, mr.state.displaced[level])));
@@ -671,6 +709,55 @@ val animate_frame(double amount, int level) {
   r.set("changed", footprint.displaced_changed.empty() ? 0 : footprint.displaced_changed[level]);
   r.set("vertexCount", mr.num_vertices(level));
   r.set("jawMatrix", jaw_matrix(s, amount));
+  return r;
+}
+
+// {total, lips, ears, rest} of a CrossingCounts.
+val crossings_object(const lk::CrossingCounts& c) {
+  val o = val::object();
+  o.set("total", c.total);
+  o.set("lips", c.lips);
+  o.set("ears", c.ears);
+  o.set("rest", c.rest);
+  return o;
+}
+
+// The checks `likeness fit` prints after Table 1 (core/pipeline/fit_quality.h),
+// on the kept fit's finest level at rest: triangles turned over by a
+// displacement, degenerate ones, self-intersecting pairs by region of the
+// displaced and of the smooth level, and the control mesh's own pairs.
+// Separate from fit_head_job so the page shows the fit first and the checks
+// when they are done (they cost about as much as a tenth of the fit); the
+// first call measures, later calls return the same numbers.
+// Returns {ok, level, triangles, flipped, degenerate, crossings, smoothCrossings
+// ({total, lips, ears, rest}), controlCrossings, checkMs}.
+val fit_quality_job() {
+  if (!g_session) return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "no fitted head to check"));
+  FitSession& s = *g_session;
+  if (!s.have_quality) {
+    const double t0 = now_ms();
+    if (s.posed) {  // the checks are of the fitted head, not of an animation pose
+      if (lk::Status st = set_pose(s, 0.0, nullptr); !st.ok()) return error_result(st);
+      s.posed = false;
+    }
+    if (lk::Status st = lk::ensure_current(s.fit.multires); !st.ok()) return error_result(st);
+    lk::Status generic_status;
+    const lk::GenericHead* generic = generic_head(generic_status);
+    if (!generic) return error_result(lk::with_context(generic_status, "generic head"));
+    if (lk::Status st = lk::measure_fit_quality(s.fit, generic->annotations, s.quality); !st.ok()) return error_result(st);
+    s.quality_ms = now_ms() - t0;
+    s.have_quality = true;
+  }
+  const lk::FitQuality& q = s.quality;
+  val r = ok_result();
+  r.set("level", q.level);
+  r.set("triangles", q.triangles);
+  r.set("flipped", q.flipped);
+  r.set("degenerate", q.degenerate);
+  r.set("crossings", crossings_object(q.crossings));
+  r.set("smoothCrossings", crossings_object(q.smooth_crossings));
+  r.set("controlCrossings", q.control_crossings);
+  r.set("checkMs", s.quality_ms);
   return r;
 }
 
@@ -870,6 +957,7 @@ val texture_job(val photos, val options, val progress) {
   if (!begin_step("chart")) return cancelled("chart");
   lk::Status st = set_pose(s, 0.0, nullptr);  // texture the rest pose
   if (!st.ok()) return error_result(st);
+  s.posed = false;
   lk::TriMesh control;
   control.positions = s.fit.control.positions;
   control.triangles = s.fit.control.triangles;
@@ -1077,6 +1165,8 @@ EMSCRIPTEN_BINDINGS(likeness_worker) {
   // (fit_timing.mjs reads it around a fit: each loop starts the threads once).
   emscripten::function("parallel_loops_run", &parallel_loops_run);
   emscripten::function("animate_frame", &animate_frame);
+  emscripten::function("fit_quality_job", &fit_quality_job);
+  emscripten::function("warm_up_job", &warm_up_job);
   emscripten::function("export_head", &export_head);
   emscripten::function("parse_geometry", &parse_geometry);
   emscripten::function("check_image", &check_image);

@@ -39,6 +39,8 @@
     fit: $('btn-fit'), autoFit: $('auto-fit'), fitTotal: $('fit-total'), fitView: $('fit-view'),
     level: $('level'), showPoints: $('show-points'), animate: $('animate'), animStats: $('anim-stats'),
     fullDetail: $('full-detail'),
+    fitQuality: $('fit-quality'), qualityTitle: $('quality-title'), qualitySummary: $('quality-summary'),
+    qualityList: $('quality-list'),
     showComponents: $('show-components'),
     exportObj: $('btn-export-obj'), exportPly: $('btn-export-ply'), exportTextured: $('btn-export-textured'),
     photoList: $('photo-list'), photoCount: $('photo-count'), texture: $('btn-texture'), textureTotal: $('texture-total'),
@@ -62,9 +64,10 @@
                            //   clicks (landmark id -> {u, v} or 'skip'), calib (the last calibration), sent}]
     texture: null,         // the last texture: {uvs, skin {width, height, channels, pixels}, steps, textureMs, wallMs}
     lastError: null,
+    warmup: null,          // the start-up warm-up worker: {state: running|done|failed|gave up, variant, ms, fitMs}
     startupFailed: false,  // the viewer or the core could not start
     scan: null,            // {file, display}: the loaded scan, kept to fit it and draw it under the fit
-    fit: null,             // the last fit: {name, stages, meshes, fitMs, parseMs, wallMs}; its
+    fit: null,             // the last fit: {name, stages, meshes, fitMs, parseMs, wallMs, quality}; its
                            // multiresolution head lives in the worker (animation, export)
     shownStage: null,      // which fit mesh is drawn: align|local_fit|global_fit|subdivide
     animation: { running: false, frames: 0, fps: 0, updateMs: 0 },
@@ -145,19 +148,65 @@
   const jobs = new Map();  // id -> {resolve, reject, onProgress}
   let workerReady = null;  // promise resolved when the worker's core is up
 
+  // The worker's start-up is watched here too: worker.js watches its own
+  // downloads, compiles and thread pool, but a worker script that never
+  // arrives, or an importScripts that never returns, leaves it unable to say
+  // anything. No start-up message for WORKER_START_MS (each one restarts the
+  // clock; ?worker_start_ms=N) ends that worker: a threaded attempt is
+  // retried on one thread, a single-threaded one fails with a message.
+  const WORKER_START_MS = Number(params.get('worker_start_ms')) > 0 ? Number(params.get('worker_start_ms')) : 60000;
+  let workerStartFailed = null;  // why the last start failed (the next job tries again)
+
   function startWorker() {
+    workerStartFailed = null;
+    workerReady = startWorkerOnce().catch((e) => {
+      workerStartFailed = e && e.message ? e.message : String(e);
+      throw e;
+    });
+    return workerReady;
+  }
+
+  function startWorkerOnce() {
     // ?threads=1 keeps the single-threaded core even where threads are possible;
     // so does a threaded core that could not start before (a restarted worker
-    // goes straight to one thread). ?thread_start_ms=N: see worker.js.
+    // goes straight to one thread). ?thread_start_ms=N etc.: see worker.js.
     const workerParams = new URLSearchParams();
-    if (params.get('threads') === '1' || (app.workerThreads && app.workerThreads.fallback)) workerParams.set('threads', '1');
-    if (params.get('thread_start_ms')) workerParams.set('thread_start_ms', params.get('thread_start_ms'));
+    const single = params.get('threads') === '1' || (app.workerThreads && app.workerThreads.fallback) || !window.crossOriginIsolated;
+    if (single) workerParams.set('threads', '1');
+    for (const p of ['thread_start_ms', 'core_stall_ms', 'core_compile_ms']) if (params.get(p)) workerParams.set(p, params.get(p));
     const worker = new Worker('worker.js' + (workerParams.toString() ? '?' + workerParams : ''));
     app.worker = worker;
-    workerReady = new Promise((resolve, reject) => {
+    app.workerStart = { step: 'script worker.js', steps: ['script worker.js'] };
+    return new Promise((resolve, reject) => {
+      let up = false, watch = 0;
+      const rewatch = () => {
+        clearTimeout(watch);
+        watch = setTimeout(() => {
+          if (up || app.worker !== worker) return;
+          const why = 'the core did not answer for ' + WORKER_START_MS / 1000 + ' s while starting (' + app.workerStart.step + ')';
+          worker.terminate();
+          if (!single) {  // try once more on one thread
+            app.workerThreads = { variant: 'single', threads: 1, fallback: why };
+            startWorkerOnce().then(resolve, reject);
+          } else {
+            reject(new Error(why));
+          }
+        }, WORKER_START_MS);
+      };
+      rewatch();
       worker.onmessage = (e) => {
         const msg = e.data;
-        if (msg.type === 'ready') {
+        if (msg.type === 'starting') {
+          app.workerStart.step = String(msg.step);
+          app.workerStart.steps.push(app.workerStart.step);
+          rewatch();
+        } else if (msg.type === 'startFailed') {
+          clearTimeout(watch);
+          worker.terminate();
+          if (app.worker === worker) reject(new Error(msg.message));
+        } else if (msg.type === 'ready') {
+          up = true;
+          clearTimeout(watch);
           if (app.timings.worker === undefined) app.timings.worker = performance.now() - app.startedAt;
           // fallback: why the threaded core did not start (kept across restarts).
           app.workerThreads = { variant: msg.variant || 'single', threads: msg.threads || 1,
@@ -171,18 +220,59 @@
           jobs.delete(msg.id);
           if (job) job.resolve(msg.result);
         } else if (msg.type === 'fatal') {
-          workerDied(worker, msg.message);
+          clearTimeout(watch);
+          if (up) workerDied(worker, msg.message);
+          else worker.terminate();
           reject(new Error(msg.message));
         }
       };
       worker.onerror = (e) => {
         e.preventDefault();
-        const why = e.message || 'the worker failed to load';
-        workerDied(worker, why);
+        clearTimeout(watch);
+        const why = e.message || 'worker.js did not load';
+        if (up) workerDied(worker, why);
+        else worker.terminate();
         reject(new Error(why));
       };
     });
-    return workerReady;
+  }
+
+  // The first fit in a page ran its hot loops on V8's baseline tier (+0.6-1.5 s;
+  // docs/web.md, "The first fit"). A throw-away worker running one small fit
+  // of the same module right after start-up gets them compiled by the
+  // optimizing tier, and that code is shared with the core's worker. It runs
+  // on its own thread (never delays a job) and ends itself; ?warmup=0 skips it.
+  async function warmUp(variant) {
+    if (params.get('warmup') === '0' || app.warmup) return;
+    app.warmup = { state: 'running', variant };
+    let compiled;
+    try {
+      compiled = await runJob({ type: 'module' }, []);
+    } catch (e) {
+      compiled = { ok: false, message: e && e.message ? e.message : String(e) };
+    }
+    if (!compiled.ok) {
+      Object.assign(app.warmup, { state: 'failed', message: compiled.message });
+      return;
+    }
+    const workerParams = new URLSearchParams({ warmup: '1' });
+    if (variant !== 'threads') workerParams.set('threads', '1');
+    for (const p of ['thread_start_ms', 'core_stall_ms', 'core_compile_ms']) if (params.get(p)) workerParams.set(p, params.get(p));
+    const t0 = performance.now();
+    const worker = new Worker('worker.js?' + workerParams);
+    worker.postMessage({ type: 'module', module: compiled.module });
+    const end = (state, extra) => {
+      clearTimeout(limit);
+      worker.terminate();
+      if (app.warmup.state === 'running') Object.assign(app.warmup, { state, ms: performance.now() - t0 }, extra);
+    };
+    const limit = setTimeout(() => end('gave up'), 120000);
+    worker.onmessage = (e) => {
+      const msg = e.data;
+      if (msg.type === 'warm') end(msg.ok ? 'done' : 'failed', { fitMs: msg.fitMs, message: msg.message });
+      else if (msg.type === 'startFailed' || msg.type === 'fatal') end('failed', { message: msg.message });
+    };
+    worker.onerror = (e) => { e.preventDefault(); end('failed', { message: e.message || 'error' }); };
   }
 
   // The core aborted (out of memory or a bug), or the user cancelled: fail
@@ -200,7 +290,14 @@
     jobs.clear();
     // The fitted head lived in that worker: animation and export need a new fit.
     if (app.fit) forgetFit('The fitted head was in the stopped worker: fit again to animate or export.');
-    if (document.body.dataset.state !== 'loading') startWorker().catch(() => {});
+    if (document.body.dataset.state !== 'loading') {
+      startWorker().catch((e) => {
+        // Nothing the user gave is lost: the scan, photos and clicks live on
+        // the page; the next job starts a worker again.
+        showError('The core stopped and could not be started again: ' + (e && e.message ? e.message : e) +
+                  '. Your scan and photos are kept; the next action tries again.');
+      });
+    }
   }
 
   // Cancels whatever the worker is doing (the Cancel button).
@@ -217,6 +314,8 @@
     return new Promise((resolve, reject) => {
       const id = nextJobId++;
       jobs.set(id, { resolve, reject, onProgress });
+      // The last start failed (e.g. the server was away): try again now.
+      if (workerStartFailed && document.body.dataset.state !== 'loading' && !app.startupFailed) startWorker().catch(() => {});
       workerReady.then(() => {
         if (jobs.has(id)) app.worker.postMessage(Object.assign({ id }, message), transfer);
       }, (err) => {
@@ -991,6 +1090,7 @@
     forgetTexture();
     if (app.viewer) app.viewer.clear_components();
     ui.fitView.hidden = true;
+    ui.fitQuality.hidden = true;
     for (const st of FIT_STAGES) stageItem(st.row).classList.remove('viewable', 'shown');
     if (why) setStatus(why);
     setState(document.body.dataset.state);
@@ -1008,6 +1108,7 @@
       stageStats(st.row).textContent = '';
     }
     ui.fitTotal.textContent = '';
+    ui.fitQuality.hidden = true;
     setStatus('Fitting the generic head to ' + file.name + '…');
     const t0 = performance.now();
     let result;
@@ -1075,7 +1176,92 @@
               'pick a level, animate or export.');
     setState('done');
     renderPhotos();
+    // Sent before anything else can reach the worker, so the checks see the
+    // head at rest; not awaited: the page stays usable meanwhile.
+    checkFitQuality(app.fit);
     if (ui.autoFit.checked && texturable().length) await runTexture();
+  }
+
+  // ---- the fitted head's checks ----------------------------------------------
+  // What `likeness fit` prints after Table 1 (core/pipeline/fit_quality.h),
+  // measured in the worker after the timed fit: triangles of the finest level
+  // turned over by a displacement or degenerate, self-intersecting triangle
+  // pairs by region (of the level and of its smooth surface without the
+  // scan's detail), and the control mesh's own crossings. Worded for a user:
+  // what is fine, what to look at. fit.quality holds the worker's numbers.
+  const count = (x) => Number(x).toLocaleString('en');
+  const byRegion = (c) => 'lips ' + count(c.lips) + ', ears ' + count(c.ears) + ', elsewhere ' + count(c.rest);
+
+  function qualityItem(cls, text) {
+    const li = document.createElement('li');
+    li.className = cls;
+    li.textContent = text;
+    ui.qualityList.appendChild(li);
+  }
+
+  function showQuality(q) {
+    const L = q.level, c = q.crossings, sm = q.smoothCrossings;
+    ui.qualityTitle.textContent = 'Checks of level ' + L + ' (' + count(q.triangles) + ' triangles)';
+    ui.qualityList.replaceChildren();
+    if (q.flipped + q.degenerate === 0) {
+      qualityItem('ok', 'No folds: no triangle turned over by the scan\'s detail, none degenerate.');
+    } else {
+      qualityItem('look', count(q.flipped) + ' triangles turned over by the scan\'s detail, ' + count(q.degenerate) +
+                  ' degenerate (no area): they can show as dark specks; look at level ' + L + ' with Wireframe on.');
+    }
+    if (c.total === 0) {
+      qualityItem('ok', 'No self-intersections: the surface never passes through itself.');
+    } else {
+      let text = count(c.total) + ' self-intersecting triangle pairs (' + byRegion(c) + ').';
+      if (c.lips) text += ' The lips cross each other: they may show through one another when the mouth opens.';
+      if (c.ears) text += ' At the ears: folds of the ear rims, which scans rarely capture well; the ears do not move in the animation.';
+      if (c.rest) text += ' Elsewhere: small overlaps, often at the eye rims, nose or brow; look there with Wireframe on.';
+      qualityItem('look', text);
+    }
+    qualityItem('note', 'The smooth surface under the detail (level ' + L + ' of the control mesh, without displacements): ' +
+                (sm.total === 0 ? 'no self-intersections' : count(sm.total) + ' pairs (' + byRegion(sm) + ')') +
+                (c.total === 0 ? '.' : sm.total === 0 ? ': every crossing above comes from the scan\'s detail.'
+                                     : ': crossings there come from the fitted shape, not from the detail.'));
+    if (q.controlCrossings === 0) qualityItem('ok', 'The control mesh does not cross itself.');
+    else qualityItem('look', 'The control mesh crosses itself in ' + count(q.controlCrossings) +
+                     ' triangle pairs: the fit folded it there, and every level inherits the fold.');
+    qualityItem('note', 'Checked in ' + (q.checkMs / 1000).toFixed(2) + ' s in the worker, after the timed fit (as likeness fit does).');
+    const look = [];
+    if (q.flipped + q.degenerate) look.push(count(q.flipped + q.degenerate) + ' folded or degenerate triangles');
+    if (c.total) {
+      const where = [['the lips', c.lips], ['the ears', c.ears], ['elsewhere', c.rest]].filter((w) => w[1])
+        .map((w) => w[0] + ' ' + count(w[1]));
+      look.push('the surface crosses itself in ' + count(c.total) + ' triangle pairs (' + where.join(', ') + ')');
+    }
+    if (q.controlCrossings) look.push('the control mesh crosses itself (' + count(q.controlCrossings) + ' pairs)');
+    ui.qualitySummary.className = 'quality-summary ' + (look.length ? 'look' : 'ok');
+    ui.qualitySummary.textContent = look.length ? 'Worth a look: ' + look.join('; ') + '.'
+                                                : 'All checks passed: no folds and no self-intersections.';
+  }
+
+  async function checkFitQuality(fit) {
+    fit.quality = null;
+    ui.fitQuality.hidden = false;
+    ui.fitQuality.classList.add('checking');
+    ui.qualityTitle.textContent = 'Checks';
+    ui.qualitySummary.className = 'quality-summary';
+    ui.qualitySummary.textContent = 'checking… (folds and self-intersections of the finest level; animate or export meanwhile)';
+    ui.qualityList.replaceChildren();
+    let q;
+    try {
+      q = await runJob({ type: 'quality' }, []);
+    } catch (e) {
+      q = { ok: false, message: e && e.cancelled ? 'cancelled' : (e && e.message ? e.message : String(e)) };
+    }
+    if (app.fit !== fit) return;  // a newer fit, or none, is shown now
+    ui.fitQuality.classList.remove('checking');
+    if (!q.ok) {
+      fit.quality = { ok: false, message: q.message || q.code };
+      ui.qualitySummary.textContent = 'The checks could not run: ' + (q.message || q.code) + '.';
+      return;
+    }
+    fit.quality = q;
+    showQuality(q);
   }
 
   // Shows a fit stage's mesh over the scan points, keeping the view.
@@ -1639,8 +1825,10 @@
     setState('loading');
     wire();
     setStatus('Starting the viewer and the core…');
+    let coreFailed = null;
     try {
-      const workerUp = startWorker();
+      const workerUp = startWorker().catch((e) => { coreFailed = e; throw e; });
+      workerUp.catch(() => {});  // handled below, after the viewer
       const viewer = await startViewer();
       await workerUp;
       viewer.set_point_size(Number(ui.pointSize.value));
@@ -1648,11 +1836,18 @@
       // animation.profile can split a frame's time; it slows drawing down.
       if (params.get('profile') === '1') viewer.set_profiling(true);
       app.loadMs = performance.now() - app.startedAt;
+      warmUp(app.workerThreads.variant).catch(() => {});
       setState('ready');
       setStatus('Ready. Showing the generic head. Drop a head scan to begin.' + threadsNote());
     } catch (e) {
-      fatalStartup('Could not start Likeness: ' + (e && e.message ? e.message : e) +
-                   '. This app needs WebGL 2 and WebAssembly.');
+      const why = e && e.message ? e.message : String(e);
+      if (coreFailed) {
+        // The viewer may be fine; the core (WebAssembly in a Web Worker) is not.
+        fatalStartup('The core of Likeness could not start: ' + why + '. Reload the page to try again' +
+                     ' (if it keeps failing, the site is missing files: scripts/build makes them).');
+      } else {
+        fatalStartup('Could not start Likeness: ' + why + '. This app needs WebGL 2 and WebAssembly.');
+      }
     }
   }
 

@@ -8,6 +8,10 @@
 //                                                     typed arrays are transferred back
 //               {type:'fatal', message}               the module aborted (out of memory,
 //                                                     a bug): the page starts a new worker
+//               {type:'starting', step}               start-up progress (the page's watch
+//                                                     restarts its clock on each)
+//               {type:'startFailed', message}         no core could start (why, for the user)
+//               {type:'warm', ok, fitMs, ms}          only from a ?warmup=1 worker (see WARM_UP)
 // To add a stage: bind it in wasm/worker_bindings.cpp (bytes as pointer+size,
 // a progress function, a {ok, code, message, ...} result) and add it to JOBS.
 //
@@ -26,6 +30,15 @@
 // error from a pool worker, or a pool that is not up THREAD_START_MS after
 // the module was compiled, stops the threaded core and starts the single-
 // threaded one; 'ready' then carries {fallback: why} and the page says so.
+//
+// Each core's .wasm is fetched, compiled and instantiated here (Emscripten's
+// Module.instantiateWasm hook) rather than by Emscripten 3.1.6's loader, which
+// reports a failed fetch only as "failed to load wasm binary file" and waits
+// forever for a download that never ends. A download with no new byte for
+// CORE_STALL_MS, an HTTP error, a file that is not WebAssembly or does not
+// match its .js, or a compile that takes over CORE_COMPILE_MS, fails the start
+// with a message naming the file; the threaded core then falls back to the
+// single-threaded one, the single-threaded one reports 'startFailed'.
 'use strict';
 const params = new URLSearchParams(self.location.search);
 const wantThreads = self.crossOriginIsolated === true && typeof SharedArrayBuffer === 'function'
@@ -34,6 +47,13 @@ const wantThreads = self.crossOriginIsolated === true && typeof SharedArrayBuffe
 // instantiates the already compiled module); 10 s leaves room for a busy one.
 // ?thread_start_ms=N (forwarded by the page) shortens it for the tests.
 const THREAD_START_MS = Number(params.get('thread_start_ms')) > 0 ? Number(params.get('thread_start_ms')) : 10000;
+// A 1.5 MB module comes from the page's own server: 20 s without a byte is a
+// server or network that will not answer. Compiling takes ~0.3 s idle (Liftoff)
+// and a few seconds on a saturated machine. ?core_stall_ms, ?core_compile_ms
+// (forwarded by the page) shorten them for the tests.
+const numberParam = (name, fallback) => (Number(params.get(name)) > 0 ? Number(params.get(name)) : fallback);
+const CORE_STALL_MS = numberParam('core_stall_ms', 20000);
+const CORE_COMPILE_MS = numberParam('core_compile_ms', 60000);
 
 let core = null;
 let variant = null;  // 'threads' | 'single': the core that runs
@@ -46,6 +66,88 @@ function fatal(message) {
 
 function errorText(e) { return e && e.message ? e.message : String(e); }
 
+function startStep(step) { postMessage({ type: 'starting', step }); }
+
+// The bytes at url; a stall (no byte for CORE_STALL_MS) aborts the download.
+async function fetchWatched(url, name) {
+  const controller = new AbortController();
+  let timer = 0, stalled = false;
+  const arm = () => {
+    clearTimeout(timer);
+    timer = setTimeout(() => { stalled = true; controller.abort(); }, CORE_STALL_MS);
+  };
+  const noAnswer = () => new Error(name + ': no answer from the server for ' + CORE_STALL_MS / 1000 + ' s');
+  arm();
+  try {
+    let response;
+    try {
+      response = await fetch(url, { credentials: 'same-origin', signal: controller.signal });
+    } catch (e) {
+      throw stalled ? noAnswer() : new Error(name + ' could not be downloaded (' + errorText(e) + ')');
+    }
+    if (!response.ok) throw new Error(name + ': the server answered HTTP ' + response.status + (response.statusText ? ' ' + response.statusText : ''));
+    const reader = response.body.getReader();
+    const chunks = [];
+    let total = 0;
+    for (;;) {
+      arm();
+      let part;
+      try {
+        part = await reader.read();
+      } catch (e) {
+        throw stalled ? noAnswer() : new Error(name + ': the download broke off (' + errorText(e) + ')');
+      }
+      if (part.done) break;
+      chunks.push(part.value);
+      total += part.value.length;
+    }
+    const bytes = new Uint8Array(total);
+    let at = 0;
+    for (const c of chunks) { bytes.set(c, at); at += c.length; }
+    return bytes;
+  } finally {
+    clearTimeout(timer);
+  }
+}
+
+// Emscripten's Module.instantiateWasm for the module whose binary is `file`:
+// download, compile and instantiate with clear errors and time limits;
+// onFail(Error) gets any failure (the module itself then never starts).
+function watchedInstantiate(file, onFail) {
+  return (imports, receiveInstance) => {
+    (async () => {
+      if (givenModule) {  // a warm-up worker: the core worker's compiled module (see WARM_UP)
+        startStep('instantiate the given module');
+        return { instance: await WebAssembly.instantiate(givenModule, imports), module: givenModule };
+      }
+      startStep('download ' + file);
+      const bytes = await fetchWatched(new URL(file, self.location.href).href, file);
+      startStep('compile ' + file);
+      let timer = 0;
+      const tooSlow = new Promise((resolve, reject) => {
+        timer = setTimeout(() => reject(new Error(file + ' did not compile within ' + CORE_COMPILE_MS / 1000 + ' s')), CORE_COMPILE_MS);
+      });
+      try {
+        return await Promise.race([WebAssembly.instantiate(bytes, imports), tooSlow]);
+      } catch (e) {
+        if (e instanceof WebAssembly.CompileError) {
+          throw new Error(file + ' is not a valid WebAssembly module (' + bytes.length + ' bytes: ' + e.message + ')');
+        }
+        if (e instanceof WebAssembly.LinkError) {
+          throw new Error(file + ' does not belong to its .js (the two come from different builds: ' + e.message + ')');
+        }
+        throw e;
+      } finally {
+        clearTimeout(timer);
+      }
+    })().then((result) => {
+      coreModule = result.module;
+      receiveInstance(result.instance, result.module);
+    }, onFail);
+    return {};  // the exports arrive through receiveInstance
+  };
+}
+
 // The wasm heap as bytes. In the threaded build the memory is shared and may
 // have been grown by another thread since the module's own views were made,
 // so the view is taken over the memory's current buffer.
@@ -53,9 +155,32 @@ function heapBytes() {
   return core.wasmMemory ? new Uint8Array(core.wasmMemory.buffer) : core.HEAPU8;
 }
 
+// ?warmup=1: a throw-away worker the page starts once its core is up. It
+// gets the core worker's compiled WebAssembly.Module (job 'module', passed on
+// by the page: the same compiled code, not a second compile of the bytes),
+// instantiates it and runs one small fit (warm_up_job), so that V8 compiles
+// the fit's hot functions with its optimizing tier; that code belongs to the
+// module, so the core worker's first fit no longer runs them on the baseline
+// tier (docs/web.md, "The first fit"). Then it says 'warm' and the page ends it.
+const WARM_UP = params.get('warmup') === '1';
+let givenModule = null;  // the module a warm-up worker was given
+let coreModule = null;   // this worker's compiled module (for job 'module')
+
 function coreReady(m, which) {
   core = m;
   variant = which;
+  if (WARM_UP) {
+    const t0 = performance.now();
+    let result;
+    try {
+      result = core.warm_up_job(1);
+    } catch (e) {
+      result = { ok: false, message: errorText(e) };
+    }
+    postMessage({ type: 'warm', variant, ok: !!result.ok, message: result.message || '', fitMs: result.fitMs || 0,
+                  ms: performance.now() - t0 });
+    return;
+  }
   postMessage({ type: 'ready', variant, threads: core.parallel_workers(), fallback });
   while (pending.length) handle(pending.shift());
 }
@@ -67,19 +192,35 @@ function onAbort(what) {
     : 'the core ran out of memory at ' + Math.round(heapBytes().length / 1048576) + ' MB of wasm heap');
 }
 
-// The single-threaded core: the last resort, so its failures are fatal.
+// The single-threaded core: the last resort, so its failures end the start
+// ('startFailed': the page says why; the user's files stay on the page).
 function startSingleCore() {
+  let failed = false;
+  const fail = (why) => {
+    if (failed || core) return;
+    failed = true;
+    postMessage({ type: 'startFailed', message: why + (fallback ? ' (the multi-threaded core did not start either: ' + fallback + ')' : '') });
+  };
+  startStep('script likeness_worker.js');
   try {
     importScripts('likeness_worker.js');
   } catch (e) {
-    fatal('could not load the core: ' + errorText(e));
+    fail('likeness_worker.js did not load: ' + errorText(e));
     return;
   }
-  LikenessWorker({
-    print: (t) => console.log('[worker]', t),
-    printErr: (t) => console.warn('[worker]', t),
-    onAbort,
-  }).then((m) => coreReady(m, 'single'), (err) => fatal('could not start the core: ' + err));
+  let starting;
+  try {
+    starting = LikenessWorker({
+      instantiateWasm: watchedInstantiate('likeness_worker.wasm', (e) => fail(errorText(e))),
+      print: (t) => console.log('[worker]', t),
+      printErr: (t) => console.warn('[worker]', t),
+      onAbort,
+    });
+  } catch (e) {
+    fail(errorText(e));
+    return;
+  }
+  starting.then((m) => { if (!failed) coreReady(m, 'single'); }, (err) => fail(errorText(err)));
 }
 
 // The threaded core, watched while its pthread pool starts. Every Web Worker
@@ -109,6 +250,7 @@ function startThreadedCore() {
     giveUp('this browser cannot start workers inside a worker');
     return;
   }
+  startStep('script likeness_worker_mt.js');
   try {
     importScripts('likeness_worker_mt.js');
   } catch (e) {
@@ -128,6 +270,7 @@ function startThreadedCore() {
     const post = w.postMessage.bind(w);
     w.postMessage = (message, transfer) => {
       if (message && message.cmd === 'load' && !watchdog && !settled) {
+        startStep('threads');
         watchdog = setTimeout(() => giveUp('its pool of ' + poolWorkers.length + ' thread(s) was not up after ' +
                                            THREAD_START_MS + ' ms'), THREAD_START_MS);
       }
@@ -141,6 +284,7 @@ function startThreadedCore() {
       // The pthread workers load the module's script by URL (this worker's
       // own URL is worker.js, which they must not run).
       mainScriptUrlOrBlob: new URL('likeness_worker_mt.js', self.location.href).href,
+      instantiateWasm: watchedInstantiate('likeness_worker_mt.wasm', (e) => giveUp(errorText(e))),
       print: (t) => console.log('[worker]', t),
       printErr: (t) => console.warn('[worker]', t),
       onAbort: (what) => { if (!settled) giveUp('it stopped: ' + what); else onAbort(what); },
@@ -158,7 +302,15 @@ function startThreadedCore() {
   }, (err) => giveUp(errorText(err)));
 }
 
-if (wantThreads) startThreadedCore();
+if (WARM_UP) {
+  // Waits for the page to pass the core worker's module on.
+  self.onmessage = (e) => {
+    if (givenModule || !e.data || !(e.data.module instanceof WebAssembly.Module)) return;
+    givenModule = e.data.module;
+    if (wantThreads) startThreadedCore();
+    else startSingleCore();
+  };
+} else if (wantThreads) startThreadedCore();
 else startSingleCore();
 
 // Copies the bytes into the wasm heap, runs fn(pointer, size), frees the copy.
@@ -185,6 +337,12 @@ const JOBS = {
   // kept in this worker for 'animate' and 'export'. Progress per stage.
   fit: (msg, progress) =>
     withHeapBytes(msg.buffer, (ptr, size) => core.fit_head_job(msg.name, ptr, size, msg.options || {}, progress)),
+  // {}: this worker's compiled WebAssembly.Module (structured-cloned, i.e.
+  // shared, not copied), for the page's warm-up worker.
+  module: () => ({ ok: !!coreModule, module: coreModule, message: coreModule ? '' : 'no compiled module' }),
+  // {}: the kept head's checks (turned-over, degenerate and self-intersecting
+  // triangles of the finest level), as `likeness fit` prints them.
+  quality: () => core.fit_quality_job(),
   // {amount, level}: one animation frame of the kept head (local update).
   animate: (msg) => core.animate_frame(msg.amount, msg.level),
   // {level, format: 'obj'|'ply'}: the kept head as file bytes.
@@ -254,7 +412,9 @@ function handle(msg) {
   postMessage({ type: 'result', id: msg.id, result }, transferables(result));
 }
 
-onmessage = (e) => {
-  if (!core) pending.push(e.data);
-  else handle(e.data);
-};
+if (!WARM_UP) {
+  onmessage = (e) => {
+    if (!core) pending.push(e.data);
+    else handle(e.data);
+  };
+}

@@ -24,18 +24,21 @@ export function syntheticScan(webdir, seed, points = 60000) {
 }
 
 // The native CLI's fit of the same scan bytes (`likeness fit`): its
-// report.json stages [{name, mean_pct, ...}], or { skip: why }. The Node
-// tests compare the wasm core's stage distances with it: a compiler that
-// miscompiles the core for wasm (it happened: docs/web.md) shows there.
-export function nativeFit(webdir, bytes) {
+// report.json stages [{name, mean_pct, ...}] and quality (the finest level's
+// checks), or { skip: why }. The Node tests compare the wasm core's stage
+// distances with it: a compiler that miscompiles the core for wasm (it
+// happened: docs/web.md) shows there; the browser test compares the checks
+// the page shows. name: the scan's file name (its extension picks the format).
+export function nativeFit(webdir, bytes, name = 'scan.ply') {
   const candidates = [process.env.LK_LIKENESS_BIN, path.join(webdir, '..', 'bin', 'likeness')].filter(Boolean);
   const bin = candidates.find((c) => fs.existsSync(c));
   if (!bin) return { skip: 'no native likeness binary (set LK_LIKENESS_BIN)' };
   const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-fit-'));
   try {
-    fs.writeFileSync(path.join(dir, 'scan.ply'), bytes);
-    execFileSync(bin, ['fit', '--scan', path.join(dir, 'scan.ply'), '--out', path.join(dir, 'out')], { stdio: 'pipe' });
-    return { stages: JSON.parse(fs.readFileSync(path.join(dir, 'out', 'report.json'), 'utf8')).stages };
+    fs.writeFileSync(path.join(dir, name), bytes);
+    execFileSync(bin, ['fit', '--scan', path.join(dir, name), '--out', path.join(dir, 'out')], { stdio: 'pipe' });
+    const report = JSON.parse(fs.readFileSync(path.join(dir, 'out', 'report.json'), 'utf8'));
+    return { stages: report.stages, quality: report.quality || null };
   } catch (e) {
     return { skip: 'likeness fit failed: ' + String(e.message).split('\n')[0] };
   } finally {

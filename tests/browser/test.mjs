@@ -44,7 +44,7 @@ import path from 'node:path';
 import zlib from 'node:zlib';
 import { execFileSync } from 'node:child_process';
 import { decodePng } from './harness.mjs';
-import { syntheticScan } from './synth_scan.mjs';
+import { nativeFit, syntheticScan } from './synth_scan.mjs';
 
 const WEBDIR = path.resolve(process.argv[2] || '');
 const SHOT_DIR = process.env.LK_SCREENSHOT_DIR || '';
@@ -73,8 +73,10 @@ const served = [];
 // Like scripts/serve.py: COOP/COEP on every response (cross-origin isolation:
 // the worker runs the threaded core), unless isolation is false (a host
 // without those headers: the single-threaded core). broken: {path: '404' |
-// 'hang'} answers that file with a 404, or never (a browser that cannot
-// start a worker from it); server.closeAll() ends the unanswered requests.
+// 'hang' | 'corrupt'} answers that file with a 404, never (a browser that
+// cannot start a worker from it), or with bytes that are not the file; it is
+// read per request, so a test may change it while the page runs.
+// server.closeAll() ends the unanswered requests.
 function startServer(root, { isolation = true, broken = {} } = {}) {
   const isolationHeaders = isolation
     ? { 'cross-origin-opener-policy': 'same-origin', 'cross-origin-embedder-policy': 'require-corp' } : {};
@@ -86,6 +88,12 @@ function startServer(root, { isolation = true, broken = {} } = {}) {
     served.push(rel);
     if (broken[rel] === 'hang') {
       held.push(res);
+      return;
+    }
+    if (broken[rel] === 'corrupt') {  // the right name and type, wrong bytes (a broken upload or cache)
+      res.writeHead(200, { 'content-type': MIME[path.extname(file)] || 'application/octet-stream',
+                           'cache-control': 'no-store', ...isolationHeaders });
+      res.end(Buffer.concat([Buffer.from('<!doctype html><title>Moved</title>'), Buffer.alloc(4000, 0x41)]));
       return;
     }
     if (broken[rel] === '404' || !file.startsWith(root) || !fs.existsSync(file) || fs.statSync(file).isDirectory()) {
@@ -605,6 +613,128 @@ async function adaptiveDetail(page, rest, fit, downloads) {
   await page.waitForTimeout(1000);
 }
 
+// Start-up failures of the worker's core: every one must end in a clear
+// message (or the single-threaded core, where that helps) within seconds,
+// never a page stuck in "loading"; a core that cannot restart later keeps
+// the user's files. ?core_stall_ms / ?worker_start_ms shorten the watches.
+async function startupFailures(context, ownOrigins) {
+  const cases = [
+    { what: 'the threaded core\'s wasm is a 404', isolation: true, broken: { '/likeness_worker_mt.wasm': '404' },
+      want: 'ready', why: /likeness_worker_mt\.wasm: the server answered HTTP 404/ },
+    { what: 'the threaded core\'s wasm never arrives', isolation: true, broken: { '/likeness_worker_mt.wasm': 'hang' },
+      query: '&core_stall_ms=3000', want: 'ready', why: /likeness_worker_mt\.wasm: no answer from the server for 3 s/ },
+    { what: 'the core\'s wasm is corrupt (no threads)', isolation: false, broken: { '/likeness_worker.wasm': 'corrupt' },
+      want: 'error', why: /likeness_worker\.wasm is not a valid WebAssembly module/ },
+    { what: 'both cores\' wasm are 404s', isolation: true,
+      broken: { '/likeness_worker_mt.wasm': '404', '/likeness_worker.wasm': '404' },
+      want: 'error', why: /likeness_worker\.wasm: the server answered HTTP 404.*multi-threaded core did not start either.*likeness_worker_mt\.wasm: the server answered HTTP 404/ },
+    { what: 'the core\'s wasm never arrives (no threads)', isolation: false, broken: { '/likeness_worker.wasm': 'hang' },
+      query: '&core_stall_ms=3000', want: 'error', why: /likeness_worker\.wasm: no answer from the server for 3 s/ },
+    { what: 'the core\'s script never arrives', isolation: false, broken: { '/likeness_worker.js': 'hang' },
+      query: '&worker_start_ms=4000', want: 'error', why: /did not answer for 4 s while starting \(script likeness_worker\.js\)/ },
+  ];
+  for (const c of cases) {
+    const server = await startServer(WEBDIR, { isolation: c.isolation, broken: c.broken });
+    const origin = `http://127.0.0.1:${server.address().port}`;
+    ownOrigins.push(origin);
+    const page = await context.newPage();
+    const uncaught = [];
+    page.on('pageerror', (e) => uncaught.push(e.message));
+    try {
+      const t0 = Date.now();
+      await page.goto(origin + '/index.html?autofit=0' + (c.query || ''));
+      const s = await waitForState(page, ['ready', 'error'], READY_TIMEOUT_MS);
+      const info = await page.evaluate(() => ({ worker: window.likeness.workerThreads, status: document.getElementById('status').textContent,
+                                                banner: document.getElementById('error-banner').hidden ? '' : document.getElementById('error-text').textContent }));
+      const text = c.want === 'ready' ? (info.worker && info.worker.fallback) || '' : info.banner;
+      check(`start-up: ${c.what}: ${c.want === 'ready' ? 'one thread, and the page says why' : 'a clear message, no hang'}`,
+            s === c.want && c.why.test(text) && uncaught.length === 0 &&
+            (c.want === 'ready' ? info.worker.variant === 'single' && /could not start/.test(info.status) : /could not start/i.test(text)),
+            `state ${s} after ${Date.now() - t0} ms; "${text}"` + (uncaught.length ? '; uncaught: ' + uncaught.join(' | ') : ''));
+    } finally {
+      await page.close();
+      server.closeAll();
+    }
+  }
+
+  // A worker restarted later (Cancel, a crash) whose core cannot start: the
+  // loaded scan stays, the page says so, and the next action starts a core
+  // again once the server is back.
+  const broken = {};
+  const server = await startServer(WEBDIR, { isolation: false, broken });
+  const origin = `http://127.0.0.1:${server.address().port}`;
+  ownOrigins.push(origin);
+  const page = await context.newPage();
+  try {
+    await page.goto(origin + '/index.html?autofit=0&core_stall_ms=3000');
+    await waitForState(page, ['ready', 'error'], READY_TIMEOUT_MS);
+    const sLoad = await setFile(page, 'torus.ply', torusPly(5000));
+    broken['/likeness_worker.wasm'] = 'hang';
+    await page.evaluate(() => {
+      window.likeness.runJob({ type: 'parse', name: 'x.ply', buffer: new ArrayBuffer(8) }, []).catch(() => {});
+      window.likeness.cancel();
+    });
+    await page.waitForFunction(() => !document.getElementById('error-banner').hidden, null, { timeout: 60000 });
+    const after = await page.evaluate(() => ({ banner: document.getElementById('error-text').textContent,
+                                               model: window.likeness.model && window.likeness.model.name,
+                                               scan: !!window.likeness.scan, state: document.body.dataset.state }));
+    check('start-up: a restarted core that cannot start says so and keeps the loaded scan',
+          sLoad === 'done' && /could not be started again: likeness_worker\.wasm: no answer/.test(after.banner) &&
+          /scan and photos are kept/.test(after.banner) && after.model === 'torus.ply' && after.scan,
+          JSON.stringify(after));
+    delete broken['/likeness_worker.wasm'];
+    await page.click('#error-dismiss');
+    const sCube = await setFile(page, 'cube.obj', cubeObj());
+    const status = await page.textContent('#status');
+    check('... and once the server is back, the next file starts a core and loads', sCube === 'done' &&
+          /8 vertices, 12 triangles/.test(status), `state ${sCube}; "${status.trim()}"`);
+  } finally {
+    await page.close();
+    server.closeAll();
+  }
+}
+
+// The fitted head's checks on the page (after "done"): "checking…" first
+// while Animate and the exports stay on, then the worker's numbers, which
+// must equal `likeness fit`'s report.json quality for the same scan bytes,
+// and the panel's text must show each of them.
+async function fitQualityShown(page, label, bytes, name) {
+  const early = await page.evaluate(() => ({
+    checking: !window.likeness.fit.quality && document.getElementById('fit-quality').classList.contains('checking') &&
+              /checking/.test(document.getElementById('quality-summary').textContent),
+    done: !!window.likeness.fit.quality,
+    animate: !document.getElementById('animate').disabled, exportObj: !document.getElementById('btn-export-obj').disabled,
+    state: document.body.dataset.state }));
+  check(`${label}: after the fit the checks run ("checking…") while Animate and export stay available`,
+        (early.checking || early.done) && early.animate && early.exportObj && early.state === 'done', JSON.stringify(early));
+  await page.waitForFunction(() => window.likeness.fit && window.likeness.fit.quality, null, { timeout: JOB_TIMEOUT_MS });
+  const shown = await page.evaluate(() => ({ q: window.likeness.fit.quality, text: document.getElementById('fit-quality').innerText }));
+  const native = nativeFit(WEBDIR, bytes, name);
+  if (native.skip) {
+    console.log('note  the checks are not compared with the native CLI: ' + native.skip);
+    return shown.q;
+  }
+  const q = shown.q, n = native.quality || {};
+  const pairs = (c) => c ? [c.total, c.lips, c.ears, c.rest].join('/') : 'none';
+  const page4 = [q.level, q.triangles, q.flipped, q.degenerate, pairs(q.crossings), pairs(q.smoothCrossings), q.controlCrossings].join(' ');
+  const cli4 = [n.level, n.triangles, n.flipped, n.degenerate, pairs(n.self_intersecting_pairs), pairs(n.smooth_surface_pairs),
+                n.control_mesh_pairs].join(' ');
+  const fmt = (x) => Number(x).toLocaleString('en');
+  const c = q.crossings || {}, sm = q.smoothCrossings || {};
+  const inText = [`level ${q.level} (${fmt(q.triangles)} triangles)`,
+    c.total ? `${fmt(c.total)} self-intersecting triangle pairs (lips ${fmt(c.lips)}, ears ${fmt(c.ears)}, elsewhere ${fmt(c.rest)})`
+            : 'No self-intersections',
+    sm.total ? `${fmt(sm.total)} pairs (lips ${fmt(sm.lips)}, ears ${fmt(sm.ears)}, elsewhere ${fmt(sm.rest)})` : 'no self-intersections',
+    q.flipped + q.degenerate ? `${fmt(q.flipped)} triangles turned over by the scan's detail, ${fmt(q.degenerate)} degenerate` : 'No folds',
+    q.controlCrossings ? `crosses itself in ${fmt(q.controlCrossings)} triangle pairs` : 'does not cross itself'];
+  const missing = inText.filter((t) => !shown.text.includes(t));
+  check(`${label}: the checks the page shows equal the native CLI's for the same scan`,
+        q.ok && page4 === cli4 && missing.length === 0,
+        `page ${page4} vs likeness fit ${cli4} (level, triangles, turned over, degenerate, pairs total/lips/ears/rest, smooth, control); ` +
+        `checked in ${Math.round(q.checkMs)} ms` + (missing.length ? '; text lacks: ' + missing.join(' | ') : ''));
+  return q;
+}
+
 async function shot(page, name) {
   if (!SHOT_DIR) return;
   fs.mkdirSync(SHOT_DIR, { recursive: true });
@@ -901,6 +1031,8 @@ async function main() {
       console.log('note  "Try the sample" not exercised: no sample/scan.ply in WEBDIR (scripts/demo makes it)');
     }
 
+    await startupFailures(context, ownOrigins);
+
     // 6b. The fit of a synthetic head scan, its views, export and animation.
     const synth = syntheticScan(WEBDIR, 2);
     if (synth.skip) {
@@ -920,6 +1052,31 @@ async function main() {
       check('"Fit head" reaches "done"', sFit === 'done' && !!fit,
             `state ${sFit} after ${Date.now() - tFit} ms; ${fit ? 'fit ' + Math.round(fit.fitMs) + ' ms in wasm: ' + fit.stages.join(', ') : await bannerText(page)}`);
       if (fit) {
+        await fitQualityShown(page, 'synthetic scan', synth.bytes, 'synthetic_head.ply');
+        // A real scan whose fitted head does cross itself (Fran: face-only,
+        // eye rims and brow), so the comparison is not only of zeros.
+        const fran = path.resolve(path.dirname(new URL(import.meta.url).pathname), '../../../shared/data/head_scans/fran_cyberware/fran_cut.vtk');
+        if (fs.existsSync(fran)) {
+          const pageFran = await context.newPage();
+          watch(pageFran);
+          try {
+            await pageFran.goto(origin + '/index.html?autofit=0');
+            await waitForState(pageFran, ['ready', 'error'], READY_TIMEOUT_MS);
+            const franBytes = fs.readFileSync(fran);
+            const sFran = await setFile(pageFran, 'fran_cut.vtk', franBytes);
+            await pageFran.click('#btn-fit');
+            await pageFran.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: JOB_TIMEOUT_MS });
+            if (check('the real scan fran_cut.vtk fits in the page', sFran === 'done' && (await state(pageFran)) === 'done',
+                      'state ' + (await state(pageFran)) + ' ' + await bannerText(pageFran))) {
+              await fitQualityShown(pageFran, 'fran_cut.vtk', franBytes, 'fran_cut.vtk');
+              await shot(pageFran, 'web_fit_checks.png');
+            }
+          } finally {
+            await pageFran.close();
+          }
+        } else {
+          console.log('note  the checks on a real scan are skipped: ../shared/data/head_scans/fran_cyberware/fran_cut.vtk absent');
+        }
         const rows = await page.evaluate(() => ['align', 'local_fit', 'global_fit', 'subdivide'].map((r) => {
           const li = document.querySelector(`#stages li[data-stage="${r}"]`);
           return { r, tag: li.querySelector('.stage-tag').textContent, stats: li.querySelector('.stage-stats').textContent,
