@@ -710,8 +710,11 @@ void smooth_heights(const MultiresMesh& mesh, int level, const DisplacementOptio
   // Each height's variance: the noise pooled over the one-ring (a 16-point
   // fit's own estimate rests on about three degrees of freedom: alone it
   // would make the weights as noisy as the heights) times its own factor.
-  std::vector<double> variance(nv, -1.0), known;
-  const double widest = opt.smooth_max_radius_edges * edge;
+  std::vector<double> variance(nv, -1.0), pooled(nv, -1.0), known;
+  // In edges of the finest level: a coarser level's footprints are as wide
+  // in millimetres where the scan is dense (both hold footprint_points), and
+  // a sparse scan's (James's level 2) are wider than that.
+  const double widest = opt.smooth_max_radius_edges * std::ldexp(edge, level - mesh.num_levels());
   for (int v = 0; v < nv; ++v) {
     if (!(noise[v] > 0) || !(variance_factor[v] > 0) || !(radius[v] <= widest)) continue;
     double sum = 0;
@@ -720,15 +723,53 @@ void smooth_heights(const MultiresMesh& mesh, int level, const DisplacementOptio
       const int u = ring.items[i];
       if (noise[u] > 0) sum += noise[u], ++count;
     }
-    variance[v] = sum / count * variance_factor[v];
-    known.push_back(variance[v]);
+    pooled[v] = sum / count;
+    known.push_back(pooled[v]);
   }
   if (known.empty()) return;
+  // Residuals above the scanner's noise are mostly the quadric's misfit of
+  // real detail (lip edges, nostrils, ear rims), not noise: taken at face
+  // value they would make such a vertex's own measurement the least
+  // trusted, and smooth detail hardest. The pooled noise is capped at
+  // smooth_noise_cap^2 times the level's median.
+  const double noise_limit = opt.smooth_noise_cap > 0 ? sqr(opt.smooth_noise_cap) * median(known)
+                                                    : std::numeric_limits<double>::infinity();
+  known.clear();
+  for (int v = 0; v < nv; ++v) {
+    if (!(pooled[v] > 0)) continue;
+    variance[v] = std::min(pooled[v], noise_limit) * variance_factor[v];
+    known.push_back(variance[v]);
+  }
   const double typical = median(known);
   if (!(typical > 0) || !std::isfinite(typical)) return;
+  // A height many typical errors above the base surface is detail the
+  // coarser levels missed (an ear's fold, a nostril), not noise: it takes
+  // no part (see DisplacementOptions::smooth_max_height_errors).
+  if (opt.smooth_max_height_errors > 0) {
+    const double tallest = opt.smooth_max_height_errors * std::sqrt(typical);
+    for (int v = 0; v < nv; ++v)
+      if (variance[v] > 0 && !(std::abs(heights[v]) <= tallest)) variance[v] = -1.0;
+  }
   // A neighbour's pull per unit weight, against a vertex's own 1 / s_v^2.
   const double coupling = opt.smooth_strength / typical;
   const double c = opt.smooth_agreement;
+  // How far a height may move and how far two may differ and still be
+  // averaged: its standard error, but at most smooth_move_cap times the
+  // level's typical one (an uncertain fit at a data edge or a thin
+  // feature is trusted less, yet not moved farther than a typical one).
+  std::vector<double> bound(nv, 0.0);
+  const double typical_error = std::sqrt(typical);
+  for (int v = 0; v < nv; ++v)
+    if (variance[v] > 0)
+      bound[v] = opt.smooth_move_cap > 0 ? std::min(std::sqrt(variance[v]), opt.smooth_move_cap * typical_error)
+                                         : std::sqrt(variance[v]);
+  // Heights are along each vertex's own normal: they compare only where
+  // the two normals nearly agree (not across an ear rim, a lid, a lip's
+  // edge): full weight up to smooth_normal_degrees apart, none from twice
+  // that.
+  const double cos_full = std::cos(opt.smooth_normal_degrees * kPi / 180.0);
+  const double cos_zero = std::cos(std::min(2.0 * opt.smooth_normal_degrees, 90.0) * kPi / 180.0);
+  const std::vector<Vec3>& normals = mesh.state.normals[level];
   // Neighbour weights from the measured heights (fixed, so the iteration
   // solves one linear system): 1 while the two agree within c combined
   // standard errors, smoothly 0 at 2c.
@@ -738,9 +779,15 @@ void smooth_heights(const MultiresMesh& mesh, int level, const DisplacementOptio
     for (int i = ring.offsets[v]; i < ring.offsets[v + 1]; ++i) {
       const int u = ring.items[i];
       if (u == v || !(variance[u] > 0)) continue;
-      const double t = std::abs(heights[u] - heights[v]) / (c * std::sqrt(variance[u] + variance[v]));
+      const double t = std::abs(heights[u] - heights[v]) / (c * std::hypot(bound[u], bound[v]));
       const double x = std::clamp(2.0 - t, 0.0, 1.0);
       weight[i] = x * x * (3 - 2 * x);
+      if (opt.smooth_normal_degrees > 0) {
+        const double agree = normals[u].dot(normals[v]);
+        const double y = cos_full > cos_zero ? std::clamp((agree - cos_zero) / (cos_full - cos_zero), 0.0, 1.0)
+                                             : (agree >= cos_full ? 1.0 : 0.0);  // 90 degrees: a step
+        weight[i] *= y * y * (3 - 2 * y);
+      }
     }
   }
   // Jacobi steps, each height kept within c standard errors of its own
@@ -758,7 +805,7 @@ void smooth_heights(const MultiresMesh& mesh, int level, const DisplacementOptio
         num += coupling * weight[i] * x[ring.items[i]];
         den += coupling * weight[i];
       }
-      const double limit = c * std::sqrt(variance[v]);
+      const double limit = c * bound[v];
       next[v] = std::clamp(num / den, heights[v] - limit, heights[v] + limit);
     }
     x.swap(next);
@@ -832,10 +879,13 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
                          "noise_finest_levels >= 0, max_footprint_points <= 65536");
   if (options.smooth_finest_levels < 0 || options.smooth_iterations < 0 || options.smooth_iterations > 1000 ||
       !(options.smooth_strength >= 0) || !(options.smooth_strength < 1e6) || !(options.smooth_agreement > 0) ||
-      !(options.smooth_agreement < 1e6) || !(options.smooth_max_radius_edges >= 0))
+      !(options.smooth_agreement < 1e6) || !(options.smooth_max_radius_edges >= 0) || !(options.smooth_noise_cap >= 0) ||
+      !(options.smooth_move_cap >= 0) || !(options.smooth_normal_degrees >= 0) || !(options.smooth_normal_degrees <= 90) ||
+      !(options.smooth_max_height_errors >= 0))
     return Status::error(ErrorCode::InvalidInput,
                          "multires: smooth_finest_levels >= 0, 0 <= smooth_iterations <= 1000, 0 <= smooth_strength "
-                         "< 1e6, 0 < smooth_agreement < 1e6 and smooth_max_radius_edges >= 0 required");
+                         "< 1e6, 0 < smooth_agreement < 1e6, smooth_max_radius_edges, smooth_noise_cap, smooth_move_cap, "
+                         "smooth_max_height_errors >= 0 and 0 <= smooth_normal_degrees <= 90 required");
   if (options.footprint_points < 1 || !(options.ridge >= 0) || !(options.support_full_offset >= 0) ||
       !(options.support_zero_offset > options.support_full_offset))
     return Status::error(ErrorCode::InvalidInput,

@@ -112,23 +112,50 @@ struct DisplacementOptions {
   // (the widened 3-D footprints did). 0 levels: off
   // (`likeness fit --no-denoise`). Synthetic seeds 1-5: docs/fit.md,
   // "Denoising by smoothing over the mesh".
-  // Strength 0.3 (a neighbour's pull, at the level's typical error, is 0.3
-  // of a vertex's own measurement's) over 8 steps: cheeks + brow 8.2-8.6
-  // -> 3.8-4.1 deg, truth -> surface slightly closer on every seed, lips 0;
-  // 1.0 gave 3.0-3.2 deg (as smooth as no level-3 displacement at all) and
-  // Table 1 above the noise floor; 0.15 gave 4.8-5.0 deg.
-  int smooth_finest_levels = 1;
+  // Two levels: a coarser level's heights are what the finer one is
+  // measured against and are never measured again (one displacement per
+  // vertex), so smoothing the finest level alone left the level before's
+  // noise in a quarter of its vertices (cheeks + brow 3.9-4.1 deg; the
+  // smooth undisplaced level 3 scores 3.2, noise-free data 1.6-1.8).
+  // Strength 1 over 8 steps on levels 2 and 3, with the rules below (noise
+  // cap 1.5, move cap 1, normals 10 deg, heights up to 4 errors): 2.35-2.43
+  // deg on seeds 1-5, truth -> surface where scanned the same, lips and
+  // ears 0 (docs/fit.md, "Grain: the two finest levels smoothed"). Level 2
+  // without the height and normal rules put 50-65 ear crossing pairs on
+  // seed 1 (one spot in an ear's fold). Strength 0.3 on level 3 alone (the
+  // earlier default): 3.9-4.1 deg.
+  int smooth_finest_levels = 2;
   int smooth_iterations = 8;
-  double smooth_strength = 0.3;
+  double smooth_strength = 1.0;
   double smooth_agreement = 2.0;
   // Only vertices whose footprint radius is at most this many of the
-  // level's mean edges take part: neighbours a wider footprint apart see
+  // finest level's mean edges take part (on every smoothed level; the
+  // level's own edge would let James's level 2 in: 0.0448 -> 0.0454 %,
+  // two more crossing pairs): neighbours a wider footprint apart see
   // nearly the same points already (sparse scans: Fran's and James's
   // level-3 footprints are several edges wide), their heights are as
   // smooth as the data allows, and their residuals are the misfit of real
   // detail, not noise (smoothing them cost Fran 0.050 -> 0.057 %, James
   // 0.048 -> 0.053 %).
   double smooth_max_radius_edges = 2.0;
+  // A vertex's pooled noise (from its fit's residuals) counts as at most
+  // this many times the level's median noise (standard deviations): above
+  // that the residuals are the quadric's misfit of real detail, not the
+  // scanner's noise, and must not make the vertex's own height the least
+  // trusted. 0: no cap.
+  double smooth_noise_cap = 1.5;
+  // No height moves (or is compared with a neighbour's) by more than
+  // smooth_agreement x min(its standard error, smooth_move_cap x the
+  // level's median standard error). 0: its own standard error only.
+  double smooth_move_cap = 1.0;
+  // Heights are along each vertex's own normal: neighbours count fully
+  // while their (base) normals are at most this many degrees apart, not
+  // at all from twice that on (ear rims, lids, lip edges). 0: off.
+  double smooth_normal_degrees = 10.0;
+  // Only heights within this many of the level's median standard errors
+  // of the base surface take part: a taller one is detail the coarser
+  // levels missed (an ear's fold, a nostril), not noise. 0: no limit.
+  double smooth_max_height_errors = 4.0;
   // Largest adaptive radius. 0: the larger of half the level's mean edge and
   // twice the mean point spacing sqrt(level area / #points) over the whole
   // level (a patchy scan is denser where it has data, so its footprints fit
