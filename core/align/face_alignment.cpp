@@ -261,22 +261,22 @@ Status align_face(const TriMesh& generic, const HeadAnnotations& ann, const Poin
   coarse_options.max_iterations = o.coarse_iterations;
   bool have = false;
   IcpRun best;
-  // The starts are independent: run on parallel_for's threads, one start
-  // each, then compared in their fixed order (the same choice on any number
-  // of threads). Progress is reported after each yaw's starts.
+  // The starts are independent: run in one loop on parallel_for's threads,
+  // one start each (one loop per yaw left a thread idle at each yaw's
+  // third start), then compared in their fixed order (the same choice on
+  // any number of threads). Progress is reported per yaw after the loop.
   const int num_scales = static_cast<int>(o.start_scales.size());
   const int total = static_cast<int>(o.start_yaws_deg.size()) * num_scales;
-  std::vector<IcpRun> runs(num_scales);
-  std::vector<char> started(num_scales);
-  for (size_t y = 0; y < o.start_yaws_deg.size(); ++y) {
-    const Mat3 Q = yaw(o.start_yaws_deg[y]);
-    parallel_for(0, num_scales, 1, [&](int k, int) {
-      Similarity T0;
-      started[k] = search.start(cloud.positions, Q, o.start_scales[k], T0);
-      if (started[k]) runs[k] = run_icp(search.tree, coarse, T0, coarse_options, search.clamp, false);
-    });
-    for (int k = 0; k < num_scales; ++k) {
-      if (!started[k]) continue;
+  std::vector<IcpRun> runs(total);
+  std::vector<char> started(total);
+  parallel_for(0, total, 1, [&](int k, int) {
+    Similarity T0;
+    const Mat3 Q = yaw(o.start_yaws_deg[k / num_scales]);
+    started[k] = search.start(cloud.positions, Q, o.start_scales[k % num_scales], T0);
+    if (started[k]) runs[k] = run_icp(search.tree, coarse, T0, coarse_options, search.clamp, false);
+  });
+  for (int k = 0; k < total; ++k) {
+    if (started[k]) {
       const IcpRun& run = runs[k];
       out.iterations += run.iterations;
       ++out.starts;
@@ -285,7 +285,7 @@ Status align_face(const TriMesh& generic, const HeadAnnotations& ann, const Poin
         have = true;
       }
     }
-    if (!report(progress, "align", 0.7 * (y + 1) * num_scales / total))
+    if ((k + 1) % num_scales == 0 && !report(progress, "align", 0.7 * (k + 1) / total))
       return Status::error(ErrorCode::Cancelled, "align_face: cancelled");
   }
   if (!have) return Status::error(ErrorCode::NotAHead, "align_face: no scan point corresponds to the head");
@@ -344,52 +344,50 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
   const double diagonal = search.clamp / fo.score_clamp_fraction;
   bool have_best = false, have_given = false;
   IcpRun best;
-  int done = 0;
-  // Per up axis: the given orientation (the first start) alone, as it may
-  // end the search; the other starts of the axis on parallel_for's threads
-  // (independent), then compared in their fixed order, so the outcome does
-  // not depend on the number of threads.
+  // The given orientation (the first start) runs alone, as it may end the
+  // search; then the other 47 starts run in ONE parallel loop (independent;
+  // one loop per up axis left the threads waiting at each axis's slowest
+  // start, 6 joins per search) and are compared in their fixed order, so
+  // the outcome does not depend on the number of threads.
   constexpr int kYaws = 8;
-  std::array<IcpRun, kYaws> runs;
-  std::array<char, kYaws> ran{};
-  for (const Vec3& up : axes) {
+  const int num_starts = static_cast<int>(axes.size()) * kYaws;
+  std::vector<IcpRun> runs(num_starts);
+  std::vector<char> ran(num_starts, 0);
+  const auto run_start = [&](int start, int) {
+    const Vec3& up = axes[start / kYaws];
     // A facing axis perpendicular to up, then yaws about up in 45 degree steps.
     const Vec3 look0 = std::fabs(up.z()) < 0.5 ? Vec3(Vec3::UnitZ()) : Vec3(Vec3::UnitX());
-    const auto run_start = [&](int k, int) {
-      const Vec3 look = Eigen::AngleAxisd(k * 3.14159265358979323846 / 4, up) * look0;
-      Mat3 Q;  // cloud -> candidate upright frame
-      Q.row(0) = up.cross(look).transpose();
-      Q.row(1) = up.transpose();
-      Q.row(2) = look.transpose();
-      Similarity T0;
-      ran[k] = search.start(samples, Q, 1.0, T0);
-      if (ran[k]) runs[k] = run_icp(search.tree, samples, T0, fo, search.clamp, false);
-    };
-    const int parallel_from = done == 0 ? 1 : 0;  // the given orientation's start runs alone, first
-    if (parallel_from == 1) run_start(0, 0);
-    for (int k = 0; k < kYaws; ++k) {
-      if (k == parallel_from) parallel_for(k, kYaws, 1, run_start);
-      ++done;
-      if (!report(progress, "orientation", done / 48.0))
-        return Status::error(ErrorCode::Cancelled, "guess_orientation: cancelled");
-      if (!ran[k]) continue;
-      const IcpRun& run = runs[k];
-      if (!(run.inliers > 0)) continue;
-      const Vec3 run_up = run.T.R * Vec3::UnitY(), run_facing = run.T.R * Vec3::UnitZ();
-      const bool consistent = angle_deg(run_up, Vec3::UnitY()) <= o.up_tolerance_deg &&
-                              angle_deg(run_facing, Vec3::UnitZ()) <= o.facing_tolerance_deg;
-      if (consistent && (!have_given || run.score < out.score_given)) {
-        out.score_given = run.score;
-        have_given = true;
-      }
-      if (!have_best || run.score < best.score) {
-        best = run;
-        have_best = true;
-      }
-      if (done == 1 && consistent && std::sqrt(run.score) < o.accept_given_fraction * diagonal) {
-        out.score_given = out.score_best = run.score;
-        return Status::success();  // up +y, facing +z, identity rotation, differs = false
-      }
+    const Vec3 look = Eigen::AngleAxisd((start % kYaws) * 3.14159265358979323846 / 4, up) * look0;
+    Mat3 Q;  // cloud -> candidate upright frame
+    Q.row(0) = up.cross(look).transpose();
+    Q.row(1) = up.transpose();
+    Q.row(2) = look.transpose();
+    Similarity T0;
+    ran[start] = search.start(samples, Q, 1.0, T0);
+    if (ran[start]) runs[start] = run_icp(search.tree, samples, T0, fo, search.clamp, false);
+  };
+  for (int start = 0; start < num_starts; ++start) {
+    if (start == 0) run_start(0, 0);
+    if (start == 1) parallel_for(1, num_starts, 1, run_start);
+    if (!report(progress, "orientation", (start + 1) / double(num_starts)))
+      return Status::error(ErrorCode::Cancelled, "guess_orientation: cancelled");
+    if (!ran[start]) continue;
+    const IcpRun& run = runs[start];
+    if (!(run.inliers > 0)) continue;
+    const Vec3 run_up = run.T.R * Vec3::UnitY(), run_facing = run.T.R * Vec3::UnitZ();
+    const bool consistent = angle_deg(run_up, Vec3::UnitY()) <= o.up_tolerance_deg &&
+                            angle_deg(run_facing, Vec3::UnitZ()) <= o.facing_tolerance_deg;
+    if (consistent && (!have_given || run.score < out.score_given)) {
+      out.score_given = run.score;
+      have_given = true;
+    }
+    if (!have_best || run.score < best.score) {
+      best = run;
+      have_best = true;
+    }
+    if (start == 0 && consistent && std::sqrt(run.score) < o.accept_given_fraction * diagonal) {
+      out.score_given = out.score_best = run.score;
+      return Status::success();  // up +y, facing +z, identity rotation, differs = false
     }
   }
   if (!have_best) return Status::error(ErrorCode::NotAHead, "guess_orientation: no orientation could be aligned");

@@ -136,8 +136,14 @@ bool mesh_triangles_cross(const std::vector<Vec3>& P, const Tri& ta, const Tri& 
          segment_intersects_triangle(P[tb[(ib + 1) % 3]], P[tb[(ib + 2) % 3]], P[ta[0]], P[ta[1]], P[ta[2]]);
 }
 
-bool segment_intersects_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
-  const double dp = orient3d(a, b, c, p), dq = orient3d(a, b, c, q);
+namespace {
+
+// segment_intersects_triangle with dp, dq = orient3d(a, b, c, p), orient3d(a,
+// b, c, q) already known (triangles_intersect has them from its rejection
+// tests: the same expressions, so the same bits). Sides whose signs already
+// decide are not computed.
+inline bool segment_meets_triangle(const Vec3& p, const Vec3& q, double dp, double dq, const Vec3& a, const Vec3& b,
+                                   const Vec3& c) {
   if ((dp > 0 && dq > 0) || (dp < 0 && dq < 0)) return false;
   if (dp == 0 && dq == 0) {
     const Vec3 n = (b - a).cross(c - a);
@@ -146,8 +152,16 @@ bool segment_intersects_triangle(const Vec3& p, const Vec3& q, const Vec3& a, co
   }
   // The segment spans the plane: it meets the triangle iff its line passes
   // on the same side of all three edges.
-  const double s1 = orient3d(p, q, a, b), s2 = orient3d(p, q, b, c), s3 = orient3d(p, q, c, a);
+  const double s1 = orient3d(p, q, a, b), s2 = orient3d(p, q, b, c);
+  if ((s1 > 0 && s2 < 0) || (s1 < 0 && s2 > 0)) return false;
+  const double s3 = orient3d(p, q, c, a);
   return (s1 >= 0 && s2 >= 0 && s3 >= 0) || (s1 <= 0 && s2 <= 0 && s3 <= 0);
+}
+
+}  // namespace
+
+bool segment_intersects_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
+  return segment_meets_triangle(p, q, orient3d(a, b, c, p), orient3d(a, b, c, q), a, b, c);
 }
 
 bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
@@ -157,9 +171,9 @@ bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const V
   if ((s0 > 0 && s1 > 0 && s2 > 0) || (s0 < 0 && s1 < 0 && s2 < 0)) return false;
   const double t0 = orient3d(a0, a1, a2, b0), t1 = orient3d(a0, a1, a2, b1), t2 = orient3d(a0, a1, a2, b2);
   if ((t0 > 0 && t1 > 0 && t2 > 0) || (t0 < 0 && t1 < 0 && t2 < 0)) return false;
-  return segment_intersects_triangle(a0, a1, b0, b1, b2) || segment_intersects_triangle(a1, a2, b0, b1, b2) ||
-         segment_intersects_triangle(a2, a0, b0, b1, b2) || segment_intersects_triangle(b0, b1, a0, a1, a2) ||
-         segment_intersects_triangle(b1, b2, a0, a1, a2) || segment_intersects_triangle(b2, b0, a0, a1, a2);
+  return segment_meets_triangle(a0, a1, s0, s1, b0, b1, b2) || segment_meets_triangle(a1, a2, s1, s2, b0, b1, b2) ||
+         segment_meets_triangle(a2, a0, s2, s0, b0, b1, b2) || segment_meets_triangle(b0, b1, t0, t1, a0, a1, a2) ||
+         segment_meets_triangle(b1, b2, t1, t2, a0, a1, a2) || segment_meets_triangle(b2, b0, t2, t0, a0, a1, a2);
 }
 
 void find_self_intersections(const MeshBvh& bvh, std::vector<std::array<int, 2>>& pairs,
@@ -198,32 +212,44 @@ void find_intersections_with(const MeshBvh& bvh, const std::vector<int>& triangl
                              std::vector<std::array<int, 2>>& pairs) {
   pairs.clear();
   if (bvh.empty()) return;
-  PairTester tester{bvh, pairs, 0};
-  std::vector<int> stack;
-  for (int t : triangles) {
-    if (t < 0 || t >= bvh.num_triangles()) continue;
-    Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
-    for (int v : bvh.triangles[t]) {
-      lo = lo.cwiseMin(bvh.positions[v]);
-      hi = hi.cwiseMax(bvh.positions[v]);
-    }
-    stack.assign(1, 0);
-    while (!stack.empty()) {
-      const BvhNode& n = bvh.nodes[stack.back()];
-      const int id = stack.back();
-      stack.pop_back();
-      if (!(n.box_min.array() <= hi.array()).all() || !(lo.array() <= n.box_max.array()).all()) continue;
-      if (n.leaf()) {
-        for (int i = 0; i < n.count; ++i) {
-          const int other = bvh.triangle_order[n.first + i];
-          if (other != t) tester.test(t, other);
+  // Each listed triangle is searched on its own: natively in runs of
+  // kRun on parallel_for's threads, each run into its own list (the fold
+  // limiter's re-checks list hundreds to thousands of triangles), then
+  // merged, sorted and deduplicated: the same set on any number of threads.
+  constexpr int kRun = 128;
+  const int n = static_cast<int>(triangles.size());
+  const int runs = (n + kRun - 1) / kRun;
+  std::vector<std::vector<std::array<int, 2>>> found(runs);
+  parallel_for(0, runs, 1, [&](int run, int) {
+    PairTester tester{bvh, found[run], 0};
+    std::vector<int> stack;
+    for (int k = run * kRun; k < std::min(n, (run + 1) * kRun); ++k) {
+      const int t = triangles[k];
+      if (t < 0 || t >= bvh.num_triangles()) continue;
+      Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
+      for (int v : bvh.triangles[t]) {
+        lo = lo.cwiseMin(bvh.positions[v]);
+        hi = hi.cwiseMax(bvh.positions[v]);
+      }
+      stack.assign(1, 0);
+      while (!stack.empty()) {
+        const BvhNode& node = bvh.nodes[stack.back()];
+        const int id = stack.back();
+        stack.pop_back();
+        if (!(node.box_min.array() <= hi.array()).all() || !(lo.array() <= node.box_max.array()).all()) continue;
+        if (node.leaf()) {
+          for (int i = 0; i < node.count; ++i) {
+            const int other = bvh.triangle_order[node.first + i];
+            if (other != t) tester.test(t, other);
+          }
+        } else {
+          stack.push_back(id + 1);
+          stack.push_back(node.first);
         }
-      } else {
-        stack.push_back(id + 1);
-        stack.push_back(n.first);
       }
     }
-  }
+  });
+  for (const auto& f : found) pairs.insert(pairs.end(), f.begin(), f.end());
   std::sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
 }

@@ -5,7 +5,9 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <map>
 #include <set>
 
@@ -216,4 +218,81 @@ TEST_CASE("self-intersections: the threaded search finds the serial search's set
   for (const auto& p : threaded) (p[0] < ns ? in_spheres : in_ring) += 1;
   CHECK(in_spheres > 0);
   CHECK(in_ring > 0);
+}
+
+
+TEST_CASE("self-intersections: re-checks around many triangles find the pairs touching them", "[raycast]") {
+  // Hundreds of listed triangles: several runs of find_intersections_with's
+  // threaded search; the result is the full search's pairs touching them.
+  const TriMesh sphere = icosphere(3);  // 1280 triangles
+  const TriMesh two = merged(sphere, sphere, Vec3(1.2, 0.1, 0.05));
+  MeshBvh bvh;
+  REQUIRE(build_bvh(two, bvh).ok());
+  std::vector<std::array<int, 2>> all, around, expected;
+  find_self_intersections(bvh, all);
+  REQUIRE(all == brute_force(two));
+  std::vector<int> listed;
+  for (int f = 0; f < two.num_triangles(); f += 3) listed.push_back(f);
+  listed.push_back(-1);  // out of range: ignored
+  REQUIRE(listed.size() > 3 * 128);
+  find_intersections_with(bvh, listed, around);
+  for (const auto& p : all)
+    if (p[0] % 3 == 0 || p[1] % 3 == 0) expected.push_back(p);
+  CHECK(expected.size() > 10);
+  CHECK(around == expected);
+}
+
+namespace {
+
+// The six-segment rule as first written (each segment test computing its
+// own plane sides): the reference for triangles_intersect, which reuses its
+// rejection tests' orientations and skips sides that already decide.
+double reference_orient(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  return (b - a).cross(c - a).dot(d - a);
+}
+bool reference_segment(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const double dp = reference_orient(a, b, c, p), dq = reference_orient(a, b, c, q);
+  if ((dp > 0 && dq > 0) || (dp < 0 && dq < 0)) return false;
+  if (dp == 0 && dq == 0) return segment_intersects_triangle(p, q, a, b, c);  // coplanar: unchanged code
+  const double s1 = reference_orient(p, q, a, b), s2 = reference_orient(p, q, b, c), s3 = reference_orient(p, q, c, a);
+  return (s1 >= 0 && s2 >= 0 && s3 >= 0) || (s1 <= 0 && s2 <= 0 && s3 <= 0);
+}
+bool reference_triangles(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
+                         const Vec3& b2) {
+  const double s0 = reference_orient(b0, b1, b2, a0), s1 = reference_orient(b0, b1, b2, a1),
+               s2 = reference_orient(b0, b1, b2, a2);
+  if ((s0 > 0 && s1 > 0 && s2 > 0) || (s0 < 0 && s1 < 0 && s2 < 0)) return false;
+  const double t0 = reference_orient(a0, a1, a2, b0), t1 = reference_orient(a0, a1, a2, b1),
+               t2 = reference_orient(a0, a1, a2, b2);
+  if ((t0 > 0 && t1 > 0 && t2 > 0) || (t0 < 0 && t1 < 0 && t2 < 0)) return false;
+  return reference_segment(a0, a1, b0, b1, b2) || reference_segment(a1, a2, b0, b1, b2) ||
+         reference_segment(a2, a0, b0, b1, b2) || reference_segment(b0, b1, a0, a1, a2) ||
+         reference_segment(b1, b2, a0, a1, a2) || reference_segment(b2, b0, a0, a1, a2);
+}
+
+}  // namespace
+
+TEST_CASE("triangle pairs: the shortcut tests decide as the plain six-segment rule", "[raycast]") {
+  // Random pairs on a coarse integer lattice (many touching, coplanar and
+  // degenerate configurations, exact orientations) and continuous ones.
+  std::uint64_t state = 12345;
+  auto next = [&]() {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<int>((state >> 33) % 1000);
+  };
+  int crossing = 0, apart = 0;
+  for (int k = 0; k < 40000; ++k) {
+    const bool lattice = k % 2 == 0;
+    auto point = [&]() {
+      if (lattice) return Vec3(next() % 4, next() % 4, next() % 4);
+      return Vec3(next() / 500.0, next() / 500.0, next() / 500.0);
+    };
+    const Vec3 a0 = point(), a1 = point(), a2 = point(), b0 = point(), b1 = point(), b2 = point();
+    const bool want = reference_triangles(a0, a1, a2, b0, b1, b2);
+    REQUIRE(triangles_intersect(a0, a1, a2, b0, b1, b2) == want);
+    REQUIRE(segment_intersects_triangle(a0, a1, b0, b1, b2) == reference_segment(a0, a1, b0, b1, b2));
+    (want ? crossing : apart) += 1;
+  }
+  CHECK(crossing > 1000);  // both outcomes are exercised
+  CHECK(apart > 1000);
 }
