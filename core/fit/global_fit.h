@@ -72,6 +72,31 @@
 //   segment, so each trial of the backtracking lies inside), overlap: found
 //   once per solve by a sweep along the longest axis, then each trial step
 //   tests those few thousand pairs instead of a full BVH search.
+// - Smooth-surface guard (not in the paper; GlobalFitOptions::smooth_guard_*).
+//   The control triangles may not cross, but their Modified Butterfly
+//   surface still can: its stencils overshoot where the fit bends the
+//   control mesh more sharply than the template (eye rims, brow, nose and
+//   ears of the real scans: most of their level-3 self-intersections were
+//   already on this smooth surface, which the displacements' fold limiter
+//   leaves alone by design). Butterfly is linear in the control positions,
+//   so a crossing pair of the smooth level L (subdiv/butterfly.h, with
+//   GlobalFitTerms::smooth_creases) belongs to the control faces it refines
+//   (level-L face f lies in control face f / 4^L). After the rounds, the
+//   pairs of level L that the reference's level L does not have are found
+//   (one self-intersection search; level 2 of the generic head is ~43k
+//   triangles); the corners of their control faces and those corners'
+//   rings get a rest-shape weight r_v,
+//     E_rest = 1/#V sum_v r_v |L(v) - L0(v)|^2    (the rows of E_smooth),
+//   which pulls the local shape back towards the template's (whose smooth
+//   surface does not cross there), and one more pass on all points is
+//   solved; r_v grows (smooth_guard_factor) while the count falls: stiffer
+//   patches only moved the crossings to their rims (docs/fit.md). The state
+//   with the fewest pairs is returned, so a pass that does not help changes
+//   nothing. Later searches start only from the level's triangles under
+//   weighted vertices and their rings (the BVH refit, not rebuilt). Like
+//   g_v, r_v enters E_global (counted in e_guard) from the pass it is
+//   raised in. fit_head runs it on face-only captures (FitHeadOptions::
+//   smooth_guard).
 // - Why the aligned template and not the local fit as rest shape: local
 //   fitting moves each feature box by an affine map and blends the rest, so
 //   its shape has steps at the box walls (a ridge across James's nose bridge
@@ -84,6 +109,7 @@
 #include "common/status.h"
 #include "mesh/topology.h"
 #include "mesh/tri_mesh.h"
+#include "subdiv/butterfly.h"
 
 #include <array>
 #include <cstdint>
@@ -128,6 +154,21 @@ struct GlobalFitOptions {
   // (With the generic head before c092934, whose lid skin crossed its eye
   // pockets, it held the outer eye corners off their data: docs/fit.md.)
   bool crossing_guard = true;
+  // Smooth-surface guard (see header comment): after the rounds, the
+  // control mesh refined smooth_guard_level times by Modified Butterfly
+  // (with GlobalFitTerms::smooth_creases) may cross itself where the
+  // reference's refinement does not; then the rest-shape weights r_v of
+  // the control vertices under those pairs rise (smooth_guard_stiffness at
+  // first, times smooth_guard_factor per further pass, at most
+  // smooth_guard_max_stiffness) and one more pass on all points is solved,
+  // up to smooth_guard_passes times. The state with the fewest such pairs
+  // is kept (a pass that does not help changes nothing). 0 levels or 0
+  // passes: off.
+  int smooth_guard_level = 2;
+  int smooth_guard_passes = 2;
+  double smooth_guard_stiffness = 0.25;
+  double smooth_guard_factor = 4.0;
+  double smooth_guard_max_stiffness = 16.0;
 };
 
 // Terms of E_binding and E_constraint, from the head's annotations.
@@ -138,6 +179,14 @@ struct GlobalFitTerms {
   // of E_smooth and the orientation the fold guard keeps for every
   // triangle. Empty: the input mesh serves as both.
   std::vector<Vec3> fold_reference;
+  // Crease curves of the Butterfly refinement the smooth-surface guard
+  // checks (the same the multiresolution levels will use).
+  ButterflyCreases smooth_creases;
+  // #V flags (or empty): pairs of the smooth level with a control face
+  // whose corners are all flagged do not count (parts the rest-shape
+  // weights cannot move: the mouth bag, held by E_constraint and carried
+  // after the fit by fit_head).
+  std::vector<char> smooth_guard_ignored;
 };
 
 struct GlobalFitIteration {
@@ -167,6 +216,16 @@ struct GlobalFitResult {
   int guard_raises = 0;        // sum of stiffened over all iterations
   int crossing_before = 0;     // control triangle pairs crossing in the input (self_intersection.h)
   int crossing_after = 0;      // ... in the result (counted with the guard on or off)
+  // Smooth-surface guard: crossing pairs of the smooth level
+  // smooth_guard_level that the reference's level does not have, after the
+  // rounds and in the result; passes solved; control vertices whose
+  // rest-shape weight it raised. All 0 when the guard is off (or the mesh
+  // cannot be refined: smooth_guard_skipped).
+  int smooth_crossing_before = 0;
+  int smooth_crossing_after = 0;
+  int smooth_guard_passes = 0;
+  int smooth_guard_vertices = 0;
+  bool smooth_guard_skipped = false;
 };
 
 // points: the scan points to fit (already stripped of clipped regions), #P.

@@ -181,24 +181,29 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
   MultiresMesh mr;
   Status st = build_multires(control, creases, K, mr);
   if (!st) return st;
-  auto smooth_pairs = [&](const std::vector<Vec3>& positions, std::vector<std::array<int, 2>>& pairs) -> Status {
+  auto level_positions = [&](const std::vector<Vec3>& positions, std::vector<Vec3>& level) -> Status {
     mr.control = positions;
     Status r = evaluate(mr);
     if (!r) return r;
-    TriMesh level;
-    level.positions = mr.state.displaced[K];
-    level.triangles = mr.triangles(K);
-    return find_self_intersections(level, pairs);
+    level = mr.state.displaced[K];
+    return Status::success();
   };
-  std::vector<std::array<int, 2>> reference_pairs, pairs;
-  st = smooth_pairs(reference, reference_pairs);
+  // A pair is old when it crosses at the reference's level positions too:
+  // the same rule as searching the reference's level, without that search.
+  std::vector<Vec3> reference_level;
+  st = level_positions(reference, reference_level);
   if (!st) return st;
+  TriMesh level;
+  level.triangles = mr.triangles(K);
+  std::vector<std::array<int, 2>> pairs;
   auto new_pairs = [&]() -> Status {
-    Status r = smooth_pairs(control.positions, pairs);
+    Status r = level_positions(control.positions, level.positions);
+    if (!r) return r;
+    r = find_self_intersections(level, pairs);
     if (!r) return r;
     size_t kept = 0;
-    for (const auto& p : pairs)  // both sorted (self_intersection.h)
-      if (!std::binary_search(reference_pairs.begin(), reference_pairs.end(), p)) pairs[kept++] = p;
+    for (const auto& p : pairs)
+      if (!mesh_triangles_cross(reference_level, level.triangles[p[0]], level.triangles[p[1]])) pairs[kept++] = p;
     pairs.resize(kept);
     return Status::success();
   };
@@ -485,6 +490,12 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   // steps at the box walls and may turn triangles, which a rest shape taken
   // after it would hold).
   terms.fold_reference = out.aligned.positions;
+  // The smooth-surface guard refines with the creases the levels will use.
+  ButterflyCreases creases;
+  if (options.rim_creases)
+    for (const CreaseCurve& c : ann.creases) add_crease_polyline(c.vertices, c.closed, creases);
+  terms.smooth_creases = creases;
+  terms.smooth_guard_ignored = mouth_bag;
   std::vector<Vec3> skin_pts;
   std::vector<int> skin_index;
   skin_pts.reserve(pts.size());
@@ -508,7 +519,11 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   if (static_cast<int>(skin_pts.size()) < options.min_points)
     return Status::error(ErrorCode::NotAHead, "only " + std::to_string(skin_pts.size()) +
                                                   " points lie on the skin of the aligned head");
-  st = fit_global(skin_pts, out.local, topo, terms, options.global, out.control, out.global_fit, progress);
+  GlobalFitOptions global_options = options.global;
+  const bool smooth_guarded = options.smooth_guard == FitHeadOptions::SmoothGuard::Always ||
+                              (options.smooth_guard == FitHeadOptions::SmoothGuard::FaceOnlyScans && out.face_only);
+  if (!smooth_guarded) global_options.smooth_guard_level = 0;
+  st = fit_global(skin_pts, out.local, topo, terms, global_options, out.control, out.global_fit, progress);
   if (!st) return with_context(st, "global fitting");
   if (options.carry_mouth_bag) {
     st = carry_mouth_bag(mouth_bag, topo, out.local, out.control);
@@ -518,9 +533,6 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
 
   // 4. Displaced Butterfly levels.
   if (observer.started) observer.started("subdivision");
-  ButterflyCreases creases;
-  if (options.rim_creases)
-    for (const CreaseCurve& c : ann.creases) add_crease_polyline(c.vertices, c.closed, creases);
   st = untangle_smooth_surface(out.aligned.positions, creases, diag, options, out.control,
                                out.smooth_crossings_before, out.smooth_crossings_after);
   if (!st) return with_context(st, "subdivision (untangling)");

@@ -154,6 +154,16 @@ struct FitHeadOptions {
   // and seed 3 got 37 ear crossings (docs/fit_real.md).
   enum class EarBinding { Off, FaceOnlyScans, Always };
   EarBinding bind_ear_edges = EarBinding::FaceOnlyScans;
+  // The global fit's smooth-surface guard (GlobalFitOptions::smooth_guard_*:
+  // rest-shape weights where the control mesh's smooth level 2 crosses
+  // itself) runs on face-only captures, where the sparse data bend the
+  // control mesh sharply around the eyes, brow and nose (Fran's smooth
+  // level-3 pairs 124 -> 51, displaced 157 -> 70; James 177 -> 108 and
+  // 278 -> 145; Table 1 +0.0003 / +0.0000 %). On the synthetic whole heads
+  // it fired on seed 2 only and added 5 level-3 pairs there (docs/fit.md).
+  // Always: on every scan; Off: never (GlobalFitOptions as given).
+  enum class SmoothGuard { Off, FaceOnlyScans, Always };
+  SmoothGuard smooth_guard = SmoothGuard::FaceOnlyScans;
 };
 
 struct FitStageReport {

@@ -1,0 +1,138 @@
+// The global fit's smooth-surface guard (global_fit.h): the control mesh's
+// Modified Butterfly surface must not cross itself where the control
+// triangles do not.
+#include "fit/closest_point.h"
+#include "fit/global_fit.h"
+#include "mesh/geometry.h"
+#include "mesh/primitives.h"
+#include "raycast/self_intersection.h"
+#include "subdiv/butterfly.h"
+
+#include <catch2/catch.hpp>
+#include <algorithm>
+#include <random>
+
+using namespace lk;
+
+namespace {
+
+// Crossing pairs of the mesh refined `levels` times (no creases) that the
+// start's refinement does not have (the flat sheets' corners already touch
+// themselves there: 79 pairs, boundary rules).
+int smooth_pairs(const TriMesh& m, const TriMesh& start, int levels) {
+  std::vector<ButterflyLevel> lv;
+  REQUIRE(build_butterfly_levels(m, levels, lv).ok());
+  auto pairs_of = [&](const TriMesh& mesh) {
+    std::vector<std::vector<Vec3>> refined;
+    REQUIRE(apply_all(lv, mesh.positions, refined).ok());
+    TriMesh fine;
+    fine.positions = refined.back();
+    fine.triangles = lv.back().fine_triangles;
+    std::vector<std::array<int, 2>> pairs;
+    REQUIRE(find_self_intersections(fine, pairs).ok());
+    return pairs;
+  };
+  const auto now = pairs_of(m), before = pairs_of(start);
+  int fresh = 0;
+  for (const auto& p : now) fresh += !std::binary_search(before.begin(), before.end(), p);
+  return fresh;
+}
+
+// Two parallel 20 x 20 sheets over the unit square: A at z = 0, B at
+// z = 0.2. A's data lie on A; B's data step down at x = 0.5 from z = 0.2 to
+// z = 0.005, just above A. The fitted control mesh does not cross itself,
+// but B's Butterfly surface does around the step (its stencils' negative
+// wings overshoot where the control sheet bends sharply): 29 pairs of
+// smooth level 2, all within B.
+struct StepSheets {
+  TriMesh start;
+  MeshTopology topo;
+  std::vector<Vec3> points, b_points;
+  int b_first_vertex = 0;
+};
+
+StepSheets make_step_sheets() {
+  StepSheets c;
+  const int n = 20;
+  const TriMesh grid = make_regular_grid(n, n);
+  for (const Vec3& p : grid.positions) c.start.positions.push_back(Vec3(p.x() / n, p.y() / n, 0));
+  for (const Tri& t : grid.triangles) c.start.triangles.push_back(t);
+  c.b_first_vertex = grid.num_vertices();
+  for (const Vec3& p : grid.positions) c.start.positions.push_back(Vec3(p.x() / n, p.y() / n, 0.2));
+  for (const Tri& t : grid.triangles)
+    c.start.triangles.push_back({{t[0] + c.b_first_vertex, t[1] + c.b_first_vertex, t[2] + c.b_first_vertex}});
+  REQUIRE(build_topology(c.start, c.topo).ok());
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> U(0, 1);
+  for (int i = 0; i < 8000; ++i) c.points.push_back(Vec3(U(rng), U(rng), 0));
+  for (int i = 0; i < 8000; ++i) {
+    const double x = U(rng);
+    c.b_points.push_back(Vec3(x, U(rng), x < 0.5 ? 0.2 : 0.005));
+  }
+  c.points.insert(c.points.end(), c.b_points.begin(), c.b_points.end());
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE("global fit: the smooth-surface guard keeps the Butterfly surface from crossing itself") {
+  const StepSheets c = make_step_sheets();
+    const double diag = bounding_box(c.points).diagonal();
+
+  GlobalFitOptions unguarded;
+  unguarded.smooth_guard_level = 0;
+  TriMesh out_unguarded;
+  GlobalFitResult r_unguarded;
+  REQUIRE(fit_global(c.points, c.start, c.topo, {}, unguarded, out_unguarded, r_unguarded).ok());
+  std::vector<std::array<int, 2>> control_pairs;
+  REQUIRE(find_self_intersections(out_unguarded, control_pairs).ok());
+  CHECK(control_pairs.empty());  // the control sheets do not cross ...
+  const int unguarded_pairs = smooth_pairs(out_unguarded, c.start, 2);
+  INFO("smooth level 2 without the guard: " << unguarded_pairs << " pairs");
+  CHECK(unguarded_pairs >= 10);  // ... their Butterfly surface does (29 measured)
+  CHECK(r_unguarded.smooth_guard_passes == 0);
+  CHECK(r_unguarded.smooth_crossing_before == 0);
+
+  GlobalFitOptions guarded;
+  guarded.smooth_guard_level = 2;
+  guarded.smooth_guard_stiffness = 1.0;  // the default 0.25 needs more passes here
+  TriMesh out;
+  GlobalFitResult r;
+  REQUIRE(fit_global(c.points, c.start, c.topo, {}, guarded, out, r).ok());
+  REQUIRE(find_self_intersections(out, control_pairs).ok());
+  CHECK(control_pairs.empty());
+  CHECK(smooth_pairs(out, c.start, 2) == 0);
+  CHECK(r.smooth_crossing_before == unguarded_pairs);
+  CHECK(r.smooth_crossing_after == 0);
+  CHECK(r.smooth_guard_passes >= 1);
+  CHECK(r.smooth_guard_vertices > 0);
+  for (const auto& it : r.iterations) CHECK(it.energy_after <= it.energy_before);
+  // B still follows its data: the guard holds its step's shape, not the sheet.
+  const double b_guarded = point_to_surface_stats(c.b_points, out, diag).mean_pct;
+  const double b_unguarded = point_to_surface_stats(c.b_points, out_unguarded, diag).mean_pct;
+  const double b_start = point_to_surface_stats(c.b_points, c.start, diag).mean_pct;
+  INFO("B's points: mean % " << b_guarded << " guarded, " << b_unguarded << " unguarded, " << b_start << " at the start");
+  CHECK(b_guarded < 0.6 * b_start);
+  CHECK(b_guarded < 1.2 * b_unguarded);
+
+  // Pairs with a control face of ignored vertices only (here sheet B's,
+  // where all 29 lie) are left alone.
+  GlobalFitTerms ignoring;
+  ignoring.smooth_guard_ignored.assign(c.start.num_vertices(), 0);
+  std::fill(ignoring.smooth_guard_ignored.begin() + c.b_first_vertex, ignoring.smooth_guard_ignored.end(), 1);
+  TriMesh out_ignoring;
+  GlobalFitResult r_ignoring;
+  REQUIRE(fit_global(c.points, c.start, c.topo, ignoring, guarded, out_ignoring, r_ignoring).ok());
+  CHECK(r_ignoring.smooth_crossing_before == 0);
+  CHECK(r_ignoring.smooth_guard_passes == 0);
+  CHECK(smooth_pairs(out_ignoring, c.start, 2) == unguarded_pairs);
+}
+
+TEST_CASE("global fit: the smooth-surface guard refuses ignore flags of the wrong size") {
+  const StepSheets c = make_step_sheets();
+  GlobalFitTerms terms;
+  terms.smooth_guard_ignored.assign(c.start.num_vertices() - 1, 0);
+  TriMesh out;
+  GlobalFitResult r;
+  CHECK(fit_global(c.points, c.start, c.topo, terms, {}, out, r).code == ErrorCode::InvalidInput);
+}
