@@ -127,30 +127,49 @@ struct HeadShape {
 };
 
 // ---------------------------------------------------------------------------
-// Layout of the quad grid. Rows go from the neck's bottom (row 0, the mesh's
-// boundary) to the crown patch; columns are meridians, column 0 on the face's
-// midline, increasing towards +x (the head's left).
+// Layout of the quad grid. Rows go from under the jaw (row 0) to the crown
+// patch; columns are meridians, column 0 on the face's midline, increasing
+// towards +x (the head's left). Below row 0 the neck is a stack of rings
+// with fewer meridians (kNeckRings), down to the mesh's boundary.
 
 constexpr int kColumns = 40;  // the crown patch is 10 x 10, whose border has 40 vertices
 constexpr int kCapSize = 10;
 
-// Row kinds: the neck rows cast horizontal rays from the neck's axis, one
-// transition row is interpolated and projected, the head rows cast rays from
-// a centre inside the head at the given elevation (degrees).
-const double kNeckRowY[] = {-0.195, -0.172, -0.150};
-constexpr int kNeckRows = 3;
-constexpr int kTransitionRow = 3;
+// The head rows cast rays from a centre inside the head at the given
+// elevation (degrees).
 const double kHeadRowElevation[] = {-60, -54, -48.5, -43.5, -39.5, -36.5, -33.8, -31, -27.5, -24,
                                     -20.5, -16.5, -12.5, -8, -4, 0, 5, 10, 15, 20, 26, 33, 40};
 constexpr int kHeadRows = sizeof(kHeadRowElevation) / sizeof(double);
-constexpr int kFirstHeadRow = kNeckRows + 1;
-constexpr int kRows = kFirstHeadRow + kHeadRows;
+constexpr int kRows = kHeadRows;
+
+// The neck: rings between row 0 and the neck's bottom (y = kNeckBottomY, the
+// mesh's boundary), from the top down. The 40 meridians of the head are 5 mm
+// apart at the throat (the face's dense columns) and 17 mm at the nape;
+// continuing them down the neck in 22-26 mm rows made 5:1 slivers whose
+// smooth Butterfly surface rippled in vertical columns (streaks under the
+// jaw on every fitted head). The rings have fewer, more evenly spread
+// meridians and are about as far apart as their meridians, so the neck's
+// triangles are close to right isosceles; a strip of triangles joins rings
+// of different meridian counts. depth: fraction of the way from row 0 to the
+// bottom, measured along each meridian on the surface. The first strip
+// (40 -> 24 meridians) is thinner, 8-10 mm, because its upper edges are
+// only 5 mm long at the throat. Measured (docs/generic_head.md): neck edge
+// ratio p90 4.5 -> 1.9, worst 6.2 -> 2.3, for 8 more vertices.
+struct NeckRing {
+  int meridians;           // even, so the ring is mirror-symmetric with vertices at 0 and 180 deg
+  double face_density;     // meridian spacing at the front is (1 - face_density) of the mean
+  double depth;            // 0 at row 0, 1 at the bottom
+};
+const NeckRing kNeckRings[] = {{24, 0.3, 0.10}, {24, 0.3, 0.25}, {24, 0.3, 0.40}, {24, 0.3, 0.55},
+                               {24, 0.3, 0.70}, {24, 0.3, 0.85}, {24, 0.3, 1.00}};
+constexpr int kNeckRingCount = sizeof(kNeckRings) / sizeof(NeckRing);
+constexpr double kNeckBottomY = -0.195;
 
 // Rows of the features (see kHeadRowElevation).
-constexpr int kSlitRow = kFirstHeadRow + 6;     // -33.8 deg: the lip line
-constexpr int kRimLowRow = kFirstHeadRow + 16;  // 5 deg: lower lid of the eye opening
-constexpr int kEarLowRow = kFirstHeadRow + 11;  // -16.5 deg .. 10 deg: ear root
-constexpr int kEarHighRow = kFirstHeadRow + 17;
+constexpr int kSlitRow = 6;     // -33.8 deg: the lip line
+constexpr int kRimLowRow = 16;  // 5 deg: lower lid of the eye opening
+constexpr int kEarLowRow = 11;  // -16.5 deg .. 10 deg: ear root
+constexpr int kEarHighRow = 17;
 // Columns (left side; the right side mirrors c -> -c).
 constexpr int kEyeCol0 = 2, kEyeCol1 = 6;     // eye opening: 4 quads wide, 1 high
 constexpr int kMouthHalfWidth = 3;            // lip line spans columns -3..3
@@ -159,10 +178,12 @@ constexpr int kEarCol0 = 12, kEarCol1 = 14;   // ear root: 2 quads wide, 6 high
 const Vec3 kRayCenter(0, 0.010, -0.005);
 const Vec3 kNeckAxis(0, 0, -0.016);
 
-double column_azimuth(int c) {
-  const double u = 2 * kPi * c / kColumns;
-  return u - 0.5 * std::sin(u);  // denser over the face, coarser at the back
+// Azimuth of meridian c of n, denser over the face by face_density.
+double meridian_azimuth(int c, int n, double face_density) {
+  const double u = 2 * kPi * c / n;
+  return u - face_density * std::sin(u);
 }
+double column_azimuth(int c) { return meridian_azimuth(c, kColumns, 0.5); }
 int wrap(int c) { return ((c % kColumns) + kColumns) % kColumns; }
 Vec3 direction(double azimuth, double elevation) {
   return {std::cos(elevation) * std::sin(azimuth), std::sin(elevation),
@@ -177,11 +198,11 @@ double corner_bulge(double x, double y) {
   return 1.0 + 0.16 * std::pow(std::sin(2 * a), 4);
 }
 
-enum class Part { Grid, Cap, LowerLipLine, EyePocket, MouthBag, Ear };
+enum class Part { Grid, Neck, Cap, LowerLipLine, EyePocket, MouthBag, Ear };
 
 struct VertexInfo {
   Part part = Part::Grid;
-  int row = -1, col = -1;  // grid vertices (col in 0..kColumns-1)
+  int row = -1, col = -1;  // grid vertices (col in 0..kColumns-1); neck: row -1 - ring
   int side = 0;            // +1 left, -1 right, 0 midline / both
   int chain = 0;           // lips and mouth bag: +1 upper, -1 lower, 0 corner
 };
@@ -278,21 +299,84 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
       grid[r][c] = b.add(Vec3::Zero(), vi);
     }
   auto g = [&](int r, int c) { return grid[r][wrap(c)]; };
-  for (int c = 0; c < kColumns; ++c) {
-    const double az = column_azimuth(c);
-    for (int r = 0; r < kNeckRows; ++r) {
-      const Vec3 origin(kNeckAxis.x(), kNeckRowY[r], kNeckAxis.z());
-      Vec3 p = shape.cast(origin, {std::sin(az), 0, std::cos(az)});
-      p.y() = kNeckRowY[r];
-      b.positions[g(r, c)] = p;
-    }
-    for (int h = 0; h < kHeadRows; ++h)
-      b.positions[g(kFirstHeadRow + h, c)] =
-          shape.cast(kRayCenter, direction(az, radians(kHeadRowElevation[h])));
-  }
   for (int c = 0; c < kColumns; ++c)
-    b.positions[g(kTransitionRow, c)] = shape.project(
-        0.5 * (b.positions[g(kTransitionRow - 1, c)] + b.positions[g(kTransitionRow + 1, c)]));
+    for (int h = 0; h < kHeadRows; ++h)
+      b.positions[g(h, c)] = shape.cast(kRayCenter, direction(column_azimuth(c), radians(kHeadRowElevation[h])));
+
+  // --- 1b. neck rings below row 0 -------------------------------------------
+  // Each ring vertex lies on the surface curve from row 0 down to the neck's
+  // bottom at its azimuth, at its ring's depth along that curve's length.
+  std::vector<std::vector<int>> neck_rings;
+  {
+    auto meridian_point = [&](double az, double depth) -> Vec3 {
+      const Vec3 top = shape.cast(kRayCenter, direction(az, radians(kHeadRowElevation[0])));
+      Vec3 bottom = shape.cast(Vec3(kNeckAxis.x(), kNeckBottomY, kNeckAxis.z()), {std::sin(az), 0, std::cos(az)});
+      bottom.y() = kNeckBottomY;
+      if (depth >= 1) return bottom;
+      constexpr int samples = 64;
+      std::vector<Vec3> curve(samples + 1);
+      std::vector<double> length(samples + 1, 0.0);
+      for (int i = 0; i <= samples; ++i) {
+        const double t = double(i) / samples;
+        curve[i] = i == 0 ? top : i == samples ? bottom : shape.project((1 - t) * top + t * bottom);
+        if (i > 0) length[i] = length[i - 1] + (curve[i] - curve[i - 1]).norm();
+      }
+      const double target = depth * length[samples];
+      int i = 1;
+      while (i < samples && length[i] < target) ++i;
+      const double f = (target - length[i - 1]) / std::max(1e-12, length[i] - length[i - 1]);
+      return shape.project((1 - f) * curve[i - 1] + f * curve[i]);
+    };
+    for (int k = 0; k < kNeckRingCount; ++k) {
+      const NeckRing& ring = kNeckRings[k];
+      std::vector<int> ids;
+      for (int c = 0; c < ring.meridians; ++c) {
+        VertexInfo vi;
+        vi.part = Part::Neck;
+        vi.row = -1 - k;
+        vi.col = c;
+        ids.push_back(b.add(meridian_point(meridian_azimuth(c, ring.meridians, ring.face_density), ring.depth), vi));
+      }
+      neck_rings.push_back(ids);
+    }
+    // Faces between each ring and the one above it: quads where both have
+    // the same meridians, otherwise a strip of triangles merging the two
+    // rings' edges in the order of their mid-azimuths (mirror-symmetric as
+    // long as no two mid-azimuths coincide; the tests check the triangles).
+    std::vector<int> upper(kColumns);
+    std::vector<double> upper_az(kColumns);
+    for (int c = 0; c < kColumns; ++c) upper[c] = g(0, c), upper_az[c] = column_azimuth(c);
+    double upper_density = 0.5;
+    for (int k = 0; k < kNeckRingCount; ++k) {
+      const NeckRing& ring = kNeckRings[k];
+      const std::vector<int>& lower = neck_rings[k];
+      std::vector<double> lower_az(ring.meridians);
+      for (int c = 0; c < ring.meridians; ++c) lower_az[c] = meridian_azimuth(c, ring.meridians, ring.face_density);
+      const int nu = static_cast<int>(upper.size()), nl = ring.meridians;
+      if (nu == nl && upper_density == ring.face_density) {
+        for (int c = 0; c < nl; ++c)
+          b.polygons.push_back({lower[c], lower[(c + 1) % nl], upper[(c + 1) % nu], upper[c]});
+      } else {
+        auto mid = [](const std::vector<double>& az, int i) {
+          const double next = i + 1 < int(az.size()) ? az[i + 1] : 2 * kPi;
+          return 0.5 * (az[i] + next);
+        };
+        int i = 0, j = 0;
+        while (i < nu || j < nl) {
+          if (j == nl || (i < nu && mid(upper_az, i) < mid(lower_az, j))) {
+            b.polygons.push_back({lower[j % nl], upper[(i + 1) % nu], upper[i % nu]});
+            ++i;
+          } else {
+            b.polygons.push_back({lower[j % nl], lower[(j + 1) % nl], upper[i % nu]});
+            ++j;
+          }
+        }
+      }
+      upper = lower;
+      upper_az = lower_az;
+      upper_density = ring.face_density;
+    }
+  }
 
   // Casts through a point given in front of the face.
   // The plain layout before the features are warped in; relaxation keeps its
@@ -702,7 +786,6 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
     }
     for (int r = kSlitRow - 1; r <= kSlitRow + 1; ++r)
       for (int c = -kMouthHalfWidth - 1; c <= kMouthHalfWidth + 1; ++c) pinned.insert(g(r, c));
-    for (int c = 0; c < kColumns; ++c) pinned.insert(g(0, c));
     const int n = static_cast<int>(b.positions.size());
     std::vector<std::set<int>> neighbours(n);
     for (const auto& poly : b.polygons)
@@ -732,7 +815,6 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
       for (int v : movable) {
         Vec3 p = b.positions[v] + 0.5 * (average(b.positions, v) - offset[v] - b.positions[v]);
         p = shape.project(p);
-        if (b.info[v].row >= 0 && b.info[v].row < kNeckRows) p.y() = kNeckRowY[b.info[v].row];
         next[v] = p;
       }
       b.positions = next;
@@ -818,13 +900,17 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
       R["face"].push_back(v);
       continue;
     }
+    if (vi.part == Part::Neck) {
+      R["neck"].push_back(v);
+      continue;
+    }
     if (vi.part != Part::Grid) continue;
     const int r = vi.row;
     const double a = std::abs(azimuth_deg(vi.col));
     const int cc = vi.col > kColumns / 2 ? vi.col - kColumns : vi.col;
-    const int h = r - kFirstHeadRow;  // head row index, negative on the neck
+    const int h = r;  // head row index
     if (h >= 0 && h <= 21 && a <= 70) R["face"].push_back(v);
-    if (h < 0 || (h == 0 && a > 35)) R["neck"].push_back(v);
+    if (h == 0 && a > 35) R["neck"].push_back(v);
     if (h >= 21 || (h >= 8 && a >= 105) || (h >= 18 && a > 70)) R["scalp"].push_back(v);
     if (h >= 0 && h <= 3 && a <= 25) R["chin"].push_back(v);
     if (h >= 0 && h <= 5 && a > 25 && a <= 110) R["jaw"].push_back(v);
@@ -883,10 +969,10 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
                                  {top, back, lobe}));
   }
   {
-    int tip = g(kFirstHeadRow, 0), nasion = -1;
-    for (int r = kFirstHeadRow + 9; r <= kFirstHeadRow + 14; ++r)
+    int tip = g(0, 0), nasion = -1;
+    for (int r = 9; r <= 14; ++r)
       if (P[g(r, 0)].z() > P[tip].z()) tip = g(r, 0);
-    for (int r = kFirstHeadRow + 16; r <= kFirstHeadRow + 19; ++r)
+    for (int r = 16; r <= 19; ++r)
       if (nasion < 0 || P[g(r, 0)].z() < P[nasion].z()) nasion = g(r, 0);
     int ala_left = -1;
     for (int v : R["nose"])

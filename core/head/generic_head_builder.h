@@ -8,9 +8,11 @@
 // How the mesh is made, so it can be improved:
 //  1. The head's shape is a smooth signed distance function (SDF): cranium,
 //     jaw, chin, cheekbones, brow ridge, nose, lips, lid spheres, neck.
-//  2. A quad grid of rings (neck bottom .. crown) x meridians (denser over the
-//     face) is placed on it by casting one ray per vertex; a 10 x 10 quad
-//     patch closes the crown without a pole.
+//  2. A quad grid of rings (under the jaw .. crown) x 40 meridians (denser
+//     over the face) is placed on it by casting one ray per vertex; a 10 x 10
+//     quad patch closes the crown without a pole. Below the grid the neck is
+//     7 rings of 24 meridians down to the boundary, joined to the grid by a
+//     strip of triangles, so its triangles are nearly isotropic.
 //  3. Blocks of the grid around the eyes and the mouth are warped into
 //     concentric ellipses (edge loops for animation). The eye openings are
 //     4 x 1 holes continued inwards as closed pockets around the eyeballs;

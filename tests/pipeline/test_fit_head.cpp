@@ -216,7 +216,10 @@ TEST_CASE("fit_head: the levels near the neck cut follow the scan just below it,
   const double d_off = point_to_surface_stats(band, r_off.level_meshes.back(), 1.0).mean;
   INFO(band.size() << " truth vertices above the cut: mean distance " << 1e3 * d_on << " mm with the scan below it, "
                    << 1e3 * d_off << " mm without");
-  CHECK(d_on < 0.85 * d_off);  // measured: 0.350 vs 0.450 mm
+  // Measured: 0.350 vs 0.450 mm with the old neck of 5:1 slivers; 0.247 vs
+  // 0.287 mm since the generic neck is meshed in round triangles (both
+  // closer, the band's share of the gain smaller).
+  CHECK(d_on < 0.9 * d_off);
   // Table 1's distances stay over the points above the cut.
   CHECK(r_on.fitted_points == r_off.fitted_points);
 }
