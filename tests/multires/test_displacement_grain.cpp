@@ -11,10 +11,7 @@
 // test_displacement_smoothing.cpp: a Gaussian bump, a cliff and a roof
 // ridge, sampled at random with Gaussian depth noise of a seventh of a
 // level-3 edge (the synthetic heads' 0.2 mm on 1.3 mm edges).
-#include "multires/displacement.h"
-#include "multires/multires.h"
-
-#include "../subdiv/shapes.h"
+#include "height_field_cases.h"
 #include "test_scan.h"
 
 #include <catch2/catch.hpp>
@@ -28,83 +25,14 @@ using namespace lk::test;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kSigma = 0.02;
-const Vec3 kCentre(6.375, 6.625, 0);
-
-double bump(double x, double y) {
-  const double r2 = (x - kCentre.x()) * (x - kCentre.x()) + (y - kCentre.y()) * (y - kCentre.y());
-  return 0.3 * std::exp(-r2 / (2 * 0.4 * 0.4));
-}
-
-double cliff(double x, double) { return x > 6.3 ? 0.3 : 0.0; }
 
 // A ridge along x = 6.3, slopes of 1:2 on either side: the level-2
 // normals across it differ by ~50 degrees.
-double roof(double x, double) { return 0.5 * (3.0 - std::min(3.0, std::abs(x - 6.3))); }
+double roof(double x, double) { return 0.5 * (3.0 - std::min(3.0, std::abs(x - kStepX))); }
 
 // The defaults before the two finest levels were smoothed together.
-DisplacementOptions finest_only() {
-  DisplacementOptions o;
-  o.smooth_finest_levels = 1;
-  o.smooth_strength = 0.3;
-  o.smooth_noise_cap = 0;
-  o.smooth_move_cap = 0;
-  o.smooth_normal_degrees = 0;
-  o.smooth_max_height_errors = 0;
-  return o;
-}
-
-struct Measured {
-  MultiresMesh mesh;
-  DisplacementStats stats;
-};
-
-Measured measure(const PointCloud& cloud, const DisplacementOptions& options) {
-  Measured m;
-  REQUIRE(build_multires(regular_grid(12, 12), 3, m.mesh).ok());
-  REQUIRE(measure_displacements(cloud, options, m.mesh, &m.stats).ok());
-  return m;
-}
-
-bool inside(const Vec3& p) { return p.x() > 2 && p.x() < 10 && p.y() > 2 && p.y() < 10; }
-
-// Mean |z - truth| over level-3 vertices where `where` holds.
-double mean_error(const Measured& m, const std::function<double(double, double)>& surface,
-                  const std::function<bool(const Vec3&)>& where) {
-  const TriMesh t = level_mesh(m.mesh, 3);
-  double sum = 0;
-  int n = 0;
-  for (const Vec3& p : t.positions)
-    if (inside(p) && where(p)) sum += std::abs(p.z() - surface(p.x(), p.y())), ++n;
-  REQUIRE(n > 100);
-  return sum / n;
-}
-
-// Mean angle (deg) between level-3 face normals and +z over faces where
-// `where` holds (the truth is flat there).
-double roughness(const Measured& m, const std::function<bool(const Vec3&)>& where) {
-  const TriMesh t = level_mesh(m.mesh, 3);
-  double sum = 0;
-  int n = 0;
-  for (const Tri& f : t.triangles) {
-    const Vec3 c = (t.positions[f[0]] + t.positions[f[1]] + t.positions[f[2]]) / 3.0;
-    if (!inside(c) || !where(c)) continue;
-    const Vec3 nrm = (t.positions[f[1]] - t.positions[f[0]]).cross(t.positions[f[2]] - t.positions[f[0]]).normalized();
-    sum += std::acos(std::clamp(std::abs(nrm.z()), 0.0, 1.0)) * 180.0 / kPi;
-    ++n;
-  }
-  REQUIRE(n > 100);
-  return sum / n;
-}
-
-double peak(const Measured& m) {
-  const TriMesh t = level_mesh(m.mesh, 3);
-  double best = 0;
-  for (const Vec3& p : t.positions)
-    if ((p - kCentre).head<2>().norm() < 0.1) best = std::max(best, p.z());
-  return best;
-}
+DisplacementOptions finest_only() { return finest_level_smoothing(); }
 
 }  // namespace
 
@@ -113,7 +41,7 @@ TEST_CASE("grain: smoothing the two finest levels takes the orange peel off, the
   const PointCloud cloud = test::scan_height_field(bump, 12, 36864, kSigma, 41);
   const Measured before = measure(cloud, finest_only());
   const Measured after = measure(cloud, DisplacementOptions{});
-  auto flat = [](const Vec3& p) { return (p - kCentre).head<2>().norm() > 2.0; };
+  auto flat = away_from_bump;
   auto on_bump = [](const Vec3& p) { return (p - kCentre).head<2>().norm() < 1.0; };
   const double e0 = mean_error(before, bump, flat), e1 = mean_error(after, bump, flat);
   const double r0 = roughness(before, flat), r1 = roughness(after, flat);

@@ -9,16 +9,11 @@
 // 0.3, two level-3 edges tall, along x = 6.3), sampled at random with
 // Gaussian depth noise of a seventh of an edge (the synthetic heads' 0.2 mm
 // on 1.3 mm edges).
-#include "multires/displacement.h"
-#include "multires/multires.h"
-
-#include "../subdiv/shapes.h"
+#include "height_field_cases.h"
 #include "test_scan.h"
 
 #include <catch2/catch.hpp>
 
-#include <algorithm>
-#include <cmath>
 #include <functional>
 
 using namespace lk;
@@ -26,35 +21,13 @@ using namespace lk::test;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kHeight = 0.3;
-const Vec3 kCentre(6.375, 6.625, 0);
-constexpr double kStepX = 6.3;
-
-double bump(double x, double y) {
-  const double r2 = (x - kCentre.x()) * (x - kCentre.x()) + (y - kCentre.y()) * (y - kCentre.y());
-  return kHeight * std::exp(-r2 / (2 * 0.4 * 0.4));
-}
-
-double cliff(double x, double) { return x > kStepX ? kHeight : 0.0; }
-
 PointCloud scan(const std::function<double(double, double)>& surface, int count, double sigma, unsigned seed) {
   return test::scan_height_field(surface, 12, count, sigma, seed);
 }
 
-// The finest level's smoothing alone, with the rules it was made with
-// (the defaults until the two finest levels were smoothed together: see
-// test_displacement_grain.cpp for those).
-DisplacementOptions finest_level() {
-  DisplacementOptions o;
-  o.smooth_finest_levels = 1;
-  o.smooth_strength = 0.3;
-  o.smooth_noise_cap = 0;
-  o.smooth_move_cap = 0;
-  o.smooth_normal_degrees = 0;
-  o.smooth_max_height_errors = 0;
-  return o;
-}
+// The finest level's smoothing alone (see height_field_cases.h; the current
+// defaults are tested in test_displacement_grain.cpp).
+DisplacementOptions finest_level() { return finest_level_smoothing(); }
 
 DisplacementOptions raw() {
   DisplacementOptions o;
@@ -62,55 +35,7 @@ DisplacementOptions raw() {
   return o;
 }
 
-struct Measured {
-  MultiresMesh mesh;
-  DisplacementStats stats;
-};
-
-Measured measure(const PointCloud& cloud, const DisplacementOptions& options) {
-  Measured m;
-  REQUIRE(build_multires(regular_grid(12, 12), 3, m.mesh).ok());
-  REQUIRE(measure_displacements(cloud, options, m.mesh, &m.stats).ok());
-  return m;
-}
-
-bool inside(const Vec3& p) { return p.x() > 2 && p.x() < 10 && p.y() > 2 && p.y() < 10; }
-
-// Mean |z - truth| over level-3 vertices where `where` holds.
-double mean_error(const Measured& m, const std::function<double(double, double)>& surface,
-                  const std::function<bool(const Vec3&)>& where) {
-  const TriMesh t = level_mesh(m.mesh, 3);
-  double sum = 0;
-  int n = 0;
-  for (const Vec3& p : t.positions)
-    if (inside(p) && where(p)) sum += std::abs(p.z() - surface(p.x(), p.y())), ++n;
-  REQUIRE(n > 100);
-  return sum / n;
-}
-
-// Mean angle (deg) between level-3 face normals and +z over faces away from
-// the bump: the roughness where the truth is flat.
-double flat_roughness(const Measured& m) {
-  const TriMesh t = level_mesh(m.mesh, 3);
-  double sum = 0;
-  int n = 0;
-  for (const Tri& f : t.triangles) {
-    const Vec3 c = (t.positions[f[0]] + t.positions[f[1]] + t.positions[f[2]]) / 3.0;
-    if (!inside(c) || (c - kCentre).head<2>().norm() < 2.0) continue;
-    const Vec3 nrm = (t.positions[f[1]] - t.positions[f[0]]).cross(t.positions[f[2]] - t.positions[f[0]]).normalized();
-    sum += std::acos(std::clamp(std::abs(nrm.z()), 0.0, 1.0)) * 180.0 / kPi;
-    ++n;
-  }
-  return sum / std::max(1, n);
-}
-
-double peak(const Measured& m) {
-  const TriMesh t = level_mesh(m.mesh, 3);
-  double best = 0;
-  for (const Vec3& p : t.positions)
-    if ((p - kCentre).head<2>().norm() < 0.1) best = std::max(best, p.z());
-  return best;
-}
+double flat_roughness(const Measured& m) { return roughness(m, away_from_bump); }
 
 }  // namespace
 
@@ -119,7 +44,7 @@ TEST_CASE("displacement smoothing: noise averaged over the mesh, the bump's peak
   const PointCloud cloud = scan(bump, 36864, sigma, 11);
   const Measured before = measure(cloud, raw());
   const Measured after = measure(cloud, finest_level());
-  auto flat = [](const Vec3& p) { return (p - kCentre).head<2>().norm() > 2.0; };
+  auto flat = away_from_bump;
   const double e0 = mean_error(before, bump, flat), e1 = mean_error(after, bump, flat);
   const double r0 = flat_roughness(before), r1 = flat_roughness(after);
   INFO("flat error " << e0 << " -> " << e1 << ", roughness " << r0 << " -> " << r1 << " deg, peak " << peak(before)
