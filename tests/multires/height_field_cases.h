@@ -99,4 +99,17 @@ inline double peak(const Measured& m) {
   return best;
 }
 
+// Moves the patch's middle control vertex and checks that the local update
+// (re-measuring nothing, re-evaluating its support) gives exactly the mesh
+// a full evaluation gives.
+inline void check_local_update_equals_recompute(Measured& m) {
+  MultiresMesh full = m.mesh;
+  const int v = 6 * 13 + 6;
+  const Vec3 to = m.mesh.control[v] + Vec3(0.1, -0.05, 0.2);
+  REQUIRE(update_control_vertices(m.mesh, {v}, {to}).ok());
+  full.control[v] = to;
+  REQUIRE(evaluate(full).ok());
+  for (int l = 0; l <= 3; ++l) CHECK(m.mesh.state.displaced[l] == full.state.displaced[l]);
+}
+
 }  // namespace lk::test

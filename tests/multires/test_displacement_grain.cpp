@@ -98,13 +98,7 @@ TEST_CASE("grain: local update still equals a full recompute", "[multires][displ
   const PointCloud cloud = test::scan_height_field(bump, 12, 9216, kSigma, 61);
   Measured m = measure(cloud, DisplacementOptions{});
   REQUIRE(m.stats.smoothed[2] > 0);
-  MultiresMesh full = m.mesh;
-  const int v = 6 * 13 + 6;
-  const Vec3 to = m.mesh.control[v] + Vec3(0.1, -0.05, 0.2);
-  REQUIRE(update_control_vertices(m.mesh, {v}, {to}).ok());
-  full.control[v] = to;
-  REQUIRE(evaluate(full).ok());
-  for (int l = 0; l <= 3; ++l) CHECK(m.mesh.state.displaced[l] == full.state.displaced[l]);
+  check_local_update_equals_recompute(m);
 }
 
 TEST_CASE("grain: bad options are refused", "[multires][displacement]") {

@@ -104,13 +104,7 @@ TEST_CASE("displacement smoothing: local update still equals a full recompute", 
   const PointCloud cloud = scan(bump, 9216, 0.02, 31);
   Measured m = measure(cloud, finest_level());
   REQUIRE(m.stats.smoothed[3] > 0);
-  MultiresMesh full = m.mesh;
-  const int v = 6 * 13 + 6;
-  const Vec3 to = m.mesh.control[v] + Vec3(0.1, -0.05, 0.2);
-  REQUIRE(update_control_vertices(m.mesh, {v}, {to}).ok());
-  full.control[v] = to;
-  REQUIRE(evaluate(full).ok());
-  for (int l = 0; l <= 3; ++l) CHECK(m.mesh.state.displaced[l] == full.state.displaced[l]);
+  check_local_update_equals_recompute(m);
 }
 
 TEST_CASE("displacement smoothing: bad options are refused", "[multires][displacement]") {
