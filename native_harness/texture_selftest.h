@@ -55,7 +55,7 @@ struct SelftestOptions {
   int texture_size = 1024;
   int photo_width = 1200, photo_height = 800;
   int eval_width = 1200, eval_height = 800;
-  int subdivision_levels = 3;        // Butterfly levels over the 2674-triangle head: 3 = 171k triangles
+  int subdivision_levels = 3;        // Butterfly levels over the 2706-triangle head: 3 = 173k triangles
   int supersample = 2;               // antialiasing of every render
   double landmark_noise_px = 0.5;    // Gaussian noise of the clicked correspondences
   double light_spread = 0.12;        // photo i > 0: intensity 1 +- (0.6..1) spread, tint +- spread/3 per channel
