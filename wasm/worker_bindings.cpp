@@ -624,6 +624,11 @@ val fit_head_job(const std::string& name, std::uintptr_t data, std::size_t size,
   r.set("parseMs", parse_ms);
   r.set("fitMs", fit_ms);
   r.set("stages", stages);
+  // What the fit decided on its own (the scan turned to face +z, a face-only
+  // capture, a unit guessed): `likeness fit` prints these as "note:" lines.
+  val notes = val::array();
+  for (const std::string& note : s.fit.notes) notes.call<void>("push", note);
+  r.set("notes", notes);
   val meshes = val::object();
   meshes.set("aligned", mesh_arrays(s, s.fit.aligned.positions, s.fit.aligned.triangles));
   meshes.set("local", mesh_arrays(s, s.fit.local.positions, s.fit.local.triangles));

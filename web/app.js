@@ -39,7 +39,7 @@
     fit: $('btn-fit'), autoFit: $('auto-fit'), fitTotal: $('fit-total'), fitView: $('fit-view'),
     level: $('level'), showPoints: $('show-points'), animate: $('animate'), animStats: $('anim-stats'),
     fullDetail: $('full-detail'),
-    fitQuality: $('fit-quality'), qualityTitle: $('quality-title'), qualitySummary: $('quality-summary'),
+    fitNotes: $('fit-notes'), fitQuality: $('fit-quality'), qualityTitle: $('quality-title'), qualitySummary: $('quality-summary'),
     qualityList: $('quality-list'),
     showComponents: $('show-components'),
     exportObj: $('btn-export-obj'), exportPly: $('btn-export-ply'), exportTextured: $('btn-export-textured'),
@@ -1165,6 +1165,7 @@
                               (app.workerThreads ? ' · ' + app.workerThreads.threads + (app.workerThreads.threads === 1 ? ' thread' : ' threads') +
                                (app.workerThreads.fallback ? ' (threads could not start here)' : '') : '');
     ui.fitView.hidden = false;
+    showFitNotes(result.notes || []);
     const levels = result.meshes.levels.length;
     for (const opt of ui.level.options) opt.disabled = Number(opt.value) > levels;
     if (Number(ui.level.value) > levels) ui.level.value = String(levels);
@@ -1180,6 +1181,19 @@
     // head at rest; not awaited: the page stays usable meanwhile.
     checkFitQuality(app.fit);
     if (ui.autoFit.checked && texturable().length) await runTexture();
+  }
+
+  // What the fit decided on its own about the scan (turned to face +z, a
+  // face-only capture, ...), as `likeness fit` prints them: the user should
+  // know, and can pass the conventions next time.
+  function showFitNotes(notes) {
+    ui.fitNotes.replaceChildren();
+    for (const n of notes) {
+      const li = document.createElement('li');
+      li.textContent = n;
+      ui.fitNotes.appendChild(li);
+    }
+    ui.fitNotes.hidden = notes.length === 0;
   }
 
   // ---- the fitted head's checks ----------------------------------------------

@@ -1080,6 +1080,12 @@ async function main() {
             if (check('the real scan fran_cut.vtk fits in the page', sFran === 'done' && (await state(pageFran)) === 'done',
                       'state ' + (await state(pageFran)) + ' ' + await bannerText(pageFran))) {
               await fitQualityShown(pageFran, 'fran_cut.vtk', franBytes, 'fran_cut.vtk', false);
+              // Fran faces about (0.74, 0, -0.68), not +z: the fit turns her and
+              // says so, and that she is a face-only capture, as the CLI does.
+              const notes = await pageFran.evaluate(() => [...document.querySelectorAll('#fit-notes li')].map((li) => li.textContent));
+              check('the page shows what the fit decided about the real scan (turned, face-only)',
+                    notes.some((n) => /seems to face/.test(n)) && notes.some((n) => /face-only scan/.test(n)) &&
+                    !(await pageFran.isHidden('#fit-notes')), JSON.stringify(notes).slice(0, 300));
               if (SHOT_DIR) {  // the Pipeline card with the checks (docs/images/web_fit_checks.png)
                 await pageFran.locator('.card', { has: pageFran.locator('#stages') })
                   .screenshot({ path: path.join(SHOT_DIR, 'web_fit_checks.png') });
