@@ -10,7 +10,6 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-#include <random>
 
 namespace lk {
 namespace {
@@ -311,7 +310,7 @@ std::vector<std::array<int, 2>> swept_candidates(const std::vector<Tri>& triangl
 // vertices under it. The level's BVH is built at the first check and refit
 // afterwards (the same triangles; the passes move vertices a little), and
 // a pair is old when it crosses at the reference's level positions too
-// (the same rule as a search of the reference, without the search).
+// (find_new_self_intersections).
 struct SmoothSurfaceCheck {
   std::vector<ButterflyLevel> levels;
   std::vector<Vec3> reference_level;  // the reference refined
@@ -338,13 +337,15 @@ struct SmoothSurfaceCheck {
                                                const std::vector<char>& ignored) {
     level.positions = refine(x);
     if (level.triangles.empty()) level.triangles = levels.back().fine_triangles;
+    // x and the reference are finite and of the level's size (checked by
+    // the caller), so the BVH and the search cannot fail.
     std::vector<std::array<int, 2>> pairs;
     if (bvh.empty()) {
-      build_bvh(level, bvh);  // x is finite (checked by the caller)
-      find_self_intersections(bvh, pairs);
+      build_bvh(level, bvh);
+      find_new_self_intersections(bvh, reference_level, pairs);
     } else {
       refit_bvh(level, bvh);
-      find_intersections_with(bvh, active_list, pairs);
+      find_new_self_intersections(bvh, reference_level, pairs, &active_list);
       for (const auto& p : first_pairs)
         if (!active[p[0]] && !active[p[1]]) pairs.push_back(p);
       std::sort(pairs.begin(), pairs.end());
@@ -357,9 +358,7 @@ struct SmoothSurfaceCheck {
     };
     size_t kept = 0;
     for (const auto& p : pairs)
-      if (!mesh_triangles_cross(reference_level, level.triangles[p[0]], level.triangles[p[1]]) &&
-          !ignored_face(p[0]) && !ignored_face(p[1]))
-        pairs[kept++] = p;
+      if (!ignored_face(p[0]) && !ignored_face(p[1])) pairs[kept++] = p;
     pairs.resize(kept);
     if (first_pairs.empty() && !searched) first_pairs = pairs;
     searched = true;

@@ -188,24 +188,21 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
     level = mr.state.displaced[K];
     return Status::success();
   };
-  // A pair is old when it crosses at the reference's level positions too:
-  // the same rule as searching the reference's level, without that search.
+  // New pairs are those that do not cross at the reference's level
+  // positions (find_new_self_intersections).
   std::vector<Vec3> reference_level;
   st = level_positions(reference, reference_level);
   if (!st) return st;
   TriMesh level;
   level.triangles = mr.triangles(K);
   std::vector<std::array<int, 2>> pairs;
+  MeshBvh bvh;
   auto new_pairs = [&]() -> Status {
     Status r = level_positions(control.positions, level.positions);
     if (!r) return r;
-    r = find_self_intersections(level, pairs);
+    r = build_bvh(level, bvh);
     if (!r) return r;
-    size_t kept = 0;
-    for (const auto& p : pairs)
-      if (!mesh_triangles_cross(reference_level, level.triangles[p[0]], level.triangles[p[1]])) pairs[kept++] = p;
-    pairs.resize(kept);
-    return Status::success();
+    return find_new_self_intersections(bvh, reference_level, pairs);
   };
   st = new_pairs();
   if (!st) return st;

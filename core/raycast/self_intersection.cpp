@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <string>
 #include <utility>
 
 namespace lk {
@@ -252,6 +253,27 @@ void find_intersections_with(const MeshBvh& bvh, const std::vector<int>& triangl
   for (const auto& f : found) pairs.insert(pairs.end(), f.begin(), f.end());
   std::sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+}
+
+Status find_new_self_intersections(const MeshBvh& bvh, const std::vector<Vec3>& reference,
+                                   std::vector<std::array<int, 2>>& pairs, const std::vector<int>* from_triangles) {
+  pairs.clear();
+  if (reference.size() != bvh.positions.size())
+    return Status::error(ErrorCode::InvalidInput, "new self-intersections: the reference has " +
+                                                      std::to_string(reference.size()) + " vertices, the mesh " +
+                                                      std::to_string(bvh.positions.size()));
+  for (const Vec3& p : reference)
+    if (!p.allFinite())
+      return Status::error(ErrorCode::InvalidInput, "new self-intersections: non-finite reference position");
+  if (from_triangles)
+    find_intersections_with(bvh, *from_triangles, pairs);
+  else
+    find_self_intersections(bvh, pairs);
+  size_t kept = 0;
+  for (const auto& p : pairs)
+    if (!mesh_triangles_cross(reference, bvh.triangles[p[0]], bvh.triangles[p[1]])) pairs[kept++] = p;
+  pairs.resize(kept);
+  return Status::success();
 }
 
 Status find_self_intersections(const TriMesh& mesh, std::vector<std::array<int, 2>>& pairs,

@@ -50,6 +50,20 @@ void find_self_intersections(const MeshBvh& bvh, std::vector<std::array<int, 2>>
 void find_intersections_with(const MeshBvh& bvh, const std::vector<int>& triangles,
                              std::vector<std::array<int, 2>>& pairs);
 
+// The crossings a deformation made: the intersecting pairs of the BVH's
+// mesh (at the positions it was built or last refit with) that do NOT
+// intersect at `reference` (#V by 3: the same triangles at other positions,
+// e.g. the template the mesh was deformed from), each decided by
+// mesh_triangles_cross. A pair that crosses at both is old: the same answer
+// as searching the reference's mesh and dropping its pairs, without that
+// search. `from_triangles` (null: the whole mesh) restricts the search to
+// the pairs with a listed triangle, as find_intersections_with. Pairs (a, b)
+// with a < b, sorted. Fails with InvalidInput when reference does not have
+// the BVH's #V or holds a non-finite position (pairs then empty).
+Status find_new_self_intersections(const MeshBvh& bvh, const std::vector<Vec3>& reference,
+                                   std::vector<std::array<int, 2>>& pairs,
+                                   const std::vector<int>* from_triangles = nullptr);
+
 // One pair under the rules above (shared edge: no; one shared vertex: only
 // if the common segment leaves it), corners read from positions.
 bool mesh_triangles_cross(const std::vector<Vec3>& positions, const Tri& a, const Tri& b);

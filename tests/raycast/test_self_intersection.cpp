@@ -296,3 +296,93 @@ TEST_CASE("triangle pairs: the shortcut tests decide as the plain six-segment ru
   CHECK(crossing > 1000);  // both outcomes are exercised
   CHECK(apart > 1000);
 }
+
+TEST_CASE("new self-intersections: only the pairs a move made, not those the reference had", "[raycast]") {
+  // A flat square (triangles 0, 1, split along y = x) at z = 0; triangle 2
+  // hovers at z = 1 over triangle 0; triangle 3 stands upright through
+  // triangle 1 (crossing it already at the reference). Moving one corner of
+  // triangle 2 to z = -1 makes exactly one new pair, (0, 2).
+  TriMesh m;
+  m.positions = {{-2, -2, 0}, {2, -2, 0},   {2, 2, 0},    {-2, 2, 0},  {0.5, -1, 1},
+                 {1.5, -1, 1}, {1, -0.2, 1}, {-1, 0.5, -1}, {-1, 1.5, -1}, {-1, 1, 1}};
+  m.triangles = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {7, 8, 9}};
+  const std::vector<Vec3> reference = m.positions;
+  MeshBvh bvh;
+  REQUIRE(build_bvh(m, bvh).ok());
+  std::vector<std::array<int, 2>> pairs;
+  find_self_intersections(bvh, pairs);
+  CHECK(pairs == std::vector<std::array<int, 2>>{{1, 3}});
+  REQUIRE(find_new_self_intersections(bvh, reference, pairs).ok());
+  CHECK(pairs.empty());  // nothing moved yet
+
+  m.positions[6] = Vec3(1, -0.2, -1);
+  REQUIRE(refit_bvh(m, bvh).ok());
+  find_self_intersections(bvh, pairs);
+  CHECK(pairs == std::vector<std::array<int, 2>>({{0, 2}, {1, 3}}));
+  REQUIRE(find_new_self_intersections(bvh, reference, pairs).ok());
+  CHECK(pairs == std::vector<std::array<int, 2>>{{0, 2}});
+  // Searched from listed triangles only.
+  const std::vector<int> old_one = {3}, moved_one = {2}, both = {0, 3};
+  REQUIRE(find_new_self_intersections(bvh, reference, pairs, &old_one).ok());
+  CHECK(pairs.empty());
+  REQUIRE(find_new_self_intersections(bvh, reference, pairs, &moved_one).ok());
+  CHECK(pairs == std::vector<std::array<int, 2>>{{0, 2}});
+  REQUIRE(find_new_self_intersections(bvh, reference, pairs, &both).ok());
+  CHECK(pairs == std::vector<std::array<int, 2>>{{0, 2}});
+  // Against its own positions nothing is new.
+  REQUIRE(find_new_self_intersections(bvh, m.positions, pairs).ok());
+  CHECK(pairs.empty());
+
+  // A reference of the wrong size or with a NaN is refused.
+  std::vector<Vec3> short_reference = reference;
+  short_reference.pop_back();
+  pairs = {{0, 1}};
+  CHECK(find_new_self_intersections(bvh, short_reference, pairs).code == ErrorCode::InvalidInput);
+  CHECK(pairs.empty());
+  std::vector<Vec3> nan_reference = reference;
+  nan_reference[3].y() = std::nan("");
+  CHECK(find_new_self_intersections(bvh, nan_reference, pairs).code == ErrorCode::InvalidInput);
+}
+
+TEST_CASE("self-intersections: a refit tree finds what a fresh tree finds", "[raycast]") {
+  // A torus and a sphere beside it, built once, then moved at random
+  // (shrunk, pushed through each other, vertices jittered) and refit: the
+  // full and the local searches equal those on a tree built afresh.
+  TriMesh m = merged(torus(48, 16, 1.0, 0.3), icosphere(2), Vec3(2.6, 0, 0));
+  const std::vector<Vec3> start = m.positions;
+  const int n_torus = 48 * 16;
+  MeshBvh refit;
+  REQUIRE(build_bvh(m, refit).ok());
+  uint64_t state = 12345;
+  auto uniform = [&]() {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(state >> 11) / 9007199254740992.0;
+  };
+  size_t crossings_seen = 0;
+  for (int trial = 0; trial < 6; ++trial) {
+    const Vec3 shift(-0.3 * trial, 0.05 * trial, 0);  // the sphere slides into the torus
+    const double jitter = 0.01 * trial;
+    for (size_t v = 0; v < m.positions.size(); ++v) {
+      m.positions[v] = start[v] + (static_cast<int>(v) >= n_torus ? shift : Vec3::Zero());
+      m.positions[v] += jitter * Vec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5);
+    }
+    REQUIRE(refit_bvh(m, refit).ok());
+    MeshBvh fresh;
+    REQUIRE(build_bvh(m, fresh).ok());
+    std::vector<std::array<int, 2>> a, b;
+    find_self_intersections(refit, a);
+    find_self_intersections(fresh, b);
+    CHECK(a == b);
+    CHECK(a == brute_force(m));
+    crossings_seen += a.size();
+    std::vector<int> listed;
+    for (int f = trial; f < m.num_triangles(); f += 7) listed.push_back(f);
+    find_intersections_with(refit, listed, a);
+    find_intersections_with(fresh, listed, b);
+    CHECK(a == b);
+    REQUIRE(find_new_self_intersections(refit, start, a).ok());
+    REQUIRE(find_new_self_intersections(fresh, start, b).ok());
+    CHECK(a == b);
+  }
+  CHECK(crossings_seen > 50);  // the moves did make crossings to compare
+}
