@@ -175,6 +175,30 @@ constexpr int kEyeCol0 = 2, kEyeCol1 = 6;     // eye opening: 4 quads wide, 1 hi
 constexpr int kMouthHalfWidth = 3;            // lip line spans columns -3..3
 constexpr int kEarCol0 = 12, kEarCol1 = 14;   // ear root: 2 quads wide, 6 high
 
+// The ear's rings inside its root wall, from the helix rim inwards (section
+// 8). scale: of the helix outline about kEarConchaCenter (1: the outline);
+// lift: along the head's normal (m), positive lifts fade out at the lobe.
+// The first ring is the rim, whose vertices are the ear landmarks.
+struct EarRing {
+  int count;     // vertices on the ring
+  double scale;  // of the helix outline about the concha's centre
+  double lift;   // out from the flap (m)
+};
+const EarRing kEarRings[] = {
+    {20, 1.00, 0.0},      // helix rim
+    {20, 0.84, 0.0025},   // helix lip, rolled outwards over the scapha
+    {16, 0.60, 0.0012},   // antihelix ridge
+    {8, 0.32, -0.0020},   // concha wall, sinking towards the head
+};
+// The concha's centre in the ear's frame (behind the root, up, out from the
+// head; m): in front of and below the ear's middle, as the bowl leads to the
+// ear canal. Its floor sinks kEarConchaFloorLift below the flap.
+const Vec3 kEarConchaCenter(0.004, -0.005, 0.0135);
+constexpr double kEarConchaFloorLift = -0.0045;
+// The wall ring (3.5 mm off the root) is moved this fraction of the way
+// towards the rim.
+constexpr double kEarWallTowardsRim = 0.2;
+
 const Vec3 kRayCenter(0, 0.010, -0.005);
 const Vec3 kNeckAxis(0, 0, -0.016);
 
@@ -247,6 +271,63 @@ class Builder {
       polygons.push_back({loop[k1], loop[k], ring[k], ring[k1]});
     }
     return ring;
+  }
+
+  // Joins an inner ring to an outer one whose faces on its other side walk
+  // outer[k] -> outer[k+1]; s: each vertex's place along its ring, rising
+  // with the index by less than 1 in all, both rings starting near 0. Quads where the
+  // counts match, otherwise a strip of triangles merging the two rings'
+  // edges in the order of their mid-places (the same on a mirrored pair of
+  // rings, whose places are 1 - s, as long as no two mid-places coincide).
+  // Returns the edges made between the rings (outer, inner). split: rings of
+  // the same count are joined by triangles whose diagonals all lean the same
+  // way (outer[k] - inner[k + 1] when forward, else outer[k + 1] - inner[k];
+  // a mirrored ring pair, indexed the other way round, takes the other), so
+  // every ring vertex gets 2 neighbours on each side: valence 6 where both
+  // sides are such strips. Without split: quads, split later by their better
+  // diagonal.
+  enum class Split { Quads, Forward, Backward };
+  std::vector<std::array<int, 2>> join_rings(const std::vector<int>& outer, const std::vector<double>& s_outer,
+                                             const std::vector<int>& inner, const std::vector<double>& s_inner,
+                                             Split split = Split::Quads) {
+    const int no = static_cast<int>(outer.size()), ni = static_cast<int>(inner.size());
+    std::vector<std::array<int, 2>> spokes;
+    if (no == ni) {
+      for (int k = 0; k < no; ++k) {
+        const int o0 = outer[k], o1 = outer[(k + 1) % no], i0 = inner[k], i1 = inner[(k + 1) % no];
+        spokes.push_back({o0, i0});
+        if (split == Split::Quads) {
+          polygons.push_back({o1, o0, i0, i1});
+        } else if (split == Split::Forward) {
+          polygons.push_back({o1, o0, i1});
+          polygons.push_back({o0, i0, i1});
+          spokes.push_back({o0, i1});
+        } else {
+          polygons.push_back({o1, o0, i0});
+          polygons.push_back({o1, i0, i1});
+          spokes.push_back({o1, i0});
+        }
+      }
+      return spokes;
+    }
+    auto mid = [](const std::vector<double>& s, int i) {
+      const double next = i + 1 < int(s.size()) ? s[i + 1] : s[0] + 1.0;
+      return 0.5 * (s[i] + next);
+    };
+    int i = 0, j = 0;
+    spokes.push_back({outer[0], inner[0]});
+    while (i < no || j < ni) {
+      if (j == ni || (i < no && mid(s_outer, i) < mid(s_inner, j))) {
+        polygons.push_back({outer[(i + 1) % no], outer[i], inner[j % ni]});
+        ++i;
+      } else {
+        polygons.push_back({outer[i % no], inner[j], inner[(j + 1) % ni]});
+        ++j;
+      }
+      spokes.push_back({outer[i % no], inner[j % ni]});
+    }
+    spokes.pop_back();  // the last spoke is the first again
+    return spokes;
   }
 
   // Closes a hole whose loop is made of two chains walking from one end to
@@ -648,7 +729,22 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
     b.close_between(top, bottom);
   }
 
-  // --- 8. ears: the root patch extruded into a flap -------------------------
+  // --- 8. ears ----------------------------------------------------------------
+  // The asset's ear (options.ring_ear false): the 2 x 6 root patch extruded
+  // into a plate with a rim; its bowl is a vertical strip of quads that
+  // Butterfly refines into horizontal ripples (a washboard), and fits look
+  // pasted flat. The ring ear (options.ring_ear, docs/generic_head.md "A
+  // ring ear"), for jeong2002 Sec. 4's ear with enough control vertices for
+  // helix, antihelix, concha and lobe: every part is a closed ring round the
+  // concha, so rows run round the ear as its ridges do:
+  //   root (the 16 grid vertices around the hole in the head) -> wall (16,
+  //   just off the head) -> helix rim -> helix lip (rolled outwards) ->
+  //   antihelix -> concha wall -> concha floor (1 vertex); counts in kEarRings.
+  // Rings of different counts are joined by triangle strips (Builder::
+  // join_rings), so valences stay 5-7 off the root and the floor is the only
+  // extraordinary vertex (valence 8). Each ring is the helix outline scaled
+  // about the concha's centre (kEarConchaCenter) with a lift along the
+  // head's normal; the lobe (the outline's bottom) is a flat flap.
   std::map<int, std::vector<int>> ear_vertices, ear_rim;
   std::map<int, std::vector<std::array<int, 2>>> ear_binding;
   for (int side : {1, -1}) {
@@ -676,21 +772,120 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
       half_up = std::max(half_up, std::abs(d.dot(up)));
     }
     auto at = [&](double bk, double u, double outward) -> Vec3 { return root + bk * back + u * up + outward * n; };
-    // The helix (outer rim) outline, by the angle of each loop vertex around the root.
-    auto helix = [&](double w, double out_extra, double scale) -> Vec3 {
+    if (!options.ring_ear) {
+      // The helix (outer rim) outline, by the angle of each loop vertex around the root.
+      auto helix = [&](double w, double out_extra, double scale) -> Vec3 {
+        // A superellipse: rounder than an ellipse, so the ear is not pointed.
+        auto soft = [](double t) { return std::copysign(std::pow(std::abs(t), 0.7), t); };
+        const double cw = soft(std::cos(w)), sw = soft(std::sin(w));
+        const double lobe = std::max(0.0, -sw);  // the lobe hangs a little behind the root
+        const double bk = 0.007 + scale * 0.017 * cw + 0.005 * lobe * lobe;
+        const double u = -0.002 + scale * (sw > 0 ? 0.034 : 0.031) * sw;
+        const double outward = 0.008 + 0.011 * (0.5 + 0.5 * cw) + 0.003 * lobe + out_extra;
+        return at(bk, u, outward);
+      };
+      std::vector<Vec3> ring_a, ring_b, ring_c;
+      // Each root vertex maps to the point of the helix outline at the same
+      // fraction of the perimeter, both measured from the top in the same
+      // direction: the walls between root and rim do not twist, and the
+      // outline is sampled evenly (the root's angles bunch up at its short top
+      // and bottom edges, which would make a pointed ear).
+      const int n_loop = static_cast<int>(loop.size());
+      std::vector<double> root_angle(n_loop);
+      int top_k = 0;
+      for (int k = 0; k < n_loop; ++k) {
+        const Vec3 d = b.positions[loop[k]] - root;
+        root_angle[k] = std::atan2(d.dot(up) / half_up, d.dot(back) / half_back);
+        if (std::cos(root_angle[k] - kPi / 2) > std::cos(root_angle[top_k] - kPi / 2)) top_k = k;
+      }
+      const double turn = std::sin(root_angle[(top_k + 1) % n_loop] - root_angle[top_k]) > 0 ? 1 : -1;
+      std::vector<double> root_fraction(n_loop, 0.0);
+      double root_length = 0;
+      for (int i = 1; i <= n_loop; ++i) {
+        const int k0 = (top_k + i - 1) % n_loop, k1 = (top_k + i) % n_loop;
+        root_length += (b.positions[loop[k1]] - b.positions[loop[k0]]).norm();
+        if (i < n_loop) root_fraction[k1] = root_length;
+      }
+      // Arc length of the outline, always measured counter-clockwise from the
+      // top so that both ears (whose loops turn opposite ways) sample the same points.
+      const int samples = 720;
+      std::vector<double> outline_length(samples + 1, 0.0);
+      for (int i = 1; i <= samples; ++i)
+        outline_length[i] = outline_length[i - 1] + (helix(kPi / 2 + 2 * kPi * i / samples, 0, 1.0) -
+                                                     helix(kPi / 2 + 2 * kPi * (i - 1) / samples, 0, 1.0)).norm();
+      std::vector<double> angle(n_loop);
+      for (int k = 0; k < n_loop; ++k) {
+        double f = root_fraction[k] / root_length;
+        if (turn < 0 && f > 0) f = 1 - f;
+        const double target = f * outline_length[samples];
+        const int i = std::clamp(static_cast<int>(std::upper_bound(outline_length.begin(), outline_length.end(), target) -
+                                                  outline_length.begin()), 1, samples);
+        const double t = (target - outline_length[i - 1]) / (outline_length[i] - outline_length[i - 1]);
+        const double w = kPi / 2 + 2 * kPi * (i - 1 + t) / samples;
+        const Vec3 d = b.positions[loop[k]] - root;
+        angle[k] = w;
+        ring_a.push_back(at(1.04 * d.dot(back), 1.04 * d.dot(up), d.dot(n) + 0.0035));
+        ring_b.push_back(helix(w, 0, 1.0));
+        ring_c.push_back(helix(w, 0.0040, 0.82));
+      }
+      VertexInfo vi;
+      vi.part = Part::Ear;
+      vi.side = side;
+      const std::vector<int> a_ids = b.extrude(loop, ring_a, vi);
+      const std::vector<int> b_ids = b.extrude(a_ids, ring_b, vi);
+      const std::vector<int> c_ids = b.extrude(b_ids, ring_c, vi);
+      std::map<int, int> to_cap;
+      for (size_t k = 0; k < loop.size(); ++k) to_cap[loop[k]] = c_ids[k];
+      // The patch's inner vertices become the bowl (concha) and the antihelix.
+      for (int v : patch_ids) {
+        if (to_cap.count(v)) continue;
+        const Vec3 d = b.positions[v] - root;
+        const double u = d.dot(up) / half_up;  // -1 .. 1
+        b.positions[v] = at(0.008, -0.001 + 0.022 * u, 0.006 + 0.005 * u * u + 0.004 * std::max(0.0, u));
+        b.info[v].part = Part::Ear;
+        b.info[v].side = side;
+        ear_vertices[side].push_back(v);
+      }
+      for (auto q : ear_patch[side]) {
+        for (int& v : q)
+          if (to_cap.count(v)) v = to_cap[v];
+        b.polygons.push_back(q);
+      }
+      for (int v : loop) ear_vertices[side].push_back(v);
+      for (auto* ids : {&a_ids, &b_ids, &c_ids}) ear_vertices[side].insert(ear_vertices[side].end(), ids->begin(), ids->end());
+      // Helix landmarks and the binding edges spanning the hollow behind the ear.
+      ear_rim[side] = b_ids;
+      for (size_t k = 0; k < loop.size(); ++k) {
+        if (std::cos(angle[k]) <= 0.2) continue;  // back half only
+        ear_binding[side].push_back({loop[k], a_ids[k]});
+        ear_binding[side].push_back({a_ids[k], b_ids[k]});
+        const VertexInfo& li = b.info[loop[k]];
+        if (li.part == Part::Grid && li.col == wrap(c1)) {
+          const int behind = g(li.row, c1 + side);
+          ear_binding[side].push_back({loop[k], behind});
+        }
+      }
+      continue;
+    }
+    // The helix outline (behind the root, up, out from the head) at angle w
+    // around the ear: w = 90 deg at the top, 0 at the back, 180 at the front.
+    auto soft = [](double t) { return std::copysign(std::pow(std::abs(t), 0.7), t); };
+    auto lobe_of = [&](double w) { return std::max(0.0, -soft(std::sin(w))); };
+    auto outline = [&](double w) -> Vec3 {
       // A superellipse: rounder than an ellipse, so the ear is not pointed.
-      auto soft = [](double t) { return std::copysign(std::pow(std::abs(t), 0.7), t); };
       const double cw = soft(std::cos(w)), sw = soft(std::sin(w));
       const double lobe = std::max(0.0, -sw);  // the lobe hangs a little behind the root
-      const double bk = 0.007 + scale * 0.017 * cw + 0.005 * lobe * lobe;
-      const double u = -0.002 + scale * (sw > 0 ? 0.034 : 0.031) * sw;
-      const double outward = 0.008 + 0.011 * (0.5 + 0.5 * cw) + 0.003 * lobe + out_extra;
-      return at(bk, u, outward);
+      return {0.007 + 0.017 * cw + 0.005 * lobe * lobe, -0.002 + (sw > 0 ? 0.034 : 0.031) * sw,
+              0.008 + 0.011 * (0.5 + 0.5 * cw) + 0.003 * lobe};
     };
-    std::vector<Vec3> ring_a, ring_b, ring_c;
-    // Each root vertex maps to the point of the helix outline at the same
-    // fraction of the perimeter, both measured from the top in the same
-    // direction: the walls between root and rim do not twist, and the
+    // A ring: the outline scaled about the concha's centre, lifted along n.
+    auto ring_point = [&](double w, double scale, double lift) -> Vec3 {
+      const Vec3 o = kEarConchaCenter + scale * (outline(w) - kEarConchaCenter);
+      return at(o.x(), o.y(), o.z() + lift);
+    };
+    // Each root vertex's place along the loop (arc length from the top, in
+    // the loop's order) and the outline angle at the same fraction of the
+    // outline's length: the walls between root and rim do not twist, and the
     // outline is sampled evenly (the root's angles bunch up at its short top
     // and bottom edges, which would make a pointed ear).
     const int n_loop = static_cast<int>(loop.size());
@@ -702,72 +897,121 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
       if (std::cos(root_angle[k] - kPi / 2) > std::cos(root_angle[top_k] - kPi / 2)) top_k = k;
     }
     const double turn = std::sin(root_angle[(top_k + 1) % n_loop] - root_angle[top_k]) > 0 ? 1 : -1;
-    std::vector<double> root_fraction(n_loop, 0.0);
+    std::rotate(loop.begin(), loop.begin() + top_k, loop.end());  // the top first
+    std::vector<double> loop_s(n_loop, 0.0);
     double root_length = 0;
-    for (int i = 1; i <= n_loop; ++i) {
-      const int k0 = (top_k + i - 1) % n_loop, k1 = (top_k + i) % n_loop;
-      root_length += (b.positions[loop[k1]] - b.positions[loop[k0]]).norm();
-      if (i < n_loop) root_fraction[k1] = root_length;
+    for (int k = 1; k <= n_loop; ++k) {
+      root_length += (b.positions[loop[k % n_loop]] - b.positions[loop[k - 1]]).norm();
+      if (k < n_loop) loop_s[k] = root_length;
     }
+    for (double& s : loop_s) s /= root_length;
     // Arc length of the outline, always measured counter-clockwise from the
     // top so that both ears (whose loops turn opposite ways) sample the same points.
     const int samples = 720;
     std::vector<double> outline_length(samples + 1, 0.0);
     for (int i = 1; i <= samples; ++i)
-      outline_length[i] = outline_length[i - 1] + (helix(kPi / 2 + 2 * kPi * i / samples, 0, 1.0) -
-                                                   helix(kPi / 2 + 2 * kPi * (i - 1) / samples, 0, 1.0)).norm();
-    std::vector<double> angle(n_loop);
-    for (int k = 0; k < n_loop; ++k) {
-      double f = root_fraction[k] / root_length;
+      outline_length[i] = outline_length[i - 1] + (outline(kPi / 2 + 2 * kPi * i / samples) -
+                                                   outline(kPi / 2 + 2 * kPi * (i - 1) / samples)).norm();
+    auto angle_at = [&](double s) {  // s: fraction along a ring in the loop's order
+      double f = s;
       if (turn < 0 && f > 0) f = 1 - f;
       const double target = f * outline_length[samples];
       const int i = std::clamp(static_cast<int>(std::upper_bound(outline_length.begin(), outline_length.end(), target) -
                                                 outline_length.begin()), 1, samples);
       const double t = (target - outline_length[i - 1]) / (outline_length[i] - outline_length[i - 1]);
-      const double w = kPi / 2 + 2 * kPi * (i - 1 + t) / samples;
-      const Vec3 d = b.positions[loop[k]] - root;
-      angle[k] = w;
-      ring_a.push_back(at(1.04 * d.dot(back), 1.04 * d.dot(up), d.dot(n) + 0.0035));
-      ring_b.push_back(helix(w, 0, 1.0));
-      ring_c.push_back(helix(w, 0.0040, 0.82));
-    }
+      return kPi / 2 + 2 * kPi * (i - 1 + t) / samples;
+    };
     VertexInfo vi;
     vi.part = Part::Ear;
     vi.side = side;
-    const std::vector<int> a_ids = b.extrude(loop, ring_a, vi);
-    const std::vector<int> b_ids = b.extrude(a_ids, ring_b, vi);
-    const std::vector<int> c_ids = b.extrude(b_ids, ring_c, vi);
-    std::map<int, int> to_cap;
-    for (size_t k = 0; k < loop.size(); ++k) to_cap[loop[k]] = c_ids[k];
-    // The patch's inner vertices become the bowl (concha) and the antihelix.
-    for (int v : patch_ids) {
-      if (to_cap.count(v)) continue;
-      const Vec3 d = b.positions[v] - root;
-      const double u = d.dot(up) / half_up;  // -1 .. 1
-      b.positions[v] = at(0.008, -0.001 + 0.022 * u, 0.006 + 0.005 * u * u + 0.004 * std::max(0.0, u));
-      b.info[v].part = Part::Ear;
-      b.info[v].side = side;
-      ear_vertices[side].push_back(v);
-    }
-    for (auto q : ear_patch[side]) {
-      for (int& v : q)
-        if (to_cap.count(v)) v = to_cap[v];
-      b.polygons.push_back(q);
-    }
-    for (int v : loop) ear_vertices[side].push_back(v);
-    for (auto* ids : {&a_ids, &b_ids, &c_ids}) ear_vertices[side].insert(ear_vertices[side].end(), ids->begin(), ids->end());
-    // Helix landmarks and the binding edges spanning the hollow behind the ear.
-    ear_rim[side] = b_ids;
-    for (size_t k = 0; k < loop.size(); ++k) {
-      if (std::cos(angle[k]) <= 0.2) continue;  // back half only
-      ear_binding[side].push_back({loop[k], a_ids[k]});
-      ear_binding[side].push_back({a_ids[k], b_ids[k]});
-      const VertexInfo& li = b.info[loop[k]];
-      if (li.part == Part::Grid && li.col == wrap(c1)) {
-        const int behind = g(li.row, c1 + side);
-        ear_binding[side].push_back({loop[k], behind});
+    // The root patch's inner grid vertices are reused for the concha, so no
+    // index is left unused.
+    std::vector<int> spare;
+    for (int v : patch_ids)
+      if (std::find(loop.begin(), loop.end(), v) == loop.end()) spare.push_back(v);
+    auto ear_vertex = [&](const Vec3& p) {
+      if (spare.empty()) return b.add(p, vi);
+      const int v = spare.back();
+      spare.pop_back();
+      b.positions[v] = p;
+      b.info[v] = vi;
+      return v;
+    };
+    // A ring's places by the angle about the concha's centre in the ear's
+    // plane, from the outline's top, in the loop's order.
+    auto angle_about_concha = [&](const std::vector<int>& ring) {
+      auto angle = [&](int v) {
+        const Vec3 d = b.positions[v] - root;
+        return std::atan2(d.dot(up) - kEarConchaCenter.y(), d.dot(back) - kEarConchaCenter.x());
+      };
+      const Vec3 top = outline(kPi / 2);
+      const double start = std::atan2(top.y() - kEarConchaCenter.y(), top.x() - kEarConchaCenter.x());
+      std::vector<double> place;
+      for (int v : ring) {
+        double t = turn * (angle(v) - start) / (2 * kPi);
+        t -= std::floor(t);
+        place.push_back(place.empty() && t > 0.5 ? t - 1 : t);
       }
+      return place;
+    };
+    std::vector<int> wall;
+    std::vector<double> wall_angle(n_loop);
+    for (int k = 0; k < n_loop; ++k) {
+      const Vec3 d = b.positions[loop[k]] - root;
+      wall_angle[k] = angle_at(loop_s[k]);
+      const Vec3 off_root = at(1.04 * d.dot(back), 1.04 * d.dot(up), d.dot(n) + 0.0035);
+      wall.push_back(ear_vertex(off_root + kEarWallTowardsRim * (ring_point(wall_angle[k], 1.0, 0.0) - off_root)));
     }
+    b.join_rings(loop, loop_s, wall, loop_s);
+    std::vector<int> outer = wall;
+    std::vector<double> outer_s = loop_s, outer_angle = wall_angle;
+    std::vector<std::array<int, 2>> rim_spokes;
+    for (const EarRing& spec : kEarRings) {
+      std::vector<int> ring;
+      std::vector<double> s(spec.count), angle(spec.count);
+      for (int k = 0; k < spec.count; ++k) {
+        s[k] = double(k) / spec.count;
+        angle[k] = angle_at(s[k]);
+        const double curl = 1 - lobe_of(angle[k]);  // the lobe is flat
+        ring.push_back(ear_vertex(ring_point(angle[k], spec.scale, spec.lift * (spec.lift > 0 ? curl : 1.0))));
+      }
+      const bool rim = &spec == &kEarRings[0];
+      // Wall to rim: the wall follows the root's rectangle, the rim the
+      // outline; merged by their places along the ring, the spokes fanned
+      // out across the lobe (5 deg slivers). Merged by the angle about the
+      // concha's centre instead, they run out from it, as the rings do.
+      const auto spokes = rim ? b.join_rings(outer, angle_about_concha(outer), ring, angle_about_concha(ring))
+                              : b.join_rings(outer, outer_s, ring, s, turn > 0 ? Builder::Split::Forward : Builder::Split::Backward);
+      if (rim) {
+        ear_rim[side] = ring;
+        // Binding edges over the hollow behind the ear: the wall's spokes
+        // to the rim on the back half.
+        for (const auto& e : spokes) {
+          const auto ko = std::find(outer.begin(), outer.end(), e[0]) - outer.begin();
+          const auto ki = std::find(ring.begin(), ring.end(), e[1]) - ring.begin();
+          if (std::cos(outer_angle[ko]) > 0.2 && std::cos(angle[ki]) > 0.2) rim_spokes.push_back(e);
+        }
+      }
+      ear_vertices[side].insert(ear_vertices[side].end(), ring.begin(), ring.end());
+      outer = ring;
+      outer_s = s;
+      outer_angle = angle;
+    }
+    const int floor = ear_vertex(ring_point(kPi / 2, 0.0, kEarConchaFloorLift));
+    for (size_t k = 0; k < outer.size(); ++k) b.polygons.push_back({outer[(k + 1) % outer.size()], outer[k], floor});
+    ear_vertices[side].push_back(floor);
+    for (int v : loop) ear_vertices[side].push_back(v);
+    ear_vertices[side].insert(ear_vertices[side].end(), wall.begin(), wall.end());
+    // Binding edges (Sec. 4.2) spanning the hollow behind the ear, where
+    // scans have no data: root -> wall -> rim on the back half, and the root
+    // to the grid vertex behind it.
+    for (int k = 0; k < n_loop; ++k) {
+      if (std::cos(wall_angle[k]) <= 0.2) continue;  // back half only
+      ear_binding[side].push_back({loop[k], wall[k]});
+      const VertexInfo& li = b.info[loop[k]];
+      if (li.part == Part::Grid && li.col == wrap(c1)) ear_binding[side].push_back({loop[k], g(li.row, c1 + side)});
+    }
+    for (const auto& e : rim_spokes) ear_binding[side].push_back(e);
   }
 
   // --- 9. relaxation of the surface grid ---------------------------------------
@@ -937,6 +1181,10 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
   }
   R["ear_left"] = ear_vertices[1];
   R["ear_right"] = ear_vertices[-1];
+  if (options.ring_ear) {  // the helix rims (the asset's plate ear does not name them)
+    R["ear_rim_left"] = ear_rim[1];
+    R["ear_rim_right"] = ear_rim[-1];
+  }
   R["ears"] = ear_vertices[1];
   R["ears"].insert(R["ears"].end(), ear_vertices[-1].begin(), ear_vertices[-1].end());
   R["eye_rim_left"] = ann.eye_left.rim;

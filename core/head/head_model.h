@@ -59,6 +59,8 @@ struct HeadAnnotations {
   Vec3 look = Vec3::UnitZ();
   Vec3 up = Vec3::UnitY();
   // Named vertex sets: "face", "scalp", "ears", "ear_left", "ear_right",
+  // "ear_rim_left", "ear_rim_right" (the helix rims, within the ears; only
+  // from the builder's ring ear),
   // "neck", "lips", "upper_lip", "lower_lip", "eye_rim_left", "eye_rim_right",
   // "nose", "brow", "jaw", "chin", "cheeks". Sets may overlap. "lips" holds
   // both lips, the mouth corners and the mouth bag; "upper_lip"/"lower_lip"
