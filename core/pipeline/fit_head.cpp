@@ -196,11 +196,14 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
   TriMesh level;
   level.triangles = mr.triangles(K);
   std::vector<std::array<int, 2>> pairs;
+  // One SAH tree for all searches, refit after each step: the steps move
+  // vertices by a fraction of a percent of the diagonal, so the refit boxes
+  // stay tight (James: up to seven fresh builds of level 2 cost ~44 ms).
   MeshBvh bvh;
   auto new_pairs = [&]() -> Status {
     Status r = level_positions(control.positions, level.positions);
     if (!r) return r;
-    r = build_bvh(level, bvh);
+    r = bvh.empty() ? build_bvh(level, bvh) : refit_bvh(level, bvh);
     if (!r) return r;
     return find_new_self_intersections(bvh, reference_level, pairs);
   };
