@@ -2,6 +2,7 @@
 #include "align/face_alignment.h"
 
 #include "common/parallel.h"
+#include "common/sampling.h"
 #include "mesh/geometry.h"
 #include "raycast/bvh.h"
 
@@ -10,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <numeric>
 #include <random>
 
 namespace lk {
@@ -125,7 +127,9 @@ IcpRun run_icp(const MeshBvh& tree, const std::vector<Vec3>& samples, Similarity
     const Eigen::Matrix4d M = Eigen::umeyama(src, dst, true);
     Similarity next;
     const Mat3 sR = M.topLeftCorner<3, 3>();
-    next.s = std::cbrt(sR.determinant());
+    // The scale as a column's length (sqrt is exact in IEEE arithmetic;
+    // libm's cbrt of the determinant differs between glibc and wasm's musl).
+    next.s = sR.col(0).norm();
     if (!(next.s > 0) || !std::isfinite(next.s)) break;
     next.R = sR / next.s;
     next.t = M.topRightCorner<3, 1>();
@@ -226,18 +230,84 @@ struct Searcher {
   }
 };
 
-std::vector<Vec3> subset(const std::vector<Vec3>& points, int n, std::uint32_t seed) {
+// n random points of the cloud (all when it has no more), the same subset
+// as std::shuffle under libstdc++ gave before, on any standard library.
+std::vector<Vec3> random_subset(const std::vector<Vec3>& points, int n, std::uint32_t seed) {
   std::vector<Vec3> out = points;
   if (static_cast<int>(out.size()) > n) {
     std::mt19937 rng(seed);
-    std::shuffle(out.begin(), out.end(), rng);
+    mt19937_shuffle(out.begin(), out.end(), rng);
     out.resize(n);
   }
   return out;
 }
 
-Mat3 yaw(double degrees) {
-  return Eigen::AngleAxisd(degrees * 3.14159265358979323846 / 180.0, Vec3::UnitY()).toRotationMatrix();
+// About n points of the cloud, stratified (common/sampling.h).
+std::vector<Vec3> subset(const std::vector<Vec3>& points, int n, std::uint64_t seed) {
+  std::vector<Vec3> out;
+  for (int i : stratified_sample(points, n, seed)) out.push_back(points[i]);
+  return out;
+}
+
+// cos and sin of an angle in degrees; exact for multiples of 45 degrees (the
+// starts), where libm's sin and cos of a rounded pi/4 may differ in the last
+// bit between native and wasm.
+void cos_sin_deg(double degrees, double& c, double& s) {
+  const double eighths = degrees / 45.0;
+  if (eighths == std::floor(eighths) && std::fabs(eighths) < 1e6) {
+    const long k = ((static_cast<long>(eighths) % 8) + 8) % 8;
+    const double h = std::sqrt(0.5);
+    const double cs[8] = {1, h, 0, -h, -1, -h, 0, h};
+    c = cs[k];
+    s = cs[(k + 6) % 8];
+    return;
+  }
+  const double r = degrees * 3.14159265358979323846 / 180.0;
+  c = std::cos(r);
+  s = std::sin(r);
+}
+
+// Rotation by `degrees` about the unit axis (Rodrigues).
+Mat3 rotation_about(const Vec3& axis, double degrees) {
+  double c, s;
+  cos_sin_deg(degrees, c, s);
+  Mat3 K;
+  K << 0, -axis.z(), axis.y(), axis.z(), 0, -axis.x(), -axis.y(), axis.x(), 0;
+  return Mat3::Identity() + s * K + (1 - c) * (K * K);
+}
+
+Mat3 yaw(double degrees) { return rotation_about(Vec3::UnitY(), degrees); }
+
+double rotation_angle_deg(const Mat3& a, const Mat3& b) {
+  const double c = 0.5 * ((a.transpose() * b).trace() - 1);
+  return std::acos(std::clamp(c, -1.0, 1.0)) * 180.0 / 3.14159265358979323846;
+}
+
+// Indices of the runs (those with inliers) in order of score, then index.
+std::vector<int> ranked(const std::vector<IcpRun>& runs, const std::vector<char>& valid) {
+  std::vector<int> order;
+  for (int k = 0; k < static_cast<int>(runs.size()); ++k)
+    if (valid[k] && runs[k].inliers > 0) order.push_back(k);
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    return runs[a].score < runs[b].score || (runs[a].score == runs[b].score && a < b);
+  });
+  return order;
+}
+
+// Up to `count` runs from `order` whose results differ from those before.
+std::vector<int> distinct_best(const std::vector<IcpRun>& runs, const std::vector<int>& order, int count,
+                               double distinct_deg, double distinct_scale) {
+  std::vector<int> picked;
+  for (int k : order) {
+    if (static_cast<int>(picked.size()) >= count) break;
+    bool distinct = true;
+    for (int j : picked)
+      if (rotation_angle_deg(runs[k].T.R, runs[j].T.R) <= distinct_deg &&
+          std::fabs(runs[k].T.s / runs[j].T.s - 1) <= distinct_scale)
+        distinct = false;
+    if (distinct) picked.push_back(k);
+  }
+  return picked;
 }
 
 }  // namespace
@@ -289,9 +359,32 @@ Status align_face(const TriMesh& generic, const HeadAnnotations& ann, const Poin
       return Status::error(ErrorCode::Cancelled, "align_face: cancelled");
   }
   if (!have) return Status::error(ErrorCode::NotAHead, "align_face: no scan point corresponds to the head");
-  best = run_icp(search.tree, subset(cloud.positions, o.max_points, o.seed + 1), best.T, o, search.clamp, true);
-  out.iterations += best.iterations;
-  if (!(best.inliers > 0)) return Status::error(ErrorCode::NotAHead, "align_face: no scan point corresponds to the head");
+  // Refine the best distinct coarse results, polish each on the (nearly)
+  // full cloud and keep the one that fits it best: the choice between
+  // nearly equal basins is made on the full cloud, and each polish ends
+  // near its basin's minimum whatever the samples were. (Scoring the
+  // refined results on the full cloud and polishing only the best chose
+  // different basins for different seeds: James 3 mm apart.)
+  const std::vector<int> candidates = distinct_best(runs, ranked(runs, started), std::max(1, o.refine_candidates),
+                                                    o.distinct_deg, o.distinct_scale);
+  const std::vector<Vec3> refine_set = subset(cloud.positions, o.max_points, o.seed + 1ull);
+  const std::vector<Vec3> final_set = subset(cloud.positions, o.final_points, o.seed + 2ull);
+  FaceAlignOptions polish_options = o;
+  polish_options.relative_tolerance = o.polish_tolerance;
+  have = false;
+  for (size_t c = 0; c < candidates.size(); ++c) {
+    const IcpRun refined = run_icp(search.tree, refine_set, runs[candidates[c]].T, o, search.clamp, true);
+    const IcpRun polished = run_icp(search.tree, final_set, refined.T, polish_options, search.clamp, true);
+    out.iterations += refined.iterations + polished.iterations;
+    if (polished.inliers > 0 && (!have || polished.score < best.score)) {
+      best = polished;
+      have = true;
+    }
+    if (!report(progress, "align", 0.7 + 0.3 * (c + 1) / candidates.size()))
+      return Status::error(ErrorCode::Cancelled, "align_face: cancelled");
+  }
+  if (!have || !(best.inliers > 0))
+    return Status::error(ErrorCode::NotAHead, "align_face: no scan point corresponds to the head");
   out.scale = best.T.s;
   out.rotation = best.T.R;
   out.linear = best.T.s * best.T.R * search.facing;
@@ -328,7 +421,8 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
   out = OrientationGuess{};
   Status st = check_cloud(cloud, "guess_orientation");
   if (!st) return st;
-  if (!(o.better_ratio > 0 && o.better_ratio <= 1) || o.points < kMinPoints || o.iterations < 1)
+  if (!(o.better_ratio > 0 && o.better_ratio <= 1) || o.points < kMinPoints || o.iterations < 1 ||
+      o.final_points < kMinPoints || o.candidates < 1)
     return Status::error(ErrorCode::InvalidInput, "guess_orientation: an option is out of range");
   if (generic.triangles.empty())
     return Status::error(ErrorCode::Empty, "guess_orientation: the generic head has no triangles");
@@ -337,7 +431,11 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
   fo.max_iterations = o.iterations;
   st = search.build(generic, ann, cloud, fo.score_clamp_fraction);
   if (!st) return st;
-  const std::vector<Vec3> samples = subset(cloud.positions, o.points, fo.seed);
+  // Random (not stratified) coarse samples: the given orientation's score
+  // on them decides whether the search can stop (accept_given_fraction),
+  // and stratified samples weigh the neck and the back of a synthetic head
+  // more, which made every whole-head fit run all 48 starts (+1.6 s CPU).
+  const std::vector<Vec3> samples = random_subset(cloud.positions, o.points, o.seed);
   // +y first: its first yaw is the given orientation (see accept_given_fraction).
   const std::vector<Vec3> axes = {Vec3::UnitY(), Vec3::UnitX(), -Vec3::UnitX(), -Vec3::UnitY(),
                                   Vec3::UnitZ(), -Vec3::UnitZ()};
@@ -357,7 +455,7 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
     const Vec3& up = axes[start / kYaws];
     // A facing axis perpendicular to up, then yaws about up in 45 degree steps.
     const Vec3 look0 = std::fabs(up.z()) < 0.5 ? Vec3(Vec3::UnitZ()) : Vec3(Vec3::UnitX());
-    const Vec3 look = Eigen::AngleAxisd((start % kYaws) * 3.14159265358979323846 / 4, up) * look0;
+    const Vec3 look = rotation_about(up, 45.0 * (start % kYaws)) * look0;
     Mat3 Q;  // cloud -> candidate upright frame
     Q.row(0) = up.cross(look).transpose();
     Q.row(1) = up.transpose();
@@ -366,18 +464,39 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
     ran[start] = search.start(samples, Q, 1.0, T0);
     if (ran[start]) runs[start] = run_icp(search.tree, samples, T0, fo, search.clamp, false);
   };
-  for (int start = 0; start < num_starts; ++start) {
-    if (start == 0) run_start(0, 0);
-    if (start == 1) parallel_for(1, num_starts, 1, run_start);
-    if (!report(progress, "orientation", (start + 1) / double(num_starts)))
-      return Status::error(ErrorCode::Cancelled, "guess_orientation: cancelled");
-    if (!ran[start]) continue;
-    const IcpRun& run = runs[start];
+  const auto is_consistent = [&](const IcpRun& run) {
+    return angle_deg(run.T.R * Vec3::UnitY(), Vec3::UnitY()) <= o.up_tolerance_deg &&
+           angle_deg(run.T.R * Vec3::UnitZ(), Vec3::UnitZ()) <= o.facing_tolerance_deg;
+  };
+  run_start(0, 0);
+  if (!report(progress, "orientation", 0.5 / num_starts))
+    return Status::error(ErrorCode::Cancelled, "guess_orientation: cancelled");
+  if (ran[0] && runs[0].inliers > 0 && is_consistent(runs[0]) &&
+      std::sqrt(runs[0].score) < o.accept_given_fraction * diagonal) {
+    out.score_given = out.score_best = runs[0].score;
+    return Status::success();  // up +y, facing +z, identity rotation, differs = false
+  }
+  parallel_for(1, num_starts, 1, run_start);
+  if (!report(progress, "orientation", 0.7))
+    return Status::error(ErrorCode::Cancelled, "guess_orientation: cancelled");
+  // The best distinct results and the best consistent one are scored on
+  // the (nearly) full cloud, where the decision is made; the best is
+  // polished there, so that its facing does not depend on the 600 samples.
+  const std::vector<int> order = ranked(runs, ran);
+  if (order.empty()) return Status::error(ErrorCode::NotAHead, "guess_orientation: no orientation could be aligned");
+  std::vector<int> picked = distinct_best(runs, order, o.candidates, fo.distinct_deg, fo.distinct_scale);
+  for (int k : order)
+    if (is_consistent(runs[k])) {
+      if (std::find(picked.begin(), picked.end(), k) == picked.end()) picked.push_back(k);
+      break;
+    }
+  const std::vector<Vec3> dense = subset(cloud.positions, o.final_points, o.seed + 1ull);
+  FaceAlignOptions score_only = fo;
+  score_only.max_iterations = 1;  // (run_icp's first iteration scores its start)
+  for (size_t c = 0; c < picked.size(); ++c) {
+    const IcpRun run = run_icp(search.tree, dense, runs[picked[c]].T, score_only, search.clamp, true);
     if (!(run.inliers > 0)) continue;
-    const Vec3 run_up = run.T.R * Vec3::UnitY(), run_facing = run.T.R * Vec3::UnitZ();
-    const bool consistent = angle_deg(run_up, Vec3::UnitY()) <= o.up_tolerance_deg &&
-                            angle_deg(run_facing, Vec3::UnitZ()) <= o.facing_tolerance_deg;
-    if (consistent && (!have_given || run.score < out.score_given)) {
+    if (is_consistent(run) && (!have_given || run.score < out.score_given)) {
       out.score_given = run.score;
       have_given = true;
     }
@@ -385,16 +504,23 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
       best = run;
       have_best = true;
     }
-    if (start == 0 && consistent && std::sqrt(run.score) < o.accept_given_fraction * diagonal) {
-      out.score_given = out.score_best = run.score;
-      return Status::success();  // up +y, facing +z, identity rotation, differs = false
+  }
+  if (have_best) {
+    FaceAlignOptions polish_options = fo;
+    polish_options.max_iterations = 4 * o.iterations;
+    polish_options.relative_tolerance = 0.1 * fo.polish_tolerance;
+    const IcpRun polished = run_icp(search.tree, dense, best.T, polish_options, search.clamp, true);
+    if (polished.inliers > 0) {
+      best = polished;
+      if (is_consistent(best) && best.score < out.score_given) out.score_given = best.score;
     }
   }
+  if (!report(progress, "orientation", 1.0))
+    return Status::error(ErrorCode::Cancelled, "guess_orientation: cancelled");
   if (!have_best) return Status::error(ErrorCode::NotAHead, "guess_orientation: no orientation could be aligned");
   out.score_best = best.score;
   const Vec3 facing = best.T.R * Vec3::UnitZ(), up = best.T.R * Vec3::UnitY();
-  const bool consistent = angle_deg(up, Vec3::UnitY()) <= o.up_tolerance_deg &&
-                          angle_deg(facing, Vec3::UnitZ()) <= o.facing_tolerance_deg;
+  const bool consistent = is_consistent(best);
   out.differs = !consistent && (!have_given || best.score < o.better_ratio * out.score_given);
   out.up = snap(up, o.snap_deg);
   // Facing: perpendicular to the (snapped) up, then snapped, then made

@@ -72,9 +72,25 @@ struct FaceAlignOptions {
   // ICP from a single start turns only part of the way.
   std::vector<double> start_yaws_deg = {-45.0, 0.0, 45.0};
   std::vector<double> start_scales = {0.9, 1.0, 1.1};
-  int coarse_points = 800;     // random subset per coarse start
+  // Samples are stratified, one point per cell of a voxel grid sized for the
+  // count (common/sampling.h): an even cover of the scanned surface, so
+  // that which points are drawn (the seed) hardly moves the result.
+  int coarse_points = 800;     // samples per coarse start
   int coarse_iterations = 20;
-  int max_points = 3000;       // random subset for the refinement
+  // The best coarse results that differ (rotation by more than
+  // distinct_deg or scale by more than distinct_scale) are each refined on
+  // max_points samples, then polished on final_points (the whole cloud
+  // when it has no more) until the trimmed RMS changes less than
+  // polish_tolerance, and the one that fits those best is taken: the
+  // choice between nearly equal basins is made on the full cloud, not on a
+  // subset (picking the best coarse start on a random subset turned Fran
+  // differently for different subsets, and in wasm).
+  int refine_candidates = 2;
+  double distinct_deg = 3.0;
+  double distinct_scale = 0.03;
+  int max_points = 3000;       // samples for the refinement
+  int final_points = 20000;    // samples for the polish and the choice
+  double polish_tolerance = 1e-5;
   int max_iterations = 60;
   double relative_tolerance = 1e-4;  // stop when the trimmed RMS changes less than this
   // Pairs farther than trim_factor * median distance do not pull (the part
@@ -83,6 +99,8 @@ struct FaceAlignOptions {
   // Score of a result: mean of min(d, score_clamp)^2 over the subset, with
   // score_clamp this fraction of the cloud's bbox diagonal.
   double score_clamp_fraction = 0.03;
+  // Which point of each grid cell the samples take. Any seed gives the same
+  // alignment in practice (tests/align: James and Fran for seeds 1-10).
   std::uint32_t seed = 7;
 };
 
@@ -108,9 +126,18 @@ Status align_face(const TriMesh& generic, const HeadAnnotations& ann, const Poin
                   const FaceAlignOptions& options, FaceAlignResult& out, const ProgressFn& progress = {});
 
 struct OrientationOptions {
-  // Coarse ICP from every up axis (6) times yaws 0, 45, ..., 315 degrees.
+  // Coarse ICP from every up axis (6) times yaws 0, 45, ..., 315 degrees,
+  // on `points` stratified samples (see FaceAlignOptions).
   int points = 600;
   int iterations = 30;
+  // The best `candidates` distinct coarse results and the best one
+  // consistent with the given orientation are scored on final_points
+  // samples (all points when the cloud has no more), the decision is made
+  // there, and the best is polished there (a decision on 600 points alone
+  // depended on which 600).
+  int candidates = 3;
+  int final_points = 8000;
+  std::uint32_t seed = 7;  // which point of each grid cell is sampled
   // The given orientation is kept unless the best start ends with its up
   // more than up_tolerance_deg, or its facing more than facing_tolerance_deg,
   // away from +y / +z, AND scores below better_ratio times the best start

@@ -1,6 +1,7 @@
 #include "fit/global_fit.h"
 
 #include "common/parallel.h"
+#include "common/sampling.h"
 #include "fit/block_ldlt.h"
 #include "fit/closest_point.h"
 #include "mesh/geometry.h"
@@ -495,7 +496,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
   std::vector<int> order(points.size());
   std::iota(order.begin(), order.end(), 0);
   std::mt19937 rng(options.seed);
-  std::shuffle(order.begin(), order.end(), rng);
+  mt19937_shuffle(order.begin(), order.end(), rng);
 
   TriMesh work = mesh;
   VecX x = rest;

@@ -1,12 +1,12 @@
 #include "fit/local_fit.h"
 
+#include "common/sampling.h"
 #include "fit/closest_point.h"
 
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-#include <random>
 
 namespace lk {
 namespace {
@@ -278,7 +278,7 @@ Status fit_local(const std::vector<Vec3>& points, const TriMesh& mesh, const Mes
     for (size_t i = 0; i < points.size(); ++i)
       if (box.contains(generic_points[i])) idx.push_back(static_cast<int>(i));
     if (static_cast<int>(idx.size()) > options.max_points_per_box) {
-      std::shuffle(idx.begin(), idx.end(), rng);
+      mt19937_shuffle(idx.begin(), idx.end(), rng);
       idx.resize(options.max_points_per_box);
     }
     for (int i : idx) prob.points.push_back(points[i]);
@@ -436,7 +436,7 @@ Status fit_soft_region(const std::vector<Vec3>& points, const TriMesh& mesh, con
   }
   if (static_cast<int>(idx.size()) > options.max_points_per_box) {
     std::mt19937 rng(options.seed);
-    std::shuffle(idx.begin(), idx.end(), rng);
+    mt19937_shuffle(idx.begin(), idx.end(), rng);
     idx.resize(options.max_points_per_box);
   }
   for (int i : idx) prob.points.push_back(points[i]);
