@@ -102,6 +102,15 @@ struct FoldLimitOptions {
   // for bit (tests/multires/test_fold_incremental.cpp compares the two);
   // on the synthetic heads about 0.2 s CPU less per fit (docs/fit.md).
   bool incremental = true;
+  // The separation gives a finest-level pair up when no corner of it can
+  // move (its corners and its parents' are on the smooth surface); later
+  // restarts and fold passes move the base under those heights, so such a
+  // pair can cross again unseen. When one does, the whole limiter runs once
+  // more on its result (nothing held, every pair seen from the start) and
+  // that is kept if it leaves fewer crossing pairs in all. Demo sample (synth-scan --seed 1 through PLY): ear pairs
+  // 10 -> 0; James 97 -> 5 pairs; Fran's second pass is not kept
+  // (docs/fit.md, "The demo sample's ear crossings").
+  bool second_pass = true;
 };
 
 struct FoldLimitStats {
@@ -118,6 +127,11 @@ struct FoldLimitStats {
   int crossing_corrected = 0;  // finest-level corners of crossing pairs put on the smooth surface
   std::vector<int> coarse_intersections_found;  // L: crossing pairs of levels 0..L-1 before separating them
   std::vector<int> coarse_intersections_left;   // L: after (incl. pairs that cross on the smooth level too)
+  // second_pass: finest-level crossing pairs before and after it (0 / 0:
+  // it did not run), and whether it was kept (then the counts above are the
+  // second pass's, rounds the sum of both).
+  int second_pass_before = 0, second_pass_after = 0;
+  bool second_pass_kept = false;
 };
 
 // Shrinks mesh.displacements as described above and re-evaluates the mesh.
