@@ -5,7 +5,7 @@
 
 #include "head/generic_head.h"
 #include "raycast/bvh.h"
-#include "synth/prng.h"
+#include "common/prng.h"
 #include "synth/scanner.h"
 #include "synth/synth_head.h"
 

@@ -7,7 +7,7 @@
 #include "raycast/bvh.h"
 #include "render/offscreen.h"
 #include "subdiv/butterfly.h"
-#include "synth/prng.h"
+#include "common/prng.h"
 #include "synth/skin_field.h"
 #include "synth/synth_head.h"
 #include "texture/chart_raster.h"

@@ -1,6 +1,6 @@
 #include "calib/calibrate.h"
 
-#include "synth/prng.h"
+#include "common/prng.h"
 
 #include <Eigen/Dense>
 #include <algorithm>

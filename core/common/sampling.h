@@ -14,6 +14,7 @@
 //
 // Shapes: points #P by 3; results are indices into points.
 #pragma once
+#include "common/prng.h"
 #include "common/types.h"
 
 #include <algorithm>
@@ -25,31 +26,9 @@
 
 namespace lk {
 
-// splitmix64 (Steele, Lea, Flood 2014): small, fast, and fully specified.
-struct PortableRandom {
-  std::uint64_t state = 0;
-
-  explicit PortableRandom(std::uint64_t seed) : state(seed) {}
-
-  std::uint64_t next() {
-    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
-  // Uniform in [0, n), n >= 1, without modulo bias (rejection of the
-  // incomplete last block of 2^64).
-  std::uint64_t below(std::uint64_t n) {
-    const std::uint64_t limit = ~std::uint64_t(0) - (~std::uint64_t(0) % n);
-    std::uint64_t r = next();
-    while (r >= limit) r = next();
-    return r % n;
-  }
-};
-
 // Fisher-Yates shuffle of [first, last) with rng: the same order everywhere.
 template <class RandomIt>
-void portable_shuffle(RandomIt first, RandomIt last, PortableRandom& rng) {
+void portable_shuffle(RandomIt first, RandomIt last, SplitMix64& rng) {
   const auto n = last - first;
   for (auto i = n - 1; i > 0; --i) {
     const auto j = static_cast<decltype(i)>(rng.below(static_cast<std::uint64_t>(i) + 1));
@@ -151,7 +130,7 @@ inline std::vector<int> stratified_sample(const std::vector<Vec3>& points, int t
   }
   std::vector<int> out;
   out.reserve(cells);
-  PortableRandom rng(seed);
+  SplitMix64 rng(seed);
   for (int begin = 0; begin < n;) {
     int end = begin + 1;
     while (end < n && keyed[end].first == keyed[begin].first) ++end;

@@ -351,6 +351,30 @@ BBox box_of(const std::vector<Vec3>& p, const std::vector<int>& ids) {
   return b;
 }
 
+// Where an ear's root loop starts and which way it turns: the loop vertex
+// nearest the top of the root (by its angle around `root` in the back/up
+// plane, the extents scaled to a circle), and +1 when the loop runs
+// counter-clockwise from there (towards the back), -1 otherwise. Both ears'
+// loops turn opposite ways; their walls are matched to the helix outline
+// from the top in the same direction.
+struct EarLoopStart {
+  int top = 0;
+  double turn = 1;
+};
+EarLoopStart ear_loop_start(const std::vector<Vec3>& positions, const std::vector<int>& loop, const Vec3& root,
+                            const Vec3& back, const Vec3& up, double half_back, double half_up) {
+  const int n_loop = static_cast<int>(loop.size());
+  std::vector<double> root_angle(n_loop);
+  EarLoopStart s;
+  for (int k = 0; k < n_loop; ++k) {
+    const Vec3 d = positions[loop[k]] - root;
+    root_angle[k] = std::atan2(d.dot(up) / half_up, d.dot(back) / half_back);
+    if (std::cos(root_angle[k] - kPi / 2) > std::cos(root_angle[s.top] - kPi / 2)) s.top = k;
+  }
+  s.turn = std::sin(root_angle[(s.top + 1) % n_loop] - root_angle[s.top]) > 0 ? 1 : -1;
+  return s;
+}
+
 std::vector<int> sorted_unique(std::vector<int> v) {
   std::sort(v.begin(), v.end());
   v.erase(std::unique(v.begin(), v.end()), v.end());
@@ -791,14 +815,9 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
       // outline is sampled evenly (the root's angles bunch up at its short top
       // and bottom edges, which would make a pointed ear).
       const int n_loop = static_cast<int>(loop.size());
-      std::vector<double> root_angle(n_loop);
-      int top_k = 0;
-      for (int k = 0; k < n_loop; ++k) {
-        const Vec3 d = b.positions[loop[k]] - root;
-        root_angle[k] = std::atan2(d.dot(up) / half_up, d.dot(back) / half_back);
-        if (std::cos(root_angle[k] - kPi / 2) > std::cos(root_angle[top_k] - kPi / 2)) top_k = k;
-      }
-      const double turn = std::sin(root_angle[(top_k + 1) % n_loop] - root_angle[top_k]) > 0 ? 1 : -1;
+      const EarLoopStart loop_start = ear_loop_start(b.positions, loop, root, back, up, half_back, half_up);
+      const int top_k = loop_start.top;
+      const double turn = loop_start.turn;
       std::vector<double> root_fraction(n_loop, 0.0);
       double root_length = 0;
       for (int i = 1; i <= n_loop; ++i) {
@@ -889,15 +908,9 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
     // outline is sampled evenly (the root's angles bunch up at its short top
     // and bottom edges, which would make a pointed ear).
     const int n_loop = static_cast<int>(loop.size());
-    std::vector<double> root_angle(n_loop);
-    int top_k = 0;
-    for (int k = 0; k < n_loop; ++k) {
-      const Vec3 d = b.positions[loop[k]] - root;
-      root_angle[k] = std::atan2(d.dot(up) / half_up, d.dot(back) / half_back);
-      if (std::cos(root_angle[k] - kPi / 2) > std::cos(root_angle[top_k] - kPi / 2)) top_k = k;
-    }
-    const double turn = std::sin(root_angle[(top_k + 1) % n_loop] - root_angle[top_k]) > 0 ? 1 : -1;
-    std::rotate(loop.begin(), loop.begin() + top_k, loop.end());  // the top first
+    const EarLoopStart loop_start = ear_loop_start(b.positions, loop, root, back, up, half_back, half_up);
+    const double turn = loop_start.turn;
+    std::rotate(loop.begin(), loop.begin() + loop_start.top, loop.end());  // the top first
     std::vector<double> loop_s(n_loop, 0.0);
     double root_length = 0;
     for (int k = 1; k <= n_loop; ++k) {

@@ -2,7 +2,7 @@
 
 #include "mesh/geometry.h"
 #include "raycast/bvh.h"
-#include "synth/prng.h"
+#include "common/prng.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,7 +1,7 @@
 // Procedural skin albedo, camera ring and feature vertices (see skin_field.h).
 #include "synth/skin_field.h"
 
-#include "synth/prng.h"
+#include "common/prng.h"
 
 #include <algorithm>
 #include <cmath>

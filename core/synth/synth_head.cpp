@@ -3,7 +3,7 @@
 #include "head/generic_head.h"
 #include "mesh/geometry.h"
 #include "mesh/topology.h"
-#include "synth/prng.h"
+#include "common/prng.h"
 
 #include <algorithm>
 #include <cmath>

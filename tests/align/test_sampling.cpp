@@ -10,15 +10,15 @@
 
 using namespace lk;
 
-TEST_CASE("PortableRandom and portable_shuffle give fixed results for a seed") {
+TEST_CASE("SplitMix64 and portable_shuffle give fixed results for a seed") {
   // splitmix64's published first output for state 0 (Vigna's reference code).
-  PortableRandom zero(0);
+  SplitMix64 zero(0);
   CHECK(zero.next() == 0xE220A8397B1DCDAFull);
   // A shuffle is a permutation, and the same one for the same seed.
   std::vector<int> a(50), b(50);
   std::iota(a.begin(), a.end(), 0);
   std::iota(b.begin(), b.end(), 0);
-  PortableRandom ra(7), rb(7);
+  SplitMix64 ra(7), rb(7);
   portable_shuffle(a.begin(), a.end(), ra);
   portable_shuffle(b.begin(), b.end(), rb);
   CHECK(a == b);
@@ -28,7 +28,7 @@ TEST_CASE("PortableRandom and portable_shuffle give fixed results for a seed") {
   CHECK(a != identity);
   // Unbiased: each of 3 values about a third of 30,000 draws (a 2^64 % 3
   // bias would be invisible; a broken reduction such as next() & 1 is not).
-  PortableRandom r(11);
+  SplitMix64 r(11);
   int counts[3] = {0, 0, 0};
   for (int i = 0; i < 30000; ++i) ++counts[r.below(3)];
   for (int c : counts) CHECK(std::abs(c - 10000) < 400);
@@ -36,7 +36,7 @@ TEST_CASE("PortableRandom and portable_shuffle give fixed results for a seed") {
   std::set<int> where;
   for (std::uint64_t seed = 0; seed < 64; ++seed) {
     std::vector<int> v = {0, 1, 2, 3};
-    PortableRandom rs(seed);
+    SplitMix64 rs(seed);
     portable_shuffle(v.begin(), v.end(), rs);
     where.insert(static_cast<int>(std::find(v.begin(), v.end(), 0) - v.begin()));
   }
@@ -47,7 +47,7 @@ TEST_CASE("stratified_sample covers a surface evenly, whatever its density") {
   // A unit square in z = 0 sampled 40x more densely on its left tenth:
   // half the points lie in x < 0.1.
   std::vector<Vec3> points;
-  PortableRandom r(3);
+  SplitMix64 r(3);
   const auto u = [&] { return double(r.next() >> 11) / 9007199254740992.0; };
   for (int i = 0; i < 20000; ++i) points.emplace_back(0.1 * u(), u(), 0);
   for (int i = 0; i < 20000; ++i) points.emplace_back(0.1 + 0.9 * u(), u(), 0);

@@ -2,7 +2,7 @@
 // calibration tests: ground truth for every calibrated parameter.
 #pragma once
 #include "calib/camera.h"
-#include "synth/prng.h"
+#include "common/prng.h"
 
 #include <catch2/catch.hpp>
 #include <cmath>

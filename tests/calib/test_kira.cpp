@@ -8,7 +8,7 @@
 // shared focal estimated from the three photos is reported against the truth.
 #include "calib/calibrate.h"
 #include "head/generic_head.h"
-#include "synth/prng.h"
+#include "common/prng.h"
 #include "test_data.h"
 
 #include <catch2/catch.hpp>

@@ -3,7 +3,7 @@
 // monotone drop with blur and noise, the seam measure on ramps with and
 // without a step, and the bad inputs that must give clear errors.
 #include "image/metrics.h"
-#include "synth/prng.h"
+#include "common/prng.h"
 
 #include <catch2/catch.hpp>
 #include <algorithm>

@@ -4,7 +4,7 @@
 #include "io/exif.h"
 #include "test_data.h"
 
-#include "synth/prng.h"
+#include "common/prng.h"
 
 #include <catch2/catch.hpp>
 #include <cmath>

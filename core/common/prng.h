@@ -1,8 +1,9 @@
-// A small deterministic PRNG for synthetic data: splitmix64 (Steele, Lea,
-// Flood 2014). The standard distributions (std::normal_distribution, ...)
-// give different numbers under libstdc++ and emscripten's libc++, and libm's
-// log/cos may differ in the last bit, so everything here uses only integer
-// ops and +,-,*,/ : the same seed yields the same bits natively and in wasm.
+// A small deterministic PRNG: splitmix64 (Steele, Lea, Flood 2014), for
+// synthetic data and for the fit's portable samples (common/sampling.h).
+// The standard distributions (std::normal_distribution, ...) give different
+// numbers under libstdc++ and emscripten's libc++, and libm's log/cos may
+// differ in the last bit, so everything here uses only integer ops and
+// +,-,*,/ : the same seed yields the same bits natively and in wasm.
 #pragma once
 #include <cstdint>
 
@@ -18,6 +19,14 @@ struct SplitMix64 {
     z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
     z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
     return z ^ (z >> 31);
+  }
+  // Uniform in [0, n), n >= 1, without modulo bias (rejection of the
+  // incomplete last block of 2^64).
+  std::uint64_t below(std::uint64_t n) {
+    const std::uint64_t limit = ~std::uint64_t(0) - (~std::uint64_t(0) % n);
+    std::uint64_t r = next();
+    while (r >= limit) r = next();
+    return r % n;
   }
   // Uniform in [0, 1) with 53 random bits.
   double uniform01() { return static_cast<double>(next() >> 11) * (1.0 / 9007199254740992.0); }
