@@ -612,6 +612,31 @@ double edge_ratio(const TriMesh& m, const Tri& t) {
   return hi / lo;
 }
 
+// Triangles inside `region` (all three corners) whose mirror image in x = 0
+// is not a triangle of m, with the opposite winding; every region vertex
+// must have its mirror vertex (REQUIRE).
+int triangles_without_mirror(const TriMesh& m, const std::vector<char>& region) {
+  std::vector<int> mirror(m.num_vertices(), -1);
+  for (int v = 0; v < m.num_vertices(); ++v) {
+    if (!region[v]) continue;
+    const Vec3 q(-m.positions[v].x(), m.positions[v].y(), m.positions[v].z());
+    for (int w = 0; w < m.num_vertices() && mirror[v] < 0; ++w)
+      if ((m.positions[w] - q).norm() < 1e-9) mirror[v] = w;
+    REQUIRE(mirror[v] >= 0);
+  }
+  auto canonical = [](std::array<int, 3> t) {
+    while (!(t[0] < t[1] && t[0] < t[2])) t = {t[1], t[2], t[0]};
+    return t;
+  };
+  std::set<std::array<int, 3>> triangles;
+  for (const Tri& t : m.triangles) triangles.insert(canonical({t[0], t[1], t[2]}));
+  int unmatched = 0;
+  for (const Tri& t : m.triangles)
+    if (region[t[0]] && region[t[1]] && region[t[2]])
+      unmatched += triangles.count(canonical({mirror[t[0]], mirror[t[2]], mirror[t[1]]})) ? 0 : 1;
+  return unmatched;
+}
+
 }  // namespace
 
 TEST_CASE("generic head: the neck is meshed in round triangles, mirror-symmetric, within the vertex budget", "[head]") {
@@ -638,25 +663,7 @@ TEST_CASE("generic head: the neck is meshed in round triangles, mirror-symmetric
   // Exact mirror symmetry of the neck's triangles too (the strip joining
   // rings of different meridian counts is built by a merge that only stays
   // symmetric if no two mid-azimuths coincide).
-  std::vector<int> mirror(m.num_vertices(), -1);
-  for (int v = 0; v < m.num_vertices(); ++v) {
-    if (!in_neck[v]) continue;
-    const Vec3 q(-m.positions[v].x(), m.positions[v].y(), m.positions[v].z());
-    for (int w = 0; w < m.num_vertices() && mirror[v] < 0; ++w)
-      if ((m.positions[w] - q).norm() < 1e-9) mirror[v] = w;
-    REQUIRE(mirror[v] >= 0);
-  }
-  auto canonical = [](std::array<int, 3> t) {
-    while (!(t[0] < t[1] && t[0] < t[2])) t = {t[1], t[2], t[0]};
-    return t;
-  };
-  std::set<std::array<int, 3>> triangles;
-  for (const Tri& t : m.triangles) triangles.insert(canonical({t[0], t[1], t[2]}));
-  int unmatched = 0;
-  for (const Tri& t : m.triangles)
-    if (in_neck[t[0]] && in_neck[t[1]] && in_neck[t[2]])
-      unmatched += triangles.count(canonical({mirror[t[0]], mirror[t[2]], mirror[t[1]]})) ? 0 : 1;
-  CHECK(unmatched == 0);
+  CHECK(triangles_without_mirror(m, in_neck) == 0);
 }
 
 TEST_CASE("generic head: the smooth level 3 of the neck does not ripple", "[head]") {
@@ -801,24 +808,7 @@ TEST_CASE("generic head, ring ear: ear triangles are not slivers and mirror each
   CHECK(smallest > 12.0);
   // Each ear triangle has its mirror image in the other ear (the strips
   // joining rings of different counts only stay symmetric if their merge is).
-  std::vector<int> mirror(m.num_vertices(), -1);
-  for (int v : ears) {
-    const Vec3 q(-m.positions[v].x(), m.positions[v].y(), m.positions[v].z());
-    for (int w = 0; w < m.num_vertices() && mirror[v] < 0; ++w)
-      if ((m.positions[w] - q).norm() < 1e-9) mirror[v] = w;
-    REQUIRE(mirror[v] >= 0);
-  }
-  auto canonical = [](std::array<int, 3> t) {
-    while (!(t[0] < t[1] && t[0] < t[2])) t = {t[1], t[2], t[0]};
-    return t;
-  };
-  std::set<std::array<int, 3>> triangles;
-  for (const Tri& t : m.triangles) triangles.insert(canonical({t[0], t[1], t[2]}));
-  int unmatched = 0;
-  for (const Tri& t : m.triangles)
-    if (in_ear[t[0]] && in_ear[t[1]] && in_ear[t[2]])
-      unmatched += triangles.count(canonical({mirror[t[0]], mirror[t[2]], mirror[t[1]]})) ? 0 : 1;
-  CHECK(unmatched == 0);
+  CHECK(triangles_without_mirror(m, in_ear) == 0);
 }
 
 TEST_CASE("generic head, ring ear: ear landmarks sit on the rim, inside the ear's box, and binding edges mirror", "[head]") {
