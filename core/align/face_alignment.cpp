@@ -320,7 +320,8 @@ Status align_face(const TriMesh& generic, const HeadAnnotations& ann, const Poin
   if (generic.triangles.empty()) return Status::error(ErrorCode::Empty, "align_face: the generic head has no triangles");
   if (o.max_points < kMinPoints || o.coarse_points < kMinPoints || o.max_iterations < 1 ||
       o.coarse_iterations < 1 || o.start_scales.empty() || o.start_yaws_deg.empty() || !(o.trim_factor > 1) ||
-      !(o.score_clamp_fraction > 0))
+      !(o.score_clamp_fraction > 0) || o.final_points < kMinPoints || !(o.distinct_deg >= 0) ||
+      !(o.distinct_scale >= 0) || !(o.polish_tolerance >= 0))
     return Status::error(ErrorCode::InvalidInput, "align_face: an option is out of range");
   Searcher search;
   st = search.build(generic, ann, cloud, o.score_clamp_fraction);

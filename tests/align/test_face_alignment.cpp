@@ -134,6 +134,16 @@ TEST_CASE("align_face and guess_orientation refuse bad input") {
         ErrorCode::InvalidInput);
   CHECK(align_face(TriMesh{}, generic().annotations, face_patch(0.08, 500, 4), FaceAlignOptions{}, r).code ==
         ErrorCode::Empty);
+  // The candidate and polish options (NaN, negative, too few points).
+  for (int k = 0; k < 4; ++k) {
+    FaceAlignOptions bad;
+    if (k == 0) bad.final_points = 3;
+    if (k == 1) bad.distinct_deg = std::nan("");
+    if (k == 2) bad.distinct_scale = -0.1;
+    if (k == 3) bad.polish_tolerance = std::nan("");
+    CHECK(align_face(generic().mesh, generic().annotations, face_patch(0.08, 500, 4), bad, r).code ==
+          ErrorCode::InvalidInput);
+  }
   PointCloud nan = face_patch(0.08, 500, 5);
   nan.positions[7].z() = std::nan("");
   CHECK(guess_orientation(generic().mesh, generic().annotations, nan, OrientationOptions{}, g).code ==
