@@ -122,6 +122,13 @@ class FoldLimiter {
   // Bad triangles left on the finest level.
   int count_finest_bad() const;
   int given_up_still_crossing() const;
+  // Every crossing pair of the finest level as it is now: a full search on
+  // separate_finest's tree, refitted to the current positions (the same
+  // sorted pairs as a search on a fresh tree, without its build).
+  Status finest_pairs(PairList& out);
+  // Takes over `other`'s finest-level tree (refitted, not rebuilt, at the
+  // start of separate_finest) when this run starts where `other` ended.
+  void adopt_finest_tree(FoldLimiter& other);
 
  private:
   bool is_bad(int l, int f) const {
@@ -215,6 +222,12 @@ class FoldLimiter {
   // separate_finest: the pairs it gave up on (incl. those that cross on the
   // smooth surface too).
   std::set<PairList::value_type> given_up_;
+  // separate_finest's tree over the finest level (bvh.positions: where its
+  // boxes were last fitted), kept for finest_pairs and a second run: a
+  // level-3 build is about half the cost of a full search.
+  bool finest_built_ = false;
+  MeshBvh finest_bvh_;
+  BvhRefitIndex finest_refit_index_;
 };
 
 FoldLimiter::FoldLimiter(MultiresMesh& mesh, const FoldLimitOptions& options,
@@ -631,14 +644,23 @@ Status FoldLimiter::separate_finest() {
   TriMesh finest;
   finest.positions = state_.displaced[L];
   finest.triangles = mesh_.triangles(L);
-  MeshBvh bvh;
-  Status s = build_bvh(finest, bvh);
-  if (!s.ok()) return s;
+  MeshBvh& bvh = finest_bvh_;
   // Rounds move a few hundred of the finest level's vertices: only the
   // boxes holding them are refitted (bvh.positions are the positions the
   // boxes were fitted to).
-  BvhRefitIndex refit_index;
-  build_refit_index(bvh, refit_index);
+  BvhRefitIndex& refit_index = finest_refit_index_;
+  Status s;
+  if (finest_built_) {
+    // A tree taken over from the run this one continues: every box
+    // refitted to where the level is now (searches give the same pairs on
+    // any tree over the same positions).
+    s = refit_bvh(finest, bvh);
+  } else {
+    s = build_bvh(finest, bvh);
+    if (s.ok()) build_refit_index(bvh, refit_index);
+    finest_built_ = s.ok();
+  }
+  if (!s.ok()) return s;
   // The reference path: the moved vertices copied, every box refitted.
   auto refit_changed = [&]() {
     if (options_.incremental) return refit_bvh_vertices(bvh, refit_index, state_.displaced[L], changed_);
@@ -738,16 +760,32 @@ int FoldLimiter::given_up_still_crossing() const {
   return n;
 }
 
-// Crossing pairs of the finest level (a full search).
-Status count_finest_crossings(const MultiresMesh& mesh, int& count) {
-  const int L = mesh.num_levels();
-  TriMesh finest;
-  finest.positions = mesh.state.displaced[L];
-  finest.triangles = mesh.triangles(L);
-  PairList pairs;
-  const Status s = find_self_intersections(finest, pairs);
-  count = static_cast<int>(pairs.size());
-  return s;
+Status FoldLimiter::finest_pairs(PairList& out) {
+  out.clear();
+  if (!finest_built_) {
+    TriMesh finest;
+    finest.positions = state_.displaced[L_];
+    finest.triangles = mesh_.triangles(L_);
+    Status s = build_bvh(finest, finest_bvh_);
+    if (!s.ok()) return s;
+    build_refit_index(finest_bvh_, finest_refit_index_);
+    finest_built_ = true;
+  } else {
+    std::vector<int> moved;
+    moved_since_fit(finest_bvh_, state_.displaced[L_], moved);
+    Status s = refit_bvh_vertices(finest_bvh_, finest_refit_index_, state_.displaced[L_], moved);
+    if (!s.ok()) return s;
+  }
+  find_self_intersections(finest_bvh_, out);
+  return Status::success();
+}
+
+void FoldLimiter::adopt_finest_tree(FoldLimiter& other) {
+  if (!other.finest_built_) return;
+  finest_bvh_ = std::move(other.finest_bvh_);
+  finest_refit_index_ = std::move(other.finest_refit_index_);
+  finest_built_ = true;
+  other.finest_built_ = false;
 }
 
 int FoldLimiter::count_finest_bad() const {
@@ -770,6 +808,25 @@ int zero_crease_displacements(MultiresMesh& mesh) {
 }
 
 }  // namespace
+
+std::uint64_t positions_fingerprint(const std::vector<Vec3>& positions) {
+  std::uint64_t h = 14695981039346656037ull;
+  for (const Vec3& p : positions)
+    for (int k = 0; k < 3; ++k) {
+      unsigned char bytes[sizeof(double)];
+      const double x = p[k];
+      std::memcpy(bytes, &x, sizeof x);
+      for (unsigned char b : bytes) h = (h ^ b) * 1099511628211ull;
+    }
+  return h;
+}
+
+const std::vector<std::array<int, 2>>* finest_pairs_of(const FoldLimitStats& stats,
+                                                       const std::vector<Vec3>& finest_positions) {
+  if (!stats.finest_pairs_known || positions_fingerprint(finest_positions) != stats.finest_pairs_fingerprint)
+    return nullptr;
+  return &stats.finest_pairs;
+}
 
 Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimitStats* stats) {
   if (!(options.shrink >= 0 && options.shrink < 1) || options.min_area_ratio < 0 || options.max_shrinks < 0 ||
@@ -805,10 +862,15 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
   // sees the pairs from the start), and that is kept when it leaves fewer
   // crossing pairs (those that cross on the smooth surface too included:
   // what the user sees).
+  // Both full searches below run on the first run's finest-level tree,
+  // refitted (the second run takes it over): the same pairs as searches on
+  // fresh trees, without three level-L builds; the pairs of the result
+  // are handed to the quality report (FoldLimitStats::finest_pairs).
   if (options.max_intersection_rounds > 0 && options.second_pass && limiter.given_up_still_crossing() > 0) {
-    int before = 0, after = 0;
-    s = count_finest_crossings(mesh, before);
+    PairList before_pairs, after_pairs;
+    s = limiter.finest_pairs(before_pairs);
     if (!s.ok()) return s;
+    const int before = static_cast<int>(before_pairs.size());
     const std::vector<std::vector<double>> displacements = mesh.displacements;
     const MultiresState state = mesh.state;
     s = evaluate(mesh);
@@ -816,10 +878,12 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
     FoldLimitStats again_st;
     again_st.crease_zeroed = st.crease_zeroed;
     FoldLimiter again(mesh, options, smooth, again_st);
+    again.adopt_finest_tree(limiter);
     s = again.fold_pass(options.max_rounds);
     if (s.ok()) s = again.separate_finest();
-    if (s.ok()) s = count_finest_crossings(mesh, after);
+    if (s.ok()) s = again.finest_pairs(after_pairs);
     if (!s.ok()) return s;
+    const int after = static_cast<int>(after_pairs.size());
     st.second_pass_before = before;
     st.second_pass_after = after;
     if (after < before && again.count_finest_bad() == 0) {
@@ -829,10 +893,14 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
       again_st.second_pass_kept = true;
       again_st.rounds += st.rounds;
       st = again_st;
+      st.finest_pairs.swap(after_pairs);
     } else {
       mesh.displacements = displacements;
       mesh.state = state;
+      st.finest_pairs.swap(before_pairs);
     }
+    st.finest_pairs_known = true;
+    st.finest_pairs_fingerprint = positions_fingerprint(mesh.state.displaced[mesh.num_levels()]);
   }
   if (stats) *stats = st;
   return Status::success();

@@ -5,6 +5,8 @@
 #include "common/status.h"
 #include "multires/multires.h"
 
+#include <array>
+#include <cstdint>
 #include <vector>
 
 namespace lk {
@@ -132,7 +134,25 @@ struct FoldLimitStats {
   // second pass's, rounds the sum of both).
   int second_pass_before = 0, second_pass_after = 0;
   bool second_pass_kept = false;
+  // The finest level's crossing pairs as limit_folds left it (#pairs by 2,
+  // a < b, sorted: find_self_intersections of mesh.state.displaced[L]),
+  // when it searched them whole anyway (the second pass ran); the quality
+  // report (pipeline/fit_quality.h) takes them instead of searching again.
+  // finest_pairs_of says whether they still describe the given positions
+  // (an edit after the fit moves the level).
+  bool finest_pairs_known = false;
+  std::vector<std::array<int, 2>> finest_pairs;
+  std::uint64_t finest_pairs_fingerprint = 0;  // positions_fingerprint of the level searched
 };
+
+// FNV-1a over the bytes of the positions: tells whether a level moved since
+// its crossing pairs were searched.
+std::uint64_t positions_fingerprint(const std::vector<Vec3>& positions);
+
+// The limiter's finest-level pairs (FoldLimitStats::finest_pairs) when they
+// were searched on exactly these positions; null otherwise.
+const std::vector<std::array<int, 2>>* finest_pairs_of(const FoldLimitStats& stats,
+                                                       const std::vector<Vec3>& finest_positions);
 
 // Shrinks mesh.displacements as described above and re-evaluates the mesh.
 // Fails with InvalidInput on mismatched arrays or options out of range

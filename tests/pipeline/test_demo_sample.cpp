@@ -13,6 +13,7 @@
 #include "io/io.h"
 #include "pipeline/fit_head.h"
 #include "pipeline/fit_quality.h"
+#include "raycast/self_intersection.h"
 #include "test_scan.h"
 
 #include <catch2/catch.hpp>
@@ -54,4 +55,21 @@ TEST_CASE("fit_head: the demo sample (seed 1, 300k points through float32 PLY) h
   // doing (FoldLimitOptions::max_intersection_rounds); the sample has none.
   REQUIRE(q.smooth_crossings.total == 0);
   CHECK(q.crossings.total == 0);
+
+  // The fold limiter's second pass fires on this sample (a given-up ear
+  // pair crossed again): its full searches ran on the first run's tree,
+  // refitted, and the quality report took their pairs. They must be what a
+  // search on a fresh tree finds.
+  INFO("second pass: " << r.fold_limit.second_pass_before << " -> " << r.fold_limit.second_pass_after);
+  CHECK(r.fold_limit.second_pass_before > 0);
+  REQUIRE(r.fold_limit.finest_pairs_known);
+  const TriMesh finest = level_mesh(r.multires, r.multires.num_levels());
+  std::vector<std::array<int, 2>> fresh;
+  REQUIRE(find_self_intersections(finest, fresh).ok());
+  CHECK(r.fold_limit.finest_pairs == fresh);
+  REQUIRE(finest_pairs_of(r.fold_limit, finest.positions) != nullptr);
+  // After an edit the level moved: the report searches again.
+  std::vector<Vec3> moved = finest.positions;
+  moved[0].x() += 1e-3;
+  CHECK(finest_pairs_of(r.fold_limit, moved) == nullptr);
 }
