@@ -21,10 +21,15 @@
 // --fit-smooth-agreement C / --fit-smooth-max-radius E (denoising by smoothing over the mesh,
 // DisplacementOptions::smooth_*; --fit-smooth-levels 0 turns it off)
 // (seeds 1..N); --save-scans DIR writes scans, truths,
-// the finest level and its crossing triangles.
+// the finest level and its crossing triangles. --truth-head H and --fit-head H
+// (H: asset, the committed generic head, the default; plate or ring, built
+// now with GenericHeadBuildOptions::ring_ear off or on) choose the generic
+// head the synthetic people are made from and the one that is fitted, so two
+// generic heads can be compared on the same scans (docs/generic_head.md).
 #include "command.h"
 #include "common/parallel.h"
 #include "fit_table.h"
+#include "generic_head_choice.h"
 #include "head/generic_head.h"
 #include "io/io.h"
 #include "mesh/geometry.h"
@@ -206,12 +211,16 @@ int run(const Args& args) {
     for (int s = 1; s <= first_seeds; ++s) seeds.push_back(s);
   }
   const std::string save = args.get("save-scans");
-  GenericHead generic;
-  Status st = load_generic_head(generic);
+  const std::string fit_head_name = args.get("fit-head", "asset"), truth_head_name = args.get("truth-head", "asset");
+  GenericHead generic, truth_generic;
+  Status st = choose_generic_head(fit_head_name, generic);
+  if (st) st = choose_generic_head(truth_head_name, truth_generic);
   if (!st) {
     std::printf("   generic head: %s\n", st.message.c_str());
     return 1;
   }
+  std::printf("   generic head fitted: %s (%d vertices); truths made from: %s (%d vertices)\n", fit_head_name.c_str(),
+              generic.mesh.num_vertices(), truth_head_name.c_str(), truth_generic.mesh.num_vertices());
   std::printf("   synthetic scans: %d points, seeds", n_points);
   for (int s : seeds) std::printf(" %d", s);
   const ScannerOptions scanner_defaults;
@@ -223,7 +232,7 @@ int run(const Args& args) {
   double sum_roughness = 0, sum_region_roughness = 0, sum_scanned_mm = 0;
   for (int seed : seeds) {
     SyntheticScan data;
-    st = make_synthetic_scan(generic, seed, n_points, data);
+    st = make_synthetic_scan(truth_generic, seed, n_points, data);
     const TruthSurface& truth = data.truth;
     const PointCloud& cloud = data.cloud;
     const ScanStats& scan_stats = data.stats;

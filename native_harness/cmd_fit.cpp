@@ -2,6 +2,7 @@
 // (jeong2002 Sec. 4-5), with the paper's Table 1 printed beside ours.
 #include "command.h"
 #include "fit_table.h"
+#include "generic_head_choice.h"
 #include "head/generic_head.h"
 #include "io/io.h"
 #include "pipeline/fit_head.h"
@@ -72,8 +73,10 @@ int run_fit(const Args& args) {
   PointCloud scan;
   Status st = load_point_cloud_file(scan_path, scan);
   if (!st) return fail(cmd, st.message);
+  // --generic-head plate|ring: a builder variant instead of the committed
+  // asset, to measure a generic head change on real scans before shipping it.
   GenericHead generic;
-  st = load_generic_head(generic);
+  st = choose_generic_head(args.get("generic-head", "asset"), generic);
   if (!st) return fail(cmd, "generic head: " + st.message);
   ::mkdir(out_dir.c_str(), 0755);
 
@@ -139,7 +142,7 @@ int run_fit(const Args& args) {
 Registrar reg({"fit",
                "likeness fit --scan FILE --out DIR [--levels L] [--up X Y Z|+x..-z] [--facing X Y Z|+x..-z] "
                "[--no-orientation-check] [--face-only|--whole-head] [--no-eye-region] [--no-denoise] [--widen-footprints] "
-               "[--dump] [--scan-frame]",
+               "[--dump] [--scan-frame] [--generic-head asset|plate|ring]",
                "fits the generic head to a scan (jeong2002): control.obj, level1..L.obj, report.json", run_fit});
 
 }  // namespace

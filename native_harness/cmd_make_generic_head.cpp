@@ -17,14 +17,23 @@ namespace {
 const char* kName = "make-generic-head";
 
 int run_make_generic_head(const Args& args) {
-  if (!only_known_options(kName, args, {"out"})) return 2;
+  if (!only_known_options(kName, args, {"out", "ring-ear", "plate-ear"})) return 2;
   const std::string out_dir = args.get("out");
   if (out_dir.empty()) {
     fail(kName, "--out DIR is required (the asset lives in core/head/data)");
     return 2;
   }
+  // --ring-ear / --plate-ear: the builder's ear choice instead of its
+  // default (GenericHeadBuildOptions::ring_ear), to look at or measure one.
+  if (args.has("ring-ear") && args.has("plate-ear")) {
+    fail(kName, "give --ring-ear or --plate-ear, not both");
+    return 2;
+  }
+  GenericHeadBuildOptions options;
+  if (args.has("ring-ear")) options.ring_ear = true;
+  if (args.has("plate-ear")) options.ring_ear = false;
   GenericHead head;
-  Status s = build_generic_head(GenericHeadBuildOptions{}, head);
+  Status s = build_generic_head(options, head);
   if (!s) return fail(kName, s.message);
 
   const std::string obj_path = out_dir + "/generic_head.obj";
@@ -47,7 +56,7 @@ int run_make_generic_head(const Args& args) {
   return 0;
 }
 
-Registrar reg({kName, "likeness make-generic-head --out DIR",
+Registrar reg({kName, "likeness make-generic-head --out DIR [--ring-ear|--plate-ear]",
                "builds the generic head control mesh + annotations (writes generic_head.obj/.json)",
                run_make_generic_head});
 
