@@ -78,18 +78,35 @@ struct IcpRun {
   int iterations = 0;
 };
 
-// Point-to-point ICP of the faced generic (tree over it) onto the samples.
+// An ICP that can stop after some iterations and go on later: `next` is the
+// transform the next iteration starts from, `previous` the last trimmed RMS
+// (-1: none yet), `done` set when it converged or cannot go on. Going on
+// gives the same bits as one uninterrupted run (the nearest-triangle hints
+// only speed the searches up; closest_point_near's answer does not depend
+// on them).
+struct IcpProgress {
+  Similarity next;
+  double previous = -1;
+  bool done = false;
+  IcpRun run;
+};
+
+// Point-to-point ICP of the faced generic (tree over it) onto the samples,
+// until run.iterations reaches `until` (at most o.max_iterations).
 // parallel: the closest points of an iteration on parallel_for's threads
 // (false when the caller already runs several ICPs in parallel); the
 // result does not depend on it.
-IcpRun run_icp(const MeshBvh& tree, const std::vector<Vec3>& samples, Similarity T, const FaceAlignOptions& o,
-               double clamp, bool parallel) {
-  IcpRun run;
+void continue_icp(const MeshBvh& tree, const std::vector<Vec3>& samples, IcpProgress& progress,
+                  const FaceAlignOptions& o, int until, double clamp, bool parallel) {
+  IcpRun& run = progress.run;
+  Similarity& T = progress.next;
+  double& previous = progress.previous;
   std::vector<Vec3> model(samples.size());
   std::vector<double> dist(samples.size());
   std::vector<int> face(samples.size(), -1);  // the last iteration's nearest triangle per sample
-  double previous = -1;
-  for (int it = 0; it < o.max_iterations; ++it) {
+  const int last = std::min(until, o.max_iterations);
+  if (run.iterations >= o.max_iterations) progress.done = true;
+  for (int it = run.iterations; it < last && !progress.done; ++it) {
     const auto correspond = [&](int i, int) {
       const ClosestPoint c = closest_point_near(tree, T.inverse(samples[i]), face[i]);
       face[i] = c.triangle;
@@ -116,8 +133,11 @@ IcpRun run_icp(const MeshBvh& tree, const std::vector<Vec3>& samples, Similarity
     for (double d : dist) score += std::min(d, clamp) * std::min(d, clamp);
     run.score = score / samples.size();
     run.T = T;
-    if (keep.size() < 4) break;
-    if (previous >= 0 && std::fabs(previous - run.rms) <= o.relative_tolerance * previous) break;
+    if (keep.size() < 4 ||
+        (previous >= 0 && std::fabs(previous - run.rms) <= o.relative_tolerance * previous)) {
+      progress.done = true;
+      break;
+    }
     previous = run.rms;
     Eigen::Matrix3Xd src(3, keep.size()), dst(3, keep.size());
     for (size_t k = 0; k < keep.size(); ++k) {
@@ -130,12 +150,23 @@ IcpRun run_icp(const MeshBvh& tree, const std::vector<Vec3>& samples, Similarity
     // The scale as a column's length (sqrt is exact in IEEE arithmetic;
     // libm's cbrt of the determinant differs between glibc and wasm's musl).
     next.s = sR.col(0).norm();
-    if (!(next.s > 0) || !std::isfinite(next.s)) break;
+    if (!(next.s > 0) || !std::isfinite(next.s)) {
+      progress.done = true;
+      break;
+    }
     next.R = sR / next.s;
     next.t = M.topRightCorner<3, 1>();
     T = next;
   }
-  return run;
+  if (run.iterations >= o.max_iterations) progress.done = true;
+}
+
+IcpRun run_icp(const MeshBvh& tree, const std::vector<Vec3>& samples, const Similarity& T, const FaceAlignOptions& o,
+               double clamp, bool parallel) {
+  IcpProgress progress;
+  progress.next = T;
+  continue_icp(tree, samples, progress, o, o.max_iterations, clamp, parallel);
+  return progress.run;
 }
 
 }  // namespace
@@ -423,7 +454,7 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
   Status st = check_cloud(cloud, "guess_orientation");
   if (!st) return st;
   if (!(o.better_ratio > 0 && o.better_ratio <= 1) || o.points < kMinPoints || o.iterations < 1 ||
-      o.final_points < kMinPoints || o.candidates < 1)
+      o.final_points < kMinPoints || o.candidates < 1 || o.screen_iterations < 0 || o.screen_keep < 1)
     return Status::error(ErrorCode::InvalidInput, "guess_orientation: an option is out of range");
   if (generic.triangles.empty())
     return Status::error(ErrorCode::Empty, "guess_orientation: the generic head has no triangles");
@@ -450,8 +481,12 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
   // the outcome does not depend on the number of threads.
   constexpr int kYaws = 8;
   const int num_starts = static_cast<int>(axes.size()) * kYaws;
+  std::vector<IcpProgress> icps(num_starts);
   std::vector<IcpRun> runs(num_starts);
   std::vector<char> ran(num_starts, 0);
+  // Screening (OrientationOptions::screen_iterations): the first
+  // `first_stage` iterations of every start, then only the best go on.
+  const int first_stage = o.screen_iterations > 0 ? std::min(o.screen_iterations, o.iterations) : o.iterations;
   const auto run_start = [&](int start, int) {
     const Vec3& up = axes[start / kYaws];
     // A facing axis perpendicular to up, then yaws about up in 45 degree steps.
@@ -461,9 +496,11 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
     Q.row(0) = up.cross(look).transpose();
     Q.row(1) = up.transpose();
     Q.row(2) = look.transpose();
-    Similarity T0;
-    ran[start] = search.start(samples, Q, 1.0, T0);
-    if (ran[start]) runs[start] = run_icp(search.tree, samples, T0, fo, search.clamp, false);
+    IcpProgress& icp = icps[start];
+    ran[start] = search.start(samples, Q, 1.0, icp.next);
+    if (!ran[start]) return;
+    continue_icp(search.tree, samples, icp, fo, start == 0 ? o.iterations : first_stage, search.clamp, false);
+    runs[start] = icp.run;
   };
   const auto is_consistent = [&](const IcpRun& run) {
     return angle_deg(run.T.R * Vec3::UnitY(), Vec3::UnitY()) <= o.up_tolerance_deg &&
@@ -478,6 +515,34 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
     return Status::success();  // up +y, facing +z, identity rotation, differs = false
   }
   parallel_for(1, num_starts, 1, run_start);
+  if (first_stage < o.iterations) {
+    // The screen_keep best screened starts, and the screen_keep best of
+    // those consistent with the given orientation, go on to o.iterations
+    // (the same bits as running them through at once); the others are out
+    // of the choice below. On James and Fran the starts kept this way
+    // include every start the full search picked (docs/fit_real.md).
+    std::vector<char> screened(num_starts, 0);
+    for (int k = 1; k < num_starts; ++k) screened[k] = ran[k];
+    const std::vector<int> by_screen = ranked(runs, screened);
+    std::vector<int> go_on;
+    int consistent_kept = 0;
+    for (int k : by_screen) {
+      const bool best_few = static_cast<int>(go_on.size()) < o.screen_keep;
+      const bool consistent_few = consistent_kept < o.screen_keep && is_consistent(runs[k]);
+      if (!best_few && !consistent_few) continue;
+      go_on.push_back(k);
+      consistent_kept += is_consistent(runs[k]);
+    }
+    parallel_for(0, static_cast<int>(go_on.size()), 1, [&](int i, int) {
+      IcpProgress& icp = icps[go_on[i]];
+      continue_icp(search.tree, samples, icp, fo, o.iterations, search.clamp, false);
+      runs[go_on[i]] = icp.run;
+    });
+    std::vector<char> kept(num_starts, 0);
+    kept[0] = ran[0];
+    for (int k : go_on) kept[k] = 1;
+    ran.swap(kept);
+  }
   if (!report(progress, "orientation", 0.7))
     return Status::error(ErrorCode::Cancelled, "guess_orientation: cancelled");
   // The best distinct results and the best consistent one are scored on
