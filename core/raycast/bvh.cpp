@@ -517,14 +517,20 @@ ClosestPoint closest_point(const MeshBvh& bvh, const Vec3& p, double max_distanc
   if (bvh.nodes.empty() || !p.allFinite()) return best;
   double best_d2 = max_distance * max_distance;
   if (!(max_distance >= 0)) return best;
+  // Each node is pushed with its box distance, so the check when it is
+  // popped (the bound may have shrunk since) needs no second computation.
   int stack[kStackSize];
+  double stack_d2[kStackSize];
   int top = 0;
-  if (box_distance2(bvh.nodes[0].box_min, bvh.nodes[0].box_max, p) > best_d2) return best;
-  stack[top++] = 0;
+  const double root_d2 = box_distance2(bvh.nodes[0].box_min, bvh.nodes[0].box_max, p);
+  if (root_d2 > best_d2) return best;
+  stack[top] = 0;
+  stack_d2[top++] = root_d2;
   while (top > 0) {
-    const int ni = stack[--top];
+    --top;
+    const int ni = stack[top];
+    if (stack_d2[top] > best_d2) continue;  // shrunk since pushed
     const BvhNode& n = bvh.nodes[ni];
-    if (box_distance2(n.box_min, n.box_max, p) > best_d2) continue;  // shrunk since pushed
     if (n.leaf()) {
       for (int i = n.first; i < n.first + n.count; ++i) {
         const int f = bvh.triangle_order[i];
@@ -545,12 +551,16 @@ ClosestPoint closest_point(const MeshBvh& bvh, const Vec3& p, double max_distanc
     const int left = ni + 1, right = n.first;
     const double dl = box_distance2(bvh.nodes[left].box_min, bvh.nodes[left].box_max, p);
     const double dr = box_distance2(bvh.nodes[right].box_min, bvh.nodes[right].box_max, p);
+    auto push = [&](int child, double d2) {
+      stack[top] = child;
+      stack_d2[top++] = d2;
+    };
     if (dl < dr) {
-      if (dr <= best_d2) stack[top++] = right;
-      if (dl <= best_d2) stack[top++] = left;
+      if (dr <= best_d2) push(right, dr);
+      if (dl <= best_d2) push(left, dl);
     } else {
-      if (dl <= best_d2) stack[top++] = left;
-      if (dr <= best_d2) stack[top++] = right;
+      if (dl <= best_d2) push(left, dl);
+      if (dr <= best_d2) push(right, dr);
     }
   }
   if (best.found()) best.distance = std::sqrt(best_d2);
