@@ -571,7 +571,11 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
       have_best = true;
     }
   }
-  if (have_best) {
+  // A best result consistent with the given orientation leaves the scan as
+  // given (differs is false whatever its polish does short of turning it
+  // 40 degrees away), so its facing is never used: polished only when it
+  // would turn the scan (James: 0.2 s CPU of the 0.6 s check saved).
+  if (have_best && !is_consistent(best)) {
     FaceAlignOptions polish_options = fo;
     polish_options.max_iterations = 4 * o.iterations;
     polish_options.relative_tolerance = 0.1 * fo.polish_tolerance;

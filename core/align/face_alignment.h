@@ -143,8 +143,9 @@ struct OrientationOptions {
   // The best `candidates` distinct coarse results and the best one
   // consistent with the given orientation are scored on final_points
   // samples (all points when the cloud has no more), the decision is made
-  // there, and the best is polished there (a decision on 600 points alone
-  // depended on which 600).
+  // there, and the best, when it would turn the scan (not consistent with
+  // the given orientation), is polished there (a decision on 600 points
+  // alone depended on which 600).
   int candidates = 3;
   int final_points = 8000;
   std::uint32_t seed = 7;  // which point of each grid cell is sampled
