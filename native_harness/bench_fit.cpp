@@ -8,7 +8,7 @@
 // truth: noise, outliers, hair junk), self-intersecting triangle pairs by
 // region beside those of the smooth (undisplaced) surface, and the fold
 // limiter's work. Experiment knobs (see docs/fit.md): --fit-separate-rounds N,
-// --fit-area-ratio R, --fit-cap-pct P, --fit-levels L, --fit-line-edges E,
+// --fit-area-ratio R, --fit-cap-pct P, --fit-levels L, --fit-line-edges E, --fit-edge-fade W (DisplacementOptions::edge_fade_control_edges, 0: off),
 // --fit-no-climb, --fit-remeasure, --fit-no-eye-region (leave the eyes where the alignment put them, FitHeadOptions::fit_eye_region), --fit-no-creases (plain Butterfly at the
 // eye and lip rims), --fit-displaced-creases, --fit-no-corners-to-smooth,
 // --fit-no-parents-to-smooth, --fit-separation-repeats N, --fit-restarts N (fold_limit.h), --fit-seeds N,
@@ -48,6 +48,7 @@
 #include <cstdio>
 #include <ctime>
 #include <map>
+#include <queue>
 #include <random>
 
 namespace lk::cli {
@@ -280,6 +281,7 @@ int run(const Args& args) {
     args.get_double("fit-smooth-max-radius", opt.displacement.smooth_max_radius_edges,
                     opt.displacement.smooth_max_radius_edges);
     args.get_double("fit-line-edges", opt.displacement.fine_line_edges, opt.displacement.fine_line_edges);
+    args.get_double("fit-edge-fade", opt.displacement.edge_fade_control_edges, opt.displacement.edge_fade_control_edges);
     if (args.has("fit-no-climb")) opt.fold_limit.shrink_coarser_levels = false;
     if (args.has("fit-remeasure")) opt.displacement.remeasure_coarse_vertices = true;
     if (args.has("fit-no-creases")) opt.rim_creases = false;
@@ -391,6 +393,68 @@ int run(const Args& args) {
                         : Roughness{};
         std::printf("   roughness %s (%d scanned level-%d faces): %.2f deg, smooth (undisplaced) %.2f deg\n", part,
                     fitted_part.region_faces, L, fitted_part.region_mean_deg, smooth_part.region_mean_deg);
+      }
+      // The step where the data ends (the neck cut, holes): level-L faces
+      // within 10 mm over the mesh of the data's edge, on both sides of it
+      // (MultiresMesh::data_support: 1 = measured with data all round), in
+      // the neck region and elsewhere: the angle of each face's normal to
+      // the truth's at the truth point nearest its centroid (a ledge tilts
+      // the faces across it), and that point's distance.
+      if (r.multires.data_support.size() == static_cast<size_t>(finest.num_vertices())) {
+        const std::vector<double>& support = r.multires.data_support;
+        const int nv = finest.num_vertices();
+        std::vector<std::vector<int>> adjacent(nv);
+        for (const Tri& t : finest.triangles)
+          for (int k = 0; k < 3; ++k) adjacent[t[k]].push_back(t[(k + 1) % 3]), adjacent[t[(k + 1) % 3]].push_back(t[k]);
+        // Distance over the edges to the other side of the edge (Dijkstra from both sides at once).
+        std::vector<double> to_edge(nv, 1e9);
+        std::priority_queue<std::pair<double, int>, std::vector<std::pair<double, int>>, std::greater<>> heap;
+        auto side = [&support](int v) { return support[v] >= 1.0; };
+        for (int v = 0; v < nv; ++v)
+          for (int u : adjacent[v])
+            if (side(u) != side(v)) to_edge[v] = 0;
+        for (int v = 0; v < nv; ++v)
+          if (to_edge[v] == 0) heap.push({0.0, v});
+        while (!heap.empty()) {
+          const auto top = heap.top();
+          heap.pop();
+          if (top.first > to_edge[top.second]) continue;
+          for (int u : adjacent[top.second]) {
+            const double d = top.first + (finest.positions[u] - finest.positions[top.second]).norm();
+            if (side(u) == side(top.second) && d < to_edge[u] && d <= 0.010) to_edge[u] = d, heap.push({d, u});
+          }
+        }
+        const auto neck_it = generic.annotations.regions.find("neck");
+        const std::vector<char> neck =
+            neck_it == generic.annotations.regions.end()
+                ? std::vector<char>(nv, 0)
+                : propagate_vertex_mask(r.multires, vertex_mask(neck_it->second, r.multires.num_vertices(0)))[L];
+        const std::vector<Vec3> fn = face_normals(finest);
+        std::vector<double> angle[2], dist[2], near[2];  // neck, rest; near: angles within 3 mm of the edge
+        for (int f = 0; f < finest.num_triangles(); ++f) {
+          const Tri& t = finest.triangles[f];
+          if (!(to_edge[t[0]] <= 0.010 && to_edge[t[1]] <= 0.010 && to_edge[t[2]] <= 0.010)) continue;
+          const Vec3 c = (finest.positions[t[0]] + finest.positions[t[1]] + finest.positions[t[2]]) / 3.0;
+          const SurfacePoint sp = truth_tree.closest(c);
+          if (sp.face < 0) continue;
+          const Tri& tt = truth_head.triangles[sp.face];
+          const Vec3 tn = (sp.barycentric[0] * truth_normals[tt[0]] + sp.barycentric[1] * truth_normals[tt[1]] +
+                           sp.barycentric[2] * truth_normals[tt[2]]).normalized();
+          const int part = neck[t[0]] && neck[t[1]] && neck[t[2]] ? 0 : 1;
+          angle[part].push_back(std::acos(std::clamp(fn[f].normalized().dot(tn), -1.0, 1.0)) * 180.0 / 3.14159265358979323846);
+          dist[part].push_back(std::sqrt(sp.squared_distance));
+          if (to_edge[t[0]] <= 0.003 && to_edge[t[1]] <= 0.003 && to_edge[t[2]] <= 0.003) near[part].push_back(angle[part].back());
+        }
+        std::printf("   data edge (level-%d faces within 10 mm of it, both sides): angle to truth mean / p95 / max deg, "
+                    "distance to truth mean / p95 mm, angle p95 within 3 mm:", L);
+        const char* names[2] = {"neck", "rest"};
+        for (int part = 0; part < 2; ++part) {
+          const DistanceStats a = summarize_distances(angle[part], 1.0), d = summarize_distances(dist[part], 1.0),
+                              n = summarize_distances(near[part], 1.0);
+          std::printf(" %s (%zu) %.2f / %.2f / %.1f, %.3f / %.3f, %.2f;", names[part], angle[part].size(), a.mean, a.p95,
+                      a.max, 1e3 * d.mean, 1e3 * d.p95, n.p95);
+        }
+        std::printf("\n");
       }
       sum_roughness += fit_rough.mean_deg;
       sum_region_roughness += fit_rough.region_mean_deg;

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <limits>
 #include <numeric>
+#include <queue>
 
 namespace lk {
 
@@ -818,6 +819,108 @@ void smooth_heights(const MultiresMesh& mesh, int level, const DisplacementOptio
   }
 }
 
+// The fade across the data's edge (DisplacementOptions::
+// edge_fade_control_edges) on level l. support (#V_L; level l's vertices
+// set): 1 = full data support; d (#V_l): the level's displacements, of
+// which those of the vertices from `first` on (the level's own) may change.
+// Returns how many changed.
+int fade_across_data_edge(const MultiresMesh& mesh, int level, int first, const std::vector<double>& support,
+                          double width, std::vector<double>& d) {
+  const IndexRows& ring = mesh.links[level].normal_reach;  // itself + one-ring
+  const std::vector<Vec3>& P = mesh.state.base[level];
+  const std::vector<Vec3>& N = mesh.state.normals[level];
+  const int nv = mesh.num_vertices(level);
+  auto full = [&support](int v) { return support[v] >= 1.0; };
+  // The band does not turn round a rim (an ear's, a lip's, a lid's): a
+  // displacement measured on one side means nothing on the other, and
+  // carried there it pushed the two sheets into each other. Neighbours
+  // whose normals are more than ~15 degrees apart are not joined.
+  const double min_agreement = std::cos(15.0 * kPi / 180.0);
+  // The band: vertices without full support within `width` of a supported
+  // one, by the shortest path over the level's edges (Dijkstra from the
+  // supported vertices that have an unsupported neighbour).
+  std::vector<double> dist(nv, std::numeric_limits<double>::infinity());
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> heap;
+  for (int v = 0; v < nv; ++v) {
+    if (!full(v)) continue;
+    for (int i = ring.offsets[v]; i < ring.offsets[v + 1]; ++i)
+      if (!full(ring.items[i])) {
+        dist[v] = 0;
+        heap.push({0.0, v});
+        break;
+      }
+  }
+  std::vector<int> band;  // nearest first
+  while (!heap.empty()) {
+    const Item top = heap.top();
+    heap.pop();
+    const int v = top.second;
+    if (top.first > dist[v]) continue;
+    if (!full(v)) band.push_back(v);
+    for (int i = ring.offsets[v]; i < ring.offsets[v + 1]; ++i) {
+      const int u = ring.items[i];
+      if (full(u) || !(N[u].dot(N[v]) >= min_agreement)) continue;
+      const double next = top.first + (P[u] - P[v]).norm();
+      if (next < width && next < dist[u]) {
+        dist[u] = next;
+        heap.push({next, u});
+      }
+    }
+  }
+  if (band.empty()) return 0;
+  // The value carried into the band: the level's own supported vertices
+  // hold their displacement (a coarser level's vertices hold 0 here, they
+  // lie on the data already: they carry nothing); each band vertex takes the
+  // mean over its neighbours that hold a value. The first sweep, nearest
+  // first, reaches across the band; the further ones average along the
+  // edge too (one vertex's noise is not carried out alone).
+  constexpr int kSweeps = 8;
+  std::vector<double> carried(nv, 0.0);
+  std::vector<char> holds(nv, 0);
+  for (int v = first; v < nv; ++v)
+    if (full(v)) carried[v] = d[v], holds[v] = 1;
+  for (int sweep = 0; sweep < kSweeps; ++sweep)
+    for (int v : band) {
+      double sum = 0;
+      int count = 0;
+      for (int i = ring.offsets[v]; i < ring.offsets[v + 1]; ++i) {
+        const int u = ring.items[i];
+        if (u != v && holds[u] && N[u].dot(N[v]) >= min_agreement) sum += carried[u], ++count;
+      }
+      if (count == 0) continue;
+      carried[v] = sum / count;
+      holds[v] = 1;
+    }
+  // A partly supported vertex takes a share only at the data's edge
+  // (within a few rings of a vertex without data): inside the data a
+  // footprint's centroid can lie off the line by chance (sparse or noisy
+  // points), and such a vertex keeps its measurement as before.
+  constexpr int kEdgeRings = 3;
+  std::vector<int> rings_to_void(nv, kEdgeRings + 1);
+  std::vector<int> queue;
+  for (int v : band)
+    if (support[v] <= 0) rings_to_void[v] = 0, queue.push_back(v);
+  for (size_t head = 0; head < queue.size(); ++head) {
+    const int v = queue[head];
+    if (rings_to_void[v] >= kEdgeRings) continue;
+    for (int i = ring.offsets[v]; i < ring.offsets[v + 1]; ++i) {
+      const int u = ring.items[i];
+      if (rings_to_void[u] > rings_to_void[v] + 1) rings_to_void[u] = rings_to_void[v] + 1, queue.push_back(u);
+    }
+  }
+  int changed = 0;
+  for (int v : band) {
+    if (v < first || !holds[v] || rings_to_void[v] > kEdgeRings) continue;
+    const double x = std::clamp(1.0 - dist[v] / width, 0.0, 1.0);
+    const double share = (1.0 - std::clamp(support[v], 0.0, 1.0)) * x * x * (3 - 2 * x);
+    if (!(share > 0) || carried[v] == 0) continue;
+    d[v] += share * carried[v];
+    ++changed;
+  }
+  return changed;
+}
+
 }  // namespace
 
 std::vector<char> isolated_scan_points(const std::vector<Vec3>& points, double density_ratio) {
@@ -886,6 +989,8 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
                          "multires: smooth_finest_levels >= 0, 0 <= smooth_iterations <= 1000, 0 <= smooth_strength "
                          "< 1e6, 0 < smooth_agreement < 1e6, smooth_max_radius_edges, smooth_noise_cap, smooth_move_cap, "
                          "smooth_max_height_errors >= 0 and 0 <= smooth_normal_degrees <= 90 required");
+  if (!(options.edge_fade_control_edges >= 0) || !(options.edge_fade_control_edges < 1e6))
+    return Status::error(ErrorCode::InvalidInput, "multires: edge_fade_control_edges must be >= 0 and finite");
   if (options.footprint_points < 1 || !(options.ridge >= 0) || !(options.support_full_offset >= 0) ||
       !(options.support_zero_offset > options.support_full_offset))
     return Status::error(ErrorCode::InvalidInput,
@@ -924,7 +1029,7 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
                                std::vector<double>(L + 1, 0), std::vector<double>(L + 1, 0),
                                std::vector<int>(L + 1, 0),    std::vector<double>(L + 1, 0),
                                std::vector<int>(L + 1, 0),    std::vector<int>(L + 1, 0),
-                               std::vector<double>(L + 1, 0)};
+                               std::vector<double>(L + 1, 0), std::vector<int>(L + 1, 0), 0.0};
   std::vector<Scratch> scratch(parallel_workers());  // one per worker
   // Per vertex of the finest level (a coarser level's vertices keep their
   // indices): the noise figures of the fit that measured it, for the
@@ -932,6 +1037,11 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
   std::vector<double> vertex_noise(mesh.num_vertices(L), -1.0), vertex_variance_factor(mesh.num_vertices(L), 0.0),
       vertex_radius(mesh.num_vertices(L), 0.0);
   mesh.state.base[0] = mesh.control;
+  // Data support of every vertex on the level that introduced it, and the
+  // width of the fade across the data's edge.
+  mesh.data_support.assign(mesh.num_vertices(L), 0.0);
+  const double fade_width = options.edge_fade_control_edges * mean_edge(mesh.control, mesh.control_triangles);
+  if (stats) stats->edge_fade_width = fade_width;
   for (int l = 0; l <= L; ++l) {
     evaluate_level(mesh, l);  // normals N_l with d_l = 0
     const double edge = mean_edge(mesh.state.base[l], mesh.triangles(l));
@@ -1013,6 +1123,9 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
                      sum_smoothing);
       for (int v = first; v < nv; ++v) mesh.displacements[l][v] = heights[v];
     }
+    for (int v = first; v < nv; ++v) mesh.data_support[v] = found[v - first] ? found_taper[v - first] : 0.0;
+    int faded = 0;
+    if (fade_width > 0) faded = fade_across_data_edge(mesh, l, first, mesh.data_support, fade_width, mesh.displacements[l]);
     if (stats) {
       stats->candidates[l] = nv - first;
       stats->measured[l] = measured;
@@ -1023,6 +1136,7 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
       stats->widened[l] = widened;
       stats->smoothed[l] = smoothed;
       stats->mean_smoothing[l] = smoothed ? sum_smoothing / smoothed : 0.0;
+      stats->faded[l] = faded;
     }
     evaluate_level(mesh, l);  // now with d_l
     if (l < L) {

@@ -215,6 +215,27 @@ struct DisplacementOptions {
   // in holes 1.44-1.89 vs 2.50-2.96 mm); 10 also drops sparse but real
   // points behind the ears (85 crossing pairs there on seed 3).
   double isolated_density_ratio = 30.0;
+  // The data's edge (the neck cut, the border of a face-only scan, a
+  // scan's hole). Sec. 5 leaves the surface smooth where there is no data,
+  // so on every level the vertices just outside the data kept d = 0 while
+  // those just inside followed the scan: where the data and the control
+  // mesh's smooth surface disagree, a ledge about one edge of a fine level
+  // wide (a ridge round James's face). Instead, on every level, the
+  // displacements of the fully supported vertices along the edge are
+  // carried into the vertices without full support (each takes the mean of
+  // its neighbours', so they are averaged along the edge too) and faded out
+  // with a smoothstep of the distance over the level's edges from the
+  // supported vertices, reaching 0 at this many of the control mesh's mean
+  // edges: the surface passes from the data to the smooth surface as a
+  // slope, not a step. Fully supported vertices keep their measurement; a
+  // partly supported one (support taper s < 1) takes s of its measurement
+  // plus 1 - s of the carried value. The band does not turn round rims
+  // (neighbours whose normals differ by more than 15 degrees). One control
+  // edge is too short: a control vertex just past the data is a whole edge
+  // from the last supported one and gets nothing (the flat-patch test);
+  // synthetic seeds 1-5 with 1 vs 2 before the rim rule: docs/fit.md, "The
+  // step where the data ends". 0: off (the ledge).
+  double edge_fade_control_edges = 2.0;
   // jeong2002 stores one displacement per vertex introduced on each level;
   // vertices inherited from the coarser level already lie on the data. Set
   // to re-measure them on every level as well.
@@ -231,6 +252,8 @@ struct DisplacementStats {
   std::vector<int> widened;        // L+1: measured vertices whose footprint the noise widened
   std::vector<int> smoothed;       // L+1: vertices the smoothing over the mesh moved (denoising)
   std::vector<double> mean_smoothing;  // L+1: their mean |change| of d
+  std::vector<int> faded;          // L+1: vertices without full support given a share of their edge's displacement
+  double edge_fade_width = 0;      // the fade's width (DisplacementOptions::edge_fade_control_edges), cloud units
 };
 
 // Flags (#P, 1 = isolated) the points whose neighbourhood holds fewer than
@@ -244,7 +267,7 @@ std::vector<char> isolated_scan_points(const std::vector<Vec3>& points, double d
 // Measures d_0 .. d_L from a point cloud (jeong2002 Sec. 5): before each
 // refinement, the signed distance along N_l from each vertex to the surface
 // the points sample near the normal line (see DisplacementOptions).
-// Overwrites mesh.displacements and re-evaluates. Fails with Empty on an
+// Overwrites mesh.displacements and mesh.data_support and re-evaluates. Fails with Empty on an
 // empty cloud, InvalidInput on non-finite points or options out of range,
 // Cancelled when progress asks to stop (the mesh is then left with zero
 // displacements).

@@ -55,6 +55,13 @@ struct MultiresMesh {
   ButterflyCreases creases;                        // the control mesh's crease curves the levels were built with
   std::vector<std::vector<double>> displacements;  // L+1 arrays: d_l, #V_l each
   std::vector<MultiresLevelLinks> links;           // L+1
+  // #V_L after measure_displacements (empty before): each vertex's data
+  // support on the level that introduced it, 1 = measured with data all
+  // round, between 0 and 1 = at the data's edge (support taper), 0 = no
+  // data. Where it is below 1 the displacement is (partly) carried across
+  // the data's edge rather than measured (DisplacementOptions::
+  // edge_fade_control_edges). Not used by evaluation.
+  std::vector<double> data_support;
   MultiresState state;
   // After an update limited to level l < L (see update_control_vertices), the
   // levels above l are out of date from this level on; -1: every level is

@@ -149,27 +149,41 @@ TEST_CASE("multires: measured displacements put every level on the scanned surfa
 TEST_CASE("multires: where the scan has no data the displacement is zero", "[multires]") {
   TriMesh m = icosphere(1);
   PointCloud cloud = sample_target(200000, 0.0005, 5, /*drop_above_z=*/0.5);
-  MultiresMesh mr;
-  REQUIRE(build_multires(m, 3, mr).ok());
-  DisplacementStats stats;
-  REQUIRE(measure_displacements(cloud, DisplacementOptions{}, mr, &stats).ok());
-  int in_hole = 0, measured_elsewhere = 0, below = 0;
-  for (int l = 0; l <= 3; ++l) {
-    CHECK(stats.measured[l] < stats.candidates[l]);
-    for (int v = 0; v < mr.num_vertices(l); ++v) {
-      const Vec3 dir = mr.state.base[l][v].normalized();
-      if (dir.z() > 0.85) {
-        ++in_hole;
-        CHECK(mr.displacements[l][v] == 0.0);
-      } else if (dir.z() < 0.3) {
-        ++below;
-        measured_elsewhere += mr.displacements[l][v] != 0.0;
+  // Without the fade across the data's edge: 0 everywhere in the hole.
+  // With it (the default), the hole (1 rad across its radius) lies within
+  // the fade's reach (two control edges, ~1.1 rad): its displacements are
+  // the edge's carried in, never larger than the largest measured one.
+  DisplacementOptions no_fade;
+  no_fade.edge_fade_control_edges = 0;
+  for (const bool fade : {false, true}) {
+    MultiresMesh mr;
+    REQUIRE(build_multires(m, 3, mr).ok());
+    DisplacementStats stats;
+    REQUIRE(measure_displacements(cloud, fade ? DisplacementOptions{} : no_fade, mr, &stats).ok());
+    int in_hole = 0, measured_elsewhere = 0, below = 0, filled = 0;
+    for (int l = 0; l <= 3; ++l) {
+      CHECK(stats.measured[l] < stats.candidates[l]);
+      for (int v = 0; v < mr.num_vertices(l); ++v) {
+        const Vec3 dir = mr.state.base[l][v].normalized();
+        if (dir.z() > 0.85) {
+          ++in_hole;
+          if (fade) {
+            CHECK(std::abs(mr.displacements[l][v]) <= stats.max_abs[l] + 1e-12);
+            filled += mr.displacements[l][v] != 0.0;
+          } else {
+            CHECK(mr.displacements[l][v] == 0.0);
+          }
+        } else if (dir.z() < 0.3) {
+          ++below;
+          measured_elsewhere += mr.displacements[l][v] != 0.0;
+        }
       }
     }
+    CHECK(in_hole > 100);
+    if (fade) CHECK(filled > 0);
+    // Data region: new vertices are measured (inherited ones keep 0).
+    CHECK(measured_elsewhere > below / 2);
   }
-  CHECK(in_hole > 100);
-  // Data region: new vertices are measured (inherited ones keep 0).
-  CHECK(measured_elsewhere > below / 2);
 }
 
 TEST_CASE("multires: local update equals a full recompute, bit for bit", "[multires]") {

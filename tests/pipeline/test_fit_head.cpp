@@ -218,8 +218,10 @@ TEST_CASE("fit_head: the levels near the neck cut follow the scan just below it,
                    << 1e3 * d_off << " mm without");
   // Measured: 0.350 vs 0.450 mm with the old neck of 5:1 slivers; 0.247 vs
   // 0.287 mm since the generic neck is meshed in round triangles (both
-  // closer, the band's share of the gain smaller).
-  CHECK(d_on < 0.9 * d_off);
+  // closer, the band's share of the gain smaller); 0.247 vs 0.271 mm since
+  // the displacements fade across the data's edge (the fit without the
+  // band gained, DisplacementOptions::edge_fade_control_edges).
+  CHECK(d_on < 0.93 * d_off);
   // Table 1's distances stay over the points above the cut.
   CHECK(r_on.fitted_points == r_off.fitted_points);
 }
