@@ -97,6 +97,24 @@
 //   g_v, r_v enters E_global (counted in e_guard) from the pass it is
 //   raised in. fit_head runs it on face-only captures (FitHeadOptions::
 //   smooth_guard).
+// - Fold relief (part of the smooth-surface guard; GlobalFitOptions::
+//   smooth_guard_relief_*). Level 2 can be clean while level 3 folds inside
+//   one control face or two that share a corner: the fit made a sliver
+//   with a sharp kink (James: a cheek face with angles 36/8/136 deg and an
+//   84 deg dihedral where the template has 0.3; 42 of his 48 smooth
+//   level-3 pairs sat in three such faces, none crossed on level 2). After
+//   the guard, the new pairs of level 3 whose control faces share a corner
+//   are found (one search of the whole level, ~173k triangles on the
+//   generic head); the corners of those faces, cluster by cluster, step
+//   their umbrella vectors towards the template's (x_v -= s (L(v) - L0(v)),
+//   s from smooth_guard_relief_shares: a line search counted on a tree of
+//   the control faces within four rings), keeping the share with the
+//   fewest folds, as long as no control triangle turns or crosses. A last
+//   search of the whole level keeps the result only when it has fewer new
+//   pairs than before. Only those few vertices move (the displacements
+//   carry the detail they leave); vertices under E_constraint or ignored by
+//   the guard never do. Not a term of E_global: the step after the
+//   minimization, like the untangling in fit_head.
 // - Why the aligned template and not the local fit as rest shape: local
 //   fitting moves each feature box by an affine map and blends the rest, so
 //   its shape has steps at the box walls (a ridge across James's nose bridge
@@ -169,6 +187,18 @@ struct GlobalFitOptions {
   double smooth_guard_stiffness = 0.25;
   double smooth_guard_factor = 4.0;
   double smooth_guard_max_stiffness = 16.0;
+  // Fold relief (see header comment), part of the smooth-surface guard:
+  // crossing pairs of the smooth level smooth_guard_relief_level whose two
+  // control faces share a corner (folds, not two sheets) and which the
+  // reference's level does not have. Per cluster of their faces' corners,
+  // the corners' umbrella vectors step towards the template's by the share
+  // of smooth_guard_relief_shares that leaves the fewest folds (none kept
+  // when none lowers the count or one would turn or cross control
+  // triangles); at most smooth_guard_relief_steps sweeps. 0 level or
+  // steps: off.
+  int smooth_guard_relief_level = 3;
+  int smooth_guard_relief_steps = 3;
+  std::vector<double> smooth_guard_relief_shares = {0.25, 0.5};
 };
 
 // Terms of E_binding and E_constraint, from the head's annotations.
@@ -226,6 +256,12 @@ struct GlobalFitResult {
   int smooth_guard_passes = 0;
   int smooth_guard_vertices = 0;
   bool smooth_guard_skipped = false;
+  // Fold relief: new fold pairs of the relief level before and after it,
+  // steps taken, control vertices moved.
+  int relief_folds_before = 0;
+  int relief_folds_after = 0;
+  int relief_steps = 0;
+  int relief_vertices = 0;
 };
 
 // points: the scan points to fit (already stripped of clipped regions), #P.
