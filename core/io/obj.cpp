@@ -290,6 +290,7 @@ std::string write_obj(const TriMesh& mesh, const std::string& mtl_file) {
   const bool per_corner = mesh.uv_per_corner && mesh.uvs.size() == 3 * mesh.triangles.size() && !mesh.uvs.empty();
   const bool per_vertex_uv = !mesh.uv_per_corner && mesh.uvs.size() == nv && nv > 0;
   std::string out = "# written by likeness\n";
+  out.reserve(64 * nv + 32 * mesh.triangles.size());  // a level-3 head: ~18 MB, written once
   if (!mtl_file.empty()) out += "mtllib " + mtl_file + "\n";
   for (size_t i = 0; i < nv; ++i) {
     out += "v";
@@ -326,11 +327,20 @@ std::string write_obj(const TriMesh& mesh, const std::string& mtl_file) {
   for (size_t f = 0; f < mesh.triangles.size(); ++f) {
     out += "f";
     for (int k = 0; k < 3; ++k) {
-      const std::string v = std::to_string(mesh.triangles[f][k] + 1);
-      out += ' ' + v;
-      if (per_corner) out += '/' + std::to_string(3 * f + k + 1);
-      else if (per_vertex_uv) out += '/' + v;
-      if (has_normals) out += (per_corner || per_vertex_uv ? "/" : "//") + v;
+      const long long v = mesh.triangles[f][k] + 1LL;
+      out += ' ';
+      io_detail::append_int(out, v);
+      if (per_corner) {
+        out += '/';
+        io_detail::append_int(out, static_cast<long long>(3 * f + k + 1));
+      } else if (per_vertex_uv) {
+        out += '/';
+        io_detail::append_int(out, v);
+      }
+      if (has_normals) {
+        out += per_corner || per_vertex_uv ? "/" : "//";
+        io_detail::append_int(out, v);
+      }
     }
     out += '\n';
   }

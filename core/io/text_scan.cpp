@@ -183,11 +183,32 @@ void append_double(std::string& out, double v) {
   char buf[40];
   // 15 significant digits suffice for most values and keep files small;
   // 17 always round-trip.
+#if defined(__cpp_lib_to_chars) && __cpp_lib_to_chars >= 201611L
+  // std::to_chars with a precision writes exactly printf's "%.*g" (C++17
+  // [charconv.to.chars]) and from_chars reads as strtod does (both
+  // correctly rounded), so the bytes are the fallback's, ~5x faster: a
+  // level-3 head's OBJ took ~0.5 s with snprintf + strtod.
+  for (int precision : {15, 16, 17}) {
+    const char* end = std::to_chars(buf, buf + sizeof(buf), v, std::chars_format::general, precision).ptr;
+    double back = 0.0;
+    if (precision == 17 || (std::from_chars(buf, end, back).ec == std::errc() && back == v)) {
+      out.append(buf, static_cast<size_t>(end - buf));
+      return;
+    }
+  }
+#else
+  // Emscripten 3.1.6's libc++ has no floating-point to_chars.
   for (int precision : {15, 16, 17}) {
     std::snprintf(buf, sizeof(buf), "%.*g", precision, v);
     if (precision == 17 || std::strtod(buf, nullptr) == v) break;
   }
   out += buf;
+#endif
+}
+
+void append_int(std::string& out, long long v) {
+  char buf[24];
+  out.append(buf, std::to_chars(buf, buf + sizeof(buf), v).ptr);
 }
 
 std::string lowercase(std::string s) {

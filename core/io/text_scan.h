@@ -57,6 +57,7 @@ class Tokenizer {
 // Shortest "%.Ng" text that reads back as exactly the same double.
 std::string format_double(double v);
 void append_double(std::string& out, double v);
+void append_int(std::string& out, long long v);  // decimal, as std::to_string
 
 std::string lowercase(std::string s);
 // Quotes a token for an error message, shortened if long or binary.
