@@ -1253,6 +1253,8 @@
                                                 : 'All checks passed: no folds and no self-intersections.';
   }
 
+  app.showQuality = showQuality;  // tests: the wording for a head that does cross itself
+
   async function checkFitQuality(fit) {
     fit.quality = null;
     ui.fitQuality.hidden = false;
