@@ -9,7 +9,8 @@
 // region beside those of the smooth (undisplaced) surface, and the fold
 // limiter's work. Experiment knobs (see docs/fit.md): --fit-separate-rounds N,
 // --fit-area-ratio R, --fit-cap-pct P, --fit-levels L, --fit-line-edges E, --fit-edge-fade W (DisplacementOptions::edge_fade_control_edges, 0: off),
-// --fit-no-climb, --fit-remeasure, --fit-no-eye-region (leave the eyes where the alignment put them, FitHeadOptions::fit_eye_region), --fit-no-creases (plain Butterfly at the
+// --fit-guard-always / --fit-guard-off (the global fit's smooth-surface guard and fold relief on
+// every scan / on none; default: face-only captures), --fit-no-climb, --fit-remeasure, --fit-no-eye-region (leave the eyes where the alignment put them, FitHeadOptions::fit_eye_region), --fit-no-creases (plain Butterfly at the
 // eye and lip rims), --fit-displaced-creases, --fit-no-corners-to-smooth,
 // --fit-no-parents-to-smooth, --fit-separation-repeats N, --fit-restarts N (fold_limit.h), --fit-seeds N,
 // --fit-isolated R (points R times sparser than the scan's sampling are
@@ -282,6 +283,8 @@ int run(const Args& args) {
                     opt.displacement.smooth_max_radius_edges);
     args.get_double("fit-line-edges", opt.displacement.fine_line_edges, opt.displacement.fine_line_edges);
     args.get_double("fit-edge-fade", opt.displacement.edge_fade_control_edges, opt.displacement.edge_fade_control_edges);
+    if (args.has("fit-guard-always")) opt.smooth_guard = FitHeadOptions::SmoothGuard::Always;
+    if (args.has("fit-guard-off")) opt.smooth_guard = FitHeadOptions::SmoothGuard::Off;
     if (args.has("fit-no-climb")) opt.fold_limit.shrink_coarser_levels = false;
     if (args.has("fit-remeasure")) opt.displacement.remeasure_coarse_vertices = true;
     if (args.has("fit-no-creases")) opt.rim_creases = false;
