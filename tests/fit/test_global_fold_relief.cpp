@@ -8,6 +8,7 @@
 #include "mesh/primitives.h"
 #include "raycast/self_intersection.h"
 #include "subdiv/butterfly.h"
+#include "step_sheets.h"
 
 #include <catch2/catch.hpp>
 #include <algorithm>
@@ -26,19 +27,7 @@ struct LevelPairs {
 };
 
 LevelPairs smooth_pairs(const TriMesh& m, const TriMesh& start, int levels) {
-  std::vector<ButterflyLevel> lv;
-  REQUIRE(build_butterfly_levels(m, levels, lv).ok());
-  auto pairs_of = [&](const TriMesh& mesh) {
-    std::vector<std::vector<Vec3>> refined;
-    REQUIRE(apply_all(lv, mesh.positions, refined).ok());
-    TriMesh fine;
-    fine.positions = refined.back();
-    fine.triangles = lv.back().fine_triangles;
-    std::vector<std::array<int, 2>> pairs;
-    REQUIRE(find_self_intersections(fine, pairs).ok());
-    return pairs;
-  };
-  const auto now = pairs_of(m), before = pairs_of(start);
+  const auto now = test::smooth_level_pairs(m, levels), before = test::smooth_level_pairs(start, levels);
   const int per = 1 << (2 * levels);
   LevelPairs out;
   for (const auto& p : now) {
@@ -52,37 +41,12 @@ LevelPairs smooth_pairs(const TriMesh& m, const TriMesh& start, int levels) {
   return out;
 }
 
-// Two parallel 20 x 20 sheets over the unit square, A at z = 0 and B at
-// z = 0.2, B's data stepping down at x = `step_at` to `low_z` (as in
-// test_global_smooth_guard.cpp). With the guard at level 2 the fitted
-// control mesh's level 2 does not cross, but its level 3 folds in 15 pairs
-// around B's step, all inside control faces that share a corner.
-struct StepSheets {
-  TriMesh start;
-  MeshTopology topo;
-  std::vector<Vec3> points, b_points;
-};
-
-StepSheets make_step_sheets(double low_z) {
-  StepSheets c;
-  const int n = 20;
-  const TriMesh grid = make_regular_grid(n, n);
-  for (const Vec3& p : grid.positions) c.start.positions.push_back(Vec3(p.x() / n, p.y() / n, 0));
-  for (const Tri& t : grid.triangles) c.start.triangles.push_back(t);
-  const int b_first = grid.num_vertices();
-  for (const Vec3& p : grid.positions) c.start.positions.push_back(Vec3(p.x() / n, p.y() / n, 0.2));
-  for (const Tri& t : grid.triangles) c.start.triangles.push_back({{t[0] + b_first, t[1] + b_first, t[2] + b_first}});
-  REQUIRE(build_topology(c.start, c.topo).ok());
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> U(0, 1);
-  for (int i = 0; i < 8000; ++i) c.points.push_back(Vec3(U(rng), U(rng), 0));
-  for (int i = 0; i < 8000; ++i) {
-    const double x = U(rng);
-    c.b_points.push_back(Vec3(x, U(rng), x < 0.5 ? 0.2 : low_z));
-  }
-  c.points.insert(c.points.end(), c.b_points.begin(), c.b_points.end());
-  return c;
-}
+// The step sheets (step_sheets.h) with B's data stepping down to low_z.
+// With the guard at level 2 the fitted control mesh's level 2 does not
+// cross, but its level 3 folds in 15 pairs around B's step, all inside
+// control faces that share a corner.
+using test::make_step_sheets;
+using test::StepSheets;
 
 GlobalFitOptions guarded_options() {
   GlobalFitOptions o;

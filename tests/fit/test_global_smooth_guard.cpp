@@ -7,6 +7,7 @@
 #include "mesh/primitives.h"
 #include "raycast/self_intersection.h"
 #include "subdiv/butterfly.h"
+#include "step_sheets.h"
 
 #include <catch2/catch.hpp>
 #include <algorithm>
@@ -20,58 +21,18 @@ namespace {
 // start's refinement does not have (the flat sheets' corners already touch
 // themselves there: 79 pairs, boundary rules).
 int smooth_pairs(const TriMesh& m, const TriMesh& start, int levels) {
-  std::vector<ButterflyLevel> lv;
-  REQUIRE(build_butterfly_levels(m, levels, lv).ok());
-  auto pairs_of = [&](const TriMesh& mesh) {
-    std::vector<std::vector<Vec3>> refined;
-    REQUIRE(apply_all(lv, mesh.positions, refined).ok());
-    TriMesh fine;
-    fine.positions = refined.back();
-    fine.triangles = lv.back().fine_triangles;
-    std::vector<std::array<int, 2>> pairs;
-    REQUIRE(find_self_intersections(fine, pairs).ok());
-    return pairs;
-  };
-  const auto now = pairs_of(m), before = pairs_of(start);
+  const auto now = test::smooth_level_pairs(m, levels), before = test::smooth_level_pairs(start, levels);
   int fresh = 0;
   for (const auto& p : now) fresh += !std::binary_search(before.begin(), before.end(), p);
   return fresh;
 }
 
-// Two parallel 20 x 20 sheets over the unit square: A at z = 0, B at
-// z = 0.2. A's data lie on A; B's data step down at x = 0.5 from z = 0.2 to
-// z = 0.005, just above A. The fitted control mesh does not cross itself,
-// but B's Butterfly surface does around the step (its stencils' negative
-// wings overshoot where the control sheet bends sharply): 29 pairs of
+// The step sheets (step_sheets.h): B's data step down at x = 0.5 from
+// z = 0.2 to 0.005, just above A. The fitted control mesh does not cross
+// itself, but B's Butterfly surface does around the step: 29 pairs of
 // smooth level 2, all within B.
-struct StepSheets {
-  TriMesh start;
-  MeshTopology topo;
-  std::vector<Vec3> points, b_points;
-  int b_first_vertex = 0;
-};
-
-StepSheets make_step_sheets() {
-  StepSheets c;
-  const int n = 20;
-  const TriMesh grid = make_regular_grid(n, n);
-  for (const Vec3& p : grid.positions) c.start.positions.push_back(Vec3(p.x() / n, p.y() / n, 0));
-  for (const Tri& t : grid.triangles) c.start.triangles.push_back(t);
-  c.b_first_vertex = grid.num_vertices();
-  for (const Vec3& p : grid.positions) c.start.positions.push_back(Vec3(p.x() / n, p.y() / n, 0.2));
-  for (const Tri& t : grid.triangles)
-    c.start.triangles.push_back({{t[0] + c.b_first_vertex, t[1] + c.b_first_vertex, t[2] + c.b_first_vertex}});
-  REQUIRE(build_topology(c.start, c.topo).ok());
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> U(0, 1);
-  for (int i = 0; i < 8000; ++i) c.points.push_back(Vec3(U(rng), U(rng), 0));
-  for (int i = 0; i < 8000; ++i) {
-    const double x = U(rng);
-    c.b_points.push_back(Vec3(x, U(rng), x < 0.5 ? 0.2 : 0.005));
-  }
-  c.points.insert(c.points.end(), c.b_points.begin(), c.b_points.end());
-  return c;
-}
+using test::make_step_sheets;
+using test::StepSheets;
 
 }  // namespace
 

@@ -1,0 +1,67 @@
+// Two parallel sheets with a step in one sheet's data, for the global fit's
+// smooth-surface guard and fold relief tests: the fitted control mesh does
+// not cross itself, but its Butterfly surface does around the step (the
+// stencils' negative wings overshoot where the control sheet bends sharply).
+#pragma once
+#include "mesh/primitives.h"
+#include "mesh/topology.h"
+#include "mesh/tri_mesh.h"
+#include "raycast/self_intersection.h"
+#include "subdiv/butterfly.h"
+
+#include <catch2/catch.hpp>
+
+#include <array>
+#include <random>
+#include <vector>
+
+namespace lk::test {
+
+// Two 20 x 20 sheets over the unit square: A at z = 0, B at z = 0.2. A's
+// data lie on A; B's data step down at x = 0.5 from z = 0.2 to low_z, just
+// above A.
+struct StepSheets {
+  TriMesh start;
+  MeshTopology topo;
+  std::vector<Vec3> points, b_points;  // all data; B's data alone
+  int b_first_vertex = 0;
+};
+
+inline StepSheets make_step_sheets(double low_z = 0.005) {
+  StepSheets c;
+  const int n = 20;
+  const TriMesh grid = make_regular_grid(n, n);
+  for (const Vec3& p : grid.positions) c.start.positions.push_back(Vec3(p.x() / n, p.y() / n, 0));
+  for (const Tri& t : grid.triangles) c.start.triangles.push_back(t);
+  c.b_first_vertex = grid.num_vertices();
+  for (const Vec3& p : grid.positions) c.start.positions.push_back(Vec3(p.x() / n, p.y() / n, 0.2));
+  for (const Tri& t : grid.triangles)
+    c.start.triangles.push_back({{t[0] + c.b_first_vertex, t[1] + c.b_first_vertex, t[2] + c.b_first_vertex}});
+  REQUIRE(build_topology(c.start, c.topo).ok());
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> U(0, 1);
+  for (int i = 0; i < 8000; ++i) c.points.push_back(Vec3(U(rng), U(rng), 0));
+  for (int i = 0; i < 8000; ++i) {
+    const double x = U(rng);
+    c.b_points.push_back(Vec3(x, U(rng), x < 0.5 ? 0.2 : low_z));
+  }
+  c.points.insert(c.points.end(), c.b_points.begin(), c.b_points.end());
+  return c;
+}
+
+// The crossing pairs of m refined `levels` times by plain Butterfly (no
+// creases), sorted; level triangle f lies in control face f >> (2 levels).
+inline std::vector<std::array<int, 2>> smooth_level_pairs(const TriMesh& m, int levels) {
+  std::vector<ButterflyLevel> lv;
+  REQUIRE(build_butterfly_levels(m, levels, lv).ok());
+  std::vector<std::vector<Vec3>> refined;
+  REQUIRE(apply_all(lv, m.positions, refined).ok());
+  TriMesh fine;
+  fine.positions = refined.back();
+  fine.triangles = lv.back().fine_triangles;
+  std::vector<std::array<int, 2>> pairs;
+  REQUIRE(find_self_intersections(fine, pairs).ok());
+  return pairs;
+}
+
+}  // namespace lk::test
