@@ -9,16 +9,27 @@
 #include <utility>
 
 namespace lk {
-namespace {
 
-// Six times the signed volume of tetrahedron (a, b, c, d): > 0 when d lies on
-// the side of plane abc that its normal (b - a) x (c - a) points to.
-inline double orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
-  return (b - a).cross(c - a).dot(d - a);
+double orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  const Vec3 u = b - a, v = c - a, w = d - a;
+  const double m0 = u.y() * v.z(), m1 = u.z() * v.y();
+  const double m2 = u.z() * v.x(), m3 = u.x() * v.z();
+  const double m4 = u.x() * v.y(), m5 = u.y() * v.x();
+  const double det = w.x() * (m0 - m1) + w.y() * (m2 - m3) + w.z() * (m4 - m5);
+  const double permanent = std::abs(w.x()) * (std::abs(m0) + std::abs(m1)) +
+                           std::abs(w.y()) * (std::abs(m2) + std::abs(m3)) +
+                           std::abs(w.z()) * (std::abs(m4) + std::abs(m5));
+  return std::abs(det) > 1e-15 * permanent ? det : 0.0;
 }
 
+namespace {
+
+// Twice the signed area of (a, b, c), > 0 counter-clockwise; 0 when within
+// Shewchuk's bound (3 + 16 eps) eps times the permanent (here 5e-16).
 inline double orient2d(const Vec2& a, const Vec2& b, const Vec2& c) {
-  return (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x());
+  const double left = (b.x() - a.x()) * (c.y() - a.y()), right = (b.y() - a.y()) * (c.x() - a.x());
+  const double det = left - right;
+  return std::abs(det) > 5e-16 * (std::abs(left) + std::abs(right)) ? det : 0.0;
 }
 
 inline bool opposite_or_zero(double s, double t) { return (s <= 0 && t >= 0) || (s >= 0 && t <= 0); }
@@ -27,9 +38,15 @@ bool segments_intersect_2d(const Vec2& p, const Vec2& q, const Vec2& a, const Ve
   const double d1 = orient2d(a, b, p), d2 = orient2d(a, b, q);
   const double d3 = orient2d(p, q, a), d4 = orient2d(p, q, b);
   if (d1 == 0 && d2 == 0 && d3 == 0 && d4 == 0) {
-    // Collinear: overlapping extents along the line.
+    // Collinear: overlapping extents along the line, measured along the
+    // longer segment (along a zero-length one every point has extent 0:
+    // a point p = q on the line through a and b but beyond b was taken as
+    // meeting it).
+    if ((q - p).squaredNorm() < (b - a).squaredNorm()) return segments_intersect_2d(a, b, p, q);
     const Vec2 dir = q - p;
-    const double ta = (a - p).dot(dir), tb = (b - p).dot(dir), len2 = dir.squaredNorm();
+    const double len2 = dir.squaredNorm();
+    if (len2 == 0) return p == a;  // both are points
+    const double ta = (a - p).dot(dir), tb = (b - p).dot(dir);
     return std::max(std::min(ta, tb), 0.0) <= std::min(std::max(ta, tb), len2);
   }
   return opposite_or_zero(d1, d2) && opposite_or_zero(d3, d4);
@@ -167,7 +184,11 @@ bool segment_intersects_triangle(const Vec3& p, const Vec3& q, const Vec3& a, co
 
 bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
                          const Vec3& b2) {
-  // Cheap rejection: all of one triangle strictly on one side of the other's plane.
+  // Cheap rejections: boxes apart, or all of one triangle strictly on one
+  // side of the other's plane.
+  const Vec3 alo = a0.cwiseMin(a1).cwiseMin(a2), ahi = a0.cwiseMax(a1).cwiseMax(a2);
+  const Vec3 blo = b0.cwiseMin(b1).cwiseMin(b2), bhi = b0.cwiseMax(b1).cwiseMax(b2);
+  if ((alo.array() > bhi.array()).any() || (blo.array() > ahi.array()).any()) return false;
   const double s0 = orient3d(b0, b1, b2, a0), s1 = orient3d(b0, b1, b2, a1), s2 = orient3d(b0, b1, b2, a2);
   if ((s0 > 0 && s1 > 0 && s2 > 0) || (s0 < 0 && s1 < 0 && s2 < 0)) return false;
   const double t0 = orient3d(a0, a1, a2, b0), t1 = orient3d(a0, a1, a2, b1), t2 = orient3d(a0, a1, a2, b2);

@@ -10,7 +10,13 @@
 // pair is decided by six segment-triangle tests built from signed volumes
 // (orientation determinants), the predicate form of Moller 1997's test. A
 // coplanar pair is decided in the 2-D projection on its plane (edge crossings
-// or one triangle inside the other). Touching counts as crossing.
+// or one triangle inside the other). Touching counts as crossing. The
+// orientation signs are filtered (Shewchuk 1997's error bounds): a
+// determinant too small for its sign to be sure counts as 0, i.e. as
+// coplanar or touching, so nearly coplanar triangles (a flat sheet, a
+// level of fine triangles) are decided in 2-D instead of by the sign of
+// their rounding noise; triangles whose boxes are apart never cross. The
+// answer for a pair is therefore the same whichever tree found it.
 // Neighbours: triangles sharing an edge are skipped (they meet along it; a
 // fold between them is a flipped triangle, another check); triangles sharing
 // one vertex count only when the edge opposite the shared vertex in one of
@@ -72,6 +78,20 @@ bool mesh_triangles_cross(const std::vector<Vec3>& positions, const Tri& a, cons
 // logic: for two triangles given by their corners.)
 bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
                          const Vec3& b2);
+
+// The predicate of every test here: six times the signed volume of
+// tetrahedron (a, b, c, d), > 0 when d lies on the side of plane abc that
+// its normal (b - a) x (c - a) points to, 0 when floating point cannot tell
+// the sign. Shewchuk 1997 ("Adaptive precision
+// floating-point arithmetic and fast robust geometric predicates") bounds
+// the rounding error of this determinant by (7 + 56 eps) eps times its
+// permanent (the same products, all terms taken positive); a value within
+// that bound (here 1e-15 times the permanent, a little wider, for fused
+// multiply-adds) has no reliable sign and counts as 0: the point is on the
+// plane. Without it four nearly coplanar points get the sign of their
+// rounding noise, and two triangles side by side in a flat sheet were
+// reported crossing (their boxes do not even overlap).
+double orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
 
 // Does the closed segment p-q meet the triangle (a, b, c)?
 bool segment_intersects_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c);

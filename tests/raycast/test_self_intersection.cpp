@@ -247,9 +247,8 @@ namespace {
 // The six-segment rule as first written (each segment test computing its
 // own plane sides): the reference for triangles_intersect, which reuses its
 // rejection tests' orientations and skips sides that already decide.
-double reference_orient(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
-  return (b - a).cross(c - a).dot(d - a);
-}
+// The same filtered predicate (the shortcuts are under test, not it).
+double reference_orient(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) { return orient3d(a, b, c, d); }
 bool reference_segment(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c) {
   const double dp = reference_orient(a, b, c, p), dq = reference_orient(a, b, c, q);
   if ((dp > 0 && dq > 0) || (dp < 0 && dq < 0)) return false;
@@ -385,4 +384,139 @@ TEST_CASE("self-intersections: a refit tree finds what a fresh tree finds", "[ra
     CHECK(a == b);
   }
   CHECK(crossings_seen > 50);  // the moves did make crossings to compare
+}
+
+TEST_CASE("self-intersections: a refit tree finds what a fresh tree finds, threaded and on thin folds", "[raycast]") {
+  // The threaded search (>= 4096 triangles) on a refit tree, with the kind
+  // of deformation the fits make: a tree built on a smooth shape, then
+  // refit after a fold was pushed into it (a narrow pleat of a sheet, as
+  // the fold relief's level 3, and a dented torus). The full, local and
+  // new-pairs searches equal those of a tree built afresh, serial and
+  // threaded alike.
+  TriMesh m = merged(torus(128, 40, 1.0, 0.3), icosphere(3), Vec3(2.6, 0, 0));
+  REQUIRE(m.num_triangles() > 4096);
+  const std::vector<Vec3> start = m.positions;
+  const int n_torus = 128 * 40;
+  MeshBvh refit;
+  REQUIRE(build_bvh(m, refit).ok());
+  BvhRefitIndex index;
+  build_refit_index(refit, index);
+  MeshBvh partial = refit;  // refit through refit_bvh_vertices
+  uint64_t state = 777;
+  auto uniform = [&]() {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(state >> 11) / 9007199254740992.0;
+  };
+  size_t crossings_seen = 0;
+  for (int trial = 1; trial <= 5; ++trial) {
+    std::vector<int> moved;
+    for (int v = 0; v < static_cast<int>(m.positions.size()); ++v) {
+      Vec3 p = start[v];
+      if (v < n_torus) {
+        // A pleat: a band of the tube folded back on itself by a sharp
+        // sideways kink whose depth grows with the trial.
+        const double angle = std::atan2(p.y(), p.x());
+        const double band = std::exp(-std::pow((angle - 0.5) / 0.04, 2));
+        p += 0.08 * trial * band * Vec3(-std::sin(angle), std::cos(angle), 0) *
+             std::sin(40.0 * p.z());
+        p += 0.002 * trial * Vec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5);
+      } else {
+        p += Vec3(-0.35 * trial, 0.03 * trial, 0);  // the sphere slides into the torus
+      }
+      if (p != m.positions[v]) moved.push_back(v);
+      m.positions[v] = p;
+    }
+    REQUIRE(refit_bvh(m, refit).ok());
+    REQUIRE(refit_bvh_vertices(partial, index, m.positions, moved).ok());
+    MeshBvh fresh;
+    REQUIRE(build_bvh(m, fresh).ok());
+    std::vector<std::array<int, 2>> a, b, c, serial;
+    find_self_intersections(refit, a);
+    find_self_intersections(fresh, b);
+    find_self_intersections(partial, c);
+    SelfIntersectionOptions capped;  // a cap keeps the search on one thread
+    capped.max_pairs = 1 << 30;
+    find_self_intersections(refit, serial, capped);
+    INFO("trial " << trial << ": refit " << a.size() << ", fresh " << b.size() << ", partial refit " << c.size()
+                  << ", serial on the refit tree " << serial.size());
+    CHECK(a == b);
+    CHECK(c == b);
+    CHECK(serial == b);
+    crossings_seen += b.size();
+    std::vector<int> listed;
+    for (int f = trial; f < m.num_triangles(); f += 5) listed.push_back(f);
+    find_intersections_with(refit, listed, a);
+    find_intersections_with(fresh, listed, b);
+    CHECK(a == b);
+    REQUIRE(find_new_self_intersections(refit, start, a).ok());
+    REQUIRE(find_new_self_intersections(fresh, start, b).ok());
+    CHECK(a == b);
+  }
+  CHECK(crossings_seen > 200);  // the folds did make crossings to compare
+}
+
+TEST_CASE("self-intersections: a flat sheet with rounding noise does not cross itself", "[raycast]") {
+  // A 40 x 40 grid at z = 0.2 whose heights carry noise of 1e-14 (what
+  // subdividing a flat control mesh leaves): four nearly coplanar points
+  // have the sign of their rounding noise, and unfiltered orientations
+  // reported side-by-side triangles as crossing. Every pair is tested
+  // (brute force), so no tree decides which noise is seen.
+  TriMesh sheet;
+  const int n = 40;
+  uint64_t state = 99;
+  auto noise = [&]() {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return (static_cast<double>(state >> 11) / 9007199254740992.0 - 0.5) * 2e-14;
+  };
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j <= n; ++j)
+      sheet.positions.push_back(Vec3(0.05 + 0.00625 * i + noise(), 0.1 + 0.00625 * j + noise(), 0.2 + noise()));
+  auto id = [&](int i, int j) { return i * (n + 1) + j; };
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      sheet.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      sheet.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  CHECK(brute_force(sheet).empty());
+  std::vector<std::array<int, 2>> pairs;
+  REQUIRE(find_self_intersections(sheet, pairs).ok());
+  CHECK(pairs.empty());
+  // A copy laid on a noise-free sheet (exactly coplanar, shifted by a third
+  // of a cell): every copy triangle overlaps sheet triangles in the plane,
+  // and coplanar overlap counts as crossing.
+  TriMesh flat = sheet;
+  for (Vec3& p : flat.positions) p.z() = 0.2;
+  TriMesh both = merged(flat, flat, Vec3(0.00625 / 3, 0.00625 / 3, 0));
+  REQUIRE(find_self_intersections(both, pairs).ok());
+  const int nf = sheet.num_triangles();
+  std::vector<char> copy_hit(nf, 0);
+  for (const auto& p : pairs) {
+    CHECK(p[0] < nf);  // every pair is sheet x copy
+    CHECK(p[1] >= nf);
+    if (p[1] >= nf) copy_hit[p[1] - nf] = 1;
+  }
+  CHECK(std::count(copy_hit.begin(), copy_hit.end(), 1) == nf);
+  // Two triangles of a subdivided flat sheet (the fold relief's test level),
+  // side by side and a cell apart (their boxes are apart), once reported
+  // crossing.
+  {
+    const Vec3 a0(0.56249999999981692, 0.86249999999981231, 0.20000000000001703),
+        a1(0.5687499999998199, 0.86249999999981419, 0.20000000000001961),
+        a2(0.56874999999982156, 0.86874999999981528, 0.20000000000001922),
+        b0(0.56249999999982059, 0.87499999999981459, 0.20000000000001636),
+        b1(0.56874999999982323, 0.87499999999981637, 0.20000000000001883),
+        b2(0.5687499999998249, 0.88124999999981746, 0.20000000000001844);
+    CHECK_FALSE(triangles_intersect(a0, a1, a2, b0, b1, b2));
+    CHECK_FALSE(triangles_intersect(b0, b1, b2, a0, a1, a2));
+    CHECK_FALSE(segment_intersects_triangle(b0, b2, a0, a1, a2));
+    CHECK_FALSE(segment_intersects_triangle(b0, b1, a0, a1, a2));
+    CHECK_FALSE(segment_intersects_triangle(b1, b2, a0, a1, a2));
+    CHECK_FALSE(segment_intersects_triangle(a0, a1, b0, b1, b2));
+    CHECK_FALSE(segment_intersects_triangle(a1, a2, b0, b1, b2));
+    CHECK_FALSE(segment_intersects_triangle(a2, a0, b0, b1, b2));
+  }
+  // Orientation: sure signs are kept, noise is 0.
+  CHECK(orient3d(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0.3, 0.3, 1e-9)) > 0);
+  CHECK(orient3d(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0.3, 0.3, -1e-9)) < 0);
+  CHECK(orient3d(Vec3(0.1, 0.2, 0.3), Vec3(0.4, 0.5, 0.6), Vec3(0.7, 0.8, 0.9), Vec3(1.0, 1.1, 1.2)) == 0.0);
 }
