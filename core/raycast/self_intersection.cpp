@@ -57,6 +57,35 @@ bool point_in_triangle_2d(const Vec2& p, const Vec2& a, const Vec2& b, const Vec
   return (s1 >= 0 && s2 >= 0 && s3 >= 0) || (s1 <= 0 && s2 <= 0 && s3 <= 0);
 }
 
+// A point in the plane of triangle (a, b, c) with normal n: inside or on
+// its edges, in the projection that drops n's largest axis.
+bool coplanar_point_in_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& n) {
+  int drop = 0;
+  n.cwiseAbs().maxCoeff(&drop);
+  const int i = (drop + 1) % 3, j = (drop + 2) % 3;
+  return point_in_triangle_2d(Vec2(p[i], p[j]), Vec2(a[i], a[j]), Vec2(b[i], b[j]), Vec2(c[i], c[j]));
+}
+
+// A computed crossing point x (rounded, so off the plane and off an edge
+// by a few ulps of `scale`, the segment's largest coordinate) in triangle
+// (a, b, c): inside or within 1e-13 scale of an edge, in the projection
+// that drops n's largest axis.
+bool crossing_in_triangle(const Vec3& x, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& n, double scale) {
+  int drop = 0;
+  n.cwiseAbs().maxCoeff(&drop);
+  const int i = (drop + 1) % 3, j = (drop + 2) % 3;
+  const Vec2 P(x[i], x[j]), A(a[i], a[j]), B(b[i], b[j]), C(c[i], c[j]);
+  const double tol = 1e-13 * std::max(scale, a.cwiseAbs().cwiseMax(b.cwiseAbs()).cwiseMax(c.cwiseAbs()).maxCoeff());
+  // Signed distances of P from the edges' lines (> 0 on the triangle's side
+  // when it is counter-clockwise in the projection).
+  auto side = [&](const Vec2& u, const Vec2& v) {
+    const double len = (v - u).norm();
+    return len > 0 ? ((v.x() - u.x()) * (P.y() - u.y()) - (v.y() - u.y()) * (P.x() - u.x())) / len : 0.0;
+  };
+  const double d1 = side(A, B), d2 = side(B, C), d3 = side(C, A);
+  return (d1 >= -tol && d2 >= -tol && d3 >= -tol) || (d1 <= tol && d2 <= tol && d3 <= tol);
+}
+
 // Segment and triangle in one plane with normal n: drop n's largest axis.
 bool coplanar_segment_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c,
                                const Vec3& n) {
@@ -163,17 +192,26 @@ namespace {
 inline bool segment_meets_triangle(const Vec3& p, const Vec3& q, double dp, double dq, const Vec3& a, const Vec3& b,
                                    const Vec3& c) {
   if ((dp > 0 && dq > 0) || (dp < 0 && dq < 0)) return false;
-  if (dp == 0 && dq == 0) {
+  if (dp == 0 || dq == 0) {
     const Vec3 n = (b - a).cross(c - a);
-    if (n.squaredNorm() == 0) return false;  // a degenerate triangle has no plane to share
-    return coplanar_segment_triangle(p, q, a, b, c, n);
+    if (n.squaredNorm() == 0) return false;  // a degenerate triangle has no plane to meet
+    if (dp == 0 && dq == 0) return coplanar_segment_triangle(p, q, a, b, c, n);
+    // One end on the plane (the other strictly off it): that end, in the plane.
+    return coplanar_point_in_triangle(dp == 0 ? p : q, a, b, c, n);
   }
   // The segment spans the plane: it meets the triangle iff its line passes
-  // on the same side of all three edges.
+  // on the same side of all three edges. A side too close to call (the
+  // line nearly in the plane, or through an edge) is decided by the
+  // crossing point itself, in the plane.
   const double s1 = orient3d(p, q, a, b), s2 = orient3d(p, q, b, c);
   if ((s1 > 0 && s2 < 0) || (s1 < 0 && s2 > 0)) return false;
   const double s3 = orient3d(p, q, c, a);
-  return (s1 >= 0 && s2 >= 0 && s3 >= 0) || (s1 <= 0 && s2 <= 0 && s3 <= 0);
+  if ((s1 > 0 && s3 < 0) || (s1 < 0 && s3 > 0) || (s2 > 0 && s3 < 0) || (s2 < 0 && s3 > 0)) return false;
+  if (s1 != 0 && s2 != 0 && s3 != 0) return true;
+  const Vec3 n = (b - a).cross(c - a);
+  if (n.squaredNorm() == 0) return false;
+  return crossing_in_triangle(p + (dp / (dp - dq)) * (q - p), a, b, c, n,
+                              p.cwiseAbs().cwiseMax(q.cwiseAbs()).maxCoeff());
 }
 
 }  // namespace
