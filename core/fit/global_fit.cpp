@@ -401,6 +401,10 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
   for (double share : options.smooth_guard_relief_shares)
     if (!(share > 0) || !std::isfinite(share))
       return Status::error(ErrorCode::InvalidInput, "global fit: smooth_guard_relief_shares must be positive and finite");
+  if (!(options.smooth_guard_crease_min_angle_deg >= 0 && options.smooth_guard_crease_min_angle_deg < 180))
+    return Status::error(ErrorCode::InvalidInput, "global fit: smooth_guard_crease_min_angle_deg must be in [0, 180)");
+  if (options.smooth_guard_crease_trials < 0 || options.smooth_guard_crease_max_edges < 0)
+    return Status::error(ErrorCode::InvalidInput, "global fit: smooth_guard_crease_trials and _max_edges must be >= 0");
   if (options.smooth_guard_relief_level < 0 || options.smooth_guard_relief_level > 4)
     return Status::error(ErrorCode::InvalidInput, "global fit: smooth_guard_relief_level must be 0 (off) to 4");
   if (options.smooth_weights.empty())
@@ -910,7 +914,9 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       // both faces within four rings (they share a corner). Those faces'
       // level triangles are searched on their own tree, the pairs of
       // `current` outside `active` stay.
-      auto folds_at = [&](const VecX& trial, const std::vector<int>& moving) {
+      // `outside`: the folds kept for the level triangles outside `active`.
+      auto folds_in_window = [&](const std::vector<Vec3>& level_positions, const std::vector<Vec3>& reference_level,
+                                 const std::vector<int>& moving, const std::vector<std::array<int, 2>>& outside) {
         std::vector<int> ring_of(nv, -1);
         std::vector<int> frontier = moving;
         for (int v : moving) ring_of[v] = 0;
@@ -922,7 +928,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
           frontier = std::move(next);
         }
         TriMesh window;
-        window.positions = relief.refine(trial);
+        window.positions = level_positions;
         std::vector<int> window_faces;  // level triangle ids
         std::fill(active.begin(), active.end(), 0);
         for (int f = 0; f < mesh.num_triangles(); ++f) {
@@ -938,18 +944,21 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
         }
         MeshBvh window_bvh;
         std::vector<std::array<int, 2>> pairs;
-        if (build_bvh(window, window_bvh).ok()) find_new_self_intersections(window_bvh, relief.reference_level, pairs);
+        if (build_bvh(window, window_bvh).ok()) find_new_self_intersections(window_bvh, reference_level, pairs);
         for (auto& p : pairs) {
           p = {window_faces[p[0]], window_faces[p[1]]};
           if (p[0] > p[1]) std::swap(p[0], p[1]);
         }
         drop_ignored(pairs);
         keep_folds(pairs);
-        for (const auto& p : current)
+        for (const auto& p : outside)
           if (!active[p[0]] && !active[p[1]]) pairs.push_back(p);
         std::sort(pairs.begin(), pairs.end());
         pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
         return pairs;
+      };
+      auto folds_at = [&](const VecX& trial, const std::vector<int>& moving) {
+        return folds_in_window(relief.refine(trial), relief.reference_level, moving, current);
       };
       std::vector<char> failed(nv, 0);
       for (int step = 0; step < options.smooth_guard_relief_steps && !current.empty(); ++step) {
@@ -1014,10 +1023,12 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
         find_new_self_intersections(relief.bvh, relief.reference_level, pairs);
         drop_ignored(pairs);
       };
+      std::vector<std::array<int, 2>> all_now = pairs_before_relief;  // the level's new pairs at x
       if (result.relief_steps > 0) {
         std::vector<std::array<int, 2>> after;
         all_new_pairs(x, after);
         if (after.size() < pairs_before_relief.size()) {
+          all_now = after;
           keep_folds(after);
           result.relief_folds_after = static_cast<int>(after.size());
         } else {
@@ -1030,6 +1041,79 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
         result.relief_folds_after = result.relief_folds_before;
       }
       for (int v = 0; v < nv; ++v) result.relief_vertices += moved_ever[v];
+      if (options.smooth_guard_crease_max_edges > 0 && result.relief_folds_after > 0) {
+        // Fold creases (header comment): the folds the steps left, as the
+        // whole level has them now.
+        std::vector<std::array<int, 2>> folds = all_now;
+        keep_folds(folds);
+        std::vector<Vec3> control(nv), reference_positions(nv);
+        from_vector(x, control);
+        from_vector(reference, reference_positions);
+        auto unit_normal = [&](int f) {
+          const Tri& t = mesh.triangles[f];
+          return (control[t[1]] - control[t[0]]).cross(control[t[2]] - control[t[0]]).normalized();
+        };
+        const double cos_min = std::cos(options.smooth_guard_crease_min_angle_deg * std::acos(-1.0) / 180.0);
+        ButterflyCreases creases = terms.smooth_creases;
+        std::vector<char> creased(topology.edges.size(), 0), tried(topology.edges.size(), 0);
+        for (const auto& e : creases.edges) {
+          const int k = topology.find_edge(e[0], e[1]);
+          if (k >= 0) creased[k] = 1;
+        }
+        std::vector<ButterflyLevel> trial_levels;
+        std::vector<std::vector<Vec3>> refined;
+        std::vector<std::array<int, 2>> chosen;
+        for (int trial = 0; trial < options.smooth_guard_crease_trials && !folds.empty() &&
+                            static_cast<int>(chosen.size()) < options.smooth_guard_crease_max_edges;
+             ++trial) {
+          // The sharpest uncreased, untried edge of the folding faces.
+          int pick = -1;
+          double pick_cos = cos_min;
+          for (const auto& p : folds)
+            for (int f : {p[0] / per, p[1] / per})
+              for (int k : topology.face_edges[f]) {
+                const Edge& e = topology.edges[k];
+                if (e.boundary() || creased[k] || tried[k]) continue;
+                const double c = unit_normal(e.f0).dot(unit_normal(e.f1));
+                if (c < pick_cos) pick_cos = c, pick = k;
+              }
+          if (pick < 0) break;
+          tried[pick] = 1;
+          ButterflyCreases with = creases;
+          with.edges.push_back({topology.edges[pick].v0, topology.edges[pick].v1});
+          close_crease_ends(with);
+          if (!build_butterfly_levels(mesh, with, options.smooth_guard_relief_level, trial_levels).ok()) continue;
+          apply_all(trial_levels, reference_positions, refined);
+          const std::vector<Vec3> trial_reference = std::move(refined.back());
+          apply_all(trial_levels, control, refined);
+          std::vector<std::array<int, 2>> now = folds_in_window(
+              refined.back(), trial_reference, {topology.edges[pick].v0, topology.edges[pick].v1}, folds);
+          if (now.size() >= folds.size()) continue;
+          creases = std::move(with);
+          creased[pick] = 1;
+          folds = std::move(now);
+          chosen.push_back({topology.edges[pick].v0, topology.edges[pick].v1});
+        }
+        if (!chosen.empty()) {
+          // Kept only when the whole level, with the creases, has fewer new
+          // pairs (folds or not) than without them.
+          std::vector<std::array<int, 2>> all_creased;
+          if (build_butterfly_levels(mesh, creases, options.smooth_guard_relief_level, trial_levels).ok()) {
+            apply_all(trial_levels, reference_positions, refined);
+            const std::vector<Vec3> trial_reference = std::move(refined.back());
+            apply_all(trial_levels, control, refined);
+            relief.level.positions = std::move(refined.back());
+            refit_bvh(relief.level, relief.bvh);
+            find_new_self_intersections(relief.bvh, trial_reference, all_creased);
+            drop_ignored(all_creased);
+            if (all_creased.size() < all_now.size()) {
+              result.fold_crease_edges = chosen;
+              keep_folds(all_creased);
+              result.relief_folds_after = static_cast<int>(all_creased.size());
+            }
+          }
+        }
+      }
     }
   }
   result.rounds = rounds;

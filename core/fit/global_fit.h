@@ -115,6 +115,19 @@
 //   carry the detail they leave); vertices under E_constraint or ignored by
 //   the guard never do. Not a term of E_global: the step after the
 //   minimization, like the untangling in fit_head.
+// - Fold creases (GlobalFitOptions::smooth_guard_crease_*), after the
+//   relief. Some folds do not answer the umbrella step: where James's plate
+//   ear meets his head a control edge bends 105-141 deg, and Butterfly's
+//   8-point stencil reaching across it overshoots into a pleat (14 smooth
+//   level-3 pairs in one ear face, left by the relief at every share). Such
+//   an edge refined as a crease (the 4-point rule along it, the two sides
+//   no longer mixed) does not pleat, and a crease at a sharp bend is where
+//   the surface turns anyway. So the sharpest uncreased edge of a face that
+//   still folds is tried as a crease, counted on the window's tree, and
+//   kept when the folds there drop; the set is kept only when a search of
+//   the whole level has fewer new pairs. The edges go to the subdivision
+//   stage (GlobalFitResult::fold_crease_edges), which refines them as
+//   creases like the eye rims and lip lines. Positions are not changed.
 // - Why the aligned template and not the local fit as rest shape: local
 //   fitting moves each feature box by an affine map and blends the rest, so
 //   its shape has steps at the box walls (a ridge across James's nose bridge
@@ -199,6 +212,17 @@ struct GlobalFitOptions {
   int smooth_guard_relief_level = 3;
   int smooth_guard_relief_steps = 3;
   std::vector<double> smooth_guard_relief_shares = {0.25, 0.5};
+  // Fold creases (see header comment), after the relief's steps: up to
+  // smooth_guard_crease_trials times, the sharpest control edge (dihedral
+  // above smooth_guard_crease_min_angle_deg) of a face that still folds is
+  // tried as a crease of the levels; it is kept when the folds around it
+  // drop. At most smooth_guard_crease_max_edges edges (0: off), kept only
+  // when the whole level has fewer new pairs with them
+  // (GlobalFitResult::fold_crease_edges; the subdivision stage refines
+  // them as creases).
+  int smooth_guard_crease_max_edges = 4;
+  int smooth_guard_crease_trials = 6;
+  double smooth_guard_crease_min_angle_deg = 40.0;
 };
 
 // Terms of E_binding and E_constraint, from the head's annotations.
@@ -262,6 +286,9 @@ struct GlobalFitResult {
   int relief_folds_after = 0;
   int relief_steps = 0;
   int relief_vertices = 0;
+  // Fold creases: control edges to refine as creases (pairs of vertices),
+  // empty when none was kept.
+  std::vector<std::array<int, 2>> fold_crease_edges;
 };
 
 // points: the scan points to fit (already stripped of clipped regions), #P.

@@ -245,6 +245,7 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
   return Status::success();
 }
 
+
 }  // namespace
 
 Status orientation_from_conventions(const Vec3& up, const Vec3& facing, Mat3& rotation) {
@@ -528,6 +529,11 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   if (options.carry_mouth_bag) {
     st = carry_mouth_bag(mouth_bag, topo, out.local, out.control);
     if (!st) return with_context(st, "global fitting (mouth bag)");
+  }
+  // The fold creases the global fit chose are refined as creases from here on.
+  if (!out.global_fit.fold_crease_edges.empty()) {
+    for (const auto& e : out.global_fit.fold_crease_edges) creases.edges.push_back(e);
+    close_crease_ends(creases);
   }
   stage_done("global_fitting", out.control, pts);
 

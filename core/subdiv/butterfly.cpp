@@ -354,6 +354,21 @@ void add_crease_polyline(const std::vector<int>& vertices, bool closed, Butterfl
   }
 }
 
+void close_crease_ends(ButterflyCreases& creases) {
+  std::vector<std::array<int, 2>> ends;  // (vertex, tagged edges)
+  for (const auto& e : creases.edges)
+    if (e[0] != e[1]) ends.push_back({e[0], 1}), ends.push_back({e[1], 1});
+  std::sort(ends.begin(), ends.end());
+  for (size_t i = 0; i < ends.size();) {
+    size_t j = i;
+    while (j < ends.size() && ends[j][0] == ends[i][0]) ++j;
+    if (j - i != 2) creases.corners.push_back(ends[i][0]);
+    i = j;
+  }
+  std::sort(creases.corners.begin(), creases.corners.end());
+  creases.corners.erase(std::unique(creases.corners.begin(), creases.corners.end()), creases.corners.end());
+}
+
 Status build_butterfly_levels(const TriMesh& control, int levels, std::vector<ButterflyLevel>& out,
                               int max_fine_triangles) {
   return build_butterfly_levels(control, ButterflyCreases{}, levels, out, max_fine_triangles);

@@ -106,6 +106,11 @@ struct ButterflyCreases {
 // polyline's two ends become corners.
 void add_crease_polyline(const std::vector<int>& vertices, bool closed, ButterflyCreases& creases);
 
+// Makes every vertex with one or more than two tagged edges a corner (an
+// open end, or where curves meet), as add_crease_polyline does for its
+// ends; for creases assembled edge by edge.
+void close_crease_ends(ButterflyCreases& creases);
+
 // The same with creases. Fails (InvalidInput) also when a crease names a
 // vertex out of range or two vertices that share no edge; with empty creases
 // the result is identical to the overload above.

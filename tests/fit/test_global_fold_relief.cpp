@@ -72,6 +72,7 @@ TEST_CASE("global fit: the fold relief leaves a fit without folds alone") {
   CHECK(level3.all == 0);
   CHECK(r_on.relief_folds_before == 0);
   CHECK(r_on.relief_steps == 0);
+  CHECK(r_on.fold_crease_edges.empty());
   CHECK(out_on.positions == out_off.positions);
   // The relief is part of the smooth-surface guard: off with it.
   GlobalFitOptions unguarded;
@@ -94,5 +95,16 @@ TEST_CASE("global fit: the fold relief refuses bad options") {
   CHECK(fit_global(c.points, c.start, c.topo, c.terms(), o, out, r).code == ErrorCode::InvalidInput);
   o = guarded_options();
   o.smooth_guard_relief_level = 9;
+  CHECK(fit_global(c.points, c.start, c.topo, c.terms(), o, out, r).code == ErrorCode::InvalidInput);
+  o = guarded_options();
+  o.smooth_guard_crease_min_angle_deg = std::nan("");
+  CHECK(fit_global(c.points, c.start, c.topo, c.terms(), o, out, r).code == ErrorCode::InvalidInput);
+  o.smooth_guard_crease_min_angle_deg = 180;
+  CHECK(fit_global(c.points, c.start, c.topo, c.terms(), o, out, r).code == ErrorCode::InvalidInput);
+  o = guarded_options();
+  o.smooth_guard_crease_trials = -1;
+  CHECK(fit_global(c.points, c.start, c.topo, c.terms(), o, out, r).code == ErrorCode::InvalidInput);
+  o = guarded_options();
+  o.smooth_guard_crease_max_edges = -2;
   CHECK(fit_global(c.points, c.start, c.topo, c.terms(), o, out, r).code == ErrorCode::InvalidInput);
 }

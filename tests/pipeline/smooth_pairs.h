@@ -13,10 +13,10 @@
 
 namespace lk::test {
 
-inline int smooth_region_pairs(const TriMesh& control, const HeadAnnotations& ann, int level,
-                               const std::string& region) {
-  ButterflyCreases creases;
-  for (const CreaseCurve& c : ann.creases) add_crease_polyline(c.vertices, c.closed, creases);
+// With the given creases (a fit's MultiresMesh::creases, which may hold
+// more than the head's curves: GlobalFitResult::fold_crease_edges).
+inline int smooth_region_pairs(const TriMesh& control, const ButterflyCreases& creases, const HeadAnnotations& ann,
+                               int level, const std::string& region) {
   MultiresMesh mr;
   REQUIRE(build_multires(control, creases, level, mr).ok());
   const TriMesh mesh = level_mesh(mr, level);
@@ -25,6 +25,14 @@ inline int smooth_region_pairs(const TriMesh& control, const HeadAnnotations& an
   const auto it = ann.regions.find(region);
   REQUIRE(it != ann.regions.end());
   return count_pairs_touching(mr, level, pairs, it->second);
+}
+
+// With the head's crease curves (HeadAnnotations::creases).
+inline int smooth_region_pairs(const TriMesh& control, const HeadAnnotations& ann, int level,
+                               const std::string& region) {
+  ButterflyCreases creases;
+  for (const CreaseCurve& c : ann.creases) add_crease_polyline(c.vertices, c.closed, creases);
+  return smooth_region_pairs(control, creases, ann, level, region);
 }
 
 }  // namespace lk::test

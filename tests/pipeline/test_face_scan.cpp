@@ -310,3 +310,67 @@ TEST_CASE("fit_head: the real James (menpo3d face capture in mm)") {
     CHECK(fitted.norm() < 0.0045);
   }
 }
+
+TEST_CASE("fit_head: the real James's ear folds are refined as creases") {
+  // Where his plate ears meet his head a control edge bends 105-141 deg and
+  // the smooth level 3 pleats there (14-18 ear pairs; the fold relief's
+  // umbrella steps leave them at every share). The global fit hands such
+  // edges to the subdivision as creases (GlobalFitResult::fold_crease_edges).
+  LK_REQUIRE_SHARED("head_scans/james_menpo3d/james.obj");
+  PointCloud james;
+  REQUIRE(load_point_cloud_file(lk::test::shared_data_dir() + "/head_scans/james_menpo3d/james.obj", james).ok());
+  const HeadAnnotations& ann = truth().generic.annotations;
+  FitHeadResult r;
+  REQUIRE(fit_head(james, truth().generic, quick(), r).ok());
+  INFO(r.global_fit.fold_crease_edges.size() << " fold creases; relief folds " << r.global_fit.relief_folds_before
+                                             << " -> " << r.global_fit.relief_folds_after);
+  REQUIRE_FALSE(r.global_fit.fold_crease_edges.empty());
+  CHECK(r.global_fit.fold_crease_edges.size() <= 4);
+  // The creases are the fit's: refined with them, the ears no longer cross;
+  // the same control mesh with the head's curves alone still does.
+  const int with = test::smooth_region_pairs(r.control, r.multires.creases, ann, 3, "ears");
+  const int without = test::smooth_region_pairs(r.control, ann, 3, "ears");
+  INFO("smooth level-3 ear pairs: " << with << " with the fold creases, " << without << " without");
+  CHECK(with == 0);
+  CHECK(without >= 10);
+  // Off: no creases handed over, the ears cross.
+  FitHeadOptions off = quick();
+  off.global.smooth_guard_crease_max_edges = 0;
+  FitHeadResult r_off;
+  REQUIRE(fit_head(james, truth().generic, off, r_off).ok());
+  CHECK(r_off.global_fit.fold_crease_edges.empty());
+  CHECK(test::smooth_region_pairs(r_off.control, r_off.multires.creases, ann, 3, "ears") >= 10);
+}
+
+TEST_CASE("fit_head: the fold relief takes out folds of the real James's smooth level 3") {
+  // His fitted control mesh has sliver faces with sharp kinks (a cheek face
+  // 36/8/136 deg, dihedral 84 deg where the template has 0.3): level 2 is
+  // clean after the guard, level 3 folds inside faces sharing a corner. The
+  // relief steps those corners' umbrella vectors towards the template's.
+  // The fold creases are off in both fits, so the relief is measured alone.
+  LK_REQUIRE_SHARED("head_scans/james_menpo3d/james.obj");
+  PointCloud james;
+  REQUIRE(load_point_cloud_file(lk::test::shared_data_dir() + "/head_scans/james_menpo3d/james.obj", james).ok());
+  const HeadAnnotations& ann = truth().generic.annotations;
+  FitHeadOptions on = quick(), off = quick();
+  on.global.smooth_guard_crease_max_edges = 0;
+  off.global.smooth_guard_crease_max_edges = 0;
+  off.global.smooth_guard_relief_steps = 0;
+  FitHeadResult r_on, r_off;
+  REQUIRE(fit_head(james, truth().generic, on, r_on).ok());
+  REQUIRE(fit_head(james, truth().generic, off, r_off).ok());
+  INFO("relief: folds " << r_on.global_fit.relief_folds_before << " -> " << r_on.global_fit.relief_folds_after << " in "
+                        << r_on.global_fit.relief_steps << " steps, " << r_on.global_fit.relief_vertices << " vertices");
+  CHECK(r_on.global_fit.relief_folds_before >= 20);  // 61 measured
+  CHECK(r_on.global_fit.relief_folds_after < r_on.global_fit.relief_folds_before);
+  CHECK(r_on.global_fit.relief_steps > 0);
+  CHECK(r_on.global_fit.relief_vertices > 0);
+  CHECK(r_on.global_fit.relief_vertices <= 40);  // local: 9 of 1366 control vertices measured
+  CHECK(r_off.global_fit.relief_steps == 0);
+  // Counted independently on the smooth level 3: fewer pairs outside the
+  // lips and ears (the relief's folds are cheek, brow and eye-rim pleats).
+  const int rest_on = test::smooth_region_pairs(r_on.control, r_on.multires.creases, ann, 3, "face");
+  const int rest_off = test::smooth_region_pairs(r_off.control, r_off.multires.creases, ann, 3, "face");
+  INFO("smooth level-3 pairs touching the face: " << rest_on << " with the relief, " << rest_off << " without");
+  CHECK(rest_on < rest_off);
+}
