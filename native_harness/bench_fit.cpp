@@ -197,8 +197,8 @@ int print_self_intersections(const FitHeadResult& r, const HeadAnnotations& ann,
   }
   std::vector<std::array<int, 2>> control_pairs;
   find_self_intersections(r.control, control_pairs);
-  std::printf("   self-intersecting triangle pairs: level %d %zu (lips %d, ears %d, rest %d); control mesh %zu\n", L,
-              pairs.size(), c.lips, c.ears, c.rest, control_pairs.size());
+  std::printf("   self-intersecting triangle pairs: level %d %zu (lips %d, ears %d, eye sockets %d, rest %d); control mesh %zu\n", L,
+              pairs.size(), c.lips, c.ears, c.eye_sockets, c.rest, control_pairs.size());
   return static_cast<int>(pairs.size());
 }
 
@@ -482,8 +482,8 @@ int run(const Args& args) {
         find_self_intersections(level_mesh(generic_plain, smooth.num_levels()), generic_plain_pairs);
       find_self_intersections(r.aligned, generic_control_pairs);
       const CrossingCounts sc = count_crossings_by_region(smooth, smooth.num_levels(), smooth_pairs, generic.annotations);
-      std::printf("   smooth (undisplaced) level %d: %zu self-intersecting pairs (lips %d, ears %d, rest %d); the aligned generic head's: %zu with %zu crease edges, %zu without (its control mesh %zu)\n",
-                  smooth.num_levels(), smooth_pairs.size(), sc.lips, sc.ears, sc.rest, generic_pairs.size(),
+      std::printf("   smooth (undisplaced) level %d: %zu self-intersecting pairs (lips %d, ears %d, eye sockets %d, rest %d); the aligned generic head's: %zu with %zu crease edges, %zu without (its control mesh %zu)\n",
+                  smooth.num_levels(), smooth_pairs.size(), sc.lips, sc.ears, sc.eye_sockets, sc.rest, generic_pairs.size(),
                   r.multires.creases.edges.size(), generic_plain_pairs.size(), generic_control_pairs.size());
       if (!save.empty()) {
         TriMesh sm = level_mesh(smooth, smooth.num_levels()), crossing;

@@ -39,13 +39,13 @@ inline const std::vector<PaperStage>& paper_table() {
 // The checks of the finest level, in two lines under the table.
 inline void print_fit_quality(const FitQuality& q) {
   std::printf("  level %d: %d triangles, %d turned over by a displacement, %d degenerate; %d self-intersecting pairs "
-              "(lips %d, ears %d, rest %d)\n",
+              "(lips %d, ears %d, eye sockets %d, rest %d)\n",
               q.level, q.triangles, q.flipped, q.degenerate, q.crossings.total, q.crossings.lips, q.crossings.ears,
-              q.crossings.rest);
+              q.crossings.eye_sockets, q.crossings.rest);
   std::printf("  the fitted control mesh crosses itself in %d triangle pairs; its smooth level %d in %d (lips %d, ears %d, "
-              "rest %d)\n",
+              "eye sockets %d, rest %d)\n",
               q.control_crossings, q.level, q.smooth_crossings.total, q.smooth_crossings.lips, q.smooth_crossings.ears,
-              q.smooth_crossings.rest);
+              q.smooth_crossings.eye_sockets, q.smooth_crossings.rest);
 }
 
 inline void print_fit_table(const std::vector<TimedStage>& stages) {
@@ -86,7 +86,14 @@ struct StageClock {
 
 inline void json_crossings(std::ostringstream& j, const char* name, const CrossingCounts& c) {
   j << "\"" << name << "\": {\"total\": " << c.total << ", \"lips\": " << c.lips << ", \"ears\": " << c.ears
-    << ", \"rest\": " << c.rest << "}";
+    << ", \"eye_sockets\": " << c.eye_sockets << ", \"rest\": " << c.rest << ", \"rest_by_region\": {";
+  // Where the "rest" pairs are (regions overlap, so these need not sum to rest).
+  bool first = true;
+  for (const auto& kv : c.rest_by_region) {
+    j << (first ? "" : ", ") << "\"" << kv.first << "\": " << kv.second;
+    first = false;
+  }
+  j << "}}";
 }
 
 // report.json; `quality` (may be null) adds the checks of the finest level.

@@ -717,12 +717,13 @@ val animate_frame(double amount, int level) {
   return r;
 }
 
-// {total, lips, ears, rest} of a CrossingCounts.
+// {total, lips, ears, eyeSockets, rest} of a CrossingCounts.
 val crossings_object(const lk::CrossingCounts& c) {
   val o = val::object();
   o.set("total", c.total);
   o.set("lips", c.lips);
   o.set("ears", c.ears);
+  o.set("eyeSockets", c.eye_sockets);
   o.set("rest", c.rest);
   return o;
 }
@@ -735,7 +736,7 @@ val crossings_object(const lk::CrossingCounts& c) {
 // when they are done (they cost about as much as a tenth of the fit); the
 // first call measures, later calls return the same numbers.
 // Returns {ok, level, triangles, flipped, degenerate, crossings, smoothCrossings
-// ({total, lips, ears, rest}), controlCrossings, checkMs}.
+// ({total, lips, ears, eyeSockets, rest}), controlCrossings, checkMs}.
 val fit_quality_job() {
   if (!g_session) return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "no fitted head to check"));
   FitSession& s = *g_session;

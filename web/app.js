@@ -1204,7 +1204,8 @@
   // scan's detail), and the control mesh's own crossings. Worded for a user:
   // what is fine, what to look at. fit.quality holds the worker's numbers.
   const count = (x) => Number(x).toLocaleString('en');
-  const byRegion = (c) => 'lips ' + count(c.lips) + ', ears ' + count(c.ears) + ', elsewhere ' + count(c.rest);
+  const byRegion = (c) => 'lips ' + count(c.lips) + ', ears ' + count(c.ears) + ', eye sockets ' + count(c.eyeSockets || 0) +
+                          ', elsewhere ' + count(c.rest);
 
   function qualityItem(cls, text) {
     const li = document.createElement('li');
@@ -1229,6 +1230,7 @@
       let text = count(c.total) + ' self-intersecting triangle pairs (' + byRegion(c) + ').';
       if (c.lips) text += ' The lips cross each other: they may show through one another when the mouth opens.';
       if (c.ears) text += ' At the ears: folds of the ear rims, which scans rarely capture well; the ears do not move in the animation.';
+      if (c.eyeSockets) text += ' In the eye sockets: behind the lids, where the eyeballs sit; hidden when the eyes are shown.';
       if (c.rest) text += ' Elsewhere: small overlaps, often at the eye rims, nose or brow; look there with Wireframe on.';
       qualityItem('look', text);
     }
@@ -1243,7 +1245,8 @@
     const look = [];
     if (q.flipped + q.degenerate) look.push(count(q.flipped + q.degenerate) + ' folded or degenerate triangles');
     if (c.total) {
-      const where = [['the lips', c.lips], ['the ears', c.ears], ['elsewhere', c.rest]].filter((w) => w[1])
+      const where = [['the lips', c.lips], ['the ears', c.ears], ['the eye sockets', c.eyeSockets || 0], ['elsewhere', c.rest]]
+        .filter((w) => w[1])
         .map((w) => w[0] + ' ' + count(w[1]));
       look.push('the surface crosses itself in ' + count(c.total) + ' triangle pairs (' + where.join(', ') + ')');
     }

@@ -4,6 +4,7 @@
 #include "head/generic_head.h"
 #include "mesh/geometry.h"
 #include "mesh/topology.h"
+#include "pipeline/head_pockets.h"
 #include "raycast/self_intersection.h"
 
 #include <Eigen/Eigenvalues>
@@ -36,46 +37,6 @@ std::vector<Vec3> thin(const std::vector<Vec3>& p, int max_points) {
   std::vector<Vec3> out;
   for (size_t i = 0; i < p.size(); i += stride) out.push_back(p[i]);
   return out;
-}
-
-// The pockets of the generic head (head_model.h): each eye socket is the
-// part of the mesh the eye rim loop cuts off from the rest of the head, the
-// mouth bag is the inner lip / bag set of constrained vertices. #V flags.
-std::vector<char> pocket_vertices(const TriMesh& mesh, const MeshTopology& topo, const HeadAnnotations& ann) {
-  const int nv = mesh.num_vertices();
-  std::vector<char> pocket(nv, 0);
-  for (const EyeSocket* eye : {&ann.eye_left, &ann.eye_right}) {
-    if (eye->rim.empty()) continue;
-    // Components of the mesh without the rim: all but the largest are inside.
-    std::vector<int> component(nv, -1);
-    for (int v : eye->rim)
-      if (v >= 0 && v < nv) component[v] = -2;
-    std::vector<int> sizes;
-    for (int seed = 0; seed < nv; ++seed) {
-      if (component[seed] != -1) continue;
-      const int id = static_cast<int>(sizes.size());
-      sizes.push_back(0);
-      std::vector<int> stack = {seed};
-      component[seed] = id;
-      while (!stack.empty()) {
-        const int v = stack.back();
-        stack.pop_back();
-        ++sizes[id];
-        for (int w : topo.rings[v])
-          if (component[w] == -1) {
-            component[w] = id;
-            stack.push_back(w);
-          }
-      }
-    }
-    if (sizes.size() < 2) continue;  // the rim cuts nothing off: no pocket
-    const int largest = static_cast<int>(std::max_element(sizes.begin(), sizes.end()) - sizes.begin());
-    for (int v = 0; v < nv; ++v)
-      if (component[v] >= 0 && component[v] != largest) pocket[v] = 1;
-  }
-  for (int v : ann.constrained_vertices)
-    if (v >= 0 && v < nv) pocket[v] = 1;
-  return pocket;
 }
 
 // The eye sockets and the mouth bag are pockets the scanner never sees; a
@@ -467,7 +428,7 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   // binds edge vectors): held in place, it made the lid margin between rim
   // and socket turn over wherever the lids moved (James: the eyes lie 10 mm
   // below where the alignment put the generic ones).
-  const std::vector<char> pocket = pocket_vertices(generic.mesh, topo, ann);
+  const std::vector<char> pocket = pocket_vertices(topo, ann);
   const std::vector<char> mouth_bag = vertex_mask(ann.constrained_vertices, static_cast<int>(pocket.size()));
   GlobalFitTerms terms;
   terms.binding_edges = ann.binding_edges;

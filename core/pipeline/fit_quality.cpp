@@ -3,6 +3,7 @@
 #include "head/generic_head.h"
 #include "mesh/geometry.h"
 #include "pipeline/fit_head.h"
+#include "pipeline/head_pockets.h"
 #include "raycast/self_intersection.h"
 
 #include <algorithm>
@@ -44,6 +45,20 @@ CrossingCounts count_crossings_by_region(const MultiresMesh& mesh, int level,
     return it == masks.end() ? none : it->second;
   };
   const std::vector<char>&lips = region("lips"), &ears = region("ears");
+  std::vector<char> sockets = none;
+  {
+    TriMesh control;  // connectivity only
+    control.positions.assign(mesh.num_vertices(0), Vec3::Zero());
+    control.triangles = mesh.triangles(0);
+    MeshTopology topo;
+    if (build_topology(control, topo).ok()) {
+      std::vector<int> socket_vertices;
+      const std::vector<char> flags = eye_socket_vertices(topo, annotations);
+      for (int v = 0; v < static_cast<int>(flags.size()); ++v)
+        if (flags[v]) socket_vertices.push_back(v);
+      sockets = level_mask(mesh, level, socket_vertices);
+    }
+  }
   auto touches = [&](const std::vector<char>& m, const std::array<int, 2>& p) { return pair_touches(tris, m, p); };
   CrossingCounts c;
   c.total = static_cast<int>(pairs.size());
@@ -52,6 +67,8 @@ CrossingCounts count_crossings_by_region(const MultiresMesh& mesh, int level,
       ++c.lips;
     } else if (touches(ears, p)) {
       ++c.ears;
+    } else if (touches(sockets, p)) {
+      ++c.eye_sockets;
     } else {
       ++c.rest;
       for (const auto& kv : masks)

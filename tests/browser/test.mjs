@@ -720,16 +720,16 @@ async function fitQualityShown(page, label, bytes, name, exact = true) {
     return shown.q;
   }
   const q = shown.q, n = native.quality || {};
-  const pairs = (c) => c ? [c.total, c.lips, c.ears, c.rest].join('/') : 'none';
+  const pairs = (c) => c ? [c.total, c.lips, c.ears, c.eyeSockets !== undefined ? c.eyeSockets : c.eye_sockets, c.rest].join('/') : 'none';
   const page4 = [q.level, q.triangles, q.flipped, q.degenerate, pairs(q.crossings), pairs(q.smoothCrossings), q.controlCrossings].join(' ');
   const cli4 = [n.level, n.triangles, n.flipped, n.degenerate, pairs(n.self_intersecting_pairs), pairs(n.smooth_surface_pairs),
                 n.control_mesh_pairs].join(' ');
   const fmt = (x) => Number(x).toLocaleString('en');
   const c = q.crossings || {}, sm = q.smoothCrossings || {};
   const inText = [`level ${q.level} (${fmt(q.triangles)} triangles)`,
-    c.total ? `${fmt(c.total)} self-intersecting triangle pairs (lips ${fmt(c.lips)}, ears ${fmt(c.ears)}, elsewhere ${fmt(c.rest)})`
+    c.total ? `${fmt(c.total)} self-intersecting triangle pairs (lips ${fmt(c.lips)}, ears ${fmt(c.ears)}, eye sockets ${fmt(c.eyeSockets)}, elsewhere ${fmt(c.rest)})`
             : 'No self-intersections',
-    sm.total ? `${fmt(sm.total)} pairs (lips ${fmt(sm.lips)}, ears ${fmt(sm.ears)}, elsewhere ${fmt(sm.rest)})` : 'no self-intersections',
+    sm.total ? `${fmt(sm.total)} pairs (lips ${fmt(sm.lips)}, ears ${fmt(sm.ears)}, eye sockets ${fmt(sm.eyeSockets)}, elsewhere ${fmt(sm.rest)})` : 'no self-intersections',
     q.flipped + q.degenerate ? `${fmt(q.flipped)} triangles turned over by the scan's detail, ${fmt(q.degenerate)} degenerate` : 'No folds',
     q.controlCrossings ? `crosses itself in ${fmt(q.controlCrossings)} triangle pairs` : 'does not cross itself'];
   const missing = inText.filter((t) => !shown.text.includes(t));
@@ -740,15 +740,17 @@ async function fitQualityShown(page, label, bytes, name, exact = true) {
     // Real scans may fit without a crossing (Fran has 0 pairs since e952a99),
     // so the wording for a head that crosses itself is checked on made-up counts.
     const made = { ...q, flipped: 3, degenerate: 1, controlCrossings: 2,
-                   crossings: { total: 1234, lips: 1, ears: 33, rest: 1200 }, smoothCrossings: { total: 7, lips: 0, ears: 7, rest: 0 } };
+                   crossings: { total: 1234, lips: 1, ears: 33, eyeSockets: 45, rest: 1155 },
+                   smoothCrossings: { total: 7, lips: 0, ears: 7, eyeSockets: 0, rest: 0 } };
     const madeText = await page.evaluate((m) => {
       window.likeness.showQuality(m);
       const text = document.getElementById('fit-quality').innerText;
       window.likeness.showQuality(window.likeness.fit.quality);
       return text;
     }, made);
-    const expected = ['1,234 self-intersecting triangle pairs (lips 1, ears 33, elsewhere 1,200)', 'The lips cross each other',
-      'At the ears', 'Elsewhere: small overlaps', '7 pairs (lips 0, ears 7, elsewhere 0)',
+    const expected = ['1,234 self-intersecting triangle pairs (lips 1, ears 33, eye sockets 45, elsewhere 1,155)',
+      'The lips cross each other', 'At the ears', 'In the eye sockets: behind the lids', 'Elsewhere: small overlaps',
+      '7 pairs (lips 0, ears 7, eye sockets 0, elsewhere 0)', 'the eye sockets 45',
       '3 triangles turned over by the scan\'s detail, 1 degenerate', 'crosses itself in 2 triangle pairs', 'Worth a look'];
     const lacking = expected.filter((t) => !madeText.includes(t));
     check(`${label}: a head that crosses itself is named so, with its counts by region`, lacking.length === 0,
@@ -757,7 +759,7 @@ async function fitQualityShown(page, label, bytes, name, exact = true) {
   }
   check(`${label}: the checks the page shows equal the native CLI's for the same scan`,
         q.ok && page4 === cli4 && missing.length === 0,
-        `page ${page4} vs likeness fit ${cli4} (level, triangles, turned over, degenerate, pairs total/lips/ears/rest, smooth, control); ` +
+        `page ${page4} vs likeness fit ${cli4} (level, triangles, turned over, degenerate, pairs total/lips/ears/eye sockets/rest, smooth, control); ` +
         `checked in ${Math.round(q.checkMs)} ms` + (missing.length ? '; text lacks: ' + missing.join(' | ') : ''));
   return q;
 }

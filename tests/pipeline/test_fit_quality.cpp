@@ -3,6 +3,8 @@
 #include "multires/multires.h"
 #include "pipeline/fit_head.h"
 #include "pipeline/fit_quality.h"
+#include "pipeline/head_pockets.h"
+#include "mesh/topology.h"
 #include "raycast/self_intersection.h"
 
 #include <catch2/catch.hpp>
@@ -72,6 +74,47 @@ TEST_CASE("crossing pairs are counted by the region they touch, lips before ears
   CHECK(count_pairs_touching(mr, 2, pairs, {4, 5, 6}) == c.lips);
   CHECK(count_pairs_touching(mr, 2, pairs, {4, 5}) == 0);
   CHECK(count_pairs_touching(mr, 2, pairs, {0, 1, 2, 3}) == n);
+}
+
+TEST_CASE("crossing pairs in an eye socket count as eye sockets, after lips and ears", "[fit_quality]") {
+  // The crossing sheets and a small triangle far off (8, 9, 10). A rim loop
+  // of vertex 8 alone cuts the mesh into sheet A, sheet B and (9, 10); all
+  // but the largest (A, the first of equals) are the socket
+  // (pipeline/head_pockets.h), so every pair touches it.
+  TriMesh m = crossing_sheets();
+  m.positions.push_back({5, 5, 5});
+  m.positions.push_back({6, 5, 5});
+  m.positions.push_back({5, 6, 5});
+  m.triangles.push_back({8, 9, 10});
+  MultiresMesh mr;
+  REQUIRE(build_multires(m, 2, mr).ok());
+  std::vector<std::array<int, 2>> pairs;
+  REQUIRE(find_self_intersections(level_mesh(mr, 2), pairs).ok());
+  const int n = static_cast<int>(pairs.size());
+  REQUIRE(n > 0);
+  HeadAnnotations ann;
+  ann.eye_left.rim = {8};
+  MeshTopology topo;
+  REQUIRE(build_topology(m, topo).ok());
+  const std::vector<char> socket = eye_socket_vertices(topo, ann);
+  CHECK(std::vector<char>(socket.begin(), socket.begin() + 4) == std::vector<char>(4, 0));  // A
+  CHECK(std::vector<char>(socket.begin() + 4, socket.begin() + 8) == std::vector<char>(4, 1));  // B
+  CHECK(socket[8] == 0);  // the rim is not inside
+  CHECK(socket[9] == 1);
+  CrossingCounts c = count_crossings_by_region(mr, 2, pairs, ann);
+  CHECK(c.eye_sockets == n);
+  CHECK(c.rest == 0);
+  // Ears (and lips) are named first.
+  ann.regions["ears"] = {0, 1, 2, 3};
+  c = count_crossings_by_region(mr, 2, pairs, ann);
+  CHECK(c.ears == n);
+  CHECK(c.eye_sockets == 0);
+  // No rim: no socket.
+  ann.regions.clear();
+  ann.eye_left.rim.clear();
+  c = count_crossings_by_region(mr, 2, pairs, ann);
+  CHECK(c.eye_sockets == 0);
+  CHECK(c.rest == n);
 }
 
 TEST_CASE("turned-over and degenerate triangles are counted against a reference", "[fit_quality]") {
