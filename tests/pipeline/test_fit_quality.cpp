@@ -23,14 +23,20 @@ TriMesh crossing_sheets() {
   return m;
 }
 
+// m refined twice into mr, and the crossing pairs of its level 2 (some).
+std::vector<std::array<int, 2>> level2_pairs(const TriMesh& m, MultiresMesh& mr) {
+  REQUIRE(build_multires(m, 2, mr).ok());
+  std::vector<std::array<int, 2>> pairs;
+  REQUIRE(find_self_intersections(level_mesh(mr, 2), pairs).ok());
+  REQUIRE(pairs.size() > 0);
+  return pairs;
+}
+
 }  // namespace
 
 TEST_CASE("crossing pairs are counted by the region they touch, lips before ears before rest", "[fit_quality]") {
   MultiresMesh mr;
-  REQUIRE(build_multires(crossing_sheets(), 2, mr).ok());
-  std::vector<std::array<int, 2>> pairs;
-  REQUIRE(find_self_intersections(level_mesh(mr, 2), pairs).ok());
-  REQUIRE(pairs.size() > 0);
+  const std::vector<std::array<int, 2>> pairs = level2_pairs(crossing_sheets(), mr);
   const int n = static_cast<int>(pairs.size());
 
   HeadAnnotations ann;
@@ -87,11 +93,8 @@ TEST_CASE("crossing pairs in an eye socket count as eye sockets, after lips and 
   m.positions.push_back({5, 6, 5});
   m.triangles.push_back({8, 9, 10});
   MultiresMesh mr;
-  REQUIRE(build_multires(m, 2, mr).ok());
-  std::vector<std::array<int, 2>> pairs;
-  REQUIRE(find_self_intersections(level_mesh(mr, 2), pairs).ok());
+  const std::vector<std::array<int, 2>> pairs = level2_pairs(m, mr);
   const int n = static_cast<int>(pairs.size());
-  REQUIRE(n > 0);
   HeadAnnotations ann;
   ann.eye_left.rim = {8};
   MeshTopology topo;

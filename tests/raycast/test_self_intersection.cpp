@@ -3,6 +3,8 @@
 // the BVH traversal against testing every pair.
 #include "raycast/self_intersection.h"
 
+#include "mesh/primitives.h"
+
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -332,6 +334,25 @@ TEST_CASE("new self-intersections: only the pairs a move made, not those the ref
   CHECK(find_new_self_intersections(bvh, nan_reference, pairs).code == ErrorCode::InvalidInput);
 }
 
+namespace {
+
+// The searches from listed triangles (every stride-th from `first`) and
+// the new-pair search against `start` give the same pairs on both trees.
+void check_local_searches_agree(const MeshBvh& refit, const MeshBvh& fresh, const std::vector<Vec3>& start, int first,
+                                int stride) {
+  std::vector<int> listed;
+  for (int f = first; f < fresh.num_triangles(); f += stride) listed.push_back(f);
+  std::vector<std::array<int, 2>> a, b;
+  find_intersections_with(refit, listed, a);
+  find_intersections_with(fresh, listed, b);
+  CHECK(a == b);
+  REQUIRE(find_new_self_intersections(refit, start, a).ok());
+  REQUIRE(find_new_self_intersections(fresh, start, b).ok());
+  CHECK(a == b);
+}
+
+}  // namespace
+
 TEST_CASE("self-intersections: a refit tree finds what a fresh tree finds", "[raycast]") {
   // A torus and a sphere beside it, built once, then moved at random
   // (shrunk, pushed through each other, vertices jittered) and refit: the
@@ -363,14 +384,7 @@ TEST_CASE("self-intersections: a refit tree finds what a fresh tree finds", "[ra
     CHECK(a == b);
     CHECK(a == brute_force(m));
     crossings_seen += a.size();
-    std::vector<int> listed;
-    for (int f = trial; f < m.num_triangles(); f += 7) listed.push_back(f);
-    find_intersections_with(refit, listed, a);
-    find_intersections_with(fresh, listed, b);
-    CHECK(a == b);
-    REQUIRE(find_new_self_intersections(refit, start, a).ok());
-    REQUIRE(find_new_self_intersections(fresh, start, b).ok());
-    CHECK(a == b);
+    check_local_searches_agree(refit, fresh, start, trial, 7);
   }
   CHECK(crossings_seen > 50);  // the moves did make crossings to compare
 }
@@ -432,14 +446,7 @@ TEST_CASE("self-intersections: a refit tree finds what a fresh tree finds, threa
     CHECK(c == b);
     CHECK(serial == b);
     crossings_seen += b.size();
-    std::vector<int> listed;
-    for (int f = trial; f < m.num_triangles(); f += 5) listed.push_back(f);
-    find_intersections_with(refit, listed, a);
-    find_intersections_with(fresh, listed, b);
-    CHECK(a == b);
-    REQUIRE(find_new_self_intersections(refit, start, a).ok());
-    REQUIRE(find_new_self_intersections(fresh, start, b).ok());
-    CHECK(a == b);
+    check_local_searches_agree(refit, fresh, start, trial, 5);
   }
   CHECK(crossings_seen > 200);  // the folds did make crossings to compare
 }
@@ -450,22 +457,14 @@ TEST_CASE("self-intersections: a flat sheet with rounding noise does not cross i
   // have the sign of their rounding noise, and unfiltered orientations
   // reported side-by-side triangles as crossing. Every pair is tested
   // (brute force), so no tree decides which noise is seen.
-  TriMesh sheet;
   const int n = 40;
   uint64_t state = 99;
   auto noise = [&]() {
     state = state * 6364136223846793005ULL + 1442695040888963407ULL;
     return (static_cast<double>(state >> 11) / 9007199254740992.0 - 0.5) * 2e-14;
   };
-  for (int i = 0; i <= n; ++i)
-    for (int j = 0; j <= n; ++j)
-      sheet.positions.push_back(Vec3(0.05 + 0.00625 * i + noise(), 0.1 + 0.00625 * j + noise(), 0.2 + noise()));
-  auto id = [&](int i, int j) { return i * (n + 1) + j; };
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) {
-      sheet.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-      sheet.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-    }
+  TriMesh sheet = make_regular_grid(n, n);
+  for (Vec3& p : sheet.positions) p = Vec3(0.05 + 0.00625 * p.x() + noise(), 0.1 + 0.00625 * p.y() + noise(), 0.2 + noise());
   CHECK(brute_force(sheet).empty());
   std::vector<std::array<int, 2>> pairs;
   REQUIRE(find_self_intersections(sheet, pairs).ok());
@@ -598,16 +597,7 @@ TEST_CASE("self-intersections: a sheet folded along a line does not cross itself
   // point, and triangles sharing a corner on the fold were reported
   // crossing (the far end of one touched the other's plane within noise).
   for (double deg = 20; deg <= 170; deg += 15) {
-    TriMesh g;
-    const int n = 10;
-    for (int j = 0; j <= n; ++j)
-      for (int i = 0; i <= n; ++i) g.positions.push_back(Vec3(i, j, 0));
-    auto id = [n](int i, int j) { return j * (n + 1) + i; };
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        g.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-        g.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-      }
+    TriMesh g = make_regular_grid(10, 10);
     const double t = deg * 3.14159265358979323846 / 180;
     for (Vec3& p : g.positions) {
       const double r = p.x() - 5;
