@@ -910,13 +910,15 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       // The folds at trial positions that differ from x at the control
       // vertices `moving`: Butterfly's stencils reach about two rings, so
       // the level changes only inside the control faces with a corner
-      // within three rings of a moving vertex (`active`); a fold there has
+      // within three rings of a moving vertex (`active` 2); a fold there has
       // both faces within four rings (they share a corner). Those faces'
       // level triangles are searched on their own tree, the pairs of
       // `current` outside `active` stay.
-      // `outside`: the folds kept for the level triangles outside `active`.
-      auto folds_in_window = [&](const std::vector<Vec3>& level_positions, const std::vector<Vec3>& reference_level,
-                                 const std::vector<int>& moving, const std::vector<std::array<int, 2>>& outside) {
+      // `outside`: the pairs kept for the level triangles outside `active`;
+      // `folds_only`: the window's pairs are filtered to folds.
+      auto pairs_in_window = [&](const std::vector<Vec3>& level_positions, const std::vector<Vec3>& reference_level,
+                                 const std::vector<int>& moving, const std::vector<std::array<int, 2>>& outside,
+                                 bool folds_only) {
         std::vector<int> ring_of(nv, -1);
         std::vector<int> frontier = moving;
         for (int v : moving) ring_of[v] = 0;
@@ -939,7 +941,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
           for (int c = 0; c < per; ++c) {
             window_faces.push_back(f * per + c);
             window.triangles.push_back(relief.level.triangles[f * per + c]);
-            if (nearest <= 3) active[f * per + c] = 1;
+            active[f * per + c] = nearest <= 3 ? 2 : 1;  // 2: may change, 1: searched beside it
           }
         }
         MeshBvh window_bvh;
@@ -950,15 +952,19 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
           if (p[0] > p[1]) std::swap(p[0], p[1]);
         }
         drop_ignored(pairs);
-        keep_folds(pairs);
+        if (folds_only) keep_folds(pairs);
+        // A pair that may have changed was searched again, unless its other
+        // triangle lies outside the window (two sheets far apart in the
+        // mesh): that one is kept as it was, and the whole-level search
+        // that decides in the end counts it.
         for (const auto& p : outside)
-          if (!active[p[0]] && !active[p[1]]) pairs.push_back(p);
+          if ((active[p[0]] != 2 && active[p[1]] != 2) || !active[p[0]] || !active[p[1]]) pairs.push_back(p);
         std::sort(pairs.begin(), pairs.end());
         pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
         return pairs;
       };
       auto folds_at = [&](const VecX& trial, const std::vector<int>& moving) {
-        return folds_in_window(relief.refine(trial), relief.reference_level, moving, current);
+        return pairs_in_window(relief.refine(trial), relief.reference_level, moving, current, true);
       };
       std::vector<char> failed(nv, 0);
       for (int step = 0; step < options.smooth_guard_relief_steps && !current.empty(); ++step) {
@@ -1043,8 +1049,11 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       for (int v = 0; v < nv; ++v) result.relief_vertices += moved_ever[v];
       if (options.smooth_guard_crease_max_edges > 0 && result.relief_folds_after > 0) {
         // Fold creases (header comment): the folds the steps left, as the
-        // whole level has them now.
-        std::vector<std::array<int, 2>> folds = all_now;
+        // whole level has them now. A crease is judged by all the new pairs
+        // around it, folds or not: one that trades folds for two sheets
+        // crossing does not pass (James turned 0.05 deg: 44 -> 23 folds,
+        // but 102 -> 123 pairs when only folds were counted).
+        std::vector<std::array<int, 2>> pairs = all_now, folds = all_now;
         keep_folds(folds);
         std::vector<Vec3> control(nv), reference_positions(nv);
         from_vector(x, control);
@@ -1086,12 +1095,14 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
           apply_all(trial_levels, reference_positions, refined);
           const std::vector<Vec3> trial_reference = std::move(refined.back());
           apply_all(trial_levels, control, refined);
-          std::vector<std::array<int, 2>> now = folds_in_window(
-              refined.back(), trial_reference, {topology.edges[pick].v0, topology.edges[pick].v1}, folds);
-          if (now.size() >= folds.size()) continue;
+          std::vector<std::array<int, 2>> now = pairs_in_window(
+              refined.back(), trial_reference, {topology.edges[pick].v0, topology.edges[pick].v1}, pairs, false);
+          if (now.size() >= pairs.size()) continue;
           creases = std::move(with);
           creased[pick] = 1;
-          folds = std::move(now);
+          pairs = std::move(now);
+          folds = pairs;
+          keep_folds(folds);
           chosen.push_back({topology.edges[pick].v0, topology.edges[pick].v1});
         }
         if (!chosen.empty()) {

@@ -124,7 +124,8 @@
 //   no longer mixed) does not pleat, and a crease at a sharp bend is where
 //   the surface turns anyway. So the sharpest uncreased edge of a face that
 //   still folds is tried as a crease, counted on the window's tree, and
-//   kept when the folds there drop; the set is kept only when a search of
+//   kept when the new pairs there drop (folds or not: a crease can trade
+//   folds for two sheets crossing); the set is kept only when a search of
 //   the whole level has fewer new pairs. The edges go to the subdivision
 //   stage (GlobalFitResult::fold_crease_edges), which refines them as
 //   creases like the eye rims and lip lines. Positions are not changed.
@@ -215,8 +216,8 @@ struct GlobalFitOptions {
   // Fold creases (see header comment), after the relief's steps: up to
   // smooth_guard_crease_trials times, the sharpest control edge (dihedral
   // above smooth_guard_crease_min_angle_deg) of a face that still folds is
-  // tried as a crease of the levels; it is kept when the folds around it
-  // drop. At most smooth_guard_crease_max_edges edges (0: off), kept only
+  // tried as a crease of the levels; it is kept when the new pairs around
+  // it (folds or not) drop. At most smooth_guard_crease_max_edges edges (0: off), kept only
   // when the whole level has fewer new pairs with them
   // (GlobalFitResult::fold_crease_edges; the subdivision stage refines
   // them as creases).
