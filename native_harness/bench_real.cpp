@@ -109,6 +109,11 @@ int run(const Args& args) {
       const CrossingCounts& x = q.crossings;
       std::printf("   %-14s %9.5f %7d %7d %7d %8d %7d %8d %9.0f\n", c.name.c_str(), table1, x.total, x.lips, x.ears,
                   x.eye_sockets, x.rest, q.smooth_crossings.total, ms);
+      if (x.rest) {  // where the rest lie (regions overlap; "face" holds most)
+        std::printf("   %-14s rest touches:", "");
+        for (const auto& kv : x.rest_by_region) std::printf(" %s %d", kv.first.c_str(), kv.second);
+        std::printf("\n");
+      }
       totals.push_back(x.total);
     }
     if (!totals.empty()) {

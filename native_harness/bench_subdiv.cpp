@@ -17,6 +17,7 @@
 
 #if __has_include("head/generic_head.h") && !defined(LK_BENCH_NO_HEAD)
 #include "head/generic_head.h"
+#include "pipeline/head_creases.h"
 #define LK_BENCH_HAVE_HEAD 1
 #endif
 
@@ -250,8 +251,7 @@ void bench_mesh(const NamedMesh& nm, bool quick) {
 void bench_head_creases(bool quick) {
   GenericHead head;
   if (!load_generic_head(head).ok()) return;
-  ButterflyCreases creases;
-  for (const CreaseCurve& c : head.annotations.creases) add_crease_polyline(c.vertices, c.closed, creases);
+  const ButterflyCreases creases = head_creases(head.mesh, head.annotations);  // as the fit refines them
   const int L = 3, reps = quick ? 3 : 11;
   std::printf("\n-- generic head with its %zu crease curves (%zu tagged control edges, %zu corners)\n",
               head.annotations.creases.size(), creases.edges.size(), creases.corners.size());

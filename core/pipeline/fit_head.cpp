@@ -4,6 +4,7 @@
 #include "head/generic_head.h"
 #include "mesh/geometry.h"
 #include "mesh/topology.h"
+#include "pipeline/head_creases.h"
 #include "pipeline/head_pockets.h"
 #include "raycast/self_intersection.h"
 
@@ -454,8 +455,7 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   terms.fold_reference = out.aligned.positions;
   // The smooth-surface guard refines with the creases the levels will use.
   ButterflyCreases creases;
-  if (options.rim_creases)
-    for (const CreaseCurve& c : ann.creases) add_crease_polyline(c.vertices, c.closed, creases);
+  if (options.rim_creases) creases = head_creases(generic.mesh, ann);
   terms.smooth_creases = creases;
   terms.smooth_guard_ignored = mouth_bag;
   std::vector<Vec3> skin_pts;

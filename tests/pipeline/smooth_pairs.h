@@ -6,6 +6,7 @@
 #include "head/head_model.h"
 #include "multires/multires.h"
 #include "pipeline/fit_quality.h"
+#include "pipeline/head_creases.h"
 #include "raycast/self_intersection.h"
 
 #include <catch2/catch.hpp>
@@ -27,12 +28,11 @@ inline int smooth_region_pairs(const TriMesh& control, const ButterflyCreases& c
   return count_pairs_touching(mr, level, pairs, it->second);
 }
 
-// With the head's crease curves (HeadAnnotations::creases).
+// With the head's crease curves as the fit refines them (head_creases; the
+// eye corners taken from `control`, which faces +z like the generic head).
 inline int smooth_region_pairs(const TriMesh& control, const HeadAnnotations& ann, int level,
                                const std::string& region) {
-  ButterflyCreases creases;
-  for (const CreaseCurve& c : ann.creases) add_crease_polyline(c.vertices, c.closed, creases);
-  return smooth_region_pairs(control, creases, ann, level, region);
+  return smooth_region_pairs(control, head_creases(control, ann), ann, level, region);
 }
 
 }  // namespace lk::test

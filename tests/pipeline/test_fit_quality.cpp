@@ -3,7 +3,11 @@
 #include "multires/multires.h"
 #include "pipeline/fit_head.h"
 #include "pipeline/fit_quality.h"
+#include "pipeline/head_creases.h"
 #include "pipeline/head_pockets.h"
+#include "head/generic_head.h"
+
+#include <algorithm>
 #include "mesh/topology.h"
 #include "raycast/self_intersection.h"
 
@@ -154,4 +158,41 @@ TEST_CASE("fit quality of a fit result: crossings of the displaced and the smoot
   CHECK(q.control_crossings > 0);
   CHECK(q.crossings.total > 0);
   CHECK(q.crossings.total == q.smooth_crossings.total);  // no displacements: the same surface
+}
+
+TEST_CASE("head creases: the curves as tagged edges, and the eye openings' corners as crease corners", "[fit_quality]") {
+  GenericHead head;
+  REQUIRE(load_generic_head(head).ok());
+  const HeadAnnotations& ann = head.annotations;
+  ButterflyCreases plain;
+  for (const CreaseCurve& c : ann.creases) add_crease_polyline(c.vertices, c.closed, plain);
+  const ButterflyCreases creases = head_creases(head.mesh, ann);
+  CHECK(creases.edges == plain.edges);
+  // Each rim's corners: the vertices furthest along -x and +x (the inner and
+  // outer canthus), and nothing else new.
+  for (const EyeSocket* eye : {&ann.eye_left, &ann.eye_right}) {
+    REQUIRE(eye->rim.size() >= 6);
+    auto by_x = [&](int a, int b) { return head.mesh.positions[a].x() < head.mesh.positions[b].x(); };
+    const int lo = *std::min_element(eye->rim.begin(), eye->rim.end(), by_x);
+    const int hi = *std::max_element(eye->rim.begin(), eye->rim.end(), by_x);
+    CHECK(std::count(creases.corners.begin(), creases.corners.end(), lo) == 1);
+    CHECK(std::count(creases.corners.begin(), creases.corners.end(), hi) == 1);
+    // An eye is ~25-30 mm wide between its corners.
+    const double width = head.mesh.positions[hi].x() - head.mesh.positions[lo].x();
+    CHECK(width > 0.02);
+    CHECK(width < 0.035);
+  }
+  std::vector<int> plain_corners = plain.corners;  // the lip lines' ends (the mouth corners, each twice)
+  std::sort(plain_corners.begin(), plain_corners.end());
+  plain_corners.erase(std::unique(plain_corners.begin(), plain_corners.end()), plain_corners.end());
+  CHECK(creases.corners.size() == plain_corners.size() + 4);
+  // The levels refine with them: the 4-point rule does not reach past a
+  // corner, so the rim's new vertices next to the corners move.
+  std::vector<ButterflyLevel> with, without;
+  REQUIRE(build_butterfly_levels(head.mesh, creases, 1, with).ok());
+  REQUIRE(build_butterfly_levels(head.mesh, plain, 1, without).ok());
+  std::vector<std::vector<Vec3>> a, b;
+  REQUIRE(apply_all(with, head.mesh.positions, a).ok());
+  REQUIRE(apply_all(without, head.mesh.positions, b).ok());
+  CHECK(a.back() != b.back());
 }

@@ -1,0 +1,19 @@
+// The generic head's crease curves (head/head_model.h: the eye rims and the
+// lip lines) as Butterfly creases (subdiv/butterfly.h), the one place the
+// fit, the checks' helpers and the benchmarks take them from.
+#pragma once
+#include "head/head_model.h"
+#include "subdiv/butterfly.h"
+
+namespace lk {
+
+// Every HeadAnnotations::creases curve as tagged edges (open ends are
+// corners), and each eye rim's two corners of the eye opening (the canthi:
+// the rim vertices furthest along -x and +x in `mesh`, the head the
+// annotations belong to, facing +z) as crease corners: the 4-point rule
+// would otherwise carry the rim round the sharp corner in a smooth loop,
+// which pleated the lids at James's outer eye corners (docs/fit_real.md,
+// "The eye corners as crease corners").
+ButterflyCreases head_creases(const TriMesh& mesh, const HeadAnnotations& annotations);
+
+}  // namespace lk
