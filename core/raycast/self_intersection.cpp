@@ -57,24 +57,32 @@ bool point_in_triangle_2d(const Vec2& p, const Vec2& a, const Vec2& b, const Vec
   return (s1 >= 0 && s2 >= 0 && s3 >= 0) || (s1 <= 0 && s2 <= 0 && s3 <= 0);
 }
 
+// The projection onto the plane with normal n that drops n's largest axis
+// (areas keep their sign up to the flip of that axis, and none vanishes).
+struct PlaneProjection {
+  int i = 1, j = 2;
+  explicit PlaneProjection(const Vec3& n) {
+    int drop = 0;
+    n.cwiseAbs().maxCoeff(&drop);
+    i = (drop + 1) % 3;
+    j = (drop + 2) % 3;
+  }
+  Vec2 operator()(const Vec3& x) const { return Vec2(x[i], x[j]); }
+};
+
 // A point in the plane of triangle (a, b, c) with normal n: inside or on
-// its edges, in the projection that drops n's largest axis.
+// its edges, in that projection.
 bool coplanar_point_in_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& n) {
-  int drop = 0;
-  n.cwiseAbs().maxCoeff(&drop);
-  const int i = (drop + 1) % 3, j = (drop + 2) % 3;
-  return point_in_triangle_2d(Vec2(p[i], p[j]), Vec2(a[i], a[j]), Vec2(b[i], b[j]), Vec2(c[i], c[j]));
+  const PlaneProjection flat(n);
+  return point_in_triangle_2d(flat(p), flat(a), flat(b), flat(c));
 }
 
 // A computed crossing point x (rounded, so off the plane and off an edge
 // by a few ulps of `scale`, the segment's largest coordinate) in triangle
-// (a, b, c): inside or within 1e-13 scale of an edge, in the projection
-// that drops n's largest axis.
+// (a, b, c): inside or within 1e-13 scale of an edge, in that projection.
 bool crossing_in_triangle(const Vec3& x, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& n, double scale) {
-  int drop = 0;
-  n.cwiseAbs().maxCoeff(&drop);
-  const int i = (drop + 1) % 3, j = (drop + 2) % 3;
-  const Vec2 P(x[i], x[j]), A(a[i], a[j]), B(b[i], b[j]), C(c[i], c[j]);
+  const PlaneProjection flat(n);
+  const Vec2 P = flat(x), A = flat(a), B = flat(b), C = flat(c);
   const double tol = 1e-13 * std::max(scale, a.cwiseAbs().cwiseMax(b.cwiseAbs()).cwiseMax(c.cwiseAbs()).maxCoeff());
   // Signed distances of P from the edges' lines (> 0 on the triangle's side
   // when it is counter-clockwise in the projection).
@@ -86,13 +94,10 @@ bool crossing_in_triangle(const Vec3& x, const Vec3& a, const Vec3& b, const Vec
   return (d1 >= -tol && d2 >= -tol && d3 >= -tol) || (d1 <= tol && d2 <= tol && d3 <= tol);
 }
 
-// Segment and triangle in one plane with normal n: drop n's largest axis.
+// Segment and triangle in one plane with normal n, in that projection.
 bool coplanar_segment_triangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c,
                                const Vec3& n) {
-  int drop = 0;
-  n.cwiseAbs().maxCoeff(&drop);
-  const int i = (drop + 1) % 3, j = (drop + 2) % 3;
-  auto flat = [&](const Vec3& x) { return Vec2(x[i], x[j]); };
+  const PlaneProjection flat(n);
   const Vec2 P = flat(p), Q = flat(q), A = flat(a), B = flat(b), C = flat(c);
   if (point_in_triangle_2d(P, A, B, C) || point_in_triangle_2d(Q, A, B, C)) return true;
   return segments_intersect_2d(P, Q, A, B) || segments_intersect_2d(P, Q, B, C) ||
