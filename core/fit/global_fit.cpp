@@ -1069,8 +1069,19 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
           const int k = topology.find_edge(e[0], e[1]);
           if (k >= 0) creased[k] = 1;
         }
+        // The relief level refined with `with` (the control at x and the
+        // reference); false when the creases cannot be refined.
         std::vector<ButterflyLevel> trial_levels;
         std::vector<std::vector<Vec3>> refined;
+        auto refine_with = [&](const ButterflyCreases& with, std::vector<Vec3>& level, std::vector<Vec3>& ref_level) {
+          if (!build_butterfly_levels(mesh, with, options.smooth_guard_relief_level, trial_levels).ok()) return false;
+          apply_all(trial_levels, reference_positions, refined);
+          ref_level = std::move(refined.back());
+          apply_all(trial_levels, control, refined);
+          level = std::move(refined.back());
+          return true;
+        };
+        std::vector<Vec3> trial_level, trial_reference, kept_level, kept_reference;  // kept: of `creases`
         std::vector<std::array<int, 2>> chosen;
         for (int trial = 0; trial < options.smooth_guard_crease_trials && !folds.empty() &&
                             static_cast<int>(chosen.size()) < options.smooth_guard_crease_max_edges;
@@ -1091,14 +1102,13 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
           ButterflyCreases with = creases;
           with.edges.push_back({topology.edges[pick].v0, topology.edges[pick].v1});
           close_crease_ends(with);
-          if (!build_butterfly_levels(mesh, with, options.smooth_guard_relief_level, trial_levels).ok()) continue;
-          apply_all(trial_levels, reference_positions, refined);
-          const std::vector<Vec3> trial_reference = std::move(refined.back());
-          apply_all(trial_levels, control, refined);
+          if (!refine_with(with, trial_level, trial_reference)) continue;
           std::vector<std::array<int, 2>> now = pairs_in_window(
-              refined.back(), trial_reference, {topology.edges[pick].v0, topology.edges[pick].v1}, pairs, false);
+              trial_level, trial_reference, {topology.edges[pick].v0, topology.edges[pick].v1}, pairs, false);
           if (now.size() >= pairs.size()) continue;
           creases = std::move(with);
+          kept_level.swap(trial_level);
+          kept_reference.swap(trial_reference);
           creased[pick] = 1;
           pairs = std::move(now);
           folds = pairs;
@@ -1106,22 +1116,18 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
           chosen.push_back({topology.edges[pick].v0, topology.edges[pick].v1});
         }
         if (!chosen.empty()) {
-          // Kept only when the whole level, with the creases, has fewer new
-          // pairs (folds or not) than without them.
+          // Kept only when the whole level, with the creases (refined by
+          // the last kept trial), has fewer new pairs (folds or not) than
+          // without them.
           std::vector<std::array<int, 2>> all_creased;
-          if (build_butterfly_levels(mesh, creases, options.smooth_guard_relief_level, trial_levels).ok()) {
-            apply_all(trial_levels, reference_positions, refined);
-            const std::vector<Vec3> trial_reference = std::move(refined.back());
-            apply_all(trial_levels, control, refined);
-            relief.level.positions = std::move(refined.back());
-            refit_bvh(relief.level, relief.bvh);
-            find_new_self_intersections(relief.bvh, trial_reference, all_creased);
-            drop_ignored(all_creased);
-            if (all_creased.size() < all_now.size()) {
-              result.fold_crease_edges = chosen;
-              keep_folds(all_creased);
-              result.relief_folds_after = static_cast<int>(all_creased.size());
-            }
+          relief.level.positions = std::move(kept_level);
+          refit_bvh(relief.level, relief.bvh);
+          find_new_self_intersections(relief.bvh, kept_reference, all_creased);
+          drop_ignored(all_creased);
+          if (all_creased.size() < all_now.size()) {
+            result.fold_crease_edges = chosen;
+            keep_folds(all_creased);
+            result.relief_folds_after = static_cast<int>(all_creased.size());
           }
         }
       }
