@@ -921,6 +921,101 @@ int fade_across_data_edge(const MultiresMesh& mesh, int level, int first, const 
   return changed;
 }
 
+
+// The median over every step-th point of the distance to its nearest other
+// point (a point with a copy at the same place is left out, as a kd-tree's
+// two nearest neighbours leave it out); 0 when no sampled point has one.
+// Exact, over a grid: a point's cell and the 26 around it hold every point
+// within one cell of it, so a neighbour found that close is the nearest,
+// and rings of cells further out widen the search. A point with no
+// neighbour within kRings cells (a stray return) only needs to be known to
+// lie above every distance found: the median is then the same as long as
+// fewer than half the samples are such. The cells are sized so that a
+// scanned surface puts tens of points in one (a kd-tree over the whole
+// cloud cost ~40 ms for 4096 queries); clouds that defeat the grid go to
+// the kd-tree.
+double median_nearest_distance(const std::vector<Vec3>& points, size_t step) {
+  const size_t n = points.size();
+  constexpr int kRings = 2;
+  std::vector<double> nearest;
+  auto with_kd_tree = [&] {
+    nearest.clear();
+    CloudAdaptor adaptor{points};
+    const CloudTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));  // (built here)
+    for (size_t i = 0; i < n; i += step) {
+      size_t idx[2];
+      double d2[2];
+      if (tree.knnSearch(points[i].data(), 2, idx, d2) == 2 && d2[1] > 0) nearest.push_back(std::sqrt(d2[1]));
+    }
+    return nearest.empty() ? 0.0 : median(nearest);
+  };
+  BBox box;
+  for (const Vec3& p : points) box.extend(p);
+  const Vec3 size = box.size();
+  const double volume = std::max(size.x(), 1e-300) * std::max(size.y(), 1e-300) * std::max(size.z(), 1e-300);
+  const double h = std::cbrt(volume / static_cast<double>(n));
+  if (!(h > 0) || !std::isfinite(h) || !(size.maxCoeff() / h < (1 << 20))) return with_kd_tree();
+  // The cells as runs of one array (counted, then filled: no list per cell).
+  auto index = [&](double v, double lo) { return static_cast<std::int64_t>(std::floor((v - lo) / h)); };
+  auto key = [](std::int64_t x, std::int64_t y, std::int64_t z) { return (x << 42) | (y << 21) | z; };
+  std::unordered_map<std::int64_t, int> cell_of;
+  cell_of.reserve(n / 8);
+  std::vector<int> cell_start, cell_points(n), point_cell(n);
+  int fullest = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3& p = points[i];
+    const int fresh = static_cast<int>(cell_start.size());
+    const int c =
+        cell_of.try_emplace(key(index(p.x(), box.min.x()), index(p.y(), box.min.y()), index(p.z(), box.min.z())), fresh)
+            .first->second;
+    if (c == fresh) cell_start.push_back(0);
+    point_cell[i] = c;
+    fullest = std::max(fullest, ++cell_start[c]);
+  }
+  if (fullest > 4096) return with_kd_tree();  // points piled into few cells
+  int sum = 0;  // counts -> one past each cell's end, then filled backwards to its start
+  for (int& c : cell_start) sum += c, c = sum;
+  cell_start.push_back(sum);
+  for (size_t i = n; i-- > 0;) cell_points[--cell_start[point_cell[i]]] = static_cast<int>(i);
+  int far = 0;  // samples with no neighbour within kRings cells
+  for (size_t i = 0; i < n; i += step) {
+    const Vec3& p = points[i];
+    const std::int64_t c[3] = {index(p.x(), box.min.x()), index(p.y(), box.min.y()), index(p.z(), box.min.z())};
+    double best2 = std::numeric_limits<double>::infinity();
+    bool duplicate = false, known = false;
+    // Ring r: the cells at Chebyshev distance r; every point beyond it lies
+    // more than r cells away.
+    for (int r = 0; r <= kRings && !known; ++r) {
+      for (int dx = -r; dx <= r; ++dx)
+        for (int dy = -r; dy <= r; ++dy)
+          for (int dz = -r; dz <= r; ++dz) {
+            if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != r) continue;
+            const auto it = cell_of.find(key(c[0] + dx, c[1] + dy, c[2] + dz));
+            if (it == cell_of.end()) continue;
+            for (int k = cell_start[it->second]; k < cell_start[it->second + 1]; ++k) {
+              const int j = cell_points[k];
+              // (summed as the kd-tree's metric sums: the same last bit)
+              const double ex = points[j].x() - p.x(), ey = points[j].y() - p.y(), ez = points[j].z() - p.z();
+              const double d2 = ex * ex + ey * ey + ez * ez;
+              if (d2 > 0 && d2 < best2) best2 = d2;
+              duplicate = duplicate || (d2 == 0 && j != static_cast<int>(i));
+            }
+          }
+      known = best2 <= sqr(r * h);
+    }
+    if (duplicate) continue;
+    if (known) nearest.push_back(std::sqrt(best2));
+    else ++far;
+  }
+  // The far samples sort above every distance found; the median's one or
+  // two middle elements must be found ones.
+  const size_t total = nearest.size() + far;
+  if (total == 0) return 0.0;
+  if (static_cast<size_t>(far) >= total - total / 2) return with_kd_tree();
+  nearest.resize(total, std::numeric_limits<double>::infinity());
+  return median(nearest);
+}
+
 }  // namespace
 
 std::vector<char> isolated_scan_points(const std::vector<Vec3>& points, double density_ratio) {
@@ -928,18 +1023,8 @@ std::vector<char> isolated_scan_points(const std::vector<Vec3>& points, double d
   std::vector<char> isolated(n, 0);
   if (n < 16 || !(density_ratio > 0)) return isolated;
   // Typical spacing: median nearest-neighbour distance of a spread sample.
-  CloudAdaptor adaptor{points};
-  CloudTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-  tree.buildIndex();
-  const size_t step = std::max<size_t>(1, n / 4096);
-  std::vector<double> nearest;
-  for (size_t i = 0; i < n; i += step) {
-    size_t idx[2];
-    double d2[2];
-    if (tree.knnSearch(points[i].data(), 2, idx, d2) == 2 && d2[1] > 0) nearest.push_back(std::sqrt(d2[1]));
-  }
-  if (nearest.empty()) return isolated;
-  const double spacing = median(nearest);
+  const double spacing = median_nearest_distance(points, std::max<size_t>(1, n / 4096));
+  if (!(spacing > 0)) return isolated;
   const double cell = 4.0 * spacing;
   // A surface through the 3x3x3 cells holds about (3 cell / spacing)^2 points.
   const double expected = (3.0 * cell / spacing) * (3.0 * cell / spacing);
@@ -948,19 +1033,34 @@ std::vector<char> isolated_scan_points(const std::vector<Vec3>& points, double d
     const auto c = [&](double v, int d) { return static_cast<std::int64_t>(std::floor(v / cell)) + d + (1 << 20); };
     return (c(p.x(), dx) << 42) ^ (c(p.y(), dy) << 21) ^ c(p.z(), dz);
   };
-  std::unordered_map<std::int64_t, int> count;
-  count.reserve(n);
-  for (const Vec3& p : points) ++count[key(p, 0, 0, 0)];
+  // Counted per occupied cell, then each cell's 3x3x3 block summed once
+  // (not once per point: a cell holds ~9 points), then looked up per point.
+  std::vector<std::int64_t> point_key(n);
+  parallel_for(0, static_cast<int>(n), 8192, [&](int i, int) { point_key[i] = key(points[i], 0, 0, 0); });
+  std::unordered_map<std::int64_t, int> cell_of;  // key -> index into cells
+  cell_of.reserve(n / 4);
+  std::vector<size_t> cell_point;  // a point of the cell
+  std::vector<int> cell_count;
+  std::vector<int> point_cell(n);
   for (size_t i = 0; i < n; ++i) {
+    const auto [it, fresh] = cell_of.try_emplace(point_key[i], static_cast<int>(cell_point.size()));
+    if (fresh) cell_point.push_back(i), cell_count.push_back(0);
+    ++cell_count[it->second];
+    point_cell[i] = it->second;
+  }
+  std::vector<char> cell_isolated(cell_point.size(), 0);
+  parallel_for(0, static_cast<int>(cell_point.size()), 1024, [&](int c, int) {
+    const Vec3& p = points[cell_point[c]];
     int around = 0;
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dz = -1; dz <= 1; ++dz) {
-          const auto it = count.find(key(points[i], dx, dy, dz));
-          if (it != count.end()) around += it->second;
+          const auto it = cell_of.find(key(p, dx, dy, dz));
+          if (it != cell_of.end()) around += cell_count[it->second];
         }
-    isolated[i] = around < needed;
-  }
+    cell_isolated[c] = around < needed;
+  });
+  for (size_t i = 0; i < n; ++i) isolated[i] = cell_isolated[point_cell[i]];
   return isolated;
 }
 
@@ -1018,8 +1118,9 @@ Status measure_displacements(const PointCloud& cloud, const DisplacementOptions&
     }
   }
   CloudAdaptor adaptor{*positions};
-  CloudTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-  tree.buildIndex();
+  // (nanoflann 1.4's constructor builds the index; a buildIndex() after it
+  // built the same tree a second time, ~25 ms on 225k points.)
+  const CloudTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
 
   const int L = mesh.num_levels();
   for (auto& d : mesh.displacements) std::fill(d.begin(), d.end(), 0.0);
