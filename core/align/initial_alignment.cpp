@@ -1,6 +1,7 @@
 // Silhouette-based initial alignment (jeong2002 Sec. 4.1); see the header.
 #include "align/initial_alignment.h"
 
+#include "common/helper_thread.h"
 #include "mesh/geometry.h"
 #include "numeric/powell.h"
 
@@ -242,13 +243,16 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
   resolutions.push_back(options.resolution);
 
   // Buffers reused by every evaluation of the objective.
-  std::array<SilhouetteMask, kSilhouetteViews> cloud_masks, mesh_masks;
+  std::array<SilhouetteMask, kSilhouetteViews> cloud_masks, mesh_masks, other_masks;
   std::vector<Vec3> moved(generic.positions.size());
-  auto render_mesh = [&](const double* params, const ViewWindow& window) {
+  auto move_mesh = [&](const double* params) {
     Mat3 linear;
     Vec3 translation;
     model.transform_of(params, linear, translation);
     for (size_t i = 0; i < moved.size(); ++i) moved[i] = linear * generic.positions[i] + translation;
+  };
+  auto render_mesh = [&](const double* params, const ViewWindow& window) {
+    move_mesh(params);
     rasterize_mesh_silhouettes(moved, generic.triangles, window, frame.clips, mesh_masks,
                                options.cull_back_faces);
   };
@@ -269,10 +273,28 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
     render_mesh(x.data(), window);
     views_xor(mesh_masks, cloud_masks, level.xor_before);
 
+    // Each evaluation draws the two halves of the triangles on two threads,
+    // into two sets of masks, and counts their union against the cloud's:
+    // the same pixels, so the same D. (Powell's evaluations follow one
+    // another, so they cannot be spread instead.)
+    HelperThread helper;
+    const int half_triangles = static_cast<int>(generic.triangles.size()) / 2;
+    const std::function<void(int)> draw_half = [&](int k) {
+      const TriangleRange range = k == 0 ? TriangleRange{0, half_triangles} : TriangleRange{half_triangles};
+      rasterize_mesh_silhouettes(moved, generic.triangles, window, frame.clips, k == 0 ? mesh_masks : other_masks,
+                                 options.cull_back_faces, range);
+    };
     const ObjectiveFn objective = [&](const Eigen::VectorXd& p) -> double {
-      render_mesh(p.data(), window);
+      if (!helper.threaded()) {
+        render_mesh(p.data(), window);
+        double d = 0.0;
+        for (int v = 0; v < kSilhouetteViews; ++v) d += xor_count(mesh_masks[v], cloud_masks[v]);
+        return d;
+      }
+      move_mesh(p.data());
+      helper.run(draw_half);
       double d = 0.0;
-      for (int v = 0; v < kSilhouetteViews; ++v) d += xor_count(mesh_masks[v], cloud_masks[v]);
+      for (int v = 0; v < kSilhouetteViews; ++v) d += union_xor_count(mesh_masks[v], other_masks[v], cloud_masks[v]);
       return d;
     };
     PowellOptions po;

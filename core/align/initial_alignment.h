@@ -14,7 +14,8 @@
 // Differences from the paper, on purpose:
 //  - CPU bit masks instead of an OpenGL frame buffer: an evaluation costs
 //    about 0.5 ms of CPU at 256^2 (1 ms at 512^2) instead of the paper's
-//    0.1-0.3 s (6-10 min over 8-14 x 250-300 evaluations).
+//    0.1-0.3 s (6-10 min over 8-14 x 250-300 evaluations); with two
+//    threads, each draws half the triangles (common/helper_thread.h).
 //  - Coarse-to-fine (64^2, 128^2, then the final resolution) for a wider
 //    basin of convergence; on our test scans it does not save evaluations.
 //  - Initialization: the paper matches bounding boxes. A scan's neck can be

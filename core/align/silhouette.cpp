@@ -57,6 +57,13 @@ int xor_count(const SilhouetteMask& a, const SilhouetteMask& b) {
   return static_cast<int>(n);
 }
 
+int union_xor_count(const SilhouetteMask& a1, const SilhouetteMask& a2, const SilhouetteMask& b) {
+  if (a1.bits.size() != b.bits.size() || a2.bits.size() != b.bits.size()) return -1;
+  long long n = 0;
+  for (size_t i = 0; i < b.bits.size(); ++i) n += __builtin_popcountll((a1.bits[i] | a2.bits[i]) ^ b.bits[i]);
+  return static_cast<int>(n);
+}
+
 namespace {
 
 // Which world axis feeds the column and row of each view, with signs.
@@ -162,7 +169,7 @@ int clip_polygon(const Vec3* in, int count, const ClipPlane& plane, Vec3* out) {
 void rasterize_mesh_silhouettes(const std::vector<Vec3>& positions, const std::vector<Tri>& triangles,
                                 const ViewWindow& window, const std::vector<ClipPlane>& clips,
                                 std::array<SilhouetteMask, kSilhouetteViews>& out,
-                                bool cull_back_faces) {
+                                bool cull_back_faces, TriangleRange range) {
   reset_masks(window.resolution, out);
   const int nv = static_cast<int>(positions.size());
   const int nc = static_cast<int>(clips.size());
@@ -185,7 +192,9 @@ void rasterize_mesh_silhouettes(const std::vector<Vec3>& positions, const std::v
       if (c.normal.dot(view_direction[v]) > 1e-12) cull[v] = false;
   }
   Vec3 poly[2][3 + 32];
-  for (const Tri& t : triangles) {
+  const int num_triangles = static_cast<int>(triangles.size());
+  for (int f = std::clamp(range.begin, 0, num_triangles); f < std::clamp(range.end, 0, num_triangles); ++f) {
+    const Tri& t = triangles[f];
     if (t[0] < 0 || t[1] < 0 || t[2] < 0 || t[0] >= nv || t[1] >= nv || t[2] >= nv) continue;
     const unsigned all_behind = behind[t[0]] & behind[t[1]] & behind[t[2]];
     if (all_behind) continue;

@@ -51,6 +51,9 @@ struct SilhouetteMask {
 
 // Pixels covered by exactly one of a and b (sizes must match).
 int xor_count(const SilhouetteMask& a, const SilhouetteMask& b);
+// Pixels covered by exactly one of (a1 or a2) and b: the XOR count of a mesh
+// drawn in two parts into a1 and a2 (sizes must match).
+int union_xor_count(const SilhouetteMask& a1, const SilhouetteMask& a2, const SilhouetteMask& b);
 
 // The shared world-fixed projection: a cube of side 2 * half_size around
 // center, seen at resolution x resolution pixels in each view.
@@ -84,10 +87,17 @@ void rasterize_triangle(const Vec2& a, const Vec2& b, const Vec2& c, SilhouetteM
 // the viewer opens the surface to view (one sees its inside through the
 // cut), so culling is switched off in such views. Wrong for inward-facing
 // or open meshes seen through their own holes.
+// Only triangles [range.begin, range.end) are drawn when a range is given
+// (two threads draw the two halves of a mesh into two sets of masks; their
+// union is the whole mesh's silhouette, see union_xor_count).
+struct TriangleRange {
+  int begin = 0;
+  int end = 1 << 30;  // (clamped to the triangles)
+};
 void rasterize_mesh_silhouettes(const std::vector<Vec3>& positions, const std::vector<Tri>& triangles,
                                 const ViewWindow& window, const std::vector<ClipPlane>& clips,
                                 std::array<SilhouetteMask, kSilhouetteViews>& out,
-                                bool cull_back_faces = false);
+                                bool cull_back_faces = false, TriangleRange range = {});
 
 struct PointSplatOptions {
   // Hole filling: candidate closing radii in pixels, in increasing order.

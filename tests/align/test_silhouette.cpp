@@ -201,3 +201,47 @@ TEST_CASE("back-face culling leaves clipped head silhouettes unchanged", "[silho
     }
   }
 }
+
+TEST_CASE("a mesh drawn in two triangle ranges has the whole mesh's silhouette", "[silhouette]") {
+  // The initial alignment draws the two halves of the generic head on two
+  // threads into two sets of masks and counts their union against the
+  // cloud's: every view must be the whole mesh's, bit for bit, clipped and
+  // culled, in any pose and at any split.
+  const GenericHead head = test::synthetic_head();
+  ClipPlane neck = head.annotations.neck_clip;
+  ViewWindow w;
+  w.center = Vec3(0, -0.02, 0);
+  w.half_size = 0.2;
+  w.resolution = 256;
+  const int nf = head.mesh.num_triangles();
+  std::array<SilhouetteMask, kSilhouetteViews> cloud;
+  // Any other mask to count against: the unrotated head's.
+  rasterize_mesh_silhouettes(head.mesh.positions, head.mesh.triangles, w, {neck}, cloud, true);
+  for (int k = 0; k < 4; ++k) {
+    const Mat3 r = Eigen::AngleAxisd(0.07 * (k + 1), Vec3(0.3, 1, 0.4).normalized()).toRotationMatrix();
+    std::vector<Vec3> moved;
+    for (const Vec3& p : head.mesh.positions) moved.push_back(r * p + Vec3(0.004 * k, 0, 0));
+    for (int split : {nf / 2, nf / 3, 0, nf}) {
+      std::array<SilhouetteMask, kSilhouetteViews> whole, first, second;
+      rasterize_mesh_silhouettes(moved, head.mesh.triangles, w, {neck}, whole, true);
+      rasterize_mesh_silhouettes(moved, head.mesh.triangles, w, {neck}, first, true, TriangleRange{0, split});
+      rasterize_mesh_silhouettes(moved, head.mesh.triangles, w, {neck}, second, true, TriangleRange{split});
+      for (int v = 0; v < kSilhouetteViews; ++v) {
+        INFO("pose " << k << ", split at " << split << " of " << nf << ", view " << v);
+        SilhouetteMask joined = first[v];
+        for (size_t i = 0; i < joined.bits.size(); ++i) joined.bits[i] |= second[v].bits[i];
+        CHECK(xor_count(joined, whole[v]) == 0);
+        CHECK(union_xor_count(first[v], second[v], cloud[v]) == xor_count(whole[v], cloud[v]));
+        if (split > 0 && split < nf) {  // both halves draw something, neither draws all
+          CHECK(first[v].count() > 0);
+          CHECK(second[v].count() > 0);
+          CHECK(xor_count(first[v], whole[v]) > 0);
+        }
+      }
+    }
+  }
+  // A range past the end or empty draws nothing.
+  std::array<SilhouetteMask, kSilhouetteViews> none;
+  rasterize_mesh_silhouettes(head.mesh.positions, head.mesh.triangles, w, {}, none, true, TriangleRange{nf, nf + 5});
+  for (const SilhouetteMask& m : none) CHECK(m.count() == 0);
+}

@@ -2,11 +2,14 @@
 // worker index is never used by two threads at once, thousands of short
 // back-to-back loops lose and repeat nothing and are counted, and loops
 // nested in a body or started from two threads at once run every item.
+// HelperThread (common/helper_thread.h) runs both parts of every job.
 #include <catch2/catch.hpp>
 
+#include "common/helper_thread.h"
 #include "common/parallel.h"
 
 #include <atomic>
+#include <functional>
 #include <memory>
 #include <thread>
 #include <vector>
@@ -91,4 +94,43 @@ TEST_CASE("parallel_for: a reduction in item order is the serial one, bit for bi
   for (double v : x) parallel_sum += v;
   for (int i = 0; i < 100000; ++i) serial_sum += 1.0 / (1.0 + i) * (i % 3 ? 1 : -1);
   CHECK(parallel_sum == serial_sum);
+}
+
+
+TEST_CASE("HelperThread: every job runs both parts once, many jobs in a row", "[parallel]") {
+  lk::HelperThread helper;
+  CHECK(helper.threaded() == (lk::parallel_workers() > 1));
+  // Short jobs back to back (the alignment's evaluations): each part sees
+  // the data the caller wrote before run(), and the caller sees both parts'
+  // results after it.
+  std::vector<long> input(2), output(2);
+  std::atomic<int> bad{0};
+  const std::thread::id caller = std::this_thread::get_id();
+  const std::function<void(int)> job = [&](int part) {
+    if (part < 0 || part > 1) ++bad;
+    if (part == 0 && std::this_thread::get_id() != caller) ++bad;  // part 0 runs on the caller
+    if (helper.threaded() && part == 1 && std::this_thread::get_id() == caller) ++bad;
+    output[part] = 3 * input[part] + part;
+  };
+  long sum = 0;
+  for (long k = 0; k < 5000; ++k) {
+    input[0] = k;
+    input[1] = 2 * k;
+    helper.run(job);
+    if (output[0] != 3 * k || output[1] != 6 * k + 1) ++bad;
+    sum += output[0] + output[1];
+  }
+  CHECK(bad == 0);
+  CHECK(sum == 9L * (4999L * 5000L / 2) + 5000L);
+}
+
+TEST_CASE("HelperThread: made and dropped many times, never hangs", "[parallel]") {
+  int total = 0;
+  for (int k = 0; k < 200; ++k) {
+    lk::HelperThread helper;  // (destroyed with and without a job run)
+    int parts[2] = {0, 0};
+    if (k % 2) helper.run([&](int part) { parts[part] = 1; });
+    total += parts[0] + parts[1];
+  }
+  CHECK(total == 200);
 }
