@@ -23,6 +23,7 @@
 // correspondences -> cameras, chart, skin texture; tarini2002 Sec. 3) and
 // export_textured (OBJ + MTL + PNG); eye_photo_job and smile_photo_job
 // (tarini2002 Sec. 4: iris and teeth textures from the user's photos).
+#include "common/helper_thread.h"
 #include "common/parallel.h"
 #include "common/progress.h"
 #include "components/components.h"
@@ -1160,6 +1161,34 @@ double parallel_loops_ms(int loops, int items, bool parallel) {
 
 double parallel_loops_run() { return static_cast<double>(lk::parallel_loops_run().load()); }
 
+// `jobs` jobs in a row, each `items` small items split in two halves: on a
+// HelperThread (threaded) or both halves on this thread. What waking the
+// parked helper and waiting for it cost per job (the alignment makes ~760
+// such jobs of ~0.4 ms each). A measurement for parallel_overhead_node.mjs.
+double helper_jobs_ms(int jobs, int items, bool threaded) {
+  items = std::max(2, items);
+  std::vector<double> out(items);
+  const std::function<void(int)> half = [&out, items](int part) {
+    const int begin = part == 0 ? 0 : items / 2, end = part == 0 ? items / 2 : items;
+    for (int i = begin; i < end; ++i) {
+      double x = i * 1e-3;
+      for (int k = 0; k < 32; ++k) x = std::sin(x) + 0.5 * x;
+      out[i] = x;
+    }
+  };
+  const double t0 = now_ms();
+  if (threaded) {
+    lk::HelperThread helper;
+    for (int j = 0; j < jobs; ++j) helper.run(half);
+  } else {
+    for (int j = 0; j < jobs; ++j) half(0), half(1);
+  }
+  const double ms = now_ms() - t0;
+  volatile double keep = out[items / 2];
+  (void)keep;
+  return ms;
+}
+
 }  // namespace
 
 EMSCRIPTEN_BINDINGS(likeness_worker) {
@@ -1170,6 +1199,7 @@ EMSCRIPTEN_BINDINGS(likeness_worker) {
   // parallel_for loops that could use more than one thread so far
   // (fit_timing.mjs reads it around a fit: each loop starts the threads once).
   emscripten::function("parallel_loops_run", &parallel_loops_run);
+  emscripten::function("helper_jobs_ms", &helper_jobs_ms);
   emscripten::function("animate_frame", &animate_frame);
   emscripten::function("fit_quality_job", &fit_quality_job);
   emscripten::function("warm_up_job", &warm_up_job);
