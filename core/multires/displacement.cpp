@@ -921,6 +921,27 @@ int fade_across_data_edge(const MultiresMesh& mesh, int level, int first, const 
   return changed;
 }
 
+// Points grouped by a cell key (of_point[i] = key_of(i)'s cell): cells get
+// dense ids in the order their first point comes, with their point count
+// and that first point.
+struct Cells {
+  std::unordered_map<std::int64_t, int> id_of;
+  std::vector<int> count, of_point;
+  std::vector<size_t> first_point;
+};
+template <class KeyOf>
+Cells group_into_cells(size_t n, size_t expected_cells, const KeyOf& key_of) {
+  Cells c;
+  c.id_of.reserve(expected_cells);
+  c.of_point.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    const auto [it, fresh] = c.id_of.try_emplace(key_of(i), static_cast<int>(c.count.size()));
+    if (fresh) c.count.push_back(0), c.first_point.push_back(i);
+    ++c.count[it->second];
+    c.of_point[i] = it->second;
+  }
+  return c;
+}
 
 // The median over every step-th point of the distance to its nearest other
 // point (a point with a copy at the same place is left out, as a kd-tree's
@@ -958,25 +979,19 @@ double median_nearest_distance(const std::vector<Vec3>& points, size_t step) {
   // The cells as runs of one array (counted, then filled: no list per cell).
   auto index = [&](double v, double lo) { return static_cast<std::int64_t>(std::floor((v - lo) / h)); };
   auto key = [](std::int64_t x, std::int64_t y, std::int64_t z) { return (x << 42) | (y << 21) | z; };
-  std::unordered_map<std::int64_t, int> cell_of;
-  cell_of.reserve(n / 8);
-  std::vector<int> cell_start, cell_points(n), point_cell(n);
-  int fullest = 0;
-  for (size_t i = 0; i < n; ++i) {
+  Cells cells = group_into_cells(n, n / 8, [&](size_t i) {
     const Vec3& p = points[i];
-    const int fresh = static_cast<int>(cell_start.size());
-    const int c =
-        cell_of.try_emplace(key(index(p.x(), box.min.x()), index(p.y(), box.min.y()), index(p.z(), box.min.z())), fresh)
-            .first->second;
-    if (c == fresh) cell_start.push_back(0);
-    point_cell[i] = c;
-    fullest = std::max(fullest, ++cell_start[c]);
-  }
-  if (fullest > 4096) return with_kd_tree();  // points piled into few cells
-  int sum = 0;  // counts -> one past each cell's end, then filled backwards to its start
+    return key(index(p.x(), box.min.x()), index(p.y(), box.min.y()), index(p.z(), box.min.z()));
+  });
+  if (*std::max_element(cells.count.begin(), cells.count.end()) > 4096)
+    return with_kd_tree();  // points piled into few cells
+  // Counts -> one past each cell's end, then filled backwards to its start.
+  std::vector<int> cell_start = std::move(cells.count), cell_points(n);
+  int sum = 0;
   for (int& c : cell_start) sum += c, c = sum;
   cell_start.push_back(sum);
-  for (size_t i = n; i-- > 0;) cell_points[--cell_start[point_cell[i]]] = static_cast<int>(i);
+  for (size_t i = n; i-- > 0;) cell_points[--cell_start[cells.of_point[i]]] = static_cast<int>(i);
+  const auto& cell_of = cells.id_of;
   int far = 0;  // samples with no neighbour within kRings cells
   for (size_t i = 0; i < n; i += step) {
     const Vec3& p = points[i];
@@ -1037,30 +1052,20 @@ std::vector<char> isolated_scan_points(const std::vector<Vec3>& points, double d
   // (not once per point: a cell holds ~9 points), then looked up per point.
   std::vector<std::int64_t> point_key(n);
   parallel_for(0, static_cast<int>(n), 8192, [&](int i, int) { point_key[i] = key(points[i], 0, 0, 0); });
-  std::unordered_map<std::int64_t, int> cell_of;  // key -> index into cells
-  cell_of.reserve(n / 4);
-  std::vector<size_t> cell_point;  // a point of the cell
-  std::vector<int> cell_count;
-  std::vector<int> point_cell(n);
-  for (size_t i = 0; i < n; ++i) {
-    const auto [it, fresh] = cell_of.try_emplace(point_key[i], static_cast<int>(cell_point.size()));
-    if (fresh) cell_point.push_back(i), cell_count.push_back(0);
-    ++cell_count[it->second];
-    point_cell[i] = it->second;
-  }
-  std::vector<char> cell_isolated(cell_point.size(), 0);
-  parallel_for(0, static_cast<int>(cell_point.size()), 1024, [&](int c, int) {
-    const Vec3& p = points[cell_point[c]];
+  const Cells cells = group_into_cells(n, n / 4, [&](size_t i) { return point_key[i]; });
+  std::vector<char> cell_isolated(cells.count.size(), 0);
+  parallel_for(0, static_cast<int>(cells.count.size()), 1024, [&](int c, int) {
+    const Vec3& p = points[cells.first_point[c]];
     int around = 0;
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dz = -1; dz <= 1; ++dz) {
-          const auto it = cell_of.find(key(p, dx, dy, dz));
-          if (it != cell_of.end()) around += cell_count[it->second];
+          const auto it = cells.id_of.find(key(p, dx, dy, dz));
+          if (it != cells.id_of.end()) around += cells.count[it->second];
         }
     cell_isolated[c] = around < needed;
   });
-  for (size_t i = 0; i < n; ++i) isolated[i] = cell_isolated[point_cell[i]];
+  for (size_t i = 0; i < n; ++i) isolated[i] = cell_isolated[cells.of_point[i]];
   return isolated;
 }
 
