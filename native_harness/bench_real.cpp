@@ -7,7 +7,9 @@
 // fold creases, and the eye sockets"), so one fit decides little; the
 // copies show the spread. Skipped with a message when the data are absent.
 // --fit-crease-trials N, --fit-crease-edges N, --fit-crease-angle DEG: the
-// global fit's fold creases (global_fit.h); --fit-head asset|plate|ring.
+// global fit's fold creases (global_fit.h); --fit-head asset|plate|ring;
+// --fit-surface-edges X: the spacing of the samples on the scan's triangles
+// in finest-level edges (FitHeadOptions::surface_sample_edges; 0: off).
 #include "command.h"
 #include "fit_table.h"
 #include "generic_head_choice.h"
@@ -73,8 +75,10 @@ int run(const Args& args) {
       !args.get_int("fit-crease-edges", options.global.smooth_guard_crease_max_edges,
                     options.global.smooth_guard_crease_max_edges) ||
       !args.get_double("fit-crease-angle", options.global.smooth_guard_crease_min_angle_deg,
-                       options.global.smooth_guard_crease_min_angle_deg)) {
-    std::printf("   --fit-crease-trials / --fit-crease-edges take a whole number, --fit-crease-angle a number\n");
+                       options.global.smooth_guard_crease_min_angle_deg) ||
+      !args.get_double("fit-surface-edges", options.surface_sample_edges, options.surface_sample_edges)) {
+    std::printf("   --fit-crease-trials / --fit-crease-edges take a whole number, --fit-crease-angle and "
+                "--fit-surface-edges a number\n");
     return 1;
   }
   int failures = 0;

@@ -116,6 +116,10 @@ int run_fit(const Args& args) {
   std::printf("  unit: %s (bbox diagonal %.4g scan units = %.3f m), %d of %d points above the neck cut\n",
               r.unit_to_metres == 1 ? "m" : r.unit_to_metres == 0.01 ? "cm" : "mm", r.bbox_diagonal,
               r.bbox_diagonal * r.unit_to_metres, r.fitted_points, r.points);
+  if (r.surface_samples.samples > 0)
+    std::printf("  scan triangles: %d samples on %d of them measured with the points (%d dense enough, %d too long)\n",
+                r.surface_samples.samples, r.surface_samples.triangles_sampled, r.surface_samples.triangles_dense,
+                r.surface_samples.triangles_skipped_long);
   print_fit_table(stages);
   // Checked after the fit and outside its timed stages: the user learns
   // whether the head crosses itself before animating it.

@@ -105,7 +105,8 @@ inline std::string fit_report_json(const FitHeadResult& r, const std::vector<Tim
   for (const auto& s : stages) total += s.ms;
   j << "{\n  \"status\": \"" << status << "\",\n  \"points\": " << r.points
     << ",\n  \"fitted_points\": " << r.fitted_points << ",\n  \"bbox_diagonal\": " << r.bbox_diagonal
-    << ",\n  \"unit_to_metres\": " << r.unit_to_metres << ",\n  \"stages\": [";
+    << ",\n  \"unit_to_metres\": " << r.unit_to_metres << ",\n  \"surface_samples\": " << r.surface_samples.samples
+    << ",\n  \"stages\": [";
   for (size_t i = 0; i < stages.size(); ++i) {
     const auto& s = stages[i];
     j << (i ? "," : "") << "\n    {\"name\": \"" << s.name << "\", \"mean_pct\": " << s.distance.mean_pct

@@ -551,11 +551,9 @@ val fit_head_job(const std::string& name, std::uintptr_t data, std::size_t size,
   lk::GeometryKind kind = lk::GeometryKind::PointCloud;
   lk::Status status = lk::read_geometry(name, reinterpret_cast<const std::uint8_t*>(data), size, mesh, cloud, kind);
   if (!status.ok()) return error_result(lk::with_context(status, name));
-  // A mesh scan is fitted through its vertices.
-  if (kind == lk::GeometryKind::Mesh) {
-    cloud = lk::PointCloud{};
-    cloud.positions = std::move(mesh.positions);
-  }
+  // A mesh scan is fitted through its vertices; its triangles (in `cloud`
+  // too) are sampled for the displacements, as in the CLI.
+  mesh = lk::TriMesh{};
   const double parse_ms = now_ms() - t_parse;
 
   lk::FitHeadOptions opt;

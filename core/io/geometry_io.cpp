@@ -84,6 +84,7 @@ PointCloud to_point_cloud(const TriMesh& mesh) {
   cloud.positions = mesh.positions;
   if (mesh.normals.size() == mesh.positions.size()) cloud.normals = mesh.normals;
   if (mesh.colors.size() == mesh.positions.size()) cloud.colors = mesh.colors;
+  cloud.faces = mesh.triangles;
   return cloud;
 }
 

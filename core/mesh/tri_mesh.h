@@ -27,6 +27,10 @@ struct PointCloud {
   std::vector<Vec3> positions;  // #P
   std::vector<Vec3> normals;    // #P or empty
   std::vector<Vec3> colors;     // #P or empty, RGB in [0,1]
+  // The scan's own triangles when it came as a mesh (indices into
+  // positions), or empty: a raw cloud. Only the displacements read them
+  // (multires/surface_samples.h).
+  std::vector<Tri> faces;
 
   int size() const { return static_cast<int>(positions.size()); }
 };

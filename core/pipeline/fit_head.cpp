@@ -535,6 +535,26 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
     fitted.normals.reserve(measured_index.size());
     for (int i : measured_index) fitted.normals.push_back(out.scan_to_head.A * scan.normals[i]);
   }
+  if (!scan.faces.empty() && options.surface_sample_edges > 0) {
+    // A scan that came as a mesh: its triangles between the measured points.
+    std::vector<char> measured(cloud.positions.size(), 0);
+    for (int i : measured_index) measured[i] = 1;
+    std::vector<Vec3> head_normals;
+    if (!fitted.normals.empty()) {
+      head_normals.reserve(scan.normals.size());
+      for (const Vec3& nn : scan.normals) head_normals.push_back(out.scan_to_head.A * nn);
+    }
+    const double spacing = options.surface_sample_edges * mean_edge_length(out.control) / double(1 << options.levels);
+    st = sample_scan_surface(cloud.positions, head_normals, scan.faces, measured, spacing,
+                             options.surface_sample_max_edge_ratio, options.surface_sample_max, fitted,
+                             out.surface_samples);
+    if (st.code == ErrorCode::TooLarge) {
+      out.notes.push_back("the scan's triangles were not sampled for the displacements (" + st.message +
+                          "): measured on its points only");
+    } else if (!st) {
+      return with_context(st, "displacements (scan triangles)");
+    }
+  }
   DisplacementOptions dopt = options.displacement;
   dopt.isolated_density_ratio = 0;  // already left out above
   if (dopt.max_distance <= 0) dopt.max_distance = options.displacement_max_pct / 100.0 * diag;

@@ -44,6 +44,7 @@
 #include "multires/displacement.h"
 #include "multires/fold_limit.h"
 #include "multires/multires.h"
+#include "multires/surface_samples.h"
 
 #include <functional>
 #include <string>
@@ -118,6 +119,16 @@ struct FitHeadOptions {
   // closer, most of 15 mm's gain; on James's face scan 15 mm and more made
   // the neck push into the generic ear lobes: ear pairs 79 -> 118.)
   double displacement_below_neck_cut = 0.010;
+  // Scans that come as meshes (PointCloud::faces): their triangles are
+  // sampled every surface_sample_edges x the finest level's mean edge and
+  // the samples are measured with the scan's points (multires/
+  // surface_samples.h): the finest levels no longer guess the surface
+  // between samples several of their edges apart. Triangles with an edge
+  // above surface_sample_max_edge_ratio x the median (holes bridged) are
+  // left out. 0: off (the vertices only, as for a raw cloud).
+  double surface_sample_edges = 1.0;
+  double surface_sample_max_edge_ratio = 4.0;
+  int surface_sample_max = 2000000;
   // After measuring: displacements that turn a triangle over or collapse it
   // (against the smooth Butterfly levels) are shrunk until none does.
   FoldLimitOptions fold_limit;
@@ -204,6 +215,7 @@ struct FitHeadResult {
   double near_fraction = 0;     // share of points near the aligned head (sanity check)
   int pocket_points = 0;        // fitted points nearest to an eye socket / the mouth bag: not fitted
   int isolated_points = 0;  // skin points left out of fitting as isolated (DisplacementOptions::isolated_density_ratio)
+  SurfaceSampleStats surface_samples;  // samples of the scan's triangles measured (0: a raw cloud)
   int zeroed_displacements = 0; // displacements dropped in pockets or because they folded triangles
   FoldLimitStats fold_limit;    // what the fold limiter shrank
   // Crossing pairs of the control mesh's smooth level untangle_level that the
