@@ -25,6 +25,7 @@ Status sample_scan_surface(const std::vector<Vec3>& positions, const std::vector
     return Status::error(ErrorCode::InvalidInput, "surface samples: spacing must be positive");
   const bool with_normals = normals.size() == positions.size() && out.normals.size() == out.positions.size();
   std::vector<int> kept;
+  std::vector<double> longest;  // per kept triangle
   std::vector<double> edges;
   for (int f = 0; f < static_cast<int>(faces.size()); ++f) {
     const Tri& t = faces[f];
@@ -37,7 +38,12 @@ Status sample_scan_surface(const std::vector<Vec3>& positions, const std::vector
     }
     if (!ok || t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
     kept.push_back(f);
-    for (int k = 0; k < 3; ++k) edges.push_back((positions[t[k]] - positions[t[(k + 1) % 3]]).norm());
+    double l = 0;
+    for (int k = 0; k < 3; ++k) {
+      edges.push_back((positions[t[k]] - positions[t[(k + 1) % 3]]).norm());
+      l = std::max(l, edges.back());
+    }
+    longest.push_back(l);
   }
   if (kept.empty()) return Status::success();
   std::nth_element(edges.begin(), edges.begin() + edges.size() / 2, edges.end());
@@ -47,14 +53,11 @@ Status sample_scan_surface(const std::vector<Vec3>& positions, const std::vector
   std::vector<int> cuts(kept.size(), 0);
   long long total = 0;
   for (size_t i = 0; i < kept.size(); ++i) {
-    const Tri& t = faces[kept[i]];
-    double longest = 0;
-    for (int k = 0; k < 3; ++k) longest = std::max(longest, (positions[t[k]] - positions[t[(k + 1) % 3]]).norm());
-    if (!(longest <= cap)) {
+    if (!(longest[i] <= cap)) {
       ++stats.triangles_skipped_long;
       continue;
     }
-    const double n = std::ceil(longest / spacing);
+    const double n = std::ceil(longest[i] / spacing);
     if (n > 1e4) return Status::error(ErrorCode::InvalidInput, "surface samples: spacing far below the scan's edges");
     if (n < 2) {  // the scan's own points are as dense as asked here
       ++stats.triangles_dense;

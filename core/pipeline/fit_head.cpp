@@ -529,21 +529,19 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
     fitted.positions.insert(fitted.positions.end(), band.begin(), band.end());
     measured_index.insert(measured_index.end(), band_index.begin(), band_index.end());
   }
+  std::vector<Vec3> head_normals;  // #P or empty: the scan's normals in the head frame
   if (scan.normals.size() == scan.positions.size()) {
     // The scanner's normals, in the head frame, tell thin features' two
     // sheets apart when measuring (DisplacementOptions::min_normal_agreement).
+    head_normals.reserve(scan.normals.size());
+    for (const Vec3& nn : scan.normals) head_normals.push_back(out.scan_to_head.A * nn);
     fitted.normals.reserve(measured_index.size());
-    for (int i : measured_index) fitted.normals.push_back(out.scan_to_head.A * scan.normals[i]);
+    for (int i : measured_index) fitted.normals.push_back(head_normals[i]);
   }
   if (!scan.faces.empty() && options.surface_sample_edges > 0) {
     // A scan that came as a mesh: its triangles between the measured points.
     std::vector<char> measured(cloud.positions.size(), 0);
     for (int i : measured_index) measured[i] = 1;
-    std::vector<Vec3> head_normals;
-    if (!fitted.normals.empty()) {
-      head_normals.reserve(scan.normals.size());
-      for (const Vec3& nn : scan.normals) head_normals.push_back(out.scan_to_head.A * nn);
-    }
     const double spacing = options.surface_sample_edges * mean_edge_length(out.control) / double(1 << options.levels);
     st = sample_scan_surface(cloud.positions, head_normals, scan.faces, measured, spacing,
                              options.surface_sample_max_edge_ratio, options.surface_sample_max, fitted,
