@@ -8,7 +8,7 @@
 // truth: noise, outliers, hair junk), self-intersecting triangle pairs by
 // region beside those of the smooth (undisplaced) surface, and the fold
 // limiter's work. Experiment knobs (see docs/fit.md): --fit-separate-rounds N,
-// --fit-area-ratio R, --fit-cap-pct P, --fit-levels L, --fit-line-edges E, --fit-edge-fade W (DisplacementOptions::edge_fade_control_edges, 0: off),
+// --fit-area-ratio R, --fit-cap-pct P, --fit-levels L, --fit-data-level L (GlobalFitOptions::data_level), --fit-line-edges E, --fit-edge-fade W (DisplacementOptions::edge_fade_control_edges, 0: off),
 // --fit-guard-always / --fit-guard-off (the global fit's smooth-surface guard and fold relief on
 // every scan / on none; default: face-only captures), --fit-no-climb, --fit-remeasure, --fit-no-eye-region (leave the eyes where the alignment put them, FitHeadOptions::fit_eye_region), --fit-no-creases (plain Butterfly at the
 // eye and lip rims), --fit-displaced-creases, --fit-no-corners-to-smooth,
@@ -268,6 +268,7 @@ int run(const Args& args) {
     args.get_double("fit-area-ratio", opt.fold_limit.min_area_ratio, opt.fold_limit.min_area_ratio);
     args.get_double("fit-cap-pct", opt.displacement_max_pct, opt.displacement_max_pct);
     args.get_int("fit-levels", opt.levels, opt.levels);
+    args.get_int("fit-data-level", opt.global.data_level, opt.global.data_level);
     args.get_int("fit-restarts", opt.fold_limit.max_intersection_restarts, opt.fold_limit.max_intersection_restarts);
     args.get_double("fit-isolated", opt.displacement.isolated_density_ratio, opt.displacement.isolated_density_ratio);
     args.get_int("fit-footprint", opt.displacement.footprint_points, opt.displacement.footprint_points);

@@ -9,7 +9,9 @@
 // --fit-crease-trials N, --fit-crease-edges N, --fit-crease-angle DEG: the
 // global fit's fold creases (global_fit.h); --fit-head asset|plate|ring;
 // --fit-surface-edges X: the spacing of the samples on the scan's triangles
-// in finest-level edges (FitHeadOptions::surface_sample_edges; 0: off).
+// in finest-level edges (FitHeadOptions::surface_sample_edges; 0: off);
+// --fit-data-level L: the global fit's last passes measure the points
+// against Butterfly level L (GlobalFitOptions::data_level; 0: off).
 #include "command.h"
 #include "fit_table.h"
 #include "generic_head_choice.h"
@@ -76,8 +78,9 @@ int run(const Args& args) {
                     options.global.smooth_guard_crease_max_edges) ||
       !args.get_double("fit-crease-angle", options.global.smooth_guard_crease_min_angle_deg,
                        options.global.smooth_guard_crease_min_angle_deg) ||
-      !args.get_double("fit-surface-edges", options.surface_sample_edges, options.surface_sample_edges)) {
-    std::printf("   --fit-crease-trials / --fit-crease-edges take a whole number, --fit-crease-angle and "
+      !args.get_double("fit-surface-edges", options.surface_sample_edges, options.surface_sample_edges) ||
+      !args.get_int("fit-data-level", options.global.data_level, options.global.data_level)) {
+    std::printf("   --fit-crease-trials / --fit-crease-edges / --fit-data-level take a whole number, --fit-crease-angle and "
                 "--fit-surface-edges a number\n");
     return 1;
   }

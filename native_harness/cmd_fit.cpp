@@ -68,6 +68,12 @@ int run_fit(const Args& args) {
   // The earlier opt-in: level-L footprints widened against the scan's noise
   // (up to 128 points each; about +0.3 s, docs/fit.md).
   if (args.has("widen-footprints")) opt.displacement.max_footprint_points = 128;
+  // Opt-in: the global fit's passes on all points measure the scan against
+  // the control mesh's Butterfly level L (smoother faces from sparse scans;
+  // more crossing pairs at James's ears, docs/fit.md).
+  if (!args.get_int("data-level", 0, opt.global.data_level)) return 2;
+  if (opt.global.data_level < 0 || opt.global.data_level > 2)
+    return fail(cmd, "--data-level takes 0 (the control mesh, default), 1 or 2");
   const bool dump = args.has("dump"), scan_frame = args.has("scan-frame");
 
   PointCloud scan;
@@ -145,7 +151,7 @@ int run_fit(const Args& args) {
 
 Registrar reg({"fit",
                "likeness fit --scan FILE --out DIR [--levels L] [--up X Y Z|+x..-z] [--facing X Y Z|+x..-z] "
-               "[--no-orientation-check] [--face-only|--whole-head] [--no-eye-region] [--no-denoise] [--widen-footprints] "
+               "[--no-orientation-check] [--face-only|--whole-head] [--no-eye-region] [--no-denoise] [--widen-footprints] [--data-level 0|1|2] "
                "[--dump] [--scan-frame] [--generic-head asset|plate|ring]",
                "fits the generic head to a scan (jeong2002): control.obj, level1..L.obj, report.json", run_fit});
 

@@ -4,6 +4,7 @@
 #include "common/sampling.h"
 #include "fit/block_ldlt.h"
 #include "fit/closest_point.h"
+#include "fit/data_surface.h"
 #include "mesh/geometry.h"
 #include "raycast/self_intersection.h"
 
@@ -97,9 +98,10 @@ struct Projection {
 // `previous` (same size as set, or empty) holds the last projection: the
 // distance to the same triangle at the new positions bounds the search,
 // which prunes most of the tree when the mesh moved little.
-void project(const std::vector<Vec3>& points, const std::vector<int>& set, TriMesh& work,
+void project(const std::vector<Vec3>& points, const std::vector<int>& set, DataSurface& data,
              const VecX& x, double tau, const std::vector<SurfacePoint>* previous, Projection& out) {
-  from_vector(x, work.positions);
+  data.set(x);
+  const TriMesh& work = data.mesh;
   ClosestPointTree tree(work);
   out.hits.resize(set.size());
   const bool warm = previous && previous->size() == set.size();
@@ -513,9 +515,22 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
   std::mt19937 rng(options.seed);
   mt19937_shuffle(order.begin(), order.end(), rng);
 
-  TriMesh work = mesh;
+  // The data surface (header comment): the control mesh, or its Butterfly
+  // level data_level (a mesh Butterfly cannot refine is fitted as level 0).
+  DataSurface plain_data, refined_data;
+  plain_data.build(mesh, terms.smooth_creases, 0);
+  if (options.data_level > 0) {
+    // A mesh Butterfly cannot refine (not a manifold) is fitted as level 0.
+    if (!refined_data.build(mesh, terms.smooth_creases, options.data_level)) refined_data.build(mesh, {}, 0);
+  } else {
+    refined_data = plain_data;
+  }
+  result.data_level = refined_data.level;
+  int carried_level = -1;
   VecX x = rest;
   const int sub_rounds = static_cast<int>(options.smooth_weights.size());
+  // Level 0 on the subsample rounds unless data_level_on_subsamples.
+  const int data_from = options.data_level_on_subsamples ? 0 : sub_rounds;
   const int base_rounds = sub_rounds + (options.final_iterations > 0 ? 1 : 0);
   int rounds = base_rounds;  // the smooth-surface guard adds passes
   VecX smooth_best;          // the guard's state with the fewest new smooth pairs
@@ -554,14 +569,17 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
     // accepted step's, or the round's first): the same points are not
     // projected again, and a larger set starts its prefix from those hits.
     Projection proj;
+    DataSurface& data = r >= data_from ? refined_data : plain_data;
+    if (carried_level != data.level) carried_count = -1;
+    carried_level = data.level;
     if (carried_count == count) {
       proj = std::move(carried);
     } else if (carried_count > 0 && carried_count < count) {
       std::vector<SurfacePoint> start(count);  // face -1: searched from scratch
       std::copy(carried.hits.begin(), carried.hits.end(), start.begin());
-      project(points, set, work, x, 1e300, &start, proj);
+      project(points, set, data, x, 1e300, &start, proj);
     } else {
-      project(points, set, work, x, 1e300, nullptr, proj);
+      project(points, set, data, x, 1e300, nullptr, proj);
     }
     std::vector<double> d(proj.hits.size());
     for (size_t i = 0; i < d.size(); ++i) d[i] = std::sqrt(proj.hits[i].squared_distance);
@@ -590,21 +608,28 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
 
       // Data term, accumulated per triangle as 9x9 blocks (the corners'
       // coordinates), so the assembly cost does not grow with the triplets.
-      const int nf = mesh.num_triangles();
+      // On a refined data surface the blocks are over its vertices y = S x,
+      // and the term is taken to the control vertices as S^T H_y S, S^T g_y.
+      const int nf = data.mesh.num_triangles();
+      const int ny = static_cast<int>(data.mesh.positions.size());
       std::vector<Eigen::Matrix<double, 9, 9>> blocks(nf, Eigen::Matrix<double, 9, 9>::Zero());
+      // Level 0 adds the rows straight into g (g_y is g), level L into g_y.
       VecX g = g_reg;
+      VecX g_refined;
+      if (data.level > 0) g_refined = VecX::Zero(3 * ny);
+      VecX& g_y = data.level > 0 ? g_refined : g;
       const double tau2 = tau * tau;
       for (size_t i = 0; i < set.size(); ++i) {
         const SurfacePoint& h = proj.hits[i];
         if (h.face < 0 || h.squared_distance > tau2) continue;
         const Vec3& p = points[set[i]];
-        const Tri& tri = mesh.triangles[h.face];
+        const Tri& tri = data.mesh.triangles[h.face];
         Vec3 n = p - h.point;
         const double len = n.norm();
         if (len > 1e-12 * edge) {
           n /= len;
         } else {
-          n = face_normal_area(work, h.face);
+          n = face_normal_area(data.mesh, h.face);
           const double nl = n.norm();
           if (nl <= 0) continue;
           n /= nl;
@@ -619,22 +644,28 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
             const double bb = w * beta * h.barycentric[k] * h.barycentric[l];
             for (int c = 0; c < 3; ++c) B(3 * k + c, 3 * l + c) += bb;
           }
-          g.segment<3>(3 * tri[k]) += w * (a.segment<3>(3 * k) * np + beta * h.barycentric[k] * p);
+          g_y.segment<3>(3 * tri[k]) += w * (a.segment<3>(3 * k) * np + beta * h.barycentric[k] * p);
         }
       }
-      std::vector<Triplet> trip;
-      trip.reserve(size_t(nf) * 81 + 3 * nv);
-      for (int f = 0; f < nf; ++f) {
-        const Tri& tri = mesh.triangles[f];
-        for (int k = 0; k < 3; ++k)
-          for (int l = 0; l < 3; ++l)
-            for (int c = 0; c < 3; ++c)
-              for (int e = 0; e < 3; ++e)
-                trip.emplace_back(3 * tri[k] + c, 3 * tri[l] + e, blocks[f](3 * k + c, 3 * l + e));
-      }
-      for (int i = 0; i < 3 * nv; ++i) trip.emplace_back(i, i, tikhonov * w);
       SpMat h_data(3 * nv, 3 * nv);
-      h_data.setFromTriplets(trip.begin(), trip.end());
+      if (data.level > 0) {
+        h_data = data.to_control(blocks);
+        g += data.S3.transpose() * g_y;
+        for (int i = 0; i < 3 * nv; ++i) h_data.coeffRef(i, i) += tikhonov * w;  // in the pattern
+      } else {
+        std::vector<Triplet> trip;
+        trip.reserve(size_t(nf) * 81 + 3 * nv);
+        for (int f = 0; f < nf; ++f) {
+          const Tri& tri = data.mesh.triangles[f];
+          for (int k = 0; k < 3; ++k)
+            for (int l = 0; l < 3; ++l)
+              for (int c = 0; c < 3; ++c)
+                for (int e = 0; e < 3; ++e)
+                  trip.emplace_back(3 * tri[k] + c, 3 * tri[l] + e, blocks[f](3 * k + c, 3 * l + e));
+        }
+        for (int i = 0; i < 3 * nv; ++i) trip.emplace_back(i, i, tikhonov * w);
+        h_data.setFromTriplets(trip.begin(), trip.end());
+      }
       g += (tikhonov * w) * x;
       const SpMat h_data_reg = h_data + h_reg;
 
@@ -757,12 +788,12 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
           bool bounded = false;
           double e_new = 0;
           if (last_step_of_fit) {
-            const double bound = distance_energy_bound(points, set, mesh.triangles, xt, tau, proj.hits);
+            const double bound = distance_energy_bound(points, set, data.mesh.triangles, data.map(xt), tau, proj.hits);
             e_new = energy_parts(xt, bound, lambda, parts);
             bounded = e_new <= e_old;
           }
           if (!bounded) {
-            project(points, set, work, xt, tau, &proj.hits, trial);
+            project(points, set, data, xt, tau, &proj.hits, trial);
             e_new = energy_parts(xt, trial.dist_energy, lambda, parts);
           }
           if (e_new <= e_old) {
@@ -783,7 +814,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
         break;
       }
       if (!accepted) {
-        from_vector(x, work.positions);  // project() left a trial in work
+        data.set(x);  // project() left a trial in data.mesh
         rec.energy_before = e_old;
         rec.energy_after = e_old;
         energy_parts(x, proj.dist_energy, lambda, rec);
@@ -792,7 +823,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
         result.iterations.push_back(rec);
         break;
       }
-      from_vector(x_new, work.positions);
+      data.set(x_new);
       x = std::move(x_new);
       if (crossing_guarded) crossing_at_x = std::move(crossing_at_new);
       proj = std::move(proj_new);

@@ -129,6 +129,12 @@
 //   the whole level has fewer new pairs. The edges go to the subdivision
 //   stage (GlobalFitResult::fold_crease_edges), which refines them as
 //   creases like the eye rims and lip lines. Positions are not changed.
+// - Data surface (GlobalFitOptions::data_level, off by default). The
+//   points may be measured against the control mesh's Butterfly level L
+//   instead of its flat triangles (fit/data_surface.h): E_dist's rows go
+//   to the control vertices through the stencils, the closest points and
+//   the backtracking's energies are taken on level L. The guards still
+//   work on the control triangles.
 // - Why the aligned template and not the local fit as rest shape: local
 //   fitting moves each feature box by an affine map and blends the rest, so
 //   its shape has steps at the box walls (a ridge across James's nose bridge
@@ -159,6 +165,16 @@ struct GlobalFitOptions {
   // sliding along the surface, keeps the normal equations well conditioned.
   double point_to_point_weight = 0.1;
   bool preserve_rest_shape = true;  // see header comment
+  // The surface E_dist measures the points against (fit/data_surface.h):
+  // 0 the control mesh's triangles (the paper), L > 0 its Modified
+  // Butterfly level L (with GlobalFitTerms::smooth_creases), linear in the
+  // control positions. Level L serves the passes on all points (the final
+  // iterations and the smooth-surface guard's passes), or every round with
+  // data_level_on_subsamples. Off by default: on James's face capture it
+  // doubled the crossing pairs at his ears and eye rims (docs/fit.md,
+  // "Fitting the refined surface").
+  int data_level = 0;
+  bool data_level_on_subsamples = false;
   int max_iterations_per_round = 4;
   double relative_tolerance = 5e-3;  // stop a round when E changes less than this
   int subsample_points = 10000;      // points per round (0: all); a random subset
@@ -265,6 +281,7 @@ struct GlobalFitIteration {
 
 struct GlobalFitResult {
   std::vector<GlobalFitIteration> iterations;
+  int data_level = 0;          // the data surface's level (0 also when Butterfly could not refine the mesh)
   int rounds = 0;
   int turned_before = 0;       // triangles of the input turned against the reference
   int turned_after = 0;        // ... of the result
