@@ -71,9 +71,9 @@ inline StepSheets make_step_sheets(double low_z = 0.005, double high = 0.2) {
   return c;
 }
 
-// The crossing pairs of m refined `levels` times by plain Butterfly (no
-// creases), sorted; level triangle f lies in control face f >> (2 levels).
-inline std::vector<std::array<int, 2>> smooth_level_pairs(const TriMesh& m, int levels) {
+// m refined `levels` times by plain Butterfly (no creases), as a mesh;
+// level triangle f lies in control face f >> (2 levels).
+inline TriMesh butterfly_level(const TriMesh& m, int levels) {
   std::vector<ButterflyLevel> lv;
   REQUIRE(build_butterfly_levels(m, levels, lv).ok());
   std::vector<std::vector<Vec3>> refined;
@@ -81,6 +81,12 @@ inline std::vector<std::array<int, 2>> smooth_level_pairs(const TriMesh& m, int 
   TriMesh fine;
   fine.positions = refined.back();
   fine.triangles = lv.back().fine_triangles;
+  return fine;
+}
+
+// The crossing pairs of butterfly_level(m, levels), sorted.
+inline std::vector<std::array<int, 2>> smooth_level_pairs(const TriMesh& m, int levels) {
+  const TriMesh fine = butterfly_level(m, levels);
   std::vector<std::array<int, 2>> pairs;
   REQUIRE(find_self_intersections(fine, pairs).ok());
   return pairs;

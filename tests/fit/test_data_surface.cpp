@@ -5,6 +5,7 @@
 #include "fit/data_surface.h"
 #include "fit/global_fit.h"
 #include "mesh/topology.h"
+#include "step_sheets.h"
 #include "subdiv/butterfly.h"
 #include "toy_shapes.h"
 
@@ -19,18 +20,6 @@ Eigen::VectorXd flatten(const std::vector<Vec3>& p) {
   Eigen::VectorXd x(3 * p.size());
   for (size_t i = 0; i < p.size(); ++i) x.segment<3>(3 * i) = p[i];
   return x;
-}
-
-// Butterfly level `levels` of a control mesh, as a mesh.
-TriMesh refined(const TriMesh& control, int levels) {
-  std::vector<ButterflyLevel> lv;
-  REQUIRE(build_butterfly_levels(control, levels, lv).ok());
-  std::vector<std::vector<Vec3>> pos;
-  REQUIRE(apply_all(lv, control.positions, pos).ok());
-  TriMesh m;
-  m.positions = pos.back();
-  m.triangles = lv.back().fine_triangles;
-  return m;
 }
 
 // Points of an exact ellipsoid (a fine icosphere's vertices put on it).
@@ -56,7 +45,7 @@ TEST_CASE("data surface: level 0 is the control mesh, level L is Butterfly's lev
   for (int level = 1; level <= 2; ++level) {
     DataSurface data;
     REQUIRE(data.build(control, {}, level).ok());
-    const TriMesh truth = refined(control, level);
+    const TriMesh truth = test::butterfly_level(control, level);
     CHECK(data.mesh.triangles == truth.triangles);
     data.set(x);
     REQUIRE(data.mesh.positions.size() == truth.positions.size());
@@ -120,7 +109,7 @@ TEST_CASE("global fit on Butterfly's level 1 puts the refined surface on an exac
     REQUIRE(fit_global(points, start, topo, {}, o, out, res).ok());
     CHECK(res.data_level == level);
     for (size_t i = 0; i < res.iterations.size(); ++i) CHECK(res.iterations[i].energy_after <= res.iterations[i].energy_before);
-    const TriMesh fine = refined(out, 3);
+    const TriMesh fine = test::butterfly_level(out, 3);
     score[level] = point_to_surface_stats(check, fine, diag).mean;
   }
   INFO("ellipsoid to Butterfly level 3, mean: fitted on the control mesh " << score[0] << ", on level 1 " << score[1]);
