@@ -409,6 +409,8 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
     return Status::error(ErrorCode::InvalidInput, "global fit: smooth_guard_crease_trials and _max_edges must be >= 0");
   if (options.smooth_guard_relief_level < 0 || options.smooth_guard_relief_level > 4)
     return Status::error(ErrorCode::InvalidInput, "global fit: smooth_guard_relief_level must be 0 (off) to 4");
+  if (options.data_level < 0 || options.data_level > 3)
+    return Status::error(ErrorCode::InvalidInput, "global fit: data_level must be 0 (the control mesh) to 3");
   if (options.smooth_weights.empty())
     return Status::error(ErrorCode::InvalidInput, "global fit: no rounds (smooth_weights is empty)");
   for (const Vec3& p : points)
@@ -517,15 +519,12 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
 
   // The data surface (header comment): the control mesh, or its Butterfly
   // level data_level (a mesh Butterfly cannot refine is fitted as level 0).
-  DataSurface plain_data, refined_data;
+  DataSurface plain_data, refined_storage;
   plain_data.build(mesh, terms.smooth_creases, 0);
-  if (options.data_level > 0) {
-    // A mesh Butterfly cannot refine (not a manifold) is fitted as level 0.
-    if (!refined_data.build(mesh, terms.smooth_creases, options.data_level)) refined_data.build(mesh, {}, 0);
-  } else {
-    refined_data = plain_data;
-  }
-  result.data_level = refined_data.level;
+  DataSurface* refined_data = &plain_data;
+  if (options.data_level > 0 && refined_storage.build(mesh, terms.smooth_creases, options.data_level))
+    refined_data = &refined_storage;
+  result.data_level = refined_data->level;
   int carried_level = -1;
   VecX x = rest;
   const int sub_rounds = static_cast<int>(options.smooth_weights.size());
@@ -569,7 +568,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
     // accepted step's, or the round's first): the same points are not
     // projected again, and a larger set starts its prefix from those hits.
     Projection proj;
-    DataSurface& data = r >= data_from ? refined_data : plain_data;
+    DataSurface& data = r >= data_from ? *refined_data : plain_data;
     if (carried_level != data.level) carried_count = -1;
     carried_level = data.level;
     if (carried_count == count) {
