@@ -10,7 +10,8 @@
 // limiter's work. Experiment knobs (see docs/fit.md): --fit-separate-rounds N,
 // --fit-area-ratio R, --fit-cap-pct P, --fit-levels L, --fit-data-level L (GlobalFitOptions::data_level), --fit-line-edges E, --fit-edge-fade W (DisplacementOptions::edge_fade_control_edges, 0: off),
 // --fit-guard-always / --fit-guard-off (the global fit's smooth-surface guard and fold relief on
-// every scan / on none; default: face-only captures), --fit-no-climb, --fit-remeasure, --fit-no-eye-region (leave the eyes where the alignment put them, FitHeadOptions::fit_eye_region), --fit-no-creases (plain Butterfly at the
+// every scan / on none; default: face-only captures), --fit-relief-level L (the guard's fold relief
+// level, GlobalFitOptions::smooth_guard_relief_level; 0: the level-2 guard without relief), --fit-no-climb, --fit-remeasure, --fit-no-eye-region (leave the eyes where the alignment put them, FitHeadOptions::fit_eye_region), --fit-no-creases (plain Butterfly at the
 // eye and lip rims), --fit-displaced-creases, --fit-no-corners-to-smooth,
 // --fit-no-parents-to-smooth, --fit-separation-repeats N, --fit-restarts N (fold_limit.h), --fit-seeds N,
 // --fit-isolated R (points R times sparser than the scan's sampling are
@@ -21,7 +22,9 @@
 // --fit-smooth-levels N / --fit-smooth-strength S / --fit-smooth-iterations K /
 // --fit-smooth-agreement C / --fit-smooth-max-radius E (denoising by smoothing over the mesh,
 // DisplacementOptions::smooth_*; --fit-smooth-levels 0 turns it off)
-// (seeds 1..N); --save-scans DIR writes scans, truths,
+// (seeds 1..N); --fit-scan-noise-mm S (the virtual scanner's depth noise,
+// default 0.2 mm: how Table 1 and its floor move with the scanner's noise,
+// docs/fit.md); --save-scans DIR writes scans, truths,
 // the finest level and its crossing triangles. --truth-head H and --fit-head H
 // (H: asset, the committed generic head, the default; plate or ring, built
 // now with GenericHeadBuildOptions::ring_ear off or on) choose the generic
@@ -223,18 +226,23 @@ int run(const Args& args) {
   }
   std::printf("   generic head fitted: %s (%d vertices); truths made from: %s (%d vertices)\n", fit_head_name.c_str(),
               generic.mesh.num_vertices(), truth_head_name.c_str(), truth_generic.mesh.num_vertices());
+  const ScannerOptions scanner_defaults;
+  double noise_mm = 1000 * scanner_defaults.noise_sigma_m;
+  if (!args.get_double("fit-scan-noise-mm", noise_mm, noise_mm) || !(noise_mm >= 0 && noise_mm <= 10)) {
+    std::printf("   --fit-scan-noise-mm must be 0..10 (mm)\n");
+    return 1;
+  }
   std::printf("   synthetic scans: %d points, seeds", n_points);
   for (int s : seeds) std::printf(" %d", s);
-  const ScannerOptions scanner_defaults;
-  std::printf(" (virtual structured-light scanner: holes, %.2g mm noise, %.2g%% outliers, hair junk)\n",
-              1000 * scanner_defaults.noise_sigma_m, 100 * scanner_defaults.outlier_fraction);
+  std::printf(" (virtual structured-light scanner: holes, %.2g mm noise, %.2g%% outliers, hair junk)\n", noise_mm,
+              100 * scanner_defaults.outlier_fraction);
   int failures = 0;
   double sum_final_mean = 0, worst_total = 0, worst_total_cpu = 0;
   int sum_flipped = 0, sum_degenerate = 0, sum_intersections = 0;
   double sum_roughness = 0, sum_region_roughness = 0, sum_scanned_mm = 0;
   for (int seed : seeds) {
     SyntheticScan data;
-    st = make_synthetic_scan(truth_generic, seed, n_points, data);
+    st = make_synthetic_scan(truth_generic, seed, n_points, data, args.has("fit-scan-noise-mm") ? noise_mm / 1000 : -1);
     const TruthSurface& truth = data.truth;
     const PointCloud& cloud = data.cloud;
     const ScanStats& scan_stats = data.stats;
@@ -286,6 +294,7 @@ int run(const Args& args) {
     args.get_double("fit-edge-fade", opt.displacement.edge_fade_control_edges, opt.displacement.edge_fade_control_edges);
     if (args.has("fit-guard-always")) opt.smooth_guard = FitHeadOptions::SmoothGuard::Always;
     if (args.has("fit-guard-off")) opt.smooth_guard = FitHeadOptions::SmoothGuard::Off;
+    args.get_int("fit-relief-level", opt.global.smooth_guard_relief_level, opt.global.smooth_guard_relief_level);
     if (args.has("fit-no-climb")) opt.fold_limit.shrink_coarser_levels = false;
     if (args.has("fit-remeasure")) opt.displacement.remeasure_coarse_vertices = true;
     if (args.has("fit-no-creases")) opt.rim_creases = false;
