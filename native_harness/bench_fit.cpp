@@ -9,8 +9,8 @@
 // region beside those of the smooth (undisplaced) surface, and the fold
 // limiter's work. Experiment knobs (see docs/fit.md): --fit-separate-rounds N,
 // --fit-area-ratio R, --fit-cap-pct P, --fit-levels L, --fit-data-level L (GlobalFitOptions::data_level), --fit-line-edges E, --fit-edge-fade W (DisplacementOptions::edge_fade_control_edges, 0: off),
-// --fit-guard-always / --fit-guard-off (the global fit's smooth-surface guard and fold relief on
-// every scan / on none; default: face-only captures), --fit-relief-level L (the guard's fold relief
+// --fit-guard-face-only / --fit-guard-off (the global fit's smooth-surface guard and fold relief on
+// face-only captures only / on none; default: every scan; --fit-guard-always is the default), --fit-relief-level L (the guard's fold relief
 // level, GlobalFitOptions::smooth_guard_relief_level; 0: the level-2 guard without relief), --fit-no-climb, --fit-remeasure, --fit-no-eye-region (leave the eyes where the alignment put them, FitHeadOptions::fit_eye_region), --fit-no-creases (plain Butterfly at the
 // eye and lip rims), --fit-displaced-creases, --fit-no-corners-to-smooth,
 // --fit-no-parents-to-smooth, --fit-separation-repeats N, --fit-restarts N (fold_limit.h), --fit-seeds N,
@@ -293,6 +293,7 @@ int run(const Args& args) {
     args.get_double("fit-line-edges", opt.displacement.fine_line_edges, opt.displacement.fine_line_edges);
     args.get_double("fit-edge-fade", opt.displacement.edge_fade_control_edges, opt.displacement.edge_fade_control_edges);
     if (args.has("fit-guard-always")) opt.smooth_guard = FitHeadOptions::SmoothGuard::Always;
+    if (args.has("fit-guard-face-only")) opt.smooth_guard = FitHeadOptions::SmoothGuard::FaceOnlyScans;
     if (args.has("fit-guard-off")) opt.smooth_guard = FitHeadOptions::SmoothGuard::Off;
     args.get_int("fit-relief-level", opt.global.smooth_guard_relief_level, opt.global.smooth_guard_relief_level);
     if (args.has("fit-no-climb")) opt.fold_limit.shrink_coarser_levels = false;

@@ -95,7 +95,7 @@
 //   nothing. Later searches start only from the level's triangles under
 //   weighted vertices and their rings (the BVH refit, not rebuilt). Like
 //   g_v, r_v enters E_global (counted in e_guard) from the pass it is
-//   raised in. fit_head runs it on face-only captures (FitHeadOptions::
+//   raised in. fit_head runs it on every scan (FitHeadOptions::
 //   smooth_guard).
 // - Fold relief (part of the smooth-surface guard; GlobalFitOptions::
 //   smooth_guard_relief_*). Level 2 can be clean while level 3 folds inside
@@ -105,7 +105,9 @@
 //   level-3 pairs sat in three such faces, none crossed on level 2). After
 //   the guard, the new pairs of level 3 whose control faces share a corner
 //   are found (one search of the whole level, ~173k triangles on the
-//   generic head); the corners of those faces, cluster by cluster, step
+//   generic head, made only when a level-3 triangle turns against the
+//   reference's: smooth_guard_relief_when_turned); the corners of those
+//   faces, cluster by cluster, step
 //   their umbrella vectors towards the template's (x_v -= s (L(v) - L0(v)),
 //   s from smooth_guard_relief_shares: a line search counted on a tree of
 //   the control faces within four rings), keeping the share with the
@@ -229,6 +231,10 @@ struct GlobalFitOptions {
   int smooth_guard_relief_level = 3;
   int smooth_guard_relief_steps = 3;
   std::vector<double> smooth_guard_relief_shares = {0.25, 0.5};
+  // Search the relief level for folds only when one of its triangles turns
+  // against the reference's level (a fold turns one; the search is ~100 ms
+  // on the generic head's level 3, the check ~5 ms).
+  bool smooth_guard_relief_when_turned = true;
   // Fold creases (see header comment), after the relief's steps: up to
   // smooth_guard_crease_trials times, the sharpest control edge (dihedral
   // above smooth_guard_crease_min_angle_deg) of a face that still folds is
@@ -298,8 +304,10 @@ struct GlobalFitResult {
   int smooth_guard_passes = 0;
   int smooth_guard_vertices = 0;
   bool smooth_guard_skipped = false;
-  // Fold relief: new fold pairs of the relief level before and after it,
-  // steps taken, control vertices moved.
+  // Fold relief: whether the relief level was searched (no turned triangle
+  // skips it: smooth_guard_relief_when_turned), new fold pairs of the
+  // relief level before and after it, steps taken, control vertices moved.
+  bool relief_searched = false;
   int relief_folds_before = 0;
   int relief_folds_after = 0;
   int relief_steps = 0;

@@ -167,14 +167,18 @@ struct FitHeadOptions {
   EarBinding bind_ear_edges = EarBinding::FaceOnlyScans;
   // The global fit's smooth-surface guard (GlobalFitOptions::smooth_guard_*:
   // rest-shape weights where the control mesh's smooth level 2 crosses
-  // itself) runs on face-only captures, where the sparse data bend the
-  // control mesh sharply around the eyes, brow and nose (Fran's smooth
-  // level-3 pairs 124 -> 51, displaced 157 -> 70; James 177 -> 108 and
-  // 278 -> 145; Table 1 +0.0003 / +0.0000 %). On the synthetic whole heads
-  // it fired on seed 2 only and added 5 level-3 pairs there (docs/fit.md).
-  // Always: on every scan; Off: never (GlobalFitOptions as given).
+  // itself, then the fold relief of level 3) runs on every scan. Face-only
+  // captures need it most: their sparse data bend the control mesh sharply
+  // around the eyes, brow and nose (Fran's smooth level-3 pairs 124 -> 51,
+  // displaced 157 -> 70; James 177 -> 108 and 278 -> 145; Table 1 +0.0003
+  // / +0.0000 %). On whole heads it takes the brow folds of clean scans
+  // (synthetic seeds 1-5 with 0.05 mm noise: 14 -> 0 pairs; 0.2 mm, seeds
+  // 1-10: 28 -> 10) for ~40 ms a fit, 0.2-0.5 s where it has work
+  // (docs/fit.md "The smooth-surface guard on every scan, again").
+  // FaceOnlyScans: only there (the default until 22 Nov); Off: never
+  // (GlobalFitOptions as given).
   enum class SmoothGuard { Off, FaceOnlyScans, Always };
-  SmoothGuard smooth_guard = SmoothGuard::FaceOnlyScans;
+  SmoothGuard smooth_guard = SmoothGuard::Always;
 };
 
 struct FitStageReport {

@@ -74,6 +74,27 @@ TEST_CASE("global fit: the fold relief leaves a fit without folds alone") {
   CHECK(r_on.relief_steps == 0);
   CHECK(r_on.fold_crease_edges.empty());
   CHECK(out_on.positions == out_off.positions);
+  // The relief searches level 3 only where a triangle there turns against
+  // the reference's (smooth_guard_relief_when_turned). B's step turns some
+  // at its foot without folding; B without a step turns none, and then the
+  // level is not searched. Searched or not, the fit is the same.
+  GlobalFitOptions always_search = guarded_options();
+  always_search.smooth_guard_relief_when_turned = false;
+  for (const double low_z : {0.1, 0.2}) {
+    const StepSheets sheets = make_step_sheets(low_z);
+    TriMesh out_gated, out_searched;
+    GlobalFitResult r_gated, r_searched;
+    REQUIRE(fit_global(sheets.points, sheets.start, sheets.topo, sheets.terms(), guarded_options(), out_gated, r_gated)
+                .ok());
+    REQUIRE(fit_global(sheets.points, sheets.start, sheets.topo, sheets.terms(), always_search, out_searched,
+                       r_searched)
+                .ok());
+    INFO("B's foot at z = " << low_z);
+    CHECK(r_gated.relief_searched == (low_z < 0.2));
+    CHECK(r_searched.relief_searched);
+    CHECK(r_searched.relief_folds_before == 0);
+    CHECK(out_searched.positions == out_gated.positions);
+  }
   // The relief is part of the smooth-surface guard: off with it.
   GlobalFitOptions unguarded;
   unguarded.smooth_guard_level = 0;

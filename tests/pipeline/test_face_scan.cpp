@@ -361,6 +361,7 @@ TEST_CASE("fit_head: the fold relief takes out folds of the real James's smooth 
   REQUIRE(fit_head(james, truth().generic, off, r_off).ok());
   INFO("relief: folds " << r_on.global_fit.relief_folds_before << " -> " << r_on.global_fit.relief_folds_after << " in "
                         << r_on.global_fit.relief_steps << " steps, " << r_on.global_fit.relief_vertices << " vertices");
+  CHECK(r_on.global_fit.relief_searched);  // James's folds turn level-3 triangles
   CHECK(r_on.global_fit.relief_folds_before >= 20);  // 61 measured
   CHECK(r_on.global_fit.relief_folds_after < r_on.global_fit.relief_folds_before);
   CHECK(r_on.global_fit.relief_steps > 0);

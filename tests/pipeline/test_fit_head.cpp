@@ -220,8 +220,11 @@ TEST_CASE("fit_head: the levels near the neck cut follow the scan just below it,
   // 0.287 mm since the generic neck is meshed in round triangles (both
   // closer, the band's share of the gain smaller); 0.247 vs 0.271 mm since
   // the displacements fade across the data's edge (the fit without the
-  // band gained, DisplacementOptions::edge_fade_control_edges).
-  CHECK(d_on < 0.93 * d_off);
+  // band gained, DisplacementOptions::edge_fade_control_edges); 0.252 vs
+  // 0.270 mm since the smooth-surface guard runs on whole heads too (it
+  // moves this small scene's control mesh a little: both fits change).
+  // Without the band the two would be equal.
+  CHECK(d_on < 0.96 * d_off);
   // Table 1's distances stay over the points above the cut.
   CHECK(r_on.fitted_points == r_off.fitted_points);
 }
