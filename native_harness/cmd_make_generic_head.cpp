@@ -17,7 +17,7 @@ namespace {
 const char* kName = "make-generic-head";
 
 int run_make_generic_head(const Args& args) {
-  if (!only_known_options(kName, args, {"out", "ring-ear", "plate-ear"})) return 2;
+  if (!only_known_options(kName, args, {"out", "ring-ear", "plate-ear", "even-eye-corners"})) return 2;
   const std::string out_dir = args.get("out");
   if (out_dir.empty()) {
     fail(kName, "--out DIR is required (the asset lives in core/head/data)");
@@ -32,6 +32,8 @@ int run_make_generic_head(const Args& args) {
   GenericHeadBuildOptions options;
   if (args.has("ring-ear")) options.ring_ear = true;
   if (args.has("plate-ear")) options.ring_ear = false;
+  // --even-eye-corners: GenericHeadBuildOptions::even_eye_corners (not yet the asset's).
+  if (args.has("even-eye-corners")) options.even_eye_corners = true;
   GenericHead head;
   Status s = build_generic_head(options, head);
   if (!s) return fail(kName, s.message);
@@ -56,7 +58,7 @@ int run_make_generic_head(const Args& args) {
   return 0;
 }
 
-Registrar reg({kName, "likeness make-generic-head --out DIR [--ring-ear|--plate-ear]",
+Registrar reg({kName, "likeness make-generic-head --out DIR [--ring-ear|--plate-ear] [--even-eye-corners]",
                "builds the generic head control mesh + annotations (writes generic_head.obj/.json)",
                run_make_generic_head});
 
