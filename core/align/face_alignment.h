@@ -76,7 +76,7 @@ struct FaceAlignOptions {
   // count (common/sampling.h): an even cover of the scanned surface, so
   // that which points are drawn (the seed) hardly moves the result.
   int coarse_points = 800;     // samples per coarse start
-  int coarse_iterations = 40;
+  int coarse_iterations = 20;
   // The best coarse results that differ (rotation by more than
   // distinct_deg or scale by more than distinct_scale) are each refined on
   // max_points samples, then polished on final_points (the whole cloud
