@@ -540,6 +540,24 @@ TEST_CASE("generic head crease curves are the eye rims and lip lines, cutting of
   CHECK(piece_size[3] > 20 * piece_size[2]);  // the skin; the pockets are small
 }
 
+namespace {
+
+// Triangles of the pairs whose centroid lies within 3 cm of an eyeball's
+// centre (a triangle counted once per pair it is in).
+int triangles_near_eyes(const TriMesh& fine, const std::vector<std::array<int, 2>>& pairs,
+                        const HeadAnnotations& annotations) {
+  int near = 0;
+  for (const auto& p : pairs)
+    for (int t : p) {
+      const Tri& tri = fine.triangles[t];
+      const Vec3 c = (fine.positions[tri[0]] + fine.positions[tri[1]] + fine.positions[tri[2]]) / 3;
+      if ((c - annotations.eye_left.center).norm() < 0.03 || (c - annotations.eye_right.center).norm() < 0.03) ++near;
+    }
+  return near;
+}
+
+}  // namespace
+
 TEST_CASE("generic head: with the rims as creases its smooth level 3 crosses only at the mouth corners", "[head]") {
   // The skin's plain Butterfly stencils reach over the rims into the
   // pockets ~0.3-1.3 mm behind them, and the refined lips and lids cross
@@ -562,14 +580,7 @@ TEST_CASE("generic head: with the rims as creases its smooth level 3 crosses onl
   CHECK(creased_pairs.size() * 2 < plain_pairs.size());
   CHECK(creased_pairs.size() <= 24);
   const TriMesh fine = level_mesh(creased, 3);
-  int at_eyes = 0;
-  for (const auto& p : creased_pairs)
-    for (int t : p) {
-      const Tri& tri = fine.triangles[t];
-      const Vec3 c = (fine.positions[tri[0]] + fine.positions[tri[1]] + fine.positions[tri[2]]) / 3;
-      if ((c - h.annotations.eye_left.center).norm() < 0.03 || (c - h.annotations.eye_right.center).norm() < 0.03)
-        ++at_eyes;
-    }
+  const int at_eyes = triangles_near_eyes(fine, creased_pairs, h.annotations);
   CHECK(at_eyes == 0);
   // No crossing between the inner lips: no pair has triangles on both
   // sides of the slit (the control faces of the two lip lines' vertices
@@ -685,14 +696,7 @@ TEST_CASE("generic head, even eye corners: no short brow edge, and the smooth le
   const TriMesh fine = level_mesh(creased, 3);
   std::vector<std::array<int, 2>> pairs;
   REQUIRE(find_self_intersections(fine, pairs).ok());
-  int at_eyes = 0;
-  for (const auto& p : pairs)
-    for (int t : p) {
-      const Tri& tri = fine.triangles[t];
-      const Vec3 c = (fine.positions[tri[0]] + fine.positions[tri[1]] + fine.positions[tri[2]]) / 3;
-      if ((c - even.annotations.eye_left.center).norm() < 0.03 || (c - even.annotations.eye_right.center).norm() < 0.03)
-        ++at_eyes;
-    }
+  const int at_eyes = triangles_near_eyes(fine, pairs, even.annotations);
   INFO(pairs.size() << " smooth level-3 pairs, " << at_eyes << " triangles of them near an eye");
   CHECK(pairs.size() <= 24);
   CHECK(at_eyes == 0);
