@@ -314,19 +314,6 @@ std::vector<std::array<int, 2>> swept_candidates(const std::vector<Tri>& triangl
 // afterwards (the same triangles; the passes move vertices a little), and
 // a pair is old when it crosses at the reference's level positions too
 // (find_new_self_intersections).
-// Triangles whose normal at `positions` points against their normal at
-// `reference` (same triangles).
-int count_turned(const std::vector<Vec3>& positions, const std::vector<Vec3>& reference,
-                 const std::vector<Tri>& triangles) {
-  int turned = 0;
-  for (const Tri& t : triangles) {
-    const Vec3 n = (positions[t[1]] - positions[t[0]]).cross(positions[t[2]] - positions[t[0]]);
-    const Vec3 n0 = (reference[t[1]] - reference[t[0]]).cross(reference[t[2]] - reference[t[0]]);
-    turned += n.dot(n0) < 0;
-  }
-  return turned;
-}
-
 struct SmoothSurfaceCheck {
   std::vector<ButterflyLevel> levels;
   std::vector<Vec3> reference_level;  // the reference refined
@@ -924,7 +911,8 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       // where the level turns a triangle against the reference's: a fold
       // turns one (test_global_fold_relief.cpp).
       if (options.smooth_guard_relief_when_turned)
-        relieving = count_turned(relief.refine(x), relief.reference_level, relief.levels.back().fine_triangles) > 0;
+        relieving = count_turned_triangles(relief.levels.back().fine_triangles, relief.refine(x),
+                                           relief.reference_level) > 0;
     }
     result.relief_searched = relieving;
     if (relieving) {

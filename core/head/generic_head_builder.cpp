@@ -515,7 +515,8 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
           return Vec3((cc - 0.5 * (kEyeCol0 + kEyeCol1)) / (0.5 * (kEyeCol1 - kEyeCol0) + 1),
                       (rr - (kRimLowRow + 0.5)) / 1.5, 0);
         };
-        const double x = square(r, c).x(), y = square(r, c).y();
+        const Vec3 at = square(r, c);
+        const double x = at.x(), y = at.y();
         double a = std::atan2(y, x);
         const bool corner = (r == kRimLowRow - 1 || r == kRimLowRow + 2) && (c == kEyeCol0 - 1 || c == kEyeCol1 + 1);
         if (corner && options.even_eye_corners) {

@@ -17,6 +17,17 @@ Vec3 face_normal_area(const TriMesh& mesh, int f) {
   return (mesh.positions[t[1]] - a).cross(mesh.positions[t[2]] - a);
 }
 
+int count_turned_triangles(const std::vector<Tri>& triangles, const std::vector<Vec3>& positions,
+                           const std::vector<Vec3>& reference) {
+  int turned = 0;
+  for (const Tri& t : triangles) {
+    const Vec3 n = (positions[t[1]] - positions[t[0]]).cross(positions[t[2]] - positions[t[0]]);
+    const Vec3 n0 = (reference[t[1]] - reference[t[0]]).cross(reference[t[2]] - reference[t[0]]);
+    turned += n.dot(n0) < 0;
+  }
+  return turned;
+}
+
 std::vector<Vec3> vertex_normals(const TriMesh& mesh) {
   std::vector<Vec3> n(mesh.positions.size(), Vec3::Zero());
   for (int f = 0; f < mesh.num_triangles(); ++f) {

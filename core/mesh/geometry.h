@@ -17,6 +17,12 @@ std::vector<Vec3> face_normals(const TriMesh& mesh);
 
 double surface_area(const TriMesh& mesh);
 
+// Triangles whose normal at `positions` points against their normal at
+// `reference` (the same triangles at other positions; both indexed by
+// `triangles`). A zero-area triangle at either is not counted.
+int count_turned_triangles(const std::vector<Tri>& triangles, const std::vector<Vec3>& positions,
+                           const std::vector<Vec3>& reference);
+
 // Mean edge length over all triangle edges (each counted per triangle).
 double mean_edge_length(const TriMesh& mesh);
 

@@ -79,14 +79,14 @@ CrossingCounts count_crossings_by_region(const MultiresMesh& mesh, int level,
 }
 
 void count_turned_and_degenerate(const TriMesh& m, const TriMesh& reference, int& flipped, int& degenerate) {
-  flipped = degenerate = 0;
-  const auto rn = face_normals(reference);
+  // Same connectivity (the header): reference's positions under m's triangles.
+  flipped = reference.positions.size() == m.positions.size()
+                ? count_turned_triangles(m.triangles, m.positions, reference.positions)
+                : 0;
+  degenerate = 0;
   const double area_eps = 1e-6 * surface_area(m) / std::max(1, m.num_triangles());
-  for (int f = 0; f < m.num_triangles(); ++f) {
-    const Vec3 n = face_normal_area(m, f);
-    if (0.5 * n.norm() < area_eps) ++degenerate;
-    if (f < static_cast<int>(rn.size()) && n.dot(rn[f]) < 0) ++flipped;
-  }
+  for (int f = 0; f < m.num_triangles(); ++f)
+    if (0.5 * face_normal_area(m, f).norm() < area_eps) ++degenerate;
 }
 
 Status measure_fit_quality(const FitHeadResult& fit, const HeadAnnotations& annotations, FitQuality& out) {
