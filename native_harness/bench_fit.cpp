@@ -13,7 +13,8 @@
 // face-only captures only / on none; default: every scan; --fit-guard-always is the default), --fit-relief-level L (the guard's fold relief
 // level, GlobalFitOptions::smooth_guard_relief_level; 0: the level-2 guard without relief), --fit-no-climb, --fit-remeasure, --fit-no-eye-region (leave the eyes where the alignment put them, FitHeadOptions::fit_eye_region), --fit-no-creases (plain Butterfly at the
 // eye and lip rims), --fit-displaced-creases, --fit-no-corners-to-smooth,
-// --fit-no-parents-to-smooth, --fit-separation-repeats N, --fit-restarts N (fold_limit.h), --fit-seeds N,
+// --fit-no-parents-to-smooth, --fit-separation-repeats N, --fit-restarts N (fold_limit.h), --fit-seeds N, --fit-seed N (seed N alone),
+// --fit-smooth-region-rings N (FoldLimitOptions::smooth_region_rings, -1: off),
 // --fit-isolated R (points R times sparser than the scan's sampling are
 // left out of fitting; 0 keeps them), --fit-footprint N (points per
 // displacement footprint), --fit-noise-points N / --fit-noise-edge F /
@@ -216,6 +217,9 @@ int run(const Args& args) {
     seeds.clear();
     for (int s = 1; s <= first_seeds; ++s) seeds.push_back(s);
   }
+  int only_seed = 0;  // --fit-seed N: seed N alone
+  args.get_int("fit-seed", 0, only_seed);
+  if (only_seed > 0) seeds = {only_seed};
   const std::string save = args.get("save-scans");
   const std::string fit_head_name = args.get("fit-head", "asset"), truth_head_name = args.get("truth-head", "asset");
   GenericHead generic, truth_generic;
@@ -305,6 +309,7 @@ int run(const Args& args) {
     if (args.has("fit-no-corners-to-smooth")) opt.fold_limit.crossing_corners_to_smooth = false;
     if (args.has("fit-no-parents-to-smooth")) opt.fold_limit.crossing_parents_to_smooth = false;
     args.get_int("fit-separation-repeats", opt.fold_limit.separation_repeats, opt.fold_limit.separation_repeats);
+    args.get_int("fit-smooth-region-rings", opt.fold_limit.smooth_region_rings, opt.fold_limit.smooth_region_rings);
     st = fit_head(cloud, generic, opt, r, obs);
     std::printf("\n   seed %d: %d points (%d above the neck cut), bbox diagonal %.3f m\n", seed, r.points,
                 r.fitted_points, r.bbox_diagonal);
@@ -517,6 +522,9 @@ int run(const Args& args) {
       std::printf("; left %d; %d restarts; crossing pairs %d before separating, %d after; %d crease vertex displacements zeroed, %d corners of crossing pairs put on the smooth surface\n",
                   fl.remaining_bad, fl.restarts, fl.intersections_found, fl.intersections_left, fl.crease_zeroed,
                   fl.crossing_corrected);
+      std::printf("   fold limiter's second pass: %d -> %d pairs (%s); last resort: %d pairs off the smooth surface, %d control faces smoothed from level %d, %d pairs after\n",
+                  fl.second_pass_before, fl.second_pass_after, fl.second_pass_kept ? "kept" : "not kept",
+                  fl.smoothed_pairs_before, fl.smoothed_control_faces, fl.smoothed_from_level, fl.smoothed_pairs_after);
     }
     sum_intersections += print_self_intersections(r, generic.annotations,
                                                   save.empty() ? "" : save + "/fit_seed" + std::to_string(seed));

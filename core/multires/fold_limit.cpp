@@ -807,6 +807,117 @@ int zero_crease_displacements(MultiresMesh& mesh) {
   return zeroed;
 }
 
+// FoldLimitOptions::smooth_region_rings: the smooth surface over the
+// control faces of the finest level's crossing pairs that the smooth
+// surface does not have. `pairs` are the finest level's pairs at the
+// evaluated mesh (sorted, a < b) and become those of the result; the mesh
+// is left as it was unless the result is kept.
+Status smooth_crossing_regions(MultiresMesh& mesh, const FoldLimitOptions& options,
+                               const std::vector<std::vector<Vec3>>& smooth, PairList& pairs, FoldLimitStats& st) {
+  const int L = mesh.num_levels();
+  const std::vector<Tri>& finest = mesh.triangles(L);
+  auto new_pairs = [&](const PairList& ps) {
+    int n = 0;
+    for (const auto& p : ps) n += !mesh_triangles_cross(smooth[L], finest[p[0]], finest[p[1]]);
+    return n;
+  };
+  const int before = new_pairs(pairs);
+  st.smoothed_pairs_before = before;
+  st.smoothed_pairs_after = static_cast<int>(pairs.size());
+  if (before == 0 || options.smooth_region_rings < 0 || L < 1) return Status::success();
+
+  const int F0 = static_cast<int>(mesh.control_triangles.size());
+  const int shift = 2 * L;  // a level-l triangle f lies in control face f >> 2l
+  std::vector<char> region(F0, 0);
+  for (const auto& p : pairs)
+    if (!mesh_triangles_cross(smooth[L], finest[p[0]], finest[p[1]]))
+      for (int f : p) region[f >> shift] = 1;
+  // Control faces around a vertex: one ring of growth.
+  std::vector<std::vector<int>> vertex_faces(mesh.control.size());
+  for (int f = 0; f < F0; ++f)
+    for (int v : mesh.control_triangles[f]) vertex_faces[v].push_back(f);
+
+  const std::vector<std::vector<double>> original = mesh.displacements;
+  const MultiresState original_state = mesh.state;
+  TriMesh level;
+  level.positions = mesh.state.displaced[L];
+  level.triangles = finest;
+  MeshBvh bvh;
+  Status s = build_bvh(level, bvh);
+  if (!s.ok()) return s;
+
+  PairList best_pairs = pairs, trial;
+  std::vector<std::vector<double>> best_displacements;
+  int best_total = static_cast<int>(pairs.size()), best_faces = 0, best_level = -1;
+  const std::vector<char> seed_region = region;
+  // Tries, from the least change to the most: the finest levels first
+  // (the coarser ones carry every finer level's base over tens of mm on
+  // level 0), each from the pairs' own faces outwards.
+  const int rings = options.smooth_region_rings;
+  for (int t = 0; t < L * (rings + 1); ++t) {
+    const int first_level = L - 1 - t / (rings + 1), ring = t % (rings + 1);
+    if (ring == 0) {
+      region = seed_region;
+    } else {
+      const std::vector<char> grown = region;
+      for (int f = 0; f < F0; ++f)
+        if (grown[f])
+          for (int v : mesh.control_triangles[f])
+            for (int g : vertex_faces[v]) region[g] = 1;
+    }
+    mesh.displacements = original;
+    for (int l = first_level; l <= L; ++l) {
+      const std::vector<Tri>& tris = mesh.triangles(l);
+      for (int f = 0; f < static_cast<int>(tris.size()); ++f)
+        if (region[f >> (2 * l)])
+          for (int v : tris[f]) mesh.displacements[l][v] = 0;
+    }
+    s = evaluate(mesh);
+    if (!s.ok()) return s;
+    // The finest level moved only around the region: its pairs elsewhere
+    // stay, those of the moved triangles are searched again.
+    const std::vector<Vec3>& now = mesh.state.displaced[L];
+    std::vector<char> moved_tri(finest.size(), 0);
+    std::vector<int> moved;
+    for (int f = 0; f < static_cast<int>(finest.size()); ++f)
+      for (int v : finest[f])
+        if (now[v] != original_state.displaced[L][v]) moved_tri[f] = 1;
+    for (int f = 0; f < static_cast<int>(finest.size()); ++f)
+      if (moved_tri[f]) moved.push_back(f);
+    level.positions = now;
+    s = refit_bvh(level, bvh);
+    if (!s.ok()) return s;
+    find_intersections_with(bvh, moved, trial);
+    for (const auto& p : pairs)
+      if (!moved_tri[p[0]] && !moved_tri[p[1]]) trial.push_back(p);
+    std::sort(trial.begin(), trial.end());
+    trial.erase(std::unique(trial.begin(), trial.end()), trial.end());
+    int flipped = 0, collapsed = 0;
+    count_bad_triangles(mesh, L, smooth[L], options, flipped, collapsed);
+    if (flipped + collapsed == 0 && static_cast<int>(trial.size()) < best_total) {
+      best_total = static_cast<int>(trial.size());
+      best_pairs = trial;
+      best_displacements = mesh.displacements;
+      best_faces = static_cast<int>(std::count(region.begin(), region.end(), 1));
+      best_level = first_level;
+    }
+    if (flipped + collapsed == 0 && new_pairs(trial) == 0) break;
+  }
+  if (best_displacements.empty()) {
+    mesh.displacements = original;
+    mesh.state = original_state;
+    return Status::success();
+  }
+  mesh.displacements.swap(best_displacements);
+  s = evaluate(mesh);
+  if (!s.ok()) return s;
+  pairs.swap(best_pairs);
+  st.smoothed_control_faces = best_faces;
+  st.smoothed_from_level = best_level;
+  st.smoothed_pairs_after = best_total;
+  return Status::success();
+}
+
 }  // namespace
 
 std::uint64_t positions_fingerprint(const std::vector<Vec3>& positions) {
@@ -899,6 +1010,24 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
       mesh.state = state;
       st.finest_pairs.swap(before_pairs);
     }
+    st.finest_pairs_known = true;
+    st.finest_pairs_fingerprint = positions_fingerprint(mesh.state.displaced[mesh.num_levels()]);
+  }
+  // The last resort (smooth_region_rings) needs the finest level's pairs:
+  // the second pass's, or one whole search here (the quality report then
+  // takes them instead of searching again).
+  if (options.max_intersection_rounds > 0 && options.smooth_region_rings >= 0 && mesh.num_levels() > 0) {
+    const std::vector<Vec3>& finest = mesh.state.displaced[mesh.num_levels()];
+    PairList pairs;
+    if (const auto* known = finest_pairs_of(st, finest)) {
+      pairs = *known;
+    } else {
+      s = limiter.finest_pairs(pairs);
+      if (!s.ok()) return s;
+    }
+    s = smooth_crossing_regions(mesh, options, smooth, pairs, st);
+    if (!s.ok()) return s;
+    st.finest_pairs.swap(pairs);
     st.finest_pairs_known = true;
     st.finest_pairs_fingerprint = positions_fingerprint(mesh.state.displaced[mesh.num_levels()]);
   }

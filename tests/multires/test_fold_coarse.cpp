@@ -111,3 +111,50 @@ TEST_CASE("fold limit: coarser-level separation gives the same result incrementa
   CHECK(fs.coarse_intersections_left == ss.coarse_intersections_left);
   for (int l = 0; l <= 2; ++l) CHECK(fast.displacements[l] == full.displacements[l]);
 }
+
+TEST_CASE("fold limit: the last resort puts the smooth surface over crossings nothing else separated") {
+  const int L = 3;
+  const MultiresMesh before = pushed_through(L);
+  // Everything that would separate the pushed sheet on the way is off: the
+  // finest level's pairs are all crossed by level 0, and shrinking their
+  // own corners cannot undo that.
+  FoldLimitOptions o;
+  o.separate_coarser_levels = false;
+  o.crossing_corners_to_smooth = false;
+  o.crossing_parents_to_smooth = false;
+  o.second_pass = false;
+
+  MultiresMesh off = before;
+  o.smooth_region_rings = -1;
+  REQUIRE(limit_folds(off, o).ok());
+  const size_t left_without = test::displaced_crossing_pairs(off, L);
+  REQUIRE(left_without > 0);
+
+  MultiresMesh mr = before;
+  o.smooth_region_rings = 2;
+  FoldLimitStats stats;
+  REQUIRE(limit_folds(mr, o, &stats).ok());
+  CHECK(test::displaced_crossing_pairs(mr, L) == 0);
+  CHECK(stats.smoothed_pairs_before == static_cast<int>(left_without));
+  CHECK(stats.smoothed_pairs_after == 0);
+  CHECK(stats.remaining_bad == 0);
+  // Level 0 pushed the sheet through: only the smooth surface from level 0
+  // on separates it.
+  CHECK(stats.smoothed_from_level == 0);
+  CHECK(mr.displacements[0][3 * 8 + 3] == 0);
+  // Local: the faces around the pairs, not the whole mesh; the finer
+  // levels' detail elsewhere is kept as it was.
+  CHECK(stats.smoothed_control_faces > 0);
+  CHECK(stats.smoothed_control_faces < static_cast<int>(mr.control_triangles.size()));
+  int kept = 0;
+  for (size_t v = 0; v < mr.displacements[L].size(); ++v) kept += mr.displacements[L][v] == off.displacements[L][v] && mr.displacements[L][v] != 0;
+  CHECK(kept > 0);
+  // The state is the evaluation of what was kept, and the pairs handed on
+  // describe it.
+  MultiresMesh again = mr;
+  REQUIRE(evaluate(again).ok());
+  CHECK(again.state.displaced[L] == mr.state.displaced[L]);
+  const auto* known = finest_pairs_of(stats, mr.state.displaced[L]);
+  REQUIRE(known != nullptr);
+  CHECK(known->empty());
+}
