@@ -129,6 +129,9 @@ class FoldLimiter {
   // Takes over `other`'s finest-level tree (refitted, not rebuilt, at the
   // start of separate_finest) when this run starts where `other` ended.
   void adopt_finest_tree(FoldLimiter& other);
+  // That tree (boxes at whatever positions it was last refitted to), or
+  // null when it was never built.
+  MeshBvh* finest_tree() { return finest_built_ ? &finest_bvh_ : nullptr; }
 
  private:
   bool is_bad(int l, int f) const {
@@ -811,9 +814,12 @@ int zero_crease_displacements(MultiresMesh& mesh) {
 // control faces of the finest level's crossing pairs that the smooth
 // surface does not have. `pairs` are the finest level's pairs at the
 // evaluated mesh (sorted, a < b) and become those of the result; the mesh
-// is left as it was unless the result is kept.
+// is left as it was unless the result is kept. `tree` (may be null): a BVH
+// over the finest level's triangles at any positions, refitted here
+// instead of building one.
 Status smooth_crossing_regions(MultiresMesh& mesh, const FoldLimitOptions& options,
-                               const std::vector<std::vector<Vec3>>& smooth, PairList& pairs, FoldLimitStats& st) {
+                               const std::vector<std::vector<Vec3>>& smooth, MeshBvh* tree, PairList& pairs,
+                               FoldLimitStats& st) {
   const int L = mesh.num_levels();
   const std::vector<Tri>& finest = mesh.triangles(L);
   auto new_pairs = [&](const PairList& ps) {
@@ -842,8 +848,9 @@ Status smooth_crossing_regions(MultiresMesh& mesh, const FoldLimitOptions& optio
   TriMesh level;
   level.positions = mesh.state.displaced[L];
   level.triangles = finest;
-  MeshBvh bvh;
-  Status s = build_bvh(level, bvh);
+  MeshBvh own;
+  MeshBvh& bvh = tree ? *tree : own;
+  Status s = tree ? Status::success() : build_bvh(level, own);
   if (!s.ok()) return s;
 
   PairList best_pairs = pairs, trial;
@@ -872,8 +879,15 @@ Status smooth_crossing_regions(MultiresMesh& mesh, const FoldLimitOptions& optio
         if (region[f >> (2 * l)])
           for (int v : tris[f]) mesh.displacements[l][v] = 0;
     }
-    s = evaluate(mesh);
-    if (!s.ok()) return s;
+    // The levels above first_level are as they were (tries only go
+    // coarser): the rest is evaluated with evaluate()'s kernels.
+    for (int l = first_level; l <= L; ++l) {
+      evaluate_level(mesh, l);
+      if (l < L) {
+        s = apply(mesh.levels[l], mesh.state.displaced[l], mesh.state.base[l + 1]);
+        if (!s.ok()) return s;
+      }
+    }
     // The finest level moved only around the region: its pairs elsewhere
     // stay, those of the moved triangles are searched again.
     const std::vector<Vec3>& now = mesh.state.displaced[L];
@@ -892,16 +906,17 @@ Status smooth_crossing_regions(MultiresMesh& mesh, const FoldLimitOptions& optio
       if (!moved_tri[p[0]] && !moved_tri[p[1]]) trial.push_back(p);
     std::sort(trial.begin(), trial.end());
     trial.erase(std::unique(trial.begin(), trial.end()), trial.end());
-    int flipped = 0, collapsed = 0;
-    count_bad_triangles(mesh, L, smooth[L], options, flipped, collapsed);
-    if (flipped + collapsed == 0 && static_cast<int>(trial.size()) < best_total) {
+    // Only a moved triangle can have turned or collapsed.
+    bool bad = false;
+    for (int f : moved) bad = bad || bad_triangle(face_normal(finest, now, f), face_normal(finest, smooth[L], f), options);
+    if (!bad && static_cast<int>(trial.size()) < best_total) {
       best_total = static_cast<int>(trial.size());
       best_pairs = trial;
       best_displacements = mesh.displacements;
       best_faces = static_cast<int>(std::count(region.begin(), region.end(), 1));
       best_level = first_level;
     }
-    if (flipped + collapsed == 0 && new_pairs(trial) == 0) break;
+    if (!bad && new_pairs(trial) == 0) break;
   }
   if (best_displacements.empty()) {
     mesh.displacements = original;
@@ -909,7 +924,7 @@ Status smooth_crossing_regions(MultiresMesh& mesh, const FoldLimitOptions& optio
     return Status::success();
   }
   mesh.displacements.swap(best_displacements);
-  s = evaluate(mesh);
+  s = evaluate(mesh);  // all levels: the last try need not be the kept one
   if (!s.ok()) return s;
   pairs.swap(best_pairs);
   st.smoothed_control_faces = best_faces;
@@ -1012,6 +1027,7 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
     }
     st.finest_pairs_known = true;
     st.finest_pairs_fingerprint = positions_fingerprint(mesh.state.displaced[mesh.num_levels()]);
+    limiter.adopt_finest_tree(again);  // for the last resort below
   }
   // The last resort (smooth_region_rings) needs the finest level's pairs:
   // the second pass's, or one whole search here (the quality report then
@@ -1025,7 +1041,7 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
       s = limiter.finest_pairs(pairs);
       if (!s.ok()) return s;
     }
-    s = smooth_crossing_regions(mesh, options, smooth, pairs, st);
+    s = smooth_crossing_regions(mesh, options, smooth, limiter.finest_tree(), pairs, st);
     if (!s.ok()) return s;
     st.finest_pairs.swap(pairs);
     st.finest_pairs_known = true;

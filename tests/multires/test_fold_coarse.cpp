@@ -131,7 +131,7 @@ TEST_CASE("fold limit: the last resort puts the smooth surface over crossings no
   REQUIRE(left_without > 0);
 
   MultiresMesh mr = before;
-  o.smooth_region_rings = 2;
+  o.smooth_region_rings = 1;
   FoldLimitStats stats;
   REQUIRE(limit_folds(mr, o, &stats).ok());
   CHECK(test::displaced_crossing_pairs(mr, L) == 0);
