@@ -42,7 +42,7 @@ struct GenericHeadBuildOptions {
                                    // antihelix, concha; 1422 vertices); false: the plate ear
                                    // of the committed asset (1366). docs/generic_head.md
                                    // "A ring ear" says why it is not the asset's yet.
-  bool even_eye_corners = false;   // true: the eye rings' four corners halfway (in angle)
+  bool even_eye_corners = true;    // true: the eye rings' four corners halfway (in angle)
                                    // between their neighbours, not at 45 deg of the square:
                                    // no 4.3-4.9 mm edges among 13-27 mm ones at the brow.
                                    // docs/generic_head.md "Even corners of the eye rings"

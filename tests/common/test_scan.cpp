@@ -1,6 +1,7 @@
 #include "test_scan.h"
 
 #include "head/generic_head.h"
+#include "head/generic_head_builder.h"
 
 #include <catch2/catch.hpp>
 #include <random>
@@ -11,6 +12,19 @@ const GenericHead& generic_head() {
   static const GenericHead generic = [] {
     GenericHead g;
     const Status st = load_generic_head(g);
+    INFO(st.message);
+    REQUIRE(st.ok());
+    return g;
+  }();
+  return generic;
+}
+
+const GenericHead& corner45_generic_head() {
+  static const GenericHead generic = [] {
+    GenericHeadBuildOptions options;
+    options.even_eye_corners = false;
+    GenericHead g;
+    const Status st = build_generic_head(options, g);
     INFO(st.message);
     REQUIRE(st.ok());
     return g;

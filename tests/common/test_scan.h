@@ -24,6 +24,14 @@ namespace lk::test {
 // The embedded generic head (load_generic_head), loaded once per test binary.
 const GenericHead& generic_head();
 
+// The generic head as the asset was until 22 Nov 2026: the eye rings'
+// corners at 45 deg of the square (GenericHeadBuildOptions::
+// even_eye_corners off), with a 4.6 mm edge over each brow. Fits with it
+// fold where the asset's do not, which the tests of the fold relief, the
+// fold creases and the fold limiter's second pass need as subjects.
+// Built once per test binary.
+const GenericHead& corner45_generic_head();
+
 // A synthetic person: `generic` deformed by synthesize_head(seed, options).
 GenericHead make_test_head(std::uint32_t seed, const SynthHeadOptions& options = {},
                            const GenericHead& generic = generic_head());

@@ -313,7 +313,8 @@ TEST_CASE("fit_head: the real James (menpo3d face capture in mm)") {
 
 TEST_CASE("fit_head: the real James's ear folds are refined as creases") {
   // Where his plate ears meet his head a control edge bends 105-141 deg and
-  // the smooth level 3 pleats there (14-18 ear pairs; the fold relief's
+  // the smooth level 3 pleats there (14-18 ear pairs with the eye-ring
+  // corners at 45 deg, 4 with the asset's even corners; the fold relief's
   // umbrella steps leave them at every share). The global fit hands such
   // edges to the subdivision as creases (GlobalFitResult::fold_crease_edges).
   LK_REQUIRE_SHARED("head_scans/james_menpo3d/james.obj");
@@ -332,14 +333,14 @@ TEST_CASE("fit_head: the real James's ear folds are refined as creases") {
   const int without = test::smooth_region_pairs(r.control, ann, 3, "ears");
   INFO("smooth level-3 ear pairs: " << with << " with the fold creases, " << without << " without");
   CHECK(with == 0);
-  CHECK(without >= 10);
+  CHECK(without >= 3);  // 4 measured (16 with the corner-45 head)
   // Off: no creases handed over, the ears cross.
   FitHeadOptions off = quick();
   off.global.smooth_guard_crease_max_edges = 0;
   FitHeadResult r_off;
   REQUIRE(fit_head(james, truth().generic, off, r_off).ok());
   CHECK(r_off.global_fit.fold_crease_edges.empty());
-  CHECK(test::smooth_region_pairs(r_off.control, r_off.multires.creases, ann, 3, "ears") >= 10);
+  CHECK(test::smooth_region_pairs(r_off.control, r_off.multires.creases, ann, 3, "ears") >= 3);
 }
 
 TEST_CASE("fit_head: the fold relief takes out folds of the real James's smooth level 3") {
@@ -348,17 +349,21 @@ TEST_CASE("fit_head: the fold relief takes out folds of the real James's smooth 
   // clean after the guard, level 3 folds inside faces sharing a corner. The
   // relief steps those corners' umbrella vectors towards the template's.
   // The fold creases are off in both fits, so the relief is measured alone.
+  // Fitted with the generic head as it was until 22 Nov (eye-ring corners
+  // at 45 deg): with the asset's even corners James folds in 6 places the
+  // relief cannot better, and this test would have no subject.
   LK_REQUIRE_SHARED("head_scans/james_menpo3d/james.obj");
   PointCloud james;
   REQUIRE(load_point_cloud_file(lk::test::shared_data_dir() + "/head_scans/james_menpo3d/james.obj", james).ok());
-  const HeadAnnotations& ann = truth().generic.annotations;
+  const GenericHead& generic = test::corner45_generic_head();
+  const HeadAnnotations& ann = generic.annotations;
   FitHeadOptions on = quick(), off = quick();
   on.global.smooth_guard_crease_max_edges = 0;
   off.global.smooth_guard_crease_max_edges = 0;
   off.global.smooth_guard_relief_steps = 0;
   FitHeadResult r_on, r_off;
-  REQUIRE(fit_head(james, truth().generic, on, r_on).ok());
-  REQUIRE(fit_head(james, truth().generic, off, r_off).ok());
+  REQUIRE(fit_head(james, generic, on, r_on).ok());
+  REQUIRE(fit_head(james, generic, off, r_off).ok());
   INFO("relief: folds " << r_on.global_fit.relief_folds_before << " -> " << r_on.global_fit.relief_folds_after << " in "
                         << r_on.global_fit.relief_steps << " steps, " << r_on.global_fit.relief_vertices << " vertices");
   CHECK(r_on.global_fit.relief_searched);  // James's folds turn level-3 triangles
