@@ -19,15 +19,19 @@ const GenericHead& generic_head() {
   return generic;
 }
 
+GenericHead built_generic_head(const GenericHeadBuildOptions& options) {
+  GenericHead g;
+  const Status st = build_generic_head(options, g);
+  INFO(st.message);
+  REQUIRE(st.ok());
+  return g;
+}
+
 const GenericHead& corner45_generic_head() {
   static const GenericHead generic = [] {
     GenericHeadBuildOptions options;
     options.even_eye_corners = false;
-    GenericHead g;
-    const Status st = build_generic_head(options, g);
-    INFO(st.message);
-    REQUIRE(st.ok());
-    return g;
+    return built_generic_head(options);
   }();
   return generic;
 }

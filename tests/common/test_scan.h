@@ -11,6 +11,7 @@
 // Shapes: head.mesh #V by 3 (the generic head's triangles); truth.mesh #Vt
 // by 3, #Ft by 3 (4^levels #F); scan.positions/normals #P by 3.
 #pragma once
+#include "head/generic_head_builder.h"
 #include "head/head_model.h"
 #include "mesh/tri_mesh.h"
 #include "synth/scanner.h"
@@ -31,6 +32,9 @@ const GenericHead& generic_head();
 // fold creases and the fold limiter's second pass need as subjects.
 // Built once per test binary.
 const GenericHead& corner45_generic_head();
+
+// build_generic_head(options), failing the test on an error.
+GenericHead built_generic_head(const GenericHeadBuildOptions& options);
 
 // A synthetic person: `generic` deformed by synthesize_head(seed, options).
 GenericHead make_test_head(std::uint32_t seed, const SynthHeadOptions& options = {},

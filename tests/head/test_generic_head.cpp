@@ -768,10 +768,7 @@ const GenericHead& ring_ear_head() {
   static const GenericHead head = [] {
     GenericHeadBuildOptions options;
     options.ring_ear = true;
-    GenericHead h;
-    const Status s = build_generic_head(options, h);
-    if (!s.ok()) FAIL("ring ear head: " << s.message);
-    return h;
+    return test::built_generic_head(options);
   }();
   return head;
 }
