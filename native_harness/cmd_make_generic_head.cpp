@@ -32,7 +32,9 @@ int run_make_generic_head(const Args& args) {
   GenericHeadBuildOptions options;
   if (args.has("ring-ear")) options.ring_ear = true;
   if (args.has("plate-ear")) options.ring_ear = false;
-  // --even-eye-corners: GenericHeadBuildOptions::even_eye_corners (not yet the asset's).
+  // --even-eye-corners: GenericHeadBuildOptions::even_eye_corners, the
+  // builder's default and the asset's since 3a8dc46 (the flag is kept so
+  // older command lines still run).
   if (args.has("even-eye-corners")) options.even_eye_corners = true;
   GenericHead head;
   Status s = build_generic_head(options, head);

@@ -1,9 +1,11 @@
 // The generic head a harness command works with: "asset" (the committed
-// core/head/data/generic_head.{obj,json}, what the app uses), or "plate" /
-// "ring" (built now by generic_head_builder with GenericHeadBuildOptions::
-// ring_ear off or on) or "even" (the plate with even_eye_corners), so a
-// builder change can be measured on the same scans before the asset is
-// regenerated (docs/generic_head.md).
+// core/head/data/generic_head.{obj,json}, what the app uses), or one built
+// now by generic_head_builder, so a builder change can be measured on the
+// same scans before the asset is regenerated (docs/generic_head.md):
+// "plate" the plate ear with the eye rings' corners at 45 deg (the asset
+// before 3a8dc46), "ring" the ring ear with the same 45-degree corners (as
+// it was measured), "even" the plate ear with even corners (the asset's
+// layout since 3a8dc46).
 #pragma once
 #include "head/generic_head.h"
 #include "head/generic_head_builder.h"

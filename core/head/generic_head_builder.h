@@ -45,8 +45,9 @@ struct GenericHeadBuildOptions {
   bool even_eye_corners = true;    // true: the eye rings' four corners halfway (in angle)
                                    // between their neighbours, not at 45 deg of the square:
                                    // no 4.3-4.9 mm edges among 13-27 mm ones at the brow.
-                                   // docs/generic_head.md "Even corners of the eye rings"
-                                   // says what it fixes and why it is not the asset's yet.
+                                   // The asset's since 3a8dc46; false: the 45-degree corners
+                                   // of the asset before. docs/generic_head.md "Even corners
+                                   // of the eye rings" says what it fixes.
 };
 
 // Builds the generic head and its annotations. Fails with Internal if one of

@@ -827,17 +827,20 @@ Status smooth_crossing_regions(MultiresMesh& mesh, const FoldLimitOptions& optio
     for (const auto& p : ps) n += !mesh_triangles_cross(smooth[L], finest[p[0]], finest[p[1]]);
     return n;
   };
-  const int before = new_pairs(pairs);
+  // The pairs' control faces (a level-l triangle f lies in control face
+  // f >> 2l), counting them on the way.
+  const int F0 = static_cast<int>(mesh.control_triangles.size());
+  std::vector<char> region(F0, 0);
+  int before = 0;
+  for (const auto& p : pairs)
+    if (!mesh_triangles_cross(smooth[L], finest[p[0]], finest[p[1]])) {
+      ++before;
+      for (int f : p) region[f >> (2 * L)] = 1;
+    }
   st.smoothed_pairs_before = before;
   st.smoothed_pairs_after = static_cast<int>(pairs.size());
   if (before == 0 || options.smooth_region_rings < 0 || L < 1) return Status::success();
 
-  const int F0 = static_cast<int>(mesh.control_triangles.size());
-  const int shift = 2 * L;  // a level-l triangle f lies in control face f >> 2l
-  std::vector<char> region(F0, 0);
-  for (const auto& p : pairs)
-    if (!mesh_triangles_cross(smooth[L], finest[p[0]], finest[p[1]]))
-      for (int f : p) region[f >> shift] = 1;
   // Control faces around a vertex: one ring of growth.
   std::vector<std::vector<int>> vertex_faces(mesh.control.size());
   for (int f = 0; f < F0; ++f)
@@ -907,8 +910,9 @@ Status smooth_crossing_regions(MultiresMesh& mesh, const FoldLimitOptions& optio
     std::sort(trial.begin(), trial.end());
     trial.erase(std::unique(trial.begin(), trial.end()), trial.end());
     // Only a moved triangle can have turned or collapsed.
-    bool bad = false;
-    for (int f : moved) bad = bad || bad_triangle(face_normal(finest, now, f), face_normal(finest, smooth[L], f), options);
+    const bool bad = std::any_of(moved.begin(), moved.end(), [&](int f) {
+      return bad_triangle(face_normal(finest, now, f), face_normal(finest, smooth[L], f), options);
+    });
     if (!bad && static_cast<int>(trial.size()) < best_total) {
       best_total = static_cast<int>(trial.size());
       best_pairs = trial;

@@ -155,7 +155,9 @@ struct FoldLimitStats {
   int smoothed_pairs_before = 0, smoothed_control_faces = 0, smoothed_pairs_after = 0, smoothed_from_level = -1;
   // The finest level's crossing pairs as limit_folds left it (#pairs by 2,
   // a < b, sorted: find_self_intersections of mesh.state.displaced[L]),
-  // when it searched them whole anyway (the second pass ran); the quality
+  // when it searched them whole anyway (the second pass or the last resort
+  // ran, i.e. whenever max_intersection_rounds > 0 and smooth_region_rings
+  // >= 0, the defaults); the quality
   // report (pipeline/fit_quality.h) takes them instead of searching again.
   // finest_pairs_of says whether they still describe the given positions
   // (an edit after the fit moves the level).

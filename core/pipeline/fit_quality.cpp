@@ -97,9 +97,9 @@ Status measure_fit_quality(const FitHeadResult& fit, const HeadAnnotations& anno
   const TriMesh finest = level_mesh(fit.multires, L);
   out.triangles = finest.num_triangles();
 
-  // The fold limiter's second pass already searched the finest level
-  // whole as it left it (the same sorted pairs as a search here), unless
-  // it moved since (an edit).
+  // The fold limiter already searched the finest level whole as it left it
+  // (its second pass or last resort: the same sorted pairs as a search
+  // here), unless it moved since (an edit).
   std::vector<std::array<int, 2>> pairs;
   Status st;
   if (const auto* known = finest_pairs_of(fit.fold_limit, finest.positions)) {
