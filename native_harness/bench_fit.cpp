@@ -218,8 +218,16 @@ int run(const Args& args) {
     for (int s = 1; s <= first_seeds; ++s) seeds.push_back(s);
   }
   int only_seed = 0;  // --fit-seed N: seed N alone
-  args.get_int("fit-seed", 0, only_seed);
+  if (!args.get_int("fit-seed", 0, only_seed) || only_seed < 0) {
+    std::printf("   --fit-seed takes a seed number (1, 2, ...)\n");
+    return 1;
+  }
   if (only_seed > 0) seeds = {only_seed};
+  int region_rings = FoldLimitOptions().smooth_region_rings;
+  if (!args.get_int("fit-smooth-region-rings", region_rings, region_rings)) {
+    std::printf("   --fit-smooth-region-rings takes a whole number (-1: off)\n");
+    return 1;
+  }
   const std::string save = args.get("save-scans");
   const std::string fit_head_name = args.get("fit-head", "asset"), truth_head_name = args.get("truth-head", "asset");
   GenericHead generic, truth_generic;
@@ -309,7 +317,7 @@ int run(const Args& args) {
     if (args.has("fit-no-corners-to-smooth")) opt.fold_limit.crossing_corners_to_smooth = false;
     if (args.has("fit-no-parents-to-smooth")) opt.fold_limit.crossing_parents_to_smooth = false;
     args.get_int("fit-separation-repeats", opt.fold_limit.separation_repeats, opt.fold_limit.separation_repeats);
-    args.get_int("fit-smooth-region-rings", opt.fold_limit.smooth_region_rings, opt.fold_limit.smooth_region_rings);
+    opt.fold_limit.smooth_region_rings = region_rings;
     st = fit_head(cloud, generic, opt, r, obs);
     std::printf("\n   seed %d: %d points (%d above the neck cut), bbox diagonal %.3f m\n", seed, r.points,
                 r.fitted_points, r.bbox_diagonal);
