@@ -14,6 +14,8 @@
 // level, GlobalFitOptions::smooth_guard_relief_level; 0: the level-2 guard without relief), --fit-no-climb, --fit-remeasure, --fit-no-eye-region (leave the eyes where the alignment put them, FitHeadOptions::fit_eye_region), --fit-no-creases (plain Butterfly at the
 // eye and lip rims), --fit-displaced-creases, --fit-no-corners-to-smooth,
 // --fit-no-parents-to-smooth, --fit-separation-repeats N, --fit-restarts N (fold_limit.h), --fit-seeds N, --fit-seed N (seed N alone),
+// --fit-points N (scans of N points instead of 300k), --fit-back off|face-only|always and
+// --fit-back-weight W (the global fit's scan-to-mesh term, FitHeadOptions::back_term),
 // --fit-smooth-region-rings N (FoldLimitOptions::smooth_region_rings, -1: off),
 // --fit-isolated R (points R times sparser than the scan's sampling are
 // left out of fitting; 0 keeps them), --fit-footprint N (points per
@@ -40,7 +42,9 @@
 #include "io/io.h"
 #include "mesh/geometry.h"
 #include "pipeline/fit_head.h"
+#include "mesh/topology.h"
 #include "pipeline/fit_quality.h"
+#include "pipeline/head_pockets.h"
 #include "raycast/self_intersection.h"
 #include "synthetic_scan.h"
 #include "synth/scanner.h"
@@ -209,7 +213,13 @@ int print_self_intersections(const FitHeadResult& r, const HeadAnnotations& ann,
 
 int run(const Args& args) {
   const bool quick = args.has("quick");
-  const int n_points = quick ? 100000 : 300000;
+  int n_points = quick ? 100000 : 300000;
+  // --fit-points N: scans of N points (sparse captures: a few points per
+  // control vertex, as the real face captures have).
+  if (!args.get_int("fit-points", n_points, n_points) || n_points < 1000) {
+    std::printf("   --fit-points takes a whole number of at least 1000\n");
+    return 1;
+  }
   std::vector<int> seeds = quick ? std::vector<int>{1, 2} : std::vector<int>{1, 2, 3, 4, 5};
   int first_seeds = 0;  // --fit-seeds N: seeds 1..N only (full-size scans)
   args.get_int("fit-seeds", 0, first_seeds);
@@ -308,6 +318,7 @@ int run(const Args& args) {
     if (args.has("fit-guard-always")) opt.smooth_guard = FitHeadOptions::SmoothGuard::Always;
     if (args.has("fit-guard-face-only")) opt.smooth_guard = FitHeadOptions::SmoothGuard::FaceOnlyScans;
     if (args.has("fit-guard-off")) opt.smooth_guard = FitHeadOptions::SmoothGuard::Off;
+    if (!parse_back_term(args, opt)) return 1;
     args.get_int("fit-relief-level", opt.global.smooth_guard_relief_level, opt.global.smooth_guard_relief_level);
     if (args.has("fit-no-climb")) opt.fold_limit.shrink_coarser_levels = false;
     if (args.has("fit-remeasure")) opt.displacement.remeasure_coarse_vertices = true;
@@ -370,6 +381,30 @@ int run(const Args& args) {
       const DistanceStats ss = summarize_distances(scanned_d, 1.0);
       std::printf("   truth->surface where scanned (%zu truth vertices): mean %.3f mm p95 %.3f mm\n", n_scanned,
                   1e3 * ss.mean, 1e3 * ss.p95);
+      {
+        // The other way: level L's vertices (pockets left out) to the truth,
+        // where the truth was scanned (a scan point within 3 mm of the
+        // closest truth point). A bulge away from the scan shows here only.
+        TriMesh truth_in_head = truth.mesh;
+        transform(truth_in_head, r.scan_to_head.A, r.scan_to_head.t);
+        MeshTopology control_topo;
+        std::vector<char> skip;
+        if (build_topology(generic.mesh, control_topo).ok())
+          skip = propagate_vertex_mask(r.multires, pocket_vertices(control_topo, generic.annotations)).back();
+        const CoveredDistances back = surface_to_reference(
+            finest, skip, truth_in_head,
+            [&](const SurfacePoint& sp) {
+              unsigned idx = 0;
+              double d2 = 0;
+              tree.knnSearch(sp.point.data(), 1, &idx, &d2);
+              return d2 <= 0.003 * 0.003;
+            },
+            1.0);
+        std::printf("   surface->truth where scanned (%d level-%d vertices): mean %.3f mm p99 %.3f mm max %.3f mm, "
+                    "%d farther than 1 mm\n",
+                    back.vertices, r.multires.num_levels(), 1e3 * back.mean, 1e3 * back.p99, 1e3 * back.max,
+                    back.over_1mm);
+      }
       // Roughness of level L beside two references on the same control
       // mesh: its smooth (undisplaced) level L, and its level L displaced
       // from noise-free samples of the truth (same options, folds limited).

@@ -11,7 +11,11 @@
 // --fit-surface-edges X: the spacing of the samples on the scan's triangles
 // in finest-level edges (FitHeadOptions::surface_sample_edges; 0: off);
 // --fit-data-level L: the global fit's last passes measure the points
-// against Butterfly level L (GlobalFitOptions::data_level; 0: off).
+// against Butterfly level L (GlobalFitOptions::data_level; 0: off);
+// --fit-back off|face-only|always, --fit-back-weight W: the global fit's
+// scan-to-mesh term (FitHeadOptions::back_term). Beside Table 1 it prints
+// the other direction: level L's face vertices to the scan's triangles
+// where scanned (mean / p99 / max, and the nose's max).
 #include "command.h"
 #include "fit_table.h"
 #include "generic_head_choice.h"
@@ -84,6 +88,7 @@ int run(const Args& args) {
                 "--fit-surface-edges a number\n");
     return 1;
   }
+  if (!parse_back_term(args, options)) return 1;
   int failures = 0;
   for (const auto& [label, path] : scans) {
     PointCloud scan;
@@ -93,8 +98,8 @@ int run(const Args& args) {
       continue;
     }
     std::printf("   %s, %d points; likeness fit's defaults\n", label.c_str(), scan.size());
-    std::printf("   %-14s %9s %7s %7s %7s %8s %7s %8s %9s\n", "copy", "Table 1 %", "pairs", "lips", "ears",
-                "sockets", "rest", "smooth", "wall ms");
+    std::printf("   %-14s %9s %7s %7s %7s %8s %7s %8s %9s   %s\n", "copy", "Table 1 %", "pairs", "lips", "ears",
+                "sockets", "rest", "smooth", "wall ms", "level L -> scan where scanned: mean / p99 / max mm, > 1 mm");
     std::vector<int> totals;
     for (const Copy& c : nudged_copies(scan)) {
       double table1 = -1;
@@ -114,8 +119,15 @@ int run(const Args& args) {
         continue;
       }
       const CrossingCounts& x = q.crossings;
-      std::printf("   %-14s %9.5f %7d %7d %7d %8d %7d %8d %9.0f\n", c.name.c_str(), table1, x.total, x.lips, x.ears,
-                  x.eye_sockets, x.rest, q.smooth_crossings.total, ms);
+      CoveredDistances back, nose;
+      if (!c.cloud.faces.empty()) {
+        st = measure_fit_to_scan(r, c.cloud, generic, back);
+        if (st) st = measure_fit_to_scan(r, c.cloud, generic, nose, "nose");
+        if (!st) std::printf("   %-14s level L -> scan: %s\n", c.name.c_str(), st.message.c_str());
+      }
+      std::printf("   %-14s %9.5f %7d %7d %7d %8d %7d %8d %9.0f   %.3f / %.2f / %.2f, %d of %d; nose max %.2f\n",
+                  c.name.c_str(), table1, x.total, x.lips, x.ears, x.eye_sockets, x.rest, q.smooth_crossings.total, ms,
+                  1e3 * back.mean, 1e3 * back.p99, 1e3 * back.max, back.over_1mm, back.vertices, 1e3 * nose.max);
       if (x.rest) {  // where the rest lie (regions overlap; "face" holds most)
         std::printf("   %-14s rest touches:", "");
         for (const auto& kv : x.rest_by_region) std::printf(" %s %d", kv.first.c_str(), kv.second);

@@ -133,6 +133,11 @@ int run_fit(const Args& args) {
   const Status qs = measure_fit_quality(r, generic.annotations, quality);
   if (qs) print_fit_quality(quality);
   else std::cerr << "likeness fit: warning: quality check: " << qs.message << "\n";
+  // A scan that came as a mesh is also measured the other way round: the
+  // face's vertices to its triangles (a bulge away from the scan shows only here).
+  CoveredDistances to_scan;
+  const bool measured_to_scan = !scan.faces.empty() && measure_fit_to_scan(r, scan, generic, to_scan).ok();
+  if (measured_to_scan) print_fit_to_scan(to_scan, r.multires.num_levels());
 
   write_mesh("control.obj", r.control, &r);
   for (size_t l = 0; l < r.level_meshes.size(); ++l)
@@ -142,7 +147,8 @@ int run_fit(const Args& args) {
     write_mesh("stage_local_fitting.obj", r.local, &r);
     write_mesh("stage_global_fitting.obj", r.control, &r);
   }
-  st = write_file(out_dir + "/report.json", fit_report_json(r, stages, "ok", qs ? &quality : nullptr));
+  st = write_file(out_dir + "/report.json", fit_report_json(r, stages, "ok", qs ? &quality : nullptr,
+                                                                   measured_to_scan ? &to_scan : nullptr));
   if (!st) return fail(cmd, st.message);
   std::printf("  wrote %s/control.obj, level1..%d.obj, report.json (%s frame)\n", out_dir.c_str(), opt.levels,
               scan_frame ? "scan" : "head: metres, +y up, +z facing");

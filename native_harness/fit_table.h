@@ -13,6 +13,26 @@
 
 namespace lk::cli {
 
+// --fit-back off|face-only|always and --fit-back-weight W of the fit
+// benchmarks (FitHeadOptions::back_term, back_weight). False, with a
+// message printed, on a value it does not know.
+template <class ArgsT>
+bool parse_back_term(const ArgsT& args, FitHeadOptions& options) {
+  const std::string which = args.get("fit-back", "");
+  if (which == "off") options.back_term = FitHeadOptions::BackTerm::Off;
+  else if (which == "face-only") options.back_term = FitHeadOptions::BackTerm::FaceOnlyScans;
+  else if (which == "always") options.back_term = FitHeadOptions::BackTerm::Always;
+  else if (!which.empty()) {
+    std::printf("   --fit-back takes off, face-only or always (not '%s')\n", which.c_str());
+    return false;
+  }
+  if (!args.get_double("fit-back-weight", options.back_weight, options.back_weight) || !(options.back_weight >= 0)) {
+    std::printf("   --fit-back-weight takes a number >= 0\n");
+    return false;
+  }
+  return true;
+}
+
 struct TimedStage {
   std::string name;
   double ms = 0;      // wall time
@@ -34,6 +54,13 @@ inline const std::vector<PaperStage>& paper_table() {
       {"subdivision", 0.04, 1.30, 0.08, 1.55, "n/a"},
   };
   return t;
+}
+
+// The other direction of Table 1 on a mesh scan (fit_quality.h), a line.
+inline void print_fit_to_scan(const CoveredDistances& d, int level) {
+  std::printf("  level %d's face to the scan's triangles where scanned (%d vertices): mean %.3f mm, p99 %.2f mm, "
+              "max %.2f mm\n",
+              level, d.vertices, 1e3 * d.mean, 1e3 * d.p99, 1e3 * d.max);
 }
 
 // The checks of the finest level, in two lines under the table.
@@ -98,7 +125,8 @@ inline void json_crossings(std::ostringstream& j, const char* name, const Crossi
 
 // report.json; `quality` (may be null) adds the checks of the finest level.
 inline std::string fit_report_json(const FitHeadResult& r, const std::vector<TimedStage>& stages,
-                                   const std::string& status = "ok", const FitQuality* quality = nullptr) {
+                                   const std::string& status = "ok", const FitQuality* quality = nullptr,
+                                   const CoveredDistances* to_scan = nullptr) {
   std::ostringstream j;
   j.precision(9);
   double total = 0;
@@ -123,6 +151,10 @@ inline std::string fit_report_json(const FitHeadResult& r, const std::vector<Tim
     j << ",\n    ";
     json_crossings(j, "smooth_surface_pairs", q.smooth_crossings);
     j << ",\n    \"control_mesh_pairs\": " << q.control_crossings << "}";
+  }
+  if (to_scan) {  // metres: the head frame's unit
+    j << ",\n  \"face_to_scan\": {\"vertices\": " << to_scan->vertices << ", \"mean_m\": " << to_scan->mean
+      << ", \"p99_m\": " << to_scan->p99 << ", \"max_m\": " << to_scan->max << "}";
   }
   j << "\n}\n";
   return j.str();

@@ -1,9 +1,12 @@
 #include "fit/closest_point.h"
 
 #include "common/parallel.h"
+#include "mesh/geometry.h"
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <memory>
 
 namespace lk {
 
@@ -85,6 +88,80 @@ DistanceStats point_to_surface_stats(const std::vector<Vec3>& points, const TriM
     }
   });
   return summarize_distances(d, reference_diagonal);
+}
+
+CoveredDistances surface_to_reference(const TriMesh& surface, const std::vector<char>& skip, const TriMesh& reference,
+                                      const std::function<bool(const SurfacePoint&)>& covered,
+                                      double metres_per_unit) {
+  const ClosestPointTree tree(reference);
+  const std::vector<Vec3> normals = vertex_normals(surface);
+  const int n = surface.num_vertices();
+  std::vector<double> d(n, -1), facing(n, 0);
+  parallel_for(0, n, 1024, [&](int v, int) {
+    if (!skip.empty() && skip[v]) return;
+    const SurfacePoint s = tree.closest(surface.positions[v]);
+    if (s.face < 0 || !covered(s)) return;
+    d[v] = std::sqrt(s.squared_distance);
+    const Vec3 rn = face_normal_area(reference, s.face).normalized();
+    facing[v] = rn.dot(normals[v]);
+  });
+  // The reference's triangles may face in or out: their orientation is the
+  // one most vertices within 2 mm agree with. A vertex counts only where
+  // the reference faces its way (not the far side of a face-only scan).
+  double vote = 0;
+  for (int v = 0; v < n; ++v)
+    if (d[v] >= 0 && d[v] * metres_per_unit < 0.002) vote += facing[v];
+  const double sign = vote < 0 ? -1 : 1;
+  std::vector<double> kept;
+  for (int v = 0; v < n; ++v)
+    if (d[v] >= 0 && sign * facing[v] > 0.5) {
+      kept.push_back(d[v]);
+    }
+  CoveredDistances out;
+  out.vertices = static_cast<int>(kept.size());
+  if (kept.empty()) return out;
+  double sum = 0;
+  for (double x : kept) {
+    sum += x;
+    out.over_1mm += x * metres_per_unit > 0.001;
+  }
+  out.mean = sum / kept.size();
+  std::sort(kept.begin(), kept.end());
+  out.p99 = kept[std::min(kept.size() - 1, static_cast<size_t>(0.99 * kept.size()))];
+  out.max = kept.back();
+  return out;
+}
+
+std::function<bool(const SurfacePoint&)> inside_scan_mesh(const TriMesh& scan) {
+  // Boundary edges: used by one triangle.
+  auto edge_uses = std::make_shared<std::map<std::pair<int, int>, int>>();
+  for (const Tri& t : scan.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const int a = t[k], b = t[(k + 1) % 3];
+      ++(*edge_uses)[{std::min(a, b), std::max(a, b)}];
+    }
+  auto on_rim = std::make_shared<std::vector<char>>(scan.num_vertices(), 0);
+  for (const auto& [e, uses] : *edge_uses)
+    if (uses == 1) (*on_rim)[e.first] = (*on_rim)[e.second] = 1;
+  const auto triangles = std::make_shared<std::vector<Tri>>(scan.triangles);
+  return [edge_uses, on_rim, triangles](const SurfacePoint& s) {
+    const Tri& t = (*triangles)[s.face];
+    const double eps = 1e-9;
+    int zero = 0;
+    for (int k = 0; k < 3; ++k) zero += s.barycentric[k] <= eps;
+    if (zero == 0) return true;  // inside the triangle
+    if (zero >= 2) {              // at a corner
+      for (int k = 0; k < 3; ++k)
+        if (s.barycentric[k] > eps) return !(*on_rim)[t[k]];
+      return false;
+    }
+    for (int k = 0; k < 3; ++k)  // on the edge opposite the zero weight
+      if (s.barycentric[k] <= eps) {
+        const int a = t[(k + 1) % 3], b = t[(k + 2) % 3];
+        return edge_uses->at({std::min(a, b), std::max(a, b)}) > 1;
+      }
+    return true;
+  };
 }
 
 }  // namespace lk

@@ -13,6 +13,7 @@
 #include "mesh/tri_mesh.h"
 #include "raycast/bvh.h"
 
+#include <functional>
 #include <vector>
 
 namespace lk {
@@ -74,5 +75,32 @@ DistanceStats point_to_surface_stats(const std::vector<Vec3>& points, const TriM
 
 // Summary of a list of distances (consumed: it is partially sorted).
 DistanceStats summarize_distances(std::vector<double>& distances, double reference_diagonal);
+
+
+// The other direction of jeong2002's Table 1: from a fitted surface to the
+// scanned surface, counted only where that surface was scanned. Table 1
+// measures scan points to the fit; a fit that bulges away from the scan (a
+// spike over the nose tip) is invisible to it, because no scan point lies
+// near the bulge. Shapes: surface #V by 3, skip #V flags (or empty),
+// reference #R by 3.
+struct CoveredDistances {
+  int vertices = 0;                // vertices counted
+  double mean = 0, p99 = 0, max = 0;  // reference units
+  int over_1mm = 0;                // vertices farther than 1 mm (reference units given as metres_per_unit)
+};
+
+// Each vertex of `surface` not flagged in `skip` is projected onto
+// `reference`; its distance counts when covered(closest point) says the
+// reference was scanned there and the reference's triangle faces the
+// vertex's way (within 60 degrees; the reference's orientation is taken
+// from the vertices within 2 mm). metres_per_unit scales the mm figures.
+CoveredDistances surface_to_reference(const TriMesh& surface, const std::vector<char>& skip, const TriMesh& reference,
+                                      const std::function<bool(const SurfacePoint&)>& covered,
+                                      double metres_per_unit);
+
+// A covered() for a scan's own triangles: the closest point is not on the
+// mesh's boundary (an edge with one triangle, or a vertex on one), so a
+// vertex beyond the scan's rim or over one of its holes does not count.
+std::function<bool(const SurfacePoint&)> inside_scan_mesh(const TriMesh& scan);
 
 }  // namespace lk

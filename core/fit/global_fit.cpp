@@ -1,5 +1,6 @@
 #include "fit/global_fit.h"
 
+#include "common/cloud_tree.h"
 #include "common/parallel.h"
 #include "common/sampling.h"
 #include "fit/block_ldlt.h"
@@ -8,9 +9,11 @@
 #include "mesh/geometry.h"
 #include "raycast/self_intersection.h"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Sparse>
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <numeric>
 
 namespace lk {
@@ -377,6 +380,117 @@ struct SmoothSurfaceCheck {
   bool searched = false;
 };
 
+// E_back (header comment): the scan's local plane under each control vertex
+// that lies over scanned skin, taken at the start of a round and fixed for
+// it, so that the round minimizes one quadratic energy.
+struct BackPlanes {
+  std::vector<int> vertex;     // control vertices with a plane
+  std::vector<Vec3> normal;    // unit normal of the scan there
+  std::vector<double> offset;  // the plane: normal . x = offset
+  SpMat hessian;               // of weight/#V sum (n . x_v - offset)^2
+  VecX gradient;
+  double weight = 0;           // back_weight / #V
+
+  double energy(const VecX& x) const {
+    double e = 0;
+    for (size_t i = 0; i < vertex.size(); ++i) {
+      const double r = normal[i].dot(x.segment<3>(3 * vertex[i])) - offset[i];
+      e += r * r;
+    }
+    return e * weight;
+  }
+
+  void find(const CloudTree& tree, const std::vector<Vec3>& points, const VecX& x, const TriMesh& mesh,
+            const std::vector<char>& ignored, const GlobalFitOptions& o, double edge, int nv, double inv_v) {
+    vertex.clear();
+    normal.clear();
+    offset.clear();
+    weight = o.back_weight * inv_v;
+    std::vector<Vec3> pos(nv);
+    for (int v = 0; v < nv; ++v) pos[v] = x.segment<3>(3 * v);
+    std::vector<Vec3> vn(nv, Vec3::Zero());
+    for (const Tri& t : mesh.triangles) {
+      const Vec3 n = (pos[t[1]] - pos[t[0]]).cross(pos[t[2]] - pos[t[0]]);
+      for (int k = 0; k < 3; ++k) vn[t[k]] += n;
+    }
+    const int k = o.back_neighbours;
+    const double max_radius = o.back_patch_edges * edge;
+    const double max_offset = o.back_max_edges * edge;
+    std::vector<int> found(nv, 0);
+    std::vector<Vec3> fn(nv), fo(nv);
+    parallel_for(0, nv, 64, [&](int v, int) {
+      if (!ignored.empty() && ignored[v]) return;
+      const double vl = vn[v].norm();
+      if (!(vl > 0)) return;
+      std::vector<size_t> idx(k);
+      std::vector<double> d2(k);
+      const size_t got = tree.knnSearch(pos[v].data(), k, idx.data(), d2.data());
+      if (static_cast<int>(got) < k) return;
+      const double radius = std::sqrt(d2[got - 1]);
+      if (radius > max_radius) return;  // the scan is too sparse or too far here
+      Vec3 c = Vec3::Zero();
+      for (size_t i = 0; i < got; ++i) c += points[idx[i]];
+      c /= double(got);
+      Mat3 cov = Mat3::Zero();
+      for (size_t i = 0; i < got; ++i) {
+        const Vec3 q = points[idx[i]] - c;
+        cov += q * q.transpose();
+      }
+      Eigen::SelfAdjointEigenSolver<Mat3> es(cov);
+      const Vec3 ev = es.eigenvalues();  // ascending
+      if (!(ev[0] <= o.back_flatness * ev[1])) return;  // not one sheet (a fold, a lip gap, a rim)
+      const Vec3 n = es.eigenvectors().col(0);
+      const Vec3 off = pos[v] - c;
+      const double h = n.dot(off);
+      if (std::abs(h) > max_offset) return;
+      // Over the patch, not beyond its rim (a hole's edge).
+      const double patch = std::sqrt(ev[1] / double(got));  // std-dev across the patch, second axis
+      if ((off - h * n).norm() > patch) return;
+      if (std::abs(n.dot(vn[v] / vl)) < o.back_min_cos) return;  // the mesh faces another way here
+      // The surface under the vertex: a quadric height field over the
+      // patch's plane, evaluated at the vertex's foot (the centroid alone
+      // lies inside a curved patch by its sag, and would pull every
+      // vertex of a convex region inwards).
+      const Vec3 t1 = es.eigenvectors().col(2), t2 = es.eigenvectors().col(1);
+      Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
+      Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
+      const double scale = 1.0 / std::max(radius, 1e-12);  // unit-free coordinates
+      for (size_t i = 0; i < got; ++i) {
+        const Vec3 q = (points[idx[i]] - c) * scale;
+        const double u = q.dot(t1), w = q.dot(t2);
+        Eigen::Matrix<double, 6, 1> row;
+        row << 1, u, w, u * u, u * w, w * w;
+        A.noalias() += row * row.transpose();
+        b += row * q.dot(n);
+      }
+      A.diagonal().tail<3>().array() += 1e-3;  // a flat patch keeps a defined quadric
+      const Eigen::Matrix<double, 6, 1> quad = A.ldlt().solve(b);
+      if (!quad.allFinite()) return;
+      const double u0 = off.dot(t1) * scale, w0 = off.dot(t2) * scale;
+      const double height = (quad[0] + quad[1] * u0 + quad[2] * w0 + quad[3] * u0 * u0 + quad[4] * u0 * w0 + quad[5] * w0 * w0) / scale;
+      const Vec3 foot = c + (off.dot(t1)) * t1 + (off.dot(t2)) * t2 + height * n;
+      const Vec3 normal_there =
+          (n - (quad[1] + 2 * quad[3] * u0 + quad[4] * w0) * t1 - (quad[2] + quad[4] * u0 + 2 * quad[5] * w0) * t2).normalized();
+      found[v] = 1;
+      fn[v] = normal_there;
+      fo[v] = Vec3::Constant(normal_there.dot(foot));
+    });
+    for (int v = 0; v < nv; ++v)
+      if (found[v]) vertex.push_back(v), normal.push_back(fn[v]), offset.push_back(fo[v].x());
+    std::vector<Triplet> trip;
+    trip.reserve(vertex.size() * 9);
+    gradient = VecX::Zero(3 * nv);
+    for (size_t i = 0; i < vertex.size(); ++i) {
+      const Mat3 nn = normal[i] * normal[i].transpose() * weight;
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) trip.emplace_back(3 * vertex[i] + a, 3 * vertex[i] + b, nn(a, b));
+      gradient.segment<3>(3 * vertex[i]) += normal[i] * (offset[i] * weight);
+    }
+    hessian.resize(3 * nv, 3 * nv);
+    hessian.setFromTriplets(trip.begin(), trip.end());
+  }
+};
+
 }  // namespace
 
 std::vector<int> turned_triangles(const std::vector<Vec3>& reference, const TriMesh& mesh) {
@@ -411,6 +525,16 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
     return Status::error(ErrorCode::InvalidInput, "global fit: smooth_guard_relief_level must be 0 (off) to 4");
   if (options.data_level < 0 || options.data_level > 3)
     return Status::error(ErrorCode::InvalidInput, "global fit: data_level must be 0 (the control mesh) to 3");
+  if (!(options.back_weight >= 0) || !std::isfinite(options.back_weight) || options.back_neighbours < 6 ||
+      !(options.back_patch_edges > 0) || !(options.back_max_edges > 0) || !(options.back_flatness > 0) ||
+      !(options.back_min_cos >= 0 && options.back_min_cos <= 1))
+    return Status::error(ErrorCode::InvalidInput,
+                         "global fit: back_weight must be >= 0 and finite, back_neighbours >= 6, the back_ "
+                         "distances and flatness positive, back_min_cos in [0, 1]");
+  if (!terms.back_ignored.empty() && static_cast<int>(terms.back_ignored.size()) != nv)
+    return Status::error(ErrorCode::InvalidInput, "global fit: back_ignored has " +
+                                                      std::to_string(terms.back_ignored.size()) +
+                                                      " flags, the mesh " + std::to_string(nv) + " vertices");
   if (options.smooth_weights.empty())
     return Status::error(ErrorCode::InvalidInput, "global fit: no rounds (smooth_weights is empty)");
   for (const Vec3& p : points)
@@ -539,14 +663,24 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
   int factor_fresh_round = -1;  // the round whose matrix `solver` holds
   int done_iterations = 0;
 
+  // E_back's scan index (over the points fitted), when the term is on.
+  std::unique_ptr<CloudAdaptor> back_adaptor;
+  std::unique_ptr<CloudTree> back_tree;
+  BackPlanes back;
+  if (options.back_weight > 0) {
+    back_adaptor = std::make_unique<CloudAdaptor>(CloudAdaptor{points});
+    back_tree = std::make_unique<CloudTree>(3, *back_adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  }
+
   auto energy_parts = [&](const VecX& xx, double dist, double lambda, GlobalFitIteration& it) {
     it.e_dist = dist;
     it.e_smooth = smooth.energy(xx) * inv_v;
     it.e_binding = binding.energy(xx) * inv_v;
     it.e_constraint = constraint.energy(xx) * inv_v;
     it.e_guard = guard.energy(xx, inv_v) + rest_energy(xx);
+    it.e_back = back.energy(xx);
     return it.e_dist + lambda * it.e_smooth + options.binding_weight * it.e_binding +
-           options.constraint_weight * it.e_constraint + it.e_guard;
+           options.constraint_weight * it.e_constraint + it.e_guard + it.e_back;
   };
   Projection carried;     // the last round's projection at x
   int carried_count = -1;  // ... of its first carried_count points of `order`
@@ -592,11 +726,20 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
     // The guard starts afresh each round: anchors a stiff round needed
     // would hold vertices off the data in the relaxed rounds.
     if (guarding) guard.reset(nv, inv_v);
+    if (back_tree) {
+      back.find(*back_tree, points, x, mesh, terms.back_ignored, options, edge, nv, inv_v);
+    }
     GlobalFitIteration scratch;
     double e_old = energy_parts(x, proj.dist_energy, lambda, scratch);
 
-    const SpMat h_reg = SpMat(h_smooth * lambda) + h_fixed + h_rest;
-    const VecX g_reg = g_smooth * lambda + g_fixed + g_rest;
+    SpMat h_reg = SpMat(h_smooth * lambda) + h_fixed + h_rest;
+    VecX g_reg = g_smooth * lambda + g_fixed + g_rest;
+    if (!back.vertex.empty()) {
+      h_reg += back.hessian;
+      g_reg += back.gradient;
+    }
+    if (r == 0) result.back_vertices_first = static_cast<int>(back.vertex.size());
+    result.back_vertices = static_cast<int>(back.vertex.size());
     const double w = 1.0 / set.size();
     const double beta = options.point_to_point_weight;
 

@@ -137,6 +137,24 @@
 //   to the control vertices through the stencils, the closest points and
 //   the backtracking's energies are taken on level L. The guards still
 //   work on the control triangles.
+// - Scan-to-mesh term (not in the paper; GlobalFitOptions::back_*, off
+//   unless back_weight > 0):
+//     E_back = back_weight/#V sum_{v in B} (n_v . x_v - o_v)^2
+//   E_dist runs from the points to the mesh, so a vertex that sticks out
+//   where no point is nearest to it costs only its smoothness, and the
+//   rest shape (the template's umbrella vectors) keeps a template feature
+//   standing: on a face capture with a few points per control vertex,
+//   James's generic nose tip stood 6 mm off his nose. B are the vertices
+//   (not in GlobalFitTerms::back_ignored) over one sheet of scan: their
+//   back_neighbours nearest points lie within back_patch_edges mean control
+//   edges, are flat, the vertex lies over their patch (not beyond a hole's
+//   rim) within back_max_edges edges, and the mesh faces the patch's way.
+//   (n_v, o_v) is the tangent plane, at the vertex's foot, of a quadric
+//   height field fitted to the patch: the centroid's plane lies inside a
+//   curved patch by its sag and pulled whole convex regions in. Taken at
+//   the start of each round and fixed for it, so every round minimizes one
+//   quadratic energy; an interpolating subdivision passes through every
+//   control vertex, so the term puts the limit surface on the scan there.
 // - Why the aligned template and not the local fit as rest shape: local
 //   fitting moves each feature box by an affine map and blends the rest, so
 //   its shape has steps at the box walls (a ridge across James's nose bridge
@@ -246,6 +264,20 @@ struct GlobalFitOptions {
   int smooth_guard_crease_max_edges = 4;
   int smooth_guard_crease_trials = 6;
   double smooth_guard_crease_min_angle_deg = 40.0;
+  // Scan-to-mesh term E_back (see header comment; 0: off, the paper's
+  // energy): weight per vertex, like lambda (fit_head sets it from
+  // FitHeadOptions::back_term). A control vertex has a plane when its
+  // back_neighbours nearest scan points lie within back_patch_edges mean
+  // control edges, are flat (smallest covariance eigenvalue at most
+  // back_flatness times the middle one), the vertex lies over them (not
+  // beyond the patch's rim: a hole's edge) within back_max_edges edges, and
+  // the mesh's normal there is within acos(back_min_cos) of the plane's.
+  double back_weight = 0.0;
+  int back_neighbours = 16;
+  double back_patch_edges = 1.0;
+  double back_max_edges = 1.0;
+  double back_flatness = 0.2;
+  double back_min_cos = 0.7;
 };
 
 // Terms of E_binding and E_constraint, from the head's annotations.
@@ -264,6 +296,9 @@ struct GlobalFitTerms {
   // weights cannot move: the mouth bag, held by E_constraint and carried
   // after the fit by fit_head).
   std::vector<char> smooth_guard_ignored;
+  // #V flags (or empty): vertices E_back leaves alone (the pockets: eye
+  // sockets and the mouth bag, whose scan points are not fitted).
+  std::vector<char> back_ignored;
 };
 
 struct GlobalFitIteration {
@@ -280,6 +315,7 @@ struct GlobalFitIteration {
   bool energy_after_is_bound = false;
   double e_dist = 0, e_smooth = 0, e_binding = 0, e_constraint = 0;  // after, unweighted
   double e_guard = 0;          // after, weighted by g_v (the anchors)
+  double e_back = 0;           // after, weighted (back_weight / #V)
   double step = 1;             // accepted fraction of the linear solve's step (0: none)
   int stiffened = 0;           // guard weights g_v raised in this iteration (E_global redefined)
   int turned = 0;              // triangles turned against the reference after the step
@@ -287,6 +323,9 @@ struct GlobalFitIteration {
 
 struct GlobalFitResult {
   std::vector<GlobalFitIteration> iterations;
+  // Control vertices E_back held to a scan plane in the first and the last round.
+  int back_vertices_first = 0;
+  int back_vertices = 0;
   int data_level = 0;          // the data surface's level (0 also when Butterfly could not refine the mesh)
   int rounds = 0;
   int turned_before = 0;       // triangles of the input turned against the reference

@@ -1,10 +1,10 @@
 #include "multires/displacement.h"
 
+#include "common/cloud_tree.h"
 #include "common/parallel.h"
 #include "multires/multires_detail.h"
 
 #include <Eigen/Cholesky>
-#include <nanoflann.hpp>
 
 #include <algorithm>
 #include <unordered_map>
@@ -25,15 +25,6 @@ constexpr double kPi = 3.14159265358979323846;
 
 inline double sqr(double x) { return x * x; }
 
-struct CloudAdaptor {
-  const std::vector<Vec3>& pts;
-  size_t kdtree_get_point_count() const { return pts.size(); }
-  double kdtree_get_pt(size_t i, size_t dim) const { return pts[i][static_cast<int>(dim)]; }
-  template <class BBOX>
-  bool kdtree_get_bbox(BBOX&) const { return false; }
-};
-using CloudTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, CloudAdaptor>,
-                                                      CloudAdaptor, 3, size_t>;
 
 // Median of a non-empty list (reordered).
 double median(std::vector<double>& xs) {

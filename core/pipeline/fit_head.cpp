@@ -458,6 +458,12 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   if (options.rim_creases) creases = head_creases(generic.mesh, ann);
   terms.smooth_creases = creases;
   terms.smooth_guard_ignored = mouth_bag;
+  // E_back leaves the pockets (their points are not fitted) and the ears
+  // (seen from the side under hair on face captures, held in shape by
+  // their binding edges) alone.
+  terms.back_ignored = pocket;
+  if (const auto ears = ann.regions.find("ears"); ears != ann.regions.end())
+    for (int v : ears->second) terms.back_ignored[v] = 1;
   std::vector<Vec3> skin_pts;
   std::vector<int> skin_index;
   skin_pts.reserve(pts.size());
@@ -485,6 +491,9 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   const bool smooth_guarded = options.smooth_guard == FitHeadOptions::SmoothGuard::Always ||
                               (options.smooth_guard == FitHeadOptions::SmoothGuard::FaceOnlyScans && out.face_only);
   if (!smooth_guarded) global_options.smooth_guard_level = 0;
+  const bool back_term = options.back_term == FitHeadOptions::BackTerm::Always ||
+                         (options.back_term == FitHeadOptions::BackTerm::FaceOnlyScans && out.face_only);
+  global_options.back_weight = back_term ? options.back_weight : 0.0;
   st = fit_global(skin_pts, out.local, topo, terms, global_options, out.control, out.global_fit, progress);
   if (!st) return with_context(st, "global fitting");
   if (options.carry_mouth_bag) {

@@ -165,6 +165,21 @@ struct FitHeadOptions {
   // and seed 3 got 37 ear crossings (docs/fit_real.md).
   enum class EarBinding { Off, FaceOnlyScans, Always };
   EarBinding bind_ear_edges = EarBinding::FaceOnlyScans;
+  // The global fit's scan-to-mesh term E_back (GlobalFitOptions::back_*:
+  // control vertices over scanned skin held to the scan's surface under
+  // them; ears and pockets left out) with this weight. On face captures,
+  // whose few points per control vertex let a template feature stick out
+  // where no point is nearest to it: James's generic nose tip stood 6 mm
+  // off his nose, a spike with a torn columella and a tag on the upper lip
+  // at level 3. With it (five nudged copies each): face vertices of level 3
+  // to the scan, mean 0.139-0.142 -> 0.122-0.128 mm (James), 0.152-0.153
+  // -> 0.127-0.130 mm (Fran); Table 1 0.0334-0.0348 -> 0.0326-0.0337 %
+  // and 0.0395-0.0401 -> 0.0367-0.0375 %. Not on whole-head scans: dense
+  // synthetic ones gained nothing (seeds 1-5: surface to truth 0.31 ->
+  // 0.32 mm, +0.15 s). docs/fit_real.md, "The scan-to-mesh term".
+  enum class BackTerm { Off, FaceOnlyScans, Always };
+  BackTerm back_term = BackTerm::FaceOnlyScans;
+  double back_weight = 1.0;
   // The global fit's smooth-surface guard (GlobalFitOptions::smooth_guard_*:
   // rest-shape weights where the control mesh's smooth level 2 crosses
   // itself, then the fold relief of level 3) runs on every scan. Face-only

@@ -2,6 +2,7 @@
 
 #include "head/generic_head.h"
 #include "mesh/geometry.h"
+#include "mesh/topology.h"
 #include "pipeline/fit_head.h"
 #include "pipeline/head_pockets.h"
 #include "raycast/self_intersection.h"
@@ -87,6 +88,32 @@ void count_turned_and_degenerate(const TriMesh& m, const TriMesh& reference, int
   const double area_eps = 1e-6 * surface_area(m) / std::max(1, m.num_triangles());
   for (int f = 0; f < m.num_triangles(); ++f)
     if (0.5 * face_normal_area(m, f).norm() < area_eps) ++degenerate;
+}
+
+Status measure_fit_to_scan(const FitHeadResult& fit, const PointCloud& scan, const GenericHead& generic,
+                           CoveredDistances& out, const std::string& region) {
+  out = CoveredDistances();
+  if (scan.faces.empty()) return Status::error(ErrorCode::InvalidInput, "fit to scan: the scan has no triangles");
+  if (fit.multires.num_levels() < 1 || fit.level_meshes.empty())
+    return Status::error(ErrorCode::InvalidInput, "fit to scan: the fit holds no subdivision levels");
+  const auto named = generic.annotations.regions.find(region);
+  if (named == generic.annotations.regions.end())
+    return Status::error(ErrorCode::InvalidInput, "fit to scan: the head has no region '" + region + "'");
+  TriMesh scan_mesh;
+  scan_mesh.triangles = scan.faces;
+  scan_mesh.positions.reserve(scan.positions.size());
+  for (const Vec3& p : scan.positions) scan_mesh.positions.push_back(fit.scan_to_head.apply(p));
+  MeshTopology topo;
+  Status st = build_topology(generic.mesh, topo);
+  if (!st) return st;
+  // Skipped: the pockets and every vertex outside the region (a new vertex
+  // is skipped when both its parents are, so the region's rim is kept).
+  std::vector<char> skip = pocket_vertices(topo, generic.annotations);
+  const std::vector<char> in_region = vertex_mask(named->second, static_cast<int>(skip.size()));
+  for (size_t v = 0; v < skip.size(); ++v) skip[v] = skip[v] || !in_region[v];
+  const std::vector<char> finest_skip = propagate_vertex_mask(fit.multires, skip).back();
+  out = surface_to_reference(fit.level_meshes.back(), finest_skip, scan_mesh, inside_scan_mesh(scan_mesh), 1.0);
+  return Status::success();
 }
 
 Status measure_fit_quality(const FitHeadResult& fit, const HeadAnnotations& annotations, FitQuality& out) {

@@ -11,6 +11,7 @@
 // Shapes: pairs #pairs by 2 (triangle ids of the level, a < b).
 #pragma once
 #include "common/status.h"
+#include "fit/closest_point.h"
 #include "head/head_model.h"
 #include "mesh/tri_mesh.h"
 #include "multires/multires.h"
@@ -23,6 +24,7 @@
 namespace lk {
 
 struct FitHeadResult;
+struct GenericHead;
 
 // Crossing pairs split by head region (annotations carried down the
 // levels): a pair touching a lip vertex counts as lips, else one touching an
@@ -58,6 +60,16 @@ int count_pairs_touching(const MultiresMesh& mesh, int level, const std::vector<
 // reference (same connectivity), and triangles of m whose area is below
 // 1e-6 of m's mean triangle area.
 void count_turned_and_degenerate(const TriMesh& m, const TriMesh& reference, int& flipped, int& degenerate);
+
+// The other direction of Table 1 on a scan that came as a mesh: the finest
+// level's vertices of a head region (given by name; pockets left out: no
+// scanner sees them) to the scan's own triangles, moved to the head frame,
+// where scanned (fit/closest_point.h, surface_to_reference with
+// inside_scan_mesh), in metres. "face" by default: the scans' hair,
+// collars and shoulders are surfaces the head does not model. InvalidInput
+// when the scan has no triangles, the fit no levels or the region is unknown.
+Status measure_fit_to_scan(const FitHeadResult& fit, const PointCloud& scan, const GenericHead& generic,
+                           CoveredDistances& out, const std::string& region = "face");
 
 // All of FitQuality for a fit's finest level. InvalidInput when the result
 // holds no levels or non-finite positions.

@@ -1,4 +1,5 @@
 #include "fit/closest_point.h"
+#include "mesh/primitives.h"
 #include "toy_shapes.h"
 
 #include <catch2/catch.hpp>
@@ -112,4 +113,60 @@ TEST_CASE("distance statistics equal a point-by-point measurement, with and with
     CHECK(got.p95 == want.p95);
     CHECK(got.mean_pct == want.mean_pct);
   }
+}
+
+TEST_CASE("surface_to_reference: a spike over the scan counts, vertices over a hole or its far side do not") {
+  // Reference: a 10 cm grid in z = 0 (an 11 x 11 vertex sheet, 1 cm cells)
+  // with a hole: the cells of x, y in (4, 6) cm are gone.
+  TriMesh sheet = make_regular_grid(10, 10);  // vertices on [0, 10]^2
+  for (Vec3& p : sheet.positions) p = Vec3(p.x() * 0.01, p.y() * 0.01, 0);
+  TriMesh reference = sheet;
+  reference.triangles.clear();
+  for (const Tri& t : sheet.triangles) {
+    const Vec3 c = (sheet.positions[t[0]] + sheet.positions[t[1]] + sheet.positions[t[2]]) / 3;
+    if (!(c.x() > 0.04 && c.x() < 0.06 && c.y() > 0.04 && c.y() < 0.06)) reference.triangles.push_back(t);
+  }
+  // Surface: a finer sheet 1 mm above it, one vertex raised to a 5 mm
+  // spike over scanned cells, and a second sheet facing the other way.
+  TriMesh surface = make_regular_grid(20, 20);
+  for (Vec3& p : surface.positions) p = Vec3(p.x() * 0.005, p.y() * 0.005, 0.001);
+  int spike = -1, over_hole = -1;
+  for (int v = 0; v < surface.num_vertices(); ++v) {
+    const Vec3& p = surface.positions[v];
+    if (std::abs(p.x() - 0.025) < 1e-9 && std::abs(p.y() - 0.025) < 1e-9) spike = v;
+    if (std::abs(p.x() - 0.05) < 1e-9 && std::abs(p.y() - 0.05) < 1e-9) over_hole = v;
+  }
+  REQUIRE(spike >= 0);
+  REQUIRE(over_hole >= 0);
+  surface.positions[spike].z() = 0.005;
+  const int sheet_vertices = surface.num_vertices();
+  TriMesh under = make_regular_grid(4, 4);
+  for (Vec3& p : under.positions) p = Vec3(0.01 + p.x() * 0.005, 0.01 + p.y() * 0.005, -0.002);
+  for (Tri t : under.triangles) {
+    std::swap(t[1], t[2]);  // facing -z
+    for (int& v : t) v += sheet_vertices;
+    surface.triangles.push_back(t);
+  }
+  surface.positions.insert(surface.positions.end(), under.positions.begin(), under.positions.end());
+
+  const CoveredDistances all = surface_to_reference(surface, {}, reference, inside_scan_mesh(reference), 1.0);
+  INFO(all.vertices << " vertices, mean " << all.mean << " max " << all.max << ", over 1 mm " << all.over_1mm);
+  // The hole's 3 x 3 inner vertices (their closest point is on the hole's
+  // rim), the sheet's own rim (its closest points are on the grid's
+  // boundary) and the far-side sheet do not count.
+  CHECK(all.vertices < sheet_vertices - 9);
+  CHECK(all.vertices > sheet_vertices / 2);
+  CHECK(all.max == Approx(0.005).epsilon(1e-9));
+  CHECK(all.over_1mm >= 1);
+  CHECK(all.over_1mm <= 5);  // the spike and its slopes only
+  CHECK(all.mean == Approx(0.001).margin(2e-4));
+  // Skipping the spike leaves 1 mm everywhere.
+  std::vector<char> skip(surface.num_vertices(), 0);
+  skip[spike] = 1;
+  const CoveredDistances rest = surface_to_reference(surface, skip, reference, inside_scan_mesh(reference), 1.0);
+  CHECK(rest.max == Approx(0.001).epsilon(1e-6));
+  // The vertex over the hole, alone: not counted.
+  std::vector<char> only(surface.num_vertices(), 1);
+  only[over_hole] = 0;
+  CHECK(surface_to_reference(surface, only, reference, inside_scan_mesh(reference), 1.0).vertices == 0);
 }
