@@ -200,6 +200,12 @@ struct FitSession {
   bool have_quality = false;
   lk::FitQuality quality;
   double quality_ms = 0;
+  // A scan that came as a mesh: its vertices and triangles (scan frame),
+  // kept for the check of the other direction (face to scan); empty for a
+  // point cloud.
+  lk::PointCloud scan_mesh;
+  bool have_to_scan = false;
+  lk::CoveredDistances to_scan;
 };
 std::unique_ptr<FitSession> g_session;
 
@@ -611,6 +617,10 @@ val fit_head_job(const std::string& name, std::uintptr_t data, std::size_t size,
   if (!status.ok()) return error_result(lk::with_context(status, name));
 
   FitSession& s = *session;
+  if (!cloud.faces.empty()) {
+    s.scan_mesh.positions = std::move(cloud.positions);
+    s.scan_mesh.faces = std::move(cloud.faces);
+  }
   s.head_to_scan = s.fit.scan_to_head.A.inverse();
   s.head_offset = s.fit.scan_to_head.t;
   prepare_animation(s, generic.annotations);
@@ -735,7 +745,9 @@ val crossings_object(const lk::CrossingCounts& c) {
 // when they are done (they cost about as much as a tenth of the fit); the
 // first call measures, later calls return the same numbers.
 // Returns {ok, level, triangles, flipped, degenerate, crossings, smoothCrossings
-// ({total, lips, ears, eyeSockets, rest}), controlCrossings, checkMs}.
+// ({total, lips, ears, eyeSockets, rest}), controlCrossings, checkMs}, and
+// for a scan that came as a mesh faceToScan {vertices, meanMm, p99Mm, maxMm}:
+// level L's face to the scan's triangles where scanned (fit_quality.h).
 val fit_quality_job() {
   if (!g_session) return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "no fitted head to check"));
   FitSession& s = *g_session;
@@ -750,6 +762,8 @@ val fit_quality_job() {
     const lk::GenericHead* generic = generic_head(generic_status);
     if (!generic) return error_result(lk::with_context(generic_status, "generic head"));
     if (lk::Status st = lk::measure_fit_quality(s.fit, generic->annotations, s.quality); !st.ok()) return error_result(st);
+    // The other direction on a mesh scan (likeness fit prints it too).
+    s.have_to_scan = !s.scan_mesh.faces.empty() && lk::measure_fit_to_scan(s.fit, s.scan_mesh, *generic, s.to_scan).ok();
     s.quality_ms = now_ms() - t0;
     s.have_quality = true;
   }
@@ -762,6 +776,14 @@ val fit_quality_job() {
   r.set("crossings", crossings_object(q.crossings));
   r.set("smoothCrossings", crossings_object(q.smooth_crossings));
   r.set("controlCrossings", q.control_crossings);
+  if (s.have_to_scan) {
+    val d = val::object();
+    d.set("vertices", s.to_scan.vertices);
+    d.set("meanMm", 1e3 * s.to_scan.mean);
+    d.set("p99Mm", 1e3 * s.to_scan.p99);
+    d.set("maxMm", 1e3 * s.to_scan.max);
+    r.set("faceToScan", d);
+  }
   r.set("checkMs", s.quality_ms);
   return r;
 }

@@ -1241,6 +1241,12 @@
     if (q.controlCrossings === 0) qualityItem('ok', 'The control mesh does not cross itself.');
     else qualityItem('look', 'The control mesh crosses itself in ' + count(q.controlCrossings) +
                      ' triangle pairs: the fit folded it there, and every level inherits the fold.');
+    if (q.faceToScan) {
+      const d = q.faceToScan;
+      qualityItem('note', 'Against your scan\'s own triangles, where it was scanned: the face of level ' + L + ' lies ' +
+                  d.meanMm.toFixed(2) + ' mm from it on average, 99 % of its ' + count(d.vertices) + ' vertices within ' +
+                  d.p99Mm.toFixed(1) + ' mm, the farthest ' + d.maxMm.toFixed(1) + ' mm.');
+    }
     qualityItem('note', 'Checked in ' + (q.checkMs / 1000).toFixed(2) + ' s in the worker, after the timed fit (as likeness fit does).');
     const look = [];
     if (q.flipped + q.degenerate) look.push(count(q.flipped + q.degenerate) + ' folded or degenerate triangles');

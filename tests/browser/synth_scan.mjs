@@ -24,8 +24,8 @@ export function syntheticScan(webdir, seed, points = 60000) {
 }
 
 // The native CLI's fit of the same scan bytes (`likeness fit`): its
-// report.json stages [{name, mean_pct, ...}] and quality (the finest level's
-// checks), or { skip: why }. The Node tests compare the wasm core's stage
+// report.json stages [{name, mean_pct, ...}], quality (the finest level's
+// checks) and faceToScan (a mesh scan's face_to_scan, metres), or { skip: why }. The Node tests compare the wasm core's stage
 // distances with it: a compiler that miscompiles the core for wasm (it
 // happened: docs/web.md) shows there; the browser test compares the checks
 // the page shows. name: the scan's file name (its extension picks the format).
@@ -38,7 +38,7 @@ export function nativeFit(webdir, bytes, name = 'scan.ply') {
     fs.writeFileSync(path.join(dir, name), bytes);
     execFileSync(bin, ['fit', '--scan', path.join(dir, name), '--out', path.join(dir, 'out')], { stdio: 'pipe' });
     const report = JSON.parse(fs.readFileSync(path.join(dir, 'out', 'report.json'), 'utf8'));
-    return { stages: report.stages, quality: report.quality || null };
+    return { stages: report.stages, quality: report.quality || null, faceToScan: report.face_to_scan || null };
   } catch (e) {
     return { skip: 'likeness fit failed: ' + String(e.message).split('\n')[0] };
   } finally {

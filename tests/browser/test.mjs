@@ -737,6 +737,16 @@ async function fitQualityShown(page, label, bytes, name, exact = true) {
     check(`${label}: the page shows every number of the worker's checks`, q.ok && missing.length === 0,
           `page ${page4}; checked in ${Math.round(q.checkMs)} ms` + (missing.length ? '; text lacks: ' + missing.join(' | ') : ''));
     console.log(`note  ${label}: likeness fit (native) gives ${cli4}; the wasm fit differs slightly, so its counts do too`);
+    // A scan that came as a mesh is also measured the other way round (the
+    // face of the finest level to the scan's triangles), as likeness fit does.
+    if (native.faceToScan) {
+      const d = q.faceToScan, nd = native.faceToScan;
+      const sentence = d ? `lies ${d.meanMm.toFixed(2)} mm from it on average` : '(no faceToScan)';
+      check(`${label}: the face's distance to the scan's own triangles is shown, near the native CLI's`,
+            !!d && shown.text.includes(sentence) && d.vertices > 1000 && Math.abs(d.meanMm - 1e3 * nd.mean_m) < 0.25 * 1e3 * nd.mean_m,
+            d ? `page: ${sentence}, p99 ${d.p99Mm.toFixed(2)} mm, ${d.vertices} vertices; likeness fit: ${(1e3 * nd.mean_m).toFixed(3)} mm`
+              : 'the worker sent no faceToScan');
+    }
     // Real scans may fit without a crossing (Fran has 0 pairs since e952a99),
     // so the wording for a head that crosses itself is checked on made-up counts.
     const made = { ...q, flipped: 3, degenerate: 1, controlCrossings: 2,
@@ -1105,8 +1115,14 @@ async function main() {
                     notes.some((n) => /seems to face/.test(n)) && notes.some((n) => /face-only scan/.test(n)) &&
                     !(await pageFran.isHidden('#fit-notes')), JSON.stringify(notes).slice(0, 300));
               if (SHOT_DIR) {  // the Pipeline card with the checks (docs/images/web_fit_checks.png)
+                // The side panel scrolls within the window: a tall window
+                // shows the whole card (an element screenshot of its hidden
+                // part came out black).
+                const size = pageFran.viewportSize();
+                await pageFran.setViewportSize({ width: size.width, height: 2400 });
                 await pageFran.locator('.card', { has: pageFran.locator('#stages') })
                   .screenshot({ path: path.join(SHOT_DIR, 'web_fit_checks.png') });
+                await pageFran.setViewportSize(size);
               }
             }
           } finally {
