@@ -417,7 +417,8 @@ struct BackPlanes {
     const double max_radius = o.back_patch_edges * edge;
     const double max_offset = o.back_max_edges * edge;
     std::vector<int> found(nv, 0);
-    std::vector<Vec3> fn(nv), fo(nv);
+    std::vector<Vec3> fn(nv);
+    std::vector<double> fo(nv);
     parallel_for(0, nv, 64, [&](int v, int) {
       if (!ignored.empty() && ignored[v]) return;
       const double vl = vn[v].norm();
@@ -467,16 +468,18 @@ struct BackPlanes {
       const Eigen::Matrix<double, 6, 1> quad = A.ldlt().solve(b);
       if (!quad.allFinite()) return;
       const double u0 = off.dot(t1) * scale, w0 = off.dot(t2) * scale;
-      const double height = (quad[0] + quad[1] * u0 + quad[2] * w0 + quad[3] * u0 * u0 + quad[4] * u0 * w0 + quad[5] * w0 * w0) / scale;
-      const Vec3 foot = c + (off.dot(t1)) * t1 + (off.dot(t2)) * t2 + height * n;
-      const Vec3 normal_there =
-          (n - (quad[1] + 2 * quad[3] * u0 + quad[4] * w0) * t1 - (quad[2] + quad[4] * u0 + 2 * quad[5] * w0) * t2).normalized();
+      const double height =
+          (quad[0] + quad[1] * u0 + quad[2] * w0 + quad[3] * u0 * u0 + quad[4] * u0 * w0 + quad[5] * w0 * w0) / scale;
+      const Vec3 foot = c + off.dot(t1) * t1 + off.dot(t2) * t2 + height * n;
+      // Slopes in the scaled frame equal the true ones (u and w scale alike).
+      const double du = quad[1] + 2 * quad[3] * u0 + quad[4] * w0, dw = quad[2] + quad[4] * u0 + 2 * quad[5] * w0;
+      const Vec3 normal_there = (n - du * t1 - dw * t2).normalized();
       found[v] = 1;
       fn[v] = normal_there;
-      fo[v] = Vec3::Constant(normal_there.dot(foot));
+      fo[v] = normal_there.dot(foot);
     });
     for (int v = 0; v < nv; ++v)
-      if (found[v]) vertex.push_back(v), normal.push_back(fn[v]), offset.push_back(fo[v].x());
+      if (found[v]) vertex.push_back(v), normal.push_back(fn[v]), offset.push_back(fo[v]);
     std::vector<Triplet> trip;
     trip.reserve(vertex.size() * 9);
     gradient = VecX::Zero(3 * nv);
@@ -726,9 +729,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
     // The guard starts afresh each round: anchors a stiff round needed
     // would hold vertices off the data in the relaxed rounds.
     if (guarding) guard.reset(nv, inv_v);
-    if (back_tree) {
-      back.find(*back_tree, points, x, mesh, terms.back_ignored, options, edge, nv, inv_v);
-    }
+    if (back_tree) back.find(*back_tree, points, x, mesh, terms.back_ignored, options, edge, nv, inv_v);
     GlobalFitIteration scratch;
     double e_old = energy_parts(x, proj.dist_energy, lambda, scratch);
 
