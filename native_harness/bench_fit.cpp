@@ -381,25 +381,23 @@ int run(const Args& args) {
       const DistanceStats ss = summarize_distances(scanned_d, 1.0);
       std::printf("   truth->surface where scanned (%zu truth vertices): mean %.3f mm p95 %.3f mm\n", n_scanned,
                   1e3 * ss.mean, 1e3 * ss.p95);
+      TriMesh truth_head = truth.mesh;  // in the head frame (the identity for these metre-scale scans)
+      transform(truth_head, r.scan_to_head.A, r.scan_to_head.t);
       {
         // The other way: level L's vertices (pockets left out) to the truth,
         // where the truth was scanned (a scan point within 3 mm of the
         // closest truth point). A bulge away from the scan shows here only.
-        TriMesh truth_in_head = truth.mesh;
-        transform(truth_in_head, r.scan_to_head.A, r.scan_to_head.t);
         MeshTopology control_topo;
         std::vector<char> skip;
         if (build_topology(generic.mesh, control_topo).ok())
           skip = propagate_vertex_mask(r.multires, pocket_vertices(control_topo, generic.annotations)).back();
         const CoveredDistances back = surface_to_reference(
-            finest, skip, truth_in_head,
-            [&](const SurfacePoint& sp) {
+            finest, skip, truth_head, [&](const SurfacePoint& sp) {
               unsigned idx = 0;
               double d2 = 0;
               tree.knnSearch(sp.point.data(), 1, &idx, &d2);
               return d2 <= 0.003 * 0.003;
-            },
-            1.0);
+            });
         std::printf("   surface->truth where scanned (%d level-%d vertices): mean %.3f mm p99 %.3f mm max %.3f mm, "
                     "%d farther than 1 mm\n",
                     back.vertices, r.multires.num_levels(), 1e3 * back.mean, 1e3 * back.p99, 1e3 * back.max,
@@ -417,8 +415,6 @@ int run(const Args& args) {
             if (v >= 0 && v < static_cast<int>(region_control.size())) region_control[v] = 1;
       }
       const std::vector<char> region = propagate_vertex_mask(r.multires, region_control)[L];
-      TriMesh truth_head = truth.mesh;  // in the head frame (the identity for these metre-scale scans)
-      transform(truth_head, r.scan_to_head.A, r.scan_to_head.t);
       const ClosestPointTree truth_tree(truth_head);
       const std::vector<Vec3> truth_normals = vertex_normals(truth_head);
       const Roughness fit_rough = surface_roughness(finest, region, truth_tree, truth_head, truth_normals, tree);

@@ -91,8 +91,7 @@ DistanceStats point_to_surface_stats(const std::vector<Vec3>& points, const TriM
 }
 
 CoveredDistances surface_to_reference(const TriMesh& surface, const std::vector<char>& skip, const TriMesh& reference,
-                                      const std::function<bool(const SurfacePoint&)>& covered,
-                                      double metres_per_unit) {
+                                      const std::function<bool(const SurfacePoint&)>& covered) {
   const ClosestPointTree tree(reference);
   const std::vector<Vec3> normals = vertex_normals(surface);
   const int n = surface.num_vertices();
@@ -110,20 +109,18 @@ CoveredDistances surface_to_reference(const TriMesh& surface, const std::vector<
   // the reference faces its way (not the far side of a face-only scan).
   double vote = 0;
   for (int v = 0; v < n; ++v)
-    if (d[v] >= 0 && d[v] * metres_per_unit < 0.002) vote += facing[v];
+    if (d[v] >= 0 && d[v] < 0.002) vote += facing[v];
   const double sign = vote < 0 ? -1 : 1;
   std::vector<double> kept;
   for (int v = 0; v < n; ++v)
-    if (d[v] >= 0 && sign * facing[v] > 0.5) {
-      kept.push_back(d[v]);
-    }
+    if (d[v] >= 0 && sign * facing[v] > 0.5) kept.push_back(d[v]);
   CoveredDistances out;
   out.vertices = static_cast<int>(kept.size());
   if (kept.empty()) return out;
   double sum = 0;
   for (double x : kept) {
     sum += x;
-    out.over_1mm += x * metres_per_unit > 0.001;
+    out.over_1mm += x > 0.001;
   }
   out.mean = sum / kept.size();
   std::sort(kept.begin(), kept.end());

@@ -85,22 +85,23 @@ DistanceStats summarize_distances(std::vector<double>& distances, double referen
 // reference #R by 3.
 struct CoveredDistances {
   int vertices = 0;                // vertices counted
-  double mean = 0, p99 = 0, max = 0;  // reference units
-  int over_1mm = 0;                // vertices farther than 1 mm (reference units given as metres_per_unit)
+  double mean = 0, p99 = 0, max = 0;  // metres
+  int over_1mm = 0;                // vertices farther than 1 mm
 };
 
 // Each vertex of `surface` not flagged in `skip` is projected onto
 // `reference`; its distance counts when covered(closest point) says the
 // reference was scanned there and the reference's triangle faces the
 // vertex's way (within 60 degrees; the reference's orientation is taken
-// from the vertices within 2 mm). metres_per_unit scales the mm figures.
+// from the vertices within 2 mm). Both meshes in metres (the head frame).
 CoveredDistances surface_to_reference(const TriMesh& surface, const std::vector<char>& skip, const TriMesh& reference,
-                                      const std::function<bool(const SurfacePoint&)>& covered,
-                                      double metres_per_unit);
+                                      const std::function<bool(const SurfacePoint&)>& covered);
 
 // A covered() for a scan's own triangles: the closest point is not on the
 // mesh's boundary (an edge with one triangle, or a vertex on one), so a
 // vertex beyond the scan's rim or over one of its holes does not count.
+// Edges are counted directly, not by build_topology: scans need not be
+// manifold.
 std::function<bool(const SurfacePoint&)> inside_scan_mesh(const TriMesh& scan);
 
 }  // namespace lk

@@ -406,13 +406,12 @@ struct BackPlanes {
     normal.clear();
     offset.clear();
     weight = o.back_weight * inv_v;
-    std::vector<Vec3> pos(nv);
-    for (int v = 0; v < nv; ++v) pos[v] = x.segment<3>(3 * v);
-    std::vector<Vec3> vn(nv, Vec3::Zero());
-    for (const Tri& t : mesh.triangles) {
-      const Vec3 n = (pos[t[1]] - pos[t[0]]).cross(pos[t[2]] - pos[t[0]]);
-      for (int k = 0; k < 3; ++k) vn[t[k]] += n;
-    }
+    TriMesh current;
+    current.triangles = mesh.triangles;
+    current.positions.resize(nv);
+    from_vector(x, current.positions);
+    const std::vector<Vec3>& pos = current.positions;
+    const std::vector<Vec3> vn = vertex_normals(current);  // unit, or zero
     const int k = o.back_neighbours;
     const double max_radius = o.back_patch_edges * edge;
     const double max_offset = o.back_max_edges * edge;
@@ -421,8 +420,7 @@ struct BackPlanes {
     std::vector<double> fo(nv);
     parallel_for(0, nv, 64, [&](int v, int) {
       if (!ignored.empty() && ignored[v]) return;
-      const double vl = vn[v].norm();
-      if (!(vl > 0)) return;
+      if (!(vn[v].squaredNorm() > 0)) return;
       std::vector<size_t> idx(k);
       std::vector<double> d2(k);
       const size_t got = tree.knnSearch(pos[v].data(), k, idx.data(), d2.data());
@@ -447,7 +445,7 @@ struct BackPlanes {
       // Over the patch, not beyond its rim (a hole's edge).
       const double patch = std::sqrt(ev[1] / double(got));  // std-dev across the patch, second axis
       if ((off - h * n).norm() > patch) return;
-      if (std::abs(n.dot(vn[v] / vl)) < o.back_min_cos) return;  // the mesh faces another way here
+      if (std::abs(n.dot(vn[v])) < o.back_min_cos) return;  // the mesh faces another way here
       // The surface under the vertex: a quadric height field over the
       // patch's plane, evaluated at the vertex's foot (the centroid alone
       // lies inside a curved patch by its sag, and would pull every

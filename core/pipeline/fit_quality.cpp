@@ -112,7 +112,7 @@ Status measure_fit_to_scan(const FitHeadResult& fit, const PointCloud& scan, con
   const std::vector<char> in_region = vertex_mask(named->second, static_cast<int>(skip.size()));
   for (size_t v = 0; v < skip.size(); ++v) skip[v] = skip[v] || !in_region[v];
   const std::vector<char> finest_skip = propagate_vertex_mask(fit.multires, skip).back();
-  out = surface_to_reference(fit.level_meshes.back(), finest_skip, scan_mesh, inside_scan_mesh(scan_mesh), 1.0);
+  out = surface_to_reference(fit.level_meshes.back(), finest_skip, scan_mesh, inside_scan_mesh(scan_mesh));
   return Status::success();
 }
 

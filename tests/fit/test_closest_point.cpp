@@ -149,7 +149,7 @@ TEST_CASE("surface_to_reference: a spike over the scan counts, vertices over a h
   }
   surface.positions.insert(surface.positions.end(), under.positions.begin(), under.positions.end());
 
-  const CoveredDistances all = surface_to_reference(surface, {}, reference, inside_scan_mesh(reference), 1.0);
+  const CoveredDistances all = surface_to_reference(surface, {}, reference, inside_scan_mesh(reference));
   INFO(all.vertices << " vertices, mean " << all.mean << " max " << all.max << ", over 1 mm " << all.over_1mm);
   // The hole's 3 x 3 inner vertices (their closest point is on the hole's
   // rim), the sheet's own rim (its closest points are on the grid's
@@ -163,10 +163,10 @@ TEST_CASE("surface_to_reference: a spike over the scan counts, vertices over a h
   // Skipping the spike leaves 1 mm everywhere.
   std::vector<char> skip(surface.num_vertices(), 0);
   skip[spike] = 1;
-  const CoveredDistances rest = surface_to_reference(surface, skip, reference, inside_scan_mesh(reference), 1.0);
+  const CoveredDistances rest = surface_to_reference(surface, skip, reference, inside_scan_mesh(reference));
   CHECK(rest.max == Approx(0.001).epsilon(1e-6));
   // The vertex over the hole, alone: not counted.
   std::vector<char> only(surface.num_vertices(), 1);
   only[over_hole] = 0;
-  CHECK(surface_to_reference(surface, only, reference, inside_scan_mesh(reference), 1.0).vertices == 0);
+  CHECK(surface_to_reference(surface, only, reference, inside_scan_mesh(reference)).vertices == 0);
 }
