@@ -403,6 +403,26 @@ int run(const Args& args) {
                     back.vertices, r.multires.num_levels(), 1e3 * back.mean, 1e3 * back.p99, 1e3 * back.max,
                     back.over_1mm);
       }
+      {
+        // What `likeness fit` prints for a point cloud (fit_quality.h: the
+        // face to the scan's quadric patches where scanned) beside the face
+        // to the truth where scanned, the figure it stands in for.
+        CoveredDistances to_points, to_truth;
+        std::vector<char> face_skip;
+        if (measure_fit_to_scan(r, cloud, generic, to_points).ok() &&
+            finest_region_skip(r, generic, "face", face_skip).ok()) {
+          to_truth = surface_to_reference(finest, face_skip, truth_head, [&](const SurfacePoint& sp) {
+            unsigned idx = 0;
+            double d2 = 0;
+            tree.knnSearch(sp.point.data(), 1, &idx, &d2);
+            return d2 <= 0.003 * 0.003;
+          });
+          std::printf("   face->scan points (likeness fit's figure, %d vertices): mean %.3f mm p99 %.3f mm max %.3f mm; "
+                      "face->truth where scanned (%d): mean %.3f mm p99 %.3f mm max %.3f mm\n",
+                      to_points.vertices, 1e3 * to_points.mean, 1e3 * to_points.p99, 1e3 * to_points.max,
+                      to_truth.vertices, 1e3 * to_truth.mean, 1e3 * to_truth.p99, 1e3 * to_truth.max);
+        }
+      }
       // Roughness of level L beside two references on the same control
       // mesh: its smooth (undisplaced) level L, and its level L displaced
       // from noise-free samples of the truth (same options, folds limited).

@@ -133,16 +133,14 @@ int run_fit(const Args& args) {
   const Status qs = measure_fit_quality(r, generic.annotations, quality);
   if (qs) print_fit_quality(quality);
   else std::cerr << "likeness fit: warning: quality check: " << qs.message << "\n";
-  // A scan that came as a mesh is also measured the other way round: the
-  // face's vertices to its triangles (a bulge away from the scan shows only here).
+  // Measured the other way round as well: the face's vertices to the scan's
+  // triangles, or to its points' local patches (a bulge away from the scan
+  // shows only here).
   CoveredDistances to_scan;
-  bool measured_to_scan = false;
-  if (!scan.faces.empty()) {
-    const Status ts = measure_fit_to_scan(r, scan, generic, to_scan);
-    measured_to_scan = ts.ok();
-    if (measured_to_scan) print_fit_to_scan(to_scan, r.multires.num_levels());
-    else std::cerr << "likeness fit: warning: face to scan: " << ts.message << "\n";
-  }
+  const Status ts = measure_fit_to_scan(r, scan, generic, to_scan);
+  const bool measured_to_scan = ts.ok();
+  if (measured_to_scan) print_fit_to_scan(to_scan, r.multires.num_levels());
+  else std::cerr << "likeness fit: warning: face to scan: " << ts.message << "\n";
 
   write_mesh("control.obj", r.control, &r);
   for (size_t l = 0; l < r.level_meshes.size(); ++l)

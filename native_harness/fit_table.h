@@ -56,11 +56,12 @@ inline const std::vector<PaperStage>& paper_table() {
   return t;
 }
 
-// The other direction of Table 1 on a mesh scan (fit_quality.h), a line.
+// The other direction of Table 1 (fit_quality.h), a line.
 inline void print_fit_to_scan(const CoveredDistances& d, int level) {
-  std::printf("  level %d's face to the scan's triangles where scanned (%d vertices): mean %.3f mm, p99 %.2f mm, "
+  std::printf("  level %d's face to the scan's %s where scanned (%d vertices): mean %.3f mm, p99 %.2f mm, "
               "max %.2f mm\n",
-              level, d.vertices, 1e3 * d.mean, 1e3 * d.p99, 1e3 * d.max);
+              level, d.to_points ? "points (their local quadric patches)" : "triangles", d.vertices, 1e3 * d.mean,
+              1e3 * d.p99, 1e3 * d.max);
 }
 
 // The checks of the finest level, in two lines under the table.
@@ -153,7 +154,8 @@ inline std::string fit_report_json(const FitHeadResult& r, const std::vector<Tim
     j << ",\n    \"control_mesh_pairs\": " << q.control_crossings << "}";
   }
   if (to_scan) {  // metres: the head frame's unit
-    j << ",\n  \"face_to_scan\": {\"vertices\": " << to_scan->vertices << ", \"mean_m\": " << to_scan->mean
+    j << ",\n  \"face_to_scan\": {\"to\": \"" << (to_scan->to_points ? "points" : "triangles")
+      << "\", \"vertices\": " << to_scan->vertices << ", \"mean_m\": " << to_scan->mean
       << ", \"p99_m\": " << to_scan->p99 << ", \"max_m\": " << to_scan->max << "}";
   }
   j << "\n}\n";

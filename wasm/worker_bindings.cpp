@@ -200,10 +200,9 @@ struct FitSession {
   bool have_quality = false;
   lk::FitQuality quality;
   double quality_ms = 0;
-  // A scan that came as a mesh: its vertices and triangles (scan frame),
-  // kept for the check of the other direction (face to scan); empty for a
-  // point cloud.
-  lk::PointCloud scan_mesh;
+  // The scan's points, and its triangles when it came as a mesh (scan
+  // frame), kept for the check of the other direction (face to scan).
+  lk::PointCloud scan;
   bool have_to_scan = false;
   lk::CoveredDistances to_scan;
 };
@@ -617,10 +616,8 @@ val fit_head_job(const std::string& name, std::uintptr_t data, std::size_t size,
   if (!status.ok()) return error_result(lk::with_context(status, name));
 
   FitSession& s = *session;
-  if (!cloud.faces.empty()) {
-    s.scan_mesh.positions = std::move(cloud.positions);
-    s.scan_mesh.faces = std::move(cloud.faces);
-  }
+  s.scan.positions = std::move(cloud.positions);
+  s.scan.faces = std::move(cloud.faces);
   s.head_to_scan = s.fit.scan_to_head.A.inverse();
   s.head_offset = s.fit.scan_to_head.t;
   prepare_animation(s, generic.annotations);
@@ -746,8 +743,8 @@ val crossings_object(const lk::CrossingCounts& c) {
 // first call measures, later calls return the same numbers.
 // Returns {ok, level, triangles, flipped, degenerate, crossings, smoothCrossings
 // ({total, lips, ears, eyeSockets, rest}), controlCrossings, checkMs}, and
-// for a scan that came as a mesh faceToScan {vertices, meanMm, p99Mm, maxMm}:
-// level L's face to the scan's triangles where scanned (fit_quality.h).
+// faceToScan {to: "triangles"|"points", vertices, meanMm, p99Mm, maxMm}:
+// level L's face to the scan where scanned (fit_quality.h).
 val fit_quality_job() {
   if (!g_session) return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "no fitted head to check"));
   FitSession& s = *g_session;
@@ -762,8 +759,9 @@ val fit_quality_job() {
     const lk::GenericHead* generic = generic_head(generic_status);
     if (!generic) return error_result(lk::with_context(generic_status, "generic head"));
     if (lk::Status st = lk::measure_fit_quality(s.fit, generic->annotations, s.quality); !st.ok()) return error_result(st);
-    // The other direction on a mesh scan (likeness fit prints it too).
-    s.have_to_scan = !s.scan_mesh.faces.empty() && lk::measure_fit_to_scan(s.fit, s.scan_mesh, *generic, s.to_scan).ok();
+    // The other direction (likeness fit prints it too): to the scan's
+    // triangles, or to its points' local patches.
+    s.have_to_scan = lk::measure_fit_to_scan(s.fit, s.scan, *generic, s.to_scan).ok();
     s.quality_ms = now_ms() - t0;
     s.have_quality = true;
   }
@@ -778,6 +776,7 @@ val fit_quality_job() {
   r.set("controlCrossings", q.control_crossings);
   if (s.have_to_scan) {
     val d = val::object();
+    d.set("to", std::string(s.to_scan.to_points ? "points" : "triangles"));
     d.set("vertices", s.to_scan.vertices);
     d.set("meanMm", 1e3 * s.to_scan.mean);
     d.set("p99Mm", 1e3 * s.to_scan.p99);

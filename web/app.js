@@ -1243,7 +1243,9 @@
                      ' triangle pairs: the fit folded it there, and every level inherits the fold.');
     if (q.faceToScan) {
       const d = q.faceToScan;
-      qualityItem('note', 'Against your scan\'s own triangles, where it was scanned: the face of level ' + L + ' lies ' +
+      const against = d.to === 'points' ? 'Against your scan\'s points (a small surface fitted to each vertex\'s 16 nearest), where it was scanned'
+                                        : 'Against your scan\'s own triangles, where it was scanned';
+      qualityItem('note', against + ': the face of level ' + L + ' lies ' +
                   d.meanMm.toFixed(2) + ' mm from it on average, 99 % of its ' + count(d.vertices) + ' vertices within ' +
                   d.p99Mm.toFixed(1) + ' mm, the farthest ' + d.maxMm.toFixed(1) + ' mm.');
     }

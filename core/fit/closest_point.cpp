@@ -1,6 +1,8 @@
 #include "fit/closest_point.h"
 
+#include "common/cloud_tree.h"
 #include "common/parallel.h"
+#include "fit/point_patch.h"
 #include "mesh/geometry.h"
 
 #include <algorithm>
@@ -90,6 +92,24 @@ DistanceStats point_to_surface_stats(const std::vector<Vec3>& points, const TriM
   return summarize_distances(d, reference_diagonal);
 }
 
+namespace {
+CoveredDistances summarize_covered(std::vector<double>& kept) {
+  CoveredDistances out;
+  out.vertices = static_cast<int>(kept.size());
+  if (kept.empty()) return out;
+  double sum = 0;
+  for (double x : kept) {
+    sum += x;
+    out.over_1mm += x > 0.001;
+  }
+  out.mean = sum / kept.size();
+  std::sort(kept.begin(), kept.end());
+  out.p99 = kept[std::min(kept.size() - 1, static_cast<size_t>(0.99 * kept.size()))];
+  out.max = kept.back();
+  return out;
+}
+}  // namespace
+
 CoveredDistances surface_to_reference(const TriMesh& surface, const std::vector<char>& skip, const TriMesh& reference,
                                       const std::function<bool(const SurfacePoint&)>& covered) {
   const ClosestPointTree tree(reference);
@@ -114,18 +134,35 @@ CoveredDistances surface_to_reference(const TriMesh& surface, const std::vector<
   std::vector<double> kept;
   for (int v = 0; v < n; ++v)
     if (d[v] >= 0 && sign * facing[v] > 0.5) kept.push_back(d[v]);
-  CoveredDistances out;
-  out.vertices = static_cast<int>(kept.size());
-  if (kept.empty()) return out;
-  double sum = 0;
-  for (double x : kept) {
-    sum += x;
-    out.over_1mm += x > 0.001;
-  }
-  out.mean = sum / kept.size();
-  std::sort(kept.begin(), kept.end());
-  out.p99 = kept[std::min(kept.size() - 1, static_cast<size_t>(0.99 * kept.size()))];
-  out.max = kept.back();
+  return summarize_covered(kept);
+}
+
+CoveredDistances surface_to_cloud(const TriMesh& surface, const std::vector<char>& skip,
+                                  const std::vector<Vec3>& points, int k) {
+  CoveredDistances none;
+  none.to_points = true;
+  if (static_cast<int>(points.size()) < std::max(k, 6)) return none;
+  const CloudAdaptor adaptor{points};
+  CloudTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  tree.buildIndex();
+  const std::vector<Vec3> normals = vertex_normals(surface);
+  const int n = surface.num_vertices();
+  std::vector<double> d(n, -1);
+  parallel_for(0, n, 256, [&](int v, int) {
+    if (!skip.empty() && skip[v]) return;
+    const Vec3& q = surface.positions[v];
+    PointPatch patch;
+    if (!fit_patch_plane(tree, points, q, k, patch, 4.0)) return;
+    if (!patch.flat(0.2) || !patch.two_dimensional(0.1) || !patch.covers_foot()) return;
+    if (std::abs(patch.plane_normal.dot(normals[v])) < 0.5) return;
+    if (!fit_patch_quadric(points, q, patch, 4.0)) return;
+    d[v] = std::abs((q - patch.foot).dot(patch.normal));
+  });
+  std::vector<double> kept;
+  for (int v = 0; v < n; ++v)
+    if (d[v] >= 0) kept.push_back(d[v]);
+  CoveredDistances out = summarize_covered(kept);
+  out.to_points = true;
   return out;
 }
 

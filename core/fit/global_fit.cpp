@@ -6,6 +6,7 @@
 #include "fit/block_ldlt.h"
 #include "fit/closest_point.h"
 #include "fit/data_surface.h"
+#include "fit/point_patch.h"
 #include "mesh/geometry.h"
 #include "raycast/self_intersection.h"
 
@@ -412,7 +413,6 @@ struct BackPlanes {
     from_vector(x, current.positions);
     const std::vector<Vec3>& pos = current.positions;
     const std::vector<Vec3> vn = vertex_normals(current);  // unit, or zero
-    const int k = o.back_neighbours;
     const double max_radius = o.back_patch_edges * edge;
     const double max_offset = o.back_max_edges * edge;
     std::vector<int> found(nv, 0);
@@ -421,60 +421,17 @@ struct BackPlanes {
     parallel_for(0, nv, 64, [&](int v, int) {
       if (!ignored.empty() && ignored[v]) return;
       if (!(vn[v].squaredNorm() > 0)) return;
-      std::vector<size_t> idx(k);
-      std::vector<double> d2(k);
-      const size_t got = tree.knnSearch(pos[v].data(), k, idx.data(), d2.data());
-      if (static_cast<int>(got) < k) return;
-      const double radius = std::sqrt(d2[got - 1]);
-      if (radius > max_radius) return;  // the scan is too sparse or too far here
-      Vec3 c = Vec3::Zero();
-      for (size_t i = 0; i < got; ++i) c += points[idx[i]];
-      c /= double(got);
-      Mat3 cov = Mat3::Zero();
-      for (size_t i = 0; i < got; ++i) {
-        const Vec3 q = points[idx[i]] - c;
-        cov += q * q.transpose();
-      }
-      Eigen::SelfAdjointEigenSolver<Mat3> es(cov);
-      const Vec3 ev = es.eigenvalues();  // ascending
-      if (!(ev[0] <= o.back_flatness * ev[1])) return;  // not one sheet (a fold, a lip gap, a rim)
-      const Vec3 n = es.eigenvectors().col(0);
-      const Vec3 off = pos[v] - c;
-      const double h = n.dot(off);
-      if (std::abs(h) > max_offset) return;
-      // Over the patch, not beyond its rim (a hole's edge).
-      const double patch = std::sqrt(ev[1] / double(got));  // std-dev across the patch, second axis
-      if ((off - h * n).norm() > patch) return;
-      if (std::abs(n.dot(vn[v])) < o.back_min_cos) return;  // the mesh faces another way here
-      // The surface under the vertex: a quadric height field over the
-      // patch's plane, evaluated at the vertex's foot (the centroid alone
-      // lies inside a curved patch by its sag, and would pull every
-      // vertex of a convex region inwards).
-      const Vec3 t1 = es.eigenvectors().col(2), t2 = es.eigenvectors().col(1);
-      Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
-      Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
-      const double scale = 1.0 / std::max(radius, 1e-12);  // unit-free coordinates
-      for (size_t i = 0; i < got; ++i) {
-        const Vec3 q = (points[idx[i]] - c) * scale;
-        const double u = q.dot(t1), w = q.dot(t2);
-        Eigen::Matrix<double, 6, 1> row;
-        row << 1, u, w, u * u, u * w, w * w;
-        A.noalias() += row * row.transpose();
-        b += row * q.dot(n);
-      }
-      A.diagonal().tail<3>().array() += 1e-3;  // a flat patch keeps a defined quadric
-      const Eigen::Matrix<double, 6, 1> quad = A.ldlt().solve(b);
-      if (!quad.allFinite()) return;
-      const double u0 = off.dot(t1) * scale, w0 = off.dot(t2) * scale;
-      const double height =
-          (quad[0] + quad[1] * u0 + quad[2] * w0 + quad[3] * u0 * u0 + quad[4] * u0 * w0 + quad[5] * w0 * w0) / scale;
-      const Vec3 foot = c + off.dot(t1) * t1 + off.dot(t2) * t2 + height * n;
-      // Slopes in the scaled frame equal the true ones (u and w scale alike).
-      const double du = quad[1] + 2 * quad[3] * u0 + quad[4] * w0, dw = quad[2] + quad[4] * u0 + 2 * quad[5] * w0;
-      const Vec3 normal_there = (n - du * t1 - dw * t2).normalized();
+      PointPatch patch;
+      if (!fit_patch_plane(tree, points, pos[v], o.back_neighbours, patch)) return;
+      if (patch.radius > max_radius) return;           // the scan is too sparse or too far here
+      if (!patch.flat(o.back_flatness)) return;         // not one sheet (a fold, a lip gap, a rim)
+      if (std::abs(patch.height) > max_offset) return;
+      if (!patch.over_patch()) return;                  // beyond the patch's rim (a hole's edge)
+      if (std::abs(patch.plane_normal.dot(vn[v])) < o.back_min_cos) return;  // the mesh faces another way here
+      if (!fit_patch_quadric(points, pos[v], patch)) return;
       found[v] = 1;
-      fn[v] = normal_there;
-      fo[v] = normal_there.dot(foot);
+      fn[v] = patch.normal;
+      fo[v] = patch.normal.dot(patch.foot);
     });
     for (int v = 0; v < nv; ++v)
       if (found[v]) vertex.push_back(v), normal.push_back(fn[v]), offset.push_back(fo[v]);

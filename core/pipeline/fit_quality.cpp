@@ -3,6 +3,7 @@
 #include "head/generic_head.h"
 #include "mesh/geometry.h"
 #include "mesh/topology.h"
+#include "multires/displacement.h"
 #include "pipeline/fit_head.h"
 #include "pipeline/head_pockets.h"
 #include "raycast/self_intersection.h"
@@ -90,29 +91,53 @@ void count_turned_and_degenerate(const TriMesh& m, const TriMesh& reference, int
     if (0.5 * face_normal_area(m, f).norm() < area_eps) ++degenerate;
 }
 
-Status measure_fit_to_scan(const FitHeadResult& fit, const PointCloud& scan, const GenericHead& generic,
-                           CoveredDistances& out, const std::string& region) {
-  out = CoveredDistances();
-  if (scan.faces.empty()) return Status::error(ErrorCode::InvalidInput, "fit to scan: the scan has no triangles");
+Status finest_region_skip(const FitHeadResult& fit, const GenericHead& generic, const std::string& region,
+                          std::vector<char>& skip) {
+  skip.clear();
   if (fit.multires.num_levels() < 1 || fit.level_meshes.empty())
     return Status::error(ErrorCode::InvalidInput, "fit to scan: the fit holds no subdivision levels");
   const auto named = generic.annotations.regions.find(region);
   if (named == generic.annotations.regions.end())
     return Status::error(ErrorCode::InvalidInput, "fit to scan: the head has no region '" + region + "'");
-  TriMesh scan_mesh;
-  scan_mesh.triangles = scan.faces;
-  scan_mesh.positions.reserve(scan.positions.size());
-  for (const Vec3& p : scan.positions) scan_mesh.positions.push_back(fit.scan_to_head.apply(p));
   MeshTopology topo;
   Status st = build_topology(generic.mesh, topo);
   if (!st) return st;
   // Skipped: the pockets and every vertex outside the region (a new vertex
   // is skipped when both its parents are, so the region's rim is kept).
-  std::vector<char> skip = pocket_vertices(topo, generic.annotations);
-  const std::vector<char> in_region = vertex_mask(named->second, static_cast<int>(skip.size()));
-  for (size_t v = 0; v < skip.size(); ++v) skip[v] = skip[v] || !in_region[v];
-  const std::vector<char> finest_skip = propagate_vertex_mask(fit.multires, skip).back();
-  out = surface_to_reference(fit.level_meshes.back(), finest_skip, scan_mesh, inside_scan_mesh(scan_mesh));
+  std::vector<char> control = pocket_vertices(topo, generic.annotations);
+  const std::vector<char> in_region = vertex_mask(named->second, static_cast<int>(control.size()));
+  for (size_t v = 0; v < control.size(); ++v) control[v] = control[v] || !in_region[v];
+  skip = propagate_vertex_mask(fit.multires, control).back();
+  return Status::success();
+}
+
+Status measure_fit_to_scan(const FitHeadResult& fit, const PointCloud& scan, const GenericHead& generic,
+                           CoveredDistances& out, const std::string& region) {
+  out = CoveredDistances();
+  std::vector<char> skip;
+  Status st = finest_region_skip(fit, generic, region, skip);
+  if (!st) return st;
+  TriMesh scan_mesh;
+  scan_mesh.triangles = scan.faces;
+  scan_mesh.positions.reserve(scan.positions.size());
+  for (const Vec3& p : scan.positions) scan_mesh.positions.push_back(fit.scan_to_head.apply(p));
+  if (!std::all_of(scan_mesh.positions.begin(), scan_mesh.positions.end(), [](const Vec3& p) { return p.allFinite(); }))
+    return Status::error(ErrorCode::InvalidInput, "fit to scan: the scan holds non-finite positions");
+  if (scan.faces.empty()) {
+    // Stray returns far sparser than the scan's sampling are left out, as
+    // the fit leaves them out (DisplacementOptions::isolated_density_ratio):
+    // a lip vertex with no skin points near had its patch on junk 20 mm
+    // in front of the mouth.
+    const std::vector<char> isolated =
+        isolated_scan_points(scan_mesh.positions, DisplacementOptions{}.isolated_density_ratio);
+    std::vector<Vec3> kept;
+    kept.reserve(scan_mesh.positions.size());
+    for (size_t i = 0; i < isolated.size(); ++i)
+      if (!isolated[i]) kept.push_back(scan_mesh.positions[i]);
+    out = surface_to_cloud(fit.level_meshes.back(), skip, kept);
+  } else {
+    out = surface_to_reference(fit.level_meshes.back(), skip, scan_mesh, inside_scan_mesh(scan_mesh));
+  }
   return Status::success();
 }
 

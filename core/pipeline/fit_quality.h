@@ -61,13 +61,22 @@ int count_pairs_touching(const MultiresMesh& mesh, int level, const std::vector<
 // 1e-6 of m's mean triangle area.
 void count_turned_and_degenerate(const TriMesh& m, const TriMesh& reference, int& flipped, int& degenerate);
 
-// The other direction of Table 1 on a scan that came as a mesh: the finest
-// level's vertices of a head region (given by name; pockets left out: no
-// scanner sees them) to the scan's own triangles, moved to the head frame,
-// where scanned (fit/closest_point.h, surface_to_reference with
-// inside_scan_mesh), in metres. "face" by default: the scans' hair,
-// collars and shoulders are surfaces the head does not model. InvalidInput
-// when the scan has no triangles, the fit no levels or the region is unknown.
+// The flags measure_fit_to_scan (below) skips on the finest level: every vertex
+// outside the named region (a new vertex when both its parents are) and
+// the pockets. InvalidInput as there.
+Status finest_region_skip(const FitHeadResult& fit, const GenericHead& generic, const std::string& region,
+                          std::vector<char>& skip);
+
+// The other direction of Table 1: the finest level's vertices of a head
+// region (given by name; pockets left out: no scanner sees them) to the
+// scan, moved to the head frame, where scanned, in metres. A scan that
+// came as a mesh is measured to its own triangles (fit/closest_point.h,
+// surface_to_reference with inside_scan_mesh), a point cloud to the
+// quadric patches of its points (surface_to_cloud; out.to_points) less the
+// isolated ones the fit leaves out too (multires/displacement.h). "face"
+// by default: the scans' hair, collars and shoulders are surfaces the head
+// does not model. InvalidInput when the fit has no levels, the region is
+// unknown or the scan holds non-finite positions.
 Status measure_fit_to_scan(const FitHeadResult& fit, const PointCloud& scan, const GenericHead& generic,
                            CoveredDistances& out, const std::string& region = "face");
 

@@ -25,7 +25,7 @@ export function syntheticScan(webdir, seed, points = 60000) {
 
 // The native CLI's fit of the same scan bytes (`likeness fit`): its
 // report.json stages [{name, mean_pct, ...}], quality (the finest level's
-// checks) and faceToScan (a mesh scan's face_to_scan, metres), or { skip: why }. The Node tests compare the wasm core's stage
+// checks) and faceToScan (face_to_scan: to triangles or points, metres), or { skip: why }. The Node tests compare the wasm core's stage
 // distances with it: a compiler that miscompiles the core for wasm (it
 // happened: docs/web.md) shows there; the browser test compares the checks
 // the page shows. name: the scan's file name (its extension picks the format).

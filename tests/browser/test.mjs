@@ -743,7 +743,7 @@ async function fitQualityShown(page, label, bytes, name, exact = true) {
       const d = q.faceToScan, nd = native.faceToScan;
       const sentence = d ? `lies ${d.meanMm.toFixed(2)} mm from it on average` : '(no faceToScan)';
       check(`${label}: the face's distance to the scan's own triangles is shown, near the native CLI's`,
-            !!d && shown.text.includes(sentence) && d.vertices > 1000 && Math.abs(d.meanMm - 1e3 * nd.mean_m) < 0.25 * 1e3 * nd.mean_m,
+            !!d && d.to === 'triangles' && shown.text.includes(sentence) && d.vertices > 1000 && Math.abs(d.meanMm - 1e3 * nd.mean_m) < 0.25 * 1e3 * nd.mean_m,
             d ? `page: ${sentence}, p99 ${d.p99Mm.toFixed(2)} mm, ${d.vertices} vertices; likeness fit: ${(1e3 * nd.mean_m).toFixed(3)} mm`
               : 'the worker sent no faceToScan');
     }
@@ -766,6 +766,19 @@ async function fitQualityShown(page, label, bytes, name, exact = true) {
     check(`${label}: a head that crosses itself is named so, with its counts by region`, lacking.length === 0,
           lacking.length ? 'text lacks: ' + lacking.join(' | ') : `${expected.length} phrases shown`);
     return q;
+  }
+  // The other direction, on a point cloud: the face to the scan's points'
+  // local patches, as likeness fit prints it. The wasm fit is not bit for bit
+  // the native one (libm): within 5 % (measured 2 %), as the stages' distances.
+  if (native.faceToScan) {
+    const d = q.faceToScan, nd = native.faceToScan;
+    const sentence = d ? `points (a small surface fitted to each vertex's 16 nearest), where it was scanned: the face of level ${q.level} lies ${d.meanMm.toFixed(2)} mm from it on average` : '(no faceToScan)';
+    check(`${label}: the face's distance to the scan's points is shown, near the native CLI's`,
+          !!d && d.to === 'points' && nd.to === 'points' && shown.text.includes(sentence) &&
+          Math.abs(d.vertices - nd.vertices) <= 0.01 * nd.vertices && Math.abs(d.meanMm - 1e3 * nd.mean_m) <= 0.05 * 1e3 * nd.mean_m,
+          d ? `page: ${d.meanMm.toFixed(4)} mm over ${d.vertices} vertices, p99 ${d.p99Mm.toFixed(2)} mm, max ${d.maxMm.toFixed(2)} mm; ` +
+              `likeness fit: ${(1e3 * nd.mean_m).toFixed(4)} mm over ${nd.vertices}`
+            : 'the worker sent no faceToScan');
   }
   check(`${label}: the checks the page shows equal the native CLI's for the same scan`,
         q.ok && page4 === cli4 && missing.length === 0,

@@ -1,4 +1,5 @@
 #include "fit/closest_point.h"
+#include "common/prng.h"
 #include "mesh/primitives.h"
 #include "toy_shapes.h"
 
@@ -169,4 +170,62 @@ TEST_CASE("surface_to_reference: a spike over the scan counts, vertices over a h
   std::vector<char> only(surface.num_vertices(), 1);
   only[over_hole] = 0;
   CHECK(surface_to_reference(surface, only, reference, inside_scan_mesh(reference)).vertices == 0);
+}
+
+TEST_CASE("surface_to_cloud: the other direction on a point cloud, over its quadric patches") {
+  // Scan: 12,000 points on a 3 cm sphere (spacing about 1 mm), 0.1 mm of
+  // depth noise, 0.5 % outliers 2 mm out; the back (z < -1 cm) was not
+  // scanned, nor a hole of 15 degrees around +x.
+  const double R = 0.03;
+  const Vec3 hole_axis = Vec3::UnitX();
+  const double hole_cos = std::cos(15.0 * 3.14159265358979 / 180.0);
+  SplitMix64 rng(7);
+  std::vector<Vec3> points;
+  const int n = 12000;
+  for (int i = 0; i < n; ++i) {  // Fibonacci sphere
+    const double z = 1 - (2.0 * i + 1) / n, r = std::sqrt(1 - z * z), phi = 2.39996322972865 * i;
+    const Vec3 u(r * std::cos(phi), r * std::sin(phi), z);
+    if (u.z() * R < -0.01 || u.dot(hole_axis) > hole_cos) continue;
+    const double depth = (i % 200 == 0) ? 0.002 : 0.0001 * rng.gaussian();
+    points.push_back((R + depth) * u);
+  }
+  // Surface: an icosphere 0.5 mm outside it, one vertex on the front raised
+  // to a 5 mm spike.
+  TriMesh surface = make_icosphere(4);  // 2,562 vertices, about 2 mm apart at this size
+  int spike = -1, over_hole = -1, beyond_rim = -1;
+  for (int v = 0; v < surface.num_vertices(); ++v) {
+    const Vec3 u = surface.positions[v].normalized();
+    surface.positions[v] = (R + 0.0005) * u;
+    if (spike < 0 && u.z() > 0.99) spike = v;
+    if (over_hole < 0 && u.dot(hole_axis) > 0.999) over_hole = v;
+    if (beyond_rim < 0 && u.z() < -0.9) beyond_rim = v;
+  }
+  REQUIRE(spike >= 0);
+  REQUIRE(over_hole >= 0);
+  REQUIRE(beyond_rim >= 0);
+  surface.positions[spike] *= (R + 0.005) / (R + 0.0005);
+
+  const CoveredDistances all = surface_to_cloud(surface, {}, points);
+  INFO(all.vertices << " vertices, mean " << all.mean << " p99 " << all.p99 << " max " << all.max << ", over 1 mm "
+                    << all.over_1mm);
+  CHECK(all.to_points);
+  // The scanned part holds about 2/3 of the sphere less the hole.
+  CHECK(all.vertices > surface.num_vertices() / 2);
+  CHECK(all.vertices < surface.num_vertices() * 2 / 3);
+  // 0.5 mm everywhere: the quadric follows the sphere (the patches' plane
+  // would read 0.5 mm plus about half their sag, r^2 / 4R = 0.04 mm) and
+  // drops the outliers.
+  CHECK(all.mean == Approx(0.0005).margin(2e-5));
+  // The spike counts, at about its height, and only it and its slopes.
+  CHECK(all.max == Approx(0.005).margin(3e-4));
+  CHECK(all.over_1mm >= 1);
+  CHECK(all.over_1mm <= 7);
+  // A vertex over the hole, or beyond the scan's border, alone: not counted.
+  for (int v : {over_hole, beyond_rim}) {
+    std::vector<char> only(surface.num_vertices(), 1);
+    only[v] = 0;
+    CHECK(surface_to_cloud(surface, only, points).vertices == 0);
+  }
+  // Too few points: nothing measured, no crash.
+  CHECK(surface_to_cloud(surface, {}, std::vector<Vec3>(5, Vec3::Zero())).vertices == 0);
 }
