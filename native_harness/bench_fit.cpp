@@ -383,21 +383,22 @@ int run(const Args& args) {
                   1e3 * ss.mean, 1e3 * ss.p95);
       TriMesh truth_head = truth.mesh;  // in the head frame (the identity for these metre-scale scans)
       transform(truth_head, r.scan_to_head.A, r.scan_to_head.t);
+      // The truth was scanned where a scan point lies within 3 mm of it.
+      const auto truth_scanned = [&](const SurfacePoint& sp) {
+        unsigned idx = 0;
+        double d2 = 0;
+        tree.knnSearch(sp.point.data(), 1, &idx, &d2);
+        return d2 <= 0.003 * 0.003;
+      };
       {
         // The other way: level L's vertices (pockets left out) to the truth,
-        // where the truth was scanned (a scan point within 3 mm of the
-        // closest truth point). A bulge away from the scan shows here only.
+        // where the truth was scanned (at the closest truth point). A bulge
+        // away from the scan shows here only.
         MeshTopology control_topo;
         std::vector<char> skip;
         if (build_topology(generic.mesh, control_topo).ok())
           skip = propagate_vertex_mask(r.multires, pocket_vertices(control_topo, generic.annotations)).back();
-        const CoveredDistances back = surface_to_reference(
-            finest, skip, truth_head, [&](const SurfacePoint& sp) {
-              unsigned idx = 0;
-              double d2 = 0;
-              tree.knnSearch(sp.point.data(), 1, &idx, &d2);
-              return d2 <= 0.003 * 0.003;
-            });
+        const CoveredDistances back = surface_to_reference(finest, skip, truth_head, truth_scanned);
         std::printf("   surface->truth where scanned (%d level-%d vertices): mean %.3f mm p99 %.3f mm max %.3f mm, "
                     "%d farther than 1 mm\n",
                     back.vertices, r.multires.num_levels(), 1e3 * back.mean, 1e3 * back.p99, 1e3 * back.max,
@@ -411,12 +412,7 @@ int run(const Args& args) {
         std::vector<char> face_skip;
         if (measure_fit_to_scan(r, cloud, generic, to_points).ok() &&
             finest_region_skip(r, generic, "face", face_skip).ok()) {
-          to_truth = surface_to_reference(finest, face_skip, truth_head, [&](const SurfacePoint& sp) {
-            unsigned idx = 0;
-            double d2 = 0;
-            tree.knnSearch(sp.point.data(), 1, &idx, &d2);
-            return d2 <= 0.003 * 0.003;
-          });
+          to_truth = surface_to_reference(finest, face_skip, truth_head, truth_scanned);
           std::printf("   face->scan points (likeness fit's figure, %d vertices): mean %.3f mm p99 %.3f mm max %.3f mm; "
                       "face->truth where scanned (%d): mean %.3f mm p99 %.3f mm max %.3f mm\n",
                       to_points.vertices, 1e3 * to_points.mean, 1e3 * to_points.p99, 1e3 * to_points.max,
