@@ -58,6 +58,11 @@ inline const std::vector<PaperStage>& paper_table() {
 
 // The other direction of Table 1 (fit_quality.h), a line.
 inline void print_fit_to_scan(const CoveredDistances& d, int level) {
+  if (d.vertices == 0) {
+    std::printf("  level %d's face to the scan's %s: no face vertex lies over a scanned part of it\n", level,
+                d.to_points ? "points" : "triangles");
+    return;
+  }
   std::printf("  level %d's face to the scan's %s where scanned (%d vertices): mean %.3f mm, p99 %.2f mm, "
               "max %.2f mm\n",
               level, d.to_points ? "points (their local quadric patches)" : "triangles", d.vertices, 1e3 * d.mean,

@@ -1245,9 +1245,10 @@
       const d = q.faceToScan;
       const against = d.to === 'points' ? 'Against your scan\'s points (a small surface fitted to each vertex\'s 16 nearest), where it was scanned'
                                         : 'Against your scan\'s own triangles, where it was scanned';
-      qualityItem('note', against + ': the face of level ' + L + ' lies ' +
-                  d.meanMm.toFixed(2) + ' mm from it on average, 99 % of its ' + count(d.vertices) + ' vertices within ' +
-                  d.p99Mm.toFixed(1) + ' mm, the farthest ' + d.maxMm.toFixed(1) + ' mm.');
+      if (d.vertices === 0) qualityItem('note', against + ': no vertex of the face lies over a scanned part of it.');
+      else qualityItem('note', against + ': the face of level ' + L + ' lies ' +
+                       d.meanMm.toFixed(2) + ' mm from it on average, 99 % of its ' + count(d.vertices) + ' vertices within ' +
+                       d.p99Mm.toFixed(1) + ' mm, the farthest ' + d.maxMm.toFixed(1) + ' mm.');
     }
     qualityItem('note', 'Checked in ' + (q.checkMs / 1000).toFixed(2) + ' s in the worker, after the timed fit (as likeness fit does).');
     const look = [];

@@ -6,8 +6,9 @@
 // came as points (closest_point.h, surface_to_cloud). Both take the k scan
 // points nearest the vertex, their principal plane, and a quadric height
 // field over that plane evaluated at the vertex's foot. The centroid's
-// plane alone lies inside a curved patch by its sag (about r^2 / 2R), which
-// would read as the vertex being outside a convex surface everywhere.
+// plane alone lies inside a curved patch by half its sag (r^2 / 4R at the
+// centre of a patch of radius r on a sphere of radius R), which would read
+// as the vertex being outside a convex surface everywhere.
 //
 // Shapes: points #P by 3 (the tree's); k >= 6 (the quadric's 6 unknowns).
 #pragma once
