@@ -137,12 +137,22 @@ int run_fit(const Args& args) {
   // triangles, or to its points' local patches (a bulge away from the scan
   // shows only here).
   CoveredDistances to_scan;
-  const Status ts = measure_fit_to_scan(r, scan, generic, to_scan);
+  std::vector<double> to_scan_per_vertex;
+  const Status ts = measure_fit_to_scan(r, scan, generic, to_scan, "face", &to_scan_per_vertex);
   const bool measured_to_scan = ts.ok();
   if (measured_to_scan) print_fit_to_scan(to_scan, r.multires.num_levels());
   else std::cerr << "likeness fit: warning: face to scan: " << ts.message << "\n";
 
   write_mesh("control.obj", r.control, &r);
+  if (measured_to_scan) {  // the same as a map: the finest level coloured by each vertex's distance
+    TriMesh map = r.level_meshes.back();
+    map.colors = distance_colors(to_scan_per_vertex);
+    map.normals.clear();
+    map.uvs.clear();
+    if (scan_frame) map = to_scan_frame(map, r.scan_to_head);
+    const Status s = write_file(out_dir + "/face_to_scan.ply", write_ply(map));
+    if (!s) std::cerr << "likeness fit: warning: " << s.message << "\n";
+  }
   for (size_t l = 0; l < r.level_meshes.size(); ++l)
     write_mesh("level" + std::to_string(l + 1) + ".obj", r.level_meshes[l], &r);
   if (dump && scan_frame) {
@@ -153,7 +163,8 @@ int run_fit(const Args& args) {
   st = write_file(out_dir + "/report.json", fit_report_json(r, stages, "ok", qs ? &quality : nullptr,
                                                                    measured_to_scan ? &to_scan : nullptr));
   if (!st) return fail(cmd, st.message);
-  std::printf("  wrote %s/control.obj, level1..%d.obj, report.json (%s frame)\n", out_dir.c_str(), opt.levels,
+  std::printf("  wrote %s/control.obj, level1..%d.obj, %sreport.json (%s frame)\n", out_dir.c_str(), opt.levels,
+              measured_to_scan ? "face_to_scan.ply (the finest level's distance map), " : "",
               scan_frame ? "scan" : "head: metres, +y up, +z facing");
   return 0;
 }

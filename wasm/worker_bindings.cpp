@@ -205,6 +205,7 @@ struct FitSession {
   lk::PointCloud scan;
   bool have_to_scan = false;
   lk::CoveredDistances to_scan;
+  std::vector<lk::Vec3> to_scan_colors;  // the finest level's distance map (fit_quality.h, distance_colors)
 };
 std::unique_ptr<FitSession> g_session;
 
@@ -743,8 +744,9 @@ val crossings_object(const lk::CrossingCounts& c) {
 // first call measures, later calls return the same numbers.
 // Returns {ok, level, triangles, flipped, degenerate, crossings, smoothCrossings
 // ({total, lips, ears, eyeSockets, rest}), controlCrossings, checkMs}, and
-// faceToScan {to: "triangles"|"points", vertices, meanMm, p99Mm, maxMm}:
-// level L's face to the scan where scanned (fit_quality.h).
+// faceToScan {to: "triangles"|"points", vertices, meanMm, p99Mm, maxMm,
+// colors}: level L's face to the scan where scanned (fit_quality.h), and
+// its map as #V_L * 3 linear RGB (distance_colors) for the viewer.
 val fit_quality_job() {
   if (!g_session) return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "no fitted head to check"));
   FitSession& s = *g_session;
@@ -761,7 +763,9 @@ val fit_quality_job() {
     if (lk::Status st = lk::measure_fit_quality(s.fit, generic->annotations, s.quality); !st.ok()) return error_result(st);
     // The other direction (likeness fit prints it too): to the scan's
     // triangles, or to its points' local patches.
-    s.have_to_scan = lk::measure_fit_to_scan(s.fit, s.scan, *generic, s.to_scan).ok();
+    std::vector<double> per_vertex;
+    s.have_to_scan = lk::measure_fit_to_scan(s.fit, s.scan, *generic, s.to_scan, "face", &per_vertex).ok();
+    if (s.have_to_scan) s.to_scan_colors = lk::distance_colors(per_vertex);
     s.quality_ms = now_ms() - t0;
     s.have_quality = true;
   }
@@ -781,6 +785,7 @@ val fit_quality_job() {
     d.set("meanMm", 1e3 * s.to_scan.mean);
     d.set("p99Mm", 1e3 * s.to_scan.p99);
     d.set("maxMm", 1e3 * s.to_scan.max);
+    d.set("colors", float32_array(s.to_scan_colors));
     r.set("faceToScan", d);
   }
   r.set("checkMs", s.quality_ms);

@@ -37,7 +37,7 @@
     fileList: $('file-list'), reset: $('btn-reset'), generic: $('btn-generic'),
     pointSize: $('point-size'), maxSize: $('max-size'), sample: $('btn-sample'), cancel: $('btn-cancel'), wireframe: $('wireframe'),
     fit: $('btn-fit'), autoFit: $('auto-fit'), fitTotal: $('fit-total'), fitView: $('fit-view'),
-    level: $('level'), showPoints: $('show-points'), animate: $('animate'), animStats: $('anim-stats'),
+    level: $('level'), showPoints: $('show-points'), showDistance: $('show-distance'), animate: $('animate'), animStats: $('anim-stats'),
     fullDetail: $('full-detail'),
     fitNotes: $('fit-notes'), fitQuality: $('fit-quality'), qualityTitle: $('quality-title'), qualitySummary: $('quality-summary'),
     qualityList: $('quality-list'),
@@ -1270,6 +1270,7 @@
   async function checkFitQuality(fit) {
     fit.quality = null;
     ui.fitQuality.hidden = false;
+    ui.showDistance.disabled = true;
     ui.fitQuality.classList.add('checking');
     ui.qualityTitle.textContent = 'Checks';
     ui.qualitySummary.className = 'quality-summary';
@@ -1290,6 +1291,18 @@
     }
     fit.quality = q;
     showQuality(q);
+    ui.showDistance.disabled = !distanceMap(true);
+    if (ui.showDistance.checked && app.shownStage === 'subdivide') showStage('subdivide');
+  }
+
+  // The finest level's distance map from the checks (faceToScan.colors), or
+  // null; anyLevel: whether there is one at all, else only while the finest
+  // level is the one shown.
+  function distanceMap(anyLevel = false) {
+    const q = app.fit && app.fit.quality;
+    const colors = q && q.ok && q.faceToScan && q.faceToScan.colors;
+    if (!colors || !colors.length) return null;
+    return anyLevel || shownLevel() === q.level ? colors : null;
   }
 
   // Shows a fit stage's mesh over the scan points, keeping the view.
@@ -1351,8 +1364,11 @@
     if (row !== 'subdivide') stopAnimation(true, false);
     const mesh = fitMesh(row);
     const t = app.texture;
-    const textured = row === 'subdivide' && t;
-    const err = textured
+    const map = row === 'subdivide' && ui.showDistance.checked ? distanceMap() : null;
+    const textured = row === 'subdivide' && t && !map;
+    const err = map
+      ? app.viewer.show_mesh_keep_view(posed || mesh.positions, null, map, mesh.indices)
+      : textured
       ? app.viewer.show_textured_mesh(posed || mesh.positions, mesh.indices, t.uvs.subarray(0, 2 * mesh.vertexCount),
                                       t.skin.width, t.skin.height, t.skin.channels, t.skin.pixels)
       : app.viewer.show_mesh_keep_view(posed || mesh.positions, null, null, mesh.indices);
@@ -1362,8 +1378,11 @@
     if (quiet) return;
     const what = row === 'subdivide' ? (ui.level.value === '0' ? 'control mesh' : 'level ' + ui.level.value)
       : stageItem(row).querySelector('.stage-name').textContent + ' result';
+    const mapNote = map ? ' coloured by its distance to the scan: white within 0.25 mm, yellow 1 mm, red 3 mm or more, ' +
+                          'blue-grey not measured (outside the face, or not scanned)'
+      : row === 'subdivide' && ui.showDistance.checked ? ' (the distance map is of level ' + app.fit.quality.level + ')' : '';
     setStatus('Showing the ' + (textured ? 'textured ' : '') + what + ' (' + mesh.vertexCount.toLocaleString('en') + ' vertices, ' +
-              mesh.triangleCount.toLocaleString('en') + ' triangles)' + (ui.showPoints.checked ? ' over the scan points.' : '.'));
+              mesh.triangleCount.toLocaleString('en') + ' triangles)' + mapNote + (ui.showPoints.checked ? ' over the scan points.' : '.'));
   }
 
   // ---- texturing (tarini2002 Sec. 3) ---------------------------------------------
@@ -1806,11 +1825,23 @@
         if ((e.key === 'Enter' || e.key === ' ') && li.classList.contains('viewable')) { e.preventDefault(); showStage(st.row); }
       });
     }
-    ui.level.addEventListener('change', () => {
+    // Another level, or the distance map on or off: the head shown again,
+    // an animation restarted around it.
+    const reshowHead = () => {
       const wasRunning = app.animation.running;
       if (wasRunning) { app.animation.running = false; animGeneration++; restoreFullDetail(); ui.animate.checked = false; }
       showStage('subdivide');
       if (wasRunning) startAnimation();
+    };
+    ui.level.addEventListener('change', reshowHead);
+    ui.showDistance.addEventListener('change', () => {
+      // The scan's points would hide the colours: off with the map on (the
+      // user may turn them back on).
+      if (ui.showDistance.checked && ui.showPoints.checked) {
+        ui.showPoints.checked = false;
+        if (app.viewer) app.viewer.set_overlay_visible(false);
+      }
+      if (app.fit && app.shownStage === 'subdivide') reshowHead();
     });
     ui.showPoints.addEventListener('change', () => {
       if (!app.viewer) return;

@@ -111,7 +111,8 @@ CoveredDistances summarize_covered(std::vector<double>& kept) {
 }  // namespace
 
 CoveredDistances surface_to_reference(const TriMesh& surface, const std::vector<char>& skip, const TriMesh& reference,
-                                      const std::function<bool(const SurfacePoint&)>& covered) {
+                                      const std::function<bool(const SurfacePoint&)>& covered,
+                                      std::vector<double>* per_vertex) {
   const ClosestPointTree tree(reference);
   const std::vector<Vec3> normals = vertex_normals(surface);
   const int n = surface.num_vertices();
@@ -132,15 +133,19 @@ CoveredDistances surface_to_reference(const TriMesh& surface, const std::vector<
     if (d[v] >= 0 && d[v] < 0.002) vote += facing[v];
   const double sign = vote < 0 ? -1 : 1;
   std::vector<double> kept;
-  for (int v = 0; v < n; ++v)
-    if (d[v] >= 0 && sign * facing[v] > 0.5) kept.push_back(d[v]);
+  for (int v = 0; v < n; ++v) {
+    if (!(sign * facing[v] > 0.5)) d[v] = -1;
+    if (d[v] >= 0) kept.push_back(d[v]);
+  }
+  if (per_vertex) *per_vertex = std::move(d);
   return summarize_covered(kept);
 }
 
 CoveredDistances surface_to_cloud(const TriMesh& surface, const std::vector<char>& skip,
-                                  const std::vector<Vec3>& points, int k) {
+                                  const std::vector<Vec3>& points, int k, std::vector<double>* per_vertex) {
   CoveredDistances none;
   none.to_points = true;
+  if (per_vertex) per_vertex->assign(surface.positions.size(), -1.0);
   if (static_cast<int>(points.size()) < std::max(k, 6)) return none;
   const CloudAdaptor adaptor{points};
   CloudTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
@@ -163,6 +168,7 @@ CoveredDistances surface_to_cloud(const TriMesh& surface, const std::vector<char
     if (d[v] >= 0) kept.push_back(d[v]);
   CoveredDistances out = summarize_covered(kept);
   out.to_points = true;
+  if (per_vertex) *per_vertex = std::move(d);
   return out;
 }
 

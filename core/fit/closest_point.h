@@ -95,8 +95,10 @@ struct CoveredDistances {
 // reference was scanned there and the reference's triangle faces the
 // vertex's way (within 60 degrees; the reference's orientation is taken
 // from the vertices within 2 mm). Both meshes in metres (the head frame).
+// per_vertex (optional): #V distances, -1 where a vertex is not counted.
 CoveredDistances surface_to_reference(const TriMesh& surface, const std::vector<char>& skip, const TriMesh& reference,
-                                      const std::function<bool(const SurfacePoint&)>& covered);
+                                      const std::function<bool(const SurfacePoint&)>& covered,
+                                      std::vector<double>* per_vertex = nullptr);
 
 // A covered() for a scan's own triangles: the closest point is not on the
 // mesh's boundary (an edge with one triangle, or a vertex on one), so a
@@ -120,7 +122,9 @@ std::function<bool(const SurfacePoint&)> inside_scan_mesh(const TriMesh& scan);
 // 0.03 mm on a dense scan with 0.2 mm noise), and on a sparse cloud (James's
 // 6,400 vertices) their quadric is too coarse for a nose: use the
 // triangles there. Points and surface in metres (the head frame).
+// per_vertex as surface_to_reference's.
 CoveredDistances surface_to_cloud(const TriMesh& surface, const std::vector<char>& skip,
-                                  const std::vector<Vec3>& points, int k = 16);
+                                  const std::vector<Vec3>& points, int k = 16,
+                                  std::vector<double>* per_vertex = nullptr);
 
 }  // namespace lk

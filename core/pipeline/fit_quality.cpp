@@ -112,7 +112,7 @@ Status finest_region_skip(const FitHeadResult& fit, const GenericHead& generic, 
 }
 
 Status measure_fit_to_scan(const FitHeadResult& fit, const PointCloud& scan, const GenericHead& generic,
-                           CoveredDistances& out, const std::string& region) {
+                           CoveredDistances& out, const std::string& region, std::vector<double>* per_vertex) {
   out = CoveredDistances();
   std::vector<char> skip;
   Status st = finest_region_skip(fit, generic, region, skip);
@@ -134,11 +134,35 @@ Status measure_fit_to_scan(const FitHeadResult& fit, const PointCloud& scan, con
     kept.reserve(scan_mesh.positions.size());
     for (size_t i = 0; i < isolated.size(); ++i)
       if (!isolated[i]) kept.push_back(scan_mesh.positions[i]);
-    out = surface_to_cloud(fit.level_meshes.back(), skip, kept);
+    out = surface_to_cloud(fit.level_meshes.back(), skip, kept, 16, per_vertex);
   } else {
-    out = surface_to_reference(fit.level_meshes.back(), skip, scan_mesh, inside_scan_mesh(scan_mesh));
+    out = surface_to_reference(fit.level_meshes.back(), skip, scan_mesh, inside_scan_mesh(scan_mesh), per_vertex);
   }
   return Status::success();
+}
+
+std::vector<Vec3> distance_colors(const std::vector<double>& metres) {
+  // Stops of the ramp (mm -> linear RGB).
+  struct Stop {
+    double mm;
+    Vec3 rgb;
+  };
+  static const Stop stops[] = {{0.0, Vec3(0.85, 0.85, 0.85)}, {0.25, Vec3(0.85, 0.85, 0.85)},
+                               {1.0, Vec3(0.95, 0.75, 0.05)}, {3.0, Vec3(0.75, 0.02, 0.02)}};
+  const Vec3 unmeasured(0.22, 0.28, 0.5);
+  std::vector<Vec3> out(metres.size(), unmeasured);
+  for (size_t i = 0; i < metres.size(); ++i) {
+    if (!(metres[i] >= 0)) continue;
+    const double mm = 1e3 * metres[i];
+    out[i] = stops[3].rgb;
+    for (int s = 1; s < 4; ++s)
+      if (mm < stops[s].mm) {
+        const double t = (mm - stops[s - 1].mm) / (stops[s].mm - stops[s - 1].mm);
+        out[i] = (1 - t) * stops[s - 1].rgb + t * stops[s].rgb;
+        break;
+      }
+  }
+  return out;
 }
 
 Status measure_fit_quality(const FitHeadResult& fit, const HeadAnnotations& annotations, FitQuality& out) {

@@ -77,8 +77,16 @@ Status finest_region_skip(const FitHeadResult& fit, const GenericHead& generic, 
 // by default: the scans' hair, collars and shoulders are surfaces the head
 // does not model. InvalidInput when the fit has no levels, the region is
 // unknown or the scan holds non-finite positions.
+// per_vertex (optional): the finest level's #V distances, -1 where a
+// vertex is not counted (outside the region, a pocket, not scanned).
 Status measure_fit_to_scan(const FitHeadResult& fit, const PointCloud& scan, const GenericHead& generic,
-                           CoveredDistances& out, const std::string& region = "face");
+                           CoveredDistances& out, const std::string& region = "face",
+                           std::vector<double>* per_vertex = nullptr);
+
+// A distance map's colours (linear RGB, TriMesh::colors), one per entry of
+// measure_fit_to_scan's per_vertex: near white up to 0.25 mm, yellow at
+// 1 mm, red from 3 mm on, grey where nothing was measured.
+std::vector<Vec3> distance_colors(const std::vector<double>& metres);
 
 // All of FitQuality for a fit's finest level. InvalidInput when the result
 // holds no levels or non-finite positions.

@@ -1105,6 +1105,39 @@ async function main() {
             `state ${sFit} after ${Date.now() - tFit} ms; ${fit ? 'fit ' + Math.round(fit.fitMs) + ' ms in wasm: ' + fit.stages.join(', ') : await bannerText(page)}`);
       if (fit) {
         await fitQualityShown(page, 'synthetic scan', synth.bytes, 'synthetic_head.ply');
+        // The checks' distance map: "Distance to scan" turns on with them and
+        // draws the finest level in its colours; another level says it has none.
+        {
+          const enabled = await page.evaluate(() => !document.getElementById('show-distance').disabled);
+          await page.uncheck('#show-points');
+          const plain = await canvasImage(page);
+          await page.check('#show-points');
+          await page.check('#show-distance');  // turns the scan points off: they would hide the colours
+          await page.evaluate(() => document.activeElement.blur());
+          const pointsOff = await page.evaluate(() => !document.getElementById('show-points').checked);
+          const mapped = await canvasImage(page);
+          const mapStatus = await page.evaluate(() => document.getElementById('status').textContent);
+          // Blue-grey (unmeasured: the scalp, the neck) is a colour the skin never has.
+          const blueGrey = (img) => {
+            let n = 0;
+            for (let i = 0; i < img.data.length; i += 4)
+              if (img.data[i + 2] > img.data[i] + 30 && img.data[i + 2] > 90) n++;
+            return n;
+          };
+          const before = blueGrey(plain), after = blueGrey(mapped);
+          check('the checks turn on "Distance to scan": level 3 drawn in its distance colours, blue-grey where not measured',
+                enabled && pointsOff && /coloured by its distance to the scan/.test(mapStatus) && after > 5000 && after > 20 * (before + 1),
+                `enabled ${enabled}, scan points turned off ${pointsOff}; blue-grey pixels ${before} -> ${after}; status: ${mapStatus}`);
+          if (SHOT_DIR) await page.screenshot({ path: path.join(SHOT_DIR, 'web_distance_map.png') });
+          await page.selectOption('#level', '2');
+          const level2Status = await page.evaluate(() => document.getElementById('status').textContent);
+          check('on another level the page says the distance map is of the finest',
+                /the distance map is of level 3/.test(level2Status), level2Status);
+          await page.selectOption('#level', '3');
+          await page.uncheck('#show-distance');
+          await page.check('#show-points');
+          await page.evaluate(() => document.activeElement.blur());
+        }
         // A real scan whose fitted head does cross itself (Fran: face-only,
         // eye rims and brow): the page must show non-zero counts in full.
         const fran = path.resolve(path.dirname(new URL(import.meta.url).pathname), '../../../shared/data/head_scans/fran_cyberware/fran_cut.vtk');

@@ -226,6 +226,19 @@ TEST_CASE("surface_to_cloud: the other direction on a point cloud, over its quad
     only[v] = 0;
     CHECK(surface_to_cloud(surface, only, points).vertices == 0);
   }
+  // The per-vertex distances are the summary's, -1 where not counted.
+  std::vector<double> per_vertex;
+  const CoveredDistances again = surface_to_cloud(surface, {}, points, 16, &per_vertex);
+  REQUIRE(per_vertex.size() == surface.positions.size());
+  int counted = 0;
+  double sum = 0;
+  for (double x : per_vertex)
+    if (x >= 0) ++counted, sum += x;
+  CHECK(counted == again.vertices);
+  CHECK(sum / counted == Approx(all.mean).epsilon(1e-12));
+  CHECK(per_vertex[spike] == Approx(all.max).epsilon(1e-12));
+  CHECK(per_vertex[over_hole] < 0);
+  CHECK(per_vertex[beyond_rim] < 0);
   // Too few points: nothing measured, no crash.
   CHECK(surface_to_cloud(surface, {}, std::vector<Vec3>(5, Vec3::Zero())).vertices == 0);
 }

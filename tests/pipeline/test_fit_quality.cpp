@@ -196,3 +196,19 @@ TEST_CASE("head creases: the curves as tagged edges, and the eye openings' corne
   REQUIRE(apply_all(without, head.mesh.positions, b).ok());
   CHECK(a.back() != b.back());
 }
+
+TEST_CASE("distance colours: near white to 0.25 mm, yellow at 1 mm, red from 3 mm, another colour where unmeasured",
+          "[fit_quality]") {
+  const std::vector<Vec3> c = distance_colors({0.0, 0.0002, 0.001, 0.002, 0.003, 0.01, -1.0});
+  REQUIRE(c.size() == 7);
+  CHECK(c[0].isApprox(c[1]));                         // within 0.25 mm: one colour
+  CHECK(c[2].x() > c[2].z() + 0.5);                   // yellow: red and green, no blue
+  CHECK(c[2].y() > c[2].z() + 0.5);
+  CHECK(c[4].isApprox(c[5]));                         // 3 mm and beyond: the same red
+  CHECK(c[4].x() > 0.5);
+  CHECK(c[4].y() < 0.1);
+  CHECK(c[3].y() < c[2].y());                         // 2 mm between yellow and red
+  CHECK(c[3].y() > c[4].y());
+  CHECK((c[6] - c[0]).norm() > 0.3);                  // unmeasured stands apart from "close"
+  CHECK(c[6].z() > c[6].x());
+}
