@@ -1378,9 +1378,10 @@
     if (quiet) return;
     const what = row === 'subdivide' ? (ui.level.value === '0' ? 'control mesh' : 'level ' + ui.level.value)
       : stageItem(row).querySelector('.stage-name').textContent + ' result';
+    // A new fit's checks may not be in yet (fit.quality null): no map, no note.
     const mapNote = map ? ' coloured by its distance to the scan: white within 0.25 mm, yellow 1 mm, red 3 mm or more, ' +
                           'blue-grey not measured (outside the face, or not scanned)'
-      : row === 'subdivide' && ui.showDistance.checked ? ' (the distance map is of level ' + app.fit.quality.level + ')' : '';
+      : row === 'subdivide' && ui.showDistance.checked && distanceMap(true) ? ' (the distance map is of level ' + app.fit.quality.level + ')' : '';
     setStatus('Showing the ' + (textured ? 'textured ' : '') + what + ' (' + mesh.vertexCount.toLocaleString('en') + ' vertices, ' +
               mesh.triangleCount.toLocaleString('en') + ' triangles)' + mapNote + (ui.showPoints.checked ? ' over the scan points.' : '.'));
   }

@@ -1170,6 +1170,20 @@ async function main() {
                   .screenshot({ path: path.join(SHOT_DIR, 'web_fit_checks.png') });
                 await pageFran.setViewportSize(size);
               }
+              // Fitting again with "Distance to scan" on: the new fit shows
+              // before its checks are in (no map yet), then with its map.
+              await pageFran.check('#show-distance');
+              await pageFran.click('#btn-fit');
+              await pageFran.waitForFunction(() => document.body.dataset.state !== 'working', null, { timeout: JOB_TIMEOUT_MS });
+              const again = await state(pageFran);
+              let mapAgain = '';
+              if (again === 'done') {
+                await pageFran.waitForFunction(() => window.likeness.fit && window.likeness.fit.quality, null, { timeout: JOB_TIMEOUT_MS });
+                mapAgain = await pageFran.evaluate(() => document.getElementById('status').textContent);
+              }
+              check('a second fit with "Distance to scan" on reaches "done", then shows its own map',
+                    again === 'done' && /coloured by its distance to the scan/.test(mapAgain),
+                    `state ${again}; status: ${mapAgain || await bannerText(pageFran)}`);
             }
           } finally {
             await pageFran.close();
