@@ -42,9 +42,7 @@
 #include "io/io.h"
 #include "mesh/geometry.h"
 #include "pipeline/fit_head.h"
-#include "mesh/topology.h"
 #include "pipeline/fit_quality.h"
-#include "pipeline/head_pockets.h"
 #include "raycast/self_intersection.h"
 #include "synthetic_scan.h"
 #include "synth/scanner.h"
@@ -394,10 +392,8 @@ int run(const Args& args) {
         // The other way: level L's vertices (pockets left out) to the truth,
         // where the truth was scanned (at the closest truth point). A bulge
         // away from the scan shows here only.
-        MeshTopology control_topo;
         std::vector<char> skip;
-        if (build_topology(generic.mesh, control_topo).ok())
-          skip = propagate_vertex_mask(r.multires, pocket_vertices(control_topo, generic.annotations)).back();
+        if (!finest_region_skip(r, generic, "", skip).ok()) skip.clear();
         const CoveredDistances back = surface_to_reference(finest, skip, truth_head, truth_scanned);
         std::printf("   surface->truth where scanned (%d level-%d vertices): mean %.3f mm p99 %.3f mm max %.3f mm, "
                     "%d farther than 1 mm\n",

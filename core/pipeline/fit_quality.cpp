@@ -97,7 +97,7 @@ Status finest_region_skip(const FitHeadResult& fit, const GenericHead& generic, 
   if (fit.multires.num_levels() < 1 || fit.level_meshes.empty())
     return Status::error(ErrorCode::InvalidInput, "fit to scan: the fit holds no subdivision levels");
   const auto named = generic.annotations.regions.find(region);
-  if (named == generic.annotations.regions.end())
+  if (!region.empty() && named == generic.annotations.regions.end())
     return Status::error(ErrorCode::InvalidInput, "fit to scan: the head has no region '" + region + "'");
   MeshTopology topo;
   Status st = build_topology(generic.mesh, topo);
@@ -105,8 +105,10 @@ Status finest_region_skip(const FitHeadResult& fit, const GenericHead& generic, 
   // Skipped: the pockets and every vertex outside the region (a new vertex
   // is skipped when both its parents are, so the region's rim is kept).
   std::vector<char> control = pocket_vertices(topo, generic.annotations);
-  const std::vector<char> in_region = vertex_mask(named->second, static_cast<int>(control.size()));
-  for (size_t v = 0; v < control.size(); ++v) control[v] = control[v] || !in_region[v];
+  if (!region.empty()) {
+    const std::vector<char> in_region = vertex_mask(named->second, static_cast<int>(control.size()));
+    for (size_t v = 0; v < control.size(); ++v) control[v] = control[v] || !in_region[v];
+  }
   skip = propagate_vertex_mask(fit.multires, control).back();
   return Status::success();
 }

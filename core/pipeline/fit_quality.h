@@ -62,8 +62,8 @@ int count_pairs_touching(const MultiresMesh& mesh, int level, const std::vector<
 void count_turned_and_degenerate(const TriMesh& m, const TriMesh& reference, int& flipped, int& degenerate);
 
 // The flags measure_fit_to_scan (below) skips on the finest level: every vertex
-// outside the named region (a new vertex when both its parents are) and
-// the pockets. InvalidInput as there.
+// outside the named region (a new vertex when both its parents are; an
+// empty name: none) and the pockets. InvalidInput as there.
 Status finest_region_skip(const FitHeadResult& fit, const GenericHead& generic, const std::string& region,
                           std::vector<char>& skip);
 
