@@ -127,18 +127,18 @@ int drop_isolated_points(double density_ratio, std::vector<Vec3>& points, std::v
 // and displaced levels cross around them. Two sheets that close in on each
 // other face each other, so moving both INTO their own side along their
 // normals opens the gap: each step moves the corners of the control faces
-// under the new pairs of the smooth level `untangle_level` (pairs the
-// aligned generic head's smooth level does not have) by untangle_erode_pct
+// under the new pairs of the smooth level K (untangle_level, on face
+// captures face_untangle_level; pairs the aligned generic head's smooth
+// level does not have) by untangle_erode_pct
 // of the diagonal against their vertex normals. The state with the fewest
 // pairs that turns no more control triangles against the template than the
 // start did is kept, so a step that does not help changes nothing (a fold
 // within one sheet, as at Fran's lips and eye rims, is not opened this
 // way). The displacements measured afterwards put the detail back.
 Status untangle_smooth_surface(const std::vector<Vec3>& reference, const ButterflyCreases& creases,
-                               double diagonal, const FitHeadOptions& options, TriMesh& control, int& pairs_before,
-                               int& pairs_after) {
+                               double diagonal, const FitHeadOptions& options, int K, TriMesh& control,
+                               int& pairs_before, int& pairs_after) {
   pairs_before = pairs_after = 0;
-  const int K = options.untangle_level;
   if (K <= 0 || options.untangle_iterations <= 0 || !(options.untangle_erode_pct > 0)) return Status::success();
   MultiresMesh mr;
   Status st = build_multires(control, creases, K, mr);
@@ -509,7 +509,8 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
 
   // 4. Displaced Butterfly levels.
   if (observer.started) observer.started("subdivision");
-  st = untangle_smooth_surface(out.aligned.positions, creases, diag, options, out.control,
+  st = untangle_smooth_surface(out.aligned.positions, creases, diag, options,
+                               out.face_only ? options.face_untangle_level : options.untangle_level, out.control,
                                out.smooth_crossings_before, out.smooth_crossings_after);
   if (!st) return with_context(st, "subdivision (untangling)");
   st = build_multires(out.control, creases, options.levels, out.multires);

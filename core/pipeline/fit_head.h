@@ -143,8 +143,16 @@ struct FitHeadOptions {
   // untangle_erode_pct of the diagonal into the head along their normals,
   // up to untangle_iterations times (and not after two steps without
   // fewer pairs); the state with the fewest such pairs is kept (fit_head.cpp).
-  // untangle_level 0: off.
+  // untangle_level 0: off. Face captures (face_untangle_level) are searched
+  // on level 3: on James's copies nudged by a hair (likeness bench --only
+  // fit-real) the smooth level 3 still crossed itself in 4-13 pairs after
+  // level 2 was untangled, and one copy kept 10 ear pairs at level 3; on
+  // level 3, 0-4 smooth and 0 displaced pairs on all five (with the fold
+  // limiter's last resort reaching two rings, fold_limit.h), Table 1 within
+  // 0.0005 %, +0.1-0.3 s. Whole heads stay on level 2: the dense synthetic
+  // seeds have no new level-3 pairs, and the search cost 70-110 ms per fit.
   int untangle_level = 2;
+  int face_untangle_level = 3;
   int untangle_iterations = 6;
   double untangle_erode_pct = 0.03;
   // After global fitting, the mouth bag (held where local fitting put it)

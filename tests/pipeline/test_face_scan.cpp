@@ -334,13 +334,20 @@ TEST_CASE("fit_head: the real James's ear folds are refined as creases") {
   INFO("smooth level-3 ear pairs: " << with << " with the fold creases, " << without << " without");
   CHECK(with == 0);
   CHECK(without >= 3);  // 4 measured (16 with the corner-45 head)
-  // Off: no creases handed over, the ears cross.
+  // Off, and the smooth surface untangled on level 2 only (as before
+  // face_untangle_level): no creases handed over, the ears cross.
   FitHeadOptions off = quick();
   off.global.smooth_guard_crease_max_edges = 0;
+  off.face_untangle_level = 2;
   FitHeadResult r_off;
   REQUIRE(fit_head(james, truth().generic, off, r_off).ok());
   CHECK(r_off.global_fit.fold_crease_edges.empty());
   CHECK(test::smooth_region_pairs(r_off.control, r_off.multires.creases, ann, 3, "ears") >= 3);
+  // Untangling level 3 (the default on face captures) opens them too.
+  off.face_untangle_level = 3;
+  REQUIRE(fit_head(james, truth().generic, off, r_off).ok());
+  CHECK(r_off.smooth_crossings_before > 0);
+  CHECK(test::smooth_region_pairs(r_off.control, r_off.multires.creases, ann, 3, "ears") == 0);
 }
 
 TEST_CASE("fit_head: the fold relief takes out folds of the real James's smooth level 3") {
