@@ -242,3 +242,51 @@ TEST_CASE("surface_to_cloud: the other direction on a point cloud, over its quad
   // Too few points: nothing measured, no crash.
   CHECK(surface_to_cloud(surface, {}, std::vector<Vec3>(5, Vec3::Zero())).vertices == 0);
 }
+
+TEST_CASE("surface_to_cloud: noise is not a fold, a fold stays one") {
+  // A 40 x 40 mm scan of a plane sampled every 0.5 mm with 0.2 mm of depth
+  // noise (a 16-point patch of radius ~1.1 mm: its flatness ratio is ~0.13
+  // on average and passes 0.2 only by chance), and a surface 0.25 mm above
+  // it, a vertex every mm. Every vertex away from the border is over one
+  // sheet and counts; tried with 16 points alone, a few percent went
+  // unmeasured at random (lone dots on the distance map).
+  SplitMix64 rng(11);
+  std::vector<Vec3> plane;
+  for (int i = 0; i <= 80; ++i)
+    for (int j = 0; j <= 80; ++j)
+      plane.push_back(Vec3(0.0005 * i, 0.0005 * j, 0.0002 * rng.gaussian()));
+  TriMesh grid = make_regular_grid(30, 30);  // 31 x 31 vertices, 1 mm apart, from 5 mm in
+  for (Vec3& p : grid.positions) p = Vec3(0.005 + 0.001 * p.x(), 0.005 + 0.001 * p.y(), 0.00025);
+  std::vector<double> per_vertex;
+  const CoveredDistances flat = surface_to_cloud(grid, {}, plane, 16, &per_vertex);
+  INFO(flat.vertices << " of " << grid.num_vertices() << " vertices, mean " << flat.mean << " max " << flat.max);
+  CHECK(flat.vertices == grid.num_vertices());
+  // The patches carry the noise too (a 16-point quadric's height varies by
+  // about 0.1 mm here): close to 0.25 mm on average, nowhere far off.
+  CHECK(flat.mean == Approx(0.00025).margin(6e-5));
+  CHECK(flat.max < 0.0007);
+
+  // A fold: the points on z = |x| (two sheets at 90 degrees), noise-free.
+  // A surface vertex over the crease has points of both sheets among its
+  // nearest at every patch size: never one sheet, never counted; those a
+  // few mm off the crease are.
+  std::vector<Vec3> fold;
+  for (int i = -40; i <= 40; ++i)
+    for (int j = 0; j <= 80; ++j) fold.push_back(Vec3(0.0005 * i, 0.0005 * j, std::abs(0.0005 * i)));
+  // The surface: two rows of vertices across the crease, 1 mm apart,
+  // 0.2 mm above the sheets.
+  TriMesh strip;
+  for (int row = 0; row < 2; ++row)
+    for (int i = -5; i <= 5; ++i)
+      strip.positions.push_back(Vec3(0.001 * i, 0.02 + 0.001 * row, std::abs(0.001 * i) + 0.0002));
+  for (int i = 0; i < 10; ++i) {
+    strip.triangles.push_back({i, i + 1, i + 12});
+    strip.triangles.push_back({i, i + 12, i + 11});
+  }
+  std::vector<double> fold_per_vertex;
+  surface_to_cloud(strip, {}, fold, 16, &fold_per_vertex);
+  INFO("x = -5 / 0 / 5 mm: " << fold_per_vertex[0] << " / " << fold_per_vertex[5] << " / " << fold_per_vertex[10]);
+  CHECK(fold_per_vertex[5] < 0);   // x = 0: on the crease
+  CHECK(fold_per_vertex[0] == Approx(0.0002 / std::sqrt(2.0)).margin(1e-5));  // x = -5 mm: one sheet
+  CHECK(fold_per_vertex[10] == Approx(0.0002 / std::sqrt(2.0)).margin(1e-5));
+}
