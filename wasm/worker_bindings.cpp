@@ -794,10 +794,24 @@ val fit_quality_job() {
 
 // The kept head as a file: level `level` (0 = control mesh) in the scan's
 // frame, as OBJ text or binary PLY. The current animation pose is exported.
+// format "map": the checks' distance map (fit_quality_job) as a binary PLY
+// with vertex colours, as likeness fit's face_to_scan.ply: the finest level
+// (whatever `level` says) at rest, the pose the distances were measured on.
 val export_head(int level, const std::string& format) {
   if (!g_session) return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "no fitted head to export"));
   FitSession& s = *g_session;
   lk::MultiresMesh& mr = s.fit.multires;
+  const bool map = format == "map";
+  if (map) {
+    if (!s.have_quality || !s.have_to_scan)
+      return error_result(lk::Status::error(lk::ErrorCode::InvalidInput,
+                                            "no distance map yet: it comes with the checks of the fitted head"));
+    level = mr.num_levels();
+    if (s.posed) {
+      if (lk::Status st = set_pose(s, 0.0, nullptr); !st.ok()) return error_result(st);
+      s.posed = false;
+    }
+  }
   if (level < 0 || level > mr.num_levels())
     return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "no level " + std::to_string(level)));
   const lk::Status current = lk::ensure_current(mr);  // an animation may have updated only coarser levels
@@ -806,7 +820,13 @@ val export_head(int level, const std::string& format) {
   m.positions = to_scan_frame(s, mr.state.displaced[level]);
   m.triangles = mr.triangles(level);
   val r = ok_result();
-  if (format == "obj") {
+  if (map) {
+    if (s.to_scan_colors.size() != m.positions.size())
+      return error_result(lk::Status::error(lk::ErrorCode::Internal, "the distance map does not match the finest level"));
+    m.colors = s.to_scan_colors;
+    const lk::Bytes bytes = lk::write_ply(m);
+    r.set("bytes", val::global("Uint8Array").new_(emscripten::typed_memory_view(bytes.size(), bytes.data())));
+  } else if (format == "obj") {
     const std::string text = lk::write_obj(m);
     r.set("bytes", val::global("Uint8Array").new_(emscripten::typed_memory_view(text.size(),
                                                    reinterpret_cast<const std::uint8_t*>(text.data()))));

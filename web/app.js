@@ -43,6 +43,7 @@
     qualityList: $('quality-list'),
     showComponents: $('show-components'),
     exportObj: $('btn-export-obj'), exportPly: $('btn-export-ply'), exportTextured: $('btn-export-textured'),
+    exportMap: $('btn-export-map'), distanceLegend: $('distance-legend'),
     photoList: $('photo-list'), photoCount: $('photo-count'), texture: $('btn-texture'), textureTotal: $('texture-total'),
     viewerPane: document.querySelector('.viewer-pane'), clicker: $('clicker'), clickerPrompt: $('clicker-prompt'),
     clickerCanvas: $('clicker-canvas'), clickerList: $('clicker-list'), clickerUndo: $('clicker-undo'),
@@ -105,6 +106,7 @@
     ui.showComponents.disabled = !haveFit;
     ui.texture.disabled = !haveFit || !app.photos.length;
     ui.exportTextured.disabled = !haveFit || !app.texture;
+    ui.exportMap.disabled = !haveFit || !distanceMap(true);
     for (const role of ui.photoList.querySelectorAll('select.photo-role')) role.disabled = !interactive || state === 'working';
   }
 
@@ -998,6 +1000,7 @@
       loadFailed(file, meta, 'not shown', file.name + ': ' + shown);
       return;
     }
+    ui.distanceLegend.hidden = true;  // a scan is shown, no map
     app.model = { name: file.name, kind: result.kind, vertexCount: result.vertexCount,
                   triangleCount: result.triangleCount, loadMs: ms, displayStride: stride };
     // A new scan: the old fit no longer belongs to what is shown.
@@ -1077,6 +1080,7 @@
 
   function markShown(row) {
     app.shownStage = row;
+    if (row !== 'subdivide') ui.distanceLegend.hidden = true;
     if (row !== 'subdivide') viewerLevel = null;
     for (const st of FIT_STAGES) stageItem(st.row).classList.toggle('shown', st.row === row);
   }
@@ -1087,6 +1091,7 @@
     stopAnimation(false);
     closeClicker();
     app.fit = null;
+    ui.distanceLegend.hidden = true;
     forgetTexture();
     if (app.viewer) app.viewer.clear_components();
     ui.fitView.hidden = true;
@@ -1292,6 +1297,7 @@
     fit.quality = q;
     showQuality(q);
     ui.showDistance.disabled = !distanceMap(true);
+    ui.exportMap.disabled = ui.exportObj.disabled || !distanceMap(true);
     if (ui.showDistance.checked && app.shownStage === 'subdivide') showStage('subdivide');
   }
 
@@ -1374,6 +1380,7 @@
       : app.viewer.show_mesh_keep_view(posed || mesh.positions, null, null, mesh.indices);
     if (err) { showError('Could not show the ' + row + ' mesh: ' + err); return; }
     viewerLevel = row === 'subdivide' ? shownLevel() : null;
+    ui.distanceLegend.hidden = !map;
     markShown(row);
     if (quiet) return;
     const what = row === 'subdivide' ? (ui.level.value === '0' ? 'control mesh' : 'level ' + ui.level.value)
@@ -1764,6 +1771,21 @@
     }
   }
 
+  // The checks' distance map: the finest level at rest with the colours of
+  // "Distance to scan" (as likeness fit's face_to_scan.ply).
+  async function exportMap() {
+    if (!app.fit || !distanceMap(true)) return;
+    const name = app.fit.name.replace(/\.[^.]*$/, '') + '_head_distance_map.ply';
+    try {
+      const r = await runJob({ type: 'export', level: app.fit.quality.level, format: 'map' }, []);
+      if (!r.ok) { showError('Export failed: ' + r.message); return; }
+      download(name, r.bytes, 'application/octet-stream');
+      setStatus('Exported ' + name + ' (level ' + app.fit.quality.level + ' at rest).');
+    } catch (e) {
+      showError('Export failed: ' + (e && e.message ? e.message : e));
+    }
+  }
+
   // ---- wiring -----------------------------------------------------------------
   function wire() {
     ui.maxSize.textContent = formatBytes(MAX_SCAN_BYTES);
@@ -1858,6 +1880,7 @@
     ui.exportObj.addEventListener('click', () => exportHead('obj'));
     ui.exportPly.addEventListener('click', () => exportHead('ply'));
     ui.exportTextured.addEventListener('click', exportTextured);
+    ui.exportMap.addEventListener('click', exportMap);
     ui.texture.addEventListener('click', runTexture);
     ui.clickerCanvas.addEventListener('click', clickerClick);
     ui.clickerUndo.addEventListener('click', clickerUndo);

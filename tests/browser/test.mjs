@@ -28,6 +28,7 @@
 //     synthetic scan reaches "done", every stage row shows mean/max % and ms,
 //     the canvas changes, stage rows and the level selector switch meshes,
 //     OBJ/PLY exports download files with the level's vertex count, the
+//     distance map's PLY colours exactly the vertices the checks measured, the
 //     animation advances frames and moves pixels, a flat plane is refused as
 //     NotAHead with the previous model kept and the page still working; the
 //     same folder served WITHOUT the isolation headers starts the
@@ -1115,6 +1116,7 @@ async function main() {
           await page.check('#show-distance');  // turns the scan points off: they would hide the colours
           await page.evaluate(() => document.activeElement.blur());
           const pointsOff = await page.evaluate(() => !document.getElementById('show-points').checked);
+          const legendOn = await page.evaluate(() => !document.getElementById('distance-legend').hidden);
           const mapped = await canvasImage(page);
           const mapStatus = await page.evaluate(() => document.getElementById('status').textContent);
           // Blue-grey (unmeasured: the scalp, the neck) is a colour the skin never has.
@@ -1125,16 +1127,19 @@ async function main() {
             return n;
           };
           const before = blueGrey(plain), after = blueGrey(mapped);
-          check('the checks turn on "Distance to scan": level 3 drawn in its distance colours, blue-grey where not measured',
-                enabled && pointsOff && /coloured by its distance to the scan/.test(mapStatus) && after > 5000 && after > 20 * (before + 1),
-                `enabled ${enabled}, scan points turned off ${pointsOff}; blue-grey pixels ${before} -> ${after}; status: ${mapStatus}`);
+          check('the checks turn on "Distance to scan": level 3 drawn in its distance colours, blue-grey where not measured, with its colour key',
+                enabled && pointsOff && legendOn && /coloured by its distance to the scan/.test(mapStatus) && after > 5000 && after > 20 * (before + 1),
+                `enabled ${enabled}, scan points turned off ${pointsOff}, key shown ${legendOn}; blue-grey pixels ${before} -> ${after}; status: ${mapStatus}`);
           if (SHOT_DIR) await page.screenshot({ path: path.join(SHOT_DIR, 'web_distance_map.png') });
           await page.selectOption('#level', '2');
           const level2Status = await page.evaluate(() => document.getElementById('status').textContent);
-          check('on another level the page says the distance map is of the finest',
-                /the distance map is of level 3/.test(level2Status), level2Status);
+          const legendOnLevel2 = await page.evaluate(() => !document.getElementById('distance-legend').hidden);
+          check('on another level the page says the distance map is of the finest (and hides the colour key)',
+                /the distance map is of level 3/.test(level2Status) && !legendOnLevel2, `${level2Status}; key shown ${legendOnLevel2}`);
           await page.selectOption('#level', '3');
           await page.uncheck('#show-distance');
+          const legendAfter = await page.evaluate(() => !document.getElementById('distance-legend').hidden);
+          check('turning "Distance to scan" off hides the colour key', !legendAfter, `key shown ${legendAfter}`);
           await page.check('#show-points');
           await page.evaluate(() => document.activeElement.blur());
         }
@@ -1330,6 +1335,31 @@ async function main() {
               `files [${Object.keys(files)}], ${vCount(obj)} and ${vCount(ctl)} vertices`);
         check('"Head (PLY)" downloads a PLY of level 3', !!ply && ply.toString('latin1', 0, 3) === 'ply' &&
               new RegExp('element vertex ' + fit.levels[2] + '\\b').test(ply.toString('latin1', 0, 400)), ply ? `${ply.length} bytes` : 'missing');
+        // "Distance map (PLY)": level 3 with the map's colours; the vertices
+        // not drawn blue-grey are exactly those the checks measured.
+        {
+          const measured = await page.evaluate(() => window.likeness.fit.quality.faceToScan.vertices);
+          await page.click('#btn-export-map');
+          await page.waitForFunction(() => window.likeness.downloads.length >= 4, null, { timeout: JOB_TIMEOUT_MS });
+          await new Promise((r) => setTimeout(r, 500));
+          const mapFile = downloads.find((d) => d.suggestedFilename() === 'synthetic_head_head_distance_map.ply');
+          const map = mapFile ? fs.readFileSync(await mapFile.path()) : null;
+          let detail = 'missing', ok = false;
+          if (map) {
+            const head = map.toString('latin1', 0, 600);
+            const end = head.indexOf('end_header\n') + 11;
+            const stride = 15;  // float x y z, uchar r g b
+            let notGrey = 0;
+            for (let k = 0; k < fit.levels[2]; ++k) {
+              const o = end + k * stride + 12;
+              if (!(map[o + 2] > map[o] + 30)) notGrey++;
+            }
+            ok = new RegExp('element vertex ' + fit.levels[2] + '\\b').test(head) && /property float x/.test(head) &&
+                 /property uchar red/.test(head) && end > 11 && notGrey === measured && measured > 1000;
+            detail = `${map.length} bytes; ${notGrey} coloured vertices, ${measured} measured by the checks`;
+          }
+          check('"Distance map (PLY)" downloads level 3 coloured by distance, measured vertices exactly', ok, detail);
+        }
         // Animation: frames advance and the head moves.
         const rest = await canvasImage(page);
         await page.check('#animate');
