@@ -8,6 +8,7 @@
 #include "fit/data_surface.h"
 #include "fit/point_patch.h"
 #include "mesh/geometry.h"
+#include "raycast/bvh.h"
 #include "raycast/self_intersection.h"
 
 #include <Eigen/Eigenvalues>
@@ -391,6 +392,7 @@ struct BackPlanes {
   SpMat hessian;               // of weight/#V sum (n . x_v - offset)^2
   VecX gradient;
   double weight = 0;           // back_weight / #V
+  int rays = 0;                // of `vertex`, planes found by a normal ray
 
   double energy(const VecX& x) const {
     double e = 0;
@@ -402,7 +404,8 @@ struct BackPlanes {
   }
 
   void find(const CloudTree& tree, const std::vector<Vec3>& points, const VecX& x, const TriMesh& mesh,
-            const std::vector<char>& ignored, const GlobalFitOptions& o, double edge, int nv, double inv_v) {
+            const std::vector<char>& ignored, const GlobalFitOptions& o, double edge, int nv, double inv_v,
+            const TriMesh* surface = nullptr, const MeshBvh* surface_bvh = nullptr) {
     vertex.clear();
     normal.clear();
     offset.clear();
@@ -433,6 +436,37 @@ struct BackPlanes {
       fn[v] = patch.normal;
       fo[v] = patch.normal.dot(patch.foot);
     });
+    rays = 0;
+    if (surface_bvh) {
+      // Normal rays (header comment): vertices without a patch, off the
+      // scan's triangles by more than back_ray_min_edges.
+      const double reach = o.back_ray_edges * edge, min_off = o.back_ray_min_edges * edge;
+      std::vector<char> by_ray(nv, 0);
+      parallel_for(0, nv, 16, [&](int v, int) {
+        if (found[v] || (!ignored.empty() && ignored[v]) || !(vn[v].squaredNorm() > 0)) return;
+        const ClosestPoint cp = closest_point(*surface_bvh, pos[v]);
+        if (!cp.found() || cp.distance <= min_off) return;
+        double best_t = reach;
+        for (int sign : {1, -1}) {
+          Ray ray;
+          ray.origin = pos[v];
+          ray.direction = sign * vn[v];
+          ray.t_max = best_t;
+          const RayHit h = intersect_first(*surface_bvh, ray);
+          if (!h.hit()) continue;
+          const Tri& t = surface->triangles[h.triangle];
+          const Vec3& a = surface->positions[t[0]];
+          const Vec3 tn = (surface->positions[t[1]] - a).cross(surface->positions[t[2]] - a).normalized();
+          if (!(std::abs(tn.dot(vn[v])) >= 0.5)) continue;  // sign-free: scans need not be oriented
+          best_t = h.t;
+          by_ray[v] = 1;
+          fn[v] = tn;
+          fo[v] = tn.dot(pos[v] + h.t * ray.direction);
+        }
+      });
+      for (int v = 0; v < nv; ++v)
+        if (by_ray[v]) found[v] = 1, ++rays;
+    }
     for (int v = 0; v < nv; ++v)
       if (found[v]) vertex.push_back(v), normal.push_back(fn[v]), offset.push_back(fo[v]);
     std::vector<Triplet> trip;
@@ -489,6 +523,16 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
     return Status::error(ErrorCode::InvalidInput,
                          "global fit: back_weight must be >= 0 and finite, back_neighbours >= 6, the back_ "
                          "distances and flatness positive, back_min_cos in [0, 1]");
+  if (!(options.back_ray_edges >= 0) || !std::isfinite(options.back_ray_edges) ||
+      !(options.back_ray_min_edges >= 0) || !std::isfinite(options.back_ray_min_edges) ||
+      options.back_ray_first_round < 0)
+    return Status::error(ErrorCode::InvalidInput,
+                         "global fit: back_ray_edges and back_ray_min_edges must be finite and >= 0, "
+                         "back_ray_first_round >= 0");
+  for (const Tri& t : terms.back_surface.triangles)
+    for (int i : t)
+      if (i < 0 || i >= terms.back_surface.num_vertices())
+        return Status::error(ErrorCode::InvalidInput, "global fit: a back_surface triangle indexes no vertex");
   if (!terms.back_ignored.empty() && static_cast<int>(terms.back_ignored.size()) != nv)
     return Status::error(ErrorCode::InvalidInput, "global fit: back_ignored has " +
                                                       std::to_string(terms.back_ignored.size()) +
@@ -625,9 +669,14 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
   std::unique_ptr<CloudAdaptor> back_adaptor;
   std::unique_ptr<CloudTree> back_tree;
   BackPlanes back;
+  MeshBvh back_bvh;
   if (options.back_weight > 0) {
     back_adaptor = std::make_unique<CloudAdaptor>(CloudAdaptor{points});
     back_tree = std::make_unique<CloudTree>(3, *back_adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+    if (options.back_ray_edges > 0 && !terms.back_surface.triangles.empty()) {
+      const Status bs = build_bvh(terms.back_surface, back_bvh);
+      if (!bs) return bs;
+    }
   }
 
   auto energy_parts = [&](const VecX& xx, double dist, double lambda, GlobalFitIteration& it) {
@@ -684,7 +733,10 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
     // The guard starts afresh each round: anchors a stiff round needed
     // would hold vertices off the data in the relaxed rounds.
     if (guarding) guard.reset(nv, inv_v);
-    if (back_tree) back.find(*back_tree, points, x, mesh, terms.back_ignored, options, edge, nv, inv_v);
+    if (back_tree)
+      back.find(*back_tree, points, x, mesh, terms.back_ignored, options, edge, nv, inv_v,
+                &terms.back_surface, back_bvh.empty() || r < options.back_ray_first_round ? nullptr : &back_bvh);
+    if (back_tree) result.back_ray_planes += back.rays;
     GlobalFitIteration scratch;
     double e_old = energy_parts(x, proj.dist_energy, lambda, scratch);
 

@@ -494,6 +494,16 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   const bool back_term = options.back_term == FitHeadOptions::BackTerm::Always ||
                          (options.back_term == FitHeadOptions::BackTerm::FaceOnlyScans && out.face_only);
   global_options.back_weight = back_term ? options.back_weight : 0.0;
+  if (back_term && !scan.faces.empty() && global_options.back_ray_edges > 0) {
+    // E_back's normal rays (global_fit.h) reach the scan's triangles over
+    // fitted skin only: not below the neck cut (the collar), not pockets,
+    // not isolated points.
+    std::vector<char> skin(cloud.positions.size(), 0);
+    for (int i : skin_index) skin[i] = 1;
+    terms.back_surface.positions = cloud.positions;
+    for (const Tri& t : scan.faces)
+      if (skin[t[0]] && skin[t[1]] && skin[t[2]]) terms.back_surface.triangles.push_back(t);
+  }
   st = fit_global(skin_pts, out.local, topo, terms, global_options, out.control, out.global_fit, progress);
   if (!st) return with_context(st, "global fitting");
   if (options.carry_mouth_bag) {

@@ -6,6 +6,7 @@
 #include "io/io.h"
 #include "mesh/geometry.h"
 #include "pipeline/fit_head.h"
+#include "raycast/bvh.h"
 #include "smooth_pairs.h"
 #include "test_data.h"
 #include "test_scan.h"
@@ -386,4 +387,40 @@ TEST_CASE("fit_head: the fold relief takes out folds of the real James's smooth 
   const int rest_off = test::smooth_region_pairs(r_off.control, r_off.multires.creases, ann, 3, "face");
   INFO("smooth level-3 pairs touching the face: " << rest_on << " with the relief, " << rest_off << " without");
   CHECK(rest_on < rest_off);
+}
+
+TEST_CASE("fit_head: the real James's columella base comes out of his nose (E_back's normal ray)") {
+  // His columella drops 13 mm over 17 mm where the generic nose's underside
+  // is level: the generic columella base stayed 8.5 mm up inside his nose,
+  // where no point is nearest to it and its 16 nearest points hold a fold
+  // (columella, nostril floor, lip), so E_back's patch gave it no plane.
+  // Its normal line meets his subnasale 10 mm down (global_fit.h).
+  LK_REQUIRE_SHARED("head_scans/james_menpo3d/james.obj");
+  PointCloud james;
+  REQUIRE(load_point_cloud_file(lk::test::shared_data_dir() + "/head_scans/james_menpo3d/james.obj", james).ok());
+  const GenericHead& generic = truth().generic;
+  auto nose_off_scan = [&](double reach, int& rays) {
+    FitHeadOptions o = quick();
+    o.global.back_ray_edges = reach;
+    FitHeadResult r;
+    REQUIRE(fit_head(james, generic, o, r).ok());
+    rays = r.global_fit.back_ray_planes;
+    TriMesh scan;
+    scan.triangles = james.faces;
+    for (const Vec3& p : james.positions) scan.positions.push_back(r.scan_to_head.apply(p));
+    MeshBvh bvh;
+    REQUIRE(build_bvh(scan, bvh).ok());
+    double worst = 0;
+    for (int v : generic.annotations.regions.at("nose"))
+      worst = std::max(worst, closest_point(bvh, r.control.positions[v]).distance);
+    return worst;
+  };
+  int rays_off = 0, rays_on = 0;
+  const double off = nose_off_scan(0.0, rays_off), on = nose_off_scan(1.0, rays_on);
+  INFO("the nose's control vertex farthest from his triangles: " << 1e3 * off << " mm without rays, " << 1e3 * on
+                                                                  << " mm with (" << rays_on << " ray planes)");
+  CHECK(rays_off == 0);
+  CHECK(rays_on >= 1);
+  CHECK(off > 0.006);  // 8.5 mm measured
+  CHECK(on < 0.003);   // 1.5 mm measured
 }
