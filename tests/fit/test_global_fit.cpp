@@ -291,6 +291,26 @@ TEST_CASE("global fit: sheets pulled through each other do not cross with the gu
   CHECK(b_mean < 0.25 * b_mean_start);
 }
 
+// A smooth ellipsoid, finely meshed (the scanned surface), and its coarse
+// mesh with the front vertex (largest z) moved by dz along z: the template
+// of the E_back tests.
+struct MovedFront {
+  TriMesh truth, mesh;
+  int tip = 0;
+  Vec3 front = Vec3::Zero();  // the tip's place on the surface
+};
+MovedFront ellipsoid_with_front_moved(double dz) {
+  const Vec3 radii(0.08, 0.11, 0.10);
+  MovedFront m;
+  m.truth = test::bumpy_ellipsoid(test::icosphere(6), radii, Vec3(0, 0, 1), 0.0, 0.2);
+  m.mesh = test::bumpy_ellipsoid(test::icosphere(3), radii, Vec3(0, 0, 1), 0.0, 0.2);
+  for (int v = 0; v < m.mesh.num_vertices(); ++v)
+    if (m.mesh.positions[v].z() > m.mesh.positions[m.tip].z()) m.tip = v;
+  m.front = m.mesh.positions[m.tip];
+  m.mesh.positions[m.tip] += Vec3(0, 0, dz);
+  return m;
+}
+
 // jeong2002's E_dist runs from the scan points to the surface: a control
 // vertex that sticks out where no point is nearest to it costs nothing but
 // its smoothness, and with the rest shape preserved (L0 of the template) a
@@ -301,14 +321,10 @@ TEST_CASE("global fit: E_back takes a spike the scan does not have down to the s
   // A smooth ellipsoid (finely meshed) is the scanned surface; the control
   // mesh is the same ellipsoid's coarse mesh, its vertices on the surface,
   // with one vertex pushed 8 mm out in the template (a spike).
-  const Vec3 radii(0.08, 0.11, 0.10);
-  const TriMesh truth = test::bumpy_ellipsoid(test::icosphere(6), radii, Vec3(0, 0, 1), 0.0, 0.2);
-  const TriMesh coarse = test::bumpy_ellipsoid(test::icosphere(3), radii, Vec3(0, 0, 1), 0.0, 0.2);
-  TriMesh spiked = coarse;
-  int tip = 0;
-  for (int v = 0; v < spiked.num_vertices(); ++v)
-    if (spiked.positions[v].z() > spiked.positions[tip].z()) tip = v;
-  spiked.positions[tip] += Vec3(0, 0, 0.008);
+  const MovedFront moved = ellipsoid_with_front_moved(0.008);
+  const TriMesh& truth = moved.truth;
+  const TriMesh& spiked = moved.mesh;
+  const int tip = moved.tip;
   MeshTopology topo;
   REQUIRE(build_topology(spiked, topo).ok());
   // Sparse: about a dozen points per control vertex.
@@ -355,15 +371,11 @@ TEST_CASE("global fit: E_back's normal ray takes a pit the points cannot see up 
   // its points sampled everywhere but within 14 mm of the front (a sparse
   // spot the scan's triangles bridge, as under a nose). The control mesh:
   // the coarse ellipsoid with its front vertex pushed 8 mm in (a pit).
-  const Vec3 radii(0.08, 0.11, 0.10);
-  const TriMesh truth = test::bumpy_ellipsoid(test::icosphere(6), radii, Vec3(0, 0, 1), 0.0, 0.2);
-  const TriMesh coarse = test::bumpy_ellipsoid(test::icosphere(3), radii, Vec3(0, 0, 1), 0.0, 0.2);
-  TriMesh pitted = coarse;
-  int tip = 0;
-  for (int v = 0; v < pitted.num_vertices(); ++v)
-    if (pitted.positions[v].z() > pitted.positions[tip].z()) tip = v;
-  const Vec3 front = pitted.positions[tip];
-  pitted.positions[tip] -= Vec3(0, 0, 0.008);
+  const MovedFront moved = ellipsoid_with_front_moved(-0.008);
+  const TriMesh& truth = moved.truth;
+  const TriMesh& pitted = moved.mesh;
+  const int tip = moved.tip;
+  const Vec3& front = moved.front;
   MeshTopology topo;
   REQUIRE(build_topology(pitted, topo).ok());
   std::vector<Vec3> pts;
