@@ -405,7 +405,7 @@ struct BackPlanes {
 
   void find(const CloudTree& tree, const std::vector<Vec3>& points, const VecX& x, const TriMesh& mesh,
             const std::vector<char>& ignored, const GlobalFitOptions& o, double edge, int nv, double inv_v,
-            const TriMesh* surface = nullptr, const MeshBvh* surface_bvh = nullptr) {
+            bool cast_rays, const TriMesh* surface = nullptr, const MeshBvh* surface_bvh = nullptr) {
     vertex.clear();
     normal.clear();
     offset.clear();
@@ -437,7 +437,38 @@ struct BackPlanes {
       fo[v] = patch.normal.dot(patch.foot);
     });
     rays = 0;
-    if (surface_bvh) {
+    if (cast_rays && !surface_bvh) {
+      // A point cloud: the line is marched in steps of back_ray_step_edges;
+      // it meets the scan at the first step with a point within one step,
+      // and the plane there is that of the point's back_ray_neighbours
+      // nearest.
+      const double reach = o.back_ray_edges * edge, min_off = o.back_ray_min_edges * edge;
+      const double step = o.back_ray_step_edges * edge;
+      std::vector<char> by_ray(nv, 0);
+      parallel_for(0, nv, 16, [&](int v, int) {
+        if (found[v] || (!ignored.empty() && ignored[v]) || !(vn[v].squaredNorm() > 0)) return;
+        size_t nearest = 0;
+        double d2 = 0;
+        if (tree.knnSearch(pos[v].data(), 1, &nearest, &d2) < 1 || std::sqrt(d2) <= min_off) return;
+        double best_t = reach;
+        for (int sign : {1, -1})
+          for (double t = step; t < best_t; t += step) {
+            const Vec3 at = pos[v] + sign * t * vn[v];
+            if (tree.knnSearch(at.data(), 1, &nearest, &d2) < 1 || d2 > step * step) continue;
+            PointPatch patch;
+            if (!fit_patch_plane(tree, points, points[nearest], o.back_ray_neighbours, patch)) break;
+            if (!(std::abs(patch.plane_normal.dot(vn[v])) >= 0.5)) break;
+            best_t = t;
+            by_ray[v] = 1;
+            fn[v] = patch.plane_normal;
+            fo[v] = patch.plane_normal.dot(points[nearest]);
+            break;
+          }
+      });
+      for (int v = 0; v < nv; ++v)
+        if (by_ray[v]) found[v] = 1, ++rays;
+    }
+    if (cast_rays && surface_bvh) {
       // Normal rays (header comment): vertices without a patch, off the
       // scan's triangles by more than back_ray_min_edges.
       const double reach = o.back_ray_edges * edge, min_off = o.back_ray_min_edges * edge;
@@ -525,10 +556,11 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
                          "distances and flatness positive, back_min_cos in [0, 1]");
   if (!(options.back_ray_edges >= 0) || !std::isfinite(options.back_ray_edges) ||
       !(options.back_ray_min_edges >= 0) || !std::isfinite(options.back_ray_min_edges) ||
-      options.back_ray_first_round < 0)
+      options.back_ray_first_round < 0 || !(options.back_ray_step_edges > 0) ||
+      !std::isfinite(options.back_ray_step_edges) || options.back_ray_neighbours < 3)
     return Status::error(ErrorCode::InvalidInput,
                          "global fit: back_ray_edges and back_ray_min_edges must be finite and >= 0, "
-                         "back_ray_first_round >= 0");
+                         "back_ray_first_round >= 0, back_ray_step_edges positive, back_ray_neighbours >= 3");
   for (const Tri& t : terms.back_surface.triangles)
     for (int i : t)
       if (i < 0 || i >= terms.back_surface.num_vertices())
@@ -735,7 +767,8 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
     if (guarding) guard.reset(nv, inv_v);
     if (back_tree)
       back.find(*back_tree, points, x, mesh, terms.back_ignored, options, edge, nv, inv_v,
-                &terms.back_surface, back_bvh.empty() || r < options.back_ray_first_round ? nullptr : &back_bvh);
+                options.back_ray_edges > 0 && r >= options.back_ray_first_round,
+                &terms.back_surface, back_bvh.empty() ? nullptr : &back_bvh);
     if (back_tree) result.back_ray_planes += back.rays;
     GlobalFitIteration scratch;
     double e_old = energy_parts(x, proj.dist_energy, lambda, scratch);

@@ -184,10 +184,11 @@ struct FitHeadOptions {
   // -> 0.127-0.130 mm (Fran); Table 1 0.0334-0.0348 -> 0.0326-0.0337 %
   // and 0.0395-0.0401 -> 0.0367-0.0375 %. Not on whole-head scans: dense
   // synthetic ones gained nothing (seeds 1-5: surface to truth 0.31 ->
-  // 0.32 mm, +0.15 s). docs/fit_real.md, "The scan-to-mesh term". On a
-  // scan that comes as a mesh its triangles over fitted skin serve the
-  // term's normal rays (GlobalFitOptions::back_ray_*): James's columella
-  // base came out of his nose (docs/fit_real.md, "James's columella base").
+  // 0.32 mm, +0.15 s). docs/fit_real.md, "The scan-to-mesh term". Its
+  // normal rays (GlobalFitOptions::back_ray_*) meet a mesh scan's
+  // triangles over fitted skin, or a point cloud's points: James's
+  // columella base came out of his nose (docs/fit_real.md, "James's
+  // columella base").
   enum class BackTerm { Off, FaceOnlyScans, Always };
   BackTerm back_term = BackTerm::FaceOnlyScans;
   double back_weight = 1.0;

@@ -408,6 +408,33 @@ TEST_CASE("global fit: E_back's normal ray takes a pit the points cannot see up 
   CHECK(off == Approx(without).margin(1e-9));
   CHECK(rays.back_ray_planes >= 1);
   CHECK(with < 0.25 * without);
+  // A point cloud has no triangles: its line is marched until it meets a
+  // point. With a few points left where the line meets the surface (within
+  // 2.5 mm of the front), they place the pit; without rays they pull only
+  // the faces they are nearest to.
+  std::vector<Vec3> with_spot = pts;
+  for (const Vec3& p : test::sample_surface(truth, 100000, 0.0002, 13))
+    if ((p - front).norm() <= 0.0025) with_spot.push_back(p);
+  REQUIRE(with_spot.size() > pts.size() + 8);
+  auto fit_points = [&](double reach, GlobalFitResult& r, TriMesh& out) {
+    GlobalFitOptions o;
+    o.back_weight = 1.0;
+    o.back_ray_edges = reach;
+    GlobalFitTerms terms;
+    terms.fold_reference = pitted.positions;
+    REQUIRE(fit_global(with_spot, pitted, topo, terms, o, out, r).ok());
+    check_monotonic(r);
+  };
+  GlobalFitResult spot_off, spot_on;
+  TriMesh fit_spot_off, fit_spot_on;
+  fit_points(0.0, spot_off, fit_spot_off);
+  fit_points(1.0, spot_on, fit_spot_on);
+  const double spot_without = off_surface(fit_spot_off, tip), spot_with = off_surface(fit_spot_on, tip);
+  INFO("with a spot of points at the front: " << spot_without * 1e3 << " mm without rays, " << spot_with * 1e3
+                                              << " mm with (" << spot_on.back_ray_planes << " ray planes)");
+  CHECK(spot_off.back_ray_planes == 0);
+  CHECK(spot_on.back_ray_planes >= 1);
+  CHECK(spot_with < 0.5 * spot_without);
   // Bad options are refused.
   GlobalFitOptions bad;
   bad.back_weight = 1.0;
