@@ -383,21 +383,21 @@ TEST_CASE("global fit: E_back's normal ray takes a pit the points cannot see up 
     if ((p - front).norm() > 0.014) pts.push_back(p);
   const ClosestPointTree truth_tree(truth);
   auto off_surface = [&](const TriMesh& m, int v) { return std::sqrt(truth_tree.closest(m.positions[v]).squared_distance); };
-  auto fit = [&](bool triangles, double reach, GlobalFitResult& r, TriMesh& out) {
+  auto fit = [&](const std::vector<Vec3>& points, bool triangles, double reach, GlobalFitResult& r, TriMesh& out) {
     GlobalFitOptions o;
     o.back_weight = 1.0;
     o.back_ray_edges = reach;
     GlobalFitTerms terms;
     terms.fold_reference = pitted.positions;  // the template as aligned: it has the pit
     if (triangles) terms.back_surface = truth;
-    REQUIRE(fit_global(pts, pitted, topo, terms, o, out, r).ok());
+    REQUIRE(fit_global(points, pitted, topo, terms, o, out, r).ok());
     check_monotonic(r);
   };
   GlobalFitResult points_only, rays_off, rays;
   TriMesh fit_points_only, fit_rays_off, fit_rays;
-  fit(false, 1.0, points_only, fit_points_only);
-  fit(true, 0.0, rays_off, fit_rays_off);
-  fit(true, 1.0, rays, fit_rays);
+  fit(pts, false, 1.0, points_only, fit_points_only);
+  fit(pts, true, 0.0, rays_off, fit_rays_off);
+  fit(pts, true, 1.0, rays, fit_rays);
   const double without = off_surface(fit_points_only, tip), off = off_surface(fit_rays_off, tip),
                with = off_surface(fit_rays, tip);
   INFO("pit off the surface: points only " << without * 1e3 << " mm, rays off " << off * 1e3 << " mm, with rays "
@@ -416,19 +416,10 @@ TEST_CASE("global fit: E_back's normal ray takes a pit the points cannot see up 
   for (const Vec3& p : test::sample_surface(truth, 100000, 0.0002, 13))
     if ((p - front).norm() <= 0.0025) with_spot.push_back(p);
   REQUIRE(with_spot.size() > pts.size() + 8);
-  auto fit_points = [&](double reach, GlobalFitResult& r, TriMesh& out) {
-    GlobalFitOptions o;
-    o.back_weight = 1.0;
-    o.back_ray_edges = reach;
-    GlobalFitTerms terms;
-    terms.fold_reference = pitted.positions;
-    REQUIRE(fit_global(with_spot, pitted, topo, terms, o, out, r).ok());
-    check_monotonic(r);
-  };
   GlobalFitResult spot_off, spot_on;
   TriMesh fit_spot_off, fit_spot_on;
-  fit_points(0.0, spot_off, fit_spot_off);
-  fit_points(1.0, spot_on, fit_spot_on);
+  fit(with_spot, false, 0.0, spot_off, fit_spot_off);
+  fit(with_spot, false, 1.0, spot_on, fit_spot_on);
   const double spot_without = off_surface(fit_spot_off, tip), spot_with = off_surface(fit_spot_on, tip);
   INFO("with a spot of points at the front: " << spot_without * 1e3 << " mm without rays, " << spot_with * 1e3
                                               << " mm with (" << spot_on.back_ray_planes << " ray planes)");
