@@ -437,62 +437,70 @@ struct BackPlanes {
       fo[v] = patch.normal.dot(patch.foot);
     });
     rays = 0;
-    if (cast_rays && !surface_bvh) {
-      // A point cloud: the line is marched in steps of back_ray_step_edges;
-      // it meets the scan at the first step with a point within one step,
-      // and the plane there is that of the point's back_ray_neighbours
-      // nearest.
+    if (cast_rays) {
+      // Normal rays (header comment): vertices without a patch, off the
+      // scan by more than back_ray_min_edges, take the scan's plane where
+      // their normal line meets it first (either way, within reach).
       const double reach = o.back_ray_edges * edge, min_off = o.back_ray_min_edges * edge;
       const double step = o.back_ray_step_edges * edge;
-      std::vector<char> by_ray(nv, 0);
-      parallel_for(0, nv, 16, [&](int v, int) {
-        if (found[v] || (!ignored.empty() && ignored[v]) || !(vn[v].squaredNorm() > 0)) return;
+      // The scan's distance from p: to its triangles, or its nearest point.
+      auto off_scan = [&](const Vec3& p) {
+        if (surface_bvh) {
+          const ClosestPoint cp = closest_point(*surface_bvh, p);
+          return cp.found() ? cp.distance : -1.0;
+        }
         size_t nearest = 0;
         double d2 = 0;
-        if (tree.knnSearch(pos[v].data(), 1, &nearest, &d2) < 1 || std::sqrt(d2) <= min_off) return;
-        double best_t = reach;
-        for (int sign : {1, -1})
-          for (double t = step; t < best_t; t += step) {
-            const Vec3 at = pos[v] + sign * t * vn[v];
-            if (tree.knnSearch(at.data(), 1, &nearest, &d2) < 1 || d2 > step * step) continue;
-            PointPatch patch;
-            if (!fit_patch_plane(tree, points, points[nearest], o.back_ray_neighbours, patch)) break;
-            if (!(std::abs(patch.plane_normal.dot(vn[v])) >= 0.5)) break;
-            best_t = t;
-            by_ray[v] = 1;
-            fn[v] = patch.plane_normal;
-            fo[v] = patch.plane_normal.dot(points[nearest]);
-            break;
-          }
-      });
-      for (int v = 0; v < nv; ++v)
-        if (by_ray[v]) found[v] = 1, ++rays;
-    }
-    if (cast_rays && surface_bvh) {
-      // Normal rays (header comment): vertices without a patch, off the
-      // scan's triangles by more than back_ray_min_edges.
-      const double reach = o.back_ray_edges * edge, min_off = o.back_ray_min_edges * edge;
+        return tree.knnSearch(p.data(), 1, &nearest, &d2) < 1 ? -1.0 : std::sqrt(d2);
+      };
+      // Where the line from `from` along `dir` meets the scan before t_max,
+      // with the scan's unit normal and a point of its plane there. A mesh:
+      // the first triangle hit. A point cloud: the line is marched in steps
+      // of back_ray_step_edges to the first with a point within one step;
+      // the plane is that of the point's back_ray_neighbours nearest.
+      auto meet = [&](const Vec3& from, const Vec3& dir, double t_max, double& t, Vec3& n, Vec3& at) {
+        if (surface_bvh) {
+          Ray ray;
+          ray.origin = from;
+          ray.direction = dir;
+          ray.t_max = t_max;
+          const RayHit h = intersect_first(*surface_bvh, ray);
+          if (!h.hit()) return false;
+          const Tri& tri = surface->triangles[h.triangle];
+          const Vec3& a = surface->positions[tri[0]];
+          n = (surface->positions[tri[1]] - a).cross(surface->positions[tri[2]] - a).normalized();
+          t = h.t;
+          at = from + h.t * dir;
+          return true;
+        }
+        for (double s = step; s < t_max; s += step) {
+          const Vec3 probe = from + s * dir;
+          size_t nearest = 0;
+          double d2 = 0;
+          if (tree.knnSearch(probe.data(), 1, &nearest, &d2) < 1 || d2 > step * step) continue;
+          PointPatch patch;
+          if (!fit_patch_plane(tree, points, points[nearest], o.back_ray_neighbours, patch)) return false;
+          n = patch.plane_normal;
+          t = s;
+          at = points[nearest];
+          return true;
+        }
+        return false;
+      };
       std::vector<char> by_ray(nv, 0);
       parallel_for(0, nv, 16, [&](int v, int) {
         if (found[v] || (!ignored.empty() && ignored[v]) || !(vn[v].squaredNorm() > 0)) return;
-        const ClosestPoint cp = closest_point(*surface_bvh, pos[v]);
-        if (!cp.found() || cp.distance <= min_off) return;
+        if (!(off_scan(pos[v]) > min_off)) return;
         double best_t = reach;
         for (int sign : {1, -1}) {
-          Ray ray;
-          ray.origin = pos[v];
-          ray.direction = sign * vn[v];
-          ray.t_max = best_t;
-          const RayHit h = intersect_first(*surface_bvh, ray);
-          if (!h.hit()) continue;
-          const Tri& t = surface->triangles[h.triangle];
-          const Vec3& a = surface->positions[t[0]];
-          const Vec3 tn = (surface->positions[t[1]] - a).cross(surface->positions[t[2]] - a).normalized();
-          if (!(std::abs(tn.dot(vn[v])) >= 0.5)) continue;  // sign-free: scans need not be oriented
-          best_t = h.t;
+          double t = 0;
+          Vec3 n, at;
+          if (!meet(pos[v], sign * vn[v], best_t, t, n, at)) continue;
+          if (!(std::abs(n.dot(vn[v])) >= 0.5)) continue;  // sign-free: scans need not be oriented
+          best_t = t;
           by_ray[v] = 1;
-          fn[v] = tn;
-          fo[v] = tn.dot(pos[v] + h.t * ray.direction);
+          fn[v] = n;
+          fo[v] = n.dot(at);
         }
       });
       for (int v = 0; v < nv; ++v)
