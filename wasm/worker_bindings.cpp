@@ -374,6 +374,15 @@ lk::Status set_pose(FitSession& s, double amount, lk::UpdateFootprint* footprint
   return lk::update_control_vertices(s.fit.multires, s.moved, target, footprint, max_level);
 }
 
+// Puts the kept head back at rest, the pose its checks and distance map
+// are of, when an animation frame left it posed.
+lk::Status to_rest_pose(FitSession& s) {
+  if (!s.posed) return lk::Status::success();
+  const lk::Status st = set_pose(s, 0.0, nullptr);
+  if (st.ok()) s.posed = false;
+  return st;
+}
+
 const lk::GenericHead* generic_head(lk::Status& status) {
   static lk::GenericHead generic;  // parsed once per worker
   static bool have_generic = false;
@@ -752,10 +761,8 @@ val fit_quality_job() {
   FitSession& s = *g_session;
   if (!s.have_quality) {
     const double t0 = now_ms();
-    if (s.posed) {  // the checks are of the fitted head, not of an animation pose
-      if (lk::Status st = set_pose(s, 0.0, nullptr); !st.ok()) return error_result(st);
-      s.posed = false;
-    }
+    // The checks are of the fitted head, not of an animation pose.
+    if (lk::Status st = to_rest_pose(s); !st.ok()) return error_result(st);
     if (lk::Status st = lk::ensure_current(s.fit.multires); !st.ok()) return error_result(st);
     lk::Status generic_status;
     const lk::GenericHead* generic = generic_head(generic_status);
@@ -807,10 +814,7 @@ val export_head(int level, const std::string& format) {
       return error_result(lk::Status::error(lk::ErrorCode::InvalidInput,
                                             "no distance map yet: it comes with the checks of the fitted head"));
     level = mr.num_levels();
-    if (s.posed) {
-      if (lk::Status st = set_pose(s, 0.0, nullptr); !st.ok()) return error_result(st);
-      s.posed = false;
-    }
+    if (lk::Status st = to_rest_pose(s); !st.ok()) return error_result(st);
   }
   if (level < 0 || level > mr.num_levels())
     return error_result(lk::Status::error(lk::ErrorCode::InvalidInput, "no level " + std::to_string(level)));
@@ -824,13 +828,12 @@ val export_head(int level, const std::string& format) {
     if (s.to_scan_colors.size() != m.positions.size())
       return error_result(lk::Status::error(lk::ErrorCode::Internal, "the distance map does not match the finest level"));
     m.colors = s.to_scan_colors;
-    const lk::Bytes bytes = lk::write_ply(m);
-    r.set("bytes", val::global("Uint8Array").new_(emscripten::typed_memory_view(bytes.size(), bytes.data())));
-  } else if (format == "obj") {
+  }
+  if (format == "obj") {
     const std::string text = lk::write_obj(m);
     r.set("bytes", val::global("Uint8Array").new_(emscripten::typed_memory_view(text.size(),
                                                    reinterpret_cast<const std::uint8_t*>(text.data()))));
-  } else if (format == "ply") {
+  } else if (format == "ply" || map) {
     const lk::Bytes bytes = lk::write_ply(m);
     r.set("bytes", val::global("Uint8Array").new_(emscripten::typed_memory_view(bytes.size(), bytes.data())));
   } else {

@@ -1000,7 +1000,6 @@
       loadFailed(file, meta, 'not shown', file.name + ': ' + shown);
       return;
     }
-    ui.distanceLegend.hidden = true;  // a scan is shown, no map
     app.model = { name: file.name, kind: result.kind, vertexCount: result.vertexCount,
                   triangleCount: result.triangleCount, loadMs: ms, displayStride: stride };
     // A new scan: the old fit no longer belongs to what is shown.
@@ -1080,8 +1079,10 @@
 
   function markShown(row) {
     app.shownStage = row;
-    if (row !== 'subdivide') ui.distanceLegend.hidden = true;
-    if (row !== 'subdivide') viewerLevel = null;
+    if (row !== 'subdivide') {
+      viewerLevel = null;
+      ui.distanceLegend.hidden = true;  // the map is of the subdivided head only
+    }
     for (const st of FIT_STAGES) stageItem(st.row).classList.toggle('shown', st.row === row);
   }
 
