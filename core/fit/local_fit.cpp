@@ -1,5 +1,6 @@
 #include "fit/local_fit.h"
 
+#include "common/parallel.h"
 #include "common/sampling.h"
 #include "fit/closest_point.h"
 
@@ -76,11 +77,11 @@ struct BoxProblem {
     m.triangles = triangles;
     ClosestPointTree tree(m);
     ev.hits.resize(points.size());
+    // Independent queries in parallel; the sum in point order (the same on
+    // any number of threads).
+    parallel_for(0, static_cast<int>(points.size()), 256, [&](int i, int) { ev.hits[i] = tree.closest(points[i]); });
     double dist = 0;
-    for (size_t i = 0; i < points.size(); ++i) {
-      ev.hits[i] = tree.closest(points[i]);
-      dist += ev.hits[i].squared_distance;
-    }
+    for (const SurfacePoint& h : ev.hits) dist += h.squared_distance;
     double stretch = 0;
     for (size_t e = 0; e < edges.size(); ++e) {
       const double l = (m.positions[edges[e][0]] - m.positions[edges[e][1]]).norm();
