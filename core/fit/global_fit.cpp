@@ -100,19 +100,20 @@ struct Projection {
   double dist_energy = 0;  // 1/#S sum min(d, tau)^2
 };
 
-// `previous` (same size as set, or empty) holds the last projection: the
-// distance to the same triangle at the new positions bounds the search,
-// which prunes most of the tree when the mesh moved little.
-void project(const std::vector<Vec3>& points, const std::vector<int>& set, DataSurface& data,
-             const VecX& x, double tau, const std::vector<SurfacePoint>* previous, Projection& out) {
+// `points`: the round's points, in its order. `previous` (one per point, or
+// empty) holds the last projection: the distance to the same triangle at
+// the new positions bounds the search, which prunes most of the tree when
+// the mesh moved little.
+void project(const std::vector<Vec3>& points, DataSurface& data, const VecX& x, double tau,
+             const std::vector<SurfacePoint>* previous, Projection& out) {
   data.set(x);
   const TriMesh& work = data.mesh;
   ClosestPointTree tree(work);
-  out.hits.resize(set.size());
-  const bool warm = previous && previous->size() == set.size();
+  out.hits.resize(points.size());
+  const bool warm = previous && previous->size() == points.size();
   // Independent queries: in parallel, each writing its own hit.
-  parallel_for(0, static_cast<int>(set.size()), 1024, [&](int i, int) {
-    const Vec3& p = points[set[i]];
+  parallel_for(0, static_cast<int>(points.size()), 1024, [&](int i, int) {
+    const Vec3& p = points[i];
     if (warm && (*previous)[i].face >= 0) {
       const int f = (*previous)[i].face;
       const Tri& t = work.triangles[f];
@@ -127,7 +128,7 @@ void project(const std::vector<Vec3>& points, const std::vector<int>& set, DataS
   double sum = 0;  // in point order: the same sum on any number of threads
   const double tau2 = tau * tau;
   for (const SurfacePoint& h : out.hits) sum += std::min(h.squared_distance, tau2);
-  out.dist_energy = set.empty() ? 0.0 : sum / set.size();
+  out.dist_energy = points.empty() ? 0.0 : sum / points.size();
 }
 
 // The normal equations are factorized by vertices (block_ldlt.h): AMD on
@@ -166,24 +167,23 @@ bool preconditioned_cg(const SpMat& H, const VecX& g, const NormalSolver& M, con
   return false;
 }
 
-// 1/#S sum_p min(d_p, tau)^2 with d_p the distance from point p to the
-// triangle it projected to before (hits; a point without one counts tau):
-// an upper bound of E_dist at positions x.
-double distance_energy_bound(const std::vector<Vec3>& points, const std::vector<int>& set,
-                             const std::vector<Tri>& triangles, const VecX& x, double tau,
-                             const std::vector<SurfacePoint>& hits) {
+// 1/#S sum_p min(d_p, tau)^2 over the round's points (in its order), with
+// d_p the distance from point p to the triangle it projected to before
+// (hits; a point without one counts tau): an upper bound of E_dist at x.
+double distance_energy_bound(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, const VecX& x,
+                             double tau, const std::vector<SurfacePoint>& hits) {
   const double tau2 = tau * tau;
-  std::vector<double> d2(set.size(), tau2);
-  parallel_for(0, static_cast<int>(set.size()), 4096, [&](int i, int) {
+  std::vector<double> d2(points.size(), tau2);
+  parallel_for(0, static_cast<int>(points.size()), 4096, [&](int i, int) {
     const int f = hits[i].face;
     if (f < 0) return;
     const Tri& t = triangles[f];
     const Vec3 a = x.segment<3>(3 * t[0]), b = x.segment<3>(3 * t[1]), c = x.segment<3>(3 * t[2]);
-    d2[i] = closest_point_on_triangle(points[set[i]], a, b, c).squared_distance;
+    d2[i] = closest_point_on_triangle(points[i], a, b, c).squared_distance;
   });
   double sum = 0;  // in point order: the same sum on any number of threads
   for (double v : d2) sum += std::min(v, tau2);
-  return set.empty() ? 0.0 : sum / set.size();
+  return points.empty() ? 0.0 : sum / points.size();
 }
 
 bool finite(const Vec3& p) { return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z()); }
@@ -741,7 +741,11 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
     const bool last_round = r == rounds - 1;
     int count = final_pass ? 0 : options.subsample_points;
     if (count <= 0 || count > static_cast<int>(points.size())) count = static_cast<int>(points.size());
-    const std::vector<int> set(order.begin(), order.begin() + count);
+    // The round's points, in its order and side by side: every projection
+    // and assembly walks them, and gathering them through the shuffled
+    // order each time was most of the assembly's cost.
+    std::vector<Vec3> set(count);
+    for (int i = 0; i < count; ++i) set[i] = points[order[i]];
 
     // The trimming distance is fixed for the round so that the round
     // minimizes one well-defined energy.
@@ -757,9 +761,9 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
     } else if (carried_count > 0 && carried_count < count) {
       std::vector<SurfacePoint> start(count);  // face -1: searched from scratch
       std::copy(carried.hits.begin(), carried.hits.end(), start.begin());
-      project(points, set, data, x, 1e300, &start, proj);
+      project(set, data, x, 1e300, &start, proj);
     } else {
-      project(points, set, data, x, 1e300, nullptr, proj);
+      project(set, data, x, 1e300, nullptr, proj);
     }
     std::vector<double> d(proj.hits.size());
     for (size_t i = 0; i < d.size(); ++i) d[i] = std::sqrt(proj.hits[i].squared_distance);
@@ -813,7 +817,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       for (size_t i = 0; i < set.size(); ++i) {
         const SurfacePoint& h = proj.hits[i];
         if (h.face < 0 || h.squared_distance > tau2) continue;
-        const Vec3& p = points[set[i]];
+        const Vec3& p = set[i];
         const Tri& tri = data.mesh.triangles[h.face];
         Vec3 n = p - h.point;
         const double len = n.norm();
@@ -979,12 +983,12 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
           bool bounded = false;
           double e_new = 0;
           if (last_step_of_fit) {
-            const double bound = distance_energy_bound(points, set, data.mesh.triangles, data.map(xt), tau, proj.hits);
+            const double bound = distance_energy_bound(set, data.mesh.triangles, data.map(xt), tau, proj.hits);
             e_new = energy_parts(xt, bound, lambda, parts);
             bounded = e_new <= e_old;
           }
           if (!bounded) {
-            project(points, set, data, xt, tau, &proj.hits, trial);
+            project(set, data, xt, tau, &proj.hits, trial);
             e_new = energy_parts(xt, trial.dist_energy, lambda, parts);
           }
           if (e_new <= e_old) {
