@@ -537,7 +537,8 @@ std::vector<int> turned_triangles(const std::vector<Vec3>& reference, const TriM
 
 Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const MeshTopology& topology,
                   const GlobalFitTerms& terms, const GlobalFitOptions& options, TriMesh& out,
-                  GlobalFitResult& result, const ProgressFn& progress) {
+                  GlobalFitResult& result, const ProgressFn& progress, MeshBvh* relief_tree) {
+  if (relief_tree) *relief_tree = MeshBvh{};
   result = GlobalFitResult{};
   const int nv = mesh.num_vertices();
   if (points.empty()) return Status::error(ErrorCode::Empty, "global fit: no scan points to fit");
@@ -1369,6 +1370,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
         }
       }
     }
+    if (relief_tree) *relief_tree = std::move(relief.bvh);
   }
   result.rounds = rounds;
   result.turned_after = static_cast<int>(guard.turned(mesh.triangles, x).size());

@@ -180,6 +180,7 @@
 #include "common/status.h"
 #include "mesh/topology.h"
 #include "mesh/tri_mesh.h"
+#include "raycast/bvh.h"
 #include "subdiv/butterfly.h"
 
 #include <array>
@@ -394,9 +395,14 @@ struct GlobalFitResult {
 // mesh: the control mesh after local fitting; topology: its connectivity.
 // out: the fitted mesh (same triangles, new positions). Fails on empty or
 // non-finite input, index errors in terms, or a singular system.
+// relief_tree (optional): receives the fold relief's tree over the smooth
+// level smooth_guard_relief_level (its boxes at some positions of that
+// level; empty when the relief did not search), so that a caller refining
+// the fit to that level can refit it instead of building one
+// (limit_folds's finest_tree).
 Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const MeshTopology& topology,
                   const GlobalFitTerms& terms, const GlobalFitOptions& options, TriMesh& out,
-                  GlobalFitResult& result, const ProgressFn& progress = {});
+                  GlobalFitResult& result, const ProgressFn& progress = {}, MeshBvh* relief_tree = nullptr);
 
 // Triangles of mesh whose normal points against (or is degenerate relative
 // to) the same triangle's normal in reference (same triangles, positions

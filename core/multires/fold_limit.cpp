@@ -129,6 +129,9 @@ class FoldLimiter {
   // Takes over `other`'s finest-level tree (refitted, not rebuilt, at the
   // start of separate_finest) when this run starts where `other` ended.
   void adopt_finest_tree(FoldLimiter& other);
+  // Takes over a tree built over the finest level's triangles elsewhere
+  // (moved out of `tree`; a tree over other triangles is left alone).
+  void adopt_finest_tree(MeshBvh& tree);
   // That tree (boxes at whatever positions it was last refitted to), or
   // null when it was never built.
   MeshBvh* finest_tree() { return finest_built_ ? &finest_bvh_ : nullptr; }
@@ -783,6 +786,15 @@ Status FoldLimiter::finest_pairs(PairList& out) {
   return Status::success();
 }
 
+void FoldLimiter::adopt_finest_tree(MeshBvh& tree) {
+  if (tree.empty() || tree.triangles != mesh_.triangles(L_) || tree.positions.size() != state_.displaced[L_].size())
+    return;
+  finest_bvh_ = std::move(tree);
+  tree = MeshBvh{};
+  build_refit_index(finest_bvh_, finest_refit_index_);
+  finest_built_ = true;
+}
+
 void FoldLimiter::adopt_finest_tree(FoldLimiter& other) {
   if (!other.finest_built_) return;
   finest_bvh_ = std::move(other.finest_bvh_);
@@ -958,7 +970,8 @@ const std::vector<std::array<int, 2>>* finest_pairs_of(const FoldLimitStats& sta
   return &stats.finest_pairs;
 }
 
-Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimitStats* stats) {
+Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimitStats* stats,
+                   MeshBvh* finest_tree) {
   if (!(options.shrink >= 0 && options.shrink < 1) || options.min_area_ratio < 0 || options.max_shrinks < 0 ||
       options.max_rounds < 0 || options.max_intersection_rounds < 0 || options.max_intersection_restarts < 0 ||
       options.separation_repeats < 0 ||
@@ -975,6 +988,7 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
   s = evaluate(mesh);
   if (!s.ok()) return s;
   FoldLimiter limiter(mesh, options, smooth, st);
+  if (finest_tree) limiter.adopt_finest_tree(*finest_tree);
   s = limiter.fold_pass(options.max_rounds);
   if (!s.ok()) return s;
   if (options.max_intersection_rounds > 0) {

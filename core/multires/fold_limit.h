@@ -4,6 +4,7 @@
 #pragma once
 #include "common/status.h"
 #include "multires/multires.h"
+#include "raycast/bvh.h"
 
 #include <array>
 #include <cstdint>
@@ -182,7 +183,13 @@ const std::vector<std::array<int, 2>>* finest_pairs_of(const FoldLimitStats& sta
 // Shrinks mesh.displacements as described above and re-evaluates the mesh.
 // Fails with InvalidInput on mismatched arrays or options out of range
 // (shrink not in [0, 1), negative ratios or counts).
-Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options = {}, FoldLimitStats* stats = nullptr);
+// finest_tree (optional): a tree over the finest level's triangles, its
+// boxes at any positions (e.g. fit_global's relief_tree): taken over (moved
+// out) and refitted instead of building one. A tree over other triangles is
+// left alone. The crossing searches find the same pairs on any tree, so
+// the result is the same either way.
+Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options = {}, FoldLimitStats* stats = nullptr,
+                   MeshBvh* finest_tree = nullptr);
 
 // Bad triangles (see FoldLimitOptions) of level l of the evaluated mesh
 // against the smooth hierarchy's level-l positions `smooth` (#V_l): flipped

@@ -8,6 +8,7 @@
 #include "mesh/primitives.h"
 #include "multires/fold_limit.h"
 #include "multires/multires.h"
+#include "raycast/bvh.h"
 
 #include <catch2/catch.hpp>
 
@@ -130,4 +131,57 @@ TEST_CASE("fold limit: incremental visits equal full ones when crossing sheets a
     CHECK(stats.intersections_found > 10);
     CHECK(stats.crossing_corrected > 0);
   }
+}
+
+TEST_CASE("fold limit: a finest-level tree taken over from elsewhere gives the run of its own tree", "[multires]") {
+  // Two spheres pushed into each other (as above): the finest level's
+  // separation searches that tree. The tree handed in has its boxes at the
+  // smooth level (as the global fit's relief leaves its tree), so a limiter
+  // that used it without refitting would find other pairs.
+  const TriMesh a = make_icosphere(1);
+  TriMesh two = a;
+  const int na = static_cast<int>(a.positions.size());
+  for (const Vec3& p : a.positions) two.positions.push_back(p + Vec3(2.2, 0, 0));
+  for (const Tri& t : a.triangles) two.triangles.push_back({t[0] + na, t[1] + na, t[2] + na});
+  MultiresMesh mr;
+  REQUIRE(build_multires(two, 3, mr).ok());
+  std::mt19937 rng(12);
+  for (int l = 1; l <= 3; ++l) {
+    std::uniform_real_distribution<double> d(-0.04 / (1 << l), 0.04 / (1 << l));
+    for (double& x : mr.displacements[l]) x = d(rng);
+  }
+  for (double& x : mr.displacements[0]) x = 0.15;
+  REQUIRE(evaluate(mr).ok());
+  FoldLimitOptions options;
+  options.separate_coarser_levels = false;
+
+  MultiresMesh own = mr;
+  FoldLimitStats own_stats;
+  REQUIRE(limit_folds(own, options, &own_stats).ok());
+  CHECK(own_stats.intersections_found > 10);
+
+  std::vector<std::vector<Vec3>> smooth;
+  REQUIRE(smooth_positions(mr, smooth).ok());
+  TriMesh smooth_finest;
+  smooth_finest.positions = smooth[3];
+  smooth_finest.triangles = mr.triangles(3);
+  MeshBvh tree;
+  REQUIRE(build_bvh(smooth_finest, tree).ok());
+  MultiresMesh taken = mr;
+  FoldLimitStats taken_stats;
+  REQUIRE(limit_folds(taken, options, &taken_stats, &tree).ok());
+  CHECK(tree.empty());  // taken over
+  require_same_run(taken, taken_stats, own, own_stats);
+
+  // A tree over another level's triangles is left alone.
+  TriMesh level2;
+  level2.positions = smooth[2];
+  level2.triangles = mr.triangles(2);
+  MeshBvh other;
+  REQUIRE(build_bvh(level2, other).ok());
+  MultiresMesh refused = mr;
+  FoldLimitStats refused_stats;
+  REQUIRE(limit_folds(refused, options, &refused_stats, &other).ok());
+  CHECK_FALSE(other.empty());
+  require_same_run(refused, refused_stats, own, own_stats);
 }
