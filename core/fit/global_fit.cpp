@@ -1259,13 +1259,32 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       // The window searches steer the steps; whether the relief is kept is
       // decided on two whole-level searches: all new pairs of the level
       // (folds or not) must be fewer than before it.
+      // The level's new pairs at `at`, as a whole-level search finds them:
+      // the level differs from the first search's (relief.level, at
+      // x_before_relief) only where the steps moved it, so a pair of two
+      // unmoved triangles is the first search's, and only the moved
+      // triangles are searched again, on the first search's tree refit (a
+      // refit tree and a fresh one give the same pairs since the pair
+      // test's orientations are filtered).
       auto all_new_pairs = [&](const VecX& at, std::vector<std::array<int, 2>>& pairs) {
-        // The first search's tree, refit (a refit tree and a fresh one give
-        // the same pairs since the pair test's orientations are filtered).
-        relief.level.positions = relief.refine(at);
+        std::vector<Vec3> now = relief.refine(at);
+        const std::vector<Tri>& tris = relief.level.triangles;
+        std::vector<char> moved(tris.size(), 0);
+        std::vector<int> moved_list;
+        for (size_t f = 0; f < tris.size(); ++f)
+          for (int v : tris[f])
+            if (now[v] != relief.level.positions[v]) {
+              moved[f] = 1;
+              moved_list.push_back(static_cast<int>(f));
+              break;
+            }
+        relief.level.positions = std::move(now);
         refit_bvh(relief.level, relief.bvh);
-        find_new_self_intersections(relief.bvh, relief.reference_level, pairs);
+        find_new_self_intersections(relief.bvh, relief.reference_level, pairs, &moved_list);
         drop_ignored(pairs);
+        for (const auto& p : pairs_before_relief)
+          if (!moved[p[0]] && !moved[p[1]]) pairs.push_back(p);
+        std::sort(pairs.begin(), pairs.end());
       };
       std::vector<std::array<int, 2>> all_now = pairs_before_relief;  // the level's new pairs at x
       if (result.relief_steps > 0) {
