@@ -9,6 +9,7 @@
 #include "multires/fold_limit.h"
 #include "multires/multires.h"
 #include "raycast/bvh.h"
+#include "displaced_crossings.h"
 
 #include <catch2/catch.hpp>
 
@@ -87,6 +88,21 @@ MultiresMesh randomly_folded_sphere(unsigned seed) {
   return mr;
 }
 
+// Two spheres pushed into each other by level-0 displacements, with random
+// detail (seeded) on the finer levels: the finest level crosses itself.
+MultiresMesh spheres_pushed_together(unsigned seed) {
+  MultiresMesh mr;
+  REQUIRE(build_multires(test::two_spheres_apart(), 3, mr).ok());
+  std::mt19937 rng(seed);
+  for (int l = 1; l <= 3; ++l) {
+    std::uniform_real_distribution<double> d(-0.04 / (1 << l), 0.04 / (1 << l));
+    for (double& x : mr.displacements[l]) x = d(rng);
+  }
+  for (double& x : mr.displacements[0]) x = 0.15;
+  REQUIRE(evaluate(mr).ok());
+  return mr;
+}
+
 }  // namespace
 
 TEST_CASE("fold limit: incremental visits equal full ones on randomly folded spheres", "[multires]") {
@@ -104,23 +120,9 @@ TEST_CASE("fold limit: incremental visits equal full ones on randomly folded sph
 }
 
 TEST_CASE("fold limit: incremental visits equal full ones when crossing sheets are separated", "[multires]") {
-  // Two spheres pushed into each other by level-0 displacements, with
-  // random detail on the finer levels: separation rounds, corners put on
-  // the smooth surface, parents on the level above, restarts.
-  const TriMesh a = make_icosphere(1);
-  TriMesh two = a;
-  const int na = static_cast<int>(a.positions.size());
-  for (const Vec3& p : a.positions) two.positions.push_back(p + Vec3(2.2, 0, 0));
-  for (const Tri& t : a.triangles) two.triangles.push_back({t[0] + na, t[1] + na, t[2] + na});
-  MultiresMesh mr;
-  REQUIRE(build_multires(two, 3, mr).ok());
-  std::mt19937 rng(11);
-  for (int l = 1; l <= 3; ++l) {
-    std::uniform_real_distribution<double> d(-0.04 / (1 << l), 0.04 / (1 << l));
-    for (double& x : mr.displacements[l]) x = d(rng);
-  }
-  for (double& x : mr.displacements[0]) x = 0.15;
-  REQUIRE(evaluate(mr).ok());
+  // Separation rounds, corners put on the smooth surface, parents on the
+  // level above, restarts.
+  const MultiresMesh mr = spheres_pushed_together(11);
   for (int restarts : {0, 3}) {
     INFO("restarts " << restarts);
     FoldLimitOptions options;
@@ -134,24 +136,11 @@ TEST_CASE("fold limit: incremental visits equal full ones when crossing sheets a
 }
 
 TEST_CASE("fold limit: a finest-level tree taken over from elsewhere gives the run of its own tree", "[multires]") {
-  // Two spheres pushed into each other (as above): the finest level's
-  // separation searches that tree. The tree handed in has its boxes at the
-  // smooth level (as the global fit's relief leaves its tree), so a limiter
-  // that used it without refitting would find other pairs.
-  const TriMesh a = make_icosphere(1);
-  TriMesh two = a;
-  const int na = static_cast<int>(a.positions.size());
-  for (const Vec3& p : a.positions) two.positions.push_back(p + Vec3(2.2, 0, 0));
-  for (const Tri& t : a.triangles) two.triangles.push_back({t[0] + na, t[1] + na, t[2] + na});
-  MultiresMesh mr;
-  REQUIRE(build_multires(two, 3, mr).ok());
-  std::mt19937 rng(12);
-  for (int l = 1; l <= 3; ++l) {
-    std::uniform_real_distribution<double> d(-0.04 / (1 << l), 0.04 / (1 << l));
-    for (double& x : mr.displacements[l]) x = d(rng);
-  }
-  for (double& x : mr.displacements[0]) x = 0.15;
-  REQUIRE(evaluate(mr).ok());
+  // The finest level's separation searches that tree. The tree handed in
+  // has its boxes at the smooth level (as the global fit's relief leaves
+  // its tree), so a limiter that used it without refitting would find
+  // other pairs.
+  const MultiresMesh mr = spheres_pushed_together(12);
   FoldLimitOptions options;
   options.separate_coarser_levels = false;
 
@@ -160,28 +149,24 @@ TEST_CASE("fold limit: a finest-level tree taken over from elsewhere gives the r
   REQUIRE(limit_folds(own, options, &own_stats).ok());
   CHECK(own_stats.intersections_found > 10);
 
+  // limit_folds handed a tree over level `level`'s triangles at the smooth
+  // positions; returns the tree as it left it.
   std::vector<std::vector<Vec3>> smooth;
   REQUIRE(smooth_positions(mr, smooth).ok());
-  TriMesh smooth_finest;
-  smooth_finest.positions = smooth[3];
-  smooth_finest.triangles = mr.triangles(3);
-  MeshBvh tree;
-  REQUIRE(build_bvh(smooth_finest, tree).ok());
-  MultiresMesh taken = mr;
-  FoldLimitStats taken_stats;
-  REQUIRE(limit_folds(taken, options, &taken_stats, &tree).ok());
-  CHECK(tree.empty());  // taken over
+  auto run_with_tree_of = [&](int level, MultiresMesh& run, FoldLimitStats& stats) {
+    TriMesh at_smooth;
+    at_smooth.positions = smooth[level];
+    at_smooth.triangles = mr.triangles(level);
+    MeshBvh tree;
+    REQUIRE(build_bvh(at_smooth, tree).ok());
+    run = mr;
+    REQUIRE(limit_folds(run, options, &stats, &tree).ok());
+    return tree;
+  };
+  MultiresMesh taken, refused;
+  FoldLimitStats taken_stats, refused_stats;
+  CHECK(run_with_tree_of(3, taken, taken_stats).empty());  // taken over
   require_same_run(taken, taken_stats, own, own_stats);
-
-  // A tree over another level's triangles is left alone.
-  TriMesh level2;
-  level2.positions = smooth[2];
-  level2.triangles = mr.triangles(2);
-  MeshBvh other;
-  REQUIRE(build_bvh(level2, other).ok());
-  MultiresMesh refused = mr;
-  FoldLimitStats refused_stats;
-  REQUIRE(limit_folds(refused, options, &refused_stats, &other).ok());
-  CHECK_FALSE(other.empty());
+  CHECK_FALSE(run_with_tree_of(2, refused, refused_stats).empty());  // other triangles: left alone
   require_same_run(refused, refused_stats, own, own_stats);
 }

@@ -8,6 +8,7 @@
 #include "raycast/bvh.h"
 #include "raycast/self_intersection.h"
 #include "../subdiv/shapes.h"
+#include "displaced_crossings.h"
 #include "test_data.h"
 
 #include <catch2/catch.hpp>
@@ -470,11 +471,7 @@ TEST_CASE("multires: a vertex set carried down the levels keeps old vertices, ta
 TEST_CASE("multires: the limiter separates two displaced sheets that cross", "[multires]") {
   // Two spheres 0.2 apart, each inflated by 0.15 along its normals: they
   // overlap by ~0.1 near the contact; nothing turns over.
-  const TriMesh a = icosphere(1);
-  TriMesh two = a;
-  const int na = static_cast<int>(a.positions.size());
-  for (const Vec3& p : a.positions) two.positions.push_back(p + Vec3(2.2, 0, 0));
-  for (const Tri& t : a.triangles) two.triangles.push_back({t[0] + na, t[1] + na, t[2] + na});
+  const TriMesh two = test::two_spheres_apart();
   MultiresMesh mr;
   REQUIRE(build_multires(two, 2, mr).ok());
   for (int l = 0; l <= 2; ++l)
