@@ -1257,15 +1257,14 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
         if (!progress_made) break;
       }
       // The window searches steer the steps; whether the relief is kept is
-      // decided on two whole-level searches: all new pairs of the level
-      // (folds or not) must be fewer than before it.
-      // The level's new pairs at `at`, as a whole-level search finds them:
-      // the level differs from the first search's (relief.level, at
-      // x_before_relief) only where the steps moved it, so a pair of two
-      // unmoved triangles is the first search's, and only the moved
-      // triangles are searched again, on the first search's tree refit (a
-      // refit tree and a fresh one give the same pairs since the pair
-      // test's orientations are filtered).
+      // decided on all new pairs of the whole level (folds or not), which
+      // must be fewer than before it. all_new_pairs gives the set a
+      // whole-level search at `at` would: the level differs from the first
+      // search's (relief.level, at x_before_relief) only where the steps
+      // moved it, so a pair of two unmoved triangles is the first search's,
+      // and only the moved triangles are searched again, on the first
+      // search's tree refit (a refit tree and a fresh one give the same
+      // pairs since the pair test's orientations are filtered).
       auto all_new_pairs = [&](const VecX& at, std::vector<std::array<int, 2>>& pairs) {
         std::vector<Vec3> now = relief.refine(at);
         const std::vector<Tri>& tris = relief.level.triangles;
