@@ -133,8 +133,12 @@ class FoldLimiter {
   // (moved out of `tree`; a tree over other triangles is left alone).
   void adopt_finest_tree(MeshBvh& tree);
   // That tree (boxes at whatever positions it was last refitted to), or
-  // null when it was never built.
-  MeshBvh* finest_tree() { return finest_built_ ? &finest_bvh_ : nullptr; }
+  // null when it was never built. The caller may refit it elsewhere: the
+  // pairs known at its positions (below) are dropped.
+  MeshBvh* finest_tree() {
+    finest_known_valid_ = false;
+    return finest_built_ ? &finest_bvh_ : nullptr;
+  }
 
  private:
   bool is_bad(int l, int f) const {
@@ -234,6 +238,25 @@ class FoldLimiter {
   bool finest_built_ = false;
   MeshBvh finest_bvh_;
   BvhRefitIndex finest_refit_index_;
+  // Incremental runs: every crossing pair of the finest level at
+  // finest_bvh_.positions (sorted, a < b), from its last whole search kept
+  // up to date by every search around moved triangles since (a pair
+  // between two unmoved triangles crosses as it did). A later whole search
+  // of the level at the same positions is then not needed (finest_pairs,
+  // and separate_finest at the start of a run that continues this one).
+  bool finest_known_valid_ = false;
+  PairList finest_known_;
+  std::vector<char> finest_mark_;  // #F_L, all 0 between uses
+  // The pairs around `around` (finest-level triangles, distinct) were
+  // searched again at the tree's positions: `found` replaces every known
+  // pair with a triangle in it.
+  void update_finest_known(const std::vector<int>& around, const PairList& found);
+  // Every crossing pair of the finest level at the tree's positions, given
+  // `moved` (the vertices that moved since the tree's last refit, now
+  // refitted): the known pairs when nothing moved, else a whole search.
+  // (On the synthetic seeds and James and Fran nothing ever moved between
+  // the separation's last search and the searches after it.)
+  void search_finest(const std::vector<int>& moved, PairList& out);
 };
 
 FoldLimiter::FoldLimiter(MultiresMesh& mesh, const FoldLimitOptions& options,
@@ -656,15 +679,18 @@ Status FoldLimiter::separate_finest() {
   // boxes were fitted to).
   BvhRefitIndex& refit_index = finest_refit_index_;
   Status s;
+  std::vector<int> moved;  // since the tree's last refit (known pairs: see search_finest)
   if (finest_built_) {
     // A tree taken over from the run this one continues: every box
     // refitted to where the level is now (searches give the same pairs on
     // any tree over the same positions).
+    if (finest_known_valid_) moved_since_fit(bvh, state_.displaced[L], moved);
     s = refit_bvh(finest, bvh);
   } else {
     s = build_bvh(finest, bvh);
     if (s.ok()) build_refit_index(bvh, refit_index);
     finest_built_ = s.ok();
+    finest_known_valid_ = false;
   }
   if (!s.ok()) return s;
   // The reference path: the moved vertices copied, every box refitted.
@@ -674,7 +700,7 @@ Status FoldLimiter::separate_finest() {
     return refit_bvh(finest, bvh);
   };
   PairList pairs;
-  find_self_intersections(bvh, pairs);
+  search_finest(moved, pairs);
   st_.intersections_found = static_cast<int>(pairs.size());
   std::vector<int> tris, next_bad;
   std::vector<char> in_set(finest.triangles.size(), 0);
@@ -689,6 +715,7 @@ Status FoldLimiter::separate_finest() {
     if (!r.ok()) return r;
     around_changed(L, around_);
     find_intersections_with(bvh, around_, pairs);
+    update_finest_known(around_, pairs);
     bad_among(L, around_, next_bad);
     return Status::success();
   };
@@ -749,6 +776,7 @@ Status FoldLimiter::separate_finest() {
     ++st_.rounds, ++stamp_;  // a fresh round stamp for the visit marks
     around_changed(L, around_);
     find_intersections_with(bvh, around_, pairs);
+    update_finest_known(around_, pairs);
     next_bad.clear();
     rounds = 0;
   }
@@ -768,6 +796,7 @@ int FoldLimiter::given_up_still_crossing() const {
 
 Status FoldLimiter::finest_pairs(PairList& out) {
   out.clear();
+  std::vector<int> moved;
   if (!finest_built_) {
     TriMesh finest;
     finest.positions = state_.displaced[L_];
@@ -776,14 +805,44 @@ Status FoldLimiter::finest_pairs(PairList& out) {
     if (!s.ok()) return s;
     build_refit_index(finest_bvh_, finest_refit_index_);
     finest_built_ = true;
+    finest_known_valid_ = false;
   } else {
-    std::vector<int> moved;
     moved_since_fit(finest_bvh_, state_.displaced[L_], moved);
     Status s = refit_bvh_vertices(finest_bvh_, finest_refit_index_, state_.displaced[L_], moved);
     if (!s.ok()) return s;
   }
-  find_self_intersections(finest_bvh_, out);
+  search_finest(moved, out);
   return Status::success();
+}
+
+void FoldLimiter::update_finest_known(const std::vector<int>& around, const PairList& found) {
+  if (!finest_known_valid_) return;
+  for (int f : around) finest_mark_[f] = 1;
+  size_t kept = 0;
+  for (const auto& p : finest_known_)
+    if (!finest_mark_[p[0]] && !finest_mark_[p[1]]) finest_known_[kept++] = p;
+  for (int f : around) finest_mark_[f] = 0;
+  finest_known_.resize(kept);
+  // Both sorted; `found` holds only pairs with a triangle in `around`, so
+  // none of them is among those kept.
+  PairList merged(finest_known_.size() + found.size());
+  std::merge(finest_known_.begin(), finest_known_.end(), found.begin(), found.end(), merged.begin());
+  finest_known_.swap(merged);
+}
+
+void FoldLimiter::search_finest(const std::vector<int>& moved, PairList& out) {
+  if (options_.incremental && finest_known_valid_ && moved.empty()) {
+    out = finest_known_;
+    ++st_.finest_known_reused;
+    return;
+  }
+  find_self_intersections(finest_bvh_, out);
+  ++st_.finest_whole_searches;
+  if (options_.incremental) {
+    finest_known_ = out;
+    finest_known_valid_ = true;
+    finest_mark_.assign(mesh_.triangles(L_).size(), 0);
+  }
 }
 
 void FoldLimiter::adopt_finest_tree(MeshBvh& tree) {
@@ -793,6 +852,7 @@ void FoldLimiter::adopt_finest_tree(MeshBvh& tree) {
   tree = MeshBvh{};
   build_refit_index(finest_bvh_, finest_refit_index_);
   finest_built_ = true;
+  finest_known_valid_ = false;
 }
 
 void FoldLimiter::adopt_finest_tree(FoldLimiter& other) {
@@ -801,6 +861,11 @@ void FoldLimiter::adopt_finest_tree(FoldLimiter& other) {
   finest_refit_index_ = std::move(other.finest_refit_index_);
   finest_built_ = true;
   other.finest_built_ = false;
+  // The pairs known at the tree's positions go with it.
+  finest_known_valid_ = other.finest_known_valid_;
+  finest_known_ = std::move(other.finest_known_);
+  finest_mark_ = std::move(other.finest_mark_);
+  other.finest_known_valid_ = false;
 }
 
 int FoldLimiter::count_finest_bad() const {
@@ -1036,12 +1101,16 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
       again_st.second_pass_after = after;
       again_st.second_pass_kept = true;
       again_st.rounds += st.rounds;
+      again_st.finest_whole_searches += st.finest_whole_searches;
+      again_st.finest_known_reused += st.finest_known_reused;
       st = again_st;
       st.finest_pairs.swap(after_pairs);
     } else {
       mesh.displacements = displacements;
       mesh.state = state;
       st.finest_pairs.swap(before_pairs);
+      st.finest_whole_searches += again_st.finest_whole_searches;
+      st.finest_known_reused += again_st.finest_known_reused;
     }
     st.finest_pairs_known = true;
     st.finest_pairs_fingerprint = positions_fingerprint(mesh.state.displaced[mesh.num_levels()]);

@@ -167,6 +167,11 @@ struct FoldLimitStats {
   // finest_pairs_of says whether they still describe the given positions
   // (an edit after the fit moves the level).
   bool finest_pairs_known = false;
+  // How the finest level's pairs were found for the above and for the
+  // separation's start: whole searches, and the pairs already known at the
+  // same positions (incremental runs: those of the last whole search, kept
+  // up to date by the separation's searches around what it moved).
+  int finest_whole_searches = 0, finest_known_reused = 0;
   std::vector<std::array<int, 2>> finest_pairs;
   std::uint64_t finest_pairs_fingerprint = 0;  // positions_fingerprint of the level searched
 };

@@ -36,6 +36,13 @@ void require_same_run(const MultiresMesh& fast, const FoldLimitStats& fs, const 
   CHECK(fs.intersections_found == ss.intersections_found);
   CHECK(fs.intersections_left == ss.intersections_left);
   CHECK(fs.crossing_corrected == ss.crossing_corrected);
+  CHECK(fs.second_pass_before == ss.second_pass_before);
+  CHECK(fs.second_pass_after == ss.second_pass_after);
+  CHECK(fs.smoothed_pairs_before == ss.smoothed_pairs_before);
+  CHECK(fs.smoothed_pairs_after == ss.smoothed_pairs_after);
+  // The finest level's pairs handed to the quality report.
+  CHECK(fs.finest_pairs_known == ss.finest_pairs_known);
+  CHECK(fs.finest_pairs == ss.finest_pairs);
   REQUIRE(fast.num_levels() == full.num_levels());
   for (int l = 0; l <= fast.num_levels(); ++l) {
     INFO("level " << l);
@@ -63,6 +70,9 @@ void run_both(const MultiresMesh& input, FoldLimitOptions options, FoldLimitStat
   REQUIRE(limit_folds(fast, options, &fast_stats).ok());
   options.incremental = false;
   REQUIRE(limit_folds(full, options, &full_stats).ok());
+  // The reference searches the finest level whole every time; the
+  // incremental run reuses the pairs its separation kept up to date.
+  CHECK(full_stats.finest_known_reused == 0);
   require_same_run(fast, fast_stats, full, full_stats);
 }
 
@@ -132,7 +142,30 @@ TEST_CASE("fold limit: incremental visits equal full ones when crossing sheets a
     run_both(mr, options, stats);
     CHECK(stats.intersections_found > 10);
     CHECK(stats.crossing_corrected > 0);
+    CHECK(stats.finest_whole_searches == 1);  // the separation's start only
+    CHECK(stats.finest_known_reused > 0);
   }
+}
+
+TEST_CASE("fold limit: the pairs a cut-short separation leaves are the pairs a whole search finds", "[multires]") {
+  // One or two rounds leave most of the crossing pairs to the last resort
+  // (smooth_region_rings): the pairs kept up to date through the rounds'
+  // searches around what moved must be every pair a search of the whole
+  // level finds (the reference run's), or the last resort smooths other
+  // regions.
+  for (unsigned seed : {11u, 13u})
+    for (int rounds : {1, 2}) {
+      INFO("seed " << seed << ", rounds " << rounds);
+      FoldLimitOptions options;
+      options.max_intersection_rounds = rounds;
+      options.separate_coarser_levels = false;
+      FoldLimitStats stats;
+      run_both(spheres_pushed_together(seed), options, stats);
+      CHECK(stats.intersections_found > 50);
+      CHECK(stats.smoothed_pairs_before > 50);
+      CHECK(stats.finest_whole_searches == 1);
+      CHECK(stats.finest_known_reused > 0);
+    }
 }
 
 TEST_CASE("fold limit: a finest-level tree taken over from elsewhere gives the run of its own tree", "[multires]") {
