@@ -25,6 +25,15 @@ void ClosestPointTree::build(const TriMesh& mesh) {
   if (!build_bvh(mesh, bvh_).ok()) bvh_ = MeshBvh{};
 }
 
+void ClosestPointTree::build(const TriMesh& mesh, MeshBvh& tree) {
+  if (!tree.empty() && tree.triangles == mesh.triangles && tree.positions == mesh.positions) {
+    bvh_ = std::move(tree);
+    tree = MeshBvh{};
+    return;
+  }
+  build(mesh);
+}
+
 namespace {
 SurfacePoint to_surface_point(const ClosestPoint& c, const Vec3& p) {
   SurfacePoint s;
@@ -75,7 +84,11 @@ DistanceStats summarize_distances(std::vector<double>& d, double reference_diago
 
 DistanceStats point_to_surface_stats(const std::vector<Vec3>& points, const TriMesh& mesh,
                                      double reference_diagonal, int stride) {
-  ClosestPointTree tree(mesh);
+  return point_to_surface_stats(points, ClosestPointTree(mesh), reference_diagonal, stride);
+}
+
+DistanceStats point_to_surface_stats(const std::vector<Vec3>& points, const ClosestPointTree& tree,
+                                     double reference_diagonal, int stride) {
   if (tree.empty()) return DistanceStats{};
   stride = std::max(1, stride);
   const int n = static_cast<int>((points.size() + stride - 1) / stride);

@@ -33,6 +33,11 @@ class ClosestPointTree {
   ClosestPointTree() = default;
   explicit ClosestPointTree(const TriMesh& mesh) { build(mesh); }
   void build(const TriMesh& mesh);
+  // Takes over `tree` (moved out) when it is a tree over exactly `mesh`
+  // (the same triangles, its boxes fitted to the same positions, e.g. one
+  // refitted there), else builds one. Closest distances do not depend on
+  // the tree.
+  void build(const TriMesh& mesh, MeshBvh& tree);
 
   bool empty() const { return bvh_.empty(); }
   // Exact closest point on the mesh. When a finite upper bound on the squared
@@ -71,6 +76,9 @@ struct DistanceStats {
 // point searched near its predecessor's triangle (scans list neighbours
 // together); the figures do not depend on either.
 DistanceStats point_to_surface_stats(const std::vector<Vec3>& points, const TriMesh& mesh,
+                                     double reference_diagonal, int stride = 1);
+// The same on a tree already built over the mesh.
+DistanceStats point_to_surface_stats(const std::vector<Vec3>& points, const ClosestPointTree& tree,
                                      double reference_diagonal, int stride = 1);
 
 // Summary of a list of distances (consumed: it is partially sorted).

@@ -1053,7 +1053,13 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
   s = evaluate(mesh);
   if (!s.ok()) return s;
   FoldLimiter limiter(mesh, options, smooth, st);
-  if (finest_tree) limiter.adopt_finest_tree(*finest_tree);
+  // The caller's tree slot receives the limiter's tree at the end unless it
+  // holds a tree over other triangles (left alone).
+  bool hand_back = false;
+  if (finest_tree) {
+    if (!finest_tree->empty()) limiter.adopt_finest_tree(*finest_tree);
+    hand_back = finest_tree->empty();  // taken over, or none given
+  }
   s = limiter.fold_pass(options.max_rounds);
   if (!s.ok()) return s;
   if (options.max_intersection_rounds > 0) {
@@ -1135,6 +1141,16 @@ Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimi
     st.finest_pairs_fingerprint = positions_fingerprint(mesh.state.displaced[mesh.num_levels()]);
   }
   if (stats) *stats = st;
+  if (hand_back) {
+    if (MeshBvh* tree = limiter.finest_tree()) {
+      TriMesh finest;
+      finest.positions = mesh.state.displaced[mesh.num_levels()];
+      finest.triangles = mesh.triangles(mesh.num_levels());
+      s = refit_bvh(finest, *tree);
+      if (!s.ok()) return s;
+      *finest_tree = std::move(*tree);
+    }
+  }
   return Status::success();
 }
 

@@ -189,10 +189,14 @@ const std::vector<std::array<int, 2>>* finest_pairs_of(const FoldLimitStats& sta
 // Fails with InvalidInput on mismatched arrays or options out of range
 // (shrink not in [0, 1), negative ratios or counts).
 // finest_tree (optional): a tree over the finest level's triangles, its
-// boxes at any positions (e.g. fit_global's relief_tree): taken over (moved
-// out) and refitted instead of building one. A tree over other triangles is
-// left alone. The crossing searches find the same pairs on any tree, so
-// the result is the same either way.
+// boxes at any positions (e.g. fit_global's relief_tree): taken over and
+// refitted instead of building one. A tree over other triangles is left
+// alone. The crossing searches find the same pairs on any tree, so the
+// result is the same either way. Unless it was such a tree, on return it
+// holds the limiter's tree over the finest level, its boxes refitted to the
+// level's final positions (when there is one: max_intersection_rounds > 0),
+// for closest points on the result (fit_head's Table 1 figures of the
+// subdivision).
 Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options = {}, FoldLimitStats* stats = nullptr,
                    MeshBvh* finest_tree = nullptr);
 

@@ -328,12 +328,19 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   if (!st) return with_context(st, "generic head");
   const HeadAnnotations& ann = generic.annotations;
 
-  auto stage_done = [&](const char* name, const TriMesh& surface, const std::vector<Vec3>& pts) {
+  // tree (optional): a tree over exactly `surface`, taken over for the
+  // closest points instead of building one.
+  auto stage_done = [&](const char* name, const TriMesh& surface, const std::vector<Vec3>& pts,
+                        MeshBvh* tree = nullptr) {
     if (observer.finished) observer.finished(name, surface);
     FitStageReport rep;
     rep.name = name;
-    if (options.measure_stages)
-      rep.distance = point_to_surface_stats(thin(pts, options.stats_max_points), surface, diag);
+    if (options.measure_stages) {
+      ClosestPointTree closest;
+      if (tree) closest.build(surface, *tree);
+      else closest.build(surface);
+      rep.distance = point_to_surface_stats(thin(pts, options.stats_max_points), closest, diag);
+    }
     out.stages.push_back(rep);
     if (observer.measured) observer.measured(rep);
   };
@@ -591,7 +598,9 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   for (int z : out.fold_limit.zeroed) out.zeroed_displacements += z;
   for (int l = 1; l <= options.levels; ++l) out.level_meshes.push_back(level_mesh(out.multires, l));
   const TriMesh finest = level_mesh(out.multires, options.levels);
-  stage_done("subdivision", finest, pts);
+  // The fold limiter hands back its tree (the relief's), refitted to the
+  // finest level as it left it: no level-3 build for the figures.
+  stage_done("subdivision", finest, pts, &relief_tree);
   return Status::success();
 }
 

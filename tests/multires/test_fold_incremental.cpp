@@ -183,7 +183,7 @@ TEST_CASE("fold limit: a finest-level tree taken over from elsewhere gives the r
   CHECK(own_stats.intersections_found > 10);
 
   // limit_folds handed a tree over level `level`'s triangles at the smooth
-  // positions; returns the tree as it left it.
+  // positions; returns what it left in the tree's place.
   std::vector<std::vector<Vec3>> smooth;
   REQUIRE(smooth_positions(mr, smooth).ok());
   auto run_with_tree_of = [&](int level, MultiresMesh& run, FoldLimitStats& stats) {
@@ -198,8 +198,16 @@ TEST_CASE("fold limit: a finest-level tree taken over from elsewhere gives the r
   };
   MultiresMesh taken, refused;
   FoldLimitStats taken_stats, refused_stats;
-  CHECK(run_with_tree_of(3, taken, taken_stats).empty());  // taken over
+  // Taken over, and handed back refitted to where the level ended.
+  const MeshBvh back = run_with_tree_of(3, taken, taken_stats);
   require_same_run(taken, taken_stats, own, own_stats);
-  CHECK_FALSE(run_with_tree_of(2, refused, refused_stats).empty());  // other triangles: left alone
+  CHECK(back.triangles == mr.triangles(3));
+  CHECK(same_bits(back.positions, taken.state.displaced[3]));
+  MeshBvh fresh;
+  REQUIRE(build_bvh(level_mesh(taken, 3), fresh).ok());
+  CHECK(same_bits({back.nodes[0].box_min, back.nodes[0].box_max}, {fresh.nodes[0].box_min, fresh.nodes[0].box_max}));
+  // Other triangles: left alone.
+  const MeshBvh other = run_with_tree_of(2, refused, refused_stats);
   require_same_run(refused, refused_stats, own, own_stats);
+  CHECK(other.triangles == mr.triangles(2));
 }
