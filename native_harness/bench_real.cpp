@@ -12,6 +12,8 @@
 // in finest-level edges (FitHeadOptions::surface_sample_edges; 0: off);
 // --fit-data-level L: the global fit's last passes measure the points
 // against Butterfly level L (GlobalFitOptions::data_level; 0: off);
+// --fit-pleat-steps N: the pleat relief's sweeps (GlobalFitOptions::
+// smooth_guard_pleat_steps; 0: off);
 // --fit-back off|face-only|always, --fit-back-weight W: the global fit's
 // scan-to-mesh term (FitHeadOptions::back_term). Beside Table 1 it prints
 // the other direction: level L's face vertices to the scan's triangles
@@ -83,8 +85,9 @@ int run(const Args& args) {
       !args.get_double("fit-crease-angle", options.global.smooth_guard_crease_min_angle_deg,
                        options.global.smooth_guard_crease_min_angle_deg) ||
       !args.get_double("fit-surface-edges", options.surface_sample_edges, options.surface_sample_edges) ||
-      !args.get_int("fit-data-level", options.global.data_level, options.global.data_level)) {
-    std::printf("   --fit-crease-trials / --fit-crease-edges / --fit-data-level take a whole number, --fit-crease-angle and "
+      !args.get_int("fit-data-level", options.global.data_level, options.global.data_level) ||
+      !args.get_int("fit-pleat-steps", options.global.smooth_guard_pleat_steps, options.global.smooth_guard_pleat_steps)) {
+    std::printf("   --fit-crease-trials / --fit-crease-edges / --fit-data-level / --fit-pleat-steps take a whole number, --fit-crease-angle and "
                 "--fit-surface-edges a number\n");
     return 1;
   }
@@ -133,9 +136,10 @@ int run(const Args& args) {
             if (!outside_nose[v]) nose_max = std::max(nose_max, per_vertex[v]);
         if (!st) std::printf("   %-14s level L -> scan: %s\n", c.name.c_str(), st.message.c_str());
       }
-      std::printf("   %-14s %9.5f %7d %7d %7d %8d %7d %8d %9.0f   %.3f / %.2f / %.2f, %d of %d; nose max %.2f\n",
+      std::printf("   %-14s %9.5f %7d %7d %7d %8d %7d %8d %9.0f   %.3f / %.2f / %.2f, %d of %d; nose max %.2f; pleats %d -> %d\n",
                   c.name.c_str(), table1, x.total, x.lips, x.ears, x.eye_sockets, x.rest, q.smooth_crossings.total, ms,
-                  1e3 * back.mean, 1e3 * back.p99, 1e3 * back.max, back.over_1mm, back.vertices, 1e3 * nose_max);
+                  1e3 * back.mean, 1e3 * back.p99, 1e3 * back.max, back.over_1mm, back.vertices, 1e3 * nose_max,
+                  r.global_fit.pleats_before, r.global_fit.pleats_after);
       if (x.rest) {  // where the rest lie (regions overlap; "face" holds most)
         std::printf("   %-14s rest touches:", "");
         for (const auto& kv : x.rest_by_region) std::printf(" %s %d", kv.first.c_str(), kv.second);

@@ -1204,14 +1204,8 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       auto folds_at = [&](const VecX& trial, const std::vector<int>& moving) {
         return pairs_in_window(relief.refine(trial), relief.reference_level, moving, current, true);
       };
-      std::vector<char> failed(nv, 0);
-      for (int step = 0; step < options.smooth_guard_relief_steps && !current.empty(); ++step) {
-        // Clusters: corners of the folding faces, connected over the mesh.
-        std::vector<char> corner(nv, 0);
-        for (const auto& p : current)
-          for (int f : p)
-            for (int v : mesh.triangles[f / per])
-              if (!pinned[v]) corner[v] = 1;
+      // The flagged vertices in groups connected over the mesh.
+      auto connected_clusters = [&](const std::vector<char>& corner) {
         std::vector<int> cluster_of(nv, -1);
         std::vector<std::vector<int>> clusters;
         for (int v = 0; v < nv; ++v) {
@@ -1227,8 +1221,18 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
               if (corner[w] && cluster_of[w] < 0) cluster_of[w] = cluster_of[u], stack.push_back(w);
           }
         }
+        return clusters;
+      };
+      std::vector<char> failed(nv, 0);
+      for (int step = 0; step < options.smooth_guard_relief_steps && !current.empty(); ++step) {
+        // Clusters: corners of the folding faces, connected over the mesh.
+        std::vector<char> corner(nv, 0);
+        for (const auto& p : current)
+          for (int f : p)
+            for (int v : mesh.triangles[f / per])
+              if (!pinned[v]) corner[v] = 1;
         bool progress_made = false;
-        for (const std::vector<int>& cluster : clusters) {
+        for (const std::vector<int>& cluster : connected_clusters(corner)) {
           // A cluster no share helped in the previous sweep is not tried
           // again unless a neighbour's step changed it.
           if (std::all_of(cluster.begin(), cluster.end(), [&](int v) { return failed[v]; })) continue;
@@ -1295,12 +1299,178 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
           result.relief_folds_after = static_cast<int>(after.size());
         } else {
           x = x_before_relief;
+          relief.level.positions = relief.refine(x);  // where the first search's pairs are
           result.relief_folds_after = result.relief_folds_before;
           result.relief_steps = 0;
           std::fill(moved_ever.begin(), moved_ever.end(), 0);
         }
       } else {
         result.relief_folds_after = result.relief_folds_before;
+      }
+      if (options.smooth_guard_pleat_steps > 0) {
+        // Pleats (header comment): level edges bent by more than 90 deg
+        // where the reference's bend by less than 45, crossing nothing. The
+        // same steps, scored by the pleat edges of the whole level; a step
+        // may not add a new pair anywhere on the level. relief.level.positions
+        // is the level at x and all_now its new pairs: a trial's pairs are
+        // those of the triangles it moved, searched again on the tree refit,
+        // and the rest of all_now (as all_new_pairs).
+        const std::vector<Tri>& fine = relief.level.triangles;
+        const int nf = static_cast<int>(fine.size());
+        auto ignored_face = [&](const Tri& control_face) {
+          for (int v : control_face)
+            if (!terms.smooth_guard_ignored[v]) return false;
+          return true;
+        };
+        // The tree at the level's positions (a reverted relief left it at
+        // its steps'); each vertex's level triangles, for the edges below
+        // and for refits of the moved vertices alone.
+        refit_bvh(relief.level, relief.bvh);
+        BvhRefitIndex refit_index;
+        build_refit_index(relief.bvh, refit_index);
+        const std::vector<int>& vt_offsets = refit_index.vertex_offsets;
+        const std::vector<int>& vt = refit_index.vertex_triangles;
+        // The level's interior edges as their two triangles, outside
+        // ignored faces, those the reference bends by 45 deg or more left
+        // out; each face's such edges (face_edges, at most 3).
+        std::vector<std::array<int, 2>> edge_faces;
+        std::vector<std::array<int, 3>> face_edges(nf, {-1, -1, -1});
+        {
+          std::vector<Vec3> ref_normal(nf);
+          const std::vector<Vec3>& r = relief.reference_level;
+          for (int f = 0; f < nf; ++f) {
+            const Tri& t = fine[f];
+            ref_normal[f] = (r[t[1]] - r[t[0]]).cross(r[t[2]] - r[t[0]]).normalized();
+          }
+          auto add_edge = [&](int f, int g) {
+            const int e = static_cast<int>(edge_faces.size());
+            edge_faces.push_back({f, g});
+            for (int h : {f, g})
+              for (int& slot : face_edges[h])
+                if (slot < 0) {
+                  slot = e;
+                  break;
+                }
+          };
+          const double cos45 = std::sqrt(0.5);
+          for (int f = 0; f < nf; ++f) {
+            if (!terms.smooth_guard_ignored.empty() && ignored_face(mesh.triangles[f / per])) continue;
+            for (int k = 0; k < 3; ++k) {
+              const int a = fine[f][k], b = fine[f][(k + 1) % 3];
+              for (int i = vt_offsets[a]; i < vt_offsets[a + 1]; ++i) {
+                const int g = vt[i];
+                if (g <= f || (fine[g][0] != b && fine[g][1] != b && fine[g][2] != b)) continue;
+                if (!terms.smooth_guard_ignored.empty() && ignored_face(mesh.triangles[g / per])) continue;
+                if (ref_normal[f].dot(ref_normal[g]) > cos45) add_edge(f, g);
+              }
+            }
+          }
+        }
+        // Whether edge e bends by more than 90 deg at `level`.
+        auto pleated = [&](const std::vector<Vec3>& level, int e) -> char {
+          const Tri& a = fine[edge_faces[e][0]];
+          const Tri& b = fine[edge_faces[e][1]];
+          const Vec3 na = (level[a[1]] - level[a[0]]).cross(level[a[2]] - level[a[0]]);
+          const Vec3 nb = (level[b[1]] - level[b[0]]).cross(level[b[2]] - level[b[0]]);
+          return na.dot(nb) < 0;
+        };
+        std::vector<char> is_pleat(edge_faces.size(), 0);
+        int pleats_now = 0;
+        for (size_t e = 0; e < edge_faces.size(); ++e)
+          pleats_now += is_pleat[e] = pleated(relief.level.positions, static_cast<int>(e));
+        result.pleats_before = result.pleats_after = pleats_now;
+        // A step moves no vertex farther than this (the mean control edge
+        // times smooth_guard_pleat_max_move_edges).
+        double mean_edge = 0;
+        for (const Edge& e : topology.edges) mean_edge += (x.segment<3>(3 * e.v0) - x.segment<3>(3 * e.v1)).norm();
+        const double max_move =
+            options.smooth_guard_pleat_max_move_edges * mean_edge / std::max<size_t>(1, topology.edges.size());
+        std::vector<char> failed_pleat(nv, 0), face_mark(nf, 0), edge_mark(edge_faces.size(), 0);
+        for (int step = 0; step < options.smooth_guard_pleat_steps && pleats_now > 0; ++step) {
+          std::vector<char> corner(nv, 0);
+          for (size_t e = 0; e < edge_faces.size(); ++e)
+            if (is_pleat[e])
+              for (int f : edge_faces[e])
+                for (int v : mesh.triangles[f / per])
+                  if (!pinned[v]) corner[v] = 1;
+          bool progress_made = false;
+          for (const std::vector<int>& cluster : connected_clusters(corner)) {
+            if (std::all_of(cluster.begin(), cluster.end(), [&](int v) { return failed_pleat[v]; })) continue;
+            VecX best_x;
+            int best_count = pleats_now;
+            std::vector<std::pair<int, char>> best_changes;  // edges whose pleat state flips
+            std::vector<std::array<int, 2>> best_pairs;
+            std::vector<Vec3> best_level;
+            const VecX residual = smooth.R * x - smooth.b;
+            for (double share : options.smooth_guard_relief_shares) {
+              if (std::any_of(cluster.begin(), cluster.end(),
+                              [&](int v) { return share * residual.segment<3>(3 * v).norm() > max_move; }))
+                continue;
+              VecX trial = x;
+              for (int v : cluster) trial.segment<3>(3 * v) -= share * residual.segment<3>(3 * v);
+              if (static_cast<int>(guard.turned(mesh.triangles, trial).size()) > turned_start ||
+                  static_cast<int>(crossing_pairs(trial, check_mesh).size()) > crossing_start)
+                continue;
+              std::vector<Vec3> level = relief.refine(trial);
+              // What moved: its vertices, their triangles, those's edges.
+              std::vector<int> moved_vertices, moved_faces, moved_edges;
+              for (int v = 0; v < static_cast<int>(level.size()); ++v)
+                if (level[v] != relief.level.positions[v]) {
+                  moved_vertices.push_back(v);
+                  for (int i = vt_offsets[v]; i < vt_offsets[v + 1]; ++i)
+                    if (!face_mark[vt[i]]) face_mark[vt[i]] = 1, moved_faces.push_back(vt[i]);
+                }
+              for (int f : moved_faces)
+                for (int e : face_edges[f])
+                  if (e >= 0 && !edge_mark[e]) edge_mark[e] = 1, moved_edges.push_back(e);
+              for (int f : moved_faces) face_mark[f] = 0;
+              int count = pleats_now;
+              std::vector<std::pair<int, char>> changes;
+              for (int e : moved_edges) {
+                edge_mark[e] = 0;
+                const char now = pleated(level, e);
+                if (now != is_pleat[e]) changes.push_back({e, now}), count += now ? 1 : -1;
+              }
+              if (count >= best_count) continue;
+              // No new pair anywhere on the level: the moved triangles
+              // searched again on the tree refit there (and back after).
+              std::sort(moved_faces.begin(), moved_faces.end());
+              const Status refit = refit_bvh_vertices(relief.bvh, refit_index, level, moved_vertices);
+              std::vector<std::array<int, 2>> pairs;
+              if (refit.ok()) find_new_self_intersections(relief.bvh, relief.reference_level, pairs, &moved_faces);
+              refit_bvh_vertices(relief.bvh, refit_index, relief.level.positions, moved_vertices);
+              if (!refit.ok()) continue;
+              drop_ignored(pairs);
+              for (int f : moved_faces) face_mark[f] = 1;
+              for (const auto& p : all_now)
+                if (!face_mark[p[0]] && !face_mark[p[1]]) pairs.push_back(p);
+              for (int f : moved_faces) face_mark[f] = 0;
+              std::sort(pairs.begin(), pairs.end());
+              if (pairs.size() > all_now.size()) continue;
+              best_x = std::move(trial), best_count = count, best_changes = std::move(changes);
+              best_pairs = std::move(pairs), best_level = std::move(level);
+            }
+            for (int v : cluster) failed_pleat[v] = best_x.size() == 0;
+            if (best_x.size()) {
+              x = std::move(best_x);
+              pleats_now = best_count;
+              for (const auto& [e, now] : best_changes) is_pleat[e] = now;
+              all_now = std::move(best_pairs);
+              relief.level.positions = std::move(best_level);
+              for (int v : cluster) moved_ever[v] = 1;
+              ++result.pleat_steps;
+              progress_made = true;
+            }
+          }
+          if (!progress_made) break;
+        }
+        result.pleats_after = pleats_now;
+        if (result.pleat_steps > 0) {
+          std::vector<std::array<int, 2>> folds = all_now;
+          keep_folds(folds);
+          result.relief_folds_after = static_cast<int>(folds.size());
+        }
+        refit_bvh(relief.level, relief.bvh);
       }
       for (int v = 0; v < nv; ++v) result.relief_vertices += moved_ever[v];
       if (options.smooth_guard_crease_max_edges > 0 && result.relief_folds_after > 0) {

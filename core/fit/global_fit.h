@@ -117,6 +117,20 @@
 //   carry the detail they leave); vertices under E_constraint or ignored by
 //   the guard never do. Not a term of E_global: the step after the
 //   minimization, like the untangling in fit_head.
+// - Pleat relief (GlobalFitOptions::smooth_guard_pleat_steps), after the
+//   fold relief's steps, where the relief runs. A fold can be too tight to
+//   cross itself: Fran's right cheek had a 10 mm pleat on the smooth level
+//   3 (edges bent by 105-165 deg where the generic head's bend by 4), a
+//   dark slit in every render, and no crossing pair for the fold relief to
+//   see. A pleat edge of the relief level bends by more than 90 deg where
+//   the reference's bends by less than 45 (outside ignored faces; turned
+//   triangles alone are no sign: James's columella turns smoothly past the
+//   generic's, and unturning it put his subnasale back inside his nose).
+//   The same umbrella steps, cluster by cluster over the corners of the
+//   control faces holding pleat edges, scored by the pleat edges of the
+//   whole level; a share is taken only when it turns and crosses no more
+//   control triangles and adds no new pair anywhere on the level (the
+//   triangles it moved searched again on the relief's tree, refit).
 // - Fold creases (GlobalFitOptions::smooth_guard_crease_*), after the
 //   relief. Some folds do not answer the umbrella step: where James's plate
 //   ear meets his head a control edge bends 105-141 deg, and Butterfly's
@@ -267,6 +281,14 @@ struct GlobalFitOptions {
   // against the reference's level (a fold turns one; the search is ~100 ms
   // on the generic head's level 3, the check ~5 ms).
   bool smooth_guard_relief_when_turned = true;
+  // Pleat relief (header comment), after the fold relief's steps: at most
+  // this many sweeps of the same steps, scored by the relief level's pleat
+  // edges (0: off).
+  int smooth_guard_pleat_steps = 3;
+  // No vertex of a pleat step moves farther than this many mean control
+  // edges (the pleats are kinks of a few tenths of a millimetre; a longer
+  // step reshapes what the data put there: James's columella base).
+  double smooth_guard_pleat_max_move_edges = 0.1;
   // Fold creases (see header comment), after the relief's steps: up to
   // smooth_guard_crease_trials times, the sharpest control edge (dihedral
   // above smooth_guard_crease_min_angle_deg) of a face that still folds is
@@ -384,6 +406,9 @@ struct GlobalFitResult {
   bool relief_searched = false;
   int relief_folds_before = 0;
   int relief_folds_after = 0;
+  // Pleat relief: the relief level's pleat edges (header comment) before
+  // and after it, and its steps.
+  int pleats_before = 0, pleats_after = 0, pleat_steps = 0;
   int relief_steps = 0;
   int relief_vertices = 0;
   // Fold creases: control edges to refine as creases (pairs of vertices),

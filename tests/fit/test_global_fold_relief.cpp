@@ -129,3 +129,21 @@ TEST_CASE("global fit: the fold relief refuses bad options") {
   o.smooth_guard_crease_max_edges = -2;
   CHECK(fit_global(c.points, c.start, c.topo, c.terms(), o, out, r).code == ErrorCode::InvalidInput);
 }
+
+TEST_CASE("global fit: the pleat relief leaves a fit without pleats alone") {
+  // B's step turns level-3 triangles at its foot (the relief searches the
+  // level) but bends no edge of it by more than 90 deg: no pleat, nothing
+  // to move. (Pleats themselves: the real Fran's cheek,
+  // tests/pipeline/test_face_scan.cpp.)
+  const StepSheets c = make_step_sheets(0.1);
+  GlobalFitOptions off = guarded_options();
+  off.smooth_guard_pleat_steps = 0;
+  TriMesh out_off, out_on;
+  GlobalFitResult r_off, r_on;
+  REQUIRE(fit_global(c.points, c.start, c.topo, c.terms(), off, out_off, r_off).ok());
+  REQUIRE(fit_global(c.points, c.start, c.topo, c.terms(), guarded_options(), out_on, r_on).ok());
+  CHECK(r_on.relief_searched);
+  CHECK(r_on.pleats_before == 0);
+  CHECK(r_on.pleat_steps == 0);
+  CHECK(out_on.positions == out_off.positions);
+}
