@@ -1223,16 +1223,21 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
         }
         return clusters;
       };
+      // The unpinned corners of the control faces holding these level triangles.
+      auto corners_of = [&](const std::vector<int>& level_faces) {
+        std::vector<char> corner(nv, 0);
+        for (int f : level_faces)
+          for (int v : mesh.triangles[f / per])
+            if (!pinned[v]) corner[v] = 1;
+        return corner;
+      };
       std::vector<char> failed(nv, 0);
       for (int step = 0; step < options.smooth_guard_relief_steps && !current.empty(); ++step) {
         // Clusters: corners of the folding faces, connected over the mesh.
-        std::vector<char> corner(nv, 0);
-        for (const auto& p : current)
-          for (int f : p)
-            for (int v : mesh.triangles[f / per])
-              if (!pinned[v]) corner[v] = 1;
+        std::vector<int> folding;
+        for (const auto& p : current) folding.insert(folding.end(), p.begin(), p.end());
         bool progress_made = false;
-        for (const std::vector<int>& cluster : connected_clusters(corner)) {
+        for (const std::vector<int>& cluster : connected_clusters(corners_of(folding))) {
           // A cluster no share helped in the previous sweep is not tried
           // again unless a neighbour's step changed it.
           if (std::all_of(cluster.begin(), cluster.end(), [&](int v) { return failed[v]; })) continue;
@@ -1387,14 +1392,11 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
             options.smooth_guard_pleat_max_move_edges * mean_edge / std::max<size_t>(1, topology.edges.size());
         std::vector<char> failed_pleat(nv, 0), face_mark(nf, 0), edge_mark(edge_faces.size(), 0);
         for (int step = 0; step < options.smooth_guard_pleat_steps && pleats_now > 0; ++step) {
-          std::vector<char> corner(nv, 0);
+          std::vector<int> pleated_faces;
           for (size_t e = 0; e < edge_faces.size(); ++e)
-            if (is_pleat[e])
-              for (int f : edge_faces[e])
-                for (int v : mesh.triangles[f / per])
-                  if (!pinned[v]) corner[v] = 1;
+            if (is_pleat[e]) pleated_faces.insert(pleated_faces.end(), edge_faces[e].begin(), edge_faces[e].end());
           bool progress_made = false;
-          for (const std::vector<int>& cluster : connected_clusters(corner)) {
+          for (const std::vector<int>& cluster : connected_clusters(corners_of(pleated_faces))) {
             if (std::all_of(cluster.begin(), cluster.end(), [&](int v) { return failed_pleat[v]; })) continue;
             VecX best_x;
             int best_count = pleats_now;

@@ -56,6 +56,13 @@ GlobalFitOptions guarded_options() {
   return o;
 }
 
+// The sheets fitted with two sets of options.
+void fit_both(const StepSheets& c, const GlobalFitOptions& a, const GlobalFitOptions& b, TriMesh& out_a,
+              GlobalFitResult& r_a, TriMesh& out_b, GlobalFitResult& r_b) {
+  REQUIRE(fit_global(c.points, c.start, c.topo, c.terms(), a, out_a, r_a).ok());
+  REQUIRE(fit_global(c.points, c.start, c.topo, c.terms(), b, out_b, r_b).ok());
+}
+
 }  // namespace
 
 TEST_CASE("global fit: the fold relief leaves a fit without folds alone") {
@@ -65,8 +72,7 @@ TEST_CASE("global fit: the fold relief leaves a fit without folds alone") {
   off.smooth_guard_relief_steps = 0;
   TriMesh out_off, out_on;
   GlobalFitResult r_off, r_on;
-  REQUIRE(fit_global(c.points, c.start, c.topo, c.terms(), off, out_off, r_off).ok());
-  REQUIRE(fit_global(c.points, c.start, c.topo, c.terms(), guarded_options(), out_on, r_on).ok());
+  fit_both(c, off, guarded_options(), out_off, r_off, out_on, r_on);
   const LevelPairs level3 = smooth_pairs(out_off, c.flat_mesh(), 3);
   INFO("level 3 without the relief: " << level3.all << " new pairs, " << level3.folds << " folds");
   CHECK(level3.all == 0);
@@ -140,8 +146,7 @@ TEST_CASE("global fit: the pleat relief leaves a fit without pleats alone") {
   off.smooth_guard_pleat_steps = 0;
   TriMesh out_off, out_on;
   GlobalFitResult r_off, r_on;
-  REQUIRE(fit_global(c.points, c.start, c.topo, c.terms(), off, out_off, r_off).ok());
-  REQUIRE(fit_global(c.points, c.start, c.topo, c.terms(), guarded_options(), out_on, r_on).ok());
+  fit_both(c, off, guarded_options(), out_off, r_off, out_on, r_on);
   CHECK(r_on.relief_searched);
   CHECK(r_on.pleats_before == 0);
   CHECK(r_on.pleat_steps == 0);
