@@ -1403,6 +1403,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
             std::vector<std::pair<int, char>> best_changes;  // edges whose pleat state flips
             std::vector<std::array<int, 2>> best_pairs;
             std::vector<Vec3> best_level;
+            std::vector<int> best_moved;  // its moved level vertices
             const VecX residual = smooth.R * x - smooth.b;
             for (double share : options.smooth_guard_relief_shares) {
               if (std::any_of(cluster.begin(), cluster.end(),
@@ -1450,7 +1451,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
               std::sort(pairs.begin(), pairs.end());
               if (pairs.size() > all_now.size()) continue;
               best_x = std::move(trial), best_count = count, best_changes = std::move(changes);
-              best_pairs = std::move(pairs), best_level = std::move(level);
+              best_pairs = std::move(pairs), best_level = std::move(level), best_moved = std::move(moved_vertices);
             }
             for (int v : cluster) failed_pleat[v] = best_x.size() == 0;
             if (best_x.size()) {
@@ -1459,6 +1460,9 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
               for (const auto& [e, now] : best_changes) is_pleat[e] = now;
               all_now = std::move(best_pairs);
               relief.level.positions = std::move(best_level);
+              // The trials put the tree back where the level was: it follows
+              // the step (later trials search against it).
+              refit_bvh_vertices(relief.bvh, refit_index, relief.level.positions, best_moved);
               for (int v : cluster) moved_ever[v] = 1;
               ++result.pleat_steps;
               progress_made = true;
@@ -1472,7 +1476,6 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
           keep_folds(folds);
           result.relief_folds_after = static_cast<int>(folds.size());
         }
-        refit_bvh(relief.level, relief.bvh);
       }
       for (int v = 0; v < nv; ++v) result.relief_vertices += moved_ever[v];
       if (options.smooth_guard_crease_max_edges > 0 && result.relief_folds_after > 0) {
