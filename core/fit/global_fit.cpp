@@ -311,6 +311,15 @@ std::vector<std::array<int, 2>> swept_candidates(const std::vector<Tri>& triangl
   return pairs;
 }
 
+// A control face whose corners are all flagged in `ignored` (#V; empty:
+// none is): the smooth-surface guard leaves its level triangles alone.
+bool ignored_face(const Tri& control_face, const std::vector<char>& ignored) {
+  if (ignored.empty()) return false;
+  for (int v : control_face)
+    if (!ignored[v]) return false;
+  return true;
+}
+
 // The smooth-surface guard's check (header comment): the control mesh
 // refined by Modified Butterfly, and the crossing pairs of that level which
 // the reference's refinement does not have. Butterfly is linear in the
@@ -368,14 +377,10 @@ struct SmoothSurfaceCheck {
   void drop_ignored(std::vector<std::array<int, 2>>& pairs, const std::vector<Tri>& control,
                     const std::vector<char>& ignored) const {
     if (ignored.empty()) return;
-    auto ignored_face = [&](int f) {
-      for (int v : control[f / faces_per_control])
-        if (!ignored[v]) return false;
-      return true;
-    };
+    auto ignored_level_face = [&](int f) { return ignored_face(control[f / faces_per_control], ignored); };
     size_t kept = 0;
     for (const auto& p : pairs)
-      if (!ignored_face(p[0]) && !ignored_face(p[1])) pairs[kept++] = p;
+      if (!ignored_level_face(p[0]) && !ignored_level_face(p[1])) pairs[kept++] = p;
     pairs.resize(kept);
   }
   std::vector<std::array<int, 2>> first_pairs;  // new pairs of the first (whole) search
@@ -1274,6 +1279,20 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       // and only the moved triangles are searched again, on the first
       // search's tree refit (a refit tree and a fresh one give the same
       // pairs since the pair test's orientations are filtered).
+      // The level's new pairs after the triangles `moved` (listed, and
+      // marked in moved_mark, #level F) changed, relief.bvh already fitted
+      // to the new positions: those triangles searched again, and the pairs
+      // of `base` (the new pairs before) between two unmoved ones kept.
+      auto pairs_after_move = [&](const std::vector<int>& moved, const std::vector<char>& moved_mark,
+                                  const std::vector<std::array<int, 2>>& base) {
+        std::vector<std::array<int, 2>> pairs;
+        find_new_self_intersections(relief.bvh, relief.reference_level, pairs, &moved);
+        drop_ignored(pairs);
+        for (const auto& p : base)
+          if (!moved_mark[p[0]] && !moved_mark[p[1]]) pairs.push_back(p);
+        std::sort(pairs.begin(), pairs.end());
+        return pairs;
+      };
       auto all_new_pairs = [&](const VecX& at, std::vector<std::array<int, 2>>& pairs) {
         std::vector<Vec3> now = relief.refine(at);
         const std::vector<Tri>& tris = relief.level.triangles;
@@ -1288,11 +1307,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
             }
         relief.level.positions = std::move(now);
         refit_bvh(relief.level, relief.bvh);
-        find_new_self_intersections(relief.bvh, relief.reference_level, pairs, &moved_list);
-        drop_ignored(pairs);
-        for (const auto& p : pairs_before_relief)
-          if (!moved[p[0]] && !moved[p[1]]) pairs.push_back(p);
-        std::sort(pairs.begin(), pairs.end());
+        pairs = pairs_after_move(moved_list, moved, pairs_before_relief);
       };
       std::vector<std::array<int, 2>> all_now = pairs_before_relief;  // the level's new pairs at x
       if (result.relief_steps > 0) {
@@ -1322,10 +1337,8 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
         // and the rest of all_now (as all_new_pairs).
         const std::vector<Tri>& fine = relief.level.triangles;
         const int nf = static_cast<int>(fine.size());
-        auto ignored_face = [&](const Tri& control_face) {
-          for (int v : control_face)
-            if (!terms.smooth_guard_ignored[v]) return false;
-          return true;
+        auto ignored_level_face = [&](int f) {
+          return ignored_face(mesh.triangles[f / per], terms.smooth_guard_ignored);
         };
         // The tree at the level's positions (a reverted relief left it at
         // its steps'); each vertex's level triangles, for the edges below
@@ -1359,13 +1372,13 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
           };
           const double cos45 = std::sqrt(0.5);
           for (int f = 0; f < nf; ++f) {
-            if (!terms.smooth_guard_ignored.empty() && ignored_face(mesh.triangles[f / per])) continue;
+            if (ignored_level_face(f)) continue;
             for (int k = 0; k < 3; ++k) {
               const int a = fine[f][k], b = fine[f][(k + 1) % 3];
               for (int i = vt_offsets[a]; i < vt_offsets[a + 1]; ++i) {
                 const int g = vt[i];
                 if (g <= f || (fine[g][0] != b && fine[g][1] != b && fine[g][2] != b)) continue;
-                if (!terms.smooth_guard_ignored.empty() && ignored_face(mesh.triangles[g / per])) continue;
+                if (ignored_level_face(g)) continue;
                 if (ref_normal[f].dot(ref_normal[g]) > cos45) add_edge(f, g);
               }
             }
@@ -1440,16 +1453,13 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
               std::sort(moved_faces.begin(), moved_faces.end());
               const Status refit = refit_bvh_vertices(relief.bvh, refit_index, level, moved_vertices);
               std::vector<std::array<int, 2>> pairs;
-              if (refit.ok()) find_new_self_intersections(relief.bvh, relief.reference_level, pairs, &moved_faces);
+              if (refit.ok()) {
+                for (int f : moved_faces) face_mark[f] = 1;
+                pairs = pairs_after_move(moved_faces, face_mark, all_now);
+                for (int f : moved_faces) face_mark[f] = 0;
+              }
               refit_bvh_vertices(relief.bvh, refit_index, relief.level.positions, moved_vertices);
-              if (!refit.ok()) continue;
-              drop_ignored(pairs);
-              for (int f : moved_faces) face_mark[f] = 1;
-              for (const auto& p : all_now)
-                if (!face_mark[p[0]] && !face_mark[p[1]]) pairs.push_back(p);
-              for (int f : moved_faces) face_mark[f] = 0;
-              std::sort(pairs.begin(), pairs.end());
-              if (pairs.size() > all_now.size()) continue;
+              if (!refit.ok() || pairs.size() > all_now.size()) continue;
               best_x = std::move(trial), best_count = count, best_changes = std::move(changes);
               best_pairs = std::move(pairs), best_level = std::move(level), best_moved = std::move(moved_vertices);
             }
