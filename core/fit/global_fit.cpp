@@ -1285,13 +1285,10 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       // of `base` (the new pairs before) between two unmoved ones kept.
       auto pairs_after_move = [&](const std::vector<int>& moved, const std::vector<char>& moved_mark,
                                   const std::vector<std::array<int, 2>>& base) {
-        std::vector<std::array<int, 2>> pairs;
-        find_new_self_intersections(relief.bvh, relief.reference_level, pairs, &moved);
-        drop_ignored(pairs);
-        for (const auto& p : base)
-          if (!moved_mark[p[0]] && !moved_mark[p[1]]) pairs.push_back(p);
-        std::sort(pairs.begin(), pairs.end());
-        return pairs;
+        std::vector<std::array<int, 2>> found;
+        find_new_self_intersections(relief.bvh, relief.reference_level, found, &moved);
+        drop_ignored(found);
+        return pairs_after_change(base, moved_mark, found);
       };
       auto all_new_pairs = [&](const VecX& at, std::vector<std::array<int, 2>>& pairs) {
         std::vector<Vec3> now = relief.refine(at);

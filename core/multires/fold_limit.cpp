@@ -818,16 +818,8 @@ Status FoldLimiter::finest_pairs(PairList& out) {
 void FoldLimiter::update_finest_known(const std::vector<int>& around, const PairList& found) {
   if (!finest_known_valid_) return;
   for (int f : around) finest_mark_[f] = 1;
-  size_t kept = 0;
-  for (const auto& p : finest_known_)
-    if (!finest_mark_[p[0]] && !finest_mark_[p[1]]) finest_known_[kept++] = p;
+  finest_known_ = pairs_after_change(finest_known_, finest_mark_, found);
   for (int f : around) finest_mark_[f] = 0;
-  finest_known_.resize(kept);
-  // Both sorted; `found` holds only pairs with a triangle in `around`, so
-  // none of them is among those kept.
-  PairList merged(finest_known_.size() + found.size());
-  std::merge(finest_known_.begin(), finest_known_.end(), found.begin(), found.end(), merged.begin());
-  finest_known_.swap(merged);
 }
 
 void FoldLimiter::search_finest(const std::vector<int>& moved, PairList& out) {

@@ -340,6 +340,16 @@ Status find_new_self_intersections(const MeshBvh& bvh, const std::vector<Vec3>& 
   return Status::success();
 }
 
+std::vector<std::array<int, 2>> pairs_after_change(const std::vector<std::array<int, 2>>& before,
+                                                   const std::vector<char>& changed,
+                                                   const std::vector<std::array<int, 2>>& found) {
+  std::vector<std::array<int, 2>> pairs = found;
+  for (const auto& p : before)
+    if (!changed[p[0]] && !changed[p[1]]) pairs.push_back(p);
+  std::sort(pairs.begin(), pairs.end());
+  return pairs;
+}
+
 Status find_self_intersections(const TriMesh& mesh, std::vector<std::array<int, 2>>& pairs,
                                const SelfIntersectionOptions& options) {
   pairs.clear();

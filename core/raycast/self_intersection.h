@@ -70,6 +70,14 @@ Status find_new_self_intersections(const MeshBvh& bvh, const std::vector<Vec3>& 
                                    std::vector<std::array<int, 2>>& pairs,
                                    const std::vector<int>* from_triangles = nullptr);
 
+// The pairs after the triangles flagged in `changed` (#F) moved and were
+// searched again: the pairs of `before` with no changed triangle, and
+// `found` (the pairs with a changed triangle, e.g. from
+// find_intersections_with). Sorted; the whole-mesh set when `before` was.
+std::vector<std::array<int, 2>> pairs_after_change(const std::vector<std::array<int, 2>>& before,
+                                                   const std::vector<char>& changed,
+                                                   const std::vector<std::array<int, 2>>& found);
+
 // One pair under the rules above (shared edge: no; one shared vertex: only
 // if the common segment leaves it), corners read from positions.
 bool mesh_triangles_cross(const std::vector<Vec3>& positions, const Tri& a, const Tri& b);
