@@ -558,6 +558,11 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
     return Status::error(ErrorCode::InvalidInput, "global fit: smooth_guard_crease_min_angle_deg must be in [0, 180)");
   if (options.smooth_guard_crease_trials < 0 || options.smooth_guard_crease_max_edges < 0)
     return Status::error(ErrorCode::InvalidInput, "global fit: smooth_guard_crease_trials and _max_edges must be >= 0");
+  if (options.smooth_guard_pleat_steps < 0 || !(options.smooth_guard_pleat_max_move_edges >= 0) ||
+      !std::isfinite(options.smooth_guard_pleat_max_move_edges))
+    return Status::error(ErrorCode::InvalidInput,
+                         "global fit: smooth_guard_pleat_steps must be >= 0 and smooth_guard_pleat_max_move_edges "
+                         "finite and >= 0");
   if (options.smooth_guard_relief_level < 0 || options.smooth_guard_relief_level > 4)
     return Status::error(ErrorCode::InvalidInput, "global fit: smooth_guard_relief_level must be 0 (off) to 4");
   if (options.data_level < 0 || options.data_level > 3)

@@ -17,6 +17,7 @@
 #include <catch2/catch.hpp>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 using namespace lk;
@@ -133,6 +134,15 @@ TEST_CASE("global fit: the fold relief refuses bad options") {
   CHECK(fit_global(c.points, c.start, c.topo, c.terms(), o, out, r).code == ErrorCode::InvalidInput);
   o = guarded_options();
   o.smooth_guard_crease_max_edges = -2;
+  CHECK(fit_global(c.points, c.start, c.topo, c.terms(), o, out, r).code == ErrorCode::InvalidInput);
+  // A NaN cap would let every pleat step through.
+  for (const double cap : {std::nan(""), -0.1, std::numeric_limits<double>::infinity()}) {
+    o = guarded_options();
+    o.smooth_guard_pleat_max_move_edges = cap;
+    CHECK(fit_global(c.points, c.start, c.topo, c.terms(), o, out, r).code == ErrorCode::InvalidInput);
+  }
+  o = guarded_options();
+  o.smooth_guard_pleat_steps = -1;
   CHECK(fit_global(c.points, c.start, c.topo, c.terms(), o, out, r).code == ErrorCode::InvalidInput);
 }
 
