@@ -30,9 +30,9 @@
 // default 0.2 mm: how Table 1 and its floor move with the scanner's noise,
 // docs/fit.md); --save-scans DIR writes scans, truths,
 // the finest level and its crossing triangles. --truth-head H and --fit-head H
-// (H: asset, the committed generic head, the default; plate, ring or even
-// (the plate with GenericHeadBuildOptions::even_eye_corners), built
-// now with GenericHeadBuildOptions::ring_ear off or on) choose the generic
+// (H: asset, the committed generic head, the default; plate, ring, even
+// (the plate with GenericHeadBuildOptions::even_eye_corners) or back (and
+// even_back_rows), built now: generic_head_choice.h) choose the generic
 // head the synthetic people are made from and the one that is fitted, so two
 // generic heads can be compared on the same scans (docs/generic_head.md).
 #include "command.h"

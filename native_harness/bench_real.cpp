@@ -7,7 +7,7 @@
 // fold creases, and the eye sockets"), so one fit decides little; the
 // copies show the spread. Skipped with a message when the data are absent.
 // --fit-crease-trials N, --fit-crease-edges N, --fit-crease-angle DEG: the
-// global fit's fold creases (global_fit.h); --fit-head asset|plate|ring|even;
+// global fit's fold creases (global_fit.h); --fit-head asset|plate|ring|even|back;
 // --fit-surface-edges X: the spacing of the samples on the scan's triangles
 // in finest-level edges (FitHeadOptions::surface_sample_edges; 0: off);
 // --fit-data-level L: the global fit's last passes measure the points

@@ -5,7 +5,8 @@
 // "plate" the plate ear with the eye rings' corners at 45 deg (the asset
 // before 3a8dc46), "ring" the ring ear with the same 45-degree corners (as
 // it was measured), "even" the plate ear with even corners (the asset's
-// layout since 3a8dc46).
+// layout from 3a8dc46 until the back's rows were evened), "back" the plate
+// ear with even corners and even rows behind the ears (the builder's default).
 #pragma once
 #include "head/generic_head.h"
 #include "head/generic_head_builder.h"
@@ -16,13 +17,14 @@ namespace lk::cli {
 
 inline Status choose_generic_head(const std::string& which, GenericHead& out) {
   if (which == "asset") return load_generic_head(out);
-  if (which == "plate" || which == "ring" || which == "even") {
+  if (which == "plate" || which == "ring" || which == "even" || which == "back") {
     GenericHeadBuildOptions options;
     options.ring_ear = which == "ring";
-    options.even_eye_corners = which == "even";
+    options.even_eye_corners = which == "even" || which == "back";
+    options.even_back_rows = which == "back";
     return build_generic_head(options, out);
   }
-  return Status::error(ErrorCode::InvalidInput, "unknown generic head '" + which + "' (asset, plate, ring or even)");
+  return Status::error(ErrorCode::InvalidInput, "unknown generic head '" + which + "' (asset, plate, ring, even or back)");
 }
 
 }  // namespace lk::cli

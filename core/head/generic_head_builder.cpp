@@ -214,6 +214,48 @@ Vec3 direction(double azimuth, double elevation) {
           std::cos(elevation) * std::cos(azimuth)};
 }
 
+// The rows' elevations suit the face: dense at the lips and chin, sparse
+// above. Seen from the ray centre the nape is a concave bend, so at the back
+// the same elevations put rows 22 mm apart under the skull and 5 mm apart
+// at the nape's bend, against 17 mm between the meridians there: 3.5:1
+// slivers whose smooth Butterfly surface ripples into a wavy crease across
+// the back of every head. Behind the ears the rows are moved along their
+// meridian towards even spacing by arc length (row 0 and the top row stay,
+// so the neck and the crown patch join as before), fully from
+// kBackRowsFull degrees of azimuth, fading out towards kBackRowsStart.
+constexpr double kBackRowsStart = 110, kBackRowsFull = 160;
+void even_back_rows(const HeadShape& shape, const std::vector<std::vector<int>>& grid, std::vector<Vec3>& positions) {
+  const double e0 = kHeadRowElevation[0], e1 = kHeadRowElevation[kHeadRows - 1];
+  constexpr int samples = 600;
+  for (int c = 0; c < kColumns; ++c) {
+    const double az = column_azimuth(c);
+    const double a = std::abs(std::remainder(az, 2 * kPi)) * 180 / kPi;
+    double w = std::clamp((a - kBackRowsStart) / (kBackRowsFull - kBackRowsStart), 0.0, 1.0);
+    w = w * w * (3 - 2 * w);
+    if (w <= 0) continue;
+    std::vector<Vec3> curve(samples + 1);
+    std::vector<double> length(samples + 1, 0.0), elevation(samples + 1);
+    for (int i = 0; i <= samples; ++i) {
+      elevation[i] = e0 + (e1 - e0) * i / samples;
+      curve[i] = shape.cast(kRayCenter, direction(az, radians(elevation[i])));
+      if (i > 0) length[i] = length[i - 1] + (curve[i] - curve[i - 1]).norm();
+    }
+    auto length_at = [&](double e) {  // arc length up to elevation e
+      const double t = (e - e0) / (e1 - e0) * samples;
+      const int i = std::clamp(int(t), 0, samples - 1);
+      return length[i] + (t - i) * (length[i + 1] - length[i]);
+    };
+    for (int h = 1; h + 1 < kHeadRows; ++h) {
+      const double target = (1 - w) * length_at(kHeadRowElevation[h]) + w * length[samples] * h / (kHeadRows - 1);
+      int i = 1;
+      while (i < samples && length[i] < target) ++i;
+      const double f = (target - length[i - 1]) / std::max(1e-12, length[i] - length[i - 1]);
+      const double e = elevation[i - 1] + f * (elevation[i] - elevation[i - 1]);
+      positions[grid[h][c]] = shape.cast(kRayCenter, direction(az, radians(e)));
+    }
+  }
+}
+
 // Rectangular loops of the grid mapped onto ellipses would put each corner
 // vertex on the ellipse between its two neighbours, leaving a quad with a
 // straight angle; pushing corners out a little keeps those quads convex.
@@ -407,6 +449,7 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
   for (int c = 0; c < kColumns; ++c)
     for (int h = 0; h < kHeadRows; ++h)
       b.positions[g(h, c)] = shape.cast(kRayCenter, direction(column_azimuth(c), radians(kHeadRowElevation[h])));
+  if (options.even_back_rows) even_back_rows(shape, grid, b.positions);
 
   // --- 1b. neck rings below row 0 -------------------------------------------
   // Each ring vertex lies on the surface curve from row 0 down to the neck's

@@ -48,6 +48,11 @@ struct GenericHeadBuildOptions {
                                    // The asset's since 3a8dc46; false: the 45-degree corners
                                    // of the asset before. docs/generic_head.md "Even corners
                                    // of the eye rings" says what it fixes.
+  bool even_back_rows = true;      // true: behind the ears the rows are spread evenly along
+                                   // their meridians, not at the face's elevations (5 mm rows
+                                   // against 17 mm meridians at the nape rippled into a crease
+                                   // across the back of every head). docs/generic_head.md
+                                   // "Even rows at the back".
 };
 
 // Builds the generic head and its annotations. Fails with Internal if one of

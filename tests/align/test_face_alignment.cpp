@@ -279,7 +279,7 @@ TEST_CASE("align_face: a synthetic frontal capture turned 40 degrees aligns the 
     const Status st = align_face(generic().mesh, generic().annotations, turned, o, r);
     INFO("seed " << seed << ": " << st.message);
     REQUIRE(st.ok());
-    INFO("seed " << seed << " facing " << r.facing.transpose() << " scale " << r.scale);
+    INFO("seed " << seed << " facing " << r.facing.transpose() << " scale " << r.scale << " score " << r.score);
     // Facing where it was turned to (the synthetic head's own face differs
     // from the generic's, so only roughly).
     CHECK(angle_between_deg(r.facing, R * Vec3::UnitZ()) < 6.0);
@@ -290,8 +290,17 @@ TEST_CASE("align_face: a synthetic frontal capture turned 40 degrees aligns the 
                                   << ", nose tips " << s.tip * 1000 << " mm");
   CHECK(s.facing_deg < 0.25);
   CHECK(s.up_deg < 0.25);
-  CHECK(s.scale < 0.003);
+  // A frontal patch leaves the scale in a flat valley: since the generic
+  // head's back rows were evened (the synthetic head is made from it), seed
+  // 2 ends at 1.0113 and seeds 1 and 3 at 1.0055, their scores 0.4 % apart
+  // (7.488e-7 vs 7.519e-7), under FaceAlignOptions::scale_hop_gain; the
+  // old head's truth gave spreads under 0.003. The nose tips stay within
+  // 0.5 mm and the scores within 1 %: equally good placements.
+  CHECK(s.scale < 0.006);
   CHECK(s.tip < 0.0005);  // 0.5 mm
+  double best = results[0].score, worst = results[0].score;
+  for (const FaceAlignResult& r : results) best = std::min(best, r.score), worst = std::max(worst, r.score);
+  CHECK(worst < 1.01 * best);
 }
 
 // Seeds 1-3 here (about 1 s of alignment each on James); the hidden
@@ -355,11 +364,13 @@ TEST_CASE("guess_orientation: screening the starts gives the full search's guess
   // Its up turned 40 degrees off the axes the starts try: both searches end
   // in the same local minimum. (Not on every patch: over face_patch seeds
   // 1-8 they agree on 4, with the asset's even eye-ring corners on 1, 5, 6
-  // and 8, with the corners at 45 deg on 3, 5, 6 and 7; where they differ,
-  // both are off the true facing -y, e.g. scores 3.0e-5 vs 2.5e-5;
-  // docs/fit_real.md "Speed of real scans". The real scans below agree.)
+  // and 8, with the corners at 45 deg on 3, 5, 6 and 7, and since the back's
+  // rows are even (the patch samples the head by area) on 1-5 and 8; where
+  // they differ, both are off the true facing -y, e.g. scores 3.1e-5 vs
+  // 2.5e-5; docs/fit_real.md "Speed of real scans". The real scans below
+  // agree.)
   const Mat3 diagonal = Eigen::AngleAxisd(0.7, Vec3::UnitY()).toRotationMatrix() * lying;
-  for (unsigned seed : {5u, 6u}) {
+  for (unsigned seed : {5u, 8u}) {
     PointCloud between;
     for (const Vec3& p : face_patch(0.08, 3000, seed).positions) between.positions.push_back(diagonal * p);
     INFO("diagonal patch, seed " << seed);

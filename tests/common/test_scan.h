@@ -27,9 +27,10 @@ const GenericHead& generic_head();
 
 // The generic head as the asset was until 22 Nov 2026: the eye rings'
 // corners at 45 deg of the square (GenericHeadBuildOptions::
-// even_eye_corners off), with a 4.6 mm edge over each brow. Fits with it
-// fold where the asset's do not, which the tests of the fold relief, the
-// fold creases and the fold limiter's second pass need as subjects.
+// even_eye_corners off; even_back_rows off as well), with a 4.6 mm edge
+// over each brow. Fits with it fold where the asset's do not, which the
+// tests of the fold relief, the fold creases and the fold limiter's second
+// pass need as subjects.
 // Built once per test binary.
 const GenericHead& corner45_generic_head();
 
