@@ -8,6 +8,8 @@
 #include "mesh/geometry.h"
 #include "mesh/topology.h"
 
+#include <sys/stat.h>
+
 #include <cstdio>
 #include <iostream>
 
@@ -17,7 +19,7 @@ namespace {
 const char* kName = "make-generic-head";
 
 int run_make_generic_head(const Args& args) {
-  if (!only_known_options(kName, args, {"out", "ring-ear", "plate-ear", "even-eye-corners"})) return 2;
+  if (!only_known_options(kName, args, {"out", "ring-ear", "plate-ear", "even-eye-corners", "face-rows-at-back"})) return 2;
   const std::string out_dir = args.get("out");
   if (out_dir.empty()) {
     fail(kName, "--out DIR is required (the asset lives in core/head/data)");
@@ -36,6 +38,10 @@ int run_make_generic_head(const Args& args) {
   // builder's default and the asset's since 3a8dc46 (the flag is kept so
   // older command lines still run).
   if (args.has("even-eye-corners")) options.even_eye_corners = true;
+  // --face-rows-at-back: GenericHeadBuildOptions::even_back_rows off, the
+  // asset's rows behind the ears before they were evened (docs/generic_head.md).
+  if (args.has("face-rows-at-back")) options.even_back_rows = false;
+  ::mkdir(out_dir.c_str(), 0755);  // as `likeness fit` does; an existing one is kept
   GenericHead head;
   Status s = build_generic_head(options, head);
   if (!s) return fail(kName, s.message);
@@ -60,7 +66,7 @@ int run_make_generic_head(const Args& args) {
   return 0;
 }
 
-Registrar reg({kName, "likeness make-generic-head --out DIR [--ring-ear|--plate-ear] [--even-eye-corners]",
+Registrar reg({kName, "likeness make-generic-head --out DIR [--ring-ear|--plate-ear] [--even-eye-corners] [--face-rows-at-back]",
                "builds the generic head control mesh + annotations (writes generic_head.obj/.json)",
                run_make_generic_head});
 
