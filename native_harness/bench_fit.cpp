@@ -11,7 +11,7 @@
 // --fit-area-ratio R, --fit-cap-pct P, --fit-levels L, --fit-data-level L (GlobalFitOptions::data_level), --fit-line-edges E, --fit-edge-fade W (DisplacementOptions::edge_fade_control_edges, 0: off),
 // --fit-guard-face-only / --fit-guard-off (the global fit's smooth-surface guard and fold relief on
 // face-only captures only / on none; default: every scan; --fit-guard-always is the default), --fit-relief-level L (the guard's fold relief
-// level, GlobalFitOptions::smooth_guard_relief_level; 0: the level-2 guard without relief), --fit-pleat-steps N (the pleat
+// level, GlobalFitOptions::smooth_guard_relief_level; 0: the level-2 guard without relief), --fit-guard-passes N (GlobalFitOptions::smooth_guard_passes), --fit-pleat-steps N (the pleat
 // relief's sweeps, GlobalFitOptions::smooth_guard_pleat_steps; 0: off), --fit-no-climb, --fit-remeasure, --fit-no-eye-region (leave the eyes where the alignment put them, FitHeadOptions::fit_eye_region), --fit-no-creases (plain Butterfly at the
 // eye and lip rims), --fit-displaced-creases, --fit-no-corners-to-smooth,
 // --fit-no-parents-to-smooth, --fit-separation-repeats N, --fit-restarts N (fold_limit.h), --fit-seeds N, --fit-seed N (seed N alone),
@@ -320,6 +320,7 @@ int run(const Args& args) {
     if (!parse_back_term(args, opt)) return 1;
     args.get_int("fit-relief-level", opt.global.smooth_guard_relief_level, opt.global.smooth_guard_relief_level);
     args.get_int("fit-pleat-steps", opt.global.smooth_guard_pleat_steps, opt.global.smooth_guard_pleat_steps);
+    args.get_int("fit-guard-passes", opt.global.smooth_guard_passes, opt.global.smooth_guard_passes);
     if (args.has("fit-no-climb")) opt.fold_limit.shrink_coarser_levels = false;
     if (args.has("fit-remeasure")) opt.displacement.remeasure_coarse_vertices = true;
     if (args.has("fit-no-creases")) opt.rim_creases = false;
@@ -583,6 +584,12 @@ int run(const Args& args) {
                                                   save.empty() ? "" : save + "/fit_seed" + std::to_string(seed));
     // The target is the time a user waits (wall); CPU is summed over the
     // threads of the parallel loops (closest points, displacements).
+    std::printf("   smooth-surface guard: level %d new pairs %d -> %d in %d passes (%d vertices weighted); fold relief: "
+                "level %d %s, folds %d -> %d\n",
+                opt.global.smooth_guard_level, r.global_fit.smooth_crossing_before, r.global_fit.smooth_crossing_after,
+                r.global_fit.smooth_guard_passes, r.global_fit.smooth_guard_vertices,
+                opt.global.smooth_guard_relief_level, r.global_fit.relief_searched ? "searched" : "not searched",
+                r.global_fit.relief_folds_before, r.global_fit.relief_folds_after);
     std::printf("   smooth level %d pleat edges (bent > 90 deg where the generic head bends < 45): %d -> %d in %d steps\n",
                 opt.global.smooth_guard_relief_level, r.global_fit.pleats_before, r.global_fit.pleats_after,
                 r.global_fit.pleat_steps);

@@ -10,6 +10,7 @@
 #include "multires/displacement.h"
 #include "multires/fold_limit.h"
 #include "multires/multires.h"
+#include "raycast/self_intersection.h"
 
 #include <cstdio>
 #include <ctime>
@@ -26,7 +27,7 @@ int usage_error(const std::string& message) {
 
 int run_subdiv(const Args& args) {
   if (!only_known_options(kName, args,
-                          {"mesh", "points", "levels", "radius", "max-distance", "min-points", "out"}))
+                          {"mesh", "points", "levels", "radius", "max-distance", "min-points", "out", "crossings"}))
     return 2;
   const std::string mesh_path = args.get("mesh"), points_path = args.get("points"), out = args.get("out");
   if (mesh_path.empty()) return usage_error("--mesh FILE is required");
@@ -68,13 +69,21 @@ int run_subdiv(const Args& args) {
     s = write_file(path, write_ply(m));
     if (!s) return fail(kName, s.message);
     std::printf("wrote %s (%d vertices, %d triangles)\n", path.c_str(), m.num_vertices(), m.num_triangles());
+    // --crossings: each level's self-intersecting triangle pairs (a fitted
+    // control mesh's smooth levels are where a fit's folds show first).
+    if (args.has("crossings")) {
+      std::vector<std::array<int, 2>> pairs;
+      s = find_self_intersections(m, pairs);
+      if (!s) return fail(kName, s.message);
+      std::printf("  level %d: %zu self-intersecting triangle pairs\n", l, pairs.size());
+    }
   }
   return 0;
 }
 
 Registrar reg({kName,
                "likeness subdiv --mesh FILE [--points FILE] [--levels N] [--radius R] [--max-distance D] "
-               "[--min-points N] --out PREFIX",
+               "[--min-points N] [--crossings] --out PREFIX",
                "Modified Butterfly hierarchy of a control mesh, displaced onto a scan when --points is given "
                "(jeong2002 Sec. 5); writes PREFIX_level<l>.ply",
                run_subdiv});
