@@ -214,6 +214,21 @@ Vec3 direction(double azimuth, double elevation) {
           std::cos(elevation) * std::cos(azimuth)};
 }
 
+// Where a polyline's cumulative length table (length[0] = 0, non-decreasing)
+// reaches `target`: its segment i (from point i - 1 to point i, 1 <= i <
+// length.size()) and the fraction f along it.
+struct ArcPosition {
+  int i = 1;
+  double f = 0;
+};
+ArcPosition arc_position(const std::vector<double>& length, double target) {
+  const int last = static_cast<int>(length.size()) - 1;
+  ArcPosition a;
+  while (a.i < last && length[a.i] < target) ++a.i;
+  a.f = (target - length[a.i - 1]) / std::max(1e-12, length[a.i] - length[a.i - 1]);
+  return a;
+}
+
 // The rows' elevations suit the face: dense at the lips and chin, sparse
 // above. Seen from the ray centre the nape is a concave bend, so at the back
 // the same elevations put rows 22 mm apart under the skull and 5 mm apart
@@ -247,10 +262,8 @@ void even_back_rows(const HeadShape& shape, const std::vector<std::vector<int>>&
     };
     for (int h = 1; h + 1 < kHeadRows; ++h) {
       const double target = (1 - w) * length_at(kHeadRowElevation[h]) + w * length[samples] * h / (kHeadRows - 1);
-      int i = 1;
-      while (i < samples && length[i] < target) ++i;
-      const double f = (target - length[i - 1]) / std::max(1e-12, length[i] - length[i - 1]);
-      const double e = elevation[i - 1] + f * (elevation[i] - elevation[i - 1]);
+      const ArcPosition a = arc_position(length, target);
+      const double e = elevation[a.i - 1] + a.f * (elevation[a.i] - elevation[a.i - 1]);
       positions[grid[h][c]] = shape.cast(kRayCenter, direction(az, radians(e)));
     }
   }
@@ -469,11 +482,8 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
         curve[i] = i == 0 ? top : i == samples ? bottom : shape.project((1 - t) * top + t * bottom);
         if (i > 0) length[i] = length[i - 1] + (curve[i] - curve[i - 1]).norm();
       }
-      const double target = depth * length[samples];
-      int i = 1;
-      while (i < samples && length[i] < target) ++i;
-      const double f = (target - length[i - 1]) / std::max(1e-12, length[i] - length[i - 1]);
-      return shape.project((1 - f) * curve[i - 1] + f * curve[i]);
+      const ArcPosition a = arc_position(length, depth * length[samples]);
+      return shape.project((1 - a.f) * curve[a.i - 1] + a.f * curve[a.i]);
     };
     for (int k = 0; k < kNeckRingCount; ++k) {
       const NeckRing& ring = kNeckRings[k];
