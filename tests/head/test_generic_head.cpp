@@ -625,6 +625,41 @@ double edge_ratio(const TriMesh& m, const Tri& t) {
   return hi / lo;
 }
 
+// The head's smooth level 3 with its rim creases, as the fit refines it.
+TriMesh smooth_level3(const GenericHead& h) {
+  ButterflyCreases creases;
+  for (const CreaseCurve& c : h.annotations.creases) add_crease_polyline(c.vertices, c.closed, creases);
+  MultiresMesh smooth;
+  REQUIRE(build_multires(h.mesh, creases, 3, smooth).ok());
+  return level_mesh(smooth, 3);
+}
+
+// Angles (deg, sorted) between the normals of adjacent faces of m, over the
+// edges between two faces that keep(f0, f1) accepts.
+template <class Keep>
+std::vector<double> normal_angles(const TriMesh& m, Keep keep) {
+  std::vector<Vec3> normal(m.num_triangles());
+  for (int f = 0; f < m.num_triangles(); ++f) {
+    const Tri& t = m.triangles[f];
+    const Vec3 &a = m.positions[t[0]], &b = m.positions[t[1]], &c = m.positions[t[2]];
+    normal[f] = (b - a).cross(c - a).normalized();
+  }
+  MeshTopology topo;
+  REQUIRE(build_topology(m, topo).ok());
+  std::vector<double> angles;
+  for (const Edge& e : topo.edges)
+    if (e.f1 >= 0 && keep(e.f0, e.f1))
+      angles.push_back(std::acos(std::clamp(normal[e.f0].dot(normal[e.f1]), -1.0, 1.0)) * 180 / M_PI);
+  std::sort(angles.begin(), angles.end());
+  return angles;
+}
+
+// A face's centroid.
+Vec3 centroid(const TriMesh& m, int f) {
+  const Tri& t = m.triangles[f];
+  return (m.positions[t[0]] + m.positions[t[1]] + m.positions[t[2]]) / 3;
+}
+
 // Triangles inside `region` (all three corners) whose mirror image in x = 0
 // is not a triangle of m, with the opposite winding; every region vertex
 // must have its mirror vertex (REQUIRE).
@@ -682,11 +717,7 @@ TEST_CASE("generic head, even eye corners: no short brow edge, and the smooth le
   CHECK(vertices_without_mirror(even.mesh, 1e-9) == 0);
   // Its smooth level 3 with the rim creases does not cross itself at the
   // eyes (the asset's crosses only at the mouth corners).
-  ButterflyCreases creases;
-  for (const CreaseCurve& c : even.annotations.creases) add_crease_polyline(c.vertices, c.closed, creases);
-  MultiresMesh creased;
-  REQUIRE(build_multires(even.mesh, creases, 3, creased).ok());
-  const TriMesh fine = level_mesh(creased, 3);
+  const TriMesh fine = smooth_level3(even);
   std::vector<std::array<int, 2>> pairs;
   REQUIRE(find_self_intersections(fine, pairs).ok());
   const int at_eyes = triangles_near_eyes(fine, pairs, even.annotations);
@@ -729,31 +760,17 @@ TEST_CASE("generic head: the smooth level 3 of the neck does not ripple", "[head
   // radius with ~2 mm triangles turns by ~1-2 deg per edge. The 5:1 neck
   // slivers rippled: p95 5.3 deg, worst 26.5 deg; the remeshed neck 2.9 / 14.1.
   const GenericHead& h = asset();
-  ButterflyCreases creases;
-  for (const CreaseCurve& c : h.annotations.creases) add_crease_polyline(c.vertices, c.closed, creases);
-  MultiresMesh smooth;
-  REQUIRE(build_multires(h.mesh, creases, 3, smooth).ok());
-  const TriMesh fine = level_mesh(smooth, 3);
+  const TriMesh fine = smooth_level3(h);
   const double cut = h.annotations.neck_clip.point.y();
-  std::vector<Vec3> normal(fine.num_triangles());
-  std::vector<double> height(fine.num_triangles());
-  for (int f = 0; f < fine.num_triangles(); ++f) {
+  auto height = [&](int f) {
     const Tri& t = fine.triangles[f];
-    const Vec3 &a = fine.positions[t[0]], &b = fine.positions[t[1]], &c = fine.positions[t[2]];
-    normal[f] = (b - a).cross(c - a).normalized();
-    height[f] = (a.y() + b.y() + c.y()) / 3;
-  }
-  MeshTopology topo;
-  REQUIRE(build_topology(fine, topo).ok());
-  std::vector<double> angles;
-  for (const Edge& e : topo.edges) {
-    if (e.f1 < 0) continue;
-    const double y = 0.5 * (height[e.f0] + height[e.f1]);
-    if (y < cut - 0.05 || y > cut + 0.015) continue;
-    angles.push_back(std::acos(std::clamp(normal[e.f0].dot(normal[e.f1]), -1.0, 1.0)) * 180 / M_PI);
-  }
+    return (fine.positions[t[0]].y() + fine.positions[t[1]].y() + fine.positions[t[2]].y()) / 3;
+  };
+  const std::vector<double> angles = normal_angles(fine, [&](int f0, int f1) {
+    const double y = 0.5 * (height(f0) + height(f1));
+    return y >= cut - 0.05 && y <= cut + 0.015;
+  });
   REQUIRE(angles.size() > 5000);
-  std::sort(angles.begin(), angles.end());
   const double p95 = angles[angles.size() * 95 / 100];
   INFO("neck band: " << angles.size() << " edges, normal angle p95 " << p95 << " deg, worst " << angles.back());
   CHECK(p95 < 4.0);
@@ -779,29 +796,14 @@ BackShape back_shape(const GenericHead& h) {
   for (const Tri& t : m.triangles)
     if (behind_ears(m.positions[t[0]]) && behind_ears(m.positions[t[1]]) && behind_ears(m.positions[t[2]]))
       ratios.push_back(edge_ratio(m, t));
-  MultiresMesh smooth;
-  ButterflyCreases creases;
-  for (const CreaseCurve& c : h.annotations.creases) add_crease_polyline(c.vertices, c.closed, creases);
-  if (ratios.size() < 50 || !build_multires(m, creases, 3, smooth).ok()) return out;
+  if (ratios.size() < 50) return out;
   std::sort(ratios.begin(), ratios.end());
   out.ratio_p90 = ratios[ratios.size() * 9 / 10];
   out.ratio_worst = ratios.back();
-  const TriMesh fine = level_mesh(smooth, 3);
-  std::vector<Vec3> normal(fine.num_triangles()), centre(fine.num_triangles());
-  for (int f = 0; f < fine.num_triangles(); ++f) {
-    const Tri& t = fine.triangles[f];
-    const Vec3 &a = fine.positions[t[0]], &b = fine.positions[t[1]], &c = fine.positions[t[2]];
-    normal[f] = (b - a).cross(c - a).normalized();
-    centre[f] = (a + b + c) / 3;
-  }
-  MeshTopology topo;
-  if (!build_topology(fine, topo).ok()) return out;
-  std::vector<double> angles;
-  for (const Edge& e : topo.edges)
-    if (e.f1 >= 0 && behind_ears(centre[e.f0]))
-      angles.push_back(std::acos(std::clamp(normal[e.f0].dot(normal[e.f1]), -1.0, 1.0)) * 180 / M_PI);
+  const TriMesh fine = smooth_level3(h);
+  const std::vector<double> angles =
+      normal_angles(fine, [&](int f0, int) { return behind_ears(centroid(fine, f0)); });
   if (angles.size() < 5000) return out;
-  std::sort(angles.begin(), angles.end());
   out.angle_p99 = angles[angles.size() * 99 / 100];
   out.angle_worst = angles.back();
   return out;
@@ -1002,11 +1004,7 @@ struct EarSmoothness {
 // on the triangles refined from its ears' control faces.
 EarSmoothness ear_smoothness(const GenericHead& h) {
   EarSmoothness out;
-  ButterflyCreases creases;
-  for (const CreaseCurve& c : h.annotations.creases) add_crease_polyline(c.vertices, c.closed, creases);
-  MultiresMesh smooth;
-  REQUIRE(build_multires(h.mesh, creases, 3, smooth).ok());
-  const TriMesh fine = level_mesh(smooth, 3);
+  const TriMesh fine = smooth_level3(h);
   const std::vector<char> in_ear = vertex_mask(h.annotations.regions.at("ears"), h.mesh.num_vertices());
   std::vector<char> ear_face(h.mesh.num_triangles(), 0);
   for (int f = 0; f < h.mesh.num_triangles(); ++f) {
@@ -1014,19 +1012,8 @@ EarSmoothness ear_smoothness(const GenericHead& h) {
     ear_face[f] = in_ear[t[0]] && in_ear[t[1]] && in_ear[t[2]];
   }
   REQUIRE(fine.num_triangles() == 64 * h.mesh.num_triangles());
-  std::vector<Vec3> normal(fine.num_triangles());
-  for (int f = 0; f < fine.num_triangles(); ++f) {
-    const Tri& t = fine.triangles[f];
-    normal[f] = (fine.positions[t[1]] - fine.positions[t[0]]).cross(fine.positions[t[2]] - fine.positions[t[0]]).normalized();
-  }
-  MeshTopology topo;
-  REQUIRE(build_topology(fine, topo).ok());
-  for (const Edge& e : topo.edges) {
-    if (e.f1 < 0 || !ear_face[e.f0 / 64] || !ear_face[e.f1 / 64]) continue;
-    out.angles.push_back(std::acos(std::clamp(normal[e.f0].dot(normal[e.f1]), -1.0, 1.0)) * 180 / M_PI);
-  }
+  out.angles = normal_angles(fine, [&](int f0, int f1) { return ear_face[f0 / 64] && ear_face[f1 / 64]; });
   REQUIRE(out.angles.size() > 5000);
-  std::sort(out.angles.begin(), out.angles.end());
   std::vector<std::array<int, 2>> pairs;
   REQUIRE(find_self_intersections(fine, pairs).ok());
   for (const auto& p : pairs) out.crossing_pairs += ear_face[p[0] / 64] || ear_face[p[1] / 64] ? 1 : 0;
