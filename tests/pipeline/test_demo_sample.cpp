@@ -18,6 +18,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+
 using namespace lk;
 
 namespace {
@@ -134,9 +136,11 @@ TEST_CASE("fit_head: synthetic seed 6's mouth is fitted in the right basin: no l
   INFO(st.message);
   REQUIRE(st.ok());
   auto mouth = [](const FitHeadResult& fit) {
-    for (const BoxFit& b : fit.local_fit.boxes)
-      if (b.name == "mouth") return b;
-    return BoxFit{};
+    const auto it = std::find_if(fit.local_fit.boxes.begin(), fit.local_fit.boxes.end(),
+                                 [](const BoxFit& b) { return b.name == "mouth"; });
+    REQUIRE(it != fit.local_fit.boxes.end());
+    REQUIRE(!it->energies.empty());
+    return *it;
   };
   FitQuality q;
   REQUIRE(measure_fit_quality(r, generic.annotations, q).ok());
