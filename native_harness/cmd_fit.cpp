@@ -172,7 +172,7 @@ int run_fit(const Args& args) {
 Registrar reg({"fit",
                "likeness fit --scan FILE --out DIR [--levels L] [--up X Y Z|+x..-z] [--facing X Y Z|+x..-z] "
                "[--no-orientation-check] [--face-only|--whole-head] [--no-eye-region] [--no-denoise] [--widen-footprints] [--data-level 0|1|2] "
-               "[--dump] [--scan-frame] [--generic-head asset|plate|ring|even|back]",
+               "[--dump] [--scan-frame] [--generic-head asset|plate|ring|even|back|nape]",
                "fits the generic head to a scan (jeong2002): control.obj, level1..L.obj, report.json", run_fit});
 
 }  // namespace

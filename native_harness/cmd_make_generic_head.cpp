@@ -19,7 +19,7 @@ namespace {
 const char* kName = "make-generic-head";
 
 int run_make_generic_head(const Args& args) {
-  if (!only_known_options(kName, args, {"out", "ring-ear", "plate-ear", "even-eye-corners", "face-rows-at-back"})) return 2;
+  if (!only_known_options(kName, args, {"out", "ring-ear", "plate-ear", "even-eye-corners", "face-rows-at-back", "nape-by-shape"})) return 2;
   const std::string out_dir = args.get("out");
   if (out_dir.empty()) {
     fail(kName, "--out DIR is required (the asset lives in core/head/data)");
@@ -41,6 +41,9 @@ int run_make_generic_head(const Args& args) {
   // --face-rows-at-back: GenericHeadBuildOptions::even_back_rows off, the
   // asset's rows behind the ears before they were evened (docs/generic_head.md).
   if (args.has("face-rows-at-back")) options.even_back_rows = false;
+  // --nape-by-shape: GenericHeadBuildOptions::regular_nape off, the asset's
+  // nape and neck before they were made regular (quads split by shape).
+  if (args.has("nape-by-shape")) options.regular_nape = false;
   ::mkdir(out_dir.c_str(), 0755);  // as `likeness fit` does; an existing one is kept
   GenericHead head;
   Status s = build_generic_head(options, head);
@@ -66,7 +69,7 @@ int run_make_generic_head(const Args& args) {
   return 0;
 }
 
-Registrar reg({kName, "likeness make-generic-head --out DIR [--ring-ear|--plate-ear] [--even-eye-corners] [--face-rows-at-back]",
+Registrar reg({kName, "likeness make-generic-head --out DIR [--ring-ear|--plate-ear] [--even-eye-corners] [--face-rows-at-back] [--nape-by-shape]",
                "builds the generic head control mesh + annotations (writes generic_head.obj/.json)",
                run_make_generic_head});
 

@@ -6,7 +6,9 @@
 // before 3a8dc46), "ring" the ring ear with the same 45-degree corners (as
 // it was measured), "even" the plate ear with even corners (the asset's
 // layout from 3a8dc46 until the back's rows were evened), "back" the plate
-// ear with even corners and even rows behind the ears (the builder's default).
+// ear with even corners and even rows behind the ears (the asset's layout
+// from 8518b1e until the nape was made regular), "nape" that with the
+// regular nape (the builder's default).
 #pragma once
 #include "head/generic_head.h"
 #include "head/generic_head_builder.h"
@@ -17,14 +19,15 @@ namespace lk::cli {
 
 inline Status choose_generic_head(const std::string& which, GenericHead& out) {
   if (which == "asset") return load_generic_head(out);
-  if (which == "plate" || which == "ring" || which == "even" || which == "back") {
+  if (which == "plate" || which == "ring" || which == "even" || which == "back" || which == "nape") {
     GenericHeadBuildOptions options;
     options.ring_ear = which == "ring";
-    options.even_eye_corners = which == "even" || which == "back";
-    options.even_back_rows = which == "back";
+    options.even_eye_corners = which == "even" || which == "back" || which == "nape";
+    options.even_back_rows = which == "back" || which == "nape";
+    options.regular_nape = which == "nape";
     return build_generic_head(options, out);
   }
-  return Status::error(ErrorCode::InvalidInput, "unknown generic head '" + which + "' (asset, plate, ring, even or back)");
+  return Status::error(ErrorCode::InvalidInput, "unknown generic head '" + which + "' (asset, plate, ring, even, back or nape)");
 }
 
 }  // namespace lk::cli

@@ -163,6 +163,13 @@ struct NeckRing {
 const NeckRing kNeckRings[] = {{24, 0.3, 0.10}, {24, 0.3, 0.25}, {24, 0.3, 0.40}, {24, 0.3, 0.55},
                                {24, 0.3, 0.70}, {24, 0.3, 0.85}, {24, 0.3, 1.00}};
 constexpr int kNeckRingCount = sizeof(kNeckRings) / sizeof(NeckRing);
+// With regular_nape the strip joining the head's 40 meridians to the neck's
+// 24 is this much deeper (a fraction of the neck's length) at the back than
+// at the throat: 8 mm at the throat, whose upper edges are 5 mm long, and
+// 16 mm at the back, whose are 17 and 25 mm (8 mm there made 3:1 slivers, a
+// wavy line where the skull meets the neck). Deeper still (0.15, 0.2) moved
+// the line to the next ring down.
+constexpr double kBackNeckStripExtra = 0.10;
 constexpr double kNeckBottomY = -0.195;
 
 // Rows of the features (see kHeadRowElevation).
@@ -285,6 +292,46 @@ struct VertexInfo {
   int side = 0;            // +1 left, -1 right, 0 midline / both
   int chain = 0;           // lips and mouth bag: +1 upper, -1 lower, 0 corner
 };
+
+// Behind the ears the grid's quads are close to squares, and down the neck
+// the rings' quads are alike, so splitting each along its better diagonal
+// picked one or the other nearly at random: vertices with 4, 5, 7 and 8
+// neighbours, each an irregular Butterfly stencil that rippled the smooth
+// surface (wavy lines across the nape). There every quad is split along the
+// diagonal from its lower corner nearer the face's midline to its upper
+// corner farther from it (a chevron, mirrored on the other side), which
+// gives every vertex six neighbours, on the midlines too. Returns which of
+// the quad's diagonals that is (0: poly[0] - poly[2], 1: poly[1] - poly[3]),
+// or -1 for any other quad: one not made of grid vertices behind the ears
+// (kBackDiagonalColumn or more columns from the face's midline on either
+// side) or of neck ring vertices.
+constexpr int kBackDiagonalColumn = 15;
+int chevron_diagonal(const std::vector<VertexInfo>& info, const std::vector<int>& poly) {
+  const Part part = info[poly[0]].part;
+  const int columns = part == Part::Grid ? kColumns : part == Part::Neck ? kNeckRings[0].meridians : 0;
+  auto from_midline = [&](int col) { return std::min(col, columns - col); };
+  int lowest_row = 1 << 30;
+  for (int v : poly) {
+    const VertexInfo& vi = info[v];
+    if (columns == 0 || vi.part != part) return -1;
+    if (part == Part::Grid && from_midline(vi.col) < kBackDiagonalColumn) return -1;
+    lowest_row = std::min(lowest_row, vi.row);
+  }
+  // The chevron diagonal's ends: the lower row's corner nearer the midline
+  // and the upper row's corner farther from it.
+  auto is_end = [&](int v) {
+    const VertexInfo& vi = info[v];
+    int other_col = -1;  // the other corner on the same row
+    for (int w : poly)
+      if (w != v && info[w].row == vi.row) other_col = info[w].col;
+    if (other_col < 0) return false;
+    const bool nearer = from_midline(vi.col) < from_midline(other_col);
+    return vi.row == lowest_row ? nearer : !nearer;
+  };
+  if (is_end(poly[0]) && is_end(poly[2])) return 0;
+  if (is_end(poly[1]) && is_end(poly[3])) return 1;
+  return -1;
+}
 
 class Builder {
  public:
@@ -493,7 +540,16 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
         vi.part = Part::Neck;
         vi.row = -1 - k;
         vi.col = c;
-        ids.push_back(b.add(meridian_point(meridian_azimuth(c, ring.meridians, ring.face_density), ring.depth), vi));
+        const double az = meridian_azimuth(c, ring.meridians, ring.face_density);
+        double depth = ring.depth;
+        if (options.regular_nape) {
+          // The first ring lies deeper towards the back; the rings below
+          // keep their places between it and the bottom.
+          const double first = kNeckRings[0].depth;
+          const double here = first + kBackNeckStripExtra * 0.5 * (1 - std::cos(az));
+          depth = here + (1 - here) * (ring.depth - first) / (1 - first);
+        }
+        ids.push_back(b.add(meridian_point(az, depth), vi));
       }
       neck_rings.push_back(ids);
     }
@@ -1198,7 +1254,8 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
     };
     const double d02 = std::max(smallest_cos(poly[0], poly[1], poly[2]), smallest_cos(poly[0], poly[2], poly[3]));
     const double d13 = std::max(smallest_cos(poly[0], poly[1], poly[3]), smallest_cos(poly[1], poly[2], poly[3]));
-    if (d02 <= d13) {
+    const int chevron = options.regular_nape ? chevron_diagonal(b.info, poly) : -1;
+    if (chevron == 0 || (chevron < 0 && d02 <= d13)) {
       mesh.triangles.push_back({poly[0], poly[1], poly[2]});
       mesh.triangles.push_back({poly[0], poly[2], poly[3]});
     } else {

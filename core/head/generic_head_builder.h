@@ -53,6 +53,14 @@ struct GenericHeadBuildOptions {
                                    // against 17 mm meridians at the nape rippled into a crease
                                    // across the back of every head). docs/generic_head.md
                                    // "Even rows at the back".
+  bool regular_nape = true;        // true: behind the ears and down the neck each quad is split
+                                   // along the same-leaning diagonal (a chevron, mirrored), so
+                                   // every vertex there has six neighbours but a few at the ears
+                                   // and where head and neck join, and that joining strip is
+                                   // deeper at the back (no slivers). false: quads split by
+                                   // shape, 4- to 8-valent vertices at random: wavy lines
+                                   // across the nape and where the skull meets the neck.
+                                   // docs/generic_head.md "A regular nape".
 };
 
 // Builds the generic head and its annotations. Fails with Internal if one of

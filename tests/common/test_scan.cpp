@@ -27,11 +27,21 @@ GenericHead built_generic_head(const GenericHeadBuildOptions& options) {
   return g;
 }
 
+const GenericHead& back_rows_generic_head() {
+  static const GenericHead generic = [] {
+    GenericHeadBuildOptions options;
+    options.regular_nape = false;
+    return built_generic_head(options);
+  }();
+  return generic;
+}
+
 const GenericHead& corner45_generic_head() {
   static const GenericHead generic = [] {
     GenericHeadBuildOptions options;
     options.even_eye_corners = false;
     options.even_back_rows = false;  // the asset's rows of then, too
+    options.regular_nape = false;    // and its nape
     return built_generic_head(options);
   }();
   return generic;

@@ -27,7 +27,7 @@ const GenericHead& generic_head();
 
 // The generic head as the asset was until 22 Nov 2026: the eye rings'
 // corners at 45 deg of the square (GenericHeadBuildOptions::
-// even_eye_corners off; even_back_rows off as well), with a 4.6 mm edge
+// even_eye_corners off; even_back_rows and regular_nape off as well), with a 4.6 mm edge
 // over each brow. Fits with it fold where the asset's do not, which the
 // tests of the fold relief, the fold creases and the fold limiter's second
 // pass need as subjects.
@@ -36,6 +36,12 @@ const GenericHead& corner45_generic_head();
 
 // build_generic_head(options), failing the test on an error.
 GenericHead built_generic_head(const GenericHeadBuildOptions& options);
+
+// The generic head as the asset was from 8518b1e (even rows at the back) to
+// the regular nape (GenericHeadBuildOptions::regular_nape off): the head
+// whose synthetic seed 6 sent the local fit's mouth box into a wrong basin.
+// Built once per test binary.
+const GenericHead& back_rows_generic_head();
 
 // A synthetic person: `generic` deformed by synthesize_head(seed, options).
 GenericHead make_test_head(std::uint32_t seed, const SynthHeadOptions& options = {},

@@ -222,9 +222,12 @@ TEST_CASE("fit_head: the levels near the neck cut follow the scan just below it,
   // the displacements fade across the data's edge (the fit without the
   // band gained, DisplacementOptions::edge_fade_control_edges); 0.252 vs
   // 0.270 mm since the smooth-surface guard runs on whole heads too (it
-  // moves this small scene's control mesh a little: both fits change).
+  // moves this small scene's control mesh a little: both fits change);
+  // 0.189 vs 0.196 mm since the regular nape (generic_head_builder.h: the
+  // neck's quads split alike and the strip to the neck deeper at the back,
+  // so the smooth neck the fit without the band falls back on is closer).
   // Without the band the two would be equal.
-  CHECK(d_on < 0.96 * d_off);
+  CHECK(d_on < 0.98 * d_off);
   // Table 1's distances stay over the points above the cut.
   CHECK(r_on.fitted_points == r_off.fitted_points);
 }
