@@ -7,13 +7,14 @@
 // fold creases, and the eye sockets"), so one fit decides little; the
 // copies show the spread. Skipped with a message when the data are absent.
 // --fit-crease-trials N, --fit-crease-edges N, --fit-crease-angle DEG: the
-// global fit's fold creases (global_fit.h); --fit-head asset|plate|ring|even|back;
+// global fit's fold creases (global_fit.h); --fit-head asset|plate|ring|even|back|nape;
 // --fit-surface-edges X: the spacing of the samples on the scan's triangles
 // in finest-level edges (FitHeadOptions::surface_sample_edges; 0: off);
 // --fit-data-level L: the global fit's last passes measure the points
 // against Butterfly level L (GlobalFitOptions::data_level; 0: off);
 // --fit-pleat-steps N: the pleat relief's sweeps (GlobalFitOptions::
 // smooth_guard_pleat_steps; 0: off);
+// --fit-real-copies N (1-13, default 5): how many of the copies to fit;
 // --fit-back off|face-only|always, --fit-back-weight W: the global fit's
 // scan-to-mesh term (FitHeadOptions::back_term). Beside Table 1 it prints
 // the other direction: level L's face vertices to the scan's triangles
@@ -42,8 +43,11 @@ struct Copy {
   PointCloud cloud;
 };
 
-// The scan and its four nudged copies.
-std::vector<Copy> nudged_copies(const PointCloud& scan) {
+// The scan and its four nudged copies; with `count` above 5, up to eight
+// more (the other directions, axes and sign), as one fit on five copies
+// decides little either: a head change that moves James from 0 to 3-18
+// pairs on five copies may just be another draw.
+std::vector<Copy> nudged_copies(const PointCloud& scan, int count) {
   Vec3 centroid = Vec3::Zero();
   for (const Vec3& p : scan.positions) centroid += p;
   centroid /= std::max(1, scan.size());
@@ -56,12 +60,25 @@ std::vector<Copy> nudged_copies(const PointCloud& scan) {
     for (Vec3& n : c.cloud.normals) n = (linear * n).normalized();
     return c;
   };
+  auto turned = [&](double angle, const Vec3& axis) { return Mat3(Eigen::AngleAxisd(angle, axis)); };
   // The scan itself, bit for bit (p - c + c already changes last bits).
-  return {Copy{"as given", scan},
-          moved("shift x", Mat3::Identity(), Vec3(shift, 0, 0)),
-          moved("shift y", Mat3::Identity(), Vec3(0, shift, 0)),
-          moved("scale 1.0001", 1.0001 * Mat3::Identity(), Vec3::Zero()),
-          moved("turn 0.05 deg", rotation, Vec3::Zero())};
+  std::vector<Copy> copies = {Copy{"as given", scan},
+                              moved("shift x", Mat3::Identity(), Vec3(shift, 0, 0)),
+                              moved("shift y", Mat3::Identity(), Vec3(0, shift, 0)),
+                              moved("scale 1.0001", 1.0001 * Mat3::Identity(), Vec3::Zero()),
+                              moved("turn 0.05 deg", rotation, Vec3::Zero())};
+  const std::vector<std::pair<const char*, std::pair<Mat3, Vec3>>> more = {
+      {"shift -x", {Mat3::Identity(), Vec3(-shift, 0, 0)}},
+      {"shift -y", {Mat3::Identity(), Vec3(0, -shift, 0)}},
+      {"shift z", {Mat3::Identity(), Vec3(0, 0, shift)}},
+      {"shift -z", {Mat3::Identity(), Vec3(0, 0, -shift)}},
+      {"scale 0.9999", {0.9999 * Mat3::Identity(), Vec3::Zero()}},
+      {"turn -0.05 deg", {turned(-turn, Vec3::UnitY()), Vec3::Zero()}},
+      {"tilt 0.05 deg", {turned(turn, Vec3::UnitX()), Vec3::Zero()}},
+      {"roll 0.05 deg", {turned(turn, Vec3::UnitZ()), Vec3::Zero()}}};
+  for (const auto& [name, m] : more)
+    if (static_cast<int>(copies.size()) < count) copies.push_back(moved(name, m.first, m.second));
+  return copies;
 }
 
 int run(const Args& args) {
@@ -78,6 +95,7 @@ int run(const Args& args) {
   // The fold creases' knobs (GlobalFitOptions::smooth_guard_crease_*), to
   // measure them on the copies.
   FitHeadOptions options;
+  int copies = 5;
   if (!args.get_int("fit-crease-trials", options.global.smooth_guard_crease_trials,
                     options.global.smooth_guard_crease_trials) ||
       !args.get_int("fit-crease-edges", options.global.smooth_guard_crease_max_edges,
@@ -86,9 +104,10 @@ int run(const Args& args) {
                        options.global.smooth_guard_crease_min_angle_deg) ||
       !args.get_double("fit-surface-edges", options.surface_sample_edges, options.surface_sample_edges) ||
       !args.get_int("fit-data-level", options.global.data_level, options.global.data_level) ||
-      !args.get_int("fit-pleat-steps", options.global.smooth_guard_pleat_steps, options.global.smooth_guard_pleat_steps)) {
-    std::printf("   --fit-crease-trials / --fit-crease-edges / --fit-data-level / --fit-pleat-steps take a whole number, --fit-crease-angle and "
-                "--fit-surface-edges a number\n");
+      !args.get_int("fit-pleat-steps", options.global.smooth_guard_pleat_steps, options.global.smooth_guard_pleat_steps) ||
+      !args.get_int("fit-real-copies", 5, copies) || copies < 1 || copies > 13) {
+    std::printf("   --fit-crease-trials / --fit-crease-edges / --fit-data-level / --fit-pleat-steps take a whole number, "
+                "--fit-real-copies one from 1 to 13, --fit-crease-angle and --fit-surface-edges a number\n");
     return 1;
   }
   if (!parse_back_term(args, options)) return 1;
@@ -104,7 +123,7 @@ int run(const Args& args) {
     std::printf("   %-14s %9s %7s %7s %7s %8s %7s %8s %9s   %s\n", "copy", "Table 1 %", "pairs", "lips", "ears",
                 "sockets", "rest", "smooth", "wall ms", "level L -> scan where scanned: mean / p99 / max mm, > 1 mm");
     std::vector<int> totals;
-    for (const Copy& c : nudged_copies(scan)) {
+    for (const Copy& c : nudged_copies(scan, copies)) {
       double table1 = -1;
       FitStageObserver obs;
       obs.measured = [&](const FitStageReport& r) {
