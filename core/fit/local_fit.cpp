@@ -239,17 +239,21 @@ Status fit_local(const std::vector<Vec3>& points, const TriMesh& mesh, const Mes
   std::vector<BoxTransform> transforms(boxes.size());
   std::vector<std::vector<char>> inside(boxes.size(), std::vector<char>(nv, 0));
 
+  // Each box's problem and start, in box order (the subsample draws from
+  // one generator); then the boxes are minimized on parallel_for's threads,
+  // each on its own (the same results on any number of threads).
+  if (!report(progress, "local_fitting", 0.0)) return Status::error(ErrorCode::Cancelled, "local fit cancelled");
+  std::vector<BoxProblem> problems(boxes.size());
+  std::vector<BoxFit> fits(boxes.size());
   for (size_t bi = 0; bi < boxes.size(); ++bi) {
     const FeatureBox& box = boxes[bi];
-    if (!report(progress, "local_fitting", double(bi) / boxes.size()))
-      return Status::error(ErrorCode::Cancelled, "local fit cancelled");
     for (int l : box.landmarks)
       if (l < 0 || l >= nv)
         return Status::error(ErrorCode::InvalidInput, "local fit: landmark of box '" + box.name + "' out of range");
-    BoxFit fit;
+    BoxFit& fit = fits[bi];
     fit.name = box.name;
 
-    BoxProblem prob;
+    BoxProblem& prob = problems[bi];
     prob.stretch_k = options.stretch_weight;
     std::vector<int> local(nv, -1);
     for (int v = 0; v < nv; ++v)
@@ -292,48 +296,57 @@ Status fit_local(const std::vector<Vec3>& points, const TriMesh& mesh, const Mes
       }
     if (fit.vertices > 0) T.c /= double(fit.vertices);
 
-    if (prob.triangles.empty() || fit.points < options.min_points_per_box) {
-      // Nothing to fit against (a hole in the scan or a box outside it): the
-      // feature keeps the shape the alignment gave it.
-      fit.skipped = true;
-    } else {
-      // Starts (ours): the map from the alignment, and the box shifted up and
-      // down by LocalFitOptions::start_shifts of its height; each runs a few
-      // iterations and the lowest E_local goes on, a shifted start only when
-      // it is lower by more than LocalFitOptions::start_gain (BoxFit::energies is that
-      // start's, from before its first iteration). From the alignment alone
-      // the mouth can slide into the wrong basin: synthetic seed 6 (slightly
-      // open mouth) with the generic head of 23 Nov moved its lip line 9 mm
-      // up towards the nose (E_local 1.1e-6); started 20 % of the box lower
-      // it ends 5 mm down (7.1e-7), where the previous head's fit lands too.
-      // The global fit had crumpled the lips it was handed (88-125 level-3
-      // pairs).
-      if (!options.start_shifts.empty()) {
-        LocalFitOptions screen = options;
-        screen.max_iterations = options.start_screen_iterations;
-        const Vec3 up = generic_to_mesh.A * Vec3::UnitY();
-        const double height = box.max.y() - box.min.y();
-        BoxTransform best = T;
-        BoxFit best_fit = fit;
-        minimize(prob, RegionMotion::Affine, screen, best, best_fit);
-        for (double shift : options.start_shifts) {
-          BoxTransform S = T;
-          S.t += shift * height * up;
-          BoxFit f = fit;
-          minimize(prob, RegionMotion::Affine, screen, S, f);
-          if (f.energies.back() < (1 - options.start_gain) * best_fit.energies.back()) best = S, best_fit = f;
-        }
-        T = best;
-        fit = best_fit;  // energies: the chosen start's from its first, then on
-      }
-      minimize(prob, RegionMotion::Affine, options, T, fit);
-    }
     transforms[bi] = T;
+    // Nothing to fit against (a hole in the scan or a box outside it): the
+    // feature keeps the shape the alignment gave it.
+    fit.skipped = prob.triangles.empty() || fit.points < options.min_points_per_box;
+  }
+  parallel_for(0, static_cast<int>(boxes.size()), 1, [&](int bi, int) {
+    if (fits[bi].skipped) return;
+    const FeatureBox& box = boxes[bi];
+    const BoxProblem& prob = problems[bi];
+    BoxTransform& T = transforms[bi];
+    BoxFit& fit = fits[bi];
+    // Starts (ours): the map from the alignment, and the box shifted up and
+    // down by LocalFitOptions::start_shifts of its height; each runs a few
+    // iterations and the lowest E_local goes on, a shifted start only when
+    // it is lower by more than LocalFitOptions::start_gain (BoxFit::energies is that
+    // start's, from before its first iteration). From the alignment alone
+    // the mouth can slide into the wrong basin: synthetic seed 6 (slightly
+    // open mouth) with the generic head of 23 Nov moved its lip line 9 mm
+    // up towards the nose (E_local 1.1e-6); started 20 % of the box lower
+    // it ends 5 mm down (7.1e-7), where the previous head's fit lands too.
+    // The global fit had crumpled the lips it was handed (88-125 level-3
+    // pairs).
+    if (!options.start_shifts.empty()) {
+      LocalFitOptions screen = options;
+      screen.max_iterations = options.start_screen_iterations;
+      const Vec3 up = generic_to_mesh.A * Vec3::UnitY();
+      const double height = box.max.y() - box.min.y();
+      BoxTransform best = T;
+      BoxFit best_fit = fit;
+      minimize(prob, RegionMotion::Affine, screen, best, best_fit);
+      for (double shift : options.start_shifts) {
+        BoxTransform S = T;
+        S.t += shift * height * up;
+        BoxFit f = fit;
+        minimize(prob, RegionMotion::Affine, screen, S, f);
+        if (f.energies.back() < (1 - options.start_gain) * best_fit.energies.back()) best = S, best_fit = f;
+      }
+      T = best;
+      fit = best_fit;  // energies: the chosen start's from its first, then on
+    }
+    minimize(prob, RegionMotion::Affine, options, T, fit);
+  });
+  for (size_t bi = 0; bi < boxes.size(); ++bi) {
+    BoxFit& fit = fits[bi];
+    const BoxTransform& T = transforms[bi];
     // Express about the origin for callers: c + A (y - c) + t = A y + (c - A c + t).
     fit.transform.A = T.A;
     fit.transform.t = T.c - T.A * T.c + T.t;
-    result.boxes.push_back(fit);
+    result.boxes.push_back(std::move(fit));
   }
+  if (!report(progress, "local_fitting", 1.0)) return Status::error(ErrorCode::Cancelled, "local fit cancelled");
 
   // Apply: box vertices move with their box (averaged where boxes overlap);
   // the rest follow the landmarks with exponential fall-off.
