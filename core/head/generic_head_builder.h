@@ -20,8 +20,10 @@
 //     as a closed mouth bag. Ears are a 2 x 6 grid patch extruded into a flap
 //     with a rim and a real concavity behind it (or, with ring_ear, rings
 //     from that patch's border out to a helix rim and in to a concha).
-//  4. Quads are split along their better diagonal; the result is made exactly
-//     mirror-symmetric (x -> -x) and annotated.
+//  4. Quads are split along their better diagonal, except behind the ears
+//     and down the neck, where all lean the same way on each side (a
+//     chevron: valence 6); the result is made exactly mirror-symmetric
+//     (x -> -x) and annotated.
 //
 // Output shapes: mesh.positions #V by 3 (metres; +z look, +y up, +x = the
 // head's left), mesh.triangles #F by 3 (counter-clockwise seen from outside).
