@@ -860,16 +860,10 @@ NapeShape nape_shape(const GenericHead& h) {
   const TriMesh& m = h.mesh;
   MeshTopology topo;
   REQUIRE(build_topology(m, topo).ok());
-  std::vector<std::set<int>> neighbours(m.num_vertices());
-  for (const Tri& t : m.triangles)
-    for (int k = 0; k < 3; ++k) {
-      neighbours[t[k]].insert(t[(k + 1) % 3]);
-      neighbours[t[(k + 1) % 3]].insert(t[k]);
-    }
   for (int v = 0; v < m.num_vertices(); ++v)
     if (behind_ears_and_neck(m.positions[v])) {
       ++out.vertices;
-      out.irregular += neighbours[v].size() != 6;
+      out.irregular += topo.valence(v) != 6;
     }
   const TriMesh fine = smooth_level3(h);
   const std::vector<double> angles =
