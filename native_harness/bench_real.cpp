@@ -53,31 +53,34 @@ std::vector<Copy> nudged_copies(const PointCloud& scan, int count) {
   centroid /= std::max(1, scan.size());
   const double shift = 2.5e-4 * bounding_box(scan.positions).diagonal();
   const double turn = 0.05 * 3.14159265358979323846 / 180.0;
-  const Mat3 rotation = Eigen::AngleAxisd(turn, Vec3::UnitY()).toRotationMatrix();
-  auto moved = [&](const char* name, const Mat3& linear, const Vec3& offset) {
-    Copy c{name, scan};
-    for (Vec3& p : c.cloud.positions) p = centroid + linear * (p - centroid) + offset;
-    for (Vec3& n : c.cloud.normals) n = (linear * n).normalized();
-    return c;
-  };
   auto turned = [&](double angle, const Vec3& axis) { return Mat3(Eigen::AngleAxisd(angle, axis)); };
+  struct Nudge {
+    const char* name;
+    Mat3 linear;
+    Vec3 offset;
+  };
+  const Mat3 I = Mat3::Identity();
+  const Nudge nudges[] = {{"shift x", I, Vec3(shift, 0, 0)},
+                          {"shift y", I, Vec3(0, shift, 0)},
+                          {"scale 1.0001", 1.0001 * I, Vec3::Zero()},
+                          {"turn 0.05 deg", turned(turn, Vec3::UnitY()), Vec3::Zero()},
+                          {"shift -x", I, Vec3(-shift, 0, 0)},
+                          {"shift -y", I, Vec3(0, -shift, 0)},
+                          {"shift z", I, Vec3(0, 0, shift)},
+                          {"shift -z", I, Vec3(0, 0, -shift)},
+                          {"scale 0.9999", 0.9999 * I, Vec3::Zero()},
+                          {"turn -0.05 deg", turned(-turn, Vec3::UnitY()), Vec3::Zero()},
+                          {"tilt 0.05 deg", turned(turn, Vec3::UnitX()), Vec3::Zero()},
+                          {"roll 0.05 deg", turned(turn, Vec3::UnitZ()), Vec3::Zero()}};
   // The scan itself, bit for bit (p - c + c already changes last bits).
-  std::vector<Copy> copies = {Copy{"as given", scan},
-                              moved("shift x", Mat3::Identity(), Vec3(shift, 0, 0)),
-                              moved("shift y", Mat3::Identity(), Vec3(0, shift, 0)),
-                              moved("scale 1.0001", 1.0001 * Mat3::Identity(), Vec3::Zero()),
-                              moved("turn 0.05 deg", rotation, Vec3::Zero())};
-  const std::vector<std::pair<const char*, std::pair<Mat3, Vec3>>> more = {
-      {"shift -x", {Mat3::Identity(), Vec3(-shift, 0, 0)}},
-      {"shift -y", {Mat3::Identity(), Vec3(0, -shift, 0)}},
-      {"shift z", {Mat3::Identity(), Vec3(0, 0, shift)}},
-      {"shift -z", {Mat3::Identity(), Vec3(0, 0, -shift)}},
-      {"scale 0.9999", {0.9999 * Mat3::Identity(), Vec3::Zero()}},
-      {"turn -0.05 deg", {turned(-turn, Vec3::UnitY()), Vec3::Zero()}},
-      {"tilt 0.05 deg", {turned(turn, Vec3::UnitX()), Vec3::Zero()}},
-      {"roll 0.05 deg", {turned(turn, Vec3::UnitZ()), Vec3::Zero()}}};
-  for (const auto& [name, m] : more)
-    if (static_cast<int>(copies.size()) < count) copies.push_back(moved(name, m.first, m.second));
+  std::vector<Copy> copies = {Copy{"as given", scan}};
+  for (const Nudge& n : nudges) {
+    if (static_cast<int>(copies.size()) >= count) break;
+    Copy c{n.name, scan};
+    for (Vec3& p : c.cloud.positions) p = centroid + n.linear * (p - centroid) + n.offset;
+    for (Vec3& q : c.cloud.normals) q = (n.linear * q).normalized();
+    copies.push_back(std::move(c));
+  }
   return copies;
 }
 
