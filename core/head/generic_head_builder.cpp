@@ -269,8 +269,8 @@ void even_back_rows(const HeadShape& shape, const std::vector<std::vector<int>>&
     };
     for (int h = 1; h + 1 < kHeadRows; ++h) {
       const double target = (1 - w) * length_at(kHeadRowElevation[h]) + w * length[samples] * h / (kHeadRows - 1);
-      const ArcPosition a = arc_position(length, target);
-      const double e = elevation[a.i - 1] + a.f * (elevation[a.i] - elevation[a.i - 1]);
+      const ArcPosition at = arc_position(length, target);
+      const double e = elevation[at.i - 1] + at.f * (elevation[at.i] - elevation[at.i - 1]);
       positions[grid[h][c]] = shape.cast(kRayCenter, direction(az, radians(e)));
     }
   }
