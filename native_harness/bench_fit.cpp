@@ -298,7 +298,10 @@ int run(const Args& args) {
     args.get_double("fit-area-ratio", opt.fold_limit.min_area_ratio, opt.fold_limit.min_area_ratio);
     args.get_double("fit-cap-pct", opt.displacement_max_pct, opt.displacement_max_pct);
     args.get_int("fit-levels", opt.levels, opt.levels);
-    args.get_int("fit-data-level", opt.global.data_level, opt.global.data_level);
+    if (args.has("fit-data-level")) {
+      args.get_int("fit-data-level", opt.global.data_level, opt.global.data_level);
+      opt.whole_head_data_level = -1;  // on every scan, as given
+    }
     args.get_int("fit-restarts", opt.fold_limit.max_intersection_restarts, opt.fold_limit.max_intersection_restarts);
     args.get_double("fit-isolated", opt.displacement.isolated_density_ratio, opt.displacement.isolated_density_ratio);
     args.get_int("fit-footprint", opt.displacement.footprint_points, opt.displacement.footprint_points);
@@ -314,6 +317,9 @@ int run(const Args& args) {
                     opt.displacement.smooth_max_radius_edges);
     args.get_double("fit-line-edges", opt.displacement.fine_line_edges, opt.displacement.fine_line_edges);
     args.get_double("fit-edge-fade", opt.displacement.edge_fade_control_edges, opt.displacement.edge_fade_control_edges);
+    double below_cut_mm = 1e3 * opt.displacement_below_neck_cut;
+    args.get_double("fit-below-cut-mm", below_cut_mm, below_cut_mm);
+    opt.displacement_below_neck_cut = below_cut_mm / 1e3;
     if (args.has("fit-guard-always")) opt.smooth_guard = FitHeadOptions::SmoothGuard::Always;
     if (args.has("fit-guard-face-only")) opt.smooth_guard = FitHeadOptions::SmoothGuard::FaceOnlyScans;
     if (args.has("fit-guard-off")) opt.smooth_guard = FitHeadOptions::SmoothGuard::Off;

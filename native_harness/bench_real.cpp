@@ -114,6 +114,7 @@ int run(const Args& args) {
     return 1;
   }
   if (!parse_back_term(args, options)) return 1;
+  if (args.has("fit-data-level")) options.whole_head_data_level = -1;  // on every scan, as given
   int failures = 0;
   for (const auto& [label, path] : scans) {
     PointCloud scan;

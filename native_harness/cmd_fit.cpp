@@ -68,12 +68,17 @@ int run_fit(const Args& args) {
   // The earlier opt-in: level-L footprints widened against the scan's noise
   // (up to 128 points each; about +0.3 s, docs/fit.md).
   if (args.has("widen-footprints")) opt.displacement.max_footprint_points = 128;
-  // Opt-in: the global fit's passes on all points measure the scan against
-  // the control mesh's Butterfly level L (smoother faces from sparse scans;
-  // more crossing pairs at James's ears, docs/fit.md).
-  if (!args.get_int("data-level", 0, opt.global.data_level)) return 2;
-  if (opt.global.data_level < 0 || opt.global.data_level > 2)
-    return fail(cmd, "--data-level takes 0 (the control mesh, default), 1 or 2");
+  // The global fit's passes on all points measure the scan against the
+  // control mesh's Butterfly level L: by default 1 on whole-head scans and
+  // 0 (its flat triangles, the paper's) on face-only captures, where level
+  // 1 raised the crossing pairs at James's ears (FitHeadOptions::
+  // whole_head_data_level, docs/fit.md). --data-level L: L on any scan.
+  if (args.has("data-level")) {
+    if (!args.get_int("data-level", 0, opt.global.data_level)) return 2;
+    if (opt.global.data_level < 0 || opt.global.data_level > 2)
+      return fail(cmd, "--data-level takes 0 (the control mesh), 1 or 2");
+    opt.whole_head_data_level = -1;
+  }
   const bool dump = args.has("dump"), scan_frame = args.has("scan-frame");
 
   PointCloud scan;

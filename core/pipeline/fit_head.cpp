@@ -498,6 +498,7 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   const bool smooth_guarded = options.smooth_guard == FitHeadOptions::SmoothGuard::Always ||
                               (options.smooth_guard == FitHeadOptions::SmoothGuard::FaceOnlyScans && out.face_only);
   if (!smooth_guarded) global_options.smooth_guard_level = 0;
+  if (!out.face_only && options.whole_head_data_level >= 0) global_options.data_level = options.whole_head_data_level;
   const bool back_term = options.back_term == FitHeadOptions::BackTerm::Always ||
                          (options.back_term == FitHeadOptions::BackTerm::FaceOnlyScans && out.face_only);
   global_options.back_weight = back_term ? options.back_weight : 0.0;

@@ -197,7 +197,14 @@ TEST_CASE("fit_head: the levels near the neck cut follow the scan just below it,
   // to the control mesh's smooth surface (about 1 mm inside the truth) at
   // the cut, in streaks along the neck's long triangles.
   const Scene& s = scene();
+  // On the control mesh's flat triangles (the paper's global fit), whose
+  // smooth surface lies inside the scan: what the band is for. With the
+  // refined surface fitted (whole_head_data_level, the default on whole
+  // heads) the smooth neck here is already on the scan and the band's
+  // gain is gone in this small scene (0.160 vs 0.150 mm); on seeds 1-5 it
+  // is still 0.519 vs 0.524 mm where scanned (docs/fit.md).
   FitHeadOptions on = quick_options(), off = quick_options();
+  on.whole_head_data_level = off.whole_head_data_level = -1;
   off.displacement_below_neck_cut = 0;
   FitHeadResult r_on, r_off;
   REQUIRE(fit_head(s.scan, s.generic, on, r_on).ok());

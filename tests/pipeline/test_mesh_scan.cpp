@@ -41,8 +41,24 @@ TEST_CASE("fit_head: a synthetic head's truth mesh as a mesh scan comes closer w
   CHECK(without.surface_samples.samples == 0);
   CHECK(with_faces.surface_samples.samples > 100000);
   CHECK(with_faces.surface_samples.triangles_skipped_long == 0);  // a closed surface bridges no hole
+  // Measured 0.0226 % with the samples against 0.0288 % without. Before
+  // whole heads fitted the refined surface (FitHeadOptions::
+  // whole_head_data_level) the fit from the vertices alone was 0.0403 %
+  // (with the samples 0.0223 %): level 1 already follows the surface
+  // between the sparse vertices, the samples still take it closer.
+  CHECK(table1(with_faces) < 0.85 * table1(without));
+  // A whole head's global fit measures the points on the control mesh's
+  // Butterfly level 1; from the sparse vertices alone that is what takes
+  // Table 1 from 0.0403 % (the flat control triangles) to 0.0288 %.
+  CHECK(without.global_fit.data_level == 1);
+  FitHeadOptions flat;
+  flat.whole_head_data_level = -1;  // global.data_level 0: the paper's flat triangles
+  FitHeadResult without_flat;
+  REQUIRE(fit_head(vertices_only, test::generic_head(), flat, without_flat).ok());
+  INFO("vertices only, fitted on the flat control triangles: " << table1(without_flat));
+  CHECK(without_flat.global_fit.data_level == 0);
+  CHECK(table1(without) < 0.8 * table1(without_flat));
   // The stages before the displacements do not read the faces.
-  CHECK(table1(with_faces) < 0.75 * table1(without));
   CHECK(with_faces.stages[2].distance.mean_pct == without.stages[2].distance.mean_pct);
 }
 
@@ -57,6 +73,8 @@ TEST_CASE("fit_head: the real James's triangles take level 3 onto his face captu
   REQUIRE(st.ok());
   INFO("Table 1 " << table1(r) << " %, " << r.surface_samples.samples << " samples, "
                   << r.surface_samples.triangles_skipped_long << " triangles too long");
+  CHECK(r.face_only);
+  CHECK(r.global_fit.data_level == 0);  // face captures fit the flat control triangles (FitHeadOptions::whole_head_data_level)
   CHECK(r.surface_samples.samples > 100000);
   // 0.043 % measured on his vertices alone (his cheeks rippled: footprints
   // ~10 mm wide, 6.9k level-3 heights tapered towards the smooth surface);
