@@ -211,8 +211,9 @@ struct FitHeadOptions {
   // control mesh's Butterfly level 1, the surface the user gets, instead of
   // its flat triangles (fit/data_surface.h). Synthetic seeds 1-10: truth ->
   // level 3 where scanned 0.512 -> 0.490 mm, in the holes lower on all
-  // ten, 0 crossing pairs either way, Table 1 0.0476 -> 0.0478 %, slowest
-  // fit +0.17 s (docs/fit.md, "The refined surface on whole heads").
+  // ten, 0 crossing pairs either way, Table 1 0.0476 -> 0.0478 %, +0.09 s
+  // per fit on average (slowest 1.50 -> 1.75 s; Chromium 3.1 -> 3.4-3.7 s:
+  // docs/fit.md, "The refined surface on whole heads").
   // Face-only captures keep global.data_level (0 by default): on James's
   // hair-covered ears level 1 raised the crossing pairs (13 nudged copies:
   // ears 3 -> 49). -1: global.data_level on every scan.
