@@ -8,7 +8,7 @@
 // truth: noise, outliers, hair junk), self-intersecting triangle pairs by
 // region beside those of the smooth (undisplaced) surface, and the fold
 // limiter's work. Experiment knobs (see docs/fit.md): --fit-separate-rounds N,
-// --fit-area-ratio R, --fit-cap-pct P, --fit-levels L, --fit-data-level L (GlobalFitOptions::data_level), --fit-line-edges E, --fit-edge-fade W (DisplacementOptions::edge_fade_control_edges, 0: off),
+// --fit-area-ratio R, --fit-cap-pct P, --fit-levels L, --fit-data-level L (GlobalFitOptions::data_level on every scan; without it FitHeadOptions::whole_head_data_level), --fit-below-cut-mm M (FitHeadOptions::displacement_below_neck_cut in mm; 0: off), --fit-line-edges E, --fit-edge-fade W (DisplacementOptions::edge_fade_control_edges, 0: off),
 // --fit-guard-face-only / --fit-guard-off (the global fit's smooth-surface guard and fold relief on
 // face-only captures only / on none; default: every scan; --fit-guard-always is the default), --fit-relief-level L (the guard's fold relief
 // level, GlobalFitOptions::smooth_guard_relief_level; 0: the level-2 guard without relief), --fit-guard-passes N (GlobalFitOptions::smooth_guard_passes), --fit-pleat-steps N (the pleat

@@ -11,7 +11,9 @@
 // --fit-surface-edges X: the spacing of the samples on the scan's triangles
 // in finest-level edges (FitHeadOptions::surface_sample_edges; 0: off);
 // --fit-data-level L: the global fit's last passes measure the points
-// against Butterfly level L (GlobalFitOptions::data_level; 0: off);
+// against Butterfly level L on every scan (GlobalFitOptions::data_level;
+// 0: the flat control triangles; without it whole heads use level 1 and
+// face captures 0, FitHeadOptions::whole_head_data_level);
 // --fit-pleat-steps N: the pleat relief's sweeps (GlobalFitOptions::
 // smooth_guard_pleat_steps; 0: off);
 // --fit-real-copies N (1-13, default 5): how many of the copies to fit;
