@@ -17,6 +17,10 @@
 // --fit-pleat-steps N: the pleat relief's sweeps (GlobalFitOptions::
 // smooth_guard_pleat_steps; 0: off);
 // --fit-real-copies N (1-13, default 5): how many of the copies to fit;
+// --fit-real-dump DIR: writes each copy's fitted control mesh, its level L
+// and the centroids of level L's crossing triangles (DIR/<scan>_<copy>
+// _control.obj, _levelL.obj, _pairs.xyz) to look at: the copies are made in
+// memory, and a copy written to a file and fitted again is another draw.
 // --fit-back off|face-only|always, --fit-back-weight W: the global fit's
 // scan-to-mesh term (FitHeadOptions::back_term). Beside Table 1 it prints
 // the other direction: level L's face vertices to the scan's triangles
@@ -30,6 +34,7 @@
 #include "mesh/geometry.h"
 #include "pipeline/fit_head.h"
 #include "pipeline/fit_quality.h"
+#include "raycast/self_intersection.h"
 
 #include <algorithm>
 #include <cmath>
@@ -39,6 +44,24 @@
 
 namespace lk::cli {
 namespace {
+
+// What --fit-real-dump writes for one copy (header comment); prefix is
+// DIR/<scan>_<copy> with spaces as underscores.
+Status dump_copy(const std::string& prefix, const FitHeadResult& r) {
+  const TriMesh& finest = r.level_meshes.back();
+  std::vector<std::array<int, 2>> pairs;
+  Status st = find_self_intersections(finest, pairs);
+  PointCloud centroids;
+  for (const auto& p : pairs)
+    for (int f : p) {
+      const Tri& t = finest.triangles[f];
+      centroids.positions.push_back((finest.positions[t[0]] + finest.positions[t[1]] + finest.positions[t[2]]) / 3);
+    }
+  if (st) st = write_file(prefix + "_control.obj", write_obj(r.control));
+  if (st) st = write_file(prefix + "_level" + std::to_string(r.level_meshes.size()) + ".obj", write_obj(finest));
+  if (st) st = write_file(prefix + "_pairs.xyz", write_xyz(centroids));
+  return st;
+}
 
 struct Copy {
   std::string name;
@@ -116,6 +139,7 @@ int run(const Args& args) {
     return 1;
   }
   if (!parse_back_term(args, options)) return 1;
+  const std::string dump = args.get("fit-real-dump", "");
   if (args.has("fit-data-level")) options.whole_head_data_level = -1;  // on every scan, as given
   int failures = 0;
   for (const auto& [label, path] : scans) {
@@ -165,6 +189,12 @@ int run(const Args& args) {
                   c.name.c_str(), table1, x.total, x.lips, x.ears, x.eye_sockets, x.rest, q.smooth_crossings.total, ms,
                   1e3 * back.mean, 1e3 * back.p99, 1e3 * back.max, back.over_1mm, back.vertices, 1e3 * nose_max,
                   r.global_fit.pleats_before, r.global_fit.pleats_after);
+      if (!dump.empty()) {
+        std::string prefix = dump + "/" + label.substr(0, label.find(' ')) + "_" + c.name;
+        std::replace(prefix.begin() + static_cast<long>(dump.size()), prefix.end(), ' ', '_');
+        st = dump_copy(prefix, r);
+        if (!st) std::printf("   %-14s --fit-real-dump: %s\n", "", st.message.c_str());
+      }
       if (x.rest) {  // where the rest lie (regions overlap; "face" holds most)
         std::printf("   %-14s rest touches:", "");
         for (const auto& kv : x.rest_by_region) std::printf(" %s %d", kv.first.c_str(), kv.second);
