@@ -6,6 +6,7 @@
 #include "mesh/topology.h"
 #include "pipeline/head_creases.h"
 #include "pipeline/head_pockets.h"
+#include "pipeline/untangle.h"
 #include "raycast/self_intersection.h"
 
 #include <Eigen/Eigenvalues>
@@ -116,97 +117,6 @@ int drop_isolated_points(double density_ratio, std::vector<Vec3>& points, std::v
   index.resize(kept);
   return dropped;
 }
-
-// The fitted control mesh's own smooth Butterfly surface may cross itself
-// where the control triangles do not (the global fit's crossing guard sees
-// only the control mesh). On the menpo3d James scan its smooth level 3 had
-// 576 crossing pairs, 432 of them where the ear's back and the scalp behind
-// it (control faces 2-4 rings apart) were both pulled onto the same scan
-// points, against 24 for the aligned generic head; the fold limiter leaves
-// such pairs alone (shrinking displacements only returns to that surface),
-// and displaced levels cross around them. Two sheets that close in on each
-// other face each other, so moving both INTO their own side along their
-// normals opens the gap: each step moves the corners of the control faces
-// under the new pairs of the smooth level K (untangle_level, on face
-// captures face_untangle_level; pairs the aligned generic head's smooth
-// level does not have) by untangle_erode_pct
-// of the diagonal against their vertex normals. The state with the fewest
-// pairs that turns no more control triangles against the template than the
-// start did is kept, so a step that does not help changes nothing (a fold
-// within one sheet, as at Fran's lips and eye rims, is not opened this
-// way). The displacements measured afterwards put the detail back.
-Status untangle_smooth_surface(const std::vector<Vec3>& reference, const ButterflyCreases& creases,
-                               double diagonal, const FitHeadOptions& options, int K, TriMesh& control,
-                               int& pairs_before, int& pairs_after) {
-  pairs_before = pairs_after = 0;
-  if (K <= 0 || options.untangle_iterations <= 0 || !(options.untangle_erode_pct > 0)) return Status::success();
-  MultiresMesh mr;
-  Status st = build_multires(control, creases, K, mr);
-  if (!st) return st;
-  auto level_positions = [&](const std::vector<Vec3>& positions, std::vector<Vec3>& level) -> Status {
-    mr.control = positions;
-    Status r = evaluate(mr);
-    if (!r) return r;
-    level = mr.state.displaced[K];
-    return Status::success();
-  };
-  // New pairs are those that do not cross at the reference's level
-  // positions (find_new_self_intersections).
-  std::vector<Vec3> reference_level;
-  st = level_positions(reference, reference_level);
-  if (!st) return st;
-  TriMesh level;
-  level.triangles = mr.triangles(K);
-  std::vector<std::array<int, 2>> pairs;
-  // One SAH tree for all searches, refit after each step: the steps move
-  // vertices by a fraction of a percent of the diagonal, so the refit boxes
-  // stay tight (James: up to seven fresh builds of level 2 cost ~44 ms).
-  MeshBvh bvh;
-  auto new_pairs = [&]() -> Status {
-    Status r = level_positions(control.positions, level.positions);
-    if (!r) return r;
-    r = bvh.empty() ? build_bvh(level, bvh) : refit_bvh(level, bvh);
-    if (!r) return r;
-    return find_new_self_intersections(bvh, reference_level, pairs);
-  };
-  st = new_pairs();
-  if (!st) return st;
-  pairs_before = pairs_after = static_cast<int>(pairs.size());
-  const size_t turned_at_start = turned_triangles(reference, control).size();
-  std::vector<Vec3> best = control.positions;
-  const int nv = control.num_vertices();
-  std::vector<char> in_set(nv, 0);
-  std::vector<int> set;
-  const int faces_per_control = 1 << (2 * K);  // child c of triangle g is 4 g + c on every level
-  const double step = options.untangle_erode_pct / 100 * diagonal;
-  // Two steps in a row without fewer pairs end it (James: the best state
-  // came after the first step; each step costs a level-2 search).
-  for (int it = 0, idle = 0; it < options.untangle_iterations && !pairs.empty() && idle < 2; ++it) {
-    set.clear();
-    std::fill(in_set.begin(), in_set.end(), 0);
-    for (const auto& p : pairs)
-      for (int f : p)
-        for (int v : control.triangles[f / faces_per_control])
-          if (!in_set[v]) in_set[v] = 1, set.push_back(v);
-    const std::vector<Vec3> normals = vertex_normals(control);
-    for (int v : set) control.positions[v] -= step * normals[v];
-    st = new_pairs();
-    if (!st) return st;
-    // A step that turns a control triangle over against the template is not
-    // kept (Fran: a lid triangle of the right eye socket turned).
-    const bool turns = turned_triangles(reference, control).size() > turned_at_start;
-    if (!turns && static_cast<int>(pairs.size()) < pairs_after) {
-      pairs_after = static_cast<int>(pairs.size());
-      best = control.positions;
-      idle = 0;
-    } else {
-      ++idle;
-    }
-  }
-  control.positions = best;
-  return Status::success();
-}
-
 
 }  // namespace
 
@@ -531,9 +441,14 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
 
   // 4. Displaced Butterfly levels.
   if (observer.started) observer.started("subdivision");
-  st = untangle_smooth_surface(out.aligned.positions, creases, diag, options,
-                               out.face_only ? options.face_untangle_level : options.untangle_level, out.control,
-                               out.smooth_crossings_before, out.smooth_crossings_after);
+  UntangleOptions untangle;
+  untangle.level = out.face_only ? options.face_untangle_level : options.untangle_level;
+  untangle.iterations = options.untangle_iterations;
+  untangle.erode_pct = options.untangle_erode_pct;
+  untangle.restore_rings = options.untangle_restore_rings;
+  untangle.restore_share = options.untangle_restore_share;
+  st = untangle_smooth_surface(out.aligned.positions, creases, diag, topo, terms.smooth_guard_ignored, untangle,
+                               out.control, out.untangle);
   if (!st) return with_context(st, "subdivision (untangling)");
   st = build_multires(out.control, creases, options.levels, out.multires);
   if (!st) return with_context(st, "subdivision");

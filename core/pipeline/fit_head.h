@@ -45,6 +45,7 @@
 #include "multires/fold_limit.h"
 #include "multires/multires.h"
 #include "multires/surface_samples.h"
+#include "pipeline/untangle.h"
 
 #include <functional>
 #include <string>
@@ -151,10 +152,18 @@ struct FitHeadOptions {
   // limiter's last resort reaching two rings, fold_limit.h), Table 1 within
   // 0.0005 %, +0.1-0.3 s. Whole heads stay on level 2: the dense synthetic
   // seeds have no new level-3 pairs, and the search cost 70-110 ms per fit.
+  // Then the folds left within one sheet are taken untangle_restore_share
+  // of the way back to the template's shape over the corners of their
+  // control faces and up to untangle_restore_rings rings around them
+  // (pipeline/untangle.h; -1: off). On James's 13 nudged copies (likeness
+  // bench --only fit-real --fit-real-copies 13) the pairs left at his
+  // outer eye corners went 45 -> 24 in all (docs/fit.md).
   int untangle_level = 2;
   int face_untangle_level = 3;
   int untangle_iterations = 6;
   double untangle_erode_pct = 0.03;
+  int untangle_restore_rings = 3;
+  double untangle_restore_share = 0.25;
   // After global fitting, the mouth bag (held where local fitting put it)
   // follows its lips (carry_mouth_bag below). Held in place, it poked out
   // through the skin where the lips moved back: Fran's mouth corner went
@@ -262,9 +271,9 @@ struct FitHeadResult {
   int zeroed_displacements = 0; // displacements dropped in pockets or because they folded triangles
   FoldLimitStats fold_limit;    // what the fold limiter shrank
   // Crossing pairs of the control mesh's smooth level untangle_level that the
-  // aligned generic head's does not have, before and after untangling (the
-  // control mesh above is the untangled one).
-  int smooth_crossings_before = 0, smooth_crossings_after = 0;
+  // aligned generic head's does not have, before, between and after the
+  // untangling's steps (the control mesh above is the untangled one).
+  UntangleResult untangle;
 };
 
 // Fits generic (the generic head with annotations, in metres) to scan.

@@ -349,7 +349,7 @@ TEST_CASE("fit_head: the real James's ear folds are refined as creases") {
   // Untangling level 3 (the default on face captures) opens them too.
   off.face_untangle_level = 3;
   REQUIRE(fit_head(james, truth().generic, off, r_off).ok());
-  CHECK(r_off.smooth_crossings_before > 0);
+  CHECK(r_off.untangle.pairs_before > 0);
   CHECK(test::smooth_region_pairs(r_off.control, r_off.multires.creases, ann, 3, "ears") == 0);
 }
 

@@ -1,0 +1,211 @@
+#include "pipeline/untangle.h"
+
+#include "fit/global_fit.h"
+#include "mesh/geometry.h"
+#include "multires/multires.h"
+#include "raycast/bvh.h"
+#include "raycast/self_intersection.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace lk {
+
+Status untangle_smooth_surface(const std::vector<Vec3>& reference, const ButterflyCreases& creases, double diagonal,
+                               const MeshTopology& topology, const std::vector<char>& pinned,
+                               const UntangleOptions& options, TriMesh& control, UntangleResult& result) {
+  result = UntangleResult{};
+  const int nv = control.num_vertices();
+  if (static_cast<int>(reference.size()) != nv || topology.num_vertices != nv ||
+      (!pinned.empty() && static_cast<int>(pinned.size()) != nv))
+    return Status::error(ErrorCode::InvalidInput, "untangling: reference, topology and pinned must match the mesh");
+  if (options.level < 0 || options.level > 4 || options.iterations < 0 || !(options.erode_pct >= 0) ||
+      !std::isfinite(options.erode_pct) || options.restore_rings > 8 || !(options.restore_share > 0) ||
+      !(options.restore_share <= 1) || !(diagonal > 0) || !std::isfinite(diagonal))
+    return Status::error(ErrorCode::InvalidInput, "untangling: level 0-4, iterations >= 0, erode_pct >= 0, "
+                                                  "restore_rings <= 8, restore_share in (0, 1], diagonal > 0");
+  const int K = options.level;
+  const bool eroding = options.iterations > 0 && options.erode_pct > 0;
+  const bool restoring = options.restore_rings >= 0;
+  if (K == 0 || (!eroding && !restoring)) return Status::success();
+  auto is_pinned = [&](int v) { return !pinned.empty() && pinned[v]; };
+
+  MultiresMesh mr;
+  Status st = build_multires(control, creases, K, mr);
+  if (!st) return st;
+  auto level_positions = [&](const std::vector<Vec3>& positions, std::vector<Vec3>& level) -> Status {
+    mr.control = positions;
+    Status r = evaluate(mr);
+    if (!r) return r;
+    level = mr.state.displaced[K];
+    return Status::success();
+  };
+  // New pairs are those that do not cross at the reference's level
+  // positions (find_new_self_intersections).
+  std::vector<Vec3> reference_level;
+  st = level_positions(reference, reference_level);
+  if (!st) return st;
+  TriMesh level;
+  level.triangles = mr.triangles(K);
+  std::vector<std::array<int, 2>> pairs;
+  // One SAH tree for all searches, refit after each step: the steps move
+  // vertices by a fraction of a percent of the diagonal, so the refit boxes
+  // stay tight (James: up to seven fresh builds of level 2 cost ~44 ms).
+  MeshBvh bvh;
+  auto new_pairs = [&]() -> Status {
+    Status r = level_positions(control.positions, level.positions);
+    if (!r) return r;
+    r = bvh.empty() ? build_bvh(level, bvh) : refit_bvh(level, bvh);
+    if (!r) return r;
+    return find_new_self_intersections(bvh, reference_level, pairs);
+  };
+  st = new_pairs();
+  if (!st) return st;
+  int best_pairs = static_cast<int>(pairs.size());
+  result.pairs_before = best_pairs;
+  const size_t turned_at_start = turned_triangles(reference, control).size();
+  std::vector<Vec3> best = control.positions;
+  bool level_at_best = true;  // `level`, `bvh` and `pairs` are best's
+  std::vector<char> in_set(nv, 0);
+  std::vector<int> set;
+  const int faces_per_control = 1 << (2 * K);  // child c of triangle g is 4 g + c on every level
+  // The unpinned corners of the control faces under `pairs`, into `set`.
+  auto corners_under_pairs = [&]() {
+    set.clear();
+    std::fill(in_set.begin(), in_set.end(), 0);
+    for (const auto& p : pairs)
+      for (int f : p)
+        for (int v : control.triangles[f / faces_per_control])
+          if (!in_set[v] && !is_pinned(v)) in_set[v] = 1, set.push_back(v);
+  };
+
+  // 1. Erosion. On the menpo3d James scan the smooth level 3 once had 576
+  // new pairs, 432 of them where the ear's back and the scalp behind it
+  // (control faces 2-4 rings apart) were both pulled onto the same scan
+  // points; the fold limiter leaves such pairs alone (shrinking
+  // displacements only returns to this surface). Two steps in a row without
+  // fewer pairs end it (James: the best state came after the first step;
+  // each step costs a search).
+  const double step = options.erode_pct / 100 * diagonal;
+  for (int it = 0, idle = 0; eroding && it < options.iterations && !pairs.empty() && idle < 2; ++it) {
+    corners_under_pairs();
+    const std::vector<Vec3> normals = vertex_normals(control);
+    for (int v : set) control.positions[v] -= step * normals[v];
+    st = new_pairs();
+    if (!st) return st;
+    // A step that turns a control triangle over against the template is not
+    // kept (Fran: a lid triangle of the right eye socket turned).
+    const bool turns = turned_triangles(reference, control).size() > turned_at_start;
+    if (!turns && static_cast<int>(pairs.size()) < best_pairs) {
+      best_pairs = static_cast<int>(pairs.size());
+      best = control.positions;
+      level_at_best = true;
+      idle = 0;
+    } else {
+      level_at_best = false;
+      ++idle;
+    }
+  }
+  control.positions = best;
+  result.pairs_eroded = result.pairs_after = best_pairs;
+  if (!restoring || best_pairs == 0) return Status::success();
+
+  // 2. Restore (header comment).
+  if (!level_at_best) {
+    st = new_pairs();
+    if (!st) return st;
+  }
+  std::vector<std::array<int, 2>> control_pairs;
+  st = find_self_intersections(control, control_pairs);
+  if (!st) return st;
+  const size_t crossing_at_start = control_pairs.size();
+  std::vector<Vec3> rest(nv, Vec3::Zero());  // the reference's umbrella vectors L0(v)
+  for (int v = 0; v < nv; ++v) {
+    if (topology.rings[v].empty()) continue;
+    Vec3 mean = Vec3::Zero();
+    for (int u : topology.rings[v]) mean += reference[u];
+    rest[v] = reference[v] - mean / static_cast<double>(topology.rings[v].size());
+  }
+  std::vector<char> moved(level.triangles.size(), 0);
+  std::vector<int> moved_list;
+  std::vector<Vec3> now;
+  std::vector<char> ever(nv, 0);
+  // The level's new pairs at control.positions, from `pairs` (the level's
+  // at `level.positions`): only the triangles whose corners moved are
+  // searched again.
+  auto pairs_after_move = [&](std::vector<std::array<int, 2>>& out) -> Status {
+    Status r = level_positions(control.positions, now);
+    if (!r) return r;
+    std::fill(moved.begin(), moved.end(), 0);
+    moved_list.clear();
+    for (size_t f = 0; f < level.triangles.size(); ++f)
+      for (int v : level.triangles[f])
+        if (now[v] != level.positions[v]) {
+          moved[f] = 1;
+          moved_list.push_back(static_cast<int>(f));
+          break;
+        }
+    std::swap(level.positions, now);
+    r = refit_bvh(level, bvh);
+    if (!r) return r;
+    std::vector<std::array<int, 2>> found;
+    r = find_new_self_intersections(bvh, reference_level, found, &moved_list);
+    if (!r) return r;
+    out = pairs_after_change(pairs, moved, found);
+    return Status::success();
+  };
+  for (int rings = 0; rings <= options.restore_rings && !pairs.empty();) {
+    corners_under_pairs();
+    for (int r = 0; r < rings; ++r) {  // grown ring by ring
+      const size_t grown = set.size();
+      for (size_t i = 0; i < grown; ++i)
+        for (int u : topology.rings[set[i]])
+          if (!in_set[u] && !is_pinned(u)) in_set[u] = 1, set.push_back(u);
+    }
+    // L(v) = L0(v) on the set, the rest held: Gauss-Seidel until the
+    // largest change is below 1e-9 of the diagonal (a few tens of sweeps
+    // on a set three rings wide).
+    std::vector<Vec3> solved = best;
+    for (int sweep = 0; sweep < 1000; ++sweep) {
+      double change = 0;
+      for (int v : set) {
+        const std::vector<int>& ring = topology.rings[v];
+        if (ring.empty() || topology.is_boundary(v)) continue;
+        Vec3 mean = Vec3::Zero();
+        for (int u : ring) mean += solved[u];
+        const Vec3 x = mean / static_cast<double>(ring.size()) + rest[v];
+        change = std::max(change, (x - solved[v]).norm());
+        solved[v] = x;
+      }
+      if (change < 1e-9 * diagonal) break;
+    }
+    for (int v : set) control.positions[v] = best[v] + options.restore_share * (solved[v] - best[v]);
+    std::vector<std::array<int, 2>> trial;
+    st = pairs_after_move(trial);
+    if (!st) return st;
+    bool keep = trial.size() < pairs.size() && turned_triangles(reference, control).size() <= turned_at_start;
+    if (keep) {
+      st = find_self_intersections(control, control_pairs);
+      if (!st) return st;
+      keep = control_pairs.size() <= crossing_at_start;
+    }
+    if (keep) {
+      pairs = std::move(trial);
+      best = control.positions;
+      for (int v : set) ever[v] = 1;
+      ++result.restore_steps;
+    } else {  // back to best, the level and its tree too; a wider set next
+      control.positions = best;
+      st = level_positions(control.positions, level.positions);
+      if (st) st = refit_bvh(level, bvh);
+      if (!st) return st;
+      ++rings;
+    }
+  }
+  control.positions = best;
+  result.pairs_after = static_cast<int>(pairs.size());
+  for (int v = 0; v < nv; ++v) result.restored_vertices += ever[v];
+  return Status::success();
+}
+
+}  // namespace lk
