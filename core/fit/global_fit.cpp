@@ -1167,16 +1167,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       auto pairs_in_window = [&](const std::vector<Vec3>& level_positions, const std::vector<Vec3>& reference_level,
                                  const std::vector<int>& moving, const std::vector<std::array<int, 2>>& outside,
                                  bool folds_only) {
-        std::vector<int> ring_of(nv, -1);
-        std::vector<int> frontier = moving;
-        for (int v : moving) ring_of[v] = 0;
-        for (int ring = 1; ring <= 4; ++ring) {
-          std::vector<int> next;
-          for (int v : frontier)
-            for (int u : topology.rings[v])
-              if (ring_of[u] < 0) ring_of[u] = ring, next.push_back(u);
-          frontier = std::move(next);
-        }
+        const std::vector<int> ring_of = ring_distances(topology, moving, 4);
         TriMesh window;
         window.positions = level_positions;
         std::vector<int> window_faces;  // level triangle ids

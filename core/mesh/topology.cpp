@@ -157,4 +157,18 @@ int euler_characteristic(const MeshTopology& topo, int num_triangles) {
   return topo.num_vertices - static_cast<int>(topo.edges.size()) + num_triangles;
 }
 
+std::vector<int> ring_distances(const MeshTopology& topo, const std::vector<int>& sources, int max_rings) {
+  std::vector<int> ring(topo.num_vertices, -1);
+  std::vector<int> frontier = sources;
+  for (int v : sources) ring[v] = 0;
+  for (int r = 1; r <= max_rings; ++r) {
+    std::vector<int> next;
+    for (int v : frontier)
+      for (int u : topo.rings[v])
+        if (ring[u] < 0) ring[u] = r, next.push_back(u);
+    frontier = std::move(next);
+  }
+  return ring;
+}
+
 }  // namespace lk

@@ -45,4 +45,8 @@ Status build_topology(const TriMesh& mesh, MeshTopology& out);
 // Euler characteristic V - E + F (2 for a sphere, 1 for a disk).
 int euler_characteristic(const MeshTopology& topo, int num_triangles);
 
+// Per vertex, the fewest edges from any of `sources` (0 there), or -1 when
+// more than max_rings away.
+std::vector<int> ring_distances(const MeshTopology& topo, const std::vector<int>& sources, int max_rings);
+
 }  // namespace lk

@@ -44,6 +44,17 @@ TEST_CASE("closed octahedron: edges, valence, no boundary", "[mesh]") {
   for (int v = 0; v < 6; ++v) CHECK(n[v].dot(m.positions[v]) > 0.9);
 }
 
+TEST_CASE("ring distances on the octahedron", "[mesh]") {
+  TriMesh m = octahedron();
+  MeshTopology t;
+  REQUIRE(build_topology(m, t).ok());
+  // Vertex 0's opposite is 1; every other vertex is its neighbour.
+  CHECK(ring_distances(t, {0}, 2) == std::vector<int>{0, 2, 1, 1, 1, 1});
+  CHECK(ring_distances(t, {0}, 1) == std::vector<int>{0, -1, 1, 1, 1, 1});
+  CHECK(ring_distances(t, {0, 1}, 0) == std::vector<int>{0, 0, -1, -1, -1, -1});
+  CHECK(ring_distances(t, {}, 3) == std::vector<int>(6, -1));
+}
+
 TEST_CASE("grid disk: one boundary loop, ordered rings", "[mesh]") {
   TriMesh m = make_regular_grid(4, 4);
   MeshTopology t;

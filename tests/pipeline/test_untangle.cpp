@@ -47,21 +47,6 @@ struct Shoved {
   }
 };
 
-// Ring distance from v over the mesh (-1 beyond `max`).
-std::vector<int> rings_from(const MeshTopology& topo, int v, int max) {
-  std::vector<int> ring(topo.num_vertices, -1);
-  std::vector<int> frontier = {v};
-  ring[v] = 0;
-  for (int r = 1; r <= max; ++r) {
-    std::vector<int> next;
-    for (int w : frontier)
-      for (int u : topo.rings[w])
-        if (ring[u] < 0) ring[u] = r, next.push_back(u);
-    frontier = std::move(next);
-  }
-  return ring;
-}
-
 }  // namespace
 
 TEST_CASE("untangle: the restore takes a fold within one sheet part of the way back to the template") {
@@ -98,7 +83,7 @@ TEST_CASE("untangle: the restore takes a fold within one sheet part of the way b
   CHECK(new_pairs(restored, reference, s.creases, 2) == 0);
   CHECK(r1.restore_steps >= 1);
   CHECK(r1.restored_vertices > 0);
-  const std::vector<int> ring = rings_from(s.topo, s.v, 3 + o.restore_rings);
+  const std::vector<int> ring = ring_distances(s.topo, {s.v}, 3 + o.restore_rings);
   int moved = 0;
   for (int w = 0; w < restored.num_vertices(); ++w) {
     if (restored.positions[w] == s.mesh.positions[w]) continue;
