@@ -126,6 +126,7 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
     for (int u : topology.rings[v]) mean += reference[u];
     rest[v] = reference[v] - mean / static_cast<double>(topology.rings[v].size());
   }
+  std::vector<Vec3> best_level = level.positions;  // to go back to without evaluating again
   std::vector<char> moved(level.triangles.size(), 0);
   std::vector<int> moved_list;
   std::vector<Vec3> now;
@@ -192,12 +193,13 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
     if (keep) {
       pairs = std::move(trial);
       best = control.positions;
+      best_level = level.positions;
       for (int v : set) ever[v] = 1;
       ++result.restore_steps;
     } else {  // back to best, the level and its tree too; a wider set next
       control.positions = best;
-      st = level_positions(control.positions, level.positions);
-      if (st) st = refit_bvh(level, bvh);
+      level.positions = best_level;
+      st = refit_bvh(level, bvh);
       if (!st) return st;
       ++rings;
     }
