@@ -16,6 +16,8 @@
 // face captures 0, FitHeadOptions::whole_head_data_level);
 // --fit-pleat-steps N: the pleat relief's sweeps (GlobalFitOptions::
 // smooth_guard_pleat_steps; 0: off);
+// --fit-restore-rings N: the untangling's restore (FitHeadOptions::
+// untangle_restore_rings, pipeline/untangle.h; -1: off);
 // --fit-real-copies N (1-13, default 5): how many of the copies to fit;
 // --fit-real-dump DIR: writes each copy's fitted control mesh, its level L
 // and the centroids of level L's crossing triangles (DIR/<scan>_<copy>
@@ -133,8 +135,11 @@ int run(const Args& args) {
       !args.get_double("fit-surface-edges", options.surface_sample_edges, options.surface_sample_edges) ||
       !args.get_int("fit-data-level", options.global.data_level, options.global.data_level) ||
       !args.get_int("fit-pleat-steps", options.global.smooth_guard_pleat_steps, options.global.smooth_guard_pleat_steps) ||
+      !args.get_int("fit-restore-rings", options.untangle_restore_rings, options.untangle_restore_rings) ||
+      options.untangle_restore_rings > 8 ||
       !args.get_int("fit-real-copies", 5, copies) || copies < 1 || copies > 13) {
     std::printf("   --fit-crease-trials / --fit-crease-edges / --fit-data-level / --fit-pleat-steps take a whole number, "
+                "--fit-restore-rings one up to 8, "
                 "--fit-real-copies one from 1 to 13, --fit-crease-angle and --fit-surface-edges a number\n");
     return 1;
   }

@@ -65,7 +65,10 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
   result.pairs_before = best_pairs;
   const size_t turned_at_start = turned_triangles(reference, control).size();
   std::vector<Vec3> best = control.positions;
-  bool level_at_best = true;  // `level`, `bvh` and `pairs` are best's
+  // Best's level positions and new pairs, to go back to without evaluating
+  // or searching again.
+  std::vector<Vec3> best_level = level.positions;
+  std::vector<std::array<int, 2>> best_pairs_found = pairs;
   std::vector<char> in_set(nv, 0);
   std::vector<int> set;
   const int faces_per_control = 1 << (2 * K);  // child c of triangle g is 4 g + c on every level
@@ -99,10 +102,10 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
     if (!turns && static_cast<int>(pairs.size()) < best_pairs) {
       best_pairs = static_cast<int>(pairs.size());
       best = control.positions;
-      level_at_best = true;
+      best_level = level.positions;
+      best_pairs_found = pairs;
       idle = 0;
     } else {
-      level_at_best = false;
       ++idle;
     }
   }
@@ -111,9 +114,11 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
   if (!restoring || best_pairs == 0) return Status::success();
 
   // 2. Restore (header comment).
-  if (!level_at_best) {
-    st = new_pairs();
+  if (level.positions != best_level) {
+    level.positions = best_level;
+    st = refit_bvh(level, bvh);
     if (!st) return st;
+    pairs = best_pairs_found;
   }
   std::vector<std::array<int, 2>> control_pairs;
   st = find_self_intersections(control, control_pairs);
@@ -126,7 +131,6 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
     for (int u : topology.rings[v]) mean += reference[u];
     rest[v] = reference[v] - mean / static_cast<double>(topology.rings[v].size());
   }
-  std::vector<Vec3> best_level = level.positions;  // to go back to without evaluating again
   std::vector<char> moved(level.triangles.size(), 0);
   std::vector<int> moved_list;
   std::vector<Vec3> now;
