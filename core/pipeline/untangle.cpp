@@ -114,11 +114,19 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
   if (!restoring || best_pairs == 0) return Status::success();
 
   // 2. Restore (header comment).
+  std::vector<Vec3> now_scratch;
   if (level.positions != best_level) {
     level.positions = best_level;
     st = refit_bvh(level, bvh);
     if (!st) return st;
     pairs = best_pairs_found;
+  }
+  // The trials move a few control vertices: the hierarchy is updated inside
+  // their support only (update_control_vertices, bit-identical to a full
+  // evaluation), from best's.
+  if (mr.control != best) {
+    st = level_positions(best, now_scratch);
+    if (!st) return st;
   }
   std::vector<std::array<int, 2>> control_pairs;
   st = find_self_intersections(control, control_pairs);
@@ -138,9 +146,16 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
   // The level's new pairs at control.positions, from `pairs` (the level's
   // at `level.positions`): only the triangles whose corners moved are
   // searched again.
+  std::vector<Vec3> set_positions;
+  auto move_set_to = [&](const std::vector<Vec3>& positions) -> Status {
+    set_positions.clear();
+    for (int v : set) set_positions.push_back(positions[v]);
+    return update_control_vertices(mr, set, set_positions);
+  };
   auto pairs_after_move = [&](std::vector<std::array<int, 2>>& out) -> Status {
-    Status r = level_positions(control.positions, now);
+    Status r = move_set_to(control.positions);
     if (!r) return r;
+    now = mr.state.displaced[K];
     std::fill(moved.begin(), moved.end(), 0);
     moved_list.clear();
     for (size_t f = 0; f < level.triangles.size(); ++f)
@@ -202,6 +217,8 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
       ++result.restore_steps;
     } else {  // back to best, the level and its tree too; a wider set next
       control.positions = best;
+      st = move_set_to(best);
+      if (!st) return st;
       level.positions = best_level;
       st = refit_bvh(level, bvh);
       if (!st) return st;

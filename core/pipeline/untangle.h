@@ -26,8 +26,9 @@
 //    kept. A full step is no good: the reference's umbrella vectors at a
 //    corner that bends into a pocket push the skin through the pocket's
 //    ring (71-406 pairs on James's copies where a quarter of the way left
-//    0-14). Each trial re-evaluates level K and searches only the level's
-//    triangles it moved (on the first search's tree, refit).
+//    0-14). Each trial updates level K inside the moved vertices' support
+//    (update_control_vertices) and searches only the level's triangles that
+//    moved (on the first search's tree, refit).
 //
 // The displacements measured afterwards put the detail back.
 #pragma once
