@@ -596,6 +596,10 @@ int run(const Args& args) {
                 r.global_fit.smooth_guard_passes, r.global_fit.smooth_guard_vertices,
                 opt.global.smooth_guard_relief_level, r.global_fit.relief_searched ? "searched" : "not searched",
                 r.global_fit.relief_folds_before, r.global_fit.relief_folds_after);
+    std::printf("   untangling (pipeline/untangle.h): smooth level %d new pairs %d -> %d eroded -> %d (%d restore steps, "
+                "%d vertices)\n",
+                r.face_only ? opt.face_untangle_level : opt.untangle_level, r.untangle.pairs_before,
+                r.untangle.pairs_eroded, r.untangle.pairs_after, r.untangle.restore_steps, r.untangle.restored_vertices);
     std::printf("   smooth level %d pleat edges (bent > 90 deg where the generic head bends < 45): %d -> %d in %d steps\n",
                 opt.global.smooth_guard_relief_level, r.global_fit.pleats_before, r.global_fit.pleats_after,
                 r.global_fit.pleat_steps);
