@@ -1288,16 +1288,9 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       };
       auto all_new_pairs = [&](const VecX& at, std::vector<std::array<int, 2>>& pairs) {
         std::vector<Vec3> now = relief.refine(at);
-        const std::vector<Tri>& tris = relief.level.triangles;
-        std::vector<char> moved(tris.size(), 0);
+        std::vector<char> moved;
         std::vector<int> moved_list;
-        for (size_t f = 0; f < tris.size(); ++f)
-          for (int v : tris[f])
-            if (now[v] != relief.level.positions[v]) {
-              moved[f] = 1;
-              moved_list.push_back(static_cast<int>(f));
-              break;
-            }
+        moved_triangles(relief.level.triangles, relief.level.positions, now, moved, moved_list);
         relief.level.positions = std::move(now);
         refit_bvh(relief.level, relief.bvh);
         pairs = pairs_after_move(moved_list, moved, pairs_before_relief);

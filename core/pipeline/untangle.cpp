@@ -114,7 +114,7 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
   if (!restoring || best_pairs == 0) return Status::success();
 
   // 2. Restore (header comment).
-  std::vector<Vec3> now_scratch;
+  std::vector<Vec3> now;  // level K after a trial's move
   if (level.positions != best_level) {
     level.positions = best_level;
     st = refit_bvh(level, bvh);
@@ -125,7 +125,7 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
   // their support only (update_control_vertices, bit-identical to a full
   // evaluation), from best's.
   if (mr.control != best) {
-    st = level_positions(best, now_scratch);
+    st = level_positions(best, now);
     if (!st) return st;
   }
   std::vector<std::array<int, 2>> control_pairs;
@@ -139,9 +139,8 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
     for (int u : topology.rings[v]) mean += reference[u];
     rest[v] = reference[v] - mean / static_cast<double>(topology.rings[v].size());
   }
-  std::vector<char> moved(level.triangles.size(), 0);
+  std::vector<char> moved;
   std::vector<int> moved_list;
-  std::vector<Vec3> now;
   std::vector<char> ever(nv, 0);
   // The level's new pairs at control.positions, from `pairs` (the level's
   // at `level.positions`): only the triangles whose corners moved are
@@ -156,15 +155,7 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
     Status r = move_set_to(control.positions);
     if (!r) return r;
     now = mr.state.displaced[K];
-    std::fill(moved.begin(), moved.end(), 0);
-    moved_list.clear();
-    for (size_t f = 0; f < level.triangles.size(); ++f)
-      for (int v : level.triangles[f])
-        if (now[v] != level.positions[v]) {
-          moved[f] = 1;
-          moved_list.push_back(static_cast<int>(f));
-          break;
-        }
+    moved_triangles(level.triangles, level.positions, now, moved, moved_list);
     std::swap(level.positions, now);
     r = refit_bvh(level, bvh);
     if (!r) return r;

@@ -350,6 +350,19 @@ std::vector<std::array<int, 2>> pairs_after_change(const std::vector<std::array<
   return pairs;
 }
 
+void moved_triangles(const std::vector<Tri>& triangles, const std::vector<Vec3>& before,
+                     const std::vector<Vec3>& after, std::vector<char>& changed, std::vector<int>& list) {
+  changed.assign(triangles.size(), 0);
+  list.clear();
+  for (size_t f = 0; f < triangles.size(); ++f)
+    for (int v : triangles[f])
+      if (after[v] != before[v]) {
+        changed[f] = 1;
+        list.push_back(static_cast<int>(f));
+        break;
+      }
+}
+
 Status find_self_intersections(const TriMesh& mesh, std::vector<std::array<int, 2>>& pairs,
                                const SelfIntersectionOptions& options) {
   pairs.clear();

@@ -78,6 +78,13 @@ std::vector<std::array<int, 2>> pairs_after_change(const std::vector<std::array<
                                                    const std::vector<char>& changed,
                                                    const std::vector<std::array<int, 2>>& found);
 
+// The triangles with a corner whose position differs between `before` and
+// `after` (#V each): flagged in `changed` (resized to #F) and listed in
+// ascending order in `list`, as pairs_after_change and the searches
+// `from_triangles` take them.
+void moved_triangles(const std::vector<Tri>& triangles, const std::vector<Vec3>& before,
+                     const std::vector<Vec3>& after, std::vector<char>& changed, std::vector<int>& list);
+
 // One pair under the rules above (shared edge: no; one shared vertex: only
 // if the common segment leaves it), corners read from positions.
 bool mesh_triangles_cross(const std::vector<Vec3>& positions, const Tri& a, const Tri& b);

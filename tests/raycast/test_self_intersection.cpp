@@ -610,3 +610,21 @@ TEST_CASE("self-intersections: a sheet folded along a line does not cross itself
     CHECK(brute_force(g).empty());
   }
 }
+
+TEST_CASE("moved triangles: those with a corner that moved, flagged and listed", "[raycast]") {
+  const std::vector<Tri> triangles = {{0, 1, 2}, {1, 3, 2}, {3, 4, 2}, {4, 5, 3}};
+  const std::vector<Vec3> before = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {0, 2, 0}, {1, 2, 0}};
+  std::vector<Vec3> after = before;
+  std::vector<char> changed = {1, 1};  // stale contents are replaced
+  std::vector<int> list = {7};
+  moved_triangles(triangles, before, after, changed, list);
+  CHECK(changed == std::vector<char>(4, 0));
+  CHECK(list.empty());
+  after[3].z() = 1e-12;  // any change counts, however small
+  moved_triangles(triangles, before, after, changed, list);
+  CHECK(changed == std::vector<char>{0, 1, 1, 1});
+  CHECK(list == std::vector<int>{1, 2, 3});
+  // Pairs of before with a changed triangle give way to the new search's.
+  const std::vector<std::array<int, 2>> kept = pairs_after_change({{0, 1}, {0, 2}}, changed, {{1, 3}});
+  CHECK(kept == std::vector<std::array<int, 2>>{{1, 3}});
+}
