@@ -18,6 +18,10 @@
 // smooth_guard_pleat_steps; 0: off);
 // --fit-restore-rings N: the untangling's restore (FitHeadOptions::
 // untangle_restore_rings, pipeline/untangle.h; -1: off);
+// --fit-hinges-last 0|1: the untangling's erosion leaves the hinges to a
+// second pass (FitHeadOptions::untangle_hinges_last; 0: one pass, as
+// before 2026-11-24). Each copy's line ends with the untangling's new
+// smooth-surface pairs: at the start -> after the erosion -> at the end;
 // --fit-real-copies N (1-13, default 5): how many of the copies to fit;
 // --fit-real-dump DIR: writes each copy's fitted control mesh, its level L
 // and the centroids of level L's crossing triangles (DIR/<scan>_<copy>
@@ -132,6 +136,7 @@ int run(const Args& args) {
   // measure them on the copies.
   FitHeadOptions options;
   int copies = 5;
+  int hinges_last = 1;
   if (!args.get_int("fit-crease-trials", options.global.smooth_guard_crease_trials,
                     options.global.smooth_guard_crease_trials) ||
       !args.get_int("fit-crease-edges", options.global.smooth_guard_crease_max_edges,
@@ -143,12 +148,15 @@ int run(const Args& args) {
       !args.get_int("fit-pleat-steps", options.global.smooth_guard_pleat_steps, options.global.smooth_guard_pleat_steps) ||
       !args.get_int("fit-restore-rings", options.untangle_restore_rings, options.untangle_restore_rings) ||
       options.untangle_restore_rings > 8 ||
+      !args.get_int("fit-hinges-last", options.untangle_hinges_last ? 1 : 0, hinges_last) || hinges_last < 0 ||
+      hinges_last > 1 ||
       !args.get_int("fit-real-copies", 5, copies) || copies < 1 || copies > 13) {
     std::printf("   --fit-crease-trials / --fit-crease-edges / --fit-data-level / --fit-pleat-steps take a whole number, "
-                "--fit-restore-rings one up to 8, "
+                "--fit-restore-rings one up to 8, --fit-hinges-last 0 or 1, "
                 "--fit-real-copies one from 1 to 13, --fit-crease-angle and --fit-surface-edges a number\n");
     return 1;
   }
+  options.untangle_hinges_last = hinges_last == 1;
   if (!parse_back_term(args, options)) return 1;
   const std::string dump = args.get("fit-real-dump", "");
   if (args.has("fit-data-level")) options.whole_head_data_level = -1;  // on every scan, as given
@@ -196,10 +204,11 @@ int run(const Args& args) {
             if (!outside_nose[v]) nose_max = std::max(nose_max, per_vertex[v]);
         if (!st) std::printf("   %-14s level L -> scan: %s\n", c.name.c_str(), st.message.c_str());
       }
-      std::printf("   %-14s %9.5f %7d %7d %7d %8d %7d %8d %9.0f   %.3f / %.2f / %.2f, %d of %d; nose max %.2f; pleats %d -> %d\n",
+      std::printf("   %-14s %9.5f %7d %7d %7d %8d %7d %8d %9.0f   %.3f / %.2f / %.2f, %d of %d; nose max %.2f; pleats %d -> %d; untangled %d -> %d -> %d\n",
                   c.name.c_str(), table1, x.total, x.lips, x.ears, x.eye_sockets, x.rest, q.smooth_crossings.total, ms,
                   1e3 * back.mean, 1e3 * back.p99, 1e3 * back.max, back.over_1mm, back.vertices, 1e3 * nose_max,
-                  r.global_fit.pleats_before, r.global_fit.pleats_after);
+                  r.global_fit.pleats_before, r.global_fit.pleats_after, r.untangle.pairs_before,
+                  r.untangle.pairs_eroded, r.untangle.pairs_after);
       if (!dump.empty()) {
         std::string prefix = dump + "/" + label.substr(0, label.find(' ')) + "_" + c.name;
         std::replace(prefix.begin() + static_cast<long>(dump.size()), prefix.end(), ' ', '_');

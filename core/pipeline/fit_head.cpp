@@ -445,6 +445,7 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   untangle.level = out.face_only ? options.face_untangle_level : options.untangle_level;
   untangle.iterations = options.untangle_iterations;
   untangle.erode_pct = options.untangle_erode_pct;
+  untangle.hinges_last = options.untangle_hinges_last;
   untangle.restore_rings = options.untangle_restore_rings;
   untangle.restore_share = options.untangle_restore_share;
   st = untangle_smooth_surface(out.aligned.positions, creases, diag, topo, terms.smooth_guard_ignored, untangle,

@@ -152,6 +152,10 @@ struct FitHeadOptions {
   // limiter's last resort reaching two rings, fold_limit.h), Table 1 within
   // 0.0005 %, +0.1-0.3 s. Whole heads stay on level 2: the dense synthetic
   // seeds have no new level-3 pairs, and the search cost 70-110 ms per fit.
+  // With untangle_hinges_last, a first erosion pass leaves out the corners
+  // the two sheets share or neighbour (an ear's root where its back lies on
+  // the scalp): on James in Chromium, 28 -> 4 pairs where moving them too
+  // made 61 (pipeline/untangle.h, docs/fit.md "Hinges").
   // Then the folds left within one sheet are taken untangle_restore_share
   // of the way back to the template's shape over the corners of their
   // control faces and up to untangle_restore_rings rings around them
@@ -162,6 +166,7 @@ struct FitHeadOptions {
   int face_untangle_level = 3;
   int untangle_iterations = 6;
   double untangle_erode_pct = 0.03;
+  bool untangle_hinges_last = true;
   int untangle_restore_rings = 3;
   double untangle_restore_share = 0.25;
   // After global fitting, the mouth bag (held where local fitting put it)

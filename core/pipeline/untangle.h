@@ -14,7 +14,11 @@
 //    scalp behind it) face each other: the corners of the control faces
 //    under the new pairs move erode_pct of the diagonal against their
 //    vertex normals, up to `iterations` times (two steps in a row without
-//    fewer pairs end it). A fold within one sheet does not open this way.
+//    fewer pairs end it). With hinges_last, a first pass leaves out the
+//    hinges, corners that are corners of the pair's other face or next to
+//    one (the root of an ear lying on the scalp, where the sheets meet in a
+//    wedge), and a second pass from its best moves all corners. A fold
+//    within one sheet does not open this way.
 // 2. Restore. A fold within one sheet (James's outer eye corners: the rim
 //    crease bent into the socket's first ring, docs/fit.md "Where James's
 //    crossings are") is taken part of the way back to the reference's
@@ -45,6 +49,7 @@ struct UntangleOptions {
   int level = 2;               // K; 0: off
   int iterations = 6;          // erosion steps (0: no erosion)
   double erode_pct = 0.03;     // per step, percent of the diagonal
+  bool hinges_last = true;     // a first erosion pass without the hinges
   int restore_rings = 3;       // restore's largest ring count (-1: no restore)
   double restore_share = 0.25; // of the way to the solved shape, in (0, 1]
 };
