@@ -161,13 +161,15 @@ struct FitHeadOptions {
   // control faces and up to untangle_restore_rings rings around them
   // (pipeline/untangle.h; -1: off). On James's 13 nudged copies (likeness
   // bench --only fit-real --fit-real-copies 13) the pairs left at his
-  // outer eye corners went 45 -> 24 in all (docs/fit.md).
+  // outer eye corners went 45 -> 24 in all with three rings (docs/fit.md);
+  // with hinges last and four rings, 45 -> 4, and James in Chromium 28 ->
+  // 0 (docs/fit.md "Hinges").
   int untangle_level = 2;
   int face_untangle_level = 3;
   int untangle_iterations = 6;
   double untangle_erode_pct = 0.03;
   bool untangle_hinges_last = true;
-  int untangle_restore_rings = 3;
+  int untangle_restore_rings = 4;
   double untangle_restore_share = 0.25;
   // After global fitting, the mouth bag (held where local fitting put it)
   // follows its lips (carry_mouth_bag below). Held in place, it poked out

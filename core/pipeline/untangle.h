@@ -50,7 +50,7 @@ struct UntangleOptions {
   int iterations = 6;          // erosion steps (0: no erosion)
   double erode_pct = 0.03;     // per step, percent of the diagonal
   bool hinges_last = true;     // a first erosion pass without the hinges
-  int restore_rings = 3;       // restore's largest ring count (-1: no restore)
+  int restore_rings = 4;       // restore's largest ring count (-1: no restore)
   double restore_share = 0.25; // of the way to the solved shape, in (0, 1]
 };
 
