@@ -556,6 +556,9 @@ val components_object(const FitSession& s, const lk::GenericHead& generic) {
 // options: {levels, up:[x,y,z], facing:[x,y,z]} (all optional).
 // progress(stage, fraction) with stage one of initial_alignment,
 // local_fitting, global_fitting, subdivision; returning false cancels.
+// The result carries untangle {pairsBefore, pairsEroded, pairsAfter,
+// restoreSteps}: the smooth surface's new crossing pairs the untangling
+// found, left after its erosion and at its end (pipeline/untangle.h).
 val fit_head_job(const std::string& name, std::uintptr_t data, std::size_t size, val options, val progress) {
   const lk::ProgressFn report = js_progress(progress);
   if (data == 0 && size != 0)
@@ -645,6 +648,12 @@ val fit_head_job(const std::string& name, std::uintptr_t data, std::size_t size,
   val notes = val::array();
   for (const std::string& note : s.fit.notes) notes.call<void>("push", note);
   r.set("notes", notes);
+  val untangle = val::object();
+  untangle.set("pairsBefore", s.fit.untangle.pairs_before);
+  untangle.set("pairsEroded", s.fit.untangle.pairs_eroded);
+  untangle.set("pairsAfter", s.fit.untangle.pairs_after);
+  untangle.set("restoreSteps", s.fit.untangle.restore_steps);
+  r.set("untangle", untangle);
   val meshes = val::object();
   meshes.set("aligned", mesh_arrays(s, s.fit.aligned.positions, s.fit.aligned.triangles));
   meshes.set("local", mesh_arrays(s, s.fit.local.positions, s.fit.local.triangles));
