@@ -26,7 +26,9 @@
 // --fit-smooth-levels N / --fit-smooth-strength S / --fit-smooth-iterations K /
 // --fit-smooth-agreement C / --fit-smooth-max-radius E (denoising by smoothing over the mesh,
 // DisplacementOptions::smooth_*; --fit-smooth-levels 0 turns it off)
-// (seeds 1..N); --fit-scan-noise-mm S (the virtual scanner's depth noise,
+// (seeds 1..N); --fit-stations N / --fit-arc DEG (the virtual scanner's
+// stations and their span; 3 over 90 deg makes face captures);
+// --fit-scan-noise-mm S (the virtual scanner's depth noise,
 // default 0.2 mm: how Table 1 and its floor move with the scanner's noise,
 // docs/fit.md); --save-scans DIR writes scans, truths,
 // the finest level and its crossing triangles. --truth-head H and --fit-head H
@@ -254,7 +256,17 @@ int run(const Args& args) {
     std::printf("   --fit-scan-noise-mm must be 0..10 (mm)\n");
     return 1;
   }
-  std::printf("   synthetic scans: %d points, seeds", n_points);
+  // --fit-stations N --fit-arc DEG: the virtual scanner's stations and
+  // their azimuth span (defaults 6 over 200 deg, a whole head; 3 over 90
+  // makes face captures, fitted on fit_head's face-only path).
+  int stations = scanner_defaults.stations;
+  double arc = scanner_defaults.arc_degrees;
+  if (!args.get_int("fit-stations", stations, stations) || stations < 1 || stations > 32 ||
+      !args.get_double("fit-arc", arc, arc) || !(arc > 0 && arc <= 360)) {
+    std::printf("   --fit-stations must be 1..32, --fit-arc 0..360 (degrees)\n");
+    return 1;
+  }
+  std::printf("   synthetic scans: %d points, %d stations over %.0f deg, seeds", n_points, stations, arc);
   for (int s : seeds) std::printf(" %d", s);
   std::printf(" (virtual structured-light scanner: holes, %.2g mm noise, %.2g%% outliers, hair junk)\n", noise_mm,
               100 * scanner_defaults.outlier_fraction);
@@ -264,7 +276,8 @@ int run(const Args& args) {
   double sum_roughness = 0, sum_region_roughness = 0, sum_scanned_mm = 0;
   for (int seed : seeds) {
     SyntheticScan data;
-    st = make_synthetic_scan(truth_generic, seed, n_points, data, args.has("fit-scan-noise-mm") ? noise_mm / 1000 : -1);
+    st = make_synthetic_scan(truth_generic, seed, n_points, data, args.has("fit-scan-noise-mm") ? noise_mm / 1000 : -1,
+                             stations, arc);
     const TruthSurface& truth = data.truth;
     const PointCloud& cloud = data.cloud;
     const ScanStats& scan_stats = data.stats;
