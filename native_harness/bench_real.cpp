@@ -136,7 +136,7 @@ int run(const Args& args) {
   // measure them on the copies.
   FitHeadOptions options;
   int copies = 5;
-  int hinges_last = 1;
+  int hinges_last = options.untangle_hinges_last ? 1 : 0;
   if (!args.get_int("fit-crease-trials", options.global.smooth_guard_crease_trials,
                     options.global.smooth_guard_crease_trials) ||
       !args.get_int("fit-crease-edges", options.global.smooth_guard_crease_max_edges,
@@ -148,7 +148,7 @@ int run(const Args& args) {
       !args.get_int("fit-pleat-steps", options.global.smooth_guard_pleat_steps, options.global.smooth_guard_pleat_steps) ||
       !args.get_int("fit-restore-rings", options.untangle_restore_rings, options.untangle_restore_rings) ||
       options.untangle_restore_rings > 8 ||
-      !args.get_int("fit-hinges-last", options.untangle_hinges_last ? 1 : 0, hinges_last) || hinges_last < 0 ||
+      !args.get_int("fit-hinges-last", hinges_last, hinges_last) || hinges_last < 0 ||
       hinges_last > 1 ||
       !args.get_int("fit-real-copies", 5, copies) || copies < 1 || copies > 13) {
     std::printf("   --fit-crease-trials / --fit-crease-edges / --fit-data-level / --fit-pleat-steps take a whole number, "

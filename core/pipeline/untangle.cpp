@@ -158,12 +158,13 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
   if (!restoring || best_pairs == 0) return Status::success();
 
   // 2. Restore (header comment).
+  // `pairs` are best's already (each erosion pass ends there); its level
+  // and tree may still be a rejected step's.
   std::vector<Vec3> now;  // level K after a trial's move
   if (level.positions != best_level) {
     level.positions = best_level;
     st = refit_bvh(level, bvh);
     if (!st) return st;
-    pairs = best_pairs_found;
   }
   // The trials move a few control vertices: the hierarchy is updated inside
   // their support only (update_control_vertices, bit-identical to a full
