@@ -133,6 +133,28 @@ void update_refinement(MultiresMesh& m, int l, const std::vector<int>& moved) {
   for (int f : targets) fine[f] = f < nc ? coarse[f] : butterfly_new_vertex(next, f - nc, coarse);
 }
 
+void size_scratch(MultiresMesh& m) {
+  const int L = m.num_levels();
+  auto& sc = m.scratch;
+  bool sized = static_cast<int>(sc.base_mark.size()) == L + 1;
+  for (int l = 0; sized && l <= L; ++l)
+    sized = static_cast<int>(sc.base_mark[l].size()) == m.num_vertices(l) &&
+            sc.face_mark[l].size() == m.triangles(l).size();
+  if (sized) return;
+  sc.base_mark.assign(L + 1, {});
+  sc.displaced_mark.assign(L + 1, {});
+  sc.face_mark.assign(L + 1, {});
+  for (int l = 0; l <= L; ++l) {
+    sc.base_mark[l].assign(m.num_vertices(l), 0);
+    sc.displaced_mark[l].assign(m.num_vertices(l), 0);
+    sc.face_mark[l].assign(m.triangles(l).size(), 0);
+  }
+  sc.stamp = 0;
+  // Work lists as long as the finest level: no update grows them.
+  const size_t most = static_cast<size_t>(m.num_vertices(L));
+  for (auto* v : {&sc.changed, &sc.reached, &sc.spread, &sc.targets}) v->reserve(most);
+}
+
 void resize_state(MultiresMesh& m) {
   const int L = m.num_levels();
   m.state.base.resize(L + 1);
@@ -196,6 +218,7 @@ Status evaluate(MultiresMesh& mesh) {
   Status s = check_sizes(mesh);
   if (!s.ok()) return s;
   resize_state(mesh);
+  size_scratch(mesh);
   mesh.stale_from = -1;
   mesh.state.base[0] = mesh.control;
   for (int l = 0; l <= mesh.num_levels(); ++l) {
@@ -260,17 +283,7 @@ Status update_control_vertices(MultiresMesh& mesh, const std::vector<int>& moved
   }
 
   auto& sc = mesh.scratch;
-  if (static_cast<int>(sc.base_mark.size()) != L + 1) {
-    sc.base_mark.assign(L + 1, {});
-    sc.displaced_mark.assign(L + 1, {});
-    sc.face_mark.assign(L + 1, {});
-    for (int l = 0; l <= L; ++l) {
-      sc.base_mark[l].assign(mesh.num_vertices(l), 0);
-      sc.displaced_mark[l].assign(mesh.num_vertices(l), 0);
-      sc.face_mark[l].assign(mesh.triangles(l).size(), 0);
-    }
-    sc.stamp = 0;
-  }
+  size_scratch(mesh);
   if (++sc.stamp == 0) {  // wrapped: clear the marks once every 2^32 updates
     for (int l = 0; l <= L; ++l) {
       std::fill(sc.base_mark[l].begin(), sc.base_mark[l].end(), 0);
@@ -289,8 +302,8 @@ Status update_control_vertices(MultiresMesh& mesh, const std::vector<int>& moved
   // differs bit-wise, so the next level must look at its dependents. A value
   // that comes out bit-identical (e.g. P' = P + 0 * N where d = 0 and P did
   // not move) stops the spread without changing the result.
-  std::vector<int> changed, reached, spread, targets;
-  changed.reserve(moved.size());
+  std::vector<int>&changed = sc.changed, &reached = sc.reached, &spread = sc.spread, &targets = sc.targets;
+  changed.clear();
   for (size_t i = 0; i < moved.size(); ++i) {
     const int v = moved[i];
     mesh.control[v] = new_positions[i];

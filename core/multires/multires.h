@@ -67,12 +67,15 @@ struct MultiresMesh {
   // levels above l are out of date from this level on; -1: every level is
   // current. evaluate() and ensure_current() bring them back.
   int stale_from = -1;
-  // Scratch of update_control_vertices (visit marks per level); not
+  // Scratch of update_control_vertices (visit marks per level, and its work
+  // lists, kept so that an update allocates nothing); sized by evaluate(), so
+  // the first update after a build costs what the others do. Not
   // thread-safe: one update at a time per mesh.
   struct Scratch {
     std::vector<std::vector<std::uint32_t>> base_mark, displaced_mark;  // L+1, #V_l each
     std::vector<std::vector<std::uint32_t>> face_mark;                  // L+1, #F_l each
     std::uint32_t stamp = 0;
+    std::vector<int> changed, reached, spread, targets;
   } scratch;
 
   int num_levels() const { return static_cast<int>(levels.size()); }  // L

@@ -36,6 +36,9 @@ void update_level(MultiresMesh& m, int l, const std::vector<int>& moved_base);
 void update_refinement(MultiresMesh& m, int l, const std::vector<int>& moved);
 // Sizes the state arrays for the mesh's levels.
 void resize_state(MultiresMesh& m);
+// Sizes update_control_vertices' marks for the mesh's levels (cleared only
+// when the levels changed) and reserves its work lists.
+void size_scratch(MultiresMesh& m);
 // InvalidInput unless the displacement and link arrays match the levels.
 Status check_sizes(const MultiresMesh& m);
 // Mean edge length of the triangles at positions P.

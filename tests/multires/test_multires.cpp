@@ -226,6 +226,40 @@ TEST_CASE("multires: local update equals a full recompute, bit for bit", "[multi
   }
 }
 
+TEST_CASE("multires: the update's scratch follows the hierarchy it serves", "[multires]") {
+  // The marks are sized by evaluate(), so the first update after a build
+  // allocates nothing; an object rebuilt on another mesh, or assigned
+  // another hierarchy, must not reuse marks sized for the old one.
+  MultiresMesh mr;
+  REQUIRE(build_multires(icosphere(2), 3, mr).ok());
+  REQUIRE(mr.scratch.base_mark.size() == 4);
+  for (int l = 0; l <= 3; ++l) {
+    CHECK(mr.scratch.base_mark[l].size() == static_cast<size_t>(mr.num_vertices(l)));
+    CHECK(mr.scratch.face_mark[l].size() == mr.triangles(l).size());
+  }
+  CHECK(mr.scratch.targets.capacity() >= static_cast<size_t>(mr.num_vertices(3)));
+  for (int round = 0; round < 3; ++round) {
+    TriMesh m = round == 1 ? bumpy_patch(6, 10) : icosphere(round == 0 ? 1 : 2);
+    MultiresMesh other;
+    REQUIRE(build_multires(m, 2 + round % 2, other).ok());
+    random_displacements(other, 5 + round, 0.2);
+    REQUIRE(evaluate(other).ok());
+    if (round == 2) {
+      mr = other;  // assigned, not rebuilt
+    } else {
+      REQUIRE(build_multires(m, 2 + round % 2, mr).ok());
+      mr.displacements = other.displacements;
+      REQUIRE(evaluate(mr).ok());
+    }
+    const int v = m.num_vertices() / 2;
+    REQUIRE(update_control_vertices(mr, {v}, {mr.control[v] + Vec3(0.05, -0.02, 0.03)}).ok());
+    MultiresMesh full = mr;
+    REQUIRE(evaluate(full).ok());
+    INFO("round " << round);
+    require_identical(mr, full);
+  }
+}
+
 TEST_CASE("multires: an update touches only the support of the moved vertex", "[multires]") {
   TriMesh m = bumpy_patch(10, 20);
   MultiresMesh mr;
