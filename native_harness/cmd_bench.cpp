@@ -35,8 +35,14 @@ int run_bench(const Args& args) {
   return failures ? 1 : 0;
 }
 
+std::string sections() {
+  std::string out = "sections (all by default; --only picks some):\n";
+  for (auto& [name, b] : bench_registry()) out += "  " + name + std::string(name.size() < 10 ? 10 - name.size() : 1, ' ') + b.summary + "\n";
+  return out;
+}
+
 Registrar reg({"bench", "likeness bench [--only SECTION ...] [--quick]",
-               "measures speed and accuracy, printed beside the papers' figures", run_bench});
+               "measures speed and accuracy, printed beside the papers' figures", run_bench, sections});
 
 }  // namespace
 }  // namespace lk::cli

@@ -30,6 +30,7 @@ struct Command {
   std::string usage;    // one line: "likeness render --mesh FILE ..."
   std::string summary;  // what it does
   std::function<int(const Args&)> run;  // exit code: 0 ok, 1 failed, 2 usage
+  std::function<std::string()> details;  // optional: more lines for `likeness <command> --help`
 };
 
 std::map<std::string, Command>& registry();

@@ -108,6 +108,7 @@ int main(int argc, char** argv) {
   lk::cli::Args args = lk::cli::parse_args(argc, argv, 2);
   if (args.has("help")) {
     std::cout << it->second.usage << "\n  " << it->second.summary << "\n";
+    if (it->second.details) std::cout << it->second.details();
     return 0;
   }
   return it->second.run(args);
