@@ -167,6 +167,23 @@ OrbitCamera canonical_view(CanonicalView view, const BBox& bbox, float aspect) {
   return cam;
 }
 
+OrbitCamera canonical_view(CanonicalView view, const BBox& bbox, float aspect, const Vec3& facing, const Vec3& up) {
+  const Vec3 z = facing.normalized();
+  const Vec3 y = (up - up.dot(z) * z).normalized();
+  if (!z.allFinite() || !y.allFinite() || facing.norm() == 0 || (up - up.dot(z) * z).norm() < 1e-6 * up.norm())
+    return canonical_view(view, bbox, aspect);
+  const Vec3 x = y.cross(z);  // the head's left (head_model.h)
+  OrbitCamera cam = aimed_at(view, bbox);
+  const glm::vec3 h = direction_from_angles(cam.yaw_deg, cam.pitch_deg);  // in the head's frame
+  const Vec3 d = (double(h.x) * x + double(h.y) * y + double(h.z) * z).normalized();
+  cam.yaw_deg = static_cast<float>(glm::degrees(std::atan2(d.x(), d.z())));
+  cam.pitch_deg = std::clamp(static_cast<float>(glm::degrees(std::asin(std::clamp(d.y(), -1.0, 1.0)))),
+                             -kMaxPitchDeg, kMaxPitchDeg);
+  if (!bbox.valid()) return cam;
+  cam.distance = framing_distance(bbox, forward_of(cam), glm::vec3(0, 1, 0), cam.fov_y_deg, aspect);
+  return cam;
+}
+
 Status canonical_view(const std::string& name, const BBox& bbox, float aspect, OrbitCamera& out) {
   CanonicalView v = CanonicalView::Front;
   Status s = parse_canonical_view(name, v);

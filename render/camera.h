@@ -55,6 +55,15 @@ struct OrbitCamera {
 // the given aspect (width / height) with a small margin.
 OrbitCamera canonical_view(CanonicalView view, const BBox& bbox, float aspect);
 Status canonical_view(const std::string& name, const BBox& bbox, float aspect, OrbitCamera& out);
+// The same for a head whose own frame is not the world's: `facing` and `up`
+// are the head's +z and +y in world coordinates (a fitted head shown over its
+// scan in the scan's orientation, which need not face +z). The view's
+// direction is taken in the head's frame, so "three-quarter" shows the face
+// from its left front whatever way the scan faced. OrbitCamera keeps world +y
+// up, so a head whose up is not +y is seen rolled, its face still towards
+// the camera. Facing and up need not be unit or exactly orthogonal (up is
+// made orthogonal to facing); degenerate ones give the plain canonical view.
+OrbitCamera canonical_view(CanonicalView view, const BBox& bbox, float aspect, const Vec3& facing, const Vec3& up);
 // Tighter: frames the points themselves (e.g. mesh vertices), not their box,
 // whose corners stick out beyond a round head in perspective. Aimed at the
 // box centre. Empty points give a default camera.

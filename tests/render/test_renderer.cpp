@@ -551,6 +551,53 @@ TEST_CASE("orbit camera: angles, framing and interaction", "[render][camera]") {
   CHECK(cam.target.x < front.target.x);  // drag right: scene moves right, target left
 }
 
+TEST_CASE("canonical views in a head's own frame: a scan that faces elsewhere is seen from its face", "[render][camera]") {
+  BBox box;
+  box.extend(Vec3(-0.1, -0.12, -0.1));
+  box.extend(Vec3(0.1, 0.12, 0.1));
+  const auto eye_dir = [&](const OrbitCamera& c) {
+    const glm::vec3 e = c.eye() - c.target;
+    return Vec3(e.x, e.y, e.z).normalized();
+  };
+  // The head's own frame is the world's: the plain canonical views.
+  for (CanonicalView v : {CanonicalView::Front, CanonicalView::ThreeQuarter, CanonicalView::Left}) {
+    const OrbitCamera plain = canonical_view(v, box, 1.3f);
+    const OrbitCamera framed = canonical_view(v, box, 1.3f, Vec3(0, 0, 2), Vec3(0, 1, 0));
+    CHECK(std::abs(plain.yaw_deg - framed.yaw_deg) < 1e-3f);
+    CHECK(std::abs(plain.pitch_deg - framed.pitch_deg) < 1e-3f);
+    CHECK(std::abs(plain.distance - framed.distance) < 1e-5f);
+  }
+  // Fran's scan faces (0.794, 0, -0.608) with +y up: the camera turns with
+  // her face (yaw by the same angle), so the front view looks at her face and
+  // the three-quarter view sees her face and her left (x = up x facing).
+  const Vec3 facing(0.794, 0, -0.608), up(0, 1, 0);
+  const Vec3 f = facing.normalized(), left = up.cross(f);
+  const OrbitCamera front = canonical_view(CanonicalView::Front, box, 1.3f, facing, up);
+  CHECK(eye_dir(front).dot(f) > 0.9999);
+  const OrbitCamera tq = canonical_view(CanonicalView::ThreeQuarter, box, 1.3f, facing, up);
+  const OrbitCamera tq_plain = canonical_view(CanonicalView::ThreeQuarter, box, 1.3f);
+  const Vec3 d = eye_dir(tq), d_plain = eye_dir(tq_plain);
+  CHECK(d.dot(f) == Approx(d_plain.z()).margin(1e-5));
+  CHECK(d.dot(left) == Approx(d_plain.x()).margin(1e-5));
+  CHECK(d.y() == Approx(d_plain.y()).margin(1e-5));
+  // A scan lying on its back (up = +z, facing +y): pitched up to see the face
+  // from above; the box still fits the frame.
+  const OrbitCamera lying = canonical_view(CanonicalView::Front, box, 1.0f, Vec3(0, 1, 0), Vec3(0, 0, 1));
+  CHECK(eye_dir(lying).y() > 0.99);
+  const CameraMatrices m = lying.matrices(1.0f);
+  for (int i = 0; i < 8; ++i) {
+    const glm::vec4 p((i & 1) ? 0.1f : -0.1f, (i & 2) ? 0.12f : -0.12f, (i & 4) ? 0.1f : -0.1f, 1.0f);
+    const glm::vec4 c = m.projection * m.view * p;
+    CHECK(std::abs(c.x / c.w) <= 1.0);
+    CHECK(std::abs(c.y / c.w) <= 1.0);
+  }
+  // Degenerate frames fall back to the plain view.
+  const OrbitCamera none = canonical_view(CanonicalView::ThreeQuarter, box, 1.3f, Vec3(0, 0, 0), Vec3(0, 1, 0));
+  CHECK(none.yaw_deg == tq_plain.yaw_deg);
+  const OrbitCamera parallel = canonical_view(CanonicalView::ThreeQuarter, box, 1.3f, Vec3(0, 1, 0), Vec3(0, 2, 0));
+  CHECK(parallel.yaw_deg == tq_plain.yaw_deg);
+}
+
 TEST_CASE("the generic head renders plausibly from the front and the side", "[render][head]") {
   GenericHead head;
   const Status loaded = load_generic_head(head);
