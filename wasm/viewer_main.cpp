@@ -20,6 +20,10 @@
 //   set_overlay_points(positions, normals, colors) -> "": the scan under a fit
 //     (empty positions clear it); set_overlay_visible(on)
 //   set_point_size(pixels), set_wireframe(on), reset_view()
+//   set_head_frame(fx, fy, fz, ux, uy, uz): the shown head's facing (+z) and
+//     up (+y) in the scan's frame; reframes the view on its face (kept by
+//     reset_view until a new scan or the generic head is shown)
+//   view_direction() -> [x, y, z]: unit vector from the view's target to the eye
 //   orbit(dx, dy), pan(dx, dy), zoom(amount): camera steps in pixels, as if
 //     dragged (the page's keyboard control)
 //   frames_drawn() -> number of frames drawn so far (0 until the head is up)
@@ -349,6 +353,19 @@ void js_reset_view() {
   if (g_viewer) g_viewer->scene.reset_view();
 }
 
+void js_set_head_frame(double fx, double fy, double fz, double ux, double uy, double uz) {
+  const lk::Vec3 facing(fx, fy, fz), up(ux, uy, uz);
+  if (g_viewer && facing.allFinite() && up.allFinite()) g_viewer->scene.set_head_frame(facing, up);
+}
+
+val js_view_direction() {
+  val a = val::array();
+  if (!g_viewer) return a;
+  const lk::Vec3 d = g_viewer->scene.view_direction();
+  for (int k = 0; k < 3; ++k) a.call<void>("push", d[k]);
+  return a;
+}
+
 // Camera steps for keyboard (and scripted) control, in framebuffer pixels as
 // if dragged; zoom > 0 moves closer.
 void js_orbit(float dx, float dy) {
@@ -401,6 +418,8 @@ EMSCRIPTEN_BINDINGS(likeness_viewer) {
   emscripten::function("set_point_size", &js_set_point_size);
   emscripten::function("set_wireframe", &js_set_wireframe);
   emscripten::function("reset_view", &js_reset_view);
+  emscripten::function("set_head_frame", &js_set_head_frame);
+  emscripten::function("view_direction", &js_view_direction);
   emscripten::function("orbit", &js_orbit);
   emscripten::function("pan", &js_pan);
   emscripten::function("zoom", &js_zoom);

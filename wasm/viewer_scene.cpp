@@ -108,8 +108,12 @@ Status ViewerScene::replace(DrawableHandle fresh, bool keep_view) {
   bounds_ = box;
   if (model_is_points_) renderer_.set_point_size(model_, point_size_);
   else renderer_.set_wireframe(model_, wireframe_);
-  if (keep_view) dirty_ = true;
-  else reset_view();
+  if (keep_view) {
+    dirty_ = true;
+  } else {
+    has_head_frame_ = false;
+    reset_view();
+  }
   return Status::success();
 }
 
@@ -258,8 +262,23 @@ void ViewerScene::set_wireframe(bool on) {
 }
 
 void ViewerScene::reset_view() {
-  if (bounds_.valid()) camera_ = canonical_view(CanonicalView::ThreeQuarter, bounds_, float(width_) / float(height_));
+  const float aspect = float(width_) / float(height_);
+  if (bounds_.valid())
+    camera_ = has_head_frame_ ? canonical_view(CanonicalView::ThreeQuarter, bounds_, aspect, head_facing_, head_up_)
+                              : canonical_view(CanonicalView::ThreeQuarter, bounds_, aspect);
   dirty_ = true;
+}
+
+Vec3 ViewerScene::view_direction() const {
+  const glm::vec3 d = camera_.eye() - camera_.target;
+  return Vec3(d.x, d.y, d.z).normalized();
+}
+
+void ViewerScene::set_head_frame(const Vec3& facing, const Vec3& up) {
+  has_head_frame_ = true;
+  head_facing_ = facing;
+  head_up_ = up;
+  reset_view();
 }
 
 void ViewerScene::resize(int width_px, int height_px) {

@@ -74,7 +74,16 @@ class ViewerScene {
   void set_point_size(float pixels);
   // Triangle edges over the surface (meshes; kept across model changes).
   void set_wireframe(bool on);
-  void reset_view();                 // frames the model from the default view
+  // Frames the model from the default view: three-quarter, in the head's own
+  // frame while one is set (set_head_frame), else in the world's.
+  void reset_view();
+  // The shown head's +z (facing) and +y (up) in world coordinates: a fit is
+  // shown over its scan in the scan's orientation, which need not face +z.
+  // Reframes the view. Cleared when a model is shown without keep_view (a
+  // new scan, the generic head).
+  void set_head_frame(const Vec3& facing, const Vec3& up);
+  // Unit vector from the camera's target to its eye (tests, scripts).
+  Vec3 view_direction() const;
   void resize(int width_px, int height_px);
 
   // Pointer deltas in framebuffer pixels.
@@ -102,6 +111,8 @@ class ViewerScene {
   DrawableHandle overlay_ = kNoHandle;
   bool overlay_visible_ = true;
   BBox bounds_;
+  bool has_head_frame_ = false;
+  Vec3 head_facing_ = Vec3(0, 0, 1), head_up_ = Vec3(0, 1, 0);
   float point_size_ = 3.0f;
   bool wireframe_ = false;
   int width_ = 1, height_ = 1;

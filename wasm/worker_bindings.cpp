@@ -648,6 +648,10 @@ val fit_head_job(const std::string& name, std::uintptr_t data, std::size_t size,
   val notes = val::array();
   for (const std::string& note : s.fit.notes) notes.call<void>("push", note);
   r.set("notes", notes);
+  // The head's facing (+z) and up (+y) in the scan's frame, for the viewer
+  // to look at the face whatever way the scan faced.
+  r.set("headFacing", vec3_array(s.head_to_scan * lk::Vec3(0, 0, 1)));
+  r.set("headUp", vec3_array(s.head_to_scan * lk::Vec3(0, 1, 0)));
   val untangle = val::object();
   untangle.set("pairsBefore", s.fit.untangle.pairs_before);
   untangle.set("pairsEroded", s.fit.untangle.pairs_eroded);

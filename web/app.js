@@ -483,7 +483,7 @@
     } else if (alone) {
       setStatus(app.photos.length + ' photo(s) kept for the Texture stage. ' +
                 (app.fit ? 'Give each its points (a .txt of the same name, or click the photo), then Texture.'
-                  : app.model ? 'Fit the head, then texture it.' : 'Drop a head scan (PLY, OBJ or XYZ) to start.'));
+                  : app.model ? 'Fit the head, then texture it.' : 'Drop a head scan (PLY, OBJ, XYZ or VTK) to start.'));
     }
   }
 
@@ -1155,7 +1155,8 @@
     }
     app.fit = { name: file.name, stages: result.stages, meshes: result.meshes, fitMs: result.fitMs,
                 parseMs: result.parseMs, wallMs, points: result.points, fittedPoints: result.fittedPoints,
-                animatedVertices: result.animatedVertices, landmarks: result.landmarks || [] };
+                animatedVertices: result.animatedVertices, landmarks: result.landmarks || [],
+                headFacing: result.headFacing || [0, 0, 1], headUp: result.headUp || [0, 1, 0] };
     forgetTexture();
     for (const st of FIT_STAGES) {
       const s = result.stages.find((x) => x.name === st.core);
@@ -1179,6 +1180,11 @@
     app.viewer.set_overlay_visible(ui.showPoints.checked);
     showComponents(result.components);
     showStage('subdivide');
+    // Look at the new head's face: it is shown over the scan in the scan's
+    // orientation, which need not face +z (Fran's faces 37 degrees off +x),
+    // and the view was framed on the scan, which may be a face only.
+    const [f, u] = [app.fit.headFacing, app.fit.headUp];
+    app.viewer.set_head_frame(f[0], f[1], f[2], u[0], u[1], u[2]);
     setStatus(file.name + ': head fitted in ' + (result.fitMs / 1000).toFixed(2) + ' s. Click a stage to see its mesh; ' +
               'pick a level, animate or export.');
     setState('done');

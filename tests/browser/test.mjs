@@ -1165,6 +1165,21 @@ async function main() {
               check('the page shows what the fit decided about the real scan (turned, face-only)',
                     notes.some((n) => /seems to face/.test(n)) && notes.some((n) => /face-only scan/.test(n)) &&
                     !(await pageFran.isHidden('#fit-notes')), JSON.stringify(notes).slice(0, 300));
+              // The view then looks at her face from its three-quarter side
+              // (cos 35 deg cos 8 deg = 0.81 along her facing), not from the
+              // world's, which sees her cheek (-0.04), and "Reset view" keeps it.
+              const facingDot = () => pageFran.evaluate(() => {
+                const d = window.likeness.viewer.view_direction(), f = window.likeness.fit.headFacing;
+                return (d[0] * f[0] + d[1] * f[1] + d[2] * f[2]) / Math.hypot(...f);
+              });
+              const dotFit = await facingDot();
+              await pageFran.evaluate(() => window.likeness.viewer.orbit(800, 0));
+              const dotTurned = await facingDot();
+              await pageFran.click('#btn-reset');
+              const dotReset = await facingDot();
+              check('after the fit the view looks at the turned scan\'s face; Reset view goes back to it',
+                    dotFit > 0.78 && dotReset > 0.78 && dotTurned < 0.6,
+                    `view . facing: after the fit ${dotFit.toFixed(3)}, turned ${dotTurned.toFixed(3)}, reset ${dotReset.toFixed(3)}`);
               if (SHOT_DIR) {  // the Pipeline card with the checks (docs/images/web_fit_checks.png)
                 // The side panel scrolls within the window: a tall window
                 // shows the whole card (an element screenshot of its hidden
