@@ -37,7 +37,10 @@ int run_bench(const Args& args) {
 
 std::string sections() {
   std::string out = "sections (all by default; --only picks some):\n";
-  for (auto& [name, b] : bench_registry()) out += "  " + name + std::string(name.size() < 10 ? 10 - name.size() : 1, ' ') + b.summary + "\n";
+  for (auto& [name, b] : bench_registry()) {
+    const std::string pad(name.size() < 10 ? 10 - name.size() : 1, ' ');
+    out += "  " + name + pad + b.summary + "\n";
+  }
   return out;
 }
 

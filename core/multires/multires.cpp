@@ -302,7 +302,7 @@ Status update_control_vertices(MultiresMesh& mesh, const std::vector<int>& moved
   // differs bit-wise, so the next level must look at its dependents. A value
   // that comes out bit-identical (e.g. P' = P + 0 * N where d = 0 and P did
   // not move) stops the spread without changing the result.
-  std::vector<int>&changed = sc.changed, &reached = sc.reached, &spread = sc.spread, &targets = sc.targets;
+  std::vector<int> &changed = sc.changed, &reached = sc.reached, &spread = sc.spread, &targets = sc.targets;
   changed.clear();
   for (size_t i = 0; i < moved.size(); ++i) {
     const int v = moved[i];
