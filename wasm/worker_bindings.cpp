@@ -558,7 +558,9 @@ val components_object(const FitSession& s, const lk::GenericHead& generic) {
 // local_fitting, global_fitting, subdivision; returning false cancels.
 // The result carries untangle {pairsBefore, pairsEroded, pairsAfter,
 // restoreSteps}: the smooth surface's new crossing pairs the untangling
-// found, left after its erosion and at its end (pipeline/untangle.h).
+// found, left after its erosion and at its end (pipeline/untangle.h), and
+// headFacing, headUp: the head's +z and +y in the scan's frame (the page's
+// view looks at the face with them).
 val fit_head_job(const std::string& name, std::uintptr_t data, std::size_t size, val options, val progress) {
   const lk::ProgressFn report = js_progress(progress);
   if (data == 0 && size != 0)
@@ -648,8 +650,6 @@ val fit_head_job(const std::string& name, std::uintptr_t data, std::size_t size,
   val notes = val::array();
   for (const std::string& note : s.fit.notes) notes.call<void>("push", note);
   r.set("notes", notes);
-  // The head's facing (+z) and up (+y) in the scan's frame, for the viewer
-  // to look at the face whatever way the scan faced.
   r.set("headFacing", vec3_array(s.head_to_scan * lk::Vec3(0, 0, 1)));
   r.set("headUp", vec3_array(s.head_to_scan * lk::Vec3(0, 1, 0)));
   val untangle = val::object();
