@@ -117,7 +117,7 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
   // hinges out (a corner shared by both sheets has no side to move to:
   // James in Chromium, 24 ear pairs where the ear's lower back lay on the
   // scalp, went 28 -> 33 -> 61 pairs moving them, 28 -> 20 -> 4 without;
-  // docs/fit.md "Hinges"); the second, from the first's best, moves all
+  // docs/journal.md "Hinges"); the second, from the first's best, moves all
   // corners (a fold between neighbouring faces is all hinges).
   const double step = options.erode_pct / 100 * diagonal;
   auto erode = [&](bool without_hinges) -> Status {
