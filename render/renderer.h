@@ -137,7 +137,7 @@ struct RendererOptions {
   // Animation updates of indexed meshes send only the range of GPU vertices
   // that changed (glBufferSubData); false sends the whole vertex array each
   // time (still without re-allocating it). Measured in `likeness bench --only
-  // render` (docs/render.md).
+  // render` (docs/design/render.md).
   bool upload_dirty_range = true;
   // glGetError after every draw() and animation update. Natively it is
   // cheap; in a browser it is a synchronous round trip to the GPU process

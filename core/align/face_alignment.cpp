@@ -538,7 +538,7 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
     // those consistent with the given orientation, go on to o.iterations
     // (the same bits as running them through at once); the others are out
     // of the choice below. On James and Fran the starts kept this way
-    // include every start the full search picked (docs/fit_real.md).
+    // include every start the full search picked (docs/journal.md).
     std::vector<char> screened(num_starts, 0);
     for (int k = 1; k < num_starts; ++k) screened[k] = ran[k];
     const std::vector<int> by_screen = ranked(runs, screened);

@@ -88,9 +88,8 @@ struct FaceAlignOptions {
   int refine_candidates = 2;
   // Then the best is polished again from its scale times 1 +- each hop;
   // a score lower by more than scale_hop_gain (relative) replaces it (see
-  // align_face). Empty: no hops. A one-station synthetic capture: seed 2
-  // 1.020 -> 1.013 (score -13 %), seeds 1 and 3 1.005 -> 1.012 (-1 %);
-  // James and Fran: gains of 0.01-0.24 %, not taken.
+  // align_face). Empty: no hops. It corrects a one-station synthetic
+  // capture's scale; the real face scans' small gains are not taken.
   std::vector<double> scale_hops = {0.01};
   double scale_hop_gain = 0.005;
   double distinct_deg = 3.0;
@@ -141,10 +140,9 @@ struct OrientationOptions {
   // screen_keep best of them, and the screen_keep best consistent with the
   // given orientation, go on to `iterations` and into the choice below (the
   // others' scores are no longer compared). 0: every start runs through.
-  // Face scans run all 48 starts (accept_given_fraction); screened, the
-  // alignment stage's CPU went 1.76 -> 1.29 s on James and 1.39 -> 0.95 s
-  // on Fran (paired, load 7), the same guess to the bit on both and on
-  // turned face patches (tests/align; docs/fit_real.md).
+  // Face scans run all 48 starts (accept_given_fraction); screening cuts
+  // about a quarter of the stage's CPU with the same guess to the bit on
+  // the real and turned face patches (tests/align; docs/design/align.md).
   int screen_iterations = 10;
   int screen_keep = 8;
   // The best `candidates` distinct coarse results and the best one

@@ -48,7 +48,7 @@ inline int parallel_workers() {
 // How many parallel_for calls this process made that could use more than
 // one thread (a measurement for the benchmarks: each wakes the threads once,
 // so this times the per-loop cost is what starting them costs a whole job;
-// a seed-1 fit makes about 30, docs/web.md "Threads").
+// a seed-1 fit makes about 30, docs/journal.md "What one parallel loop costs").
 inline std::atomic<long>& parallel_loops_run() {
   static std::atomic<long> loops{0};
   return loops;

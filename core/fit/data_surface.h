@@ -8,7 +8,7 @@
 // for a 10 mm edge on a 20 mm nose bridge). Points fitted by the flat
 // triangles push the vertices outward by that much, more where the
 // triangles are long, so the refinement ripples with the control layout
-// (the creases on Fran's nose bridge and brow, docs/fit.md). Butterfly is
+// (the creases on Fran's nose bridge and brow, docs/design/fit.md). Butterfly is
 // linear in the control positions, so its level L, y = S x with S the
 // levels' stencils composed, can be the data surface instead: the closest
 // points are taken on level L and E_dist's rows are carried to the control

@@ -136,7 +136,7 @@ void project(const std::vector<Vec3>& points, DataSurface& data, const VecX& x, 
 // scalars gave James's guarded fit a factor with 9 % more entries), and
 // 3x3 blocks for the scalars: the same factor as Eigen's SimplicialLDLT
 // with that ordering, 2.4x faster to compute and about 3x faster to apply
-// (docs/fit.md, "Speed of the global fit's solves").
+// (docs/journal.md, "Speed of the global fit's solves").
 using NormalSolver = BlockLdlt;
 
 // Solves H x = g by conjugate gradients preconditioned with the LDLT factor

@@ -39,9 +39,9 @@
 // - Fold guard (not in the paper). Where the data is poor or misleading
 //   (hair over the ears, features the alignment put a centimetre off,
 //   slivers at the eye corners), point-to-plane distances let vertices slide
-//   past their neighbours and turn triangles over: on the real James scan 36
-//   control triangles turned and a crease band ran from the eye corners to
-//   the ears. E_smooth cannot prevent it: turning a thin triangle moves its
+//   past their neighbours and turn triangles over (on a real face capture,
+//   a crease band from the eye corners to the ears). E_smooth cannot
+//   prevent it: turning a thin triangle moves its
 //   corners by a millimetre, which the umbrella term barely notices, and a
 //   lambda strong enough would flatten the face everywhere. So every step is
 //   checked instead: no triangle may come to face against its normal in the
@@ -61,8 +61,7 @@
 // - No-crossing guard (not in the paper; GlobalFitOptions::crossing_guard).
 //   The fold guard keeps each triangle facing its way, but two triangles
 //   that share no edge can still pass through each other: lid skin through
-//   the eye-socket pocket behind it at the outer eye corners (the synthetic
-//   heads: 13-18 crossing pairs in the fitted control mesh), sheets of an
+//   the eye-socket pocket behind it at the outer eye corners, sheets of an
 //   ear, the lips. The same mechanism answers it: after each solve the
 //   triangle pairs that cross at the full step and did not cross at x
 //   (self_intersection.h rules) have all six corners anchored and
@@ -90,7 +89,7 @@
 //   which pulls the local shape back towards the template's (whose smooth
 //   surface does not cross there), and one more pass on all points is
 //   solved; r_v grows (smooth_guard_factor) while the count falls: stiffer
-//   patches only moved the crossings to their rims (docs/fit.md). The state
+//   patches only moved the crossings to their rims. The state
 //   with the fewest pairs is returned, so a pass that does not help changes
 //   nothing. Later searches start only from the level's triangles under
 //   weighted vertices and their rings (the BVH refit, not rebuilt). Like
@@ -100,9 +99,8 @@
 // - Fold relief (part of the smooth-surface guard; GlobalFitOptions::
 //   smooth_guard_relief_*). Level 2 can be clean while level 3 folds inside
 //   one control face or two that share a corner: the fit made a sliver
-//   with a sharp kink (James: a cheek face with angles 36/8/136 deg and an
-//   84 deg dihedral where the template has 0.3; 42 of his 48 smooth
-//   level-3 pairs sat in three such faces, none crossed on level 2). After
+//   with a sharp kink (on a real face capture, most smooth level-3 pairs
+//   sat in a few such faces, none crossing on level 2). After
 //   the guard, the new pairs of level 3 whose control faces share a corner
 //   are found (one search of the whole level, ~173k triangles on the
 //   generic head, made only when a level-3 triangle turns against the
@@ -119,10 +117,9 @@
 //   minimization, like the untangling in fit_head.
 // - Pleat relief (GlobalFitOptions::smooth_guard_pleat_steps), after the
 //   fold relief's steps, where the relief runs. A fold can be too tight to
-//   cross itself: Fran's right cheek had a 10 mm pleat on the smooth level
-//   3 (edges bent by 105-165 deg where the generic head's bend by 4), a
-//   dark slit in every render, and no crossing pair for the fold relief to
-//   see. A pleat edge of the relief level bends by more than 90 deg where
+//   cross itself: a pleat on a cheek of the smooth level 3 (edges bent by
+//   over 100 deg where the generic head's bend by a few), a dark slit in
+//   every render, and no crossing pair for the fold relief to see. A pleat edge of the relief level bends by more than 90 deg where
 //   the reference's bends by less than 45 (outside ignored faces; turned
 //   triangles alone are no sign: James's columella turns smoothly past the
 //   generic's, and unturning it put his subnasale back inside his nose).
@@ -132,10 +129,10 @@
 //   control triangles and adds no new pair anywhere on the level (the
 //   triangles it moved searched again on the relief's tree, refit).
 // - Fold creases (GlobalFitOptions::smooth_guard_crease_*), after the
-//   relief. Some folds do not answer the umbrella step: where James's plate
-//   ear meets his head a control edge bends 105-141 deg, and Butterfly's
-//   8-point stencil reaching across it overshoots into a pleat (14 smooth
-//   level-3 pairs in one ear face, left by the relief at every share). Such
+//   relief. Some folds do not answer the umbrella step: where a plate ear
+//   meets the head a control edge can bend by over 100 deg, and Butterfly's
+//   8-point stencil reaching across it overshoots into a pleat that the
+//   relief leaves at every share. Such
 //   an edge refined as a crease (the 4-point rule along it, the two sides
 //   no longer mixed) does not pleat, and a crease at a sharp bend is where
 //   the surface turns anyway. So the sharpest uncreased edge of a face that
@@ -187,8 +184,8 @@
 //   its shape has steps at the box walls (a ridge across James's nose bridge
 //   at the nose box's top) and may hand over turned triangles (its blend
 //   squashed the box of James's hair-covered ears: 12 turned). A rest shape
-//   taken from it holds both. With the template's (measured without the
-//   guard): James 33 -> 18 turned, the same mean distance, the ridge gone.
+//   taken from it holds both; the template's has fewer turned triangles,
+//   the same mean distance and no ridge (docs/design/fit.md).
 #pragma once
 #include "common/progress.h"
 #include "common/status.h"
@@ -218,9 +215,9 @@ struct GlobalFitOptions {
   // Butterfly level L (with GlobalFitTerms::smooth_creases), linear in the
   // control positions. Level L serves the passes on all points (the final
   // iterations and the smooth-surface guard's passes), or every round with
-  // data_level_on_subsamples. Off by default: on James's face capture it
-  // doubled the crossing pairs at his ears and eye rims (docs/fit.md,
-  // "Fitting the refined surface").
+  // data_level_on_subsamples. Off by default: on a face capture it doubled
+  // the crossing pairs at the ears and eye rims (fit_head turns it on for
+  // whole heads: FitHeadOptions::whole_head_data_level).
   int data_level = 0;
   bool data_level_on_subsamples = false;
   int max_iterations_per_round = 4;
@@ -240,15 +237,13 @@ struct GlobalFitOptions {
   // smoothness at lambda 1), multiplied by fold_stiffen_factor per further
   // detection up to fold_max_stiffness (by then the vertex barely moves).
   // A gentle start matters: anchoring hard at once held the eye corners of
-  // the synthetic heads off their data (final mean +0.001 %).
+  // the synthetic heads off their data.
   int fold_guard_attempts = 8;
   double fold_stiffness = 1.0;
   double fold_stiffen_factor = 4.0;
   double fold_max_stiffness = 1e4;
   // No-crossing guard (see header comment; needs fold_guard_attempts > 0):
   // no step may make two control triangles cross that did not cross before.
-  // (With the generic head before c092934, whose lid skin crossed its eye
-  // pockets, it held the outer eye corners off their data: docs/fit.md.)
   bool crossing_guard = true;
   // Smooth-surface guard (see header comment): after the rounds, the
   // control mesh refined smooth_guard_level times by Modified Butterfly
@@ -316,15 +311,9 @@ struct GlobalFitOptions {
   double back_min_cos = 0.7;
   // Normal rays onto the scan's triangles (header comment), from round
   // back_ray_first_round on (the first starts from the local fit, whose
-  // misfit left 129 of James's vertices off the scan by a quarter edge:
-  // rays there pulled the jaw and ears and crossed them). 0: off. James's
-  // ten bench copies: nose max 5.05-8.87 -> 0.70-1.79 mm, Table 1
-  // 0.0326-0.0340 -> 0.0325-0.0335 %, 0 crossing pairs on all (one vertex
-  // gets a ray, 440); Fran: 4.36 -> 3.29 mm (three vertices, the nose tip's
-  // among them). Reach 1 or 2 edges gave the same fits; a threshold of 0.1
-  // edges took 13 vertices on James, 0.4 none on Fran. James as raw points
-  // (marched): nose max 6.9-9.2 -> 1.0-1.4 mm, 0 pairs on the five copies;
-  // Fran as points unchanged.
+  // misfit leaves many vertices off the scan by a quarter edge: rays there
+  // pulled the jaw and ears and crossed them). 0: off. Figures:
+  // docs/design/fit.md.
   double back_ray_edges = 1.0;
   double back_ray_min_edges = 0.25;
   int back_ray_first_round = 1;

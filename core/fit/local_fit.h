@@ -39,7 +39,7 @@
 // out, the points there pulled the eyes 1.5-5 mm too deep on synthetic
 // heads (rims 1.0-1.7 mm off against 0.2-0.7 mm with the pockets).
 // It runs before the boxes (fit_head, when FitHeadOptions::fit_eye_region
-// is set: off by default, see docs/fit_real.md), so the nose box then fits
+// is set: on by default, see docs/design/fit.md), so the nose box then fits
 // a nose whose bridge already sits between the moved eyes.
 //
 // Shapes: points #P by 3; mesh positions #V by 3.

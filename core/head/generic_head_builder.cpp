@@ -153,7 +153,7 @@ constexpr int kRows = kHeadRows;
 // of different meridian counts. depth: fraction of the way from row 0 to the
 // bottom, measured along each meridian on the surface. The first strip
 // (40 -> 24 meridians) is thinner, 8-10 mm, because its upper edges are
-// only 5 mm long at the throat. Measured (docs/generic_head.md): neck edge
+// only 5 mm long at the throat. Measured (docs/journal.md): neck edge
 // ratio p90 4.5 -> 1.9, worst 6.2 -> 2.3, for 8 more vertices.
 struct NeckRing {
   int meridians;           // even, so the ring is mirror-symmetric with vertices at 0 and 180 deg
@@ -635,7 +635,7 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
           // from its column neighbour, 4.3-4.9 mm from the first among
           // 13-27 mm edges. Over the brow that short edge makes the fitted
           // control mesh's Butterfly surface fold on clean scans (seeds 2
-          // and 4 at 0.05 mm noise, 8 at 0.2 mm; docs/generic_head.md
+          // and 4 at 0.05 mm noise, 8 at 0.2 mm; docs/journal.md
           // "Even corners of the eye rings").
           const int rn = r == kRimLowRow - 1 ? r + 1 : r - 1, cn = c == kEyeCol0 - 1 ? c + 1 : c - 1;
           const Vec3 p_row = square(r, cn), p_col = square(rn, c);
@@ -887,7 +887,7 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
   // The asset's ear (options.ring_ear false): the 2 x 6 root patch extruded
   // into a plate with a rim; its bowl is a vertical strip of quads that
   // Butterfly refines into horizontal ripples (a washboard), and fits look
-  // pasted flat. The ring ear (options.ring_ear, docs/generic_head.md "A
+  // pasted flat. The ring ear (options.ring_ear, docs/journal.md "A
   // ring ear"), for jeong2002 Sec. 4's ear with enough control vertices for
   // helix, antihelix, concha and lobe: every part is a closed ring round the
   // concha, so rows run round the ear as its ridges do:

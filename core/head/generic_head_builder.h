@@ -42,18 +42,18 @@ struct GenericHeadBuildOptions {
   int relax_iterations = 8;        // smoothing passes evening out the surface grid (0: none)
   bool ring_ear = false;           // true: ears made of rings round the concha (helix rim,
                                    // antihelix, concha; 1422 vertices); false: the plate ear
-                                   // of the committed asset (1366). docs/generic_head.md
+                                   // of the committed asset (1366). docs/journal.md
                                    // "A ring ear" says why it is not the asset's yet.
   bool even_eye_corners = true;    // true: the eye rings' four corners halfway (in angle)
                                    // between their neighbours, not at 45 deg of the square:
                                    // no 4.3-4.9 mm edges among 13-27 mm ones at the brow.
                                    // The asset's since 3a8dc46; false: the 45-degree corners
-                                   // of the asset before. docs/generic_head.md "Even corners
+                                   // of the asset before. docs/journal.md "Even corners
                                    // of the eye rings" says what it fixes.
   bool even_back_rows = true;      // true: behind the ears the rows are spread evenly along
                                    // their meridians, not at the face's elevations (5 mm rows
                                    // against 17 mm meridians at the nape rippled into a crease
-                                   // across the back of every head). docs/generic_head.md
+                                   // across the back of every head). docs/journal.md
                                    // "Even rows at the back".
   bool regular_nape = true;        // true: behind the ears and down the neck each quad is split
                                    // along the same-leaning diagonal (a chevron, mirrored), so
@@ -62,7 +62,7 @@ struct GenericHeadBuildOptions {
                                    // deeper at the back (no slivers). false: quads split by
                                    // shape, 4- to 8-valent vertices at random: wavy lines
                                    // across the nape and where the skull meets the neck.
-                                   // docs/generic_head.md "A regular nape".
+                                   // docs/journal.md "A regular nape".
 };
 
 // Builds the generic head and its annotations. Fails with Internal if one of

@@ -51,10 +51,8 @@ struct DisplacementOptions {
   double radius = 0.0;
   // Points the adaptive footprint gathers. The kernel weights them (1 -
   // (rho/R)^2)^2, so about half of them count: 16 points weigh like 9, a
-  // margin over the 6 coefficients of the quadric. (Fran, a fifth of the
-  // points held out: 16 / 20 gave 0.089 / 0.092 %; with an earlier ridge of
-  // 0.02, 12 / 20 / 30 gave 0.109 / 0.105 / 0.118 %: larger footprints blur
-  // the face.)
+  // margin over the 6 coefficients of the quadric; larger footprints blur
+  // the face.
   int footprint_points = 16;
   // Noise (jeong2002 measures on clean dense scans; ours carry 0.2 mm depth
   // noise over level-3 edges of ~1.3 mm): where the footprint_points fit's
@@ -70,16 +68,11 @@ struct DisplacementOptions {
   // exactly footprint_points (its radius is set by the points, not by half
   // an edge) and the line crosses one sheet (near lips and lids a wider
   // footprint reaches the other sheet). max_footprint_points <=
-  // footprint_points: off. Synthetic seeds 1-5 (docs/fit.md): 128 points
-  // halve the level-3 roughness on cheeks and brow (8.4 -> 4.1 deg) at
-  // +1.2 s CPU at first, +0.6 s since the fits are summed as moments (docs/fit.md);
-  // 64 points gave 4.5 deg for +0.5 s (before) but 4 lip crossing pairs
-  // on seed 2. Off by default (16 = footprint_points): with the eye region
-  // on (pipeline/fit_head.h), 128 points leave 6 lip crossing pairs on
-  // seed 5 and put the slowest seed at 1.9 s wall against 1.5 s
-  // (docs/fit.md); `likeness fit --widen-footprints` and the bench's
-  // --fit-noise-points 128 turn it on. The smoothing over the mesh below
-  // (on by default) reaches the same roughness for a fraction of the time.
+  // footprint_points: off. Off by default (16 = footprint_points): it
+  // costs time and left lip crossings; the smoothing over the mesh below
+  // (on by default) reaches the same roughness for a fraction of the time
+  // (figures: docs/design/subdiv_multires.md). `likeness fit
+  // --widen-footprints` and the bench's --fit-noise-points 128 turn it on.
   int max_footprint_points = 16;
   double noise_edge_fraction = 0.01;
   double noise_max_radius_edges = 2.5;
@@ -89,8 +82,8 @@ struct DisplacementOptions {
   // smoothing is undone by the finer levels where the data is dense; the
   // finest level's noise nothing corrects (the orange-peel). Coarser
   // levels' residuals mix noise with detail their quadric cannot follow,
-  // which the interval test takes for noise: on Fran and James, widening
-  // every level cost 0.054 -> 0.072 % and 0.050 -> 0.061 %.
+  // which the interval test takes for noise: widening every level cost
+  // the real scans accuracy.
   int noise_finest_levels = 1;
   // Denoising by smoothing over the mesh (on by default): on this many of
   // the finest levels, the measured heights (#V_l, above the level's base
@@ -110,33 +103,24 @@ struct DisplacementOptions {
   // ring x iterations), no search. Neighbours are neighbours on the mesh,
   // so the smoothing never reaches across closed lips to the other lip
   // (the widened 3-D footprints did). 0 levels: off
-  // (`likeness fit --no-denoise`). Synthetic seeds 1-5: docs/fit.md,
-  // "Denoising by smoothing over the mesh".
+  // (`likeness fit --no-denoise`).
   // Two levels: a coarser level's heights are what the finer one is
   // measured against and are never measured again (one displacement per
   // vertex), so smoothing the finest level alone left the level before's
-  // noise in a quarter of its vertices (cheeks + brow 3.9-4.1 deg; the
-  // smooth undisplaced level 3 scores 3.2, noise-free data 1.6-1.8).
-  // Strength 1 over 8 steps on levels 2 and 3, with the rules below (noise
-  // cap 1.5, move cap 1, normals 10 deg, heights up to 4 errors): 2.35-2.43
-  // deg on seeds 1-5, truth -> surface where scanned the same, lips and
-  // ears 0 (docs/fit.md, "Grain: the two finest levels smoothed"). Level 2
-  // without the height and normal rules put 50-65 ear crossing pairs on
-  // seed 1 (one spot in an ear's fold). Strength 0.3 on level 3 alone (the
-  // earlier default): 3.9-4.1 deg.
+  // noise in a quarter of its vertices. Level 2 needs the height and
+  // normal rules below, or it crosses an ear's fold. Figures:
+  // docs/design/subdiv_multires.md.
   int smooth_finest_levels = 2;
   int smooth_iterations = 8;
   double smooth_strength = 1.0;
   double smooth_agreement = 2.0;
   // Only vertices whose footprint radius is at most this many of the
   // finest level's mean edges take part (on every smoothed level; the
-  // level's own edge would let James's level 2 in: 0.0448 -> 0.0454 %,
-  // two more crossing pairs): neighbours a wider footprint apart see
-  // nearly the same points already (sparse scans: Fran's and James's
-  // level-3 footprints are several edges wide), their heights are as
-  // smooth as the data allows, and their residuals are the misfit of real
-  // detail, not noise (smoothing them cost Fran 0.050 -> 0.057 %, James
-  // 0.048 -> 0.053 %).
+  // level's own edge would let a sparse scan's level 2 in): neighbours a
+  // wider footprint apart see nearly the same points already (sparse
+  // scans' level-3 footprints are several edges wide), their heights are
+  // as smooth as the data allows, and their residuals are the misfit of
+  // real detail, not noise (smoothing them cost the real scans accuracy).
   double smooth_max_radius_edges = 2.0;
   // A vertex's pooled noise (from its fit's residuals) counts as at most
   // this many times the level's median noise (standard deviations): above
@@ -210,10 +194,8 @@ struct DisplacementOptions {
   // footprint_points points would otherwise take for a surface (bumps along
   // the hairline). A scan that is sparse everywhere (Fran) keeps all its
   // points: the test is relative to the scan's own median spacing. 0: off.
-  // Synthetic heads, seeds 1-5 (hair junk 3 % of hair pixels): 30 vs off
-  // halves the truth-to-surface distance (mean 0.59-0.79 vs 1.08-1.18 mm,
-  // in holes 1.44-1.89 vs 2.50-2.96 mm); 10 also drops sparse but real
-  // points behind the ears (85 crossing pairs there on seed 3).
+  // 30 halves the synthetic heads' truth-to-surface distance against off;
+  // 10 also drops sparse but real points behind the ears.
   double isolated_density_ratio = 30.0;
   // The data's edge (the neck cut, the border of a face-only scan, a
   // scan's hole). Sec. 5 leaves the surface smooth where there is no data,
@@ -232,9 +214,8 @@ struct DisplacementOptions {
   // plus 1 - s of the carried value. The band does not turn round rims
   // (neighbours whose normals differ by more than 15 degrees). One control
   // edge is too short: a control vertex just past the data is a whole edge
-  // from the last supported one and gets nothing (the flat-patch test);
-  // synthetic seeds 1-5 with 1 vs 2 before the rim rule: docs/fit.md, "The
-  // step where the data ends". 0: off (the ledge).
+  // from the last supported one and gets nothing (the flat-patch test).
+  // 0: off (the ledge).
   double edge_fade_control_edges = 2.0;
   // jeong2002 stores one displacement per vertex introduced on each level;
   // vertices inherited from the coarser level already lie on the data. Set

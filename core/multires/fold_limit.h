@@ -44,10 +44,8 @@ struct FoldLimitOptions {
   bool shrink_coarser_levels = true;  // false: a bad triangle without displacement of its own stays bad
   // Before the folds: the crossings of every level but the finest, coarse to
   // fine, are separated the same way (see max_intersection_rounds), each
-  // level before it is refined into the next (false: only the finest).
-  // With the untangled control mesh (pipeline/fit_head.h) the menpo3d James
-  // scan's level-3 pairs went 1079 -> 646, Fran's 134 -> 104 (mean of four
-  // runs), Table 1 within the scans' own noise (docs/fit_real.md).
+  // level before it is refined into the next (false: only the finest):
+  // fewer level-3 pairs on the real scans, Table 1 within their noise.
   bool separate_coarser_levels = true;
   // Each level's displacements were measured from the coarser levels as
   // they were: where the fold pass shrinks a level-l displacement (its
@@ -58,18 +56,15 @@ struct FoldLimitOptions {
   // their normal over the new base, where they carry one), and are let go
   // (back to the displacement as measured, over the new base) the first
   // time a fold or a crossing of their own level needs them to move;
-  // shrinking follows from there. Fran's chin: level 3 0.0546 -> 0.049 %
-  // (separation off: 0.0502 %); synthetic seeds 1-5 and James closer too
-  // (docs/fit_real.md, "Fran's loss from the coarser levels' separation").
+  // shrinking follows from there. Without it the separation cost the
+  // scans accuracy (figures: docs/design/subdiv_multires.md).
   bool keep_finer_heights = true;
   // Then the finest level's self-intersections (raycast/self_intersection.h):
   // the corners of both triangles of a crossing pair are shrunk the same way,
   // re-checking only around what moved, for at most this many rounds (0: off).
   // Pairs that cross on the smooth surface too are left alone (the smooth
   // Butterfly surface of a control mesh with sheets ~0.3 mm apart crosses
-  // itself at eye and mouth corners; no shrinking undoes that). Synthetic
-  // heads, seeds 1-2: ears 39-85 -> 0 pairs, lips 223-364 -> 172-244 (the
-  // smooth surface has 84-152 there), mean distance +0.001 %, +0.15 s.
+  // itself at eye and mouth corners; no shrinking undoes that).
   int max_intersection_rounds = 40;
   // A pair whose triangles have no displacement on the finest level was
   // crossed by coarser levels: up to this many times their parents'
@@ -86,8 +81,6 @@ struct FoldLimitOptions {
   // And when that is not enough (the level above moved the vertices
   // sideways), the corners of the pair's parent triangle on the level above
   // go onto the smooth surface, and the two finest levels are re-evaluated.
-  // Synthetic heads, seeds 1-5: ears 0 / 0 / 51 / 48 / 64 -> 0 / 0 / 0 / 14 / 0
-  // pairs, same mean distance, +0.1-0.2 s CPU.
   bool crossing_parents_to_smooth = true;
   // The closing fold pass (below) may shrink corners back into a crossing:
   // this many times, the crossings around what it moved are separated again
@@ -102,17 +95,16 @@ struct FoldLimitOptions {
   // Each visit of a level recomputes only what changed since the last one
   // (normals, bad triangles, the next level's base, the BVH's boxes); false
   // evaluates, scans and refits everything on every visit. Same result bit
-  // for bit (tests/multires/test_fold_incremental.cpp compares the two);
-  // on the synthetic heads about 0.2 s CPU less per fit (docs/fit.md).
+  // for bit (tests/multires/test_fold_incremental.cpp compares the two),
+  // for less CPU per fit.
   bool incremental = true;
   // The separation gives a finest-level pair up when no corner of it can
   // move (its corners and its parents' are on the smooth surface); later
   // restarts and fold passes move the base under those heights, so such a
   // pair can cross again unseen. When one does, the whole limiter runs once
   // more on its result (nothing held, every pair seen from the start) and
-  // that is kept if it leaves fewer crossing pairs in all. Demo sample (synth-scan --seed 1 through PLY): ear pairs
-  // 10 -> 0; James 97 -> 5 pairs; Fran's second pass is not kept
-  // (docs/fit.md, "The demo sample's ear crossings").
+  // that is kept if it leaves fewer crossing pairs in all (the demo
+  // sample's last ear crossings).
   bool second_pass = true;
   // Last resort, after all the above: finest-level pairs still crossing
   // that the smooth surface does not cross (coarser levels bent them, and
@@ -124,12 +116,9 @@ struct FoldLimitOptions {
   // pairs and turns or collapses none of the triangles it moved is kept;
   // otherwise the one with the fewest pairs in all, if fewer than before
   // (the smooth surface's own crossings count: zeroing can bring them
-  // back). Seeds 1-10 (0.2 mm): 10 -> 0 pairs; noise-free seed 4: 13 -> 0;
-  // James: none kept (docs/fit.md "The last resort"). Two rings since
-  // James's level 3 was untangled (fit_head.h face_untangle_level): his
-  // copy scaled by 1.0001 kept 5 ear pairs with one ring and none with two
-  // (43 control faces of the hair-covered ear smoothed from level 0; Table 1
-  // 0.0335 -> 0.0340 %); the synthetic seeds never reach the second ring.
+  // back). Two rings: a face capture's hair-covered ear kept pairs with
+  // one; the synthetic seeds never reach the second (figures:
+  // docs/design/subdiv_multires.md).
   int smooth_region_rings = 2;
 };
 

@@ -85,20 +85,15 @@ struct FitHeadOptions {
   // Before the feature boxes, the eyes and brows move as one soft region
   // (fit/local_fit.h: translation and scale, fitted to the scan) when the
   // head has eye rims; false keeps them where the alignment put them. On
-  // by default since the level-3 footprints no longer widen against noise:
-  // synthetic seeds 1-5 truth -> level 3 mean 0.59-0.91 -> 0.55-0.79 mm,
-  // seed 4's ear crossings 22 -> 0, lips 0; James's rims 1.6 / 3.0 mm from
-  // his landmarks (5.7 / 7.8 without). Costs Table 1 on the real scans
-  // (James 0.046 -> 0.048 %, Fran 0.048 -> 0.050 %) and Fran gets lip
-  // crossings (docs/fit_real.md); `likeness fit --no-eye-region` keeps the
-  // eyes where the alignment put them.
+  // by default: the rims land on the scan's eyes and the synthetic heads
+  // come closer to their truth, for a slightly higher Table 1 on the real
+  // scans (figures: docs/design/fit.md). `likeness fit --no-eye-region`.
   bool fit_eye_region = true;
   EyeRegionOptions eye_region;
   GlobalFitOptions global;
   // Displacement measurement; min_points raised from 3 to 12 so the sparse
   // junk a scanner returns from hair (a few points per normal line) counts
-  // as "no data" and the scalp stays smooth (measured: same mean distance,
-  // no bumps on the scalp of the synthetic scans).
+  // as "no data" and the scalp stays smooth (same mean distance).
   DisplacementOptions displacement = [] {
     DisplacementOptions d;
     d.min_points = 12;
@@ -113,12 +108,10 @@ struct FitHeadOptions {
   // The generic head's neck goes on below the neck cut. Measured from the
   // points above the cut only, its displacements dropped to the smooth
   // surface right at the cut, one column of the neck's long triangles at a
-  // time: streaks under the jaw (docs/fit.md). The scan down to this far
-  // below the cut (metres), where its nearest surface is the neck's, is
-  // measured too; it is not fitted and not in Table 1's distances. 0: the
-  // cut is the data's edge. (10 mm: seeds 1-5 truth->surface 0.005-0.013 mm
-  // closer, most of 15 mm's gain; on James's face scan 15 mm and more made
-  // the neck push into the generic ear lobes: ear pairs 79 -> 118.)
+  // time: streaks under the jaw. The scan down to this far below the cut
+  // (metres), where its nearest surface is the neck's, is measured too; it
+  // is not fitted and not in Table 1's distances. 0: the cut is the data's
+  // edge. Longer reaches push a face capture's neck into the ear lobes.
   double displacement_below_neck_cut = 0.010;
   // Scans that come as meshes (PointCloud::faces): their triangles are
   // sampled every surface_sample_edges x the finest level's mean edge and
@@ -145,25 +138,15 @@ struct FitHeadOptions {
   // up to untangle_iterations times (and not after two steps without
   // fewer pairs); the state with the fewest such pairs is kept (fit_head.cpp).
   // untangle_level 0: off. Face captures (face_untangle_level) are searched
-  // on level 3: on James's copies nudged by a hair (likeness bench --only
-  // fit-real) the smooth level 3 still crossed itself in 4-13 pairs after
-  // level 2 was untangled, and one copy kept 10 ear pairs at level 3; on
-  // level 3, 0-4 smooth and 0 displaced pairs on all five (with the fold
-  // limiter's last resort reaching two rings, fold_limit.h), Table 1 within
-  // 0.0005 %, +0.1-0.3 s. Whole heads stay on level 2: the dense synthetic
-  // seeds have no new level-3 pairs, and the search cost 70-110 ms per fit.
-  // With untangle_hinges_last, a first erosion pass leaves out the corners
-  // the two sheets share or neighbour (an ear's root where its back lies on
-  // the scalp): on James in Chromium, 28 -> 4 pairs where moving them too
-  // made 61 (pipeline/untangle.h, docs/fit.md "Hinges").
+  // on level 3, where their sparse data still crossed after level 2 was
+  // clean; whole heads stay on level 2 (no new level-3 pairs, and the
+  // search costs time). With untangle_hinges_last, a first erosion pass
+  // leaves out the corners the two sheets share or neighbour (an ear's root
+  // where its back lies on the scalp): moving those too made more pairs.
   // Then the folds left within one sheet are taken untangle_restore_share
   // of the way back to the template's shape over the corners of their
   // control faces and up to untangle_restore_rings rings around them
-  // (pipeline/untangle.h; -1: off). On James's 13 nudged copies (likeness
-  // bench --only fit-real --fit-real-copies 13) the pairs left at his
-  // outer eye corners went 45 -> 24 in all with three rings (docs/fit.md);
-  // with hinges last and four rings, 45 -> 4, and James in Chromium 28 ->
-  // 0 (docs/fit.md "Hinges").
+  // (pipeline/untangle.h; -1: off). Figures: docs/design/fit.md.
   int untangle_level = 2;
   int face_untangle_level = 3;
   int untangle_iterations = 6;
@@ -180,31 +163,20 @@ struct FitHeadOptions {
   // fitting (E_binding keeps its edge VECTOR), as the eye sockets' are: the
   // ear keeps its shape and follows the scan as a whole. On face-only
   // captures (FaceOnlyScans), whose ears are seen from the side under hair:
-  // free, the thin flap of James's ears was pulled onto the points of the
-  // scalp and of its own bowl at once and folded (13 crossing control pairs,
-  // 262 ear pairs on his smooth level 3, 473 on the displaced one; bound: 0,
-  // 39 and 53, level-3 mean 0.0476 -> 0.0477 %). Not on whole-head scans,
-  // which see the ears: bound there, synthetic seeds 1-5 lost accuracy
-  // (Table 1 +0.002-0.003 % on three seeds, truth -> surface up to +0.12 mm)
-  // and seed 3 got 37 ear crossings (docs/fit_real.md).
+  // free, an ear's thin flap is pulled onto the scalp's points and its own
+  // bowl's at once and folds. Not on whole-head scans, which see the ears
+  // and lost accuracy when bound (figures: docs/design/fit.md).
   enum class EarBinding { Off, FaceOnlyScans, Always };
   EarBinding bind_ear_edges = EarBinding::FaceOnlyScans;
   // The global fit's scan-to-mesh term E_back (GlobalFitOptions::back_*:
   // control vertices over scanned skin held to the scan's surface under
   // them; ears and pockets left out) with this weight. On face captures,
   // whose few points per control vertex let a template feature stick out
-  // where no point is nearest to it: James's generic nose tip stood 6 mm
-  // off his nose, a spike with a torn columella and a tag on the upper lip
-  // at level 3. With it (five nudged copies each): face vertices of level 3
-  // to the scan, mean 0.139-0.142 -> 0.122-0.128 mm (James), 0.152-0.153
-  // -> 0.127-0.130 mm (Fran); Table 1 0.0334-0.0348 -> 0.0326-0.0337 %
-  // and 0.0395-0.0401 -> 0.0367-0.0375 %. Not on whole-head scans: dense
-  // synthetic ones gained nothing (seeds 1-5: surface to truth 0.31 ->
-  // 0.32 mm, +0.15 s). docs/fit_real.md, "The scan-to-mesh term". Its
+  // where no point is nearest to it (a generic nose tip standing off a
+  // real nose). Not on whole-head scans: dense ones gain nothing. Its
   // normal rays (GlobalFitOptions::back_ray_*) meet a mesh scan's
-  // triangles over fitted skin, or a point cloud's points: James's
-  // columella base came out of his nose (docs/fit_real.md, "James's
-  // columella base").
+  // triangles over fitted skin, or a point cloud's points. Figures:
+  // docs/design/fit.md.
   enum class BackTerm { Off, FaceOnlyScans, Always };
   BackTerm back_term = BackTerm::FaceOnlyScans;
   double back_weight = 1.0;
@@ -212,27 +184,20 @@ struct FitHeadOptions {
   // rest-shape weights where the control mesh's smooth level 2 crosses
   // itself, then the fold relief of level 3) runs on every scan. Face-only
   // captures need it most: their sparse data bend the control mesh sharply
-  // around the eyes, brow and nose (Fran's smooth level-3 pairs 124 -> 51,
-  // displaced 157 -> 70; James 177 -> 108 and 278 -> 145; Table 1 +0.0003
-  // / +0.0000 %). On whole heads it takes the brow folds of clean scans
-  // (synthetic seeds 1-5 with 0.05 mm noise: 14 -> 0 pairs; 0.2 mm, seeds
-  // 1-10: 28 -> 10) for ~40 ms a fit, 0.2-0.5 s where it has work
-  // (docs/fit.md "The smooth-surface guard on every scan, again").
-  // FaceOnlyScans: only there (the default until 22 Nov); Off: never
+  // around the eyes, brow and nose. On whole heads it takes the brow folds
+  // of clean scans, cheaply where it has no work (figures:
+  // docs/design/fit.md). FaceOnlyScans: only there; Off: never
   // (GlobalFitOptions as given).
   enum class SmoothGuard { Off, FaceOnlyScans, Always };
   SmoothGuard smooth_guard = SmoothGuard::Always;
   // The global fit's data surface (GlobalFitOptions::data_level) on
   // whole-head scans: their last passes measure the points against the
   // control mesh's Butterfly level 1, the surface the user gets, instead of
-  // its flat triangles (fit/data_surface.h). Synthetic seeds 1-10: truth ->
-  // level 3 where scanned 0.512 -> 0.490 mm, in the holes lower on all
-  // ten, 0 crossing pairs either way, Table 1 0.0476 -> 0.0478 %, +0.09 s
-  // per fit on average (slowest 1.50 -> 1.75 s; Chromium 3.1 -> 3.4-3.7 s:
-  // docs/fit.md, "The refined surface on whole heads").
-  // Face-only captures keep global.data_level (0 by default): on James's
-  // hair-covered ears level 1 raised the crossing pairs (13 nudged copies:
-  // ears 3 -> 49). -1: global.data_level on every scan.
+  // its flat triangles (fit/data_surface.h): closer to the truth where
+  // scanned and in the holes, for a little time (figures:
+  // docs/design/fit.md). Face-only captures keep global.data_level (0 by
+  // default): on hair-covered ears level 1 raised the crossing pairs.
+  // -1: global.data_level on every scan.
   int whole_head_data_level = 1;
 };
 

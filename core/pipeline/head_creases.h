@@ -12,7 +12,7 @@ namespace lk {
 // the rim vertices furthest along -x and +x in `mesh`, the head the
 // annotations belong to, facing +z) as crease corners: the 4-point rule
 // would otherwise carry the rim round the sharp corner in a smooth loop,
-// which pleated the lids at James's outer eye corners (docs/fit_real.md,
+// which pleated the lids at James's outer eye corners (docs/journal.md,
 // "The eye corners as crease corners").
 ButterflyCreases head_creases(const TriMesh& mesh, const HeadAnnotations& annotations);
 

@@ -106,18 +106,14 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
     set.resize(kept);
   };
 
-  // 1. Erosion. On the menpo3d James scan the smooth level 3 once had 576
-  // new pairs, 432 of them where the ear's back and the scalp behind it
-  // (control faces 2-4 rings apart) were both pulled onto the same scan
-  // points; the fold limiter leaves such pairs alone (shrinking
-  // displacements only returns to this surface). Each step moves the
-  // corners under the pairs against their vertex normals; two steps in a
-  // row without fewer pairs end a pass (James: the best state came after
-  // the first step; each step costs a search). The first pass leaves the
-  // hinges out (a corner shared by both sheets has no side to move to:
-  // James in Chromium, 24 ear pairs where the ear's lower back lay on the
-  // scalp, went 28 -> 33 -> 61 pairs moving them, 28 -> 20 -> 4 without;
-  // docs/fit.md "Hinges"); the second, from the first's best, moves all
+  // 1. Erosion: two sheets pulled onto the same scan points (an ear's back
+  // and the scalp behind it), which the fold limiter leaves alone
+  // (shrinking displacements only returns to this surface). Each step
+  // moves the corners under the pairs against their vertex normals; two
+  // steps in a row without fewer pairs end a pass (each step costs a
+  // search). The first pass leaves the hinges out (a corner shared by both
+  // sheets has no side to move to, and moving it made more pairs;
+  // docs/journal.md "Hinges"); the second, from the first's best, moves all
   // corners (a fold between neighbouring faces is all hinges).
   const double step = options.erode_pct / 100 * diagonal;
   auto erode = [&](bool without_hinges) -> Status {

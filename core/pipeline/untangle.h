@@ -19,9 +19,9 @@
 //    one (the root of an ear lying on the scalp, where the sheets meet in a
 //    wedge), and a second pass from its best moves all corners. A fold
 //    within one sheet does not open this way.
-// 2. Restore. A fold within one sheet (James's outer eye corners: the rim
-//    crease bent into the socket's first ring, docs/fit.md "Where James's
-//    crossings are") is taken part of the way back to the reference's
+// 2. Restore. A fold within one sheet (a face capture's outer eye corners:
+//    the rim crease bent into the socket's first ring) is taken part of the
+//    way back to the reference's
 //    shape: the unpinned corners of the control faces under the pairs that
 //    are left, grown by r rings, are solved for the reference's uniform
 //    umbrella vectors with everything outside held (L(v) = L0(v) for v in
@@ -29,8 +29,7 @@
 //    r starts at 0 and grows (up to restore_rings) whenever a step is not
 //    kept. A full step is no good: the reference's umbrella vectors at a
 //    corner that bends into a pocket push the skin through the pocket's
-//    ring (71-406 pairs on James's copies where a quarter of the way left
-//    0-14). Each trial updates level K inside the moved vertices' support
+//    ring (far more pairs than a quarter of the way leaves). Each trial updates level K inside the moved vertices' support
 //    (update_control_vertices) and searches only the level's triangles that
 //    moved (on the first search's tree, refit).
 //

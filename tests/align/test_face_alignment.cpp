@@ -304,7 +304,7 @@ TEST_CASE("align_face: a synthetic frontal capture turned 40 degrees aligns the 
 }
 
 // Seeds 1-3 here (about 1 s of alignment each on James); the hidden
-// "[.seeds10]" cases run seeds 1-10 (docs/fit_real.md).
+// "[.seeds10]" cases run seeds 1-10 (docs/journal.md).
 TEST_CASE("align_face: the real James aligns the same for seeds 1-3") {
   LK_REQUIRE_SHARED("head_scans/james_menpo3d/james.obj");
   PointCloud james;
@@ -367,7 +367,7 @@ TEST_CASE("guess_orientation: screening the starts gives the full search's guess
   // and 8, with the corners at 45 deg on 3, 5, 6 and 7, and since the back's
   // rows are even (the patch samples the head by area) on 1-5 and 8; where
   // they differ, both are off the true facing -y, e.g. scores 3.1e-5 vs
-  // 2.5e-5; docs/fit_real.md "Speed of real scans". The real scans below
+  // 2.5e-5; docs/journal.md "Speed of real scans". The real scans below
   // agree.)
   const Mat3 diagonal = Eigen::AngleAxisd(0.7, Vec3::UnitY()).toRotationMatrix() * lying;
   for (unsigned seed : {5u, 8u}) {

@@ -3,7 +3,7 @@
 // makes. Prints the stages, the untangling's counts and the checks the page
 // shows, so a difference between the page and `likeness fit` can be
 // reproduced in seconds (James's 28 crossing pairs in Chromium were found
-// this way: docs/fit.md "Hinges"). --control-out F writes the fitted control
+// this way: docs/journal.md "Hinges"). --control-out F writes the fitted control
 // mesh (OBJ, scan frame) as the page exports it.
 // Usage: node --no-experimental-fetch fit_node.mjs WEBDIR SCAN [--control-out F.obj]
 import { createRequire } from 'node:module';

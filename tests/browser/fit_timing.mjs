@@ -12,7 +12,7 @@
 // runs the threaded core (worker.js); --no-isolation serves it without them
 // (the single-threaded core, as on a host that does not send them).
 // The page warms the fit's code up in a throw-away worker after start-up
-// (docs/web.md, "The first fit"): --wait-warmup waits for it to end before the
+// (docs/journal.md, "The first fit"): --wait-warmup waits for it to end before the
 // first fit (a user who takes a few seconds to pick a file), --query warmup=0
 // turns it off (any extra page parameters: --query 'a=1&b=2').
 // Usage: node fit_timing.mjs WEBDIR [SCAN.ply] [--runs N] [--shots DIR] [--no-isolation]

@@ -27,7 +27,7 @@ export function syntheticScan(webdir, seed, points = 60000) {
 // report.json stages [{name, mean_pct, ...}], quality (the finest level's
 // checks) and faceToScan (face_to_scan: to triangles or points, metres), or { skip: why }. The Node tests compare the wasm core's stage
 // distances with it: a compiler that miscompiles the core for wasm (it
-// happened: docs/web.md) shows there; the browser test compares the checks
+// happened: docs/journal.md) shows there; the browser test compares the checks
 // the page shows. name: the scan's file name (its extension picks the format).
 export function nativeFit(webdir, bytes, name = 'scan.ply') {
   const candidates = [process.env.LK_LIKENESS_BIN, path.join(webdir, '..', 'bin', 'likeness')].filter(Boolean);

@@ -84,7 +84,7 @@ if (scan.skip) {
   // The wasm core against the native one on the same scan: not bit for bit
   // (libm, instruction selection), but each stage's mean distance within
   // 5 % (measured 0-1.3 %; a miscompiled factorization gave 4x at the
-  // global fit, docs/web.md).
+  // global fit, docs/journal.md).
   const native = nativeFit(WEBDIR, scan.bytes);
   if (native.skip) {
     console.log('note  worker threads: not compared with the native fit: ' + native.skip);

@@ -123,7 +123,7 @@ TEST_CASE("1 px noise: one photo vs 5 photos sharing the focal vs a focal prior"
   }
   WARN(single.line("1 photo      ") << "\n" << joint.line("5 photos     ") << "\n"
        << single_prior.line("1 photo+prior") << "\n" << joint_prior.line("5 photos+prior"));
-  // Bounds from the measured distributions (docs/calibration.md), with
+  // Bounds from the measured distributions (docs/design/calibration.md), with
   // margin: 1 photo median 1.8 % max 11.1 %; 5 photos median 0.86 % max
   // 2.9 %; 1 photo + prior max 5.8 %; 5 photos + prior max 2.6 %.
   CHECK(Stats::max(joint.focal) < 0.045);

@@ -315,7 +315,7 @@ MovedFront ellipsoid_with_front_moved(double dz) {
 // vertex that sticks out where no point is nearest to it costs nothing but
 // its smoothness, and with the rest shape preserved (L0 of the template) a
 // template spike stays (the generic nose tip pushed 6 mm past the menpo3d
-// James scan's nose: docs/fit_real.md). E_back pulls such a vertex onto the
+// James scan's nose: docs/journal.md). E_back pulls such a vertex onto the
 // scan's plane under it.
 TEST_CASE("global fit: E_back takes a spike the scan does not have down to the surface") {
   // A smooth ellipsoid (finely meshed) is the scanned surface; the control
@@ -365,7 +365,7 @@ TEST_CASE("global fit: E_back takes a spike the scan does not have down to the s
 // E_back's normal rays (GlobalFitOptions::back_ray_edges): where the points
 // give no plane under a vertex and none is nearest to it, a vertex off the
 // scan takes the plane of the scan's triangle along its normal. On James
-// the generic columella base sat 8.5 mm up inside his nose (docs/fit_real.md).
+// the generic columella base sat 8.5 mm up inside his nose (docs/journal.md).
 TEST_CASE("global fit: E_back's normal ray takes a pit the points cannot see up to the scan's triangles") {
   // The scanned surface: a finely meshed ellipsoid, its triangles given;
   // its points sampled everywhere but within 14 mm of the front (a sparse

@@ -1,7 +1,7 @@
 // The smooth-surface guard's fold relief (global_fit.h): folds of the
 // Modified Butterfly level 3 inside control faces that share a corner,
 // which the guarded level 2 does not show (James's cheek, brow and eye-rim
-// pairs; docs/fit_real.md "Folds that first appear on level 3"). What it
+// pairs; docs/journal.md "Folds that first appear on level 3"). What it
 // does on folds is tested on James (tests/pipeline/test_face_scan.cpp):
 // the step sheets' level-3 "folds" these tests counted until 22 Nov were
 // rounding noise of flat sheets (raycast/self_intersection.h), and no

@@ -692,7 +692,7 @@ TEST_CASE("generic head, even eye corners: no short brow edge, and the smooth le
   // each eye ring's corner sits halfway (in angle) between its neighbours
   // instead of at 45 deg of the square, which left a 4.6 mm edge over each
   // brow among 13-27 mm ones (where fitted clean scans folded:
-  // docs/generic_head.md "Even corners of the eye rings"). Same vertices and
+  // docs/journal.md "Even corners of the eye rings"). Same vertices and
   // regions; only the corners move (and the diagonals of a few quads, which
   // the builder picks by shape).
   const GenericHead& even = asset();
@@ -815,7 +815,7 @@ TEST_CASE("generic head: behind the ears the rows are even and the smooth level 
   // At the face's row elevations the back's rows were 22 mm apart under
   // the skull and 5 mm at the nape's bend, against 17 mm between the
   // meridians: slivers whose smooth level 3 rippled into a wavy crease
-  // across the back of every head (docs/generic_head.md "Even rows at the
+  // across the back of every head (docs/journal.md "Even rows at the
   // back"). The builder now spreads those rows evenly along the meridians.
   GenericHeadBuildOptions before_options;
   before_options.even_back_rows = false;
@@ -882,7 +882,7 @@ TEST_CASE("generic head: the nape and the back of the neck are regular and their
   // strip joining the head's 40 meridians to the neck's 24 was 8 mm deep
   // at the back against 17-25 mm edges: 4- to 8-valent vertices and
   // slivers, whose Butterfly surface rippled into wavy lines across the
-  // nape and where the skull meets the neck (docs/generic_head.md "A
+  // nape and where the skull meets the neck (docs/journal.md "A
   // regular nape"). GenericHeadBuildOptions::regular_nape splits them
   // along same-leaning diagonals and deepens the strip at the back.
   GenericHeadBuildOptions before_options;
@@ -918,7 +918,7 @@ TEST_CASE("generic head: the nape and the back of the neck are regular and their
 namespace {
 
 // The builder's ring ear (GenericHeadBuildOptions::ring_ear), built once;
-// not the asset's ear yet (docs/generic_head.md "A ring ear").
+// not the asset's ear yet (docs/journal.md "A ring ear").
 const GenericHead& ring_ear_head() {
   static const GenericHead head = [] {
     GenericHeadBuildOptions options;

@@ -3,7 +3,7 @@
 // pushes one sheet through another is refined into every finer level; the
 // finest level's separation alone leaves the coarser output levels crossed
 // (on the menpo3d James scan levels 0-2 crossed in 25 / 235 / 627 pairs at
-// the ears, docs/fit_real.md).
+// the ears, docs/journal.md).
 #include "multires/fold_limit.h"
 #include "multires/multires.h"
 #include "displaced_crossings.h"

@@ -4,7 +4,7 @@
 // fold limiter shrank a level-0 displacement to separate a crossing, every
 // finer level over that vertex's footprint followed it, far beyond the
 // crossing: on the Fran scan the chin moved 0.2-1 mm off the data and
-// Table 1 went 0.0502 -> 0.0546 % (docs/fit_real.md).
+// Table 1 went 0.0502 -> 0.0546 % (docs/journal.md).
 #include "multires/fold_limit.h"
 #include "multires/multires.h"
 #include "displaced_crossings.h"

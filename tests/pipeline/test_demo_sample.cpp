@@ -128,7 +128,7 @@ TEST_CASE("fit_head: synthetic seed 6's mouth is fitted in the right basin: no l
   // crumpled the lips it was handed: 125 level-3 pairs, 122 at the lips,
   // face to scan max 6 mm. The box's extra starts (LocalFitOptions::
   // start_shifts) find the basin 5 mm down (7.1e-7), where the previous
-  // head's fit lands too (docs/fit.md "The mouth box's starts"). That head
+  // head's fit lands too (docs/journal.md "The mouth box's starts"). That head
   // (test::back_rows_generic_head) keeps the case; the asset's seed 6
   // (the regular nape) lands in the right basin from either start, and is
   // checked the same way.

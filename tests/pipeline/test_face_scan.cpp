@@ -218,7 +218,7 @@ TEST_CASE("fit_head: a head facing +x is turned round with a note, or refused wi
   CHECK(st.message.find("--facing 1 0 0 --up 0 1 0") != std::string::npos);
 }
 
-// The real scans: bounds from what we measured, with margin (docs/fit_real.md).
+// The real scans: bounds from what we measured, with margin (docs/journal.md).
 TEST_CASE("fit_head: the real Fran (Cyberware face patch) is turned to face +z and fitted") {
   LK_REQUIRE_SHARED("head_scans/fran_cyberware/fran_cut.vtk");
   PointCloud fran;
@@ -236,7 +236,7 @@ TEST_CASE("fit_head: the real Fran (Cyberware face patch) is turned to face +z a
   CHECK(r.orientation.facing.z() < -0.5);
   CHECK(r.face_only);
   CHECK(r.near_fraction > 0.7);
-  CHECK(r.stages[2].distance.mean_pct < 0.14);  // 0.116 measured (docs/fit_real.md)
+  CHECK(r.stages[2].distance.mean_pct < 0.14);  // 0.116 measured (docs/journal.md)
   CHECK(r.stages[3].distance.mean_pct < 0.2);
   // No control triangle turned over against the aligned generic head (11
   // did before the fold guard).
@@ -261,7 +261,7 @@ TEST_CASE("fit_head: the real James (menpo3d face capture in mm)") {
   for (const auto& s : r.stages) INFO(s.name << " mean " << s.distance.mean_pct << " %");
   CHECK(r.unit_to_metres == 0.001);
   CHECK_FALSE(r.orientation.differs);
-  CHECK(r.stages[2].distance.mean_pct < 0.14);  // 0.116 measured (docs/fit_real.md)
+  CHECK(r.stages[2].distance.mean_pct < 0.14);  // 0.116 measured (docs/journal.md)
   CHECK(r.stages[3].distance.mean_pct < 0.2);
   // The crease band from the eye corners to the ears was 36 control
   // triangles turned over against the aligned generic head (local fitting

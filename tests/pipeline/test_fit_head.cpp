@@ -202,7 +202,7 @@ TEST_CASE("fit_head: the levels near the neck cut follow the scan just below it,
   // refined surface fitted (whole_head_data_level, the default on whole
   // heads) the smooth neck here is already on the scan and the band's
   // gain is gone in this small scene (0.160 vs 0.150 mm); on seeds 1-5 it
-  // is still 0.519 vs 0.524 mm where scanned (docs/fit.md).
+  // is still 0.519 vs 0.524 mm where scanned (docs/journal.md).
   FitHeadOptions on = quick_options(), off = quick_options();
   on.whole_head_data_level = off.whole_head_data_level = -1;
   off.displacement_below_neck_cut = 0;

@@ -55,7 +55,7 @@ struct Shoved {
 // axis (by `degrees` at `span` rings from the root and more, linearly less
 // nearer) and pressed `press` metres into the head along the scalp's normal
 // around the root: the ear's back lies on the scalp in a wedge, as James's
-// did in Chromium (docs/fit.md "Hinges").
+// did in Chromium (docs/journal.md "Hinges").
 TriMesh bent_ear(const GenericHead& g, const MeshTopology& topo, double degrees, double span, double press) {
   const std::vector<int>& ear = g.annotations.regions.at("ear_left");
   const std::set<int> in(ear.begin(), ear.end());
