@@ -92,7 +92,7 @@ inline val image_object(const lk::Image& image) {
 // Decodes an image the page handed over as bytes in the heap; errors name
 // the file.
 inline lk::Status decode_image(const std::string& name, std::uintptr_t data, std::size_t size, lk::Image& image,
-                        int channels = 0) {
+                               int channels = 0) {
   if (data == 0 && size != 0) return lk::Status::error(lk::ErrorCode::Internal, name + ": no input buffer");
   const lk::Status status = lk::read_image(reinterpret_cast<const std::uint8_t*>(data), size, image, channels);
   return status.ok() ? status : lk::with_context(status, name);
@@ -108,6 +108,7 @@ inline lk::ProgressFn js_progress(val fn) {
   };
 }
 
+// Whether an options object gives key (undefined and null objects give none).
 inline bool has(const val& object, const char* key) {
   return !object.isUndefined() && !object.isNull() && !object[key].isUndefined();
 }
