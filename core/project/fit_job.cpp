@@ -13,7 +13,11 @@ Status fit_project(PointCloud scan, const GenericHead& generic, const FitHeadOpt
   project.options = options;
   const Status status = fit_head(scan, generic, options, project.fit, observer, progress);
   if (!status.ok()) return status;
-  project.scan = std::move(scan);
+  // Kept for the checks, which read positions and faces only: a large
+  // scan's normals and colours would hold memory (the worker's heap) for
+  // nothing.
+  project.scan.positions = std::move(scan.positions);
+  project.scan.faces = std::move(scan.faces);
   project.frame = HeadFrame::from(project.fit.scan_to_head);
   project.rig = make_animation_rig(project.fit.control, generic.annotations);
   return Status::success();

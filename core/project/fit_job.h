@@ -12,7 +12,7 @@
 namespace lk {
 
 // Fits generic to scan with options and makes project a new project of it
-// (the scan is moved in). On an error (fit_head's) project.fit holds what
+// (the scan's positions and faces are moved in). On an error (fit_head's) project.fit holds what
 // the fit got to, for a report, and the project is not usable: keep the
 // previous project elsewhere. Stage timing is the caller's, through observer.
 Status fit_project(PointCloud scan, const GenericHead& generic, const FitHeadOptions& options,

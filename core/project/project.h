@@ -66,7 +66,7 @@ struct ProjectQuality {
 };
 
 struct HeadProject {
-  PointCloud scan;          // as given (scan frame); its faces when it came as a mesh
+  PointCloud scan;          // the scan's positions (scan frame) and its faces when it came as a mesh
   FitHeadOptions options;
   FitHeadResult fit;        // head frame
   HeadFrame frame;

@@ -33,6 +33,7 @@ TEST_CASE("project fit: the fit job's head is fit_head's, bit for bit, with its 
     CHECK(same(p.fit.level_meshes[l].positions, s.direct.level_meshes[l].positions));
   CHECK(p.fit.scan_to_head.A == s.direct.scan_to_head.A);
   CHECK(p.scan.positions == s.person.scan.positions);
+  CHECK(p.scan.faces == s.person.scan.faces);
   // The frame undoes scan_to_head.
   for (int i = 0; i < 50; ++i) {
     const Vec3& q = s.person.scan.positions[static_cast<size_t>(i) * 97];
