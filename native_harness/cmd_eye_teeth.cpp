@@ -107,8 +107,8 @@ Registrar reg_eye({"eye", "likeness eye --photo F --out iris.png [--guess x,y] [
 // likeness teeth: RGBA teeth texture (voids transparent) from one photo
 // (core/teeth, Tarini et al. 2002 Sec. 4.2), or from the synthetic smile
 // with lips hiding parts of the teeth (--synthetic-smile).
+#include "project/parts.h"
 #include "teeth/synthetic_smile.h"
-#include "teeth/teeth.h"
 
 namespace lk::cli {
 namespace {
@@ -160,8 +160,10 @@ int run_teeth(const Args& args) {
   TeethOptions options;
   options.reconstruct_hidden = !args.has("no-reconstruct");
   TeethResult r;
+  Image composite;  // with --generic-out: composited into the generic teeth texture
   const auto t0 = std::chrono::steady_clock::now();
-  if (Status s = teeth_texture_from_photo(photo, options, r); !s) return fail(cmd, input + ": " + s.message);
+  if (Status s = teeth_photo_texture(photo, options, r, nullptr, args.has("generic-out") ? &composite : nullptr); !s)
+    return fail(cmd, input + ": " + s.message);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (Status s = save_png_file(args.get("out"), r.texture); !s) return fail(cmd, s.message);
   size_t voids = 0, gums = 0;
@@ -172,8 +174,6 @@ int run_teeth(const Args& args) {
   std::printf("teeth target colour (%.3f, %.3f, %.3f); wrote %s\n", r.target_color[0], r.target_color[1],
               r.target_color[2], args.get("out").c_str());
   if (args.has("generic-out")) {
-    Image composite;
-    if (Status s = teeth_composite_generic(r, options, {}, composite); !s) return fail(cmd, s.message);
     if (Status s = save_png_file(args.get("generic-out"), composite); !s) return fail(cmd, s.message);
     std::printf("wrote %s (composited into the generic teeth texture)\n", args.get("generic-out").c_str());
   }
@@ -209,15 +209,13 @@ int run_components(const Args& args) {
   }
   GenericHead generic;
   if (Status s = load_generic_head(generic); !s) return fail(cmd, s.message);
-  GenericHead fitted = generic;
-  if (args.has("head")) {
-    TriMesh m;
-    if (Status s = load_mesh_file(args.get("head"), m); !s) return fail(cmd, s.message);
-    fitted.mesh = m;
-  }
-  ComponentPlacement p;
-  if (Status s = place_components(fitted, generic, p); !s) return fail(cmd, s.message);
-  const PlacedComponents c = build_placed_components(p);
+  TriMesh fitted = generic.mesh;
+  if (args.has("head"))
+    if (Status s = load_mesh_file(args.get("head"), fitted); !s) return fail(cmd, s.message);
+  HeadParts placed;
+  if (Status s = place_head_parts(fitted, generic, placed); !s) return fail(cmd, s.message);
+  const ComponentPlacement& p = placed.placement;
+  const PlacedComponents& c = placed.placed;
   const std::string d = args.get("out") + "/";
   const std::pair<const char*, const TriMesh*> files[] = {
       {"eye_left.obj", &c.eye[0]}, {"eye_right.obj", &c.eye[1]}, {"teeth.obj", &c.teeth}, {"tongue.obj", &c.tongue}};
@@ -239,7 +237,7 @@ int run_components(const Args& args) {
     if (Status s = load_image_file(args.get("teeth-texture"), teeth_tex, 4); !s) return fail(cmd, s.message);
   CanonicalView view = CanonicalView::Front;
   if (Status s = parse_canonical_view(args.get("view", "front"), view); !s) return fail(cmd, s.message);
-  TriMesh head = fitted.mesh;
+  TriMesh head = fitted;
   if (head.normals.empty()) head.normals = vertex_normals(head);
   TriMesh parts[4] = {c.eye[0], c.eye[1], c.teeth, c.tongue};
   parts[2].normals = vertex_normals(parts[2]);

@@ -5,7 +5,9 @@
 #include "generic_head_choice.h"
 #include "head/generic_head.h"
 #include "io/io.h"
-#include "pipeline/fit_head.h"
+#include "project/export.h"
+#include "project/fit_job.h"
+#include "project/quality_job.h"
 
 #include <chrono>
 #include <cstdio>
@@ -33,15 +35,6 @@ bool get_vec3(const Args& a, const std::string& key, Vec3& v) {
     if (vals[k].empty() || *end) return false;
   }
   return true;
-}
-
-// The mesh back in the scan's own frame (units, orientation).
-TriMesh to_scan_frame(const TriMesh& m, const AffineMap& scan_to_head) {
-  TriMesh out = m;
-  const Mat3 inv = scan_to_head.A.inverse();
-  for (Vec3& p : out.positions) p = inv * (p - scan_to_head.t);
-  out.normals.clear();
-  return out;
 }
 
 int run_fit(const Args& args) {
@@ -94,8 +87,9 @@ int run_fit(const Args& args) {
   std::vector<TimedStage> stages;
   StageClock timer;
   FitStageObserver obs;
-  auto write_mesh = [&](const std::string& name, const TriMesh& m, const FitHeadResult* r) {
-    const TriMesh w = (scan_frame && r) ? to_scan_frame(m, r->scan_to_head) : m;
+  HeadProject project;
+  auto write_mesh = [&](const std::string& name, const TriMesh& m, bool fitted) {
+    const TriMesh w = (scan_frame && fitted) ? project.frame.to_scan(m) : m;
     const Status s = write_file(out_dir + "/" + name, write_obj(w));
     if (!s) std::cerr << "likeness fit: warning: " << s.message << "\n";
   };
@@ -109,7 +103,7 @@ int run_fit(const Args& args) {
     s.name = name;
     timer.stop(s);
     stages.push_back(s);
-    if (dump && !scan_frame) write_mesh("stage_" + name + ".obj", surface, nullptr);
+    if (dump && !scan_frame) write_mesh("stage_" + name + ".obj", surface, false);
   };
   obs.measured = [&](const FitStageReport& rep) {
     for (auto& s : stages)
@@ -117,8 +111,8 @@ int run_fit(const Args& args) {
   };
 
   std::printf("likeness fit: %s (%d points), %d levels\n", scan_path.c_str(), scan.size(), opt.levels);
-  FitHeadResult r;
-  st = fit_head(scan, generic, opt, r, obs);
+  st = fit_project(std::move(scan), generic, opt, project, obs);
+  const FitHeadResult& r = project.fit;
   for (const std::string& note : r.notes) std::printf("  note: %s\n", note.c_str());
   if (!st) {
     write_file(out_dir + "/report.json", fit_report_json(r, stages, std::string(to_string(st.code)) + ": " + st.message));
@@ -133,43 +127,36 @@ int run_fit(const Args& args) {
                 r.surface_samples.triangles_skipped_long);
   print_fit_table(stages);
   // Checked after the fit and outside its timed stages: the user learns
-  // whether the head crosses itself before animating it.
-  FitQuality quality;
-  const Status qs = measure_fit_quality(r, generic.annotations, quality);
-  if (qs) print_fit_quality(quality);
-  else std::cerr << "likeness fit: warning: quality check: " << qs.message << "\n";
-  // Measured the other way round as well: the face's vertices to the scan's
-  // triangles, or to its points' local patches (a bulge away from the scan
-  // shows only here).
-  CoveredDistances to_scan;
-  std::vector<double> to_scan_per_vertex;
-  const Status ts = measure_fit_to_scan(r, scan, generic, to_scan, "face", &to_scan_per_vertex);
-  const bool measured_to_scan = ts.ok();
-  if (measured_to_scan) print_fit_to_scan(to_scan, r.multires.num_levels());
-  else std::cerr << "likeness fit: warning: face to scan: " << ts.message << "\n";
+  // whether the head crosses itself before animating it, and how far the
+  // face lies from the scan (a bulge away from it shows only that way).
+  st = measure_project_quality(project, generic);
+  if (!st) return fail(cmd, st.message);
+  const ProjectQuality& q = project.quality;
+  if (q.status) print_fit_quality(q.fit);
+  else std::cerr << "likeness fit: warning: quality check: " << q.status.message << "\n";
+  if (q.to_scan_status) print_fit_to_scan(q.to_scan, r.multires.num_levels());
+  else std::cerr << "likeness fit: warning: face to scan: " << q.to_scan_status.message << "\n";
 
-  write_mesh("control.obj", r.control, &r);
-  if (measured_to_scan) {  // the same as a map: the finest level coloured by each vertex's distance
-    TriMesh map = r.level_meshes.back();
-    map.colors = distance_colors(to_scan_per_vertex);
-    map.normals.clear();
-    map.uvs.clear();
-    if (scan_frame) map = to_scan_frame(map, r.scan_to_head);
-    const Status s = write_file(out_dir + "/face_to_scan.ply", write_ply(map));
+  write_mesh("control.obj", r.control, true);
+  if (q.to_scan_status) {  // the finest level coloured by each vertex's distance
+    Bytes map;
+    Status s = export_level(project, r.multires.num_levels(), LevelFormat::DistanceMap,
+                            scan_frame ? ExportFrame::Scan : ExportFrame::Head, map);
+    if (s) s = write_file(out_dir + "/face_to_scan.ply", map);
     if (!s) std::cerr << "likeness fit: warning: " << s.message << "\n";
   }
   for (size_t l = 0; l < r.level_meshes.size(); ++l)
-    write_mesh("level" + std::to_string(l + 1) + ".obj", r.level_meshes[l], &r);
+    write_mesh("level" + std::to_string(l + 1) + ".obj", r.level_meshes[l], true);
   if (dump && scan_frame) {
-    write_mesh("stage_initial_alignment.obj", r.aligned, &r);
-    write_mesh("stage_local_fitting.obj", r.local, &r);
-    write_mesh("stage_global_fitting.obj", r.control, &r);
+    write_mesh("stage_initial_alignment.obj", r.aligned, true);
+    write_mesh("stage_local_fitting.obj", r.local, true);
+    write_mesh("stage_global_fitting.obj", r.control, true);
   }
-  st = write_file(out_dir + "/report.json", fit_report_json(r, stages, "ok", qs ? &quality : nullptr,
-                                                                   measured_to_scan ? &to_scan : nullptr));
+  st = write_file(out_dir + "/report.json", fit_report_json(r, stages, "ok", q.status ? &q.fit : nullptr,
+                                                                   q.to_scan_status ? &q.to_scan : nullptr));
   if (!st) return fail(cmd, st.message);
   std::printf("  wrote %s/control.obj, level1..%d.obj, %sreport.json (%s frame)\n", out_dir.c_str(), opt.levels,
-              measured_to_scan ? "face_to_scan.ply (the finest level's distance map), " : "",
+              q.to_scan_status ? "face_to_scan.ply (the finest level's distance map), " : "",
               scan_frame ? "scan" : "head: metres, +y up, +z facing");
   return 0;
 }

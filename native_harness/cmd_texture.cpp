@@ -9,12 +9,12 @@
 #include "head/generic_head.h"
 #include "io/io.h"
 #include "mesh/geometry.h"
+#include "project/texture_job.h"
 #include "raycast/bvh.h"
 #include "subdiv/butterfly.h"
 #include "texture/binding.h"
 #include "texture/color.h"
 #include "texture/correspondences.h"
-#include "texture/refine_uv.h"
 #include "texture/synthetic_photo.h"
 #include "texture/texture.h"
 
@@ -103,13 +103,10 @@ Status load_head(const std::string& spec, const UvOptions& uv_options, HeadInput
   if (build_butterfly_levels(control, finest, levels).ok() &&
       levels.back().fine_triangles == out.mesh.triangles &&
       levels.back().num_fine_vertices == out.mesh.num_vertices()) {
-    std::vector<Vec2> control_uv;
     const double t0 = wall_clock_ms();
-    s = parameterize_stretch(control, uv_options, control_uv, out.control_uv);
+    s = level_chart(control, levels, uv_options, out.mesh.uvs, out.control_uv);
     out.control_uv_ms = wall_clock_ms() - t0;
     if (!s) return with_context(s, control_path);
-    s = refine_chart_uvs(levels, control_uv, out.mesh.uvs);
-    if (!s) return s;
     out.mesh.uv_per_corner = false;
     out.uv_from_control = true;
   } else {
@@ -252,26 +249,21 @@ int run_texture(const Args& args) {
   }
   timings["load photos"] = wall_clock_ms() - t0;
 
-  // Calibration.
+  // Calibration: each photo alone, then jointly with one focal length when
+  // they share a camera (core/project/texture_job.h).
   t0 = wall_clock_ms();
   CalibOptions copt;
   copt.known_focal = focal;
-  std::vector<CalibResult> calib;
-  // Photos of one size are most likely from one camera: one shared focal is
-  // far steadier than one per photo (tests/calib: max focal error 11 % alone,
-  // 2.9 % shared, 5 photos, 1 px clicks).
-  const bool same_camera =
-      args.has("same-camera") || (!args.has("separate-cameras") && photos_look_like_one_camera(sizes));
-  if (same_camera && photos.size() > 1)
+  const CameraSharing sharing = args.has("same-camera")        ? CameraSharing::Same
+                                : args.has("separate-cameras") ? CameraSharing::Separate
+                                                               : CameraSharing::Auto;
+  PhotoCalibration calibration;
+  s = calibrate_texture_photos(points, sizes, photo_paths, copt, sharing, calibration);
+  if (!s) return fail(kName, s.message);
+  const std::vector<CalibResult>& calib = calibration.results;
+  if (calibration.shared)
     std::printf("calibration: one focal length shared by all photos (same camera)%s\n",
                 args.has("same-camera") ? "" : "; --separate-cameras calibrates each photo alone");
-  s = calibrate_photos(points, sizes, copt, calib, same_camera);
-  if (!s) {
-    for (size_t i = 0; i < photo_paths.size(); ++i)
-      if (s.message.rfind("photo " + std::to_string(i) + ":", 0) == 0)
-        s.message = photo_paths[i] + " (points " + point_paths[i] + ")" + s.message.substr(6 + std::to_string(i).size());
-    return fail(kName, "calibration failed: " + s.message);
-  }
   for (size_t i = 0; i < photos.size(); ++i) photos[i].camera = calib[i].camera;
   timings["calibrate"] = wall_clock_ms() - t0;
 
@@ -291,13 +283,7 @@ int run_texture(const Args& args) {
   TexturedHead out;
   opt.keep_unblended = args.has("dump");
   s = texture_head(head.mesh, photos, opt, out, progress);
-  if (!s) {
-    for (size_t i = 0; i < photo_paths.size(); ++i) {
-      const std::string tag = "photo " + std::to_string(i) + " ";
-      if (s.message.rfind(tag, 0) == 0) s.message = photo_paths[i] + s.message.substr(tag.size() - 1);
-    }
-    return fail(kName, head.description + ": " + s.message);
-  }
+  if (!s) return fail(kName, head.description + ": " + name_photos(s, photo_paths).message);
   // The chart of a fit's finest level is made on its control mesh while loading.
   if (head.uv_from_control) timings["parameterize"] += head.control_uv_ms;
 

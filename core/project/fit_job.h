@@ -1,0 +1,35 @@
+// The fit job of a head project: the scan in, the fitted head (jeong2002
+// Sec. 4-5, pipeline/fit_head.h), its frame and its animation rig out; and
+// the texture landmarks, the points a user clicks in each photo to
+// calibrate it (tarini2002 Sec. 3: "about 12-15 corresponding feature
+// points").
+#pragma once
+#include "project/project.h"
+
+#include <string>
+#include <vector>
+
+namespace lk {
+
+// Fits generic to scan with options and makes project a new project of it
+// (the scan's positions and faces are moved in). On an error (fit_head's) project.fit holds what
+// the fit got to, for a report, and the project is not usable: keep the
+// previous project elsewhere. Stage timing is the caller's, through observer.
+Status fit_project(PointCloud scan, const GenericHead& generic, const FitHeadOptions& options,
+                   HeadProject& project, const FitStageObserver& observer = {}, const ProgressFn& progress = {});
+
+// A named control vertex of the generic head (the fitted head has the same
+// vertex indices). "right"/"left" are the person's own sides: +x is the
+// head's left.
+struct TextureLandmark {
+  const char* id;
+  const char* label;
+  int vertex;
+};
+
+// Picked from the annotations (extremes of the eye rims, lips, ears, nose,
+// chin, brow), in the order a user is asked for them; a landmark whose
+// region is missing is left out.
+std::vector<TextureLandmark> texture_landmarks(const GenericHead& generic);
+
+}  // namespace lk

@@ -1,0 +1,133 @@
+// Shared by the worker's binding files: conversions between JS values and
+// core types, the worker's clock and the head project kept between calls.
+#pragma once
+#include "head/generic_head.h"
+#include "io/io.h"
+#include "project/project.h"
+#include "teeth/teeth.h"
+
+#include <emscripten/bind.h>
+#include <emscripten/val.h>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace lk_worker {
+
+using emscripten::val;
+
+template <class T>
+inline val typed_array(const char* type, const std::vector<T>& flat) {
+  // new <Type>Array(view) copies out of the wasm heap.
+  return val::global(type).new_(emscripten::typed_memory_view(flat.size(), flat.data()));
+}
+
+inline val float32_array(const std::vector<lk::Vec3>& v) {
+  std::vector<float> flat(v.size() * 3);
+  for (size_t i = 0; i < v.size(); ++i)
+    for (int k = 0; k < 3; ++k) flat[3 * i + k] = static_cast<float>(v[i][k]);
+  return typed_array("Float32Array", flat);
+}
+
+inline val float32_array(const std::vector<lk::Vec2>& v) {
+  std::vector<float> flat(v.size() * 2);
+  for (size_t i = 0; i < v.size(); ++i)
+    for (int k = 0; k < 2; ++k) flat[2 * i + k] = static_cast<float>(v[i][k]);
+  return typed_array("Float32Array", flat);
+}
+
+inline val uint32_array(const std::vector<lk::Tri>& tris) {
+  std::vector<std::uint32_t> flat(tris.size() * 3);
+  for (size_t i = 0; i < tris.size(); ++i)
+    for (int k = 0; k < 3; ++k) flat[3 * i + k] = static_cast<std::uint32_t>(tris[i][k]);
+  return typed_array("Uint32Array", flat);
+}
+
+inline val bytes_array(const std::uint8_t* data, size_t size) {
+  return val::global("Uint8Array").new_(emscripten::typed_memory_view(size, data));
+}
+inline val bytes_array(const std::string& text) {
+  return bytes_array(reinterpret_cast<const std::uint8_t*>(text.data()), text.size());
+}
+
+inline val vec3_array(const lk::Vec3& p) {
+  val a = val::array();
+  for (int k = 0; k < 3; ++k) a.call<void>("push", p[k]);
+  return a;
+}
+
+inline val error_result(const lk::Status& s) {
+  val r = val::object();
+  r.set("ok", false);
+  r.set("code", std::string(lk::to_string(s.code)));
+  r.set("message", s.message);
+  return r;
+}
+
+inline val error_result(lk::ErrorCode code, const std::string& message) {
+  return error_result(lk::Status::error(code, message));
+}
+
+// The success object every job returns, to be filled with its results.
+inline val ok_result() {
+  val r = val::object();
+  r.set("ok", true);
+  r.set("code", std::string("Ok"));
+  r.set("message", std::string());
+  return r;
+}
+
+// {width, height, channels, pixels} of an image (a copy out of the heap).
+inline val image_object(const lk::Image& image) {
+  val t = val::object();
+  t.set("width", image.width);
+  t.set("height", image.height);
+  t.set("channels", image.channels);
+  t.set("pixels", bytes_array(image.pixels.data(), image.pixels.size()));
+  return t;
+}
+
+// Decodes an image the page handed over as bytes in the heap; errors name
+// the file.
+inline lk::Status decode_image(const std::string& name, std::uintptr_t data, std::size_t size, lk::Image& image,
+                               int channels = 0) {
+  if (data == 0 && size != 0) return lk::Status::error(lk::ErrorCode::Internal, name + ": no input buffer");
+  const lk::Status status = lk::read_image(reinterpret_cast<const std::uint8_t*>(data), size, image, channels);
+  return status.ok() ? status : lk::with_context(status, name);
+}
+
+// Wraps a JS function (stage, fraction) -> bool|undefined as an lk::ProgressFn.
+// Only an explicit `false` cancels, so a callback that returns nothing is fine.
+inline lk::ProgressFn js_progress(val fn) {
+  if (fn.isUndefined() || fn.isNull()) return {};
+  return [fn](const char* stage, double fraction) {
+    val answer = fn(std::string(stage), fraction);
+    return !(answer.isFalse());
+  };
+}
+
+// Whether an options object gives key (undefined and null objects give none).
+inline bool has(const val& object, const char* key) {
+  return !object.isUndefined() && !object.isNull() && !object[key].isUndefined();
+}
+
+// Core has no clocks: the bindings time jobs with the worker's performance.now().
+inline double now_ms() { return val::global("performance").call<double>("now"); }
+
+// The teeth textures' size: half the CLI's, the teeth cover few pixels on screen.
+inline lk::TeethCompositeOptions teeth_composite() {
+  lk::TeethCompositeOptions o;
+  o.width = 512;
+  o.height = 256;
+  return o;
+}
+
+// The last fit (worker_head.cpp); null before the first.
+std::unique_ptr<lk::HeadProject>& kept_project();
+
+// The generic head, parsed once per worker; null (and status) on an error.
+const lk::GenericHead* generic_head(lk::Status& status);
+
+}  // namespace lk_worker
