@@ -7,7 +7,7 @@
 // Also the floor of the Table 1 metric (the scan's own distance to the
 // truth: noise, outliers, hair junk), self-intersecting triangle pairs by
 // region beside those of the smooth (undisplaced) surface, and the fold
-// limiter's work. Experiment knobs (see docs/fit.md): --fit-separate-rounds N,
+// limiter's work. Experiment knobs (see docs/journal.md): --fit-separate-rounds N,
 // --fit-area-ratio R, --fit-cap-pct P, --fit-levels L, --fit-data-level L (GlobalFitOptions::data_level on every scan; without it FitHeadOptions::whole_head_data_level), --fit-below-cut-mm M (FitHeadOptions::displacement_below_neck_cut in mm; 0: off), --fit-line-edges E, --fit-edge-fade W (DisplacementOptions::edge_fade_control_edges, 0: off),
 // --fit-guard-face-only / --fit-guard-off (the global fit's smooth-surface guard and fold relief on
 // face-only captures only / on none; default: every scan; --fit-guard-always is the default), --fit-relief-level L (the guard's fold relief
@@ -30,13 +30,13 @@
 // stations and their span; 3 over 90 deg makes face captures);
 // --fit-scan-noise-mm S (the virtual scanner's depth noise,
 // default 0.2 mm: how Table 1 and its floor move with the scanner's noise,
-// docs/fit.md); --save-scans DIR writes scans, truths,
+// docs/journal.md); --save-scans DIR writes scans, truths,
 // the finest level and its crossing triangles. --truth-head H and --fit-head H
 // (H: asset, the committed generic head, the default; plate, ring, even
 // (the plate with GenericHeadBuildOptions::even_eye_corners) or back (and
 // even_back_rows), built now: generic_head_choice.h) choose the generic
 // head the synthetic people are made from and the one that is fitted, so two
-// generic heads can be compared on the same scans (docs/generic_head.md).
+// generic heads can be compared on the same scans (docs/journal.md).
 #include "command.h"
 #include "common/parallel.h"
 #include "fit_table.h"

@@ -3,7 +3,7 @@
 // against the serial loop, for loops of 256 to 16k small items; then how
 // many multi-threaded loops a seed-1 fit runs (300k-point synthetic scan),
 // which times the per-loop cost is what starting threads costs a fit
-// (docs/web.md, "Threads": about 30 loops, so well under 1 %).
+// (docs/journal.md, "What one parallel loop costs": about 30 loops, so well under 1 %).
 // --quick: fewer repetitions, no fit.
 #include "command.h"
 #include "timing.h"

@@ -59,13 +59,13 @@ int run_fit(const Args& args) {
   if (args.has("denoise") && args.has("no-denoise")) return fail(cmd, "give --denoise or --no-denoise, not both");
   if (args.has("no-denoise")) opt.displacement.smooth_finest_levels = 0;
   // The earlier opt-in: level-L footprints widened against the scan's noise
-  // (up to 128 points each; about +0.3 s, docs/fit.md).
+  // (up to 128 points each; about +0.3 s, docs/journal.md).
   if (args.has("widen-footprints")) opt.displacement.max_footprint_points = 128;
   // The global fit's passes on all points measure the scan against the
   // control mesh's Butterfly level L: by default 1 on whole-head scans and
   // 0 (its flat triangles, the paper's) on face-only captures, where level
   // 1 raised the crossing pairs at James's ears (FitHeadOptions::
-  // whole_head_data_level, docs/fit.md). --data-level L: L on any scan.
+  // whole_head_data_level, docs/journal.md). --data-level L: L on any scan.
   if (args.has("data-level")) {
     if (!args.get_int("data-level", 0, opt.global.data_level)) return 2;
     if (opt.global.data_level < 0 || opt.global.data_level > 2)

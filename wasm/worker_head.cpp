@@ -228,7 +228,7 @@ val fit_head_job(const std::string& name, std::uintptr_t data, std::size_t size,
 
 // A small fit whose only purpose is to run the fit's code once, in a
 // throw-away worker (web/worker.js ?warmup=1), so V8's optimizing tier has
-// compiled it before the user's fit (docs/web.md). The input is the generic
+// compiled it before the user's fit (docs/journal.md). The input is the generic
 // head itself (its vertices and triangle centroids as a point cloud); the
 // result is discarded and the kept project untouched.
 // Returns {ok, code, message, points, fitMs}.
