@@ -21,7 +21,7 @@ namespace {
 const char* kName = "make-generic-head";
 
 int run_make_generic_head(const Args& args) {
-  if (!only_known_options(kName, args, {"out", "report", "level3", "ring-ear", "plate-ear", "even-eye-corners", "face-rows-at-back", "nape-by-shape"})) return 2;
+  if (!only_known_options(kName, args, {"out", "report", "level3", "ring-ear", "plate-ear", "even-eye-corners", "face-rows-at-back", "nape-by-shape", "wide-mouth-ring", "diagonals-by-side"})) return 2;
   const std::string out_dir = args.get("out");
   const bool report = args.has("report");
   const std::string level3_path = args.get("level3");
@@ -48,6 +48,11 @@ int run_make_generic_head(const Args& args) {
   // --nape-by-shape: GenericHeadBuildOptions::regular_nape off, the asset's
   // nape and neck before they were made regular (quads split by shape).
   if (args.has("nape-by-shape")) options.regular_nape = false;
+  // --wide-mouth-ring: GenericHeadBuildOptions::wide_mouth_ring on (not
+  // the asset's yet); --diagonals-by-side: mirror_diagonals off, the
+  // asset's triangles before issue 35.
+  if (args.has("wide-mouth-ring")) options.wide_mouth_ring = true;
+  if (args.has("diagonals-by-side")) options.mirror_diagonals = false;
   GenericHead head;
   Status s = build_generic_head(options, head);
   if (!s) return fail(kName, s.message);
@@ -99,7 +104,7 @@ int run_make_generic_head(const Args& args) {
   return 0;
 }
 
-Registrar reg({kName, "likeness make-generic-head --out DIR [--report] [--level3 FILE.obj] [--ring-ear|--plate-ear] [--even-eye-corners] [--face-rows-at-back] [--nape-by-shape]",
+Registrar reg({kName, "likeness make-generic-head --out DIR [--report] [--level3 FILE.obj] [--ring-ear|--plate-ear] [--even-eye-corners] [--face-rows-at-back] [--nape-by-shape] [--wide-mouth-ring] [--diagonals-by-side]",
                "builds the generic head control mesh + annotations (writes generic_head.obj/.json; --report: smooth level 3 roughness by region, crossing pairs by level; --level3: that level as a mesh)",
                run_make_generic_head});
 
