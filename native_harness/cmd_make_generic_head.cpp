@@ -4,9 +4,11 @@
 
 #include "head/generic_head.h"
 #include "head/generic_head_builder.h"
+#include "head/surface_quality.h"
 #include "io/io.h"
 #include "mesh/geometry.h"
 #include "mesh/topology.h"
+#include "multires/multires.h"
 
 #include <sys/stat.h>
 
@@ -19,10 +21,12 @@ namespace {
 const char* kName = "make-generic-head";
 
 int run_make_generic_head(const Args& args) {
-  if (!only_known_options(kName, args, {"out", "ring-ear", "plate-ear", "even-eye-corners", "face-rows-at-back", "nape-by-shape"})) return 2;
+  if (!only_known_options(kName, args, {"out", "report", "level3", "ring-ear", "plate-ear", "even-eye-corners", "face-rows-at-back", "nape-by-shape", "wide-mouth-ring", "diagonals-by-side"})) return 2;
   const std::string out_dir = args.get("out");
-  if (out_dir.empty()) {
-    fail(kName, "--out DIR is required (the asset lives in core/head/data)");
+  const bool report = args.has("report");
+  const std::string level3_path = args.get("level3");
+  if (out_dir.empty() && !report && level3_path.empty()) {
+    fail(kName, "--out DIR is required (the asset lives in core/head/data), or --report / --level3 FILE");
     return 2;
   }
   // --ring-ear / --plate-ear: the builder's ear choice instead of its
@@ -44,10 +48,41 @@ int run_make_generic_head(const Args& args) {
   // --nape-by-shape: GenericHeadBuildOptions::regular_nape off, the asset's
   // nape and neck before they were made regular (quads split by shape).
   if (args.has("nape-by-shape")) options.regular_nape = false;
-  ::mkdir(out_dir.c_str(), 0755);  // as `likeness fit` does; an existing one is kept
+  // --wide-mouth-ring: GenericHeadBuildOptions::wide_mouth_ring on (not
+  // the asset's yet); --diagonals-by-side: mirror_diagonals off, the
+  // asset's triangles before issue 35.
+  if (args.has("wide-mouth-ring")) options.wide_mouth_ring = true;
+  if (args.has("diagonals-by-side")) options.mirror_diagonals = false;
   GenericHead head;
   Status s = build_generic_head(options, head);
   if (!s) return fail(kName, s.message);
+  if (!out_dir.empty()) ::mkdir(out_dir.c_str(), 0755);  // as `likeness fit` does; an existing one is kept
+  // --report: the smooth level 3's roughness per region and every level's
+  // crossing pairs (head/surface_quality.h), the issue-35 figures.
+  if (report) {
+    HeadSurfaceQuality q;
+    s = measure_head_surface(head, 3, q);
+    if (!s) return fail(kName, s.message);
+    std::printf("smooth level %d with the rim creases, angle between adjacent triangles' normals (deg):\n", q.level);
+    std::printf("  %-7s %6s %6s %6s %6s %6s\n", "region", "edges", "mean", "p95", "p99", "max");
+    for (const RegionRoughness& r : q.regions)
+      std::printf("  %-7s %6d %6.2f %6.2f %6.2f %6.2f\n", r.region.c_str(), r.edges, r.mean_deg, r.p95_deg,
+                  r.p99_deg, r.max_deg);
+    std::printf("self-intersecting triangle pairs, level 0..%d:", q.level);
+    for (int n : q.crossing_pairs) std::printf(" %d", n);
+    std::printf("\n");
+  }
+  // --level3 FILE: that smooth level 3 as a mesh, to render and look at.
+  if (!level3_path.empty()) {
+    ButterflyCreases creases;
+    for (const CreaseCurve& c : head.annotations.creases) add_crease_polyline(c.vertices, c.closed, creases);
+    MultiresMesh smooth;
+    s = build_multires(head.mesh, creases, 3, smooth);
+    if (s) s = write_file(level3_path, write_obj(level_mesh(smooth, 3)));
+    if (!s) return fail(kName, s.message);
+    std::printf("wrote %s\n", level3_path.c_str());
+  }
+  if (out_dir.empty()) return 0;
 
   const std::string obj_path = out_dir + "/generic_head.obj";
   const std::string json_path = out_dir + "/generic_head.json";
@@ -69,8 +104,8 @@ int run_make_generic_head(const Args& args) {
   return 0;
 }
 
-Registrar reg({kName, "likeness make-generic-head --out DIR [--ring-ear|--plate-ear] [--even-eye-corners] [--face-rows-at-back] [--nape-by-shape]",
-               "builds the generic head control mesh + annotations (writes generic_head.obj/.json)",
+Registrar reg({kName, "likeness make-generic-head --out DIR [--report] [--level3 FILE.obj] [--ring-ear|--plate-ear] [--even-eye-corners] [--face-rows-at-back] [--nape-by-shape] [--wide-mouth-ring] [--diagonals-by-side]",
+               "builds the generic head control mesh + annotations (writes generic_head.obj/.json; --report: smooth level 3 roughness by region, crossing pairs by level; --level3: that level as a mesh)",
                run_make_generic_head});
 
 }  // namespace

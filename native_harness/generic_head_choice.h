@@ -8,7 +8,9 @@
 // layout from 3a8dc46 until the back's rows were evened), "back" the plate
 // ear with even corners and even rows behind the ears (the asset's layout
 // from 8518b1e until the nape was made regular), "nape" that with the
-// regular nape (the builder's default).
+// regular nape (the asset's until its quads were split as their mirror
+// images, issue 35), "wide-mouth" the builder's default with the wider
+// ring round the mouth (docs/generic_head_v2.md).
 #pragma once
 #include "head/generic_head.h"
 #include "head/generic_head_builder.h"
@@ -19,15 +21,21 @@ namespace lk::cli {
 
 inline Status choose_generic_head(const std::string& which, GenericHead& out) {
   if (which == "asset") return load_generic_head(out);
+  if (which == "wide-mouth") {
+    GenericHeadBuildOptions options;
+    options.wide_mouth_ring = true;
+    return build_generic_head(options, out);
+  }
   if (which == "plate" || which == "ring" || which == "even" || which == "back" || which == "nape") {
     GenericHeadBuildOptions options;
     options.ring_ear = which == "ring";
     options.even_eye_corners = which == "even" || which == "back" || which == "nape";
     options.even_back_rows = which == "back" || which == "nape";
     options.regular_nape = which == "nape";
+    options.mirror_diagonals = false;
     return build_generic_head(options, out);
   }
-  return Status::error(ErrorCode::InvalidInput, "unknown generic head '" + which + "' (asset, plate, ring, even, back or nape)");
+  return Status::error(ErrorCode::InvalidInput, "unknown generic head '" + which + "' (asset, plate, ring, even, back, nape or wide-mouth)");
 }
 
 }  // namespace lk::cli

@@ -671,7 +671,12 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
   const Vec3 mouth_front(0, shape.slit_y, 0.098);  // near the lips, so rays land close to x, y
   for (int ring = 1; ring <= 2; ++ring) {
     const int hw = kMouthHalfWidth + ring;
-    const double ax = mouth_half_width + (ring == 1 ? 0.0045 : 0.0105);
+    // Ring 1 is cast towards an ellipse 8 mm wider than the lip line; at
+    // 4.5 mm its corner rays landed short where the face turns back, 1.3 mm
+    // medial of the mouth corner and 0.3 mm from the mouth bag, and the
+    // smooth level 3 crossed itself there (24 pairs; 7-9 mm give none).
+    const double ring1 = options.wide_mouth_ring ? 0.0080 : 0.0045;
+    const double ax = mouth_half_width + (ring == 1 ? ring1 : 0.0105);
     const double up = ring == 1 ? 0.0075 : 0.0120, down = ring == 1 ? 0.0095 : 0.0175;
     for (int r = kSlitRow - ring; r <= kSlitRow + ring; ++r)
       for (int c = -hw; c <= hw; ++c) {
@@ -1239,12 +1244,11 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
   TriMesh& mesh = out.mesh;
   mesh = TriMesh{};
   mesh.positions = b.positions;
-  for (const auto& poly : b.polygons) {
-    if (poly.size() == 3) {
-      mesh.triangles.push_back({poly[0], poly[1], poly[2]});
-      continue;
-    }
-    // Split along the diagonal that gives the larger smallest angle.
+  // Whether a quad is split along poly[0] - poly[2]: the chevron where it
+  // applies, else the diagonal with the larger smallest angle.
+  auto split_02 = [&](const std::vector<int>& poly) {
+    const int chevron = options.regular_nape ? chevron_diagonal(b.info, poly) : -1;
+    if (chevron >= 0) return chevron == 0;
     auto smallest_cos = [&](int a, int c, int d) {  // cosine of the smallest angle
       const Vec3 &pa = b.positions[a], &pc = b.positions[c], &pd = b.positions[d];
       auto cos_at = [](const Vec3& o, const Vec3& u, const Vec3& v) {
@@ -1254,8 +1258,43 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
     };
     const double d02 = std::max(smallest_cos(poly[0], poly[1], poly[2]), smallest_cos(poly[0], poly[2], poly[3]));
     const double d13 = std::max(smallest_cos(poly[0], poly[1], poly[3]), smallest_cos(poly[1], poly[2], poly[3]));
-    const int chevron = options.regular_nape ? chevron_diagonal(b.info, poly) : -1;
-    if (chevron == 0 || (chevron < 0 && d02 <= d13)) {
+    return d02 <= d13;
+  };
+  // With mirror_diagonals a quad on the right (-x) is split as its mirror
+  // image on the left is, so the triangles mirror as the vertices do. Each
+  // side by its own shape, 6 quads of each eye pocket (whose two diagonals
+  // tie: planar, symmetric quads) split the same way on both sides.
+  auto key_of = [](std::array<int, 4> q) {
+    std::sort(q.begin(), q.end());
+    return q;
+  };
+  auto centre_x = [&](const std::vector<int>& poly) {
+    double x = 0;
+    for (int v : poly) x += b.positions[v].x();
+    return x / double(poly.size());
+  };
+  std::map<std::array<int, 4>, std::array<int, 2>> left_diagonal;  // by the quad's sorted corners
+  if (options.mirror_diagonals)
+    for (const auto& poly : b.polygons)
+      if (poly.size() == 4 && centre_x(poly) >= -1e-9) {
+        const bool s02 = split_02(poly);
+        left_diagonal[key_of({poly[0], poly[1], poly[2], poly[3]})] =
+            s02 ? std::array<int, 2>{poly[0], poly[2]} : std::array<int, 2>{poly[1], poly[3]};
+      }
+  for (const auto& poly : b.polygons) {
+    if (poly.size() == 3) {
+      mesh.triangles.push_back({poly[0], poly[1], poly[2]});
+      continue;
+    }
+    bool split = split_02(poly);
+    if (options.mirror_diagonals && centre_x(poly) < -1e-9) {
+      const auto it = left_diagonal.find(key_of({mirror[poly[0]], mirror[poly[1]], mirror[poly[2]], mirror[poly[3]]}));
+      if (it != left_diagonal.end()) {
+        const int d0 = mirror[it->second[0]], d1 = mirror[it->second[1]];
+        split = (d0 == poly[0] && d1 == poly[2]) || (d0 == poly[2] && d1 == poly[0]);
+      }
+    }
+    if (split) {
       mesh.triangles.push_back({poly[0], poly[1], poly[2]});
       mesh.triangles.push_back({poly[0], poly[2], poly[3]});
     } else {

@@ -63,6 +63,16 @@ struct GenericHeadBuildOptions {
                                    // shape, 4- to 8-valent vertices at random: wavy lines
                                    // across the nape and where the skull meets the neck.
                                    // docs/journal.md "A regular nape".
+  bool wide_mouth_ring = false;    // true: the first ring round the mouth reaches 8 mm past the
+                                   // lip line's corners (4.5 mm in the asset): its smooth levels
+                                   // no longer cross themselves at the mouth corners (8 pairs at
+                                   // level 2, 24 at level 3 -> 0). Not the asset's yet: three
+                                   // fit and alignment tests tuned to the asset's figures fail
+                                   // with it (docs/generic_head_v2.md).
+  bool mirror_diagonals = true;    // true: each quad on the -x side is split as its mirror image
+                                   // on +x is, so triangles mirror as vertices do (issue 35);
+                                   // false: each side by shape, as before: 6 quads of each eye
+                                   // pocket split the same way on both sides.
 };
 
 // Builds the generic head and its annotations. Fails with Internal if one of

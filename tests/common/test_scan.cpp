@@ -31,6 +31,7 @@ const GenericHead& back_rows_generic_head() {
   static const GenericHead generic = [] {
     GenericHeadBuildOptions options;
     options.regular_nape = false;
+    options.mirror_diagonals = false;  // the asset's quads of then, split side by side
     return built_generic_head(options);
   }();
   return generic;
@@ -42,6 +43,7 @@ const GenericHead& corner45_generic_head() {
     options.even_eye_corners = false;
     options.even_back_rows = false;  // the asset's rows of then, too
     options.regular_nape = false;    // and its nape
+    options.mirror_diagonals = false;
     return built_generic_head(options);
   }();
   return generic;

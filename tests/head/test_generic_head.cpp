@@ -3,6 +3,7 @@
 // annotations the later stages rely on, and match what the builder makes.
 #include "head/generic_head.h"
 #include "head/generic_head_builder.h"
+#include "head/surface_quality.h"
 #include "mesh/geometry.h"
 #include "mesh/topology.h"
 #include "multires/multires.h"
@@ -1120,4 +1121,104 @@ TEST_CASE("generic head, ring ear: the smooth level 3 of the ears has no washboa
   CHECK(ring.at(0.5) < 2.5);
   CHECK(ring.at(0.75) < 6.0);
   CHECK(ring.at(0.95) < 20.0);
+}
+
+TEST_CASE("generic head mirrors its connectivity and annotations too", "[head]") {
+  // Issue 35: every vertex has its partner in x = 0 (exactly, the builder
+  // copies one side onto the other), every triangle its mirrored triangle
+  // (opposite winding), and the annotations map onto themselves: left
+  // regions onto right ones, the others onto themselves, the boxes and
+  // their landmarks, rims, creases and binding edges likewise.
+  const GenericHead& h = asset();
+  const TriMesh& m = h.mesh;
+  const HeadAnnotations& a = h.annotations;
+  const int n = m.num_vertices();
+  std::vector<int> mirror(n, -1);
+  std::map<std::array<long long, 3>, int> at;  // positions in 0.1 um steps
+  auto key = [](const Vec3& p) {
+    return std::array<long long, 3>{std::llround(p.x() * 1e7), std::llround(p.y() * 1e7), std::llround(p.z() * 1e7)};
+  };
+  for (int v = 0; v < n; ++v) at[key(m.positions[v])] = v;
+  REQUIRE(at.size() == size_t(n));  // no two vertices at one place
+  for (int v = 0; v < n; ++v) {
+    const auto it = at.find(key(Vec3(-m.positions[v].x(), m.positions[v].y(), m.positions[v].z())));
+    if (it != at.end()) mirror[v] = it->second;
+  }
+  int unpaired = 0;
+  for (int v = 0; v < n; ++v) unpaired += mirror[v] < 0;
+  REQUIRE(unpaired == 0);
+  CHECK(triangles_without_mirror(m, std::vector<char>(n, 1)) == 0);
+  {
+    // Each side's quads split by their own shape: symmetric quads, whose
+    // diagonals tie, split the same way on both sides (the asset before).
+    GenericHeadBuildOptions by_side;
+    by_side.mirror_diagonals = false;
+    const GenericHead old = test::built_generic_head(by_side);
+    CHECK(triangles_without_mirror(old.mesh, std::vector<char>(old.mesh.num_vertices(), 1)) > 0);
+  }
+  auto mirrored = [&](std::vector<int> ids) {
+    for (int& v : ids) v = mirror[v];
+    std::sort(ids.begin(), ids.end());
+    return ids;
+  };
+  auto sorted = [](std::vector<int> ids) {
+    std::sort(ids.begin(), ids.end());
+    return ids;
+  };
+  auto other_side = [](const std::string& name) {
+    for (auto [l, r] : {std::pair<std::string, std::string>{"_left", "_right"}, {"_right", "_left"}}) {
+      const size_t k = name.rfind(l);
+      if (k != std::string::npos && k + l.size() == name.size()) return name.substr(0, k) + r;
+    }
+    return name;
+  };
+  for (const auto& [name, ids] : a.regions) {
+    INFO("region " << name);
+    REQUIRE(a.regions.count(other_side(name)));
+    CHECK(mirrored(ids) == sorted(a.regions.at(other_side(name))));
+  }
+  CHECK(mirrored(a.eye_left.rim) == sorted(a.eye_right.rim));
+  CHECK(a.eye_left.center.isApprox(Vec3(-a.eye_right.center.x(), a.eye_right.center.y(), a.eye_right.center.z())));
+  CHECK(mirrored(a.constrained_vertices) == sorted(a.constrained_vertices));
+  for (const FeatureBox& b : a.boxes) {
+    INFO("box " << b.name);
+    const FeatureBox& o = box_named(a, other_side(b.name));
+    CHECK(b.min.x() == Approx(-o.max.x()).margin(1e-9));
+    CHECK(b.max.x() == Approx(-o.min.x()).margin(1e-9));
+    CHECK(mirrored(b.landmarks) == sorted(o.landmarks));
+  }
+  for (const CreaseCurve& c : a.creases) {
+    INFO("crease " << c.name);
+    bool found = false;
+    for (const CreaseCurve& o : a.creases)
+      found = found || (o.closed == c.closed && mirrored(c.vertices) == sorted(o.vertices));
+    CHECK(found);
+  }
+  std::set<std::array<int, 2>> binding;
+  for (const auto& e : a.binding_edges) binding.insert({std::min(e[0], e[1]), std::max(e[0], e[1])});
+  int binding_unmatched = 0;
+  for (const auto& e : binding)
+    binding_unmatched += binding.count({std::min(mirror[e[0]], mirror[e[1]]), std::max(mirror[e[0]], mirror[e[1]])}) ? 0 : 1;
+  CHECK(binding_unmatched == 0);
+}
+
+TEST_CASE("generic head, wide mouth ring: no smooth level from 0 to 3 crosses itself", "[head]") {
+  // Issue 35 asks for 0 self-intersecting pairs at every level of the
+  // smooth hierarchy (rim creases, as the fit refines). The asset has 8 at
+  // level 2 and 24 at level 3, all at the outer mouth corners, where the
+  // first ring round the mouth is cast 4.5 mm past the lip line and lands
+  // 0.3 mm from the mouth bag; cast 8 mm past it
+  // (GenericHeadBuildOptions::wide_mouth_ring) no level crosses itself.
+  HeadSurfaceQuality asset_q, wide_q;
+  REQUIRE(measure_head_surface(asset(), 3, asset_q).ok());
+  GenericHeadBuildOptions wide;
+  wide.wide_mouth_ring = true;
+  REQUIRE(measure_head_surface(test::built_generic_head(wide), 3, wide_q).ok());
+  REQUIRE(wide_q.crossing_pairs.size() == 4u);
+  for (int l = 0; l <= 3; ++l) {
+    INFO("level " << l << ": asset " << asset_q.crossing_pairs[l] << " pairs, wide mouth ring " << wide_q.crossing_pairs[l]);
+    CHECK(wide_q.crossing_pairs[l] == 0);
+    CHECK(asset_q.crossing_pairs[l] <= (l == 3 ? 24 : l == 2 ? 8 : 0));
+  }
+  CHECK(asset_q.crossing_pairs[3] > 0);
 }
