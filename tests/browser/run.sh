@@ -3,7 +3,8 @@
 # under Node (worker_node.mjs; worker_threads_node.mjs: the pthreads build
 # gives the single-threaded build's fit bit for bit), then the page itself,
 # served on 127.0.0.1 with and without the cross-origin isolation headers and
-# driven in Debian's Chromium by playwright-core (test.mjs).
+# driven in Debian's Chromium by playwright-core: test.mjs runs the flows of
+# flows/ one after the other in one browser and fails if any check fails.
 # Usage: tests/browser/run.sh WEBDIR     (env LK_SCREENSHOT_DIR=dir keeps screenshots)
 # Exit: 0 pass, 1 fail, 77 skipped (no /usr/bin/chromium, or WEBDIR not built).
 set -euo pipefail
