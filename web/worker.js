@@ -84,7 +84,7 @@ function coreReady(m, which) {
 try {
   importScripts('worker_start.js');
 } catch (e) {
-  postMessage({ type: 'startFailed', message: 'worker_start.js did not load: ' + errorText(e) });
+  postMessage({ type: 'startFailed', message: 'worker_start.js did not load: ' + errorText(e).replace(/\.$/, '') });
   throw e;
 }
 

@@ -24,6 +24,10 @@ async function run(s) {
       query: '&core_stall_ms=3000', want: 'error', why: /likeness_worker\.wasm: no answer from the server for 3 s/ },
     { what: 'the core\'s script never arrives', isolation: false, broken: { '/likeness_worker.js': 'hang' },
       query: '&worker_start_ms=4000', want: 'error', why: /did not answer for 4 s while starting \(script likeness_worker\.js\)/ },
+    { what: 'the worker\'s start-up script is a 404', isolation: false, broken: { '/worker_start.js': '404' },
+      want: 'error', why: /worker_start\.js did not load/ },
+    { what: 'a module of the page is a 404', isolation: true, broken: { '/js/fit.js': '404' },
+      want: 'error', why: /some of its scripts \(js\/\) did not load/ },
   ];
   for (const c of cases) {
     const { server, origin } = await s.serve({ isolation: c.isolation, broken: c.broken });
@@ -34,7 +38,7 @@ async function run(s) {
       const t0 = Date.now();
       await page.goto(origin + '/index.html?autofit=0' + (c.query || ''));
       const sStart = await waitForState(page, ['ready', 'error'], READY_TIMEOUT_MS);
-      const info = await page.evaluate(() => ({ worker: window.likeness.workerThreads, status: document.getElementById('status').textContent,
+      const info = await page.evaluate(() => ({ worker: window.likeness && window.likeness.workerThreads, status: document.getElementById('status').textContent,
                                                 banner: document.getElementById('error-banner').hidden ? '' : document.getElementById('error-text').textContent }));
       const text = c.want === 'ready' ? (info.worker && info.worker.fallback) || '' : info.banner;
       check(`start-up: ${c.what}: ${c.want === 'ready' ? 'one thread, and the page says why' : 'a clear message, no hang'}`,
