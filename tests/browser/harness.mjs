@@ -315,8 +315,8 @@ export class Session {
   }
 
   async close() {
-    if (this.shared.has('context')) {
-      const context = await this.shared.get('context');
+    const context = this.shared.has('context') && await this.shared.get('context').catch(() => null);
+    if (context) {
       await context.close().catch(() => {});
       fs.rmSync(context.userDir, { recursive: true, force: true });
     }
