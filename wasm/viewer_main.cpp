@@ -1,6 +1,6 @@
 // likeness_viewer.wasm: the 3D view of the web app. An SDL2 window on the
 // page's <canvas id="canvas"> with a GLES 3.0 (WebGL2) context, an orbit
-// camera on mouse, touch and keyboard, and embind calls for web/app.js:
+// camera on mouse, touch and keyboard, and embind calls for web/js/viewer.js:
 //
 //   show_mesh(positions, normals, colors, indices) -> "" or an error message
 //   show_points(positions, normals, colors)        -> "" or an error message
@@ -34,7 +34,7 @@
 //
 // Input: left drag orbits, right/middle or shift+left drag pans, the wheel
 // zooms; one finger orbits and a pinch zooms on touch screens. Keys are
-// web/app.js's (arrows orbit, shift+arrows pan, +/- zoom, R resets).
+// web/js/viewer.js's (arrows orbit, shift+arrows pan, +/- zoom, R resets).
 // The canvas is redrawn only when something changed, so an idle page costs
 // no CPU (WebGL2 runs on the CPU under SwiftShader).
 #include "viewer_scene.h"
@@ -458,7 +458,7 @@ int main(int argc, char** argv) {
     return 0;
   }
   // SDL's key handlers call preventDefault on keys, Tab included, which
-  // would trap keyboard users in the canvas. Unregister them: web/app.js
+  // would trap keyboard users in the canvas. Unregister them: web/js/viewer.js
   // handles the view keys (through orbit/pan/zoom below) and lets the rest
   // through.
   emscripten_set_keydown_callback(kCanvas, nullptr, 0, nullptr);

@@ -1,0 +1,89 @@
+// Start-up: the page reaches "ready" and says how long it took, runs the
+// threaded core when cross-origin isolated, draws the generic head shaded;
+// the view follows the mouse (orbit, Reset view), the keyboard (arrows, R;
+// Tab still leaves the canvas), a touch screen (one finger orbits, a pinch
+// zooms) and the Wireframe toggle.
+import { analyse, bannerText, canvasImage, check, differingFraction, runAlone, shot } from '../harness.mjs';
+
+async function run(s) {
+  const { page, state: s0, wallMs } = await s.mainPage();
+  const { loadMs, timings } = await page.evaluate(() => ({ loadMs: window.likeness.loadMs, timings: window.likeness.timings }));
+  const parts = Object.entries(timings || {}).map(([k, v]) => `${k} ${Math.round(v)}`).join(', ');
+  if (!check('page reaches "ready"', s0 === 'ready', s0 === 'ready' ? `app load ${Math.round(loadMs)} ms (${parts}), wall ${wallMs} ms`
+                                                                : 'state ' + s0 + ': ' + await bannerText(page))) {
+    throw new Error('the page did not start');
+  }
+  await shot(page, 'web_start.png');
+  // Served with COOP/COEP: the page is cross-origin isolated and the worker
+  // runs the threaded core, one thread per core up to 4.
+  const isolated = await page.evaluate(() => ({ coi: window.crossOriginIsolated, cores: navigator.hardwareConcurrency,
+                                                 worker: window.likeness.workerThreads }));
+  const wantThreads = Math.max(1, Math.min(4, isolated.cores));
+  check('cross-origin isolated: the worker runs the threaded core', isolated.coi === true && isolated.worker &&
+        isolated.worker.variant === 'threads' && isolated.worker.threads === wantThreads,
+        `crossOriginIsolated ${isolated.coi}, ${isolated.cores} cores, worker ${JSON.stringify(isolated.worker)}`);
+  // The first part loads non-head files: no automatic fit for them.
+  await page.uncheck('#auto-fit');
+  const head = await canvasImage(page);
+  const headStats = analyse(head);
+  check('canvas shows the head (not blank)', headStats.fgFraction > 0.03,
+        `${(100 * headStats.fgFraction).toFixed(1)}% of ${head.width}x${head.height} px differ from the background`);
+  check('head is shaded (not one flat color)', headStats.lumStd > 8, `luminance std ${headStats.lumStd.toFixed(1)}`);
+
+  // Orbit by dragging.
+  const box = await page.locator('#canvas').boundingBox();
+  await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
+  await page.mouse.down();
+  for (let i = 1; i <= 10; i++) await page.mouse.move(box.x + box.width / 2 + 18 * i, box.y + box.height / 2);
+  await page.mouse.up();
+  const orbited = await canvasImage(page);
+  const orbitDiff = differingFraction(head, orbited);
+  check('dragging orbits the view', orbitDiff > 0.005, `${(100 * orbitDiff).toFixed(1)}% of pixels changed`);
+  await page.click('#btn-reset');
+  const reset = await canvasImage(page);
+  const resetDiff = differingFraction(head, reset);
+  check('"Reset view" restores the start view', resetDiff < 0.002, `${(100 * resetDiff).toFixed(2)}% of pixels differ from the start`);
+
+  // Keyboard: arrows orbit the focused canvas, R resets, Tab still moves on.
+  await page.focus('#canvas');
+  for (let i = 0; i < 4; i++) await page.keyboard.press('ArrowRight');
+  const keyed = await canvasImage(page);
+  check('arrow keys orbit the focused canvas', differingFraction(reset, keyed) > 0.005,
+        `${(100 * differingFraction(reset, keyed)).toFixed(1)}% of pixels changed`);
+  await page.keyboard.press('r');
+  check('R resets the view', differingFraction(reset, await canvasImage(page)) < 0.002);
+  await page.keyboard.press('Tab');
+  const focused = await page.evaluate(() => document.activeElement && document.activeElement.id);
+  check('Tab moves focus on from the canvas', focused !== 'canvas', `focus on #${focused}`);
+
+  // Touch: one finger orbits, a pinch outwards zooms in (the head grows).
+  const cdp = await page.context().newCDPSession(page);
+  const cx = box.x + box.width / 2, cy = box.y + box.height / 2;
+  const touch = async (type, points) => cdp.send('Input.dispatchTouchEvent', { type, touchPoints: points });
+  await touch('touchStart', [{ x: cx, y: cy, id: 1 }]);
+  for (let i = 1; i <= 10; i++) await touch('touchMove', [{ x: cx + 18 * i, y: cy, id: 1 }]);
+  await touch('touchEnd', []);
+  const touched = await canvasImage(page);
+  check('a one-finger drag orbits', differingFraction(reset, touched) > 0.005,
+        `${(100 * differingFraction(reset, touched)).toFixed(1)}% of pixels changed`);
+  await page.click('#btn-reset');
+  await touch('touchStart', [{ x: cx - 20, y: cy, id: 1 }, { x: cx + 20, y: cy, id: 2 }]);
+  for (let i = 1; i <= 10; i++) await touch('touchMove', [{ x: cx - 20 - 8 * i, y: cy, id: 1 }, { x: cx + 20 + 8 * i, y: cy, id: 2 }]);
+  await touch('touchEnd', []);
+  const pinched = analyse(await canvasImage(page));
+  check('a pinch zooms in', pinched.fgFraction > 1.2 * headStats.fgFraction,
+        `foreground ${(100 * headStats.fgFraction).toFixed(1)}% -> ${(100 * pinched.fgFraction).toFixed(1)}%`);
+  await page.click('#btn-reset');
+
+  // Wireframe: the edges darken part of the head; off again restores it.
+  await page.check('#wireframe');
+  const wired = await canvasImage(page);
+  const wireDiff = differingFraction(reset, wired);
+  await page.uncheck('#wireframe');
+  const unwired = differingFraction(reset, await canvasImage(page));
+  check('the wireframe toggle draws the edges and removes them', wireDiff > 0.003 && unwired < 0.002,
+        `on: ${(100 * wireDiff).toFixed(2)}% changed, off: ${(100 * unwired).toFixed(2)}%`);
+}
+
+export const flow = { name: 'startup', title: 'start-up, the head drawn, the view by mouse, keys and touch', run };
+runAlone(import.meta.url, flow);

@@ -1,0 +1,158 @@
+// Fitting the generic head to the loaded scan (jeong2002 Sec. 4-5) in the
+// worker: the Pipeline rows follow its stages, then the fitted head is shown
+// over the scan, its checks start, and photos with points are textured when
+// Auto-run is on.
+import { app, ui, clearError, setStage, setState, setStatus, showError, stageItem } from './state.js';
+import { runJob } from './worker_client.js';
+import { stopAnimation } from './animation.js';
+import { closeClicker } from './clicker.js';
+import { renderPhotos, texturable } from './photos.js';
+import { forgetTexture, runTexture } from './texture.js';
+import { showComponents, showStage } from './head_view.js';
+import { checkFitQuality } from './checks.js';
+
+// Core stage names -> the Pipeline rows, and the mesh each row shows.
+export const FIT_STAGES = [
+  { core: 'initial_alignment', row: 'align', mesh: 'aligned' },
+  { core: 'local_fitting', row: 'local_fit', mesh: 'local' },
+  { core: 'global_fitting', row: 'global_fit', mesh: 'control' },
+  { core: 'subdivision', row: 'subdivide', mesh: 'level' },
+];
+const rowOf = (core) => (FIT_STAGES.find((s) => s.core === core) || {}).row;
+
+function stageStats(row) { return stageItem(row).querySelector('.stage-stats'); }
+
+// The fit died with its worker, or a new scan came: rows keep their numbers
+// until the next fit, but nothing can be animated or exported.
+export function forgetFit(why) {
+  stopAnimation(false);
+  closeClicker();
+  app.fit = null;
+  ui.distanceLegend.hidden = true;
+  forgetTexture();
+  if (app.viewer) app.viewer.clear_components();
+  ui.fitView.hidden = true;
+  ui.fitQuality.hidden = true;
+  for (const st of FIT_STAGES) stageItem(st.row).classList.remove('viewable', 'shown');
+  if (why) setStatus(why);
+  setState(document.body.dataset.state);
+}
+
+export async function runFit() {
+  const state = document.body.dataset.state;
+  if (!app.scan || state === 'working' || state === 'loading' || app.startupFailed) return;
+  clearError();
+  stopAnimation();
+  const file = app.scan.file;
+  setState('working');
+  for (const st of FIT_STAGES) {
+    setStage(st.row, 'waiting', 0);
+    stageStats(st.row).textContent = '';
+  }
+  ui.fitTotal.textContent = '';
+  ui.fitQuality.hidden = true;
+  setStatus('Fitting the generic head to ' + file.name + '…');
+  const t0 = performance.now();
+  let result;
+  try {
+    const buffer = await file.arrayBuffer();
+    result = await runJob({ type: 'fit', name: file.name, buffer, options: { levels: 3 } }, [buffer],
+      (stage, fraction) => {
+        const row = rowOf(stage);
+        if (!row) return;
+        // Earlier rows are complete once a later stage starts.
+        for (const st of FIT_STAGES) {
+          if (st.row === row) break;
+          const li = stageItem(st.row);
+          if (!li.classList.contains('complete')) setStage(st.row, 'done', 1, 'complete');
+        }
+        setStage(row, fraction >= 1 ? 'measuring' : Math.round(fraction * 100) + '%', fraction, 'active');
+      });
+  } catch (e) {
+    if (e && e.cancelled) {
+      for (const st of FIT_STAGES) setStage(st.row, 'cancelled', 0);
+      setStatus('Fit cancelled. ' + (app.model ? app.model.name + ' is still shown.' : ''));
+      setState(app.model ? 'done' : 'ready');
+      return;
+    }
+    result = { ok: false, code: 'Internal', message: file.name + ': ' + (e && e.message ? e.message : e) };
+  }
+  const wallMs = performance.now() - t0;
+  if (!result.ok) {
+    const failedRow = FIT_STAGES.find((st) => stageItem(st.row).classList.contains('active'));
+    for (const st of FIT_STAGES) {
+      if (!stageItem(st.row).classList.contains('complete')) setStage(st.row, st === failedRow ? 'failed' : 'waiting', 0, st === failedRow ? 'failed' : undefined);
+    }
+    let message = result.message || result.code;
+    if (result.code === 'not a head' || result.code === 'NotAHead') message = 'This does not look like a head scan, so no head was fitted: ' + message;
+    setStatus('The fit failed.' + (app.model ? ' ' + app.model.name + ' is still shown.' : ''));
+    showError(message);
+    return;
+  }
+  app.fit = { name: file.name, stages: result.stages, meshes: result.meshes, fitMs: result.fitMs,
+              parseMs: result.parseMs, wallMs, points: result.points, fittedPoints: result.fittedPoints,
+              animatedVertices: result.animatedVertices, landmarks: result.landmarks || [],
+              headFacing: result.headFacing || [0, 0, 1], headUp: result.headUp || [0, 1, 0] };
+  forgetTexture();
+  for (const st of FIT_STAGES) {
+    const s = result.stages.find((x) => x.name === st.core);
+    setStage(st.row, s ? Math.round(s.ms) + ' ms' : 'done', 1, 'complete');
+    if (s) stageStats(st.row).textContent = 'mean ' + s.meanPct.toFixed(3) + ' % · max ' + s.maxPct.toFixed(2) + ' % of diagonal';
+    const li = stageItem(st.row);
+    li.classList.add('viewable');
+    li.tabIndex = 0;
+    li.setAttribute('role', 'button');
+  }
+  ui.fitTotal.textContent = 'fit ' + (result.fitMs / 1000).toFixed(2) + ' s (+ parse ' + Math.round(result.parseMs) +
+                            ' ms) · ' + result.fittedPoints.toLocaleString('en') + ' points fitted' +
+                            (app.workerThreads ? ' · ' + app.workerThreads.threads + (app.workerThreads.threads === 1 ? ' thread' : ' threads') +
+                             (app.workerThreads.fallback ? ' (threads could not start here)' : '') : '');
+  ui.fitView.hidden = false;
+  showFitNotes(result.notes || []);
+  const levels = result.meshes.levels.length;
+  for (const opt of ui.level.options) opt.disabled = Number(opt.value) > levels;
+  if (Number(ui.level.value) > levels) ui.level.value = String(levels);
+  app.viewer.set_overlay_points(app.scan.display.positions, app.scan.display.normals, app.scan.display.colors);
+  app.viewer.set_overlay_visible(ui.showPoints.checked);
+  showComponents(result.components);
+  showStage('subdivide');
+  // Look at the new head's face: it is shown over the scan in the scan's
+  // orientation, which need not face +z (Fran's faces 37 degrees off +x),
+  // and the view was framed on the scan, which may be a face only.
+  const [f, u] = [app.fit.headFacing, app.fit.headUp];
+  app.viewer.set_head_frame(f[0], f[1], f[2], u[0], u[1], u[2]);
+  setStatus(file.name + ': head fitted in ' + (result.fitMs / 1000).toFixed(2) + ' s. Click a stage to see its mesh; ' +
+            'pick a level, animate or export.');
+  setState('done');
+  renderPhotos();
+  // Sent before anything else can reach the worker, so the checks see the
+  // head at rest; not awaited: the page stays usable meanwhile.
+  checkFitQuality(app.fit);
+  if (ui.autoFit.checked && texturable().length) await runTexture();
+}
+app.fitHead = () => runFit();
+
+// What the fit decided on its own about the scan (turned to face +z, a
+// face-only capture, ...), as `likeness fit` prints them: the user should
+// know, and can pass the conventions next time.
+function showFitNotes(notes) {
+  ui.fitNotes.replaceChildren();
+  for (const n of notes) {
+    const li = document.createElement('li');
+    li.textContent = n;
+    ui.fitNotes.appendChild(li);
+  }
+  ui.fitNotes.hidden = notes.length === 0;
+}
+
+// Fit head, and the Pipeline rows: a fitted row shows its stage's mesh.
+export function wireFit() {
+  ui.fit.addEventListener('click', runFit);
+  for (const st of FIT_STAGES) {
+    const li = stageItem(st.row);
+    li.addEventListener('click', () => { if (li.classList.contains('viewable')) showStage(st.row); });
+    li.addEventListener('keydown', (e) => {
+      if ((e.key === 'Enter' || e.key === ' ') && li.classList.contains('viewable')) { e.preventDefault(); showStage(st.row); }
+    });
+  }
+}

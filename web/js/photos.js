@@ -1,0 +1,211 @@
+// Photos for the texture (tarini2002 Sec. 3) and their correspondences:
+// each dropped photo is decoded once in the worker (a broken file is caught
+// now, not at the Texture stage), listed with a thumbnail, and gets its
+// points from a points file of the same name or from landmark clicks.
+import { app, ui, setState, setStatus, showError } from './state.js';
+import { formatBytes, listFile, MAX_SCAN_BYTES } from './files.js';
+import { runJob } from './worker_client.js';
+import { clicker, closeClicker, openClicker } from './clicker.js';
+import { dropRoleTexture, PHOTO_ROLES, setPhotoRole } from './photo_roles.js';
+
+// Photos are decoded once in the worker to catch broken files now rather
+// than at the Texture stage; the File objects are kept for that stage.
+export async function checkPhotos(photos, alone) {
+  const before = document.body.dataset.state;
+  setState('working');
+  const failures = [];
+  for (const file of photos) {
+    const meta = listFile(file, 'checking…');
+    if (file.size > MAX_SCAN_BYTES) {
+      meta.textContent = formatBytes(file.size) + ' · too large';
+      failures.push(file.name + ' is ' + formatBytes(file.size) + '; photos up to ' + formatBytes(MAX_SCAN_BYTES) + ' are accepted.');
+      continue;
+    }
+    let result;
+    try {
+      const buffer = await file.arrayBuffer();
+      result = await runJob({ type: 'image', name: file.name, buffer }, [buffer]);
+    } catch (e) {
+      if (e && e.cancelled) {
+        meta.textContent = formatBytes(file.size) + ' · cancelled';
+        break;
+      }
+      result = { ok: false, message: file.name + ': ' + (e && e.message ? e.message : e) };
+    }
+    if (!result.ok) {
+      meta.textContent = formatBytes(file.size) + ' · not an image';
+      failures.push(result.message);
+      continue;
+    }
+    meta.textContent = formatBytes(file.size) + ' · ' + result.width + '×' + result.height + ' photo';
+    meta.parentElement.title = file.name + ': ' + result.width + '×' + result.height +
+                               ' photo, kept for the Texture stage';
+    addPhoto({ name: file.name, file, width: result.width, height: result.height });
+  }
+  renderPhotos();
+  setState(before === 'loading' ? 'ready' : before);
+  if (failures.length) {
+    showError(failures.join(' '));
+  } else if (alone) {
+    setStatus(app.photos.length + ' photo(s) kept for the Texture stage. ' +
+              (app.fit ? 'Give each its points (a .txt of the same name, or click the photo), then Texture.'
+                : app.model ? 'Fit the head, then texture it.' : 'Drop a head scan (PLY, OBJ, XYZ or VTK) to start.'));
+  }
+}
+
+const baseName = (name) => name.replace(/\.[^.]*$/, '').toLowerCase();
+
+// A photo dropped again under the same name replaces the old one but keeps
+// its points and clicks (they are the user's work).
+function addPhoto(entry) {
+  const old = app.photos.findIndex((p) => p.name === entry.name);
+  entry.url = URL.createObjectURL(entry.file);
+  entry.filePoints = null;
+  entry.pointsName = '';
+  entry.clicks = new Map();
+  entry.calib = null;
+  entry.sent = null;
+  entry.role = 'face';
+  if (old >= 0) {
+    const prev = app.photos[old];
+    URL.revokeObjectURL(prev.url);
+    Object.assign(entry, { filePoints: prev.filePoints, pointsName: prev.pointsName, clicks: prev.clicks, role: prev.role || 'face' });
+    app.photos[old] = entry;
+  } else {
+    app.photos.push(entry);
+  }
+}
+
+function removePhoto(photo) {
+  if (document.body.dataset.state === 'working') return;
+  if (clicker.photo === photo) closeClicker();
+  app.photos = app.photos.filter((p) => p !== photo);
+  URL.revokeObjectURL(photo.url);
+  dropRoleTexture(photo);
+  renderPhotos();
+  setStatus('Removed ' + photo.name + ' from the photos.');
+}
+
+// Points files (u v X Y Z per line, read by the core's parser) go to the
+// photo of the same base name.
+export async function readPointFiles(files) {
+  const failures = [];
+  const before = document.body.dataset.state;
+  setState('working');
+  for (const file of files) {
+    const photo = app.photos.find((p) => baseName(p.name) === baseName(file.name));
+    const meta = listFile(file, 'reading…');
+    if (!photo) {
+      meta.textContent = formatBytes(file.size) + ' · no photo named ' + baseName(file.name) + '.jpg/.png';
+      meta.parentElement.classList.add('ignored');
+      failures.push(file.name + ' is not a scan, and no photo is named ' + baseName(file.name) + '.jpg or .png: a points ' +
+                    'file (.txt, "u v X Y Z" per line) goes with the photo of the same name; drop both together.');
+      continue;
+    }
+    let result;
+    try {
+      result = file.size > 4 * 1024 * 1024 ? { ok: false, message: 'larger than 4 MB: not a points file' }
+        : await runJob({ type: 'points', text: await file.text() }, []);
+    } catch (e) {
+      result = { ok: false, message: e && e.message ? e.message : String(e) };
+    }
+    if (!result.ok) {
+      meta.textContent = formatBytes(file.size) + ' · not a points file';
+      failures.push(file.name + ': ' + result.message + ' (expected one "u v X Y Z" per line)');
+      continue;
+    }
+    photo.filePoints = result.points;
+    photo.pointsName = file.name;
+    photo.calib = null;
+    meta.textContent = formatBytes(file.size) + ' · ' + result.points.length / 5 + ' points for ' + photo.name;
+  }
+  renderPhotos();
+  setState(before === 'loading' ? 'ready' : before);
+  if (failures.length) showError(failures.join(' '));
+}
+
+// The correspondences a photo contributes: its clicks when it has any
+// (landmarks placed on the fitted head), else its points file.
+export function photoPoints(photo) {
+  const clicked = [];
+  if (app.fit && app.fit.landmarks) {
+    for (const lm of app.fit.landmarks) {
+      const c = photo.clicks.get(lm.id);
+      if (c && c !== 'skip') clicked.push({ u: c.u, v: c.v, p: lm.position, label: lm.label });
+    }
+  }
+  if (clicked.length || !photo.filePoints) return { source: clicked.length ? 'clicks' : 'none', list: clicked };
+  const list = [];
+  const f = photo.filePoints;
+  for (let k = 0; k + 4 < f.length; k += 5) list.push({ u: f[k], v: f[k + 1], p: [f[k + 2], f[k + 3], f[k + 4]], label: 'point ' + (k / 5 + 1) });
+  return { source: 'file', list };
+}
+
+// Photos that take part in texturing: those with any correspondence.
+export function texturable() { return facePhotos().filter((p) => photoPoints(p).list.length > 0); }
+// Photos of role "face" (the default) texture the skin; "eye" and "smile"
+// photos only make the iris and teeth textures.
+export function facePhotos() { return app.photos.filter((p) => (p.role || 'face') === 'face'); }
+
+export function renderPhotos() {
+  ui.photoList.textContent = '';
+  for (const [index, photo] of app.photos.entries()) {
+    const li = document.createElement('li');
+    li.tabIndex = 0;
+    li.setAttribute('role', 'button');
+    li.dataset.index = String(index);
+    li.classList.toggle('open', clicker.photo === photo);
+    const img = document.createElement('img');
+    img.src = photo.url;
+    img.alt = '';
+    const text = document.createElement('div');
+    const name = document.createElement('div');
+    name.className = 'photo-name';
+    name.textContent = photo.name;
+    const meta = document.createElement('div');
+    meta.className = 'photo-meta';
+    const pts = photoPoints(photo);
+    let note = photo.width + '×' + photo.height + ' · ';
+    if (pts.source === 'clicks') note += pts.list.length + ' of ' + app.fit.landmarks.length + ' landmarks clicked';
+    else if (pts.source === 'file') note += pts.list.length + ' points from ' + photo.pointsName;
+    else note += app.fit ? 'no points yet: click to mark landmarks' : 'no points yet';
+    if (pts.list.length > 0 && pts.list.length < 6) { note += ' (6 needed)'; meta.classList.add('bad'); }
+    if (photo.calib) {
+      if (photo.calib.ok) {
+        const outliers = photo.calib.outlier.filter(Boolean).length;
+        note += ' · calibrated, rms ' + photo.calib.rms.toFixed(2) + ' px' + (outliers ? ', ' + outliers + ' outlier(s)' : '');
+      } else {
+        note += ' · calibration failed';
+        meta.classList.add('bad');
+      }
+    }
+    meta.textContent = note;
+    const role = document.createElement('select');
+    role.className = 'photo-role small';
+    role.setAttribute('aria-label', 'Role of ' + photo.name);
+    for (const [value, label] of PHOTO_ROLES) role.append(new Option(label, value, false, value === (photo.role || 'face')));
+    role.addEventListener('click', (e) => e.stopPropagation());
+    role.addEventListener('keydown', (e) => e.stopPropagation());
+    role.addEventListener('change', () => setPhotoRole(photo, role.value));
+    if ((photo.role || 'face') !== 'face') {
+      meta.classList.remove('bad');
+      meta.textContent = photo.width + '×' + photo.height + ' · ' + (photo.roleNote || '');
+      if (photo.roleFailed) meta.classList.add('bad');
+    }
+    text.append(name, meta, role);
+    const remove = document.createElement('button');
+    remove.type = 'button';
+    remove.className = 'photo-remove small';
+    remove.textContent = '×';
+    remove.title = 'Remove ' + photo.name + ' (and its points) from the texture';
+    remove.setAttribute('aria-label', 'Remove ' + photo.name);
+    remove.addEventListener('click', (e) => { e.stopPropagation(); removePhoto(photo); });
+    li.append(img, text, remove);
+    li.title = photo.name + ': click to mark landmarks on it' + (photo.calib && !photo.calib.ok ? ' (' + photo.calib.message + ')' : '');
+    li.addEventListener('click', () => openClicker(photo));
+    li.addEventListener('keydown', (e) => { if (e.key === 'Enter' || e.key === ' ') { e.preventDefault(); openClicker(photo); } });
+    ui.photoList.append(li);
+  }
+  ui.photoCount.textContent = app.photos.length ? app.photos.length + ' photo(s), ' + texturable().length + ' with points' : '';
+  setState(document.body.dataset.state);
+}

@@ -1,0 +1,107 @@
+// The Texture stage (tarini2002 Sec. 3): every face photo with
+// correspondences is calibrated and the fitted head textured in the worker;
+// the viewer then shows the skin on the chosen level.
+import { app, params, ui, clearError, setStage, setState, setStatus, showError, stageItem } from './state.js';
+import { runJob } from './worker_client.js';
+import { facePhotos, photoPoints, renderPhotos, texturable } from './photos.js';
+import { clicker, closeClicker, updateClicker } from './clicker.js';
+import { stopAnimation } from './animation.js';
+import { showStage } from './head_view.js';
+
+export function forgetTexture() {
+  app.texture = null;
+  setStage('texture', 'waiting', 0);
+  stageItem('texture').querySelector('.stage-stats').textContent = '';
+  ui.textureTotal.textContent = '';
+}
+
+// Calibrates every photo that has correspondences and textures the fitted
+// head in the worker; the viewer then shows the skin on the chosen level.
+export async function runTexture() {
+  const state = document.body.dataset.state;
+  if (state === 'working' || state === 'loading' || app.startupFailed) return;
+  clearError();
+  if (!app.fit) { showError('Fit the head before texturing it: the texture is laid on the fitted head.'); return; }
+  const using = texturable();
+  if (!facePhotos().length) {
+    showError(app.photos.length ? 'No photo has the role "Face (skin)": only face photos texture the skin.'
+      : 'Drop one or more photos of the head (JPG or PNG) to texture it.');
+    return;
+  }
+  if (!using.length) {
+    showError('No photo has correspondences yet: drop each photo\'s points file (same name, .txt) or click a photo ' +
+              'to mark its landmarks (at least 6 each).');
+    return;
+  }
+  const few = using.filter((p) => photoPoints(p).list.length < 6);
+  if (few.length) {
+    showError(few.map((p) => p.name + ' has ' + photoPoints(p).list.length + ' point(s)').join('; ') +
+              '. Calibrating a photo needs at least 6 correspondences (12-15 spread over the face are best): ' +
+              'click more landmarks or skip the photo by clearing its clicks.');
+    return;
+  }
+  stopAnimation();
+  setState('working');
+  stageItem('texture').classList.remove('coming');
+  setStage('texture', '0%', 0, 'active');
+  setStatus('Texturing the head from ' + using.length + ' photo(s)…');
+  const t0 = performance.now();
+  let result;
+  try {
+    const photos = [];
+    for (const p of using) {
+      const pts = photoPoints(p);
+      p.sent = pts.list.map((x) => ({ label: x.label }));
+      const flat = new Float64Array(pts.list.length * 5);
+      pts.list.forEach((x, k) => flat.set([x.u, x.v, x.p[0], x.p[1], x.p[2]], 5 * k));
+      photos.push({ name: p.name, buffer: await p.file.arrayBuffer(), points: flat });
+    }
+    const size = Number(params.get('texture_size')) > 0 ? Number(params.get('texture_size')) : 1024;
+    result = await runJob({ type: 'texture', photos, options: { size } }, photos.map((p) => p.buffer),
+      (stage, fraction) => {
+        // stage is "texture:<step>" (decode, calibrate, chart, bind, resample, ...).
+        if (!/^texture/.test(stage)) return;
+        const step = stage.slice(8);
+        setStage('texture', (step && step !== 'done' ? step + ' ' : '') + Math.round(fraction * 100) + '%', fraction, 'active');
+      });
+  } catch (e) {
+    if (e && e.cancelled) {
+      setStage('texture', 'cancelled', 0);
+      setStatus('Texturing cancelled.');
+      setState('done');
+      return;
+    }
+    result = { ok: false, code: 'Internal', message: e && e.message ? e.message : String(e) };
+  }
+  const wallMs = performance.now() - t0;
+  // Per-photo calibration outcomes (also on failure: the page marks bad points).
+  if (result.calib) using.forEach((p, i) => { p.calib = result.calib[i] || null; });
+  renderPhotos();
+  if (clicker.photo) updateClicker();
+  if (!result.ok) {
+    setStage('texture', 'failed', 0, 'failed');
+    setStatus('Texturing failed; your points and clicks are kept.' + (app.fit ? ' The fitted head is still shown.' : ''));
+    showError('Texture: ' + (result.message || result.code));
+    return;
+  }
+  app.texture = { uvs: result.uvs, skin: result.skin, steps: result.steps, textureMs: result.textureMs, wallMs,
+                  level: result.level, photos: using.length };
+  setStage('texture', Math.round(result.textureMs) + ' ms', 1, 'complete');
+  const rms = using.map((p) => p.calib && p.calib.ok ? p.calib.rms : NaN).filter((x) => !Number.isNaN(x));
+  stageItem('texture').querySelector('.stage-stats').textContent = using.length + ' photo(s), calibration rms ' +
+    (rms.length ? Math.min(...rms).toFixed(2) + '-' + Math.max(...rms).toFixed(2) : '?') + ' px · ' +
+    result.skin.width + '² texels · ' + result.steps.map((x) => x.name + ' ' + Math.round(x.ms)).join(', ') + ' ms';
+  ui.textureTotal.textContent = 'textured in ' + (result.textureMs / 1000).toFixed(2) + ' s';
+  ui.showPoints.checked = false;
+  app.viewer.set_overlay_visible(false);
+  closeClicker();
+  showStage('subdivide');
+  setStatus('Textured from ' + using.length + ' photo(s) in ' + (result.textureMs / 1000).toFixed(2) + ' s. ' +
+            'Animate it, pick a level, or export the textured head.');
+  setState('done');
+}
+app.textureHead = () => runTexture();
+
+export function wireTexture() {
+  ui.texture.addEventListener('click', runTexture);
+}

@@ -1,0 +1,101 @@
+// The bridge to likeness_viewer.js (SDL2 + WebGL2 on #canvas, its embind
+// calls listed in docs/design/web.md): starting it, and the view controls of the
+// toolbar and the keyboard. What is shown comes from the other modules.
+import { app, params, ui, fatalStartup, clearError, setStatus } from './state.js';
+import { stopAnimation } from './animation.js';
+import { markShown } from './head_view.js';
+
+function loadScript(src) {
+  return new Promise((resolve, reject) => {
+    const s = document.createElement('script');
+    s.src = src;
+    s.onload = resolve;
+    s.onerror = () => reject(new Error('could not load ' + src));
+    document.head.appendChild(s);
+  });
+}
+
+// Resolves once the viewer has drawn at least one frame with the head.
+function firstFrame(viewer) {
+  return new Promise((resolve, reject) => {
+    const poll = () => {
+      const why = viewer.startup_error();
+      if (why) reject(new Error('the 3D viewer could not start: ' + why));
+      else if (viewer.frames_drawn() > 0) resolve();
+      else requestAnimationFrame(poll);
+    };
+    poll();
+  });
+}
+
+// True when WebGL2 is drawn on the CPU (SwiftShader, llvmpipe): no GPU.
+function softwareWebGL() {
+  try {
+    const gl = document.createElement('canvas').getContext('webgl2');
+    if (!gl) return false;
+    let name = String(gl.getParameter(gl.RENDERER));
+    const info = gl.getExtension('WEBGL_debug_renderer_info');
+    if (info) name += ' ' + gl.getParameter(info.UNMASKED_RENDERER_WEBGL);
+    const lose = gl.getExtension('WEBGL_lose_context');
+    if (lose) lose.loseContext();
+    return /swiftshader|llvmpipe|softpipe|software/i.test(name);
+  } catch (e) {
+    return false;
+  }
+}
+
+export async function startViewer() {
+  await loadScript('likeness_viewer.js');
+  // Multisampling doubles SwiftShader's cost of a level-3 frame (measured:
+  // docs/journal.md), so a software WebGL gets none; ?msaa=N overrides.
+  app.software = softwareWebGL();
+  app.msaa = params.has('msaa') ? Math.max(0, Number(params.get('msaa')) || 0) : app.software ? 0 : 4;
+  const viewer = await LikenessViewer({
+    canvas: ui.canvas,
+    arguments: ['--msaa', String(app.msaa)],
+    print: (t) => console.log('[viewer]', t),
+    printErr: (t) => console.warn('[viewer]', t),
+    onAbort: (what) => fatalStartup('The 3D viewer stopped: ' + what),
+  });
+  app.viewer = viewer;
+  app.timings.viewerModule = performance.now() - app.startedAt;
+  await firstFrame(viewer);
+  app.timings.firstFrame = performance.now() - app.startedAt;
+  ui.overlay.hidden = true;
+  return viewer;
+}
+
+// The toolbar (Reset view, Generic head, Wireframe, Point size) and the
+// keyboard on the focused canvas.
+export function wireViewer() {
+  ui.reset.addEventListener('click', () => app.viewer && app.viewer.reset_view());
+  ui.generic.addEventListener('click', () => {
+    if (!app.viewer) return;
+    stopAnimation();
+    app.viewer.show_generic_head();
+    app.viewer.set_overlay_points(new Float32Array(0), null, null);
+    app.viewer.set_components_visible(false);
+    markShown(null);
+    app.model = null;
+    clearError();
+    setStatus('Showing the generic head model.');
+  });
+  // Keyboard control of the focused canvas. Only the view keys are taken;
+  // Tab and everything else keep their usual meaning.
+  ui.canvas.addEventListener('keydown', (e) => {
+    const v = app.viewer;
+    if (!v || e.ctrlKey || e.metaKey || e.altKey) return;
+    const step = 40;  // pixels of drag per key press
+    const arrows = { ArrowLeft: [-step, 0], ArrowRight: [step, 0], ArrowUp: [0, -step], ArrowDown: [0, step] };
+    if (arrows[e.key]) {
+      const [dx, dy] = arrows[e.key];
+      if (e.shiftKey) v.pan(dx, dy); else v.orbit(dx, dy);
+    } else if (e.key === '+' || e.key === '=') v.zoom(120);
+    else if (e.key === '-' || e.key === '_') v.zoom(-120);
+    else if (e.key === 'r' || e.key === 'R') v.reset_view();
+    else return;
+    e.preventDefault();
+  });
+  ui.wireframe.addEventListener('change', () => app.viewer && app.viewer.set_wireframe(ui.wireframe.checked));
+  ui.pointSize.addEventListener('input', () => app.viewer && app.viewer.set_point_size(Number(ui.pointSize.value)));
+}
