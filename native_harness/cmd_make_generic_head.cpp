@@ -43,7 +43,7 @@ int run_make_generic_head(const Args& args) {
   // older command lines still run).
   if (args.has("even-eye-corners")) options.even_eye_corners = true;
   // --face-rows-at-back: GenericHeadBuildOptions::even_back_rows off, the
-  // asset's rows behind the ears before they were evened (docs/generic_head.md).
+  // asset's rows behind the ears before they were evened (docs/journal.md).
   if (args.has("face-rows-at-back")) options.even_back_rows = false;
   // --nape-by-shape: GenericHeadBuildOptions::regular_nape off, the asset's
   // nape and neck before they were made regular (quads split by shape).

@@ -1,7 +1,7 @@
 // The generic head a harness command works with: "asset" (the committed
 // core/head/data/generic_head.{obj,json}, what the app uses), or one built
 // now by generic_head_builder, so a builder change can be measured on the
-// same scans before the asset is regenerated (docs/generic_head.md):
+// same scans before the asset is regenerated (docs/journal.md):
 // "plate" the plate ear with the eye rings' corners at 45 deg (the asset
 // before 3a8dc46), "ring" the ring ear with the same 45-degree corners (as
 // it was measured), "even" the plate ear with even corners (the asset's
@@ -10,7 +10,7 @@
 // from 8518b1e until the nape was made regular), "nape" that with the
 // regular nape (the asset's until its quads were split as their mirror
 // images, issue 35), "wide-mouth" the builder's default with the wider
-// ring round the mouth (docs/generic_head_v2.md).
+// ring round the mouth (docs/design/generic_head_measured.md).
 #pragma once
 #include "head/generic_head.h"
 #include "head/generic_head_builder.h"

@@ -68,7 +68,7 @@ struct GenericHeadBuildOptions {
                                    // no longer cross themselves at the mouth corners (8 pairs at
                                    // level 2, 24 at level 3 -> 0). Not the asset's yet: three
                                    // fit and alignment tests tuned to the asset's figures fail
-                                   // with it (docs/generic_head_v2.md).
+                                   // with it (docs/design/generic_head_measured.md).
   bool mirror_diagonals = true;    // true: each quad on the -x side is split as its mirror image
                                    // on +x is, so triangles mirror as vertices do (issue 35);
                                    // false: each side by shape, as before: 6 quads of each eye
