@@ -353,7 +353,8 @@ int run(const Args& args) {
 }
 
 BenchRegistrar reg({"fit-real",
-                    "real scans (../shared/data) and four copies nudged by a hair: Table 1 and crossing pairs by region",
+                    "every real scan in ../shared/data/head_scans: Table 1 beside its noise floor, crossing pairs by "
+                    "region, face to scan, the neck, CPU time",
                     run});
 
 }  // namespace
