@@ -4,6 +4,7 @@
 #include "head/generic_head.h"
 #include "mesh/geometry.h"
 #include "mesh/topology.h"
+#include "pipeline/fit_quality.h"
 #include "pipeline/head_creases.h"
 #include "pipeline/head_pockets.h"
 #include "pipeline/untangle.h"
@@ -186,6 +187,102 @@ Status carry_mouth_bag(const std::vector<char>& mouth_bag, const MeshTopology& t
   for (int i = 0; i < n; ++i) control.positions[bag[i]] = before.positions[bag[i]] + moved.row(i).transpose();
   return Status::success();
 }
+
+namespace {
+
+// FitHeadOptions::hold_crossing_ears. displace(folds, zeroed) measures the
+// displacements of out.multires as built. reverted: set when an ear was held
+// and then given back (the relief's tree was refitted to the held one).
+template <class Displace>
+Status hold_crossing_ears(const FitHeadOptions& options, const HeadAnnotations& ann, const MeshTopology& topo,
+                          const ButterflyCreases& creases, FitHeadResult& out, Displace&& displace,
+                          bool& reverted) {
+  reverted = false;
+  const auto region = ann.regions.find("ears");
+  if (!options.hold_crossing_ears || region == ann.regions.end() || out.multires.num_levels() == 0)
+    return Status::success();
+  const int finest = out.multires.num_levels();
+  auto ear_pairs = [&](const std::vector<std::vector<int>>& ears, std::vector<int>& per_ear, int& total) {
+    std::vector<std::array<int, 2>> pairs;
+    Status s = find_self_intersections(level_mesh(out.multires, finest), pairs);
+    if (!s) return s;
+    total = static_cast<int>(pairs.size());
+    per_ear.clear();
+    for (const auto& ear : ears) per_ear.push_back(count_pairs_touching(out.multires, finest, pairs, ear));
+    return Status::success();
+  };
+  // One ear per connected part of the region.
+  std::vector<std::vector<int>> ears;
+  {
+    const std::vector<char> in_ear = vertex_mask(region->second, topo.num_vertices);
+    std::vector<char> seen(topo.num_vertices, 0);
+    for (int s : region->second) {
+      if (s < 0 || s >= topo.num_vertices || seen[s]) continue;
+      std::vector<int> ear, stack{s};
+      seen[s] = 1;
+      while (!stack.empty()) {
+        const int v = stack.back();
+        stack.pop_back();
+        ear.push_back(v);
+        for (int w : topo.rings[v])
+          if (in_ear[w] && !seen[w]) seen[w] = 1, stack.push_back(w);
+      }
+      ears.push_back(ear);
+    }
+  }
+  std::vector<int> before;
+  int total_before = 0;
+  Status st = ear_pairs(ears, before, total_before);
+  if (!st) return st;
+  std::vector<char> held(topo.num_vertices, 0);
+  int crossing = 0;
+  for (size_t e = 0; e < ears.size(); ++e)
+    if (before[e] > 0) {
+      ++crossing;
+      for (int v : ears[e]) held[v] = 1;
+    }
+  if (crossing == 0) return Status::success();
+  // The held ears take the aligned generic ear's shape (not local fitting's
+  // box, which the data had already pulled onto the hair), carried by the
+  // harmonic interpolation of the movement of the head around them. Their
+  // displacements are measured as elsewhere: they follow the data from the
+  // generic ear (zeroed, more pairs remained: docs/fit_real_scans.md).
+  const TriMesh control_before = out.control;
+  const MultiresMesh multires_before = out.multires;
+  const FoldLimitStats folds_before = out.fold_limit;
+  const int zeroed_before = out.zeroed_displacements;
+  st = carry_mouth_bag(held, topo, out.aligned, out.control);
+  if (!st) return st;
+  st = build_multires(out.control, creases, options.levels, out.multires);
+  if (!st) return st;
+  out.fold_limit = FoldLimitStats{};
+  out.zeroed_displacements = 0;
+  st = displace(out.fold_limit, out.zeroed_displacements);
+  if (!st) return st;
+  std::vector<int> after;
+  int total_after = 0;
+  st = ear_pairs(ears, after, total_after);
+  if (!st) return st;
+  int ears_before = 0, ears_after = 0;
+  for (size_t e = 0; e < ears.size(); ++e) ears_before += before[e], ears_after += after[e];
+  std::ostringstream note;
+  note << crossing << " ear(s) crossed at level " << finest << " (" << ears_before << " pairs)";
+  if (ears_after < ears_before && total_after - ears_after <= total_before - ears_before) {
+    out.ears_held = crossing;
+    note << ": kept the generic ear's shape, moved with the head around it (" << ears_after << " pairs)";
+  } else {
+    out.control = control_before;
+    out.multires = multires_before;
+    out.fold_limit = folds_before;
+    out.zeroed_displacements = zeroed_before;
+    reverted = true;
+    note << "; holding them in the generic ear's shape did not help (" << ears_after << " pairs): left as fitted";
+  }
+  out.notes.push_back(note.str());
+  return Status::success();
+}
+
+}  // namespace
 
 Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHeadOptions& options,
                 FitHeadResult& out, const FitStageObserver& observer, const ProgressFn& progress) {
@@ -504,20 +601,26 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   DisplacementOptions dopt = options.displacement;
   dopt.isolated_density_ratio = 0;  // already left out above
   if (dopt.max_distance <= 0) dopt.max_distance = options.displacement_max_pct / 100.0 * diag;
-  st = measure_displacements(fitted, dopt, out.multires, nullptr, progress);
+  // Displacements of out.multires (built), pockets zeroed, folds limited.
+  auto displace = [&](FoldLimitStats& folds, int& zeroed) -> Status {
+    Status s = measure_displacements(fitted, dopt, out.multires, nullptr, progress);
+    if (!s) return s;
+    s = zero_pocket_displacements(pocket, out.multires, zeroed);
+    if (!s) return s;
+    s = limit_folds(out.multires, options.fold_limit, &folds, &relief_tree);
+    for (int z : folds.zeroed) zeroed += z;
+    return s;
+  };
+  st = displace(out.fold_limit, out.zeroed_displacements);
   if (!st) return with_context(st, "displacements");
-  int zeroed_pockets = 0;
-  st = zero_pocket_displacements(pocket, out.multires, zeroed_pockets);
-  if (!st) return with_context(st, "displacements");
-  st = limit_folds(out.multires, options.fold_limit, &out.fold_limit, &relief_tree);
-  if (!st) return with_context(st, "displacements");
-  out.zeroed_displacements = zeroed_pockets;
-  for (int z : out.fold_limit.zeroed) out.zeroed_displacements += z;
+  bool ears_reverted = false;
+  st = hold_crossing_ears(options, ann, topo, creases, out, displace, ears_reverted);
+  if (!st) return with_context(st, "displacements (ears)");
   for (int l = 1; l <= options.levels; ++l) out.level_meshes.push_back(level_mesh(out.multires, l));
   const TriMesh finest = level_mesh(out.multires, options.levels);
   // The fold limiter hands back its tree (the relief's), refitted to the
   // finest level as it left it: no level-3 build for the figures.
-  stage_done("subdivision", finest, pts, &relief_tree);
+  stage_done("subdivision", finest, pts, ears_reverted ? nullptr : &relief_tree);
   return Status::success();
 }
 

@@ -168,6 +168,16 @@ struct FitHeadOptions {
   // and lost accuracy when bound (figures: docs/design/fit.md).
   enum class EarBinding { Off, FaceOnlyScans, Always };
   EarBinding bind_ear_edges = EarBinding::FaceOnlyScans;
+  // When an ear (a connected part of region "ears") still crosses itself or
+  // the head at the finest level, its control vertices take the aligned
+  // generic ear's shape, carried by the harmonic interpolation of the
+  // movement of the head around it (carry_mouth_bag), and the levels and
+  // displacements are measured again; kept only when the ears' pairs drop
+  // and no others appear. Where the data is no ear (carved hair over it)
+  // the ear keeps the generic shape; where nothing crosses nothing changes.
+  // Costs one self-intersection search of the finest level per fit, and a
+  // second subdivision stage when an ear crosses.
+  bool hold_crossing_ears = true;
   // The global fit's scan-to-mesh term E_back (GlobalFitOptions::back_*:
   // control vertices over scanned skin held to the scan's surface under
   // them; ears and pockets left out) with this weight. On face captures,
@@ -246,6 +256,7 @@ struct FitHeadResult {
   // aligned generic head's does not have, before, between and after the
   // untangling's steps (the control mesh above is the untangled one).
   UntangleResult untangle;
+  int ears_held = 0;            // ears held in their generic shape (hold_crossing_ears)
 };
 
 // Fits generic (the generic head with annotations, in metres) to scan.

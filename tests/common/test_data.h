@@ -1,13 +1,18 @@
 // Where tests find data. Real data in ../shared/data is never copied into the
 // repo; tests that need it skip with a message when it is absent.
 #pragma once
+#include <cstdlib>
 #include <string>
 #include <sys/stat.h>
 
 namespace lk::test {
 
 inline std::string source_dir() { return LK_SOURCE_DIR; }
-inline std::string shared_data_dir() { return LK_SOURCE_DIR "/../shared/data"; }
+// LK_SHARED_DATA=DIR overrides it (a git worktree elsewhere than beside ../shared).
+inline std::string shared_data_dir() {
+  const char* dir = std::getenv("LK_SHARED_DATA");
+  return dir && *dir ? dir : LK_SOURCE_DIR "/../shared/data";
+}
 inline bool exists(const std::string& p) {
   struct stat st;
   return ::stat(p.c_str(), &st) == 0;
