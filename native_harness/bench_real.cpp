@@ -6,13 +6,13 @@
 // the face of the finest level to the scan where scanned (mean / p99 /
 // max), the scanned neck below the cut to the fitted neck (points, median /
 // p90), and the fit's CPU time (all threads); then one summary line per
-// scan (docs/fit_real_scans.md). Skipped with a message when the data are
+// scan (docs/design/fit_real_scans.md). Skipped with a message when the data are
 // absent.
 // --fit-real-copies N (1-13, default 1): the scan and copies moved by a
 // hair: shifted by 2.5e-4 of its bounding-box diagonal (0.1 mm on a head)
 // along x and along y, scaled by 1.0001, turned by 0.05 degrees about the
 // vertical, ..., all about its centroid. A fitted head's crossing count
-// moves by tens of pairs under such changes (docs/fit_real.md, "False
+// moves by tens of pairs under such changes (docs/journal.md, "False
 // crossings, fold creases, and the eye sockets"), so one fit decides
 // little; the copies show the spread.
 // --fit-crease-trials N, --fit-crease-edges N, --fit-crease-angle DEG: the

@@ -246,7 +246,7 @@ Status hold_crossing_ears(const FitHeadOptions& options, const HeadAnnotations& 
   // box, which the data had already pulled onto the hair), carried by the
   // harmonic interpolation of the movement of the head around them. Their
   // displacements are measured as elsewhere: they follow the data from the
-  // generic ear (zeroed, more pairs remained: docs/fit_real_scans.md).
+  // generic ear (zeroed, more pairs remained: docs/design/fit_real_scans.md).
   const TriMesh control_before = out.control;
   const MultiresMesh multires_before = out.multires;
   const FoldLimitStats folds_before = out.fold_limit;

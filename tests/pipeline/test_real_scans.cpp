@@ -1,7 +1,7 @@
 // Every real scan in ../shared/data/head_scans fits without crossing
 // itself at the lips and the ears (issue 35). Skipped with a message when
 // the folder is absent; the scans are never copied into the repo. Two
-// busts do not pass yet (docs/fit_real_scans.md): Plato's level 3 crosses
+// busts do not pass yet (docs/design/fit_real_scans.md): Plato's level 3 crosses
 // itself at the ears, Gutenberg's alignment is refused as not a head.
 // They are fitted and their figures printed (WARN), not required; any
 // other scan put in the folder is required to pass.
@@ -33,7 +33,7 @@ std::vector<std::string> real_scans() {
   return out;
 }
 
-// Folders of scans known to fail (docs/fit_real_scans.md, "Not done").
+// Folders of scans known to fail (docs/design/fit_real_scans.md, "Not done").
 bool known_failure(const std::string& path) {
   return path.find("/threedscans_plato/") != std::string::npos ||
          path.find("/threedscans_gutenberg/") != std::string::npos;
@@ -77,7 +77,7 @@ TEST_CASE("fit_head: every real scan fits with no crossing pairs at the lips and
 TEST_CASE("fit_head: Plato's ears, under carved hair, cross less when held in the generic shape",
           "[pipeline][real_scans]") {
   // FitHeadOptions::hold_crossing_ears on the scan it was made for
-  // (docs/fit_real_scans.md): it must lower the ear pairs and add none
+  // (docs/design/fit_real_scans.md): it must lower the ear pairs and add none
   // elsewhere; 0 is not reached yet (Plato stays a known failure above).
   LK_REQUIRE_SHARED("head_scans/threedscans_plato/plato.obj");
   PointCloud scan;
