@@ -62,14 +62,8 @@ namespace {
 // DIR/<scan>_<copy> with spaces as underscores.
 Status dump_copy(const std::string& prefix, const FitHeadResult& r) {
   const TriMesh& finest = r.level_meshes.back();
-  // The fold limiter's own search of this level when it has not moved
-  // since (as measure_fit_quality takes it), else a search.
   std::vector<std::array<int, 2>> pairs;
-  Status st;
-  if (const auto* known = finest_pairs_of(r.fold_limit, finest.positions))
-    pairs = *known;
-  else
-    st = find_self_intersections(finest, pairs);
+  Status st = finest_crossing_pairs(r.fold_limit, finest, pairs);
   PointCloud centroids;
   for (const auto& p : pairs)
     for (int f : p) {

@@ -1027,6 +1027,15 @@ const std::vector<std::array<int, 2>>* finest_pairs_of(const FoldLimitStats& sta
   return &stats.finest_pairs;
 }
 
+Status finest_crossing_pairs(const FoldLimitStats& stats, const TriMesh& finest,
+                             std::vector<std::array<int, 2>>& pairs) {
+  if (const auto* known = finest_pairs_of(stats, finest.positions)) {
+    pairs = *known;
+    return Status::success();
+  }
+  return find_self_intersections(finest, pairs);
+}
+
 Status limit_folds(MultiresMesh& mesh, const FoldLimitOptions& options, FoldLimitStats* stats,
                    MeshBvh* finest_tree) {
   if (!(options.shrink >= 0 && options.shrink < 1) || options.min_area_ratio < 0 || options.max_shrinks < 0 ||

@@ -174,6 +174,12 @@ std::uint64_t positions_fingerprint(const std::vector<Vec3>& positions);
 const std::vector<std::array<int, 2>>* finest_pairs_of(const FoldLimitStats& stats,
                                                        const std::vector<Vec3>& finest_positions);
 
+// The crossing pairs of finest (the finest level as the limiter left it or
+// moved since): the limiter's own (finest_pairs_of) when they still describe
+// its positions, else a whole search (find_self_intersections).
+Status finest_crossing_pairs(const FoldLimitStats& stats, const TriMesh& finest,
+                             std::vector<std::array<int, 2>>& pairs);
+
 // Shrinks mesh.displacements as described above and re-evaluates the mesh.
 // Fails with InvalidInput on mismatched arrays or options out of range
 // (shrink not in [0, 1), negative ratios or counts).

@@ -203,8 +203,9 @@ Status hold_crossing_ears(const FitHeadOptions& options, const HeadAnnotations& 
     return Status::success();
   const int finest = out.multires.num_levels();
   auto ear_pairs = [&](const std::vector<std::vector<int>>& ears, std::vector<int>& per_ear, int& total) {
+    // The fold limiter's own search of the level as it left it, when known.
     std::vector<std::array<int, 2>> pairs;
-    Status s = find_self_intersections(level_mesh(out.multires, finest), pairs);
+    Status s = finest_crossing_pairs(out.fold_limit, level_mesh(out.multires, finest), pairs);
     if (!s) return s;
     total = static_cast<int>(pairs.size());
     per_ear.clear();

@@ -179,13 +179,8 @@ Status measure_fit_quality(const FitHeadResult& fit, const HeadAnnotations& anno
   // (its second pass or last resort: the same sorted pairs as a search
   // here), unless it moved since (an edit).
   std::vector<std::array<int, 2>> pairs;
-  Status st;
-  if (const auto* known = finest_pairs_of(fit.fold_limit, finest.positions)) {
-    pairs = *known;
-  } else {
-    st = find_self_intersections(finest, pairs);
-    if (!st) return st;
-  }
+  Status st = finest_crossing_pairs(fit.fold_limit, finest, pairs);
+  if (!st) return st;
   out.crossings = count_crossings_by_region(fit.multires, L, pairs, annotations);
 
   MultiresMesh smooth;
