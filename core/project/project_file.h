@@ -1,0 +1,44 @@
+// The head project as one file, bytes in and bytes out (the shells read and
+// write files). The container is a GLB (glTF 2.0 binary): its scene is the
+// finest level at rest in the head frame (metres, +y up, +z facing: glTF's
+// own convention), textured when the project is, so any glTF viewer shows
+// the head; the project rides in the root's extras ("likeness"), its arrays
+// as bufferViews of exact doubles and int32s in the same binary chunk.
+// tinygltf (Debian) writes and parses the container; docs/design/project_file.md.
+#pragma once
+#include "io/io.h"
+#include "project/project.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+namespace lk {
+
+// The format's name in extras.likeness.format, and its version: a reader
+// refuses a newer version and anything without the name.
+extern const char* const kProjectFormat;  // "likeness-project"
+constexpr int kProjectFileVersion = 1;
+
+// The project's bytes. Stored: the scan's positions and faces, the fit's
+// options the CLI and page set, the fitted head (control mesh at rest, the
+// current control positions, creases, displacements of every level, the
+// alignment's meshes and the fit's report figures), the frame, the rig, the
+// pose, the texture's chart and skin (PNG). Not stored: the checks
+// (measure_project_quality measures them again), the photos and their
+// points. InvalidInput when the project has no fit.
+Status save_project(const HeadProject& project, Bytes& out);
+
+// Rebuilds a saved project without fitting: the levels are evaluated from
+// the stored control positions and displacements, so the loaded levels are
+// bit-identical to the saved project's evaluated ones. Every count, index
+// and offset is checked against the bytes before anything is allocated;
+// errors say why a file is refused ("not a Likeness project: ...",
+// "made by a newer Likeness (project version 3; this one reads up to 1)").
+// The file carries a checksum of its project (FNV-1a over the extras and
+// the binary chunk), so a damaged file is refused rather than loaded
+// wrong; verify_checksum false skips it (the fuzz tests reach the checks
+// behind it). out is left untouched on an error.
+Status load_project(const std::uint8_t* data, std::size_t size, HeadProject& out, bool verify_checksum = true);
+
+}  // namespace lk

@@ -1,0 +1,456 @@
+// The project file (core/project/project_file.h): a fitted and textured
+// project comes back bit for bit and poses and exports as the original;
+// the GLB's scene is the head for any glTF reader; cut, damaged, foreign
+// and future files are refused with a reason and never crash.
+#include "io/io.h"
+#include "project/export.h"
+#include "project/pose.h"
+#include "project/project_file.h"
+#include "project/quality_job.h"
+#include "project/texture_job.h"
+#include "project_photos.h"
+#include "project_scene.h"
+
+// The same switches as core/project's own tinygltf (its implementation
+// lives there): the test reads and rewrites GLBs directly.
+#define TINYGLTF_NO_FS
+#define TINYGLTF_NO_STB_IMAGE
+#define TINYGLTF_NO_STB_IMAGE_WRITE
+#define TINYGLTF_NO_EXTERNAL_IMAGE
+#include <fstream>
+#include <tiny_gltf.h>
+
+#include <catch2/catch.hpp>
+
+#include <cstring>
+#include <functional>
+#include <random>
+#include <sstream>
+
+using namespace lk;
+
+namespace {
+
+// The scene's project, re-evaluated at rest (the fit's own state differs
+// from an evaluation by rounding: a loaded project is an evaluation) and
+// textured from three synthetic photos at 256 x 256.
+const HeadProject& textured_project() {
+  static const HeadProject p = [] {
+    HeadProject q = test::fitted_project();
+    REQUIRE(pose_project(q, 0.0).ok());
+    TriMesh level;
+    REQUIRE(project_level_mesh(q, q.fit.multires.num_levels(), ExportFrame::Scan, level).ok());
+    const test::Photos shots = test::photograph(level);
+    TextureJobInput input;
+    input.photos = shots.photos;
+    input.points = shots.points;
+    input.names = shots.names;
+    input.options.size = 256;
+    TextureJobResult out;
+    const Status st = texture_project(q, input, out);
+    INFO(st.message);
+    REQUIRE(st.ok());
+    return q;
+  }();
+  return p;
+}
+
+Bytes saved(const HeadProject& p) {
+  Bytes b;
+  const Status st = save_project(p, b);
+  INFO(st.message);
+  REQUIRE(st.ok());
+  return b;
+}
+
+HeadProject loaded(const Bytes& b) {
+  HeadProject p;
+  const Status st = load_project(b.data(), b.size(), p);
+  INFO(st.message);
+  REQUIRE(st.ok());
+  return p;
+}
+
+Status try_load(const Bytes& b, bool verify_checksum = true) {
+  HeadProject p;
+  return load_project(b.data(), b.size(), p, verify_checksum);
+}
+
+bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+
+void check_same_head(const HeadProject& a, const HeadProject& b) {
+  const MultiresMesh &ma = a.fit.multires, &mb = b.fit.multires;
+  REQUIRE(ma.num_levels() == mb.num_levels());
+  CHECK(ma.control == mb.control);
+  CHECK(ma.displacements == mb.displacements);
+  CHECK(ma.creases.edges == mb.creases.edges);
+  CHECK(ma.creases.corners == mb.creases.corners);
+  for (int l = 0; l <= ma.num_levels(); ++l) {
+    CHECK(ma.triangles(l) == mb.triangles(l));
+    CHECK(ma.state.base[l] == mb.state.base[l]);
+    CHECK(ma.state.normals[l] == mb.state.normals[l]);
+    CHECK(ma.state.displaced[l] == mb.state.displaced[l]);
+  }
+  CHECK(a.pose == b.pose);
+}
+
+}  // namespace
+
+TEST_CASE("project file: a fitted, textured project comes back bit for bit") {
+  const HeadProject& a = textured_project();
+  const Bytes bytes = saved(a);
+  const HeadProject b = loaded(bytes);
+  const int L = a.fit.multires.num_levels();
+
+  check_same_head(a, b);
+  CHECK(b.scan.positions == a.scan.positions);
+  CHECK(b.scan.faces == a.scan.faces);
+  CHECK(b.fit.control.positions == a.fit.control.positions);
+  CHECK(b.fit.control.triangles == a.fit.control.triangles);
+  CHECK(b.fit.aligned.positions == a.fit.aligned.positions);
+  CHECK(b.fit.local.positions == a.fit.local.positions);
+  // The level meshes are the rest pose's: the fitted control mesh's (the
+  // project's own control positions went through pose 0, whose jaw
+  // rotation by 0 moves them by rounding).
+  MultiresMesh rest = a.fit.multires;
+  rest.control = a.fit.control.positions;
+  REQUIRE(evaluate(rest).ok());
+  REQUIRE(b.fit.level_meshes.size() == static_cast<size_t>(L));
+  for (int l = 1; l <= L; ++l) {
+    CHECK(b.fit.level_meshes[l - 1].positions == rest.state.displaced[l]);
+    CHECK(b.fit.level_meshes[l - 1].triangles == a.fit.level_meshes[l - 1].triangles);
+  }
+  CHECK(b.fit.scan_to_head.A == a.fit.scan_to_head.A);
+  CHECK(b.fit.scan_to_head.t == a.fit.scan_to_head.t);
+  CHECK(b.frame.head_to_scan == a.frame.head_to_scan);
+  CHECK(b.frame.head_offset == a.frame.head_offset);
+  CHECK(b.fit.notes == a.fit.notes);
+  REQUIRE(b.fit.stages.size() == a.fit.stages.size());
+  for (size_t i = 0; i < a.fit.stages.size(); ++i) {
+    CHECK(b.fit.stages[i].name == a.fit.stages[i].name);
+    CHECK(b.fit.stages[i].distance.mean_pct == a.fit.stages[i].distance.mean_pct);
+    CHECK(b.fit.stages[i].distance.max == a.fit.stages[i].distance.max);
+  }
+  CHECK(b.fit.points == a.fit.points);
+  CHECK(b.fit.unit_to_metres == a.fit.unit_to_metres);
+  CHECK(b.fit.untangle.pairs_after == a.fit.untangle.pairs_after);
+  CHECK(b.options.levels == a.options.levels);
+  CHECK(b.options.up == a.options.up);
+  CHECK(b.rig.moved == a.rig.moved);
+  CHECK(b.rig.rest == a.rig.rest);
+  CHECK(b.rig.kind == a.rig.kind);
+  CHECK(b.rig.weight == a.rig.weight);
+  CHECK(b.rig.jaw_pivot == a.rig.jaw_pivot);
+  CHECK(b.rig.head_size == a.rig.head_size);
+  REQUIRE(!b.texture.empty());
+  CHECK(b.texture.uvs == a.texture.uvs);
+  CHECK(b.texture.skin.width == a.texture.skin.width);
+  CHECK(b.texture.skin.channels == a.texture.skin.channels);
+  CHECK(b.texture.skin.pixels == a.texture.skin.pixels);
+  CHECK(!b.quality.measured);  // measured again on demand
+
+  // Saving the loaded project gives the same bytes.
+  CHECK(saved(b) == bytes);
+}
+
+TEST_CASE("project file: a loaded project poses and exports exactly as the original") {
+  HeadProject a = textured_project();
+  HeadProject b = loaded(saved(a));
+  const int L = a.fit.multires.num_levels();
+  for (double amount : {0.0, 0.7, 1.0, 0.3}) {
+    REQUIRE(pose_project(a, amount).ok());
+    REQUIRE(pose_project(b, amount).ok());
+    check_same_head(a, b);
+    CHECK(jaw_motion(a, amount) == jaw_motion(b, amount));
+    for (int l = 0; l <= L; ++l)
+      for (LevelFormat f : {LevelFormat::Obj, LevelFormat::Ply}) {
+        Bytes ea, eb;
+        REQUIRE(export_level(a, l, f, ExportFrame::Scan, ea).ok());
+        REQUIRE(export_level(b, l, f, ExportFrame::Scan, eb).ok());
+        CHECK(ea == eb);
+      }
+    TexturedFiles ta, tb;
+    REQUIRE(export_textured(a, L, "head", ExportFrame::Scan, ta).ok());
+    REQUIRE(export_textured(b, L, "head", ExportFrame::Scan, tb).ok());
+    CHECK(ta.obj == tb.obj);
+    CHECK(ta.png == tb.png);
+  }
+
+  // A posed project keeps its pose; its scene and level meshes are at rest.
+  const Bytes posed = saved(a);
+  HeadProject c = loaded(posed);
+  CHECK(c.pose == a.pose);
+  check_same_head(a, c);
+  REQUIRE(pose_project(c, 0.0).ok());
+  REQUIRE(pose_project(b, 0.0).ok());
+  check_same_head(b, c);
+
+  // The checks measured on the loaded project are the original's.
+  HeadProject q = loaded(saved(textured_project()));
+  HeadProject r = textured_project();
+  REQUIRE(measure_project_quality(q, test::project_scene().generic).ok());
+  REQUIRE(measure_project_quality(r, test::project_scene().generic).ok());
+  CHECK(q.quality.status.ok() == r.quality.status.ok());
+  CHECK(q.quality.fit.flipped == r.quality.fit.flipped);
+  CHECK(q.quality.fit.degenerate == r.quality.fit.degenerate);
+  CHECK(q.quality.fit.crossings.total == r.quality.fit.crossings.total);
+  CHECK(q.quality.fit.smooth_crossings.total == r.quality.fit.smooth_crossings.total);
+  CHECK(q.quality.to_scan.mean == Approx(r.quality.to_scan.mean).epsilon(1e-12));
+  CHECK(q.quality.to_scan.max == Approx(r.quality.to_scan.max).epsilon(1e-12));
+}
+
+TEST_CASE("project file: the GLB's scene is the textured finest level for any glTF reader") {
+  const HeadProject& a = textured_project();
+  const Bytes bytes = saved(a);
+  tinygltf::TinyGLTF gltf;
+  gltf.SetImageLoader([](tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int,
+                         void*) { return true; },
+                      nullptr);
+  tinygltf::Model m;
+  std::string err, warn;
+  REQUIRE(gltf.LoadBinaryFromMemory(&m, &err, &warn, bytes.data(), static_cast<unsigned>(bytes.size())));
+  REQUIRE(m.scenes.size() == 1);
+  REQUIRE(m.meshes.size() == 1);
+  const tinygltf::Primitive& prim = m.meshes[0].primitives.at(0);
+  const int L = a.fit.multires.num_levels();
+  MultiresMesh rest_mesh = a.fit.multires;  // the fitted control mesh's levels
+  rest_mesh.control = a.fit.control.positions;
+  REQUIRE(evaluate(rest_mesh).ok());
+  const std::vector<Vec3>& rest = rest_mesh.state.displaced[L];
+  const std::vector<Tri>& tris = a.fit.multires.triangles(L);
+  auto data = [&](int accessor) {
+    const tinygltf::Accessor& acc = m.accessors.at(accessor);
+    const tinygltf::BufferView& v = m.bufferViews.at(acc.bufferView);
+    return m.buffers.at(v.buffer).data.data() + v.byteOffset + acc.byteOffset;
+  };
+  const tinygltf::Accessor& pos = m.accessors.at(prim.attributes.at("POSITION"));
+  REQUIRE(pos.count == rest.size());
+  REQUIRE(pos.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT);
+  const float* P = reinterpret_cast<const float*>(data(prim.attributes.at("POSITION")));
+  for (size_t i = 0; i < rest.size(); i += 97)
+    for (int k = 0; k < 3; ++k) CHECK(P[3 * i + k] == static_cast<float>(rest[i][k]));
+  const tinygltf::Accessor& idx = m.accessors.at(prim.indices);
+  REQUIRE(idx.count == 3 * tris.size());
+  const std::uint32_t* I = reinterpret_cast<const std::uint32_t*>(data(prim.indices));
+  for (size_t t = 0; t < tris.size(); t += 31)
+    for (int k = 0; k < 3; ++k) CHECK(I[3 * t + k] == static_cast<std::uint32_t>(tris[t][k]));
+  const float* UV = reinterpret_cast<const float*>(data(prim.attributes.at("TEXCOORD_0")));
+  for (size_t i = 0; i < rest.size(); i += 97) {
+    CHECK(UV[2 * i] == static_cast<float>(a.texture.uvs[i].x()));
+    CHECK(UV[2 * i + 1] == static_cast<float>(1.0 - a.texture.uvs[i].y()));  // glTF's v runs down
+  }
+  // The material's texture is the skin.
+  const int tex = m.materials.at(prim.material).pbrMetallicRoughness.baseColorTexture.index;
+  const tinygltf::Image& im = m.images.at(m.textures.at(tex).source);
+  CHECK(im.mimeType == "image/png");
+  const tinygltf::BufferView& iv = m.bufferViews.at(im.bufferView);
+  Image skin;
+  REQUIRE(read_image(m.buffers[0].data.data() + iv.byteOffset, iv.byteLength, skin).ok());
+  CHECK(skin.pixels == a.texture.skin.pixels);
+}
+
+namespace {
+
+// A GLB rewritten with its project's extras changed by edit (and its
+// checksum made to match again when rehash).
+Bytes rewritten(const Bytes& bytes, const std::function<void(tinygltf::Value::Object&)>& edit) {
+  tinygltf::TinyGLTF gltf;
+  gltf.SetImageLoader([](tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int,
+                         void*) { return true; },
+                      nullptr);
+  tinygltf::Model m;
+  std::string err, warn;
+  REQUIRE(gltf.LoadBinaryFromMemory(&m, &err, &warn, bytes.data(), static_cast<unsigned>(bytes.size())));
+  tinygltf::Value::Object root = m.extras.Get<tinygltf::Value::Object>();
+  tinygltf::Value::Object doc = root["likeness"].Get<tinygltf::Value::Object>();
+  edit(doc);
+  root["likeness"] = tinygltf::Value(doc);
+  m.extras = tinygltf::Value(root);
+  std::ostringstream out;
+  REQUIRE(gltf.WriteGltfSceneToStream(&m, out, false, true));
+  const std::string s = out.str();
+  return Bytes(s.begin(), s.end());
+}
+
+// A small project for the exhaustive tests: the scene's head at one level,
+// 300 scan points, a 16 x 16 skin.
+const Bytes& small_project() {
+  static const Bytes b = [] {
+    HeadProject p = textured_project();
+    MultiresMesh& mr = p.fit.multires;
+    MultiresMesh one;
+    REQUIRE(build_multires(p.fit.control, mr.creases, 1, one).ok());
+    one.displacements[0] = mr.displacements[0];
+    one.displacements[1] = mr.displacements[1];
+    REQUIRE(evaluate(one).ok());
+    mr = std::move(one);
+    p.fit.level_meshes.resize(1);
+    p.options.levels = 1;
+    p.scan.positions.resize(300);
+    p.scan.faces.clear();
+    p.texture.uvs.resize(static_cast<size_t>(mr.num_vertices(1)));
+    p.texture.skin = Image::make(16, 16, 3, 128);
+    p.texture.skin.pixels[5] = 7;
+    return saved(p);
+  }();
+  return b;
+}
+
+}  // namespace
+
+TEST_CASE("project file: foreign, future and edited files are refused with a reason") {
+  const Bytes bytes = saved(textured_project());
+  Status st = try_load(Bytes{});
+  CHECK(st.code == ErrorCode::Empty);
+
+  // A PLY, an OBJ.
+  TriMesh tri;
+  tri.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  tri.triangles = {{0, 1, 2}};
+  st = try_load(write_ply(tri));
+  CHECK(contains(st.message, "not a Likeness project"));
+  const std::string obj = write_obj(tri);
+  st = try_load(Bytes(obj.begin(), obj.end()));
+  CHECK(contains(st.message, "not a Likeness project"));
+
+  // A plain GLB from elsewhere: one triangle, no project.
+  {
+    tinygltf::Model m;
+    m.asset.version = "2.0";
+    m.asset.generator = "some modeller";
+    m.buffers.resize(1);
+    const float P[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    m.buffers[0].data.assign(reinterpret_cast<const unsigned char*>(P), reinterpret_cast<const unsigned char*>(P) + 36);
+    tinygltf::BufferView v;
+    v.buffer = 0;
+    v.byteLength = 36;
+    m.bufferViews.push_back(v);
+    tinygltf::Accessor a;
+    a.bufferView = 0;
+    a.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+    a.count = 3;
+    a.type = TINYGLTF_TYPE_VEC3;
+    a.minValues = {0, 0, 0};
+    a.maxValues = {1, 1, 0};
+    m.accessors.push_back(a);
+    tinygltf::Primitive prim;
+    prim.attributes["POSITION"] = 0;
+    tinygltf::Mesh mesh;
+    mesh.primitives.push_back(prim);
+    m.meshes.push_back(mesh);
+    tinygltf::TinyGLTF gltf;
+    std::ostringstream out;
+    REQUIRE(gltf.WriteGltfSceneToStream(&m, out, false, true));
+    const std::string s = out.str();
+    st = try_load(Bytes(s.begin(), s.end()));
+    CHECK(st.code == ErrorCode::InvalidInput);
+    CHECK(contains(st.message, "not a Likeness project: a glTF file with no Likeness project in it (made by some modeller)"));
+  }
+
+  // A newer version, another format's extras, an edited pose.
+  st = try_load(rewritten(bytes, [](tinygltf::Value::Object& d) { d["version"] = tinygltf::Value(2); }));
+  CHECK(st.code == ErrorCode::Unsupported);
+  CHECK(st.message == "made by a newer Likeness (project version 2); this one reads version 1");
+  st = try_load(rewritten(bytes, [](tinygltf::Value::Object& d) { d["format"] = tinygltf::Value(std::string("x")); }));
+  CHECK(contains(st.message, "not a Likeness project"));
+  const Bytes edited = rewritten(bytes, [](tinygltf::Value::Object& d) { d["pose"] = tinygltf::Value(0.5); });
+  st = try_load(edited);
+  CHECK(contains(st.message, "checksum does not match"));
+  // Without the checksum, the edit loads (the checks behind it pass).
+  HeadProject p;
+  REQUIRE(load_project(edited.data(), edited.size(), p, false).ok());
+  CHECK(p.pose == 0.5);
+  // Inconsistent contents behind the checksum are refused one by one.
+  const auto refused = [&](const std::function<void(tinygltf::Value::Object&)>& edit, const std::string& why) {
+    const Status s = try_load(rewritten(bytes, edit), false);
+    INFO(why << ": " << s.message);
+    CHECK(s.code != ErrorCode::Ok);
+    CHECK(contains(s.message, why));
+  };
+  using Obj = tinygltf::Value::Object;
+  const auto at = [](Obj& d, std::initializer_list<const char*> path) -> Obj {
+    Obj o = d;
+    for (const char* k : path) {
+      Obj next = o[k].Get<Obj>();
+      o = std::move(next);
+    }
+    return o;
+  };
+  refused([](Obj& d) { d["pose"] = tinygltf::Value(2.0); }, "the pose");
+  refused([](Obj& d) { d.erase("rig"); }, "rig");
+  refused([&](Obj& d) {
+    Obj fit = at(d, {"fit"}), mr = at(d, {"fit", "multires"});
+    mr["levels"] = tinygltf::Value(3);
+    fit["multires"] = tinygltf::Value(mr);
+    d["fit"] = tinygltf::Value(fit);
+  }, "displacements");
+  refused([&](Obj& d) {
+    Obj scan = at(d, {"scan"}), pos = at(d, {"scan", "positions"});
+    pos["count"] = tinygltf::Value(pos["count"].Get<int>() + 1);
+    scan["positions"] = tinygltf::Value(pos);
+    d["scan"] = tinygltf::Value(scan);
+  }, "scan positions");
+  refused([&](Obj& d) {
+    Obj rig = at(d, {"rig"}), moved = at(d, {"rig", "moved"});
+    moved["view"] = tinygltf::Value(100000);
+    rig["moved"] = tinygltf::Value(moved);
+    d["rig"] = tinygltf::Value(rig);
+  }, "no such bufferView");
+  refused([&](Obj& d) {  // the control triangles read as the scan's positions: out of range or wrong type
+    Obj fit = at(d, {"fit"}), control = at(d, {"fit", "control"});
+    control["triangles"] = tinygltf::Value(at(d, {"scan", "positions"}));
+    fit["control"] = tinygltf::Value(control);
+    d["fit"] = tinygltf::Value(fit);
+  }, "control mesh triangles");
+}
+
+TEST_CASE("project file: every cut of a small project is refused, and says it is cut") {
+  const Bytes& full = small_project();
+  INFO("small project: " << full.size() << " bytes");
+  REQUIRE(try_load(full).ok());
+  REQUIRE(full.size() < 2000000);
+  int wrong = 0;
+  for (size_t n = 0; n < full.size(); ++n) {
+    HeadProject p;
+    const Status st = load_project(n ? full.data() : nullptr, n, p);
+    const bool expected = n == 0 ? st.code == ErrorCode::Empty
+                          : n < 4 ? contains(st.message, "not a Likeness project")
+                                  : st.code == ErrorCode::Truncated && contains(st.message, "truncated Likeness project");
+    if (!expected && ++wrong < 5) FAIL_CHECK("cut at " << n << ": " << st.message);
+  }
+  CHECK(wrong == 0);
+}
+
+TEST_CASE("project file: random byte flips are refused or change nothing, and never crash") {
+  const Bytes& full = small_project();
+  HeadProject original = loaded(full);
+  std::mt19937 rng(36);
+  std::uniform_int_distribution<size_t> where(0, full.size() - 1);
+  std::uniform_int_distribution<int> mask(1, 255);
+  int refused = 0, same = 0, unchecked_loaded = 0;
+  Bytes b = full;
+  for (int i = 0; i < 3000; ++i) {
+    const size_t at = where(rng);
+    b[at] = static_cast<std::uint8_t>(b[at] ^ mask(rng));
+    HeadProject p;
+    const Status st = load_project(b.data(), b.size(), p);
+    if (!st.ok()) {
+      CHECK(!st.message.empty());
+      ++refused;
+    } else {
+      // Accepted only where the flip is outside the project (the scene's
+      // JSON, say): the project is the original, byte for byte.
+      CHECK(saved(p) == full);
+      ++same;
+    }
+    // Without the checksum the checks behind it meet the damage: no crash.
+    HeadProject q;
+    if (load_project(b.data(), b.size(), q, false).ok()) ++unchecked_loaded;
+    b[at] = full[at];
+  }
+  INFO("refused " << refused << ", unchanged " << same << ", loaded without the checksum " << unchecked_loaded);
+  CHECK(refused > 2500);
+  CHECK(refused + same == 3000);
+  WARN("byte flips: refused " << refused << ", accepted unchanged " << same << ", loaded without the checksum "
+                              << unchecked_loaded << " of 3000");
+}
