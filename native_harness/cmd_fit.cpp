@@ -7,6 +7,7 @@
 #include "io/io.h"
 #include "project/export.h"
 #include "project/fit_job.h"
+#include "project/project_file.h"
 #include "project/quality_job.h"
 
 #include <chrono>
@@ -73,6 +74,10 @@ int run_fit(const Args& args) {
     opt.whole_head_data_level = -1;
   }
   const bool dump = args.has("dump"), scan_frame = args.has("scan-frame");
+  // --project FILE: the whole head project as one GLB (project_file.h), for
+  // `likeness project`, `likeness texture --project` and the page.
+  const std::string project_path = args.get("project");
+  if (args.has("project") && project_path.empty()) return fail(cmd, "--project needs a file name, e.g. head.likeness.glb");
 
   PointCloud scan;
   Status st = load_point_cloud_file(scan_path, scan);
@@ -158,14 +163,24 @@ int run_fit(const Args& args) {
   std::printf("  wrote %s/control.obj, level1..%d.obj, %sreport.json (%s frame)\n", out_dir.c_str(), opt.levels,
               q.to_scan_status ? "face_to_scan.ply (the finest level's distance map), " : "",
               scan_frame ? "scan" : "head: metres, +y up, +z facing");
+  if (!project_path.empty()) {
+    Bytes bytes;
+    st = save_project(project, bytes);
+    if (st) st = write_file(project_path, bytes);
+    if (!st) return fail(cmd, st.message);
+    std::printf("  wrote %s (the head project, %.1f MB: `likeness project info %s`)\n", project_path.c_str(),
+                bytes.size() / 1e6, project_path.c_str());
+  }
   return 0;
 }
 
 Registrar reg({"fit",
                "likeness fit --scan FILE --out DIR [--levels L] [--up X Y Z|+x..-z] [--facing X Y Z|+x..-z] "
                "[--no-orientation-check] [--face-only|--whole-head] [--no-eye-region] [--no-denoise] [--widen-footprints] [--data-level 0|1|2] "
-               "[--dump] [--scan-frame] [--generic-head asset|plate|ring|even|back|nape]",
-               "fits the generic head to a scan (jeong2002): control.obj, level1..L.obj, report.json", run_fit});
+               "[--dump] [--scan-frame] [--generic-head asset|plate|ring|even|back|nape] [--project FILE.likeness.glb]",
+               "fits the generic head to a scan (jeong2002): control.obj, level1..L.obj, report.json, and with "
+               "--project the head project (a GLB)",
+               run_fit});
 
 }  // namespace
 }  // namespace lk::cli

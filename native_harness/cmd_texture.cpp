@@ -9,6 +9,9 @@
 #include "head/generic_head.h"
 #include "io/io.h"
 #include "mesh/geometry.h"
+#include "project/export.h"
+#include "project/pose.h"
+#include "project/project_file.h"
 #include "project/texture_job.h"
 #include "raycast/bvh.h"
 #include "subdiv/butterfly.h"
@@ -198,11 +201,21 @@ int run_texture(const Args& args) {
   if (!only_known_options(kName, args,
                           {"head", "photos", "points", "size", "focal", "out", "no-spline", "dump",
                            "make-synthetic", "photo-width", "photo-height", "even-light", "field",
-                           "same-camera", "separate-cameras"}))
+                           "same-camera", "separate-cameras", "project", "project-out"}))
     return 2;
   const double t_start = wall_clock_ms();
   const std::string head_spec = args.get("head"), out_dir = args.get("out");
-  if (head_spec.empty()) return usage_error("--head DIR (a `likeness fit` output), a mesh file or 'generic' is required");
+  // --project FILE: the head is a saved project's finest level (scan frame,
+  // as the points are), textured by the project's job as in the page;
+  // --project-out FILE saves the textured project.
+  const std::string project_path = args.get("project"), project_out = args.get("project-out");
+  const bool use_project = args.has("project");
+  if (use_project && project_path.empty()) return usage_error("--project needs a project file");
+  if (use_project && !head_spec.empty()) return usage_error("give --head or --project, not both");
+  if (args.has("project-out") && (!use_project || project_out.empty()))
+    return usage_error("--project-out FILE goes with --project FILE");
+  if (head_spec.empty() && !use_project)
+    return usage_error("--head DIR (a `likeness fit` output), a mesh file or 'generic' is required, or --project FILE");
   TextureOptions opt;
   double focal = 0;
   if (!args.get_int("size", 2048, opt.size) || !args.get_double("focal", 0, focal)) return 2;
@@ -210,9 +223,20 @@ int run_texture(const Args& args) {
   if (opt.size < 16 || opt.size > 4096) return usage_error("--size must be in [16, 4096]");
 
   HeadInput head;
+  HeadProject project;
   std::map<std::string, double> timings;
   double t0 = wall_clock_ms();
-  Status s = load_head(head_spec, opt.uv, head);
+  Status s;
+  if (use_project) {
+    Bytes bytes;
+    s = read_file(project_path, bytes);
+    if (s) s = with_context(load_project(bytes.data(), bytes.size(), project), project_path);
+    if (s) s = rest_pose(project);
+    if (s) s = project_level_mesh(project, project.fit.multires.num_levels(), ExportFrame::Scan, head.mesh);
+    head.description = project_path;
+  } else {
+    s = load_head(head_spec, opt.uv, head);
+  }
   if (!s) return fail(kName, s.message);
   timings["load head"] = wall_clock_ms() - t0 - head.control_uv_ms;
 
@@ -258,14 +282,47 @@ int run_texture(const Args& args) {
                                 : args.has("separate-cameras") ? CameraSharing::Separate
                                                                : CameraSharing::Auto;
   PhotoCalibration calibration;
-  s = calibrate_texture_photos(points, sizes, photo_paths, copt, sharing, calibration);
-  if (!s) return fail(kName, s.message);
+  TexturedHead out;
+  opt.keep_unblended = args.has("dump");
+  if (use_project) {
+    // The project's texture job: calibration, the chart, texture_head.
+    TextureJobInput input;
+    input.photos = photos;
+    input.points = points;
+    input.names = photo_paths;
+    input.options = opt;
+    input.calibration = copt;
+    input.sharing = sharing;
+    TextureJobResult result;
+    std::map<std::string, double> started;
+    StepObserver observer;
+    observer.started = [&](const std::string& step) { started[step] = wall_clock_ms(); };
+    observer.finished = [&](const std::string& step) { timings[step] += wall_clock_ms() - started[step]; };
+    s = texture_project(project, input, result, observer);
+    if (!s) return fail(kName, head.description + ": " + s.message);
+    calibration = std::move(result.calibration);
+    out = std::move(result.head);
+    timings["parameterize"] += timings["chart"];
+    timings.erase("chart");
+    head.uv_from_control = true;
+    head.control_uv = result.chart;
+    if (!project_out.empty()) {
+      Bytes bytes;
+      s = save_project(project, bytes);
+      if (s) s = write_file(project_out, bytes);
+      if (!s) return fail(kName, s.message);
+      std::printf("wrote %s (the textured head project)\n", project_out.c_str());
+    }
+  } else {
+    s = calibrate_texture_photos(points, sizes, photo_paths, copt, sharing, calibration);
+    if (!s) return fail(kName, s.message);
+  }
   const std::vector<CalibResult>& calib = calibration.results;
   if (calibration.shared)
     std::printf("calibration: one focal length shared by all photos (same camera)%s\n",
                 args.has("same-camera") ? "" : "; --separate-cameras calibrates each photo alone");
   for (size_t i = 0; i < photos.size(); ++i) photos[i].camera = calib[i].camera;
-  timings["calibrate"] = wall_clock_ms() - t0;
+  if (!use_project) timings["calibrate"] = wall_clock_ms() - t0;
 
   // Texturing, timed step by step from the progress callback.
   std::string current;
@@ -280,12 +337,12 @@ int run_texture(const Args& args) {
     }
     return true;
   };
-  TexturedHead out;
-  opt.keep_unblended = args.has("dump");
-  s = texture_head(head.mesh, photos, opt, out, progress);
-  if (!s) return fail(kName, head.description + ": " + name_photos(s, photo_paths).message);
+  if (!use_project) {
+    s = texture_head(head.mesh, photos, opt, out, progress);
+    if (!s) return fail(kName, head.description + ": " + name_photos(s, photo_paths).message);
+  }
   // The chart of a fit's finest level is made on its control mesh while loading.
-  if (head.uv_from_control) timings["parameterize"] += head.control_uv_ms;
+  if (head.uv_from_control && !use_project) timings["parameterize"] += head.control_uv_ms;
 
   // Outputs.
   t0 = wall_clock_ms();
@@ -382,7 +439,8 @@ int run_texture(const Args& args) {
 }
 
 const Registrar reg({kName,
-                     "likeness texture --head DIR|MESH|generic --photos P1 P2 ... --points F1 F2 ... --out DIR "
+                     "likeness texture --head DIR|MESH|generic | --project FILE [--project-out FILE] "
+                     "--photos P1 P2 ... --points F1 F2 ... --out DIR "
                      "[--size 2048] [--focal PX] [--same-camera | --separate-cameras] [--no-spline] [--dump] | --head ... --make-synthetic DIR "
                      "[--photo-width 3000 --photo-height 2000] [--even-light] [--field bands|skin]",
                      "skin texture from calibrated photos (tarini2002 Sec. 3.2): binding, resampling, hole filling, "

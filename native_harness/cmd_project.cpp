@@ -1,0 +1,102 @@
+// likeness project: what a saved head project (core/project/project_file.h,
+// written by `likeness fit --project` or the page's "Save project") holds,
+// and its levels re-exported without fitting again.
+#include "command.h"
+
+#include "io/io.h"
+#include "project/export.h"
+#include "project/pose.h"
+#include "project/project_file.h"
+
+#include <cstdio>
+
+namespace lk::cli {
+namespace {
+
+const char* kName = "project";
+
+Status read_project_file(const std::string& path, HeadProject& project) {
+  Bytes bytes;
+  if (Status st = read_file(path, bytes); !st.ok()) return st;
+  return with_context(load_project(bytes.data(), bytes.size(), project), path);
+}
+
+int run_info(const std::string& path) {
+  HeadProject p;
+  if (Status st = read_project_file(path, p); !st.ok()) return fail(kName, st.message);
+  const FitHeadResult& f = p.fit;
+  const MultiresMesh& mr = f.multires;
+  std::printf("%s: Likeness project, version %d\n", path.c_str(), kProjectFileVersion);
+  std::printf("  scan: %zu points%s, unit %s (bbox diagonal %.4g scan units), %d points above the neck cut%s\n",
+              p.scan.positions.size(),
+              p.scan.faces.empty() ? "" : (", " + std::to_string(p.scan.faces.size()) + " triangles").c_str(),
+              f.unit_to_metres == 1 ? "m" : f.unit_to_metres == 0.01 ? "cm" : "mm", f.bbox_diagonal,
+              f.fitted_points, f.face_only ? ", a face-only capture" : "");
+  for (const std::string& note : f.notes) std::printf("  note: %s\n", note.c_str());
+  for (int l = 0; l <= mr.num_levels(); ++l)
+    std::printf("  level %d%s: %d vertices, %zu triangles\n", l, l == 0 ? " (control mesh)" : "", mr.num_vertices(l),
+                mr.triangles(l).size());
+  for (const FitStageReport& s : f.stages)
+    std::printf("  %-18s scan to surface: mean %.3f %%, max %.3f %% of the diagonal\n", s.name.c_str(),
+                s.distance.mean_pct, s.distance.max_pct);
+  std::printf("  animation: %zu control vertices rigged, pose %.2f\n", p.rig.moved.size(), p.pose);
+  if (p.texture.empty())
+    std::printf("  texture: none\n");
+  else
+    std::printf("  texture: %dx%d skin, chart on %zu vertices\n", p.texture.skin.width, p.texture.skin.height,
+                p.texture.uvs.size());
+  return 0;
+}
+
+int run_export(const std::string& path, const Args& args) {
+  const std::string out = args.get("out"), format = args.get("format", "obj");
+  if (out.empty()) return fail(kName, "export needs --out FILE");
+  HeadProject p;
+  if (Status st = read_project_file(path, p); !st.ok()) return fail(kName, st.message);
+  int level = -1;
+  double pose = p.pose;
+  if (!args.get_int("level", -1, level) || !args.get_double("pose", p.pose, pose)) return 2;
+  if (level < 0) level = p.fit.multires.num_levels();
+  if (Status st = pose_project(p, pose); !st.ok()) return fail(kName, st.message);
+  const ExportFrame frame = args.has("scan-frame") ? ExportFrame::Scan : ExportFrame::Head;
+  Status st;
+  if (format == "obj" || format == "ply") {
+    Bytes bytes;
+    st = export_level(p, level, format == "obj" ? LevelFormat::Obj : LevelFormat::Ply, frame, bytes);
+    if (st) st = write_file(out, bytes);
+    if (!st) return fail(kName, st.message);
+    std::printf("wrote %s: level %d, pose %.2f, %s frame\n", out.c_str(), level, p.pose,
+                frame == ExportFrame::Scan ? "scan" : "head");
+    return 0;
+  }
+  if (format != "textured") return fail(kName, "--format takes obj, ply or textured");
+  // OUT.obj with OUT.mtl and OUT.png beside it.
+  const std::string stem = out.size() > 4 && out.compare(out.size() - 4, 4, ".obj") == 0 ? out.substr(0, out.size() - 4) : out;
+  const std::string base = stem.substr(stem.find_last_of('/') + 1);
+  TexturedFiles files;
+  st = export_textured(p, level, base, frame, files);
+  if (st) st = write_file(stem + ".obj", files.obj);
+  if (st) st = write_file(stem + ".mtl", files.mtl);
+  if (st) st = write_file(stem + ".png", files.png);
+  if (!st) return fail(kName, st.message);
+  std::printf("wrote %s.obj, %s.mtl, %s.png: level %d, pose %.2f, %s frame\n", stem.c_str(), stem.c_str(),
+              stem.c_str(), level, p.pose, frame == ExportFrame::Scan ? "scan" : "head");
+  return 0;
+}
+
+int run_project(const Args& args) {
+  if (!only_known_options(kName, args, {"level", "format", "out", "pose", "scan-frame"})) return 2;
+  if (args.positional.size() != 2 || (args.positional[0] != "info" && args.positional[0] != "export")) {
+    fail(kName, "give `info FILE` or `export FILE --out PATH` (see likeness project --help)");
+    return 2;
+  }
+  return args.positional[0] == "info" ? run_info(args.positional[1]) : run_export(args.positional[1], args);
+}
+
+const Registrar reg({kName,
+                     "likeness project info FILE | likeness project export FILE --out PATH [--format obj|ply|textured] "
+                     "[--level L] [--pose A] [--scan-frame]",
+                     "what a saved head project holds; its levels re-exported without fitting again", run_project});
+
+}  // namespace
+}  // namespace lk::cli

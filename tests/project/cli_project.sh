@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# The project file through the CLI: fit writes it, `project info` reads it,
+# `project export` re-exports without fitting (the fit's level to within its
+# rounding), `texture --project` textures it as the page does and saves it,
+# and a cut or foreign file is refused with exit 1 and a reason.
+# Usage: cli_project.sh LIKENESS WORKDIR
+set -euo pipefail
+L="$1"; W="$2"
+rm -rf "$W"; mkdir -p "$W"; cd "$W"
+"$L" synth-scan --seed 2 --points 60000 --out . > /dev/null
+"$L" fit --scan scan.ply --out fit --levels 2 --scan-frame --project head.likeness.glb > fit.log
+grep -q "wrote head.likeness.glb" fit.log
+"$L" project info head.likeness.glb > info.txt
+grep -q "level 2: [0-9]* vertices" info.txt
+grep -q "texture: none" info.txt
+"$L" project export head.likeness.glb --level 2 --scan-frame --out l2.obj > /dev/null
+python3 - <<'PY'
+a = [list(map(float, l.split()[1:])) for l in open("l2.obj") if l.startswith("v ")]
+b = [list(map(float, l.split()[1:])) for l in open("fit/level2.obj") if l.startswith("v ")]
+assert len(a) == len(b) and len(a) > 1000, (len(a), len(b))
+worst = max(abs(x - y) for p, q in zip(a, b) for x, y in zip(p, q))
+assert worst < 1e-12, worst  # the fit's own state and an evaluation differ by rounding
+fa = [l for l in open("l2.obj") if l.startswith("f ")]
+fb = [l for l in open("fit/level2.obj") if l.startswith("f ")]
+assert fa == fb
+print("export matches the fit's level 2 within", worst)
+PY
+"$L" texture --project head.likeness.glb --make-synthetic photos --photo-width 480 --photo-height 360 > /dev/null
+"$L" texture --project head.likeness.glb --photos photos/photo{0,1,2}.png --points photos/points{0,1,2}.txt \
+  --out tex --size 256 --project-out textured.likeness.glb > tex.log
+"$L" project info textured.likeness.glb | grep -q "texture: 256x256 skin"
+"$L" project export textured.likeness.glb --format textured --scan-frame --out head.obj > /dev/null
+cmp <(grep '^vt' head.obj) <(grep '^vt' tex/textured.obj)
+cmp <(grep '^v ' head.obj) <(grep '^v ' tex/textured.obj)
+head -c 4000 head.likeness.glb > cut.glb
+if "$L" project info cut.glb 2> err.txt; then echo "a cut file was read"; exit 1; fi
+grep -q "truncated Likeness project" err.txt
+if "$L" project info scan.ply 2> err.txt; then echo "a PLY was read as a project"; exit 1; fi
+grep -q "not a Likeness project" err.txt
+echo "cli project: ok"
