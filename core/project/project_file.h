@@ -34,7 +34,7 @@ Status save_project(const HeadProject& project, Bytes& out);
 // bit-identical to the saved project's evaluated ones. Every count, index
 // and offset is checked against the bytes before anything is allocated;
 // errors say why a file is refused ("not a Likeness project: ...",
-// "made by a newer Likeness (project version 3; this one reads up to 1)").
+// "made by a newer Likeness (project version 2); this one reads version 1").
 // The file carries a checksum of its project (FNV-1a over the extras and
 // the binary chunk), so a damaged file is refused rather than loaded
 // wrong; verify_checksum false skips it (the fuzz tests reach the checks
