@@ -130,6 +130,11 @@ const JOBS = {
     core.texture_job(placed, msg.options || {}, progress)),
   // {level, base}: the textured head as {obj, mtl, png} bytes.
   exportTextured: (msg) => core.export_textured(msg.level, String(msg.base)),
+  // {}: the kept head project as a .likeness.glb file's bytes.
+  saveProject: () => core.save_project_job(),
+  // {name, buffer}: a saved project -> the kept head, as 'fit' returns it
+  // (plus scan positions, texture, loadMs), without fitting.
+  openProject: (msg) => withHeapBytes(msg.buffer, (ptr, size) => core.load_project_job(msg.name, ptr, size)),
   // {name, buffer, guess?: [x, y]}: an eye photo -> the eyeball (iris) texture.
   eye: (msg) => withHeapBytes(msg.buffer, (ptr, size) => core.eye_photo_job(msg.name, ptr, size, msg.guess || null)),
   // {name, buffer}: a smile photo -> the teeth texture (teeth model's uvs).

@@ -26,7 +26,8 @@ import { flow as exportFlow } from './flows/export.mjs';
 import { flow as animation } from './flows/animation.mjs';
 import { flow as texture } from './flows/texture.mjs';
 import { flow as eyeSmile } from './flows/eye_smile.mjs';
+import { flow as project } from './flows/project.mjs';
 import { flow as fitCancel } from './flows/fit_cancel.mjs';
 
 runFlows([startup, scanLoad, startupFailures, fit, fitChecks, fitThreads, exportFlow, animation, texture, eyeSmile,
-          fitCancel]);
+          project, fitCancel]);

@@ -5,7 +5,7 @@ import { app, ui, setStatus, showError } from './state.js';
 import { runJob } from './worker_client.js';
 import { distanceMap } from './checks.js';
 
-function download(name, bytes, mime) {
+export function download(name, bytes, mime) {
   const url = URL.createObjectURL(new Blob([bytes], { type: mime }));
   const a = document.createElement('a');
   a.href = url;

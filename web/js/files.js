@@ -6,6 +6,7 @@ import { stopAnimation } from './animation.js';
 import { loadScan } from './scan.js';
 import { checkPhotos, readPointFiles, texturable } from './photos.js';
 import { runTexture } from './texture.js';
+import { openProject } from './project.js';
 
 // Largest scan file accepted. Parsing needs up to ~5x the file's size in
 // wasm memory (the bytes, then double-precision positions and the arrays
@@ -59,6 +60,13 @@ export async function handleFiles(fileList) {
   }
   clearError();
   stopAnimation();
+  // A saved project (.likeness.glb) is opened on its own: it is a whole head.
+  const project = files.find((f) => extension(f.name) === 'glb');
+  if (project) {
+    for (const extra of files.filter((f) => f !== project)) listFile(extra, 'ignored: a project opens on its own', 'ignored');
+    await openProject(project);
+    return;
+  }
   const photos = files.filter((f) => PHOTO_EXTENSIONS.includes(extension(f.name)));
   const pointFiles = files.filter((f) => extension(f.name) === 'txt');
   const scans = files.filter((f) => !photos.includes(f) && !pointFiles.includes(f));

@@ -41,6 +41,11 @@ export function forgetFit(why) {
 export async function runFit() {
   const state = document.body.dataset.state;
   if (!app.scan || state === 'working' || state === 'loading' || app.startupFailed) return;
+  if (!app.scan.file) {
+    showError('This head was opened from a project file, which keeps the fitted head but not the scan file: ' +
+              'drop the scan to fit it again.');
+    return;
+  }
   clearError();
   stopAnimation();
   const file = app.scan.file;
@@ -89,21 +94,43 @@ export async function runFit() {
     showError(message);
     return;
   }
-  app.fit = { name: file.name, stages: result.stages, meshes: result.meshes, fitMs: result.fitMs,
-              parseMs: result.parseMs, wallMs, points: result.points, fittedPoints: result.fittedPoints,
+  app.project = null;
+  showHead(result, file.name, wallMs);
+  setStatus(file.name + ': head fitted in ' + (result.fitMs / 1000).toFixed(2) + ' s. Click a stage to see its mesh; ' +
+            'pick a level, animate or export.');
+  setState('done');
+  renderPhotos();
+  // Sent before anything else can reach the worker, so the checks see the
+  // head at rest; not awaited: the page stays usable meanwhile.
+  checkFitQuality(app.fit);
+  if (ui.autoFit.checked && texturable().length) await runTexture();
+}
+app.fitHead = () => runFit();
+
+// Shows a head the worker holds, fitted just now or opened from a project
+// file (result.loadMs; its stages carry the saved figures, no times): the
+// Pipeline rows, the notes, the levels, the components, the subdivided
+// head over app.scan's points, looking at its face.
+export function showHead(result, name, wallMs) {
+  const opened = result.loadMs !== undefined;
+  app.fit = { name, stages: result.stages, meshes: result.meshes, fitMs: result.fitMs || 0,
+              parseMs: result.parseMs || 0, wallMs, points: result.points, fittedPoints: result.fittedPoints,
               animatedVertices: result.animatedVertices, landmarks: result.landmarks || [],
               headFacing: result.headFacing || [0, 0, 1], headUp: result.headUp || [0, 1, 0] };
   forgetTexture();
   for (const st of FIT_STAGES) {
     const s = result.stages.find((x) => x.name === st.core);
-    setStage(st.row, s ? Math.round(s.ms) + ' ms' : 'done', 1, 'complete');
+    setStage(st.row, opened ? 'saved' : s ? Math.round(s.ms) + ' ms' : 'done', 1, 'complete');
     if (s) stageStats(st.row).textContent = 'mean ' + s.meanPct.toFixed(3) + ' % · max ' + s.maxPct.toFixed(2) + ' % of diagonal';
     const li = stageItem(st.row);
     li.classList.add('viewable');
     li.tabIndex = 0;
     li.setAttribute('role', 'button');
   }
-  ui.fitTotal.textContent = 'fit ' + (result.fitMs / 1000).toFixed(2) + ' s (+ parse ' + Math.round(result.parseMs) +
+  ui.fitTotal.textContent = opened
+    ? 'opened from ' + name + ' in ' + Math.round(result.loadMs) + ' ms, not fitted again · ' +
+      result.fittedPoints.toLocaleString('en') + ' points fitted when saved'
+    : 'fit ' + (result.fitMs / 1000).toFixed(2) + ' s (+ parse ' + Math.round(result.parseMs) +
                             ' ms) · ' + result.fittedPoints.toLocaleString('en') + ' points fitted' +
                             (app.workerThreads ? ' · ' + app.workerThreads.threads + (app.workerThreads.threads === 1 ? ' thread' : ' threads') +
                              (app.workerThreads.fallback ? ' (threads could not start here)' : '') : '');
@@ -121,16 +148,7 @@ export async function runFit() {
   // and the view was framed on the scan, which may be a face only.
   const [f, u] = [app.fit.headFacing, app.fit.headUp];
   app.viewer.set_head_frame(f[0], f[1], f[2], u[0], u[1], u[2]);
-  setStatus(file.name + ': head fitted in ' + (result.fitMs / 1000).toFixed(2) + ' s. Click a stage to see its mesh; ' +
-            'pick a level, animate or export.');
-  setState('done');
-  renderPhotos();
-  // Sent before anything else can reach the worker, so the checks see the
-  // head at rest; not awaited: the page stays usable meanwhile.
-  checkFitQuality(app.fit);
-  if (ui.autoFit.checked && texturable().length) await runTexture();
 }
-app.fitHead = () => runFit();
 
 // What the fit decided on its own about the scan (turned to face +z, a
 // face-only capture, ...), as `likeness fit` prints them: the user should

@@ -28,6 +28,7 @@ import { wireHeadView } from './head_view.js';
 import { wireTexture } from './texture.js';
 import { wireAnimation } from './animation.js';
 import { wireExport } from './export.js';
+import { wireProject } from './project.js';
 
 function wire() {
   // ?autofit=0 starts with Auto-run off (load scans without fitting them).
@@ -41,6 +42,7 @@ function wire() {
   wireHeadView();
   wireAnimation();
   wireExport();
+  wireProject();
   wireTexture();
   wireClicker();
 }

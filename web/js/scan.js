@@ -9,11 +9,11 @@ import { FIT_STAGES, forgetFit, runFit } from './fit.js';
 const SCAN_EXTENSIONS = ['ply', 'obj', 'xyz', 'vtk'];
 // What the viewer draws at most (see loadScan); ?max_display_points=N and
 // ?max_display_triangles=N override.
-const MAX_DISPLAY_POINTS = Number(params.get('max_display_points')) > 0 ? Number(params.get('max_display_points')) : 4000000;
+export const MAX_DISPLAY_POINTS = Number(params.get('max_display_points')) > 0 ? Number(params.get('max_display_points')) : 4000000;
 const MAX_DISPLAY_TRIANGLES = Number(params.get('max_display_triangles')) > 0 ? Number(params.get('max_display_triangles')) : 2000000;
 
 // Every stride-th point of a parsed point cloud (positions, normals, colors).
-function thinPoints(result, stride) {
+export function thinPoints(result, stride) {
   const n = Math.ceil(result.vertexCount / stride);
   const pick = (a) => {
     if (!a || a.length === 0) return a;

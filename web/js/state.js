@@ -29,6 +29,7 @@ export const ui = {
   showComponents: $('show-components'),
   exportObj: $('btn-export-obj'), exportPly: $('btn-export-ply'), exportTextured: $('btn-export-textured'),
   exportMap: $('btn-export-map'), distanceLegend: $('distance-legend'),
+  saveProject: $('btn-save-project'), projectInput: $('project-input'),
   photoList: $('photo-list'), photoCount: $('photo-count'), texture: $('btn-texture'), textureTotal: $('texture-total'),
   viewerPane: document.querySelector('.viewer-pane'), clicker: $('clicker'), clickerPrompt: $('clicker-prompt'),
   clickerCanvas: $('clicker-canvas'), clickerList: $('clicker-list'), clickerUndo: $('clicker-undo'),
@@ -53,6 +54,7 @@ export const app = window.likeness = {
   warmup: null,          // the start-up warm-up worker: {state: running|done|failed|gave up, variant, ms, fitMs}
   startupFailed: false,  // the viewer or the core could not start
   scan: null,            // {file, display}: the loaded scan, kept to fit it and draw it under the fit
+  project: null,         // {name, loadMs, wallMs} when the head shown came from a project file
   fit: null,             // the last fit: {name, stages, meshes, fitMs, parseMs, wallMs, quality}; its
                          // multiresolution head lives in the worker (animation, export)
   shownStage: null,      // which fit mesh is drawn: align|local_fit|global_fit|subdivide
@@ -91,7 +93,7 @@ export function setState(state) {
   ui.dropZone.classList.toggle('busy', state === 'working');
   ui.cancel.hidden = state !== 'working';
   const fitting = state === 'working';
-  ui.fit.disabled = !interactive || fitting || !app.scan;
+  ui.fit.disabled = !interactive || fitting || !app.scan || !app.scan.file;
   const haveFit = interactive && !fitting && !!app.fit;
   ui.exportObj.disabled = !haveFit;
   ui.exportPly.disabled = !haveFit;
@@ -103,6 +105,8 @@ export function setState(state) {
   ui.texture.disabled = !haveFit || !app.photos.length;
   ui.exportTextured.disabled = !haveFit || !app.texture;
   ui.exportMap.disabled = !haveFit || !distanceColors();
+  ui.saveProject.disabled = !haveFit;
+  ui.projectInput.disabled = !interactive || state === 'working';
   for (const role of ui.photoList.querySelectorAll('select.photo-role')) role.disabled = !interactive || state === 'working';
 }
 

@@ -1,0 +1,93 @@
+// Save project / Open project: "Save project" downloads the fitted (and,
+// after the texture flow, textured) head as a .likeness.glb; a freshly
+// loaded page opens it and shows the same head without fitting (same level
+// sizes and positions, the same skin), animates and exports it; a cut file
+// is refused with its reason and the head stays.
+import fs from 'node:fs';
+import { bannerText, check, JOB_TIMEOUT_MS, runAlone, settled, shot, state } from '../harness.mjs';
+import { fittedHead } from './fit.mjs';
+
+// What identifies the head a page shows: level sizes, the finest level's
+// position sums, the skin's size and a checksum of its pixels.
+function headPrint(page) {
+  return page.evaluate(() => {
+    const f = window.likeness.fit, t = window.likeness.texture;
+    if (!f) return null;
+    const finest = f.meshes.levels[f.meshes.levels.length - 1].positions;
+    let sum = 0, abs = 0;
+    for (let i = 0; i < finest.length; i++) { sum += finest[i] * ((i % 7) + 1); abs += Math.abs(finest[i]); }
+    let skin = null;
+    if (t) {
+      let h = 0;
+      for (let i = 0; i < t.skin.pixels.length; i++) h = (h * 31 + t.skin.pixels[i]) >>> 0;
+      skin = `${t.skin.width}x${t.skin.height}x${t.skin.channels} #${h}`;
+    }
+    return { levels: f.meshes.levels.map((m) => m.vertexCount), control: f.meshes.control.vertexCount, sum, abs, skin,
+             stages: f.stages.map((s) => s.name + ' ' + s.meanPct.toFixed(4)) };
+  });
+}
+
+async function run(s) {
+  const { page, fit } = await fittedHead(s);
+  if (!fit) return;
+  await settled(page);
+  const before = await headPrint(page);
+  const handed = await page.evaluate(() => window.likeness.downloads.length);
+  const downloadP = page.waitForEvent('download', { timeout: JOB_TIMEOUT_MS });
+  await page.click('#btn-save-project');
+  const download = await downloadP;
+  const bytes = fs.readFileSync(await download.path());
+  await page.waitForFunction((n) => window.likeness.downloads.length > n, handed, { timeout: JOB_TIMEOUT_MS });
+  check('"Save project" downloads a .likeness.glb (a glTF binary)',
+        /\.likeness\.glb$/.test(download.suggestedFilename()) && bytes.toString('latin1', 0, 4) === 'glTF' &&
+        bytes.readUInt32LE(8) === bytes.length,
+        `${download.suggestedFilename()}, ${bytes.length} bytes`);
+
+  // A freshly loaded page (nothing fitted) opens the file.
+  const fresh = await s.newPage();
+  const empty = await fresh.evaluate(() => !window.likeness.fit && !window.likeness.scan);
+  const t0 = Date.now();
+  await fresh.setInputFiles('#project-input', { name: download.suggestedFilename(), mimeType: 'model/gltf-binary', buffer: bytes });
+  await settled(fresh);
+  const wallMs = Date.now() - t0;
+  const after = await headPrint(fresh);
+  const opened = await fresh.evaluate(() => ({ state: document.body.dataset.state, project: window.likeness.project,
+    fitMs: window.likeness.fit && window.likeness.fit.fitMs,
+    tags: [...document.querySelectorAll('#stages li .stage-tag')].map((t) => t.textContent),
+    animate: !document.getElementById('animate').disabled, fitButton: !document.getElementById('btn-fit').disabled }));
+  const same = !!after && JSON.stringify(after.levels) === JSON.stringify(before.levels) && after.control === before.control &&
+    Math.abs(after.sum - before.sum) <= 1e-6 * before.abs && after.skin === before.skin &&
+    JSON.stringify(after.stages) === JSON.stringify(before.stages);
+  check('"Open project" on a fresh page shows the same head (levels, positions, skin, figures)',
+        empty && opened.state === 'done' && same,
+        `state ${opened.state}; before ${JSON.stringify(before)}; after ${JSON.stringify(after)}; ${await bannerText(fresh)}`);
+  check('...without fitting: the fit rows say "saved", no fit time, opened in a fraction of the fit',
+        !!opened.project && opened.fitMs === 0 && opened.tags.filter((t) => t === 'saved').length >= 4 &&
+        opened.project.loadMs < fit.fitMs / 2,
+        `opened in ${wallMs} ms (worker ${opened.project && Math.round(opened.project.loadMs)} ms), fit took ${Math.round(fit.fitMs)} ms; tags ${opened.tags.join('|')}`);
+  check('...and it can be animated, but not fitted again without its scan file', opened.animate && !opened.fitButton,
+        JSON.stringify({ animate: opened.animate, fit: opened.fitButton }));
+  await shot(fresh, 'web_project_open.png');
+
+  // Exported from the opened project: the finest level's OBJ has its vertices.
+  const exportP = fresh.waitForEvent('download', { timeout: JOB_TIMEOUT_MS });
+  await fresh.selectOption('#level', String(before.levels.length));
+  await fresh.click('#btn-export-ply');
+  const ply = fs.readFileSync(await (await exportP).path());
+  check('the opened head exports its finest level', new RegExp('element vertex ' + before.levels[before.levels.length - 1] + '\\b')
+    .test(ply.toString('latin1', 0, 400)), `${ply.length} bytes`);
+
+  // A cut file: refused with its reason, the opened head stays.
+  await settled(fresh);
+  await fresh.setInputFiles('#project-input', { name: 'cut.likeness.glb', mimeType: 'model/gltf-binary', buffer: bytes.subarray(0, 5000) });
+  await settled(fresh);
+  const banner = await bannerText(fresh);
+  const kept = await headPrint(fresh);
+  check('a cut project file is refused with its reason and the head stays',
+        /truncated Likeness project/.test(banner) && !!kept && kept.sum === after.sum && (await state(fresh)) === 'error',
+        banner);
+  await fresh.close();
+}
+
+export const flow = { name: 'project', title: 'Save project, then Open project on a fresh page without fitting', run };
+runAlone(import.meta.url, flow);

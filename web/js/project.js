@@ -1,0 +1,103 @@
+// Save project / Open project: the head the worker holds as one
+// .likeness.glb file (core/project/project_file.h: a GLB whose scene is the
+// head, the project in its extras), and such a file shown again without
+// fitting, over the scan it keeps.
+import { app, ui, clearError, setStage, setState, setStatus, showError, stageItem } from './state.js';
+import { runJob } from './worker_client.js';
+import { download } from './export.js';
+import { formatBytes, listFile } from './files.js';
+import { FIT_STAGES, forgetFit, showHead } from './fit.js';
+import { MAX_DISPLAY_POINTS, thinPoints } from './scan.js';
+import { stopAnimation } from './animation.js';
+import { showStage } from './head_view.js';
+import { renderPhotos } from './photos.js';
+import { checkFitQuality } from './checks.js';
+
+function projectName() {
+  const base = (app.fit && app.fit.name ? app.fit.name : 'head').replace(/\.likeness\.glb$/i, '').replace(/\.[^.]*$/, '');
+  return base + '.likeness.glb';
+}
+
+export async function saveProject() {
+  if (!app.fit || document.body.dataset.state === 'working') return;
+  stopAnimation();
+  try {
+    const r = await runJob({ type: 'saveProject' }, []);
+    if (!r.ok) { showError('Could not save the project: ' + r.message); return; }
+    const name = projectName();
+    download(name, r.bytes, 'model/gltf-binary');
+    setStatus('Saved ' + name + ' (' + formatBytes(r.bytes.length) + '): Open project shows it again without fitting.');
+  } catch (e) {
+    showError('Could not save the project: ' + (e && e.message ? e.message : e));
+  }
+}
+
+// A refused file (cut, damaged, newer, not a project) leaves everything shown
+// as it was: the worker keeps its head until a file loads.
+export async function openProject(file) {
+  const state = document.body.dataset.state;
+  if (state === 'working' || state === 'loading' || app.startupFailed) return;
+  clearError();
+  stopAnimation();
+  const meta = listFile(file, 'opening…');
+  setState('working');
+  setStatus('Opening ' + file.name + '…');
+  const t0 = performance.now();
+  let result;
+  try {
+    const buffer = await file.arrayBuffer();
+    result = await runJob({ type: 'openProject', name: file.name, buffer }, [buffer]);
+  } catch (e) {
+    result = { ok: false, code: 'Internal', message: file.name + ': ' + (e && e.message ? e.message : e) };
+  }
+  if (!result.ok) {
+    meta.textContent = formatBytes(file.size) + ' · not opened';
+    setStatus('Could not open ' + file.name + '.' + (app.model ? ' ' + app.model.name + ' is still shown.' : ''));
+    setState(app.fit ? 'done' : 'ready');  // what Dismiss goes back to: nothing changed
+    showError(result.message || result.code);
+    return;
+  }
+  if (app.fit) forgetFit();
+  // The scan it was fitted to, as points under the head (thinned as a
+  // dropped scan is); shown first so the view is framed on it.
+  let display = { positions: result.scan.positions, normals: new Float32Array(0), colors: new Float32Array(0),
+                  vertexCount: result.scan.vertexCount };
+  if (display.vertexCount > MAX_DISPLAY_POINTS) display = thinPoints(display, Math.ceil(display.vertexCount / MAX_DISPLAY_POINTS));
+  const shown = app.viewer.show_points(display.positions, display.normals, display.colors);
+  if (shown !== '') {
+    setState('ready');
+    showError(file.name + ': ' + shown);
+    return;
+  }
+  app.model = { name: file.name, kind: 'project', vertexCount: result.scan.vertexCount, triangleCount: 0 };
+  app.scan = { file: null, display: { positions: display.positions, normals: display.normals, colors: display.colors } };
+  setStage('load', 'project', 1, 'complete');
+  for (const st of FIT_STAGES) stageItem(st.row).classList.remove('coming');
+  const wallMs = performance.now() - t0;
+  app.project = { name: file.name, loadMs: result.loadMs, wallMs };
+  showHead(result, file.name, wallMs);
+  if (result.texture) {
+    app.texture = { uvs: result.texture.uvs, skin: result.texture.skin, steps: [], textureMs: 0, wallMs: 0,
+                    level: result.texture.level, photos: 0 };
+    stageItem('texture').classList.remove('coming');
+    setStage('texture', 'saved', 1, 'complete');
+    stageItem('texture').querySelector('.stage-stats').textContent = result.texture.skin.width + '² texels, from the project';
+    ui.showPoints.checked = false;
+    app.viewer.set_overlay_visible(false);
+    showStage('subdivide');
+  }
+  meta.textContent = formatBytes(file.size) + ' · project';
+  setStatus('Opened ' + file.name + (result.texture ? ' (textured)' : '') + ' in ' + Math.round(wallMs) +
+            ' ms, without fitting: animate it, texture it or export it.');
+  setState('done');
+  renderPhotos();
+  checkFitQuality(app.fit);
+}
+
+export function wireProject() {
+  ui.saveProject.addEventListener('click', saveProject);
+  ui.projectInput.addEventListener('change', () => {
+    const f = ui.projectInput.files && ui.projectInput.files[0];
+    if (f) openProject(f).finally(() => { ui.projectInput.value = ''; });
+  });
+}
