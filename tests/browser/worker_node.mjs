@@ -8,11 +8,15 @@
 //     recomputation from the returned mesh (skipped when absent);
 //   - every prefix of a binary and an ascii PLY, and byte-flipped copies,
 //     come back as {ok:false, message} or a valid result: never an abort
-//     (an abort kills the page's worker).
+//     (an abort kills the page's worker);
+//   - a project file made by `likeness fit --project` opens, saves to the
+//     same bytes, and its cuts and byte flips give messages, never an abort.
 // Usage: node --no-experimental-fetch worker_node.mjs WEBDIR
 import { createRequire } from 'node:module';
 import fs from 'node:fs';
+import os from 'node:os';
 import path from 'node:path';
+import { execFileSync } from 'node:child_process';
 import { fileURLToPath } from 'node:url';
 
 const WEBDIR = path.resolve(process.argv[2] || '');
@@ -166,6 +170,56 @@ for (const [name, full] of [['bin.ply', binaryPly(40)], ['ascii.ply', Buffer.fro
         good.ok ? Array.from(good.points).join(' ') : good.message);
   const bad = core.parse_points('10 20 0.1 0.2\n');
   check('a short points line is a message naming the line', !bad.ok && /line 1/.test(bad.message), bad.message);
+}
+
+// --- project files: saved and opened; cut and flipped ones give messages -------
+{
+  const noHead = core.save_project_job();
+  check('save before any fit says so', !noHead.ok && /no fitted head/.test(noHead.message), noHead.message);
+  const bin = [process.env.LK_LIKENESS_BIN, path.join(WEBDIR, '..', 'bin', 'likeness')].filter(Boolean).find((c) => fs.existsSync(c));
+  if (!bin) {
+    console.log('skip  worker: project files: no native likeness to make one (set LK_LIKENESS_BIN)');
+  } else {
+    const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-project-'));
+    try {
+      execFileSync(bin, ['synth-scan', '--seed', '3', '--points', '20000', '--out', dir], { stdio: 'pipe' });
+      execFileSync(bin, ['fit', '--scan', path.join(dir, 'scan.ply'), '--out', path.join(dir, 'fit'), '--levels', '1',
+                         '--project', path.join(dir, 'p.likeness.glb')], { stdio: 'pipe' });
+      const full = fs.readFileSync(path.join(dir, 'p.likeness.glb'));
+      const open = (bytes) => {
+        const ptr = core._malloc(Math.max(1, bytes.length));
+        core.HEAPU8.set(bytes, ptr);
+        try { return core.load_project_job('p.likeness.glb', ptr, bytes.length); } finally { core._free(ptr); }
+      };
+      const r = open(full);
+      check('a project made by `likeness fit --project` opens in wasm as the fit returns it',
+            r.ok && r.meshes.levels.length === 1 && r.stages.length === 4 && r.scan.vertexCount > 10000 && r.loadMs >= 0,
+            r.ok ? `${full.length} bytes, level 1 ${r.meshes.levels[0].vertexCount} vertices, ${Math.round(r.loadMs)} ms` : r.message);
+      const saved = core.save_project_job();
+      check('...and saves to the same bytes', saved.ok && Buffer.compare(Buffer.from(saved.bytes), full) === 0,
+            saved.ok ? `${saved.bytes.length} bytes` : saved.message);
+      let refused = 0, bad = 0, same = 0;
+      let rnd = 36;
+      const next = () => (rnd = (rnd * 1103515245 + 12345) >>> 0) / 4294967296;
+      for (let k = 0; k < 300 && !aborted; k++) {
+        const x = open(full.subarray(0, k < 64 ? k : Math.floor(next() * full.length)));
+        if (x.ok) bad++; else if (x.message) refused++; else bad++;
+      }
+      for (let k = 0; k < 200 && !aborted; k++) {
+        const copy = Buffer.from(full);
+        const at = Math.floor(next() * copy.length);
+        copy[at] ^= 1 + Math.floor(next() * 255);
+        const x = open(copy);
+        if (x.ok) same++; else if (x.message) refused++; else bad++;
+      }
+      check('cut and byte-flipped project files give messages, never an abort', !aborted && bad === 0 && refused >= 450,
+            aborted ? 'ABORTED: ' + aborted : `${refused} refused with a message, ${same} flips accepted, ${bad} without a message`);
+    } catch (e) {
+      check('a project file made natively opens in wasm', false, String(e.message).split('\n')[0]);
+    } finally {
+      fs.rmSync(dir, { recursive: true, force: true });
+    }
+  }
 }
 
 // --- the wasm fit measures what it fitted (last: the checks above need no fit) ---
