@@ -4,6 +4,7 @@
 // and future files are refused with a reason and never crash.
 #include "io/io.h"
 #include "project/export.h"
+#include "project/parts.h"
 #include "project/pose.h"
 #include "project/project_file.h"
 #include "project/quality_job.h"
@@ -148,6 +149,19 @@ TEST_CASE("project file: a fitted, textured project comes back bit for bit") {
   CHECK(b.texture.skin.channels == a.texture.skin.channels);
   CHECK(b.texture.skin.pixels == a.texture.skin.pixels);
   CHECK(!b.quality.measured);  // measured again on demand
+
+  // The control mesh as the fit left it (normals too), and the parts placed
+  // from it.
+  CHECK(b.fit.control.normals == a.fit.control.normals);
+  CHECK(b.fit.aligned.triangles == a.fit.aligned.triangles);
+  CHECK(b.fit.local.triangles == a.fit.local.triangles);
+  HeadParts pa, pb;
+  REQUIRE(place_head_parts(a.fit.control, test::project_scene().generic, pa).ok());
+  REQUIRE(place_head_parts(b.fit.control, test::project_scene().generic, pb).ok());
+  for (int i = 0; i < 2; ++i) CHECK(pa.placed.eye[i].positions == pb.placed.eye[i].positions);
+  CHECK(pa.upper_teeth.positions == pb.upper_teeth.positions);
+  CHECK(pa.lower_teeth.positions == pb.lower_teeth.positions);
+  CHECK(pa.placed.tongue.positions == pb.placed.tongue.positions);
 
   // Saving the loaded project gives the same bytes.
   CHECK(saved(b) == bytes);
