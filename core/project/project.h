@@ -3,8 +3,8 @@
 // levels and displacements, the scan <-> head frame, the animation rig and
 // pose, the texture and the fit's checks. The jobs on it live beside it
 // (fit_job.h, pose.h, quality_job.h, export.h, texture_job.h, parts.h);
-// none keeps state of its own, so a project can later be saved and loaded
-// as it is.
+// none keeps state of its own, so a project is saved and loaded as it is
+// (project_file.h).
 //
 // Frames: the fit works in the HEAD frame (metres, +y up, +z facing,
 // pipeline/fit_head.h); what is shown and exported lies over the scan, in

@@ -1,17 +1,14 @@
-// The head project as one file, bytes in and bytes out (the shells read and
-// write files). The container is a GLB (glTF 2.0 binary): its scene is the
-// finest level at rest in the head frame (metres, +y up, +z facing: glTF's
-// own convention), textured when the project is, so any glTF viewer shows
-// the head; the project rides in the root's extras ("likeness"), its arrays
-// as bufferViews of exact doubles and int32s in the same binary chunk.
-// tinygltf (Debian) writes and parses the container; docs/design/project_file.md.
+// The head project as one file, bytes in and out (the shells do the files).
+// A GLB (glTF 2.0 binary), not a zip: its scene is the finest level at rest,
+// textured when the project is, so any glTF viewer shows the head, and the
+// project rides in its extras ("likeness"), arrays as bufferViews of exact
+// doubles. tinygltf (Debian) writes and parses it; docs/design/project_file.md.
 #pragma once
 #include "io/io.h"
 #include "project/project.h"
 
 #include <cstddef>
 #include <cstdint>
-#include <string>
 
 namespace lk {
 
