@@ -6,6 +6,7 @@
 #include "raycast/bvh.h"
 #include "texture/binding.h"
 #include "texture/synthetic_photo.h"
+#include "project/texture_job.h"
 #include "texture/texture.h"
 
 #include <catch2/catch.hpp>
@@ -56,6 +57,16 @@ inline Photos photograph(const TriMesh& mesh) {
     out.points.push_back(points);
   }
   return out;
+}
+
+// The texture job's input of those photos, at size x size texels.
+inline TextureJobInput job_input(const Photos& shots, int size) {
+  TextureJobInput input;
+  input.photos = shots.photos;
+  input.points = shots.points;
+  input.names = shots.names;
+  input.options.size = size;
+  return input;
 }
 
 }  // namespace lk::test

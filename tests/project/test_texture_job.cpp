@@ -59,11 +59,7 @@ TEST_CASE("project texture: the job's skin is the composed stages' skin, and hol
 
   // The job, on a posed project (it textures the rest pose), with its steps.
   REQUIRE(pose_project(p, 1.0).ok());
-  TextureJobInput input;
-  input.photos = shots.photos;
-  input.points = shots.points;
-  input.names = shots.names;
-  input.options.size = 256;
+  TextureJobInput input = test::job_input(shots, 256);
   TextureJobResult out;
   std::vector<std::string> started, finished;
   StepObserver observer;
