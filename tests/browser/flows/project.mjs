@@ -2,7 +2,8 @@
 // after the texture flow, textured) head as a .likeness.glb; a freshly
 // loaded page opens it and shows the same head without fitting (same level
 // sizes and positions, the same skin), animates and exports it; a cut file
-// is refused with its reason and the head stays.
+// is refused with its reason and the head stays; the file chosen among
+// others in the Inputs card opens too.
 import fs from 'node:fs';
 import { bannerText, check, JOB_TIMEOUT_MS, runAlone, settled, shot, state } from '../harness.mjs';
 import { fittedHead } from './fit.mjs';
@@ -86,6 +87,13 @@ async function run(s) {
   check('a cut project file is refused with its reason and the head stays',
         /truncated Likeness project/.test(banner) && !!kept && kept.sum === after.sum && (await state(fresh)) === 'error',
         banner);
+
+  // The file among dropped or chosen files (the Inputs card) opens too.
+  await fresh.setInputFiles('#file-input', { name: download.suggestedFilename(), mimeType: 'model/gltf-binary', buffer: bytes });
+  await settled(fresh);
+  const dropped = await headPrint(fresh);
+  check('a .likeness.glb among the chosen files opens as a project', (await state(fresh)) === 'done' && !!dropped &&
+        dropped.sum === after.sum && dropped.skin === after.skin, `${await state(fresh)} ${await bannerText(fresh)}`);
   await fresh.close();
 }
 
