@@ -2,7 +2,8 @@
 // after the texture flow, textured) head as a .likeness.glb; a freshly
 // loaded page opens it and shows the same head without fitting (same level
 // sizes and positions, the same skin), animates and exports it; a cut file
-// is refused with its reason and the head stays; the file chosen among
+// is refused with its reason and the head stays; the checks measured again
+// agree with the original's; the file chosen among
 // others in the Inputs card opens too.
 import fs from 'node:fs';
 import { bannerText, check, JOB_TIMEOUT_MS, runAlone, settled, shot, state } from '../harness.mjs';
@@ -69,6 +70,17 @@ async function run(s) {
   check('...and it can be animated, but not fitted again without its scan file', opened.animate && !opened.fitButton,
         JSON.stringify({ animate: opened.animate, fit: opened.fitButton }));
   await shot(fresh, 'web_project_open.png');
+
+  // The checks are measured again on the opened head, and agree.
+  const quality = (p) => p.waitForFunction(() => window.likeness.fit && window.likeness.fit.quality, null, { timeout: JOB_TIMEOUT_MS })
+    .then(() => p.evaluate(() => {
+      const q = window.likeness.fit.quality, d = q.faceToScan || {};
+      return { ok: q.ok, flipped: q.flipped, degenerate: q.degenerate, crossings: q.crossings && q.crossings.total,
+               vertices: d.vertices, meanMm: d.meanMm && d.meanMm.toFixed(6), maxMm: d.maxMm && d.maxMm.toFixed(6) };
+    }));
+  const [qBefore, qAfter] = [await quality(page), await quality(fresh)];
+  check('the checks measured again on the opened head are the original\'s', qBefore.ok && JSON.stringify(qBefore) === JSON.stringify(qAfter),
+        `original ${JSON.stringify(qBefore)}; opened ${JSON.stringify(qAfter)}`);
 
   // Exported from the opened project: the finest level's OBJ has its vertices.
   const exportP = fresh.waitForEvent('download', { timeout: JOB_TIMEOUT_MS });
