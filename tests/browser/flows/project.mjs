@@ -3,8 +3,8 @@
 // loaded page opens it and shows the same head without fitting (same level
 // sizes and positions, the same skin), animates and exports it; a cut file
 // is refused with its reason and the head stays; the checks measured again
-// agree with the original's; the file chosen among
-// others in the Inputs card opens too.
+// agree with the original's; the file chosen among others in the Inputs
+// card opens too.
 import fs from 'node:fs';
 import { bannerText, check, JOB_TIMEOUT_MS, runAlone, settled, shot, state } from '../harness.mjs';
 import { fittedHead } from './fit.mjs';
