@@ -130,4 +130,10 @@ std::unique_ptr<lk::HeadProject>& kept_project();
 // The generic head, parsed once per worker; null (and status) on an error.
 const lk::GenericHead* generic_head(lk::Status& status);
 
+// {meanPct, maxPct, rmsPct, points} of a stage's distances.
+val stats_object(const lk::DistanceStats& d);
+
+// What the page shows of a head project, fitted or opened (worker_head.cpp).
+val head_result(const lk::HeadProject& p, const lk::GenericHead& generic);
+
 }  // namespace lk_worker

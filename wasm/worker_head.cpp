@@ -6,7 +6,6 @@
 #include "project/fit_job.h"
 #include "project/parts.h"
 #include "project/pose.h"
-#include "project/project_file.h"
 #include "project/quality_job.h"
 
 #include <algorithm>
@@ -43,14 +42,6 @@ val mesh_arrays(const lk::HeadFrame& frame, const std::vector<lk::Vec3>& positio
   return m;
 }
 
-val stats_object(const lk::DistanceStats& d) {
-  val o = val::object();
-  o.set("meanPct", d.mean_pct);
-  o.set("maxPct", d.max_pct);
-  o.set("rmsPct", d.mean != 0 ? d.rms / d.mean * d.mean_pct : 0.0);
-  o.set("points", d.count);
-  return o;
-}
 
 // A component mesh {positions, indices, uvs?, colors?}: uvs when textured,
 // else one linear RGB colour for every vertex.
@@ -102,56 +93,6 @@ val components_object(const lk::HeadProject& p, const lk::GenericHead& generic) 
   eto.size = 256;  // as the generic eyes
   if (lk::generic_eyeball_texture(eto, eye_texture).ok()) o.set("eyeTexture", image_object(eye_texture));
   return o;
-}
-
-// What the page shows of a head project, for a fit and an opened project
-// alike: {points, fittedPoints, unitToMetres, notes, headFacing, headUp,
-// untangle, meshes {aligned, local, control, levels}, animatedVertices,
-// landmarks, components}.
-val head_result(const lk::HeadProject& p, const lk::GenericHead& generic) {
-  const lk::FitHeadResult& fit = p.fit;
-  val r = ok_result();
-  r.set("points", fit.points);
-  r.set("fittedPoints", fit.fitted_points);
-  r.set("unitToMetres", fit.unit_to_metres);
-  // What the fit decided on its own (the scan turned to face +z, a face-only
-  // capture, a unit guessed): `likeness fit` prints these as "note:" lines.
-  val notes = val::array();
-  for (const std::string& note : fit.notes) notes.call<void>("push", note);
-  r.set("notes", notes);
-  r.set("headFacing", vec3_array(p.frame.head_to_scan * lk::Vec3(0, 0, 1)));
-  r.set("headUp", vec3_array(p.frame.head_to_scan * lk::Vec3(0, 1, 0)));
-  val untangle = val::object();
-  untangle.set("pairsBefore", fit.untangle.pairs_before);
-  untangle.set("pairsEroded", fit.untangle.pairs_eroded);
-  untangle.set("pairsAfter", fit.untangle.pairs_after);
-  untangle.set("restoreSteps", fit.untangle.restore_steps);
-  r.set("untangle", untangle);
-  val meshes = val::object();
-  meshes.set("aligned", mesh_arrays(p.frame, fit.aligned.positions, fit.aligned.triangles));
-  meshes.set("local", mesh_arrays(p.frame, fit.local.positions, fit.local.triangles));
-  meshes.set("control", mesh_arrays(p.frame, fit.control.positions, fit.control.triangles));
-  val levels = val::array();
-  for (const lk::TriMesh& m : fit.level_meshes) levels.call<void>("push", mesh_arrays(p.frame, m.positions, m.triangles));
-  meshes.set("levels", levels);
-  r.set("meshes", meshes);
-  r.set("animatedVertices", static_cast<double>(p.rig.moved.size()));
-  // Texture landmarks where they are on the fitted surface (finest level,
-  // rest pose, scan frame): control vertices keep their index on every level.
-  val landmarks = val::array();
-  const std::vector<lk::Vec3>& finest = fit.level_meshes.back().positions;
-  for (const lk::TextureLandmark& l : lk::texture_landmarks(generic)) {
-    if (l.vertex >= static_cast<int>(finest.size())) continue;
-    val o = val::object();
-    o.set("id", std::string(l.id));
-    o.set("label", std::string(l.label));
-    o.set("vertex", l.vertex);
-    o.set("position", vec3_array(p.frame.to_scan(finest[l.vertex])));
-    landmarks.call<void>("push", o);
-  }
-  r.set("landmarks", landmarks);
-  r.set("components", components_object(p, generic));
-  return r;
 }
 
 // Runs the whole fit (jeong2002 Sec. 4-5) on a dropped scan's bytes.
@@ -387,60 +328,67 @@ val export_textured(int level, const std::string& base) {
   return r;
 }
 
-
-// The kept head project as a file (core/project/project_file.h: a GLB whose
-// scene is the head, the project in its extras). Returns {ok, bytes}.
-val save_project_job() {
-  if (!kept_project()) return error_result(lk::ErrorCode::InvalidInput, "no fitted head to save");
-  lk::Bytes bytes;
-  if (lk::Status st = lk::save_project(*kept_project(), bytes); !st.ok()) return error_result(st);
-  val r = ok_result();
-  r.set("bytes", bytes_array(bytes.data(), bytes.size()));
-  return r;
-}
-
-// A saved project's bytes -> the kept project (at rest), without fitting.
-// Returns what fit_head_job does (stages: the saved figures, ms 0) and
-// scan {positions (scan frame), vertexCount}, texture {uvs, skin, level}
-// when textured, loadMs. A refused file leaves the kept project as it was.
-val load_project_job(const std::string& name, std::uintptr_t data, std::size_t size) {
-  if (data == 0 && size != 0) return error_result(lk::ErrorCode::Internal, name + ": no input buffer");
-  const double t0 = now_ms();
-  auto project = std::make_unique<lk::HeadProject>();
-  lk::Status st = lk::load_project(reinterpret_cast<const std::uint8_t*>(data), size, *project);
-  if (st.ok()) st = lk::rest_pose(*project);
-  if (!st.ok()) return error_result(lk::with_context(st, name));
-  lk::Status generic_status;
-  const lk::GenericHead* generic = generic_head(generic_status);
-  if (!generic) return error_result(lk::with_context(generic_status, "generic head"));
-  const lk::HeadProject& p = *project;
-  val r = head_result(p, *generic);
-  r.set("name", name);
-  val stages = val::array();
-  for (const lk::FitStageReport& s : p.fit.stages) {
-    val o = stats_object(s.distance);
-    o.set("name", s.name);
-    o.set("ms", 0);
-    stages.call<void>("push", o);
-  }
-  r.set("stages", stages);
-  val scan = val::object();
-  scan.set("positions", float32_array(p.scan.positions));
-  scan.set("vertexCount", static_cast<double>(p.scan.positions.size()));
-  r.set("scan", scan);
-  if (!p.texture.empty()) {
-    val t = val::object();
-    t.set("uvs", float32_array(p.texture.uvs));
-    t.set("skin", image_object(p.texture.skin));
-    t.set("level", p.fit.multires.num_levels());
-    r.set("texture", t);
-  }
-  r.set("loadMs", now_ms() - t0);
-  kept_project() = std::move(project);
-  return r;
-}
-
 }  // namespace
+
+val stats_object(const lk::DistanceStats& d) {
+  val o = val::object();
+  o.set("meanPct", d.mean_pct);
+  o.set("maxPct", d.max_pct);
+  o.set("rmsPct", d.mean != 0 ? d.rms / d.mean * d.mean_pct : 0.0);
+  o.set("points", d.count);
+  return o;
+}
+
+// What the page shows of a head project, for a fit and an opened project
+// alike: {points, fittedPoints, unitToMetres, notes, headFacing, headUp,
+// untangle, meshes {aligned, local, control, levels}, animatedVertices,
+// landmarks, components}.
+val head_result(const lk::HeadProject& p, const lk::GenericHead& generic) {
+  const lk::FitHeadResult& fit = p.fit;
+  val r = ok_result();
+  r.set("points", fit.points);
+  r.set("fittedPoints", fit.fitted_points);
+  r.set("unitToMetres", fit.unit_to_metres);
+  // What the fit decided on its own (the scan turned to face +z, a face-only
+  // capture, a unit guessed): `likeness fit` prints these as "note:" lines.
+  val notes = val::array();
+  for (const std::string& note : fit.notes) notes.call<void>("push", note);
+  r.set("notes", notes);
+  r.set("headFacing", vec3_array(p.frame.head_to_scan * lk::Vec3(0, 0, 1)));
+  r.set("headUp", vec3_array(p.frame.head_to_scan * lk::Vec3(0, 1, 0)));
+  val untangle = val::object();
+  untangle.set("pairsBefore", fit.untangle.pairs_before);
+  untangle.set("pairsEroded", fit.untangle.pairs_eroded);
+  untangle.set("pairsAfter", fit.untangle.pairs_after);
+  untangle.set("restoreSteps", fit.untangle.restore_steps);
+  r.set("untangle", untangle);
+  val meshes = val::object();
+  meshes.set("aligned", mesh_arrays(p.frame, fit.aligned.positions, fit.aligned.triangles));
+  meshes.set("local", mesh_arrays(p.frame, fit.local.positions, fit.local.triangles));
+  meshes.set("control", mesh_arrays(p.frame, fit.control.positions, fit.control.triangles));
+  val levels = val::array();
+  for (const lk::TriMesh& m : fit.level_meshes) levels.call<void>("push", mesh_arrays(p.frame, m.positions, m.triangles));
+  meshes.set("levels", levels);
+  r.set("meshes", meshes);
+  r.set("animatedVertices", static_cast<double>(p.rig.moved.size()));
+  // Texture landmarks where they are on the fitted surface (finest level,
+  // rest pose, scan frame): control vertices keep their index on every level.
+  val landmarks = val::array();
+  const std::vector<lk::Vec3>& finest = fit.level_meshes.back().positions;
+  for (const lk::TextureLandmark& l : lk::texture_landmarks(generic)) {
+    if (l.vertex >= static_cast<int>(finest.size())) continue;
+    val o = val::object();
+    o.set("id", std::string(l.id));
+    o.set("label", std::string(l.label));
+    o.set("vertex", l.vertex);
+    o.set("position", vec3_array(p.frame.to_scan(finest[l.vertex])));
+    landmarks.call<void>("push", o);
+  }
+  r.set("landmarks", landmarks);
+  r.set("components", components_object(p, generic));
+  return r;
+}
+
 }  // namespace lk_worker
 
 EMSCRIPTEN_BINDINGS(likeness_worker_head) {
@@ -451,6 +399,4 @@ EMSCRIPTEN_BINDINGS(likeness_worker_head) {
   emscripten::function("fit_quality_job", &fit_quality_job);
   emscripten::function("export_head", &export_head);
   emscripten::function("export_textured", &export_textured);
-  emscripten::function("save_project_job", &save_project_job);
-  emscripten::function("load_project_job", &load_project_job);
 }

@@ -1,0 +1,71 @@
+// The worker's project-file jobs (core/project/project_file.h): the kept
+// head project saved as a .likeness.glb's bytes, and such bytes opened as
+// the kept project without fitting.
+#include "worker_common.h"
+
+#include "project/pose.h"
+#include "project/project_file.h"
+
+namespace lk_worker {
+namespace {
+
+// The kept head project as a file (core/project/project_file.h: a GLB whose
+// scene is the head, the project in its extras). Returns {ok, bytes}.
+val save_project_job() {
+  if (!kept_project()) return error_result(lk::ErrorCode::InvalidInput, "no fitted head to save");
+  lk::Bytes bytes;
+  if (lk::Status st = lk::save_project(*kept_project(), bytes); !st.ok()) return error_result(st);
+  val r = ok_result();
+  r.set("bytes", bytes_array(bytes.data(), bytes.size()));
+  return r;
+}
+
+// A saved project's bytes -> the kept project (at rest), without fitting.
+// Returns what fit_head_job does (stages: the saved figures, ms 0) and
+// scan {positions (scan frame), vertexCount}, texture {uvs, skin, level}
+// when textured, loadMs. A refused file leaves the kept project as it was.
+val load_project_job(const std::string& name, std::uintptr_t data, std::size_t size) {
+  if (data == 0 && size != 0) return error_result(lk::ErrorCode::Internal, name + ": no input buffer");
+  const double t0 = now_ms();
+  auto project = std::make_unique<lk::HeadProject>();
+  lk::Status st = lk::load_project(reinterpret_cast<const std::uint8_t*>(data), size, *project);
+  if (st.ok()) st = lk::rest_pose(*project);
+  if (!st.ok()) return error_result(lk::with_context(st, name));
+  lk::Status generic_status;
+  const lk::GenericHead* generic = generic_head(generic_status);
+  if (!generic) return error_result(lk::with_context(generic_status, "generic head"));
+  const lk::HeadProject& p = *project;
+  val r = head_result(p, *generic);
+  r.set("name", name);
+  val stages = val::array();
+  for (const lk::FitStageReport& s : p.fit.stages) {
+    val o = stats_object(s.distance);
+    o.set("name", s.name);
+    o.set("ms", 0);
+    stages.call<void>("push", o);
+  }
+  r.set("stages", stages);
+  val scan = val::object();
+  scan.set("positions", float32_array(p.scan.positions));
+  scan.set("vertexCount", static_cast<double>(p.scan.positions.size()));
+  r.set("scan", scan);
+  if (!p.texture.empty()) {
+    val t = val::object();
+    t.set("uvs", float32_array(p.texture.uvs));
+    t.set("skin", image_object(p.texture.skin));
+    t.set("level", p.fit.multires.num_levels());
+    r.set("texture", t);
+  }
+  r.set("loadMs", now_ms() - t0);
+  kept_project() = std::move(project);
+  return r;
+}
+
+}  // namespace
+}  // namespace lk_worker
+
+EMSCRIPTEN_BINDINGS(likeness_worker_project) {
+  using namespace lk_worker;
+  emscripten::function("save_project_job", &save_project_job);
+  emscripten::function("load_project_job", &load_project_job);
+}
