@@ -2,7 +2,7 @@
 // worker: the Pipeline rows follow its stages, then the fitted head is shown
 // over the scan, its checks start, and photos with points are textured when
 // Auto-run is on.
-import { app, ui, clearError, setStage, setState, setStatus, showError, stageItem } from './state.js';
+import { app, ui, beginJob, endJob, live, refreshControls, setStage, setStatus, showError, stageItem } from './state.js';
 import { runJob } from './worker_client.js';
 import { stopAnimation } from './animation.js';
 import { closeClicker } from './clicker.js';
@@ -35,7 +35,7 @@ export function forgetFit(why) {
   ui.fitQuality.hidden = true;
   for (const st of FIT_STAGES) stageItem(st.row).classList.remove('viewable', 'shown');
   if (why) setStatus(why);
-  setState(document.body.dataset.state);
+  refreshControls();
 }
 
 export async function runFit() {
@@ -46,10 +46,10 @@ export async function runFit() {
               'drop the scan to fit it again.');
     return;
   }
-  clearError();
   stopAnimation();
   const file = app.scan.file;
-  setState('working');
+  const job = beginJob('fit');
+  if (!job) return;
   for (const st of FIT_STAGES) {
     setStage(st.row, 'waiting', 0);
     stageStats(st.row).textContent = '';
@@ -61,6 +61,7 @@ export async function runFit() {
   let result;
   try {
     const buffer = await file.arrayBuffer();
+    if (!live(job)) return;
     result = await runJob({ type: 'fit', name: file.name, buffer, options: { levels: 3 } }, [buffer],
       (stage, fraction) => {
         const row = rowOf(stage);
@@ -77,12 +78,13 @@ export async function runFit() {
     if (e && e.cancelled) {
       for (const st of FIT_STAGES) setStage(st.row, 'cancelled', 0);
       setStatus('Fit cancelled. ' + (app.model ? app.model.name + ' is still shown.' : ''));
-      setState(app.model ? 'done' : 'ready');
+      endJob(job);
       return;
     }
     result = { ok: false, code: 'Internal', message: file.name + ': ' + (e && e.message ? e.message : e) };
   }
   const wallMs = performance.now() - t0;
+  if (!live(job)) return;
   if (!result.ok) {
     const failedRow = FIT_STAGES.find((st) => stageItem(st.row).classList.contains('active'));
     for (const st of FIT_STAGES) {
@@ -98,7 +100,7 @@ export async function runFit() {
   showHead(result, file.name, wallMs);
   setStatus(file.name + ': head fitted in ' + (result.fitMs / 1000).toFixed(2) + ' s. Click a stage to see its mesh; ' +
             'pick a level, animate or export.');
-  setState('done');
+  endJob(job);
   renderPhotos();
   // Sent before anything else can reach the worker, so the checks see the
   // head at rest; not awaited: the page stays usable meanwhile.

@@ -5,7 +5,8 @@
 // from anywhere but this page's own origin.
 //
 // The page's modules, one concern each:
-//   state.js          URL parameters, elements, window.likeness, the state machine, status and error banner
+//   page_state.js     the page's states and what each allows (one owner: jobs, errors, Dismiss, Cancel)
+//   state.js          URL parameters, elements, window.likeness, the states applied to the page, status
 //   worker_client.js  the worker: start-up, jobs as promises, Cancel, the warm-up worker
 //   viewer.js         the 3D viewer's start-up and view controls
 //   files.js          received files: size limit, file list, sorting a drop
@@ -17,7 +18,8 @@
 //   texture.js        the Texture stage
 //   animation.js      animation and adaptive detail
 //   export.js         downloads
-import { app, params, ui, clearError, fatalStartup, setState, setStatus } from './state.js';
+//   project.js        Save project / Open project (.likeness.glb)
+import { app, page, params, ui, clearError, fatalStartup, setStatus } from './state.js';
 import { cancelJobs, startWorker, warmUp } from './worker_client.js';
 import { startViewer, wireViewer } from './viewer.js';
 import { wireFiles } from './files.js';
@@ -36,7 +38,8 @@ function wire() {
   wireFiles();
   ui.dismiss.addEventListener('click', clearError);
   ui.sample.addEventListener('click', loadSample);
-  ui.cancel.addEventListener('click', cancelJobs);
+  ui.cancel.addEventListener('click', () => page.cancel());
+  app.cancelJobs = cancelJobs;
   wireViewer();
   wireFit();
   wireHeadView();
@@ -56,7 +59,6 @@ function threadsNote() {
 }
 
 async function start() {
-  setState('loading');
   wire();
   setStatus('Starting the viewer and the core…');
   let coreFailed = null;
@@ -71,7 +73,7 @@ async function start() {
     if (params.get('profile') === '1') viewer.set_profiling(true);
     app.loadMs = performance.now() - app.startedAt;
     warmUp(app.workerThreads.variant).catch(() => {});
-    setState('ready');
+    page.started();
     setStatus('Ready. Showing the generic head. Drop a head scan to begin.' + threadsNote());
   } catch (e) {
     const why = e && e.message ? e.message : String(e);

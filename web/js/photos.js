@@ -2,7 +2,7 @@
 // each dropped photo is decoded once in the worker (a broken file is caught
 // now, not at the Texture stage), listed with a thumbnail, and gets its
 // points from a points file of the same name or from landmark clicks.
-import { app, ui, setState, setStatus, showError } from './state.js';
+import { app, ui, beginJob, endJob, live, refreshControls, setStatus, showError } from './state.js';
 import { formatBytes, listFile, MAX_SCAN_BYTES } from './files.js';
 import { runJob } from './worker_client.js';
 import { clicker, closeClicker, openClicker } from './clicker.js';
@@ -11,10 +11,11 @@ import { dropRoleTexture, PHOTO_ROLES, setPhotoRole } from './photo_roles.js';
 // Photos are decoded once in the worker to catch broken files now rather
 // than at the Texture stage; the File objects are kept for that stage.
 export async function checkPhotos(photos, alone) {
-  const before = document.body.dataset.state;
-  setState('working');
+  const job = beginJob('photos');
+  if (!job) return;
   const failures = [];
   for (const file of photos) {
+    if (!live(job)) break;
     const meta = listFile(file, 'checking…');
     if (file.size > MAX_SCAN_BYTES) {
       meta.textContent = formatBytes(file.size) + ' · too large';
@@ -43,7 +44,7 @@ export async function checkPhotos(photos, alone) {
     addPhoto({ name: file.name, file, width: result.width, height: result.height });
   }
   renderPhotos();
-  setState(before === 'loading' ? 'ready' : before);
+  if (!endJob(job)) return;
   if (failures.length) {
     showError(failures.join(' '));
   } else if (alone) {
@@ -90,9 +91,10 @@ function removePhoto(photo) {
 // photo of the same base name.
 export async function readPointFiles(files) {
   const failures = [];
-  const before = document.body.dataset.state;
-  setState('working');
+  const job = beginJob('points');
+  if (!job) return;
   for (const file of files) {
+    if (!live(job)) break;
     const photo = app.photos.find((p) => baseName(p.name) === baseName(file.name));
     const meta = listFile(file, 'reading…');
     if (!photo) {
@@ -120,7 +122,7 @@ export async function readPointFiles(files) {
     meta.textContent = formatBytes(file.size) + ' · ' + result.points.length / 5 + ' points for ' + photo.name;
   }
   renderPhotos();
-  setState(before === 'loading' ? 'ready' : before);
+  if (!endJob(job)) return;
   if (failures.length) showError(failures.join(' '));
 }
 
@@ -207,5 +209,5 @@ export function renderPhotos() {
     ui.photoList.append(li);
   }
   ui.photoCount.textContent = app.photos.length ? app.photos.length + ' photo(s), ' + texturable().length + ' with points' : '';
-  setState(document.body.dataset.state);
+  refreshControls();
 }
