@@ -19,6 +19,7 @@
 //   animation.js      animation and adaptive detail
 //   export.js         downloads
 //   project.js        Save project / Open project (.likeness.glb)
+//   keep.js           the head kept in IndexedDB (keep_store.js), offered back after a reload
 import { app, page, params, ui, clearError, fatalStartup, setStatus } from './state.js';
 import { cancelJobs, startWorker, warmUp } from './worker_client.js';
 import { startViewer, wireViewer } from './viewer.js';
@@ -31,6 +32,7 @@ import { wireTexture } from './texture.js';
 import { wireAnimation } from './animation.js';
 import { wireExport } from './export.js';
 import { wireProject } from './project.js';
+import { offerRestore, wireKeep } from './keep.js';
 
 function wire() {
   // ?autofit=0 starts with Auto-run off (load scans without fitting them).
@@ -48,6 +50,7 @@ function wire() {
   wireProject();
   wireTexture();
   wireClicker();
+  wireKeep();
 }
 
 // Said when the page could have run the threaded core but it did not start
@@ -74,6 +77,7 @@ async function start() {
     app.loadMs = performance.now() - app.startedAt;
     warmUp(app.workerThreads.variant).catch(() => {});
     page.started();
+    offerRestore().catch(() => {});  // a browser without storage: nothing to offer
     setStatus('Ready. Showing the generic head. Drop a head scan to begin.' + threadsNote());
   } catch (e) {
     const why = e && e.message ? e.message : String(e);

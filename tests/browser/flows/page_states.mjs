@@ -103,6 +103,13 @@ async function run(s) {
   const msCancel = Date.now() - t0;
   check('Cancel during a fit ends the job at once (the state leaves "working")', sCancel !== 'working' && (await bannerText(page)) === '',
         `state ${sCancel} ${msCancel} ms after the click`);
+  // The stopped worker took the head with it; keep.js puts the kept copy
+  // into the new one, so the head shown still exports, the same bytes.
+  const uCancel = await usable(page);
+  const exCancel = await exportsHead(page);
+  check('... and the head shown before the cancelled fit is still there and exports the same file',
+        idleWithHead(uCancel) && exCancel.ok && exCancel.bytes.equals(exTex.bytes),
+        `${JSON.stringify(uCancel)}; ${exCancel.why}; same bytes as before the fit: ${exCancel.bytes && exCancel.bytes.equals(exTex.bytes)}`);
 }
 
 export const flow = { name: 'page-states', title: 'No failure strands the page; the head stays; Cancel ends any job', run };
