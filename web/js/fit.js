@@ -10,6 +10,7 @@ import { renderPhotos, texturable } from './photos.js';
 import { forgetTexture, runTexture } from './texture.js';
 import { showComponents, showStage } from './head_view.js';
 import { checkFitQuality } from './checks.js';
+import { forPage } from './wording.js';
 
 // Core stage names -> the Pipeline rows, and the mesh each row shows.
 export const FIT_STAGES = [
@@ -90,7 +91,7 @@ export async function runFit() {
     for (const st of FIT_STAGES) {
       if (!stageItem(st.row).classList.contains('complete')) setStage(st.row, st === failedRow ? 'failed' : 'waiting', 0, st === failedRow ? 'failed' : undefined);
     }
-    let message = result.message || result.code;
+    let message = forPage(result.message || result.code);
     if (result.code === 'not a head' || result.code === 'NotAHead') message = 'This does not look like a head scan, so no head was fitted: ' + message;
     setStatus('The fit failed.' + (app.model ? ' ' + app.model.name + ' is still shown.' : ''));
     showError(message);
@@ -123,7 +124,7 @@ export function showHead(result, name, wallMs) {
   for (const st of FIT_STAGES) {
     const s = result.stages.find((x) => x.name === st.core);
     setStage(st.row, opened ? 'saved' : s ? Math.round(s.ms) + ' ms' : 'done', 1, 'complete');
-    if (s) stageStats(st.row).textContent = 'mean ' + s.meanPct.toFixed(3) + ' % · max ' + s.maxPct.toFixed(2) + ' % of diagonal';
+    if (s) stageStats(st.row).textContent = 'mean ' + s.meanPct.toFixed(3) + ' % · max ' + s.maxPct.toFixed(2) + ' % of the scan\'s size';
     const li = stageItem(st.row);
     li.classList.add('viewable');
     li.tabIndex = 0;
@@ -159,7 +160,7 @@ function showFitNotes(notes) {
   ui.fitNotes.replaceChildren();
   for (const n of notes) {
     const li = document.createElement('li');
-    li.textContent = n;
+    li.textContent = forPage(n);
     ui.fitNotes.appendChild(li);
   }
   ui.fitNotes.hidden = notes.length === 0;

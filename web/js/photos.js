@@ -100,20 +100,21 @@ export async function readPointFiles(files) {
     if (!photo) {
       meta.textContent = formatBytes(file.size) + ' · no photo named ' + baseName(file.name) + '.jpg/.png';
       meta.parentElement.classList.add('ignored');
-      failures.push(file.name + ' is not a scan, and no photo is named ' + baseName(file.name) + '.jpg or .png: a points ' +
-                    'file (.txt, "u v X Y Z" per line) goes with the photo of the same name; drop both together.');
+      failures.push(file.name + ' is not a scan, and no photo is named ' + baseName(file.name) + '.jpg or .png: a .txt of ' +
+                    'matching points goes with the photo of the same name; drop both together.');
       continue;
     }
     let result;
     try {
-      result = file.size > 4 * 1024 * 1024 ? { ok: false, message: 'larger than 4 MB: not a points file' }
+      result = file.size > 4 * 1024 * 1024 ? { ok: false, message: 'larger than 4 MB: not a list of matching points' }
         : await runJob({ type: 'points', text: await file.text() }, []);
     } catch (e) {
       result = { ok: false, message: e && e.message ? e.message : String(e) };
     }
     if (!result.ok) {
-      meta.textContent = formatBytes(file.size) + ' · not a points file';
-      failures.push(file.name + ': ' + result.message + ' (expected one "u v X Y Z" per line)');
+      meta.textContent = formatBytes(file.size) + ' · not matching points';
+      failures.push(file.name + ': ' + result.message + ' (each line should hold five numbers: a point\'s pixel in the ' +
+                    'photo, u v, then its place on the scan, X Y Z)');
       continue;
     }
     photo.filePoints = result.points;

@@ -40,7 +40,7 @@ export async function loadScan(file) {
   if (file.size > MAX_SCAN_BYTES) {
     loadFailed(file, meta, 'too large', file.name + ' is ' + formatBytes(file.size) +
                '; the web app accepts scans up to ' + formatBytes(MAX_SCAN_BYTES) +
-               '. Decimate the scan or use the native tool (likeness).');
+               '. Reduce the scan (fewer points or triangles) in your scanning software, or use the Likeness command-line tool.');
     return;
   }
   if (file.size === 0) {

@@ -29,14 +29,14 @@ export async function runTexture() {
     return;
   }
   if (!using.length) {
-    showError('No photo has correspondences yet: drop each photo\'s points file (same name, .txt) or click a photo ' +
-              'to mark its landmarks (at least 6 each).');
+    showError('No photo is placed on the head yet: click each photo to mark its landmarks (at least 6 each), or drop ' +
+              'its matching points (a .txt of the same name).');
     return;
   }
   const few = using.filter((p) => photoPoints(p).list.length < 6);
   if (few.length) {
     showError(few.map((p) => p.name + ' has ' + photoPoints(p).list.length + ' point(s)').join('; ') +
-              '. Calibrating a photo needs at least 6 correspondences (12-15 spread over the face are best): ' +
+              '. Placing a photo on the head needs at least 6 matching points (12-15 spread over the face are best): ' +
               'click more landmarks or skip the photo by clearing its clicks.');
     return;
   }
