@@ -7,7 +7,7 @@
 import assert from 'node:assert/strict';
 import { controlsFor, PageState } from '../../web/js/page_state.js';
 
-const JOBS = ['scan', 'fit', 'texture', 'photos', 'points', 'eye photo', 'smile photo', 'project', 'sample', 'restore'];
+const JOBS = ['scan', 'fit', 'texture', 'photos', 'points', 'eye photo', 'smile photo', 'project', 'sample'];
 let checks = 0;
 function test(name, fn) {
   fn();

@@ -230,9 +230,9 @@ export async function restoreHead(id) {
   renderPhotos();
   app.restored = { id, savedAt: head.savedAt, ms: performance.now() - t0 };
   // Eye and smile photos make their textures again (small jobs, no fit).
-  for (const [i, p] of (head.page.photos || []).entries()) {
+  for (const p of head.page.photos || []) {
     const photo = app.photos.find((x) => x.name === p.name);
-    if (photo && i >= 0 && p.role && p.role !== 'face') await setPhotoRole(photo, p.role);
+    if (photo && p.role && p.role !== 'face') await setPhotoRole(photo, p.role);
   }
   setStatus('Restored ' + head.name + ' as kept ' + when(head.savedAt) + ', in ' + Math.round(performance.now() - t0) +
             ' ms without fitting: animate it, texture it or export it.');

@@ -6,8 +6,8 @@
 // States (document.body.dataset.state shows the current one):
 //   loading  the modules start; nothing can be used yet
 //   ready    nothing is shown but the generic head
-//   working  one job runs (job.name: parse, fit, texture, photos, points,
-//            role, project, sample, restore); Cancel ends it
+//   working  one job runs (job.name: scan, fit, texture, photos, points,
+//            eye photo, smile photo, project, sample); Cancel ends it
 //   done     a scan or head is shown: the resting state once one is
 //   error    the last action failed; the message is in the banner and what
 //            was shown before is still shown. Dismiss goes back to rest.

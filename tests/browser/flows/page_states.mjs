@@ -57,6 +57,26 @@ async function run(s) {
                                                      model: window.likeness.model && window.likeness.model.name }));
   check('... and a bad scan then Dismiss goes back to what was shown, every input on',
         afterDismiss.state === 'done' && afterDismiss.sample && afterDismiss.model === 'sample_scan.ply', JSON.stringify(afterDismiss));
+  // Cancel while the sample is still downloading (no worker job runs yet:
+  // the old Cancel had nothing to stop): the page is back at once, and the
+  // late download is dropped.
+  let release;
+  const held = new Promise((r) => { release = r; });
+  await fresh.unroute('**/sample/scan.ply');
+  await fresh.route('**/sample/scan.ply', async (r) => {
+    await held;
+    await r.fulfill({ status: 200, contentType: 'application/octet-stream', body: torusPly(5000) });
+  });
+  await fresh.click('#btn-sample');
+  await fresh.waitForFunction(() => document.body.dataset.state === 'working', null, { timeout: 10000 });
+  await fresh.click('#btn-cancel');
+  const sCancelled = await state(fresh);
+  release();
+  await fresh.waitForTimeout(1500);
+  const late = await fresh.evaluate(() => ({ state: document.body.dataset.state, model: window.likeness.model && window.likeness.model.name,
+                                             vertices: window.likeness.model && window.likeness.model.vertexCount }));
+  check('Cancel while the sample downloads ends that job at once; the late download changes nothing',
+        sCancelled === 'done' && late.state === 'done' && late.vertices === 3000, `state ${sCancelled} at Cancel; then ${JSON.stringify(late)}`);
   await fresh.close();
 
   // 2. With a fitted head: each failure leaves it shown and exportable.
