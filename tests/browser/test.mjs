@@ -27,7 +27,9 @@ import { flow as animation } from './flows/animation.mjs';
 import { flow as texture } from './flows/texture.mjs';
 import { flow as eyeSmile } from './flows/eye_smile.mjs';
 import { flow as project } from './flows/project.mjs';
+import { flow as keep } from './flows/keep.mjs';
+import { flow as pageStates } from './flows/page_states.mjs';
 import { flow as fitCancel } from './flows/fit_cancel.mjs';
 
 runFlows([startup, scanLoad, startupFailures, fit, fitChecks, fitThreads, exportFlow, animation, texture, eyeSmile,
-          project, fitCancel]);
+          project, keep, pageStates, fitCancel]);

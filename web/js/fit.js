@@ -2,7 +2,7 @@
 // worker: the Pipeline rows follow its stages, then the fitted head is shown
 // over the scan, its checks start, and photos with points are textured when
 // Auto-run is on.
-import { app, ui, clearError, setStage, setState, setStatus, showError, stageItem } from './state.js';
+import { app, ui, beginJob, endJob, live, refreshControls, setStage, setStatus, showError, stageItem } from './state.js';
 import { runJob } from './worker_client.js';
 import { stopAnimation } from './animation.js';
 import { closeClicker } from './clicker.js';
@@ -10,6 +10,7 @@ import { renderPhotos, texturable } from './photos.js';
 import { forgetTexture, runTexture } from './texture.js';
 import { showComponents, showStage } from './head_view.js';
 import { checkFitQuality } from './checks.js';
+import { forPage } from './wording.js';
 
 // Core stage names -> the Pipeline rows, and the mesh each row shows.
 export const FIT_STAGES = [
@@ -35,7 +36,7 @@ export function forgetFit(why) {
   ui.fitQuality.hidden = true;
   for (const st of FIT_STAGES) stageItem(st.row).classList.remove('viewable', 'shown');
   if (why) setStatus(why);
-  setState(document.body.dataset.state);
+  refreshControls();
 }
 
 export async function runFit() {
@@ -46,10 +47,10 @@ export async function runFit() {
               'drop the scan to fit it again.');
     return;
   }
-  clearError();
   stopAnimation();
   const file = app.scan.file;
-  setState('working');
+  const job = beginJob('fit');
+  if (!job) return;
   for (const st of FIT_STAGES) {
     setStage(st.row, 'waiting', 0);
     stageStats(st.row).textContent = '';
@@ -61,6 +62,7 @@ export async function runFit() {
   let result;
   try {
     const buffer = await file.arrayBuffer();
+    if (!live(job)) return;
     result = await runJob({ type: 'fit', name: file.name, buffer, options: { levels: 3 } }, [buffer],
       (stage, fraction) => {
         const row = rowOf(stage);
@@ -77,18 +79,19 @@ export async function runFit() {
     if (e && e.cancelled) {
       for (const st of FIT_STAGES) setStage(st.row, 'cancelled', 0);
       setStatus('Fit cancelled. ' + (app.model ? app.model.name + ' is still shown.' : ''));
-      setState(app.model ? 'done' : 'ready');
+      endJob(job);
       return;
     }
     result = { ok: false, code: 'Internal', message: file.name + ': ' + (e && e.message ? e.message : e) };
   }
   const wallMs = performance.now() - t0;
+  if (!live(job)) return;
   if (!result.ok) {
     const failedRow = FIT_STAGES.find((st) => stageItem(st.row).classList.contains('active'));
     for (const st of FIT_STAGES) {
       if (!stageItem(st.row).classList.contains('complete')) setStage(st.row, st === failedRow ? 'failed' : 'waiting', 0, st === failedRow ? 'failed' : undefined);
     }
-    let message = result.message || result.code;
+    let message = forPage(result.message || result.code);
     if (result.code === 'not a head' || result.code === 'NotAHead') message = 'This does not look like a head scan, so no head was fitted: ' + message;
     setStatus('The fit failed.' + (app.model ? ' ' + app.model.name + ' is still shown.' : ''));
     showError(message);
@@ -98,7 +101,7 @@ export async function runFit() {
   showHead(result, file.name, wallMs);
   setStatus(file.name + ': head fitted in ' + (result.fitMs / 1000).toFixed(2) + ' s. Click a stage to see its mesh; ' +
             'pick a level, animate or export.');
-  setState('done');
+  endJob(job);
   renderPhotos();
   // Sent before anything else can reach the worker, so the checks see the
   // head at rest; not awaited: the page stays usable meanwhile.
@@ -121,7 +124,7 @@ export function showHead(result, name, wallMs) {
   for (const st of FIT_STAGES) {
     const s = result.stages.find((x) => x.name === st.core);
     setStage(st.row, opened ? 'saved' : s ? Math.round(s.ms) + ' ms' : 'done', 1, 'complete');
-    if (s) stageStats(st.row).textContent = 'mean ' + s.meanPct.toFixed(3) + ' % · max ' + s.maxPct.toFixed(2) + ' % of diagonal';
+    if (s) stageStats(st.row).textContent = 'mean ' + s.meanPct.toFixed(3) + ' % · max ' + s.maxPct.toFixed(2) + ' % of the scan\'s size';
     const li = stageItem(st.row);
     li.classList.add('viewable');
     li.tabIndex = 0;
@@ -157,7 +160,7 @@ function showFitNotes(notes) {
   ui.fitNotes.replaceChildren();
   for (const n of notes) {
     const li = document.createElement('li');
-    li.textContent = n;
+    li.textContent = forPage(n);
     ui.fitNotes.appendChild(li);
   }
   ui.fitNotes.hidden = notes.length === 0;

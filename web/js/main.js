@@ -5,7 +5,8 @@
 // from anywhere but this page's own origin.
 //
 // The page's modules, one concern each:
-//   state.js          URL parameters, elements, window.likeness, the state machine, status and error banner
+//   page_state.js     the page's states and what each allows (one owner: jobs, errors, Dismiss, Cancel)
+//   state.js          URL parameters, elements, window.likeness, the states applied to the page, status
 //   worker_client.js  the worker: start-up, jobs as promises, Cancel, the warm-up worker
 //   viewer.js         the 3D viewer's start-up and view controls
 //   files.js          received files: size limit, file list, sorting a drop
@@ -17,7 +18,9 @@
 //   texture.js        the Texture stage
 //   animation.js      animation and adaptive detail
 //   export.js         downloads
-import { app, params, ui, clearError, fatalStartup, setState, setStatus } from './state.js';
+//   project.js        Save project / Open project (.likeness.glb)
+//   keep.js           the head kept in IndexedDB (keep_store.js), offered back after a reload
+import { app, page, params, ui, clearError, fatalStartup, setStatus } from './state.js';
 import { cancelJobs, startWorker, warmUp } from './worker_client.js';
 import { startViewer, wireViewer } from './viewer.js';
 import { wireFiles } from './files.js';
@@ -29,6 +32,7 @@ import { wireTexture } from './texture.js';
 import { wireAnimation } from './animation.js';
 import { wireExport } from './export.js';
 import { wireProject } from './project.js';
+import { offerRestore, wireKeep } from './keep.js';
 
 function wire() {
   // ?autofit=0 starts with Auto-run off (load scans without fitting them).
@@ -36,7 +40,8 @@ function wire() {
   wireFiles();
   ui.dismiss.addEventListener('click', clearError);
   ui.sample.addEventListener('click', loadSample);
-  ui.cancel.addEventListener('click', cancelJobs);
+  ui.cancel.addEventListener('click', () => page.cancel());
+  app.cancelJobs = cancelJobs;
   wireViewer();
   wireFit();
   wireHeadView();
@@ -45,6 +50,7 @@ function wire() {
   wireProject();
   wireTexture();
   wireClicker();
+  wireKeep();
 }
 
 // Said when the page could have run the threaded core but it did not start
@@ -56,7 +62,6 @@ function threadsNote() {
 }
 
 async function start() {
-  setState('loading');
   wire();
   setStatus('Starting the viewer and the core…');
   let coreFailed = null;
@@ -71,7 +76,8 @@ async function start() {
     if (params.get('profile') === '1') viewer.set_profiling(true);
     app.loadMs = performance.now() - app.startedAt;
     warmUp(app.workerThreads.variant).catch(() => {});
-    setState('ready');
+    page.started();
+    offerRestore().catch(() => {});  // a browser without storage: nothing to offer
     setStatus('Ready. Showing the generic head. Drop a head scan to begin.' + threadsNote());
   } catch (e) {
     const why = e && e.message ? e.message : String(e);

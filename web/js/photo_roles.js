@@ -1,7 +1,7 @@
 // Photo roles (tarini2002 Sec. 4): a photo set to "Eye (iris)" makes the
 // eyeballs' iris texture, one set to "Smile (teeth)" the teeth texture; both
 // run in the worker. Face photos (the default) texture the skin.
-import { app, clearError, setState, setStatus, showError, stateUnderError } from './state.js';
+import { app, beginJob, clearError, endJob, live, setStatus, showError } from './state.js';
 import { runJob } from './worker_client.js';
 import { renderPhotos } from './photos.js';
 import { clicker, closeClicker } from './clicker.js';
@@ -35,10 +35,10 @@ export async function setPhotoRole(photo, role) {
     return;
   }
   if (clicker.photo === photo) closeClicker();
-  const before = document.body.dataset.state;
   const eye = role === 'eye';
+  const job = beginJob(eye ? 'eye photo' : 'smile photo');
+  if (!job) { renderPhotos(); return; }
   photo.roleNote = eye ? 'finding the iris…' : 'making the teeth texture…';
-  setState('working');
   renderPhotos();
   setStatus((eye ? 'Synthesizing the iris from ' : 'Making the teeth texture from ') + photo.name + '…');
   const t0 = performance.now();
@@ -50,7 +50,8 @@ export async function setPhotoRole(photo, role) {
     result = { ok: false, message: photo.name + ': ' + (e && e.cancelled ? 'cancelled' : e && e.message ? e.message : e) };
   }
   const wallMs = performance.now() - t0;
-  setState(before === 'error' ? stateUnderError() : before);
+  if (!live(job)) { photo.roleNote = 'cancelled'; renderPhotos(); return; }
+  endJob(job);
   if (photo.role !== role || !app.photos.includes(photo)) { renderPhotos(); return; }
   if (!result.ok) {
     photo.roleFailed = true;

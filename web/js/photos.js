@@ -2,7 +2,7 @@
 // each dropped photo is decoded once in the worker (a broken file is caught
 // now, not at the Texture stage), listed with a thumbnail, and gets its
 // points from a points file of the same name or from landmark clicks.
-import { app, ui, setState, setStatus, showError } from './state.js';
+import { app, ui, beginJob, endJob, live, refreshControls, setStatus, showError } from './state.js';
 import { formatBytes, listFile, MAX_SCAN_BYTES } from './files.js';
 import { runJob } from './worker_client.js';
 import { clicker, closeClicker, openClicker } from './clicker.js';
@@ -11,10 +11,11 @@ import { dropRoleTexture, PHOTO_ROLES, setPhotoRole } from './photo_roles.js';
 // Photos are decoded once in the worker to catch broken files now rather
 // than at the Texture stage; the File objects are kept for that stage.
 export async function checkPhotos(photos, alone) {
-  const before = document.body.dataset.state;
-  setState('working');
+  const job = beginJob('photos');
+  if (!job) return;
   const failures = [];
   for (const file of photos) {
+    if (!live(job)) break;
     const meta = listFile(file, 'checking…');
     if (file.size > MAX_SCAN_BYTES) {
       meta.textContent = formatBytes(file.size) + ' · too large';
@@ -43,7 +44,7 @@ export async function checkPhotos(photos, alone) {
     addPhoto({ name: file.name, file, width: result.width, height: result.height });
   }
   renderPhotos();
-  setState(before === 'loading' ? 'ready' : before);
+  if (!endJob(job)) return;
   if (failures.length) {
     showError(failures.join(' '));
   } else if (alone) {
@@ -90,28 +91,30 @@ function removePhoto(photo) {
 // photo of the same base name.
 export async function readPointFiles(files) {
   const failures = [];
-  const before = document.body.dataset.state;
-  setState('working');
+  const job = beginJob('points');
+  if (!job) return;
   for (const file of files) {
+    if (!live(job)) break;
     const photo = app.photos.find((p) => baseName(p.name) === baseName(file.name));
     const meta = listFile(file, 'reading…');
     if (!photo) {
       meta.textContent = formatBytes(file.size) + ' · no photo named ' + baseName(file.name) + '.jpg/.png';
       meta.parentElement.classList.add('ignored');
-      failures.push(file.name + ' is not a scan, and no photo is named ' + baseName(file.name) + '.jpg or .png: a points ' +
-                    'file (.txt, "u v X Y Z" per line) goes with the photo of the same name; drop both together.');
+      failures.push(file.name + ' is not a scan, and no photo is named ' + baseName(file.name) + '.jpg or .png: a .txt of ' +
+                    'matching points goes with the photo of the same name; drop both together.');
       continue;
     }
     let result;
     try {
-      result = file.size > 4 * 1024 * 1024 ? { ok: false, message: 'larger than 4 MB: not a points file' }
+      result = file.size > 4 * 1024 * 1024 ? { ok: false, message: 'larger than 4 MB: not a list of matching points' }
         : await runJob({ type: 'points', text: await file.text() }, []);
     } catch (e) {
       result = { ok: false, message: e && e.message ? e.message : String(e) };
     }
     if (!result.ok) {
-      meta.textContent = formatBytes(file.size) + ' · not a points file';
-      failures.push(file.name + ': ' + result.message + ' (expected one "u v X Y Z" per line)');
+      meta.textContent = formatBytes(file.size) + ' · not matching points';
+      failures.push(file.name + ': ' + result.message + ' (each line should hold five numbers: a point\'s pixel in the ' +
+                    'photo, u v, then its place on the scan, X Y Z)');
       continue;
     }
     photo.filePoints = result.points;
@@ -120,7 +123,7 @@ export async function readPointFiles(files) {
     meta.textContent = formatBytes(file.size) + ' · ' + result.points.length / 5 + ' points for ' + photo.name;
   }
   renderPhotos();
-  setState(before === 'loading' ? 'ready' : before);
+  if (!endJob(job)) return;
   if (failures.length) showError(failures.join(' '));
 }
 
@@ -207,5 +210,5 @@ export function renderPhotos() {
     ui.photoList.append(li);
   }
   ui.photoCount.textContent = app.photos.length ? app.photos.length + ' photo(s), ' + texturable().length + ' with points' : '';
-  setState(document.body.dataset.state);
+  refreshControls();
 }

@@ -2,7 +2,7 @@
 // .likeness.glb file (core/project/project_file.h: a GLB whose scene is the
 // head, the project in its extras), and such a file shown again without
 // fitting, over the scan it keeps.
-import { app, ui, clearError, setStage, setState, setStatus, showError, stageItem } from './state.js';
+import { app, ui, beginJob, endJob, live, setStage, setStatus, showError, stageItem } from './state.js';
 import { runJob } from './worker_client.js';
 import { download } from './export.js';
 import { formatBytes, listFile } from './files.js';
@@ -37,10 +37,10 @@ export async function saveProject() {
 export async function openProject(file) {
   const state = document.body.dataset.state;
   if (state === 'working' || state === 'loading' || app.startupFailed) return;
-  clearError();
   stopAnimation();
+  const job = beginJob('project');
+  if (!job) return;
   const meta = listFile(file, 'opening…');
-  setState('working');
   setStatus('Opening ' + file.name + '…');
   const t0 = performance.now();
   let result;
@@ -48,12 +48,17 @@ export async function openProject(file) {
     const buffer = await file.arrayBuffer();
     result = await runJob({ type: 'openProject', name: file.name, buffer }, [buffer]);
   } catch (e) {
+    if (e && e.cancelled) {
+      meta.textContent = formatBytes(file.size) + ' · cancelled';
+      setStatus('Cancelled opening ' + file.name + '.');
+      return;
+    }
     result = { ok: false, code: 'Internal', message: file.name + ': ' + (e && e.message ? e.message : e) };
   }
+  if (!live(job)) return;
   if (!result.ok) {
     meta.textContent = formatBytes(file.size) + ' · not opened';
     setStatus('Could not open ' + file.name + '.' + (app.model ? ' ' + app.model.name + ' is still shown.' : ''));
-    setState(app.fit ? 'done' : 'ready');  // what Dismiss goes back to: nothing changed
     showError(result.message || result.code);
     return;
   }
@@ -65,7 +70,7 @@ export async function openProject(file) {
   if (display.vertexCount > MAX_DISPLAY_POINTS) display = thinPoints(display, Math.ceil(display.vertexCount / MAX_DISPLAY_POINTS));
   const shown = app.viewer.show_points(display.positions, display.normals, display.colors);
   if (shown !== '') {
-    setState('ready');
+    app.model = null;
     showError(file.name + ': ' + shown);
     return;
   }
@@ -89,7 +94,7 @@ export async function openProject(file) {
   meta.textContent = formatBytes(file.size) + ' · project';
   setStatus('Opened ' + file.name + (result.texture ? ' (textured)' : '') + ' in ' + Math.round(wallMs) +
             ' ms, without fitting: animate it, texture it or export it.');
-  setState('done');
+  endJob(job);
   renderPhotos();
   checkFitQuality(app.fit);
 }

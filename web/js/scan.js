@@ -1,7 +1,7 @@
 // Loading a head scan: parsed in the worker, shown by the viewer (thinned
 // beyond the display budget), then fitted when Auto-run is on; and the
 // built-in sample fetched from beside the page.
-import { app, params, ui, clearError, setStage, setState, setStatus, showError, stageItem } from './state.js';
+import { app, params, ui, beginJob, endJob, live, setStage, setStatus, showError, stageItem } from './state.js';
 import { extension, formatBytes, handleFiles, listFile, MAX_SCAN_BYTES } from './files.js';
 import { runJob } from './worker_client.js';
 import { FIT_STAGES, forgetFit, runFit } from './fit.js';
@@ -40,20 +40,22 @@ export async function loadScan(file) {
   if (file.size > MAX_SCAN_BYTES) {
     loadFailed(file, meta, 'too large', file.name + ' is ' + formatBytes(file.size) +
                '; the web app accepts scans up to ' + formatBytes(MAX_SCAN_BYTES) +
-               '. Decimate the scan or use the native tool (likeness).');
+               '. Reduce the scan (fewer points or triangles) in your scanning software, or use the Likeness command-line tool.');
     return;
   }
   if (file.size === 0) {
     loadFailed(file, meta, 'empty', file.name + ' is empty.');
     return;
   }
-  setState('working');
+  const job = beginJob('scan');
+  if (!job) return;
   setStage('load', 'reading', 0, 'active');
   setStatus('Reading ' + file.name + '…');
   const t0 = performance.now();
   let result;
   try {
     const buffer = await file.arrayBuffer();
+    if (!live(job)) throw Object.assign(new Error('cancelled'), { cancelled: true });
     setStage('load', 'parsing', 0.05, 'active');
     result = await runJob({ type: 'parse', name: file.name, buffer }, [buffer], (stage, fraction) => {
       if (stage === 'load') setStage('load', 'parsing', 0.05 + 0.9 * fraction, 'active');
@@ -64,12 +66,13 @@ export async function loadScan(file) {
       setStage('load', 'cancelled', 0);
       setStatus('Cancelled loading ' + file.name + '.' +
                 (app.model ? ' The previous model (' + app.model.name + ') is still shown.' : ''));
-      setState(app.model ? 'done' : 'ready');
+      endJob(job);
       return;
     }
     result = { ok: false, code: 'Internal', message: file.name + ': ' + (e && e.message ? e.message : e) +
                '. Try a smaller or decimated scan.' };
   }
+  if (!live(job)) return;
   if (!result.ok) {
     let message = result.message || (file.name + ': ' + result.code);
     // The core guessed the format from the bytes; say what we expected.
@@ -121,7 +124,7 @@ export async function loadScan(file) {
   meta.parentElement.title = file.name + ': ' + what;
   setStage('load', 'done', 1, 'complete');
   setStatus(file.name + ': ' + what + ' (loaded in ' + Math.round(ms) + ' ms).');
-  setState('done');
+  endJob(job);
   if (ui.autoFit.checked) await runFit();
 }
 
@@ -131,15 +134,18 @@ export async function loadScan(file) {
 const SAMPLE_URL = 'sample/scan.ply';
 const SAMPLE_TEXTURE_URL = 'sample/texture.json';
 export async function loadSample() {
-  if (document.body.dataset.state === 'working') return;
-  clearError();
+  // Fetching is a job of its own, so Cancel ends it too.
+  const job = beginJob('sample');
+  if (!job) return;
+  setStatus('Fetching the sample…');
   let response;
   try {
     response = await fetch(SAMPLE_URL, { cache: 'no-store' });
   } catch (e) {
-    showError('Could not fetch the sample (' + SAMPLE_URL + '): ' + (e && e.message ? e.message : e));
+    if (live(job)) showError('Could not fetch the sample (' + SAMPLE_URL + '): ' + (e && e.message ? e.message : e));
     return;
   }
+  if (!live(job)) return;
   if (!response.ok) {
     showError('The built-in sample is not installed next to this page (' + SAMPLE_URL + ': HTTP ' +
               response.status + '). scripts/demo makes it; or drop your own scan.');
@@ -164,5 +170,6 @@ export async function loadSample() {
   } catch (e) {
     console.warn('sample photos not loaded:', e && e.message ? e.message : e);
   }
+  if (!endJob(job)) return;
   await handleFiles([new File([blob], 'sample_scan.ply'), ...extra]);
 }

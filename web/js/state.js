@@ -1,16 +1,11 @@
 // The page's shared state: the URL parameters, the elements, window.likeness
 // (the app's data, exposed for the browser tests and the console), the
-// state machine on document.body.dataset.state, the status line, the error
-// banner and the Pipeline rows. It imports nothing, so every other module
-// can use it while they are evaluated.
-//
-// document.body.dataset.state is always one of:
-//   loading  the modules start and the generic head is not drawn yet
-//   ready    viewer and worker are up, nothing loaded yet
-//   working  a job runs in the worker
-//   done     the last job's result is shown
-//   error    the last action failed; the message is in #error-banner and the
-//            previous model is still shown
+// page's states (owned by page_state.js's PageState, applied here to
+// document.body.dataset.state, the banner and the controls), the status
+// line and the Pipeline rows. It imports only page_state.js, so every other
+// module can use it while they are evaluated. The states are described in
+// page_state.js: loading, ready, working, done, error.
+import { controlsFor, PageState } from './page_state.js';
 
 export const params = new URLSearchParams(location.search);
 
@@ -76,53 +71,66 @@ export function distanceColors() {
   return colors && colors.length ? colors : null;
 }
 
-let stateBeforeError = 'ready';
-// The state an error replaced (what clearing it goes back to).
-export function stateUnderError() { return stateBeforeError; }
+// The page's states have one owner (page_state.js); this applies them to
+// the page: data-state, the banner, and what each control allows.
+const pageListeners = [];
+// f(snapshot) after every change of the page's state (keep.js saves then).
+export function onPageChange(f) { pageListeners.push(f); }
+export const page = new PageState({
+  rest: () => (app.model ? 'done' : 'ready'),
+  onChange: (snap) => { applyState(snap); for (const f of pageListeners) f(snap); },
+  onCancel: () => { if (app.cancelJobs) app.cancelJobs(); },
+});
+app.page = page;
 
-export function setState(state) {
-  if (state !== 'error') stateBeforeError = state;
-  document.body.dataset.state = state;
-  const interactive = state !== 'loading' && !app.startupFailed;
-  ui.fileInput.disabled = !interactive || state === 'working';
-  ui.reset.disabled = !interactive;
-  ui.generic.disabled = !interactive || state === 'working';
-  ui.sample.disabled = !interactive || state === 'working';
-  ui.pointSize.disabled = !interactive;
-  ui.wireframe.disabled = !interactive;
-  ui.dropZone.classList.toggle('busy', state === 'working');
-  ui.cancel.hidden = state !== 'working';
-  const fitting = state === 'working';
-  ui.fit.disabled = !interactive || fitting || !app.scan || !app.scan.file;
-  const haveFit = interactive && !fitting && !!app.fit;
-  ui.exportObj.disabled = !haveFit;
-  ui.exportPly.disabled = !haveFit;
-  ui.animate.disabled = !haveFit;
-  ui.fullDetail.disabled = !haveFit;
-  ui.level.disabled = !haveFit;
-  ui.showPoints.disabled = !haveFit;
-  ui.showComponents.disabled = !haveFit;
-  ui.texture.disabled = !haveFit || !app.photos.length;
-  ui.exportTextured.disabled = !haveFit || !app.texture;
-  ui.exportMap.disabled = !haveFit || !distanceColors();
-  ui.saveProject.disabled = !haveFit;
-  ui.projectInput.disabled = !interactive || state === 'working';
-  for (const role of ui.photoList.querySelectorAll('select.photo-role')) role.disabled = !interactive || state === 'working';
+function applyState(snap) {
+  document.body.dataset.state = snap.state;
+  ui.banner.hidden = !snap.banner;
+  if (snap.banner) ui.bannerText.textContent = snap.message;
+  const c = controlsFor({ state: snap.state, fatal: snap.fatal || app.startupFailed, scanFile: !!(app.scan && app.scan.file),
+                          fit: !!app.fit, texture: !!app.texture, photos: app.photos.length,
+                          distance: !!distanceColors() });
+  ui.fileInput.disabled = !c.files;
+  ui.reset.disabled = !c.reset;
+  ui.generic.disabled = !c.generic;
+  ui.sample.disabled = !c.sample;
+  ui.pointSize.disabled = !c.pointSize;
+  ui.wireframe.disabled = !c.wireframe;
+  ui.dropZone.classList.toggle('busy', snap.state === 'working');
+  ui.cancel.hidden = !c.cancel;
+  ui.fit.disabled = !c.fit;
+  ui.exportObj.disabled = !c.exportObj;
+  ui.exportPly.disabled = !c.exportPly;
+  ui.animate.disabled = !c.animate;
+  ui.fullDetail.disabled = !c.fullDetail;
+  ui.level.disabled = !c.level;
+  ui.showPoints.disabled = !c.showPoints;
+  ui.showComponents.disabled = !c.showComponents;
+  ui.texture.disabled = !c.texture;
+  ui.exportTextured.disabled = !c.exportTextured;
+  ui.exportMap.disabled = !c.exportMap;
+  ui.saveProject.disabled = !c.saveProject;
+  ui.projectInput.disabled = !c.openProject;
+  for (const role of ui.photoList.querySelectorAll('select.photo-role')) role.disabled = !c.photoRoles;
+  for (const b of document.querySelectorAll('.needs-idle')) b.disabled = !c.restore;
 }
+// A job starts (null: another runs, or the page cannot be used now); end it
+// with endJob(job); live(job): not cancelled or replaced meanwhile.
+export function beginJob(name) { return page.begin(name); }
+export function endJob(job) { return page.end(job); }
+export function live(job) { return page.isLive(job); }
+// What the page holds changed: the controls follow.
+export function refreshControls() { page.refresh(); }
 
 export function setStatus(text) { ui.status.textContent = text; }
 
+// An error ends the running job, if any; what was shown stays shown.
 export function showError(message) {
   app.lastError = message;
-  ui.bannerText.textContent = message;
-  ui.banner.hidden = false;
-  setState('error');
+  page.fail(message);
 }
 
-export function clearError() {
-  ui.banner.hidden = true;
-  if (document.body.dataset.state === 'error' && !app.startupFailed) setState(stateBeforeError);
-}
+export function clearError() { page.dismiss(); }
 
 // Without the viewer or the core nothing works: every control stays off.
 export function fatalStartup(message) {
@@ -131,7 +139,8 @@ export function fatalStartup(message) {
   ui.overlayText.textContent = 'The app could not start.';
   setStatus('Likeness could not start in this browser.');
   ui.overlay.classList.add('failed');
-  showError(message);
+  app.lastError = message;
+  page.startFailed(message);
 }
 
 // ---- the Pipeline rows (index.html's #stages li[data-stage]) ----------------

@@ -1,7 +1,7 @@
 // The Texture stage (tarini2002 Sec. 3): every face photo with
 // correspondences is calibrated and the fitted head textured in the worker;
 // the viewer then shows the skin on the chosen level.
-import { app, params, ui, clearError, setStage, setState, setStatus, showError, stageItem } from './state.js';
+import { app, params, ui, beginJob, clearError, endJob, live, setStage, setStatus, showError, stageItem } from './state.js';
 import { runJob } from './worker_client.js';
 import { facePhotos, photoPoints, renderPhotos, texturable } from './photos.js';
 import { clicker, closeClicker, updateClicker } from './clicker.js';
@@ -29,19 +29,20 @@ export async function runTexture() {
     return;
   }
   if (!using.length) {
-    showError('No photo has correspondences yet: drop each photo\'s points file (same name, .txt) or click a photo ' +
-              'to mark its landmarks (at least 6 each).');
+    showError('No photo is placed on the head yet: click each photo to mark its landmarks (at least 6 each), or drop ' +
+              'its matching points (a .txt of the same name).');
     return;
   }
   const few = using.filter((p) => photoPoints(p).list.length < 6);
   if (few.length) {
     showError(few.map((p) => p.name + ' has ' + photoPoints(p).list.length + ' point(s)').join('; ') +
-              '. Calibrating a photo needs at least 6 correspondences (12-15 spread over the face are best): ' +
+              '. Placing a photo on the head needs at least 6 matching points (12-15 spread over the face are best): ' +
               'click more landmarks or skip the photo by clearing its clicks.');
     return;
   }
   stopAnimation();
-  setState('working');
+  const job = beginJob('texture');
+  if (!job) return;
   stageItem('texture').classList.remove('coming');
   setStage('texture', '0%', 0, 'active');
   setStatus('Texturing the head from ' + using.length + ' photo(s)…');
@@ -68,12 +69,13 @@ export async function runTexture() {
     if (e && e.cancelled) {
       setStage('texture', 'cancelled', 0);
       setStatus('Texturing cancelled.');
-      setState('done');
+      endJob(job);
       return;
     }
     result = { ok: false, code: 'Internal', message: e && e.message ? e.message : String(e) };
   }
   const wallMs = performance.now() - t0;
+  if (!live(job)) return;
   // Per-photo calibration outcomes (also on failure: the page marks bad points).
   if (result.calib) using.forEach((p, i) => { p.calib = result.calib[i] || null; });
   renderPhotos();
@@ -98,7 +100,7 @@ export async function runTexture() {
   showStage('subdivide');
   setStatus('Textured from ' + using.length + ' photo(s) in ' + (result.textureMs / 1000).toFixed(2) + ' s. ' +
             'Animate it, pick a level, or export the textured head.');
-  setState('done');
+  endJob(job);
 }
 app.textureHead = () => runTexture();
 

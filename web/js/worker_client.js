@@ -150,8 +150,9 @@ function workerDied(worker, why, cancelled = false) {
     job.reject(err);
   }
   jobs.clear();
-  // The fitted head lived in that worker: animation and export need a new fit.
-  if (app.fit) forgetFit('The fitted head was in the stopped worker: fit again to animate or export.');
+  // The fitted head lived in that worker: keep.js puts it back from its
+  // kept copy when it has one, else animation and export need a new fit.
+  if (app.fit && !(app.reviveHead && app.reviveHead())) forgetFit('The fitted head was in the stopped worker: fit again to animate or export.');
   if (document.body.dataset.state !== 'loading') {
     startWorker().catch((e) => {
       // Nothing the user gave is lost: the scan, photos and clicks live on

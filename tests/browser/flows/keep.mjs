@@ -1,0 +1,150 @@
+// Nothing lost on reload (issue 39): the fitted head is kept in IndexedDB
+// as soon as it is fitted; a page loaded afterwards (and reloaded) offers
+// it back, and one click restores the same head (same levels, positions,
+// stage figures and checks) without fitting; the list of kept heads stays
+// at five however many are made, each deletable; a full storage gives a
+// message in the card and leaves the page working.
+import fs from 'node:fs';
+import { bannerText, check, JOB_TIMEOUT_MS, makePng, READY_TIMEOUT_MS, runAlone, settled, shot, waitForState } from '../harness.mjs';
+import { fittedHead } from './fit.mjs';
+
+function headPrint(page) {
+  return page.evaluate(() => {
+    const f = window.likeness.fit;
+    if (!f) return null;
+    const finest = f.meshes.levels[f.meshes.levels.length - 1].positions;
+    let sum = 0, abs = 0;
+    for (let i = 0; i < finest.length; i++) { sum += finest[i] * ((i % 7) + 1); abs += Math.abs(finest[i]); }
+    return { levels: f.meshes.levels.map((m) => m.vertexCount), control: f.meshes.control.vertexCount, sum, abs,
+             stages: f.stages.map((s) => s.name + ' ' + s.meanPct.toFixed(4)) };
+  });
+}
+const sameHead = (a, b) => !!a && !!b && JSON.stringify(a.levels) === JSON.stringify(b.levels) && a.control === b.control &&
+  Math.abs(a.sum - b.sum) <= 1e-6 * b.abs && JSON.stringify(a.stages) === JSON.stringify(b.stages);
+
+const quality = (p) => p.waitForFunction(() => window.likeness.fit && window.likeness.fit.quality, null, { timeout: JOB_TIMEOUT_MS })
+  .then(() => p.evaluate(() => {
+    const q = window.likeness.fit.quality, d = q.faceToScan || {};
+    return { ok: q.ok, flipped: q.flipped, degenerate: q.degenerate, crossings: q.crossings && q.crossings.total,
+             vertices: d.vertices, meanMm: d.meanMm && d.meanMm.toFixed(6) };
+  }));
+
+// Waits until the page has kept its head n times in all.
+const keptTimes = (p, n) => p.waitForFunction((k) => window.likeness.keep && window.likeness.keep.saves >= k, n, { timeout: JOB_TIMEOUT_MS });
+
+async function run(s) {
+  const { page, fit } = await fittedHead(s);
+  if (!fit) return;
+  await settled(page);
+  await keptTimes(page, 1);
+  // A photo with its points file: kept with the head (the project file
+  // does not hold photos), so a restore brings it back with its points.
+  const n0 = await page.evaluate(() => window.likeness.keep.saves);
+  const points = Array.from({ length: 7 }, (_, k) => `${10 + 9 * k} ${20 + 5 * k} ${k} ${2 * k} ${k * k}`).join('\n') + '\n';
+  await page.setInputFiles('#file-input', [{ name: 'kept_photo.png', mimeType: 'image/png', buffer: makePng(32, 24) },
+    { name: 'kept_photo.txt', mimeType: 'text/plain', buffer: Buffer.from(points) }]);
+  await settled(page);
+  await keptTimes(page, n0 + 1);
+  const photosBefore = await page.evaluate(() => window.likeness.photos.map((p) => p.name + ' ' + p.width + 'x' + p.height + ' ' +
+    (p.filePoints ? p.filePoints.length / 5 : 0) + ' points').sort().join(', '));
+  const before = await headPrint(page);
+  const qBefore = await quality(page);
+  const kept = await page.evaluate(() => window.likeness.keep.lastSave);
+  check('the fitted head is kept in IndexedDB right after the fit', !!kept && kept.size > 100000 && kept.wroteFile,
+        JSON.stringify(kept));
+
+  // A page loaded afterwards, then reloaded: the head is offered back.
+  const other = await s.newPage();
+  await other.reload();
+  await waitForState(other, ['ready', 'error'], READY_TIMEOUT_MS);
+  await other.waitForSelector('#restore-offer:not([hidden])', { timeout: 30000 });
+  const offer = await other.evaluate(() => ({ text: document.getElementById('restore-text').textContent,
+                                              fit: !!window.likeness.fit, listed: document.querySelectorAll('#keep-list li').length }));
+  check('after a reload the page offers the head back ("Restore your head from …?") without restoring it unasked',
+        /^Restore your head from .*\?/.test(offer.text) && !offer.fit && offer.listed >= 1, JSON.stringify(offer));
+  await shot(other, 'web_restore_offer.png');
+  const t0 = Date.now();
+  await other.click('#btn-restore');
+  await other.waitForFunction(() => window.likeness.restored, null, { timeout: JOB_TIMEOUT_MS });
+  await settled(other);
+  const ms = Date.now() - t0;
+  const after = await headPrint(other);
+  const how = await other.evaluate(() => ({ state: document.body.dataset.state, fitMs: window.likeness.fit && window.likeness.fit.fitMs,
+    tags: [...document.querySelectorAll('#stages li .stage-tag')].slice(1, 5).map((t) => t.textContent),
+    exportOn: !document.getElementById('btn-export-ply').disabled, restored: window.likeness.restored }));
+  check('one click restores the same head (levels, positions, stage figures)', how.state === 'done' && sameHead(after, before),
+        `before ${JSON.stringify(before)}; after ${JSON.stringify(after)}; ${await bannerText(other)}`);
+  check('... without fitting: no fit time, the rows say "saved", in a fraction of the fit, and it exports',
+        how.fitMs === 0 && how.tags.every((t) => t === 'saved') && ms < fit.fitMs && how.exportOn,
+        `restored in ${ms} ms (page ${Math.round(how.restored.ms)} ms), the fit took ${Math.round(fit.fitMs)} ms; ${how.tags.join('|')}`);
+  const photosAfter = await other.evaluate(() => window.likeness.photos.map((p) => p.name + ' ' + p.width + 'x' + p.height + ' ' +
+    (p.filePoints ? p.filePoints.length / 5 : 0) + ' points').sort().join(', '));
+  check('... with its photos and their points', /kept_photo\.png 32x24 7 points/.test(photosAfter) && photosAfter === photosBefore,
+        `${photosBefore} / ${photosAfter}`);
+  const qAfter = await quality(other);
+  check('... and its checks measure the same', qBefore.ok && JSON.stringify(qAfter) === JSON.stringify(qBefore),
+        `${JSON.stringify(qBefore)} / ${JSON.stringify(qAfter)}`);
+
+  // Bounded: six more heads (the project file opened six times) leave five.
+  const downloadP = page.waitForEvent('download', { timeout: JOB_TIMEOUT_MS });
+  await page.click('#btn-save-project');
+  const bytes = fs.readFileSync(await (await downloadP).path());
+  for (let k = 0; k < 6; k++) {
+    const n = await other.evaluate(() => window.likeness.keep.saves);
+    await other.setInputFiles('#project-input', { name: `head_${k}.likeness.glb`, mimeType: 'model/gltf-binary', buffer: bytes });
+    await settled(other);
+    await keptTimes(other, n + 1);
+  }
+  await other.waitForFunction(() => window.likeness.keep.heads.length <= 5, null, { timeout: 30000 }).catch(() => {});
+  const list = await other.evaluate(async () => {
+    const db = await new Promise((ok, no) => { const r = indexedDB.open('likeness'); r.onsuccess = () => ok(r.result); r.onerror = no; });
+    const count = (name) => new Promise((ok) => { const r = db.transaction(name).objectStore(name).count(); r.onsuccess = () => ok(r.result); });
+    const out = { heads: await count('heads'), files: await count('files'), listed: document.querySelectorAll('#keep-list li').length,
+                  thumbs: 0, contrast: [] };
+    // A thumbnail shows something: its pixels' brightness varies (a blank
+    // or black read of the canvas would not).
+    for (const img of document.querySelectorAll('#keep-list img')) {
+      if (!/^data:image\/png/.test(img.src)) continue;
+      await img.decode();
+      const c = document.createElement('canvas');
+      c.width = c.height = 48;
+      const g = c.getContext('2d');
+      g.drawImage(img, 0, 0, 48, 48);
+      const d = g.getImageData(0, 0, 48, 48).data;
+      let s1 = 0, s2 = 0;
+      for (let i = 0; i < d.length; i += 4) { const l = (d[i] + d[i + 1] + d[i + 2]) / 3; s1 += l; s2 += l * l; }
+      const n = d.length / 4, std = Math.sqrt(Math.max(0, s2 / n - (s1 / n) ** 2));
+      out.contrast.push(Math.round(std));
+      if (std > 10) out.thumbs++;
+    }
+    db.close();
+    return out;
+  });
+  check('the kept heads stay at five, each listed with a thumbnail', list.heads === 5 && list.files === 5 && list.listed === 5 &&
+        list.thumbs === 5, JSON.stringify(list));
+  await shot(other, 'web_keep_list.png');
+
+  // Delete: one fewer, in the list and in the storage.
+  await other.click('#keep-list li:last-child .keep-delete');
+  await other.waitForFunction(() => document.querySelectorAll('#keep-list li').length === 4, null, { timeout: 30000 }).catch(() => {});
+  const afterDelete = await other.evaluate(() => window.likeness.keep.heads.length);
+  check('Delete removes a kept head', afterDelete === 4, `${afterDelete} left`);
+
+  // A full storage: the card says so; no error banner, the page works on.
+  await other.evaluate(() => {
+    window.__put = IDBObjectStore.prototype.put;
+    IDBObjectStore.prototype.put = function () { throw new DOMException('The quota has been exceeded.', 'QuotaExceededError'); };
+  });
+  await other.selectOption('#level', '1');
+  await other.waitForFunction(() => document.getElementById('keep-note').classList.contains('bad'), null, { timeout: 30000 }).catch(() => {});
+  const full = await other.evaluate(() => ({ note: document.getElementById('keep-note').textContent, state: document.body.dataset.state,
+                                             files: !document.getElementById('file-input').disabled }));
+  check('a full storage says what to do, without an error and with the page working',
+        /storage .* is full/.test(full.note) && /Save project/.test(full.note) && full.state === 'done' && full.files &&
+        (await bannerText(other)) === '', JSON.stringify(full));
+  await other.evaluate(() => { IDBObjectStore.prototype.put = window.__put; });
+  await other.close();
+}
+
+export const flow = { name: 'keep', title: 'The head kept in IndexedDB: reload, restore without fitting, bounded list, delete, full storage', run };
+runAlone(import.meta.url, flow);

@@ -1,0 +1,22 @@
+// The page's wording of the core's messages (web/js/wording.js) under
+// Node: the messages likeness fit prints with flags come out without them,
+// and the rest of each message is kept.
+// Usage: node tests/browser/wording_node.mjs   (exit 0: every check passed)
+import assert from 'node:assert/strict';
+import { forPage } from '../../web/js/wording.js';
+
+const turned = 'the scan seems to face +x with +y up (there its closest-point error is 3.1x smaller than as given): ' +
+               'turned it that way; pass --facing 0.74 0 -0.68 --up 0 1 0 to say so';
+const t = forPage(turned);
+assert.ok(!/--facing|--up|pass /.test(t), t);
+assert.ok(t.startsWith('the scan seems to face +x with +y up (there its closest-point error is 3.1x smaller than as given)'), t);
+assert.ok(/head was turned that way/.test(t), t);
+
+const hint = 'the scan seems to face -z with +y up (there its closest-point error is 2x smaller than as given); try --facing 0 0 -1 --up 0 1 0';
+const h = forPage(hint);
+assert.ok(!/--facing|--up/.test(h) && /turn the scan so the face looks along/.test(h) && /seems to face -z/.test(h), h);
+
+const faceOnly = 'face-only scan (its upper part is 0.4x as deep as wide; a whole head is 1x or more): aligned by closest points';
+assert.equal(forPage(faceOnly), faceOnly, 'a message without command-line words is left alone');
+assert.ok(!/bbox/.test(forPage('1.2 % of the bbox diagonal')));
+console.log('wording: 6/6 checks passed');
