@@ -70,10 +70,15 @@ Status read_vtk(const std::uint8_t* data, size_t size, TriMesh& mesh, GeometryKi
 Status read_geometry(const std::string& name, const std::uint8_t* data, size_t size,
                      TriMesh& mesh, PointCloud& cloud, GeometryKind& kind);
 
-// Images: PNG/JPEG/BMP/TGA via stb_image. Fails on anything that is not an
-// image, and on images over max_pixels (default 64 Mpixel), checked from the
-// header before decoding. A JPEG whose data ends before its end-of-image
-// marker is refused as Truncated (stb would fill the missing rows with grey).
+// Images: JPEG (baseline, progressive) and PNG only, decoded by stb_image
+// behind our own checks (image_io.cpp). Other formats are refused by name
+// from their magic bytes ("this is a PGM image; Likeness reads JPEG and
+// PNG", Unsupported). Before decoding, the segments / chunks are walked with
+// every length checked, and the declared size is refused over max_pixels
+// (TooLarge) or over what the bytes can hold (a JPEG needs a bit per 8x8
+// block, deflate inflates at most 1032:1: InvalidInput). A JPEG whose data
+// ends before its end-of-image marker, or a PNG before IEND, is Truncated.
+// JPEG EXIF orientation is applied (width and height swap for 5-8).
 // want_channels 0 keeps the file's channels (gray+alpha becomes RGBA).
 Status read_image(const std::uint8_t* data, size_t size, Image& image,
                   int want_channels = 0, size_t max_pixels = 64u << 20);
