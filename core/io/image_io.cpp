@@ -333,11 +333,9 @@ void append_to_bytes(void* context, void* data, int size) {
 
 }  // namespace
 
-Status read_image(const std::uint8_t* data, size_t size, Image& image, int want_channels, size_t max_pixels) {
-  image = Image();
+Status inspect_image(const std::uint8_t* data, size_t size, ImageInfo& info, size_t max_pixels) {
+  info = ImageInfo();
   if (size == 0 || data == nullptr) return Status::error(ErrorCode::Empty, "empty input: no bytes");
-  if (want_channels < 0 || want_channels > 4)
-    return invalid("want_channels must be 0..4, got " + std::to_string(want_channels));
   if (size > static_cast<size_t>(INT_MAX)) return Status::error(ErrorCode::TooLarge, "image data over 2 GiB");
   const bool jpeg = size >= 3 && data[0] == 0xFF && data[1] == 0xD8 && data[2] == 0xFF;
   const bool png = starts_with(data, size, "\x89PNG\r\n\x1a\n", 8);
@@ -373,6 +371,27 @@ Status read_image(const std::uint8_t* data, size_t size, Image& image, int want_
                              std::to_string(coded_bytes) + " bytes of image data, fewer than the " +
                              std::to_string(needed_bytes) + " that size needs (" + rule +
                              "): a decompression bomb or a damaged file");
+  info.format = jpeg ? "JPEG" : "PNG";
+  info.stored_width = declared.width;
+  info.stored_height = declared.height;
+  if (jpeg) {
+    ExifInfo exif;
+    // A damaged EXIF block does not spoil the picture: it is read as upright.
+    if (read_jpeg_exif(data, size, exif).ok() && exif.orientation >= 2 && exif.orientation <= 8)
+      info.orientation = exif.orientation;
+  }
+  const bool turned = info.orientation >= 5;
+  info.width = turned ? declared.height : declared.width;
+  info.height = turned ? declared.width : declared.height;
+  return Status::success();
+}
+
+Status read_image(const std::uint8_t* data, size_t size, Image& image, int want_channels, size_t max_pixels) {
+  image = Image();
+  if (want_channels < 0 || want_channels > 4)
+    return invalid("want_channels must be 0..4, got " + std::to_string(want_channels));
+  ImageInfo info;
+  if (Status s = inspect_image(data, size, info, max_pixels); !s) return s;
   // The bytes are checked: stb may now look at them.
   const int n = static_cast<int>(size);
   int w = 0, h = 0, c = 0;
@@ -383,10 +402,12 @@ Status read_image(const std::uint8_t* data, size_t size, Image& image, int want_
   int dw = 0, dh = 0, dc = 0;
   stbi_uc* pixels = stbi_load_from_memory(data, n, &dw, &dh, &dc, channels);
   if (!pixels) return invalid(std::string("cannot decode image: ") + stbi_failure_reason());
-  if (dw != declared.width || dh != declared.height) {
+  if (dw != info.stored_width || dh != info.stored_height) {
     stbi_image_free(pixels);
     return Status::error(ErrorCode::Internal, "the decoder gave " + std::to_string(dw) + "x" + std::to_string(dh) +
-                                                  " pixels for an image that declares " + dims);
+                                                  " pixels for an image that declares " +
+                                                  std::to_string(info.stored_width) + "x" +
+                                                  std::to_string(info.stored_height));
   }
   Image decoded;
   decoded.width = dw;
@@ -394,15 +415,7 @@ Status read_image(const std::uint8_t* data, size_t size, Image& image, int want_
   decoded.channels = channels;
   decoded.pixels.assign(pixels, pixels + static_cast<size_t>(dw) * dh * channels);
   stbi_image_free(pixels);
-  if (jpeg) {
-    ExifInfo exif;
-    // A damaged EXIF block does not spoil the picture: it is read as upright.
-    if (read_jpeg_exif(data, size, exif).ok() && exif.orientation >= 2 && exif.orientation <= 8) {
-      image = oriented(decoded, exif.orientation);
-      return Status::success();
-    }
-  }
-  image = std::move(decoded);
+  image = info.orientation >= 2 ? oriented(decoded, info.orientation) : std::move(decoded);
   return Status::success();
 }
 

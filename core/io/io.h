@@ -82,6 +82,17 @@ Status read_geometry(const std::string& name, const std::uint8_t* data, size_t s
 // want_channels 0 keeps the file's channels (gray+alpha becomes RGBA).
 Status read_image(const std::uint8_t* data, size_t size, Image& image,
                   int want_channels = 0, size_t max_pixels = 64u << 20);
+
+// What read_image checks before decoding, without decoding: the format, the
+// structure, the limits and the EXIF orientation. The page runs it before
+// handing the bytes to the browser's own decoder.
+struct ImageInfo {
+  const char* format = "";                 // "JPEG" or "PNG"
+  int stored_width = 0, stored_height = 0;  // as the file stores the pixels
+  int orientation = 1;                      // EXIF orientation 1..8 (1: upright)
+  int width = 0, height = 0;                // as shown: swapped for orientations 5..8
+};
+Status inspect_image(const std::uint8_t* data, size_t size, ImageInfo& info, size_t max_pixels = 64u << 20);
 // Empty when the image is empty or its pixel count disagrees with its size.
 Bytes write_png(const Image& image);
 

@@ -195,3 +195,25 @@ TEST_CASE("EXIF orientation is applied as a viewer shows the photo", "[io][image
     CHECK(colour_at(im, c.w - 3, c.h - 3) == c.br);
   }
 }
+
+TEST_CASE("inspect_image: the checks and the shown size without decoding", "[io][image][untrusted]") {
+  const Bytes jpg = with_orientation(jpeg_of(quadrants(32, 16)), 6);
+  ImageInfo info;
+  REQUIRE(inspect_image(jpg.data(), jpg.size(), info).ok());
+  CHECK(std::string(info.format) == "JPEG");
+  CHECK(info.stored_width == 32);
+  CHECK(info.stored_height == 16);
+  CHECK(info.orientation == 6);
+  CHECK(info.width == 16);
+  CHECK(info.height == 32);
+  const Bytes png = write_png(quadrants(8, 4));
+  REQUIRE(inspect_image(png.data(), png.size(), info).ok());
+  CHECK(std::string(info.format) == "PNG");
+  CHECK(info.width == 8);
+  CHECK(info.height == 4);
+  CHECK(info.orientation == 1);
+  require_error(inspect_image(jpg.data(), jpg.size() - 10, info), ErrorCode::Truncated, "truncated JPEG");
+  Bytes pgm = bytes("P5\n4 4\n65535\n");
+  pgm.resize(pgm.size() + 32, 0x7F);
+  require_error(inspect_image(pgm.data(), pgm.size(), info), ErrorCode::Unsupported, "a PGM image");
+}
