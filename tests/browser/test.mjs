@@ -27,6 +27,7 @@ import { flow as animation } from './flows/animation.mjs';
 import { flow as texture } from './flows/texture.mjs';
 import { flow as eyeSmile } from './flows/eye_smile.mjs';
 import { flow as fitCancel } from './flows/fit_cancel.mjs';
+import { flow as photoRefusals } from './flows/photo_refusals.mjs';
 
 runFlows([startup, scanLoad, startupFailures, fit, fitChecks, fitThreads, exportFlow, animation, texture, eyeSmile,
-          fitCancel]);
+          fitCancel, photoRefusals]);
