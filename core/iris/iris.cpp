@@ -671,10 +671,16 @@ Status check_eye_closeup(const Image& photo, const IrisCircle& circle) {
   }
   const double pupil_contrast = median(ring) - median(centre);
   auto pct = [](double v) { return std::to_string(static_cast<int>(std::lround(100 * v))) + " %"; };
+  if (r > 0.4 * std::min(photo.width, photo.height))
+    return Status::error(ErrorCode::NotAHead,
+                         "no eye close-up: the dark round patch found spans " +
+                             pct(2 * r / std::min(photo.width, photo.height)) +
+                             " of the photo's short side (80 % at most: an eye photo shows the eye's white or lids "
+                             "beside the iris); an eye photo is a close-up of one open eye, the iris near the middle");
   if (round_fraction < 0.38)
     return Status::error(ErrorCode::NotAHead,
-                         "no eye close-up: the dark patch found (radius " + std::to_string(static_cast<int>(std::lround(r))) +
-                             " px) has no round iris edge (" + pct(round_fraction) + " of its border, 38 % needed); "
+                         "no eye close-up: the dark patch found has no round iris edge (" + pct(round_fraction) +
+                             " of its border, 38 % needed); "
                              "an eye photo is a close-up of one open eye, the iris near the middle");
   if (pupil_contrast < 0.12)
     return Status::error(ErrorCode::NotAHead,

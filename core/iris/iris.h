@@ -131,16 +131,20 @@ Status eyeball_texture(const PolarIris& iris, double pupil_to_iris_ratio,
 
 // Whether the found circle is an eye's iris in a close-up of one eye, not a
 // dark patch of a face, hair or background: NotAHead with the reason unless
+//  - the iris's radius is at most 0.4 of the photo's short side (an eye
+//    photo shows the white of the eye or the lids beside the iris), and
 //  - the limbus is round: on at least 38 % of 180 rays from the centre the
 //    strongest dark-to-bright step between 0.6 and 1.5 radii lies within
 //    10 % of the radius (eyelids may hide the rest), and
 //  - a pupil darker than the iris sits at the centre: the median luminance
 //    at 0.6 radii exceeds that within 0.1 radii by at least 0.12.
-// Measured (docs/design/untrusted_images.md): the real eye close-up 0.49 /
-// 0.28 and the synthetic test eye 0.73 / 0.21 pass; the ten portraits of
-// multiview_faces, two intraoral photos, a scanner texture and the
-// synthetic smile each fail one (the best of them 0.46 / -0.06 and
-// 0.27 / 0.20). A stopgap until the face landmarks (issue 37) locate the eye.
+// Measured (docs/design/untrusted_images.md): the real eye close-up (radius
+// 0.27 of the short side, round 0.56, contrast 0.28) and the synthetic test
+// eye pass; the ten portraits of multiview_faces, two intraoral photos and a
+// scanner texture each fail one (the roundest 0.48 with contrast -0.07); a
+// portrait given a guess at its eye found the face's outline (0.46 of the
+// short side, round 0.42). A stopgap until the face landmarks (issue 37)
+// locate the eye.
 Status check_eye_closeup(const Image& photo, const IrisCircle& circle);
 
 // Everything above with default options: photo (+ guess or nullptr) -> texture.

@@ -273,6 +273,17 @@ TEST_CASE("iris: portraits are refused as eye photos; a crop of one eye is taken
     CHECK(s.code == lk::ErrorCode::NotAHead);
     CHECK(s.message.find("no eye close-up") != std::string::npos);
   }
+  // A guess at the right eye of 0001 once grew into the face's outline
+  // (radius 557 px, round and darker at its centre): refused by its size.
+  {
+    lk::Image im;
+    REQUIRE(lk::load_image_file(dir + "0001.jpg", im, 3).ok());
+    const lk::Vec2 guess(780, 548);
+    lk::IrisResult res;
+    const lk::Status s = lk::iris_texture_from_photo(im, &guess, res);
+    INFO(s.message);
+    CHECK(s.code == lk::ErrorCode::NotAHead);
+  }
   // The right eye of 0001 cut out (160 x 100 px, the iris about 56 px
   // across): a small but real close-up, accepted.
   lk::Image face;
