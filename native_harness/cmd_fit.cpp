@@ -10,6 +10,7 @@
 #include "project/quality_job.h"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <sys/stat.h>
@@ -32,9 +33,9 @@ bool get_vec3(const Args& a, const std::string& key, Vec3& v) {
   for (int k = 0; k < 3; ++k) {
     char* end = nullptr;
     v[k] = std::strtod(vals[k].c_str(), &end);
-    if (vals[k].empty() || *end) return false;
+    if (vals[k].empty() || *end || !std::isfinite(v[k])) return false;
   }
-  return true;
+  return v.norm() > 0;  // a direction: finite, not zero
 }
 
 int run_fit(const Args& args) {
