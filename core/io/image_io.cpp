@@ -67,7 +67,10 @@ bool starts_with(const std::uint8_t* d, size_t n, const char* magic, size_t m) {
 // when the bytes are no image format we know.
 std::string other_format_name(const std::uint8_t* d, size_t n) {
   if (starts_with(d, n, "GIF87a", 6) || starts_with(d, n, "GIF89a", 6)) return "a GIF image";
-  if (starts_with(d, n, "BM", 2) && n >= 14) return "a BMP image";
+  if (starts_with(d, n, "BM", 2) && n >= 18) {  // and a known DIB header size
+    const std::uint32_t dib = d[14] | std::uint32_t(d[15]) << 8 | std::uint32_t(d[16]) << 16 | std::uint32_t(d[17]) << 24;
+    if (dib == 12 || dib == 40 || dib == 52 || dib == 56 || dib == 64 || dib == 108 || dib == 124) return "a BMP image";
+  }
   if (n >= 3 && d[0] == 'P' && d[1] >= '1' && d[1] <= '7' && (d[2] == ' ' || d[2] == '\n' || d[2] == '\r' || d[2] == '\t')) {
     static const char* names[] = {"a PBM", "a PGM", "a PPM", "a PBM", "a PGM", "a PPM", "a PAM"};
     return std::string(names[d[1] - '1']) + " image";
