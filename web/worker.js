@@ -77,7 +77,7 @@ function coreReady(m, which) {
     return;
   }
   postMessage({ type: 'ready', variant, threads: core.parallel_workers(), fallback });
-  while (pending.length) { const msg = pending.shift(); queue = queue.then(() => handle(msg)); }
+  while (pending.length) enqueue(pending.shift());
 }
 
 // The start-up code (functions only; it runs below, once JOBS exist).
@@ -225,6 +225,10 @@ function transferables(result, out = []) {
 // Jobs run one at a time, in the order they came (a photo job awaits the
 // browser's decoder, and the next message must not overtake it).
 let queue = Promise.resolve();
+function enqueue(msg) {
+  // A failure outside the job's own try (posting the result) must not stop the queue.
+  queue = queue.then(() => handle(msg)).catch((e) => fatal(msg.type + ': ' + errorText(e)));
+}
 
 async function handle(msg) {
   const job = JOBS[msg.type];
@@ -264,6 +268,6 @@ else startSingleCore();
 if (!WARM_UP) {
   onmessage = (e) => {
     if (!core) pending.push(e.data);
-    else queue = queue.then(() => handle(e.data));
+    else enqueue(e.data);
   };
 }
