@@ -21,6 +21,8 @@
 
 #include <algorithm>
 #include <climits>
+#include <cstdint>
+#include <vector>
 #include <cstring>
 #include <string>
 
@@ -106,6 +108,7 @@ std::uint32_t be32(const std::uint8_t* p) {
 struct Declared {
   int width = 0, height = 0;
   bool jpeg = false;
+  std::vector<size_t> scan_ends;  // JPEG: where each scan's entropy-coded data ends
 };
 
 std::string at_byte(size_t i) { return " at byte " + std::to_string(i); }
@@ -229,6 +232,7 @@ Status check_jpeg(const std::uint8_t* d, size_t n, Declared& out, std::uint64_t&
       while (k + 1 < n && !(d[k] == 0xFF && d[k + 1] != 0x00 && !(d[k + 1] >= 0xD0 && d[k + 1] <= 0xD7))) ++k;
       if (k + 1 >= n) return truncated(cut);
       scan_bytes += k - begin;
+      out.scan_ends.push_back(k);
       have_scan = true;
       i = k;
       continue;
@@ -334,9 +338,54 @@ void append_to_bytes(void* context, void* data, int size) {
   out->insert(out->end(), p, p + size);
 }
 
+// JPEG: the bytes with sixteen 0xFE bytes after each scan's entropy-coded
+// data (mostly one-bits; not 0xFF, which would need stuffing and make the
+// decoder's search for the next marker stop early). A whole scan never uses
+// bits past its data (its last byte is padded), so the copy decodes to the
+// same pixels; a scan whose data ends early has its missing blocks read from
+// these bits instead of the decoder's zero filler (or fails on a code no
+// table has), so the pixels differ. stb_image 2.27 and browsers fill
+// silently; this tells.
+Bytes ones_after_scans(const std::uint8_t* d, size_t n, const std::vector<size_t>& ends) {
+  Bytes out;
+  out.reserve(n + 16 * ends.size());
+  size_t at = 0;
+  for (size_t end : ends) {
+    out.insert(out.end(), d + at, d + end);
+    out.insert(out.end(), 16, 0xFE);
+    at = end;
+  }
+  out.insert(out.end(), d + at, d + n);
+  return out;
+}
+
+std::uint64_t fnv1a(const stbi_uc* p, size_t n) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;
+  return h;
+}
+
+Status inspect(const std::uint8_t* data, size_t size, ImageInfo& info, size_t max_pixels, Declared& declared);
+
 }  // namespace
 
 Status inspect_image(const std::uint8_t* data, size_t size, ImageInfo& info, size_t max_pixels) {
+  Declared declared;
+  return inspect(data, size, info, max_pixels, declared);
+}
+
+Status jpeg_truncation_probe(const std::uint8_t* data, size_t size, Bytes& probe) {
+  probe.clear();
+  ImageInfo info;
+  Declared declared;
+  if (Status s = inspect(data, size, info, SIZE_MAX, declared); !s) return s;
+  if (declared.jpeg) probe = ones_after_scans(data, size, declared.scan_ends);
+  return Status::success();
+}
+
+namespace {
+
+Status inspect(const std::uint8_t* data, size_t size, ImageInfo& info, size_t max_pixels, Declared& declared) {
   info = ImageInfo();
   if (size == 0 || data == nullptr) return Status::error(ErrorCode::Empty, "empty input: no bytes");
   if (size > static_cast<size_t>(INT_MAX)) return Status::error(ErrorCode::TooLarge, "image data over 2 GiB");
@@ -347,7 +396,7 @@ Status inspect_image(const std::uint8_t* data, size_t size, ImageInfo& info, siz
     if (!other.empty()) return Status::error(ErrorCode::Unsupported, "this is " + other + kReads);
     return invalid(std::string("not an image") + kReads + " (a JPEG starts with FF D8 FF, a PNG with 89 'PNG')");
   }
-  Declared declared;
+  declared = Declared();
   std::uint64_t coded_bytes = 0, needed_bytes = 0;
   std::string rule;
   if (jpeg) {
@@ -389,12 +438,15 @@ Status inspect_image(const std::uint8_t* data, size_t size, ImageInfo& info, siz
   return Status::success();
 }
 
+}  // namespace
+
 Status read_image(const std::uint8_t* data, size_t size, Image& image, int want_channels, size_t max_pixels) {
   image = Image();
   if (want_channels < 0 || want_channels > 4)
     return invalid("want_channels must be 0..4, got " + std::to_string(want_channels));
   ImageInfo info;
-  if (Status s = inspect_image(data, size, info, max_pixels); !s) return s;
+  Declared declared;
+  if (Status s = inspect(data, size, info, max_pixels, declared); !s) return s;
   // The bytes are checked: stb may now look at them.
   const int n = static_cast<int>(size);
   int w = 0, h = 0, c = 0;
@@ -411,6 +463,24 @@ Status read_image(const std::uint8_t* data, size_t size, Image& image, int want_
                                                   " pixels for an image that declares " +
                                                   std::to_string(info.stored_width) + "x" +
                                                   std::to_string(info.stored_height));
+  }
+  if (declared.jpeg) {
+    // Filler inside a whole-looking file: see ones_after_scans.
+    const size_t count = static_cast<size_t>(dw) * dh * channels;
+    const std::uint64_t hash = fnv1a(pixels, count);
+    const Bytes probe = ones_after_scans(data, size, declared.scan_ends);
+    int pw = 0, ph = 0, pc = 0;
+    stbi_uc* other = probe.size() <= static_cast<size_t>(INT_MAX)
+                         ? stbi_load_from_memory(probe.data(), static_cast<int>(probe.size()), &pw, &ph, &pc, channels)
+                         : nullptr;
+    const bool same = other && pw == dw && ph == dh && fnv1a(other, count) == hash;
+    if (other) stbi_image_free(other);
+    if (!same) {
+      stbi_image_free(pixels);
+      return Status::error(ErrorCode::Truncated,
+                           "truncated JPEG: its image data ends before its last blocks (the decoder would fill them "
+                           "with grey)");
+    }
   }
   Image decoded;
   decoded.width = dw;

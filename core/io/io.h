@@ -93,6 +93,14 @@ struct ImageInfo {
   int width = 0, height = 0;                // as shown: swapped for orientations 5..8
 };
 Status inspect_image(const std::uint8_t* data, size_t size, ImageInfo& info, size_t max_pixels = 64u << 20);
+
+// For a JPEG that inspect_image accepts: a copy with one-bits after each
+// scan's data. A whole JPEG decodes to the same pixels as its probe; one
+// whose scan data ends early (cut, with an end-of-image marker after) does
+// not, since decoders silently fill its missing blocks. read_image compares
+// the two itself; the page does it with the browser's decoder. Empty for a
+// PNG (a cut deflate stream already fails in the decoder).
+Status jpeg_truncation_probe(const std::uint8_t* data, size_t size, Bytes& probe);
 // Empty when the image is empty or its pixel count disagrees with its size.
 Bytes write_png(const Image& image);
 

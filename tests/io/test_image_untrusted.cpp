@@ -60,9 +60,12 @@ Bytes with_orientation(const Bytes& jpg, int orientation) {
                       1, 0,                                                       // one entry
                       0x12, 0x01, 3, 0, 1, 0, 0, 0, std::uint8_t(orientation), 0, 0, 0,  // 0x0112 SHORT 1
                       0, 0, 0, 0};                                                // no next IFD
-  Bytes out(jpg.begin(), jpg.begin() + 2);
-  out.insert(out.end(), app1.begin(), app1.end());
-  out.insert(out.end(), jpg.begin() + 2, jpg.end());
+  Bytes out;
+  out.reserve(jpg.size() + app1.size());
+  out.push_back(jpg[0]);  // SOI, then the segment, then the rest
+  out.push_back(jpg[1]);
+  for (std::uint8_t b : app1) out.push_back(b);
+  for (size_t i = 2; i < jpg.size(); ++i) out.push_back(jpg[i]);
   return out;
 }
 
@@ -216,4 +219,68 @@ TEST_CASE("inspect_image: the checks and the shown size without decoding", "[io]
   Bytes pgm = bytes("P5\n4 4\n65535\n");
   pgm.resize(pgm.size() + 32, 0x7F);
   require_error(inspect_image(pgm.data(), pgm.size(), info), ErrorCode::Unsupported, "a PGM image");
+}
+
+TEST_CASE("a JPEG cut inside its image data and closed with an end marker is refused, not filled", "[io][image][untrusted]") {
+  // stb_image (and browsers) decode such a file without complaint, filling
+  // the missing blocks; read_image compares with its truncation probe.
+  Image im = Image::make(64, 48, 3);
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 64; ++x)
+      for (int c = 0; c < 3; ++c) im.at(x, y)[c] = static_cast<std::uint8_t>((x * 5 + y * 3 + c * 70) % 256);
+  const Bytes jpg = jpeg_of(im);
+  Image back;
+  REQUIRE(read_image(jpg.data(), jpg.size(), back).ok());
+  const size_t sos = find_marker(jpg, 0xDA);
+  REQUIRE(sos > 0);
+  const size_t data = sos + 2 + (size_t(jpg[sos + 2]) << 8 | jpg[sos + 3]);
+  Bytes cut(jpg.begin(), jpg.begin() + static_cast<std::ptrdiff_t>(data + (jpg.size() - 2 - data) / 2));
+  if (cut.back() == 0xFF) cut.pop_back();
+  cut.push_back(0xFF);
+  cut.push_back(0xD9);
+  require_error(read_image(cut.data(), cut.size(), back), ErrorCode::Truncated, "ends before its last blocks");
+  Bytes probe;
+  REQUIRE(jpeg_truncation_probe(jpg.data(), jpg.size(), probe).ok());
+  CHECK(probe.size() == jpg.size() + 16);
+  const Bytes png = write_png(im);
+  REQUIRE(jpeg_truncation_probe(png.data(), png.size(), probe).ok());
+  CHECK(probe.empty());
+}
+
+TEST_CASE("a progressive JPEG cut inside a scan is refused; whole ones decode", "[io][image][untrusted][shared]") {
+  LK_REQUIRE_SHARED("multiview_faces/keentools_kira/0001.jpg");
+  Bytes jpg;
+  REQUIRE(read_file(lk::test::shared_data_dir() + "/multiview_faces/keentools_kira/0001.jpg", jpg).ok());
+  Image back;
+  REQUIRE(read_image(jpg.data(), jpg.size(), back).ok());
+  // Cut in the middle of the file (inside some scan's data), closed with EOI.
+  Bytes cut(jpg.begin(), jpg.begin() + static_cast<std::ptrdiff_t>(jpg.size() / 2));
+  while (cut.back() == 0xFF) cut.pop_back();
+  cut.push_back(0xFF);
+  cut.push_back(0xD9);
+  require_error(read_image(cut.data(), cut.size(), back), ErrorCode::Truncated, "ends before its last blocks");
+}
+
+TEST_CASE("a PNG whose deflate stream is cut short, with its IEND kept, is refused", "[io][image][untrusted]") {
+  Image im = Image::make(64, 48, 3);
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 64; ++x)
+      for (int c = 0; c < 3; ++c) im.at(x, y)[c] = static_cast<std::uint8_t>((x * 37 + y * 91 + c * 13) % 256);
+  const Bytes png = write_png(im);
+  // Find IDAT, halve its data, fix its length; the CRC is not checked.
+  size_t at = 8;
+  while (at + 8 <= png.size() && std::string(png.begin() + at + 4, png.begin() + at + 8) != "IDAT")
+    at += 12 + (size_t(png[at]) << 24 | size_t(png[at + 1]) << 16 | size_t(png[at + 2]) << 8 | png[at + 3]);
+  REQUIRE(at + 8 <= png.size());
+  const size_t length = size_t(png[at]) << 24 | size_t(png[at + 1]) << 16 | size_t(png[at + 2]) << 8 | png[at + 3];
+  const size_t keep = length / 2;
+  Bytes cut(png.begin(), png.begin() + static_cast<std::ptrdiff_t>(at + 8 + keep));
+  cut[at] = std::uint8_t(keep >> 24); cut[at + 1] = std::uint8_t(keep >> 16);
+  cut[at + 2] = std::uint8_t(keep >> 8); cut[at + 3] = std::uint8_t(keep);
+  cut.insert(cut.end(), png.begin() + static_cast<std::ptrdiff_t>(at + 8 + length), png.end());  // CRC, IEND
+  Image back;
+  const Status s = read_image(cut.data(), cut.size(), back);
+  INFO(s.message);
+  CHECK_FALSE(s.ok());
+  CHECK(back.empty());
 }
