@@ -90,6 +90,19 @@ val inspect_image(const std::string& name, std::uintptr_t data, std::size_t size
   return r;
 }
 
+// jpeg_truncation_probe (io.h): {ok, probe: Uint8Array} (empty for a PNG);
+// worker.js decodes both with the browser and refuses the photo when their
+// pixels differ (image data cut short and filled by the decoder).
+val jpeg_truncation_probe(const std::string& name, std::uintptr_t data, std::size_t size) {
+  if (data == 0 && size != 0) return error_result(lk::ErrorCode::Internal, name + ": no input buffer");
+  lk::Bytes probe;
+  const lk::Status status = lk::jpeg_truncation_probe(reinterpret_cast<const std::uint8_t*>(data), size, probe);
+  if (!status.ok()) return error_result(lk::with_context(status, name));
+  val r = ok_result();
+  r.set("probe", bytes_array(probe.data(), probe.size()));
+  return r;
+}
+
 // Decodes a dropped photo (decoded: see decode_image) to check it is a
 // whole, usable image and reports its size; the texture job decodes it
 // again, so the pixels are not kept here.
@@ -191,5 +204,6 @@ EMSCRIPTEN_BINDINGS(likeness_worker_load) {
   emscripten::function("parse_geometry", &parse_geometry);
   emscripten::function("check_image", &check_image);
   emscripten::function("inspect_image", &inspect_image);
+  emscripten::function("jpeg_truncation_probe", &jpeg_truncation_probe);
   emscripten::function("parse_points", &parse_points);
 }

@@ -117,27 +117,42 @@ async function photoPixels(name, buffer) {
   if (!BROWSER_DECODER) return { buffer, decoded: null, decoder: 'stb' };
   const info = withHeapBytes(buffer, (ptr, size) => core.inspect_image(name, ptr, size));
   if (!info.ok) return { error: info };
-  const fail = (why) => ({ error: { ok: false, code: 'InvalidInput', message: name + ': ' + why } });
-  let bitmap;
-  try {
-    bitmap = await createImageBitmap(new Blob([buffer]), { imageOrientation: 'from-image', premultiplyAlpha: 'none' });
-  } catch (e) {
-    return fail('the browser could not decode this ' + info.format + ' (' + errorText(e) + ')');
-  }
-  try {
-    if (bitmap.width !== info.width || bitmap.height !== info.height) {
-      return fail('the browser decoded ' + bitmap.width + '×' + bitmap.height + ' pixels from a ' + info.format +
-                  ' that declares ' + info.width + '×' + info.height);
+  const fail = (why, code = 'InvalidInput') => ({ error: { ok: false, code, message: name + ': ' + why } });
+  const decode = async (bytes) => {
+    let bitmap;
+    try {
+      bitmap = await createImageBitmap(new Blob([bytes]), { imageOrientation: 'from-image', premultiplyAlpha: 'none' });
+    } catch (e) {
+      return { why: 'the browser could not decode this ' + info.format + ' (' + errorText(e) + ')' };
     }
-    const canvas = new OffscreenCanvas(bitmap.width, bitmap.height);
-    const ctx = canvas.getContext('2d', { willReadFrequently: true });
-    if (!ctx) return fail('no 2-D canvas to read the decoded pixels from');
-    ctx.drawImage(bitmap, 0, 0);
-    const pixels = ctx.getImageData(0, 0, bitmap.width, bitmap.height).data;
-    return { buffer: pixels.buffer, decoded: { width: bitmap.width, height: bitmap.height }, decoder: 'browser' };
-  } finally {
-    bitmap.close();
+    try {
+      if (bitmap.width !== info.width || bitmap.height !== info.height) {
+        return { why: 'the browser decoded ' + bitmap.width + '×' + bitmap.height + ' pixels from a ' + info.format +
+                      ' that declares ' + info.width + '×' + info.height };
+      }
+      const canvas = new OffscreenCanvas(bitmap.width, bitmap.height);
+      const ctx = canvas.getContext('2d', { willReadFrequently: true });
+      if (!ctx) return { why: 'no 2-D canvas to read the decoded pixels from' };
+      ctx.drawImage(bitmap, 0, 0);
+      return { pixels: ctx.getImageData(0, 0, bitmap.width, bitmap.height).data };
+    } finally {
+      bitmap.close();
+    }
+  };
+  const first = await decode(buffer);
+  if (first.why) return fail(first.why);
+  // A JPEG whose image data ends early is filled in silently by the decoder;
+  // its probe (one-bits after each scan, io.h) then decodes differently.
+  const probe = withHeapBytes(buffer, (ptr, size) => core.jpeg_truncation_probe(name, ptr, size));
+  if (!probe.ok) return { error: probe };
+  if (probe.probe.length) {
+    const second = await decode(probe.probe);
+    const a = first.pixels, b = second.pixels;
+    let same = !second.why && b.length === a.length;
+    for (let i = 0; same && i < a.length; i++) same = a[i] === b[i];
+    if (!same) return fail('truncated JPEG: its image data ends before its last blocks (the decoder would fill them with grey)', 'Truncated');
   }
+  return { buffer: first.pixels.buffer, decoded: { width: info.width, height: info.height }, decoder: 'browser' };
 }
 
 // Runs fn(ptr, size, decoded) on a photo's pixels (or bytes) in the heap;

@@ -4,8 +4,9 @@
 // bomb), a truncated JPEG and the 10-byte JPEG with oversized Huffman counts
 // are each refused with the reason beside the file and in the banner, while
 // a good PNG and a JPEG whose EXIF says "turn 90 degrees" are kept (the
-// latter upright, 16x32); the page goes on working (another photo is
-// kept). With ?decoder=stb (the fallback where createImageBitmap is
+// latter upright, 16x32); a JPEG cut inside its data and closed with an end
+// marker (which decoders fill silently) is refused; the page goes on working
+// (another photo is kept). With ?decoder=stb (the fallback where createImageBitmap is
 // missing) the core decodes, with the same refusals and orientation. With
 // ../shared/data present, a whole portrait set to Eye or Smile is refused
 // with a reason within seconds.
@@ -48,6 +49,16 @@ function withOrientation6(jpg) {
   return Buffer.concat([jpg.subarray(0, 2), app1, jpg.subarray(2)]);
 }
 
+// Cut in the middle of its image data and closed with an end-of-image
+// marker: decoders fill the rest without complaint.
+function cutInsideData(jpg) {
+  const sos = findMarker(jpg, 0xda);
+  const data = sos + 2 + jpg.readUInt16BE(sos + 2);
+  let cut = jpg.subarray(0, data + Math.floor((jpg.length - 2 - data) / 2));
+  while (cut[cut.length - 1] === 0xff) cut = cut.subarray(0, cut.length - 1);
+  return Buffer.concat([cut, Buffer.from([0xff, 0xd9])]);
+}
+
 function badPhotos(jpegs) {
   const bomb = Buffer.from(jpegs.small);
   const sof = [0xc0, 0xc1, 0xc2].map((m) => findMarker(bomb, m)).find((i) => i >= 0);
@@ -73,6 +84,13 @@ async function keptPhotos(page) {
   return page.evaluate(() => Object.fromEntries(window.likeness.photos.map((p) => [p.name, { w: p.width, h: p.height, decoder: p.decoder }])));
 }
 
+async function refusedRow(page, banner, decoder, name, reason) {
+  const row = await fileRow(page, name);
+  check(`${decoder}: ${name} is refused, the reason beside it and in the banner`,
+        !!row && row.refused && reason.test(row.title) && /refused/.test(row.text) && banner.includes(name),
+        row ? `"${row.text}" (${row.title})` : 'no row');
+}
+
 async function dropAndCheck(page, jpegs, decoder) {
   const bad = badPhotos(jpegs);
   const files = bad.map(([name, buffer]) => ({ name, mimeType: 'image/jpeg', buffer }));
@@ -82,24 +100,24 @@ async function dropAndCheck(page, jpegs, decoder) {
   await page.setInputFiles('#file-input', files);
   await settled(page);
   const banner = await bannerText(page);
-  for (const [name, , reason] of bad) {
-    const row = await fileRow(page, name);
-    check(`${decoder}: ${name} is refused, the reason beside it and in the banner`,
-          !!row && row.refused && reason.test(row.title) && /refused/.test(row.text) && banner.includes(name),
-          row ? `"${row.text}" (${row.title})` : 'no row');
-  }
+  for (const [name, , reason] of bad) await refusedRow(page, banner, decoder, name, reason);
   const kept = await keptPhotos(page);
   const good = kept[`good_${decoder}.png`], turned = kept[`turned_${decoder}.jpg`];
   check(`${decoder}: the good photos are kept, the EXIF-turned JPEG upright (16x32), decoded by ${decoder}`,
         !!good && good.w === 40 && good.h === 30 && good.decoder === decoder && !!turned && turned.w === 16 && turned.h === 32 &&
         turned.decoder === decoder && bad.every(([n]) => !kept[n]),
         `${JSON.stringify(kept)} in ${Date.now() - t0} ms`);
-  // The page keeps working: another photo is checked and kept.
+  // A JPEG cut inside its image data and closed with an end marker (the
+  // file list shows six rows: a second drop), then the page keeps working:
+  // another photo is checked and kept.
+  await page.setInputFiles('#file-input', { name: 'filled.jpg', mimeType: 'image/jpeg', buffer: cutInsideData(jpegs.plain) });
+  await settled(page);
+  await refusedRow(page, await bannerText(page), decoder, 'filled.jpg', /ends before its last blocks/);
   await page.setInputFiles('#file-input', { name: `after_${decoder}.png`, mimeType: 'image/png', buffer: makePng(12, 8) });
   await settled(page);
   const after = await keptPhotos(page);
-  check(`${decoder}: after the refusals another photo is kept`, !!after[`after_${decoder}.png`] && (await state(page)) !== 'error',
-        `state ${await state(page)}; ${await bannerText(page)}`);
+  check(`${decoder}: after the refusals another photo is kept`, !!after[`after_${decoder}.png`] && !after['filled.jpg'] &&
+        (await state(page)) !== 'error', `state ${await state(page)}; ${await bannerText(page)}`);
 }
 
 async function run(s) {
