@@ -29,7 +29,7 @@ namespace {
 
 int run(const Args& args) {
   int size = 2048, width = 3000, height = 2000;
-  if (!args.get_int("size", 2048, size)) return 2;
+  if (!args.get_int("size", 2048, size, 16, 4096)) return 2;
   GenericHead head;
   if (!load_generic_head(head).ok()) {
     std::printf("texture: the generic head could not be loaded\n");

@@ -14,6 +14,22 @@ std::map<std::string, Bench>& bench_registry() {
 namespace {
 
 int run_bench(const Args& args) {
+  // Every option a section reads (bench_*.cpp, fit_table.h).
+  if (!only_known_options(
+          "bench", args,
+          {"only", "quick", "size", "data", "dump", "save-scans", "truth-head", "fit-arc", "fit-area-ratio", "fit-back",
+           "fit-back-weight", "fit-below-cut-mm", "fit-cap-pct", "fit-crease-angle", "fit-crease-edges",
+           "fit-crease-trials", "fit-data-level", "fit-displaced-creases", "fit-edge-fade", "fit-footprint",
+           "fit-guard-always", "fit-guard-face-only", "fit-guard-off", "fit-guard-passes", "fit-head",
+           "fit-hinges-last", "fit-isolated", "fit-levels", "fit-line-edges", "fit-no-climb",
+           "fit-no-corners-to-smooth", "fit-no-creases", "fit-no-eye-region", "fit-no-parents-to-smooth",
+           "fit-noise-confidence", "fit-noise-edge", "fit-noise-points", "fit-noise-radius", "fit-pleat-steps",
+           "fit-points", "fit-real-copies", "fit-real-dump", "fit-real-scan", "fit-relief-level", "fit-remeasure",
+           "fit-restarts", "fit-restore-rings", "fit-scan-noise-mm", "fit-seed", "fit-seeds", "fit-separate-rounds",
+           "fit-separation-repeats", "fit-smooth-agreement", "fit-smooth-iterations", "fit-smooth-levels",
+           "fit-smooth-max-radius", "fit-smooth-region-rings", "fit-smooth-strength", "fit-stations",
+           "fit-surface-edges"}))
+    return 2;
   const auto only_list = args.get_all("only");
   std::set<std::string> only(only_list.begin(), only_list.end());
   int failures = 0, ran = 0;

@@ -27,6 +27,7 @@ std::string file_name(const std::string& path) {
 }
 
 int run_convert(const Args& args) {
+  if (!only_known_options("convert", args, {"in", "out", "ascii"})) return 2;
   const std::string in = args.get("in"), out = args.get("out");
   if (in.empty() || out.empty()) return fail("convert", "needs --in FILE and --out FILE");
   const std::string in_ext = extension(in), out_ext = extension(out);

@@ -6,7 +6,10 @@
 #include "io/io.h"
 #include "iris/iris.h"
 
+#include <cerrno>
 #include <chrono>
+#include <climits>
+#include <cstdlib>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -56,7 +59,7 @@ int run_eye(const Args& args) {
     return 2;
   }
   int size = 512;
-  if (!args.get_int("size", 512, size)) return 2;
+  if (!args.get_int("size", 512, size, 16, 4096)) return 2;
   Image photo;
   if (Status s = load_image_file(args.get("photo"), photo, 3); !s) return fail(cmd, s.message);
   EyeballTextureOptions topt;
@@ -129,12 +132,9 @@ int run_teeth(const Args& args) {
     SyntheticSmileOptions so;
     so.width = 640;
     so.height = 320;
-    try {
-      so.upper_dip = std::stod(args.get("upper-dip", "40"));
-      so.lower_rise = std::stod(args.get("lower-rise", "34"));
-    } catch (...) {
-      return fail(cmd, "--upper-dip and --lower-rise take numbers (rows at 320x160)");
-    }
+    // Rows at 320x160 (the smile is 160 rows tall).
+    if (!args.get_double("upper-dip", 40, so.upper_dip, 0, 160) || !args.get_double("lower-rise", 34, so.lower_rise, 0, 160))
+      return 2;
     photo = make_synthetic_smile(so).image;
     input = "synthetic smile";
     if (args.has("input-out"))
@@ -143,16 +143,26 @@ int run_teeth(const Args& args) {
     return fail(cmd, s.message);
   }
   if (args.has("crop")) {  // X,Y,W,H: the front teeth's part of a larger photo
-    int cx = 0, cy = 0, cw = 0, ch = 0;
-    char tail = 0;
-    if (std::sscanf(args.get("crop").c_str(), "%d,%d,%d,%d%c", &cx, &cy, &cw, &ch, &tail) != 4 || cx < 0 || cy < 0 ||
-        cw < 8 || ch < 8 || cx + cw > photo.width || cy + ch > photo.height)
+    // Four integers, each parsed with its range (no sscanf %d overflow).
+    long long v[4] = {-1, -1, -1, -1};
+    const std::string crop = args.get("crop");
+    const char* p = crop.c_str();
+    bool parsed = true;
+    for (int k = 0; k < 4 && parsed; ++k) {
+      char* end = nullptr;
+      errno = 0;
+      v[k] = std::strtoll(p, &end, 10);
+      parsed = end != p && errno == 0 && v[k] >= 0 && v[k] <= INT_MAX && *end == (k < 3 ? ',' : '\0');
+      p = end + (k < 3 ? 1 : 0);
+    }
+    const long long cx = v[0], cy = v[1], cw = v[2], ch = v[3];
+    if (!parsed || cw < 8 || ch < 8 || cx + cw > photo.width || cy + ch > photo.height)
       return fail(cmd, "--crop takes X,Y,W,H inside the " + std::to_string(photo.width) + "x" +
                            std::to_string(photo.height) + " photo (W, H >= 8)");
-    Image cropped = Image::make(cw, ch, photo.channels);
+    Image cropped = Image::make(int(cw), int(ch), photo.channels);
     for (int y = 0; y < ch; ++y)
       for (int x = 0; x < cw; ++x)
-        for (int k = 0; k < photo.channels; ++k) cropped.at(x, y)[k] = photo.at(cx + x, cy + y)[k];
+        for (int k = 0; k < photo.channels; ++k) cropped.at(x, y)[k] = photo.at(int(cx) + x, int(cy) + y)[k];
     photo = std::move(cropped);
     if (args.has("input-out"))
       if (Status s = save_png_file(args.get("input-out"), photo); !s) return fail(cmd, s.message);

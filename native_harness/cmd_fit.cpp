@@ -11,6 +11,7 @@
 #include "project/quality_job.h"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <sys/stat.h>
@@ -33,17 +34,22 @@ bool get_vec3(const Args& a, const std::string& key, Vec3& v) {
   for (int k = 0; k < 3; ++k) {
     char* end = nullptr;
     v[k] = std::strtod(vals[k].c_str(), &end);
-    if (vals[k].empty() || *end) return false;
+    if (vals[k].empty() || *end || !std::isfinite(v[k])) return false;
   }
-  return true;
+  return v.norm() > 0;  // a direction: finite, not zero
 }
 
 int run_fit(const Args& args) {
   const std::string cmd = "fit";
+  if (!only_known_options(cmd, args,
+                          {"scan", "out", "levels", "up", "facing", "no-orientation-check", "face-only", "whole-head",
+                           "no-eye-region", "denoise", "no-denoise", "widen-footprints", "data-level", "dump",
+                           "scan-frame", "generic-head"}))
+    return 2;
   const std::string scan_path = args.get("scan"), out_dir = args.get("out");
   if (scan_path.empty() || out_dir.empty()) return fail(cmd, "needs --scan FILE and --out DIR");
   FitHeadOptions opt;
-  if (!args.get_int("levels", 3, opt.levels)) return 2;
+  if (!args.get_int("levels", 3, opt.levels, 0, 5)) return 2;
   if (!get_vec3(args, "up", opt.up) || !get_vec3(args, "facing", opt.facing))
     return fail(cmd, "--up and --facing take an axis (+x, -y, ...) or three numbers, e.g. --up +z or --up 0 0 1");
   // Conventions the user gave are checked, not overridden: a scan that
@@ -68,9 +74,7 @@ int run_fit(const Args& args) {
   // 1 raised the crossing pairs at James's ears (FitHeadOptions::
   // whole_head_data_level, docs/journal.md). --data-level L: L on any scan.
   if (args.has("data-level")) {
-    if (!args.get_int("data-level", 0, opt.global.data_level)) return 2;
-    if (opt.global.data_level < 0 || opt.global.data_level > 2)
-      return fail(cmd, "--data-level takes 0 (the control mesh), 1 or 2");
+    if (!args.get_int("data-level", 0, opt.global.data_level, 0, 2)) return 2;
     opt.whole_head_data_level = -1;
   }
   const bool dump = args.has("dump"), scan_frame = args.has("scan-frame");
@@ -121,7 +125,7 @@ int run_fit(const Args& args) {
   for (const std::string& note : r.notes) std::printf("  note: %s\n", note.c_str());
   if (!st) {
     write_file(out_dir + "/report.json", fit_report_json(r, stages, std::string(to_string(st.code)) + ": " + st.message));
-    return fail(cmd, std::string(to_string(st.code)) + ": " + st.message);
+    return fail(cmd, scan_path + ": " + std::string(to_string(st.code)) + ": " + st.message);
   }
   std::printf("  unit: %s (bbox diagonal %.4g scan units = %.3f m), %d of %d points above the neck cut\n",
               r.unit_to_metres == 1 ? "m" : r.unit_to_metres == 0.01 ? "cm" : "mm", r.bbox_diagonal,

@@ -51,12 +51,9 @@ int run_render(const Args& args) {
   if (!s) return usage_error(s.message);
   int size = 0, supersample = 0;
   double point_size = 0;
-  if (!args.get_int("size", 1024, size) || !args.get_int("supersample", 2, supersample) ||
-      !args.get_double("point-size", 0.0, point_size))
+  if (!args.get_int("size", 1024, size, 16, 4096) || !args.get_int("supersample", 2, supersample, 1, 4) ||
+      !args.get_double("point-size", 0.0, point_size, 0, 64))
     return 2;
-  if (size < 16 || size > 4096) return usage_error("--size must be 16..4096 pixels");
-  if (supersample < 1 || supersample > 4) return usage_error("--supersample must be 1..4");
-  if (point_size < 0 || point_size > 64) return usage_error("--point-size must be 0..64 pixels");
 
   TriMesh mesh;
   PointCloud cloud;

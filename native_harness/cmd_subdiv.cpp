@@ -34,10 +34,9 @@ int run_subdiv(const Args& args) {
   if (out.empty()) return usage_error("--out PREFIX is required (writes PREFIX_level<l>.ply)");
   int levels = 2, min_points = 3;
   DisplacementOptions options;
-  if (!args.get_int("levels", 2, levels) || !args.get_int("min-points", 3, min_points) ||
-      !args.get_double("radius", 0.0, options.radius) || !args.get_double("max-distance", 0.0, options.max_distance))
+  if (!args.get_int("levels", 2, levels, 0, 5) || !args.get_int("min-points", 3, min_points, 1, 1000000) ||
+      !args.get_double("radius", 0.0, options.radius, 0) || !args.get_double("max-distance", 0.0, options.max_distance, 0))
     return 2;
-  if (levels < 0 || levels > 5) return usage_error("--levels must be 0..5");
   options.min_points = min_points;
 
   TriMesh control;

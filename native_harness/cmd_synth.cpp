@@ -56,7 +56,7 @@ int run_synth_head(const Args& args) {
   const std::string out = args.get("out");
   if (out.empty()) return usage_error(cmd, "--out FILE.obj is required");
   SynthHeadOptions opt;
-  if (!args.get_double("variation", 1.0, opt.variation)) return 2;
+  if (!args.get_double("variation", 1.0, opt.variation, 0, 10)) return 2;
   GenericHead generic, head;
   Status s = base_head(args.get("base", "generic"), generic);
   if (!s) return fail(cmd, s.message);
@@ -90,13 +90,13 @@ int run_synth_scan(const Args& args) {
   ScannerOptions so;
   TruthOptions to;
   double noise_mm = 0, detail_mm = 0;
-  if (!args.get_int("points", so.target_points, so.target_points) ||
-      !args.get_double("noise-mm", so.noise_sigma_m * 1000, noise_mm) ||
-      !args.get_double("outliers", so.outlier_fraction, so.outlier_fraction) ||
-      !args.get_int("stations", so.stations, so.stations) ||
-      !args.get_double("arc", so.arc_degrees, so.arc_degrees) ||
-      !args.get_int("levels", to.subdivision_levels, to.subdivision_levels) ||
-      !args.get_double("detail-mm", to.detail_amplitude_m * 1000, detail_mm))
+  if (!args.get_int("points", so.target_points, so.target_points, 1, 50000000) ||
+      !args.get_double("noise-mm", so.noise_sigma_m * 1000, noise_mm, 0, 100) ||
+      !args.get_double("outliers", so.outlier_fraction, so.outlier_fraction, 0, 1) ||
+      !args.get_int("stations", so.stations, so.stations, 1, 64) ||
+      !args.get_double("arc", so.arc_degrees, so.arc_degrees, 0, 360) ||
+      !args.get_int("levels", to.subdivision_levels, to.subdivision_levels, 0, 5) ||
+      !args.get_double("detail-mm", to.detail_amplitude_m * 1000, detail_mm, 0, 100))
     return 2;
   so.noise_sigma_m = noise_mm / 1000;
   to.detail_amplitude_m = detail_mm / 1000;

@@ -125,9 +125,8 @@ nlohmann::json vec3(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
 // spread over each photo, clicked with up to half a pixel of error.
 int make_synthetic(const Args& args, const HeadInput& head, const std::string& dir) {
   int width = 3000, height = 2000;
-  if (!args.get_int("photo-width", 3000, width) || !args.get_int("photo-height", 2000, height)) return 2;
-  if (width < 64 || height < 64 || width > 8000 || height > 8000)
-    return usage_error("--photo-width/--photo-height must be in [64, 8000]");
+  if (!args.get_int("photo-width", 3000, width, 64, 8000) || !args.get_int("photo-height", 2000, height, 64, 8000))
+    return 2;
   ::mkdir(dir.c_str(), 0755);
   const TriMesh& mesh = head.mesh;
   const BBox box = bounding_box(mesh.positions);
@@ -218,9 +217,8 @@ int run_texture(const Args& args) {
     return usage_error("--head DIR (a `likeness fit` output), a mesh file or 'generic' is required, or --project FILE");
   TextureOptions opt;
   double focal = 0;
-  if (!args.get_int("size", 2048, opt.size) || !args.get_double("focal", 0, focal)) return 2;
+  if (!args.get_int("size", 2048, opt.size, 16, 4096) || !args.get_double("focal", 0, focal, 0)) return 2;
   opt.multiresolution_spline = !args.has("no-spline");
-  if (opt.size < 16 || opt.size > 4096) return usage_error("--size must be in [16, 4096]");
 
   HeadInput head;
   HeadProject project;

@@ -29,14 +29,12 @@ int run_texture_selftest_command(const Args& args) {
   if (out.empty()) return usage_error("--out DIR is required");
   SelftestOptions opt;
   int seed = 1, photo_size = 0;
-  if (!args.get_int("seed", 1, seed) || !args.get_int("size", 1024, opt.texture_size) ||
-      !args.get_int("photos", 5, opt.photos) || !args.get_int("photo-size", 1200, photo_size) ||
-      !args.get_int("levels", 3, opt.subdivision_levels) || !args.get_int("supersample", 2, opt.supersample) ||
-      !args.get_double("light-spread", 0.12, opt.light_spread) ||
-      !args.get_double("noise", 0.5, opt.landmark_noise_px))
+  if (!args.get_int("seed", 1, seed, 0) || !args.get_int("size", 1024, opt.texture_size, 64, 8192) ||
+      !args.get_int("photos", 5, opt.photos, 1, 7) || !args.get_int("photo-size", 1200, photo_size, 96, 4096) ||
+      !args.get_int("levels", 3, opt.subdivision_levels, 0, 4) || !args.get_int("supersample", 2, opt.supersample, 1, 4) ||
+      !args.get_double("light-spread", 0.12, opt.light_spread, 0, 1) ||
+      !args.get_double("noise", 0.5, opt.landmark_noise_px, 0))
     return 2;
-  if (seed < 0) return usage_error("--seed must be >= 0");
-  if (photo_size < 96 || photo_size > 4096) return usage_error("--photo-size must be 96..4096 (width; height = 2/3 of it)");
   opt.seed = static_cast<std::uint32_t>(seed);
   opt.photo_width = opt.eval_width = photo_size;
   opt.photo_height = opt.eval_height = photo_size * 2 / 3;

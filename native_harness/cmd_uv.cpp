@@ -74,8 +74,7 @@ int run_uv(const Args& args) {
   if (out.empty() && png.empty()) return usage_error("--out FILE.obj and/or --png FILE is required");
   UvOptions opt;
   int size = 1024;
-  if (!args.get_double("k", 1.2, opt.k) || !args.get_int("size", 1024, size)) return 2;
-  if (size < 16 || size > 8192) return usage_error("--size must be in [16, 8192]");
+  if (!args.get_double("k", 1.2, opt.k, 0) || !args.get_int("size", 1024, size, 16, 8192)) return 2;
   opt.view_weighted = !args.has("unweighted");
   TriMesh mesh;
   if (mesh_path == "generic") {

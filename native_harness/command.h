@@ -2,6 +2,8 @@
 // and registers itself with a static Registrar. Commands are thin shells:
 // read files, call core/, write files, print.
 #pragma once
+#include <cfloat>
+#include <climits>
 #include <functional>
 #include <initializer_list>
 #include <map>
@@ -18,9 +20,12 @@ struct Args {
   bool has(const std::string& key) const { return options.count(key) != 0; }
   std::string get(const std::string& key, const std::string& def = "") const;
   std::vector<std::string> get_all(const std::string& key) const;
-  // Returns false (and prints an error) if the value is missing or not a number.
-  bool get_int(const std::string& key, int def, int& out) const;
-  bool get_double(const std::string& key, double def, double& out) const;
+  // Returns false (and prints "--key takes an integer in lo..hi, got 'v'")
+  // when the value is missing, not a number, not finite or outside [lo, hi];
+  // values are never wrapped or clamped (--size 4294967312 is refused).
+  bool get_int(const std::string& key, int def, int& out, int lo = INT_MIN, int hi = INT_MAX) const;
+  bool get_double(const std::string& key, double def, double& out, double lo = -DBL_MAX,
+                  double hi = DBL_MAX) const;
 };
 
 Args parse_args(int argc, char** argv, int first);

@@ -1,7 +1,10 @@
 // likeness: the native command-line harness.
 #include "command.h"
 
+#include <cerrno>
+#include <cmath>
 #include <cstdio>
+#include <sstream>
 #include <cstdlib>
 #include <iostream>
 
@@ -22,30 +25,49 @@ std::vector<std::string> Args::get_all(const std::string& key) const {
   return it == options.end() ? std::vector<std::string>{} : it->second;
 }
 
-bool Args::get_int(const std::string& key, int def, int& out) const {
+namespace {
+
+std::string range_text(double lo, double hi, bool integer) {
+  auto num = [&](double v) {
+    if (integer) return std::to_string(static_cast<long long>(v));
+    std::ostringstream o;
+    o << v;
+    return o.str();
+  };
+  if (lo <= -DBL_MAX / 2 || (integer && lo <= INT_MIN)) return hi >= DBL_MAX / 2 || (integer && hi >= INT_MAX) ? "" : " <= " + num(hi);
+  if (hi >= DBL_MAX / 2 || (integer && hi >= INT_MAX)) return " >= " + num(lo);
+  return " in " + num(lo) + ".." + num(hi);
+}
+
+bool refuse(const std::string& key, const char* what, double lo, double hi, const std::string& value) {
+  std::cerr << "error: --" << key << " takes " << what << range_text(lo, hi, std::string(what) == "an integer")
+            << ", got '" << value << "'\n";
+  return false;
+}
+
+}  // namespace
+
+bool Args::get_int(const std::string& key, int def, int& out, int lo, int hi) const {
   out = def;
   if (!has(key)) return true;
   const std::string v = get(key);
   char* end = nullptr;
-  const long x = std::strtol(v.c_str(), &end, 10);
-  if (v.empty() || *end != '\0') {
-    std::cerr << "error: --" << key << " expects an integer, got '" << v << "'\n";
-    return false;
-  }
+  errno = 0;
+  const long long x = std::strtoll(v.c_str(), &end, 10);
+  if (v.empty() || *end != '\0' || errno == ERANGE || x < lo || x > hi) return refuse(key, "an integer", lo, hi, v);
   out = static_cast<int>(x);
   return true;
 }
 
-bool Args::get_double(const std::string& key, double def, double& out) const {
+bool Args::get_double(const std::string& key, double def, double& out, double lo, double hi) const {
   out = def;
   if (!has(key)) return true;
   const std::string v = get(key);
   char* end = nullptr;
+  errno = 0;
   const double x = std::strtod(v.c_str(), &end);
-  if (v.empty() || *end != '\0') {
-    std::cerr << "error: --" << key << " expects a number, got '" << v << "'\n";
-    return false;
-  }
+  if (v.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(x) || x < lo || x > hi)
+    return refuse(key, "a number", lo, hi, v);
   out = x;
   return true;
 }
@@ -73,6 +95,10 @@ int fail(const std::string& command, const std::string& message) {
 }
 
 bool only_known_options(const std::string& command, const Args& args, std::initializer_list<const char*> known) {
+  if (!args.positional.empty()) {
+    fail(command, "unexpected argument '" + args.positional.front() + "' (options are --name value; see `likeness help`)");
+    return false;
+  }
   for (const auto& [key, values] : args.options) {
     bool ok = false;
     for (const char* k : known) ok = ok || key == k;

@@ -73,12 +73,42 @@ val parse_geometry(const std::string& name, std::uintptr_t data, std::size_t siz
   return r;
 }
 
-// Decodes a dropped photo (PNG/JPEG/...) to check it is a whole, usable image
-// and reports its size; the texture job decodes it again, so the pixels are
-// not kept here.
-val check_image(const std::string& name, std::uintptr_t data, std::size_t size) {
+// inspect_image on a dropped photo's bytes (io.h): JPEG or PNG, whole, within
+// the limits, no decompression bomb; {ok, format, width, height (as shown),
+// orientation} or the refusal, naming the file. worker.js runs it before the
+// browser decodes the bytes.
+val inspect_image(const std::string& name, std::uintptr_t data, std::size_t size) {
+  if (data == 0 && size != 0) return error_result(lk::ErrorCode::Internal, name + ": no input buffer");
+  lk::ImageInfo info;
+  const lk::Status status = lk::inspect_image(reinterpret_cast<const std::uint8_t*>(data), size, info);
+  if (!status.ok()) return error_result(lk::with_context(status, name));
+  val r = ok_result();
+  r.set("format", std::string(info.format));
+  r.set("width", info.width);
+  r.set("height", info.height);
+  r.set("orientation", info.orientation);
+  return r;
+}
+
+// jpeg_truncation_probe (io.h): {ok, probe: Uint8Array} (empty for a PNG);
+// worker.js decodes both with the browser and refuses the photo when their
+// pixels differ (image data cut short and filled by the decoder).
+val jpeg_truncation_probe(const std::string& name, std::uintptr_t data, std::size_t size) {
+  if (data == 0 && size != 0) return error_result(lk::ErrorCode::Internal, name + ": no input buffer");
+  lk::Bytes probe;
+  const lk::Status status = lk::jpeg_truncation_probe(reinterpret_cast<const std::uint8_t*>(data), size, probe);
+  if (!status.ok()) return error_result(lk::with_context(status, name));
+  val r = ok_result();
+  r.set("probe", bytes_array(probe.data(), probe.size()));
+  return r;
+}
+
+// Decodes a dropped photo (decoded: see decode_image) to check it is a
+// whole, usable image and reports its size; the texture job decodes it
+// again, so the pixels are not kept here.
+val check_image(const std::string& name, std::uintptr_t data, std::size_t size, val decoded) {
   lk::Image image;
-  lk::Status status = decode_image(name, data, size, image);
+  lk::Status status = decode_image(name, data, size, decoded, image);
   if (!status.ok()) return error_result(status);
   val r = ok_result();
   r.set("name", name);
@@ -173,5 +203,7 @@ EMSCRIPTEN_BINDINGS(likeness_worker_load) {
   emscripten::function("helper_jobs_ms", &helper_jobs_ms);
   emscripten::function("parse_geometry", &parse_geometry);
   emscripten::function("check_image", &check_image);
+  emscripten::function("inspect_image", &inspect_image);
+  emscripten::function("jpeg_truncation_probe", &jpeg_truncation_probe);
   emscripten::function("parse_points", &parse_points);
 }

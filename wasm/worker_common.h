@@ -89,11 +89,43 @@ inline val image_object(const lk::Image& image) {
   return t;
 }
 
-// Decodes an image the page handed over as bytes in the heap; errors name
-// the file.
-inline lk::Status decode_image(const std::string& name, std::uintptr_t data, std::size_t size, lk::Image& image,
-                               int channels = 0) {
+// Whether an options object gives key (undefined and null objects give none).
+inline bool has(const val& object, const char* key) {
+  return !object.isUndefined() && !object.isNull() && !object[key].isUndefined();
+}
+
+// A photo the page handed over in the heap: RGBA pixels the browser decoded
+// (decoded = {width, height}; worker.js ran inspect_image on the file first),
+// or, with decoded null, the file's bytes for read_image (stb behind our
+// checks: the fallback where the browser's decoders are missing). Channels
+// as read_image gives them (0: RGB, or RGBA when any pixel is not opaque).
+// Errors name the file.
+inline lk::Status decode_image(const std::string& name, std::uintptr_t data, std::size_t size, const val& decoded,
+                               lk::Image& image, int channels = 0) {
   if (data == 0 && size != 0) return lk::Status::error(lk::ErrorCode::Internal, name + ": no input buffer");
+  if (has(decoded, "width") && decoded["width"].as<int>() > 0) {
+    const int w = decoded["width"].as<int>(), h = has(decoded, "height") ? decoded["height"].as<int>() : 0;
+    if (h <= 0 || channels < 0 || channels > 4 || size != static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 4)
+      return lk::Status::error(lk::ErrorCode::Internal, name + ": the decoded pixels do not match their size");
+    const std::uint8_t* p = reinterpret_cast<const std::uint8_t*>(data);
+    const std::size_t n = static_cast<std::size_t>(w) * h;
+    bool opaque = true;
+    for (std::size_t i = 0; i < n && opaque; ++i) opaque = p[4 * i + 3] == 255;
+    const int c = channels != 0 ? channels : (opaque ? 3 : 4);
+    image = lk::Image::make(w, h, c);
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint8_t* s = p + 4 * i;
+      std::uint8_t* d = &image.pixels[i * c];
+      if (c >= 3) {
+        d[0] = s[0]; d[1] = s[1]; d[2] = s[2];
+        if (c == 4) d[3] = s[3];
+      } else {  // stb's luminance
+        d[0] = static_cast<std::uint8_t>((s[0] * 77 + s[1] * 150 + s[2] * 29) >> 8);
+        if (c == 2) d[1] = s[3];
+      }
+    }
+    return lk::Status::success();
+  }
   const lk::Status status = lk::read_image(reinterpret_cast<const std::uint8_t*>(data), size, image, channels);
   return status.ok() ? status : lk::with_context(status, name);
 }
@@ -106,11 +138,6 @@ inline lk::ProgressFn js_progress(val fn) {
     val answer = fn(std::string(stage), fraction);
     return !(answer.isFalse());
   };
-}
-
-// Whether an options object gives key (undefined and null objects give none).
-inline bool has(const val& object, const char* key) {
-  return !object.isUndefined() && !object.isNull() && !object[key].isUndefined();
 }
 
 // Core has no clocks: the bindings time jobs with the worker's performance.now().

@@ -110,7 +110,7 @@ val texture_job(val photos, val options, val progress) {
     input.names.push_back(name);
     const std::uintptr_t ptr = p["ptr"].as<std::uintptr_t>();
     if (ptr == 0) return error_result(lk::ErrorCode::Internal, name + ": no input buffer");
-    const lk::Status st = decode_image(name, ptr, p["size"].as<std::size_t>(), input.photos[i].image, 3);
+    const lk::Status st = decode_image(name, ptr, p["size"].as<std::size_t>(), p["decoded"], input.photos[i].image, 3);
     if (!st.ok()) return error_result(st);
     const std::vector<double> flat = emscripten::convertJSArrayToNumberVector<double>(p["points"]);
     if (flat.size() % 5 != 0)
@@ -148,11 +148,12 @@ val texture_job(val photos, val options, val progress) {
 // 4.1): the iris found from the darkest blob near the centre (or from
 // guess [x, y] in pixels, optional), its valid part resynthesized around the
 // whole circle. {ok, texture, circle: {x, y, radius, pupilRadius}, usedTwoD,
-// sectorDeg, ms} or the core's error (no dark blob, the circle never stops).
-val eye_photo_job(const std::string& name, std::uintptr_t data, std::size_t size, val guess) {
+// sectorDeg, ms} or the core's error (no dark blob, the circle never stops,
+// not an eye close-up). decoded: see decode_image; progress: "iris", 0..1.
+val eye_photo_job(const std::string& name, std::uintptr_t data, std::size_t size, val guess, val decoded, val progress) {
   const double t0 = now_ms();
   lk::Image photo;
-  lk::Status status = decode_image(name, data, size, photo);
+  lk::Status status = decode_image(name, data, size, decoded, photo);
   if (!status.ok()) return error_result(status);
   lk::Vec2 guess_px;
   const bool have_guess = !guess.isUndefined() && !guess.isNull() && guess["length"].as<int>() == 2;
@@ -160,7 +161,7 @@ val eye_photo_job(const std::string& name, std::uintptr_t data, std::size_t size
   lk::IrisResult iris;
   lk::EyeballTextureOptions eto;
   eto.size = 256;  // as the generic eyes
-  status = lk::iris_texture_from_photo(photo, have_guess ? &guess_px : nullptr, iris, eto);
+  status = lk::iris_texture_from_photo(photo, have_guess ? &guess_px : nullptr, iris, eto, js_progress(progress));
   if (!status.ok()) return error_result(lk::with_context(status, name + ": no iris found"));
   val r = ok_result();
   r.set("texture", image_object(iris.texture));
@@ -179,10 +180,10 @@ val eye_photo_job(const std::string& name, std::uintptr_t data, std::size_t size
 // A smile photo (role "Smile (teeth)") -> the teeth texture in the teeth
 // model's uv layout (tarini2002 Sec. 4.2). {ok, texture (RGBA), ms} or the
 // core's error (e.g. no teeth found).
-val smile_photo_job(const std::string& name, std::uintptr_t data, std::size_t size) {
+val smile_photo_job(const std::string& name, std::uintptr_t data, std::size_t size, val decoded) {
   const double t0 = now_ms();
   lk::Image photo;
-  lk::Status status = decode_image(name, data, size, photo);
+  lk::Status status = decode_image(name, data, size, decoded, photo);
   if (!status.ok()) return error_result(status);
   lk::TeethResult teeth;
   lk::Image texture;

@@ -77,7 +77,7 @@ function coreReady(m, which) {
     return;
   }
   postMessage({ type: 'ready', variant, threads: core.parallel_workers(), fallback });
-  while (pending.length) handle(pending.shift());
+  while (pending.length) enqueue(pending.shift());
 }
 
 // The start-up code (functions only; it runs below, once JOBS exist).
@@ -101,13 +101,77 @@ function withHeapBytes(buffer, fn) {
   }
 }
 
-// job name -> (message, progress) -> result
+// Photos are decoded by the browser's own decoders (createImageBitmap, the
+// most fuzzed decoders there are, and faster than stb in wasm), after the
+// core's inspect_image has checked the bytes: JPEG or PNG, whole, within the
+// pixel limit, no decompression bomb (io.h). EXIF orientation is applied
+// ('from-image'), as the page's <img> shows the photo and as read_image does.
+// Where createImageBitmap or OffscreenCanvas are missing (or with
+// ?decoder=stb) the core decodes the bytes itself (stb behind the same checks).
+const BROWSER_DECODER = typeof createImageBitmap === 'function' && typeof OffscreenCanvas === 'function' &&
+  params.get('decoder') !== 'stb';
+
+// -> {buffer, decoded: {width, height}, decoder} with the RGBA pixels, or
+// {buffer (the file's bytes), decoded: null, decoder: 'stb'}, or {error: result}.
+async function photoPixels(name, buffer) {
+  if (!BROWSER_DECODER) return { buffer, decoded: null, decoder: 'stb' };
+  const info = withHeapBytes(buffer, (ptr, size) => core.inspect_image(name, ptr, size));
+  if (!info.ok) return { error: info };
+  const fail = (why, code = 'InvalidInput') => ({ error: { ok: false, code, message: name + ': ' + why } });
+  const decode = async (bytes) => {
+    let bitmap;
+    try {
+      bitmap = await createImageBitmap(new Blob([bytes]), { imageOrientation: 'from-image', premultiplyAlpha: 'none' });
+    } catch (e) {
+      return { why: 'the browser could not decode this ' + info.format + ' (' + errorText(e) + ')' };
+    }
+    try {
+      if (bitmap.width !== info.width || bitmap.height !== info.height) {
+        return { why: 'the browser decoded ' + bitmap.width + '×' + bitmap.height + ' pixels from a ' + info.format +
+                      ' that declares ' + info.width + '×' + info.height };
+      }
+      const canvas = new OffscreenCanvas(bitmap.width, bitmap.height);
+      const ctx = canvas.getContext('2d', { willReadFrequently: true });
+      if (!ctx) return { why: 'no 2-D canvas to read the decoded pixels from' };
+      ctx.drawImage(bitmap, 0, 0);
+      return { pixels: ctx.getImageData(0, 0, bitmap.width, bitmap.height).data };
+    } finally {
+      bitmap.close();
+    }
+  };
+  const first = await decode(buffer);
+  if (first.why) return fail(first.why);
+  // A JPEG whose image data ends early is filled in silently by the decoder;
+  // its probe (one-bits after each scan, io.h) then decodes differently.
+  const probe = withHeapBytes(buffer, (ptr, size) => core.jpeg_truncation_probe(name, ptr, size));
+  if (!probe.ok) return { error: probe };
+  if (probe.probe.length) {
+    const second = await decode(probe.probe);
+    const a = first.pixels, b = second.pixels;
+    let same = !second.why && b.length === a.length;
+    for (let i = 0; same && i < a.length; i++) same = a[i] === b[i];
+    if (!same) return fail('truncated JPEG: its image data ends before its last blocks (the decoder would fill them with grey)', 'Truncated');
+  }
+  return { buffer: first.pixels.buffer, decoded: { width: info.width, height: info.height }, decoder: 'browser' };
+}
+
+// Runs fn(ptr, size, decoded) on a photo's pixels (or bytes) in the heap;
+// the result says which decoder ran.
+async function withPhoto(name, buffer, fn) {
+  const photo = await photoPixels(name, buffer);
+  if (photo.error) return photo.error;
+  const result = withHeapBytes(photo.buffer, (ptr, size) => fn(ptr, size, photo.decoded));
+  if (result && typeof result === 'object') result.decoder = photo.decoder;
+  return result;
+}
+
+// job name -> (message, progress) -> result (or a promise of it)
 const JOBS = {
   // {name, buffer}: a dropped PLY / OBJ / XYZ / VTK file -> geometry arrays.
   parse: (msg, progress) =>
     withHeapBytes(msg.buffer, (ptr, size) => core.parse_geometry(msg.name, ptr, size, progress)),
-  // {name, buffer}: a dropped photo -> {width, height, channels} once decoded.
-  image: (msg) => withHeapBytes(msg.buffer, (ptr, size) => core.check_image(msg.name, ptr, size)),
+  // {name, buffer}: a dropped photo -> {width, height, channels, decoder} once decoded.
+  image: (msg) => withPhoto(msg.name, msg.buffer, (ptr, size, decoded) => core.check_image(msg.name, ptr, size, decoded)),
   // {name, buffer, options}: a scan -> the fitted head (jeong2002 Sec. 4-5),
   // kept in this worker for 'animate' and 'export'. Progress per stage.
   fit: (msg, progress) =>
@@ -126,8 +190,15 @@ const JOBS = {
   points: (msg) => core.parse_points(String(msg.text)),
   // {photos: [{name, buffer, points: Float64Array}], options}: calibrate each
   // photo and texture the kept head (tarini2002 Sec. 3). Progress 'texture'.
-  texture: (msg, progress) => withManyHeapBytes(msg.photos || [], (placed) =>
-    core.texture_job(placed, msg.options || {}, progress)),
+  texture: async (msg, progress) => {
+    const photos = [];
+    for (const p of msg.photos || []) {
+      const photo = await photoPixels(String(p.name), p.buffer || new ArrayBuffer(0));
+      if (photo.error) return photo.error;
+      photos.push({ name: p.name, buffer: photo.buffer, decoded: photo.decoded, points: p.points });
+    }
+    return withManyHeapBytes(photos, (placed) => core.texture_job(placed, msg.options || {}, progress));
+  },
   // {level, base}: the textured head as {obj, mtl, png} bytes.
   exportTextured: (msg) => core.export_textured(msg.level, String(msg.base)),
   // {}: the kept head project as a .likeness.glb file's bytes.
@@ -136,9 +207,10 @@ const JOBS = {
   // (plus scan positions, texture, loadMs), without fitting.
   openProject: (msg) => withHeapBytes(msg.buffer, (ptr, size) => core.load_project_job(msg.name, ptr, size)),
   // {name, buffer, guess?: [x, y]}: an eye photo -> the eyeball (iris) texture.
-  eye: (msg) => withHeapBytes(msg.buffer, (ptr, size) => core.eye_photo_job(msg.name, ptr, size, msg.guess || null)),
+  eye: (msg, progress) => withPhoto(msg.name, msg.buffer, (ptr, size, decoded) =>
+    core.eye_photo_job(msg.name, ptr, size, msg.guess || null, decoded, progress)),
   // {name, buffer}: a smile photo -> the teeth texture (teeth model's uvs).
-  smile: (msg) => withHeapBytes(msg.buffer, (ptr, size) => core.smile_photo_job(msg.name, ptr, size)),
+  smile: (msg) => withPhoto(msg.name, msg.buffer, (ptr, size, decoded) => core.smile_photo_job(msg.name, ptr, size, decoded)),
 };
 
 // withHeapBytes for a list of {name, buffer, points}: fn gets
@@ -150,7 +222,8 @@ function withManyHeapBytes(items, fn) {
       const bytes = new Uint8Array(item.buffer || new ArrayBuffer(0));
       const ptr = core._malloc(Math.max(1, bytes.length));
       if (!ptr) return { ok: false, code: 'TooLarge', message: 'not enough memory to hold ' + item.name + ' (' + bytes.length + ' bytes)' };
-      placed.push({ name: String(item.name), ptr, size: bytes.length, points: item.points || new Float64Array(0) });
+      placed.push({ name: String(item.name), ptr, size: bytes.length, points: item.points || new Float64Array(0),
+                    decoded: item.decoded || null });
       heapBytes().set(bytes, ptr);
     }
     return fn(placed);
@@ -169,7 +242,15 @@ function transferables(result, out = []) {
   return out;
 }
 
-function handle(msg) {
+// Jobs run one at a time, in the order they came (a photo job awaits the
+// browser's decoder, and the next message must not overtake it).
+let queue = Promise.resolve();
+function enqueue(msg) {
+  // A failure outside the job's own try (posting the result) must not stop the queue.
+  queue = queue.then(() => handle(msg)).catch((e) => fatal(msg.type + ': ' + errorText(e)));
+}
+
+async function handle(msg) {
   const job = JOBS[msg.type];
   if (!job) {
     postMessage({ type: 'result', id: msg.id, result: { ok: false, code: 'Internal', message: 'unknown job ' + msg.type } });
@@ -179,7 +260,7 @@ function handle(msg) {
   let result;
   const t0 = performance.now();
   try {
-    result = job(msg, progress);
+    result = await job(msg, progress);
   } catch (e) {
     // The core returns errors as values, so only an abort or a binding
     // error (a bug) gets here; the module may be unusable afterwards.
@@ -207,6 +288,6 @@ else startSingleCore();
 if (!WARM_UP) {
   onmessage = (e) => {
     if (!core) pending.push(e.data);
-    else handle(e.data);
+    else enqueue(e.data);
   };
 }

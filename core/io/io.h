@@ -70,13 +70,37 @@ Status read_vtk(const std::uint8_t* data, size_t size, TriMesh& mesh, GeometryKi
 Status read_geometry(const std::string& name, const std::uint8_t* data, size_t size,
                      TriMesh& mesh, PointCloud& cloud, GeometryKind& kind);
 
-// Images: PNG/JPEG/BMP/TGA via stb_image. Fails on anything that is not an
-// image, and on images over max_pixels (default 64 Mpixel), checked from the
-// header before decoding. A JPEG whose data ends before its end-of-image
-// marker is refused as Truncated (stb would fill the missing rows with grey).
+// Images: JPEG (baseline, progressive) and PNG only, decoded by stb_image
+// behind our own checks (image_io.cpp). Other formats are refused by name
+// from their magic bytes ("this is a PGM image; Likeness reads JPEG and
+// PNG", Unsupported). Before decoding, the segments / chunks are walked with
+// every length checked, and the declared size is refused over max_pixels
+// (TooLarge) or over what the bytes can hold (a JPEG needs a bit per 8x8
+// block, deflate inflates at most 1032:1: InvalidInput). A JPEG whose data
+// ends before its end-of-image marker, or a PNG before IEND, is Truncated.
+// JPEG EXIF orientation is applied (width and height swap for 5-8).
 // want_channels 0 keeps the file's channels (gray+alpha becomes RGBA).
 Status read_image(const std::uint8_t* data, size_t size, Image& image,
                   int want_channels = 0, size_t max_pixels = 64u << 20);
+
+// What read_image checks before decoding, without decoding: the format, the
+// structure, the limits and the EXIF orientation. The page runs it before
+// handing the bytes to the browser's own decoder.
+struct ImageInfo {
+  const char* format = "";                 // "JPEG" or "PNG"
+  int stored_width = 0, stored_height = 0;  // as the file stores the pixels
+  int orientation = 1;                      // EXIF orientation 1..8 (1: upright)
+  int width = 0, height = 0;                // as shown: swapped for orientations 5..8
+};
+Status inspect_image(const std::uint8_t* data, size_t size, ImageInfo& info, size_t max_pixels = 64u << 20);
+
+// For a JPEG that inspect_image accepts: a copy with one-bits after each
+// scan's data. A whole JPEG decodes to the same pixels as its probe; one
+// whose scan data ends early (cut, with an end-of-image marker after) does
+// not, since decoders silently fill its missing blocks. read_image compares
+// the two itself; the page does it with the browser's decoder. Empty for a
+// PNG (a cut deflate stream already fails in the decoder).
+Status jpeg_truncation_probe(const std::uint8_t* data, size_t size, Bytes& probe);
 // Empty when the image is empty or its pixel count disagrees with its size.
 Bytes write_png(const Image& image);
 

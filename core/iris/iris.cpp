@@ -253,8 +253,11 @@ Status iris_to_polar(const Image& photo, const IrisCircle& circle,
   if (!(circle.radius > circle.pupil_radius && circle.pupil_radius >= 0))
     return Status::error(ErrorCode::InvalidInput, "the iris circle has no annulus (radius <= pupil radius)");
   const double band = circle.radius - circle.pupil_radius;
-  polar.angles = options.angles > 0 ? options.angles : std::max(32, static_cast<int>(std::lround(2 * kPi * circle.radius)));
-  polar.radii = options.radii > 0 ? options.radii : std::max(4, static_cast<int>(std::lround(band)));
+  polar.angles = options.angles > 0
+                     ? options.angles
+                     : std::clamp(static_cast<int>(std::lround(2 * kPi * circle.radius)), 32, std::max(32, options.max_auto_angles));
+  polar.radii = options.radii > 0 ? options.radii
+                                  : std::clamp(static_cast<int>(std::lround(band)), 4, std::max(4, options.max_auto_radii));
   polar.rgb.assign(static_cast<size_t>(polar.angles) * polar.radii * 3, 0.f);
   polar.valid.assign(static_cast<size_t>(polar.angles) * polar.radii, 1);
   const int w = photo.width, h = photo.height;
@@ -614,16 +617,99 @@ Status eyeball_texture(const PolarIris& iris, double pupil_to_iris_ratio,
   return Status::success();
 }
 
+namespace {
+
+// The photo reduced by an integer factor (box filter): its long side at
+// most max_side. factor 1 returns it unchanged.
+Image reduce(const Image& photo, int max_side, int& factor) {
+  factor = 1;
+  while (max_side > 0 && std::max(photo.width, photo.height) > factor * max_side) ++factor;
+  if (factor == 1) return photo;
+  const int w = photo.width / factor, h = photo.height / factor, c = photo.channels;
+  Image out = Image::make(w, h, c);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int k = 0; k < c; ++k) {
+        int sum = 0;
+        for (int dy = 0; dy < factor; ++dy)
+          for (int dx = 0; dx < factor; ++dx) sum += photo.at(x * factor + dx, y * factor + dy)[k];
+        out.at(x, y)[k] = static_cast<std::uint8_t>((sum + factor * factor / 2) / (factor * factor));
+      }
+  return out;
+}
+
+double median(std::vector<double> v) { return percentile(std::move(v), 0.5); }
+
+}  // namespace
+
+Status check_eye_closeup(const Image& photo, const IrisCircle& circle) {
+  if (Status s = check_photo(photo); !s) return s;
+  const double r = circle.radius;
+  const Vec2 c = circle.center;
+  if (!(r > 0)) return Status::error(ErrorCode::InvalidInput, "the iris circle has no radius");
+  // Round limbus: the strongest step along each ray, outwards.
+  constexpr int kRays = 180;
+  int round = 0;
+  for (int i = 0; i < kRays; ++i) {
+    const Vec2 d(std::cos(2 * kPi * i / kRays), std::sin(2 * kPi * i / kRays));
+    double best = 0, at = 0;
+    for (double f = 0.6; f <= 1.5 + 1e-9; f += 0.02) {
+      const Vec2 a = c + (f - 0.04) * r * d, b = c + (f + 0.04) * r * d;
+      const double step = sample_lum(photo, b.x(), b.y()) - sample_lum(photo, a.x(), a.y());
+      if (step > best) { best = step; at = f; }
+    }
+    if (best > 0.05 && std::abs(at - 1) < 0.1) ++round;
+  }
+  const double round_fraction = static_cast<double>(round) / kRays;
+  // A pupil darker than the iris.
+  std::vector<double> ring, centre;
+  for (int i = 0; i < 90; ++i) {
+    const Vec2 d(std::cos(2 * kPi * i / 90), std::sin(2 * kPi * i / 90));
+    const Vec2 p = c + 0.6 * r * d;
+    ring.push_back(sample_lum(photo, p.x(), p.y()));
+    for (double f : {0.05, 0.1}) centre.push_back(sample_lum(photo, c.x() + f * r * d.x(), c.y() + f * r * d.y()));
+  }
+  const double pupil_contrast = median(ring) - median(centre);
+  auto pct = [](double v) { return std::to_string(static_cast<int>(std::lround(100 * v))) + " %"; };
+  if (r > 0.4 * std::min(photo.width, photo.height))
+    return Status::error(ErrorCode::NotAHead,
+                         "no eye close-up: the dark round patch found spans " +
+                             pct(2 * r / std::min(photo.width, photo.height)) +
+                             " of the photo's short side (80 % at most: an eye photo shows the eye's white or lids "
+                             "beside the iris); an eye photo is a close-up of one open eye, the iris near the middle");
+  if (round_fraction < 0.38)
+    return Status::error(ErrorCode::NotAHead,
+                         "no eye close-up: the dark patch found has no round iris edge (" + pct(round_fraction) +
+                             " of its border, 38 % needed); "
+                             "an eye photo is a close-up of one open eye, the iris near the middle");
+  if (pupil_contrast < 0.12)
+    return Status::error(ErrorCode::NotAHead,
+                         "no eye close-up: the round patch found has no pupil darker than its iris (contrast " +
+                             pct(pupil_contrast) + ", 12 % needed); an eye photo is a close-up of one open eye");
+  return Status::success();
+}
+
 Status iris_texture_from_photo(const Image& photo, const Vec2* guess, IrisResult& result,
-                               const EyeballTextureOptions& texture_options) {
+                               const EyeballTextureOptions& texture_options, const ProgressFn& progress, int max_side) {
+  if (Status s = check_photo(photo); !s) return s;
+  int factor = 1;
+  const Image small = reduce(photo, max_side, factor);
   Vec2 g;
-  if (guess) g = *guess;
-  else if (Status s = iris_default_guess(photo, g); !s) return s;
-  if (Status s = find_iris(photo, g, {}, result.circle); !s) return s;
-  if (Status s = iris_to_polar(photo, result.circle, {}, result.input_polar); !s) return s;
-  if (Status s = iris_synthesize(result.input_polar, {}, result.synthesized, &result.report); !s) return s;
-  return eyeball_texture(result.synthesized, result.circle.pupil_radius / result.circle.radius,
-                         texture_options, result.texture);
+  if (guess) g = (*guess + Vec2::Constant(0.5)) / factor - Vec2::Constant(0.5);
+  else if (Status s = iris_default_guess(small, g); !s) return s;
+  if (!report(progress, "iris", 0.1)) return Status::error(ErrorCode::Cancelled, "iris: cancelled");
+  if (Status s = find_iris(small, g, {}, result.circle); !s) return s;
+  if (Status s = check_eye_closeup(small, result.circle); !s) return s;
+  if (!report(progress, "iris", 0.2)) return Status::error(ErrorCode::Cancelled, "iris: cancelled");
+  if (Status s = iris_to_polar(small, result.circle, {}, result.input_polar); !s) return s;
+  const ProgressFn synthesis = [&progress](const char*, double f) { return report(progress, "iris", 0.25 + 0.7 * f); };
+  if (Status s = iris_synthesize(result.input_polar, {}, result.synthesized, &result.report, synthesis); !s) return s;
+  const double ratio = result.circle.pupil_radius / result.circle.radius;
+  // The circle in the photo's own pixels.
+  result.circle.center = (result.circle.center + Vec2::Constant(0.5)) * factor - Vec2::Constant(0.5);
+  result.circle.radius *= factor;
+  result.circle.pupil_radius *= factor;
+  return eyeball_texture(result.synthesized, ratio, texture_options, result.texture);
 }
 
 }  // namespace lk

@@ -64,6 +64,7 @@ Status generic_eyeball_texture(const EyeballTextureOptions& options, Image& text
 Status teeth_photo_texture(const Image& photo, const TeethOptions& options, TeethResult& teeth,
                            const TeethCompositeOptions* composite_options, Image* composite) {
   if (Status st = teeth_texture_from_photo(photo, options, teeth); !st.ok()) return st;
+  if (Status st = check_smile_closeup(teeth, photo.width, photo.height); !st.ok()) return st;
   if (!composite) return Status::success();
   return teeth_composite_generic(teeth, options, composite_options ? *composite_options : TeethCompositeOptions{},
                                  *composite);

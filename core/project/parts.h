@@ -33,7 +33,8 @@ PolarIris generic_polar_iris();
 // The eyeball texture of the generic iris (pupil 0.35 of the iris).
 Status generic_eyeball_texture(const EyeballTextureOptions& options, Image& texture);
 
-// A smile photo -> the teeth found (Sec. 4.2: classification, voids
+// A smile photo -> (refused unless check_smile_closeup finds an open mouth
+// in close-up) the teeth found (Sec. 4.2: classification, voids
 // transparent, equalization, hidden parts) and, when composite is given,
 // the composite texture in make_teeth_model's uv layout with the generic
 // side teeth around them.

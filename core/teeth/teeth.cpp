@@ -402,4 +402,37 @@ Status teeth_composite_generic(const TeethResult& teeth, const TeethOptions& o,
   return Status::success();
 }
 
+Status check_smile_closeup(const TeethResult& r, int width, int height) {
+  const size_t n = static_cast<size_t>(std::max(0, width)) * static_cast<size_t>(std::max(0, height));
+  if (n == 0 || r.classes.size() != n)
+    return Status::error(ErrorCode::InvalidInput, "check_smile_closeup: the classes do not match the photo's size");
+  size_t gums = 0, teeth = 0, borders = 0;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const TeethClass c = r.classes[static_cast<size_t>(y) * width + x];
+      gums += c == TeethClass::Gum;
+      teeth += c == TeethClass::Tooth;
+      if (x + 1 < width) {
+        const TeethClass d = r.classes[static_cast<size_t>(y) * width + x + 1];
+        borders += (c == TeethClass::Tooth && d == TeethClass::Void) || (c == TeethClass::Void && d == TeethClass::Tooth);
+      }
+    }
+  if (teeth == 0) return Status::error(ErrorCode::NotAHead, "no teeth found");
+  auto pct = [](double v) { return std::to_string(static_cast<int>(std::lround(100 * v))) + " %"; };
+  const double gum_ratio = static_cast<double>(gums) / static_cast<double>(teeth);
+  if (gum_ratio < 0.95)
+    return Status::error(ErrorCode::NotAHead,
+                         "no open mouth in close-up: the bright non-red pixels taken for teeth cover " +
+                             pct(static_cast<double>(teeth) / n) + " of the photo and lips or gums only " +
+                             pct(static_cast<double>(gums) / n) +
+                             "; a smile photo shows the front teeth, lips apart, filling most of the picture");
+  const double speckle = static_cast<double>(borders) / static_cast<double>(teeth);
+  if (speckle >= 0.1)
+    return Status::error(ErrorCode::NotAHead,
+                         "no open mouth in close-up: the pixels taken for teeth are speckle among dark ones (" +
+                             std::to_string(speckle).substr(0, 4) +
+                             " dark borders per pixel, under 0.1 expected), not solid teeth");
+  return Status::success();
+}
+
 }  // namespace lk

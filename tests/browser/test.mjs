@@ -30,6 +30,7 @@ import { flow as project } from './flows/project.mjs';
 import { flow as keep } from './flows/keep.mjs';
 import { flow as pageStates } from './flows/page_states.mjs';
 import { flow as fitCancel } from './flows/fit_cancel.mjs';
+import { flow as photoRefusals } from './flows/photo_refusals.mjs';
 
 runFlows([startup, scanLoad, startupFailures, fit, fitChecks, fitThreads, exportFlow, animation, texture, eyeSmile,
-          project, keep, pageStates, fitCancel]);
+          project, keep, pageStates, fitCancel, photoRefusals]);

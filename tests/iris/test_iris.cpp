@@ -237,3 +237,65 @@ TEST_CASE("real eye photo: iris found and texture synthesized") {
   CHECK(res.circle.radius > 55);
   CHECK(res.circle.radius < 85);
 }
+
+TEST_CASE("iris: the polar iris is capped, so a huge circle cannot make the synthesis slow") {
+  // A whole-face photo once gave a 524 px "iris": 3300 x 350 polar samples
+  // and minutes of synthesis in the page (issue 36, class 9).
+  const lk::Image im = lk::Image::make(1200, 1200, 3, 90);
+  lk::IrisCircle c;
+  c.center = lk::Vec2(600, 600);
+  c.radius = 524;
+  c.pupil_radius = 170;
+  lk::PolarIris polar;
+  REQUIRE(lk::iris_to_polar(im, c, {}, polar).ok());
+  CHECK(polar.angles == 720);
+  CHECK(polar.radii == 128);
+  // A close-up's iris keeps about one sample per pixel.
+  c.radius = 70;
+  c.pupil_radius = 24;
+  REQUIRE(lk::iris_to_polar(im, c, {}, polar).ok());
+  CHECK(polar.angles == 440);
+  CHECK(polar.radii == 46);
+}
+
+TEST_CASE("iris: portraits are refused as eye photos; a crop of one eye is taken", "[shared]") {
+  // Issue 36, class 9: a whole-face photo gave a "texture" of its hair or
+  // chin (and minutes of work in the page). Each is refused, with a reason.
+  const std::string dir = lk::test::shared_data_dir() + "/multiview_faces/keentools_kira/";
+  LK_REQUIRE_SHARED("multiview_faces/keentools_kira/0001.jpg");
+  for (const char* name : {"0001.jpg", "0002.jpg", "0003.jpg", "0004.jpg", "0005.jpg", "0006.jpg", "0007.jpg",
+                           "0008.jpg", "0009.jpg", "0010.jpg"}) {
+    lk::Image im;
+    REQUIRE(lk::load_image_file(dir + name, im, 3).ok());
+    lk::IrisResult res;
+    const lk::Status s = lk::iris_texture_from_photo(im, nullptr, res);
+    INFO(name << ": " << s.message);
+    CHECK(s.code == lk::ErrorCode::NotAHead);
+    CHECK(s.message.find("no eye close-up") != std::string::npos);
+  }
+  // A guess at the right eye of 0001 once grew into the face's outline
+  // (radius 557 px, round and darker at its centre): refused by its size.
+  {
+    lk::Image im;
+    REQUIRE(lk::load_image_file(dir + "0001.jpg", im, 3).ok());
+    const lk::Vec2 guess(780, 548);
+    lk::IrisResult res;
+    const lk::Status s = lk::iris_texture_from_photo(im, &guess, res);
+    INFO(s.message);
+    CHECK(s.code == lk::ErrorCode::NotAHead);
+  }
+  // The right eye of 0001 cut out (160 x 100 px, the iris about 56 px
+  // across): a small but real close-up, accepted.
+  lk::Image face;
+  REQUIRE(lk::load_image_file(dir + "0001.jpg", face, 3).ok());
+  lk::Image eye = lk::Image::make(160, 100, 3);
+  for (int y = 0; y < 100; ++y)
+    for (int x = 0; x < 160; ++x)
+      for (int k = 0; k < 3; ++k) eye.at(x, y)[k] = face.at(700 + x, 500 + y)[k];
+  lk::IrisResult res;
+  const lk::Status s = lk::iris_texture_from_photo(eye, nullptr, res);
+  INFO(s.message);
+  REQUIRE(s.ok());
+  CHECK(res.circle.radius > 22);
+  CHECK(res.circle.radius < 34);
+}

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "io/io.h"
+#include "project/parts.h"
 #include "teeth/teeth.h"
 #include "test_data.h"
 
@@ -136,4 +137,37 @@ TEST_CASE("teeth: composite into the generic texture along a curved boundary") {
   CHECK(found);
   lk::TeethResult empty;
   CHECK_FALSE(lk::teeth_composite_generic(empty, o, co, tex).ok());
+}
+
+TEST_CASE("teeth: portraits and a closed mouth are refused as smile photos; intraoral photos are taken", "[shared]") {
+  // Issue 36, class 9: a whole portrait exited 0 with the photo recoloured.
+  const std::string dir = lk::test::shared_data_dir() + "/multiview_faces/keentools_kira/";
+  LK_REQUIRE_SHARED("multiview_faces/keentools_kira/0001.jpg");
+  for (const char* name : {"0001.jpg", "0002.jpg", "0003.jpg", "0004.jpg", "0005.jpg", "0006.jpg", "0007.jpg",
+                           "0008.jpg", "0009.jpg", "0010.jpg"}) {
+    lk::Image im;
+    REQUIRE(lk::load_image_file(dir + name, im, 3).ok());
+    lk::TeethResult r;
+    const lk::Status s = lk::teeth_photo_texture(im, {}, r);
+    INFO(name << ": " << s.message);
+    CHECK(s.code == lk::ErrorCode::NotAHead);
+    CHECK(s.message.find("no open mouth in close-up") != std::string::npos);
+  }
+  // The closed mouth of 0001, cut out: no teeth.
+  lk::Image face;
+  REQUIRE(lk::load_image_file(dir + "0001.jpg", face, 3).ok());
+  lk::Image mouth = lk::Image::make(230, 130, 3);
+  for (int y = 0; y < 130; ++y)
+    for (int x = 0; x < 230; ++x)
+      for (int k = 0; k < 3; ++k) mouth.at(x, y)[k] = face.at(800 + x, 790 + y)[k];
+  lk::TeethResult r;
+  CHECK(lk::teeth_photo_texture(mouth, {}, r).code == lk::ErrorCode::NotAHead);
+  for (const char* name : {"intraoral_anterior_0-4.png", "intraoral_anterior_1-4.png"}) {
+    LK_REQUIRE_SHARED(std::string("teeth_photos/") + name);
+    lk::Image im;
+    REQUIRE(lk::load_image_file(lk::test::shared_data_dir() + "/teeth_photos/" + name, im, 3).ok());
+    const lk::Status s = lk::teeth_photo_texture(im, {}, r);
+    INFO(name << ": " << s.message);
+    CHECK(s.ok());
+  }
 }

@@ -59,9 +59,12 @@ export async function setPhotoRole(photo, role) {
     renderPhotos();
     setStatus(photo.name + ': ' + photo.roleNote + '; the ' + (eye ? 'eyes' : 'teeth') + ' keep their texture.');
     // The worker's message starts with the photo's name.
-    showError((eye ? 'Eye photo ' : 'Smile photo ') + (result.message || photo.name + ': ' + result.code) +
-              (eye ? '. An eye photo is a close-up of one open eye, the iris near the middle.'
-                : '. A smile photo shows the front teeth, lips apart, filling most of the picture.'));
+    // The core's refusals of a photo that is no close-up say what one is.
+    const message = result.message || photo.name + ': ' + result.code;
+    const hint = /close-up/.test(message) ? '.'
+      : eye ? '. An eye photo is a close-up of one open eye, the iris near the middle.'
+        : '. A smile photo shows the front teeth, lips apart, filling most of the picture.';
+    showError((eye ? 'Eye photo ' : 'Smile photo ') + message + hint);
     return;
   }
   // Only one eye photo and one smile photo at a time: the newest wins.

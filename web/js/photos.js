@@ -34,14 +34,19 @@ export async function checkPhotos(photos, alone) {
       result = { ok: false, message: file.name + ': ' + (e && e.message ? e.message : e) };
     }
     if (!result.ok) {
-      meta.textContent = formatBytes(file.size) + ' · not an image';
+      // Beside the file: why it was refused (the worker's message, without
+      // the file's name; its first clause, the whole one as the tooltip).
+      const reason = String(result.message || result.code).replace(file.name + ': ', '');
+      meta.textContent = formatBytes(file.size) + ' · refused: ' + reason.split(/[;:]/)[0];
+      meta.parentElement.title = file.name + ': ' + reason;
+      meta.parentElement.classList.add('refused');
       failures.push(result.message);
       continue;
     }
     meta.textContent = formatBytes(file.size) + ' · ' + result.width + '×' + result.height + ' photo';
     meta.parentElement.title = file.name + ': ' + result.width + '×' + result.height +
                                ' photo, kept for the Texture stage';
-    addPhoto({ name: file.name, file, width: result.width, height: result.height });
+    addPhoto({ name: file.name, file, width: result.width, height: result.height, decoder: result.decoder });
   }
   renderPhotos();
   if (!endJob(job)) return;

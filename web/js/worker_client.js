@@ -35,7 +35,7 @@ function startWorkerOnce() {
   const workerParams = new URLSearchParams();
   const single = params.get('threads') === '1' || (app.workerThreads && app.workerThreads.fallback) || !window.crossOriginIsolated;
   if (single) workerParams.set('threads', '1');
-  for (const p of ['thread_start_ms', 'core_stall_ms', 'core_compile_ms']) if (params.get(p)) workerParams.set(p, params.get(p));
+  for (const p of ['thread_start_ms', 'core_stall_ms', 'core_compile_ms', 'decoder']) if (params.get(p)) workerParams.set(p, params.get(p));
   const worker = new Worker('worker.js' + (workerParams.toString() ? '?' + workerParams : ''));
   app.worker = worker;
   app.workerStart = { step: 'script worker.js', steps: ['script worker.js'] };
@@ -119,7 +119,7 @@ export async function warmUp(variant) {
   }
   const workerParams = new URLSearchParams({ warmup: '1' });
   if (variant !== 'threads') workerParams.set('threads', '1');
-  for (const p of ['thread_start_ms', 'core_stall_ms', 'core_compile_ms']) if (params.get(p)) workerParams.set(p, params.get(p));
+  for (const p of ['thread_start_ms', 'core_stall_ms', 'core_compile_ms', 'decoder']) if (params.get(p)) workerParams.set(p, params.get(p));
   const t0 = performance.now();
   const worker = new Worker('worker.js?' + workerParams);
   worker.postMessage({ type: 'module', module: compiled.module });
