@@ -62,7 +62,7 @@ Status write_file(const std::string& path, const Bytes& bytes) { return write_fi
 
 Status load_geometry_file(const std::string& path, TriMesh& mesh, PointCloud& cloud, GeometryKind& kind) {
   Bytes bytes;
-  if (Status s = read_file(path, bytes); !s) return s;
+  if (Status s = read_file(path, bytes, kMaxGeometryBytes); !s) return s;
   // An OBJ's material library sits next to it; its map_Kd becomes a path the
   // caller can open directly. A missing MTL only means no texture name.
   std::string mtllib = obj_mtllib(bytes.data(), bytes.size());
@@ -70,7 +70,7 @@ Status load_geometry_file(const std::string& path, TriMesh& mesh, PointCloud& cl
   Bytes mtl;
   if (!mtllib.empty()) {
     const std::string mtl_path = is_absolute(mtllib) ? mtllib : directory_of(path) + mtllib;
-    if (read_file(mtl_path, mtl, size_t(1) << 20)) {
+    if (read_file(mtl_path, mtl, kMaxMaterialBytes)) {
       if (Status s = read_obj(bytes.data(), bytes.size(), mesh, kind, std::string(mtl.begin(), mtl.end())); !s)
         return with_context(s, path);
       if (!mesh.texture_name.empty() && !is_absolute(mesh.texture_name))
@@ -99,7 +99,7 @@ Status load_point_cloud_file(const std::string& path, PointCloud& cloud) {
 
 Status load_image_file(const std::string& path, Image& image, int want_channels) {
   Bytes bytes;
-  if (Status s = read_file(path, bytes); !s) return s;
+  if (Status s = read_file(path, bytes, kMaxImageBytes); !s) return s;
   return with_context(read_image(bytes.data(), bytes.size(), image, want_channels), path);
 }
 
