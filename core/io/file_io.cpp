@@ -27,6 +27,9 @@ Status read_file(const std::string& path, Bytes& out, size_t max_bytes) {
   if (::stat(path.c_str(), &st) != 0)
     return Status::error(ErrorCode::InvalidInput, path + ": cannot open: " + std::strerror(errno));
   if (S_ISDIR(st.st_mode)) return Status::error(ErrorCode::InvalidInput, path + ": is a directory, not a file");
+  // A FIFO would block the open below forever, a device has no size to check.
+  if (!S_ISREG(st.st_mode))
+    return Status::error(ErrorCode::InvalidInput, path + ": not a regular file (a device, pipe or socket)");
   const std::uint64_t size = static_cast<std::uint64_t>(st.st_size);
   if (size > max_bytes)
     return Status::error(ErrorCode::TooLarge, path + ": too large: " + std::to_string(size) +

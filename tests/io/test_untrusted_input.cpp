@@ -11,6 +11,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <sys/stat.h>
 #include <unistd.h>
 
 using namespace lk;
@@ -239,6 +240,15 @@ TEST_CASE("size limits: one constant per kind, refused from the size before a by
   require_error(s, ErrorCode::TooLarge, two_gib + ": too large: 2147483648 bytes, the limit is 2147483647");
   CHECK(seconds_since(t0) < 2.0);
   ::unlink(two_gib.c_str());
+
+  // Only regular files: a FIFO (an OBJ's mtllib may name one) blocked the
+  // open forever, a device has no size to check.
+  const std::string fifo = lk::test::scratch_dir("untrusted_input") + "/fifo.obj";
+  ::unlink(fifo.c_str());
+  REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+  require_error(load_mesh_file(fifo, m), ErrorCode::InvalidInput, fifo + ": not a regular file");
+  ::unlink(fifo.c_str());
+  require_error(load_point_cloud_file("/dev/zero", c), ErrorCode::InvalidInput, "/dev/zero: not a regular file");
 
   // Points text: the page hands it over as text, the CLI as a file.
   std::vector<Correspondence> points;
