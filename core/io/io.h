@@ -46,8 +46,9 @@ Bytes write_ply(const PointCloud& cloud, bool ascii = false);
 // OBJ: v, vn, vt, f (polygons fan-triangulated, negative indices allowed),
 // mtllib/usemtl recorded (texture_name from the MTL's map_Kd when given).
 // Per-corner uvs (3 * #F) unless every vertex uses a single uv throughout;
-// vn normals are averaged per vertex. Unknown statements made of lowercase
-// letters are skipped; any other line start is rejected as "not OBJ".
+// vn normals are made unit length, then averaged per vertex. Unknown
+// statements made of lowercase letters are skipped; any other line start is
+// rejected as "not OBJ".
 Status read_obj(const std::uint8_t* data, size_t size, TriMesh& mesh, GeometryKind& kind,
                 const std::string& mtl_text = "");
 // The file name after "mtllib" (empty if none), so a caller can fetch the MTL.
