@@ -27,6 +27,9 @@ Status read_file(const std::string& path, Bytes& out, size_t max_bytes) {
   if (::stat(path.c_str(), &st) != 0)
     return Status::error(ErrorCode::InvalidInput, path + ": cannot open: " + std::strerror(errno));
   if (S_ISDIR(st.st_mode)) return Status::error(ErrorCode::InvalidInput, path + ": is a directory, not a file");
+  // A FIFO would block the open below forever, a device has no size to check.
+  if (!S_ISREG(st.st_mode))
+    return Status::error(ErrorCode::InvalidInput, path + ": not a regular file (a device, pipe or socket)");
   const std::uint64_t size = static_cast<std::uint64_t>(st.st_size);
   if (size > max_bytes)
     return Status::error(ErrorCode::TooLarge, path + ": too large: " + std::to_string(size) +
@@ -62,7 +65,7 @@ Status write_file(const std::string& path, const Bytes& bytes) { return write_fi
 
 Status load_geometry_file(const std::string& path, TriMesh& mesh, PointCloud& cloud, GeometryKind& kind) {
   Bytes bytes;
-  if (Status s = read_file(path, bytes); !s) return s;
+  if (Status s = read_file(path, bytes, kMaxGeometryBytes); !s) return s;
   // An OBJ's material library sits next to it; its map_Kd becomes a path the
   // caller can open directly. A missing MTL only means no texture name.
   std::string mtllib = obj_mtllib(bytes.data(), bytes.size());
@@ -70,7 +73,7 @@ Status load_geometry_file(const std::string& path, TriMesh& mesh, PointCloud& cl
   Bytes mtl;
   if (!mtllib.empty()) {
     const std::string mtl_path = is_absolute(mtllib) ? mtllib : directory_of(path) + mtllib;
-    if (read_file(mtl_path, mtl, size_t(1) << 20)) {
+    if (read_file(mtl_path, mtl, kMaxMaterialBytes)) {
       if (Status s = read_obj(bytes.data(), bytes.size(), mesh, kind, std::string(mtl.begin(), mtl.end())); !s)
         return with_context(s, path);
       if (!mesh.texture_name.empty() && !is_absolute(mesh.texture_name))
@@ -99,7 +102,7 @@ Status load_point_cloud_file(const std::string& path, PointCloud& cloud) {
 
 Status load_image_file(const std::string& path, Image& image, int want_channels) {
   Bytes bytes;
-  if (Status s = read_file(path, bytes); !s) return s;
+  if (Status s = read_file(path, bytes, kMaxImageBytes); !s) return s;
   return with_context(read_image(bytes.data(), bytes.size(), image, want_channels), path);
 }
 

@@ -49,6 +49,7 @@ Status read_geometry(const std::string& name, const std::uint8_t* data, size_t s
   cloud = PointCloud();
   kind = GeometryKind::PointCloud;
   if (size == 0) return Status::error(ErrorCode::Empty, "empty input: no bytes");
+  if (Status s = io_detail::check_input_size(size, kMaxGeometryBytes); !s) return s;
   std::string format = extension_of(name);
   if (format == "txt" || format == "pts" || format == "asc" || format == "xyzn" || format == "xyzrgb") format = "xyz";
   if (format != "ply" && format != "obj" && format != "xyz" && format != "vtk") {

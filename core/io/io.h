@@ -12,6 +12,7 @@
 #include "image/image.h"
 #include "mesh/tri_mesh.h"
 
+#include <climits>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -20,6 +21,14 @@
 namespace lk {
 
 using Bytes = std::vector<std::uint8_t>;
+
+// The largest input of each kind, one constant per kind used on every path:
+// read_file refuses a bigger file from its size (stat) before reading a byte,
+// and the readers refuse bigger buffers (bytes from the page) before parsing.
+// 2 GiB - 1 because line numbers and stb_image's lengths are ints.
+constexpr size_t kMaxGeometryBytes = size_t(INT_MAX);
+constexpr size_t kMaxImageBytes = size_t(INT_MAX);
+constexpr size_t kMaxMaterialBytes = size_t(1) << 20;  // an OBJ's MTL
 
 // Which kind of geometry a file held.
 enum class GeometryKind { Mesh, PointCloud };
@@ -37,8 +46,9 @@ Bytes write_ply(const PointCloud& cloud, bool ascii = false);
 // OBJ: v, vn, vt, f (polygons fan-triangulated, negative indices allowed),
 // mtllib/usemtl recorded (texture_name from the MTL's map_Kd when given).
 // Per-corner uvs (3 * #F) unless every vertex uses a single uv throughout;
-// vn normals are averaged per vertex. Unknown statements made of lowercase
-// letters are skipped; any other line start is rejected as "not OBJ".
+// vn normals are made unit length, then averaged per vertex. Unknown
+// statements made of lowercase letters are skipped; any other line start is
+// rejected as "not OBJ".
 Status read_obj(const std::uint8_t* data, size_t size, TriMesh& mesh, GeometryKind& kind,
                 const std::string& mtl_text = "");
 // The file name after "mtllib" (empty if none), so a caller can fetch the MTL.
@@ -104,12 +114,13 @@ Status jpeg_truncation_probe(const std::uint8_t* data, size_t size, Bytes& probe
 // Empty when the image is empty or its pixel count disagrees with its size.
 Bytes write_png(const Image& image);
 
-// File helpers (native only). Files larger than max_bytes (default 2 GiB)
-// are refused with TooLarge before being read. Every message starts with the
+// File helpers (native only). Files larger than max_bytes are refused with
+// TooLarge from their size, before being read; load_geometry_file and
+// load_image_file use the constants above. Every message starts with the
 // path ("scan.ply: truncated: ..."). For an OBJ, load_geometry_file also
 // reads the MTL named by mtllib (next to the OBJ) and sets texture_name to
 // the map_Kd path resolved against the MTL's folder.
-Status read_file(const std::string& path, Bytes& out, size_t max_bytes = (size_t(2) << 30));
+Status read_file(const std::string& path, Bytes& out, size_t max_bytes = kMaxGeometryBytes);
 Status write_file(const std::string& path, const void* data, size_t size);
 Status write_file(const std::string& path, const std::string& text);
 Status write_file(const std::string& path, const Bytes& bytes);

@@ -7,6 +7,7 @@
 #include "io/io.h"
 #include "io/text_scan.h"
 
+#include <charconv>
 #include <climits>
 #include <cmath>
 
@@ -20,20 +21,41 @@ struct Corner {
   int v = -1, vt = -1, vn = -1;
 };
 
-// Resolves a 1-based (or negative, relative) OBJ index against count items.
-bool resolve_index(std::string_view text, int count, int& out) {
-  std::int64_t i = 0;
-  if (!io_detail::parse_int64(text.data(), text.data() + text.size(), i)) return false;
-  if (i > 0 && i <= count) {
-    out = static_cast<int>(i - 1);
-    return true;
-  }
-  if (i < 0 && -i <= count) {
-    out = static_cast<int>(count + i);
-    return true;
-  }
+enum class IndexResult { Ok, NotAnInteger, OutOfRange };
+
+// Resolves a 1-based (or negative, relative) OBJ index against the count
+// items defined so far. Every comparison is made on the parsed 64-bit value
+// without negating it: -2^63 has no positive counterpart.
+IndexResult resolve_index(std::string_view text, size_t count, int& out) {
   out = -1;
-  return true;
+  const char* b = text.data();
+  const char* e = b + text.size();
+  if (b != e && *b == '+') ++b;
+  std::int64_t i = 0;
+  const auto r = std::from_chars(b, e, i);
+  if (r.ptr != e || b == e) return IndexResult::NotAnInteger;
+  if (r.ec == std::errc::result_out_of_range) return IndexResult::OutOfRange;
+  if (r.ec != std::errc()) return IndexResult::NotAnInteger;
+  // count <= INT_MAX (the vertex loop refuses more), so it fits an int64.
+  const std::int64_t n = static_cast<std::int64_t>(count);
+  if (i >= 1 && i <= n) {
+    out = static_cast<int>(i - 1);
+    return IndexResult::Ok;
+  }
+  if (i <= -1 && i >= -n) {
+    out = static_cast<int>(n + i);
+    return IndexResult::Ok;
+  }
+  return IndexResult::OutOfRange;
+}
+
+// A normal scaled to unit length without overflowing on huge components
+// (1e300 squared is inf); zero stays zero.
+Vec3 unit_or_zero(const Vec3& n) {
+  const double scale = n.cwiseAbs().maxCoeff();
+  if (!(scale > 0)) return Vec3::Zero();
+  const Vec3 m = n / scale;
+  return m / m.norm();
 }
 
 // OBJ statements are short lowercase words ("v", "usemtl", "c_interp"); a
@@ -134,7 +156,11 @@ Status read_obj_body(const std::uint8_t* data, size_t size, TriMesh& mesh, Geome
         return error_at(ErrorCode::TooLarge, "too many vertices");
       mesh.positions.push_back(p);
       if (got == 6 && all_have_colors) {
-        vertex_colors.push_back(Vec3(x[3], x[4], x[5]));
+        const Vec3 color(x[3], x[4], x[5]);
+        if (!color.allFinite())
+          return error_at(ErrorCode::InvalidInput, "vertex " + std::to_string(mesh.positions.size()) +
+                                                       " has a NaN or infinite color");
+        vertex_colors.push_back(color);
       } else {
         all_have_colors = false;
       }
@@ -156,7 +182,8 @@ Status read_obj_body(const std::uint8_t* data, size_t size, TriMesh& mesh, Geome
                         bad.empty() ? "a normal needs 3 components" : "normal component " + quote(bad) + " is not a number");
       const Vec3 n(x[0], x[1], x[2]);
       if (!n.allFinite()) return error_at(ErrorCode::InvalidInput, "NaN or infinite normal");
-      normals.push_back(n);
+      // Unit length now, so that the per-vertex sums below stay finite.
+      normals.push_back(unit_or_zero(n));
     } else if (key == "f") {
       face.clear();
       for (std::string_view t = tok.next_on_line(); !t.empty(); t = tok.next_on_line()) {
@@ -170,19 +197,23 @@ Status read_obj_body(const std::uint8_t* data, size_t size, TriMesh& mesh, Geome
           ts = t.substr(s1 + 1, s2 == std::string_view::npos ? std::string_view::npos : s2 - s1 - 1);
           if (s2 != std::string_view::npos) ns = t.substr(s2 + 1);
         }
-        const int nv = static_cast<int>(mesh.positions.size());
-        if (!resolve_index(vs, nv, c.v))
+        const size_t nv = mesh.positions.size();
+        IndexResult r = resolve_index(vs, nv, c.v);
+        if (r == IndexResult::NotAnInteger)
           return error_at(ErrorCode::InvalidInput, "face corner " + quote(t) + " is not a vertex index");
-        if (c.v < 0)
-          return error_at(ErrorCode::InvalidInput, "face refers to vertex " + std::string(vs) + " but only " +
+        if (r == IndexResult::OutOfRange)
+          return error_at(ErrorCode::InvalidInput, "face refers to vertex " + std::string(vs.substr(0, 24)) +
+                                                       (vs.size() > 24 ? "..." : "") + " but only " +
                                                        std::to_string(nv) + " vertices are defined before it");
         if (!ts.empty()) {
-          if (!resolve_index(ts, static_cast<int>(texcoords.size()), c.vt) || c.vt < 0)
+          r = resolve_index(ts, texcoords.size(), c.vt);
+          if (r != IndexResult::Ok)
             return error_at(ErrorCode::InvalidInput, "face refers to texture coordinate " + quote(ts) + " but only " +
                                                          std::to_string(texcoords.size()) + " are defined");
         }
         if (!ns.empty()) {
-          if (!resolve_index(ns, static_cast<int>(normals.size()), c.vn) || c.vn < 0)
+          r = resolve_index(ns, normals.size(), c.vn);
+          if (r != IndexResult::Ok)
             return error_at(ErrorCode::InvalidInput, "face refers to normal " + quote(ns) + " but only " +
                                                          std::to_string(normals.size()) + " are defined");
         }
@@ -251,13 +282,12 @@ Status read_obj_body(const std::uint8_t* data, size_t size, TriMesh& mesh, Geome
       if (c.vn >= 0) sum[c.v] += normals[c.vn];
     bool complete = true;
     for (Vec3& n : sum) {
-      const double len = n.norm();
-      if (len > 0) n /= len;
-      else complete = false;
+      n = unit_or_zero(n);
+      if (n == Vec3::Zero()) complete = false;
     }
     if (complete) mesh.normals = std::move(sum);
   } else if (nt == 0 && static_cast<int>(normals.size()) == nv) {
-    mesh.normals = std::move(normals);  // a point cloud stored as v + vn lines
+    mesh.normals = std::move(normals);  // a point cloud stored as v + vn lines (now unit length)
   }
 
   if (!mtl_text.empty()) {
@@ -278,7 +308,8 @@ Status read_obj(const std::uint8_t* data, size_t size, TriMesh& mesh, GeometryKi
                 const std::string& mtl_text) {
   mesh = TriMesh();
   kind = GeometryKind::PointCloud;
-  Status s = read_obj_body(data, size, mesh, kind, mtl_text);
+  if (Status s = io_detail::check_input_size(size, kMaxGeometryBytes); !s) return s;
+  Status s = io_detail::guard_allocation([&] { return read_obj_body(data, size, mesh, kind, mtl_text); });
   if (!s) mesh = TriMesh();  // never hand back half a mesh
   return s;
 }

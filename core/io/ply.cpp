@@ -272,6 +272,12 @@ Status read_ply_body(const std::uint8_t* data, size_t size, TriMesh& mesh, Geome
   const std::uint64_t body_bytes = size - header.body_offset;
   std::uint64_t needed = 0;
   for (const PlyElement& e : header.elements) {
+    // Every item must take at least one byte, or no byte count can bound the
+    // loop over its items: "element junk 9223372036854775807" with no
+    // properties would spin for hours over nothing.
+    if (e.properties.empty() && e.count > 0)
+      return Status::error(ErrorCode::InvalidInput, "element '" + e.name + "' declares " + std::to_string(e.count) +
+                                                        " items but has no properties");
     const std::uint64_t item = min_item_bytes(e, header.format);
     if (item > 0 && e.count > (body_bytes + 1) / item) {
       const std::string at_least =
@@ -470,7 +476,8 @@ Status read_ply_body(const std::uint8_t* data, size_t size, TriMesh& mesh, Geome
 Status read_ply(const std::uint8_t* data, size_t size, TriMesh& mesh, GeometryKind& kind) {
   mesh = TriMesh();
   kind = GeometryKind::PointCloud;
-  Status s = read_ply_body(data, size, mesh, kind);
+  if (Status s = io_detail::check_input_size(size, kMaxGeometryBytes); !s) return s;
+  Status s = io_detail::guard_allocation([&] { return read_ply_body(data, size, mesh, kind); });
   if (!s) mesh = TriMesh();  // never hand back half a mesh
   return s;
 }

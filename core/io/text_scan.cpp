@@ -124,6 +124,13 @@ bool parse_double(const char* begin, const char* end, double& out) {
   return parse_double_slow(begin, end, out);
 }
 
+Status check_input_size(size_t size, size_t limit) {
+  if (size > limit)
+    return Status::error(ErrorCode::TooLarge, "too large: " + std::to_string(size) + " bytes, the limit is " +
+                                                  std::to_string(limit));
+  return Status::success();
+}
+
 bool parse_int64(const char* begin, const char* end, std::int64_t& out) {
   if (begin != end && *begin == '+') ++begin;
   auto r = std::from_chars(begin, end, out);

@@ -6,12 +6,35 @@
 // 300k-point files, and Emscripten 3.1.6's libc++ (LLVM 14) has no
 // floating-point from_chars. Integer from_chars is available everywhere.
 #pragma once
+#include "common/status.h"
+
 #include <cstddef>
 #include <cstdint>
+#include <new>
 #include <string>
 #include <string_view>
 
 namespace lk::io_detail {
+
+// TooLarge when a reader is handed more than its kind's limit (io.h), before
+// a byte is parsed.
+Status check_input_size(size_t size, size_t limit);
+
+// Runs a reader body; an allocation failure (which the readers' bounds on
+// declared counts should make impossible) becomes a TooLarge status instead
+// of an exception escaping the reader. The wasm build has no exceptions.
+template <typename Body>
+Status guard_allocation(Body&& body) {
+#if defined(__cpp_exceptions)
+  try {
+    return body();
+  } catch (const std::bad_alloc&) {
+    return Status::error(ErrorCode::TooLarge, "too large: out of memory while reading");
+  }
+#else
+  return body();
+#endif
+}
 
 inline bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
 

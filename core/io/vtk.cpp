@@ -43,7 +43,14 @@ class VtkParser {
     return Status::success();
   }
   // Reads n numbers; a missing one is truncation, a bad one invalid input.
+  // Nothing is allocated before the bytes left are shown to hold n values
+  // (two bytes each at least), whatever count a section declared.
   Status read_numbers(const char* what, size_t n, std::vector<double>& out) {
+    if (n > (tok_.remaining() + 1) / 2)
+      return error(ErrorCode::Truncated, std::string("truncated: ") + what + " declares " + std::to_string(n) +
+                                             " values (at least " + std::to_string(2 * static_cast<std::uint64_t>(n)) +
+                                             " bytes) but only " + std::to_string(tok_.remaining()) +
+                                             " bytes are left");
     out.resize(n);
     for (size_t i = 0; i < n; ++i) {
       const std::string_view t = tok_.next();
@@ -57,6 +64,10 @@ class VtkParser {
     return Status::success();
   }
   Status skip_numbers(const char* what, size_t n) {
+    if (n > (tok_.remaining() + 1) / 2)
+      return error(ErrorCode::Truncated, std::string("truncated: ") + what + " declares " + std::to_string(n) +
+                                             " values but only " + std::to_string(tok_.remaining()) +
+                                             " bytes are left");
     for (size_t i = 0; i < n; ++i)
       if (tok_.next().empty())
         return error(ErrorCode::Truncated, std::string("truncated: ") + what + " declares " + std::to_string(n) +
@@ -108,6 +119,8 @@ Status VtkParser::parse(TriMesh& mesh) {
     } else if (keyword == "point_data" || keyword == "cell_data") {
       point_data_ = keyword == "point_data";
       in_data_section_ = true;
+      // The count alone allocates nothing: each attribute that follows is
+      // checked against the bytes left before it is read (read_numbers).
       if (Status s = read_count(point_data_ ? "POINT_DATA" : "CELL_DATA", 0, attribute_count_); !s) return s;
       if (point_data_ && attribute_count_ != num_points_)
         return error(ErrorCode::InvalidInput, "wrong counts: POINT_DATA " + std::to_string(attribute_count_) +
@@ -302,8 +315,9 @@ Status read_vtk(const std::uint8_t* data, size_t size, TriMesh& mesh, GeometryKi
   kind = GeometryKind::PointCloud;
   if (size == 0) return Status::error(ErrorCode::Empty, "empty input: no bytes");
   const char* text = reinterpret_cast<const char*>(data);
+  if (Status s = io_detail::check_input_size(size, kMaxGeometryBytes); !s) return s;
   VtkParser parser(text, text + size);
-  if (Status s = parser.parse(mesh); !s) {
+  if (Status s = io_detail::guard_allocation([&] { return parser.parse(mesh); }); !s) {
     mesh = TriMesh();
     return s;
   }

@@ -34,8 +34,9 @@ bool all_unit_length(const std::vector<double>& values, int columns, int first) 
 
 }  // namespace
 
-Status read_xyz(const std::uint8_t* data, size_t size, PointCloud& cloud) {
-  cloud = PointCloud();
+namespace {
+
+Status read_xyz_body(const std::uint8_t* data, size_t size, PointCloud& cloud) {
   if (size == 0) return Status::error(ErrorCode::Empty, "empty input: no bytes");
   const char* p = reinterpret_cast<const char*>(data);
   const char* end = p + size;
@@ -125,6 +126,16 @@ Status read_xyz(const std::uint8_t* data, size_t size, PointCloud& cloud) {
       cloud.colors[r] = color_scale * Vec3(v[color_column], v[color_column + 1], v[color_column + 2]);
   }
   return Status::success();
+}
+
+}  // namespace
+
+Status read_xyz(const std::uint8_t* data, size_t size, PointCloud& cloud) {
+  cloud = PointCloud();
+  if (Status s = io_detail::check_input_size(size, kMaxGeometryBytes); !s) return s;
+  Status s = io_detail::guard_allocation([&] { return read_xyz_body(data, size, cloud); });
+  if (!s) cloud = PointCloud();  // never hand back half a cloud
+  return s;
 }
 
 std::string write_xyz(const PointCloud& cloud) {

@@ -1,6 +1,5 @@
 #include "texture/correspondences.h"
 
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -9,6 +8,9 @@ namespace lk {
 
 Status parse_correspondences(const std::string& text, std::vector<Correspondence>& out) {
   out.clear();
+  if (text.size() > kMaxCorrespondenceBytes)
+    return Status::error(ErrorCode::TooLarge, "too large: " + std::to_string(text.size()) + " bytes, the limit is " +
+                                                  std::to_string(kMaxCorrespondenceBytes));
   size_t pos = 0;
   int line_no = 0;
   while (pos < text.size()) {
@@ -19,6 +21,9 @@ Status parse_correspondences(const std::string& text, std::vector<Correspondence
     ++line_no;
     const size_t hash = line.find('#');
     if (hash != std::string::npos) line.resize(hash);
+    // strtod below stops at a NUL and would silently drop the rest of the line.
+    if (line.find('\0') != std::string::npos)
+      return Status::error(ErrorCode::InvalidInput, "line " + std::to_string(line_no) + ": a NUL byte (not text)");
     double v[5];
     int count = 0;
     const char* p = line.c_str();
@@ -27,7 +32,6 @@ Status parse_correspondences(const std::string& text, std::vector<Correspondence
       while (*p == ' ' || *p == '\t' || *p == '\r' || *p == ',') ++p;
       if (*p == '\0') break;
       char* next = nullptr;
-      errno = 0;
       const double d = std::strtod(p, &next);
       if (next == p) {
         garbage = true;
@@ -35,7 +39,8 @@ Status parse_correspondences(const std::string& text, std::vector<Correspondence
       }
       if (count < 5) v[count] = d;
       ++count;
-      if (!std::isfinite(d) || errno == ERANGE)
+      // Overflow reads as infinity; an underflow (1e-400) is a fine zero.
+      if (!std::isfinite(d))
         return Status::error(ErrorCode::InvalidInput,
                              "line " + std::to_string(line_no) + ": a number is not finite");
       p = next;

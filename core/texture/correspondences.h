@@ -12,14 +12,20 @@
 #include "calib/camera.h"
 #include "common/status.h"
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
 namespace lk {
 
+// The largest points text accepted (files are refused from their size by
+// the CLI, text from the page here): a few dozen clicked points take ~2 kB.
+constexpr size_t kMaxCorrespondenceBytes = size_t(16) << 20;
+
 // Fails with InvalidInput and a message naming the line ("line 7: expected
 // 5 numbers 'u v X Y Z', found 4") on a malformed line, a non-finite number,
-// or trailing garbage; Empty when no point is given.
+// a NUL byte, or trailing garbage; Empty when no point is given; TooLarge over
+// kMaxCorrespondenceBytes.
 Status parse_correspondences(const std::string& text, std::vector<Correspondence>& out);
 
 // The text parse_correspondences reads (17 significant digits).
