@@ -261,7 +261,7 @@ int run_texture(const Args& args) {
     if (!s) return fail(kName, s.message);  // names the file
     sizes.push_back({photos[i].image.width, photos[i].image.height});
     Bytes bytes;
-    s = read_file(point_paths[i], bytes, 16 << 20);
+    s = read_file(point_paths[i], bytes, kMaxCorrespondenceBytes);
     if (!s) return fail(kName, s.message);
     s = parse_correspondences(std::string(bytes.begin(), bytes.end()), points[i]);
     if (!s) return fail(kName, point_paths[i] + ": " + s.message);

@@ -388,7 +388,7 @@ namespace {
 Status inspect(const std::uint8_t* data, size_t size, ImageInfo& info, size_t max_pixels, Declared& declared) {
   info = ImageInfo();
   if (size == 0 || data == nullptr) return Status::error(ErrorCode::Empty, "empty input: no bytes");
-  if (size > static_cast<size_t>(INT_MAX)) return Status::error(ErrorCode::TooLarge, "image data over 2 GiB");
+  if (size > kMaxImageBytes) return Status::error(ErrorCode::TooLarge, "image data over 2 GiB");
   const bool jpeg = size >= 3 && data[0] == 0xFF && data[1] == 0xD8 && data[2] == 0xFF;
   const bool png = starts_with(data, size, "\x89PNG\r\n\x1a\n", 8);
   if (!jpeg && !png) {
