@@ -26,31 +26,10 @@
 #include <cstring>
 #include <string>
 
-#define STBI_NO_STDIO
-#define STBI_FAILURE_USERMSG
-#define STBI_ONLY_JPEG
-#define STBI_ONLY_PNG
-#define STBI_NO_LINEAR
-#define STBI_NO_HDR
-#define STBI_MAX_DIMENSIONS (1 << 15)
-#define STB_IMAGE_IMPLEMENTATION
-#define STB_IMAGE_WRITE_IMPLEMENTATION
-#define STBI_WRITE_NO_STDIO
-#if defined(__GNUC__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wunused-function"
-#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
-#pragma GCC diagnostic ignored "-Wsign-compare"
-#pragma GCC diagnostic ignored "-Wshadow"
-#pragma GCC diagnostic ignored "-Wimplicit-fallthrough"
-#pragma GCC diagnostic ignored "-Wunused-parameter"
-#pragma GCC diagnostic ignored "-Wunused-but-set-variable"
-#endif
+#include "io/stb_config.h"
+
 #include <stb/stb_image.h>
 #include <stb/stb_image_write.h>
-#if defined(__GNUC__)
-#pragma GCC diagnostic pop
-#endif
 
 namespace lk {
 
@@ -137,7 +116,8 @@ Status check_jpeg(const std::uint8_t* d, size_t n, Declared& out, std::uint64_t&
   const std::string corrupt = "corrupt JPEG: ";
   const std::string cut = "truncated JPEG: the data ends before the end-of-image marker";
   size_t i = 2;  // after SOI
-  bool have_frame = false, have_scan = false;
+  bool have_frame = false, have_scan = false, progressive = false;
+  bool table_defined[2][4] = {{false, false, false, false}, {false, false, false, false}};  // [DC, AC][id]
   int components = 0;
   int comp_id[4] = {0, 0, 0, 0}, comp_h[4] = {0, 0, 0, 0}, comp_v[4] = {0, 0, 0, 0};
   scan_bytes = 0;
@@ -158,6 +138,7 @@ Status check_jpeg(const std::uint8_t* d, size_t n, Declared& out, std::uint64_t&
     const size_t len = length - 2;
     if (m == 0xC0 || m == 0xC1 || m == 0xC2) {
       if (have_frame) return invalid(corrupt + "a second frame header");
+      progressive = m == 0xC2;
       if (len < 6) return invalid(corrupt + "a short frame header");
       if (s[0] != 8) return Status::error(ErrorCode::Unsupported, "a " + std::to_string(s[0]) + "-bit JPEG; only 8-bit JPEGs are read");
       out.height = static_cast<int>(be16(s + 1));
@@ -195,6 +176,7 @@ Status check_jpeg(const std::uint8_t* d, size_t n, Declared& out, std::uint64_t&
       while (k < len) {
         if (len - k < 17) return invalid(corrupt + "a Huffman table header runs past its segment");
         if ((s[k] >> 4) > 1 || (s[k] & 15) > 3) return invalid(corrupt + "a Huffman table with a bad class or number");
+        table_defined[s[k] >> 4][s[k] & 15] = true;
         size_t symbols = 0;
         for (int b = 1; b <= 16; ++b) symbols += s[k + b];
         if (symbols > 256)
@@ -226,6 +208,14 @@ Status check_jpeg(const std::uint8_t* d, size_t n, Declared& out, std::uint64_t&
         if (!known) return invalid(corrupt + "a scan names a component the frame does not have");
         if ((s[2 + 2 * c] >> 4) > 3 || (s[2 + 2 * c] & 15) > 3) return invalid(corrupt + "a scan names a bad Huffman table");
       }
+      // The tables a scan decodes with must have been defined before it:
+      // stb 2.27 does not clear its tables, and decodes with whatever memory
+      // an undefined one holds (fuzzed: reads far outside the table).
+      const int ss = s[1 + 2 * ns], se = s[2 + 2 * ns], ah = s[3 + 2 * ns] >> 4;
+      const bool uses_dc = ss == 0 && !(progressive && ah != 0), uses_ac = se > 0;
+      for (int c = 0; c < ns; ++c)
+        if ((uses_dc && !table_defined[0][s[2 + 2 * c] >> 4]) || (uses_ac && !table_defined[1][s[2 + 2 * c] & 15]))
+          return invalid(corrupt + "a scan decodes with a Huffman table that was never defined");
       // Entropy-coded data: up to a marker other than FF00 (stuffing) and RSTn.
       size_t k = i + length;
       const size_t begin = k;

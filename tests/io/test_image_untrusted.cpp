@@ -139,6 +139,14 @@ TEST_CASE("JPEG segments are checked before stb reads them", "[io][image][untrus
   bad = jpg;
   bad[sof + 1] = 0xC3;
   require_error(read_image(bad.data(), bad.size(), im), ErrorCode::Unsupported, "lossless");
+  // A scan decoding with Huffman tables no DHT defined (stb_image_write
+  // defines 0 and 1): stb 2.27 decoded with uninitialized tables and read far
+  // outside them (found by tests/fuzz/fuzz_image).
+  const size_t sos = find_marker(jpg, 0xDA);
+  REQUIRE(sos > 0);
+  bad = jpg;
+  bad[sos + 6] = 0x33;
+  require_error(read_image(bad.data(), bad.size(), im), ErrorCode::InvalidInput, "never defined");
   // A segment length past the end of the data.
   bad = Bytes(jpg.begin(), jpg.begin() + sof + 6);
   require_error(read_image(bad.data(), bad.size(), im), ErrorCode::Truncated, "truncated JPEG");
