@@ -44,7 +44,7 @@ int run_fit(const Args& args) {
   if (!only_known_options(cmd, args,
                           {"scan", "out", "levels", "up", "facing", "no-orientation-check", "face-only", "whole-head",
                            "no-eye-region", "denoise", "no-denoise", "widen-footprints", "data-level", "dump",
-                           "scan-frame", "generic-head"}))
+                           "scan-frame", "generic-head", "project"}))
     return 2;
   const std::string scan_path = args.get("scan"), out_dir = args.get("out");
   if (scan_path.empty() || out_dir.empty()) return fail(cmd, "needs --scan FILE and --out DIR");
