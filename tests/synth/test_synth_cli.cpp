@@ -39,7 +39,7 @@ TEST_CASE("synth-scan writes the scan and its truth, deterministically", "[synth
   CHECK(read_file_text(dir + "/h.obj") == read_file_text(dir + "/a/truth_control.obj"));
   CHECK(run("synth-head --seed -1 --out " + dir + "/x.obj") == 2);
   CHECK(run("synth-head --seed 3") == 2);
-  CHECK(run("synth-scan --seed 3 --out " + dir + "/d --points 0") == 1);
+  CHECK(run("synth-scan --seed 3 --out " + dir + "/d --points 0") == 2);  // out of range: a usage error, like --seed -1
   CHECK(run("synth-scan --seed 3 --out " + dir + "/d --bogus 1") == 2);
   CHECK(run("synth-head --seed 3 --out /nonexistent/dir/h.obj") == 1);
 }
