@@ -212,7 +212,9 @@ Status check_jpeg(const std::uint8_t* d, size_t n, Declared& out, std::uint64_t&
       // stb 2.27 does not clear its tables, and decodes with whatever memory
       // an undefined one holds (fuzzed: reads far outside the table).
       const int ss = s[1 + 2 * ns], se = s[2 + 2 * ns], ah = s[3 + 2 * ns] >> 4;
-      const bool uses_dc = ss == 0 && !(progressive && ah != 0), uses_ac = se > 0;
+      // A baseline scan decodes with both tables whatever Ss/Se say; a
+      // progressive one with the DC table (first DC scans) or the AC table.
+      const bool uses_dc = !progressive || (ss == 0 && ah == 0), uses_ac = !progressive || se > 0;
       for (int c = 0; c < ns; ++c)
         if ((uses_dc && !table_defined[0][s[2 + 2 * c] >> 4]) || (uses_ac && !table_defined[1][s[2 + 2 * c] & 15]))
           return invalid(corrupt + "a scan decodes with a Huffman table that was never defined");

@@ -147,6 +147,12 @@ TEST_CASE("JPEG segments are checked before stb reads them", "[io][image][untrus
   bad = jpg;
   bad[sos + 6] = 0x33;
   require_error(read_image(bad.data(), bad.size(), im), ErrorCode::InvalidInput, "never defined");
+  // A baseline scan decodes its AC coefficients even when its header says
+  // Se = 0: an undefined AC table is refused there too.
+  bad = jpg;
+  bad[sos + 6] = 0x03;
+  bad[sos + 5 + 2 * size_t(jpg[sos + 4]) + 1] = 0;
+  require_error(read_image(bad.data(), bad.size(), im), ErrorCode::InvalidInput, "never defined");
   // A segment length past the end of the data.
   bad = Bytes(jpg.begin(), jpg.begin() + sof + 6);
   require_error(read_image(bad.data(), bad.size(), im), ErrorCode::Truncated, "truncated JPEG");
