@@ -278,11 +278,16 @@ Status foreign(const std::string& what) {
   return Status::error(ErrorCode::InvalidInput, "not a Likeness project: " + what);
 }
 
+// Every stored number lies within this magnitude (metres, scan units, pixels
+// are far below it), so nothing evaluated from a file overflows to infinity.
+constexpr double kMaxMagnitude = 1e9;
+bool sane(double x) { return std::isfinite(x) && std::abs(x) <= kMaxMagnitude; }
+
 bool get_number(const json& o, const char* key, double& v) {
   const auto it = o.find(key);
   if (it == o.end() || !it->is_number()) return false;
   v = it->get<double>();
-  return std::isfinite(v);
+  return sane(v);
 }
 bool get_int(const json& o, const char* key, int& v, int lo = std::numeric_limits<int>::min(),
              int hi = std::numeric_limits<int>::max()) {
@@ -305,7 +310,7 @@ bool get_vec3(const json& o, const char* key, Vec3& v) {
   for (int k = 0; k < 3; ++k) {
     if (!(*it)[k].is_number()) return false;
     v[k] = (*it)[k].get<double>();
-    if (!std::isfinite(v[k])) return false;
+    if (!sane(v[k])) return false;
   }
   return true;
 }
@@ -317,7 +322,7 @@ bool get_affine(const json& o, const char* key, AffineMap& m) {
   for (int i = 0; i < 9; ++i) {
     if (!(*a)[i].is_number()) return false;
     m.A(i / 3, i % 3) = (*a)[i].get<double>();
-    if (!std::isfinite(m.A(i / 3, i % 3))) return false;
+    if (!sane(m.A(i / 3, i % 3))) return false;
   }
   return get_vec3(*it, "t", m.t);
 }
@@ -362,7 +367,7 @@ struct BinReader {
   Status doubles(const json& ref, const std::string& what, int width, std::vector<double>& out) {
     if (Status st = array(ref, what, "f64", width, out); !st.ok()) return st;
     for (double x : out)
-      if (!std::isfinite(x)) return damaged(what + ": a number that is not finite");
+      if (!sane(x)) return damaged(what + ": a number that is not finite or out of range");
     return Status::success();
   }
   Status vec3s(const json& ref, const std::string& what, std::vector<Vec3>& out) {
@@ -550,6 +555,8 @@ Status read_project(const tinygltf::Model& model, const json& doc, HeadProject& 
     if (Status s = evaluate(mr); !s.ok()) return s;
   }
   p.frame = HeadFrame::from(fit.scan_to_head);
+  if (!p.frame.head_to_scan.allFinite() || p.frame.head_to_scan.cwiseAbs().maxCoeff() > kMaxMagnitude)
+    return damaged("the scan-to-head map cannot be inverted");
 
   // The rig and the pose.
   const json& rj = member(doc, "rig");

@@ -412,6 +412,14 @@ TEST_CASE("project file: foreign, future and edited files are refused with a rea
     fit["control"] = tinygltf::Value(control);
     d["fit"] = tinygltf::Value(fit);
   }, "control mesh triangles");
+  refused([&](Obj& d) {  // invertible on paper, its inverse 1e100 (found by tests/fuzz/fuzz_project)
+    Obj fit = at(d, {"fit"}), map = at(d, {"fit", "scan_to_head"});
+    tinygltf::Value::Array a = map["A"].Get<tinygltf::Value::Array>();
+    a[0] = tinygltf::Value(1e-100);
+    map["A"] = tinygltf::Value(a);
+    fit["scan_to_head"] = tinygltf::Value(map);
+    d["fit"] = tinygltf::Value(fit);
+  }, "cannot be inverted");
 }
 
 TEST_CASE("project file: every cut of a small project is refused, and says it is cut") {
