@@ -1,5 +1,6 @@
 // Scans and bad input on the main page: a PLY point cloud is shown (green
-// points); broken files (truncated, not a scan, 2^31 vertices, empty) give a
+// points); broken files (truncated, not a scan, 2^31 vertices, empty, and
+// issue 36's OBJ index, PLY junk element, VTK count and NaN colour) give a
 // visible error naming the file while the previous model stays; a worker
 // dying mid-job is replaced; the viewer refuses malformed arrays; Cancel;
 // a dropped file loads; an OBJ mesh after the errors; a PNG photo is checked
@@ -35,6 +36,13 @@ async function run(s) {
     ['notes.txt', Buffer.from('These are my notes, not a scan.\nSecond line.\n')],
     ['huge_count.ply', hugeCountPly()],
     ['empty.ply', Buffer.alloc(0)],
+    // Issue 36's classes 1-4, the reproducers of tests/io/test_untrusted_input.cpp's kind.
+    ['index.obj', Buffer.from('v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -9223372036854775808\n')],
+    ['junk.ply', Buffer.from('ply\nformat ascii 1.0\nelement junk 4611686018427387904\nelement vertex 3\n' +
+                             'property float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n')],
+    ['colors.vtk', Buffer.from('# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n' +
+                               '0 0 0 1 0 0 0 1 0\nPOLYGONS 1 4\n3 0 1 2\nCELL_DATA 1000000000\nCOLOR_SCALARS c 3\n0 0 0\n')],
+    ['nan.obj', Buffer.from('v 0 0 0 nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n')],
   ];
   for (const [name, bytes] of broken) {
     const t = Date.now();
