@@ -86,9 +86,7 @@ int run_export(const std::string& path, const Args& args) {
 
 int run_project(const Args& args) {
   // Its two positional words (info|export FILE) are checked below.
-  Args options = args;
-  options.positional.clear();
-  if (!only_known_options(kName, options, {"level", "format", "out", "pose", "scan-frame"})) return 2;
+  if (!only_known_options(kName, args, {"level", "format", "out", "pose", "scan-frame"}, 2)) return 2;
   if (args.positional.size() != 2 || (args.positional[0] != "info" && args.positional[0] != "export")) {
     fail(kName, "give `info FILE` or `export FILE --out PATH` (see likeness project --help)");
     return 2;

@@ -3,6 +3,7 @@
 // read files, call core/, write files, print.
 #pragma once
 #include <cfloat>
+#include <cstddef>
 #include <climits>
 #include <functional>
 #include <initializer_list>
@@ -48,8 +49,10 @@ struct Registrar {
 int fail(const std::string& command, const std::string& message);
 
 // False (after printing "unknown option --key (see `likeness help`)" through
-// fail) when args has an option not in known; commands then exit with 2.
-bool only_known_options(const std::string& command, const Args& args, std::initializer_list<const char*> known);
+// fail) when args has an option not in known, or more than max_positional
+// positional words; commands then exit with 2.
+bool only_known_options(const std::string& command, const Args& args, std::initializer_list<const char*> known,
+                        size_t max_positional = 0);
 
 }  // namespace lk::cli
 

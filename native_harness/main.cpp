@@ -94,9 +94,11 @@ int fail(const std::string& command, const std::string& message) {
   return 1;
 }
 
-bool only_known_options(const std::string& command, const Args& args, std::initializer_list<const char*> known) {
-  if (!args.positional.empty()) {
-    fail(command, "unexpected argument '" + args.positional.front() + "' (options are --name value; see `likeness help`)");
+bool only_known_options(const std::string& command, const Args& args, std::initializer_list<const char*> known,
+                        size_t max_positional) {
+  if (args.positional.size() > max_positional) {
+    fail(command, "unexpected argument '" + args.positional[max_positional] +
+                      "' (options are --name value; see `likeness help`)");
     return false;
   }
   for (const auto& [key, values] : args.options) {

@@ -484,7 +484,14 @@ Status read_project(const tinygltf::Model& model, const json& doc, HeadProject& 
       !get_int(f, "pocket_points", fit.pocket_points) || !get_int(f, "isolated_points", fit.isolated_points) ||
       !get_number(f, "near_fraction", fit.near_fraction))
     return damaged("the fit's figures");
-  if (std::abs(fit.scan_to_head.A.determinant()) < 1e-300) return damaged("a scan to head map that cannot be inverted");
+  // HeadFrame inverts the map: a singular one, or one whose inverse leaves
+  // kMaxMagnitude, would put every exported vertex at infinity.
+  {
+    const Mat3 inverse = fit.scan_to_head.A.inverse();
+    if (std::abs(fit.scan_to_head.A.determinant()) < 1e-300 || !inverse.allFinite() ||
+        inverse.cwiseAbs().maxCoeff() > kMaxMagnitude)
+      return damaged("a scan to head map that cannot be inverted");
+  }
   const json& notes = member(f, "notes");
   if (!notes.is_array() && !notes.is_null()) return damaged("the fit's notes");
   for (const json& n : notes) {
@@ -555,8 +562,6 @@ Status read_project(const tinygltf::Model& model, const json& doc, HeadProject& 
     if (Status s = evaluate(mr); !s.ok()) return s;
   }
   p.frame = HeadFrame::from(fit.scan_to_head);
-  if (!p.frame.head_to_scan.allFinite() || p.frame.head_to_scan.cwiseAbs().maxCoeff() > kMaxMagnitude)
-    return damaged("the scan-to-head map cannot be inverted");
 
   // The rig and the pose.
   const json& rj = member(doc, "rig");
