@@ -47,6 +47,24 @@ export function listFile(file, note, cls) {
   return meta;
 }
 
+// A file the page could not use: its row says so, and why, in full under its
+// name (visible, not only a tooltip, so touch screens show it too). The
+// reason is the core's or the page's message without the leading "name: ".
+export function refuseFile(meta, file, note, reason) {
+  const li = meta.parentElement;
+  const why = String(reason).replace(file.name + ': ', '');
+  meta.textContent = formatBytes(file.size) + ' · ' + note;
+  li.classList.add('refused');
+  li.title = file.name + ': ' + why;
+  let line = li.querySelector('.file-reason');
+  if (!line) {
+    line = document.createElement('span');
+    line.className = 'file-reason';
+    li.append(line);
+  }
+  line.textContent = why;
+}
+
 export async function handleFiles(fileList) {
   const files = Array.from(fileList || []);
   if (!files.length) return;

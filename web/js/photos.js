@@ -3,7 +3,7 @@
 // now, not at the Texture stage), listed with a thumbnail, and gets its
 // points from a points file of the same name or from landmark clicks.
 import { app, ui, beginJob, endJob, live, refreshControls, setStatus, showError } from './state.js';
-import { formatBytes, listFile, MAX_SCAN_BYTES } from './files.js';
+import { formatBytes, listFile, MAX_SCAN_BYTES, refuseFile } from './files.js';
 import { runJob } from './worker_client.js';
 import { clicker, closeClicker, openClicker } from './clicker.js';
 import { dropRoleTexture, PHOTO_ROLES, setPhotoRole } from './photo_roles.js';
@@ -18,8 +18,9 @@ export async function checkPhotos(photos, alone) {
     if (!live(job)) break;
     const meta = listFile(file, 'checking…');
     if (file.size > MAX_SCAN_BYTES) {
-      meta.textContent = formatBytes(file.size) + ' · too large';
-      failures.push(file.name + ' is ' + formatBytes(file.size) + '; photos up to ' + formatBytes(MAX_SCAN_BYTES) + ' are accepted.');
+      const tooLarge = file.name + ' is ' + formatBytes(file.size) + '; photos up to ' + formatBytes(MAX_SCAN_BYTES) + ' are accepted.';
+      refuseFile(meta, file, 'too large', tooLarge);
+      failures.push(tooLarge);
       continue;
     }
     let result;
@@ -34,12 +35,8 @@ export async function checkPhotos(photos, alone) {
       result = { ok: false, message: file.name + ': ' + (e && e.message ? e.message : e) };
     }
     if (!result.ok) {
-      // Beside the file: why it was refused (the worker's message, without
-      // the file's name; its first clause, the whole one as the tooltip).
-      const reason = String(result.message || result.code).replace(file.name + ': ', '');
-      meta.textContent = formatBytes(file.size) + ' · refused: ' + reason.split(/[;:]/)[0];
-      meta.parentElement.title = file.name + ': ' + reason;
-      meta.parentElement.classList.add('refused');
+      // Beside the file: why it was refused (the worker's message).
+      refuseFile(meta, file, 'refused', result.message || result.code);
       failures.push(result.message);
       continue;
     }
@@ -103,10 +100,10 @@ export async function readPointFiles(files) {
     const photo = app.photos.find((p) => baseName(p.name) === baseName(file.name));
     const meta = listFile(file, 'reading…');
     if (!photo) {
-      meta.textContent = formatBytes(file.size) + ' · no photo named ' + baseName(file.name) + '.jpg/.png';
-      meta.parentElement.classList.add('ignored');
-      failures.push(file.name + ' is not a scan, and no photo is named ' + baseName(file.name) + '.jpg or .png: a .txt of ' +
-                    'matching points goes with the photo of the same name; drop both together.');
+      const why = file.name + ' is not a scan, and no photo is named ' + baseName(file.name) + '.jpg or .png: a .txt of ' +
+                  'matching points goes with the photo of the same name; drop both together.';
+      refuseFile(meta, file, 'no photo named ' + baseName(file.name) + '.jpg/.png', why);
+      failures.push(why);
       continue;
     }
     let result;
@@ -117,9 +114,10 @@ export async function readPointFiles(files) {
       result = { ok: false, message: e && e.message ? e.message : String(e) };
     }
     if (!result.ok) {
-      meta.textContent = formatBytes(file.size) + ' · not matching points';
-      failures.push(file.name + ': ' + result.message + ' (each line should hold five numbers: a point\'s pixel in the ' +
-                    'photo, u v, then its place on the scan, X Y Z)');
+      const why = file.name + ': ' + result.message + ' (each line should hold five numbers: a point\'s pixel in the ' +
+                  'photo, u v, then its place on the scan, X Y Z)';
+      refuseFile(meta, file, 'not matching points', why);
+      failures.push(why);
       continue;
     }
     photo.filePoints = result.points;

@@ -5,7 +5,7 @@
 import { app, ui, beginJob, endJob, live, setStage, setStatus, showError, stageItem } from './state.js';
 import { runJob } from './worker_client.js';
 import { download } from './export.js';
-import { formatBytes, listFile } from './files.js';
+import { formatBytes, listFile, refuseFile } from './files.js';
 import { FIT_STAGES, forgetFit, showHead } from './fit.js';
 import { MAX_DISPLAY_POINTS, thinPoints } from './scan.js';
 import { stopAnimation } from './animation.js';
@@ -57,7 +57,7 @@ export async function openProject(file) {
   }
   if (!live(job)) return;
   if (!result.ok) {
-    meta.textContent = formatBytes(file.size) + ' · not opened';
+    refuseFile(meta, file, 'not opened', result.message || result.code);
     setStatus('Could not open ' + file.name + '.' + (app.model ? ' ' + app.model.name + ' is still shown.' : ''));
     showError(result.message || result.code);
     return;

@@ -2,7 +2,7 @@
 // beyond the display budget), then fitted when Auto-run is on; and the
 // built-in sample fetched from beside the page.
 import { app, params, ui, beginJob, endJob, live, setStage, setStatus, showError, stageItem } from './state.js';
-import { extension, formatBytes, handleFiles, listFile, MAX_SCAN_BYTES } from './files.js';
+import { extension, formatBytes, handleFiles, listFile, MAX_SCAN_BYTES, refuseFile } from './files.js';
 import { runJob } from './worker_client.js';
 import { FIT_STAGES, forgetFit, runFit } from './fit.js';
 
@@ -25,10 +25,10 @@ export function thinPoints(result, stride) {
                                      colors: pick(result.colors), vertexCount: n });
 }
 
-// A failed load: the message goes to the banner, the stage and the file
-// list say so, and the status line says what is still shown.
+// A failed load: the reason goes beside the file and to the banner, the
+// stage says so, and the status line says what is still shown.
 function loadFailed(file, meta, note, message) {
-  meta.textContent = formatBytes(file.size) + ' · ' + note;
+  refuseFile(meta, file, note, message);
   setStage('load', 'failed', 0, 'failed');
   const kept = app.model ? ' The previous model (' + app.model.name + ') is still shown.' : '';
   setStatus('Could not load ' + file.name + '.' + kept);

@@ -50,8 +50,20 @@ async function run(s) {
     const msg = await bannerText(page);
     check(`${name} leads to "error" with a visible message`, sBad === 'error' && msg.includes(name),
           `state ${sBad} after ${Date.now() - t} ms; "${msg}"`);
+    // Beside the file too: its row is marked and shows the reason in full.
+    const row = await page.evaluate(() => {
+      const li = document.querySelector('#file-list li:first-child');
+      const reason = li && li.querySelector('.file-reason');
+      return li ? { name: li.querySelector('.file-name').textContent, refused: li.classList.contains('refused'),
+                    reason: reason ? reason.textContent : '', shown: !!(reason && reason.offsetHeight > 0) } : null;
+    });
+    check(`${name}: the reason is shown beside the file`,
+          !!row && row.name === name && row.refused && row.shown && row.reason.length > 10 && msg.includes(row.reason.slice(0, 20)),
+          JSON.stringify(row));
   }
   await shot(page, 'web_error.png');
+  await page.evaluate(() => document.getElementById('file-list').scrollIntoView({ block: 'center' }));
+  await shot(page, 'web_error_files.png');
   const afterErrors = await canvasImage(page);
   check('the previous model stays after errors', analyse(afterErrors).greenFraction > 0.5 * pointStats.greenFraction);
 
