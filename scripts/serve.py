@@ -33,6 +33,7 @@ MIME_TYPES = {
     '.txt': 'text/plain; charset=utf-8',
     '.ply': 'application/octet-stream',
     '.obj': 'text/plain; charset=utf-8',
+    '.webmanifest': 'application/manifest+json',
 }
 
 

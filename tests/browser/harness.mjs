@@ -30,6 +30,7 @@ const MIME = {
   '.html': 'text/html; charset=utf-8', '.js': 'text/javascript; charset=utf-8',
   '.mjs': 'text/javascript; charset=utf-8', '.css': 'text/css; charset=utf-8',
   '.wasm': 'application/wasm', '.png': 'image/png', '.json': 'application/json', '.txt': 'text/plain',
+  '.webmanifest': 'application/manifest+json',
 };
 
 // Serves the files under root; anything outside it or missing is a 404.
@@ -104,17 +105,19 @@ export async function closeChromium(context, server) {
 }
 
 // The context's profile folder is context.userDir (remove it with closeChromium).
-// hasTouch: a touch screen; args: more Chromium flags (e.g. --disable-webgl).
+// hasTouch: a touch screen; args: more Chromium flags (e.g. --disable-webgl);
+// serviceWorkers 'block' by default (page.route does not see what a service
+// worker fetches), 'allow' for the offline flow.
 // Env LK_CHROMIUM_FLAGS adds Chromium flags for an experiment (space-separated,
 // e.g. "--js-flags=--no-wasm-dynamic-tiering").
-export async function launchChromium(name, viewport, { hasTouch = false, args = [] } = {}) {
+export async function launchChromium(name, viewport, { hasTouch = false, args = [], serviceWorkers = 'block' } = {}) {
   const userDir = fs.mkdtempSync(path.join(os.tmpdir(), `likeness-${name}-`));
   const context = await chromium.launchPersistentContext(userDir, {
     executablePath: '/usr/bin/chromium', headless: true,
     args: ['--no-sandbox', '--disable-quic', '--no-first-run', '--disable-background-networking',
            '--disable-component-update', '--disable-sync', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
            ...args, ...(process.env.LK_CHROMIUM_FLAGS || '').split(' ').filter(Boolean)],
-    viewport, deviceScaleFactor: 1, hasTouch,
+    viewport, deviceScaleFactor: 1, hasTouch, serviceWorkers,
   });
   context.userDir = userDir;
   return context;
@@ -354,7 +357,7 @@ export async function runFlows(flows, argv = process.argv.slice(2)) {
     const mine = results.slice(first);
     console.log(`== ${flow.name}: ${mine.filter((r) => r.ok).length}/${mine.length} checks passed in ${((Date.now() - tFlow) / 1000).toFixed(1)} s`);
   }
-  if (s.shared.has('context')) {
+  if (s.shared.has('context') || s.requests.length) {  // a flow with a browser of its own counts too
     console.log('\n== the whole run');
     check('no console errors', s.consoleErrors.length === 0, s.consoleErrors.slice(0, 5).join(' | '));
     check('every request goes to the page\'s own origin', s.foreign.length === 0 && s.requests.length > 0,

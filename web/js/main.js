@@ -20,6 +20,7 @@
 //   export.js         downloads
 //   project.js        Save project / Open project (.likeness.glb)
 //   keep.js           the head kept in IndexedDB (keep_store.js), offered back after a reload
+//   offline.js        the service worker (sw.js): a copy of the app for offline use
 import { app, page, params, ui, clearError, fatalStartup, setStatus } from './state.js';
 import { cancelJobs, startWorker, warmUp } from './worker_client.js';
 import { startViewer, wireViewer } from './viewer.js';
@@ -33,6 +34,7 @@ import { wireAnimation } from './animation.js';
 import { wireExport } from './export.js';
 import { wireProject } from './project.js';
 import { offerRestore, wireKeep } from './keep.js';
+import { keepOfflineCopy, wireOffline } from './offline.js';
 
 function wire() {
   // ?autofit=0 starts with Auto-run off (load scans without fitting them).
@@ -51,6 +53,7 @@ function wire() {
   wireTexture();
   wireClicker();
   wireKeep();
+  wireOffline();
 }
 
 // Said when the page could have run the threaded core but it did not start
@@ -78,6 +81,7 @@ async function start() {
     warmUp(app.workerThreads.variant).catch(() => {});
     page.started();
     offerRestore().catch(() => {});  // a browser without storage: nothing to offer
+    keepOfflineCopy();
     setStatus('Ready. Showing the generic head. Drop a head scan to begin.' + threadsNote());
   } catch (e) {
     const why = e && e.message ? e.message : String(e);
