@@ -32,6 +32,8 @@ import { flow as pageStates } from './flows/page_states.mjs';
 import { flow as fitCancel } from './flows/fit_cancel.mjs';
 import { flow as photoRefusals } from './flows/photo_refusals.mjs';
 import { flow as offline } from './flows/offline.mjs';
+import { flow as accessibility } from './flows/accessibility.mjs';
 
 runFlows([startup, scanLoad, startupFailures, fit, fitChecks, fitThreads, exportFlow, animation, texture, eyeSmile,
-          project, keep, pageStates, fitCancel, photoRefusals, offline]);
+          project, keep, pageStates, fitCancel, photoRefusals, offline,
+          accessibility]);

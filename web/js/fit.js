@@ -34,7 +34,10 @@ export function forgetFit(why) {
   if (app.viewer) app.viewer.clear_components();
   ui.fitView.hidden = true;
   ui.fitQuality.hidden = true;
-  for (const st of FIT_STAGES) stageItem(st.row).classList.remove('viewable', 'shown');
+  for (const st of FIT_STAGES) {
+    stageItem(st.row).classList.remove('viewable', 'shown');
+    stageItem(st.row).querySelector('.stage-name').disabled = true;
+  }
   if (why) setStatus(why);
   refreshControls();
 }
@@ -127,8 +130,8 @@ export function showHead(result, name, wallMs) {
     if (s) stageStats(st.row).textContent = 'mean ' + s.meanPct.toFixed(3) + ' % · max ' + s.maxPct.toFixed(2) + ' % of the scan\'s size';
     const li = stageItem(st.row);
     li.classList.add('viewable');
-    li.tabIndex = 0;
-    li.setAttribute('role', 'button');
+    // The row's name is its button (keyboard, screen readers); the whole row takes clicks.
+    li.querySelector('.stage-name').disabled = false;
   }
   ui.fitTotal.textContent = opened
     ? 'opened from ' + name + ' in ' + Math.round(result.loadMs) + ' ms, not fitted again · ' +
@@ -172,8 +175,5 @@ export function wireFit() {
   for (const st of FIT_STAGES) {
     const li = stageItem(st.row);
     li.addEventListener('click', () => { if (li.classList.contains('viewable')) showStage(st.row); });
-    li.addEventListener('keydown', (e) => {
-      if ((e.key === 'Enter' || e.key === ' ') && li.classList.contains('viewable')) { e.preventDefault(); showStage(st.row); }
-    });
   }
 }

@@ -157,13 +157,18 @@ export function renderPhotos() {
   ui.photoList.textContent = '';
   for (const [index, photo] of app.photos.entries()) {
     const li = document.createElement('li');
-    li.tabIndex = 0;
-    li.setAttribute('role', 'button');
     li.dataset.index = String(index);
     li.classList.toggle('open', clicker.photo === photo);
+    // The thumbnail is the row's button (keyboard, screen readers); the whole
+    // row takes clicks. Not the row itself: it holds the role menu and ×.
+    const open = document.createElement('button');
+    open.type = 'button';
+    open.className = 'photo-open';
+    open.setAttribute('aria-label', 'Open ' + photo.name + ' to mark landmarks');
     const img = document.createElement('img');
     img.src = photo.url;
     img.alt = '';
+    open.append(img);
     const text = document.createElement('div');
     const name = document.createElement('div');
     name.className = 'photo-name';
@@ -206,10 +211,9 @@ export function renderPhotos() {
     remove.title = 'Remove ' + photo.name + ' (and its points) from the texture';
     remove.setAttribute('aria-label', 'Remove ' + photo.name);
     remove.addEventListener('click', (e) => { e.stopPropagation(); removePhoto(photo); });
-    li.append(img, text, remove);
+    li.append(open, text, remove);
     li.title = photo.name + ': click to mark landmarks on it' + (photo.calib && !photo.calib.ok ? ' (' + photo.calib.message + ')' : '');
     li.addEventListener('click', () => openClicker(photo));
-    li.addEventListener('keydown', (e) => { if (e.key === 'Enter' || e.key === ' ') { e.preventDefault(); openClicker(photo); } });
     ui.photoList.append(li);
   }
   ui.photoCount.textContent = app.photos.length ? app.photos.length + ' photo(s), ' + texturable().length + ' with points' : '';

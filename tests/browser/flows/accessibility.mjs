@@ -1,0 +1,103 @@
+// Accessibility (issue 39): axe-core (npm, injected from node_modules: no
+// request) finds no serious or critical violation in each state a person
+// meets: the page ready; an error (a broken scan); a scan loaded; working
+// (a fit running); done (the fitted head, its checks); a photo open to mark
+// landmarks (the clicker); the restore offer after a reload. Ready and done:
+// Tab reaches every visible, enabled control, each with a visible focus. A page of its
+// own (?autofit=0); the fit uses a 20k-point synthetic scan (skipped with
+// a note without the native CLI).
+import { createRequire } from 'node:module';
+import { check, makePng, note, runAlone, setFile, settled, waitForState } from '../harness.mjs';
+import { syntheticScan } from '../synth_scan.mjs';
+
+const AXE = createRequire(import.meta.url).resolve('axe-core/axe.min.js');
+
+// Serious and critical violations of axe's WCAG 2.0/2.1 A and AA rules and
+// best practices, as "rule (n): first targets".
+async function violations(page) {
+  if (!(await page.evaluate(() => typeof window.axe !== 'undefined'))) await page.addScriptTag({ path: AXE });
+  return page.evaluate(async () => {
+    const r = await window.axe.run(document, { resultTypes: ['violations'] });
+    return r.violations.filter((v) => v.impact === 'serious' || v.impact === 'critical')
+      .map((v) => `${v.id} (${v.nodes.length}): ${v.nodes.slice(0, 3).map((n) => n.target.join(' ')).join(', ')}`);
+  });
+}
+
+async function checkState(page, label) {
+  const found = await violations(page);
+  check(`${label}: no serious or critical accessibility violation (axe-core)`, found.length === 0, found.join(' | '));
+}
+
+// Tab from the top through the page: every visible, enabled control is
+// reached, and each shows where the focus is (an outline or a ring).
+async function keyboardReach(page, label) {
+  await page.evaluate(() => { document.activeElement && document.activeElement.blur(); window.scrollTo(0, 0); });
+  const describe = () => {
+    const e = document.activeElement;
+    if (!e || e === document.body) return null;
+    const st = getComputedStyle(e);
+    const ring = (st.outlineStyle !== 'none' && parseFloat(st.outlineWidth) > 0) || st.boxShadow !== 'none';
+    return { key: e.id || e.getAttribute('aria-label') || e.textContent.trim().slice(0, 30), ring };
+  };
+  const reached = new Map();
+  for (let i = 0; i < 150; i++) {
+    await page.keyboard.press('Tab');
+    const d = await page.evaluate(describe);
+    if (!d) continue;
+    if (reached.has(d.key)) break;  // round the page once
+    reached.set(d.key, d.ring);
+  }
+  const controls = await page.evaluate(() => Array.from(document.querySelectorAll(
+    'button, input, select, textarea, a[href], [tabindex]:not([tabindex="-1"])')).filter((e) => {
+    if (e.disabled || e.closest('[hidden]') || e.tabIndex < 0) return false;
+    const r = e.getBoundingClientRect();
+    const st = getComputedStyle(e);
+    // A visually hidden file input is reached through its label's focus ring.
+    return (r.width > 0 && r.height > 0 && st.visibility !== 'hidden') || e.type === 'file';
+  }).map((e) => e.id || e.getAttribute('aria-label') || e.textContent.trim().slice(0, 30)));
+  const missing = controls.filter((k) => !reached.has(k));
+  const noRing = [...reached].filter(([, ring]) => !ring).map(([k]) => k);
+  check(`${label}: every control is reached by Tab and shows its focus`, missing.length === 0 && noRing.length === 0,
+        `${reached.size} reached of ${controls.length}; missing: ${missing.join(', ') || 'none'}; no visible focus: ${noRing.join(', ') || 'none'}`);
+}
+
+async function run(s) {
+  const page = await s.newPage('?autofit=0');
+  await checkState(page, 'ready');
+  await keyboardReach(page, 'ready');
+  await setFile(page, 'broken.ply', Buffer.from('ply\nformat ascii 1.0\nelement vertex 9\nend_header\n1 2\n'));
+  await checkState(page, 'error (a broken scan, its reason beside the file)');
+  const synth = syntheticScan(s.webdir, 4, 20000);
+  if (synth.skip) {
+    note('the fitted states are not checked: ' + synth.skip);
+    await page.close();
+    return;
+  }
+  await setFile(page, 'head.ply', synth.bytes);
+  await checkState(page, 'a scan loaded');
+  await page.click('#btn-fit');
+  const during = await page.evaluate(() => document.body.dataset.state);
+  if (during === 'working') await checkState(page, 'working (a fit running)');
+  else note('the fit ended before the check of "working" could run');
+  await settled(page);
+  await page.waitForFunction(() => window.likeness.fit && window.likeness.fit.quality, null, { timeout: 60000 }).catch(() => {});
+  await checkState(page, 'done (the fitted head and its checks)');
+  await keyboardReach(page, 'done');
+  await page.setInputFiles('#file-input', [{ name: 'front.png', mimeType: 'image/png', buffer: makePng(64, 48) }]);
+  await settled(page);
+  await page.evaluate(() => window.likeness.openClicker(0));
+  await page.waitForSelector('#clicker:not([hidden])', { timeout: 10000 }).catch(() => {});
+  await checkState(page, 'a photo open to mark landmarks');
+  await page.click('#clicker-close');
+  // The head is kept; after a reload the page offers it back.
+  await page.waitForTimeout(1500);
+  await page.reload();
+  await waitForState(page, ['ready', 'error']);
+  const offered = await page.waitForSelector('#restore-offer:not([hidden])', { timeout: 30000 }).then(() => true, () => false);
+  if (offered) await checkState(page, 'the restore offer after a reload');
+  else check('the restore offer appears after a reload (to check it)', false);
+  await page.close();
+}
+
+export const flow = { name: 'accessibility', title: 'axe-core on every state of the page', run };
+runAlone(import.meta.url, flow);
