@@ -3,7 +3,9 @@
 // the view follows the mouse (orbit, Reset view), the keyboard (arrows, R;
 // Tab still leaves the canvas), a touch screen (one finger orbits, a pinch
 // zooms) and the Wireframe toggle.
-import { analyse, bannerText, canvasImage, check, differingFraction, runAlone, shot } from '../harness.mjs';
+import fs from 'node:fs';
+import path from 'node:path';
+import { analyse, bannerText, canvasImage, check, differingFraction, note, runAlone, shot } from '../harness.mjs';
 
 async function run(s) {
   const { page, state: s0, wallMs } = await s.mainPage();
@@ -14,6 +16,14 @@ async function run(s) {
     throw new Error('the page did not start');
   }
   await shot(page, 'web_start.png');
+  // Start-up figures (issue 39 asks for interactive under 2 s from a local
+  // server): printed, not asserted, since the machine's load decides them.
+  const paint = await page.evaluate(() =>
+    (performance.getEntriesByType('paint').find((e) => e.name === 'first-contentful-paint') || {}).startTime);
+  const wasm = fs.readdirSync(s.webdir).filter((f) => f.endsWith('.wasm'))
+    .map((f) => `${f} ${(fs.statSync(path.join(s.webdir, f)).size / 1024).toFixed(0)} KB`);
+  note(`start-up: first paint ${Math.round(paint)} ms, ready (viewer and core up, head drawn) ${Math.round(loadMs)} ms; ` +
+       `wasm files: ${wasm.join(', ')}`);
   // Served with COOP/COEP: the page is cross-origin isolated and the worker
   // runs the threaded core, one thread per core up to 4.
   const isolated = await page.evaluate(() => ({ coi: window.crossOriginIsolated, cores: navigator.hardwareConcurrency,
