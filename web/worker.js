@@ -269,7 +269,11 @@ async function handle(msg) {
   }
   // The job's time inside the worker (core + copies out of the heap), so the
   // page can tell it from the message round trip.
-  if (result && typeof result === 'object') result.workerMs = performance.now() - t0;
+  if (result && typeof result === 'object') {
+    result.workerMs = performance.now() - t0;
+    // The core's memory (the wasm heap only grows: its size is the peak so far).
+    result.heapBytes = heapBytes().length;
+  }
   postMessage({ type: 'result', id: msg.id, result }, transferables(result));
 }
 

@@ -33,7 +33,8 @@ import { flow as fitCancel } from './flows/fit_cancel.mjs';
 import { flow as photoRefusals } from './flows/photo_refusals.mjs';
 import { flow as offline } from './flows/offline.mjs';
 import { flow as accessibility } from './flows/accessibility.mjs';
+import { flow as largeScan } from './flows/large_scan.mjs';
 
 runFlows([startup, scanLoad, startupFailures, fit, fitChecks, fitThreads, exportFlow, animation, texture, eyeSmile,
           project, keep, pageStates, fitCancel, photoRefusals, offline,
-          accessibility]);
+          accessibility, largeScan]);

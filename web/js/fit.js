@@ -119,7 +119,7 @@ app.fitHead = () => runFit();
 // head over app.scan's points, looking at its face.
 export function showHead(result, name, wallMs) {
   const opened = result.loadMs !== undefined;
-  app.fit = { name, stages: result.stages, meshes: result.meshes, fitMs: result.fitMs || 0,
+  app.fit = { name, stages: result.stages, meshes: result.meshes, fitMs: result.fitMs || 0, heapBytes: result.heapBytes || 0,
               parseMs: result.parseMs || 0, wallMs, points: result.points, fittedPoints: result.fittedPoints,
               animatedVertices: result.animatedVertices, landmarks: result.landmarks || [],
               headFacing: result.headFacing || [0, 0, 1], headUp: result.headUp || [0, 1, 0] };
@@ -138,6 +138,7 @@ export function showHead(result, name, wallMs) {
       result.fittedPoints.toLocaleString('en') + ' points fitted when saved'
     : 'fit ' + (result.fitMs / 1000).toFixed(2) + ' s (+ parse ' + Math.round(result.parseMs) +
                             ' ms) · ' + result.fittedPoints.toLocaleString('en') + ' points fitted' +
+                            (result.heapBytes ? ' · core memory ' + Math.round(result.heapBytes / 1048576) + ' MB' : '') +
                             (app.workerThreads ? ' · ' + app.workerThreads.threads + (app.workerThreads.threads === 1 ? ' thread' : ' threads') +
                              (app.workerThreads.fallback ? ' (threads could not start here)' : '') : '');
   ui.fitView.hidden = false;
