@@ -31,6 +31,7 @@ import { flow as keep } from './flows/keep.mjs';
 import { flow as pageStates } from './flows/page_states.mjs';
 import { flow as fitCancel } from './flows/fit_cancel.mjs';
 import { flow as photoRefusals } from './flows/photo_refusals.mjs';
+import { flow as landmarks } from './flows/landmarks.mjs';
 
 runFlows([startup, scanLoad, startupFailures, fit, fitChecks, fitThreads, exportFlow, animation, texture, eyeSmile,
-          project, keep, pageStates, fitCancel, photoRefusals]);
+          project, keep, pageStates, fitCancel, photoRefusals, landmarks]);

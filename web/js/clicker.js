@@ -12,6 +12,9 @@ import { landmarksJson } from './landmarks.js';
 // the drag moved it, so the click that ends it places no landmark.
 export const clicker = { photo: null, image: null, current: 0, view: null, drag: -1, moved: false };
 
+const CLICK_NOTE = 'Click where the named point is in the photo; the red dot on the 3D head shows it. Skip points ' +
+  'hidden in this photo. Six points at least, 12-15 spread over the face are best. After texturing, each point shows its ' +
+  'reprojection error in pixels; red ones were rejected as outliers.';
 const detected = (photo) => (photo && photo.detect && photo.detect.points) || null;
 
 export function openClicker(photo) {
@@ -76,11 +79,14 @@ export function updateClicker() {
   if (!app.fit || !app.fit.landmarks) {
     // Face points only (no fitted head to click landmarks on yet).
     ui.clickerPrompt.textContent = photo.name + ': ' + photo.detect.message + '. Drag a point to correct it.';
+    ui.clickerNote.textContent = 'The yellow dots are the face points found in the photo. Drag one that is off to where it ' +
+      'belongs; Save points keeps them as a file. Once the head is fitted, clicking the photo marks the guided landmarks.';
     ui.clickerList.textContent = '';
     ui.clickerUndo.disabled = ui.clickerSkip.disabled = true;
     drawClicker();
     return;
   }
+  ui.clickerNote.textContent = CLICK_NOTE;
   const lms = app.fit.landmarks;
   const done = lms.filter((l) => photo.clicks.has(l.id) && photo.clicks.get(l.id) !== 'skip').length;
   const lm = clicker.current >= 0 ? lms[clicker.current] : null;
