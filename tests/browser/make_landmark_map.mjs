@@ -145,7 +145,7 @@ for (const g of [...Object.keys(groups), 'other']) {
   const s = spreads.filter((x, k) => x !== null && region(k) === g).sort((a, b) => a - b);
   if (s.length) console.log(`  ${g}: ${s.length} landmarks, spread median ${mm(median(s))} mm, p95 ${mm(s[Math.floor(0.95 * (s.length - 1))])} mm`);
 }
-console.log('named: ' + [[1, 'nose tip'], [33, 'right eye outer'], [133, 'right eye inner'], [263, 'left eye outer'],
+console.log('named: ' + [[4, 'nose tip'], [1, 'below the nose tip'], [33, 'right eye outer'], [133, 'right eye inner'], [263, 'left eye outer'],
   [362, 'left eye inner'], [61, 'right mouth corner'], [291, 'left mouth corner'], [13, 'upper lip'], [14, 'lower lip'], [152, 'chin']]
   .map(([k, n]) => `${n} #${k} ${spreads[k] === null ? 'unmapped' : mm(spreads[k]) + ' mm'}`).join(', '));
 const worst = spreads.map((s, k) => [s, k]).filter(([s]) => s !== null).sort((a, b) => b[0] - a[0]).slice(0, 8);
