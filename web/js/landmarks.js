@@ -31,8 +31,9 @@ function detector() {
       // Two faces at most, so a second person is noticed. No
       // minDetectionConfidence: in this release setting it breaks the face
       // detector's options ("RET_CHECK failure ... has_num_classes()",
-      // google-ai-edge/mediapipe#3504); the default (0.5) is kept.
-      mesh.setOptions({ maxNumFaces: 2, staticImageMode: true, refineLandmarks: false });
+      // google-ai-edge/mediapipe#3504); the default (0.5) is kept. The JS
+      // solution has no static-image mode: see reset() below.
+      mesh.setOptions({ maxNumFaces: 2, refineLandmarks: false });
       const holder = { mesh, results: null };
       mesh.onResults((r) => { holder.results = r; });
       await mesh.initialize();
@@ -51,6 +52,9 @@ export function detectLandmarks(image, width, height) {
   const run = queue.then(async () => {
     const d = await detector();
     d.results = null;
+    // A video graph: it would track the face from the previous photo's
+    // landmarks (measured: 16 px off on the next photo). Each photo starts afresh.
+    d.mesh.reset();
     await d.mesh.send({ image });
     const faces = (d.results && d.results.multiFaceLandmarks) || [];
     const first = faces[0];
