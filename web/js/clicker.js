@@ -25,9 +25,10 @@ export function openClicker(photo) {
   }
   const fitted = app.fit && app.fit.landmarks && app.fit.landmarks.length;
   if (!fitted && !detected(photo)) {
-    setStatus(photo && photo.detect && photo.detect.state === 'running'
-      ? 'Face points are being found on ' + photo.name + '; open it again in a moment.'
-      : 'Fit the head first: the landmarks are placed on the fitted head.');
+    const state = photo && photo.detect ? photo.detect.state : '';
+    setStatus(state === 'running' || state === 'waiting' ? 'Face points are being found on ' + photo.name + '; open it again in a moment.'
+      : state === 'none' || state === 'failed' ? 'No face points on ' + photo.name + ': once the head is fitted, click its landmarks on it instead.'
+        : 'Fit the head first: the landmarks are placed on the fitted head.');
     return;
   }
   stopAnimation();
