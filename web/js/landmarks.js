@@ -53,7 +53,7 @@ export function detectLandmarks(image, width, height) {
     const d = await detector();
     d.results = null;
     // A video graph: it would track the face from the previous photo's
-    // landmarks (measured: 16 px off on the next photo). Each photo starts afresh.
+    // landmarks and misplace this one's (docs/design/photos.md). Each photo starts afresh.
     d.mesh.reset();
     await d.mesh.send({ image });
     const faces = (d.results && d.results.multiFaceLandmarks) || [];
