@@ -8,13 +8,14 @@
 // (core/head/data/mediapipe_landmark_map.json) projected by that camera; on
 // the flat image it says no face was found; on the double one, two faces. A point dragged in the photo
 // view moves by the drag; Save points writes the likeness-landmarks JSON.
+// Served without the detector's files, the page says so beside the photo.
 // The run's closing check covers requests: none leaves the origin.
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { execFileSync } from 'node:child_process';
 import { fileURLToPath } from 'node:url';
-import { check, decodePng, makePhotoPng, note, runAlone, settled } from '../harness.mjs';
+import { check, decodePng, makePhotoPng, note, READY_TIMEOUT_MS, runAlone, settled, waitForState } from '../harness.mjs';
 import { headWithEyes, project } from '../landmark_geometry.mjs';
 
 const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../../..');
@@ -138,6 +139,7 @@ async function run(s) {
         j.image.name === 'rendered_head.png' && j.image.width === 800 && j.image.height === 800 && j.points.length === 468 &&
         Math.abs(j.points[1][0] - moved[0]) < 0.01, JSON.stringify(saved.download) + ' ' + JSON.stringify(j).slice(0, 160));
   await page.click('#clicker-close');
+  await missingDetector(s, png);
   // Leave the page's photos as they were for the flows after this one.
   await page.evaluate(() => {
     for (const li of Array.from(document.querySelectorAll('#photo-list li'))) {
@@ -145,6 +147,31 @@ async function run(s) {
       if (['rendered_head.png', 'flat_grey.png', 'two_heads.png'].includes(n)) li.querySelector('.photo-remove').click();
     }
   });
+}
+
+// A site without the detector (its loader a 404): the photo is kept and
+// its row says the face points could not be found, and why. The page is not
+// watched: the 404 is logged as a console error on purpose.
+async function missingDetector(s, png) {
+  const { server, origin } = await s.serve({ broken: { '/vendor/face_mesh/face_mesh.js': '404' } });
+  const page = await (await s.context()).newPage();
+  const uncaught = [];
+  page.on('pageerror', (e) => uncaught.push(e.message));
+  try {
+    await page.goto(origin + '/index.html?autofit=0');
+    await waitForState(page, ['ready', 'error'], READY_TIMEOUT_MS);
+    await page.setInputFiles('#file-input', { name: 'head.png', mimeType: 'image/png', buffer: png });
+    await settled(page);
+    const found = await detections(page);
+    const row = found['head.png'];
+    check('without the detector\'s files: the photo is kept, its row says the face points were not found and why',
+          row.state === 'failed' && /face points not found: the face detector .* is missing/.test(row.row || '') &&
+          uncaught.length === 0 && (await page.evaluate(() => document.body.dataset.state)) !== 'error',
+          `"${row.row}"` + (uncaught.length ? '; uncaught: ' + uncaught.join(' | ') : ''));
+  } finally {
+    await page.close();
+    server.closeAll();
+  }
 }
 
 export const flow = { name: 'landmarks', title: 'face landmarks found in the page (MediaPipe Face Mesh from our origin), mapped onto the generic head', run };
