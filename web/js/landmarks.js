@@ -61,8 +61,13 @@ export function detectLandmarks(image, width, height) {
     const points = first ? first.slice(0, POINT_COUNT).map((p) => [p.x * width, p.y * height]) : null;
     return { faces: faces.length, points };
   });
-  queue = run.catch(() => {});
-  return run;
+  // A detector that aborted (e.g. a damaged model file) is not reused: the
+  // next photo loads a fresh one.
+  queue = run.catch(() => { loading = null; });
+  return run.catch((e) => {
+    const why = e && e.message ? e.message : String(e);
+    throw new Error(/^the face detector/.test(why) ? why : 'the face detector failed (' + why + ')');
+  });
 }
 
 // The points file of a photo, the format the native CLI reads
