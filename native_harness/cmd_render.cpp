@@ -8,6 +8,10 @@
 #include "render/camera.h"
 #include "render/offscreen.h"
 
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
 #include <iostream>
 #include <sys/stat.h>
 
@@ -35,7 +39,7 @@ std::string directory_of(const std::string& path) {
 int run_render(const Args& args) {
   if (!only_known_options(kName, args,
                           {"mesh", "points", "texture", "wireframe", "edges-only", "view", "size", "out",
-                           "point-size", "supersample", "no-ao", "flat"}))
+                           "point-size", "supersample", "no-ao", "flat", "yaw", "pitch", "camera-out"}))
     return 2;
   const std::string mesh_path = args.get("mesh"), points_path = args.get("points");
   const std::string out_path = args.get("out"), texture_path = args.get("texture");
@@ -50,10 +54,14 @@ int run_render(const Args& args) {
   Status s = parse_canonical_view(args.get("view", "front"), view);
   if (!s) return usage_error(s.message);
   int size = 0, supersample = 0;
-  double point_size = 0;
+  double point_size = 0, yaw = 0, pitch = 0;
   if (!args.get_int("size", 1024, size, 16, 4096) || !args.get_int("supersample", 2, supersample, 1, 4) ||
-      !args.get_double("point-size", 0.0, point_size, 0, 64))
+      !args.get_double("point-size", 0.0, point_size, 0, 64) || !args.get_double("yaw", 0.0, yaw, -360, 360) ||
+      !args.get_double("pitch", 0.0, pitch, -80, 80))
     return 2;
+  const bool own_angles = args.has("yaw") || args.has("pitch");
+  const std::string camera_out = args.get("camera-out");
+  if (args.has("camera-out") && camera_out.empty()) return usage_error("--camera-out needs a file");
 
   TriMesh mesh;
   PointCloud cloud;
@@ -135,7 +143,22 @@ int run_render(const Args& args) {
   // Frame what is drawn (vertices and points), not its box: tighter on round heads.
   std::vector<Vec3> framed = mesh.positions;
   framed.insert(framed.end(), cloud.positions.begin(), cloud.positions.end());
-  auto camera_for = [&](float aspect) { return canonical_view(view, framed, aspect).matrices(aspect); };
+  // --yaw/--pitch: a camera at those angles (degrees, OrbitCamera's) instead
+  // of the named view's, framed the same way (e.g. known cameras for
+  // detecting landmarks on the generic head, scripts/make-landmark-map).
+  auto camera = [&](float aspect) {
+    OrbitCamera cam = canonical_view(view, framed, aspect);
+    if (own_angles && !framed.empty()) {
+      cam.yaw_deg = static_cast<float>(yaw);
+      cam.pitch_deg = static_cast<float>(pitch);
+      BBox box;
+      for (const Vec3& p : framed) box.extend(p);
+      const glm::vec3 forward = glm::normalize(cam.target - cam.eye());
+      cam.distance = framing_distance(framed, box.center(), forward, glm::vec3(0, 1, 0), cam.fov_y_deg, aspect);
+    }
+    return cam;
+  };
+  auto camera_for = [&](float aspect) { return camera(aspect).matrices(aspect); };
 
   OffscreenOptions options;
   options.width = options.height = size;
@@ -145,7 +168,29 @@ int run_render(const Args& args) {
   if (!s) return fail(kName, s.message);
   s = save_png_file(out_path, image);
   if (!s) return fail(kName, s.message);
-  std::cout << "wrote " << out_path << " (" << size << "x" << size << ", " << to_string(view) << " view";
+  if (!camera_out.empty()) {
+    // The camera of the image: GL view and projection matrices (column-major,
+    // as glm stores them), so a tool can project points into it or cast rays
+    // from its pixels (pixel (u, v), origin top-left: ndc x = 2u/W - 1, y = 1 - 2v/H).
+    const OrbitCamera cam = camera(1.0f);
+    const CameraMatrices m = cam.matrices(1.0f);
+    const glm::vec3 eye = cam.eye();
+    nlohmann::json j = {{"format", "likeness-camera"}, {"version", 1}, {"width", size}, {"height", size},
+                        {"fov_y_deg", cam.fov_y_deg}, {"yaw_deg", cam.yaw_deg}, {"pitch_deg", cam.pitch_deg},
+                        {"eye", {eye.x, eye.y, eye.z}}, {"target", {cam.target.x, cam.target.y, cam.target.z}}};
+    for (const auto& [name, mat] : {std::pair{"view", m.view}, std::pair{"projection", m.projection}}) {
+      nlohmann::json a = nlohmann::json::array();
+      for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) a.push_back(mat[c][r]);
+      j[name] = a;
+    }
+    std::ofstream f(camera_out);
+    f << j.dump(1) << "\n";
+    if (!f) return fail(kName, camera_out + ": cannot write");
+  }
+  std::cout << "wrote " << out_path << " (" << size << "x" << size << ", ";
+  if (own_angles) std::cout << "yaw " << yaw << ", pitch " << pitch << " degrees";
+  else std::cout << to_string(view) << " view";
   if (!mesh.positions.empty()) std::cout << ", " << mesh.num_triangles() << " triangles";
   if (cloud.size() > 0) std::cout << ", " << cloud.size() << " points";
   if (!texture.empty()) std::cout << ", textured by " << tex_path;
@@ -156,9 +201,9 @@ int run_render(const Args& args) {
 Registrar reg({"render",
                "likeness render --mesh FILE [--points FILE] [--texture PNG] [--wireframe | --edges-only] "
                "[--view front|left|right|back|top|three-quarter] [--size N] [--point-size PX] "
-               "[--flat] [--supersample 1..4] [--no-ao] --out PNG",
+               "[--flat] [--supersample 1..4] [--no-ao] [--yaw DEG --pitch DEG] [--camera-out FILE.json] --out PNG",
                "draws a mesh (with baked ambient occlusion) and/or point cloud from a canonical view into a PNG "
-               "(OSMesa, same shaders as the web app)",
+               "(OSMesa, same shaders as the web app); --yaw/--pitch turn the camera, --camera-out writes its matrices",
                run_render});
 
 }  // namespace

@@ -21,6 +21,13 @@ for f in likeness_viewer.js likeness_viewer.wasm likeness_worker.js likeness_wor
     exit 77
   fi
 done
+# The face-landmark detector the page serves (vendor/, from npm): the wasm
+# build copies it only if scripts/setup installed it before cmake configured.
+if [ ! -f "$WEBDIR/vendor/face_mesh/face_mesh.js" ]; then
+  echo "FAILED: $WEBDIR/vendor/face_mesh/ is missing: run scripts/setup (npm install in vendor/), then" \
+       "touch wasm/CMakeLists.txt && scripts/build --wasm-only" >&2
+  exit 1
+fi
 # The page's own files: every file under web/ (its modules in web/js/ too),
 # copied there by the wasm build; a missing or stale copy would test old code.
 SRC_WEB="$(cd "$HERE/../../web" && pwd)"

@@ -3,7 +3,10 @@
 //   OUTDIR/web_start.png          the page once ready (the generic head)
 //   OUTDIR/web_wireframe.png      the same with its edges (--wireframe)
 //   OUTDIR/web_<stem>.png         after loading each FILE given
+//   OUTDIR/web_landmarks_<stem>.png  with --landmarks PHOTO: the photo open
+//                                 with the face points the page found on it
 // Usage: node screenshots.mjs WEBDIR OUTDIR [FILE ...] [--point-size N] [--wireframe] [--query "max_mb=N&..."]
+//        [--landmarks PHOTO]
 import { closeChromium, launchChromium, serveDir, takeFlag, takeOption } from './harness.mjs';
 import fs from 'node:fs';
 import path from 'node:path';
@@ -13,6 +16,7 @@ const wireframe = takeFlag(args, '--wireframe');
 const queryValue = takeOption(args, '--query', null);
 const query = queryValue === null ? '' : '?' + queryValue;
 const pointSize = takeOption(args, '--point-size', null);
+const landmarksPhoto = takeOption(args, '--landmarks', null);
 const [webdir, outdir, ...files] = args;
 if (!webdir || !outdir) {
   console.error('usage: node screenshots.mjs WEBDIR OUTDIR [FILE ...] [--point-size N] [--wireframe] [--query "max_mb=N&..."]');
@@ -47,6 +51,17 @@ try {
     const out = path.join(outdir, 'web_' + path.basename(f).replace(/\.[^.]*$/, '') + '.png');
     await page.screenshot({ path: out });
     console.log('wrote', out, '(' + (await page.textContent('#status')).trim() + ')' + (await page.evaluate(() => window.likeness.lastError ? ' error: ' + window.likeness.lastError : '')));
+  }
+  if (landmarksPhoto) {
+    await page.setInputFiles('#file-input', landmarksPhoto);
+    await page.waitForFunction(() => window.likeness.photos.length && window.likeness.photos.every((p) =>
+      p.detect && !['waiting', 'running'].includes(p.detect.state)), null, { timeout: 180000 });
+    const name = path.basename(landmarksPhoto);
+    await page.locator('#photo-list li', { hasText: name }).click();
+    await settle();
+    const out = path.join(outdir, 'web_landmarks_' + name.replace(/\.[^.]*$/, '') + '.png');
+    await page.screenshot({ path: out });
+    console.log('wrote', out, '(' + (await page.textContent('#clicker-prompt')).trim() + ')');
   }
 } finally {
   await closeChromium(context, server);

@@ -5,8 +5,17 @@
 import { app, ui, setStatus } from './state.js';
 import { photoPoints, renderPhotos } from './photos.js';
 import { stopAnimation } from './animation.js';
+import { download } from './export.js';
+import { landmarksJson } from './landmarks.js';
 
-export const clicker = { photo: null, image: null, current: 0, view: null };
+// drag: the index of the detected face point being dragged (or -1); moved:
+// the drag moved it, so the click that ends it places no landmark.
+export const clicker = { photo: null, image: null, current: 0, view: null, drag: -1, moved: false };
+
+const CLICK_NOTE = 'Click where the named point is in the photo; the red dot on the 3D head shows it. Skip points ' +
+  'hidden in this photo. Six points at least, 12-15 spread over the face are best. After texturing, each point shows its ' +
+  'reprojection error in pixels; red ones were rejected as outliers.';
+const detected = (photo) => (photo && photo.detect && photo.detect.points) || null;
 
 export function openClicker(photo) {
   if (photo && (photo.role || 'face') !== 'face') {
@@ -14,8 +23,12 @@ export function openClicker(photo) {
               '(set its role to "Face (skin)" to texture the skin with it).');
     return;
   }
-  if (!app.fit || !app.fit.landmarks || !app.fit.landmarks.length) {
-    setStatus('Fit the head first: the landmarks are placed on the fitted head.');
+  const fitted = app.fit && app.fit.landmarks && app.fit.landmarks.length;
+  if (!fitted && !detected(photo)) {
+    const state = photo && photo.detect ? photo.detect.state : '';
+    setStatus(state === 'running' || state === 'waiting' ? 'Face points are being found on ' + photo.name + '; open it again in a moment.'
+      : state === 'none' || state === 'failed' ? 'No face points on ' + photo.name + ': once the head is fitted, click its landmarks on it instead.'
+        : 'Fit the head first: the landmarks are placed on the fitted head.');
     return;
   }
   stopAnimation();
@@ -23,7 +36,7 @@ export function openClicker(photo) {
   clicker.image = new Image();
   clicker.image.onload = () => drawClicker();
   clicker.image.src = photo.url;
-  clicker.current = nextLandmark(0);
+  clicker.current = fitted ? nextLandmark(0) : -1;
   ui.clicker.hidden = false;
   ui.viewerPane.classList.add('clicking');
   reframeSoon();
@@ -50,6 +63,7 @@ function reframeSoon() {
 
 // The first landmark from `from` on that has neither a click nor a skip.
 function nextLandmark(from) {
+  if (!app.fit || !app.fit.landmarks) return -1;
   const lms = app.fit.landmarks;
   for (let k = 0; k < lms.length; k++) {
     const i = (from + k) % lms.length;
@@ -61,6 +75,19 @@ function nextLandmark(from) {
 export function updateClicker() {
   const photo = clicker.photo;
   if (!photo) return;
+  const found = detected(photo);
+  ui.clickerSavePoints.hidden = !found;
+  if (!app.fit || !app.fit.landmarks) {
+    // Face points only (no fitted head to click landmarks on yet).
+    ui.clickerPrompt.textContent = photo.name + ': ' + photo.detect.message + '. Drag a point to correct it.';
+    ui.clickerNote.textContent = 'The yellow dots are the face points found in the photo. Drag one that is off to where it ' +
+      'belongs; Save points keeps them as a file. Once the head is fitted, clicking the photo marks the guided landmarks.';
+    ui.clickerList.textContent = '';
+    ui.clickerUndo.disabled = ui.clickerSkip.disabled = true;
+    drawClicker();
+    return;
+  }
+  ui.clickerNote.textContent = CLICK_NOTE;
   const lms = app.fit.landmarks;
   const done = lms.filter((l) => photo.clicks.has(l.id) && photo.clicks.get(l.id) !== 'skip').length;
   const lm = clicker.current >= 0 ? lms[clicker.current] : null;
@@ -112,6 +139,7 @@ function drawClicker() {
   const photo = clicker.photo, img = clicker.image;
   const canvas = ui.clickerCanvas;
   if (!photo) return;
+  ui.clickerSavePoints.hidden = !detected(photo);
   const dpr = window.devicePixelRatio || 1;
   const w = Math.max(1, Math.round(canvas.clientWidth * dpr)), h = Math.max(1, Math.round(canvas.clientHeight * dpr));
   if (canvas.width !== w || canvas.height !== h) { canvas.width = w; canvas.height = h; }
@@ -123,6 +151,16 @@ function drawClicker() {
   const ox = (w - photo.width * scale) / 2, oy = (h - photo.height * scale) / 2;
   clicker.view = { scale, ox, oy, dpr };
   g.drawImage(img, ox, oy, photo.width * scale, photo.height * scale);
+  // The detector's face points: small dots, the dragged one larger.
+  const found = detected(photo);
+  if (found) {
+    g.fillStyle = '#ffd24d';
+    for (const [i, p] of found.entries()) {
+      if (!p) continue;
+      const r = (i === clicker.drag ? 4 : 1.6) * dpr;
+      g.fillRect(ox + p[0] * scale - r, oy + p[1] * scale - r, 2 * r, 2 * r);
+    }
+  }
   // Points: clicked (or from the file), numbered; after a calibration each
   // shows its reprojection error, outliers in red.
   const pts = photoPoints(photo);
@@ -144,8 +182,57 @@ function drawClicker() {
   }
 }
 
+// Canvas pixel of a pointer event -> photo pixel.
+function photoPixel(e) {
+  const v = clicker.view, rect = ui.clickerCanvas.getBoundingClientRect();
+  return [((e.clientX - rect.left) * v.dpr - v.ox) / v.scale, ((e.clientY - rect.top) * v.dpr - v.oy) / v.scale];
+}
+
+// Dragging a detected face point moves it (the user's correction).
+function pointerDown(e) {
+  const found = detected(clicker.photo), v = clicker.view;
+  clicker.moved = false;
+  if (!found || !v) return;
+  const [u, w] = photoPixel(e);
+  const reach = 8 * v.dpr / v.scale;  // 8 CSS pixels
+  let best = -1, bestD = reach * reach;
+  for (const [i, p] of found.entries()) {
+    if (!p) continue;
+    const d = (p[0] - u) ** 2 + (p[1] - w) ** 2;
+    if (d < bestD) { best = i; bestD = d; }
+  }
+  if (best < 0) return;
+  clicker.drag = best;
+  ui.clickerCanvas.setPointerCapture(e.pointerId);
+  drawClicker();
+}
+
+function pointerMove(e) {
+  if (clicker.drag < 0) return;
+  const photo = clicker.photo;
+  const [u, w] = photoPixel(e);
+  detected(photo)[clicker.drag] = [Math.min(Math.max(u, 0), photo.width), Math.min(Math.max(w, 0), photo.height)];
+  clicker.moved = true;
+  drawClicker();
+}
+
+function pointerUp() {
+  if (clicker.drag < 0) return;
+  clicker.drag = -1;
+  drawClicker();
+}
+
+function savePoints() {
+  const photo = clicker.photo, found = detected(photo);
+  if (!found) return;
+  const json = JSON.stringify(landmarksJson(photo.name, photo.width, photo.height, found));
+  download(photo.name.replace(/\.[^.]*$/, '') + '.landmarks.json', new TextEncoder().encode(json), 'application/json');
+  setStatus('Saved the ' + found.length + ' face points of ' + photo.name + '.');
+}
+
 function clickerClick(e) {
   const photo = clicker.photo, v = clicker.view;
+  if (clicker.moved) { clicker.moved = false; return; }  // the end of a drag
   if (!photo || !v || clicker.current < 0) return;
   const rect = ui.clickerCanvas.getBoundingClientRect();
   const u = ((e.clientX - rect.left) * v.dpr - v.ox) / v.scale;
@@ -193,6 +280,11 @@ function clickerClear() {
 
 export function wireClicker() {
   ui.clickerCanvas.addEventListener('click', clickerClick);
+  ui.clickerCanvas.addEventListener('pointerdown', pointerDown);
+  ui.clickerCanvas.addEventListener('pointermove', pointerMove);
+  ui.clickerCanvas.addEventListener('pointerup', pointerUp);
+  ui.clickerCanvas.addEventListener('pointercancel', pointerUp);
+  ui.clickerSavePoints.addEventListener('click', savePoints);
   ui.clickerUndo.addEventListener('click', clickerUndo);
   ui.clickerSkip.addEventListener('click', clickerSkip);
   ui.clickerClear.addEventListener('click', clickerClear);

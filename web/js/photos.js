@@ -7,13 +7,14 @@ import { formatBytes, listFile, MAX_SCAN_BYTES, refuseFile } from './files.js';
 import { runJob } from './worker_client.js';
 import { clicker, closeClicker, openClicker } from './clicker.js';
 import { dropRoleTexture, PHOTO_ROLES, setPhotoRole } from './photo_roles.js';
+import { detectLandmarks } from './landmarks.js';
 
 // Photos are decoded once in the worker to catch broken files now rather
 // than at the Texture stage; the File objects are kept for that stage.
 export async function checkPhotos(photos, alone) {
   const job = beginJob('photos');
   if (!job) return;
-  const failures = [];
+  const failures = [], kept = [];
   for (const file of photos) {
     if (!live(job)) break;
     const meta = listFile(file, 'checking…');
@@ -43,9 +44,10 @@ export async function checkPhotos(photos, alone) {
     meta.textContent = formatBytes(file.size) + ' · ' + result.width + '×' + result.height + ' photo';
     meta.parentElement.title = file.name + ': ' + result.width + '×' + result.height +
                                ' photo, kept for the Texture stage';
-    addPhoto({ name: file.name, file, width: result.width, height: result.height, decoder: result.decoder });
+    kept.push(addPhoto({ name: file.name, file, width: result.width, height: result.height, decoder: result.decoder }));
   }
   renderPhotos();
+  findLandmarks(kept);
   if (!endJob(job)) return;
   if (failures.length) {
     showError(failures.join(' '));
@@ -69,6 +71,7 @@ function addPhoto(entry) {
   entry.calib = null;
   entry.sent = null;
   entry.role = 'face';
+  entry.detect = null;
   if (old >= 0) {
     const prev = app.photos[old];
     URL.revokeObjectURL(prev.url);
@@ -76,6 +79,41 @@ function addPhoto(entry) {
     app.photos[old] = entry;
   } else {
     app.photos.push(entry);
+  }
+  return entry;
+}
+
+// Face landmarks found by the detector (landmarks.js), one photo after the
+// other, beside the page's jobs (they need no worker): photo.detect is
+// {state: 'running' | 'found' | 'none' | 'many' | 'failed', points, faces,
+// message, ms}. Where no face is found the guided clicks remain the way in.
+async function findLandmarks(photos) {
+  for (const photo of photos) photo.detect = { state: 'waiting' };
+  for (const photo of photos) {
+    if (!app.photos.includes(photo)) continue;  // removed meanwhile
+    photo.detect = { state: 'running' };
+    renderPhotos();
+    const t0 = performance.now();
+    let bitmap = null;
+    try {
+      bitmap = await createImageBitmap(photo.file);
+      const r = await detectLandmarks(bitmap, photo.width, photo.height);
+      const ms = Math.round(performance.now() - t0);
+      if (!r.points) {
+        photo.detect = { state: 'none', faces: 0, points: null, ms,
+                         message: 'no face found: mark its landmarks by clicking instead' };
+      } else {
+        photo.detect = { state: r.faces > 1 ? 'many' : 'found', faces: r.faces, points: r.points, ms,
+                         message: r.faces > 1 ? r.faces + ' faces found: points shown for one of them, check it is the right person'
+                           : r.points.length + ' face points found' };
+      }
+    } catch (e) {
+      photo.detect = { state: 'failed', points: null, message: 'face points not found: ' + (e && e.message ? e.message : e) };
+    } finally {
+      if (bitmap) bitmap.close();
+    }
+    renderPhotos();
+    if (clicker.photo === photo) openClicker(photo);
   }
 }
 
@@ -181,6 +219,10 @@ export function renderPhotos() {
     else if (pts.source === 'file') note += pts.list.length + ' points from ' + photo.pointsName;
     else note += app.fit ? 'no points yet: click to mark landmarks' : 'no points yet';
     if (pts.list.length > 0 && pts.list.length < 6) { note += ' (6 needed)'; meta.classList.add('bad'); }
+    if (photo.detect && photo.detect.state !== 'waiting' && (photo.role || 'face') === 'face') {
+      note += ' · ' + (photo.detect.state === 'running' ? 'finding face points…' : photo.detect.message);
+      if (photo.detect.state !== 'found' && photo.detect.state !== 'running') meta.classList.add('bad');
+    }
     if (photo.calib) {
       if (photo.calib.ok) {
         const outliers = photo.calib.outlier.filter(Boolean).length;

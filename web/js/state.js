@@ -29,6 +29,7 @@ export const ui = {
   viewerPane: document.querySelector('.viewer-pane'), clicker: $('clicker'), clickerPrompt: $('clicker-prompt'),
   clickerCanvas: $('clicker-canvas'), clickerList: $('clicker-list'), clickerUndo: $('clicker-undo'),
   clickerSkip: $('clicker-skip'), clickerClear: $('clicker-clear'), clickerClose: $('clicker-close'),
+  clickerSavePoints: $('clicker-save-points'), clickerNote: $('clicker-note'),
 };
 
 // Exposed for the browser test and for debugging from the console.
