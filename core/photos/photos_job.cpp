@@ -4,6 +4,33 @@
 
 namespace lk {
 
+Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoint>& landmarks,
+                        const std::vector<LandmarkPhoto>& photos, const SelfCalibResult& calib,
+                        const PhotosJobOptions& options, ShapeFitResult& fit) {
+  if (calib.photos.size() != photos.size())
+    return Status::error(ErrorCode::InvalidInput, "shape fit: the calibration is for other photos");
+  std::vector<Camera> cameras;
+  std::vector<FeatureObservation> obs;
+  for (size_t i = 0; i < photos.size(); ++i) {
+    const PhotoCalibration& pc = calib.photos[i];
+    if (!pc.used) continue;
+    const int cam = int(cameras.size());
+    cameras.push_back(pc.camera);
+    for (size_t m = 0; m < landmarks.size() && m < photos[i].points.size(); ++m) {
+      if (!photos[i].present[m] || !landmarks[m].valid() || !(pc.weights[m] > 0)) continue;
+      FeatureObservation o;
+      o.camera = cam;
+      o.point = landmarks[m];
+      o.pixel = photos[i].points[m];
+      o.prior_weight = o.weight = pc.weights[m];
+      obs.push_back(o);
+    }
+  }
+  std::vector<std::unique_ptr<ObservationSet>> sets;
+  sets.push_back(std::make_unique<FeatureSet>(generic.mesh, cameras, std::move(obs), 2 * options.calib.pixel_sigma));
+  return fit_shape(generic.mesh, sets, {options.fit.lambda_features}, options.fit, fit);
+}
+
 Status run_photos_job(const GenericHead& generic, const LandmarkMap& map, const std::vector<LandmarkPhoto>& photos,
                       const PhotosJobOptions& options, PhotosJobResult& result) {
   result = {};
@@ -28,26 +55,7 @@ Status run_photos_job(const GenericHead& generic, const LandmarkMap& map, const 
       result.notes.push_back(photo_name(i) + " dropped: " + result.calib.photos[i].refusal);
   if (!s) return s;
 
-  std::vector<Camera> cameras;
-  std::vector<FeatureObservation> obs;
-  for (size_t i = 0; i < photos.size(); ++i) {
-    const PhotoCalibration& pc = result.calib.photos[i];
-    if (!pc.used) continue;
-    const int cam = int(cameras.size());
-    cameras.push_back(pc.camera);
-    for (size_t m = 0; m < landmarks.size() && m < photos[i].points.size(); ++m) {
-      if (!photos[i].present[m] || !landmarks[m].valid() || !(pc.weights[m] > 0)) continue;
-      FeatureObservation o;
-      o.camera = cam;
-      o.point = landmarks[m];
-      o.pixel = photos[i].points[m];
-      o.prior_weight = o.weight = pc.weights[m];
-      obs.push_back(o);
-    }
-  }
-  std::vector<std::unique_ptr<ObservationSet>> sets;
-  sets.push_back(std::make_unique<FeatureSet>(generic.mesh, cameras, std::move(obs), 2 * options.calib.pixel_sigma));
-  s = fit_shape(generic.mesh, sets, {options.fit.lambda_features}, options.fit, result.fit);
+  s = fit_photos_shape(generic, landmarks, photos, result.calib, options, result.fit);
   return with_context(s, "photos");
 }
 

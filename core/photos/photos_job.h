@@ -27,7 +27,14 @@ struct PhotosJobResult {
   std::vector<std::string> notes;  // for people: one photo only, photos dropped, ...
 };
 
-// Fails with the first stage's status (the message names the stage and, for
+// The shape-fit stage alone, from a finished self-calibration: every used
+// photo's landmarks (with their calibration weights) as feature
+// observations. landmarks: the map attached to generic.mesh.
+Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoint>& landmarks,
+                        const std::vector<LandmarkPhoto>& photos, const SelfCalibResult& calib,
+                        const PhotosJobOptions& options, ShapeFitResult& fit);
+
+// Both stages. Fails with the first stage's status (the message names the stage and, for
 // a refused photo, the photo by its name).
 Status run_photos_job(const GenericHead& generic, const LandmarkMap& map, const std::vector<LandmarkPhoto>& photos,
                       const PhotosJobOptions& options, PhotosJobResult& result);
