@@ -108,7 +108,7 @@ TEST_CASE("wrong landmarks lose their pull", "[photos]") {
   CHECK(std::abs(calib.focal - s.session.cameras[0].fx) / s.session.cameras[0].fx < 0.04);
 }
 
-TEST_CASE("too few usable photos are refused with the reasons; one photo alone gives a head and a note", "[photos]") {
+TEST_CASE("too few usable photos are refused with the reasons, one photo alone gives a head and a note", "[photos]") {
   test::PhotoScenario s = test::make_photo_scenario(2);
   std::vector<LandmarkPhoto> three(s.session.photos.begin(), s.session.photos.begin() + 3);
   for (int i : {0, 2}) std::fill(three[size_t(i)].present.begin(), three[size_t(i)].present.end(), 0);
