@@ -168,7 +168,8 @@ Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& g
   result = {};
   const int P = int(photos.size()), M = int(landmarks.size());
   if (!(options.pixel_sigma > 0) || !(options.shape_sigma_m > 0) || !(options.huber_k > 0) ||
-      !(options.focal_prior_px >= 0) || !(options.focal_prior_sigma > 0) || options.min_landmarks < 6)
+      !(options.focal_prior_px >= 0) || !(options.focal_prior_sigma > 0) || options.min_landmarks < 6 || !(options.refuse_factor > 1) ||
+      !(options.refuse_min_sigma >= 0))
     return Status::error(ErrorCode::InvalidInput, "self-calibration: an option is out of range");
   for (const SurfacePoint& s : landmarks)
     if (s.valid() && (s.triangle >= generic.num_triangles()))
@@ -288,7 +289,7 @@ Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& g
     const double typical = median_of(med);
     int worst = -1;
     for (size_t k = 0; k < used.size(); ++k)
-      if (med[k] > std::max(options.refuse_factor * typical, options.refuse_min_px) &&
+      if (med[k] > std::max(options.refuse_factor * typical, options.refuse_min_sigma * options.pixel_sigma) &&
           (worst < 0 || med[k] > med[size_t(worst)]))
         worst = int(k);
     if (worst >= 0 && used.size() > 2) {

@@ -38,10 +38,14 @@ struct SelfCalibOptions {
   double huber_k = 2.0;             // Huber threshold, in pixel_sigma units
   int reweighting_rounds = 4;       // IRLS rounds, each a full LM run
   int min_landmarks = 12;           // fewer in a photo: refused
-  // Refusal of a photo after bundle adjustment: its robust RMS error above
-  // max(refuse_factor * median of the photos, refuse_min_px).
-  double refuse_factor = 3.0;
-  double refuse_min_px = 6.0;
+  // Refusal of a photo after bundle adjustment: the median error of its
+  // landmarks above max(refuse_factor * the photos' median of medians,
+  // refuse_min_sigma * pixel_sigma). With 2 px noise a photo of the same
+  // head has a median of ~2.3 px (1.18 sigma); another person's landmarks
+  // seen by one camera are often explained by its pose, so only a face
+  // that differs enough is caught (docs/design/photos.md).
+  double refuse_factor = 1.6;
+  double refuse_min_sigma = 2.0;
 };
 
 struct PhotoCalibration {

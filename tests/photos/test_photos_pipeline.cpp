@@ -65,12 +65,13 @@ TEST_CASE("the fitted head is closer to the person than the generic head", "[pho
 }
 
 // Landmarks of another person seen by the same camera replace one photo's.
+// This synthetic stranger differs enough to be caught (median landmark error
+// ~4.6 px against ~2.2 px); a stranger with a similar face often is not, see
+// docs/design/photos.md: landmarks alone are a weak identity check.
 TEST_CASE("a photo of somebody else is refused, named, and the rest kept", "[photos]") {
   test::PhotoScenario s = test::make_photo_scenario(5);
   GenericHead other;
-  SynthHeadOptions big;
-  big.variation = 2.0;
-  REQUIRE(synthesize_head(s.generic, 77, big, other));
+  REQUIRE(synthesize_head(s.generic, 77, SynthHeadOptions{}, other));
   SyntheticSession os;
   REQUIRE(make_synthetic_views(other, s.landmarks, 5, {}, os));
   const size_t victim = 4;
