@@ -15,6 +15,33 @@ Status invalid(const std::string& field, const std::string& what) {
   return Status::error(ErrorCode::InvalidInput, field + ": " + what);
 }
 
+// Our documents nest 3 deep ({"points": [[x, y]]}); a file of 4 MB of '['
+// would make the JSON parser build millions of nested arrays first.
+constexpr int kMaxDepth = 16;
+bool nested_too_deep(const std::string& text) {
+  int depth = 0;
+  bool in_string = false, escaped = false;
+  for (char c : text) {
+    if (in_string) {
+      if (escaped) escaped = false;
+      else if (c == '\\') escaped = true;
+      else if (c == '"') in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxDepth) return true;
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+  return false;
+}
+
+Json parse_document(const std::string& text) {
+  if (nested_too_deep(text)) return Json(Json::value_t::discarded);
+  return Json::parse(text, nullptr, /*allow_exceptions=*/false);
+}
+
 Status check_header(const Json& root, const char* format, std::string& detector) {
   if (!root.is_object()) return invalid("document", "not a JSON object");
   auto f = root.find("format");
@@ -75,8 +102,8 @@ Status parse_landmarks_json(const std::string& text, LandmarkPhoto& out) {
   if (text.size() > kMaxLandmarkFileBytes)
     return Status::error(ErrorCode::TooLarge, "landmark file of " + std::to_string(text.size()) +
                                                   " bytes, at most " + std::to_string(kMaxLandmarkFileBytes));
-  const Json root = Json::parse(text, nullptr, /*allow_exceptions=*/false);
-  if (root.is_discarded()) return invalid("document", "not valid JSON");
+  const Json root = parse_document(text);
+  if (root.is_discarded()) return invalid("document", "not valid JSON, or nested deeper than " + std::to_string(kMaxDepth));
   Status s = check_header(root, "likeness-landmarks", out.detector);
   if (!s) return s;
   auto img = root.find("image");
@@ -116,8 +143,8 @@ Status parse_landmark_map_json(const std::string& text, LandmarkMap& out) {
   if (text.size() > kMaxLandmarkFileBytes)
     return Status::error(ErrorCode::TooLarge, "landmark map of " + std::to_string(text.size()) +
                                                   " bytes, at most " + std::to_string(kMaxLandmarkFileBytes));
-  const Json root = Json::parse(text, nullptr, /*allow_exceptions=*/false);
-  if (root.is_discarded()) return invalid("document", "not valid JSON");
+  const Json root = parse_document(text);
+  if (root.is_discarded()) return invalid("document", "not valid JSON, or nested deeper than " + std::to_string(kMaxDepth));
   Status s = check_header(root, "likeness-landmark-map", out.detector);
   if (!s) return s;
   const Json& pts = root["points"];

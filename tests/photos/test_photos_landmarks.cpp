@@ -51,6 +51,7 @@ TEST_CASE("landmark files parse, round trip and refuse bad input", "[photos]") {
       {with("[10.5,20]", "[1e999,20]"), "not valid JSON"},  // overflow: nlohmann refuses the number
       {with("[10.5,20]", "[1000,20]"), "far outside"},
       {with("[[10.5,20],null,[99,79.5]]", "7"), "points"},
+      {with("[10.5,20]", std::string(40, '[') + std::string(40, ']')), "nested deeper"},
   };
   for (const Bad& b : bad) {
     LandmarkPhoto r;
