@@ -25,6 +25,11 @@ int run_bench_photos(const Args& args) {
   if (!args.get_int("photos-seeds", 5, seeds, 1, 50) || !args.get_int("photos-cameras", 10, cameras, 2, 64) ||
       !args.get_double("photos-noise-px", 2.0, noise, 0, 50))
     return 1;
+  // --photos-stiffness-scale: multiplies the stiffness schedule (sensitivity).
+  int first_seed = 1;
+  if (!args.get_int("photos-first-seed", 1, first_seed, 0, 1000000)) return 1;
+  double stiffness_scale = 1;
+  if (!args.get_double("photos-stiffness-scale", 1.0, stiffness_scale, 1e-6, 1e6)) return 1;
   GenericHead generic;
   if (!load_generic_head(generic)) return 1;
   LandmarkMap map;
@@ -54,13 +59,14 @@ int run_bench_photos(const Args& args) {
   for (const char* region : {"face", "scalp", "ears"})
     for (int v : generic.annotations.regions.at(region)) head.push_back(v);
   std::printf("photos (fua1998 + self-calibration): %d cameras, %.1f px landmark noise, placeholder map of %d "
-              "generic-head face points (%s) (CPU ms)\n", cameras, noise, int(landmarks.size()), map_kind.c_str());
+              "generic-head face points (%s), stiffness x%g (CPU ms)\n", cameras, noise, int(landmarks.size()),
+              map_kind.c_str(), stiffness_scale);
   std::printf("  %-4s %6s %7s %7s | %-13s %-13s | %-13s %-13s | %6s %6s\n", "seed", "focal", "rot", "rot",
               "generic face", "", "fit face", "", "calib", "fit");
   std::printf("  %-4s %6s %7s %7s | %-13s %-13s | %-13s %-13s | %6s %6s\n", "", "err %", "mean", "max",
               "t->g mean/p95", "g->t mean/p95", "t->f mean/p95", "f->t mean/p95", "ms", "ms");
   double sum_gen = 0, sum_fit = 0, sum_head_gen = 0, sum_head_fit = 0, sum_focal = 0, sum_rot = 0;
-  for (int seed = 1; seed <= seeds; ++seed) {
+  for (int seed = first_seed; seed < first_seed + seeds; ++seed) {
     GenericHead person;
     SyntheticViewsOptions vo;
     vo.num_cameras = cameras;
@@ -70,6 +76,7 @@ int run_bench_photos(const Args& args) {
         !make_synthetic_views(person, landmarks, std::uint32_t(seed), vo, session))
       return 1;
     PhotosJobOptions opt;
+    for (double& k : opt.fit.stiffness_schedule) k *= stiffness_scale;
     PhotosJobResult r;
     const double t0 = cpu_clock_ms();
     Status st = self_calibrate(session.photos, generic.mesh, landmarks, opt.calib, r.calib);
@@ -125,7 +132,7 @@ int run_bench_photos(const Args& args) {
 }
 
 BenchRegistrar reg({"photos", "photos to head on synthetic sessions: camera errors, face distances, stage times "
-                              "(--photos-seeds N --photos-cameras C --photos-noise-px S --photos-map vertices|interior)",
+                              "(--photos-seeds N --photos-cameras C --photos-noise-px S --photos-map vertices|interior --photos-stiffness-scale K --photos-first-seed S)",
                     run_bench_photos});
 
 }  // namespace

@@ -215,6 +215,7 @@ Status fit_shape(const TriMesh& control, std::vector<std::unique_ptr<Observation
       problem.normalize(lambdas);
       LmOptions lo;
       lo.max_iterations = options.max_lm_iterations;
+      lo.relative_tolerance = options.relative_tolerance;
       const LmReport rep = levenberg_marquardt(problem, lo);
       if (round == 0) stage.initial_cost = rep.initial_cost;
       stage.final_cost = rep.final_cost;

@@ -81,10 +81,13 @@ struct ShapeFitOptions {
   // Stiffness lambda_S per stage, coarse to fine (each stage: reweighting
   // rounds of LM). Units: the normalized observations are about lambda_type
   // times a 3-D error in metres, the stiffness term is in metres too.
-  std::vector<double> stiffness_schedule = {1.0, 0.1, 0.03};
+  std::vector<double> stiffness_schedule = {100.0, 10.0, 3.0};
   double tether = 1e-4;           // ||delta||^2 weight: fixes what nothing observes
   int reweighting_rounds = 2;
   int max_lm_iterations = 20;
+  // An LM run stops when a step gains less than this share of the cost
+  // (1e-5: later steps move the face by hundredths of a millimetre).
+  double relative_tolerance = 1e-5;
 };
 
 struct ShapeFitStage {

@@ -59,7 +59,7 @@ TEST_CASE("the fitted head is closer to the person than the generic head", "[pho
   const DistanceStats tg = surface_distances(s.person.mesh, face, gen);
   std::printf("truth->face mean: generic %.2f mm, fit %.2f mm (p95 %.2f / %.2f)\n", 1000 * tg.mean, 1000 * tf.mean,
               1000 * tg.p95, 1000 * tf.p95);
-  CHECK(tf.mean < 0.7 * tg.mean);
+  CHECK(tf.mean < 0.5 * tg.mean);  // measured: 0.22 against 0.85 mm
   CHECK(tf.p95 < tg.p95);
   CHECK(r.fit.final_rms_px < r.fit.initial_rms_px);
 }
