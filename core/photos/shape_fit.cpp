@@ -54,6 +54,29 @@ void FeatureSet::reweight(const std::vector<Vec3>& positions) {
   }
 }
 
+void FeatureSet::inlier_pixel_errors(const std::vector<Vec3>& positions, std::vector<double>& out) const {
+  const std::vector<double> e = errors(positions);
+  for (size_t i = 0; i < e.size(); ++i)
+    if (obs_[i].weight >= 0.5 && std::isfinite(e[i])) out.push_back(e[i]);
+}
+
+std::vector<double> observation_type_weights(const std::vector<Vec3>& positions,
+                                             const std::vector<std::unique_ptr<ObservationSet>>& sets,
+                                             const std::vector<double>& lambdas) {
+  std::vector<double> w(sets.size(), 0.0);
+  for (size_t k = 0; k < sets.size() && k < lambdas.size(); ++k) {
+    const int n = sets[k]->num_residuals();
+    Eigen::VectorXd r(n);
+    std::vector<Eigen::Triplet<double>> trip;
+    if (n == 0 || !sets[k]->evaluate(positions, r, 0, &trip)) continue;
+    double sum = 0;  // each row's entries are distinct columns: the sum of squares is the rows' squared norms
+    for (const auto& t : trip) sum += t.value() * t.value();
+    const double G = std::sqrt(sum / n);
+    w[k] = G > 0 ? lambdas[k] / G : 0;
+  }
+  return w;
+}
+
 SparseMat uniform_laplacian(const TriMesh& mesh) {
   const int V = mesh.num_vertices();
   std::vector<std::set<int>> nbr(static_cast<size_t>(V));
@@ -109,20 +132,7 @@ class ShapeProblem : public LeastSquaresProblem {
     return n;
   }
 
-  // eq. 7 with the RMS reading (see shape_fit.h).
-  void normalize(const std::vector<double>& lambdas) {
-    const std::vector<Vec3> p = positions();
-    for (size_t k = 0; k < sets_.size(); ++k) {
-      const int n = sets_[k]->num_residuals();
-      Eigen::VectorXd r(n);
-      std::vector<Eigen::Triplet<double>> trip;
-      sets_[k]->evaluate(p, r, 0, &trip);
-      Eigen::VectorXd rowsq = Eigen::VectorXd::Zero(n);
-      for (const auto& t : trip) rowsq[t.row()] += t.value() * t.value();
-      const double G = n > 0 ? std::sqrt(rowsq.sum() / n) : 0;
-      scales_[k] = G > 0 ? lambdas[k] / G : 0;
-    }
-  }
+  void normalize(const std::vector<double>& lambdas) { scales_ = observation_type_weights(positions(), sets_, lambdas); }
 
   bool residuals(const Eigen::VectorXd& delta, Eigen::VectorXd& r, std::vector<Eigen::Triplet<double>>* trip) const {
     const std::vector<Vec3> p = positions(delta);
@@ -171,16 +181,11 @@ class ShapeProblem : public LeastSquaresProblem {
 };
 
 double feature_rms(const std::vector<std::unique_ptr<ObservationSet>>& sets, const std::vector<Vec3>& p) {
+  std::vector<double> e;
+  for (const auto& s : sets) s->inlier_pixel_errors(p, e);
   double sum = 0;
-  int n = 0;
-  for (const auto& s : sets) {
-    const auto* f = dynamic_cast<const FeatureSet*>(s.get());
-    if (!f) continue;
-    const std::vector<double> e = f->errors(p);
-    for (size_t i = 0; i < e.size(); ++i)
-      if (f->observations()[i].weight >= 0.5 && std::isfinite(e[i])) { sum += e[i] * e[i]; ++n; }
-  }
-  return n ? std::sqrt(sum / n) : 0;
+  for (double x : e) sum += x * x;
+  return e.empty() ? 0 : std::sqrt(sum / double(e.size()));
 }
 
 }  // namespace

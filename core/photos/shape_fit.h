@@ -43,6 +43,9 @@ class ObservationSet {
                         std::vector<Eigen::Triplet<double>>* jacobian) const = 0;
   // Iterative reweighting from the current residuals.
   virtual void reweight(const std::vector<Vec3>& positions) = 0;
+  // Image-space errors of the observations that are inliers (weight >= 0.5),
+  // for reports; sets without a pixel error (stereo) add nothing.
+  virtual void inlier_pixel_errors(const std::vector<Vec3>& /*positions*/, std::vector<double>& /*out*/) const {}
 };
 
 // 2-D feature locations (eq. 12): surface point p seen at pixel (u, v) in a
@@ -65,6 +68,7 @@ class FeatureSet : public ObservationSet {
   bool evaluate(const std::vector<Vec3>& positions, Eigen::VectorXd& r, int row,
                 std::vector<Eigen::Triplet<double>>* jacobian) const override;
   void reweight(const std::vector<Vec3>& positions) override;
+  void inlier_pixel_errors(const std::vector<Vec3>& positions, std::vector<double>& out) const override;
   const std::vector<FeatureObservation>& observations() const { return obs_; }
   // Pixel error of each observation at the given positions (inf behind a camera).
   std::vector<double> errors(const std::vector<Vec3>& positions) const;
@@ -101,6 +105,12 @@ struct ShapeFitResult {
   std::vector<ShapeFitStage> stages;
   double initial_rms_px = 0, final_rms_px = 0;  // feature errors (weight >= 0.5), pixels
 };
+
+// eq. 7: each set's weight lambda_k / G_k at the given positions, G_k the
+// RMS norm of the set's Jacobian rows (0 for a set without gradient).
+std::vector<double> observation_type_weights(const std::vector<Vec3>& positions,
+                                             const std::vector<std::unique_ptr<ObservationSet>>& sets,
+                                             const std::vector<double>& lambdas);
 
 // Fails with InvalidInput on a bad option or an observation set that
 // does not match the mesh; NotConverged when no step lowers the cost.

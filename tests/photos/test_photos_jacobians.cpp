@@ -113,3 +113,39 @@ TEST_CASE("Levenberg-Marquardt lowers the shape fit's cost at every stage", "[ph
 
 }  // namespace
 }  // namespace lk
+
+namespace lk {
+namespace {
+
+// eq. 7: after weighting, each type's rows have RMS gradient norm lambda,
+// whatever the type's own units (here: the same features seen by cameras of
+// twice the focal, i.e. residuals and gradients twice as large).
+TEST_CASE("eq. 7 gives every observation type the RMS gradient lambda", "[photos]") {
+  test::PhotoScenario s = test::make_photo_scenario(3);
+  std::vector<FeatureObservation> obs;
+  for (size_t c = 0; c < s.session.photos.size(); ++c)
+    for (size_t m = 0; m < s.landmarks.size(); m += 5)
+      if (s.session.photos[c].present[m]) obs.push_back({int(c), s.landmarks[m], s.session.photos[c].points[m], 1, 1});
+  std::vector<Camera> doubled = s.session.cameras;
+  for (Camera& c : doubled) c.fx = c.fy = 2 * c.fx;
+  std::vector<std::unique_ptr<ObservationSet>> sets;
+  sets.push_back(std::make_unique<FeatureSet>(s.generic.mesh, s.session.cameras, obs, 4.0));
+  sets.push_back(std::make_unique<FeatureSet>(s.generic.mesh, doubled, obs, 4.0));
+  const std::vector<double> lambdas = {0.3, 1.0};
+  const std::vector<double> w = observation_type_weights(s.generic.mesh.positions, sets, lambdas);
+  REQUIRE(w.size() == 2);
+  for (size_t k = 0; k < 2; ++k) {
+    Eigen::VectorXd r(sets[k]->num_residuals());
+    std::vector<Eigen::Triplet<double>> trip;
+    REQUIRE(sets[k]->evaluate(s.generic.mesh.positions, r, 0, &trip));
+    SparseMat J(r.size(), 3 * s.generic.mesh.num_vertices());
+    J.setFromTriplets(trip.begin(), trip.end());
+    const double rms = w[k] * std::sqrt(J.squaredNorm() / double(r.size()));
+    CHECK(rms == Approx(lambdas[k]).epsilon(1e-9));
+  }
+  // Twice the focal: about twice the gradient, so about half the weight per unit lambda.
+  CHECK(w[1] / lambdas[1] == Approx(0.5 * w[0] / lambdas[0]).epsilon(0.02));
+}
+
+}  // namespace
+}  // namespace lk
