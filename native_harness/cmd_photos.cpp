@@ -159,7 +159,8 @@ int run_photos(const Args& args) {
               r.calib.focal);
   std::printf("  landmark error: calibration %.2f -> %.2f px, shape fit %.2f -> %.2f px (%.2f s)\n",
               r.calib.initial_rms_px, r.calib.final_rms_px, r.fit.initial_rms_px, r.fit.final_rms_px, seconds);
-  std::printf("  wrote %s/control.obj, level1..%d.obj, cameras.json, report.json\n", out_dir.c_str(), levels);
+  const std::string level_files = levels > 0 ? ", level1..level" + std::to_string(levels) + ".obj" : "";
+  std::printf("  wrote %s/control.obj%s, cameras.json, report.json\n", out_dir.c_str(), level_files.c_str());
   return 0;
 }
 
