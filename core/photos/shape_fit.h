@@ -89,8 +89,7 @@ struct ShapeFitOptions {
   double tether = 1e-4;           // ||delta||^2 weight: fixes what nothing observes
   int reweighting_rounds = 2;
   int max_lm_iterations = 20;
-  // An LM run stops when a step gains less than this share of the cost
-  // (1e-5: later steps move the face by hundredths of a millimetre).
+  // An LM run stops when a step gains less than this share of the cost.
   double relative_tolerance = 1e-5;
 };
 
