@@ -6,6 +6,7 @@
 // OUT_DIR/<target>/.
 #include "io/io.h"
 #include "mesh/primitives.h"
+#include "photos/landmarks.h"
 #include "texture/correspondences.h"
 
 #include <sys/stat.h>
@@ -137,6 +138,23 @@ int main(int argc, char** argv) {
   }
   put("points", "six.txt", format_correspondences(points));
   put("points", "commented.txt", "# u v X Y Z\n\n12 34 0.5 0.25 -1 # nose tip\n1,2,3,4,5\n");
+
+  // Landmark files and a landmark map, as likeness synth-photos writes them.
+  LandmarkPhoto photo;
+  photo.name = "view_00.png";
+  photo.width = 120;
+  photo.height = 160;
+  photo.detector = "mediapipe-face-mesh";
+  LandmarkMap map;
+  map.detector = photo.detector;
+  for (int i = 0; i < 8; ++i) {
+    photo.points.push_back(Vec2(10 + 12.5 * i, 150 - 17.25 * i));
+    photo.present.push_back(i % 3 != 1);
+    map.points.push_back(Vec3(0.01 * i, -0.02 * i, 0.1 + 0.005 * i));
+    map.present.push_back(i % 4 != 2);
+  }
+  put("landmarks", "view_00.json", landmarks_to_json(photo));
+  put("landmarks", "map.json", landmark_map_to_json(map));
 
   if (g_failures) {
     std::fprintf(stderr, "make_seeds: %d files could not be written under %s\n", g_failures, g_out.c_str());

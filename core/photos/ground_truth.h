@@ -1,0 +1,40 @@
+// Scoring the photos-to-head stages against a synthetic truth (tests and
+// `likeness bench --only photos`). Uncalibrated photos fix a head only up to
+// a similarity (absolute scale is unobservable; the self-calibration takes
+// the generic head's), so the fit is first brought onto the truth by the
+// least-squares similarity over corresponding vertices (same topology,
+// Umeyama 1991) and the scale factor is reported apart.
+//
+// Shapes: fit and truth #V, same triangles; vertices: indices into both.
+#pragma once
+#include "calib/camera.h"
+#include "mesh/tri_mesh.h"
+
+#include <vector>
+
+namespace lk {
+
+struct Similarity {
+  double scale = 1;
+  Mat3 R = Mat3::Identity();
+  Vec3 t = Vec3::Zero();
+  Vec3 apply(const Vec3& p) const { return scale * (R * p) + t; }
+};
+
+// The similarity taking from[v] closest to to[v] over the listed vertices.
+Similarity fit_similarity(const std::vector<Vec3>& from, const std::vector<Vec3>& to, const std::vector<int>& vertices);
+
+// A camera of the fit's frame moved into the truth's frame by s (the image is unchanged).
+Camera transform_camera(const Camera& c, const Similarity& s);
+
+// Angle of R_a^T R_b, degrees.
+double rotation_angle_deg(const Mat3& Ra, const Mat3& Rb);
+
+struct DistanceStats {
+  double mean = 0, p95 = 0;
+  int count = 0;
+};
+// Distances from the listed vertices of `from` to the surface of `to`.
+DistanceStats surface_distances(const TriMesh& from, const std::vector<int>& vertices, const TriMesh& to);
+
+}  // namespace lk

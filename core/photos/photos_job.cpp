@@ -1,0 +1,62 @@
+#include "photos/photos_job.h"
+
+#include <memory>
+
+namespace lk {
+
+Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoint>& landmarks,
+                        const std::vector<LandmarkPhoto>& photos, const SelfCalibResult& calib,
+                        const PhotosJobOptions& options, ShapeFitResult& fit) {
+  if (calib.photos.size() != photos.size())
+    return Status::error(ErrorCode::InvalidInput, "shape fit: the calibration is for other photos");
+  std::vector<Camera> cameras;
+  std::vector<FeatureObservation> obs;
+  for (size_t i = 0; i < photos.size(); ++i) {
+    const PhotoCalibration& pc = calib.photos[i];
+    if (!pc.used) continue;
+    const int cam = int(cameras.size());
+    cameras.push_back(pc.camera);
+    for (size_t m = 0; m < landmarks.size() && m < photos[i].points.size(); ++m) {
+      if (!photos[i].present[m] || !landmarks[m].valid() || !(pc.weights[m] > 0)) continue;
+      FeatureObservation o;
+      o.camera = cam;
+      o.point = landmarks[m];
+      o.pixel = photos[i].points[m];
+      o.prior_weight = o.weight = pc.weights[m];
+      obs.push_back(o);
+    }
+  }
+  std::vector<std::unique_ptr<ObservationSet>> sets;
+  sets.push_back(std::make_unique<FeatureSet>(generic.mesh, cameras, std::move(obs), 2 * options.calib.pixel_sigma));
+  return fit_shape(generic.mesh, sets, {options.fit.lambda_features}, options.fit, fit);
+}
+
+Status run_photos_job(const GenericHead& generic, const LandmarkMap& map, const std::vector<LandmarkPhoto>& photos,
+                      const PhotosJobOptions& options, PhotosJobResult& result) {
+  result = {};
+  auto photo_name = [&](size_t i) {
+    return photos[i].name.empty() ? "photo " + std::to_string(i + 1) : photos[i].name;
+  };
+  if (photos.empty()) return Status::error(ErrorCode::Empty, "photos: no photo given");
+  if (photos.size() == 1)
+    result.notes.push_back(photo_name(0) + " is the only photo: the head follows its landmarks across the image, "
+                           "but its depth stays the generic head's (add photos from the sides)");
+  for (size_t i = 0; i < photos.size(); ++i)
+    if (photos[i].detector != map.detector)
+      return Status::error(ErrorCode::InvalidInput, photo_name(i) + ": landmarks from detector '" + photos[i].detector +
+                                                        "', the map is for '" + map.detector + "'");
+  std::vector<SurfacePoint> landmarks;
+  Status s = attach_landmark_map(map, generic.mesh, options.map_max_distance_m, landmarks);
+  if (!s) return s;
+
+  s = self_calibrate(photos, generic.mesh, landmarks, options.calib, result.calib);
+  for (size_t i = 0; i < result.calib.photos.size(); ++i)
+    if (!result.calib.photos[i].refusal.empty())
+      result.notes.push_back(photo_name(i) + " dropped: " + result.calib.photos[i].refusal);
+  if (!s) return s;
+
+  s = fit_photos_shape(generic, landmarks, photos, result.calib, options, result.fit);
+  return with_context(s, "photos");
+}
+
+}  // namespace lk

@@ -1,0 +1,345 @@
+#include "photos/self_calibration.h"
+
+#include "calib/calibrate.h"
+#include "photos/sparse_lm.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+namespace lk {
+namespace {
+
+Mat3 skew(const Vec3& v) {
+  Mat3 m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
+Mat3 rotation_increment(const Vec3& w) {
+  const double a = w.norm();
+  return a > 0 ? Eigen::AngleAxisd(a, w / a).toRotationMatrix() : Mat3::Identity();
+}
+
+double median_of(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+struct Observation {
+  int camera = 0;    // index into the used cameras
+  int landmark = 0;  // index into the active landmarks
+  Vec2 pixel = Vec2::Zero();
+  double weight = 1; // IRLS weight
+};
+
+// The bundle adjustment: focal, poses, landmark positions; reprojection
+// residuals / pixel_sigma, landmark priors / shape_sigma, focal prior.
+class BundleProblem : public LeastSquaresProblem {
+ public:
+  double focal = 0;
+  std::vector<Camera> cameras;
+  std::vector<Vec3> points, prior;
+  std::vector<Observation> obs;
+  double pixel_sigma = 2, shape_sigma = 0.01, focal_prior = 0, focal_prior_sigma = 0.05;
+
+  int num_parameters() const override { return 1 + 6 * int(cameras.size()) + 3 * int(points.size()); }
+  int point_index(int a) const { return 1 + 6 * int(cameras.size()) + 3 * a; }
+  int num_residuals() const {
+    return 2 * int(obs.size()) + 3 * int(points.size()) + (focal_prior > 0 ? 1 : 0);
+  }
+
+  void linearize(Eigen::VectorXd& r, SparseMat& J) override {
+    r.setZero(num_residuals());
+    std::vector<Eigen::Triplet<double>> trip;
+    trip.reserve(obs.size() * 24 + points.size() * 3 + 1);
+    int row = 0;
+    for (const Observation& o : obs) {
+      Camera c = cameras[size_t(o.camera)];
+      c.fx = c.fy = focal;
+      ProjectionJacobian pj;
+      const double s = std::sqrt(o.weight) / pixel_sigma;
+      if (projection_jacobian(c, points[size_t(o.landmark)], o.pixel, pj)) {
+        r.segment<2>(row) = s * pj.residual;
+        const int ci = 1 + 6 * o.camera, pi = point_index(o.landmark);
+        for (int k = 0; k < 2; ++k) {
+          trip.emplace_back(row + k, 0, s * pj.d_focal[k]);
+          for (int j = 0; j < 3; ++j) {
+            trip.emplace_back(row + k, ci + j, s * pj.d_rotation(k, j));
+            trip.emplace_back(row + k, ci + 3 + j, s * pj.d_translation(k, j));
+            trip.emplace_back(row + k, pi + j, s * pj.d_point(k, j));
+          }
+        }
+      } else {
+        r.segment<2>(row).setConstant(s * 1e4);  // behind the camera: a large constant, no gradient
+      }
+      row += 2;
+    }
+    for (size_t a = 0; a < points.size(); ++a) {
+      r.segment<3>(row) = (points[a] - prior[a]) / shape_sigma;
+      for (int j = 0; j < 3; ++j) trip.emplace_back(row + j, point_index(int(a)) + j, 1.0 / shape_sigma);
+      row += 3;
+    }
+    if (focal_prior > 0) {
+      const double w = 1.0 / (focal_prior_sigma * focal_prior);
+      r[row] = w * (focal - focal_prior);
+      trip.emplace_back(row, 0, w);
+    }
+    J.resize(num_residuals(), num_parameters());
+    J.setFromTriplets(trip.begin(), trip.end());
+  }
+
+  // The state moved by step, into the given copies.
+  void moved(const Eigen::VectorXd& step, double& f, std::vector<Camera>& cams, std::vector<Vec3>& pts) const {
+    f = focal + step[0];
+    cams = cameras;
+    for (size_t k = 0; k < cams.size(); ++k) {
+      cams[k].R = rotation_increment(step.segment<3>(1 + 6 * long(k))) * cams[k].R;
+      cams[k].t += step.segment<3>(4 + 6 * long(k));
+    }
+    pts = points;
+    for (size_t a = 0; a < pts.size(); ++a) pts[a] += step.segment<3>(point_index(int(a)));
+  }
+
+  double cost_of(double f, const std::vector<Camera>& cams, const std::vector<Vec3>& pts) const {
+    if (!(f > 0)) return std::numeric_limits<double>::infinity();
+    double cost = 0;
+    for (const Observation& o : obs) {
+      Camera c = cams[size_t(o.camera)];
+      c.fx = c.fy = f;
+      Vec2 uv;
+      if (!c.project(pts[size_t(o.landmark)], uv)) return std::numeric_limits<double>::infinity();
+      cost += o.weight * (uv - o.pixel).squaredNorm() / (pixel_sigma * pixel_sigma);
+    }
+    for (size_t a = 0; a < pts.size(); ++a) cost += (pts[a] - prior[a]).squaredNorm() / (shape_sigma * shape_sigma);
+    if (focal_prior > 0) {
+      const double d = (f - focal_prior) / (focal_prior_sigma * focal_prior);
+      cost += d * d;
+    }
+    return cost;
+  }
+
+  double cost_after(const Eigen::VectorXd& step) override {
+    double f;
+    std::vector<Camera> cams;
+    std::vector<Vec3> pts;
+    moved(step, f, cams, pts);
+    return cost_of(f, cams, pts);
+  }
+  void apply(const Eigen::VectorXd& step) override { moved(step, focal, cameras, points); }
+
+  // Pixel error of an observation (inf behind the camera).
+  double error(const Observation& o) const {
+    Camera c = cameras[size_t(o.camera)];
+    c.fx = c.fy = focal;
+    Vec2 uv;
+    return c.project(points[size_t(o.landmark)], uv) ? (uv - o.pixel).norm() : std::numeric_limits<double>::infinity();
+  }
+};
+
+}  // namespace
+
+int SelfCalibResult::num_used() const {
+  int n = 0;
+  for (const auto& p : photos) n += p.used;
+  return n;
+}
+
+bool projection_jacobian(const Camera& camera, const Vec3& X, const Vec2& observed, ProjectionJacobian& out) {
+  const Vec3 Xr = camera.R * X;
+  const Vec3 c = Xr + camera.t;
+  if (c.z() <= 1e-9) return false;
+  const double iz = 1.0 / c.z(), x = c.x() * iz, y = c.y() * iz, f = camera.fx;
+  out.residual = Vec2(f * x + camera.cx - observed.x(), f * y + camera.cy - observed.y());
+  out.d_focal << x, y;
+  Eigen::Matrix<double, 2, 3> dc;
+  dc << f * iz, 0, -f * x * iz, 0, f * iz, -f * y * iz;
+  out.d_translation = dc;
+  out.d_point = dc * camera.R;
+  out.d_rotation = -dc * skew(Xr);
+  return true;
+}
+
+Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& generic,
+                      const std::vector<SurfacePoint>& landmarks, const SelfCalibOptions& options,
+                      SelfCalibResult& result) {
+  result = {};
+  const int P = int(photos.size()), M = int(landmarks.size());
+  if (!(options.pixel_sigma > 0) || !(options.shape_sigma_m > 0) || !(options.huber_k > 0) ||
+      !(options.focal_prior_px >= 0) || !(options.focal_prior_sigma > 0) || options.min_landmarks < 6 || !(options.refuse_factor > 1) ||
+      !(options.refuse_min_sigma >= 0))
+    return Status::error(ErrorCode::InvalidInput, "self-calibration: an option is out of range");
+  for (const SurfacePoint& s : landmarks)
+    if (s.valid() && (s.triangle >= generic.num_triangles()))
+      return Status::error(ErrorCode::InvalidInput, "self-calibration: a landmark's triangle is out of range");
+  std::vector<Vec3> generic_points(size_t(M), Vec3::Zero());
+  for (int m = 0; m < M; ++m)
+    if (landmarks[size_t(m)].valid()) generic_points[size_t(m)] = surface_position(generic, landmarks[size_t(m)]);
+  result.photos.assign(size_t(P), PhotoCalibration{});
+  result.landmarks = generic_points;
+  result.landmark_seen.assign(size_t(M), 0);
+
+  // 1. Each photo alone against the generic head.
+  CalibOptions co;
+  co.fix_principal_point = true;
+  co.pixel_sigma = options.pixel_sigma;
+  co.outlier_px = 3 * options.pixel_sigma;
+  co.focal_prior = options.focal_prior_px;
+  co.focal_prior_sigma = options.focal_prior_sigma;
+  std::vector<std::vector<Correspondence>> corr(static_cast<size_t>(P));
+  std::vector<std::vector<int>> corr_index(static_cast<size_t>(P));
+  for (int i = 0; i < P; ++i) {
+    const LandmarkPhoto& ph = photos[size_t(i)];
+    PhotoCalibration& pc = result.photos[size_t(i)];
+    pc.weights.assign(ph.points.size(), 0.0);
+    if (ph.points.size() != ph.present.size() || ph.width <= 0 || ph.height <= 0)
+      return Status::error(ErrorCode::InvalidInput, "self-calibration: photo " + std::to_string(i) + " is malformed");
+    for (int m = 0; m < std::min(M, int(ph.points.size())); ++m)
+      if (ph.present[size_t(m)] && landmarks[size_t(m)].valid()) {
+        corr[size_t(i)].push_back({ph.points[size_t(m)], generic_points[size_t(m)]});
+        corr_index[size_t(i)].push_back(m);
+      }
+    pc.num_landmarks = int(corr[size_t(i)].size());
+    if (pc.num_landmarks < options.min_landmarks) {
+      pc.refusal = std::to_string(pc.num_landmarks) + " mapped landmarks, at least " +
+                   std::to_string(options.min_landmarks) + " needed (no face found?)";
+      continue;
+    }
+    CalibResult alone;
+    const Status s = calibrate_camera(corr[size_t(i)], ph.width, ph.height, co, alone);
+    if (!s) {
+      pc.refusal = "its landmarks fit no camera: " + s.message;
+      continue;
+    }
+    pc.used = true;
+  }
+
+  // 2. One focal for all usable photos; 3-4. bundle adjustment, refusals.
+  for (int pass = 0; pass < P; ++pass) {
+    std::vector<int> used;
+    for (int i = 0; i < P; ++i)
+      if (result.photos[size_t(i)].used) used.push_back(i);
+    // One photo given: calibrated against the generic head alone (the caller
+    // notes that depth then comes from the generic head). Several given but
+    // fewer than 2 usable: refused.
+    if (used.size() < 2 && !(P == 1 && used.size() == 1))
+      return Status::error(ErrorCode::NotConverged, "self-calibration: " + std::to_string(used.size()) +
+                                                        " usable photo(s), at least 2 needed");
+    std::vector<std::vector<Correspondence>> sets;
+    std::vector<std::array<int, 2>> sizes;
+    for (int i : used) {
+      sets.push_back(corr[size_t(i)]);
+      sizes.push_back({photos[size_t(i)].width, photos[size_t(i)].height});
+    }
+    SharedCalibResult shared;
+    Status s = calibrate_cameras_shared(sets, sizes, co, shared);
+    if (!s) return with_context(s, "self-calibration");
+
+    BundleProblem bp;
+    bp.focal = shared.focal;
+    bp.pixel_sigma = options.pixel_sigma;
+    bp.shape_sigma = options.shape_sigma_m;
+    bp.focal_prior = options.focal_prior_px;
+    bp.focal_prior_sigma = options.focal_prior_sigma;
+    std::vector<int> active_of(size_t(M), -1), landmark_of;
+    for (size_t k = 0; k < used.size(); ++k) {
+      bp.cameras.push_back(shared.photos[k].camera);
+      const auto& idx = corr_index[size_t(used[k])];
+      for (size_t q = 0; q < idx.size(); ++q) {
+        const int m = idx[q];
+        if (active_of[size_t(m)] < 0) {
+          active_of[size_t(m)] = int(landmark_of.size());
+          landmark_of.push_back(m);
+          bp.points.push_back(generic_points[size_t(m)]);
+        }
+        bp.obs.push_back({int(k), active_of[size_t(m)], corr[size_t(used[k])][q].pixel, 1.0});
+      }
+    }
+    bp.prior = bp.points;
+    auto rms_all = [&]() {
+      double sum = 0;
+      int n = 0;
+      for (const Observation& o : bp.obs) {
+        const double e = bp.error(o);
+        if (o.weight >= 0.5 && std::isfinite(e)) { sum += e * e; ++n; }
+      }
+      return n ? std::sqrt(sum / n) : 0.0;
+    };
+    result.initial_rms_px = rms_all();
+    result.lm_iterations = 0;
+    for (int round = 0; round < options.reweighting_rounds; ++round) {
+      // Huber weights from the current errors.
+      if (round > 0)
+        for (Observation& o : bp.obs) {
+          const double e = bp.error(o) / options.pixel_sigma;
+          o.weight = e <= options.huber_k ? 1.0 : (std::isfinite(e) ? options.huber_k / e : 0.0);
+        }
+      LmOptions lo;
+      lo.max_iterations = 30;
+      result.lm_iterations += levenberg_marquardt(bp, lo).iterations;
+    }
+
+    // Per-photo robust error: the median pixel error of its landmarks.
+    std::vector<double> med(used.size());
+    std::vector<std::vector<double>> errs(used.size());
+    for (const Observation& o : bp.obs) errs[size_t(o.camera)].push_back(bp.error(o));
+    for (size_t k = 0; k < used.size(); ++k) med[k] = median_of(errs[k]);
+    const double typical = median_of(med);
+    int worst = -1;
+    for (size_t k = 0; k < used.size(); ++k)
+      if (med[k] > std::max(options.refuse_factor * typical, options.refuse_min_sigma * options.pixel_sigma) &&
+          (worst < 0 || med[k] > med[size_t(worst)]))
+        worst = int(k);
+    if (worst >= 0 && used.size() > 2) {
+      PhotoCalibration& pc = result.photos[size_t(used[size_t(worst)])];
+      pc.used = false;
+      char buf[200];
+      std::snprintf(buf, sizeof buf,
+                    "its landmarks do not fit the other photos' head (median error %.1f px, the others %.1f px): "
+                    "another person, or wrong points?",
+                    med[size_t(worst)], typical);
+      pc.refusal = buf;
+      continue;
+    }
+
+    // Done: write the result.
+    result.focal = bp.focal;
+    result.final_rms_px = rms_all();
+    std::vector<int> seen(size_t(M), 0);
+    for (size_t k = 0; k < used.size(); ++k) {
+      PhotoCalibration& pc = result.photos[size_t(used[k])];
+      pc.camera = bp.cameras[k];
+      pc.camera.fx = pc.camera.fy = bp.focal;
+      pc.camera.width = photos[size_t(used[k])].width;
+      pc.camera.height = photos[size_t(used[k])].height;
+      pc.num_outliers = 0;
+      double sum = 0;
+      int n = 0;
+      for (const Observation& o : bp.obs) {
+        if (o.camera != int(k)) continue;
+        const int m = landmark_of[size_t(o.landmark)];
+        pc.weights[size_t(m)] = o.weight;
+        ++seen[size_t(m)];
+        if (o.weight < 0.5) ++pc.num_outliers;  // error beyond 2 huber_k sigma
+        else {
+          const double e = bp.error(o);
+          sum += e * e;
+          ++n;
+        }
+      }
+      pc.rms_px = n ? std::sqrt(sum / n) : 0;
+    }
+    for (size_t a = 0; a < landmark_of.size(); ++a) {
+      const int m = landmark_of[a];
+      result.landmarks[size_t(m)] = bp.points[a];
+      result.landmark_seen[size_t(m)] = seen[size_t(m)] >= 2;
+    }
+    return Status::success();
+  }
+  return Status::error(ErrorCode::Internal, "self-calibration: refusal loop did not end");
+}
+
+}  // namespace lk

@@ -1,0 +1,90 @@
+// Self-calibration from landmarks (issue 37, stage 2): uncalibrated photos
+// of one head -> one shared focal length and a pose per photo, plus the 3-D
+// positions of the landmarks on this person's head.
+//
+// 1. Each photo alone: its landmarks against the generic head's mapped
+//    points (core/calib: DLT, RANSAC, LM); a photo that cannot be calibrated
+//    is refused with the reason.
+// 2. All photos with one focal (calibrate_cameras_shared, EXIF prior optional).
+// 3. Bundle adjustment of the focal, every pose and every landmark's 3-D
+//    position (the person's shape is unknown), each landmark pulled toward
+//    its generic-head position with a Gaussian prior (sigma shape_sigma_m;
+//    this also fixes the gauge: absolute scale is not observable from
+//    uncalibrated photos, so the result has the generic head's size).
+//    Robust: Huber weights by iterative reweighting, so a wrong landmark
+//    loses its pull.
+// 4. A photo whose robust RMS reprojection error stays far above the others'
+//    (another person, a mislabelled file) is refused and step 3 re-run.
+//
+// Coordinates: the generic head's (metres). Principal points at the image
+// centres, no distortion (phone photos are undistorted by the phone).
+// Shapes: photos #P, landmarks #M (the map's points; invalid = unmapped),
+// each photo's points #N (indices >= M are ignored).
+#pragma once
+#include "calib/camera.h"
+#include "common/status.h"
+#include "photos/landmarks.h"
+
+#include <string>
+#include <vector>
+
+namespace lk {
+
+struct SelfCalibOptions {
+  double focal_prior_px = 0;        // EXIF focal in pixels (0 = none)
+  double focal_prior_sigma = 0.05;  // its relative standard deviation
+  double pixel_sigma = 2.0;         // expected landmark noise per coordinate, pixels
+  double shape_sigma_m = 0.01;      // how far a person's landmark may sit from the generic's
+  double huber_k = 2.0;             // Huber threshold, in pixel_sigma units
+  int reweighting_rounds = 4;       // IRLS rounds, each a full LM run
+  int min_landmarks = 12;           // fewer in a photo: refused
+  // Refusal of a photo after bundle adjustment: the median error of its
+  // landmarks above max(refuse_factor * the photos' median of medians,
+  // refuse_min_sigma * pixel_sigma). With 2 px noise a photo of the same
+  // head has a median of ~2.3 px (1.18 sigma); another person's landmarks
+  // seen by one camera are often explained by its pose, so only a face
+  // that differs enough is caught (docs/design/photos.md).
+  double refuse_factor = 1.6;
+  double refuse_min_sigma = 2.0;
+};
+
+struct PhotoCalibration {
+  bool used = false;
+  std::string refusal;              // why the photo was dropped (empty when used)
+  Camera camera;                    // valid when used
+  double rms_px = 0;                // RMS reprojection error after BA over the inliers, pixels
+  int num_landmarks = 0;
+  int num_outliers = 0;             // landmarks with error beyond 2 huber_k pixel_sigma
+  std::vector<double> weights;      // #N, final IRLS weight of each landmark (0 where absent)
+};
+
+struct SelfCalibResult {
+  double focal = 0;                      // the shared focal, pixels
+  std::vector<PhotoCalibration> photos;  // #P
+  std::vector<Vec3> landmarks;           // #M, bundle-adjusted 3-D positions (generic where unmapped/unseen)
+  std::vector<char> landmark_seen;       // #M, 1 = observed in >= 2 used photos
+  double initial_rms_px = 0, final_rms_px = 0;  // all used photos, before/after BA
+  int lm_iterations = 0;
+  int num_used() const;
+};
+
+// Fails with InvalidInput on inconsistent sizes or a bad option, NotConverged
+// when fewer than 2 of several photos are usable (the refusals say why per
+// photo). A single photo is calibrated alone (its landmarks' depths then
+// rest on the generic head's prior).
+Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& generic,
+                      const std::vector<SurfacePoint>& landmarks, const SelfCalibOptions& options,
+                      SelfCalibResult& result);
+
+// The bundle-adjustment residuals, exposed for the Jacobian tests: for
+// photo i's observation of landmark m, the pixel residual
+// (project(camera, X) - observed) and its derivatives with respect to the
+// focal (fx = fy), the rotation increment w (R <- exp([w]x) R), t and X.
+struct ProjectionJacobian {
+  Vec2 residual = Vec2::Zero();
+  Eigen::Matrix<double, 2, 1> d_focal;
+  Eigen::Matrix<double, 2, 3> d_rotation, d_translation, d_point;
+};
+bool projection_jacobian(const Camera& camera, const Vec3& X, const Vec2& observed, ProjectionJacobian& out);
+
+}  // namespace lk

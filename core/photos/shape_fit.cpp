@@ -1,0 +1,238 @@
+#include "photos/shape_fit.h"
+
+#include "photos/self_calibration.h"
+
+#include <cmath>
+#include <limits>
+#include <set>
+
+namespace lk {
+
+FeatureSet::FeatureSet(const TriMesh& mesh, std::vector<Camera> cameras, std::vector<FeatureObservation> observations,
+                       double huber_px)
+    : triangles_(mesh.triangles), cameras_(std::move(cameras)), obs_(std::move(observations)), huber_px_(huber_px) {}
+
+bool FeatureSet::evaluate(const std::vector<Vec3>& positions, Eigen::VectorXd& r, int row,
+                          std::vector<Eigen::Triplet<double>>* jacobian) const {
+  for (const FeatureObservation& o : obs_) {
+    const Tri& t = triangles_[size_t(o.point.triangle)];
+    const Vec3 X = o.point.barycentric[0] * positions[size_t(t[0])] + o.point.barycentric[1] * positions[size_t(t[1])] +
+                   o.point.barycentric[2] * positions[size_t(t[2])];
+    ProjectionJacobian pj;
+    if (!projection_jacobian(cameras_[size_t(o.camera)], X, o.pixel, pj)) return false;
+    const double s = std::sqrt(o.weight);
+    r.segment<2>(row) = s * pj.residual;
+    if (jacobian)
+      for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < 2; ++k)
+          for (int j = 0; j < 3; ++j)
+            jacobian->emplace_back(row + k, 3 * t[size_t(c)] + j, s * o.point.barycentric[c] * pj.d_point(k, j));
+    row += 2;
+  }
+  return true;
+}
+
+std::vector<double> FeatureSet::errors(const std::vector<Vec3>& positions) const {
+  std::vector<double> e;
+  e.reserve(obs_.size());
+  for (const FeatureObservation& o : obs_) {
+    const Tri& t = triangles_[size_t(o.point.triangle)];
+    const Vec3 X = o.point.barycentric[0] * positions[size_t(t[0])] + o.point.barycentric[1] * positions[size_t(t[1])] +
+                   o.point.barycentric[2] * positions[size_t(t[2])];
+    Vec2 uv;
+    e.push_back(cameras_[size_t(o.camera)].project(X, uv) ? (uv - o.pixel).norm()
+                                                          : std::numeric_limits<double>::infinity());
+  }
+  return e;
+}
+
+void FeatureSet::reweight(const std::vector<Vec3>& positions) {
+  const std::vector<double> e = errors(positions);
+  for (size_t i = 0; i < obs_.size(); ++i) {
+    const double h = e[i] <= huber_px_ ? 1.0 : (std::isfinite(e[i]) ? huber_px_ / e[i] : 0.0);
+    obs_[i].weight = obs_[i].prior_weight * h;
+  }
+}
+
+void FeatureSet::inlier_pixel_errors(const std::vector<Vec3>& positions, std::vector<double>& out) const {
+  const std::vector<double> e = errors(positions);
+  for (size_t i = 0; i < e.size(); ++i)
+    if (obs_[i].weight >= 0.5 && std::isfinite(e[i])) out.push_back(e[i]);
+}
+
+std::vector<double> observation_type_weights(const std::vector<Vec3>& positions,
+                                             const std::vector<std::unique_ptr<ObservationSet>>& sets,
+                                             const std::vector<double>& lambdas) {
+  std::vector<double> w(sets.size(), 0.0);
+  for (size_t k = 0; k < sets.size() && k < lambdas.size(); ++k) {
+    const int n = sets[k]->num_residuals();
+    Eigen::VectorXd r(n);
+    std::vector<Eigen::Triplet<double>> trip;
+    if (n == 0 || !sets[k]->evaluate(positions, r, 0, &trip)) continue;
+    double sum = 0;  // each row's entries are distinct columns: the sum of squares is the rows' squared norms
+    for (const auto& t : trip) sum += t.value() * t.value();
+    const double G = std::sqrt(sum / n);
+    w[k] = G > 0 ? lambdas[k] / G : 0;
+  }
+  return w;
+}
+
+SparseMat uniform_laplacian(const TriMesh& mesh) {
+  const int V = mesh.num_vertices();
+  std::vector<std::set<int>> nbr(static_cast<size_t>(V));
+  for (const Tri& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) {
+      nbr[size_t(t[size_t(k)])].insert(t[size_t((k + 1) % 3)]);
+      nbr[size_t(t[size_t((k + 1) % 3)])].insert(t[size_t(k)]);
+    }
+  std::vector<Eigen::Triplet<double>> trip;
+  for (int i = 0; i < V; ++i) {
+    if (nbr[size_t(i)].empty()) continue;
+    trip.emplace_back(i, i, 1.0);
+    const double w = -1.0 / double(nbr[size_t(i)].size());
+    for (int j : nbr[size_t(i)]) trip.emplace_back(i, j, w);
+  }
+  SparseMat L(V, V);
+  L.setFromTriplets(trip.begin(), trip.end());
+  return L;
+}
+
+namespace {
+
+// State: displacements delta (3 #V); residuals: the scaled observation sets,
+// then sqrt(stiffness) (L x I3) delta, then sqrt(tether) delta.
+class ShapeProblem : public LeastSquaresProblem {
+ public:
+  ShapeProblem(const TriMesh& control, std::vector<std::unique_ptr<ObservationSet>>& sets)
+      : p0_(control.positions), sets_(sets), delta_(Eigen::VectorXd::Zero(3 * long(p0_.size()))) {
+    const SparseMat L = uniform_laplacian(control);
+    std::vector<Eigen::Triplet<double>> trip;
+    for (int k = 0; k < L.outerSize(); ++k)
+      for (SparseMat::InnerIterator it(L, k); it; ++it)
+        for (int j = 0; j < 3; ++j) trip.emplace_back(3 * int(it.row()) + j, 3 * int(it.col()) + j, it.value());
+    L3_.resize(3 * long(p0_.size()), 3 * long(p0_.size()));
+    L3_.setFromTriplets(trip.begin(), trip.end());
+    scales_.assign(sets_.size(), 1.0);
+  }
+
+  double stiffness = 1, tether = 1e-4;
+  std::vector<double> scales_;
+
+  std::vector<Vec3> positions(const Eigen::VectorXd& delta) const {
+    std::vector<Vec3> p = p0_;
+    for (size_t i = 0; i < p.size(); ++i) p[i] += delta.segment<3>(3 * long(i));
+    return p;
+  }
+  std::vector<Vec3> positions() const { return positions(delta_); }
+
+  int num_parameters() const override { return int(delta_.size()); }
+  int observation_rows() const {
+    int n = 0;
+    for (const auto& s : sets_) n += s->num_residuals();
+    return n;
+  }
+
+  void normalize(const std::vector<double>& lambdas) { scales_ = observation_type_weights(positions(), sets_, lambdas); }
+
+  bool residuals(const Eigen::VectorXd& delta, Eigen::VectorXd& r, std::vector<Eigen::Triplet<double>>* trip) const {
+    const std::vector<Vec3> p = positions(delta);
+    const int nobs = observation_rows(), npar = num_parameters();
+    r.setZero(nobs + 2 * npar);
+    int row = 0;
+    for (size_t k = 0; k < sets_.size(); ++k) {
+      std::vector<Eigen::Triplet<double>> local;
+      Eigen::VectorXd rk(sets_[k]->num_residuals());
+      if (!sets_[k]->evaluate(p, rk, 0, trip ? &local : nullptr)) return false;
+      r.segment(row, rk.size()) = scales_[k] * rk;
+      for (const auto& t : local) trip->emplace_back(row + t.row(), t.col(), scales_[k] * t.value());
+      row += int(rk.size());
+    }
+    const double ss = std::sqrt(stiffness), st = std::sqrt(tether);
+    r.segment(row, npar) = ss * (L3_ * delta);
+    if (trip)
+      for (int k = 0; k < L3_.outerSize(); ++k)
+        for (SparseMat::InnerIterator it(L3_, k); it; ++it)
+          trip->emplace_back(row + int(it.row()), int(it.col()), ss * it.value());
+    row += npar;
+    r.segment(row, npar) = st * delta;
+    if (trip)
+      for (int j = 0; j < npar; ++j) trip->emplace_back(row + j, j, st);
+    return true;
+  }
+
+  void linearize(Eigen::VectorXd& r, SparseMat& J) override {
+    std::vector<Eigen::Triplet<double>> trip;
+    residuals(delta_, r, &trip);  // the current state is valid: LM only accepts valid states
+    J.resize(r.size(), num_parameters());
+    J.setFromTriplets(trip.begin(), trip.end());
+  }
+  double cost_after(const Eigen::VectorXd& step) override {
+    Eigen::VectorXd r;
+    if (!residuals(delta_ + step, r, nullptr)) return std::numeric_limits<double>::infinity();
+    return r.squaredNorm();
+  }
+  void apply(const Eigen::VectorXd& step) override { delta_ += step; }
+
+ private:
+  std::vector<Vec3> p0_;
+  std::vector<std::unique_ptr<ObservationSet>>& sets_;
+  Eigen::VectorXd delta_;
+  SparseMat L3_;
+};
+
+double feature_rms(const std::vector<std::unique_ptr<ObservationSet>>& sets, const std::vector<Vec3>& p) {
+  std::vector<double> e;
+  for (const auto& s : sets) s->inlier_pixel_errors(p, e);
+  double sum = 0;
+  for (double x : e) sum += x * x;
+  return e.empty() ? 0 : std::sqrt(sum / double(e.size()));
+}
+
+}  // namespace
+
+Status fit_shape(const TriMesh& control, std::vector<std::unique_ptr<ObservationSet>>& sets,
+                 const std::vector<double>& lambdas, const ShapeFitOptions& options, ShapeFitResult& result) {
+  result = {};
+  if (lambdas.size() != sets.size())
+    return Status::error(ErrorCode::InvalidInput, "shape fit: one lambda per observation type needed");
+  for (double l : lambdas)
+    if (!(l >= 0) || !std::isfinite(l)) return Status::error(ErrorCode::InvalidInput, "shape fit: lambda out of range");
+  if (options.stiffness_schedule.empty() || !(options.tether > 0) || options.reweighting_rounds < 1)
+    return Status::error(ErrorCode::InvalidInput, "shape fit: an option is out of range");
+  for (double s : options.stiffness_schedule)
+    if (!(s > 0) || !std::isfinite(s)) return Status::error(ErrorCode::InvalidInput, "shape fit: stiffness must be > 0");
+  if (control.num_vertices() == 0) return Status::error(ErrorCode::InvalidInput, "shape fit: empty control mesh");
+  ShapeProblem problem(control, sets);
+  problem.tether = options.tether;
+  {
+    Eigen::VectorXd r;
+    if (!problem.residuals(Eigen::VectorXd::Zero(problem.num_parameters()), r, nullptr))
+      return Status::error(ErrorCode::InvalidInput, "shape fit: a feature lies behind its camera on the start shape");
+  }
+  result.initial_rms_px = feature_rms(sets, problem.positions());
+  for (double stiffness : options.stiffness_schedule) {
+    ShapeFitStage stage;
+    stage.stiffness = stiffness;
+    problem.stiffness = stiffness;
+    for (int round = 0; round < options.reweighting_rounds; ++round) {
+      if (round > 0 || &stiffness != &options.stiffness_schedule.front())
+        for (auto& s : sets) s->reweight(problem.positions());
+      problem.normalize(lambdas);
+      LmOptions lo;
+      lo.max_iterations = options.max_lm_iterations;
+      lo.relative_tolerance = options.relative_tolerance;
+      const LmReport rep = levenberg_marquardt(problem, lo);
+      if (round == 0) stage.initial_cost = rep.initial_cost;
+      stage.final_cost = rep.final_cost;
+      stage.lm_iterations += rep.iterations;
+    }
+    result.stages.push_back(stage);
+  }
+  result.mesh = control;
+  result.mesh.positions = problem.positions();
+  result.mesh.normals.clear();
+  result.final_rms_px = feature_rms(sets, result.mesh.positions);
+  return Status::success();
+}
+
+}  // namespace lk

@@ -1,0 +1,225 @@
+// likeness photos: landmark files of several photos -> cameras and the
+// person's head (issue 37, fua1998; core/photos/photos_job.h).
+// likeness synth-photos: a synthetic photo session with its truth, to try it.
+#include "command.h"
+
+#include "head/generic_head.h"
+#include "image/image.h"
+#include "io/exif.h"
+#include "io/io.h"
+#include "photos/photos_job.h"
+#include "photos/synthetic_views.h"
+#include "pipeline/head_creases.h"
+#include "subdiv/butterfly.h"
+#include "synth/skin_field.h"
+#include "synth/synth_head.h"
+#include "texture/synthetic_photo.h"
+
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <sys/stat.h>
+
+namespace lk::cli {
+namespace {
+
+using Json = nlohmann::json;
+
+Json camera_json(const Camera& c) {
+  Json R = Json::array();
+  for (int i = 0; i < 3; ++i) R.push_back({c.R(i, 0), c.R(i, 1), c.R(i, 2)});
+  return {{"width", c.width}, {"height", c.height}, {"fx", c.fx}, {"fy", c.fy}, {"cx", c.cx}, {"cy", c.cy},
+          {"R", R}, {"t", {c.t.x(), c.t.y(), c.t.z()}}};
+}
+
+bool make_dir(const std::string& dir) {
+  ::mkdir(dir.c_str(), 0755);
+  struct stat st;
+  return ::stat(dir.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+std::string base_name(const std::string& path) {
+  const size_t k = path.find_last_of('/');
+  return k == std::string::npos ? path : path.substr(k + 1);
+}
+
+int run_photos(const Args& args) {
+  const std::string cmd = "photos";
+  if (!only_known_options(cmd, args, {"points", "photos", "map", "out", "levels", "focal-px"})) return 2;
+  const std::vector<std::string> points_paths = args.get_all("points"), photo_paths = args.get_all("photos");
+  const std::string map_path = args.get("map"), out_dir = args.get("out");
+  if (points_paths.empty() || out_dir.empty()) return fail(cmd, "needs --points P1.json P2.json ... and --out DIR");
+  if (map_path.empty())
+    return fail(cmd, "needs --map MAP.json (landmark index -> generic head point) until the MediaPipe map ships "
+                     "with the head; `likeness synth-photos` writes one for its landmarks");
+  if (!photo_paths.empty() && photo_paths.size() != points_paths.size())
+    return fail(cmd, std::to_string(photo_paths.size()) + " photos for " + std::to_string(points_paths.size()) +
+                         " points files: give one points file per photo, in the same order");
+  int levels = 3;
+  double focal_px = 0;
+  if (!args.get_int("levels", 3, levels, 0, 4) || !args.get_double("focal-px", 0, focal_px, 0, 1e6)) return 2;
+  const auto t0 = std::chrono::steady_clock::now();
+
+  GenericHead generic;
+  Status s = load_generic_head(generic);
+  if (!s) return fail(cmd, s.message);
+  Bytes bytes;
+  s = read_file(map_path, bytes, kMaxLandmarkFileBytes);
+  if (!s) return fail(cmd, s.message);
+  LandmarkMap map;
+  s = parse_landmark_map_json(std::string(bytes.begin(), bytes.end()), map);
+  if (!s) return fail(cmd, map_path + ": " + s.message);
+
+  // Each photo's points; a file that cannot be used is named and left out.
+  std::vector<LandmarkPhoto> photos;
+  std::vector<std::string> notes;
+  std::vector<double> exif_focals;
+  for (size_t i = 0; i < points_paths.size(); ++i) {
+    LandmarkPhoto ph;
+    s = read_file(points_paths[i], bytes, kMaxLandmarkFileBytes);
+    if (s) s = with_context(parse_landmarks_json(std::string(bytes.begin(), bytes.end()), ph), points_paths[i]);
+    if (s && !photo_paths.empty()) {
+      Bytes img;
+      s = read_file(photo_paths[i], img, kMaxImageBytes);
+      ImageInfo info;
+      if (s) s = with_context(inspect_image(img.data(), img.size(), info), photo_paths[i]);
+      if (s && (info.width != ph.width || info.height != ph.height))
+        s = Status::error(ErrorCode::InvalidInput, photo_paths[i] + " is " + std::to_string(info.width) + "x" +
+                                                       std::to_string(info.height) + ", its points file says " +
+                                                       std::to_string(ph.width) + "x" + std::to_string(ph.height));
+      ExifInfo exif;
+      if (s && std::string(info.format) == "JPEG" && read_jpeg_exif(img.data(), img.size(), exif) && exif.present) {
+        const double f = exif_focal_pixels(exif, ph.width, ph.height);
+        if (f > 0) exif_focals.push_back(f);
+      }
+      ph.name = base_name(photo_paths[i]);
+    }
+    if (ph.name.empty()) ph.name = base_name(points_paths[i]);
+    if (!s) {
+      notes.push_back(s.message + " (left out)");
+      continue;
+    }
+    photos.push_back(ph);
+  }
+  PhotosJobOptions opt;
+  opt.calib.focal_prior_px = focal_px;
+  if (focal_px == 0 && !exif_focals.empty()) {
+    std::sort(exif_focals.begin(), exif_focals.end());
+    opt.calib.focal_prior_px = exif_focals[exif_focals.size() / 2];
+    notes.push_back("focal prior from EXIF: " + std::to_string(int(std::lround(opt.calib.focal_prior_px))) + " px");
+  }
+  PhotosJobResult r;
+  s = run_photos_job(generic, map, photos, opt, r);
+  for (const std::string& n : r.notes) notes.push_back(n);
+  for (const std::string& n : notes) std::printf("  note: %s\n", n.c_str());
+  if (!s) return fail(cmd, s.message);
+  if (!make_dir(out_dir)) return fail(cmd, "cannot create the output folder '" + out_dir + "'");
+
+  // The control mesh and its Butterfly levels (no scan: no displacements).
+  s = write_file(out_dir + "/control.obj", write_obj(r.fit.mesh));
+  std::vector<ButterflyLevel> bl;
+  if (s && levels > 0) s = build_butterfly_levels(r.fit.mesh, head_creases(r.fit.mesh, generic.annotations), levels, bl);
+  std::vector<std::vector<Vec3>> level_positions;
+  if (s && levels > 0) s = apply_all(bl, r.fit.mesh.positions, level_positions);
+  for (int l = 1; s && l <= levels; ++l) {
+    TriMesh m;
+    m.positions = level_positions[size_t(l)];
+    m.triangles = bl[size_t(l - 1)].fine_triangles;
+    s = write_file(out_dir + "/level" + std::to_string(l) + ".obj", write_obj(m));
+  }
+  if (!s) return fail(cmd, s.message);
+
+  Json cams = {{"format", "likeness-cameras"}, {"version", 1}, {"focal_px", r.calib.focal}, {"photos", Json::array()}};
+  for (size_t i = 0; i < photos.size(); ++i) {
+    const PhotoCalibration& pc = r.calib.photos[i];
+    Json p = {{"name", photos[i].name}, {"used", pc.used}};
+    if (pc.used) {
+      p["camera"] = camera_json(pc.camera);
+      p["rms_px"] = pc.rms_px;
+    } else {
+      p["refusal"] = pc.refusal;
+    }
+    cams["photos"].push_back(p);
+  }
+  s = write_file(out_dir + "/cameras.json", cams.dump(2) + "\n");
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  Json rep = {{"photos_used", r.calib.num_used()}, {"photos_given", points_paths.size()},
+              {"focal_px", r.calib.focal},
+              {"calibration_rms_px", {r.calib.initial_rms_px, r.calib.final_rms_px}},
+              {"shape_fit_rms_px", {r.fit.initial_rms_px, r.fit.final_rms_px}}, {"notes", notes},
+              {"seconds", seconds}, {"stages", Json::array()}};
+  for (const ShapeFitStage& st : r.fit.stages)
+    rep["stages"].push_back({{"stiffness", st.stiffness}, {"cost", {st.initial_cost, st.final_cost}},
+                             {"lm_iterations", st.lm_iterations}});
+  if (s) s = write_file(out_dir + "/report.json", rep.dump(2) + "\n");
+  if (!s) return fail(cmd, s.message);
+  std::printf("likeness photos: %d of %zu photos used, focal %.1f px\n", r.calib.num_used(), points_paths.size(),
+              r.calib.focal);
+  std::printf("  landmark error: calibration %.2f -> %.2f px, shape fit %.2f -> %.2f px (%.2f s)\n",
+              r.calib.initial_rms_px, r.calib.final_rms_px, r.fit.initial_rms_px, r.fit.final_rms_px, seconds);
+  const std::string level_files = levels > 0 ? ", level1..level" + std::to_string(levels) + ".obj" : "";
+  std::printf("  wrote %s/control.obj%s, cameras.json, report.json\n", out_dir.c_str(), level_files.c_str());
+  return 0;
+}
+
+int run_synth_photos(const Args& args) {
+  const std::string cmd = "synth-photos";
+  if (!only_known_options(cmd, args, {"seed", "out", "cameras", "noise-px", "no-render"})) return 2;
+  int seed = 1;
+  SyntheticViewsOptions vo;
+  if (!args.get_int("seed", 1, seed, 0, INT_MAX) || !args.get_int("cameras", 10, vo.num_cameras, 1, 64) ||
+      !args.get_double("noise-px", 2.0, vo.noise_px, 0, 100))
+    return 2;
+  const std::string out_dir = args.get("out");
+  if (out_dir.empty()) return fail(cmd, "needs --out DIR");
+  if (!make_dir(out_dir)) return fail(cmd, "cannot create the output folder '" + out_dir + "'");
+  GenericHead generic, person;
+  Status s = load_generic_head(generic);
+  if (s) s = synthesize_head(generic, std::uint32_t(seed), SynthHeadOptions{}, person);
+  LandmarkMap map;
+  if (s) s = placeholder_landmark_map(generic, 468, map);
+  std::vector<SurfacePoint> landmarks;
+  if (s) s = attach_landmark_map(map, generic.mesh, 1e-3, landmarks);
+  SyntheticSession session;
+  if (s) s = make_synthetic_views(person, landmarks, std::uint32_t(seed), vo, session);
+  if (s) s = write_file(out_dir + "/map.json", landmark_map_to_json(map));
+  if (s) s = write_file(out_dir + "/person.obj", write_obj(person.mesh));
+  SkinField skin;
+  if (s && !args.has("no-render")) s = make_skin_field(person, std::uint32_t(seed), {}, skin);
+  Json truth = {{"seed", seed}, {"focal_px", vo.focal_px}, {"cameras", Json::array()}};
+  for (size_t c = 0; s && c < session.photos.size(); ++c) {
+    const std::string stem = out_dir + "/" + session.photos[c].name.substr(0, session.photos[c].name.size() - 4);
+    s = write_file(stem + ".json", landmarks_to_json(session.photos[c]));
+    truth["cameras"].push_back(camera_json(session.cameras[c]));
+    if (!s || args.has("no-render")) continue;
+    // Lambert shading under a light from the camera's upper left.
+    const Vec3 light = (session.cameras[c].R.transpose() * Vec3(-0.4, -0.6, -1.0)).normalized();
+    Image photo;
+    s = render_synthetic_photo(
+        person.mesh, session.cameras[c],
+        [&](const Vec3& p, const Vec3& n) -> Vec3 { return skin_albedo(skin, p) * (0.35 + 0.65 * std::max(0.0, n.dot(light))); },
+        Vec3(0.55, 0.6, 0.65), photo);
+    if (s) s = write_file(stem + ".png", write_png(photo));
+  }
+  if (s) s = write_file(out_dir + "/truth.json", truth.dump(2) + "\n");
+  if (!s) return fail(cmd, s.message);
+  std::printf("synth-photos: seed %d, %zu views -> %s (view_XX.json%s, map.json, person.obj, truth.json)\n", seed,
+              session.photos.size(), out_dir.c_str(), args.has("no-render") ? "" : ", view_XX.png");
+  return 0;
+}
+
+Registrar photos_reg({"photos",
+                      "likeness photos --points P1.json P2.json ... --map MAP.json --out DIR [--photos P1.jpg ...] "
+                      "[--focal-px F] [--levels L]",
+                      "a head from several photos' landmarks (fua1998): self-calibrated cameras, fitted control "
+                      "mesh, levels, cameras.json, report.json",
+                      run_photos, nullptr});
+Registrar synth_photos_reg({"synth-photos",
+                            "likeness synth-photos --out DIR [--seed N] [--cameras C] [--noise-px S] [--no-render]",
+                            "a synthetic photo session with its truth: landmark files, map, rendered views, cameras",
+                            run_synth_photos, nullptr});
+
+}  // namespace
+}  // namespace lk::cli

@@ -1,0 +1,50 @@
+// likeness synth-photos + likeness photos end to end, and their refusals.
+#include "test_data.h"
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+
+namespace {
+
+using lk::test::read_file_text;
+int run(const std::string& args, const std::string& err = "/dev/null") { return lk::test::run_likeness(args, err); }
+
+}  // namespace
+
+TEST_CASE("likeness photos makes a head and cameras from a synthetic session's landmark files", "[photos][cli]") {
+  LK_REQUIRE_LIKENESS();
+  const std::string dir = lk::test::scratch_dir("photos_cli");
+  REQUIRE(run("synth-photos --seed 2 --cameras 6 --no-render --out " + dir + "/s") == 0);
+  std::string points;
+  for (int i = 0; i < 6; ++i) points += " " + dir + "/s/view_0" + std::to_string(i) + ".json";
+  REQUIRE(run("photos --points" + points + " --map " + dir + "/s/map.json --levels 1 --out " + dir + "/out") == 0);
+  CHECK(read_file_text(dir + "/out/control.obj").size() > 1000);
+  CHECK(read_file_text(dir + "/out/level1.obj").size() > read_file_text(dir + "/out/control.obj").size());
+  const auto cams = nlohmann::json::parse(read_file_text(dir + "/out/cameras.json"));
+  const auto truth = nlohmann::json::parse(read_file_text(dir + "/s/truth.json"));
+  REQUIRE(cams["photos"].size() == 6);
+  CHECK(std::abs(cams["focal_px"].get<double>() - truth["focal_px"].get<double>()) < 0.05 * truth["focal_px"].get<double>());
+  for (const auto& p : cams["photos"]) CHECK(p["used"] == true);
+
+  // Refusals: no map, a broken points file (named, left out), the map for another head.
+  const std::string err = dir + "/err.txt";
+  CHECK(run("photos --points" + points + " --out " + dir + "/o2", err) == 1);
+  CHECK(read_file_text(err).find("--map") != std::string::npos);
+  {
+    FILE* f = std::fopen((dir + "/broken.json").c_str(), "w");
+    REQUIRE(f);
+    std::fputs("{\"format\":\"likeness-landmarks\",\"version\":1}", f);
+    std::fclose(f);
+  }
+  const std::string log = dir + "/log.txt";
+  CHECK(std::system(("'" + std::string(LK_BIN_DIR) + "/likeness' photos --points" + points + " " + dir +
+                     "/broken.json --map " + dir + "/s/map.json --levels 0 --out " + dir + "/o3 > " + log + " 2>&1")
+                        .c_str()) == 0);
+  CHECK(read_file_text(log).find("broken.json: detector") != std::string::npos);
+  CHECK(run("photos --points" + points + " --map " + dir + "/s/view_00.json --out " + dir + "/o4", err) == 1);
+  CHECK(read_file_text(err).find("format") != std::string::npos);
+  CHECK(run("photos --points" + points + " --map " + dir + "/s/map.json --photos a.jpg --out " + dir + "/o5", err) == 1);
+  CHECK(read_file_text(err).find("one points file per photo") != std::string::npos);
+}
