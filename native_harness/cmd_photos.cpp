@@ -51,9 +51,6 @@ int run_photos(const Args& args) {
   const std::vector<std::string> points_paths = args.get_all("points"), photo_paths = args.get_all("photos");
   const std::string map_path = args.get("map"), out_dir = args.get("out");
   if (points_paths.empty() || out_dir.empty()) return fail(cmd, "needs --points P1.json P2.json ... and --out DIR");
-  if (map_path.empty())
-    return fail(cmd, "needs --map MAP.json (landmark index -> generic head point) until the MediaPipe map ships "
-                     "with the head; `likeness synth-photos` writes one for its landmarks");
   if (!photo_paths.empty() && photo_paths.size() != points_paths.size())
     return fail(cmd, std::to_string(photo_paths.size()) + " photos for " + std::to_string(points_paths.size()) +
                          " points files: give one points file per photo, in the same order");
@@ -65,12 +62,20 @@ int run_photos(const Args& args) {
   GenericHead generic;
   Status s = load_generic_head(generic);
   if (!s) return fail(cmd, s.message);
-  Bytes bytes;
-  s = read_file(map_path, bytes, kMaxLandmarkFileBytes);
-  if (!s) return fail(cmd, s.message);
+  // The map: --map FILE (e.g. synth-photos' own), else the MediaPipe map
+  // that ships with the head.
+  std::string map_text;
+  if (!map_path.empty()) {
+    Bytes bytes;
+    s = read_file(map_path, bytes, kMaxLandmarkFileBytes);
+    if (!s) return fail(cmd, s.message);
+    map_text.assign(bytes.begin(), bytes.end());
+  } else {
+    map_text = mediapipe_landmark_map_text();
+  }
   LandmarkMap map;
-  s = parse_landmark_map_json(std::string(bytes.begin(), bytes.end()), map);
-  if (!s) return fail(cmd, map_path + ": " + s.message);
+  s = parse_landmark_map_json(map_text, map);
+  if (!s) return fail(cmd, (map_path.empty() ? std::string("the embedded MediaPipe map") : map_path) + ": " + s.message);
 
   // Each photo's points; a file that cannot be used is named and left out.
   std::vector<LandmarkPhoto> photos;
@@ -78,6 +83,7 @@ int run_photos(const Args& args) {
   std::vector<double> exif_focals;
   for (size_t i = 0; i < points_paths.size(); ++i) {
     LandmarkPhoto ph;
+    Bytes bytes;
     s = read_file(points_paths[i], bytes, kMaxLandmarkFileBytes);
     if (s) s = with_context(parse_landmarks_json(std::string(bytes.begin(), bytes.end()), ph), points_paths[i]);
     if (s && !photo_paths.empty()) {
@@ -211,7 +217,7 @@ int run_synth_photos(const Args& args) {
 }
 
 Registrar photos_reg({"photos",
-                      "likeness photos --points P1.json P2.json ... --map MAP.json --out DIR [--photos P1.jpg ...] "
+                      "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] "
                       "[--focal-px F] [--levels L]",
                       "a head from several photos' landmarks (fua1998): self-calibrated cameras, fitted control "
                       "mesh, levels, cameras.json, report.json",

@@ -14,6 +14,8 @@ extern const unsigned char head_generic_head_obj[];
 extern const std::size_t head_generic_head_obj_size;
 extern const unsigned char head_generic_head_json[];
 extern const std::size_t head_generic_head_json_size;
+extern const unsigned char head_mediapipe_landmark_map_json[];
+extern const std::size_t head_mediapipe_landmark_map_json_size;
 }  // namespace likeness_embedded
 
 namespace lk {
@@ -312,6 +314,10 @@ std::string generic_head_obj_text() {
 std::string generic_head_json_text() {
   return std::string(reinterpret_cast<const char*>(likeness_embedded::head_generic_head_json),
                      likeness_embedded::head_generic_head_json_size);
+}
+std::string mediapipe_landmark_map_text() {
+  return std::string(reinterpret_cast<const char*>(likeness_embedded::head_mediapipe_landmark_map_json),
+                     likeness_embedded::head_mediapipe_landmark_map_json_size);
 }
 
 Status load_generic_head(GenericHead& out) {

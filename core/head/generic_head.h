@@ -27,6 +27,10 @@ Status load_generic_head(GenericHead& out);
 // The embedded asset's bytes, for tools that want to write them out as-is.
 std::string generic_head_obj_text();
 std::string generic_head_json_text();
+// The embedded map of MediaPipe Face Mesh's 468 landmarks onto the generic
+// head's surface (core/head/data/mediapipe_landmark_map.json, format
+// likeness-landmark-map: photos/landmarks.h reads it).
+std::string mediapipe_landmark_map_text();
 
 // Parses annotation JSON for a mesh with num_vertices vertices. Every field is
 // checked: vectors are 3 finite numbers, indices are integers in

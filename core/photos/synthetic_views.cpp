@@ -49,7 +49,7 @@ Vec3 triangle_normal(const TriMesh& m, int f) {
 
 Status placeholder_landmark_map(const GenericHead& generic, int count, LandmarkMap& out) {
   out = {};
-  out.detector = "mediapipe-face-mesh";
+  out.detector = kPlaceholderDetector;
   auto it = generic.annotations.regions.find("face");
   if (it == generic.annotations.regions.end() || count < 6)
     return Status::error(ErrorCode::InvalidInput, "placeholder map: no face region, or count < 6");
@@ -143,7 +143,7 @@ Status make_synthetic_views(const GenericHead& head, const std::vector<SurfacePo
     ph.name = name;
     ph.width = o.width;
     ph.height = o.height;
-    ph.detector = "mediapipe-face-mesh";
+    ph.detector = kPlaceholderDetector;
     ph.points.assign(landmarks.size(), Vec2::Zero());
     ph.present.assign(landmarks.size(), 0);
     const Vec3 C = cam.center();

@@ -24,6 +24,9 @@
 namespace lk {
 
 Status placeholder_landmark_map(const GenericHead& generic, int count, LandmarkMap& out);
+// The placeholder map's and the synthetic photos' detector name: not
+// MediaPipe's, so synthetic points files are never read with the real map.
+inline constexpr const char* kPlaceholderDetector = "likeness-placeholder-vertices";
 
 struct SyntheticViewsOptions {
   int num_cameras = 10;
@@ -38,7 +41,7 @@ struct SyntheticViewsOptions {
 
 struct SyntheticSession {
   std::vector<Camera> cameras;       // #C, the truth
-  std::vector<LandmarkPhoto> photos; // #C, detector "mediapipe-face-mesh", names view_XX.png
+  std::vector<LandmarkPhoto> photos; // #C, detector kPlaceholderDetector, names view_XX.png
 };
 
 // head: the person (same topology as the head the landmarks were attached

@@ -98,5 +98,21 @@ TEST_CASE("the landmark map attaches to the head's surface and refuses a map for
   CHECK_FALSE(parse_landmark_map_json(R"({"format":"likeness-landmark-map","version":1,"detector":"d","points":[[0,0,1e9]]})", bad).ok());
 }
 
+TEST_CASE("the MediaPipe map that ships with the head attaches to it", "[photos]") {
+  GenericHead generic;
+  REQUIRE(load_generic_head(generic));
+  LandmarkMap map;
+  REQUIRE(parse_landmark_map_json(mediapipe_landmark_map_text(), map));
+  CHECK(map.detector == "mediapipe-face-mesh");
+  REQUIRE(map.points.size() == 468);
+  int mapped = 0;
+  for (char p : map.present) mapped += p != 0;
+  CHECK(mapped >= 440);  // 451 when made: face-outline points whose views disagree are null
+  std::vector<SurfacePoint> attached;
+  REQUIRE(attach_landmark_map(map, generic.mesh, 5e-3, attached));
+  CHECK(static_cast<int>(attached.size()) == 468);
+}
+
 }  // namespace
+
 }  // namespace lk
