@@ -66,9 +66,9 @@ struct GenericHeadBuildOptions {
   bool wide_mouth_ring = false;    // true: the first ring round the mouth reaches 8 mm past the
                                    // lip line's corners (4.5 mm in the asset): its smooth levels
                                    // no longer cross themselves at the mouth corners (8 pairs at
-                                   // level 2, 24 at level 3 -> 0). Not the asset's yet: three
-                                   // fit and alignment tests tuned to the asset's figures fail
-                                   // with it (docs/design/generic_head_measured.md).
+                                   // level 2, 24 at level 3 -> 0). Not the asset's yet: six
+                                   // tests fail with it, among them Demosthenes' ears on the
+                                   // real scans (docs/design/generic_head_measured.md).
   bool mirror_diagonals = true;    // true: each quad on the -x side is split as its mirror image
                                    // on +x is, so triangles mirror as vertices do (issue 35);
                                    // false: each side by shape, as before: 6 quads of each eye
