@@ -138,7 +138,7 @@ Roughness surface_roughness(const TriMesh& level, const std::vector<char>& regio
     double d2 = 0;
     scan_tree.knnSearch(c.data(), 1, &idx, &d2);
     if (d2 > 0.003 * 0.003) continue;
-    const SurfacePoint sp = truth_tree.closest(c);
+    const SurfaceHit sp = truth_tree.closest(c);
     if (sp.face < 0) continue;
     const Tri& tt = truth.triangles[sp.face];
     const Vec3 tn = (sp.barycentric[0] * truth_normals[tt[0]] + sp.barycentric[1] * truth_normals[tt[1]] +
@@ -404,7 +404,7 @@ int run(const Args& args) {
       TriMesh truth_head = truth.mesh;  // in the head frame (the identity for these metre-scale scans)
       transform(truth_head, r.scan_to_head.A, r.scan_to_head.t);
       // The truth was scanned where a scan point lies within 3 mm of it.
-      const auto truth_scanned = [&](const SurfacePoint& sp) {
+      const auto truth_scanned = [&](const SurfaceHit& sp) {
         unsigned idx = 0;
         double d2 = 0;
         tree.knnSearch(sp.point.data(), 1, &idx, &d2);
@@ -528,7 +528,7 @@ int run(const Args& args) {
           const Tri& t = finest.triangles[f];
           if (!(to_edge[t[0]] <= 0.010 && to_edge[t[1]] <= 0.010 && to_edge[t[2]] <= 0.010)) continue;
           const Vec3 c = (finest.positions[t[0]] + finest.positions[t[1]] + finest.positions[t[2]]) / 3.0;
-          const SurfacePoint sp = truth_tree.closest(c);
+          const SurfaceHit sp = truth_tree.closest(c);
           if (sp.face < 0) continue;
           const Tri& tt = truth_head.triangles[sp.face];
           const Vec3 tn = (sp.barycentric[0] * truth_normals[tt[0]] + sp.barycentric[1] * truth_normals[tt[1]] +

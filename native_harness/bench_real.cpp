@@ -172,7 +172,7 @@ Status measure_neck(const FitHeadResult& r, const PointCloud& scan, const Generi
     const Vec3 p = r.scan_to_head.apply(p0);
     const double h = normal.dot(p - point);
     if (h >= 0 || h < lowest) continue;
-    const SurfacePoint s = tree.closest(p);
+    const SurfaceHit s = tree.closest(p);
     if (s.face < 0) continue;
     const Tri& t = finest.triangles[s.face];
     if (not_neck[t[0]] && not_neck[t[1]] && not_neck[t[2]]) continue;

@@ -12,8 +12,8 @@
 
 namespace lk {
 
-SurfacePoint closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
-  SurfacePoint r;
+SurfaceHit closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  SurfaceHit r;
   r.point = lk::closest_point_on_triangle(p, a, b, c, r.barycentric);
   r.squared_distance = (r.point - p).squaredNorm();
   return r;
@@ -35,8 +35,8 @@ void ClosestPointTree::build(const TriMesh& mesh, MeshBvh& tree) {
 }
 
 namespace {
-SurfacePoint to_surface_point(const ClosestPoint& c, const Vec3& p) {
-  SurfacePoint s;
+SurfaceHit to_surface_point(const ClosestPoint& c, const Vec3& p) {
+  SurfaceHit s;
   s.face = c.triangle;
   s.point = c.point;
   s.barycentric = c.barycentric;
@@ -45,18 +45,18 @@ SurfacePoint to_surface_point(const ClosestPoint& c, const Vec3& p) {
 }
 }  // namespace
 
-SurfacePoint ClosestPointTree::closest(const Vec3& p, double max_squared_distance) const {
+SurfaceHit ClosestPointTree::closest(const Vec3& p, double max_squared_distance) const {
   const ClosestPoint c = closest_point(bvh_, p, std::sqrt(max_squared_distance));
   if (c.found()) return to_surface_point(c, p);
-  SurfacePoint none;
+  SurfaceHit none;
   none.squared_distance = max_squared_distance;
   return none;
 }
 
-SurfacePoint ClosestPointTree::closest_near(const Vec3& p, int guess) const {
+SurfaceHit ClosestPointTree::closest_near(const Vec3& p, int guess) const {
   const ClosestPoint c = closest_point_near(bvh_, p, guess);
   if (c.found()) return to_surface_point(c, p);
-  return SurfacePoint{};  // (an empty tree)
+  return SurfaceHit{};  // (an empty tree)
 }
 
 DistanceStats summarize_distances(std::vector<double>& d, double reference_diagonal) {
@@ -97,7 +97,7 @@ DistanceStats point_to_surface_stats(const std::vector<Vec3>& points, const Clos
   parallel_for(0, (n + kRun - 1) / kRun, 1, [&](int run, int) {
     int face = -1;
     for (int k = run * kRun; k < std::min(n, (run + 1) * kRun); ++k) {
-      const SurfacePoint c = tree.closest_near(points[size_t(k) * stride], face);
+      const SurfaceHit c = tree.closest_near(points[size_t(k) * stride], face);
       face = c.face;
       d[k] = std::sqrt(c.squared_distance);
     }
@@ -124,7 +124,7 @@ CoveredDistances summarize_covered(std::vector<double>& kept) {
 }  // namespace
 
 CoveredDistances surface_to_reference(const TriMesh& surface, const std::vector<char>& skip, const TriMesh& reference,
-                                      const std::function<bool(const SurfacePoint&)>& covered,
+                                      const std::function<bool(const SurfaceHit&)>& covered,
                                       std::vector<double>* per_vertex) {
   const ClosestPointTree tree(reference);
   const std::vector<Vec3> normals = vertex_normals(surface);
@@ -132,7 +132,7 @@ CoveredDistances surface_to_reference(const TriMesh& surface, const std::vector<
   std::vector<double> d(n, -1), facing(n, 0);
   parallel_for(0, n, 1024, [&](int v, int) {
     if (!skip.empty() && skip[v]) return;
-    const SurfacePoint s = tree.closest(surface.positions[v]);
+    const SurfaceHit s = tree.closest(surface.positions[v]);
     if (s.face < 0 || !covered(s)) return;
     d[v] = std::sqrt(s.squared_distance);
     const Vec3 rn = face_normal_area(reference, s.face).normalized();
@@ -195,7 +195,7 @@ CoveredDistances surface_to_cloud(const TriMesh& surface, const std::vector<char
   return out;
 }
 
-std::function<bool(const SurfacePoint&)> inside_scan_mesh(const TriMesh& scan) {
+std::function<bool(const SurfaceHit&)> inside_scan_mesh(const TriMesh& scan) {
   // Boundary edges: used by one triangle.
   auto edge_uses = std::make_shared<std::map<std::pair<int, int>, int>>();
   for (const Tri& t : scan.triangles)
@@ -207,7 +207,7 @@ std::function<bool(const SurfacePoint&)> inside_scan_mesh(const TriMesh& scan) {
   for (const auto& [e, uses] : *edge_uses)
     if (uses == 1) (*on_rim)[e.first] = (*on_rim)[e.second] = 1;
   const auto triangles = std::make_shared<std::vector<Tri>>(scan.triangles);
-  return [edge_uses, on_rim, triangles](const SurfacePoint& s) {
+  return [edge_uses, on_rim, triangles](const SurfaceHit& s) {
     const Tri& t = (*triangles)[s.face];
     const double eps = 1e-9;
     int zero = 0;

@@ -18,8 +18,9 @@
 
 namespace lk {
 
-// The nearest surface point of one query.
-struct SurfacePoint {
+// The nearest surface point of one query. (Not "SurfacePoint": that is
+// photos/landmarks.h's, and one program links both modules.)
+struct SurfaceHit {
   int face = -1;                     // triangle index, -1 when the mesh is empty
   Vec3 barycentric = Vec3::Zero();   // weights of the triangle's corners 0,1,2
   Vec3 point = Vec3::Zero();         // the closest point itself
@@ -44,20 +45,20 @@ class ClosestPointTree {
   // distance is known (e.g. from the previous iteration's triangle) passing
   // it prunes the search; if nothing is nearer than the bound the result's
   // face is -1.
-  SurfacePoint closest(const Vec3& p, double max_squared_distance = 1e300) const;
+  SurfaceHit closest(const Vec3& p, double max_squared_distance = 1e300) const;
   // Exact closest point, searched first within the distance to triangle
   // `guess` (e.g. the triangle found for a neighbouring point; -1: none).
   // Same answer as closest(p), bit for bit (the bound is widened a little
   // so that the nearest triangle, and the first of exact ties, is always
   // inside it), only faster when the guess is near.
-  SurfacePoint closest_near(const Vec3& p, int guess) const;
+  SurfaceHit closest_near(const Vec3& p, int guess) const;
 
  private:
   MeshBvh bvh_;
 };
 
 // Closest point on triangle (a, b, c) to p, with barycentric weights.
-SurfacePoint closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+SurfaceHit closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
 
 // Distances from scan points to a surface, the measure of jeong2002 Table 1.
 struct DistanceStats {
@@ -105,7 +106,7 @@ struct CoveredDistances {
 // from the vertices within 2 mm). Both meshes in metres (the head frame).
 // per_vertex (optional): #V distances, -1 where a vertex is not counted.
 CoveredDistances surface_to_reference(const TriMesh& surface, const std::vector<char>& skip, const TriMesh& reference,
-                                      const std::function<bool(const SurfacePoint&)>& covered,
+                                      const std::function<bool(const SurfaceHit&)>& covered,
                                       std::vector<double>* per_vertex = nullptr);
 
 // A covered() for a scan's own triangles: the closest point is not on the
@@ -113,7 +114,7 @@ CoveredDistances surface_to_reference(const TriMesh& surface, const std::vector<
 // vertex beyond the scan's rim or over one of its holes does not count.
 // Edges are counted directly, not by build_topology: scans need not be
 // manifold.
-std::function<bool(const SurfacePoint&)> inside_scan_mesh(const TriMesh& scan);
+std::function<bool(const SurfaceHit&)> inside_scan_mesh(const TriMesh& scan);
 
 // The same on a scan that came as points (no triangles to project onto):
 // each vertex's distance to the scanned surface under it, the quadric

@@ -96,7 +96,7 @@ LinearTerm constraint_term(const std::vector<int>& vertices, int nv, const VecX&
 
 // Closest points of the point set on the mesh with positions x.
 struct Projection {
-  std::vector<SurfacePoint> hits;
+  std::vector<SurfaceHit> hits;
   double dist_energy = 0;  // 1/#S sum min(d, tau)^2
 };
 
@@ -105,7 +105,7 @@ struct Projection {
 // the new positions bounds the search, which prunes most of the tree when
 // the mesh moved little.
 void project(const std::vector<Vec3>& points, DataSurface& data, const VecX& x, double tau,
-             const std::vector<SurfacePoint>* previous, Projection& out) {
+             const std::vector<SurfaceHit>* previous, Projection& out) {
   data.set(x);
   const TriMesh& work = data.mesh;
   ClosestPointTree tree(work);
@@ -117,9 +117,9 @@ void project(const std::vector<Vec3>& points, DataSurface& data, const VecX& x, 
     if (warm && (*previous)[i].face >= 0) {
       const int f = (*previous)[i].face;
       const Tri& t = work.triangles[f];
-      SurfacePoint guess = closest_point_on_triangle(p, work.positions[t[0]], work.positions[t[1]], work.positions[t[2]]);
+      SurfaceHit guess = closest_point_on_triangle(p, work.positions[t[0]], work.positions[t[1]], work.positions[t[2]]);
       guess.face = f;
-      const SurfacePoint better = tree.closest(p, guess.squared_distance);
+      const SurfaceHit better = tree.closest(p, guess.squared_distance);
       out.hits[i] = better.face >= 0 ? better : guess;
     } else {
       out.hits[i] = tree.closest(p);
@@ -127,7 +127,7 @@ void project(const std::vector<Vec3>& points, DataSurface& data, const VecX& x, 
   });
   double sum = 0;  // in point order: the same sum on any number of threads
   const double tau2 = tau * tau;
-  for (const SurfacePoint& h : out.hits) sum += std::min(h.squared_distance, tau2);
+  for (const SurfaceHit& h : out.hits) sum += std::min(h.squared_distance, tau2);
   out.dist_energy = points.empty() ? 0.0 : sum / points.size();
 }
 
@@ -171,7 +171,7 @@ bool preconditioned_cg(const SpMat& H, const VecX& g, const NormalSolver& M, con
 // d_p the distance from point p to the triangle it projected to before
 // (hits; a point without one counts tau): an upper bound of E_dist at x.
 double distance_energy_bound(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, const VecX& x,
-                             double tau, const std::vector<SurfacePoint>& hits) {
+                             double tau, const std::vector<SurfaceHit>& hits) {
   const double tau2 = tau * tau;
   std::vector<double> d2(points.size(), tau2);
   parallel_for(0, static_cast<int>(points.size()), 4096, [&](int i, int) {
@@ -770,7 +770,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
     if (carried_count == count) {
       proj = std::move(carried);
     } else if (carried_count > 0 && carried_count < count) {
-      std::vector<SurfacePoint> start(count);  // face -1: searched from scratch
+      std::vector<SurfaceHit> start(count);  // face -1: searched from scratch
       std::copy(carried.hits.begin(), carried.hits.end(), start.begin());
       project(set, data, x, 1e300, &start, proj);
     } else {
@@ -826,7 +826,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       VecX& g_y = data.level > 0 ? g_refined : g;
       const double tau2 = tau * tau;
       for (size_t i = 0; i < set.size(); ++i) {
-        const SurfacePoint& h = proj.hits[i];
+        const SurfaceHit& h = proj.hits[i];
         if (h.face < 0 || h.squared_distance > tau2) continue;
         const Vec3& p = set[i];
         const Tri& tri = data.mesh.triangles[h.face];

@@ -66,7 +66,7 @@ struct BoxProblem {
 
   struct Eval {
     double energy = 0;
-    std::vector<SurfacePoint> hits;
+    std::vector<SurfaceHit> hits;
     std::vector<Vec3> moved;
   };
 
@@ -81,7 +81,7 @@ struct BoxProblem {
     // any number of threads).
     parallel_for(0, static_cast<int>(points.size()), 256, [&](int i, int) { ev.hits[i] = tree.closest(points[i]); });
     double dist = 0;
-    for (const SurfacePoint& h : ev.hits) dist += h.squared_distance;
+    for (const SurfaceHit& h : ev.hits) dist += h.squared_distance;
     double stretch = 0;
     for (size_t e = 0; e < edges.size(); ++e) {
       const double l = (m.positions[edges[e][0]] - m.positions[edges[e][1]]).norm();
@@ -98,7 +98,7 @@ struct BoxProblem {
     Jtr.setZero();
     const double wd = 1.0 / std::max<size_t>(1, points.size());
     for (size_t i = 0; i < points.size(); ++i) {
-      const SurfacePoint& h = ev.hits[i];
+      const SurfaceHit& h = ev.hits[i];
       if (h.face < 0) continue;
       const Tri& tri = triangles[h.face];
       // Corners follow T by their weights: q collects their weighted

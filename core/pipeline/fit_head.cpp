@@ -486,7 +486,7 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   {
     std::vector<char> on_pocket(pts.size(), 0);
     parallel_for(0, static_cast<int>(pts.size()), 2048, [&](int i, int) {
-      const SurfacePoint c = local_tree.closest(pts[i]);
+      const SurfaceHit c = local_tree.closest(pts[i]);
       if (c.face >= 0)
         for (int v : out.local.triangles[c.face]) on_pocket[i] = on_pocket[i] || pocket[v];
     });
@@ -566,7 +566,7 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
     for (int i = 0; i < n; ++i) {
       const double h = neck.normal.dot(cloud.positions[i] - neck.point);
       if (h >= 0 || h < -options.displacement_below_neck_cut) continue;
-      const SurfacePoint c = local_tree.closest(cloud.positions[i]);
+      const SurfaceHit c = local_tree.closest(cloud.positions[i]);
       if (c.face < 0) continue;
       const Tri& t = out.local.triangles[c.face];
       if (in_neck[t[0]] && in_neck[t[1]] && in_neck[t[2]]) band.push_back(cloud.positions[i]), band_index.push_back(i);

@@ -35,7 +35,7 @@ TEST_CASE("BVH closest point equals brute force on a bumpy ellipsoid") {
     double best = 1e300;
     for (const Tri& t : m.triangles)
       best = std::min(best, closest_point_on_triangle(p, m.positions[t[0]], m.positions[t[1]], m.positions[t[2]]).squared_distance);
-    const SurfacePoint s = tree.closest(p);
+    const SurfaceHit s = tree.closest(p);
     REQUIRE(s.face >= 0);
     CHECK(s.squared_distance == Approx(best).epsilon(1e-12));
     // The barycentric combination reproduces the point.
@@ -76,10 +76,10 @@ TEST_CASE("closest_near: the same point, triangle and distance as closest, from 
       const Tri& t = m.triangles[i % m.num_triangles()];
       p = (i % 4 == 0) ? m.positions[t[0]] : Vec3(0.5 * (m.positions[t[0]] + m.positions[t[1]]));
     }
-    const SurfacePoint exact = tree.closest(p);
+    const SurfaceHit exact = tree.closest(p);
     // The right triangle, a random one (usually far), none, out of range.
     for (int guess : {exact.face, F(rng), -1, m.num_triangles() + 5}) {
-      const SurfacePoint near = tree.closest_near(p, guess);
+      const SurfaceHit near = tree.closest_near(p, guess);
       guesses_far += guess >= 0 && guess != exact.face;
       REQUIRE(near.face == exact.face);
       CHECK(near.squared_distance == exact.squared_distance);  // bit for bit
