@@ -1,0 +1,34 @@
+#include "project/photos_project.h"
+
+#include "pipeline/head_creases.h"
+#include "project/pose.h"
+
+namespace lk {
+
+Status photos_project(const GenericHead& generic, const LandmarkMap& map, const std::vector<LandmarkPhoto>& photos,
+                      const PhotosJobOptions& options, int levels, HeadProject& project, PhotosJobResult& result) {
+  project = HeadProject{};
+  result = PhotosJobResult{};
+  if (levels < 1 || levels > 4) return Status::error(ErrorCode::InvalidInput, "photos: levels must be 1..4");
+  Status s = run_photos_job(generic, map, photos, options, result);
+  if (!s) return s;
+  FitHeadResult& fit = project.fit;
+  fit.aligned = generic.mesh;
+  fit.local = result.fit.mesh;
+  fit.control = result.fit.mesh;
+  fit.notes = result.notes;
+  // The levels as `likeness photos` writes them: the generic head's creases
+  // (eye and lip rims), no displacements.
+  s = build_multires(fit.control, head_creases(fit.control, generic.annotations), levels, fit.multires);
+  if (!s) {
+    project = HeadProject{};
+    return with_context(s, "photos (levels)");
+  }
+  for (int l = 1; l <= levels; ++l) fit.level_meshes.push_back(level_mesh(fit.multires, l));
+  project.options.levels = levels;
+  project.frame = HeadFrame{};  // head frame = shown frame: metres, +y up, +z facing
+  project.rig = make_animation_rig(fit.control, generic.annotations);
+  return Status::success();
+}
+
+}  // namespace lk

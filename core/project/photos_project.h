@@ -1,0 +1,29 @@
+// A head project from photos (issue 37): the photos job's fitted control
+// mesh (photos/photos_job.h, run here unchanged) made into a HeadProject the
+// way fit_project makes one from a scan, so the page and the CLI animate,
+// check, export and save it like a fitted head.
+//
+// What differs from a scan's project: there is no scan (project.scan is
+// empty, so the checks have no distance to a scan), the head frame is the
+// scan frame (metres, the generic head's size: scale is not observable from
+// uncalibrated photos), and the levels carry no displacements (no scan to
+// measure them on): they are the fitted control mesh's Butterfly levels, as
+// `likeness photos` writes them.
+#pragma once
+#include "photos/photos_job.h"
+#include "project/project.h"
+
+#include <vector>
+
+namespace lk {
+
+// Runs run_photos_job(generic, map, photos, options, result) and, when it
+// succeeds, makes project a new project of its control mesh with `levels`
+// (1..4) Butterfly levels. fit.aligned is the generic head (the shape the
+// self-calibration starts from), fit.local and fit.control the fitted
+// control mesh; fit.notes are the job's notes. On an error project is left
+// empty and result holds what the job got to (each photo's refusal).
+Status photos_project(const GenericHead& generic, const LandmarkMap& map, const std::vector<LandmarkPhoto>& photos,
+                      const PhotosJobOptions& options, int levels, HeadProject& project, PhotosJobResult& result);
+
+}  // namespace lk
