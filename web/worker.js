@@ -209,6 +209,10 @@ const JOBS = {
   // {name, buffer, guess?: [x, y]}: an eye photo -> the eyeball (iris) texture.
   eye: (msg, progress) => withPhoto(msg.name, msg.buffer, (ptr, size, decoded) =>
     core.eye_photo_job(msg.name, ptr, size, msg.guess || null, decoded, progress)),
+  // {photos: [{name, text}], options}: each photo's face landmarks
+  // (likeness-landmarks JSON) -> cameras and the person's head (issue 37),
+  // kept in this worker like a fitted head.
+  photos: (msg) => core.photos_head_job(msg.photos || [], msg.options || {}),
   // {name, buffer}: a smile photo -> the teeth texture (teeth model's uvs).
   smile: (msg) => withPhoto(msg.name, msg.buffer, (ptr, size, decoded) => core.smile_photo_job(msg.name, ptr, size, decoded)),
 };

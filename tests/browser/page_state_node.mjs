@@ -194,4 +194,14 @@ for (const state of ['ready', 'done', 'error']) {
   });
 }
 
+test('Make head from photos: at rest, with no scan loaded, once a photo has face points', () => {
+  for (const state of ['ready', 'done', 'error']) {
+    assert.equal(controlsFor({ state, facePoints: 2 }).photosHead, true, state);
+    assert.equal(controlsFor({ state, facePoints: 0 }).photosHead, false, state + ', no face points');
+    assert.equal(controlsFor({ state, facePoints: 2, scan: true, scanFile: true }).photosHead, false, state + ', a scan loaded');
+  }
+  for (const state of ['loading', 'working']) assert.equal(controlsFor({ state, facePoints: 2 }).photosHead, false, state);
+  assert.equal(controlsFor({ state: 'ready', facePoints: 2, fatal: true }).photosHead, false, 'fatal');
+});
+
 console.log(`page state: ${checks}/${checks} checks passed`);

@@ -49,7 +49,7 @@ export function showQuality(q) {
   if (q.controlCrossings === 0) qualityItem('ok', 'The control mesh does not cross itself.');
   else qualityItem('look', 'The control mesh crosses itself in ' + count(q.controlCrossings) +
                    ' triangle pairs: the fit folded it there, and every level inherits the fold.');
-  if (q.faceToScan) {
+  if (q.faceToScan && !(app.fit && app.fit.fromPhotos)) {  // a head from photos has no scan to measure against
     const d = q.faceToScan;
     const against = d.to === 'points' ? 'Against your scan\'s points (a small surface fitted to each vertex\'s 16 nearest), where it was scanned'
                                       : 'Against your scan\'s own triangles, where it was scanned';

@@ -21,6 +21,25 @@ export const FIT_STAGES = [
 ];
 const rowOf = (core) => (FIT_STAGES.find((s) => s.core === core) || {}).row;
 
+// A head from photos runs other stages than a scan's fit: its rows say what
+// ran (photos_head.js); a scan's fit or a project gets the scan rows back.
+const PHOTO_ROWS = {
+  load: ['Face points', 'MediaPipe Face Mesh in the page: 468 points per photo, from the page\'s own origin'],
+  align: ['Self-calibration', 'fua1998 with uncalibrated photos: one shared focal and a pose per photo, bundle-adjusted ' +
+                              'with the landmarks\' 3-D positions (core/photos/self_calibration.h)'],
+  local_fit: ['Shape fit', 'fua1998 Sec. 2-3.3: the control mesh deformed so that its landmarks project onto the photos ' +
+                           '(least squares, Levenberg-Marquardt; core/photos/shape_fit.h)'],
+};
+export function nameRows(photos) {
+  for (const [row, [name, title]] of Object.entries(PHOTO_ROWS)) {
+    const li = stageItem(row);
+    const el = li.querySelector('.stage-name');
+    if (li.dataset.scanName === undefined) { li.dataset.scanName = el.textContent; li.dataset.scanTitle = li.title || ''; }
+    el.textContent = photos ? name : li.dataset.scanName;
+    li.title = photos ? title : li.dataset.scanTitle;
+  }
+}
+
 function stageStats(row) { return stageItem(row).querySelector('.stage-stats'); }
 
 // The fit died with its worker, or a new scan came: rows keep their numbers
@@ -54,6 +73,7 @@ export async function runFit() {
   const file = app.scan.file;
   const job = beginJob('fit');
   if (!job) return;
+  nameRows(false);
   for (const st of FIT_STAGES) {
     setStage(st.row, 'waiting', 0);
     stageStats(st.row).textContent = '';
@@ -117,8 +137,11 @@ app.fitHead = () => runFit();
 // file (result.loadMs; its stages carry the saved figures, no times): the
 // Pipeline rows, the notes, the levels, the components, the subdivided
 // head over app.scan's points, looking at its face.
-export function showHead(result, name, wallMs) {
+// photos: a head from photos (no scan: no points under it; photos_head.js
+// then names and fills the rows).
+export function showHead(result, name, wallMs, photos = false) {
   const opened = result.loadMs !== undefined;
+  nameRows(photos);
   app.fit = { name, stages: result.stages, meshes: result.meshes, fitMs: result.fitMs || 0, heapBytes: result.heapBytes || 0,
               parseMs: result.parseMs || 0, wallMs, points: result.points, fittedPoints: result.fittedPoints,
               animatedVertices: result.animatedVertices, landmarks: result.landmarks || [],
@@ -146,7 +169,8 @@ export function showHead(result, name, wallMs) {
   const levels = result.meshes.levels.length;
   for (const opt of ui.level.options) opt.disabled = Number(opt.value) > levels;
   if (Number(ui.level.value) > levels) ui.level.value = String(levels);
-  app.viewer.set_overlay_points(app.scan.display.positions, app.scan.display.normals, app.scan.display.colors);
+  if (app.scan) app.viewer.set_overlay_points(app.scan.display.positions, app.scan.display.normals, app.scan.display.colors);
+  else app.viewer.set_overlay_points(new Float32Array(0), null, null);
   app.viewer.set_overlay_visible(ui.showPoints.checked);
   showComponents(result.components);
   showStage('subdivide');

@@ -14,6 +14,7 @@
 //   photos.js         photos and their points; photo_roles.js: eye and smile photos
 //   clicker.js        landmark clicks on a photo
 //   fit.js            Fit head and the Pipeline rows; checks.js: the fitted head's checks
+//   photos_head.js    a head from the photos' face points, when no scan is loaded
 //   head_view.js      which mesh of the fit is drawn, and how
 //   texture.js        the Texture stage
 //   animation.js      animation and adaptive detail
@@ -28,6 +29,7 @@ import { wireFiles } from './files.js';
 import { loadSample } from './scan.js';
 import { wireClicker } from './clicker.js';
 import { wireFit } from './fit.js';
+import { wirePhotosHead } from './photos_head.js';
 import { wireHeadView } from './head_view.js';
 import { wireTexture } from './texture.js';
 import { wireAnimation } from './animation.js';
@@ -46,6 +48,7 @@ function wire() {
   app.cancelJobs = cancelJobs;
   wireViewer();
   wireFit();
+  wirePhotosHead();
   wireHeadView();
   wireAnimation();
   wireExport();

@@ -6,7 +6,7 @@
 // States (document.body.dataset.state shows the current one):
 //   loading  the modules start; nothing can be used yet
 //   ready    nothing is shown but the generic head
-//   working  one job runs (job.name: scan, fit, texture, photos, points,
+//   working  one job runs (job.name: scan, fit, photos head, texture, photos, points,
 //            eye photo, smile photo, project, sample); Cancel ends it
 //   done     a scan or head is shown: the resting state once one is
 //   error    the last action failed; the message is in the banner and what
@@ -129,7 +129,8 @@ export class PageState {
 
 // What each control allows in a state, given what the page holds:
 // s = {state, fatal, scanFile (a scan file to fit), fit (a fitted head in
-// the worker), texture, photos (how many), distance (a distance map)}.
+// the worker), texture, photos (how many), distance (a distance map),
+// scan (a scan is loaded or opened), facePoints (photos with face points)}.
 // Returns {control: enabled}; state.js maps the names to elements.
 export function controlsFor(s) {
   const usable = s.state !== 'loading' && !s.fatal;
@@ -140,6 +141,8 @@ export function controlsFor(s) {
     reset: usable, pointSize: usable, wireframe: usable,
     cancel: usable && s.state === 'working',
     fit: idle && !!s.scanFile,
+    // A head from the photos' face points: the main flow when no scan is loaded.
+    photosHead: idle && !s.scan && (s.facePoints || 0) > 0,
     exportObj: head, exportPly: head, animate: head, fullDetail: head, level: head, showPoints: head,
     showComponents: head, saveProject: head,
     texture: head && s.photos > 0,

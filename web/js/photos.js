@@ -72,6 +72,7 @@ function addPhoto(entry) {
   entry.sent = null;
   entry.role = 'face';
   entry.detect = null;
+  entry.photosHead = null;  // {used, refusal, rmsPx, leftOut} from the last head from photos
   if (old >= 0) {
     const prev = app.photos[old];
     URL.revokeObjectURL(prev.url);
@@ -115,6 +116,9 @@ async function findLandmarks(photos) {
     renderPhotos();
     if (clicker.photo === photo) openClicker(photo);
   }
+  // Every photo's points are in: a head from them (photos_head.js) when
+  // Auto-run is on and no scan is loaded.
+  if (app.afterLandmarks) app.afterLandmarks();
 }
 
 function removePhoto(photo) {
@@ -222,6 +226,12 @@ export function renderPhotos() {
     if (photo.detect && photo.detect.state !== 'waiting' && (photo.role || 'face') === 'face') {
       note += ' · ' + (photo.detect.state === 'running' ? 'finding face points…' : photo.detect.message);
       if (photo.detect.state !== 'found' && photo.detect.state !== 'running') meta.classList.add('bad');
+    }
+    // The last head from photos: used, or why not.
+    const ph = (photo.role || 'face') === 'face' ? photo.photosHead : null;
+    if (ph) {
+      if (ph.used) note += ' · used for the head (' + ph.rmsPx.toFixed(1) + ' px)';
+      else { note += ' · not used for the head' + (ph.leftOut ? ' (no face points)' : ph.refusal ? ': ' + ph.refusal : ''); meta.classList.add('bad'); }
     }
     if (photo.calib) {
       if (photo.calib.ok) {

@@ -25,7 +25,8 @@ export const ui = {
   exportObj: $('btn-export-obj'), exportPly: $('btn-export-ply'), exportTextured: $('btn-export-textured'),
   exportMap: $('btn-export-map'), distanceLegend: $('distance-legend'),
   saveProject: $('btn-save-project'), projectInput: $('project-input'),
-  photoList: $('photo-list'), photoCount: $('photo-count'), texture: $('btn-texture'), textureTotal: $('texture-total'),
+  photoList: $('photo-list'), photoCount: $('photo-count'), texture: $('btn-texture'),
+  photosHead: $('btn-photos-head'), photosHeadTotal: $('photos-head-total'), textureTotal: $('texture-total'),
   viewerPane: document.querySelector('.viewer-pane'), clicker: $('clicker'), clickerPrompt: $('clicker-prompt'),
   clickerCanvas: $('clicker-canvas'), clickerList: $('clicker-list'), clickerUndo: $('clicker-undo'),
   clickerSkip: $('clicker-skip'), clickerClear: $('clicker-clear'), clickerClose: $('clicker-close'),
@@ -51,6 +52,7 @@ export const app = window.likeness = {
   startupFailed: false,  // the viewer or the core could not start
   scan: null,            // {file, display}: the loaded scan, kept to fit it and draw it under the fit
   project: null,         // {name, loadMs, wallMs} when the head shown came from a project file
+  photosHead: null,      // the last head from photos: {trigger: 'auto'|'button', ok, photos, focalPx, wallMs, message}
   fit: null,             // the last fit: {name, stages, meshes, fitMs, parseMs, wallMs, quality}; its
                          // multiresolution head lives in the worker (animation, export)
   shownStage: null,      // which fit mesh is drawn: align|local_fit|global_fit|subdivide
@@ -67,7 +69,7 @@ export const app = window.likeness = {
 // The checks' distance map of the finest level (fit.quality.faceToScan.colors),
 // or null when the last checks gave none.
 export function distanceColors() {
-  const q = app.fit && app.fit.quality;
+  const q = app.fit && !app.fit.fromPhotos && app.fit.quality;  // a head from photos: no scan, no map
   const colors = q && q.ok && q.faceToScan && q.faceToScan.colors;
   return colors && colors.length ? colors : null;
 }
@@ -90,7 +92,8 @@ function applyState(snap) {
   if (snap.banner) ui.bannerText.textContent = snap.message;
   const c = controlsFor({ state: snap.state, fatal: snap.fatal || app.startupFailed, scanFile: !!(app.scan && app.scan.file),
                           fit: !!app.fit, texture: !!app.texture, photos: app.photos.length,
-                          distance: !!distanceColors() });
+                          distance: !!distanceColors(), scan: !!app.scan,
+                          facePoints: app.photos.filter((p) => (p.role || 'face') === 'face' && p.detect && p.detect.points).length });
   ui.fileInput.disabled = !c.files;
   ui.reset.disabled = !c.reset;
   ui.generic.disabled = !c.generic;
@@ -100,6 +103,7 @@ function applyState(snap) {
   ui.dropZone.classList.toggle('busy', snap.state === 'working');
   ui.cancel.hidden = !c.cancel;
   ui.fit.disabled = !c.fit;
+  ui.photosHead.disabled = !c.photosHead;
   ui.exportObj.disabled = !c.exportObj;
   ui.exportPly.disabled = !c.exportPly;
   ui.animate.disabled = !c.animate;

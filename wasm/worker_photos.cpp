@@ -1,0 +1,141 @@
+// The worker's photos job (issue 37): each photo's face landmarks (the
+// likeness-landmarks JSON the page's detector writes) -> cameras and the
+// person's head, by core/project/photos_project.h (run_photos_job, the core
+// job `likeness photos` runs), kept as the head project so Animate, Export
+// and Save work on it as on a fitted head.
+#include "worker_common.h"
+
+#include "photos/landmarks.h"
+#include "project/photos_project.h"
+
+#include <memory>
+
+namespace lk_worker {
+namespace {
+
+// The MediaPipe map that ships with the head, parsed once per worker.
+const lk::LandmarkMap* mediapipe_map(lk::Status& status) {
+  static lk::LandmarkMap map;
+  static bool have = false;
+  status = lk::Status::success();
+  if (!have) {
+    status = lk::parse_landmark_map_json(lk::mediapipe_landmark_map_text(), map);
+    if (!status.ok()) return nullptr;
+    have = true;
+  }
+  return &map;
+}
+
+// photos: [{name, text}] (text: the photo's likeness-landmarks JSON);
+// options: {levels (1..4, default 3), focalPx (a focal prior in pixels, 0:
+// none)}. Returns what fit_head_job does (head_result: meshes with the
+// generic head as "aligned", the fitted control mesh as "local" and
+// "control", the levels; notes; components) plus
+//   photos [{name, used, refusal, rmsPx, landmarks, outliers}] in the order given
+//   focalPx, calibrationRmsPx [before, after], shapeFitRmsPx [before, after],
+//   calibrationIterations, shapeFitStages [{stiffness, iterations}], photosMs.
+// A photo whose file is refused (format, size) is named with its reason and
+// left out, as the CLI does. On an error (fewer than 2 usable photos, ...)
+// the kept head is unchanged and the error result carries photos too.
+val photos_head_job(val photos, val options) {
+  int levels = 3;
+  double focal_px = 0;
+  if (has(options, "levels")) levels = options["levels"].as<int>();
+  if (has(options, "focalPx")) focal_px = options["focalPx"].as<double>();
+  if (levels < 1 || levels > 4) return error_result(lk::ErrorCode::InvalidInput, "levels must be 1..4");
+  if (!(focal_px >= 0 && focal_px < 1e6)) return error_result(lk::ErrorCode::InvalidInput, "focalPx must be 0..1e6");
+  lk::Status status;
+  const lk::GenericHead* generic = generic_head(status);
+  if (!generic) return error_result(lk::with_context(status, "generic head"));
+  const lk::LandmarkMap* map = mediapipe_map(status);
+  if (!map) return error_result(lk::with_context(status, "the embedded MediaPipe map"));
+
+  const int n = photos.isUndefined() || photos.isNull() ? 0 : photos["length"].as<int>();
+  std::vector<lk::LandmarkPhoto> parsed;
+  std::vector<int> parsed_index(static_cast<size_t>(n), -1);  // photo k -> its index in parsed, -1: refused
+  std::vector<std::string> names(static_cast<size_t>(n)), refusals(static_cast<size_t>(n));
+  for (int k = 0; k < n; ++k) {
+    const val p = photos[k];
+    names[size_t(k)] = has(p, "name") ? p["name"].as<std::string>() : "photo " + std::to_string(k + 1);
+    const std::string text = has(p, "text") ? p["text"].as<std::string>() : std::string();
+    lk::LandmarkPhoto ph;
+    const lk::Status s = text.size() > lk::kMaxLandmarkFileBytes
+                             ? lk::Status::error(lk::ErrorCode::TooLarge, "landmarks larger than 4 MB")
+                             : lk::parse_landmarks_json(text, ph);
+    if (!s.ok()) {
+      refusals[size_t(k)] = s.message;
+      continue;
+    }
+    ph.name = names[size_t(k)];
+    parsed_index[size_t(k)] = static_cast<int>(parsed.size());
+    parsed.push_back(std::move(ph));
+  }
+
+  lk::PhotosJobOptions opt;
+  opt.calib.focal_prior_px = focal_px;
+  auto project = std::make_unique<lk::HeadProject>();
+  lk::PhotosJobResult job;
+  const double t0 = now_ms();
+  status = lk::photos_project(*generic, *map, parsed, opt, levels, *project, job);
+  const double photos_ms = now_ms() - t0;
+
+  val rows = val::array();
+  for (int k = 0; k < n; ++k) {
+    val o = val::object();
+    o.set("name", names[size_t(k)]);
+    const int i = parsed_index[size_t(k)];
+    const bool calibrated = i >= 0 && static_cast<size_t>(i) < job.calib.photos.size();
+    const lk::PhotoCalibration* pc = calibrated ? &job.calib.photos[size_t(i)] : nullptr;
+    o.set("used", status.ok() && pc && pc->used);
+    o.set("refusal", i < 0 ? refusals[size_t(k)] : pc ? pc->refusal : std::string());
+    o.set("rmsPx", pc ? pc->rms_px : 0.0);
+    o.set("landmarks", pc ? pc->num_landmarks : 0);
+    o.set("outliers", pc ? pc->num_outliers : 0);
+    rows.call<void>("push", o);
+  }
+  if (!status.ok()) {
+    val e = error_result(status);
+    e.set("photos", rows);
+    e.set("photosMs", photos_ms);
+    return e;
+  }
+  val r = head_result(*project, *generic);
+  // The CLI's notes: photos left out (with why), one photo only, ...
+  val notes = val::array();
+  for (int k = 0; k < n; ++k)
+    if (parsed_index[size_t(k)] < 0) notes.call<void>("push", names[size_t(k)] + ": " + refusals[size_t(k)] + " (left out)");
+  for (const std::string& note : job.notes) notes.call<void>("push", note);
+  r.set("notes", notes);
+  r.set("name", std::string("photos"));
+  r.set("photos", rows);
+  r.set("focalPx", job.calib.focal);
+  val calib_rms = val::array(), fit_rms = val::array();
+  calib_rms.call<void>("push", job.calib.initial_rms_px);
+  calib_rms.call<void>("push", job.calib.final_rms_px);
+  fit_rms.call<void>("push", job.fit.initial_rms_px);
+  fit_rms.call<void>("push", job.fit.final_rms_px);
+  r.set("calibrationRmsPx", calib_rms);
+  r.set("shapeFitRmsPx", fit_rms);
+  r.set("calibrationIterations", job.calib.lm_iterations);
+  val stages = val::array();
+  for (const lk::ShapeFitStage& st : job.fit.stages) {
+    val o = val::object();
+    o.set("stiffness", st.stiffness);
+    o.set("iterations", st.lm_iterations);
+    stages.call<void>("push", o);
+  }
+  r.set("shapeFitStages", stages);
+  r.set("stages", val::array());  // no scan: no distance figures per stage
+  r.set("photosMs", photos_ms);
+  r.set("fitMs", photos_ms);
+  kept_project() = std::move(project);
+  return r;
+}
+
+}  // namespace
+}  // namespace lk_worker
+
+EMSCRIPTEN_BINDINGS(likeness_worker_photos) {
+  using namespace lk_worker;
+  emscripten::function("photos_head_job", &photos_head_job);
+}
