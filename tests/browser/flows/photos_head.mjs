@@ -16,7 +16,7 @@ import os from 'node:os';
 import path from 'node:path';
 import { execFileSync } from 'node:child_process';
 import { fileURLToPath } from 'node:url';
-import { analyse, bannerText, canvasImage, check, differingFraction, makePhotoPng, note, runAlone, shot } from '../harness.mjs';
+import { analyse, bannerText, canvasImage, check, differingFraction, makePhotoPng, note, runAlone, SHOT_DIR } from '../harness.mjs';
 import { readObj } from '../landmark_geometry.mjs';
 
 const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../../..');
@@ -163,7 +163,11 @@ async function run(s) {
       return { ok: e.ok, size: e.bytes ? e.bytes.length : 0, message: e.message };
     });
     check('the head from photos exports (level 3 as OBJ)', exported.ok && exported.size > 100000, JSON.stringify(exported));
-    await shot(page, 'web_photos_head.png');
+    // The head beside the photos' rows (the side panel scrolled to them).
+    if (SHOT_DIR) {
+      await page.evaluate(() => document.getElementById('photos-card').scrollIntoView());
+      await page.screenshot({ path: path.join(SHOT_DIR, 'web_photos_head.png') });
+    }
     await page.close();
 
     await badInput(s, fs.readFileSync(path.join(dir, 'view_03.png')));
