@@ -35,6 +35,7 @@ import { flow as offline } from './flows/offline.mjs';
 import { flow as accessibility } from './flows/accessibility.mjs';
 import { flow as largeScan } from './flows/large_scan.mjs';
 import { flow as landmarks } from './flows/landmarks.mjs';
+import { flow as glb } from './flows/glb.mjs';
 
 runFlows([startup, scanLoad, startupFailures, fit, fitChecks, fitThreads, exportFlow, animation, texture, eyeSmile,
-          project, keep, pageStates, fitCancel, photoRefusals, landmarks, offline, accessibility, largeScan]);
+          project, keep, pageStates, fitCancel, photoRefusals, landmarks, glb, offline, accessibility, largeScan]);
