@@ -140,7 +140,7 @@ export function controlsFor(s) {
     reset: usable, pointSize: usable, wireframe: usable,
     cancel: usable && s.state === 'working',
     fit: idle && !!s.scanFile,
-    exportObj: head, exportPly: head, animate: head, fullDetail: head, level: head, showPoints: head,
+    exportObj: head, exportPly: head, exportGlb: head, animate: head, fullDetail: head, level: head, showPoints: head,
     showComponents: head, saveProject: head,
     texture: head && s.photos > 0,
     exportTextured: head && !!s.texture,
