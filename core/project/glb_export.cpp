@@ -6,7 +6,10 @@
 #include "project/parts.h"
 #include "project/pose.h"
 
+#include "multires/multires.h"
+
 #include <algorithm>
+#include <cmath>
 
 namespace lk {
 
@@ -37,6 +40,31 @@ int textured_material(GltfBuilder& w, const std::string& name, const Image& text
 
 void add_child(tinygltf::Model& model, int parent, int child) { model.nodes[parent].children.push_back(child); }
 
+// Level `level` of the fit with the rig posed (jaw open by jaw, brows up by
+// brow) minus the same level at rest: a morph target's offsets.
+Status rig_offsets(const HeadProject& project, int level, double jaw, double brow, std::vector<Vec3>& out) {
+  MultiresMesh posed = project.fit.multires;  // at rest, current
+  const AnimationRig& rig = project.rig;
+  if (Status s = update_control_vertices(posed, rig.moved, rig_targets(rig, jaw, brow)); !s.ok()) return s;
+  const std::vector<Vec3>& rest = project.fit.multires.state.displaced[static_cast<std::size_t>(level)];
+  const std::vector<Vec3>& moved = posed.state.displaced[static_cast<std::size_t>(level)];
+  out.resize(rest.size());
+  for (std::size_t i = 0; i < rest.size(); ++i) out[i] = moved[i] - rest[i];
+  return Status::success();
+}
+
+// A part riding on the jaw (node at the hinge, its mesh about it): its
+// vertices turned as the jaw opens fully, as offsets.
+std::vector<Vec3> jaw_turn(const TriMesh& about_hinge) {
+  const double a = jaw_angle(1.0), c = std::cos(a), s = std::sin(a);
+  std::vector<Vec3> d(about_hinge.positions.size());
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    const Vec3& p = about_hinge.positions[i];
+    d[i] = Vec3(p.x(), c * p.y() - s * p.z(), s * p.y() + c * p.z()) - p;
+  }
+  return d;
+}
+
 }  // namespace
 
 Status export_glb(HeadProject& project, const GenericHead& generic, const GlbExportOptions& options, Bytes& out,
@@ -59,8 +87,16 @@ Status export_glb(HeadProject& project, const GenericHead& generic, const GlbExp
   std::vector<Vec2> uvs;
   if (textured) uvs.assign(project.texture.uvs.begin(), project.texture.uvs.begin() + static_cast<std::ptrdiff_t>(head.positions.size()));
   const int skin = textured_material(w, "skin", textured ? project.texture.skin : Image{}, {0.8, 0.62, 0.52, 1.0}, false);
+  // Morph targets from the rig (pose.h): jawOpen (ARKit's name: the jaw
+  // turns down about its hinge, the lower lip and chin with it) and
+  // likeness_browsUp (both brows lifted whole: no ARKit shape is that).
+  std::vector<MorphTarget> head_targets(2);
+  head_targets[0].name = "jawOpen";
+  head_targets[1].name = "likeness_browsUp";
+  if (Status s = rig_offsets(project, level, 1, 0, head_targets[0].delta); !s.ok()) return s;
+  if (Status s = rig_offsets(project, level, 0, 1, head_targets[1].delta); !s.ok()) return s;
   const int neck = w.node("Neck");
-  const int head_node = w.node("Head", w.mesh("head", head.positions, head.normals, uvs, head.triangles, skin));
+  const int head_node = w.node("Head", w.mesh("head", head.positions, head.normals, uvs, head.triangles, skin, head_targets));
   add_child(model, neck, head_node);
 
   HeadParts parts;
@@ -82,8 +118,12 @@ Status export_glb(HeadProject& project, const GenericHead& generic, const GlbExp
     const int jaw = w.node("Jaw", -1, hinge);
     add_child(model, head_node, jaw);
     const TriMesh lower = about(parts.lower_teeth, hinge), tongue = about(parts.placed.tongue, hinge);
-    add_child(model, jaw, w.node("LowerTeeth", w.mesh("LowerTeeth", lower.positions, lower.normals, uv_if(lower, teeth_tex), lower.triangles, teeth_mat)));
-    add_child(model, jaw, w.node("Tongue", w.mesh("Tongue", tongue.positions, tongue.normals, {}, tongue.triangles, tongue_mat)));
+    // They open with the jaw under the same target name (the Jaw node also
+    // turns them, for tools that drive bones).
+    add_child(model, jaw, w.node("LowerTeeth", w.mesh("LowerTeeth", lower.positions, lower.normals, uv_if(lower, teeth_tex), lower.triangles, teeth_mat,
+                                                      {{"jawOpen", jaw_turn(lower)}})));
+    add_child(model, jaw, w.node("Tongue", w.mesh("Tongue", tongue.positions, tongue.normals, {}, tongue.triangles, tongue_mat,
+                                                  {{"jawOpen", jaw_turn(tongue)}})));
   }
 
   tinygltf::Scene scene;

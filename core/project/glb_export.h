@@ -5,9 +5,10 @@
 // RightEye, Jaw > LowerTeeth, Tongue) whose eye and jaw nodes sit at the
 // eyes' centres and the jaw's hinge, so a tool turns the eyes or the jaw by
 // rotating a node. Head frame, metres, +y up, the face towards +z (glTF's
-// front). At rest. Not yet: morph targets (blendshapes, visemes) and
-// skinning (the jaw node moves the lower teeth and tongue, not the chin's
-// skin): they need the muscle layer.
+// front). At rest, with the rig's two morph targets (jawOpen on the head,
+// lower teeth and tongue; likeness_browsUp on the head). Not yet: the other
+// ARKit shapes, visemes and expressions (they need the muscle layer), and
+// skinning (the Jaw node turns the lower teeth and tongue, not the chin).
 #pragma once
 #include "head/head_model.h"
 #include "image/image.h"

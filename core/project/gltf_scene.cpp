@@ -63,17 +63,32 @@ int GltfBuilder::material(const std::string& name, int texture, const std::vecto
   return static_cast<int>(model.materials.size()) - 1;
 }
 
-int GltfBuilder::mesh(const std::string& name, const std::vector<Vec3>& positions, const std::vector<Vec3>& normals,
-                      const std::vector<Vec2>& uvs, const std::vector<Tri>& triangles, int material) {
-  const int n = static_cast<int>(positions.size());
-  std::vector<float> pos(3 * positions.size()), nrm(3 * positions.size());
-  std::vector<double> lo(3, 1e300), hi(3, -1e300);
-  for (std::size_t i = 0; i < positions.size(); ++i)
+namespace {
+
+// float32 copies of points, with their per-axis bounds (glTF wants min and
+// max on every POSITION accessor, morph targets' too).
+std::vector<float> floats(const std::vector<Vec3>& v, std::vector<double>& lo, std::vector<double>& hi) {
+  std::vector<float> out(3 * v.size());
+  lo.assign(3, v.empty() ? 0.0 : 1e300);
+  hi.assign(3, v.empty() ? 0.0 : -1e300);
+  for (std::size_t i = 0; i < v.size(); ++i)
     for (int k = 0; k < 3; ++k) {
-      pos[3 * i + k] = static_cast<float>(positions[i][k]);
-      lo[k] = std::min(lo[k], double(pos[3 * i + k]));
-      hi[k] = std::max(hi[k], double(pos[3 * i + k]));
+      out[3 * i + k] = static_cast<float>(v[i][k]);
+      lo[k] = std::min(lo[k], double(out[3 * i + k]));
+      hi[k] = std::max(hi[k], double(out[3 * i + k]));
     }
+  return out;
+}
+
+}  // namespace
+
+int GltfBuilder::mesh(const std::string& name, const std::vector<Vec3>& positions, const std::vector<Vec3>& normals,
+                      const std::vector<Vec2>& uvs, const std::vector<Tri>& triangles, int material,
+                      const std::vector<MorphTarget>& targets) {
+  const int n = static_cast<int>(positions.size());
+  std::vector<double> lo, hi;
+  const std::vector<float> pos = floats(positions, lo, hi);
+  std::vector<float> nrm(3 * positions.size());
   // glTF wants unit normals: each is normalized in float (the validator's
   // check), and a vertex without one (degenerate) gets +z.
   for (std::size_t i = 0; i < normals.size() && i < positions.size(); ++i) {
@@ -102,12 +117,30 @@ int GltfBuilder::mesh(const std::string& name, const std::vector<Vec3>& position
     prim.attributes["TEXCOORD_0"] = accessor(uv.data(), uv.size() * 4, n, TINYGLTF_COMPONENT_TYPE_FLOAT,
                                              TINYGLTF_TYPE_VEC2, TINYGLTF_TARGET_ARRAY_BUFFER);
   }
+  std::vector<double> weights;
+  tinygltf::Value::Array names;
+  for (const MorphTarget& t : targets) {
+    if (t.delta.size() != positions.size()) continue;
+    std::vector<double> tlo, thi;
+    const std::vector<float> d = floats(t.delta, tlo, thi);
+    const int acc = accessor(d.data(), d.size() * 4, n, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3,
+                             TINYGLTF_TARGET_ARRAY_BUFFER);
+    model.accessors.back().minValues = tlo;
+    model.accessors.back().maxValues = thi;
+    prim.targets.push_back({{"POSITION", acc}});
+    weights.push_back(0);
+    names.emplace_back(t.name);
+  }
   prim.material = material;
   prim.indices = accessor(idx.data(), idx.size() * 4, static_cast<int>(idx.size()), TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT,
                           TINYGLTF_TYPE_SCALAR, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
   tinygltf::Mesh m;
   m.name = name;
   m.primitives.push_back(prim);
+  if (!weights.empty()) {
+    m.weights = weights;
+    m.extras = tinygltf::Value(tinygltf::Value::Object{{"targetNames", tinygltf::Value(names)}});
+  }
   model.meshes.push_back(m);
   return static_cast<int>(model.meshes.size()) - 1;
 }

@@ -15,6 +15,12 @@
 
 namespace lk {
 
+// A morph target: a name and each vertex's offset (#V).
+struct MorphTarget {
+  std::string name;
+  std::vector<Vec3> delta;
+};
+
 class GltfBuilder {
  public:
   explicit GltfBuilder(tinygltf::Model& model);
@@ -30,9 +36,12 @@ class GltfBuilder {
   // A PBR material, non-metallic: textured by texture (>= 0) or of colour rgba.
   int material(const std::string& name, int texture, const std::vector<double>& rgba, double roughness = 0.8);
   // A mesh of one triangle primitive: positions and normals (#V), uvs (#V,
-  // or empty; glTF's v runs down the image, so v is flipped), triangles.
+  // or empty; glTF's v runs down the image, so v is flipped), triangles, and
+  // morph targets (position offsets; weights 0; names in extras.targetNames,
+  // the convention three.js and avatar tools read).
   int mesh(const std::string& name, const std::vector<Vec3>& positions, const std::vector<Vec3>& normals,
-           const std::vector<Vec2>& uvs, const std::vector<Tri>& triangles, int material);
+           const std::vector<Vec2>& uvs, const std::vector<Tri>& triangles, int material,
+           const std::vector<MorphTarget>& targets = {});
   // A node (name, mesh or -1, translation); returns its index.
   int node(const std::string& name, int mesh = -1, const Vec3& translation = Vec3::Zero());
 };

@@ -572,4 +572,40 @@ TEST_CASE("GLB export: the head at its level with uvs and skin, the parts under 
         1e-9);
   // The teeth's voids are transparent: alpha-masked.
   CHECK(m.materials.at(m.meshes.at(node("UpperTeeth").mesh).primitives[0].material).alphaMode == "MASK");
+
+  // Morph targets from the rig, named in extras.targetNames: jawOpen lowers
+  // the chin by over a centimetre and leaves the brows; likeness_browsUp
+  // lifts the brows and leaves the chin. The lower teeth open with the jaw.
+  const tinygltf::Mesh& hm = m.meshes.at(node("Head").mesh);
+  REQUIRE(hm.primitives[0].targets.size() == 2);
+  REQUIRE(hm.extras.Get("targetNames").ArrayLen() == 2);
+  CHECK(hm.extras.Get("targetNames").Get(0).Get<std::string>() == "jawOpen");
+  CHECK(hm.extras.Get("targetNames").Get(1).Get<std::string>() == "likeness_browsUp");
+  CHECK(hm.weights == std::vector<double>{0, 0});
+  auto delta = [&](int target, int v) {
+    const float* D = data(hm.primitives[0].targets[target].at("POSITION"));
+    return Vec3(D[3 * v], D[3 * v + 1], D[3 * v + 2]);
+  };
+  const std::vector<int>& chin = generic.annotations.regions.at("chin");
+  const std::vector<int>& brow = generic.annotations.regions.at("brow");
+  double chin_drop = 0, chin_brow = 0, brow_lift = 0, brow_jaw = 0;
+  for (int v : chin) {
+    chin_drop = std::max(chin_drop, -delta(0, v).y());
+    chin_brow = std::max(chin_brow, delta(1, v).norm());
+  }
+  for (int v : brow) {
+    brow_lift = std::max(brow_lift, delta(1, v).y());
+    brow_jaw = std::max(brow_jaw, delta(0, v).norm());
+  }
+  INFO("chin drop " << chin_drop << " m, brow lift " << brow_lift << " m");
+  CHECK(chin_drop > 0.01);
+  CHECK(chin_brow < 1e-9);
+  CHECK(brow_lift > 0.002);
+  CHECK(brow_jaw < 1e-9);
+  const tinygltf::Primitive& lower_prim = m.meshes.at(node("LowerTeeth").mesh).primitives[0];
+  REQUIRE(lower_prim.targets.size() == 1);
+  const float* LD = data(lower_prim.targets[0].at("POSITION"));
+  double teeth_drop = 0;
+  for (size_t i = 0; i < parts.lower_teeth.positions.size(); ++i) teeth_drop = std::max(teeth_drop, -double(LD[3 * i + 1]));
+  CHECK(teeth_drop > 0.002);
 }
