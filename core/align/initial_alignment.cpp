@@ -265,14 +265,14 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
 
   const int num_levels = static_cast<int>(resolutions.size());
   // One resolution level of Powell from x (updated), its record into level.
-  auto run_level = [&](int li, double progress_from, double progress_span, Eigen::VectorXd& x,
+  auto run_level = [&](int li, double progress_from, double progress_span, Eigen::VectorXd& at,
                        AlignLevel& level) -> Status {
     ViewWindow window = frame.window;
     window.resolution = resolutions[li];
     level = AlignLevel{};
     level.resolution = window.resolution;
     rasterize_point_silhouettes(cloud_kept, window, frame.clips, options.splat, cloud_masks, &level.cloud);
-    render_mesh(x.data(), window);
+    render_mesh(at.data(), window);
     views_xor(mesh_masks, cloud_masks, level.xor_before);
 
     // Each evaluation draws the two halves of the triangles on two threads,
@@ -315,12 +315,12 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
     const ProgressFn level_progress = [&](const char*, double f) {
       return report(progress, "align", progress_from + f * progress_span);
     };
-    Status r = powell_minimize(objective, x, po, pr, level_progress);
+    Status r = powell_minimize(objective, at, po, pr, level_progress);
     out.evaluations += pr.evaluations;
     out.iterations += pr.iterations;
     if (!r) return with_context(r, "align at " + std::to_string(window.resolution) + "^2");
-    x = pr.x;
-    render_mesh(x.data(), window);
+    at = pr.x;
+    render_mesh(at.data(), window);
     views_xor(mesh_masks, cloud_masks, level.xor_after);
     level.evaluations = pr.evaluations;
     level.iterations = pr.iterations;
