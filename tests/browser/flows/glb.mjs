@@ -6,7 +6,8 @@
 // and (2) three.js's GLTFLoader (npm three) loads it in Chromium on a test
 // page served from the page's own origin: the node names (Neck, Head, eyes,
 // Jaw, teeth, tongue), the head's vertex count, a textured skin, and a
-// WebGL render that shows the head.
+// WebGL render that shows the head; its morphTargetDictionary holds jawOpen
+// and likeness_browsUp, and jawOpen at weight 1 changes the render.
 import { execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import { createRequire } from 'node:module';
@@ -71,21 +72,30 @@ import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 window.result = (async () => {
   const gltf = await new GLTFLoader().loadAsync('./head.glb');
-  const names = []; let headVertices = 0, meshes = 0, skinTextured = false;
+  const names = []; let headVertices = 0, meshes = 0, skinTextured = false, head = null;
   gltf.scene.traverse((o) => {
     names.push(o.name);
     if (o.isMesh) meshes++;
-    if (o.isMesh && o.name === 'Head') { headVertices = o.geometry.attributes.position.count; skinTextured = !!o.material.map; }
+    if (o.isMesh && o.name === 'Head') { head = o; headVertices = o.geometry.attributes.position.count; skinTextured = !!o.material.map; }
   });
   const renderer = new THREE.WebGLRenderer({ canvas: document.getElementById('c'), preserveDrawingBuffer: true });
   const scene = new THREE.Scene(); scene.background = new THREE.Color(0, 0, 0);
   scene.add(gltf.scene); scene.add(new THREE.AmbientLight(0xffffff, 2));
   const box = new THREE.Box3().setFromObject(gltf.scene), c = box.getCenter(new THREE.Vector3()), size = box.getSize(new THREE.Vector3()).length();
   const camera = new THREE.PerspectiveCamera(30, 1, size / 100, size * 10); camera.position.set(c.x, c.y, c.z + 2.2 * size); camera.lookAt(c);
-  renderer.render(scene, camera);
-  const gl = renderer.getContext(), px = new Uint8Array(256 * 256 * 4); gl.readPixels(0, 0, 256, 256, gl.RGBA, gl.UNSIGNED_BYTE, px);
-  let lit = 0; for (let i = 0; i < px.length; i += 4) if (px[i] + px[i + 1] + px[i + 2] > 30) lit++;
-  return { names, meshes, headVertices, skinTextured, litFraction: lit / (256 * 256) };
+  const gl = renderer.getContext();
+  const draw = () => { renderer.render(scene, camera); const px = new Uint8Array(256 * 256 * 4); gl.readPixels(0, 0, 256, 256, gl.RGBA, gl.UNSIGNED_BYTE, px); return px; };
+  const rest = draw();
+  let lit = 0; for (let i = 0; i < rest.length; i += 4) if (rest[i] + rest[i + 1] + rest[i + 2] > 30) lit++;
+  // jawOpen at full weight: the mouth opens, pixels change.
+  const morphs = head ? Object.keys(head.morphTargetDictionary || {}) : [];
+  let changed = 0;
+  if (head && head.morphTargetDictionary.jawOpen !== undefined) {
+    head.morphTargetInfluences[head.morphTargetDictionary.jawOpen] = 1;
+    const open = draw();
+    for (let i = 0; i < open.length; i += 4) if (Math.abs(open[i] - rest[i]) + Math.abs(open[i + 1] - rest[i + 1]) + Math.abs(open[i + 2] - rest[i + 2]) > 30) changed++;
+  }
+  return { names, meshes, headVertices, skinTextured, litFraction: lit / (256 * 256), morphs, jawChanged: changed / (256 * 256) };
 })().catch((e) => ({ error: String(e && e.message || e) }));
 </script>` });
     }
@@ -107,6 +117,9 @@ window.result = (async () => {
         JSON.stringify(Object.assign({}, got, { names: got.names && got.names.join(' ') })));
   await shot(page, 'glb_threejs.png');
   check('... and renders the head with WebGL', got.litFraction > 0.05, `${(100 * (got.litFraction || 0)).toFixed(1)}% of the pixels lit`);
+  check('... its morphTargetDictionary holds jawOpen and likeness_browsUp, and jawOpen at weight 1 changes the render',
+        (got.morphs || []).includes('jawOpen') && got.morphs.includes('likeness_browsUp') && got.jawChanged > 0.001,
+        `morphs ${JSON.stringify(got.morphs)}; ${(100 * (got.jawChanged || 0)).toFixed(2)}% of the pixels changed`);
   await page.close();
 }
 
