@@ -144,6 +144,12 @@ int run_photos(const Args& args) {
     if (pc.used) {
       p["camera"] = camera_json(pc.camera);
       p["rms_px"] = pc.rms_px;
+      p["median_px"] = pc.median_px;
+      double yaw, pitch;
+      view_angles(pc.camera, yaw, pitch);
+      p["yaw_deg"] = yaw;
+      p["pitch_deg"] = pitch;
+      p["landmarks_turned_away"] = pc.num_hidden;
     } else {
       p["refusal"] = pc.refusal;
     }
@@ -165,6 +171,18 @@ int run_photos(const Args& args) {
               r.calib.focal);
   std::printf("  landmark error: calibration %.2f -> %.2f px, shape fit %.2f -> %.2f px (%.2f s)\n",
               r.calib.initial_rms_px, r.calib.final_rms_px, r.fit.initial_rms_px, r.fit.final_rms_px, seconds);
+  for (size_t i = 0; i < photos.size(); ++i) {
+    const PhotoCalibration& pc = r.calib.photos[i];
+    if (!pc.used) {
+      std::printf("  %s: not used\n", photos[i].name.c_str());
+      continue;
+    }
+    double yaw, pitch;
+    view_angles(pc.camera, yaw, pitch);
+    std::printf("  %s: seen from yaw %+.0f deg (+ = the head's left), pitch %+.0f deg (+ = above); "
+                "%d landmarks, %d turned away; median error %.1f px\n",
+                photos[i].name.c_str(), yaw, pitch, pc.num_landmarks - pc.num_hidden, pc.num_hidden, pc.median_px);
+  }
   const std::string level_files = levels > 0 ? ", level1..level" + std::to_string(levels) + ".obj" : "";
   std::printf("  wrote %s/control.obj%s, cameras.json, report.json\n", out_dir.c_str(), level_files.c_str());
   return 0;
