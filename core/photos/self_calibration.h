@@ -55,6 +55,12 @@ struct SelfCalibOptions {
   bool refuse_upside_down = true;
 };
 
+// In its own inline namespace: project/texture_job.h and the texture
+// self-test also define an lk::PhotoCalibration, and two classes of one
+// mangled name in one program break the one-definition rule (the linker
+// kept one destructor for both). Code that names lk::PhotoCalibration
+// still finds this one where only this header is included.
+inline namespace self_calib {
 struct PhotoCalibration {
   bool used = false;
   std::string refusal;              // why the photo was dropped (empty when used)
@@ -66,6 +72,7 @@ struct PhotoCalibration {
   int num_outliers = 0;             // landmarks with error beyond 2 huber_k pixel_sigma
   std::vector<double> weights;      // #N, final IRLS weight of each landmark (0 where absent)
 };
+}  // namespace self_calib
 
 struct SelfCalibResult {
   double focal = 0;                      // the shared focal, pixels
