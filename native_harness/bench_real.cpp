@@ -317,6 +317,11 @@ int run(const Args& args) {
         st = dump_copy(prefix, r);
         if (!st) std::printf("   %-14s --fit-real-dump: %s\n", "", st.message.c_str());
       }
+      if (!r.face_only)  // the silhouette alignment's answer: a nudge that changes it changes the fit
+        std::printf("   %-14s alignment: D %d after %d evaluations; log scales %.4f %.4f %.4f, turn %.4f %.4f %.4f\n", "",
+                    total_xor(r.alignment.xor_after), r.alignment.evaluations, r.alignment.parameters[6],
+                    r.alignment.parameters[7], r.alignment.parameters[8], r.alignment.parameters[3],
+                    r.alignment.parameters[4], r.alignment.parameters[5]);
       if (x.rest) {  // where the rest lie (regions overlap; "face" holds most)
         std::printf("   %-14s rest touches:", "");
         for (const auto& kv : x.rest_by_region) std::printf(" %s %d", kv.first.c_str(), kv.second);

@@ -8,6 +8,7 @@
 #include "io/exif.h"
 #include "io/io.h"
 #include "photos/photos_job.h"
+#include "photos_texture.h"
 #include "photos/synthetic_views.h"
 #include "pipeline/head_creases.h"
 #include "subdiv/butterfly.h"
@@ -47,16 +48,19 @@ std::string base_name(const std::string& path) {
 
 int run_photos(const Args& args) {
   const std::string cmd = "photos";
-  if (!only_known_options(cmd, args, {"points", "photos", "map", "out", "levels", "focal-px"})) return 2;
+  if (!only_known_options(cmd, args, {"points", "photos", "map", "out", "levels", "focal-px", "texture-size", "no-texture"}))
+    return 2;
   const std::vector<std::string> points_paths = args.get_all("points"), photo_paths = args.get_all("photos");
   const std::string map_path = args.get("map"), out_dir = args.get("out");
   if (points_paths.empty() || out_dir.empty()) return fail(cmd, "needs --points P1.json P2.json ... and --out DIR");
   if (!photo_paths.empty() && photo_paths.size() != points_paths.size())
     return fail(cmd, std::to_string(photo_paths.size()) + " photos for " + std::to_string(points_paths.size()) +
                          " points files: give one points file per photo, in the same order");
-  int levels = 3;
+  int levels = 3, texture_size = 2048;
   double focal_px = 0;
-  if (!args.get_int("levels", 3, levels, 0, 4) || !args.get_double("focal-px", 0, focal_px, 0, 1e6)) return 2;
+  if (!args.get_int("levels", 3, levels, 0, 4) || !args.get_double("focal-px", 0, focal_px, 0, 1e6) ||
+      !args.get_int("texture-size", 2048, texture_size, 16, 4096))
+    return 2;
   const auto t0 = std::chrono::steady_clock::now();
 
   GenericHead generic;
@@ -79,6 +83,7 @@ int run_photos(const Args& args) {
 
   // Each photo's points; a file that cannot be used is named and left out.
   std::vector<LandmarkPhoto> photos;
+  std::vector<std::string> image_paths;  // #photos: each kept photo's image ("" without --photos)
   std::vector<std::string> notes;
   std::vector<double> exif_focals;
   for (size_t i = 0; i < points_paths.size(); ++i) {
@@ -108,6 +113,7 @@ int run_photos(const Args& args) {
       continue;
     }
     photos.push_back(ph);
+    image_paths.push_back(photo_paths.empty() ? "" : photo_paths[i]);
   }
   PhotosJobOptions opt;
   opt.calib.focal_prior_px = focal_px;
@@ -137,6 +143,22 @@ int run_photos(const Args& args) {
   }
   if (!s) return fail(cmd, s.message);
 
+  // The skin from the recovered cameras, when the photos are given.
+  const bool textured = !photo_paths.empty() && levels > 0 && !args.has("no-texture");
+  if (textured) {
+    std::vector<std::string> used_paths, used_names;
+    std::vector<Camera> cameras;
+    for (size_t i = 0; i < photos.size(); ++i)
+      if (r.calib.photos[i].used) {
+        used_paths.push_back(image_paths[i]);
+        used_names.push_back(photos[i].name);
+        cameras.push_back(r.calib.photos[i].camera);
+      }
+    s = write_photos_texture(r.fit.mesh, bl, level_positions[size_t(levels)], used_paths, used_names, cameras,
+                             texture_size, out_dir);
+    if (!s) return fail(cmd, s.message);
+  }
+
   Json cams = {{"format", "likeness-cameras"}, {"version", 1}, {"focal_px", r.calib.focal}, {"photos", Json::array()}};
   for (size_t i = 0; i < photos.size(); ++i) {
     const PhotoCalibration& pc = r.calib.photos[i];
@@ -144,6 +166,12 @@ int run_photos(const Args& args) {
     if (pc.used) {
       p["camera"] = camera_json(pc.camera);
       p["rms_px"] = pc.rms_px;
+      p["median_px"] = pc.median_px;
+      double yaw, pitch;
+      view_angles(pc.camera, yaw, pitch);
+      p["yaw_deg"] = yaw;
+      p["pitch_deg"] = pitch;
+      p["landmarks_turned_away"] = pc.num_hidden;
     } else {
       p["refusal"] = pc.refusal;
     }
@@ -165,8 +193,21 @@ int run_photos(const Args& args) {
               r.calib.focal);
   std::printf("  landmark error: calibration %.2f -> %.2f px, shape fit %.2f -> %.2f px (%.2f s)\n",
               r.calib.initial_rms_px, r.calib.final_rms_px, r.fit.initial_rms_px, r.fit.final_rms_px, seconds);
+  for (size_t i = 0; i < photos.size(); ++i) {
+    const PhotoCalibration& pc = r.calib.photos[i];
+    if (!pc.used) {
+      std::printf("  %s: not used\n", photos[i].name.c_str());
+      continue;
+    }
+    double yaw, pitch;
+    view_angles(pc.camera, yaw, pitch);
+    std::printf("  %s: seen from yaw %+.0f deg (+ = the head's left), pitch %+.0f deg (+ = above); "
+                "%d landmarks, %d turned away; median error %.1f px\n",
+                photos[i].name.c_str(), yaw, pitch, pc.num_landmarks - pc.num_hidden, pc.num_hidden, pc.median_px);
+  }
   const std::string level_files = levels > 0 ? ", level1..level" + std::to_string(levels) + ".obj" : "";
-  std::printf("  wrote %s/control.obj%s, cameras.json, report.json\n", out_dir.c_str(), level_files.c_str());
+  std::printf("  wrote %s/control.obj%s, cameras.json, report.json%s\n", out_dir.c_str(), level_files.c_str(),
+              textured ? ", textured.obj, textured.mtl, skin.png" : "");
   return 0;
 }
 
@@ -218,9 +259,10 @@ int run_synth_photos(const Args& args) {
 
 Registrar photos_reg({"photos",
                       "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] "
-                      "[--focal-px F] [--levels L]",
+                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture]",
                       "a head from several photos' landmarks (fua1998): self-calibrated cameras, fitted control "
-                      "mesh, levels, cameras.json, report.json",
+                      "mesh, levels, cameras.json, report.json; with --photos the skin from those cameras "
+                      "(textured.obj, skin.png)",
                       run_photos, nullptr});
 Registrar synth_photos_reg({"synth-photos",
                             "likeness synth-photos --out DIR [--seed N] [--cameras C] [--noise-px S] [--no-render]",

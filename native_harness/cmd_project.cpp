@@ -4,7 +4,10 @@
 #include "command.h"
 
 #include "io/io.h"
+#include "head/generic_head.h"
 #include "project/export.h"
+#include "project/glb_export.h"
+#include "project/parts.h"
 #include "project/pose.h"
 #include "project/project_file.h"
 
@@ -69,7 +72,31 @@ int run_export(const std::string& path, const Args& args) {
                 frame == ExportFrame::Scan ? "scan" : "head");
     return 0;
   }
-  if (format != "textured") return fail(kName, "--format takes obj, ply or textured");
+  if (format == "glb") {
+    // The head at --level (default 2) with the generic eyes' and teeth's
+    // textures, at rest (--pose is ignored: avatar tools pose it).
+    GenericHead generic;
+    if (st = load_generic_head(generic); !st) return fail(kName, st.message);
+    GlbExportOptions o;
+    o.level = args.has("level") ? level : 2;
+    EyeballTextureOptions eye;
+    eye.size = 256;
+    TeethCompositeOptions teeth;
+    teeth.width = 512;
+    teeth.height = 256;
+    if (!generic_eyeball_texture(eye, o.eye_texture).ok()) o.eye_texture = Image{};
+    if (!generic_teeth_texture(teeth, o.teeth_texture).ok()) o.teeth_texture = Image{};
+    Bytes bytes;
+    GlbExportReport r;
+    st = export_glb(p, generic, o, bytes, &r);
+    if (st) st = write_file(out, bytes);
+    if (!st) return fail(kName, st.message);
+    std::printf("wrote %s: level %d (%d vertices, %d triangles)%s, %zu nodes, %zu bytes, at rest\n", out.c_str(),
+                r.level, r.head_vertices, r.head_triangles, p.texture.empty() ? "" : ", textured", r.nodes.size(),
+                bytes.size());
+    return 0;
+  }
+  if (format != "textured") return fail(kName, "--format takes obj, ply, textured or glb");
   // OUT.obj with OUT.mtl and OUT.png beside it.
   const std::string stem = out.size() > 4 && out.compare(out.size() - 4, 4, ".obj") == 0 ? out.substr(0, out.size() - 4) : out;
   const std::string base = stem.substr(stem.find_last_of('/') + 1);
@@ -95,7 +122,7 @@ int run_project(const Args& args) {
 }
 
 const Registrar reg({kName,
-                     "likeness project info FILE | likeness project export FILE --out PATH [--format obj|ply|textured] "
+                     "likeness project info FILE | likeness project export FILE --out PATH [--format obj|ply|textured|glb] "
                      "[--level L] [--pose A] [--scan-frame]",
                      "what a saved head project holds; its levels re-exported without fitting again", run_project});
 

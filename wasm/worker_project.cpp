@@ -1,8 +1,11 @@
 // The worker's project-file jobs (core/project/project_file.h): the kept
 // head project saved as a .likeness.glb's bytes, and such bytes opened as
-// the kept project without fitting.
+// the kept project without fitting; and the GLB for avatar tools
+// (core/project/glb_export.h).
 #include "worker_common.h"
 
+#include "project/glb_export.h"
+#include "project/parts.h"
 #include "project/pose.h"
 #include "project/project_file.h"
 
@@ -17,6 +20,30 @@ val save_project_job() {
   if (lk::Status st = lk::save_project(*kept_project(), bytes); !st.ok()) return error_result(st);
   val r = ok_result();
   r.set("bytes", bytes_array(bytes.data(), bytes.size()));
+  return r;
+}
+
+// The kept head as a GLB at level (glb_export.h), with the generic eyes'
+// and teeth's textures; the project is put at rest. Returns {ok, bytes,
+// level, vertices}.
+val export_glb_job(int level) {
+  if (!kept_project()) return error_result(lk::ErrorCode::InvalidInput, "no fitted head to export");
+  lk::Status generic_status;
+  const lk::GenericHead* generic = generic_head(generic_status);
+  if (!generic) return error_result(lk::with_context(generic_status, "generic head"));
+  lk::GlbExportOptions o;
+  o.level = level;
+  lk::EyeballTextureOptions eye;
+  eye.size = 256;  // as the generic eyes shown
+  if (!lk::generic_eyeball_texture(eye, o.eye_texture).ok()) o.eye_texture = lk::Image{};
+  if (!lk::generic_teeth_texture(teeth_composite(), o.teeth_texture).ok()) o.teeth_texture = lk::Image{};
+  lk::Bytes bytes;
+  lk::GlbExportReport report;
+  if (lk::Status st = lk::export_glb(*kept_project(), *generic, o, bytes, &report); !st.ok()) return error_result(st);
+  val r = ok_result();
+  r.set("bytes", bytes_array(bytes.data(), bytes.size()));
+  r.set("level", report.level);
+  r.set("vertices", report.head_vertices);
   return r;
 }
 
@@ -68,4 +95,5 @@ EMSCRIPTEN_BINDINGS(likeness_worker_project) {
   using namespace lk_worker;
   emscripten::function("save_project_job", &save_project_job);
   emscripten::function("load_project_job", &load_project_job);
+  emscripten::function("export_glb_job", &export_glb_job);
 }

@@ -203,6 +203,7 @@ const JOBS = {
   exportTextured: (msg) => core.export_textured(msg.level, String(msg.base)),
   // {}: the kept head project as a .likeness.glb file's bytes.
   saveProject: () => core.save_project_job(),
+  exportGlb: (msg) => core.export_glb_job(msg.level | 0),
   // {name, buffer}: a saved project -> the kept head, as 'fit' returns it
   // (plus scan positions, texture, loadMs), without fitting.
   openProject: (msg) => withHeapBytes(msg.buffer, (ptr, size) => core.load_project_job(msg.name, ptr, size)),

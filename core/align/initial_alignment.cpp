@@ -264,13 +264,15 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
       rot_step, rot_step, rot_step, options.step_scale, options.step_scale, options.step_scale;
 
   const int num_levels = static_cast<int>(resolutions.size());
-  for (int li = 0; li < num_levels; ++li) {
+  // One resolution level of Powell from x (updated), its record into level.
+  auto run_level = [&](int li, double progress_from, double progress_span, Eigen::VectorXd& at,
+                       AlignLevel& level) -> Status {
     ViewWindow window = frame.window;
     window.resolution = resolutions[li];
-    AlignLevel level;
+    level = AlignLevel{};
     level.resolution = window.resolution;
     rasterize_point_silhouettes(cloud_kept, window, frame.clips, options.splat, cloud_masks, &level.cloud);
-    render_mesh(x.data(), window);
+    render_mesh(at.data(), window);
     views_xor(mesh_masks, cloud_masks, level.xor_before);
 
     // Each evaluation draws the two halves of the triangles on two threads,
@@ -311,21 +313,61 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
         0.25 * window.pixel_size() / (model.head_height * options.step_translation * level_scale);
     PowellResult pr;
     const ProgressFn level_progress = [&](const char*, double f) {
-      return report(progress, "align", (li + f) / num_levels);
+      return report(progress, "align", progress_from + f * progress_span);
     };
-    st = powell_minimize(objective, x, po, pr, level_progress);
+    Status r = powell_minimize(objective, at, po, pr, level_progress);
     out.evaluations += pr.evaluations;
     out.iterations += pr.iterations;
-    if (!st) return with_context(st, "align at " + std::to_string(window.resolution) + "^2");
-    x = pr.x;
-    render_mesh(x.data(), window);
+    if (!r) return with_context(r, "align at " + std::to_string(window.resolution) + "^2");
+    at = pr.x;
+    render_mesh(at.data(), window);
     views_xor(mesh_masks, cloud_masks, level.xor_after);
     level.evaluations = pr.evaluations;
     level.iterations = pr.iterations;
     level.xor_per_iteration = pr.value_per_iteration;
-    out.levels.push_back(std::move(level));
-    if (!report(progress, "align", double(li + 1) / num_levels))
+    if (!report(progress, "align", progress_from + progress_span))
       return Status::error(ErrorCode::Cancelled, "align: cancelled");
+    return Status::success();
+  };
+  // Every start (AlignOptions::pitch_starts_deg) through the coarse levels;
+  // the one with the least D on the last of them goes on to the finest.
+  std::vector<double> starts = options.pitch_starts_deg;
+  if (starts.empty()) starts.push_back(0.0);
+  const int coarse = num_levels - 1;
+  const double span = 1.0 / (static_cast<double>(starts.size()) * std::max(coarse, 1) + 1.0);
+  int best_d = -1;
+  Eigen::VectorXd best_x = x;
+  std::vector<AlignLevel> best_levels;
+  for (size_t k = 0; k < starts.size(); ++k) {
+    Eigen::VectorXd xs = Eigen::VectorXd::Zero(9);
+    xs[3] = starts[k] * kPi / 180.0;
+    std::vector<AlignLevel> levels;
+    int d = -1;
+    if (coarse == 0) {
+      // One level: each start runs it, the least D is the answer.
+      AlignLevel level;
+      st = run_level(0, k * span, span, xs, level);
+      if (!st) return st;
+      d = total_xor(level.xor_after);
+      levels.push_back(std::move(level));
+    } else {
+      for (int li = 0; li < coarse; ++li) {
+        AlignLevel level;
+        st = run_level(li, (k * coarse + li) * span, span, xs, level);
+        if (!st) return st;
+        d = total_xor(level.xor_after);
+        levels.push_back(std::move(level));
+      }
+    }
+    if (best_d < 0 || d < best_d) best_d = d, best_x = xs, best_levels = std::move(levels);
+  }
+  x = best_x;
+  out.levels = std::move(best_levels);
+  if (coarse > 0) {
+    AlignLevel level;
+    st = run_level(coarse, 1.0 - span, span, x, level);
+    if (!st) return st;
+    out.levels.push_back(std::move(level));
   }
 
   // The final level's masks are still in cloud_masks: D before and after.

@@ -65,6 +65,14 @@ struct AlignOptions {
   double step_translation = 0.05;
   double step_rotation_deg = 4.0;
   double step_scale = 0.05;
+  // Starts of the search, as turns about the horizontal axis (degrees,
+  // head up / down from the initialization): each is taken through the
+  // coarse levels and the one with the least D there goes on to the final
+  // resolution (with no coarse level: the least D at the final one). {0}:
+  // one start, as the paper. Three starts (0, 15, -15) put Demosthenes'
+  // nudged copies in one basin but not Plato's, for twice the alignment's
+  // CPU and a worse fit of Demosthenes (docs/design/fit_real_scans.md).
+  std::vector<double> pitch_starts_deg = {0.0};
   // Fraction of the clipped head height (from the top) over which the head
   // width and front are measured for the initialization.
   double init_slab_fraction = 0.5;

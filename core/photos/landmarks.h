@@ -41,12 +41,17 @@ struct LandmarkMap {
   std::vector<char> present;   // #M
 };
 
+// In its own inline namespace: fit/closest_point.h defines another
+// lk::SurfacePoint (64 bytes, this one 32), and the likeness binary shared
+// std::vector<lk::SurfacePoint> members between the two layouts (nm).
+inline namespace landmark_points {
 // A point on a mesh that keeps its place when the vertices move.
 struct SurfacePoint {
   int triangle = -1;               // -1 = no point
   Vec3 barycentric = Vec3::Zero(); // weights of the triangle's corners 0,1,2
   bool valid() const { return triangle >= 0; }
 };
+}  // namespace landmark_points
 Vec3 surface_position(const TriMesh& mesh, const SurfacePoint& p);
 
 // Parsers. Every field is checked: format and version, detector a non-empty

@@ -1,6 +1,7 @@
 #include "photos/self_calibration.h"
 
 #include "calib/calibrate.h"
+#include "mesh/geometry.h"
 #include "photos/sparse_lm.h"
 
 #include <algorithm>
@@ -28,6 +29,13 @@ double median_of(std::vector<double> v) {
   std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
   return v[v.size() / 2];
 }
+
+// A camera that sees the head's up (+y) pointing down the image: the
+// landmarks make an upside-down face (seen on a detector's misreading of a
+// full profile: mouth above the eyes).
+bool upside_down(const Camera& c) { return c.R.col(1).y() > 0; }
+const char* const kUpsideDown =
+    "its landmarks make an upside-down face (mouth above the eyes): the detector misread this photo";
 
 struct Observation {
   int camera = 0;    // index into the used cameras
@@ -148,6 +156,13 @@ int SelfCalibResult::num_used() const {
   return n;
 }
 
+void view_angles(const Camera& camera, double& yaw_deg, double& pitch_deg) {
+  const Vec3 c = camera.center();
+  constexpr double kDeg = 180.0 / 3.14159265358979323846;
+  yaw_deg = std::atan2(c.x(), c.z()) * kDeg;
+  pitch_deg = std::atan2(c.y(), std::hypot(c.x(), c.z())) * kDeg;
+}
+
 bool projection_jacobian(const Camera& camera, const Vec3& X, const Vec2& observed, ProjectionJacobian& out) {
   const Vec3 Xr = camera.R * X;
   const Vec3 c = Xr + camera.t;
@@ -170,7 +185,7 @@ Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& g
   const int P = int(photos.size()), M = int(landmarks.size());
   if (!(options.pixel_sigma > 0) || !(options.shape_sigma_m > 0) || !(options.huber_k > 0) ||
       !(options.focal_prior_px >= 0) || !(options.focal_prior_sigma > 0) || options.min_landmarks < 6 || !(options.refuse_factor > 1) ||
-      !(options.refuse_min_sigma >= 0))
+      !(options.refuse_min_sigma >= 0) || !(options.min_view_cos >= -1 && options.min_view_cos < 1))
     return Status::error(ErrorCode::InvalidInput, "self-calibration: an option is out of range");
   for (const SurfacePoint& s : landmarks)
     if (s.valid() && (s.triangle >= generic.num_triangles()))
@@ -182,7 +197,9 @@ Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& g
   result.landmarks = generic_points;
   result.landmark_seen.assign(size_t(M), 0);
 
-  // 1. Each photo alone against the generic head.
+  // 1. Each photo alone against the generic head. A photo whose landmarks
+  // alone fit no camera (DLT mirrors shallow, mismatched face points; seen
+  // on a face photographed from below) is posed at the other photos' focal.
   CalibOptions co;
   co.fix_principal_point = true;
   co.pixel_sigma = options.pixel_sigma;
@@ -191,6 +208,9 @@ Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& g
   co.focal_prior_sigma = options.focal_prior_sigma;
   std::vector<std::vector<Correspondence>> corr(static_cast<size_t>(P));
   std::vector<std::vector<int>> corr_index(static_cast<size_t>(P));
+  std::vector<CalibResult> alone(static_cast<size_t>(P));
+  std::vector<std::string> alone_error(static_cast<size_t>(P));
+  std::vector<double> focals;
   for (int i = 0; i < P; ++i) {
     const LandmarkPhoto& ph = photos[size_t(i)];
     PhotoCalibration& pc = result.photos[size_t(i)];
@@ -208,13 +228,69 @@ Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& g
                    std::to_string(options.min_landmarks) + " needed (no face found?)";
       continue;
     }
-    CalibResult alone;
-    const Status s = calibrate_camera(corr[size_t(i)], ph.width, ph.height, co, alone);
-    if (!s) {
-      pc.refusal = "its landmarks fit no camera: " + s.message;
+    const Status s = calibrate_camera(corr[size_t(i)], ph.width, ph.height, co, alone[size_t(i)]);
+    if (s && upside_down(alone[size_t(i)].camera) && options.refuse_upside_down) {
+      pc.refusal = kUpsideDown;
+    } else if (s) {
+      pc.used = true;
+      focals.push_back(alone[size_t(i)].camera.fx);
+    } else {
+      alone_error[size_t(i)] = s.message;
+    }
+  }
+  const double fallback_focal = options.focal_prior_px > 0 ? options.focal_prior_px : median_of(focals);
+  for (int i = 0; i < P; ++i) {
+    PhotoCalibration& pc = result.photos[size_t(i)];
+    if (alone_error[size_t(i)].empty()) continue;
+    Status s = Status::error(ErrorCode::InvalidInput, alone_error[size_t(i)]);
+    if (fallback_focal > 0) {
+      CalibOptions at_focal = co;
+      at_focal.known_focal = fallback_focal;
+      s = calibrate_camera(corr[size_t(i)], photos[size_t(i)].width, photos[size_t(i)].height, at_focal,
+                           alone[size_t(i)]);
+    }
+    if (s && upside_down(alone[size_t(i)].camera) && options.refuse_upside_down) pc.refusal = kUpsideDown;
+    else if (s) pc.used = true;
+    else pc.refusal = "its landmarks fit no camera: " + s.message;
+  }
+
+  // Visibility: the detector places every landmark, also those the face
+  // hides (the far cheek, the outline seen edge-on); it puts them on the
+  // silhouette, not where the map says. Each photo keeps only the landmarks
+  // whose generic-head normal faces its camera by more than
+  // min_view_cos (the camera from step 1).
+  const std::vector<Vec3> vn = vertex_normals(generic);
+  std::vector<Vec3> generic_normals(size_t(M), Vec3::Zero());
+  for (int m = 0; m < M; ++m)
+    if (landmarks[size_t(m)].valid()) {
+      const auto& tri = generic.triangles[size_t(landmarks[size_t(m)].triangle)];
+      Vec3 n = Vec3::Zero();
+      for (int k = 0; k < 3; ++k) n += landmarks[size_t(m)].barycentric[k] * vn[size_t(tri[k])];
+      generic_normals[size_t(m)] = n.normalized();
+    }
+  for (int i = 0; i < P; ++i) {
+    PhotoCalibration& pc = result.photos[size_t(i)];
+    if (!pc.used || options.min_view_cos <= -1) continue;
+    const Vec3 C = alone[size_t(i)].camera.center();
+    std::vector<Correspondence> kept;
+    std::vector<int> kept_index;
+    for (size_t q = 0; q < corr_index[size_t(i)].size(); ++q) {
+      const int m = corr_index[size_t(i)][q];
+      const Vec3 d = (C - generic_points[size_t(m)]).normalized();
+      if (generic_normals[size_t(m)].dot(d) >= options.min_view_cos) {
+        kept.push_back(corr[size_t(i)][q]);
+        kept_index.push_back(m);
+      }
+    }
+    pc.num_hidden = pc.num_landmarks - int(kept.size());
+    if (int(kept.size()) < options.min_landmarks) {
+      pc.used = false;
+      pc.refusal = std::to_string(kept.size()) + " of its " + std::to_string(pc.num_landmarks) +
+                   " landmarks face the camera, at least " + std::to_string(options.min_landmarks) + " needed";
       continue;
     }
-    pc.used = true;
+    corr[size_t(i)] = std::move(kept);
+    corr_index[size_t(i)] = std::move(kept_index);
   }
 
   // 2. One focal for all usable photos; 3-4. bundle adjustment, refusals.
@@ -331,6 +407,7 @@ Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& g
         }
       }
       pc.rms_px = n ? std::sqrt(sum / n) : 0;
+      pc.median_px = med[k];
     }
     for (size_t a = 0; a < landmark_of.size(); ++a) {
       const int m = landmark_of[a];

@@ -283,6 +283,224 @@ Status hold_crossing_ears(const FitHeadOptions& options, const HeadAnnotations& 
   return Status::success();
 }
 
+// Scales the displacements of every level by a weight that is 0 on the
+// control vertices in `mask` and 1 elsewhere, a new vertex taking the mean of
+// its edge's endpoints: the detail fades out toward the masked area instead
+// of stopping at a step.
+void fade_displacements(const std::vector<char>& mask, MultiresMesh& mr) {
+  std::vector<double> keep(mask.size());
+  for (size_t v = 0; v < mask.size(); ++v) keep[v] = mask[v] ? 0.0 : 1.0;
+  for (int l = 0; l <= mr.num_levels(); ++l) {
+    for (size_t v = 0; v < keep.size(); ++v) mr.displacements[l][v] *= keep[v];
+    if (l == mr.num_levels()) break;
+    const ButterflyLevel& level = mr.levels[l];
+    keep.resize(level.num_fine_vertices);
+    for (int k = 0; k < level.num_new_vertices(); ++k)
+      keep[level.num_coarse_vertices + k] =
+          0.5 * (keep[level.edge_endpoints[k][0]] + keep[level.edge_endpoints[k][1]]);
+  }
+}
+
+// FitHeadOptions::guard_feature_crossings. tree: a tree over the finest
+// level's triangles (the relief's), refitted here and left fitted to the
+// level as it ends when `searched` is set.
+Status guard_feature_crossings(const FitHeadOptions& options, const HeadAnnotations& ann, const MeshTopology& topo,
+                               FitHeadResult& out, MeshBvh& tree, bool& searched) {
+  searched = false;
+  MultiresMesh& mr = out.multires;
+  const int L = mr.num_levels();
+  const int nv = topo.num_vertices;
+  if (!options.guard_feature_crossings || L == 0) return Status::success();
+  std::vector<char> feature(nv, 0);
+  for (const char* name : {"lips", "ears"})
+    if (const auto r = ann.regions.find(name); r != ann.regions.end())
+      for (int v : r->second)
+        if (v >= 0 && v < nv) feature[v] = 1;
+  const std::vector<char> feature_finest = propagate_vertex_mask(mr, feature)[L];
+  TriMesh level;
+  level.triangles = mr.triangles(L);
+  level.positions = mr.state.displaced[L];
+  auto is_feature = [&](const std::array<int, 2>& p) {
+    for (int f : p)
+      for (int v : level.triangles[f])
+        if (feature_finest[v]) return true;
+    return false;
+  };
+  auto split = [&](const std::vector<std::array<int, 2>>& pairs, int& features, int& others) {
+    features = 0;
+    for (const auto& p : pairs) features += is_feature(p);
+    others = static_cast<int>(pairs.size()) - features;
+  };
+  std::vector<std::array<int, 2>> pairs;
+  Status st = finest_crossing_pairs(out.fold_limit, level, pairs);
+  if (!st) return st;
+  int best_features = 0, best_others = 0;
+  split(pairs, best_features, best_others);
+  out.feature_guard.pairs_before = out.feature_guard.pairs_after = best_features;
+  if (best_features == 0) return Status::success();
+
+  searched = true;
+  st = tree.empty() ? build_bvh(level, tree) : refit_bvh(level, tree);
+  if (!st) return st;
+  std::vector<Vec3> best_control = mr.control;
+  std::vector<std::vector<double>> best_displacements = mr.displacements;
+  std::vector<Vec3> best_level = level.positions;
+  std::vector<char> relaxed(nv, 0), moved_ever(nv, 0);
+  const int per_control = 1 << (2 * L);  // child c of triangle g is 4 g + c on every level
+  // From the least change to the most (FitHeadOptions::guard_feature_crossings).
+  struct Step {
+    int rings;
+    double share;  // of the way to the carried generic shape
+    int smoothing; // or: sweeps of umbrella smoothing (halfway to the ring's mean) over the mask
+  };
+  const Step steps[] = {{0, 0.0, 0}, {1, 0.0, 0}, {2, 0.0, 0}, {1, 0.0, 2}, {1, 0.5, 0}, {1, 1.0, 0},
+                        {2, 0.0, 4}, {2, 1.0, 0}, {3, 1.0, 0}, {3, 0.0, 8}, {5, 1.0, 0}};
+  TriMesh target;
+  target.triangles = mr.control_triangles;
+  std::vector<char> moved_tris;
+  std::vector<int> moved_list;
+  std::vector<std::array<int, 2>> found;
+  // The corners of the control faces under each crossing: pairs sharing a
+  // corner make one cluster (the mouth, each ear, both sheets of a
+  // crossing), tried on its own so that one giving way is not held back by
+  // another that does not.
+  std::vector<int> parent(nv);
+  auto find = [&](int v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+  };
+  // One step on `mask`; kept (true) when it leaves fewer pairs at the lips
+  // and ears and no more elsewhere.
+  auto try_step = [&](const std::vector<char>& mask, const Step& step, bool& kept) -> Status {
+    kept = false;
+    const double share = step.share;
+    mr.control = best_control;
+    if (share > 0) {
+      target.positions = best_control;
+      Status r = carry_mouth_bag(mask, topo, out.aligned, target);
+      if (!r) return r;
+      for (int v = 0; v < nv; ++v)
+        if (mask[v]) mr.control[v] = best_control[v] + share * (target.positions[v] - best_control[v]);
+    }
+    for (int sweep = 0; sweep < step.smoothing; ++sweep)
+      for (int v = 0; v < nv; ++v) {
+        if (!mask[v] || topo.rings[v].empty() || topo.is_boundary(v)) continue;
+        Vec3 mean = Vec3::Zero();
+        for (int w : topo.rings[v]) mean += mr.control[w];
+        mr.control[v] = 0.5 * (mr.control[v] + mean / static_cast<double>(topo.rings[v].size()));
+      }
+    mr.displacements = best_displacements;
+    if (share > 0 || step.smoothing > 0) {
+      // The detail over the moved vertices' Butterfly support (two rings)
+      // was measured from the old surface: it goes too.
+      std::vector<char> wide = mask;
+      for (int r = 0; r < 2; ++r) {
+        std::vector<char> grown = wide;
+        for (int v = 0; v < nv; ++v)
+          if (wide[v])
+            for (int w : topo.rings[v]) grown[w] = 1;
+        wide.swap(grown);
+      }
+      fade_displacements(wide, mr);
+    } else {
+      fade_displacements(mask, mr);
+    }
+    Status r = evaluate(mr);
+    if (!r) return r;
+    // Only the triangles that moved are searched again.
+    moved_triangles(level.triangles, best_level, mr.state.displaced[L], moved_tris, moved_list);
+    level.positions = mr.state.displaced[L];
+    r = refit_bvh(level, tree);
+    if (!r) return r;
+    find_intersections_with(tree, moved_list, found);
+    std::vector<std::array<int, 2>> trial = pairs_after_change(pairs, moved_tris, found);
+    int features = 0, others = 0;
+    split(trial, features, others);
+    if (features >= best_features || features + others >= best_features + best_others) return Status::success();
+    best_features = features;
+    best_others = others;
+    pairs = std::move(trial);
+    best_control = mr.control;
+    best_displacements = mr.displacements;
+    best_level = level.positions;
+    for (int v = 0; v < nv; ++v)
+      if (mask[v]) relaxed[v] = 1, moved_ever[v] = moved_ever[v] || share > 0 || step.smoothing > 0;
+    ++out.feature_guard.steps;
+    kept = true;
+    return Status::success();
+  };
+  for (int round = 0; round < options.feature_guard_rounds && best_features > 0; ++round) {
+    for (int v = 0; v < nv; ++v) parent[v] = v;
+    std::vector<char> seed(nv, 0);
+    for (const auto& p : pairs)
+      if (is_feature(p)) {
+        const int first = mr.control_triangles[p[0] / per_control][0];
+        for (int f : p)
+          for (int v : mr.control_triangles[f / per_control]) seed[v] = 1, parent[find(v)] = find(first);
+      }
+    std::vector<std::vector<int>> clusters;
+    {
+      std::vector<int> index(nv, -1);
+      for (int v = 0; v < nv; ++v)
+        if (seed[v]) {
+          int& c = index[find(v)];
+          if (c < 0) c = static_cast<int>(clusters.size()), clusters.emplace_back();
+          clusters[c].push_back(v);
+        }
+    }
+    bool any = false;
+    for (const std::vector<int>& cluster : clusters) {
+      const std::vector<char> start = vertex_mask(cluster, nv);
+      for (const Step& step : steps) {
+        std::vector<char> mask = start;
+        for (int r = 0; r < step.rings; ++r) {
+          std::vector<char> grown = mask;
+          for (int v = 0; v < nv; ++v)
+            if (mask[v])
+              for (int w : topo.rings[v]) grown[w] = 1;
+          mask.swap(grown);
+        }
+        bool kept = false;
+        st = try_step(mask, step, kept);
+        if (!st) return st;
+        if (kept) {
+          any = true;
+          break;
+        }
+      }
+      if (best_features == 0) break;
+    }
+    if (!any) break;
+  }
+  mr.control = best_control;
+  mr.displacements = best_displacements;
+  st = evaluate(mr);
+  if (!st) return st;
+  level.positions = mr.state.displaced[L];
+  st = refit_bvh(level, tree);
+  if (!st) return st;
+  out.control.positions = best_control;
+  // The pairs found are the level's (the searches around what moved find
+  // what a whole search would): the quality report takes them.
+  out.fold_limit.finest_pairs = pairs;
+  out.fold_limit.finest_pairs_fingerprint = positions_fingerprint(level.positions);
+  out.fold_limit.finest_pairs_known = true;
+  out.feature_guard.pairs_after = best_features;
+  for (int v = 0; v < nv; ++v) {
+    out.feature_guard.relaxed_vertices += relaxed[v];
+    out.feature_guard.moved_vertices += moved_ever[v];
+  }
+  std::ostringstream note;
+  note << "the lips or ears crossed themselves at level " << L << " (" << out.feature_guard.pairs_before
+       << " pairs): the displacements of " << out.feature_guard.relaxed_vertices
+       << " control vertices there were dropped";
+  if (out.feature_guard.moved_vertices)
+    note << " and " << out.feature_guard.moved_vertices << " of them moved toward the generic shape";
+  note << " (" << best_features << " pairs left)";
+  out.notes.push_back(note.str());
+  return Status::success();
+}
+
 }  // namespace
 
 Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHeadOptions& options,
@@ -617,11 +835,15 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   bool ears_reverted = false;
   st = hold_crossing_ears(options, ann, topo, creases, out, displace, ears_reverted);
   if (!st) return with_context(st, "displacements (ears)");
+  bool guard_searched = false;
+  st = guard_feature_crossings(options, ann, topo, out, relief_tree, guard_searched);
+  if (!st) return with_context(st, "displacements (lips and ears)");
   for (int l = 1; l <= options.levels; ++l) out.level_meshes.push_back(level_mesh(out.multires, l));
   const TriMesh finest = level_mesh(out.multires, options.levels);
-  // The fold limiter hands back its tree (the relief's), refitted to the
-  // finest level as it left it: no level-3 build for the figures.
-  stage_done("subdivision", finest, pts, ears_reverted ? nullptr : &relief_tree);
+  // The fold limiter (or the guard) hands back its tree (the relief's),
+  // refitted to the finest level as it left it: no level-3 build for the
+  // figures.
+  stage_done("subdivision", finest, pts, ears_reverted && !guard_searched ? nullptr : &relief_tree);
   return Status::success();
 }
 

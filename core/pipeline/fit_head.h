@@ -178,6 +178,21 @@ struct FitHeadOptions {
   // Costs one self-intersection search of the finest level per fit, and a
   // second subdivision stage when an ear crosses.
   bool hold_crossing_ears = true;
+  // Last, where the finest level still crosses itself at the lips or the
+  // ears (a pair touching either region), the fit gives way there, from the
+  // least change to the most, per cluster of crossings (pairs sharing a
+  // control corner): the displacements over the control faces under the
+  // pairs (grown by 0-2 rings, faded on the finer levels) go to 0; then
+  // those control vertices (1-5 rings) are smoothed (umbrella sweeps) or
+  // moved half or all of the way to the aligned generic head's shape
+  // carried by the movement of the head around them (carry_mouth_bag's
+  // solve), with the displacements over their support faded too. A step is
+  // kept when it leaves fewer pairs at the lips and ears and fewer pairs in
+  // all; up to feature_guard_rounds passes over the clusters. Where nothing
+  // crosses nothing changes: the ears and lips follow the scan wherever it
+  // fits them cleanly. The note says what was relaxed.
+  bool guard_feature_crossings = true;
+  int feature_guard_rounds = 6;
   // The global fit's scan-to-mesh term E_back (GlobalFitOptions::back_*:
   // control vertices over scanned skin held to the scan's surface under
   // them; ears and pockets left out) with this weight. On face captures,
@@ -257,6 +272,12 @@ struct FitHeadResult {
   // untangling's steps (the control mesh above is the untangled one).
   UntangleResult untangle;
   int ears_held = 0;            // ears held in their generic shape (hold_crossing_ears)
+  // guard_feature_crossings: the finest level's pairs touching the lips or
+  // ears before and after it, the steps kept, and the control vertices
+  // whose displacements it dropped / that it moved toward the generic shape.
+  struct FeatureGuard {
+    int pairs_before = 0, pairs_after = 0, steps = 0, relaxed_vertices = 0, moved_vertices = 0;
+  } feature_guard;
 };
 
 // Fits generic (the generic head with annotations, in metres) to scan.

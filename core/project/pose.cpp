@@ -66,15 +66,10 @@ Mat3 jaw_rotation(double angle) {
 
 }  // namespace
 
-Status pose_project(HeadProject& project, double amount, int max_level, UpdateFootprint* footprint) {
-  MultiresMesh& mr = project.fit.multires;
-  if (mr.num_levels() == 0) return Status::error(ErrorCode::InvalidInput, "no fitted head to animate");
-  if (max_level < -1 || max_level > mr.num_levels())
-    return Status::error(ErrorCode::InvalidInput, "no level " + std::to_string(max_level));
-  amount = clamp_pose_amount(amount);
-  const AnimationRig& rig = project.rig;
-  const double lift = brow_lift(rig, amount);
-  const double c = std::cos(jaw_angle(amount)), sn = std::sin(jaw_angle(amount));
+std::vector<Vec3> rig_targets(const AnimationRig& rig, double jaw_amount, double brow_amount) {
+  const double lift = brow_lift(rig, clamp_pose_amount(brow_amount));
+  const double angle = jaw_angle(clamp_pose_amount(jaw_amount));
+  const double c = std::cos(angle), sn = std::sin(angle);
   std::vector<Vec3> target(rig.moved.size());
   for (size_t i = 0; i < rig.moved.size(); ++i) {
     const Vec3& p = rig.rest[i];
@@ -85,6 +80,17 @@ Status pose_project(HeadProject& project, double amount, int max_level, UpdateFo
       target[i] = rig.jaw_pivot + Vec3(d.x(), c * d.y() - sn * d.z(), sn * d.y() + c * d.z());
     }
   }
+  return target;
+}
+
+Status pose_project(HeadProject& project, double amount, int max_level, UpdateFootprint* footprint) {
+  MultiresMesh& mr = project.fit.multires;
+  if (mr.num_levels() == 0) return Status::error(ErrorCode::InvalidInput, "no fitted head to animate");
+  if (max_level < -1 || max_level > mr.num_levels())
+    return Status::error(ErrorCode::InvalidInput, "no level " + std::to_string(max_level));
+  amount = clamp_pose_amount(amount);
+  const AnimationRig& rig = project.rig;
+  const std::vector<Vec3> target = rig_targets(rig, amount, amount);
   const Status st = update_control_vertices(mr, rig.moved, target, footprint, max_level);
   if (st.ok()) project.pose = amount;
   return st;

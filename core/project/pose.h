@@ -21,6 +21,10 @@ double clamp_pose_amount(double amount);
 double jaw_angle(double amount);
 double brow_lift(const AnimationRig& rig, double amount);
 
+// The rig's moved control vertices (rig.moved) posed with the jaw open by
+// jaw_amount and the brows up by brow_amount (each clamped to [0, 1]).
+std::vector<Vec3> rig_targets(const AnimationRig& rig, double jaw_amount, double brow_amount);
+
 // Poses the project: amount is clamped to [0, 1] (NaN: 0), levels up to
 // max_level are updated (-1: all; the others are brought up to date by
 // ensure_current before they are read). InvalidInput when the project has

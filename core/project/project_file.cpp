@@ -1,6 +1,7 @@
 #include "project/project_file.h"
 
 #include "multires/multires.h"
+#include "project/gltf_scene.h"
 
 #include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
@@ -99,24 +100,10 @@ void drop_empty(json& j) {
 
 // ---------------------------------------------------------------- writing
 
-// Appends arrays to the one binary buffer as bufferViews, 8-byte aligned
-// (the doubles are read in place by anyone who maps the buffer).
-struct BinWriter {
-  tinygltf::Model& model;
-
-  int view(const void* data, std::size_t bytes, int target = 0) {
-    std::vector<unsigned char>& buf = model.buffers[0].data;
-    while (buf.size() % 8) buf.push_back(0);
-    tinygltf::BufferView v;
-    v.buffer = 0;
-    v.byteOffset = buf.size();
-    v.byteLength = bytes;
-    v.target = target;
-    const auto* p = static_cast<const unsigned char*>(data);
-    buf.insert(buf.end(), p, p + bytes);
-    model.bufferViews.push_back(v);
-    return static_cast<int>(model.bufferViews.size()) - 1;
-  }
+// The extras' arrays go into the scene's binary buffer as bufferViews
+// (8-byte aligned: the doubles are read in place by anyone who maps it).
+struct BinWriter : GltfBuilder {
+  using GltfBuilder::GltfBuilder;
 
   // {"view", "type", "count", "width"}: count tuples of width values; an
   // empty array has no view (glTF views are at least one byte).
@@ -148,17 +135,6 @@ struct BinWriter {
     return array(std::vector<std::int32_t>(v.begin(), v.end()), "i32", 1);
   }
   json doubles(const std::vector<double>& v) { return array(v, "f64", 1); }
-
-  // A float32/uint32 accessor of the scene's mesh.
-  int accessor(const void* data, std::size_t bytes, int count, int component, int type, int target) {
-    tinygltf::Accessor a;
-    a.bufferView = view(data, bytes, target);
-    a.componentType = component;
-    a.count = count;
-    a.type = type;
-    model.accessors.push_back(a);
-    return static_cast<int>(model.accessors.size()) - 1;
-  }
 };
 
 json mat3_json(const Mat3& m) {
@@ -191,82 +167,20 @@ json options_json(const FitHeadOptions& o) {
 }
 
 // The scene: the finest level at rest, head frame, float32, with normals
-// and, when textured, uvs (glTF's v runs down the image) and the skin.
+// and, when textured, uvs and the skin (the PNG in bufferView skin_view).
 void add_scene(const HeadProject& p, const std::vector<Vec3>& rest, const std::vector<Vec3>& normals,
                int skin_view, BinWriter& w) {
-  tinygltf::Model& m = w.model;
   const MultiresMesh& mr = p.fit.multires;
-  const std::vector<Tri>& tris = mr.triangles(mr.num_levels());
-  const int n = static_cast<int>(rest.size());
-  std::vector<float> pos(3 * rest.size()), nrm(3 * rest.size());
-  std::vector<double> lo(3, 1e300), hi(3, -1e300);
-  for (std::size_t i = 0; i < rest.size(); ++i)
-    for (int k = 0; k < 3; ++k) {
-      pos[3 * i + k] = static_cast<float>(rest[i][k]);
-      nrm[3 * i + k] = static_cast<float>(normals[i][k]);
-      lo[k] = std::min(lo[k], double(pos[3 * i + k]));
-      hi[k] = std::max(hi[k], double(pos[3 * i + k]));
-    }
-  std::vector<std::uint32_t> idx(3 * tris.size());
-  for (std::size_t i = 0; i < tris.size(); ++i)
-    for (int k = 0; k < 3; ++k) idx[3 * i + k] = static_cast<std::uint32_t>(tris[i][k]);
-
-  tinygltf::Primitive prim;
-  prim.mode = TINYGLTF_MODE_TRIANGLES;
-  prim.attributes["POSITION"] = w.accessor(pos.data(), pos.size() * 4, n, TINYGLTF_COMPONENT_TYPE_FLOAT,
-                                           TINYGLTF_TYPE_VEC3, TINYGLTF_TARGET_ARRAY_BUFFER);
-  m.accessors.back().minValues = lo;
-  m.accessors.back().maxValues = hi;
-  prim.attributes["NORMAL"] = w.accessor(nrm.data(), nrm.size() * 4, n, TINYGLTF_COMPONENT_TYPE_FLOAT,
-                                         TINYGLTF_TYPE_VEC3, TINYGLTF_TARGET_ARRAY_BUFFER);
-  tinygltf::Material mat;
-  mat.name = "skin";
-  mat.pbrMetallicRoughness.metallicFactor = 0;
-  mat.pbrMetallicRoughness.roughnessFactor = 0.8;
-  if (skin_view >= 0 && p.texture.uvs.size() >= rest.size()) {
-    std::vector<float> uv(2 * rest.size());
-    for (std::size_t i = 0; i < rest.size(); ++i) {
-      uv[2 * i] = static_cast<float>(p.texture.uvs[i].x());
-      uv[2 * i + 1] = static_cast<float>(1.0 - p.texture.uvs[i].y());
-    }
-    prim.attributes["TEXCOORD_0"] = w.accessor(uv.data(), uv.size() * 4, n, TINYGLTF_COMPONENT_TYPE_FLOAT,
-                                               TINYGLTF_TYPE_VEC2, TINYGLTF_TARGET_ARRAY_BUFFER);
-    tinygltf::Image image;
-    image.name = "skin";
-    image.mimeType = "image/png";
-    image.bufferView = skin_view;
-    m.images.push_back(image);
-    tinygltf::Sampler sampler;
-    sampler.magFilter = TINYGLTF_TEXTURE_FILTER_LINEAR;
-    sampler.minFilter = TINYGLTF_TEXTURE_FILTER_LINEAR_MIPMAP_LINEAR;
-    sampler.wrapS = sampler.wrapT = TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE;
-    m.samplers.push_back(sampler);
-    tinygltf::Texture tex;
-    tex.source = 0;
-    tex.sampler = 0;
-    m.textures.push_back(tex);
-    mat.pbrMetallicRoughness.baseColorTexture.index = 0;
-  } else {
-    mat.pbrMetallicRoughness.baseColorFactor = {0.8, 0.62, 0.52, 1.0};
-  }
-  m.materials.push_back(mat);
-  prim.material = 0;
-  prim.indices = w.accessor(idx.data(), idx.size() * 4, static_cast<int>(idx.size()),
-                            TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TYPE_SCALAR,
-                            TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
-  tinygltf::Mesh mesh;
-  mesh.name = "head";
-  mesh.primitives.push_back(prim);
-  m.meshes.push_back(mesh);
-  tinygltf::Node node;
-  node.name = "head";
-  node.mesh = 0;
-  m.nodes.push_back(node);
+  const bool textured = skin_view >= 0 && p.texture.uvs.size() >= rest.size();
+  std::vector<Vec2> uvs;
+  if (textured) uvs.assign(p.texture.uvs.begin(), p.texture.uvs.begin() + static_cast<std::ptrdiff_t>(rest.size()));
+  const int material = w.material("skin", textured ? w.png_texture(skin_view, "skin") : -1, {0.8, 0.62, 0.52, 1.0});
+  const int mesh = w.mesh("head", rest, normals, uvs, mr.triangles(mr.num_levels()), material);
   tinygltf::Scene scene;
   scene.name = "head";
-  scene.nodes.push_back(0);
-  m.scenes.push_back(scene);
-  m.defaultScene = 0;
+  scene.nodes.push_back(w.node("head", mesh));
+  w.model.scenes.push_back(scene);
+  w.model.defaultScene = 0;
 }
 
 // ---------------------------------------------------------------- reading
@@ -607,7 +521,7 @@ Status save_project(const HeadProject& p, Bytes& out) {
   model.asset.version = "2.0";
   model.asset.generator = "Likeness";
   model.buffers.resize(1);
-  BinWriter w{model};
+  BinWriter w(model);
 
   // The finest level at rest for the scene: the fit's own (a posed
   // project's state is the pose's).
@@ -696,13 +610,7 @@ Status save_project(const HeadProject& p, Bytes& out) {
   doc["checksum"] = project_checksum(doc, model);
   model.extras = tinygltf::Value(tinygltf::Value::Object{{"likeness", to_value(doc)}});
 
-  tinygltf::TinyGLTF gltf;
-  std::ostringstream stream;
-  if (!gltf.WriteGltfSceneToStream(&model, stream, /*prettyPrint=*/false, /*writeBinary=*/true))
-    return Status::error(ErrorCode::Internal, "could not write the project's GLB");
-  const std::string bytes = stream.str();
-  out.assign(bytes.begin(), bytes.end());
-  return Status::success();
+  return with_context(write_glb(model, out), "the project file");
 }
 
 Status load_project(const std::uint8_t* data, std::size_t size, HeadProject& out, bool verify_checksum) {

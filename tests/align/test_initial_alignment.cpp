@@ -361,3 +361,31 @@ TEST_CASE("align places the generic head on the real James scan", "[align][real]
   CHECK(r.levels.back().cloud.closing_radius_px[0] > 0.0);  // 6k points leave gaps at 256^2
   check_monotone(r);
 }
+
+TEST_CASE("align with several starts keeps the one with the least D on the coarse levels", "[align]") {
+  // AlignOptions::pitch_starts_deg: start 0 runs exactly as a single start,
+  // so the start kept has a coarse D no larger than the single start's, and
+  // the progress still runs from 0 to 1 in order.
+  const GenericHead generic = test::synthetic_head();
+  const PointCloud cloud = transformed(test::sample_surface(generic.mesh, 5000, 2), random_affine(7, 5, 0.1, 0.1, 1.0));
+  AlignOptions one;
+  one.resolution = 64;
+  one.coarse_resolutions = {32};
+  AlignOptions three = one;
+  three.pitch_starts_deg = {0.0, 15.0, -15.0};
+  std::vector<double> fractions;
+  lk::ProgressFn record = [&](const char*, double f) {
+    fractions.push_back(f);
+    return true;
+  };
+  AlignResult r1, r3;
+  REQUIRE(align_initial(generic.mesh, generic.annotations, cloud, one, r1).ok());
+  REQUIRE(align_initial(generic.mesh, generic.annotations, cloud, three, r3, record).ok());
+  REQUIRE(r1.levels.size() == 2);
+  REQUIRE(r3.levels.size() == 2);
+  CHECK(total_xor(r3.levels[0].xor_after) <= total_xor(r1.levels[0].xor_after));
+  CHECK(r3.evaluations > r1.evaluations);
+  REQUIRE(!fractions.empty());
+  for (size_t i = 1; i < fractions.size(); ++i) CHECK(fractions[i] >= fractions[i - 1]);
+  CHECK(fractions.back() == 1.0);
+}

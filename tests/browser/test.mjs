@@ -35,7 +35,8 @@ import { flow as offline } from './flows/offline.mjs';
 import { flow as accessibility } from './flows/accessibility.mjs';
 import { flow as largeScan } from './flows/large_scan.mjs';
 import { flow as landmarks } from './flows/landmarks.mjs';
+import { flow as glb } from './flows/glb.mjs';
 import { flow as photosHead } from './flows/photos_head.mjs';
 
 runFlows([startup, scanLoad, startupFailures, fit, fitChecks, fitThreads, exportFlow, animation, texture, eyeSmile,
-          project, keep, pageStates, fitCancel, photoRefusals, landmarks, photosHead, offline, accessibility, largeScan]);
+          project, keep, pageStates, fitCancel, photoRefusals, landmarks, photosHead, glb, offline, accessibility, largeScan]);

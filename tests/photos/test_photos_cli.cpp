@@ -1,4 +1,6 @@
 // likeness synth-photos + likeness photos end to end, and their refusals.
+#include "image/image.h"
+#include "io/io.h"
 #include "test_data.h"
 
 #include <catch2/catch.hpp>
@@ -49,4 +51,39 @@ TEST_CASE("likeness photos makes a head and cameras from a synthetic session's l
   CHECK(read_file_text(err).find("format") != std::string::npos);
   CHECK(run("photos --points" + points + " --map " + dir + "/s/map.json --photos a.jpg --out " + dir + "/o5", err) == 1);
   CHECK(read_file_text(err).find("one points file per photo") != std::string::npos);
+}
+
+// With --photos the skin comes from the recovered cameras: the synthetic
+// photos show a skin-coloured head (red above blue) on a blue-grey
+// background (blue above red); texels sampled through wrong cameras would
+// land on the background.
+TEST_CASE("likeness photos --photos textures the head from the recovered cameras", "[photos][cli]") {
+  LK_REQUIRE_LIKENESS();
+  const std::string dir = lk::test::scratch_dir("photos_cli_texture");
+  REQUIRE(run("synth-photos --seed 4 --cameras 5 --out " + dir + "/s") == 0);
+  std::string points, photos;
+  for (int i = 0; i < 5; ++i) {
+    points += " " + dir + "/s/view_0" + std::to_string(i) + ".json";
+    photos += " " + dir + "/s/view_0" + std::to_string(i) + ".png";
+  }
+  REQUIRE(run("photos --points" + points + " --photos" + photos + " --map " + dir +
+              "/s/map.json --levels 1 --texture-size 256 --out " + dir + "/out") == 0);
+  CHECK(read_file_text(dir + "/out/textured.obj").find("mtllib textured.mtl") != std::string::npos);
+  lk::Image skin;
+  REQUIRE(lk::load_image_file(dir + "/out/skin.png", skin, 3));
+  REQUIRE(skin.width == 256);
+  long colored = 0, skin_like = 0;
+  for (size_t p = 0; p + 2 < skin.pixels.size(); p += 3) {
+    const int r = skin.pixels[p], b = skin.pixels[p + 2];
+    if (r + skin.pixels[p + 1] + b < 30) continue;  // outside the chart
+    ++colored;
+    skin_like += r > b + 10;
+  }
+  std::printf("skin texels: %ld of %ld coloured texels red above blue\n", skin_like, colored);
+  REQUIRE(colored > 10000);
+  CHECK(skin_like > 0.9 * colored);
+  // --no-texture: no skin.
+  REQUIRE(run("photos --points" + points + " --photos" + photos + " --map " + dir +
+              "/s/map.json --levels 1 --no-texture --out " + dir + "/out2") == 0);
+  CHECK_FALSE(lk::test::exists(dir + "/out2/skin.png"));
 }

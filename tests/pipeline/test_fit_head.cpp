@@ -267,6 +267,7 @@ TEST_CASE("fit_head: holding a crossing ear that does not help leaves the fit as
   }
   FitHeadOptions on;
   on.measure_stages = false;
+  on.guard_feature_crossings = false;  // the hold alone (the guard is tested below)
   FitHeadOptions off = on;
   off.hold_crossing_ears = false;
   FitHeadResult free_fit, held_fit;
@@ -284,4 +285,55 @@ TEST_CASE("fit_head: holding a crossing ear that does not help leaves the fit as
   CHECK(held_fit.control.positions == free_fit.control.positions);
   REQUIRE(held_fit.level_meshes.size() == free_fit.level_meshes.size());
   CHECK(held_fit.level_meshes.back().positions == free_fit.level_meshes.back().positions);
+}
+
+TEST_CASE("fit_head: the feature guard leaves no crossing pair at the ears and lips, and nothing else changes") {
+  // The sheet over the left ear of the test above: the hold cannot help, the
+  // guard (FitHeadOptions::guard_feature_crossings) must take the ear's
+  // pairs to 0 without adding pairs elsewhere, and leave the control mesh
+  // as fitted away from the crossing (the rest of the head follows the
+  // scan as before).
+  const Scene& s = scene();
+  const auto region = s.generic.annotations.regions.find("ears");
+  REQUIRE(region != s.generic.annotations.regions.end());
+  PointCloud scan = s.scan;
+  scan.normals.clear();
+  {
+    std::vector<Vec3> ear;
+    for (int v : region->second)
+      if (s.generic.mesh.positions[v].x() > 0) ear.push_back(s.generic.mesh.positions[v]);  // +x is left
+    const BBox box = bounding_box(ear);
+    const Vec3 centre = 0.5 * (box.min + box.max);
+    for (Vec3& p : scan.positions)
+      if ((p - centre).norm() < 0.6 * box.diagonal() && p.x() - centre.x() > -0.01) p.x() = box.max.x();
+  }
+  FitHeadOptions guarded;
+  guarded.measure_stages = false;
+  FitHeadOptions unguarded = guarded;
+  unguarded.guard_feature_crossings = false;
+  FitHeadResult before, after;
+  REQUIRE(fit_head(scan, s.generic, unguarded, before).ok());
+  REQUIRE(fit_head(scan, s.generic, guarded, after).ok());
+  FitQuality qb, qa;
+  REQUIRE(measure_fit_quality(before, s.generic.annotations, qb).ok());
+  REQUIRE(measure_fit_quality(after, s.generic.annotations, qa).ok());
+  // The quality report's pairs (handed over by the guard) are a whole search's.
+  std::vector<std::array<int, 2>> pairs;
+  REQUIRE(find_self_intersections(after.level_meshes.back(), pairs).ok());
+  CHECK(static_cast<int>(pairs.size()) == qa.crossings.total);
+  INFO("ears " << qb.crossings.ears << " -> " << qa.crossings.ears << ", lips " << qb.crossings.lips << " -> "
+               << qa.crossings.lips << ", all " << qb.crossings.total << " -> " << qa.crossings.total);
+  REQUIRE(qb.crossings.ears + qb.crossings.lips > 0);  // else the guard has nothing to do
+  CHECK(after.feature_guard.pairs_before == qb.crossings.ears + qb.crossings.lips);
+  CHECK(after.feature_guard.steps > 0);
+  CHECK(qa.crossings.ears == 0);
+  CHECK(qa.crossings.lips == 0);
+  CHECK(qa.crossings.total - qa.crossings.ears - qa.crossings.lips <=
+        qb.crossings.total - qb.crossings.ears - qb.crossings.lips);
+  // Only the relaxed control vertices moved: at most the count reported.
+  int moved = 0;
+  for (size_t v = 0; v < after.control.positions.size(); ++v)
+    moved += after.control.positions[v] != before.control.positions[v];
+  CHECK(moved <= after.feature_guard.moved_vertices);
+  CHECK(after.feature_guard.relaxed_vertices < after.control.num_vertices() / 10);
 }

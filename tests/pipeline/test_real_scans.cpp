@@ -1,10 +1,12 @@
 // Every real scan in ../shared/data/head_scans fits without crossing
-// itself at the lips and the ears (issue 35). Skipped with a message when
-// the folder is absent; the scans are never copied into the repo. Two
-// busts do not pass yet (docs/design/fit_real_scans.md): Plato's level 3 crosses
-// itself at the ears, Gutenberg's alignment is refused as not a head.
-// They are fitted and their figures printed (WARN), not required; any
-// other scan put in the folder is required to pass.
+// itself at the lips and the ears (issue 35), as given and turned by 0.05
+// degrees about the vertical (the fit is chaotic on busts: such a nudge
+// changed Demosthenes' alignment and gave 100 pairs at the lips and ears
+// before FitHeadOptions::guard_feature_crossings). Skipped with a
+// message when the folder is absent; the scans are never copied into the
+// repo. Gutenberg (beret, beard, pedestal) is refused as not a head after
+// its alignment (docs/design/fit_real_scans.md): a refusal with a message is
+// accepted for it, a fit is held to the same 0 pairs.
 #include "io/io.h"
 #include "pipeline/fit_head.h"
 #include "pipeline/fit_quality.h"
@@ -33,57 +35,71 @@ std::vector<std::string> real_scans() {
   return out;
 }
 
-// Folders of scans known to fail (docs/design/fit_real_scans.md, "Not done").
-bool known_failure(const std::string& path) {
-  return path.find("/threedscans_plato/") != std::string::npos ||
-         path.find("/threedscans_gutenberg/") != std::string::npos;
+// Folders of scans refused today (docs/design/fit_real_scans.md, "Not done").
+bool known_refusal(const std::string& path) { return path.find("/threedscans_gutenberg/") != std::string::npos; }
+
+// The scan turned by `degrees` about the vertical through its centroid (the
+// bench's "turn 0.05 deg" copy, native_harness/bench_real.cpp).
+PointCloud turned(const PointCloud& scan, double degrees) {
+  Vec3 centroid = Vec3::Zero();
+  for (const Vec3& p : scan.positions) centroid += p;
+  centroid /= std::max(1, scan.size());
+  const Mat3 R(Eigen::AngleAxisd(degrees * 3.14159265358979323846 / 180.0, Vec3::UnitY()));
+  PointCloud out = scan;
+  for (Vec3& p : out.positions) p = centroid + R * (p - centroid);
+  for (Vec3& n : out.normals) n = R * n;
+  return out;
 }
 
 }  // namespace
 
-TEST_CASE("fit_head: every real scan fits with no crossing pairs at the lips and the ears", "[pipeline][real_scans]") {
+TEST_CASE("fit_head: every real scan fits with no crossing pairs at the lips and the ears",
+          "[pipeline][real_scans][shared]") {
   LK_REQUIRE_SHARED("head_scans");
   const std::vector<std::string> scans = real_scans();
   REQUIRE(!scans.empty());
   for (const std::string& path : scans) {
-    DYNAMIC_SECTION(path) {
-      PointCloud scan;
-      REQUIRE(load_point_cloud_file(path, scan).ok());
-      FitHeadOptions options;
-      options.measure_stages = false;  // the crossings are what is checked
-      FitHeadResult r;
-      const Status st = fit_head(scan, test::generic_head(), options, r);
-      FitQuality q;
-      if (st) REQUIRE(measure_fit_quality(r, test::generic_head().annotations, q).ok());
-      if (known_failure(path)) {
-        if (!st) WARN("known failure, " << path << ": " << st.message);
-        else
-          WARN("known failure, " << path << ": level " << q.level << " lips " << q.crossings.lips << ", ears "
-                                 << q.crossings.ears << " pairs");
-        continue;
+    for (const double degrees : {0.0, 0.05}) {
+      DYNAMIC_SECTION(path << ", turned " << degrees << " deg") {
+        PointCloud scan;
+        REQUIRE(load_point_cloud_file(path, scan).ok());
+        if (degrees != 0) scan = turned(scan, degrees);
+        FitHeadOptions options;
+        options.measure_stages = false;  // the crossings are what is checked
+        FitHeadResult r;
+        const Status st = fit_head(scan, test::generic_head(), options, r);
+        if (!st && known_refusal(path)) {
+          WARN("known refusal, " << path << ": " << st.message);
+          CHECK(st.code == ErrorCode::NotAHead);
+          CHECK(!st.message.empty());
+          continue;
+        }
+        INFO(st.message);
+        REQUIRE(st.ok());
+        FitQuality q;
+        REQUIRE(measure_fit_quality(r, test::generic_head().annotations, q).ok());
+        INFO("level " << q.level << ": " << q.crossings.total << " pairs (lips " << q.crossings.lips << ", ears "
+                      << q.crossings.ears << ", eye sockets " << q.crossings.eye_sockets << ", rest "
+                      << q.crossings.rest << ")");
+        CHECK(q.level == 3);
+        CHECK(q.crossings.lips == 0);
+        CHECK(q.crossings.ears == 0);
       }
-      INFO(st.message);
-      REQUIRE(st.ok());
-      INFO("level " << q.level << ": " << q.crossings.total << " pairs (lips " << q.crossings.lips << ", ears "
-                    << q.crossings.ears << ", eye sockets " << q.crossings.eye_sockets << ", rest "
-                    << q.crossings.rest << ")");
-      CHECK(q.level == 3);
-      CHECK(q.crossings.lips == 0);
-      CHECK(q.crossings.ears == 0);
     }
   }
 }
 
 TEST_CASE("fit_head: Plato's ears, under carved hair, cross less when held in the generic shape",
-          "[pipeline][real_scans]") {
+          "[pipeline][real_scans][shared]") {
   // FitHeadOptions::hold_crossing_ears on the scan it was made for
   // (docs/design/fit_real_scans.md): it must lower the ear pairs and add none
-  // elsewhere; 0 is not reached yet (Plato stays a known failure above).
+  // elsewhere (0 is reached with the feature guard after it, tested above).
   LK_REQUIRE_SHARED("head_scans/threedscans_plato/plato.obj");
   PointCloud scan;
   REQUIRE(load_point_cloud_file(lk::test::shared_data_dir() + "/head_scans/threedscans_plato/plato.obj", scan).ok());
   FitHeadOptions on;
   on.measure_stages = false;
+  on.guard_feature_crossings = false;  // the hold alone (the guard after it is tested above)
   FitHeadOptions off = on;
   off.hold_crossing_ears = false;
   FitHeadResult free_fit, held_fit;

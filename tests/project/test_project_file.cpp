@@ -2,8 +2,10 @@
 // project comes back bit for bit and poses and exports as the original;
 // the GLB's scene is the head for any glTF reader; cut, damaged, foreign
 // and future files are refused with a reason and never crash.
+#include "head/generic_head.h"
 #include "io/io.h"
 #include "project/export.h"
+#include "project/glb_export.h"
 #include "project/parts.h"
 #include "project/pose.h"
 #include "project/project_file.h"
@@ -471,4 +473,139 @@ TEST_CASE("project file: random byte flips are refused or change nothing, and ne
   CHECK(refused + same == 3000);
   WARN("byte flips: refused " << refused << ", accepted unchanged " << same << ", loaded without the checksum "
                               << unchecked_loaded << " of 3000");
+}
+
+// ---------------------------------------------------------------- GLB export
+
+TEST_CASE("GLB export: the head at its level with uvs and skin, the parts under their nodes") {
+  HeadProject p = textured_project();
+  REQUIRE(pose_project(p, 0.6).ok());  // exported at rest whatever the pose
+  GenericHead generic;
+  REQUIRE(load_generic_head(generic).ok());
+  GlbExportOptions o;
+  o.level = 2;
+  o.eye_texture = Image::make(8, 8, 3, 200);
+  o.teeth_texture = Image::make(8, 4, 4, 255);
+  Bytes bytes;
+  GlbExportReport r;
+  const Status st = export_glb(p, generic, o, bytes, &r);
+  INFO(st.message);
+  REQUIRE(st.ok());
+  CHECK(p.pose == 0);
+  tinygltf::Model m = parsed_glb(bytes);
+  auto node = [&](const std::string& name) -> const tinygltf::Node& {
+    for (const tinygltf::Node& n : m.nodes)
+      if (n.name == name) return n;
+    FAIL("no node " << name);
+    return m.nodes[0];
+  };
+  auto index = [&](const std::string& name) {
+    for (size_t i = 0; i < m.nodes.size(); ++i)
+      if (m.nodes[i].name == name) return static_cast<int>(i);
+    return -1;
+  };
+  REQUIRE(m.scenes.size() == 1);
+  REQUIRE(m.scenes[0].nodes.size() == 1);
+  CHECK(m.nodes[m.scenes[0].nodes[0]].name == "Neck");
+  auto children = [&](const std::string& name) {
+    std::vector<std::string> out;
+    for (int c : node(name).children) out.push_back(m.nodes[c].name);
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  CHECK(children("Neck") == std::vector<std::string>{"Head"});
+  CHECK(children("Head") == std::vector<std::string>{"Jaw", "LeftEye", "RightEye", "UpperTeeth"});
+  CHECK(children("Jaw") == std::vector<std::string>{"LowerTeeth", "Tongue"});
+
+  auto data = [&](int accessor) {
+    const tinygltf::Accessor& acc = m.accessors.at(accessor);
+    const tinygltf::BufferView& v = m.bufferViews.at(acc.bufferView);
+    return reinterpret_cast<const float*>(m.buffers.at(v.buffer).data.data() + v.byteOffset + acc.byteOffset);
+  };
+  // The head: level 2 at rest, head frame, with the skin's uvs.
+  REQUIRE(pose_project(p, 0.0).ok());
+  TriMesh level2;
+  REQUIRE(project_level_mesh(p, 2, ExportFrame::Head, level2).ok());
+  const tinygltf::Primitive& head = m.meshes.at(node("Head").mesh).primitives.at(0);
+  REQUIRE(m.accessors.at(head.attributes.at("POSITION")).count == level2.positions.size());
+  CHECK(r.head_vertices == level2.num_vertices());
+  const float* P = data(head.attributes.at("POSITION"));
+  const float* UV = data(head.attributes.at("TEXCOORD_0"));
+  for (size_t i = 0; i < level2.positions.size(); i += 53) {
+    for (int k = 0; k < 3; ++k) CHECK(P[3 * i + k] == static_cast<float>(level2.positions[i][k]));
+    CHECK(UV[2 * i + 1] == static_cast<float>(1.0 - p.texture.uvs[i].y()));
+  }
+  CHECK(m.materials.at(head.material).pbrMetallicRoughness.baseColorTexture.index >= 0);
+
+  // The parts: each where place_head_parts puts it, in its node's frame.
+  HeadParts parts;
+  REQUIRE(place_head_parts(p.fit.control, generic, parts).ok());
+  auto world_of = [&](const std::string& name, const TriMesh& expect) {
+    const tinygltf::Node& n = node(name);
+    Vec3 offset = Vec3::Zero();
+    for (int at = index(name); at >= 0;) {  // sum the translations up to the root
+      const tinygltf::Node& a = m.nodes[at];
+      if (a.translation.size() == 3) offset += Vec3(a.translation[0], a.translation[1], a.translation[2]);
+      int parent = -1;
+      for (size_t i = 0; i < m.nodes.size(); ++i)
+        for (int c : m.nodes[i].children)
+          if (c == at) parent = static_cast<int>(i);
+      at = parent;
+    }
+    const tinygltf::Primitive& prim = m.meshes.at(n.mesh).primitives.at(0);
+    REQUIRE(m.accessors.at(prim.attributes.at("POSITION")).count == expect.positions.size());
+    const float* Q = data(prim.attributes.at("POSITION"));
+    double worst = 0;
+    for (size_t i = 0; i < expect.positions.size(); ++i)
+      worst = std::max(worst, (Vec3(Q[3 * i], Q[3 * i + 1], Q[3 * i + 2]) + offset - expect.positions[i]).norm());
+    CHECK(worst < 1e-6);
+    return offset;
+  };
+  const Vec3 left = world_of("LeftEye", parts.placed.eye[0]);
+  world_of("RightEye", parts.placed.eye[1]);
+  CHECK((left - parts.placement.eye_center[0]).norm() < 1e-9);
+  CHECK(left.x() > 0);  // the head's left is +x
+  world_of("UpperTeeth", parts.upper_teeth);
+  world_of("LowerTeeth", parts.lower_teeth);
+  world_of("Tongue", parts.placed.tongue);
+  CHECK((Vec3(node("Jaw").translation[0], node("Jaw").translation[1], node("Jaw").translation[2]) - p.rig.jaw_pivot).norm() <
+        1e-9);
+  // The teeth's voids are transparent: alpha-masked.
+  CHECK(m.materials.at(m.meshes.at(node("UpperTeeth").mesh).primitives[0].material).alphaMode == "MASK");
+
+  // Morph targets from the rig, named in extras.targetNames: jawOpen lowers
+  // the chin by over a centimetre and leaves the brows; likeness_browsUp
+  // lifts the brows and leaves the chin. The lower teeth open with the jaw.
+  const tinygltf::Mesh& hm = m.meshes.at(node("Head").mesh);
+  REQUIRE(hm.primitives[0].targets.size() == 2);
+  REQUIRE(hm.extras.Get("targetNames").ArrayLen() == 2);
+  CHECK(hm.extras.Get("targetNames").Get(0).Get<std::string>() == "jawOpen");
+  CHECK(hm.extras.Get("targetNames").Get(1).Get<std::string>() == "likeness_browsUp");
+  CHECK(hm.weights == std::vector<double>{0, 0});
+  auto delta = [&](int target, int v) {
+    const float* D = data(hm.primitives[0].targets[target].at("POSITION"));
+    return Vec3(D[3 * v], D[3 * v + 1], D[3 * v + 2]);
+  };
+  const std::vector<int>& chin = generic.annotations.regions.at("chin");
+  const std::vector<int>& brow = generic.annotations.regions.at("brow");
+  double chin_drop = 0, chin_brow = 0, brow_lift = 0, brow_jaw = 0;
+  for (int v : chin) {
+    chin_drop = std::max(chin_drop, -delta(0, v).y());
+    chin_brow = std::max(chin_brow, delta(1, v).norm());
+  }
+  for (int v : brow) {
+    brow_lift = std::max(brow_lift, delta(1, v).y());
+    brow_jaw = std::max(brow_jaw, delta(0, v).norm());
+  }
+  INFO("chin drop " << chin_drop << " m, brow lift " << brow_lift << " m");
+  CHECK(chin_drop > 0.01);
+  CHECK(chin_brow < 1e-9);
+  CHECK(brow_lift > 0.002);
+  CHECK(brow_jaw < 1e-9);
+  const tinygltf::Primitive& lower_prim = m.meshes.at(node("LowerTeeth").mesh).primitives[0];
+  REQUIRE(lower_prim.targets.size() == 1);
+  const float* LD = data(lower_prim.targets[0].at("POSITION"));
+  double teeth_drop = 0;
+  for (size_t i = 0; i < parts.lower_teeth.positions.size(); ++i) teeth_drop = std::max(teeth_drop, -double(LD[3 * i + 1]));
+  CHECK(teeth_drop > 0.002);
 }

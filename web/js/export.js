@@ -1,5 +1,5 @@
-// Export: the worker writes the fitted head's files (OBJ, PLY, the textured
-// OBJ + MTL + PNG, the distance map's PLY) and the page hands them to the
+// Export: the worker writes the fitted head's files (OBJ, PLY, a GLB, the
+// textured OBJ + MTL + PNG, the distance map's PLY) and the page hands them to the
 // browser as downloads, in the scan's own units and orientation.
 import { app, ui, setStatus, showError } from './state.js';
 import { runJob } from './worker_client.js';
@@ -53,6 +53,24 @@ async function exportTextured() {
   }
 }
 
+// The head as one GLB for avatar tools and viewers: the chosen level
+// (level 0 gives level 2: a control mesh is no avatar) with its skin when
+// textured, the eyes, teeth and tongue under their nodes, at rest.
+async function exportGlb() {
+  if (!app.fit) return;
+  const level = Number(ui.level.value) || 2;
+  const name = app.fit.name.replace(/\.[^.]*$/, '') + '_head_level' + level + '.glb';
+  try {
+    const r = await runJob({ type: 'exportGlb', level }, []);
+    if (!r.ok) { showError('Export failed: ' + r.message); return; }
+    download(name, r.bytes, 'model/gltf-binary');
+    setStatus('Exported ' + name + ' (level ' + r.level + ', ' + r.vertices.toLocaleString('en') + ' vertices' +
+              (app.texture ? ', textured' : '') + ', with eyes, teeth and tongue; at rest).');
+  } catch (e) {
+    showError('Export failed: ' + (e && e.message ? e.message : e));
+  }
+}
+
 // The checks' distance map: the finest level at rest with the colours of
 // "Distance to scan" (as likeness fit's face_to_scan.ply).
 async function exportMap() {
@@ -71,6 +89,7 @@ async function exportMap() {
 export function wireExport() {
   ui.exportObj.addEventListener('click', () => exportHead('obj'));
   ui.exportPly.addEventListener('click', () => exportHead('ply'));
+  ui.exportGlb.addEventListener('click', exportGlb);
   ui.exportTextured.addEventListener('click', exportTextured);
   ui.exportMap.addEventListener('click', exportMap);
 }

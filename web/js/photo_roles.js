@@ -18,6 +18,51 @@ export function dropRoleTexture(photo) {
   if (changed && app.viewer && app.componentsData) showComponents(app.componentsData);
 }
 
+// MediaPipe Face Mesh landmarks (landmarks.js numbering): each eye's
+// corners, the mouth's corners and the lips' middles.
+const EYE_CORNERS = [[33, 133], [362, 263]];
+const MOUTH = { corners: [61, 291], lips: [0, 17] };
+
+// A photo whose face points were found (a whole face, not a close-up): the
+// close-up the eye or smile job needs, cut around the wider eye (the one
+// turned most to the camera) or the mouth, as PNG bytes; null when the
+// points are missing or the cut would be under 32 px. {buffer, box}.
+async function closeUpFromFace(photo, eye) {
+  const pts = photo.detect && photo.detect.points;
+  if (!pts) return null;
+  const span = (a, b) => (pts[a] && pts[b] ? Math.hypot(pts[a][0] - pts[b][0], pts[a][1] - pts[b][1]) : 0);
+  let c, width;
+  if (eye) {
+    const [a, b] = EYE_CORNERS.reduce((best, e) => (span(...e) > span(...best) ? e : best));
+    if (!span(a, b)) return null;
+    c = [(pts[a][0] + pts[b][0]) / 2, (pts[a][1] + pts[b][1]) / 2];
+    width = 1.5 * span(a, b);   // the eye and a little lid around it
+  } else {
+    const [a, b] = MOUTH.corners, [u, l] = MOUTH.lips;
+    if (!span(a, b) || !pts[u] || !pts[l]) return null;
+    c = [(pts[a][0] + pts[b][0]) / 2, (pts[u][1] + pts[l][1]) / 2];
+    width = 1.6 * span(a, b);   // the lips and a little cheek
+  }
+  const w = Math.round(Math.min(width, photo.width)), h = Math.round(Math.min(0.75 * width, photo.height));
+  if (w < 32 || h < 24) return null;
+  const x = Math.round(Math.min(Math.max(c[0] - w / 2, 0), photo.width - w));
+  const y = Math.round(Math.min(Math.max(c[1] - h / 2, 0), photo.height - h));
+  const bitmap = await createImageBitmap(photo.file);
+  try {
+    // Brought up to a close-up's size (the jobs' thresholds are set on
+    // close-ups, ~600 px and more across); never down.
+    const scale = Math.max(1, 640 / w);
+    const canvas = new OffscreenCanvas(Math.round(w * scale), Math.round(h * scale));
+    const g = canvas.getContext('2d');
+    g.imageSmoothingQuality = 'high';
+    g.drawImage(bitmap, x, y, w, h, 0, 0, canvas.width, canvas.height);
+    const blob = await canvas.convertToBlob({ type: 'image/png' });
+    return { buffer: await blob.arrayBuffer(), box: { x, y, w, h } };
+  } finally {
+    bitmap.close();
+  }
+}
+
 // An eye photo runs the iris synthesis in the worker and dresses both
 // eyeballs; a smile photo makes the teeth texture. Errors go to the banner;
 // the photo keeps its role (and its clicks), the textures stay as they were.
@@ -44,7 +89,11 @@ export async function setPhotoRole(photo, role) {
   const t0 = performance.now();
   let result;
   try {
-    const buffer = await photo.file.arrayBuffer();
+    // A whole face (its points found): the eye or mouth is cut out of it;
+    // a close-up (no face found in it) goes as it is.
+    const cut = await closeUpFromFace(photo, eye).catch(() => null);
+    photo.roleCrop = cut ? cut.box : null;
+    const buffer = cut ? cut.buffer : await photo.file.arrayBuffer();
     result = await runJob({ type: eye ? 'eye' : 'smile', name: photo.name, buffer }, [buffer]);
   } catch (e) {
     result = { ok: false, message: photo.name + ': ' + (e && e.cancelled ? 'cancelled' : e && e.message ? e.message : e) };
@@ -61,9 +110,11 @@ export async function setPhotoRole(photo, role) {
     // The worker's message starts with the photo's name.
     // The core's refusals of a photo that is no close-up say what one is.
     const message = result.message || photo.name + ': ' + result.code;
-    const hint = /close-up/.test(message) ? '.'
+    const cutNote = photo.roleCrop ? ' (looked for in the ' + (eye ? 'eye' : 'mouth') + ' found in the face, ' +
+                                     photo.roleCrop.w + '×' + photo.roleCrop.h + ' px)' : '';
+    const hint = cutNote + (/close-up/.test(message) && !photo.roleCrop ? '.'
       : eye ? '. An eye photo is a close-up of one open eye, the iris near the middle.'
-        : '. A smile photo shows the front teeth, lips apart, filling most of the picture.';
+        : '. A smile photo shows the front teeth, lips apart, filling most of the picture.');
     showError((eye ? 'Eye photo ' : 'Smile photo ') + message + hint);
     return;
   }
@@ -73,8 +124,9 @@ export async function setPhotoRole(photo, role) {
   }
   const entry = { name: photo.name, texture: result.texture, ms: result.ms, wallMs };
   if (eye) { entry.circle = result.circle; app.eyePhoto = entry; } else { app.smilePhoto = entry; }
-  photo.roleNote = eye ? 'iris r ' + result.circle.radius.toFixed(0) + ' px, on both eyes (' + Math.round(result.ms) + ' ms)'
-    : 'teeth texture (' + Math.round(result.ms) + ' ms)';
+  const from = photo.roleCrop ? ' from the ' + (eye ? 'eye' : 'mouth') + ' found in the face' : '';
+  photo.roleNote = eye ? 'iris r ' + result.circle.radius.toFixed(0) + ' px' + from + ', on both eyes (' + Math.round(result.ms) + ' ms)'
+    : 'teeth texture' + from + ' (' + Math.round(result.ms) + ' ms)';
   if (app.viewer && app.componentsData) showComponents(app.componentsData);
   renderPhotos();
   setStatus((eye ? 'Iris from ' : 'Teeth from ') + photo.name + ' in ' + (result.ms / 1000).toFixed(2) + ' s' +

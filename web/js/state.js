@@ -22,7 +22,7 @@ export const ui = {
   fitNotes: $('fit-notes'), fitQuality: $('fit-quality'), qualityTitle: $('quality-title'), qualitySummary: $('quality-summary'),
   qualityList: $('quality-list'),
   showComponents: $('show-components'),
-  exportObj: $('btn-export-obj'), exportPly: $('btn-export-ply'), exportTextured: $('btn-export-textured'),
+  exportObj: $('btn-export-obj'), exportPly: $('btn-export-ply'), exportGlb: $('btn-export-glb'), exportTextured: $('btn-export-textured'),
   exportMap: $('btn-export-map'), distanceLegend: $('distance-legend'),
   saveProject: $('btn-save-project'), projectInput: $('project-input'),
   photoList: $('photo-list'), photoCount: $('photo-count'), texture: $('btn-texture'),
@@ -106,6 +106,7 @@ function applyState(snap) {
   ui.photosHead.disabled = !c.photosHead;
   ui.exportObj.disabled = !c.exportObj;
   ui.exportPly.disabled = !c.exportPly;
+  ui.exportGlb.disabled = !c.exportGlb;
   ui.animate.disabled = !c.animate;
   ui.fullDetail.disabled = !c.fullDetail;
   ui.level.disabled = !c.level;

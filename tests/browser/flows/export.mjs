@@ -1,8 +1,10 @@
-// Export and downloads of the fitted head: "Head (OBJ)" gives the chosen
+// Export and downloads of the fitted head ("Head (GLB)" too, checked by the
+// Khronos validator): "Head (OBJ)" gives the chosen
 // level 3 and the control mesh with their vertex counts, "Head (PLY)" level
 // 3, and "Distance map (PLY)" level 3 coloured by distance, whose coloured
 // vertices are exactly those the checks measured.
 import fs from 'node:fs';
+import { createRequire } from 'node:module';
 import { check, JOB_TIMEOUT_MS, runAlone } from '../harness.mjs';
 import { fittedHead } from './fit.mjs';
 
@@ -54,6 +56,25 @@ async function run(s) {
       detail = `${map.length} bytes; ${notGrey} coloured vertices, ${measured} measured by the checks`;
     }
     check('"Distance map (PLY)" downloads level 3 coloured by distance, measured vertices exactly', ok, detail);
+  }
+  // "Head (GLB)": the chosen level (3) for avatar tools, valid for the
+  // Khronos validator, with the parts' nodes.
+  {
+    await page.click('#btn-export-glb');
+    await page.waitForFunction((n) => window.likeness.downloads.length >= n + 5, handed, { timeout: JOB_TIMEOUT_MS });
+    await new Promise((r) => setTimeout(r, 500));
+    const glbFile = downloads.find((d) => d.suggestedFilename() === 'synthetic_head_head_level3.glb');
+    const glb = glbFile ? fs.readFileSync(await glbFile.path()) : null;
+    let detail = 'missing', ok = false;
+    if (glb) {
+      const v = await createRequire(import.meta.url)('gltf-validator').validateBytes(new Uint8Array(glb));
+      const json = JSON.parse(glb.toString('utf8', 20, 20 + glb.readUInt32LE(12)));
+      const names = json.nodes.map((n) => n.name);
+      const head = json.accessors[json.meshes[json.nodes[names.indexOf('Head')].mesh].primitives[0].attributes.POSITION].count;
+      ok = v.issues.numErrors === 0 && head === fit.levels[2] && ['Neck', 'LeftEye', 'RightEye', 'Jaw', 'Tongue'].every((n) => names.includes(n));
+      detail = `${glb.length} bytes; validator ${v.issues.numErrors} errors, ${v.issues.numWarnings} warnings; head ${head} vertices; nodes ${names.join(' ')}`;
+    }
+    check('"Head (GLB)" downloads level 3 with eyes, teeth and tongue, valid glTF', ok, detail);
   }
   page.off('download', onDownload);
 }

@@ -1,0 +1,40 @@
+// A head project as one GLB (glTF 2.0 binary) for avatar tools and
+// viewers (issue 38's export): the head at a chosen level with its uvs and
+// skin, the eyeballs, upper and lower teeth and tongue as their own meshes
+// with their textures, and a small node hierarchy (Neck > Head > LeftEye,
+// RightEye, Jaw > LowerTeeth, Tongue) whose eye and jaw nodes sit at the
+// eyes' centres and the jaw's hinge, so a tool turns the eyes or the jaw by
+// rotating a node. Head frame, metres, +y up, the face towards +z (glTF's
+// front). At rest, with the rig's two morph targets (jawOpen on the head,
+// lower teeth and tongue; likeness_browsUp on the head). Not yet: the other
+// ARKit shapes, visemes and expressions (they need the muscle layer), and
+// skinning (the Jaw node turns the lower teeth and tongue, not the chin).
+#pragma once
+#include "head/head_model.h"
+#include "image/image.h"
+#include "io/io.h"
+#include "project/project.h"
+
+#include <string>
+#include <vector>
+
+namespace lk {
+
+struct GlbExportOptions {
+  int level = 2;          // the head's level (0 = the control mesh); clamped to the levels there are
+  Image eye_texture;      // the eyeballs' texture (parts.h: generic_eyeball_texture); empty: white
+  Image teeth_texture;    // RGBA, voids transparent (generic_teeth_texture); empty: ivory
+};
+
+struct GlbExportReport {
+  int level = 0;
+  int head_vertices = 0, head_triangles = 0;
+  std::vector<std::string> nodes;  // in file order
+};
+
+// The GLB bytes. Puts the project at rest first. InvalidInput without a
+// fit; the parts left out (with a reason in report) when they cannot be placed.
+Status export_glb(HeadProject& project, const GenericHead& generic, const GlbExportOptions& options, Bytes& out,
+                  GlbExportReport* report = nullptr);
+
+}  // namespace lk

@@ -1,0 +1,25 @@
+// likeness photos' texture step: the skin from the self-calibrated cameras
+// (tarini2002 Sec. 3.2, texture/texture.h), what `likeness texture` does
+// from clicked points, here with no click. Its own file because
+// project/texture_job.h (the chart) and photos/ name different types alike.
+#pragma once
+#include "calib/camera.h"
+#include "common/status.h"
+#include "mesh/tri_mesh.h"
+#include "subdiv/butterfly.h"
+
+#include <string>
+#include <vector>
+
+namespace lk::cli {
+
+// The finest of levels (positions fine_positions) with the control mesh's
+// chart refined to it, textured from the images (image_paths, cameras and
+// names #P, the used photos) at size x size texels; writes
+// out_dir/textured.obj, textured.mtl and skin.png. Errors name the photo.
+Status write_photos_texture(const TriMesh& control, const std::vector<ButterflyLevel>& levels,
+                            const std::vector<Vec3>& fine_positions, const std::vector<std::string>& image_paths,
+                            const std::vector<std::string>& names, const std::vector<Camera>& cameras, int size,
+                            const std::string& out_dir);
+
+}  // namespace lk::cli

@@ -1,0 +1,127 @@
+// The GLB export read by the tools people use (issue 38): a textured head
+// project is made by the native CLI (synth-scan 20k points, fit --levels 2
+// --project, synthetic photos, texture --project-out; skipped with a note
+// without the CLI), exported with `likeness project export --format glb`,
+// then (1) the Khronos glTF-Validator (npm gltf-validator) finds no error,
+// and (2) three.js's GLTFLoader (npm three) loads it in Chromium on a test
+// page served from the page's own origin: the node names (Neck, Head, eyes,
+// Jaw, teeth, tongue), the head's vertex count, a textured skin, and a
+// WebGL render that shows the head; its morphTargetDictionary holds jawOpen
+// and likeness_browsUp, and jawOpen at weight 1 changes the render.
+import { execFileSync } from 'node:child_process';
+import fs from 'node:fs';
+import { createRequire } from 'node:module';
+import os from 'node:os';
+import path from 'node:path';
+import { check, note, runAlone, shot } from '../harness.mjs';
+
+const require = createRequire(import.meta.url);
+
+// A textured head project and its GLB, made by the CLI: {glb, report} or {skip}.
+function makeGlb(webdir) {
+  const bin = [process.env.LK_LIKENESS_BIN, path.join(webdir, '..', 'bin', 'likeness')].filter(Boolean).find((c) => fs.existsSync(c));
+  if (!bin) return { skip: 'no native likeness binary (set LK_LIKENESS_BIN)' };
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-glb-'));
+  const run = (...args) => execFileSync(bin, args, { cwd: dir, stdio: 'pipe' }).toString();
+  try {
+    run('synth-scan', '--seed', '3', '--points', '20000', '--out', '.');
+    run('fit', '--scan', 'scan.ply', '--out', 'fit', '--levels', '2', '--project', 'head.likeness.glb');
+    run('texture', '--project', 'head.likeness.glb', '--make-synthetic', 'photos', '--photo-width', '480', '--photo-height', '360');
+    run('texture', '--project', 'head.likeness.glb', '--photos', 'photos/photo0.png', 'photos/photo1.png', 'photos/photo2.png',
+        '--points', 'photos/points0.txt', 'photos/points1.txt', 'photos/points2.txt', '--out', 'tex', '--size', '512',
+        '--project-out', 'textured.likeness.glb');
+    const report = run('project', 'export', 'textured.likeness.glb', '--format', 'glb', '--out', 'head.glb').trim();
+    return { glb: fs.readFileSync(path.join(dir, 'head.glb')), report };
+  } catch (e) {
+    return { skip: 'the CLI could not make the GLB: ' + String(e.stderr || e.message).split('\n')[0] };
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+}
+
+async function run(s) {
+  const made = makeGlb(s.webdir);
+  if (made.skip) {
+    note('the GLB is not exercised: ' + made.skip);
+    return;
+  }
+  note(made.report);
+  // (1) The Khronos validator.
+  const validator = require('gltf-validator');
+  const v = await validator.validateBytes(new Uint8Array(made.glb), { maxIssues: 200 });
+  const issues = v.issues;
+  const errors = issues.messages.filter((m) => m.severity === 0).map((m) => `${m.code} ${m.pointer || ''}`);
+  check('the Khronos glTF-Validator finds no error in the GLB', issues.numErrors === 0,
+        `${issues.numErrors} errors, ${issues.numWarnings} warnings, ${issues.numInfos} infos${errors.length ? ': ' + errors.slice(0, 5).join(', ') : ''}; ` +
+        `${v.info.drawCallCount} draw calls, ${v.info.totalVertexCount} vertices, ${v.info.totalTriangleCount} triangles, ` +
+        `${(made.glb.length / 1048576).toFixed(2)} MB`);
+
+  // (2) three.js in Chromium, on a test page of the page's own origin (routes:
+  // the test page, three's modules and the GLB are served by the test itself).
+  const page = s.watch(await (await s.context()).newPage());
+  const three = path.dirname(path.dirname(require.resolve('three')));  // node_modules/three (its main is build/three.cjs)
+  await page.route('**/__glb_test/**', (r) => {
+    const url = new URL(r.request().url());
+    const rel = url.pathname.replace(/^\/__glb_test\//, '');
+    if (rel === 'index.html') {
+      return r.fulfill({ contentType: 'text/html', body: `<!doctype html><meta charset="utf-8"><body>
+<script type="importmap">{"imports": {"three": "./three/build/three.module.js", "three/addons/": "./three/examples/jsm/"}}</script>
+<canvas id="c" width="256" height="256" style="width:512px;height:512px"></canvas>
+<script type="module">
+import * as THREE from 'three';
+import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+window.result = (async () => {
+  const gltf = await new GLTFLoader().loadAsync('./head.glb');
+  const names = []; let headVertices = 0, meshes = 0, skinTextured = false, head = null;
+  gltf.scene.traverse((o) => {
+    names.push(o.name);
+    if (o.isMesh) meshes++;
+    if (o.isMesh && o.name === 'Head') { head = o; headVertices = o.geometry.attributes.position.count; skinTextured = !!o.material.map; }
+  });
+  const renderer = new THREE.WebGLRenderer({ canvas: document.getElementById('c'), preserveDrawingBuffer: true });
+  const scene = new THREE.Scene(); scene.background = new THREE.Color(0, 0, 0);
+  scene.add(gltf.scene); scene.add(new THREE.AmbientLight(0xffffff, 2));
+  const box = new THREE.Box3().setFromObject(gltf.scene), c = box.getCenter(new THREE.Vector3()), size = box.getSize(new THREE.Vector3()).length();
+  const camera = new THREE.PerspectiveCamera(30, 1, size / 100, size * 10); camera.position.set(c.x, c.y, c.z + 2.2 * size); camera.lookAt(c);
+  const gl = renderer.getContext();
+  const draw = () => { renderer.render(scene, camera); const px = new Uint8Array(256 * 256 * 4); gl.readPixels(0, 0, 256, 256, gl.RGBA, gl.UNSIGNED_BYTE, px); return px; };
+  const rest = draw();
+  let lit = 0; for (let i = 0; i < rest.length; i += 4) if (rest[i] + rest[i + 1] + rest[i + 2] > 30) lit++;
+  // jawOpen at full weight: the mouth opens, pixels change.
+  const morphs = head ? Object.keys(head.morphTargetDictionary || {}) : [];
+  let changed = 0;
+  if (head && head.morphTargetDictionary.jawOpen !== undefined) {
+    head.morphTargetInfluences[head.morphTargetDictionary.jawOpen] = 1;
+    const open = draw();
+    for (let i = 0; i < open.length; i += 4) if (Math.abs(open[i] - rest[i]) + Math.abs(open[i + 1] - rest[i + 1]) + Math.abs(open[i + 2] - rest[i + 2]) > 30) changed++;
+  }
+  return { names, meshes, headVertices, skinTextured, litFraction: lit / (256 * 256), morphs, jawChanged: changed / (256 * 256) };
+})().catch((e) => ({ error: String(e && e.message || e) }));
+</script>` });
+    }
+    if (rel === 'head.glb') return r.fulfill({ contentType: 'model/gltf-binary', body: made.glb });
+    if (rel.startsWith('three/')) {
+      const file = path.join(three, rel.slice('three/'.length));
+      if (!file.startsWith(three) || !fs.existsSync(file)) return r.fulfill({ status: 404, body: 'not found' });
+      return r.fulfill({ contentType: 'text/javascript', body: fs.readFileSync(file) });
+    }
+    return r.fulfill({ status: 404, body: 'not found' });
+  });
+  await page.goto(s.origin + '/__glb_test/index.html');
+  await page.waitForFunction(() => window.result, null, { timeout: 60000 });
+  const got = await page.evaluate(() => window.result);
+  const wanted = ['Neck', 'Head', 'LeftEye', 'RightEye', 'UpperTeeth', 'Jaw', 'LowerTeeth', 'Tongue'];
+  const headVerts = Number((/(\d+) vertices/.exec(made.report) || [])[1]);
+  check('three.js\'s GLTFLoader loads the GLB: every node, the head\'s vertices, the skin texture',
+        !got.error && wanted.every((n) => got.names.includes(n)) && got.headVertices === headVerts && got.skinTextured && got.meshes === 6,
+        JSON.stringify(Object.assign({}, got, { names: got.names && got.names.join(' ') })));
+  await shot(page, 'glb_threejs.png');
+  check('... and renders the head with WebGL', got.litFraction > 0.05, `${(100 * (got.litFraction || 0)).toFixed(1)}% of the pixels lit`);
+  check('... its morphTargetDictionary holds jawOpen and likeness_browsUp, and jawOpen at weight 1 changes the render',
+        (got.morphs || []).includes('jawOpen') && got.morphs.includes('likeness_browsUp') && got.jawChanged > 0.001,
+        `morphs ${JSON.stringify(got.morphs)}; ${(100 * (got.jawChanged || 0)).toFixed(2)}% of the pixels changed`);
+  await page.close();
+}
+
+export const flow = { name: 'glb', title: 'the GLB export: Khronos validator and three.js', run };
+runAlone(import.meta.url, flow);

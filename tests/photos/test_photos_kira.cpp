@@ -1,0 +1,95 @@
+// The photos job on real photos: the page's detector's landmarks on nine
+// photos of one real person (Kira, tests/photos/data/kira; the photos
+// themselves stay in ../shared/data and are not needed here) with the
+// MediaPipe map that ships with the head. All are the same person, so
+// every photo must be used except 0004, whose landmarks are the detector's
+// misreading of a full profile (an upside-down face).
+#include "head/generic_head.h"
+#include "photos/photos_job.h"
+#include "test_data.h"
+
+#include <algorithm>
+#include <array>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+namespace lk {
+namespace {
+
+TEST_CASE("the photos job uses every Kira photo the detector read, with cameras where the photos were taken", "[photos][kira]") {
+  const std::vector<std::string> names = {"0001", "0002", "0003", "0004", "0006", "0007", "0008", "0009", "0010"};
+  std::vector<LandmarkPhoto> photos;
+  for (const std::string& n : names) {
+    LandmarkPhoto ph;
+    const std::string text = test::read_file_text(test::source_dir() + "/tests/photos/data/kira/" + n + ".json");
+    REQUIRE_FALSE(text.empty());
+    REQUIRE(parse_landmarks_json(text, ph));
+    photos.push_back(ph);
+  }
+  GenericHead generic;
+  REQUIRE(load_generic_head(generic));
+  LandmarkMap map;
+  REQUIRE(parse_landmark_map_json(mediapipe_landmark_map_text(), map));
+  PhotosJobResult r;
+  REQUIRE(run_photos_job(generic, map, photos, {}, r));
+
+  std::map<std::string, std::array<double, 2>> view;  // yaw, pitch in degrees
+  std::vector<double> medians;
+  for (size_t i = 0; i < names.size(); ++i) {
+    const PhotoCalibration& pc = r.calib.photos[i];
+    if (!pc.used) {
+      std::printf("%s: refused: %s\n", names[i].c_str(), pc.refusal.c_str());
+      continue;
+    }
+    double yaw, pitch;
+    view_angles(pc.camera, yaw, pitch);
+    view[names[i]] = {yaw, pitch};
+    medians.push_back(pc.median_px);
+    std::printf("%s: yaw %+.1f pitch %+.1f, median error %.2f px, %d landmarks turned away\n", names[i].c_str(), yaw,
+                pitch, pc.median_px, pc.num_hidden);
+  }
+  std::printf("focal %.1f px (the tutorial's lens: 3813.6 px), rms %.2f -> %.2f px, shape fit %.2f -> %.2f px\n",
+              r.calib.focal, r.calib.initial_rms_px, r.calib.final_rms_px, r.fit.initial_rms_px, r.fit.final_rms_px);
+
+  // 0004: refused, and for the true reason.
+  CHECK_FALSE(r.calib.photos[3].used);
+  CHECK(r.calib.photos[3].refusal.find("upside-down") != std::string::npos);
+  REQUIRE(r.calib.num_used() == 8);
+
+  // Where the cameras are, by eye on the photos (yaw + = from the head's
+  // left, pitch + = from above): 0001 frontal; 0002, 0008, 0010 from her
+  // left; 0003, 0006, 0009 from her right; 0006-0008 from below, 0009-0010
+  // from above.
+  CHECK(std::abs(view["0001"][0]) < 10);
+  CHECK(std::abs(view["0001"][1]) < 10);
+  for (const char* n : {"0002", "0008", "0010"}) CHECK(view[n][0] > 15);
+  for (const char* n : {"0003", "0006", "0009"}) CHECK(view[n][0] < -8);
+  CHECK(std::abs(view["0007"][0]) < 10);
+  for (const char* n : {"0006", "0007", "0008"}) CHECK(view[n][1] < -10);
+  for (const char* n : {"0009", "0010"}) CHECK(view[n][1] > 8);
+  // The order by yaw: 0006 (most from her right), 0003, 0009, then 0001 and
+  // 0007 (frontal), then 0008, 0010, 0002 within a few degrees of each other.
+  CHECK(view["0006"][0] < view["0003"][0]);
+  CHECK(view["0003"][0] < view["0009"][0]);
+  CHECK(view["0009"][0] < view["0001"][0] - 5);
+  for (const char* n : {"0002", "0008", "0010"}) CHECK(view[n][0] > view["0001"][0] + 15);
+
+  // Reprojection: measured 2.2-3.6 px per photo at or above eye level, 4.4-7.1
+  // px from below (the detector's bias changes with the view).
+  std::sort(medians.begin(), medians.end());
+  CHECK(medians[medians.size() / 2] < 4.0);
+  CHECK(medians.back() < 9.0);
+  CHECK(r.calib.final_rms_px < 6.0);
+  CHECK(r.fit.final_rms_px < r.fit.initial_rms_px);
+
+  // The focal: the self-calibration does NOT recover the lens (3813.6 px,
+  // SOURCES.md); it settles at about 1800 px (docs/design/photos.md, "On real
+  // photos: Kira"). Held here to its measured neighbourhood so a change shows.
+  CHECK(r.calib.focal > 1500);
+  CHECK(r.calib.focal < 2200);
+}
+
+}  // namespace
+}  // namespace lk
