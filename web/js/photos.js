@@ -218,10 +218,12 @@ export function renderPhotos() {
     const meta = document.createElement('div');
     meta.className = 'photo-meta';
     const pts = photoPoints(photo);
-    let note = photo.width + '×' + photo.height + ' · ';
-    if (pts.source === 'clicks') note += pts.list.length + ' of ' + app.fit.landmarks.length + ' landmarks clicked';
-    else if (pts.source === 'file') note += pts.list.length + ' points from ' + photo.pointsName;
-    else note += app.fit ? 'no points yet: click to mark landmarks' : 'no points yet';
+    let note = photo.width + '×' + photo.height;
+    // "no points yet" only while the detector has not given the photo its own.
+    const facePoints = photo.detect && (photo.detect.state === 'found' || photo.detect.state === 'many');
+    if (pts.source === 'clicks') note += ' · ' + pts.list.length + ' of ' + app.fit.landmarks.length + ' landmarks clicked';
+    else if (pts.source === 'file') note += ' · ' + pts.list.length + ' points from ' + photo.pointsName;
+    else if (!facePoints) note += ' · ' + (app.fit ? 'no points yet: click to mark landmarks' : 'no points yet');
     if (pts.list.length > 0 && pts.list.length < 6) { note += ' (6 needed)'; meta.classList.add('bad'); }
     if (photo.detect && photo.detect.state !== 'waiting' && (photo.role || 'face') === 'face') {
       note += ' · ' + (photo.detect.state === 'running' ? 'finding face points…' : photo.detect.message);
