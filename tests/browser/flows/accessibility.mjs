@@ -30,22 +30,45 @@ async function checkState(page, label) {
 
 // Tab from the top through the page: every visible, enabled control is
 // reached, and each shows where the focus is (an outline or a ring).
+// Waits until the head kept in IndexedDB (keep.js, saved a moment after a
+// change) has stopped saving, so its list is not redrawn under the Tab walk.
+async function keepIdle(page) {
+  let last = -1;
+  for (let i = 0; i < 15; i++) {
+    const n = await page.evaluate(() => (window.likeness.keep ? window.likeness.keep.saves : 0));
+    if (n === last) return;
+    last = n;
+    await page.waitForTimeout(2000);
+  }
+}
+
 async function keyboardReach(page, label) {
-  await page.evaluate(() => { document.activeElement && document.activeElement.blur(); window.scrollTo(0, 0); });
+  await keepIdle(page);
+  // Each control is told apart by a mark of its own (two kept heads of the
+  // same minute have the same label); reported by its id or label.
+  await page.evaluate(() => {
+    document.querySelectorAll('[data-tab-check]').forEach((e) => e.removeAttribute('data-tab-check'));
+    document.querySelectorAll('button, input, select, textarea, a[href], [tabindex]')
+      .forEach((e, i) => e.setAttribute('data-tab-check', String(i)));
+    if (document.activeElement) document.activeElement.blur();
+    window.scrollTo(0, 0);
+  });
   const describe = () => {
     const e = document.activeElement;
     if (!e || e === document.body) return null;
     const st = getComputedStyle(e);
     const ring = (st.outlineStyle !== 'none' && parseFloat(st.outlineWidth) > 0) || st.boxShadow !== 'none';
-    return { key: e.id || e.getAttribute('aria-label') || e.textContent.trim().slice(0, 30), ring };
+    return { key: e.getAttribute('data-tab-check') || e.id || e.getAttribute('aria-label'), ring,
+             name: e.id || e.getAttribute('aria-label') || e.textContent.trim().slice(0, 30) };
   };
-  const reached = new Map();
-  for (let i = 0; i < 150; i++) {
+  const reached = new Map(), names = new Map();
+  for (let i = 0; i < 300; i++) {
     await page.keyboard.press('Tab');
     const d = await page.evaluate(describe);
     if (!d) continue;
     if (reached.has(d.key)) break;  // round the page once
     reached.set(d.key, d.ring);
+    names.set(d.key, d.name);
   }
   const controls = await page.evaluate(() => Array.from(document.querySelectorAll(
     'button, input, select, textarea, a[href], [tabindex]:not([tabindex="-1"])')).filter((e) => {
@@ -54,9 +77,9 @@ async function keyboardReach(page, label) {
     const st = getComputedStyle(e);
     // A visually hidden file input is reached through its label's focus ring.
     return (r.width > 0 && r.height > 0 && st.visibility !== 'hidden') || e.type === 'file';
-  }).map((e) => e.id || e.getAttribute('aria-label') || e.textContent.trim().slice(0, 30)));
-  const missing = controls.filter((k) => !reached.has(k));
-  const noRing = [...reached].filter(([, ring]) => !ring).map(([k]) => k);
+  }).map((e) => ({ key: e.getAttribute('data-tab-check'), name: e.id || e.getAttribute('aria-label') || e.textContent.trim().slice(0, 30) })));
+  const missing = controls.filter((c) => !reached.has(c.key)).map((c) => c.name);
+  const noRing = [...reached].filter(([, ring]) => !ring).map(([k]) => names.get(k));
   check(`${label}: every control is reached by Tab and shows its focus`, missing.length === 0 && noRing.length === 0,
         `${reached.size} reached of ${controls.length}; missing: ${missing.join(', ') || 'none'}; no visible focus: ${noRing.join(', ') || 'none'}`);
 }
