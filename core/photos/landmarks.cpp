@@ -97,14 +97,21 @@ Vec3 surface_position(const TriMesh& mesh, const SurfacePoint& p) {
          p.barycentric[2] * mesh.positions[size_t(t[2])];
 }
 
+// The document of a landmark file or map (what: "landmark file" / "landmark
+// map"), within the size limit, parsed, with its format header checked.
+static Status read_document(const std::string& text, const char* what, const char* format, Json& root, std::string& detector) {
+  if (text.size() > kMaxLandmarkFileBytes)
+    return Status::error(ErrorCode::TooLarge, std::string(what) + " of " + std::to_string(text.size()) +
+                                                  " bytes, at most " + std::to_string(kMaxLandmarkFileBytes));
+  root = parse_document(text);
+  if (root.is_discarded()) return invalid("document", "not valid JSON, or nested deeper than " + std::to_string(kMaxDepth));
+  return check_header(root, format, detector);
+}
+
 Status parse_landmarks_json(const std::string& text, LandmarkPhoto& out) {
   out = {};
-  if (text.size() > kMaxLandmarkFileBytes)
-    return Status::error(ErrorCode::TooLarge, "landmark file of " + std::to_string(text.size()) +
-                                                  " bytes, at most " + std::to_string(kMaxLandmarkFileBytes));
-  const Json root = parse_document(text);
-  if (root.is_discarded()) return invalid("document", "not valid JSON, or nested deeper than " + std::to_string(kMaxDepth));
-  Status s = check_header(root, "likeness-landmarks", out.detector);
+  Json root;
+  Status s = read_document(text, "landmark file", "likeness-landmarks", root, out.detector);
   if (!s) return s;
   auto img = root.find("image");
   if (img == root.end() || !img->is_object()) return invalid("image", "must be an object with name, width, height");
@@ -140,12 +147,8 @@ Status parse_landmarks_json(const std::string& text, LandmarkPhoto& out) {
 
 Status parse_landmark_map_json(const std::string& text, LandmarkMap& out) {
   out = {};
-  if (text.size() > kMaxLandmarkFileBytes)
-    return Status::error(ErrorCode::TooLarge, "landmark map of " + std::to_string(text.size()) +
-                                                  " bytes, at most " + std::to_string(kMaxLandmarkFileBytes));
-  const Json root = parse_document(text);
-  if (root.is_discarded()) return invalid("document", "not valid JSON, or nested deeper than " + std::to_string(kMaxDepth));
-  Status s = check_header(root, "likeness-landmark-map", out.detector);
+  Json root;
+  Status s = read_document(text, "landmark map", "likeness-landmark-map", root, out.detector);
   if (!s) return s;
   const Json& pts = root["points"];
   out.points.assign(pts.size(), Vec3::Zero());
