@@ -242,6 +242,23 @@ TEST_CASE("fit_head: the levels near the neck cut follow the scan just below it,
   CHECK(r_on.fitted_points == r_off.fitted_points);
 }
 
+// The scan with a sheet over the left ear: every point within 0.6 ear
+// sizes of the ear's centre pushed out to the ear's outer side (it crosses
+// the ear at level 3). ears: the "ears" region of head.
+static PointCloud sheet_over_left_ear(const PointCloud& scan_in, const TriMesh& head, const std::vector<int>& ears) {
+  PointCloud scan = scan_in;
+  scan.normals.clear();
+  std::vector<Vec3> ear;
+  for (int v : ears)
+    if (head.positions[v].x() > 0) ear.push_back(head.positions[v]);  // +x is left
+  REQUIRE(!ear.empty());
+  const BBox box = bounding_box(ear);
+  const Vec3 centre = 0.5 * (box.min + box.max);
+  for (Vec3& p : scan.positions)
+    if ((p - centre).norm() < 0.6 * box.diagonal() && p.x() - centre.x() > -0.01) p.x() = box.max.x();
+  return scan;
+}
+
 TEST_CASE("fit_head: holding a crossing ear that does not help leaves the fit as it was") {
   // A sheet over the left ear (every scan point within 0.6 ear sizes of its
   // centre pushed out to the ear's outer side) crosses the ear at level 3.
@@ -253,18 +270,7 @@ TEST_CASE("fit_head: holding a crossing ear that does not help leaves the fit as
   const Scene& s = scene();
   const auto region = s.generic.annotations.regions.find("ears");
   REQUIRE(region != s.generic.annotations.regions.end());
-  PointCloud scan = s.scan;
-  scan.normals.clear();
-  {
-    std::vector<Vec3> ear;
-    for (int v : region->second)
-      if (s.generic.mesh.positions[v].x() > 0) ear.push_back(s.generic.mesh.positions[v]);  // +x is left
-    REQUIRE(!ear.empty());
-    const BBox box = bounding_box(ear);
-    const Vec3 centre = 0.5 * (box.min + box.max);
-    for (Vec3& p : scan.positions)
-      if ((p - centre).norm() < 0.6 * box.diagonal() && p.x() - centre.x() > -0.01) p.x() = box.max.x();
-  }
+  const PointCloud scan = sheet_over_left_ear(s.scan, s.generic.mesh, region->second);
   FitHeadOptions on;
   on.measure_stages = false;
   on.guard_feature_crossings = false;  // the hold alone (the guard is tested below)
@@ -296,17 +302,7 @@ TEST_CASE("fit_head: the feature guard leaves no crossing pair at the ears and l
   const Scene& s = scene();
   const auto region = s.generic.annotations.regions.find("ears");
   REQUIRE(region != s.generic.annotations.regions.end());
-  PointCloud scan = s.scan;
-  scan.normals.clear();
-  {
-    std::vector<Vec3> ear;
-    for (int v : region->second)
-      if (s.generic.mesh.positions[v].x() > 0) ear.push_back(s.generic.mesh.positions[v]);  // +x is left
-    const BBox box = bounding_box(ear);
-    const Vec3 centre = 0.5 * (box.min + box.max);
-    for (Vec3& p : scan.positions)
-      if ((p - centre).norm() < 0.6 * box.diagonal() && p.x() - centre.x() > -0.01) p.x() = box.max.x();
-  }
+  const PointCloud scan = sheet_over_left_ear(s.scan, s.generic.mesh, region->second);
   FitHeadOptions guarded;
   guarded.measure_stages = false;
   FitHeadOptions unguarded = guarded;
