@@ -7,7 +7,6 @@
 #include "head/generic_head.h"
 #include "project/export.h"
 #include "project/glb_export.h"
-#include "project/parts.h"
 #include "project/pose.h"
 #include "project/project_file.h"
 
@@ -79,13 +78,7 @@ int run_export(const std::string& path, const Args& args) {
     if (st = load_generic_head(generic); !st) return fail(kName, st.message);
     GlbExportOptions o;
     o.level = args.has("level") ? level : 2;
-    EyeballTextureOptions eye;
-    eye.size = 256;
-    TeethCompositeOptions teeth;
-    teeth.width = 512;
-    teeth.height = 256;
-    if (!generic_eyeball_texture(eye, o.eye_texture).ok()) o.eye_texture = Image{};
-    if (!generic_teeth_texture(teeth, o.teeth_texture).ok()) o.teeth_texture = Image{};
+    use_generic_part_textures(o);
     Bytes bytes;
     GlbExportReport r;
     st = export_glb(p, generic, o, bytes, &r);

@@ -5,7 +5,6 @@
 #include "worker_common.h"
 
 #include "project/glb_export.h"
-#include "project/parts.h"
 #include "project/pose.h"
 #include "project/project_file.h"
 
@@ -33,10 +32,7 @@ val export_glb_job(int level) {
   if (!generic) return error_result(lk::with_context(generic_status, "generic head"));
   lk::GlbExportOptions o;
   o.level = level;
-  lk::EyeballTextureOptions eye;
-  eye.size = 256;  // as the generic eyes shown
-  if (!lk::generic_eyeball_texture(eye, o.eye_texture).ok()) o.eye_texture = lk::Image{};
-  if (!lk::generic_teeth_texture(teeth_composite(), o.teeth_texture).ok()) o.teeth_texture = lk::Image{};
+  lk::use_generic_part_textures(o);
   lk::Bytes bytes;
   lk::GlbExportReport report;
   if (lk::Status st = lk::export_glb(*kept_project(), *generic, o, bytes, &report); !st.ok()) return error_result(st);

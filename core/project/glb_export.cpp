@@ -67,6 +67,16 @@ std::vector<Vec3> jaw_turn(const TriMesh& about_hinge) {
 
 }  // namespace
 
+void use_generic_part_textures(GlbExportOptions& options) {
+  EyeballTextureOptions eye;
+  eye.size = 256;
+  TeethCompositeOptions teeth;
+  teeth.width = 512;
+  teeth.height = 256;
+  if (!generic_eyeball_texture(eye, options.eye_texture).ok()) options.eye_texture = Image{};
+  if (!generic_teeth_texture(teeth, options.teeth_texture).ok()) options.teeth_texture = Image{};
+}
+
 Status export_glb(HeadProject& project, const GenericHead& generic, const GlbExportOptions& options, Bytes& out,
                   GlbExportReport* report) {
   if (project.fit.multires.num_levels() == 0) return Status::error(ErrorCode::InvalidInput, "no fitted head to export");

@@ -26,6 +26,10 @@ struct GlbExportOptions {
   Image teeth_texture;    // RGBA, voids transparent (generic_teeth_texture); empty: ivory
 };
 
+// The generic eyeball (256 px) and teeth (512 x 256) textures the page
+// shows, into options; a texture that cannot be made is left empty (plain).
+void use_generic_part_textures(GlbExportOptions& options);
+
 struct GlbExportReport {
   int level = 0;
   int head_vertices = 0, head_triangles = 0;
