@@ -105,19 +105,20 @@ export async function closeChromium(context, server) {
 }
 
 // The context's profile folder is context.userDir (remove it with closeChromium).
-// hasTouch: a touch screen; args: more Chromium flags (e.g. --disable-webgl);
+// hasTouch: a touch screen; isMobile: a phone's browser (its viewport
+// meta tag honoured, pointer: coarse); args: more Chromium flags (e.g. --disable-webgl);
 // serviceWorkers 'block' by default (page.route does not see what a service
 // worker fetches), 'allow' for the offline flow.
 // Env LK_CHROMIUM_FLAGS adds Chromium flags for an experiment (space-separated,
 // e.g. "--js-flags=--no-wasm-dynamic-tiering").
-export async function launchChromium(name, viewport, { hasTouch = false, args = [], serviceWorkers = 'block' } = {}) {
+export async function launchChromium(name, viewport, { hasTouch = false, isMobile = false, args = [], serviceWorkers = 'block' } = {}) {
   const userDir = fs.mkdtempSync(path.join(os.tmpdir(), `likeness-${name}-`));
   const context = await chromium.launchPersistentContext(userDir, {
     executablePath: '/usr/bin/chromium', headless: true,
     args: ['--no-sandbox', '--disable-quic', '--no-first-run', '--disable-background-networking',
            '--disable-component-update', '--disable-sync', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
            ...args, ...(process.env.LK_CHROMIUM_FLAGS || '').split(' ').filter(Boolean)],
-    viewport, deviceScaleFactor: 1, hasTouch, serviceWorkers,
+    viewport, deviceScaleFactor: 1, hasTouch, isMobile, serviceWorkers,
   });
   context.userDir = userDir;
   return context;

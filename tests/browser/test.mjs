@@ -37,6 +37,7 @@ import { flow as largeScan } from './flows/large_scan.mjs';
 import { flow as landmarks } from './flows/landmarks.mjs';
 import { flow as glb } from './flows/glb.mjs';
 import { flow as photosHead } from './flows/photos_head.mjs';
+import { flow as phone } from './flows/phone.mjs';
 
 runFlows([startup, scanLoad, startupFailures, fit, fitChecks, fitThreads, exportFlow, animation, texture, eyeSmile,
-          project, keep, pageStates, fitCancel, photoRefusals, landmarks, photosHead, glb, offline, accessibility, largeScan]);
+          project, keep, pageStates, fitCancel, photoRefusals, landmarks, photosHead, phone, glb, offline, accessibility, largeScan]);

@@ -12,6 +12,7 @@
 //   files.js          received files: size limit, file list, sorting a drop
 //   scan.js           loading a scan and the built-in sample
 //   photos.js         photos and their points; photo_roles.js: eye and smile photos
+//   capture.js        Take photos (the camera) and the views still wanted (views.js)
 //   clicker.js        landmark clicks on a photo
 //   fit.js            Fit head and the Pipeline rows; checks.js: the fitted head's checks
 //   photos_head.js    a head from the photos' face points, when no scan is loaded
@@ -28,6 +29,7 @@ import { startViewer, wireViewer } from './viewer.js';
 import { wireFiles } from './files.js';
 import { loadSample } from './scan.js';
 import { wireClicker } from './clicker.js';
+import { wireCapture } from './capture.js';
 import { wireFit } from './fit.js';
 import { wirePhotosHead } from './photos_head.js';
 import { wireHeadView } from './head_view.js';
@@ -55,6 +57,7 @@ function wire() {
   wireProject();
   wireTexture();
   wireClicker();
+  wireCapture();
   wireKeep();
   wireOffline();
 }
@@ -85,7 +88,10 @@ async function start() {
     page.started();
     offerRestore().catch(() => {});  // a browser without storage: nothing to offer
     keepOfflineCopy();
-    setStatus('Ready. Showing the generic head. Drop a head scan to begin.' + threadsNote());
+    // On a touch screen the camera is the way in (Take photos, capture.js).
+    const start = matchMedia('(pointer: coarse)').matches ? 'Take photos of your head, or choose a head scan, to begin.'
+      : 'Drop a head scan, or photos of a head, to begin.';
+    setStatus('Ready. Showing the generic head. ' + start + threadsNote());
   } catch (e) {
     const why = e && e.message ? e.message : String(e);
     if (coreFailed) {

@@ -127,8 +127,10 @@ export async function makeHeadFromPhotos(trigger = 'button') {
 
 // Auto-run: once every dropped photo has its landmarks, with no scan loaded
 // and the page at rest (a banner is left for the user to read).
+// While photos are being taken (capture.js), once the views are enough.
 export function photosHeadAfterLandmarks() {
   if (!ui.autoFit.checked || app.scan || app.photos.some(pending) || !withPoints().length) return;
+  if (app.capturing && !(app.viewGuide && app.viewGuide.enough)) return;
   const state = document.body.dataset.state;
   if (state !== 'ready' && state !== 'done') return;
   makeHeadFromPhotos('auto');
