@@ -21,6 +21,7 @@
 
 #include "common/helper_thread.h"
 #include "common/parallel.h"
+#include "io/exif.h"
 #include "mesh/geometry.h"
 #include "texture/correspondences.h"
 
@@ -104,8 +105,10 @@ val jpeg_truncation_probe(const std::string& name, std::uintptr_t data, std::siz
 }
 
 // Decodes a dropped photo (decoded: see decode_image) to check it is a
-// whole, usable image and reports its size; the texture job decodes it
-// again, so the pixels are not kept here.
+// whole, usable image and reports its size, and the focal in pixels its
+// EXIF gives (focalPx, 0: none; focalSource: the rule, io/exif.h): the
+// prior of a head from photos, as `likeness photos` takes it. The texture
+// job decodes the photo again, so the pixels are not kept here.
 val check_image(const std::string& name, std::uintptr_t data, std::size_t size, val decoded) {
   lk::Image image;
   lk::Status status = decode_image(name, data, size, decoded, image);
@@ -115,6 +118,14 @@ val check_image(const std::string& name, std::uintptr_t data, std::size_t size, 
   r.set("width", image.width);
   r.set("height", image.height);
   r.set("channels", image.channels);
+  lk::ExifInfo exif;
+  std::string source;
+  double focal = 0;
+  const auto* bytes = reinterpret_cast<const std::uint8_t*>(data);
+  if (lk::read_jpeg_exif(bytes, size, exif).ok() && exif.present)  // not a JPEG, or broken EXIF: no prior
+    focal = lk::exif_focal_pixels(exif, image.width, image.height, 0, &source);
+  r.set("focalPx", focal);
+  r.set("focalSource", source);
   return r;
 }
 

@@ -1,6 +1,7 @@
 // Shared by the worker's binding files: conversions between JS values and
 // core types, the worker's clock and the head project kept between calls.
 #pragma once
+#include "calib/camera.h"
 #include "head/generic_head.h"
 #include "io/io.h"
 #include "project/project.h"
@@ -153,6 +154,17 @@ inline lk::TeethCompositeOptions teeth_composite() {
 
 // The last fit (worker_head.cpp); null before the first.
 std::unique_ptr<lk::HeadProject>& kept_project();
+
+// The cameras of the photos the kept head was made from (worker_photos.cpp),
+// by photo name: what the texture job uses for a head from photos. They
+// belong to `project` only (another head kept since: not its cameras).
+struct PhotoCameras {
+  const lk::HeadProject* project = nullptr;
+  std::vector<std::string> names;
+  std::vector<lk::Camera> cameras;
+  const lk::Camera* find(const lk::HeadProject* of, const std::string& name) const;
+};
+PhotoCameras& kept_photo_cameras();
 
 // The generic head, parsed once per worker; null (and status) on an error.
 const lk::GenericHead* generic_head(lk::Status& status);

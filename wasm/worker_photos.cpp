@@ -129,10 +129,31 @@ val photos_head_job(val photos, val options) {
   r.set("photosMs", photos_ms);
   r.set("fitMs", photos_ms);
   kept_project() = std::move(project);
+  PhotoCameras& cams = kept_photo_cameras();
+  cams = PhotoCameras{};
+  cams.project = kept_project().get();
+  for (int k = 0; k < n; ++k) {
+    const int i = parsed_index[size_t(k)];
+    if (i < 0 || static_cast<size_t>(i) >= job.calib.photos.size() || !job.calib.photos[size_t(i)].used) continue;
+    cams.names.push_back(names[size_t(k)]);
+    cams.cameras.push_back(job.calib.photos[size_t(i)].camera);
+  }
   return r;
 }
 
 }  // namespace
+
+PhotoCameras& kept_photo_cameras() {
+  static PhotoCameras cameras;
+  return cameras;
+}
+
+const lk::Camera* PhotoCameras::find(const lk::HeadProject* of, const std::string& name) const {
+  if (!of || of != project) return nullptr;
+  for (size_t i = 0; i < names.size(); ++i)
+    if (names[i] == name) return &cameras[i];
+  return nullptr;
+}
 }  // namespace lk_worker
 
 EMSCRIPTEN_BINDINGS(likeness_worker_photos) {

@@ -50,7 +50,9 @@ val calib_array(const lk::PhotoCalibration& c) {
 // (ptr, size) and points a Float64Array of u v X Y Z per correspondence
 // (pixels, top-left origin; the point on the head in the scan's frame, as
 // the fit result's landmarks). options: {level (default finest), size
-// (texels, default 1024)}. progress gets "texture:<step>" and the job's
+// (texels, default 1024), cameras (true: a head from photos, each photo's
+// camera is its self-calibration's, found by name; points are not read)}.
+// progress gets "texture:<step>" and the job's
 // overall fraction. Returns {ok, code, message, calib: [per photo],
 // uvs Float32Array #V*2, skin {width, height, channels, pixels}, steps
 // [{name, ms}], level, vertexCount, chartL2, textureMs}. On a calibration
@@ -68,6 +70,8 @@ val texture_job(val photos, val options, val progress) {
     return error_result(lk::ErrorCode::InvalidInput, "no level " + std::to_string(input.level));
   if (input.options.size < 16 || input.options.size > 4096)
     return error_result(lk::ErrorCode::InvalidInput, "texture size must be 16..4096 texels");
+  // A head from photos: each photo's camera is the self-calibration's.
+  input.cameras_given = has(options, "cameras") && options["cameras"].as<bool>();
   const int count = photos.isArray() ? photos["length"].as<int>() : 0;
   if (count == 0) return error_result(lk::ErrorCode::InvalidInput, "no photo to texture from");
   if (count > lk::kMaxTexturePhotos)
@@ -112,6 +116,15 @@ val texture_job(val photos, val options, val progress) {
     if (ptr == 0) return error_result(lk::ErrorCode::Internal, name + ": no input buffer");
     const lk::Status st = decode_image(name, ptr, p["size"].as<std::size_t>(), p["decoded"], input.photos[i].image, 3);
     if (!st.ok()) return error_result(st);
+    if (input.cameras_given) {
+      const lk::Camera* camera = kept_photo_cameras().find(&project, name);
+      if (!camera)
+        return error_result(lk::ErrorCode::InvalidInput, name + ": not one of the photos the head was made from " +
+                                                             "(make the head from the photos again)");
+      input.photos[i].camera = *camera;
+      if (!overall("decode", (i + 1.0) / count)) return cancelled("decode");
+      continue;
+    }
     const std::vector<double> flat = emscripten::convertJSArrayToNumberVector<double>(p["points"]);
     if (flat.size() % 5 != 0)
       return error_result(lk::ErrorCode::InvalidInput, name + ": points need 5 numbers each (u v X Y Z)");

@@ -90,7 +90,7 @@ Status texture_project(HeadProject& project, TextureJobInput& input, TextureJobR
   if (count > static_cast<size_t>(kMaxTexturePhotos))
     return Status::error(ErrorCode::InvalidInput, std::to_string(count) + " photos; at most " +
                                                       std::to_string(kMaxTexturePhotos) + " are used");
-  if (input.points.size() != count || input.names.size() != count)
+  if ((!input.cameras_given && input.points.size() != count) || input.names.size() != count)
     return Status::error(ErrorCode::InvalidInput, "one set of points and one name per photo");
   out = TextureJobResult{};
   out.level = level;
@@ -102,15 +102,19 @@ Status texture_project(HeadProject& project, TextureJobInput& input, TextureJobR
     if (observer.finished) observer.finished(step);
   };
 
-  // 1. One camera per photo.
+  // 1. One camera per photo (unless given).
   if (!start("calibrate")) return cancelled("calibrate");
-  std::vector<std::array<int, 2>> sizes;
-  for (const TexturePhoto& p : input.photos) sizes.push_back({p.image.width, p.image.height});
-  const Status calibrated = calibrate_texture_photos(input.points, sizes, input.names, input.calibration,
-                                                     input.sharing, out.calibration);
-  finish("calibrate");
-  if (!calibrated.ok()) return calibrated;
-  for (size_t i = 0; i < count; ++i) input.photos[i].camera = out.calibration.results[i].camera;
+  if (!input.cameras_given) {
+    std::vector<std::array<int, 2>> sizes;
+    for (const TexturePhoto& p : input.photos) sizes.push_back({p.image.width, p.image.height});
+    const Status calibrated = calibrate_texture_photos(input.points, sizes, input.names, input.calibration,
+                                                       input.sharing, out.calibration);
+    finish("calibrate");
+    if (!calibrated.ok()) return calibrated;
+    for (size_t i = 0; i < count; ++i) input.photos[i].camera = out.calibration.results[i].camera;
+  } else {
+    finish("calibrate");
+  }
 
   // 2. The chart on the fitted control mesh (head frame: the view weight
   // assumes the head looks along +z), refined to the finest level; the

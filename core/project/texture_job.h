@@ -58,6 +58,9 @@ Status name_photos(Status status, const std::vector<std::string>& names);
 struct TextureJobInput {
   std::vector<TexturePhoto> photos;                 // decoded images; cameras are set here
   std::vector<std::vector<Correspondence>> points;  // per photo, scan frame
+  // The photos' cameras are already set (a head from photos: the
+  // self-calibration's, scan frame): nothing is calibrated, points are not read.
+  bool cameras_given = false;
   std::vector<std::string> names;                   // per photo, for messages
   int level = -1;                                   // -1: the finest
   TextureOptions options;

@@ -36,6 +36,7 @@ inline Photos photograph(const TriMesh& mesh) {
     const Vec3 eye = c + Vec3(r * std::sin(angle), 0.05 * r, r * std::cos(angle));
     const Camera cam = look_at_camera(eye, c, Vec3::UnitY(), 0.7 * 360 * r / box.size().y(), 480, 360);
     TexturePhoto photo;
+    photo.camera = cam;  // the true camera (the texture job overwrites it unless cameras_given)
     const SurfaceColorFn field = [scale](const Vec3& p, const Vec3&) { return procedural_color_field(p, scale); };
     REQUIRE(render_synthetic_photo(mesh, cam, field, Vec3(0.1, 0.12, 0.15), photo.image).ok());
     VertexBinding b;

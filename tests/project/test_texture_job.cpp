@@ -138,3 +138,42 @@ TEST_CASE("project texture: bad photos and points give errors that name the phot
   CHECK(!out.calibration.status[1].ok());
   CHECK(p.texture.empty());
 }
+
+TEST_CASE("project texture: with the cameras given (a head from photos) nothing is calibrated and those cameras are used") {
+  HeadProject p = test::fitted_project();
+  const int L = p.fit.multires.num_levels();
+  REQUIRE(pose_project(p, 0.0).ok());
+  TriMesh level;
+  REQUIRE(project_level_mesh(p, L, ExportFrame::Scan, level).ok());
+  const Photos shots = photograph(level);
+
+  // texture_head with the true cameras on the job's chart.
+  TriMesh mesh = level;
+  UvStats stats;
+  std::vector<Vec2> finest_uv;
+  REQUIRE(level_chart(p.fit.control, p.fit.multires.levels, UvOptions{}, finest_uv, stats).ok());
+  mesh.uvs.assign(finest_uv.begin(), finest_uv.begin() + mesh.positions.size());
+  TextureOptions topt;
+  topt.size = 256;
+  TexturedHead direct;
+  REQUIRE(texture_head(mesh, shots.photos, topt, direct).ok());
+
+  TextureJobInput input;
+  input.photos = shots.photos;  // cameras set, no points
+  input.names = shots.names;
+  input.cameras_given = true;
+  input.options = topt;
+  TextureJobResult out;
+  const Status st = texture_project(p, input, out);
+  INFO(st.message);
+  REQUIRE(st.ok());
+  CHECK(out.calibration.status.empty());
+  CHECK(p.texture.skin.pixels == direct.skin.pixels);
+
+  // The given cameras are what is used: the front one moved 3 cm sideways
+  // gives another skin.
+  input.photos = shots.photos;
+  input.photos[0].camera.t.x() += 0.03;
+  REQUIRE(texture_project(p, input, out).ok());
+  CHECK(p.texture.skin.pixels != direct.skin.pixels);
+}

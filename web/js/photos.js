@@ -44,7 +44,8 @@ export async function checkPhotos(photos, alone) {
     meta.textContent = formatBytes(file.size) + ' · ' + result.width + '×' + result.height + ' photo';
     meta.parentElement.title = file.name + ': ' + result.width + '×' + result.height +
                                ' photo, kept for the Texture stage';
-    kept.push(addPhoto({ name: file.name, file, width: result.width, height: result.height, decoder: result.decoder }));
+    kept.push(addPhoto({ name: file.name, file, width: result.width, height: result.height, decoder: result.decoder,
+                         exifFocalPx: result.focalPx || 0 }));
   }
   renderPhotos();
   findLandmarks(kept);
@@ -239,10 +240,11 @@ export function renderPhotos() {
     const pts = photoPoints(photo);
     let note = photo.width + '×' + photo.height;
     // "no points yet" only while the detector has not given the photo its own.
-    const facePoints = photo.detect && (photo.detect.state === 'found' || photo.detect.state === 'many');
+    // Nor when the detector found none: its own message says what to do.
+    const detected = photo.detect && ['found', 'many', 'none', 'failed'].includes(photo.detect.state);
     if (pts.source === 'clicks') note += ' · ' + pts.list.length + ' of ' + app.fit.landmarks.length + ' landmarks clicked';
     else if (pts.source === 'file') note += ' · ' + pts.list.length + ' points from ' + photo.pointsName;
-    else if (!facePoints) note += ' · ' + (app.fit ? 'no points yet: click to mark landmarks' : 'no points yet');
+    else if (!detected) note += ' · ' + (app.fit ? 'no points yet: click to mark landmarks' : 'no points yet');
     if (pts.list.length > 0 && pts.list.length < 6) { note += ' (6 needed)'; meta.classList.add('bad'); }
     if (photo.detect && photo.detect.state !== 'waiting' && (photo.role || 'face') === 'face') {
       note += ' · ' + (photo.detect.state === 'running' ? 'finding face points…' : photo.detect.message);

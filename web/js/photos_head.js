@@ -14,6 +14,7 @@ import { FIT_STAGES, showHead } from './fit.js';
 import { checkFitQuality } from './checks.js';
 import { stopAnimation } from './animation.js';
 import { forPage } from './wording.js';
+import { runTexture } from './texture.js';
 
 const pending = (p) => p.detect && ['waiting', 'running'].includes(p.detect.state);
 const withPoints = () => facePhotos().filter((p) => p.detect && p.detect.points);
@@ -38,11 +39,12 @@ function rowsWaiting(n) {
 
 // Rows of a finished head: what ran, with the core's figures. The core runs
 // both stages in one call: their time is one figure, on the Self-calibration row.
-function rowsDone(r, n) {
+function rowsDone(r, n, prior) {
   const used = r.photos.filter((p) => p.used).length;
   const [c0, c1] = r.calibrationRmsPx, [f0, f1] = r.shapeFitRmsPx;
   setStage('align', used + ' of ' + n + ' photos', 1, 'complete');
-  stats('align', 'focal ' + Math.round(r.focalPx) + ' px · landmark error ' + c0.toFixed(1) + ' → ' + c1.toFixed(1) +
+  stats('align', 'focal ' + Math.round(r.focalPx) + ' px' + (prior ? ' (the photos\' EXIF says ' + Math.round(prior) + ' px)' : '') +
+        ' · landmark error ' + c0.toFixed(1) + ' → ' + c1.toFixed(1) +
         ' px (generic head → bundle adjustment) · both stages ' + (r.photosMs / 1000).toFixed(2) + ' s');
   setStage('local_fit', 'done', 1, 'complete');
   stats('local_fit', 'landmark error on the fitted mesh ' + f0.toFixed(1) + ' → ' + f1.toFixed(1) + ' px · stiffness ' +
@@ -54,6 +56,13 @@ function rowsDone(r, n) {
   g.querySelector('.stage-name').disabled = true;
   setStage('subdivide', r.meshes.levels.length + ' levels', 1, 'complete');
   stats('subdivide', 'Butterfly levels of the fitted control mesh; no scan, so no detail displacements');
+}
+
+// The focal prior from the photos' EXIF (the median over those that give
+// one, as `likeness photos` takes it), 0: none.
+function exifFocal(photos) {
+  const f = photos.map((p) => p.exifFocalPx || 0).filter((x) => x > 0).sort((a, b) => a - b);
+  return f.length ? f[Math.floor(f.length / 2)] : 0;
 }
 
 export async function makeHeadFromPhotos(trigger = 'button') {
@@ -82,7 +91,7 @@ export async function makeHeadFromPhotos(trigger = 'button') {
   let result;
   try {
     const list = photos.map((p) => ({ name: p.name, text: JSON.stringify(landmarksJson(p.name, p.width, p.height, p.detect.points)) }));
-    result = await runJob({ type: 'photos', photos: list, options: { levels: 3 } }, []);
+    result = await runJob({ type: 'photos', photos: list, options: { levels: 3, focalPx: exifFocal(photos) } }, []);
   } catch (e) {
     if (e && e.cancelled) {
       for (const st of FIT_STAGES) setStage(st.row, 'cancelled', 0);
@@ -97,6 +106,7 @@ export async function makeHeadFromPhotos(trigger = 'button') {
   (result.photos || []).forEach((row, k) => { if (photos[k]) photos[k].photosHead = row; });
   const usedCount = (result.photos || []).filter((p) => p.used).length;
   app.photosHead = { trigger, ok: !!result.ok, photos: photos.length, used: usedCount, focalPx: result.focalPx || 0,
+                     exifFocalPx: exifFocal(photos),
                      wallMs, photosMs: result.photosMs || 0, message: result.ok ? '' : result.message,
                      notes: result.notes || [] };
   renderPhotos();
@@ -114,15 +124,17 @@ export async function makeHeadFromPhotos(trigger = 'button') {
                 triangleCount: result.meshes.control.triangleCount };
   showHead(result, 'head from ' + usedCount + ' photos', wallMs, true);
   app.fit.fromPhotos = true;
-  rowsDone(result, photos.length);
+  rowsDone(result, photos.length, exifFocal(photos));
   ui.fitTotal.textContent = 'head from ' + usedCount + ' of ' + photos.length + ' photos in ' + (result.photosMs / 1000).toFixed(2) +
                             ' s in the worker · focal ' + Math.round(result.focalPx) + ' px · the generic head\'s size ' +
                             '(photos without a known focal do not give the scale)';
   ui.photosHeadTotal.textContent = usedCount + ' of ' + photos.length + ' photos used · ' + (wallMs / 1000).toFixed(1) + ' s';
   setStatus('Head made from ' + usedCount + ' photos in ' + (result.photosMs / 1000).toFixed(2) + ' s: no scan, no click. ' +
-            'Pick a level, animate or export; click a photo to correct its points and make it again.');
+            'Texture it from the same photos, pick a level, animate or export; click a photo to correct its points and make it again.');
   endJob(job);
   checkFitQuality(app.fit);
+  // With Auto-run on, the skin from the same photos, their cameras known: no click.
+  if (ui.autoFit.checked) await runTexture();
 }
 
 // Auto-run: once every dropped photo has its landmarks, with no scan loaded

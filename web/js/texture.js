@@ -22,7 +22,14 @@ export async function runTexture() {
   if (state === 'working' || state === 'loading' || app.startupFailed) return;
   clearError();
   if (!app.fit) { showError('Fit the head before texturing it: the texture is laid on the fitted head.'); return; }
-  const using = texturable();
+  // A head from photos is textured from the photos it was made from, with
+  // their self-calibrated cameras: no point to click.
+  const fromPhotos = !!app.fit.fromPhotos;
+  const using = fromPhotos ? facePhotos().filter((p) => p.photosHead && p.photosHead.used) : texturable();
+  if (fromPhotos && !using.length) {
+    showError('None of the photos made this head (they were removed or changed): make the head from the photos again, then texture it.');
+    return;
+  }
   if (!facePhotos().length) {
     showError(app.photos.length ? 'No photo has the role "Face (skin)": only face photos texture the skin.'
       : 'Drop one or more photos of the head (JPG or PNG) to texture it.');
@@ -33,7 +40,7 @@ export async function runTexture() {
               'its matching points (a .txt of the same name).');
     return;
   }
-  const few = using.filter((p) => photoPoints(p).list.length < 6);
+  const few = fromPhotos ? [] : using.filter((p) => photoPoints(p).list.length < 6);
   if (few.length) {
     showError(few.map((p) => p.name + ' has ' + photoPoints(p).list.length + ' point(s)').join('; ') +
               '. Placing a photo on the head needs at least 6 matching points (12-15 spread over the face are best): ' +
@@ -51,6 +58,11 @@ export async function runTexture() {
   try {
     const photos = [];
     for (const p of using) {
+      if (fromPhotos) {
+        p.sent = [];
+        photos.push({ name: p.name, buffer: await p.file.arrayBuffer() });
+        continue;
+      }
       const pts = photoPoints(p);
       p.sent = pts.list.map((x) => ({ label: x.label }));
       const flat = new Float64Array(pts.list.length * 5);
@@ -58,7 +70,7 @@ export async function runTexture() {
       photos.push({ name: p.name, buffer: await p.file.arrayBuffer(), points: flat });
     }
     const size = Number(params.get('texture_size')) > 0 ? Number(params.get('texture_size')) : 1024;
-    result = await runJob({ type: 'texture', photos, options: { size } }, photos.map((p) => p.buffer),
+    result = await runJob({ type: 'texture', photos, options: { size, cameras: fromPhotos } }, photos.map((p) => p.buffer),
       (stage, fraction) => {
         // stage is "texture:<step>" (decode, calibrate, chart, bind, resample, ...).
         if (!/^texture/.test(stage)) return;
@@ -77,7 +89,7 @@ export async function runTexture() {
   const wallMs = performance.now() - t0;
   if (!live(job)) return;
   // Per-photo calibration outcomes (also on failure: the page marks bad points).
-  if (result.calib) using.forEach((p, i) => { p.calib = result.calib[i] || null; });
+  if (result.calib && !fromPhotos) using.forEach((p, i) => { p.calib = result.calib[i] || null; });
   renderPhotos();
   if (clicker.photo) updateClicker();
   if (!result.ok) {
@@ -90,8 +102,9 @@ export async function runTexture() {
                   level: result.level, photos: using.length };
   setStage('texture', Math.round(result.textureMs) + ' ms', 1, 'complete');
   const rms = using.map((p) => p.calib && p.calib.ok ? p.calib.rms : NaN).filter((x) => !Number.isNaN(x));
-  stageItem('texture').querySelector('.stage-stats').textContent = using.length + ' photo(s), calibration rms ' +
-    (rms.length ? Math.min(...rms).toFixed(2) + '-' + Math.max(...rms).toFixed(2) : '?') + ' px · ' +
+  const cameras = fromPhotos ? 'cameras from the head\'s self-calibration'
+    : 'calibration rms ' + (rms.length ? Math.min(...rms).toFixed(2) + '-' + Math.max(...rms).toFixed(2) : '?') + ' px';
+  stageItem('texture').querySelector('.stage-stats').textContent = using.length + ' photo(s), ' + cameras + ' · ' +
     result.skin.width + '² texels · ' + result.steps.map((x) => x.name + ' ' + Math.round(x.ms)).join(', ') + ' ms';
   ui.textureTotal.textContent = 'textured in ' + (result.textureMs / 1000).toFixed(2) + ' s';
   ui.showPoints.checked = false;

@@ -5,7 +5,7 @@
 // gives them (each a JPEG named image.jpg): the renders of a synthetic person
 // (`likeness synth-photos`, seed 2, 9 cameras; views 04 front, 03 and 05
 // about 22 deg to either side, 02 and 06 about 45 deg), turned into JPEGs by
-// the browser. After each photo the guide says which views are still
+// the browser, each with its lens in EXIF as phones write it. After each photo the guide says which views are still
 // missing; no photo replaces another; Auto-run waits for enough views (5
 // photos with a face, every view) and then makes the head by itself; a
 // photo taken while that job runs (another front one) waits and is added
@@ -18,6 +18,29 @@ import { check, closeChromium, launchChromium, note, READY_TIMEOUT_MS, runAlone,
 
 const ORDER = ['view_04', 'view_03', 'view_05', 'view_02', 'view_06'];
 const LATE = 'view_04';   // another front photo, taken while the head is being made
+
+// A phone's JPEG carries its lens in EXIF: FocalLengthIn35mmFilm. The
+// synthetic cameras' 1250 px on 1200x1600 is 1250 / 2000 * 43.27 = 27.0 mm
+// (the 35-mm frame's diagonal is 43.27 mm), which reads back as 1248 px.
+const FOCAL_35MM = 27, TRUE_FOCAL_PX = 1250;
+
+// jpeg with an APP1 Exif segment after its SOI: a big-endian TIFF block
+// whose IFD0 points to an Exif IFD holding FocalLengthIn35mmFilm (0xA405).
+function withExif(jpeg, focal35) {
+  const tiff = Buffer.alloc(44);
+  tiff.write('MM', 0, 'latin1');
+  tiff.writeUInt16BE(42, 2);
+  tiff.writeUInt32BE(8, 4);                       // IFD0
+  tiff.writeUInt16BE(1, 8);                       // one entry: ExifIFDPointer
+  tiff.writeUInt16BE(0x8769, 10); tiff.writeUInt16BE(4, 12); tiff.writeUInt32BE(1, 14); tiff.writeUInt32BE(26, 18);
+  tiff.writeUInt32BE(0, 22);                      // no next IFD
+  tiff.writeUInt16BE(1, 26);                      // Exif IFD: FocalLengthIn35mmFilm, SHORT
+  tiff.writeUInt16BE(0xA405, 28); tiff.writeUInt16BE(3, 30); tiff.writeUInt32BE(1, 32); tiff.writeUInt16BE(focal35, 36);
+  tiff.writeUInt32BE(0, 40);
+  const head = Buffer.from([0xFF, 0xE1, 0, 0]);
+  head.writeUInt16BE(2 + 6 + tiff.length, 2);
+  return Buffer.concat([jpeg.subarray(0, 2), head, Buffer.from('Exif\0\0', 'latin1'), tiff, jpeg.subarray(2)]);
+}
 
 function likenessBin(webdir) {
   return [process.env.LK_LIKENESS_BIN, path.join(webdir, '..', 'bin', 'likeness')].filter(Boolean).find((c) => fs.existsSync(c));
@@ -119,7 +142,8 @@ async function run(s) {
       for (let i = 0; i < out.length; i += 0x8000) s += String.fromCharCode(...out.subarray(i, i + 0x8000));
       return btoa(s);
     }, fs.readFileSync(path.join(dir, name + '.png')).toString('base64')), 'base64');
-    const take = async (name) => page.setInputFiles('#camera-input', { name: 'image.jpg', mimeType: 'image/jpeg', buffer: await jpeg(name) });
+    const take = async (name) => page.setInputFiles('#camera-input', { name: 'image.jpg', mimeType: 'image/jpeg',
+                                                                       buffer: withExif(await jpeg(name), FOCAL_35MM) });
 
     const steps = [];
     for (const [k, name] of ORDER.entries()) {
@@ -155,6 +179,11 @@ async function run(s) {
           end.names.length === 6 && end.names[5] === 'photo-06.jpg' && end.head.photos === 6 &&
           (during !== 'working' || /taken meanwhile/.test(waitingHint)), `during ${during}: "${waitingHint}"; ${end.names.join()}`);
     note(`phone: head from ${end.head.used} of ${end.head.photos} photos in ${(end.head.wallMs / 1000).toFixed(1)} s; guide: "${end.hint}"`);
+    const exif = await page.evaluate(() => window.likeness.photos.map((p) => p.exifFocalPx));
+    check('each taken photo\'s EXIF lens (27 mm in 35-mm terms) is read as its focal in pixels, and the head is made with it as the prior',
+          exif.every((f) => Math.abs(f - 1248) < 1) && Math.abs(end.head.exifFocalPx - 1248) < 1,
+          `EXIF ${exif.map(Math.round).join(', ')} px; prior ${Math.round(end.head.exifFocalPx)} px; the head's focal ` +
+          `${Math.round(end.head.focalPx)} px (truth ${TRUE_FOCAL_PX} px)`);
     if (SHOT_DIR) {
       await page.evaluate(() => document.getElementById('photos-card').scrollIntoView());
       await page.screenshot({ path: path.join(SHOT_DIR, 'web_phone_take_photos.png') });

@@ -6,7 +6,8 @@
 // MediaPipe's, so they are not given), and with Auto-run on, with no click,
 // the worker makes the head: every view with a face is used, each photo's
 // row says so, the Pipeline rows say what ran, the canvas shows the head,
-// and it exports. The fitted head is compared with the synthetic person's
+// and it exports; then it is textured from the same photos with their
+// recovered cameras (no click). The fitted head is compared with the synthetic person's
 // truth (person.obj, same topology as the generic head). Bad input: a flat
 // grey image with one face photo: "no face found" beside the first, and a
 // one-photo head with its note (or a clear message); the page keeps working.
@@ -118,6 +119,26 @@ async function run(s) {
           r.stages.load.name === 'Face points' && r.stages.align.name === 'Self-calibration' &&
           r.stages.local_fit.name === 'Shape fit' && /not run/.test(r.stages.global_fit.tag) && /focal \d+ px/.test(r.stages.align.stats) &&
           /3 levels/.test(r.stages.subdivide.tag), JSON.stringify(r.stages));
+    // With Auto-run on, the skin follows from the same photos and their
+    // self-calibrated cameras: no click, no points file.
+    const tex = await page.evaluate(() => {
+      const t = window.likeness.texture;
+      if (!t) return null;
+      const px = t.skin.pixels, c = t.skin.channels;
+      let r = 0, g = 0, b = 0, n = 0, lo = 255, hi = 0;
+      for (let i = 0; i < px.length; i += c * 7) {
+        if (px[i] + px[i + 1] + px[i + 2] < 30) continue;  // outside the chart
+        r += px[i]; g += px[i + 1]; b += px[i + 2]; n++;
+        lo = Math.min(lo, px[i]); hi = Math.max(hi, px[i]);
+      }
+      return { photos: t.photos, ms: t.textureMs, size: t.skin.width, mean: [r / n, g / n, b / n], spread: hi - lo,
+               stats: document.querySelector('#stages li[data-stage="texture"] .stage-stats').textContent };
+    });
+    check('the head from photos is textured from the same photos by itself, with their self-calibrated cameras (no click)',
+          tex && tex.photos === r.head.used && /cameras from the head's self-calibration/.test(tex.stats) &&
+          tex.mean[0] > tex.mean[1] && tex.mean[1] > tex.mean[2] && tex.spread > 40,
+          tex ? `${tex.photos} photos, ${tex.size}² texels in ${Math.round(tex.ms)} ms, mean RGB ${tex.mean.map(Math.round).join(' ')}, ` +
+                `red spread ${tex.spread}; "${tex.stats}"` : 'no texture');
     const after = await canvasImage(page);
     const a = analyse(after), changed = differingFraction(before, after);
     check('the canvas shows the new head (the view changed from the generic head, a head fills it)',
