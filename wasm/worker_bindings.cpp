@@ -105,10 +105,8 @@ val jpeg_truncation_probe(const std::string& name, std::uintptr_t data, std::siz
 }
 
 // Decodes a dropped photo (decoded: see decode_image) to check it is a
-// whole, usable image and reports its size, and the focal in pixels its
-// EXIF gives (focalPx, 0: none; focalSource: the rule, io/exif.h): the
-// prior of a head from photos, as `likeness photos` takes it. The texture
-// job decodes the photo again, so the pixels are not kept here.
+// whole, usable image and reports its size; the texture job decodes it
+// again, so the pixels are not kept here.
 val check_image(const std::string& name, std::uintptr_t data, std::size_t size, val decoded) {
   lk::Image image;
   lk::Status status = decode_image(name, data, size, decoded, image);
@@ -118,14 +116,22 @@ val check_image(const std::string& name, std::uintptr_t data, std::size_t size, 
   r.set("width", image.width);
   r.set("height", image.height);
   r.set("channels", image.channels);
+  return r;
+}
+
+// The focal in pixels a photo file's EXIF gives for its width x height
+// (io/exif.h): {focalPx (0: none: not a JPEG, no EXIF, no focal tag, or
+// broken EXIF), source (the rule used)}. The prior of a head from photos,
+// as `likeness photos` takes it.
+val photo_focal(std::uintptr_t data, std::size_t size, int width, int height) {
   lk::ExifInfo exif;
   std::string source;
   double focal = 0;
-  const auto* bytes = reinterpret_cast<const std::uint8_t*>(data);
-  if (lk::read_jpeg_exif(bytes, size, exif).ok() && exif.present)  // not a JPEG, or broken EXIF: no prior
-    focal = lk::exif_focal_pixels(exif, image.width, image.height, 0, &source);
+  if (lk::read_jpeg_exif(reinterpret_cast<const std::uint8_t*>(data), size, exif).ok() && exif.present)
+    focal = lk::exif_focal_pixels(exif, width, height, 0, &source);
+  val r = val::object();
   r.set("focalPx", focal);
-  r.set("focalSource", source);
+  r.set("source", source);
   return r;
 }
 
@@ -214,6 +220,7 @@ EMSCRIPTEN_BINDINGS(likeness_worker_load) {
   emscripten::function("helper_jobs_ms", &helper_jobs_ms);
   emscripten::function("parse_geometry", &parse_geometry);
   emscripten::function("check_image", &check_image);
+  emscripten::function("photo_focal", &photo_focal);
   emscripten::function("inspect_image", &inspect_image);
   emscripten::function("jpeg_truncation_probe", &jpeg_truncation_probe);
   emscripten::function("parse_points", &parse_points);

@@ -170,8 +170,20 @@ const JOBS = {
   // {name, buffer}: a dropped PLY / OBJ / XYZ / VTK file -> geometry arrays.
   parse: (msg, progress) =>
     withHeapBytes(msg.buffer, (ptr, size) => core.parse_geometry(msg.name, ptr, size, progress)),
-  // {name, buffer}: a dropped photo -> {width, height, channels, decoder} once decoded.
-  image: (msg) => withPhoto(msg.name, msg.buffer, (ptr, size, decoded) => core.check_image(msg.name, ptr, size, decoded)),
+  // {name, buffer}: a dropped photo -> {width, height, channels, decoder} once
+  // decoded, and focalPx, focalSource: the focal its EXIF gives (0: none),
+  // read from the file's bytes (the browser's decoder leaves pixels only).
+  image: async (msg) => {
+    const r = await withPhoto(msg.name, msg.buffer, (ptr, size, decoded) => core.check_image(msg.name, ptr, size, decoded));
+    if (r && r.ok) {
+      // EXIF sits in the file's first segments (APP1, at most 64 kB).
+      const head = msg.buffer.slice(0, 256 * 1024);
+      const f = withHeapBytes(head, (ptr, size) => core.photo_focal(ptr, size, r.width, r.height));
+      r.focalPx = f.focalPx;
+      r.focalSource = f.source;
+    }
+    return r;
+  },
   // {name, buffer, options}: a scan -> the fitted head (jeong2002 Sec. 4-5),
   // kept in this worker for 'animate' and 'export'. Progress per stage.
   fit: (msg, progress) =>

@@ -65,6 +65,15 @@ async function addTaken(files) {
   await handleFiles(files);
 }
 
+// Called just after a job ended: the code that ended it may have started
+// the next one meanwhile (a head from photos goes on to its texture); then
+// the photos wait for that one too.
+function flushWaiting() {
+  const state = document.body.dataset.state;
+  if (!waiting.length || (state !== 'ready' && state !== 'done')) return;
+  handleFiles(waiting.splice(0));
+}
+
 export function wireCapture() {
   const input = $('camera-input');
   input.addEventListener('change', () => {
@@ -77,9 +86,6 @@ export function wireCapture() {
     renderViewGuide();
     // The job that held them back has ended: add the photos taken meanwhile
     // (after an error, once its banner is dismissed).
-    if (waiting.length && (snap.state === 'ready' || snap.state === 'done')) {
-      const files = waiting.splice(0);
-      queueMicrotask(() => handleFiles(files));
-    }
+    if (waiting.length && (snap.state === 'ready' || snap.state === 'done')) queueMicrotask(flushWaiting);
   });
 }

@@ -10,7 +10,7 @@
 //   worker_client.js  the worker: start-up, jobs as promises, Cancel, the warm-up worker
 //   viewer.js         the 3D viewer's start-up and view controls
 //   files.js          received files: size limit, file list, sorting a drop
-//   scan.js           loading a scan and the built-in sample
+//   scan.js           loading a scan and the built-in samples (a scan, photos)
 //   photos.js         photos and their points; photo_roles.js: eye and smile photos
 //   capture.js        Take photos (the camera) and the views still wanted (views.js)
 //   clicker.js        landmark clicks on a photo
@@ -27,7 +27,7 @@ import { app, page, params, ui, clearError, fatalStartup, setStatus } from './st
 import { cancelJobs, startWorker, warmUp } from './worker_client.js';
 import { startViewer, wireViewer } from './viewer.js';
 import { wireFiles } from './files.js';
-import { loadSample } from './scan.js';
+import { loadSample, loadPhotosSample } from './scan.js';
 import { wireClicker } from './clicker.js';
 import { wireCapture } from './capture.js';
 import { wireFit } from './fit.js';
@@ -46,6 +46,7 @@ function wire() {
   wireFiles();
   ui.dismiss.addEventListener('click', clearError);
   ui.sample.addEventListener('click', loadSample);
+  ui.samplePhotos.addEventListener('click', loadPhotosSample);
   ui.cancel.addEventListener('click', () => page.cancel());
   app.cancelJobs = cancelJobs;
   wireViewer();

@@ -174,3 +174,41 @@ export async function loadSample() {
   if (!endJob(job)) return;
   await handleFiles([new File([blob], 'sample_scan.ply'), ...extra]);
 }
+
+// The photos sample (scripts/demo puts it beside the page): five renders of
+// a synthetic person from around the head (`likeness synth-photos`, no real
+// person), listed in sample/photos.json. Dropped as photos alone, so with
+// Auto-run on the head is made from them and textured, no click.
+const SAMPLE_PHOTOS_URL = 'sample/photos.json';
+export async function loadPhotosSample() {
+  if (app.scan) {
+    showError('A scan is loaded, and a head from photos is made only without one. Reload the page to try the photos ' +
+              'sample (the head made so far is kept in this browser and offered back).');
+    return;
+  }
+  const job = beginJob('sample');
+  if (!job) return;
+  setStatus('Fetching the photos sample…');
+  const files = [];
+  let why = '';
+  try {
+    const list = await fetch(SAMPLE_PHOTOS_URL, { cache: 'no-store' });
+    if (!list.ok) why = SAMPLE_PHOTOS_URL + ': HTTP ' + list.status;
+    const manifest = list.ok ? await list.json() : { photos: [] };
+    for (const name of (manifest.photos || []).slice(0, 15)) {
+      if (typeof name !== 'string' || !/^[\w.-]+\.(png|jpe?g)$/i.test(name)) continue;
+      const photo = await fetch('sample/' + name, { cache: 'no-store' });
+      if (photo.ok) files.push(new File([await photo.blob()], name, { type: photo.headers.get('content-type') || '' }));
+    }
+  } catch (e) {
+    why = e && e.message ? e.message : String(e);
+  }
+  if (!live(job)) return;
+  if (!files.length) {
+    showError('The photos sample is not installed next to this page' + (why ? ' (' + why + ')' : '') +
+              '. scripts/demo makes it; or drop your own photos.');
+    return;
+  }
+  if (!endJob(job)) return;
+  await handleFiles(files);
+}

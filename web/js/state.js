@@ -15,7 +15,7 @@ export const ui = {
   status: $('status'), banner: $('error-banner'), bannerText: $('error-text'),
   dismiss: $('error-dismiss'), dropZone: $('drop-zone'), fileInput: $('file-input'),
   fileList: $('file-list'), reset: $('btn-reset'), generic: $('btn-generic'),
-  pointSize: $('point-size'), maxSize: $('max-size'), sample: $('btn-sample'), cancel: $('btn-cancel'), wireframe: $('wireframe'),
+  pointSize: $('point-size'), maxSize: $('max-size'), sample: $('btn-sample'), samplePhotos: $('btn-sample-photos'), cancel: $('btn-cancel'), wireframe: $('wireframe'),
   fit: $('btn-fit'), autoFit: $('auto-fit'), fitTotal: $('fit-total'), fitView: $('fit-view'),
   level: $('level'), showPoints: $('show-points'), showDistance: $('show-distance'), animate: $('animate'), animStats: $('anim-stats'),
   fullDetail: $('full-detail'),
@@ -98,6 +98,7 @@ function applyState(snap) {
   ui.reset.disabled = !c.reset;
   ui.generic.disabled = !c.generic;
   ui.sample.disabled = !c.sample;
+  ui.samplePhotos.disabled = !c.sample;
   ui.pointSize.disabled = !c.pointSize;
   ui.wireframe.disabled = !c.wireframe;
   ui.dropZone.classList.toggle('busy', snap.state === 'working');

@@ -192,9 +192,30 @@ async function run(s) {
     await page.close();
 
     await badInput(s, fs.readFileSync(path.join(dir, 'view_03.png')));
+    await photosSample(s);
   } finally {
     fs.rmSync(dir, { recursive: true, force: true });
   }
+}
+
+// "Try the photos sample", when scripts/demo has put it beside the page:
+// the head is made from its photos and textured, with no click.
+async function photosSample(s) {
+  if (!fs.existsSync(path.join(s.webdir, 'sample', 'photos.json'))) {
+    note('"Try the photos sample" not exercised: no sample/photos.json in WEBDIR (scripts/demo makes it)');
+    return;
+  }
+  const page = await s.newPage();
+  await countClicks(page);
+  await page.evaluate(() => document.getElementById('btn-sample-photos').click());  // not a trusted click: counted apart
+  const r = await photosHeadDone(page);
+  await page.waitForFunction(() => window.likeness.texture || document.body.dataset.state !== 'working', null, { timeout: 300000 });
+  const tex = await page.evaluate(() => window.likeness.texture && { photos: window.likeness.texture.photos, ms: window.likeness.texture.textureMs });
+  check('"Try the photos sample" makes a head from its photos and textures it, no click', r.head.ok && r.head.used >= 4 &&
+        tex && tex.photos === r.head.used && r.clicks === 0,
+        `head ${r.head.ok ? 'from ' + r.head.used + ' of ' + r.head.photos + ' photos' : 'refused: ' + r.head.message}; ` +
+        (tex ? `textured from ${tex.photos} in ${Math.round(tex.ms)} ms` : 'no texture'));
+  await page.close();
 }
 
 // A flat grey image and one face: the grey one keeps "no face found" and is
