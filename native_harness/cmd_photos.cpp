@@ -9,6 +9,7 @@
 #include "io/io.h"
 #include "photos/photos_job.h"
 #include "photos_texture.h"
+#include "photos/synthetic_outlines.h"
 #include "photos/synthetic_views.h"
 #include "pipeline/head_creases.h"
 #include "subdiv/butterfly.h"
@@ -48,14 +49,18 @@ std::string base_name(const std::string& path) {
 
 int run_photos(const Args& args) {
   const std::string cmd = "photos";
-  if (!only_known_options(cmd, args, {"points", "photos", "map", "out", "levels", "focal-px", "texture-size", "no-texture"}))
+  if (!only_known_options(cmd, args, {"points", "photos", "masks", "map", "out", "levels", "focal-px", "texture-size", "no-texture"}))
     return 2;
-  const std::vector<std::string> points_paths = args.get_all("points"), photo_paths = args.get_all("photos");
+  const std::vector<std::string> points_paths = args.get_all("points"), photo_paths = args.get_all("photos"),
+                                 mask_paths = args.get_all("masks");
   const std::string map_path = args.get("map"), out_dir = args.get("out");
   if (points_paths.empty() || out_dir.empty()) return fail(cmd, "needs --points P1.json P2.json ... and --out DIR");
   if (!photo_paths.empty() && photo_paths.size() != points_paths.size())
     return fail(cmd, std::to_string(photo_paths.size()) + " photos for " + std::to_string(points_paths.size()) +
                          " points files: give one points file per photo, in the same order");
+  if (!mask_paths.empty() && mask_paths.size() != points_paths.size())
+    return fail(cmd, std::to_string(mask_paths.size()) + " masks for " + std::to_string(points_paths.size()) +
+                         " points files: give one mask per photo, in the same order");
   int levels = 3, texture_size = 2048;
   double focal_px = 0;
   if (!args.get_int("levels", 3, levels, 0, 4) || !args.get_double("focal-px", 0, focal_px, 0, 1e6) ||
@@ -86,6 +91,7 @@ int run_photos(const Args& args) {
   std::vector<std::string> image_paths;  // #photos: each kept photo's image ("" without --photos)
   std::vector<std::string> notes;
   std::vector<double> exif_focals;
+  std::vector<PhotoOutline> outlines;  // #photos with --masks: each kept photo's outline (empty: its mask refused)
   for (size_t i = 0; i < points_paths.size(); ++i) {
     LandmarkPhoto ph;
     Bytes bytes;
@@ -112,6 +118,18 @@ int run_photos(const Args& args) {
       notes.push_back(s.message + " (left out)");
       continue;
     }
+    if (!mask_paths.empty()) {
+      // A bad mask costs that photo its outline, not the photo.
+      Image mask;
+      PhotoOutline outline;
+      Status ms = load_image_file(mask_paths[i], mask);
+      if (ms) ms = outline_from_mask_image(mask, ph.width, ph.height, OutlineOptions{}, outline);
+      if (!ms) {
+        notes.push_back(with_context(ms, mask_paths[i]).message + " (its outline not used)");
+        outline = {};
+      }
+      outlines.push_back(outline);
+    }
     photos.push_back(ph);
     image_paths.push_back(photo_paths.empty() ? "" : photo_paths[i]);
   }
@@ -123,7 +141,7 @@ int run_photos(const Args& args) {
     notes.push_back("focal prior from EXIF: " + std::to_string(int(std::lround(opt.calib.focal_prior_px))) + " px");
   }
   PhotosJobResult r;
-  s = run_photos_job(generic, map, photos, opt, r);
+  s = run_photos_job(generic, map, photos, opt, r, mask_paths.empty() ? nullptr : &outlines);
   for (const std::string& n : r.notes) notes.push_back(n);
   for (const std::string& n : notes) std::printf("  note: %s\n", n.c_str());
   if (!s) return fail(cmd, s.message);
@@ -187,6 +205,18 @@ int run_photos(const Args& args) {
   for (const ShapeFitStage& st : r.fit.stages)
     rep["stages"].push_back({{"stiffness", st.stiffness}, {"cost", {st.initial_cost, st.final_cost}},
                              {"lm_iterations", st.lm_iterations}});
+  if (!mask_paths.empty()) {
+    // The rim against the masks' outlines, at the generic head and at the fit.
+    const auto sil = make_silhouette_set(generic, generic.mesh, r.calib, outlines, opt.silhouettes);
+    if (sil) {
+      const SilhouetteStats a = sil->stats(generic.mesh.positions), b = sil->stats(r.fit.mesh.positions);
+      rep["silhouettes"] = {{"outline_points", a.points}, {"matched", {a.matched, b.matched}},
+                            {"rim_to_outline_mean_px", {a.mean_px, b.mean_px}},
+                            {"rim_to_outline_p95_px", {a.p95_px, b.p95_px}}};
+      std::printf("  silhouettes: %d outline points; rim to outline %.2f px (%d matched, generic head) -> %.2f px (%d, fit)\n",
+                  a.points, a.mean_px, a.matched, b.mean_px, b.matched);
+    }
+  }
   if (s) s = write_file(out_dir + "/report.json", rep.dump(2) + "\n");
   if (!s) return fail(cmd, s.message);
   std::printf("likeness photos: %d of %zu photos used, focal %.1f px\n", r.calib.num_used(), points_paths.size(),
@@ -249,20 +279,25 @@ int run_synth_photos(const Args& args) {
         [&](const Vec3& p, const Vec3& n) -> Vec3 { return skin_albedo(skin, p) * (0.35 + 0.65 * std::max(0.0, n.dot(light))); },
         Vec3(0.55, 0.6, 0.65), photo);
     if (s) s = write_file(stem + ".png", write_png(photo));
+    // The exact mask a perfect segmentation would give (likeness photos --masks).
+    Image mask;
+    if (s) s = synthetic_mask(person.mesh, session.cameras[c], mask);
+    if (s) s = write_file(stem + "_mask.png", write_png(mask));
   }
   if (s) s = write_file(out_dir + "/truth.json", truth.dump(2) + "\n");
   if (!s) return fail(cmd, s.message);
   std::printf("synth-photos: seed %d, %zu views -> %s (view_XX.json%s, map.json, person.obj, truth.json)\n", seed,
-              session.photos.size(), out_dir.c_str(), args.has("no-render") ? "" : ", view_XX.png");
+              session.photos.size(), out_dir.c_str(), args.has("no-render") ? "" : ", view_XX.png, view_XX_mask.png");
   return 0;
 }
 
 Registrar photos_reg({"photos",
-                      "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] "
+                      "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] [--masks M1.png ...] "
                       "[--focal-px F] [--levels L] [--texture-size N] [--no-texture]",
                       "a head from several photos' landmarks (fua1998): self-calibrated cameras, fitted control "
                       "mesh, levels, cameras.json, report.json; with --photos the skin from those cameras "
-                      "(textured.obj, skin.png)",
+                      "(textured.obj, skin.png); with --masks (white or opaque = the person) the head's outline "
+                      "in each photo as silhouettes",
                       run_photos, nullptr});
 Registrar synth_photos_reg({"synth-photos",
                             "likeness synth-photos --out DIR [--seed N] [--cameras C] [--noise-px S] [--no-render]",
