@@ -29,6 +29,10 @@ int run_bench_photos(const Args& args) {
   // --photos-stiffness-scale: multiplies the stiffness schedule (sensitivity).
   int first_seed = 1;
   if (!args.get_int("photos-first-seed", 1, first_seed, 0, 1000000)) return 1;
+  double lambda_sil = 0.3;  // --photos-lambda-sil: fua1998 Sec. 4's 0.3 (its Fig. 6 varies it over 0..0.5)
+  if (!args.get_double("photos-lambda-sil", 0.3, lambda_sil, 0, 10)) return 1;
+  int grow_px = 0;  // --photos-mask-grow: the truth's masks grown (shrunk) by that many pixels, a biased segmentation
+  if (!args.get_int("photos-mask-grow", 0, grow_px, -20, 20)) return 1;
   double stiffness_scale = 1;
   if (!args.get_double("photos-stiffness-scale", 1.0, stiffness_scale, 1e-6, 1e6)) return 1;
   // --photos-silhouettes both|on|off: each seed fitted without and with the
@@ -67,8 +71,8 @@ int run_bench_photos(const Args& args) {
   for (const char* region : {"face", "scalp", "ears"})
     for (int v : generic.annotations.regions.at(region)) head.push_back(v);
   std::printf("photos (fua1998 + self-calibration): %d cameras, %.1f px landmark noise, placeholder map of %d "
-              "generic-head face points (%s), stiffness x%g (CPU ms)\n", cameras, noise, int(landmarks.size()),
-              map_kind.c_str(), stiffness_scale);
+              "generic-head face points (%s), stiffness x%g, lambda_sil %g, masks grown %d px (CPU ms)\n",
+              cameras, noise, int(landmarks.size()), map_kind.c_str(), stiffness_scale, lambda_sil, grow_px);
   std::printf("  %-4s %6s %7s %7s | %-13s %-13s | %-13s %-13s | %6s %6s\n", "seed", "focal", "rot", "rot",
               "generic face", "", "fit face", "", "calib", "fit");
   std::printf("  %-4s %6s %7s %7s | %-13s %-13s | %-13s %-13s | %6s %6s\n", "", "err %", "mean", "max",
@@ -86,13 +90,15 @@ int run_bench_photos(const Args& args) {
       return 1;
     PhotosJobOptions opt;
     for (double& k : opt.fit.stiffness_schedule) k *= stiffness_scale;
+    opt.lambda_silhouettes = lambda_sil;
+    opt.silhouettes.facet_equations = args.has("photos-sil-facets");
     PhotosJobResult r;
     const double t0 = cpu_clock_ms();
     Status st = self_calibrate(session.photos, generic.mesh, landmarks, opt.calib, r.calib);
     const double calib_ms = cpu_clock_ms() - t0;
     // The truth's exact masks (plain background, neck included).
     std::vector<PhotoOutline> outlines;
-    if (st && sil_mode != "off") st = synthetic_outlines(person.mesh, session.cameras, OutlineOptions{}, outlines);
+    if (st && sil_mode != "off") st = synthetic_outlines(person.mesh, session.cameras, OutlineOptions{}, outlines, grow_px);
     if (!st) {
       std::printf("  %-4d failed: %s\n", seed, st.message.c_str());
       continue;
@@ -170,7 +176,7 @@ int run_bench_photos(const Args& args) {
 }
 
 BenchRegistrar reg({"photos", "photos to head on synthetic sessions: camera errors, face distances, stage times "
-                              "(--photos-seeds N --photos-cameras C --photos-noise-px S --photos-map vertices|interior --photos-stiffness-scale K --photos-first-seed S --photos-silhouettes both|on|off)",
+                              "(--photos-seeds N --photos-cameras C --photos-noise-px S --photos-map vertices|interior --photos-stiffness-scale K --photos-first-seed S --photos-silhouettes both|on|off --photos-lambda-sil L --photos-mask-grow PX --photos-sil-facets)",
                     run_bench_photos});
 
 }  // namespace

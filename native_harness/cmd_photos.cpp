@@ -47,9 +47,56 @@ std::string base_name(const std::string& path) {
   return k == std::string::npos ? path : path.substr(k + 1);
 }
 
+// A check image of the silhouettes in one photo: the photo (or grey), each
+// outline point red (no rim matched at the fit) or green (matched), the
+// matched rim edges as the generic head projects them (yellow) and as the
+// fitted head does (cyan).
+void draw_segment(Image& im, Vec2 a, Vec2 b, const std::uint8_t* rgb) {
+  const int n = int(std::ceil((b - a).norm())) + 1;
+  for (int i = 0; i <= n; ++i) {
+    const Vec2 p = a + (b - a) * (double(i) / n);
+    const int x = int(std::floor(p.x())), y = int(std::floor(p.y()));
+    if (x >= 0 && y >= 0 && x < im.width && y < im.height)
+      for (int k = 0; k < 3; ++k) im.at(x, y)[k] = rgb[k];
+  }
+}
+
+Status write_silhouette_check(const std::string& path, const std::string& photo_path, const PhotoOutline& outline,
+                              const Camera& camera, int cam_index, const SilhouetteSet& at_generic,
+                              const std::vector<Vec3>& generic_positions, const SilhouetteSet& at_fit,
+                              const std::vector<Vec3>& fit_positions) {
+  Image im;
+  if (photo_path.empty() || !load_image_file(photo_path, im, 3)) im = Image::make(outline.width, outline.height, 3, 96);
+  for (auto& v : im.pixels) v = std::uint8_t(v / 2);
+  static const std::uint8_t red[3] = {255, 40, 40}, green[3] = {40, 255, 40}, yellow[3] = {255, 220, 0},
+                            cyan[3] = {0, 220, 255};
+  auto edges = [&](const SilhouetteSet& set, const std::vector<Vec3>& P, const std::uint8_t* rgb) {
+    for (const auto& m : set.matches()) {
+      if (m.camera != cam_index) continue;
+      Vec2 a, b;
+      if (camera.project(P[size_t(m.a)], a) && camera.project(P[size_t(m.b)], b)) draw_segment(im, a, b, rgb);
+    }
+  };
+  edges(at_generic, generic_positions, yellow);
+  edges(at_fit, fit_positions, cyan);
+  std::vector<char> matched(outline.points.size(), 0);
+  for (const auto& m : at_fit.matches())
+    if (m.camera == cam_index) matched[size_t(m.point)] = 1;
+  for (size_t k = 0; k < outline.points.size(); ++k) {
+    const Vec2 p = outline.points[k].pixel;
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int x = int(p.x()) + dx, y = int(p.y()) + dy;
+        if (x >= 0 && y >= 0 && x < im.width && y < im.height)
+          for (int c = 0; c < 3; ++c) im.at(x, y)[c] = (matched[k] ? green : red)[c];
+      }
+  }
+  return write_file(path, write_png(im));
+}
+
 int run_photos(const Args& args) {
   const std::string cmd = "photos";
-  if (!only_known_options(cmd, args, {"points", "photos", "masks", "map", "out", "levels", "focal-px", "texture-size", "no-texture"}))
+  if (!only_known_options(cmd, args, {"points", "photos", "masks", "masks-from-photos", "silhouette-check", "map", "out", "levels", "focal-px", "texture-size", "no-texture"}))
     return 2;
   const std::vector<std::string> points_paths = args.get_all("points"), photo_paths = args.get_all("photos"),
                                  mask_paths = args.get_all("masks");
@@ -61,6 +108,10 @@ int run_photos(const Args& args) {
   if (!mask_paths.empty() && mask_paths.size() != points_paths.size())
     return fail(cmd, std::to_string(mask_paths.size()) + " masks for " + std::to_string(points_paths.size()) +
                          " points files: give one mask per photo, in the same order");
+  const bool plain_masks = args.has("masks-from-photos");
+  if (plain_masks && (photo_paths.empty() || !mask_paths.empty()))
+    return fail(cmd, "--masks-from-photos needs --photos (and no --masks): it finds each outline on a plain background");
+  const bool with_outlines = plain_masks || !mask_paths.empty();
   int levels = 3, texture_size = 2048;
   double focal_px = 0;
   if (!args.get_int("levels", 3, levels, 0, 4) || !args.get_double("focal-px", 0, focal_px, 0, 1e6) ||
@@ -118,14 +169,23 @@ int run_photos(const Args& args) {
       notes.push_back(s.message + " (left out)");
       continue;
     }
-    if (!mask_paths.empty()) {
+    if (with_outlines) {
       // A bad mask costs that photo its outline, not the photo.
-      Image mask;
+      const std::string& source = plain_masks ? photo_paths[i] : mask_paths[i];
+      Image image;
       PhotoOutline outline;
-      Status ms = load_image_file(mask_paths[i], mask);
-      if (ms) ms = outline_from_mask_image(mask, ph.width, ph.height, OutlineOptions{}, outline);
+      Status ms = load_image_file(source, image, plain_masks ? 3 : 0);
+      if (ms && plain_masks) {
+        std::vector<std::uint8_t> mask;
+        ms = mask_from_plain_background(image, PlainBackgroundOptions{}, mask);
+        if (ms) ms = extract_outline(mask, image.width, image.height, ph.width, ph.height, OutlineOptions{}, outline);
+      } else if (ms) {
+        ms = outline_from_mask_image(image, ph.width, ph.height, OutlineOptions{}, outline);
+      }
       if (!ms) {
-        notes.push_back(with_context(ms, mask_paths[i]).message + " (its outline not used)");
+        // (load_image_file's messages already start with the path)
+        notes.push_back((ms.message.rfind(source, 0) == 0 ? ms.message : source + ": " + ms.message) +
+                        " (its outline not used)");
         outline = {};
       }
       outlines.push_back(outline);
@@ -141,7 +201,7 @@ int run_photos(const Args& args) {
     notes.push_back("focal prior from EXIF: " + std::to_string(int(std::lround(opt.calib.focal_prior_px))) + " px");
   }
   PhotosJobResult r;
-  s = run_photos_job(generic, map, photos, opt, r, mask_paths.empty() ? nullptr : &outlines);
+  s = run_photos_job(generic, map, photos, opt, r, with_outlines ? &outlines : nullptr);
   for (const std::string& n : r.notes) notes.push_back(n);
   for (const std::string& n : notes) std::printf("  note: %s\n", n.c_str());
   if (!s) return fail(cmd, s.message);
@@ -205,7 +265,7 @@ int run_photos(const Args& args) {
   for (const ShapeFitStage& st : r.fit.stages)
     rep["stages"].push_back({{"stiffness", st.stiffness}, {"cost", {st.initial_cost, st.final_cost}},
                              {"lm_iterations", st.lm_iterations}});
-  if (!mask_paths.empty()) {
+  if (with_outlines) {
     // The rim against the masks' outlines, at the generic head and at the fit.
     const auto sil = make_silhouette_set(generic, generic.mesh, r.calib, outlines, opt.silhouettes);
     if (sil) {
@@ -215,6 +275,18 @@ int run_photos(const Args& args) {
                             {"rim_to_outline_p95_px", {a.p95_px, b.p95_px}}};
       std::printf("  silhouettes: %d outline points; rim to outline %.2f px (%d matched, generic head) -> %.2f px (%d, fit)\n",
                   a.points, a.mean_px, a.matched, b.mean_px, b.matched);
+      if (args.has("silhouette-check")) {
+        const auto at_fit = make_silhouette_set(generic, r.fit.mesh, r.calib, outlines, opt.silhouettes);
+        int cam = 0;
+        for (size_t i = 0; s && i < photos.size(); ++i) {
+          if (!r.calib.photos[i].used) continue;
+          if (!outlines[i].points.empty())
+            s = write_silhouette_check(out_dir + "/silhouettes_" + std::to_string(i + 1) + ".png", image_paths[i],
+                                       outlines[i], r.calib.photos[i].camera, cam, *sil, generic.mesh.positions,
+                                       *at_fit, r.fit.mesh.positions);
+          ++cam;
+        }
+      }
     }
   }
   if (s) s = write_file(out_dir + "/report.json", rep.dump(2) + "\n");
@@ -292,12 +364,13 @@ int run_synth_photos(const Args& args) {
 }
 
 Registrar photos_reg({"photos",
-                      "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] [--masks M1.png ...] "
+                      "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] [--masks M1.png ... | --masks-from-photos] [--silhouette-check] "
                       "[--focal-px F] [--levels L] [--texture-size N] [--no-texture]",
                       "a head from several photos' landmarks (fua1998): self-calibrated cameras, fitted control "
                       "mesh, levels, cameras.json, report.json; with --photos the skin from those cameras "
                       "(textured.obj, skin.png); with --masks (white or opaque = the person) the head's outline "
-                      "in each photo as silhouettes",
+                      "in each photo as silhouettes (--masks-from-photos: from the photos, plain background only; "
+                      "--silhouette-check: silhouettes_N.png, outline and rims drawn on each photo)",
                       run_photos, nullptr});
 Registrar synth_photos_reg({"synth-photos",
                             "likeness synth-photos --out DIR [--seed N] [--cameras C] [--noise-px S] [--no-render]",

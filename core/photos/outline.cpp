@@ -28,6 +28,50 @@ std::vector<std::uint8_t> mask_from_image(const Image& image) {
   return mask;
 }
 
+Status mask_from_plain_background(const Image& photo, const PlainBackgroundOptions& o, std::vector<std::uint8_t>& mask) {
+  mask.clear();
+  if (photo.empty() || photo.channels < 3 || photo.pixels.size() < size_t(photo.width) * size_t(photo.height) * size_t(photo.channels))
+    return Status::error(ErrorCode::InvalidInput, "plain background: needs a colour image");
+  if (o.frame_px < 1 || 4 * o.frame_px >= std::min(photo.width, photo.height))
+    return Status::error(ErrorCode::InvalidInput, "plain background: the image is too small");
+  const int w = photo.width, h = photo.height, f = o.frame_px;
+  auto in_frame = [&](int x, int y) { return x < f || y < f || x >= w - f || y >= h - f; };
+  std::vector<double> ch[3];
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      if (in_frame(x, y))
+        for (int k = 0; k < 3; ++k) ch[k].push_back(photo.at(x, y)[k]);
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  const Vec3 bg(median(ch[0]), median(ch[1]), median(ch[2]));
+  std::vector<double> dist(ch[0].size());
+  for (size_t i = 0; i < dist.size(); ++i) dist[i] = (Vec3(ch[0][i], ch[1][i], ch[2][i]) - bg).norm();
+  const double spread = median(dist);
+  if (spread > o.max_spread)
+    return Status::error(ErrorCode::InvalidInput, "the background is not plain (its border varies by " +
+                                                      std::to_string(int(std::lround(spread))) +
+                                                      " levels): give a mask instead");
+  const double threshold = std::max(o.min_distance, o.spread_factor * spread);
+  mask.assign(size_t(w) * size_t(h), 0);
+  size_t frame_fg = 0, frame_n = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const std::uint8_t* p = photo.at(x, y);
+      const bool fg = (Vec3(p[0], p[1], p[2]) - bg).norm() > threshold;
+      mask[size_t(y) * size_t(w) + size_t(x)] = fg;
+      if (in_frame(x, y)) {
+        ++frame_n;
+        frame_fg += fg;
+      }
+    }
+  if (double(frame_fg) > o.max_frame_share * double(frame_n))
+    return Status::error(ErrorCode::InvalidInput, "the background is not plain (the person covers much of the "
+                                                  "image's border): give a mask instead");
+  return Status::success();
+}
+
 namespace {
 
 std::string size_text(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }

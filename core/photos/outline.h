@@ -50,6 +50,26 @@ struct OutlineOptions {
 // foreground where the value is >= 128. Row-major width * height, 0 or 1.
 std::vector<std::uint8_t> mask_from_image(const Image& image);
 
+// A mask from the photo itself, for a plain background only: the
+// background's colour is the median of the image's outer frame (frame_px
+// wide), its spread the median distance of the frame's pixels from it;
+// foreground where a pixel is farther from that colour than
+// max(min_distance, spread_factor * spread) (8-bit RGB units). The person
+// must not touch most of the frame. Fails with InvalidInput when the frame
+// is not one colour (spread above max_spread: a room, a window, a sofa)
+// or the foreground covers more than max_frame_share of the frame.
+// Where it fails even so: hair or clothes of the background's colour
+// (holes or bites in the outline), shadows cast on the backdrop (lumps).
+struct PlainBackgroundOptions {
+  int frame_px = 4;
+  double min_distance = 30;
+  double spread_factor = 6;
+  double max_spread = 12;
+  double max_frame_share = 0.35;
+};
+Status mask_from_plain_background(const Image& photo, const PlainBackgroundOptions& options,
+                                  std::vector<std::uint8_t>& mask);
+
 // Fails with InvalidInput, saying why, for a mask of the wrong size (it must
 // be expected_width x expected_height, the photo's), with no foreground,
 // covering (nearly) the whole image, or leaving fewer than min_points.

@@ -15,7 +15,9 @@
 namespace lk {
 
 Status synthetic_mask(const TriMesh& person, const Camera& camera, Image& mask);
+// grow_px: the mask grown (> 0) or shrunk (< 0) by that many pixels (a
+// disk), a segmentation's bias, before the outline is taken.
 Status synthetic_outlines(const TriMesh& person, const std::vector<Camera>& cameras, const OutlineOptions& options,
-                          std::vector<PhotoOutline>& out);
+                          std::vector<PhotoOutline>& out, int grow_px = 0);
 
 }  // namespace lk

@@ -5,6 +5,8 @@
 #include "photos/silhouette_obs.h"
 #include "photos/synthetic_outlines.h"
 #include "photos_scenario.h"
+#include "synth/skin_field.h"
+#include "texture/synthetic_photo.h"
 
 #include <cmath>
 #include <cstdio>
@@ -193,6 +195,42 @@ TEST_CASE("silhouettes lower the outline distance and the head error on a synthe
   CHECK(sw.matched >= sp.matched * 9 / 10);
   CHECK(hw.mean < hp.mean);
   CHECK(hw.p95 < hp.p95);
+}
+
+TEST_CASE("a plain background gives the renderer's mask; a busy one is refused", "[photos]") {
+  test::PhotoScenario s = test::make_photo_scenario(4);
+  SkinField skin;
+  REQUIRE(make_skin_field(s.person, 4, {}, skin));
+  for (size_t c : {size_t(0), size_t(4), size_t(9)}) {
+    const Camera& cam = s.session.cameras[c];
+    // As synth-photos renders it: shaded skin on a plain grey-blue backdrop.
+    const Vec3 light = (cam.R.transpose() * Vec3(-0.4, -0.6, -1.0)).normalized();
+    Image photo, exact;
+    REQUIRE(render_synthetic_photo(
+        s.person.mesh, cam,
+        [&](const Vec3& p, const Vec3& n) -> Vec3 { return skin_albedo(skin, p) * (0.35 + 0.65 * std::max(0.0, n.dot(light))); },
+        Vec3(0.55, 0.6, 0.65), photo));
+    REQUIRE(synthetic_mask(s.person.mesh, cam, exact));
+    std::vector<std::uint8_t> derived;
+    REQUIRE(mask_from_plain_background(photo, {}, derived));
+    const std::vector<std::uint8_t> truth = mask_from_image(exact);
+    size_t inter = 0, uni = 0;
+    for (size_t i = 0; i < truth.size(); ++i) {
+      inter += truth[i] && derived[i];
+      uni += truth[i] || derived[i];
+    }
+    // Before the largest component and hole filling: what the threshold alone gets right.
+    std::printf("plain background, view %zu: IoU with the renderer's mask %.4f\n", c, double(inter) / double(uni));
+    CHECK(double(inter) / double(uni) > 0.98);
+  }
+  // A busy background: every pixel a different colour.
+  Image busy = Image::make(200, 150, 3);
+  std::uint32_t state = 12345;
+  for (auto& b : busy.pixels) b = std::uint8_t((state = state * 1664525u + 1013904223u) >> 24);
+  std::vector<std::uint8_t> m;
+  const Status st = mask_from_plain_background(busy, {}, m);
+  CHECK(!st);
+  CHECK(st.message.find("the background is not plain") != std::string::npos);
 }
 
 TEST_CASE("the photos job refuses outlines that do not fit its photos", "[photos]") {
