@@ -84,12 +84,27 @@ Status write_silhouette_check(const std::string& path, const std::string& photo_
     if (m.camera == cam_index) matched[size_t(m.point)] = 1;
   for (size_t k = 0; k < outline.points.size(); ++k) {
     const Vec2 p = outline.points[k].pixel;
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
+    for (int dy = -2; dy <= 2; ++dy)
+      for (int dx = -2; dx <= 2; ++dx) {
         const int x = int(p.x()) + dx, y = int(p.y()) + dy;
         if (x >= 0 && y >= 0 && x < im.width && y < im.height)
           for (int c = 0; c < 3; ++c) im.at(x, y)[c] = (matched[k] ? green : red)[c];
       }
+  }
+  // At most about 1000 px wide or high (box filter), so a check of a
+  // 12-megapixel photo stays small.
+  const int k = std::max(1, (std::max(im.width, im.height) + 999) / 1000);
+  if (k > 1) {
+    Image small = Image::make(im.width / k, im.height / k, 3);
+    for (int y = 0; y < small.height; ++y)
+      for (int x = 0; x < small.width; ++x)
+        for (int c = 0; c < 3; ++c) {
+          int sum = 0;
+          for (int dy = 0; dy < k; ++dy)
+            for (int dx = 0; dx < k; ++dx) sum += im.at(k * x + dx, k * y + dy)[c];
+          small.at(x, y)[c] = std::uint8_t(sum / (k * k));
+        }
+    im = small;
   }
   return write_file(path, write_png(im));
 }
