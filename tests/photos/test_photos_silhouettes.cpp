@@ -197,7 +197,7 @@ TEST_CASE("silhouettes lower the outline distance and the head error on a synthe
   CHECK(hw.p95 < hp.p95);
 }
 
-TEST_CASE("a plain background gives the renderer's mask; a busy one is refused", "[photos]") {
+TEST_CASE("a plain background gives the renderer's mask and a busy one is refused", "[photos]") {
   test::PhotoScenario s = test::make_photo_scenario(4);
   SkinField skin;
   REQUIRE(make_skin_field(s.person, 4, {}, skin));
