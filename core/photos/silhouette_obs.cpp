@@ -145,6 +145,12 @@ std::vector<SilhouetteSet::Match> SilhouetteSet::find_matches(const std::vector<
         have_chin = true;
       }
     }
+    // search_m in pixels at the depth of the mesh's centre.
+    Vec3 centre = Vec3::Zero();
+    for (const Vec3& p : P) centre += p;
+    centre /= double(std::max<size_t>(1, P.size()));
+    const double depth = cam.to_camera(centre).z();
+    const double reach_px = depth > 1e-9 ? options_.search_m * 0.5 * (cam.fx + cam.fy) / depth : 0.0;
     for (size_t k = 0; k < outline.points.size(); ++k) {
       const Vec2& s = outline.points[k].pixel;
       const Vec2& n = outline.points[k].normal;
@@ -157,7 +163,7 @@ std::vector<SilhouetteSet::Match> SilhouetteSet::find_matches(const std::vector<
         const double den = cross2(n, e);
         if (std::abs(den) < 1e-3 * e.norm()) continue;
         const double t = cross2(r.pa - s, e) / den, u = cross2(r.pa - s, n) / den;
-        if (u < -0.05 || u > 1.05 || std::abs(t) > options_.search_px || std::abs(t) >= std::abs(best_t)) continue;
+        if (u < -0.05 || u > 1.05 || std::abs(t) > reach_px || std::abs(t) >= std::abs(best_t)) continue;
         best_t = t;
         best = &r;
       }

@@ -7,7 +7,9 @@
 // camera and one facing away, kept only where they lie on the border of the
 // mesh's projected footprint (rasterized: a rim over other surface, like the
 // jaw seen over the neck, is no silhouette). Each outline point searches
-// along its normal, within search_px, for the nearest such rim edge seen
+// along its normal, within search_m (on the head, at the distance of the
+// mesh's centre from the camera: the same reach on a 12-megapixel photo as
+// on a small one), for the nearest such rim edge seen
 // with the same outward direction (the paper searches its Facet-ID image
 // along the normal). No edge, or an edge touching an excluded vertex (the
 // neck: the mask's neck and shoulders are not the head's outline) or the
@@ -37,7 +39,7 @@
 namespace lk {
 
 struct SilhouetteOptions {
-  double search_px = 30;          // how far along an outline point's normal its rim may be
+  double search_m = 0.010;        // how far along an outline point's normal its rim may be (21 px at 1250 px, 0.6 m)
   double huber_px = 4;            // Huber threshold of the reweighting
   double min_normal_cos = 0.3;    // outline normal vs the rim's outward direction
   bool facet_equations = false;   // the paper's three determinants per point (see above)
@@ -52,7 +54,7 @@ struct ChinLine {
 
 struct SilhouetteStats {
   int points = 0;         // outline points given
-  int matched = 0;        // with a rim within search_px
+  int matched = 0;        // with a rim within reach (search_m)
   double mean_px = 0, p95_px = 0;  // |distance| of the matched points to their rim line
 };
 
