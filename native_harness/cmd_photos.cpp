@@ -369,12 +369,13 @@ int run_synth_photos(const Args& args) {
     // The exact mask a perfect segmentation would give (likeness photos --masks).
     Image mask;
     if (s) s = synthetic_mask(person.mesh, session.cameras[c], mask);
-    if (s) s = write_file(stem + "_mask.png", write_png(mask));
+    // mask_XX.png, not view_XX_mask.png: a glob view_*.png stays the photos alone.
+    if (s) s = write_file(out_dir + "/mask_" + session.photos[c].name.substr(5), write_png(mask));
   }
   if (s) s = write_file(out_dir + "/truth.json", truth.dump(2) + "\n");
   if (!s) return fail(cmd, s.message);
   std::printf("synth-photos: seed %d, %zu views -> %s (view_XX.json%s, map.json, person.obj, truth.json)\n", seed,
-              session.photos.size(), out_dir.c_str(), args.has("no-render") ? "" : ", view_XX.png, view_XX_mask.png");
+              session.photos.size(), out_dir.c_str(), args.has("no-render") ? "" : ", view_XX.png, mask_XX.png");
   return 0;
 }
 
