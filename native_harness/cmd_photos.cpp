@@ -9,6 +9,7 @@
 #include "io/io.h"
 #include "photos/photos_job.h"
 #include "photos_texture.h"
+#include "photos/synthetic_outlines.h"
 #include "photos/synthetic_views.h"
 #include "pipeline/head_creases.h"
 #include "subdiv/butterfly.h"
@@ -46,16 +47,86 @@ std::string base_name(const std::string& path) {
   return k == std::string::npos ? path : path.substr(k + 1);
 }
 
+// A check image of the silhouettes in one photo: the photo (or grey), each
+// outline point red (no rim matched at the fit) or green (matched), the
+// matched rim edges as the generic head projects them (yellow) and as the
+// fitted head does (cyan).
+void draw_segment(Image& im, Vec2 a, Vec2 b, const std::uint8_t* rgb) {
+  const int n = int(std::ceil((b - a).norm())) + 1;
+  for (int i = 0; i <= n; ++i) {
+    const Vec2 p = a + (b - a) * (double(i) / n);
+    const int x = int(std::floor(p.x())), y = int(std::floor(p.y()));
+    if (x >= 0 && y >= 0 && x < im.width && y < im.height)
+      for (int k = 0; k < 3; ++k) im.at(x, y)[k] = rgb[k];
+  }
+}
+
+Status write_silhouette_check(const std::string& path, const std::string& photo_path, const PhotoOutline& outline,
+                              const Camera& camera, int cam_index, const SilhouetteSet& at_generic,
+                              const std::vector<Vec3>& generic_positions, const SilhouetteSet& at_fit,
+                              const std::vector<Vec3>& fit_positions) {
+  Image im;
+  if (photo_path.empty() || !load_image_file(photo_path, im, 3)) im = Image::make(outline.width, outline.height, 3, 96);
+  for (auto& v : im.pixels) v = std::uint8_t(v / 2);
+  static const std::uint8_t red[3] = {255, 40, 40}, green[3] = {40, 255, 40}, yellow[3] = {255, 220, 0},
+                            cyan[3] = {0, 220, 255};
+  auto edges = [&](const SilhouetteSet& set, const std::vector<Vec3>& P, const std::uint8_t* rgb) {
+    for (const auto& m : set.matches()) {
+      if (m.camera != cam_index) continue;
+      Vec2 a, b;
+      if (camera.project(P[size_t(m.a)], a) && camera.project(P[size_t(m.b)], b)) draw_segment(im, a, b, rgb);
+    }
+  };
+  edges(at_generic, generic_positions, yellow);
+  edges(at_fit, fit_positions, cyan);
+  std::vector<char> matched(outline.points.size(), 0);
+  for (const auto& m : at_fit.matches())
+    if (m.camera == cam_index) matched[size_t(m.point)] = 1;
+  for (size_t k = 0; k < outline.points.size(); ++k) {
+    const Vec2 p = outline.points[k].pixel;
+    for (int dy = -2; dy <= 2; ++dy)
+      for (int dx = -2; dx <= 2; ++dx) {
+        const int x = int(p.x()) + dx, y = int(p.y()) + dy;
+        if (x >= 0 && y >= 0 && x < im.width && y < im.height)
+          for (int c = 0; c < 3; ++c) im.at(x, y)[c] = (matched[k] ? green : red)[c];
+      }
+  }
+  // At most about 1000 px wide or high (box filter), so a check of a
+  // 12-megapixel photo stays small.
+  const int k = std::max(1, (std::max(im.width, im.height) + 999) / 1000);
+  if (k > 1) {
+    Image small = Image::make(im.width / k, im.height / k, 3);
+    for (int y = 0; y < small.height; ++y)
+      for (int x = 0; x < small.width; ++x)
+        for (int c = 0; c < 3; ++c) {
+          int sum = 0;
+          for (int dy = 0; dy < k; ++dy)
+            for (int dx = 0; dx < k; ++dx) sum += im.at(k * x + dx, k * y + dy)[c];
+          small.at(x, y)[c] = std::uint8_t(sum / (k * k));
+        }
+    im = small;
+  }
+  return write_file(path, write_png(im));
+}
+
 int run_photos(const Args& args) {
   const std::string cmd = "photos";
-  if (!only_known_options(cmd, args, {"points", "photos", "map", "out", "levels", "focal-px", "texture-size", "no-texture"}))
+  if (!only_known_options(cmd, args, {"points", "photos", "masks", "masks-from-photos", "silhouette-check", "map", "out", "levels", "focal-px", "texture-size", "no-texture"}))
     return 2;
-  const std::vector<std::string> points_paths = args.get_all("points"), photo_paths = args.get_all("photos");
+  const std::vector<std::string> points_paths = args.get_all("points"), photo_paths = args.get_all("photos"),
+                                 mask_paths = args.get_all("masks");
   const std::string map_path = args.get("map"), out_dir = args.get("out");
   if (points_paths.empty() || out_dir.empty()) return fail(cmd, "needs --points P1.json P2.json ... and --out DIR");
   if (!photo_paths.empty() && photo_paths.size() != points_paths.size())
     return fail(cmd, std::to_string(photo_paths.size()) + " photos for " + std::to_string(points_paths.size()) +
                          " points files: give one points file per photo, in the same order");
+  if (!mask_paths.empty() && mask_paths.size() != points_paths.size())
+    return fail(cmd, std::to_string(mask_paths.size()) + " masks for " + std::to_string(points_paths.size()) +
+                         " points files: give one mask per photo, in the same order");
+  const bool plain_masks = args.has("masks-from-photos");
+  if (plain_masks && (photo_paths.empty() || !mask_paths.empty()))
+    return fail(cmd, "--masks-from-photos needs --photos (and no --masks): it finds each outline on a plain background");
+  const bool with_outlines = plain_masks || !mask_paths.empty();
   int levels = 3, texture_size = 2048;
   double focal_px = 0;
   if (!args.get_int("levels", 3, levels, 0, 4) || !args.get_double("focal-px", 0, focal_px, 0, 1e6) ||
@@ -86,6 +157,7 @@ int run_photos(const Args& args) {
   std::vector<std::string> image_paths;  // #photos: each kept photo's image ("" without --photos)
   std::vector<std::string> notes;
   std::vector<double> exif_focals;
+  std::vector<PhotoOutline> outlines;  // #photos with --masks: each kept photo's outline (empty: its mask refused)
   for (size_t i = 0; i < points_paths.size(); ++i) {
     LandmarkPhoto ph;
     Bytes bytes;
@@ -112,6 +184,27 @@ int run_photos(const Args& args) {
       notes.push_back(s.message + " (left out)");
       continue;
     }
+    if (with_outlines) {
+      // A bad mask costs that photo its outline, not the photo.
+      const std::string& source = plain_masks ? photo_paths[i] : mask_paths[i];
+      Image image;
+      PhotoOutline outline;
+      Status ms = load_image_file(source, image, plain_masks ? 3 : 0);
+      if (ms && plain_masks) {
+        std::vector<std::uint8_t> mask;
+        ms = mask_from_plain_background(image, PlainBackgroundOptions{}, mask);
+        if (ms) ms = extract_outline(mask, image.width, image.height, ph.width, ph.height, OutlineOptions{}, outline);
+      } else if (ms) {
+        ms = outline_from_mask_image(image, ph.width, ph.height, OutlineOptions{}, outline);
+      }
+      if (!ms) {
+        // (load_image_file's messages already start with the path)
+        notes.push_back((ms.message.rfind(source, 0) == 0 ? ms.message : source + ": " + ms.message) +
+                        " (its outline not used)");
+        outline = {};
+      }
+      outlines.push_back(outline);
+    }
     photos.push_back(ph);
     image_paths.push_back(photo_paths.empty() ? "" : photo_paths[i]);
   }
@@ -123,7 +216,7 @@ int run_photos(const Args& args) {
     notes.push_back("focal prior from EXIF: " + std::to_string(int(std::lround(opt.calib.focal_prior_px))) + " px");
   }
   PhotosJobResult r;
-  s = run_photos_job(generic, map, photos, opt, r);
+  s = run_photos_job(generic, map, photos, opt, r, with_outlines ? &outlines : nullptr);
   for (const std::string& n : r.notes) notes.push_back(n);
   for (const std::string& n : notes) std::printf("  note: %s\n", n.c_str());
   if (!s) return fail(cmd, s.message);
@@ -187,6 +280,30 @@ int run_photos(const Args& args) {
   for (const ShapeFitStage& st : r.fit.stages)
     rep["stages"].push_back({{"stiffness", st.stiffness}, {"cost", {st.initial_cost, st.final_cost}},
                              {"lm_iterations", st.lm_iterations}});
+  if (with_outlines) {
+    // The rim against the masks' outlines, at the generic head and at the fit.
+    const auto sil = make_silhouette_set(generic, generic.mesh, r.calib, outlines, opt.silhouettes);
+    if (sil) {
+      const SilhouetteStats a = sil->stats(generic.mesh.positions), b = sil->stats(r.fit.mesh.positions);
+      rep["silhouettes"] = {{"outline_points", a.points}, {"matched", {a.matched, b.matched}},
+                            {"rim_to_outline_mean_px", {a.mean_px, b.mean_px}},
+                            {"rim_to_outline_p95_px", {a.p95_px, b.p95_px}}};
+      std::printf("  silhouettes: %d outline points; rim to outline %.2f px (%d matched, generic head) -> %.2f px (%d, fit)\n",
+                  a.points, a.mean_px, a.matched, b.mean_px, b.matched);
+      if (args.has("silhouette-check")) {
+        const auto at_fit = make_silhouette_set(generic, r.fit.mesh, r.calib, outlines, opt.silhouettes);
+        int cam = 0;
+        for (size_t i = 0; s && i < photos.size(); ++i) {
+          if (!r.calib.photos[i].used) continue;
+          if (!outlines[i].points.empty())
+            s = write_silhouette_check(out_dir + "/silhouettes_" + std::to_string(i + 1) + ".png", image_paths[i],
+                                       outlines[i], r.calib.photos[i].camera, cam, *sil, generic.mesh.positions,
+                                       *at_fit, r.fit.mesh.positions);
+          ++cam;
+        }
+      }
+    }
+  }
   if (s) s = write_file(out_dir + "/report.json", rep.dump(2) + "\n");
   if (!s) return fail(cmd, s.message);
   std::printf("likeness photos: %d of %zu photos used, focal %.1f px\n", r.calib.num_used(), points_paths.size(),
@@ -249,20 +366,27 @@ int run_synth_photos(const Args& args) {
         [&](const Vec3& p, const Vec3& n) -> Vec3 { return skin_albedo(skin, p) * (0.35 + 0.65 * std::max(0.0, n.dot(light))); },
         Vec3(0.55, 0.6, 0.65), photo);
     if (s) s = write_file(stem + ".png", write_png(photo));
+    // The exact mask a perfect segmentation would give (likeness photos --masks).
+    Image mask;
+    if (s) s = synthetic_mask(person.mesh, session.cameras[c], mask);
+    // mask_XX.png, not view_XX_mask.png: a glob view_*.png stays the photos alone.
+    if (s) s = write_file(out_dir + "/mask_" + session.photos[c].name.substr(5), write_png(mask));
   }
   if (s) s = write_file(out_dir + "/truth.json", truth.dump(2) + "\n");
   if (!s) return fail(cmd, s.message);
   std::printf("synth-photos: seed %d, %zu views -> %s (view_XX.json%s, map.json, person.obj, truth.json)\n", seed,
-              session.photos.size(), out_dir.c_str(), args.has("no-render") ? "" : ", view_XX.png");
+              session.photos.size(), out_dir.c_str(), args.has("no-render") ? "" : ", view_XX.png, mask_XX.png");
   return 0;
 }
 
 Registrar photos_reg({"photos",
-                      "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] "
+                      "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] [--masks M1.png ... | --masks-from-photos] [--silhouette-check] "
                       "[--focal-px F] [--levels L] [--texture-size N] [--no-texture]",
                       "a head from several photos' landmarks (fua1998): self-calibrated cameras, fitted control "
                       "mesh, levels, cameras.json, report.json; with --photos the skin from those cameras "
-                      "(textured.obj, skin.png)",
+                      "(textured.obj, skin.png); with --masks (white or opaque = the person) the head's outline "
+                      "in each photo as silhouettes (--masks-from-photos: from the photos, plain background only; "
+                      "--silhouette-check: silhouettes_N.png, outline and rims drawn on each photo)",
                       run_photos, nullptr});
 Registrar synth_photos_reg({"synth-photos",
                             "likeness synth-photos --out DIR [--seed N] [--cameras C] [--noise-px S] [--no-render]",

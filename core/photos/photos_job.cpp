@@ -6,7 +6,8 @@ namespace lk {
 
 Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoint>& landmarks,
                         const std::vector<LandmarkPhoto>& photos, const SelfCalibResult& calib,
-                        const PhotosJobOptions& options, ShapeFitResult& fit) {
+                        const PhotosJobOptions& options, ShapeFitResult& fit,
+                        const std::vector<PhotoOutline>* outlines) {
   if (calib.photos.size() != photos.size())
     return Status::error(ErrorCode::InvalidInput, "shape fit: the calibration is for other photos");
   std::vector<Camera> cameras;
@@ -28,11 +29,50 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
   }
   std::vector<std::unique_ptr<ObservationSet>> sets;
   sets.push_back(std::make_unique<FeatureSet>(generic.mesh, cameras, std::move(obs), 2 * options.calib.pixel_sigma));
-  return fit_shape(generic.mesh, sets, {options.fit.lambda_features}, options.fit, fit);
+  std::vector<double> lambdas = {options.fit.lambda_features};
+  if (outlines) {
+    if (outlines->size() != photos.size())
+      return Status::error(ErrorCode::InvalidInput, "shape fit: one outline per photo needed");
+    if (auto sil = make_silhouette_set(generic, generic.mesh, calib, *outlines, options.silhouettes)) {
+      sets.push_back(std::move(sil));
+      lambdas.push_back(options.lambda_silhouettes);
+    }
+  }
+  return fit_shape(generic.mesh, sets, lambdas, options.fit, fit);
+}
+
+std::unique_ptr<SilhouetteSet> make_silhouette_set(const GenericHead& generic, const TriMesh& start,
+                                                   const SelfCalibResult& calib,
+                                                   const std::vector<PhotoOutline>& outlines,
+                                                   const SilhouetteOptions& options) {
+  std::vector<Camera> cameras;
+  std::vector<PhotoOutline> used;
+  bool any = false;
+  for (size_t i = 0; i < calib.photos.size() && i < outlines.size(); ++i) {
+    if (!calib.photos[i].used) continue;
+    cameras.push_back(calib.photos[i].camera);
+    used.push_back(outlines[i]);
+    any = any || !outlines[i].points.empty();
+  }
+  if (!any) return nullptr;
+  std::vector<char> excluded(size_t(generic.mesh.num_vertices()), 0);
+  auto neck = generic.annotations.regions.find("neck");
+  if (neck != generic.annotations.regions.end())
+    for (int v : neck->second)
+      if (v >= 0 && v < generic.mesh.num_vertices()) excluded[size_t(v)] = 1;
+  ChinLine chin;
+  auto ch = generic.annotations.regions.find("chin");
+  if (ch != generic.annotations.regions.end()) chin.vertices = ch->second;
+  chin.up = generic.annotations.up;
+  TriMesh m = generic.mesh;
+  m.positions = start.positions;
+  return std::make_unique<SilhouetteSet>(m, std::move(cameras), std::move(used), std::move(excluded), std::move(chin),
+                                         options);
 }
 
 Status run_photos_job(const GenericHead& generic, const LandmarkMap& map, const std::vector<LandmarkPhoto>& photos,
-                      const PhotosJobOptions& options, PhotosJobResult& result) {
+                      const PhotosJobOptions& options, PhotosJobResult& result,
+                      const std::vector<PhotoOutline>* outlines) {
   result = {};
   auto photo_name = [&](size_t i) {
     return photos[i].name.empty() ? "photo " + std::to_string(i + 1) : photos[i].name;
@@ -45,6 +85,19 @@ Status run_photos_job(const GenericHead& generic, const LandmarkMap& map, const 
     if (photos[i].detector != map.detector)
       return Status::error(ErrorCode::InvalidInput, photo_name(i) + ": landmarks from detector '" + photos[i].detector +
                                                         "', the map is for '" + map.detector + "'");
+  if (outlines) {
+    if (outlines->size() != photos.size())
+      return Status::error(ErrorCode::InvalidInput, "photos: " + std::to_string(outlines->size()) + " masks for " +
+                                                        std::to_string(photos.size()) + " photos");
+    for (size_t i = 0; i < photos.size(); ++i) {
+      const PhotoOutline& o = (*outlines)[i];
+      if (!o.points.empty() && (o.width != photos[i].width || o.height != photos[i].height))
+        return Status::error(ErrorCode::InvalidInput, photo_name(i) + ": its mask is " + std::to_string(o.width) + "x" +
+                                                          std::to_string(o.height) + ", the photo " +
+                                                          std::to_string(photos[i].width) + "x" +
+                                                          std::to_string(photos[i].height));
+    }
+  }
   std::vector<SurfacePoint> landmarks;
   Status s = attach_landmark_map(map, generic.mesh, options.map_max_distance_m, landmarks);
   if (!s) return s;
@@ -55,7 +108,7 @@ Status run_photos_job(const GenericHead& generic, const LandmarkMap& map, const 
       result.notes.push_back(photo_name(i) + " dropped: " + result.calib.photos[i].refusal);
   if (!s) return s;
 
-  s = fit_photos_shape(generic, landmarks, photos, result.calib, options, result.fit);
+  s = fit_photos_shape(generic, landmarks, photos, result.calib, options, result.fit, outlines);
   return with_context(s, "photos");
 }
 

@@ -7,9 +7,12 @@
 #pragma once
 #include "head/head_model.h"
 #include "photos/landmarks.h"
+#include "photos/outline.h"
 #include "photos/self_calibration.h"
 #include "photos/shape_fit.h"
+#include "photos/silhouette_obs.h"
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -19,6 +22,8 @@ struct PhotosJobOptions {
   SelfCalibOptions calib;
   ShapeFitOptions fit;
   double map_max_distance_m = 0.005;  // a map point farther from the head: a map for another head
+  double lambda_silhouettes = 0.3;    // fua1998 Sec. 4
+  SilhouetteOptions silhouettes;
 };
 
 struct PhotosJobResult {
@@ -29,14 +34,27 @@ struct PhotosJobResult {
 
 // The shape-fit stage alone, from a finished self-calibration: every used
 // photo's landmarks (with their calibration weights) as feature
-// observations. landmarks: the map attached to generic.mesh.
+// observations. landmarks: the map attached to generic.mesh. outlines:
+// null, or one per photo (empty points: none for that photo), each used
+// photo's as silhouette observations (silhouette_obs.h; the neck region
+// excluded, the chin region's lowest point as the chin line).
 Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoint>& landmarks,
                         const std::vector<LandmarkPhoto>& photos, const SelfCalibResult& calib,
-                        const PhotosJobOptions& options, ShapeFitResult& fit);
+                        const PhotosJobOptions& options, ShapeFitResult& fit,
+                        const std::vector<PhotoOutline>* outlines = nullptr);
+
+// The silhouette set fit_photos_shape builds (for reports: its stats at the
+// generic and the fitted shape). Null when no used photo has an outline.
+std::unique_ptr<SilhouetteSet> make_silhouette_set(const GenericHead& generic, const TriMesh& start,
+                                                   const SelfCalibResult& calib,
+                                                   const std::vector<PhotoOutline>& outlines,
+                                                   const SilhouetteOptions& options);
 
 // Both stages. Fails with the first stage's status (the message names the stage and, for
 // a refused photo, the photo by its name).
+// outlines: as for fit_photos_shape (checked: one per photo, each of its photo's size).
 Status run_photos_job(const GenericHead& generic, const LandmarkMap& map, const std::vector<LandmarkPhoto>& photos,
-                      const PhotosJobOptions& options, PhotosJobResult& result);
+                      const PhotosJobOptions& options, PhotosJobResult& result,
+                      const std::vector<PhotoOutline>* outlines = nullptr);
 
 }  // namespace lk

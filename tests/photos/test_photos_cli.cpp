@@ -87,3 +87,36 @@ TEST_CASE("likeness photos --photos textures the head from the recovered cameras
               "/s/map.json --levels 1 --no-texture --out " + dir + "/out2") == 0);
   CHECK_FALSE(lk::test::exists(dir + "/out2/skin.png"));
 }
+
+// --masks: each photo's mask gives its outline (silhouettes); a mask of the
+// wrong size costs that photo its outline, not the photo.
+TEST_CASE("likeness photos --masks fits the outlines and names a bad mask", "[photos][cli]") {
+  LK_REQUIRE_LIKENESS();
+  const std::string dir = lk::test::scratch_dir("photos_cli_masks");
+  REQUIRE(run("synth-photos --seed 2 --cameras 6 --out " + dir + "/s") == 0);
+  std::string points, masks;
+  for (int i = 0; i < 6; ++i) {
+    points += " " + dir + "/s/view_0" + std::to_string(i) + ".json";
+    masks += " " + dir + "/s/" + (i == 3 ? "small.png" : "mask_0" + std::to_string(i) + ".png");
+  }
+  lk::Image small = lk::Image::make(64, 48, 1, 0);
+  for (int y = 10; y < 40; ++y)
+    for (int x = 10; x < 50; ++x) small.at(x, y)[0] = 255;
+  REQUIRE(lk::save_png_file(dir + "/s/small.png", small));
+  const std::string log = dir + "/log.txt";
+  CHECK(std::system(("'" + std::string(LK_BIN_DIR) + "/likeness' photos --points" + points + " --masks" + masks +
+                     " --map " + dir + "/s/map.json --levels 0 --out " + dir + "/out > " + log + " 2>&1")
+                        .c_str()) == 0);
+  CHECK(read_file_text(log).find("small.png: mask is 64x48, its photo is 1200x1600 (its outline not used)") !=
+        std::string::npos);
+  const auto rep = nlohmann::json::parse(read_file_text(dir + "/out/report.json"));
+  CHECK(rep["photos_used"] == 6);
+  REQUIRE(rep.contains("silhouettes"));
+  const auto d = rep["silhouettes"]["rim_to_outline_mean_px"];
+  std::printf("--masks: rim to outline %.2f -> %.2f px\n", d[0].get<double>(), d[1].get<double>());
+  CHECK(d[1].get<double>() < 0.5 * d[0].get<double>());
+  const std::string err = dir + "/err.txt";
+  CHECK(run("photos --points" + points + " --masks " + dir + "/s/mask_00.png --map " + dir + "/s/map.json --out " +
+                dir + "/o2", err) == 1);
+  CHECK(read_file_text(err).find("give one mask per photo") != std::string::npos);
+}
