@@ -48,7 +48,7 @@ std::string base_name(const std::string& path) {
 
 int run_photos(const Args& args) {
   const std::string cmd = "photos";
-  if (!only_known_options(cmd, args, {"points", "photos", "map", "out", "levels", "focal-px", "texture-size", "no-texture"}))
+  if (!only_known_options(cmd, args, {"points", "photos", "map", "out", "levels", "focal-px", "texture-size", "no-texture", "no-stereo"}))
     return 2;
   const std::vector<std::string> points_paths = args.get_all("points"), photo_paths = args.get_all("photos");
   const std::string map_path = args.get("map"), out_dir = args.get("out");
@@ -84,6 +84,8 @@ int run_photos(const Args& args) {
   // Each photo's points; a file that cannot be used is named and left out.
   std::vector<LandmarkPhoto> photos;
   std::vector<std::string> image_paths;  // #photos: each kept photo's image ("" without --photos)
+  std::vector<Image> images;             // #photos with --photos (for stereo), else empty
+  const bool stereo = !photo_paths.empty() && !args.has("no-stereo");
   std::vector<std::string> notes;
   std::vector<double> exif_focals;
   for (size_t i = 0; i < points_paths.size(); ++i) {
@@ -100,6 +102,9 @@ int run_photos(const Args& args) {
         s = Status::error(ErrorCode::InvalidInput, photo_paths[i] + " is " + std::to_string(info.width) + "x" +
                                                        std::to_string(info.height) + ", its points file says " +
                                                        std::to_string(ph.width) + "x" + std::to_string(ph.height));
+      Image decoded;
+      if (s && stereo) s = with_context(read_image(img.data(), img.size(), decoded, 3), photo_paths[i]);
+      if (s && stereo) images.push_back(std::move(decoded));
       ExifInfo exif;
       if (s && std::string(info.format) == "JPEG" && read_jpeg_exif(img.data(), img.size(), exif) && exif.present) {
         const double f = exif_focal_pixels(exif, ph.width, ph.height);
@@ -116,6 +121,7 @@ int run_photos(const Args& args) {
     image_paths.push_back(photo_paths.empty() ? "" : photo_paths[i]);
   }
   PhotosJobOptions opt;
+  opt.stereo = stereo;
   opt.calib.focal_prior_px = focal_px;
   if (focal_px == 0 && !exif_focals.empty()) {
     std::sort(exif_focals.begin(), exif_focals.end());
@@ -123,7 +129,7 @@ int run_photos(const Args& args) {
     notes.push_back("focal prior from EXIF: " + std::to_string(int(std::lround(opt.calib.focal_prior_px))) + " px");
   }
   PhotosJobResult r;
-  s = run_photos_job(generic, map, photos, opt, r);
+  s = run_photos_job(generic, map, photos, opt, r, images);
   for (const std::string& n : r.notes) notes.push_back(n);
   for (const std::string& n : notes) std::printf("  note: %s\n", n.c_str());
   if (!s) return fail(cmd, s.message);
@@ -187,12 +193,35 @@ int run_photos(const Args& args) {
   for (const ShapeFitStage& st : r.fit.stages)
     rep["stages"].push_back({{"stiffness", st.stiffness}, {"cost", {st.initial_cost, st.final_cost}},
                              {"lm_iterations", st.lm_iterations}});
+  Json pairs = Json::array();
+  for (const StereoPairReport& p : r.stereo.pairs) {
+    Json jp = {{"photos", {photos[size_t(p.a)].name, photos[size_t(p.b)].name}}, {"angle_deg", p.angle_deg},
+               {"rectified", {p.width, p.height}}, {"pixels_searched", p.disparity.searched},
+               {"disparities", p.disparity.valid}, {"low_texture", p.disparity.low_texture},
+               {"low_score", p.disparity.low_score}, {"at_range_end", p.disparity.at_range_end},
+               {"left_right_rejected", p.disparity.lr_rejected}, {"disparity_range", {p.d_min, p.d_max}},
+               {"patches", p.patches}};
+    if (!p.refusal.empty()) jp["refusal"] = p.refusal;
+    pairs.push_back(jp);
+  }
+  rep["stereo"] = {{"used", stereo}, {"pairs", pairs}, {"patches", r.stereo.patches.size()},
+                   {"inliers", r.stereo_fit.inliers},
+                   {"median_patch_to_surface_mm", {1000 * r.stereo_fit.median_start_m, 1000 * r.stereo_fit.median_fit_m}},
+                   {"p95_patch_to_fit_mm", 1000 * r.stereo_fit.p95_fit_m}};
   if (s) s = write_file(out_dir + "/report.json", rep.dump(2) + "\n");
   if (!s) return fail(cmd, s.message);
   std::printf("likeness photos: %d of %zu photos used, focal %.1f px\n", r.calib.num_used(), points_paths.size(),
               r.calib.focal);
   std::printf("  landmark error: calibration %.2f -> %.2f px, shape fit %.2f -> %.2f px (%.2f s)\n",
               r.calib.initial_rms_px, r.calib.final_rms_px, r.fit.initial_rms_px, r.fit.final_rms_px, seconds);
+  if (stereo) {
+    int pairs_used = 0;
+    for (const StereoPairReport& p : r.stereo.pairs) pairs_used += p.patches > 0;
+    std::printf("  stereo: %d of %zu pairs, %zu patches (%d inliers); patch to surface median %.2f mm (generic) -> "
+                "%.2f mm (fit), p95 %.2f mm\n",
+                pairs_used, r.stereo.pairs.size(), r.stereo.patches.size(), r.stereo_fit.inliers,
+                1000 * r.stereo_fit.median_start_m, 1000 * r.stereo_fit.median_fit_m, 1000 * r.stereo_fit.p95_fit_m);
+  }
   for (size_t i = 0; i < photos.size(); ++i) {
     const PhotoCalibration& pc = r.calib.photos[i];
     if (!pc.used) {
@@ -259,9 +288,10 @@ int run_synth_photos(const Args& args) {
 
 Registrar photos_reg({"photos",
                       "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] "
-                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture]",
+                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--no-stereo]",
                       "a head from several photos' landmarks (fua1998): self-calibrated cameras, fitted control "
-                      "mesh, levels, cameras.json, report.json; with --photos the skin from those cameras "
+                      "mesh, levels, cameras.json, report.json; with --photos stereo between pairs of them joins "
+                      "the landmarks (--no-stereo: landmarks only) and the skin comes from those cameras "
                       "(textured.obj, skin.png)",
                       run_photos, nullptr});
 Registrar synth_photos_reg({"synth-photos",

@@ -27,9 +27,9 @@
 namespace lk {
 
 struct DisparityOptions {
-  int radius = 3;              // correlation window (2 radius + 1)^2
+  int radius = 4;              // correlation window (2 radius + 1)^2
   double min_ncc = 0.6;        // a best score below this: no disparity
-  double min_std = 0.01;       // grey-level standard deviation a window needs (texture), levels in [0, 1]
+  double min_std = 0.004;      // grey-level standard deviation a window needs (texture), levels in [0, 1]
   int lr_tolerance = 1;        // |d_left - d_right| allowed, pixels
 };
 

@@ -181,9 +181,11 @@ TEST_CASE("disparity on a rendered textured plane recovers its depth", "[photos]
       if (std::isnan(d)) continue;
       Vec3 X;
       REQUIRE(triangulate_rectified(rc, x, y, d, X));
-      // The ray's true point on the plane.
+      // The ray's true point on the plane; away from the plane's edges (there the
+      // window straddles the grey background).
       const Vec3 dir = X - Ca;
       const double s = n.dot(p0 - Ca) / n.dot(dir);
+      if ((Ca + s * dir - p0).norm() > 0.18) continue;
       depth_err.push_back(std::abs(1 - s) * (rc.a.R * dir).z());
     }
   REQUIRE(depth_err.size() > 1000);
@@ -192,7 +194,7 @@ TEST_CASE("disparity on a rendered textured plane recovers its depth", "[photos]
                                    << depth_err[depth_err.size() * 95 / 100] * 1000 << " mm over "
                                    << depth_err.size());
   CHECK(depth_err[depth_err.size() / 2] < 0.0005);
-  CHECK(depth_err[depth_err.size() * 95 / 100] < 0.003);
+  CHECK(depth_err[depth_err.size() * 95 / 100] < 0.0015);
 }
 
 TEST_CASE("the left-right check removes the background an occluder hides from the right photo", "[photos][stereo]") {
