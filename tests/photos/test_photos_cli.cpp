@@ -82,8 +82,12 @@ TEST_CASE("likeness photos --photos textures the head from the recovered cameras
   std::printf("skin texels: %ld of %ld coloured texels red above blue\n", skin_like, colored);
   REQUIRE(colored > 10000);
   CHECK(skin_like > 0.9 * colored);
+  // Five views 45 deg apart: no stereo pair, said so in the report.
+  const std::string report = read_file_text(dir + "/out/report.json");
+  CHECK(report.find("stereo: no two used photos see the head from 10-40 deg apart") != std::string::npos);
   // --no-texture: no skin.
   REQUIRE(run("photos --points" + points + " --photos" + photos + " --map " + dir +
-              "/s/map.json --levels 1 --no-texture --out " + dir + "/out2") == 0);
+              "/s/map.json --levels 1 --no-texture --no-stereo --out " + dir + "/out2") == 0);
   CHECK_FALSE(lk::test::exists(dir + "/out2/skin.png"));
+  CHECK(read_file_text(dir + "/out2/report.json").find("no two used photos") == std::string::npos);
 }
