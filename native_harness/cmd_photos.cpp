@@ -183,6 +183,19 @@ int run_photos(const Args& args) {
     }
     cams["photos"].push_back(p);
   }
+  // The stereo patches as points (normals; green = kept by the fit's last
+  // reweighting, within ~3 median distances, red = dropped), to look at.
+  if (stereo && !r.stereo.patches.empty()) {
+    PointCloud pc;
+    for (size_t i = 0; i < r.stereo.patches.size(); ++i) {
+      pc.positions.push_back(r.stereo.patches[i].centre);
+      pc.normals.push_back(r.stereo.patches[i].normal);
+      const bool kept = i < r.stereo_fit.weights.size() && r.stereo_fit.weights[i] >= std::exp(-3.0);
+      pc.colors.push_back(kept ? Vec3(0.1, 0.8, 0.2) : Vec3(0.9, 0.1, 0.1));
+    }
+    s = write_file(out_dir + "/stereo_patches.ply", write_ply(pc));
+    if (!s) return fail(cmd, s.message);
+  }
   s = write_file(out_dir + "/cameras.json", cams.dump(2) + "\n");
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   Json rep = {{"photos_used", r.calib.num_used()}, {"photos_given", points_paths.size()},
@@ -235,8 +248,9 @@ int run_photos(const Args& args) {
                 photos[i].name.c_str(), yaw, pitch, pc.num_landmarks - pc.num_hidden, pc.num_hidden, pc.median_px);
   }
   const std::string level_files = levels > 0 ? ", level1..level" + std::to_string(levels) + ".obj" : "";
-  std::printf("  wrote %s/control.obj%s, cameras.json, report.json%s\n", out_dir.c_str(), level_files.c_str(),
-              textured ? ", textured.obj, textured.mtl, skin.png" : "");
+  std::printf("  wrote %s/control.obj%s, cameras.json, report.json%s%s\n", out_dir.c_str(), level_files.c_str(),
+              textured ? ", textured.obj, textured.mtl, skin.png" : "",
+              stereo && !r.stereo.patches.empty() ? ", stereo_patches.ply" : "");
   return 0;
 }
 
