@@ -251,7 +251,6 @@ Status stereo_pair(const StereoView& a, const StereoView& b, const TriMesh& head
     hull = {Vec2(0, 0), Vec2(a.camera.width, 0), Vec2(a.camera.width, a.camera.height), Vec2(0, a.camera.height)};
     hull = convex_hull(hull);
   }
-  rep.angle_deg = head.positions.empty() ? 0 : view_angle_deg(a.camera, b.camera, Vec3::Zero());
   // The head's vertices both photos see (facing both, inside a's region and b's frame).
   std::vector<Vec3> vn(head.positions.size(), Vec3::Zero());
   for (const Tri& t : head.triangles) {
@@ -271,6 +270,9 @@ Status stereo_pair(const StereoView& a, const StereoView& b, const TriMesh& head
     roi.push_back(X);
   }
   if (roi.size() < 10) return refuse("no overlap: the two photos share no part of the head's region");
+  Vec3 roi_centre = Vec3::Zero();
+  for (const Vec3& X : roi) roi_centre += X;
+  rep.angle_deg = view_angle_deg(a.camera, b.camera, roi_centre / double(roi.size()));
   RectifiedCameras rc;
   Status s = rectified_cameras(a.camera, b.camera, roi, o.max_size, o.disparity.radius + 2, rc);
   if (!s) return refuse(s.message);
@@ -371,7 +373,7 @@ Status run_stereo(const std::vector<StereoView>& views, const TriMesh& head, con
     ++uses[size_t(c.a)];
     ++uses[size_t(c.b)];
     stereo_pair(views[size_t(c.a)], views[size_t(c.b)], head, o, out, c.a, c.b);  // a refusal stays in its report
-    out.pairs.back().angle_deg = c.angle;
+    out.pairs.back().angle_deg = c.angle;  // at the head's centre, as the pair was chosen
   }
   return Status::success();
 }

@@ -83,7 +83,7 @@ struct StereoView {
 
 struct StereoPairReport {
   int a = 0, b = 0;              // indices into the views
-  double angle_deg = 0;
+  double angle_deg = 0;          // between the views, at the centre of the head (run_stereo) or of the shared region
   int width = 0, height = 0;     // rectified frame
   int d_min = 0, d_max = 0;
   DisparityMap disparity;        // counts; the map itself is kept only with keep_maps
