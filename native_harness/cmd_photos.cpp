@@ -111,7 +111,8 @@ Status write_silhouette_check(const std::string& path, const std::string& photo_
 
 int run_photos(const Args& args) {
   const std::string cmd = "photos";
-  if (!only_known_options(cmd, args, {"points", "photos", "masks", "masks-from-photos", "silhouette-check", "map", "out", "levels", "focal-px", "texture-size", "no-texture"}))
+  if (!only_known_options(cmd, args, {"points", "photos", "masks", "masks-from-photos", "silhouette-check", "map", "out",
+                                      "levels", "focal-px", "texture-size", "no-texture", "stereo", "no-stereo"}))
     return 2;
   const std::vector<std::string> points_paths = args.get_all("points"), photo_paths = args.get_all("photos"),
                                  mask_paths = args.get_all("masks");
@@ -155,6 +156,10 @@ int run_photos(const Args& args) {
   // Each photo's points; a file that cannot be used is named and left out.
   std::vector<LandmarkPhoto> photos;
   std::vector<std::string> image_paths;  // #photos: each kept photo's image ("" without --photos)
+  std::vector<Image> images;             // #photos with --photos (for stereo), else empty
+  // Stereo is asked for (--stereo): on Kira's real photos its patches dent
+  // the face (docs/design/photos.md, Stereo); --no-stereo is kept as the default.
+  const bool stereo = !photo_paths.empty() && args.has("stereo") && !args.has("no-stereo");
   std::vector<std::string> notes;
   std::vector<double> exif_focals;
   std::vector<PhotoOutline> outlines;  // #photos with --masks: each kept photo's outline (empty: its mask refused)
@@ -172,6 +177,9 @@ int run_photos(const Args& args) {
         s = Status::error(ErrorCode::InvalidInput, photo_paths[i] + " is " + std::to_string(info.width) + "x" +
                                                        std::to_string(info.height) + ", its points file says " +
                                                        std::to_string(ph.width) + "x" + std::to_string(ph.height));
+      Image decoded;
+      if (s && stereo) s = with_context(read_image(img.data(), img.size(), decoded, 3), photo_paths[i]);
+      if (s && stereo) images.push_back(std::move(decoded));
       ExifInfo exif;
       if (s && std::string(info.format) == "JPEG" && read_jpeg_exif(img.data(), img.size(), exif) && exif.present) {
         const double f = exif_focal_pixels(exif, ph.width, ph.height);
@@ -209,6 +217,7 @@ int run_photos(const Args& args) {
     image_paths.push_back(photo_paths.empty() ? "" : photo_paths[i]);
   }
   PhotosJobOptions opt;
+  opt.stereo = stereo;
   opt.calib.focal_prior_px = focal_px;
   if (focal_px == 0 && !exif_focals.empty()) {
     std::sort(exif_focals.begin(), exif_focals.end());
@@ -216,7 +225,7 @@ int run_photos(const Args& args) {
     notes.push_back("focal prior from EXIF: " + std::to_string(int(std::lround(opt.calib.focal_prior_px))) + " px");
   }
   PhotosJobResult r;
-  s = run_photos_job(generic, map, photos, opt, r, with_outlines ? &outlines : nullptr);
+  s = run_photos_job(generic, map, photos, opt, r, with_outlines ? &outlines : nullptr, images);
   for (const std::string& n : r.notes) notes.push_back(n);
   for (const std::string& n : notes) std::printf("  note: %s\n", n.c_str());
   if (!s) return fail(cmd, s.message);
@@ -270,6 +279,19 @@ int run_photos(const Args& args) {
     }
     cams["photos"].push_back(p);
   }
+  // The stereo patches as points (normals; green = kept by the fit's last
+  // reweighting, within ~3 median distances, red = dropped), to look at.
+  if (stereo && !r.stereo.patches.empty()) {
+    PointCloud pc;
+    for (size_t i = 0; i < r.stereo.patches.size(); ++i) {
+      pc.positions.push_back(r.stereo.patches[i].centre);
+      pc.normals.push_back(r.stereo.patches[i].normal);
+      const bool kept = i < r.stereo_fit.weights.size() && r.stereo_fit.weights[i] >= std::exp(-3.0);
+      pc.colors.push_back(kept ? Vec3(0.1, 0.8, 0.2) : Vec3(0.9, 0.1, 0.1));
+    }
+    s = write_file(out_dir + "/stereo_patches.ply", write_ply(pc));
+    if (!s) return fail(cmd, s.message);
+  }
   s = write_file(out_dir + "/cameras.json", cams.dump(2) + "\n");
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   Json rep = {{"photos_used", r.calib.num_used()}, {"photos_given", points_paths.size()},
@@ -304,12 +326,35 @@ int run_photos(const Args& args) {
       }
     }
   }
+  Json pairs = Json::array();
+  for (const StereoPairReport& p : r.stereo.pairs) {
+    Json jp = {{"photos", {photos[size_t(p.a)].name, photos[size_t(p.b)].name}}, {"angle_deg", p.angle_deg},
+               {"rectified", {p.width, p.height}}, {"pixels_searched", p.disparity.searched},
+               {"disparities", p.disparity.valid}, {"low_texture", p.disparity.low_texture},
+               {"low_score", p.disparity.low_score}, {"at_range_end", p.disparity.at_range_end},
+               {"left_right_rejected", p.disparity.lr_rejected}, {"disparity_range", {p.d_min, p.d_max}},
+               {"patches", p.patches}};
+    if (!p.refusal.empty()) jp["refusal"] = p.refusal;
+    pairs.push_back(jp);
+  }
+  rep["stereo"] = {{"used", stereo}, {"pairs", pairs}, {"patches", r.stereo.patches.size()},
+                   {"inliers", r.stereo_fit.inliers},
+                   {"median_patch_to_surface_mm", {1000 * r.stereo_fit.median_start_m, 1000 * r.stereo_fit.median_fit_m}},
+                   {"p95_patch_to_fit_mm", 1000 * r.stereo_fit.p95_fit_m}};
   if (s) s = write_file(out_dir + "/report.json", rep.dump(2) + "\n");
   if (!s) return fail(cmd, s.message);
   std::printf("likeness photos: %d of %zu photos used, focal %.1f px\n", r.calib.num_used(), points_paths.size(),
               r.calib.focal);
   std::printf("  landmark error: calibration %.2f -> %.2f px, shape fit %.2f -> %.2f px (%.2f s)\n",
               r.calib.initial_rms_px, r.calib.final_rms_px, r.fit.initial_rms_px, r.fit.final_rms_px, seconds);
+  if (stereo) {
+    int pairs_used = 0;
+    for (const StereoPairReport& p : r.stereo.pairs) pairs_used += p.patches > 0;
+    std::printf("  stereo: %d of %zu pairs, %zu patches (%d inliers); patch to surface median %.2f mm (generic) -> "
+                "%.2f mm (fit), p95 %.2f mm\n",
+                pairs_used, r.stereo.pairs.size(), r.stereo.patches.size(), r.stereo_fit.inliers,
+                1000 * r.stereo_fit.median_start_m, 1000 * r.stereo_fit.median_fit_m, 1000 * r.stereo_fit.p95_fit_m);
+  }
   for (size_t i = 0; i < photos.size(); ++i) {
     const PhotoCalibration& pc = r.calib.photos[i];
     if (!pc.used) {
@@ -323,8 +368,9 @@ int run_photos(const Args& args) {
                 photos[i].name.c_str(), yaw, pitch, pc.num_landmarks - pc.num_hidden, pc.num_hidden, pc.median_px);
   }
   const std::string level_files = levels > 0 ? ", level1..level" + std::to_string(levels) + ".obj" : "";
-  std::printf("  wrote %s/control.obj%s, cameras.json, report.json%s\n", out_dir.c_str(), level_files.c_str(),
-              textured ? ", textured.obj, textured.mtl, skin.png" : "");
+  std::printf("  wrote %s/control.obj%s, cameras.json, report.json%s%s\n", out_dir.c_str(), level_files.c_str(),
+              textured ? ", textured.obj, textured.mtl, skin.png" : "",
+              stereo && !r.stereo.patches.empty() ? ", stereo_patches.ply" : "");
   return 0;
 }
 
@@ -381,12 +427,14 @@ int run_synth_photos(const Args& args) {
 
 Registrar photos_reg({"photos",
                       "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] [--masks M1.png ... | --masks-from-photos] [--silhouette-check] "
-                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture]",
+                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--stereo]",
                       "a head from several photos' landmarks (fua1998): self-calibrated cameras, fitted control "
                       "mesh, levels, cameras.json, report.json; with --photos the skin from those cameras "
                       "(textured.obj, skin.png); with --masks (white or opaque = the person) the head's outline "
                       "in each photo as silhouettes (--masks-from-photos: from the photos, plain background only; "
-                      "--silhouette-check: silhouettes_N.png, outline and rims drawn on each photo)",
+                      "--silhouette-check: silhouettes_N.png, outline and rims drawn on each photo); with --photos "
+                      "and --stereo, stereo between pairs of them joins the landmarks (off by default: on real "
+                      "photos it dents the face, docs/design/photos.md)",
                       run_photos, nullptr});
 Registrar synth_photos_reg({"synth-photos",
                             "likeness synth-photos --out DIR [--seed N] [--cameras C] [--noise-px S] [--no-render]",

@@ -1,13 +1,47 @@
 #include "photos/photos_job.h"
 
+#include "photos/stereo_obs.h"
+
+#include <algorithm>
+#include <cmath>
 #include <memory>
 
 namespace lk {
 
+Status run_photos_stereo(const GenericHead& generic, const std::vector<LandmarkPhoto>& photos,
+                         const SelfCalibResult& calib, const std::vector<Image>& images, const StereoOptions& options,
+                         StereoResult& stereo) {
+  stereo = {};
+  if (images.size() != photos.size() || calib.photos.size() != photos.size())
+    return Status::error(ErrorCode::InvalidInput, "stereo: one image per photo needed");
+  std::vector<StereoView> views;
+  for (size_t i = 0; i < photos.size(); ++i) {
+    if (!calib.photos[i].used || images[i].empty()) continue;
+    StereoView v;
+    v.image = &images[i];
+    v.camera = calib.photos[i].camera;
+    v.name = photos[i].name;
+    for (size_t m = 0; m < photos[i].points.size(); ++m)
+      if (photos[i].present[m]) v.region.push_back(photos[i].points[m]);
+    views.push_back(v);
+  }
+  Status s = run_stereo(views, generic.mesh, options, stereo);
+  // Report pairs by photo index, not by index among the views.
+  std::vector<int> photo_of;
+  for (size_t i = 0; i < photos.size(); ++i)
+    if (calib.photos[i].used && !images[i].empty()) photo_of.push_back(int(i));
+  for (StereoPairReport& p : stereo.pairs) {
+    p.a = photo_of[size_t(p.a)];
+    p.b = photo_of[size_t(p.b)];
+  }
+  return s;
+}
+
 Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoint>& landmarks,
                         const std::vector<LandmarkPhoto>& photos, const SelfCalibResult& calib,
                         const PhotosJobOptions& options, ShapeFitResult& fit,
-                        const std::vector<PhotoOutline>* outlines) {
+                        const std::vector<PhotoOutline>* outlines, const StereoResult* stereo,
+                        PhotosStereoFit* stereo_fit) {
   if (calib.photos.size() != photos.size())
     return Status::error(ErrorCode::InvalidInput, "shape fit: the calibration is for other photos");
   std::vector<Camera> cameras;
@@ -38,7 +72,35 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
       lambdas.push_back(options.lambda_silhouettes);
     }
   }
-  return fit_shape(generic.mesh, sets, lambdas, options.fit, fit);
+  const StereoAttractorSet* attractors = nullptr;
+  if (options.stereo && stereo && !stereo->patches.empty()) {
+    auto set = std::make_unique<StereoAttractorSet>(generic.mesh, stereo->patches, generic.mesh.positions);
+    attractors = set.get();
+    sets.push_back(std::move(set));
+    lambdas.push_back(options.lambda_stereo);
+  }
+  const std::vector<double> start = attractors ? attractors->surface_distances(generic.mesh.positions)
+                                               : std::vector<double>();
+  Status s = fit_shape(generic.mesh, sets, lambdas, options.fit, fit);
+  if (s && attractors && stereo_fit) {
+    auto median_of = [](std::vector<double> v) {
+      std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+      return v[v.size() / 2];
+    };
+    std::vector<double> d = attractors->surface_distances(fit.mesh.positions);
+    PhotosStereoFit& r = *stereo_fit;
+    r = {};
+    r.attractors = int(d.size());
+    for (const StereoAttractor& a : attractors->attractors()) {
+      r.inliers += a.weight >= std::exp(-3.0);
+      r.weights.push_back(a.weight);
+    }
+    r.median_start_m = median_of(start);
+    r.median_fit_m = median_of(d);
+    std::sort(d.begin(), d.end());
+    r.p95_fit_m = d[d.size() * 95 / 100];
+  }
+  return s;
 }
 
 std::unique_ptr<SilhouetteSet> make_silhouette_set(const GenericHead& generic, const TriMesh& start,
@@ -72,7 +134,7 @@ std::unique_ptr<SilhouetteSet> make_silhouette_set(const GenericHead& generic, c
 
 Status run_photos_job(const GenericHead& generic, const LandmarkMap& map, const std::vector<LandmarkPhoto>& photos,
                       const PhotosJobOptions& options, PhotosJobResult& result,
-                      const std::vector<PhotoOutline>* outlines) {
+                      const std::vector<PhotoOutline>* outlines, const std::vector<Image>& images) {
   result = {};
   auto photo_name = [&](size_t i) {
     return photos[i].name.empty() ? "photo " + std::to_string(i + 1) : photos[i].name;
@@ -108,7 +170,20 @@ Status run_photos_job(const GenericHead& generic, const LandmarkMap& map, const 
       result.notes.push_back(photo_name(i) + " dropped: " + result.calib.photos[i].refusal);
   if (!s) return s;
 
-  s = fit_photos_shape(generic, landmarks, photos, result.calib, options, result.fit, outlines);
+  if (options.stereo && !images.empty()) {
+    s = run_photos_stereo(generic, photos, result.calib, images, options.stereo_options, result.stereo);
+    if (!s) return with_context(s, "photos");
+    for (const StereoPairReport& p : result.stereo.pairs)
+      if (!p.refusal.empty())
+        result.notes.push_back("stereo " + photo_name(size_t(p.a)) + " + " + photo_name(size_t(p.b)) + ": " + p.refusal);
+    if (result.stereo.pairs.empty())
+      result.notes.push_back("stereo: no two used photos see the head from " +
+                             std::to_string(int(options.stereo_options.min_angle_deg)) + "-" +
+                             std::to_string(int(options.stereo_options.max_angle_deg)) +
+                             " deg apart; landmarks only");
+  }
+  s = fit_photos_shape(generic, landmarks, photos, result.calib, options, result.fit, outlines, &result.stereo,
+                       &result.stereo_fit);
   return with_context(s, "photos");
 }
 

@@ -1,16 +1,21 @@
 // Photos to head, the native core's job (issue 37): landmark files of
 // several photos + the landmark map -> cameras (self_calibration.h) and the
-// generic head's control mesh deformed to the person (shape_fit.h). The CLI
+// generic head's control mesh deformed to the person (shape_fit.h); with the
+// photos' images, stereo patches between pairs of them (stereo.h) join the
+// landmarks as attractors (stereo_obs.h, lambda_stereo). The CLI
 // (`likeness photos`) and the benchmark are thin shells over it.
 //
-// Shapes: photos #P; the result's cameras/refusals #P (photo order kept).
+// Shapes: photos #P; images #P (an empty image: none for that photo); the
+// result's cameras/refusals #P (photo order kept).
 #pragma once
 #include "head/head_model.h"
+#include "image/image.h"
 #include "photos/landmarks.h"
 #include "photos/outline.h"
 #include "photos/self_calibration.h"
 #include "photos/shape_fit.h"
 #include "photos/silhouette_obs.h"
+#include "photos/stereo.h"
 
 #include <memory>
 #include <string>
@@ -24,24 +29,48 @@ struct PhotosJobOptions {
   double map_max_distance_m = 0.005;  // a map point farther from the head: a map for another head
   double lambda_silhouettes = 0.3;    // fua1998 Sec. 4
   SilhouetteOptions silhouettes;
+  bool stereo = true;                 // use the images, when given, for stereo attractors
+  StereoOptions stereo_options;
+  double lambda_stereo = 1.0;         // fua1998 Sec. 4
+};
+
+// What the stereo attractors came to in a fit (fua1998 Fig. 7's measure).
+struct PhotosStereoFit {
+  int attractors = 0;
+  int inliers = 0;                    // eq. 10 weight >= exp(-3) at the end (within ~3 median distances)
+  double median_start_m = 0;          // patch centres to the start surface (generic head)
+  double median_fit_m = 0, p95_fit_m = 0;  // to the fitted surface
+  std::vector<double> weights;        // #patches, each attractor's final weight (eq. 10 x normal agreement)
 };
 
 struct PhotosJobResult {
   SelfCalibResult calib;
+  StereoResult stereo;         // pairs tried and their patches (empty without images)
+  PhotosStereoFit stereo_fit;
   ShapeFitResult fit;          // fit.mesh: the person's control mesh
   std::vector<std::string> notes;  // for people: one photo only, photos dropped, ...
 };
 
+// The stereo stage alone, from a finished self-calibration: pairs of used
+// photos with images, each searched inside its landmarks' hull, the depth
+// range from the generic head. Fails on bad options or #images != #photos.
+Status run_photos_stereo(const GenericHead& generic, const std::vector<LandmarkPhoto>& photos,
+                         const SelfCalibResult& calib, const std::vector<Image>& images, const StereoOptions& options,
+                         StereoResult& stereo);
+
 // The shape-fit stage alone, from a finished self-calibration: every used
 // photo's landmarks (with their calibration weights) as feature
-// observations. landmarks: the map attached to generic.mesh. outlines:
-// null, or one per photo (empty points: none for that photo), each used
-// photo's as silhouette observations (silhouette_obs.h; the neck region
-// excluded, the chin region's lowest point as the chin line).
+// observations, the outlines (if any) as silhouette observations and the
+// stereo patches (if any) as attractors. landmarks: the map attached to
+// generic.mesh. outlines: null, or one per photo (empty points: none for
+// that photo), each used photo's as silhouette observations
+// (silhouette_obs.h; the neck region excluded, the chin region's lowest
+// point as the chin line).
 Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoint>& landmarks,
                         const std::vector<LandmarkPhoto>& photos, const SelfCalibResult& calib,
                         const PhotosJobOptions& options, ShapeFitResult& fit,
-                        const std::vector<PhotoOutline>* outlines = nullptr);
+                        const std::vector<PhotoOutline>* outlines = nullptr, const StereoResult* stereo = nullptr,
+                        PhotosStereoFit* stereo_fit = nullptr);
 
 // The silhouette set fit_photos_shape builds (for reports: its stats at the
 // generic and the fitted shape). Null when no used photo has an outline.
@@ -50,11 +79,12 @@ std::unique_ptr<SilhouetteSet> make_silhouette_set(const GenericHead& generic, c
                                                    const std::vector<PhotoOutline>& outlines,
                                                    const SilhouetteOptions& options);
 
-// Both stages. Fails with the first stage's status (the message names the stage and, for
-// a refused photo, the photo by its name).
-// outlines: as for fit_photos_shape (checked: one per photo, each of its photo's size).
+// All stages. Fails with the first stage's status (the message names the
+// stage and, for a refused photo, the photo by its name). outlines: as for
+// fit_photos_shape (checked: one per photo, each of its photo's size);
+// images: empty, or one per photo (for stereo).
 Status run_photos_job(const GenericHead& generic, const LandmarkMap& map, const std::vector<LandmarkPhoto>& photos,
                       const PhotosJobOptions& options, PhotosJobResult& result,
-                      const std::vector<PhotoOutline>* outlines = nullptr);
+                      const std::vector<PhotoOutline>* outlines = nullptr, const std::vector<Image>& images = {});
 
 }  // namespace lk

@@ -67,7 +67,7 @@ TEST_CASE("likeness photos --photos textures the head from the recovered cameras
     photos += " " + dir + "/s/view_0" + std::to_string(i) + ".png";
   }
   REQUIRE(run("photos --points" + points + " --photos" + photos + " --map " + dir +
-              "/s/map.json --levels 1 --texture-size 256 --out " + dir + "/out") == 0);
+              "/s/map.json --levels 1 --texture-size 256 --stereo --out " + dir + "/out") == 0);
   CHECK(read_file_text(dir + "/out/textured.obj").find("mtllib textured.mtl") != std::string::npos);
   lk::Image skin;
   REQUIRE(lk::load_image_file(dir + "/out/skin.png", skin, 3));
@@ -82,10 +82,14 @@ TEST_CASE("likeness photos --photos textures the head from the recovered cameras
   std::printf("skin texels: %ld of %ld coloured texels red above blue\n", skin_like, colored);
   REQUIRE(colored > 10000);
   CHECK(skin_like > 0.9 * colored);
-  // --no-texture: no skin.
+  // --stereo, five views 45 deg apart: no stereo pair, said so in the report.
+  const std::string report = read_file_text(dir + "/out/report.json");
+  CHECK(report.find("stereo: no two used photos see the head from 10-40 deg apart") != std::string::npos);
+  // --no-texture: no skin; no --stereo: none tried (off by default).
   REQUIRE(run("photos --points" + points + " --photos" + photos + " --map " + dir +
               "/s/map.json --levels 1 --no-texture --out " + dir + "/out2") == 0);
   CHECK_FALSE(lk::test::exists(dir + "/out2/skin.png"));
+  CHECK(read_file_text(dir + "/out2/report.json").find("no two used photos") == std::string::npos);
 }
 
 // --masks: each photo's mask gives its outline (silhouettes); a mask of the
