@@ -14,7 +14,7 @@ import { detectLandmarks } from './landmarks.js';
 export async function checkPhotos(photos, alone) {
   const job = beginJob('photos');
   if (!job) return;
-  const failures = [], kept = [];
+  const failures = [];
   for (const file of photos) {
     if (!live(job)) break;
     const meta = listFile(file, 'checking…');
@@ -44,11 +44,15 @@ export async function checkPhotos(photos, alone) {
     meta.textContent = formatBytes(file.size) + ' · ' + result.width + '×' + result.height + ' photo';
     meta.parentElement.title = file.name + ': ' + result.width + '×' + result.height +
                                ' photo, kept for the Texture stage';
-    kept.push(addPhoto({ name: file.name, file, width: result.width, height: result.height, decoder: result.decoder,
-                         exifFocalPx: result.focalPx || 0 }));
+    const photo = addPhoto({ name: file.name, file, width: result.width, height: result.height, decoder: result.decoder,
+                             exifFocalPx: result.focalPx || 0 });
+    // Its face points are found now, while the worker checks the next photo
+    // (the detector takes one photo at a time, landmarks.js).
+    photo.detect = { state: 'waiting' };
+    renderPhotos();
+    findLandmarks([photo]);
   }
   renderPhotos();
-  findLandmarks(kept);
   if (!endJob(job)) return;
   if (failures.length) {
     showError(failures.join(' '));
@@ -57,6 +61,8 @@ export async function checkPhotos(photos, alone) {
               (app.fit ? 'Give each its points (a .txt of the same name, or click the photo), then Texture.'
                 : app.model ? 'Fit the head, then texture it.' : 'Drop a head scan (PLY, OBJ, XYZ or VTK) to start.'));
   }
+  // Every photo's points may already be in (the detection ran beside the checks).
+  if (app.afterLandmarks) app.afterLandmarks();
 }
 
 const baseName = (name) => name.replace(/\.[^.]*$/, '').toLowerCase();
