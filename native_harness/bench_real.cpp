@@ -35,6 +35,8 @@
 // memory, and a copy written to a file and fitted again is another draw.
 // --fit-back off|face-only|always, --fit-back-weight W: the global fit's
 // scan-to-mesh term (FitHeadOptions::back_term).
+// --fit-real-scanned-neck: the scanned neck below the cut is fitted too
+// (FitHeadOptions::fit_scanned_neck on), to compare.
 #include "command.h"
 #include "fit_table.h"
 #include "generic_head_choice.h"
@@ -254,6 +256,7 @@ int run(const Args& args) {
     return 1;
   }
   options.untangle_hinges_last = hinges_last == 1;
+  if (args.has("fit-real-scanned-neck")) options.fit_scanned_neck = true;
   if (!parse_back_term(args, options)) return 1;
   const std::string dump = args.get("fit-real-dump", "");
   if (args.has("fit-data-level")) options.whole_head_data_level = -1;  // on every scan, as given
