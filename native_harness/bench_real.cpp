@@ -35,6 +35,8 @@
 // memory, and a copy written to a file and fitted again is another draw.
 // --fit-back off|face-only|always, --fit-back-weight W: the global fit's
 // scan-to-mesh term (FitHeadOptions::back_term).
+// --fit-real-scanned-neck: the scanned neck below the cut is fitted too
+// (FitHeadOptions::fit_scanned_neck on), to compare.
 #include "command.h"
 #include "fit_table.h"
 #include "generic_head_choice.h"
@@ -254,6 +256,7 @@ int run(const Args& args) {
     return 1;
   }
   options.untangle_hinges_last = hinges_last == 1;
+  if (args.has("fit-real-scanned-neck")) options.fit_scanned_neck = true;
   if (!parse_back_term(args, options)) return 1;
   const std::string dump = args.get("fit-real-dump", "");
   if (args.has("fit-data-level")) options.whole_head_data_level = -1;  // on every scan, as given
@@ -284,6 +287,14 @@ int run(const Args& args) {
       obs.measured = [&](const FitStageReport& r) {
         if (r.name == "subdivision") table1 = r.distance;
       };
+      // CPU per stage, from its start to its end (the stats measured after
+      // each stage are in the total only).
+      std::vector<std::pair<std::string, double>> stage_cpu;
+      double stage0 = 0;
+      obs.started = [&](const std::string&) { stage0 = cpu_clock_ms(); };
+      obs.finished = [&](const std::string& name, const TriMesh&) {
+        stage_cpu.emplace_back(name, 1e-3 * (cpu_clock_ms() - stage0));
+      };
       FitHeadResult r;
       const double cpu0 = cpu_clock_ms();
       st = fit_head(c.cloud, generic, options, r, obs);
@@ -311,6 +322,9 @@ int run(const Args& args) {
                   c.name.c_str(), table1.mean_pct, table1.max_pct, floor_pct, x.total, x.lips, x.ears,
                   x.eye_sockets, x.rest, q.smooth_crossings.total, cpu_s, 1e3 * back.mean, 1e3 * back.p99,
                   1e3 * back.max, neck.points, 1e3 * neck.median, 1e3 * neck.p90);
+      std::printf("   %-14s cpu s by stage:", "");
+      for (const auto& [name, s] : stage_cpu) std::printf(" %s %.2f", name.c_str(), s);
+      std::printf("\n");
       if (!dump.empty()) {
         std::string prefix = dump + "/" + label.substr(0, label.find('/')) + "_" + c.name;
         std::replace(prefix.begin() + static_cast<long>(dump.size()), prefix.end(), ' ', '_');

@@ -513,6 +513,8 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
     if (!p.allFinite()) return Status::error(ErrorCode::InvalidInput, "the scan has non-finite coordinates");
   if (options.levels < 0 || options.levels > 5)
     return Status::error(ErrorCode::InvalidInput, "levels must be in 0..5");
+  if (!(options.scanned_neck_max_angle_deg >= 0 && options.scanned_neck_max_angle_deg <= 90))
+    return Status::error(ErrorCode::InvalidInput, "scanned_neck_max_angle_deg must be in 0..90");
   if (generic.mesh.triangles.empty())
     return Status::error(ErrorCode::InvalidInput, "the generic head has no triangles");
   if (n < options.min_points)
@@ -712,6 +714,38 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
       if (!on_pocket[i]) skin_pts.push_back(pts[i]), skin_index.push_back(pts_index[i]);
   }
   out.pocket_points = static_cast<int>(pts.size() - skin_pts.size());
+  const auto neck_region = ann.regions.find("neck");
+  const bool scanned_neck = options.cut_neck && options.fit_scanned_neck && !out.face_only &&
+                            neck_region != ann.regions.end();
+  if (scanned_neck) {
+    // FitHeadOptions::fit_scanned_neck: the scan's neck below the cut, on
+    // the neck's triangles and along their normals (not beyond its rim).
+    const std::vector<char> in_neck = vertex_mask(neck_region->second, out.local.num_vertices());
+    double lowest = 0;  // the aligned generic neck's lower end, below the cut
+    for (const Vec3& v : out.aligned.positions) lowest = std::min(lowest, neck.normal.dot(v - neck.point));
+    const double min_cos = std::cos(options.scanned_neck_max_angle_deg * 3.14159265358979323846 / 180.0);
+    std::vector<char> take(n, 0);
+    parallel_for(0, n, 2048, [&](int i, int) {
+      const double h = neck.normal.dot(cloud.positions[i] - neck.point);
+      if (h >= 0 || h < lowest) return;
+      const SurfaceHit c = local_tree.closest(cloud.positions[i]);
+      if (c.face < 0) return;
+      const Tri& t = out.local.triangles[c.face];
+      if (!in_neck[t[0]] || !in_neck[t[1]] || !in_neck[t[2]]) return;
+      const Vec3 normal = (out.local.positions[t[1]] - out.local.positions[t[0]])
+                              .cross(out.local.positions[t[2]] - out.local.positions[t[0]]);
+      const Vec3 off = cloud.positions[i] - c.point;
+      const double along = std::abs(normal.dot(off)), size = normal.norm() * off.norm();
+      take[i] = size == 0 || along >= min_cos * size;
+    });
+    std::vector<Vec3> band;
+    std::vector<int> band_index;
+    for (int i = 0; i < n; ++i)
+      if (take[i]) band.push_back(cloud.positions[i]), band_index.push_back(i);
+    out.neck_points = static_cast<int>(band.size());
+    skin_pts.insert(skin_pts.end(), band.begin(), band.end());
+    skin_index.insert(skin_index.end(), band_index.begin(), band_index.end());
+  }
   // Points far sparser than the scan's own sampling (hair returns, stray
   // reflections) are not skin: fitted as a surface they raised bumps along
   // the hairline. They stay in the reported distances (Table 1 is over all
@@ -772,8 +806,8 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   PointCloud fitted;
   fitted.positions = skin_pts;
   std::vector<int> measured_index = skin_index;  // into the scan
-  const auto neck_region = ann.regions.find("neck");
-  if (options.cut_neck && options.displacement_below_neck_cut > 0 && neck_region != ann.regions.end()) {
+  if (!scanned_neck && options.cut_neck && options.displacement_below_neck_cut > 0 &&
+      neck_region != ann.regions.end()) {
     // The band just below the neck cut (see FitHeadOptions) where its
     // nearest surface is the neck's (on a face scan the cut passes under
     // the ear lobes: 20 mm of band with no such test tripled James's ear

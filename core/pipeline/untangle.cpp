@@ -106,6 +106,35 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
     set.resize(kept);
   };
 
+  // Trials move a few control vertices: the hierarchy is updated inside
+  // their support only (update_control_vertices, bit-identical to a full
+  // evaluation), and the level's new pairs at control.positions come from
+  // `pairs` (the level's at `level.positions`): only the triangles whose
+  // corners moved are searched again. The corners moved are `set`.
+  std::vector<Vec3> now;  // level K after a trial's move
+  std::vector<char> moved;
+  std::vector<int> moved_list;
+  std::vector<Vec3> set_positions;
+  auto move_set_to = [&](const std::vector<Vec3>& positions) -> Status {
+    set_positions.clear();
+    for (int v : set) set_positions.push_back(positions[v]);
+    return update_control_vertices(mr, set, set_positions);
+  };
+  auto pairs_after_move = [&](std::vector<std::array<int, 2>>& out) -> Status {
+    Status r = move_set_to(control.positions);
+    if (!r) return r;
+    now = mr.state.displaced[K];
+    moved_triangles(level.triangles, level.positions, now, moved, moved_list);
+    std::swap(level.positions, now);
+    r = refit_bvh(level, bvh);
+    if (!r) return r;
+    std::vector<std::array<int, 2>> found;
+    r = find_new_self_intersections(bvh, reference_level, found, &moved_list);
+    if (!r) return r;
+    out = pairs_after_change(pairs, moved, found);
+    return Status::success();
+  };
+
   // 1. Erosion: two sheets pulled onto the same scan points (an ear's back
   // and the scalp behind it), which the fold limiter leaves alone
   // (shrinking displacements only returns to this surface). Each step
@@ -117,14 +146,25 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
   // corners (a fold between neighbouring faces is all hinges).
   const double step = options.erode_pct / 100 * diagonal;
   auto erode = [&](bool without_hinges) -> Status {
+    // The hierarchy, the level and its tree at control.positions (a pass
+    // after another starts from that one's best, not its last step).
+    if (mr.control != control.positions) {
+      Status r = level_positions(control.positions, level.positions);
+      if (r) r = refit_bvh(level, bvh);
+      if (!r) return r;
+    }
     for (int it = 0, idle = 0; it < options.iterations && !pairs.empty() && idle < 2; ++it) {
       corners_under_pairs();
       if (without_hinges) drop_hinges();
       if (set.empty()) break;
       const std::vector<Vec3> normals = vertex_normals(control);
       for (int v : set) control.positions[v] -= step * normals[v];
-      Status r = new_pairs();
+      // Only the level's triangles over the moved corners are searched
+      // again (the same pairs as a search of the whole level).
+      std::vector<std::array<int, 2>> after;
+      Status r = pairs_after_move(after);
       if (!r) return r;
+      pairs = std::move(after);
       // A step that turns a control triangle over against the template is
       // not kept (Fran: a lid triangle of the right eye socket turned).
       const bool turns = turned_triangles(reference, control).size() > turned_at_start;
@@ -156,7 +196,6 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
   // 2. Restore (header comment).
   // `pairs` are best's already (each erosion pass ends there); its level
   // and tree may still be a rejected step's.
-  std::vector<Vec3> now;  // level K after a trial's move
   if (level.positions != best_level) {
     level.positions = best_level;
     st = refit_bvh(level, bvh);
@@ -173,6 +212,7 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
   st = find_self_intersections(control, control_pairs);
   if (!st) return st;
   const size_t crossing_at_start = control_pairs.size();
+  std::vector<char> ever(nv, 0);
   std::vector<Vec3> rest(nv, Vec3::Zero());  // the reference's umbrella vectors L0(v)
   for (int v = 0; v < nv; ++v) {
     if (topology.rings[v].empty()) continue;
@@ -180,32 +220,6 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
     for (int u : topology.rings[v]) mean += reference[u];
     rest[v] = reference[v] - mean / static_cast<double>(topology.rings[v].size());
   }
-  std::vector<char> moved;
-  std::vector<int> moved_list;
-  std::vector<char> ever(nv, 0);
-  // The level's new pairs at control.positions, from `pairs` (the level's
-  // at `level.positions`): only the triangles whose corners moved are
-  // searched again.
-  std::vector<Vec3> set_positions;
-  auto move_set_to = [&](const std::vector<Vec3>& positions) -> Status {
-    set_positions.clear();
-    for (int v : set) set_positions.push_back(positions[v]);
-    return update_control_vertices(mr, set, set_positions);
-  };
-  auto pairs_after_move = [&](std::vector<std::array<int, 2>>& out) -> Status {
-    Status r = move_set_to(control.positions);
-    if (!r) return r;
-    now = mr.state.displaced[K];
-    moved_triangles(level.triangles, level.positions, now, moved, moved_list);
-    std::swap(level.positions, now);
-    r = refit_bvh(level, bvh);
-    if (!r) return r;
-    std::vector<std::array<int, 2>> found;
-    r = find_new_self_intersections(bvh, reference_level, found, &moved_list);
-    if (!r) return r;
-    out = pairs_after_change(pairs, moved, found);
-    return Status::success();
-  };
   for (int rings = 0; rings <= options.restore_rings && !pairs.empty();) {
     corners_under_pairs();
     for (int r = 0; r < rings; ++r) {  // grown ring by ring

@@ -208,6 +208,9 @@ TEST_CASE("fit_head: the levels near the neck cut follow the scan just below it,
   // is still 0.519 vs 0.524 mm where scanned (docs/journal.md).
   FitHeadOptions on = quick_options(), off = quick_options();
   on.whole_head_data_level = off.whole_head_data_level = -1;
+  // The band, not the whole scanned neck (fit_scanned_neck, off by
+  // default; tested below).
+  on.fit_scanned_neck = off.fit_scanned_neck = false;
   off.displacement_below_neck_cut = 0;
   FitHeadResult r_on, r_off;
   REQUIRE(fit_head(s.scan, s.generic, on, r_on).ok());
@@ -240,6 +243,63 @@ TEST_CASE("fit_head: the levels near the neck cut follow the scan just below it,
   CHECK(d_on < 0.98 * d_off);
   // Table 1's distances stay over the points above the cut.
   CHECK(r_on.fitted_points == r_off.fitted_points);
+}
+
+TEST_CASE("fit_head: a scanned neck thicker than the generic one is fitted where it is scanned") {
+  // The scan's points below the generic neck plane pushed 6 mm out along
+  // their normals: a neck the generic one does not have. Fitted from the
+  // points above the cut and a 10 mm band (fit_scanned_neck off), the
+  // neck stays near the generic one, millimetres inside those points;
+  // with it on, the neck down to the generic neck's end lies on them.
+  const Scene& s = scene();
+  const ClipPlane& generic_cut = s.generic.annotations.neck_clip;
+  PointCloud scan = s.scan;
+  REQUIRE(scan.normals.size() == scan.positions.size());
+  int pushed = 0;
+  for (size_t i = 0; i < scan.positions.size(); ++i)
+    if (!generic_cut.keeps(scan.positions[i])) scan.positions[i] += 0.006 * scan.normals[i].normalized(), ++pushed;
+  REQUIRE(pushed > 1000);
+  FitHeadOptions on = quick_options(), off = quick_options();
+  on.fit_scanned_neck = true;
+  off.fit_scanned_neck = false;
+  FitHeadResult r_on, r_off;
+  REQUIRE(fit_head(scan, s.generic, on, r_on).ok());
+  REQUIRE(fit_head(scan, s.generic, off, r_off).ok());
+  CHECK(r_on.neck_points > 1000);
+  CHECK(r_off.neck_points == 0);
+  // Table 1's points are those above the cut either way.
+  CHECK(r_on.fitted_points == r_off.fitted_points);
+  // The scan's points between the aligned cut and the aligned neck's lower
+  // end, to each fit's finest level.
+  const AffineMap& m = r_on.generic_to_head;
+  const Vec3 p0 = m.apply(generic_cut.point);
+  const Vec3 n = (m.A.inverse().transpose() * generic_cut.normal).normalized();
+  double lowest = 0;
+  for (const Vec3& v : r_on.aligned.positions) lowest = std::min(lowest, n.dot(v - p0));
+  std::vector<Vec3> neck;
+  for (const Vec3& p : scan.positions) {
+    const double h = n.dot(p - p0);
+    if (h < -0.005 && h > lowest + 0.005) neck.push_back(p);  // off the cut and the neck's end
+  }
+  REQUIRE(neck.size() > 500);
+  auto median_distance = [&](const TriMesh& mesh) {
+    const ClosestPointTree tree(mesh);
+    std::vector<double> d;
+    for (const Vec3& p : neck) d.push_back(std::sqrt(tree.closest(p).squared_distance));
+    std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+    return d[d.size() / 2];
+  };
+  const double d_on = median_distance(r_on.level_meshes.back());
+  const double d_off = median_distance(r_off.level_meshes.back());
+  INFO(neck.size() << " neck points: median distance " << 1e3 * d_on << " mm with the scanned neck fitted, "
+                   << 1e3 * d_off << " mm without");
+  CHECK(d_on < 0.001);
+  CHECK(d_off > 0.003);
+  FitHeadResult bad;
+  on.scanned_neck_max_angle_deg = -1;
+  const Status st = fit_head(scan, s.generic, on, bad);
+  CHECK(st.code == ErrorCode::InvalidInput);
+  CHECK(st.message.find("scanned_neck_max_angle_deg") != std::string::npos);
 }
 
 // The scan with a sheet over the left ear: every point within 0.6 ear
