@@ -1,6 +1,9 @@
 // likeness render: draws a mesh and/or point cloud headlessly (OSMesa) from a
 // canonical view into a PNG, with the same renderer and shaders as the web app.
 #include "command.h"
+#include "expression_head.h"
+
+#include "anim/face_shapes.h"
 
 #include "io/io.h"
 #include "mesh/geometry.h"
@@ -39,11 +42,25 @@ std::string directory_of(const std::string& path) {
 int run_render(const Args& args) {
   if (!only_known_options(kName, args,
                           {"mesh", "points", "texture", "wireframe", "edges-only", "view", "size", "out",
-                           "point-size", "supersample", "no-ao", "flat", "yaw", "pitch", "camera-out"}))
+                           "point-size", "supersample", "no-ao", "flat", "yaw", "pitch", "camera-out", "expression",
+                           "project", "level"}))
     return 2;
+  // --expression NAME: a head with the generic head's vertices (--mesh, or
+  // --project FILE, or the generic head) posed by the muscle layer and drawn
+  // at --level L (default 2) with its eyes, teeth and tongue.
+  const bool posing = args.has("expression") || args.has("project");
+  const std::string expression = args.get("expression", "neutral");
+  FaceControls face;
+  if (posing) {
+    if (Status st = face_shape(expression, face); !st) return usage_error(st.message + " (see docs/design/muscles.md)");
+    if (args.has("points") || args.has("texture")) return usage_error("--expression draws a head alone: no --points or --texture");
+    if (args.has("project") && args.has("mesh")) return usage_error("give --project or --mesh, not both");
+  }
+  int level = 2;
+  if (!args.get_int("level", 2, level, 0, 4)) return 2;
   const std::string mesh_path = args.get("mesh"), points_path = args.get("points");
   const std::string out_path = args.get("out"), texture_path = args.get("texture");
-  if (mesh_path.empty() && points_path.empty())
+  if (mesh_path.empty() && points_path.empty() && !posing)
     return usage_error("give --mesh FILE and/or --points FILE");
   if (out_path.empty()) return usage_error("--out PNG is required");
   if (args.has("texture") && texture_path.empty()) return usage_error("--texture needs a file");
@@ -66,7 +83,16 @@ int run_render(const Args& args) {
   TriMesh mesh;
   PointCloud cloud;
   Image texture;
-  if (!mesh_path.empty()) {
+  PosedHead posed;
+  if (posing) {
+    ExpressionHead head;
+    s = load_expression_head(args.get("project"), mesh_path, level, head);
+    if (s) s = pose_expression_head(head, face, level, posed);
+    if (!s) return fail(kName, s.message);
+    mesh = posed.head;
+    texture = head.skin;
+    if (texture.empty()) mesh.uvs.clear();
+  } else if (!mesh_path.empty()) {
     s = load_mesh_file(mesh_path, mesh);
     if (!s) return fail(kName, s.message);
   }
@@ -90,7 +116,7 @@ int run_render(const Args& args) {
     if (file_exists(mesh.texture_name)) tex_path = mesh.texture_name;
     else if (file_exists(beside)) tex_path = beside;
   }
-  if (!tex_path.empty()) {
+  if (!tex_path.empty() && !posing) {
     if (mesh.uvs.empty()) return fail(kName, mesh_path + ": the mesh has no uvs, so a texture cannot be applied");
     s = load_image_file(tex_path, texture);
     if (!s) return fail(kName, s.message);
@@ -131,6 +157,18 @@ int run_render(const Args& args) {
         if (st) st = r.attach_texture(h, t);
         if (!st) return with_context(st, tex_path);
       }
+    }
+    for (std::size_t i = 0; i < posed.parts.size(); ++i) {
+      DrawableHandle h;
+      Status st = r.upload_mesh(posed.parts[i], h);
+      const Vec3& c = posed.part_colors[i];
+      if (st) st = r.set_base_color(h, glm::vec3(float(c.x()), float(c.y()), float(c.z())));
+      if (st && !posed.part_textures[i].empty()) {
+        TextureHandle t;
+        st = r.upload_texture(posed.part_textures[i], t);
+        if (st) st = r.attach_texture(h, t);
+      }
+      if (!st) return st;
     }
     if (cloud.size() > 0) {
       DrawableHandle h;
@@ -192,8 +230,9 @@ int run_render(const Args& args) {
   if (own_angles) std::cout << "yaw " << yaw << ", pitch " << pitch << " degrees";
   else std::cout << to_string(view) << " view";
   if (!mesh.positions.empty()) std::cout << ", " << mesh.num_triangles() << " triangles";
+  if (posing) std::cout << ", expression " << expression;
   if (cloud.size() > 0) std::cout << ", " << cloud.size() << " points";
-  if (!texture.empty()) std::cout << ", textured by " << tex_path;
+  if (!texture.empty()) std::cout << ", textured by " << (posing ? std::string("the project's skin") : tex_path);
   std::cout << ")\n";
   return 0;
 }
@@ -201,7 +240,8 @@ int run_render(const Args& args) {
 Registrar reg({"render",
                "likeness render --mesh FILE [--points FILE] [--texture PNG] [--wireframe | --edges-only] "
                "[--view front|left|right|back|top|three-quarter] [--size N] [--point-size PX] "
-               "[--flat] [--supersample 1..4] [--no-ao] [--yaw DEG --pitch DEG] [--camera-out FILE.json] --out PNG",
+               "[--flat] [--supersample 1..4] [--no-ao] [--yaw DEG --pitch DEG] [--camera-out FILE.json] --out PNG | "
+               "likeness render --expression NAME [--project FILE | --mesh FILE] [--level L] [--view ...] --out PNG",
                "draws a mesh (with baked ambient occlusion) and/or point cloud from a canonical view into a PNG "
                "(OSMesa, same shaders as the web app); --yaw/--pitch turn the camera, --camera-out writes its matrices",
                run_render});

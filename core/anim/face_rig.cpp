@@ -269,8 +269,8 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
       m.pull = pull;
       rig.field[static_cast<std::size_t>(channel + s)] = linear_muscle_field(m, P, mask);
     };
-    add(kFrontalisInnerL, Bi, Bi + Vec3(0, 0.45 * iod, -0.012), 0.5, 0.015, 0.18, off_lids);
-    add(kFrontalisOuterL, Bo, Bo + Vec3(0, 0.45 * iod, -0.012), 0.5, 0.015, 0.18, off_lids);
+    add(kFrontalisInnerL, Bi, Bi + Vec3(0, 0.45 * iod, -0.012), 0.9, 0.025, 0.18, off_lids);
+    add(kFrontalisOuterL, Bo, Bo + Vec3(0, 0.45 * iod, -0.012), 0.9, 0.025, 0.18, off_lids);
     add(kCorrugatorL, Bi + 0.3 * (Bo - Bi), Vec3(mid_x + sg * 0.1 * iod, Bi.y() - 1.5 * place.eye_radius[s], Bi.z() - 0.01),
         0.5, 0.012, 0.25, off_lids);
     add(kZygomaticMajorL, M, M + Vec3(sg * 0.35 * iod, 0.75 * iod, -0.35 * iod), 0.45, 0.015, 0.2, everywhere);
@@ -376,23 +376,30 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
         push(rig.field[kCheekPuff], v, 0.006 * w[static_cast<std::size_t>(v)] * off_lids(v) * normals[static_cast<std::size_t>(v)]);
   }
 
-  // The jaw: its regions whole, the skin below the mouth line fading over
-  // 3 cm from them, nothing above the line or on the upper lip.
+  // The jaw: the lower lip, chin and the skin between them whole; the skin around them, the jaw
+  // line included, fading over 4.5 cm from them and over 2 cm below the
+  // mouth line (nothing above it, nothing on the upper lip), so the cheeks
+  // stretch instead of creasing at a region's edge. The mouth corners stay
+  // (both lips hold them): the share grows from 0 there over 40 % of the
+  // mouth's width.
   rig.jaw.hinge = jaw_hinge(P, ann);
-  Region jaw_set;
-  for (const char* name : {"lower_lip", "chin", "jaw"})
-    for (int v : *find_region(ann, name)) jaw_set.push_back(v);
-  const std::vector<char> on_jaw = vertex_mask(jaw_set, n);
-  // The mouth corners stay (both lips hold them): the jaw's share grows
-  // from 0 there over 40 % of the mouth's width.
+  Region jaw_core;
+  for (const char* name : {"lower_lip", "chin"})
+    for (int v : *find_region(ann, name)) jaw_core.push_back(v);
+  // ... and the skin between them (below the lower lip, above the chin).
+  for (int v = 0; v < n; ++v)
+    if (!on_upper[v] && std::abs(P[v].x() - mid_x) < 0.35 * mw && P[v].y() < lip_y(P[v].x()) - 0.002 &&
+        P[v].y() > P[lm.chin].y() - 0.01 && P[v].z() > P[lm.chin].z() - 0.02)
+      jaw_core.push_back(v);
+  const std::vector<char> on_core = vertex_mask(jaw_core, n);
   const Region corners(lm.mouth_corner.begin(), lm.mouth_corner.end());
   for (int v = 0; v < n; ++v) {
     double w = 0;
-    if (on_jaw[v] && !on_upper[v]) {
+    if (on_core[v] && !on_upper[v]) {
       w = 1;
     } else if (!on_upper[v]) {
-      const double band = smoothstep01((lip_y(P[v].x()) - P[v].y()) / 0.015);
-      w = band * smoothstep01(1.0 - nearest_distance(P[v], P, jaw_set) / 0.03);
+      const double band = smoothstep01((lip_y(P[v].x()) - P[v].y()) / 0.02);
+      w = band * smoothstep01(1.0 - nearest_distance(P[v], P, jaw_core) / 0.045);
     }
     w *= smoothstep01(nearest_distance(P[v], P, corners) / (0.4 * mw));
     if (w <= 0) continue;
