@@ -43,16 +43,27 @@ int run_render(const Args& args) {
   if (!only_known_options(kName, args,
                           {"mesh", "points", "texture", "wireframe", "edges-only", "view", "size", "out",
                            "point-size", "supersample", "no-ao", "flat", "yaw", "pitch", "camera-out", "expression",
-                           "project", "level"}))
+                           "project", "level", "columns", "face"}))
     return 2;
   // --expression NAME: a head with the generic head's vertices (--mesh, or
   // --project FILE, or the generic head) posed by the muscle layer and drawn
   // at --level L (default 2) with its eyes, teeth and tongue.
+  // Several names (comma-separated) make a sheet of --columns tiles, each
+  // --size pixels, in reading order; --face frames the face alone.
   const bool posing = args.has("expression") || args.has("project");
   const std::string expression = args.get("expression", "neutral");
-  FaceControls face;
+  std::vector<std::string> names;
+  for (std::size_t at = 0; at <= expression.size();) {
+    const std::size_t comma = std::min(expression.find(',', at), expression.size());
+    names.push_back(expression.substr(at, comma - at));
+    at = comma + 1;
+  }
+  std::vector<FaceControls> faces(names.size());
+  int columns = 0;
+  if (!args.get_int("columns", static_cast<int>(names.size()), columns, 1, 64)) return 2;
   if (posing) {
-    if (Status st = face_shape(expression, face); !st) return usage_error(st.message + " (see docs/design/muscles.md)");
+    for (std::size_t i = 0; i < names.size(); ++i)
+      if (Status st = face_shape(names[i], faces[i]); !st) return usage_error(st.message + " (see docs/design/muscles.md)");
     if (args.has("points") || args.has("texture")) return usage_error("--expression draws a head alone: no --points or --texture");
     if (args.has("project") && args.has("mesh")) return usage_error("give --project or --mesh, not both");
   }
@@ -84,10 +95,10 @@ int run_render(const Args& args) {
   PointCloud cloud;
   Image texture;
   PosedHead posed;
+  ExpressionHead head;
   if (posing) {
-    ExpressionHead head;
     s = load_expression_head(args.get("project"), mesh_path, level, head);
-    if (s) s = pose_expression_head(head, face, level, posed);
+    if (s) s = pose_expression_head(head, FaceControls{}, level, posed);
     if (!s) return fail(kName, s.message);
     mesh = posed.head;
     texture = head.skin;
@@ -181,6 +192,10 @@ int run_render(const Args& args) {
   // Frame what is drawn (vertices and points), not its box: tighter on round heads.
   std::vector<Vec3> framed = mesh.positions;
   framed.insert(framed.end(), cloud.positions.begin(), cloud.positions.end());
+  if (posing && args.has("face")) {  // the rig's reach at rest: brows to chin
+    framed.clear();
+    for (int v : head.rig.moved) framed.push_back(head.rig.rest[static_cast<std::size_t>(v)]);
+  }
   // --yaw/--pitch: a camera at those angles (degrees, OrbitCamera's) instead
   // of the named view's, framed the same way (e.g. known cameras for
   // detecting landmarks on the generic head, scripts/make-landmark-map).
@@ -202,7 +217,27 @@ int run_render(const Args& args) {
   options.width = options.height = size;
   options.supersample = supersample;
   Image image;
-  s = render_offscreen(setup, camera_for, options, image);
+  if (posing) {
+    // Each name posed and drawn (the occlusion of the rest pose kept), the
+    // tiles laid out in rows.
+    const int rows = (static_cast<int>(names.size()) + columns - 1) / columns;
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      s = pose_expression_head(head, faces[i], level, posed);
+      if (!s) return fail(kName, s.message);
+      const std::vector<Vec2> uvs = mesh.uvs;
+      mesh = posed.head;
+      mesh.uvs = uvs;
+      Image tile;
+      s = render_offscreen(setup, camera_for, options, tile);
+      if (!s) return fail(kName, s.message);
+      if (image.empty()) image = Image::make(tile.width * std::min(columns, static_cast<int>(names.size())), tile.height * rows, tile.channels, 255);
+      const int x0 = static_cast<int>(i) % columns * tile.width, y0 = static_cast<int>(i) / columns * tile.height;
+      for (int y = 0; y < tile.height; ++y)
+        std::copy(tile.at(0, y), tile.at(0, y) + static_cast<std::ptrdiff_t>(tile.width) * tile.channels, image.at(x0, y0 + y));
+    }
+  } else {
+    s = render_offscreen(setup, camera_for, options, image);
+  }
   if (!s) return fail(kName, s.message);
   s = save_png_file(out_path, image);
   if (!s) return fail(kName, s.message);
@@ -241,7 +276,7 @@ Registrar reg({"render",
                "likeness render --mesh FILE [--points FILE] [--texture PNG] [--wireframe | --edges-only] "
                "[--view front|left|right|back|top|three-quarter] [--size N] [--point-size PX] "
                "[--flat] [--supersample 1..4] [--no-ao] [--yaw DEG --pitch DEG] [--camera-out FILE.json] --out PNG | "
-               "likeness render --expression NAME [--project FILE | --mesh FILE] [--level L] [--view ...] --out PNG",
+               "likeness render --expression NAME[,NAME...] [--columns C] [--face] [--project FILE | --mesh FILE] [--level L] [--view ...] --out PNG",
                "draws a mesh (with baked ambient occlusion) and/or point cloud from a canonical view into a PNG "
                "(OSMesa, same shaders as the web app); --yaw/--pitch turn the camera, --camera-out writes its matrices",
                run_render});

@@ -132,10 +132,17 @@ Status pose_multires(MultiresMesh& mesh, const FaceRig& rig, const FaceControls&
                      UpdateFootprint* footprint) {
   if (mesh.control.size() != rig.rest.size())
     return Status::error(ErrorCode::InvalidInput, "the head's control mesh is not the rig's");
+  // Only the vertices whose position changes: a blink after a smile
+  // recomputes the lids' support, not the mouth's.
   const std::vector<Vec3> P = pose_face(rig, controls);
-  std::vector<Vec3> target(rig.moved.size());
-  for (std::size_t i = 0; i < rig.moved.size(); ++i) target[i] = P[static_cast<std::size_t>(rig.moved[i])];
-  return update_control_vertices(mesh, rig.moved, target, footprint, max_level);
+  std::vector<int> moved;
+  std::vector<Vec3> target;
+  for (int v : rig.moved)
+    if (P[static_cast<std::size_t>(v)] != mesh.control[static_cast<std::size_t>(v)]) {
+      moved.push_back(v);
+      target.push_back(P[static_cast<std::size_t>(v)]);
+    }
+  return update_control_vertices(mesh, moved, target, footprint, max_level);
 }
 
 }  // namespace lk
@@ -170,9 +177,19 @@ std::vector<Vec3> pose_tongue(const FaceRig& rig, const std::vector<Vec3>& tongu
       z0 = std::min(z0, p.z());
       z1 = std::max(z1, p.z());
     }
+    // Far enough that the tip passes the lower lip's front by 12 mm, and
+    // lifted so that the tip's underside rides on the lower lip (in the
+    // jaw's frame: the jaw's turn below carries both).
+    const Vec3 lip = rig.rest[static_cast<std::size_t>(rig.landmarks.lower_lip_mid)];
+    const double travel = std::max(0.02, lip.z() + 0.012 - z1);
+    auto share = [&](const Vec3& p) { return z1 > z0 ? (p.z() - z0) / (z1 - z0) : 1.0; };
+    double underside = 1e300;
+    for (const Vec3& p : tongue)
+      if (share(p) >= 0.8) underside = std::min(underside, p.y());
+    const double lift = std::max(0.0, lip.y() + 0.0005 - underside);
     for (Vec3& p : out) {
-      const double w = z1 > z0 ? (p.z() - z0) / (z1 - z0) : 1.0;
-      p += c[kTongueOut] * w * w * Vec3(0, -0.003, 0.02);
+      const double w = share(p);
+      p += c[kTongueOut] * w * w * Vec3(0, lift, travel);
     }
   }
   return pose_lower_teeth(rig, out, c);

@@ -13,9 +13,10 @@ namespace lk {
 // the eyeball), then the lips' contact. All channels zero: rig.rest exactly.
 std::vector<Vec3> pose_face(const FaceRig& rig, const FaceControls& controls);
 
-// Poses a multiresolution head whose level 0 is the rig's mesh: rig.moved
-// go to pose_face's positions and levels up to max_level (-1: all) are
-// recomputed inside their support only.
+// Poses a multiresolution head whose level 0 is the rig's mesh: the
+// vertices of rig.moved whose position changes go to pose_face's positions
+// and levels up to max_level (-1: all) are recomputed inside their support
+// only.
 Status pose_multires(MultiresMesh& mesh, const FaceRig& rig, const FaceControls& controls, int max_level = -1,
                      UpdateFootprint* footprint = nullptr);
 
@@ -33,8 +34,8 @@ namespace lk {
 // Parts that ride on the face (head frame positions in, posed positions
 // out): an eyeball turned about its centre by eye_rotation; the lower teeth
 // by the jaw's motion; the tongue by the jaw's motion after tongue_out has
-// pushed it forward (its tip, the front along +z, by up to 2 cm; its root
-// stays).
+// pushed it forward (its tip, the front along +z, until it passes the
+// lower lip's front by 12 mm, at least 2 cm; its root stays).
 std::vector<Vec3> pose_eye(const FaceRig& rig, const std::vector<Vec3>& eye, const FaceControls& controls, int eye_index);
 std::vector<Vec3> pose_lower_teeth(const FaceRig& rig, const std::vector<Vec3>& teeth, const FaceControls& controls);
 std::vector<Vec3> pose_tongue(const FaceRig& rig, const std::vector<Vec3>& tongue, const FaceControls& controls);

@@ -279,7 +279,7 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
     const Vec3 ll_ins = up_side + Vec3(0, 0.004, 0);
     add(kLevatorLabiiL, ll_ins, ll_ins + Vec3(sg * 0.05 * iod, 0.7 * iod, -0.15 * iod), 0.25, 0.012, 0.12, upper_side);
     const Vec3 NW = P[lm.nose_wing[s]];
-    add(kLevatorNasiL, NW, NW + Vec3(-sg * 0.05 * iod, 0.55 * iod, -0.1 * iod), 0.4, 0.012, 0.12, upper_side);
+    add(kLevatorNasiL, NW, NW + Vec3(-sg * 0.05 * iod, 0.55 * iod, -0.1 * iod), 0.4, 0.012, 0.18, upper_side);
     add(kDepressorAnguliL, M, M + Vec3(sg * 0.1 * iod, -0.55 * iod, -0.1 * iod), 0.45, 0.012, 0.2, everywhere);
     const Vec3 dl = low_side + Vec3(0, -0.004, 0);
     add(kDepressorLabiiL, dl, dl + Vec3(sg * 0.05 * iod, -0.5 * iod, -0.1 * iod), 0.35, 0.01, 0.15, lower_side);
@@ -327,6 +327,8 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
   oris.center = mc;
   oris.a = 0.75 * mw;
   oris.b = 0.5 * mw;
+  oris.squeeze = 0.45;
+  oris.protrude = 0.008;
   rig.field[kOrisPucker] = sphincter_field(oris, P, everywhere);
 
   // Skin actions.

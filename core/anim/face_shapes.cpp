@@ -79,7 +79,7 @@ const std::vector<std::pair<std::string, Recipe>>& recipes() {
     t.push_back({"cheekPuff", {{kCheekPuff, 1.0}}});
     for (int s = 0; s < 2; ++s) t.push_back({std::string("cheekSquint") + (s ? "Right" : "Left"), {{kOculiL + s, 1.0}}});
     for (int s = 0; s < 2; ++s) t.push_back({std::string("noseSneer") + (s ? "Right" : "Left"), {{kLevatorNasiL + s, 1.0}}});
-    t.push_back({"tongueOut", {{kTongueOut, 1.0}, {kJawOpen, 0.3}}});
+    t.push_back({"tongueOut", {{kTongueOut, 1.0}, {kJawOpen, 0.45}}});
     // Visemes (OVRLipSync's 15).
     t.push_back({"viseme_sil", {}});
     t.push_back({"viseme_PP", both(kPressL, 1.0) + Recipe{{kRollUpper, 0.3}, {kRollLower, 0.3}}});

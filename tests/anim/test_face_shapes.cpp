@@ -75,8 +75,9 @@ struct Measure {
   bool still(int v) const { return d(v).norm() < 1e-9; }
 };
 
-// The frontmost point of the tongue moves forward by this (mm).
-double tongue_tip_forward(const FaceRig& rig, const FaceControls& c) {
+// The frontmost point of the tongue moves forward by this (mm); past: how
+// far in front of the posed lower lip's middle it ends (mm).
+double tongue_tip_forward(const FaceRig& rig, const FaceControls& c, double* past = nullptr) {
   ComponentPlacement place;
   GenericHead fitted{TriMesh{}, test::generic_head().annotations};
   fitted.mesh.positions = rig.rest;
@@ -89,6 +90,7 @@ double tongue_tip_forward(const FaceRig& rig, const FaceControls& c) {
     before = std::max(before, tongue.positions[i].z());
     after = std::max(after, posed[i].z());
   }
+  if (past) *past = 1000.0 * (after - pose_face(rig, c)[static_cast<std::size_t>(rig.landmarks.lower_lip_mid)].z());
   return 1000.0 * (after - before);
 }
 
@@ -284,9 +286,11 @@ std::map<std::string, Check> checks() {
     CHECK(b.x() < -0.5);
   };
   c["tongueOut"] = [](const Measure& m) {
-    const double tip = tongue_tip_forward(m.rig, m.controls);
-    INFO("tongue tip forward " << tip << " mm, mouth gap " << m.gap());
+    double past = 0;
+    const double tip = tongue_tip_forward(m.rig, m.controls, &past);
+    INFO("tongue tip forward " << tip << " mm, " << past << " mm past the lower lip, mouth gap " << m.gap());
     CHECK(tip > 10.0);
+    CHECK(past > 5.0);
     CHECK(m.gap() > 3.0);
   };
   // Visemes.
