@@ -261,7 +261,7 @@ int run_render(const Args& args) {
     f << j.dump(1) << "\n";
     if (!f) return fail(kName, camera_out + ": cannot write");
   }
-  std::cout << "wrote " << out_path << " (" << size << "x" << size << ", ";
+  std::cout << "wrote " << out_path << " (" << image.width << "x" << image.height << ", ";
   if (own_angles) std::cout << "yaw " << yaw << ", pitch " << pitch << " degrees";
   else std::cout << to_string(view) << " view";
   if (!mesh.positions.empty()) std::cout << ", " << mesh.num_triangles() << " triangles";
