@@ -261,13 +261,7 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
     const Vec3 up_side = P[lm.upper_lip_side[s]], low_side = P[lm.lower_lip_side[s]];
     auto add = [&](int channel, const Vec3& ins, const Vec3& att, double cone, double reach, double pull,
                    const std::function<double(int)>& mask) {
-      LinearMuscle m;
-      m.insertion = ins;
-      m.attachment = att;
-      m.cone = cone;
-      m.reach = reach;
-      m.pull = pull;
-      rig.field[static_cast<std::size_t>(channel + s)] = linear_muscle_field(m, P, mask);
+      rig.field[static_cast<std::size_t>(channel + s)] = linear_muscle_field(LinearMuscle{att, ins, cone, reach, pull}, P, mask);
     };
     add(kFrontalisInnerL, Bi, Bi + Vec3(0, 0.45 * iod, -0.012), 0.9, 0.025, 0.18, off_lids);
     add(kFrontalisOuterL, Bo, Bo + Vec3(0, 0.45 * iod, -0.012), 0.9, 0.025, 0.18, off_lids);
@@ -315,13 +309,7 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
   }
   {
     const Vec3 g = 0.5 * (P[lm.brow_inner[0]] + P[lm.brow_inner[1]]);
-    LinearMuscle pro;
-    pro.insertion = g;
-    pro.attachment = g + Vec3(0, -0.35 * iod, -0.008);
-    pro.cone = 0.5;
-    pro.reach = 0.012;
-    pro.pull = 0.2;
-    rig.field[kProcerus] = linear_muscle_field(pro, P, off_lids);
+    rig.field[kProcerus] = linear_muscle_field(LinearMuscle{g + Vec3(0, -0.35 * iod, -0.008), g, 0.5, 0.012, 0.2}, P, off_lids);
   }
   Sphincter oris;
   oris.center = mc;

@@ -96,6 +96,17 @@ double tongue_tip_forward(const FaceRig& rig, const FaceControls& c, double* pas
 
 using Check = std::function<void(const Measure&)>;
 
+// One side's landmark of a pair moves up (dy > 0) or down (dy < 0) by over
+// |dy| mm, the other side's by under `other` mm in all.
+void pair_moves(const Measure& m, std::array<int, 2> FaceLandmarks::*pair, const char* what, int side, double dy,
+                double other) {
+  const Vec3 a = m.d((m.lm().*pair)[static_cast<std::size_t>(side)]);
+  const Vec3 b = m.d((m.lm().*pair)[static_cast<std::size_t>(1 - side)]);
+  INFO(what << " (mm) " << a.transpose() << ", other side " << b.transpose());
+  CHECK((dy > 0 ? a.y() : -a.y()) > std::abs(dy));
+  CHECK(b.norm() < other);
+}
+
 Check corner(int side, double up, double out, double back) {
   return [=](const Measure& m) {
     const double sg = side == 0 ? 1.0 : -1.0;
@@ -187,34 +198,12 @@ std::map<std::string, Check> checks() {
       CHECK(b < 0.5);
     };
     c["browDown" + side] = [e, out](const Measure& m) {
-      const Vec3 a = m.d(m.lm().brow_inner[static_cast<std::size_t>(e)]);
-      const Vec3 b = m.d(m.lm().brow_inner[static_cast<std::size_t>(1 - e)]);
-      INFO("inner brow (mm) " << a.transpose() << ", other " << b.transpose());
-      CHECK(a.y() < -2.0);
-      CHECK(out * a.x() < -0.5);  // towards the nose
-      CHECK(b.norm() < 0.5);
+      pair_moves(m, &FaceLandmarks::brow_inner, "inner brow", e, -2.0, 0.5);
+      CHECK(out * m.d(m.lm().brow_inner[static_cast<std::size_t>(e)]).x() < -0.5);  // towards the nose
     };
-    c["browOuterUp" + side] = [e](const Measure& m) {
-      const Vec3 a = m.d(m.lm().brow_outer[static_cast<std::size_t>(e)]);
-      const Vec3 b = m.d(m.lm().brow_outer[static_cast<std::size_t>(1 - e)]);
-      INFO("outer brow (mm) " << a.transpose() << ", other " << b.transpose());
-      CHECK(a.y() > 3.0);
-      CHECK(b.norm() < 0.5);
-    };
-    c["cheekSquint" + side] = [e](const Measure& m) {
-      const Vec3 a = m.d(m.lm().cheek[static_cast<std::size_t>(e)]);
-      const Vec3 b = m.d(m.lm().cheek[static_cast<std::size_t>(1 - e)]);
-      INFO("cheek (mm) " << a.transpose() << ", other " << b.transpose());
-      CHECK(a.y() > 1.5);
-      CHECK(b.norm() < 0.3);
-    };
-    c["noseSneer" + side] = [e](const Measure& m) {
-      const Vec3 a = m.d(m.lm().nose_wing[static_cast<std::size_t>(e)]);
-      const Vec3 b = m.d(m.lm().nose_wing[static_cast<std::size_t>(1 - e)]);
-      INFO("nose wing (mm) " << a.transpose() << ", other " << b.transpose());
-      CHECK(a.y() > 2.0);
-      CHECK(b.y() < 1.0);
-    };
+    c["browOuterUp" + side] = [e](const Measure& m) { pair_moves(m, &FaceLandmarks::brow_outer, "outer brow", e, 3.0, 0.5); };
+    c["cheekSquint" + side] = [e](const Measure& m) { pair_moves(m, &FaceLandmarks::cheek, "cheek", e, 1.5, 0.3); };
+    c["noseSneer" + side] = [e](const Measure& m) { pair_moves(m, &FaceLandmarks::nose_wing, "nose wing", e, 2.0, 1.0); };
   }
   auto chin = [](const Measure& m) { return m.d(m.lm().chin); };
   c["jawOpen"] = [chin](const Measure& m) {
