@@ -43,7 +43,7 @@ int textured_material(GltfBuilder& w, const std::string& name, const Image& text
 void add_child(tinygltf::Model& model, int parent, int child) { model.nodes[parent].children.push_back(child); }
 
 // The offsets of a part's vertices (head frame) under each baked shape, as
-// morph targets: only the shapes that move the part (by a micrometre or
+// morph targets: only the shapes that move the part (by 10 micrometres or
 // more), so each part carries the names that concern it.
 std::vector<MorphTarget> part_targets(const std::vector<BakedShape>& shapes, const std::vector<Vec3>& rest,
                                       const std::function<std::vector<Vec3>(const FaceControls&)>& pose) {
@@ -57,7 +57,7 @@ std::vector<MorphTarget> part_targets(const std::vector<BakedShape>& shapes, con
       t.delta[i] -= rest[i];
       largest = std::max(largest, t.delta[i].cwiseAbs().maxCoeff());
     }
-    if (largest >= 1e-6) out.push_back(std::move(t));
+    if (largest >= 1e-5) out.push_back(std::move(t));
   }
   return out;
 }

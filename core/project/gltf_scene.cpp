@@ -143,11 +143,12 @@ int GltfBuilder::morph_target(const std::vector<Vec3>& delta) {
   const int n = static_cast<int>(delta.size());
   std::vector<double> lo, hi;
   std::vector<float> d = floats(delta, lo, hi);  // lo, hi: recomputed below
-  // Offsets under a micrometre in every axis are dropped (zero).
+  // Offsets under 10 micrometres in every axis are dropped (zero): a tenth
+  // of a scan's noise, and a tail of every falloff that would cost bytes.
   std::vector<std::uint32_t> moved;
   for (int i = 0; i < n; ++i) {
     bool keep = false;
-    for (int k = 0; k < 3; ++k) keep = keep || std::abs(d[3 * i + k]) >= 1e-6f;
+    for (int k = 0; k < 3; ++k) keep = keep || std::abs(d[3 * i + k]) >= 1e-5f;
     if (keep) moved.push_back(static_cast<std::uint32_t>(i));
     else d[3 * i] = d[3 * i + 1] = d[3 * i + 2] = 0.0f;
   }

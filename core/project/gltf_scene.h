@@ -39,7 +39,7 @@ class GltfBuilder {
   // or empty; glTF's v runs down the image, so v is flipped), triangles, and
   // morph targets (position offsets; weights 0; names in extras.targetNames,
   // the convention three.js and avatar tools read). A target is written
-  // sparse (only the vertices it moves, by more than 1 micrometre in some
+  // sparse (only the vertices it moves, by 10 micrometres or more in some
   // axis) when that is smaller than dense.
   int mesh(const std::string& name, const std::vector<Vec3>& positions, const std::vector<Vec3>& normals,
            const std::vector<Vec2>& uvs, const std::vector<Tri>& triangles, int material,

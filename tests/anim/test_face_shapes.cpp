@@ -394,6 +394,26 @@ void check_no_crossing(const FaceRig& rig, const std::vector<Vec3>& P, const std
   }
 }
 
+// The lips stay in front of the teeth: every lip-line column in front of
+// the teeth's frontmost point (the upper lip against the teeth at rest, the
+// lower lip against the teeth moved by the jaw).
+void check_lips_before_teeth(const FaceRig& rig, const FaceControls& c, const std::vector<Vec3>& P, const std::string& what) {
+  ComponentPlacement place;
+  GenericHead fitted{TriMesh{}, test::generic_head().annotations};
+  fitted.mesh.positions = rig.rest;
+  REQUIRE(place_components(fitted, test::generic_head(), place).ok());
+  const TriMesh teeth = build_placed_components(place).teeth;
+  const std::vector<Vec3> moved = pose_lower_teeth(rig, teeth.positions, c);
+  double front_rest = -1e9, front_moved = -1e9;
+  for (std::size_t i = 0; i < teeth.positions.size(); ++i) {
+    front_rest = std::max(front_rest, teeth.positions[i].z());
+    front_moved = std::max(front_moved, moved[i].z());
+  }
+  INFO(what << ": teeth front " << front_rest << " / " << front_moved);
+  for (int v : rig.landmarks.upper_lip_line) CHECK(P[v].z() > front_rest);
+  for (int v : rig.landmarks.lower_lip_line) CHECK(P[v].z() > front_moved);
+}
+
 }  // namespace
 
 TEST_CASE("face shapes: Apple's 52 ARKit names, the 15 visemes and 10 expressions, each with a recipe") {
@@ -450,7 +470,7 @@ TEST_CASE("face rig: every shape does what its name says, measured on the generi
   }
 }
 
-TEST_CASE("face rig: no triangle turns over and no lip or lid crosses, every shape, synthetic people 1-5") {
+TEST_CASE("face rig: no triangle turns over, no lip or lid crosses, the lips stay before the teeth, every shape, synthetic people 1-5") {
   const auto table = checks();
   for (std::uint32_t seed = 0; seed <= 5; ++seed) {
     const GenericHead head = seed == 0 ? test::generic_head() : test::make_test_head(seed);
@@ -461,6 +481,7 @@ TEST_CASE("face rig: no triangle turns over and no lip or lid crosses, every sha
       const Measure m(rig, name);
       CHECK(count_turned_triangles(head.mesh.triangles, m.P, rig.rest) == 0);
       check_no_crossing(rig, m.P, what);
+      check_lips_before_teeth(rig, m.controls, m.P, what);
       if (seed > 0) table.at(name)(m);  // the same meaning on each person
     }
   }

@@ -625,7 +625,7 @@ TEST_CASE("GLB export: the head at its level with uvs and skin, the parts under 
     REQUIRE(d.size() == baked[t].level.size());
     double worst = 0;
     for (size_t i = 0; i < d.size(); ++i) worst = std::max(worst, (d[i] - baked[t].level[i]).cwiseAbs().maxCoeff());
-    CHECK(worst < 1.5e-6);  // float32, and offsets under a micrometre dropped
+    CHECK(worst < 1.1e-5);  // float32, and offsets under 10 micrometres dropped
   }
   CHECK(sparse > 40);  // most shapes move a part of the face only
   const std::vector<int>& chin = generic.annotations.regions.at("chin");
