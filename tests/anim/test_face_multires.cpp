@@ -2,6 +2,7 @@
 // (jeong2002 Sec. 6): bit-identical to a full recompute at every pose, back
 // at rest exactly; and the shapes baked per head as offsets on a level.
 #include "anim/bake.h"
+#include "anim/expression.h"
 #include "anim/face_pose.h"
 #include "pipeline/head_creases.h"
 #include "test_scan.h"
@@ -95,4 +96,21 @@ TEST_CASE("baked shapes: offsets of the control mesh and of the level, the head 
   CHECK(few.size() == 2);
   CHECK(few[0].level.empty());
   CHECK(bake_face_shapes(s.rig, nullptr, 0, {"grin"}, few).code == ErrorCode::InvalidInput);
+}
+
+TEST_CASE("set_expression: weights per name pose the head as their summed recipes do") {
+  Scene s;
+  MultiresMesh a = s.rest, b = s.rest;
+  REQUIRE(set_expression(a, s.rig, {{"smile", 0.5}, {"eyeBlinkLeft", 1.0}}).ok());
+  FaceControls smile = named("smile"), blink = named("eyeBlinkLeft"), sum;
+  for (int c = 0; c < kChannelCount; ++c) sum[c] = 0.5 * smile[c] + blink[c];
+  REQUIRE(pose_multires(b, s.rig, sum).ok());
+  CHECK(a.state.displaced.back() == b.state.displaced.back());
+  CHECK(a.state.displaced.back() != s.rest.state.displaced.back());
+  // An unknown name changes nothing.
+  const std::vector<Vec3> before = a.state.displaced.back();
+  CHECK(set_expression(a, s.rig, {{"smile", 1.0}, {"smirk", 1.0}}).code == ErrorCode::InvalidInput);
+  CHECK(a.state.displaced.back() == before);
+  REQUIRE(set_expression(a, s.rig, {}).ok());
+  CHECK(a.state.displaced.back() == s.rest.state.displaced.back());
 }
