@@ -97,13 +97,18 @@ std::vector<Vec3> pose_face(const FaceRig& rig, const FaceControls& controls) {
     const double yaw = 0.2 * c[kGazeYawL + eye] * kGazeAngle;
     if (upper == 0 && lower == 0 && yaw == 0) continue;
     const EyeLids& L = rig.lids[static_cast<std::size_t>(eye)];
+    // How far the lids have closed: the rims' radii meet as they do.
+    const double closed = std::clamp((upper + lower) / 0.96, 0.0, 1.0);
     for (std::size_t i = 0; i < L.index.size(); ++i) {
       Vec3& p = P[static_cast<std::size_t>(L.index[i])];
       const double w = L.weight[i];
       // The upper lid turns down (negative about x), the lower lid up.
       const double a = L.upper[i] ? -w * L.gap[i] * upper : w * L.gap[i] * lower;
       const Vec3 d = p - L.center;
-      p += turn_y(w * yaw) * turn_x(a) * d - d;
+      Vec3 e = turn_y(w * yaw) * turn_x(a) * d;
+      const double r = d.norm();
+      if (closed > 0 && r > 0) e *= (r + w * closed * L.radial[i]) / r;
+      p += e - d;
     }
   }
   // The lips' contact: where a column's lower lip rose above its upper lip,

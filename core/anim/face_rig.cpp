@@ -73,7 +73,7 @@ Status lid_rig(const std::vector<Vec3>& P, const EyeSocket& socket, const Vec3& 
   lids.center = center;
   lids.radius = radius;
   auto angle = [&](const Vec3& p) { return std::atan2(p.y() - center.y(), p.z() - center.z()); };
-  std::vector<std::pair<double, double>> gap, meet, rim_r;
+  std::vector<std::pair<double, double>> gap, meet, rim_r, upper_r, lower_r;
   for (std::size_t k = 0; k < m; ++k) {
     const Vec3 &u = P[upper[k]], &l = P[lower[k]];
     const double x = 0.5 * (u.x() + l.x()), g = angle(u) - angle(l);
@@ -82,8 +82,11 @@ Status lid_rig(const std::vector<Vec3>& P, const EyeSocket& socket, const Vec3& 
     gap.emplace_back(x, corner ? 0.0 : g);
     meet.emplace_back(x, angle(l) + 0.25 * g);
     rim_r.emplace_back(x, 0.5 * ((u - center).norm() + (l - center).norm()));
+    upper_r.emplace_back(x, (u - center).norm());
+    lower_r.emplace_back(x, (l - center).norm());
   }
   const Profile gap_at = Profile::through(gap), meet_at = Profile::through(meet), rim_at = Profile::through(rim_r);
+  const Profile upper_at = Profile::through(upper_r), lower_at = Profile::through(lower_r);
   const double x0 = gap_at.x.front(), x1 = gap_at.x.back();
   for (std::size_t v = 0; v < P.size(); ++v) {
     const Vec3 d = P[v] - center;
@@ -95,7 +98,11 @@ Status lid_rig(const std::vector<Vec3>& P, const EyeSocket& socket, const Vec3& 
     lids.index.push_back(static_cast<int>(v));
     lids.weight.push_back(w);
     lids.gap.push_back(g);
-    lids.upper.push_back(angle(P[v]) > meet_at(P[v].x()) ? 1 : 0);
+    const bool up = angle(P[v]) > meet_at(P[v].x());
+    lids.upper.push_back(up ? 1 : 0);
+    // Closed, both rims meet at the column's mean radius (a scan's lids
+    // need not sit at one distance from the eyeball's centre).
+    lids.radial.push_back(rr - (up ? upper_at(P[v].x()) : lower_at(P[v].x())));
   }
   return Status::success();
 }
@@ -181,16 +188,19 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
   const Region& upper_lip = *find_region(ann, "upper_lip");
   const Region& lower_lip = *find_region(ann, "lower_lip");
   const Region& chin = *find_region(ann, "chin");
-  auto front_mid = [&](const Region& r, double sign) {  // the region's extreme y near the midline, in front
+  // The region's extreme y near the midline, in front (within `depth` of the mouth's front).
+  auto front_mid = [&](const Region& r, double sign, double depth) {
     Region near;
     for (int v : r)
-      if (std::abs(P[v].x() - mid_x) < 0.25 * mw && P[v].z() > mc.z() - 0.003) near.push_back(v);
+      if (std::abs(P[v].x() - mid_x) < 0.25 * mw && P[v].z() > mc.z() - depth) near.push_back(v);
     if (near.empty()) near = r;
     return argmin(near, [&](int v) { return -sign * P[v].y(); });
   };
-  lm.upper_lip_top = front_mid(upper_lip, +1);
-  lm.lower_lip_bottom = front_mid(lower_lip, -1);
-  lm.chin = front_mid(chin, -1);
+  lm.upper_lip_top = front_mid(upper_lip, +1, 0.003);
+  lm.lower_lip_bottom = front_mid(lower_lip, -1, 0.003);
+  // The chin's lowest point still facing forward: its region wraps under
+  // the jaw, so the lowest of all would be under the chin.
+  lm.chin = front_mid(chin, -1, 0.025);
 
   // Eyes where the parts go.
   GenericHead fitted{control, ann};
@@ -288,23 +298,25 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
       for (int v = 0; v < n; ++v) {
         const Vec3 d = P[v] - mt;
         const double rho = std::hypot(d.x() / a, d.y() / b);
-        if (rho >= 1 || d.z() < -0.015) continue;
+        if (rho >= 1 || d.z() < -0.03) continue;
         push(f, v, lower_side(v) * std::cos(1.5707963267948966 * rho) * Vec3(0, 0.004, 0.002));
       }
     }
     add(kBuccinatorL, M, M + Vec3(sg * 0.15 * iod, 0, -0.5 * iod), 0.4, 0.01, 0.12, everywhere);
     add(kRisoriusL, M, M + Vec3(sg * 0.7 * iod, -0.05 * iod, -0.3 * iod), 0.35, 0.01, 0.15, everywhere);
 
-    // Orbicularis oculi: a ring about the eye pulling the skin towards it
-    // (most at half its radius), the lids themselves left to the lid rig.
+    // Orbicularis oculi: a ring about the eye (from 1.8 to 3.8 eye radii)
+    // pulling the skin towards it, by up to 3.5 mm at its middle; the lids
+    // and their fading skin inside it are left to the lid rig.
     const Vec3 E = place.eye_center[s];
-    const double ring = 3.6 * place.eye_radius[s];
+    const double r_in = 1.8 * place.eye_radius[s], r_out = 3.8 * place.eye_radius[s];
     SparseField& oc = rig.field[static_cast<std::size_t>(kOculiL + s)];
     for (int v = 0; v < n; ++v) {
       const Vec3 d = P[v] - E;
-      const double rho = std::hypot(d.x(), d.y()) / ring;
-      if (rho >= 1.0 || d.z() < 0) continue;
-      push(oc, v, -0.12 * std::sin(3.14159265358979323846 * rho) * off_lids(v) * Vec3(d.x(), d.y(), 0));
+      const double r = std::hypot(d.x(), d.y());
+      if (r <= r_in || r >= r_out || d.z() < 0) continue;
+      const double t = (r - r_in) / (r_out - r_in);
+      push(oc, v, -0.0035 * std::sin(3.14159265358979323846 * t) * off_lids(v) * Vec3(d.x() / r, d.y() / r, 0));
     }
   }
   {

@@ -44,6 +44,7 @@ struct EyeLids {
   std::vector<int> index;
   std::vector<double> weight;  // 1 on the rim and the socket's first ring, falling to 0 outwards
   std::vector<double> gap;     // the column's rest gap angle (0 at the corners)
+  std::vector<double> radial;  // the column's mean rim radius minus this lid's rim radius (metres)
   std::vector<char> upper;     // 1: upper lid, 0: lower lid
 };
 

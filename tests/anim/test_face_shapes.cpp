@@ -7,6 +7,9 @@
 #include "anim/face_rig.h"
 #include "anim/face_shapes.h"
 #include "components/components.h"
+#include "io/io.h"
+#include "pipeline/fit_head.h"
+#include "test_data.h"
 #include "mesh/geometry.h"
 #include "test_scan.h"
 
@@ -497,4 +500,35 @@ TEST_CASE("face rig: bad input gets a message") {
   TriMesh nan = test::generic_head().mesh;
   nan.positions[5].x() = std::nan("");
   CHECK(make_face_rig(nan, test::generic_head(), rig).code == ErrorCode::InvalidInput);
+}
+
+TEST_CASE("face rig: every shape on real scans' fits (James, Fran): meaning, no fold, no crossing") {
+  LK_REQUIRE_SHARED("head_scans");
+  const auto table = checks();
+  for (const char* rel : {"head_scans/james_menpo3d/james.obj", "head_scans/fran_cyberware/fran_cut.vtk"}) {
+    const std::string path = test::shared_data_dir() + "/" + rel;
+    if (!test::exists(path)) {
+      WARN("skipped: ../shared/data/" << rel << " is absent");
+      continue;
+    }
+    PointCloud scan;
+    REQUIRE(load_point_cloud_file(path, scan).ok());
+    FitHeadOptions options;
+    options.levels = 1;  // the rig reads the control mesh only
+    FitHeadResult fit;
+    const Status st = fit_head(scan, test::generic_head(), options, fit);
+    INFO(rel << ": " << st.message);
+    REQUIRE(st.ok());
+    GenericHead head{fit.control, test::generic_head().annotations};
+    const FaceRig rig = rig_of(head);
+    for (const std::string& name : face_shape_names()) {
+      const std::string what = std::string(rel) + ", " + name;
+      INFO(what);
+      const Measure m(rig, name);
+      CHECK(count_turned_triangles(head.mesh.triangles, m.P, rig.rest) == 0);
+      check_no_crossing(rig, m.P, what);
+      check_lips_before_teeth(rig, m.controls, m.P, what);
+      table.at(name)(m);
+    }
+  }
 }
