@@ -51,7 +51,8 @@ struct FaceControls {
 };
 
 // The jaw's turn at full opening (radians), its glide forward per unit of
-// opening, its sideways and forward travel (metres), the gaze's full turn.
+// opening, its sideways and forward travel (metres on the generic head's
+// scale; FaceRig::scale), the gaze's full turn.
 constexpr double kJawOpenAngle = 0.22;
 constexpr double kJawOpenGlide = 0.0015;
 constexpr double kJawSideShift = 0.006;

@@ -61,14 +61,14 @@ Mat3 eye_rotation(const FaceControls& controls, int eye) {
   return turn_y(c[kGazeYawL + eye] * kGazeAngle) * turn_x(c[kGazePitchL + eye] * kGazeAngle);
 }
 
-void jaw_motion(const FaceRig&, const FaceControls& controls, Mat3& R, Vec3& t) {
+void jaw_motion(const FaceRig& rig, const FaceControls& controls, Mat3& R, Vec3& t) {
   FaceControls c = controls;
   c.clamp();
   const double open = c[kJawOpen], side = c[kJawSide], forward = c[kJawForward];
   // Opening turns the chin down (a negative turn about x) and glides the
   // jaw forward a little, as the condyles do.
   R = turn_y(0.05 * side) * turn_x(-kJawOpenAngle * open);
-  t = Vec3(side * kJawSideShift, 0, open * kJawOpenGlide + forward * kJawForwardShift);
+  t = rig.scale * Vec3(side * kJawSideShift, 0, open * kJawOpenGlide + forward * kJawForwardShift);
 }
 
 std::vector<Vec3> pose_face(const FaceRig& rig, const FaceControls& controls) {
@@ -97,7 +97,7 @@ std::vector<Vec3> pose_face(const FaceRig& rig, const FaceControls& controls) {
     const double yaw = 0.2 * c[kGazeYawL + eye] * kGazeAngle;
     if (upper == 0 && lower == 0 && yaw == 0) continue;
     const EyeLids& L = rig.lids[static_cast<std::size_t>(eye)];
-    // How far the lids have closed: the rims' radii meet as they do.
+    // How far the lids have closed: the rims' radii and x meet as they do.
     const double closed = std::clamp((upper + lower) / 0.96, 0.0, 1.0);
     for (std::size_t i = 0; i < L.index.size(); ++i) {
       Vec3& p = P[static_cast<std::size_t>(L.index[i])];
@@ -107,7 +107,10 @@ std::vector<Vec3> pose_face(const FaceRig& rig, const FaceControls& controls) {
       const Vec3 d = p - L.center;
       Vec3 e = turn_y(w * yaw) * turn_x(a) * d;
       const double r = d.norm();
-      if (closed > 0 && r > 0) e *= (r + w * closed * L.radial[i]) / r;
+      if (closed > 0 && r > 0) {
+        e *= (r + w * closed * L.radial[i]) / r;
+        e.x() += w * closed * L.shift[i];
+      }
       p += e - d;
     }
   }
@@ -118,7 +121,7 @@ std::vector<Vec3> pose_face(const FaceRig& rig, const FaceControls& controls) {
   bool any = false;
   for (std::size_t k = 0; k < lm.upper_lip_line.size(); ++k) {
     const double o = P[static_cast<std::size_t>(lm.lower_lip_line[k])].y() - P[static_cast<std::size_t>(lm.upper_lip_line[k])].y();
-    overlap.emplace_back(rig.lips.column_x[k], o > 0 ? o + 1e-5 : 0.0);
+    overlap.emplace_back(rig.lips.column_x[k], o > 0 ? o + 1e-5 * rig.scale : 0.0);
     any = any || o > 0;
   }
   if (any) {
@@ -186,12 +189,12 @@ std::vector<Vec3> pose_tongue(const FaceRig& rig, const std::vector<Vec3>& tongu
     // lifted so that the tip's underside rides on the lower lip (in the
     // jaw's frame: the jaw's turn below carries both).
     const Vec3 lip = rig.rest[static_cast<std::size_t>(rig.landmarks.lower_lip_mid)];
-    const double travel = std::max(0.02, lip.z() + 0.012 - z1);
+    const double travel = std::max(0.02 * rig.scale, lip.z() + 0.012 * rig.scale - z1);
     auto share = [&](const Vec3& p) { return z1 > z0 ? (p.z() - z0) / (z1 - z0) : 1.0; };
     double underside = 1e300;
     for (const Vec3& p : tongue)
       if (share(p) >= 0.8) underside = std::min(underside, p.y());
-    const double lift = std::max(0.0, lip.y() + 0.0005 - underside);
+    const double lift = std::max(0.0, lip.y() + 0.0005 * rig.scale - underside);
     for (Vec3& p : out) {
       const double w = share(p);
       p += c[kTongueOut] * w * w * Vec3(0, lift, travel);

@@ -73,7 +73,7 @@ Status lid_rig(const std::vector<Vec3>& P, const EyeSocket& socket, const Vec3& 
   lids.center = center;
   lids.radius = radius;
   auto angle = [&](const Vec3& p) { return std::atan2(p.y() - center.y(), p.z() - center.z()); };
-  std::vector<std::pair<double, double>> gap, meet, rim_r, upper_r, lower_r;
+  std::vector<std::pair<double, double>> gap, meet, rim_r, upper_r, lower_r, upper_dx, lower_dx;
   for (std::size_t k = 0; k < m; ++k) {
     const Vec3 &u = P[upper[k]], &l = P[lower[k]];
     const double x = 0.5 * (u.x() + l.x()), g = angle(u) - angle(l);
@@ -84,9 +84,12 @@ Status lid_rig(const std::vector<Vec3>& P, const EyeSocket& socket, const Vec3& 
     rim_r.emplace_back(x, 0.5 * ((u - center).norm() + (l - center).norm()));
     upper_r.emplace_back(x, (u - center).norm());
     lower_r.emplace_back(x, (l - center).norm());
+    upper_dx.emplace_back(x, x - u.x());
+    lower_dx.emplace_back(x, x - l.x());
   }
   const Profile gap_at = Profile::through(gap), meet_at = Profile::through(meet), rim_at = Profile::through(rim_r);
   const Profile upper_at = Profile::through(upper_r), lower_at = Profile::through(lower_r);
+  const Profile upper_dx_at = Profile::through(upper_dx), lower_dx_at = Profile::through(lower_dx);
   const double x0 = gap_at.x.front(), x1 = gap_at.x.back();
   for (std::size_t v = 0; v < P.size(); ++v) {
     const Vec3 d = P[v] - center;
@@ -100,9 +103,11 @@ Status lid_rig(const std::vector<Vec3>& P, const EyeSocket& socket, const Vec3& 
     lids.gap.push_back(g);
     const bool up = angle(P[v]) > meet_at(P[v].x());
     lids.upper.push_back(up ? 1 : 0);
-    // Closed, both rims meet at the column's mean radius (a scan's lids
-    // need not sit at one distance from the eyeball's centre).
+    // Closed, both rims meet at the column's mean radius and x (a scan's
+    // lids need not sit at one distance from the eyeball's centre, nor
+    // their columns at one x).
     lids.radial.push_back(rr - (up ? upper_at(P[v].x()) : lower_at(P[v].x())));
+    lids.shift.push_back(up ? upper_dx_at(P[v].x()) : lower_dx_at(P[v].x()));
   }
   return Status::success();
 }
@@ -150,6 +155,17 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
   rig.field.assign(kChannelCount, SparseField{});
   FaceLandmarks& lm = rig.landmarks;
 
+  // Eyes where the parts go; their distance sets the rig's scale (its
+  // distances are the generic head's, 64 mm between the eyes, times u).
+  GenericHead fitted{control, ann};
+  ComponentPlacement place;
+  if (Status s = place_components(fitted, generic, place); !s.ok()) return s;
+  rig.eye_distance = (place.eye_center[0] - place.eye_center[1]).norm();
+  if (!(rig.eye_distance > 0)) return Status::error(ErrorCode::InvalidInput, "the eyes coincide");
+  const double iod = rig.eye_distance;
+  const double u = iod / 0.064;
+  rig.scale = u;
+
   // Mouth: corners at the lip lines' ends, columns between them by x.
   const std::vector<int>& ul = up_line->vertices;
   const std::vector<int>& ll = low_line->vertices;
@@ -196,18 +212,12 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
     if (near.empty()) near = r;
     return argmin(near, [&](int v) { return -sign * P[v].y(); });
   };
-  lm.upper_lip_top = front_mid(upper_lip, +1, 0.003);
-  lm.lower_lip_bottom = front_mid(lower_lip, -1, 0.003);
+  lm.upper_lip_top = front_mid(upper_lip, +1, 0.003 * u);
+  lm.lower_lip_bottom = front_mid(lower_lip, -1, 0.003 * u);
   // The chin's lowest point still facing forward: its region wraps under
   // the jaw, so the lowest of all would be under the chin.
-  lm.chin = front_mid(chin, -1, 0.025);
+  lm.chin = front_mid(chin, -1, 0.025 * u);
 
-  // Eyes where the parts go.
-  GenericHead fitted{control, ann};
-  ComponentPlacement place;
-  if (Status s = place_components(fitted, generic, place); !s.ok()) return s;
-  rig.eye_distance = (place.eye_center[0] - place.eye_center[1]).norm();
-  const double iod = rig.eye_distance;
   const EyeSocket* sockets[2] = {&ann.eye_left, &ann.eye_right};
   for (int s = 0; s < 2; ++s)
     if (Status st = lid_rig(P, *sockets[s], place.eye_center[s], place.eye_radius[s], rig.lids[static_cast<std::size_t>(s)],
@@ -254,12 +264,12 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
   auto upper_side = [&](int v) {
     if (on_upper[v]) return 1.0;
     if (on_lower[v] || on_chin[v]) return 0.0;
-    return smoothstep01((P[v].y() - lip_y(P[v].x())) / 0.006 + 0.5);
+    return smoothstep01((P[v].y() - lip_y(P[v].x())) / (0.006 * u) + 0.5);
   };
   auto lower_side = [&](int v) {
     if (on_lower[v] || on_chin[v]) return 1.0;
     if (on_upper[v]) return 0.0;
-    return 1.0 - smoothstep01((P[v].y() - lip_y(P[v].x())) / 0.006 + 0.5);
+    return 1.0 - smoothstep01((P[v].y() - lip_y(P[v].x())) / (0.006 * u) + 0.5);
   };
   auto everywhere = [](int) { return 1.0; };
   auto off_lids = [&](int v) { return 1.0 - lid_weight[static_cast<std::size_t>(v)]; };
@@ -273,20 +283,20 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
                    const std::function<double(int)>& mask) {
       rig.field[static_cast<std::size_t>(channel + s)] = linear_muscle_field(LinearMuscle{att, ins, cone, reach, pull}, P, mask);
     };
-    add(kFrontalisInnerL, Bi, Bi + Vec3(0, 0.45 * iod, -0.012), 0.9, 0.025, 0.18, off_lids);
-    add(kFrontalisOuterL, Bo, Bo + Vec3(0, 0.45 * iod, -0.012), 0.9, 0.025, 0.18, off_lids);
-    add(kCorrugatorL, Bi + 0.3 * (Bo - Bi), Vec3(mid_x + sg * 0.1 * iod, Bi.y() - 1.5 * place.eye_radius[s], Bi.z() - 0.01),
-        0.5, 0.012, 0.25, off_lids);
-    add(kZygomaticMajorL, M, M + Vec3(sg * 0.35 * iod, 0.75 * iod, -0.35 * iod), 0.45, 0.015, 0.2, everywhere);
-    const Vec3 zm = up_side + Vec3(0, 0.004, 0);
-    add(kZygomaticMinorL, zm, zm + Vec3(sg * 0.3 * iod, 0.6 * iod, -0.25 * iod), 0.35, 0.012, 0.15, upper_side);
-    const Vec3 ll_ins = up_side + Vec3(0, 0.004, 0);
-    add(kLevatorLabiiL, ll_ins, ll_ins + Vec3(sg * 0.05 * iod, 0.7 * iod, -0.15 * iod), 0.25, 0.012, 0.12, upper_side);
+    add(kFrontalisInnerL, Bi, Bi + Vec3(0, 0.45 * iod, -0.012 * u), 0.9, 0.025 * u, 0.18, off_lids);
+    add(kFrontalisOuterL, Bo, Bo + Vec3(0, 0.45 * iod, -0.012 * u), 0.9, 0.025 * u, 0.18, off_lids);
+    add(kCorrugatorL, Bi + 0.3 * (Bo - Bi), Vec3(mid_x + sg * 0.1 * iod, Bi.y() - 1.5 * place.eye_radius[s], Bi.z() - 0.01 * u),
+        0.5, 0.012 * u, 0.25, off_lids);
+    add(kZygomaticMajorL, M, M + Vec3(sg * 0.35 * iod, 0.75 * iod, -0.35 * iod), 0.45, 0.015 * u, 0.2, everywhere);
+    const Vec3 zm = up_side + Vec3(0, 0.004 * u, 0);
+    add(kZygomaticMinorL, zm, zm + Vec3(sg * 0.3 * iod, 0.6 * iod, -0.25 * iod), 0.35, 0.012 * u, 0.15, upper_side);
+    const Vec3 ll_ins = up_side + Vec3(0, 0.004 * u, 0);
+    add(kLevatorLabiiL, ll_ins, ll_ins + Vec3(sg * 0.05 * iod, 0.7 * iod, -0.15 * iod), 0.25, 0.012 * u, 0.12, upper_side);
     const Vec3 NW = P[lm.nose_wing[s]];
-    add(kLevatorNasiL, NW, NW + Vec3(-sg * 0.05 * iod, 0.55 * iod, -0.1 * iod), 0.4, 0.012, 0.18, upper_side);
-    add(kDepressorAnguliL, M, M + Vec3(sg * 0.1 * iod, -0.55 * iod, -0.1 * iod), 0.45, 0.012, 0.2, everywhere);
-    const Vec3 dl = low_side + Vec3(0, -0.004, 0);
-    add(kDepressorLabiiL, dl, dl + Vec3(sg * 0.05 * iod, -0.5 * iod, -0.1 * iod), 0.35, 0.01, 0.15, lower_side);
+    add(kLevatorNasiL, NW, NW + Vec3(-sg * 0.05 * iod, 0.55 * iod, -0.1 * iod), 0.4, 0.012 * u, 0.18, upper_side);
+    add(kDepressorAnguliL, M, M + Vec3(sg * 0.1 * iod, -0.55 * iod, -0.1 * iod), 0.45, 0.012 * u, 0.2, everywhere);
+    const Vec3 dl = low_side + Vec3(0, -0.004 * u, 0);
+    add(kDepressorLabiiL, dl, dl + Vec3(sg * 0.05 * iod, -0.5 * iod, -0.1 * iod), 0.35, 0.01 * u, 0.15, lower_side);
     // Mentalis: it lifts the chin's soft tissue, and the lower lip with it;
     // a Waters cone from its origin above the chin cannot reach the lip
     // above its origin, so it is a lift over an ellipse from the chin to the
@@ -298,12 +308,12 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
       for (int v = 0; v < n; ++v) {
         const Vec3 d = P[v] - mt;
         const double rho = std::hypot(d.x() / a, d.y() / b);
-        if (rho >= 1 || d.z() < -0.03) continue;
-        push(f, v, lower_side(v) * std::cos(1.5707963267948966 * rho) * Vec3(0, 0.004, 0.002));
+        if (rho >= 1 || d.z() < -0.03 * u) continue;
+        push(f, v, lower_side(v) * std::cos(1.5707963267948966 * rho) * Vec3(0, 0.004, 0.002) * u);
       }
     }
-    add(kBuccinatorL, M, M + Vec3(sg * 0.15 * iod, 0, -0.5 * iod), 0.4, 0.01, 0.12, everywhere);
-    add(kRisoriusL, M, M + Vec3(sg * 0.7 * iod, -0.05 * iod, -0.3 * iod), 0.35, 0.01, 0.15, everywhere);
+    add(kBuccinatorL, M, M + Vec3(sg * 0.15 * iod, 0, -0.5 * iod), 0.4, 0.01 * u, 0.12, everywhere);
+    add(kRisoriusL, M, M + Vec3(sg * 0.7 * iod, -0.05 * iod, -0.3 * iod), 0.35, 0.01 * u, 0.15, everywhere);
 
     // Orbicularis oculi: a ring about the eye (from 1.8 to 3.8 eye radii)
     // pulling the skin towards it, by up to 3.5 mm at its middle; the lids
@@ -316,19 +326,20 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
       const double r = std::hypot(d.x(), d.y());
       if (r <= r_in || r >= r_out || d.z() < 0) continue;
       const double t = (r - r_in) / (r_out - r_in);
-      push(oc, v, -0.0035 * std::sin(3.14159265358979323846 * t) * off_lids(v) * Vec3(d.x() / r, d.y() / r, 0));
+      push(oc, v, -0.0035 * u * std::sin(3.14159265358979323846 * t) * off_lids(v) * Vec3(d.x() / r, d.y() / r, 0));
     }
   }
   {
     const Vec3 g = 0.5 * (P[lm.brow_inner[0]] + P[lm.brow_inner[1]]);
-    rig.field[kProcerus] = linear_muscle_field(LinearMuscle{g + Vec3(0, -0.35 * iod, -0.008), g, 0.5, 0.012, 0.2}, P, off_lids);
+    rig.field[kProcerus] = linear_muscle_field(LinearMuscle{g + Vec3(0, -0.35 * iod, -0.008 * u), g, 0.5, 0.012 * u, 0.2}, P, off_lids);
   }
   Sphincter oris;
   oris.center = mc;
   oris.a = 0.75 * mw;
   oris.b = 0.5 * mw;
   oris.squeeze = 0.45;
-  oris.protrude = 0.008;
+  oris.protrude = 0.008 * u;
+  oris.depth = 0.02 * u;
   rig.field[kOrisPucker] = sphincter_field(oris, P, everywhere);
 
   // Skin actions.
@@ -336,20 +347,20 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
   for (int v = 0; v < n; ++v) {
     const Vec3& p = P[v];
     const double below = p.y() - lip_y(p.x());
-    if (on_upper[v]) push(rig.field[kRollUpper], v, taper(p.x()) * Vec3(0, -0.5 * below, -0.003));
-    if (on_lower[v]) push(rig.field[kRollLower], v, taper(p.x()) * Vec3(0, -0.5 * below, -0.003));
+    if (on_upper[v]) push(rig.field[kRollUpper], v, taper(p.x()) * Vec3(0, -0.5 * below, -0.003 * u));
+    if (on_lower[v]) push(rig.field[kRollLower], v, taper(p.x()) * Vec3(0, -0.5 * below, -0.003 * u));
     if (on_upper[v] || on_lower[v])
       for (int s = 0; s < 2; ++s) {
         const double sg = s == 0 ? 1.0 : -1.0;
         const double side = smoothstep01(0.5 + sg * (p.x() - mid_x) / (0.5 * mw));
-        push(rig.field[static_cast<std::size_t>(kPressL + s)], v, side * Vec3(0, -0.4 * below, -0.001));
+        push(rig.field[static_cast<std::size_t>(kPressL + s)], v, side * Vec3(0, -0.4 * below, -0.001 * u));
       }
     const Vec3 d = p - mc;
-    if (d.z() > -0.02) {
+    if (d.z() > -0.02 * u) {
       const double rho = std::hypot(d.x() / mw, d.y() / (0.7 * mw));
-      if (rho < 1) push(rig.field[kMouthShift], v, std::cos(1.5707963267948966 * rho) * Vec3(0.006, 0, 0));
+      if (rho < 1) push(rig.field[kMouthShift], v, std::cos(1.5707963267948966 * rho) * Vec3(0.006 * u, 0, 0));
       const double rs = std::hypot(d.x() / (0.8 * mw), d.y() / (0.6 * mw));
-      if (rs < 1) push(rig.field[kShrugUpper], v, upper_side(v) * std::cos(1.5707963267948966 * rs) * Vec3(0, 0.003, 0.001));
+      if (rs < 1) push(rig.field[kShrugUpper], v, upper_side(v) * std::cos(1.5707963267948966 * rs) * Vec3(0, 0.003, 0.001) * u);
     }
   }
   // Cheeks blown out along their normals: the cheek region's weight,
@@ -367,7 +378,7 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
       std::vector<double> next = w;
       for (int v = 0; v < n; ++v) {
         double sum = w[static_cast<std::size_t>(v)];
-        for (int u : ring[static_cast<std::size_t>(v)]) sum += w[static_cast<std::size_t>(u)];
+        for (int nb : ring[static_cast<std::size_t>(v)]) sum += w[static_cast<std::size_t>(nb)];
         next[static_cast<std::size_t>(v)] = sum / static_cast<double>(1 + ring[static_cast<std::size_t>(v)].size());
       }
       w.swap(next);
@@ -375,11 +386,11 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
     const std::vector<Vec3> normals = vertex_normals(control);
     for (int v = 0; v < n; ++v)
       if (!on_lips[v])
-        push(rig.field[kCheekPuff], v, 0.006 * w[static_cast<std::size_t>(v)] * off_lids(v) * normals[static_cast<std::size_t>(v)]);
+        push(rig.field[kCheekPuff], v, 0.006 * u * w[static_cast<std::size_t>(v)] * off_lids(v) * normals[static_cast<std::size_t>(v)]);
   }
 
   // The jaw: the lower lip, chin and the skin between them whole; the skin around them, the jaw
-  // line included, fading over 4.5 cm from them and over 2 cm below the
+  // line included, fading over 6 cm from them and over 2 cm below the
   // mouth line (nothing above it, nothing on the upper lip), so the cheeks
   // stretch instead of creasing at a region's edge. The mouth corners stay
   // (both lips hold them): the share grows from 0 there over 40 % of the
@@ -390,8 +401,8 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
     for (int v : *find_region(ann, name)) jaw_core.push_back(v);
   // ... and the skin between them (below the lower lip, above the chin).
   for (int v = 0; v < n; ++v)
-    if (!on_upper[v] && std::abs(P[v].x() - mid_x) < 0.35 * mw && P[v].y() < lip_y(P[v].x()) - 0.002 &&
-        P[v].y() > P[lm.chin].y() - 0.01 && P[v].z() > P[lm.chin].z() - 0.02)
+    if (!on_upper[v] && std::abs(P[v].x() - mid_x) < 0.35 * mw && P[v].y() < lip_y(P[v].x()) - 0.002 * u &&
+        P[v].y() > P[lm.chin].y() - 0.01 * u && P[v].z() > P[lm.chin].z() - 0.02 * u)
       jaw_core.push_back(v);
   const std::vector<char> on_core = vertex_mask(jaw_core, n);
   const Region corners(lm.mouth_corner.begin(), lm.mouth_corner.end());
@@ -400,8 +411,8 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
     if (on_core[v] && !on_upper[v]) {
       w = 1;
     } else if (!on_upper[v]) {
-      const double band = smoothstep01((lip_y(P[v].x()) - P[v].y()) / 0.02);
-      w = band * smoothstep01(1.0 - nearest_distance(P[v], P, jaw_core) / 0.045);
+      const double band = smoothstep01((lip_y(P[v].x()) - P[v].y()) / (0.02 * u));
+      w = band * smoothstep01(1.0 - nearest_distance(P[v], P, jaw_core) / (0.06 * u));
     }
     w *= smoothstep01(nearest_distance(P[v], P, corners) / (0.4 * mw));
     if (w <= 0) continue;
@@ -414,8 +425,8 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
   for (int v = 0; v < n; ++v) {
     if (std::abs(P[v].x() - mid_x) > 0.6 * mw) continue;
     const double above = P[v].y() - lip_y(P[v].x());
-    const double wu = on_upper[v] ? 1.0 : (above > 0 && !on_lower[v] ? smoothstep01(1.0 - nearest_distance(P[v], P, upper_lip) / 0.01) : 0.0);
-    const double wl = on_lower[v] ? 1.0 : (above < 0 && !on_upper[v] ? smoothstep01(1.0 - nearest_distance(P[v], P, lower_lip) / 0.01) : 0.0);
+    const double wu = on_upper[v] ? 1.0 : (above > 0 && !on_lower[v] ? smoothstep01(1.0 - nearest_distance(P[v], P, upper_lip) / (0.01 * u)) : 0.0);
+    const double wl = on_lower[v] ? 1.0 : (above < 0 && !on_upper[v] ? smoothstep01(1.0 - nearest_distance(P[v], P, lower_lip) / (0.01 * u)) : 0.0);
     push(rig.lips.side[0], v, Vec3(0, wu, 0));
     push(rig.lips.side[1], v, Vec3(0, -wl, 0));
   }

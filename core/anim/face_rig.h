@@ -45,6 +45,7 @@ struct EyeLids {
   std::vector<double> weight;  // 1 on the rim and the socket's first ring, falling to 0 outwards
   std::vector<double> gap;     // the column's rest gap angle (0 at the corners)
   std::vector<double> radial;  // the column's mean rim radius minus this lid's rim radius (metres)
+  std::vector<double> shift;   // the column's mean rim x minus this lid's rim x (metres)
   std::vector<char> upper;     // 1: upper lid, 0: lower lid
 };
 
@@ -70,6 +71,7 @@ struct FaceRig {
   LipContact lips;
   FaceLandmarks landmarks;
   double eye_distance = 0.064;            // between the eyeballs' centres
+  double scale = 1.0;                     // eye_distance / 64 mm: the rig's distances are the generic head's times this
   double mouth_width = 0.045;             // corner to corner
   Vec3 mouth_center = Vec3::Zero();
   std::vector<int> moved;                 // every vertex some channel moves, ascending

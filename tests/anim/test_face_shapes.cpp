@@ -52,19 +52,22 @@ struct Measure {
   std::vector<Vec3> P;
   Measure(const FaceRig& r, const std::string& name) : rig(r), controls(shape(name)), P(pose_face(r, controls)) {}
   const FaceLandmarks& lm() const { return rig.landmarks; }
-  Vec3 d(int v) const { return 1000.0 * (P[static_cast<std::size_t>(v)] - rig.rest[static_cast<std::size_t>(v)]); }
-  static double mouth_gap(const FaceLandmarks& lm, const std::vector<Vec3>& Q) {
-    return 1000.0 * (Q[lm.upper_lip_mid].y() - Q[lm.lower_lip_mid].y());
+  // Millimetres on the generic head's scale (a head of another size or in
+  // other units is measured against its own eye distance, FaceRig::scale).
+  double mm() const { return 1000.0 / rig.scale; }
+  Vec3 d(int v) const { return mm() * (P[static_cast<std::size_t>(v)] - rig.rest[static_cast<std::size_t>(v)]); }
+  double mouth_gap(const std::vector<Vec3>& Q) const {
+    return mm() * (Q[lm().upper_lip_mid].y() - Q[lm().lower_lip_mid].y());
   }
-  double gap() const { return mouth_gap(lm(), P); }
-  double rest_gap() const { return mouth_gap(lm(), rig.rest); }
+  double gap() const { return mouth_gap(P); }
+  double rest_gap() const { return mouth_gap(rig.rest); }
   double width_change() const {
     const auto w = [&](const std::vector<Vec3>& Q) { return Q[lm().mouth_corner[0]].x() - Q[lm().mouth_corner[1]].x(); };
-    return 1000.0 * (w(P) - w(rig.rest));
+    return mm() * (w(P) - w(rig.rest));
   }
   double thickness_change() const {
     const auto t = [&](const std::vector<Vec3>& Q) { return Q[lm().upper_lip_top].y() - Q[lm().lower_lip_bottom].y(); };
-    return 1000.0 * (t(P) - t(rig.rest));
+    return mm() * (t(P) - t(rig.rest));
   }
   // The eye's opening (middle rim column) over its rest opening.
   double lid_ratio(int eye) const {
@@ -93,8 +96,8 @@ double tongue_tip_forward(const FaceRig& rig, const FaceControls& c, double* pas
     before = std::max(before, tongue.positions[i].z());
     after = std::max(after, posed[i].z());
   }
-  if (past) *past = 1000.0 * (after - pose_face(rig, c)[static_cast<std::size_t>(rig.landmarks.lower_lip_mid)].z());
-  return 1000.0 * (after - before);
+  if (past) *past = 1000.0 / rig.scale * (after - pose_face(rig, c)[static_cast<std::size_t>(rig.landmarks.lower_lip_mid)].z());
+  return 1000.0 / rig.scale * (after - before);
 }
 
 using Check = std::function<void(const Measure&)>;
@@ -346,7 +349,7 @@ std::map<std::string, Check> checks() {
   c["anger"] = [](const Measure& m) {
     const auto apart = [&](const std::vector<Vec3>& Q) { return (Q[m.lm().brow_inner[0]] - Q[m.lm().brow_inner[1]]).norm(); };
     for (int s = 0; s < 2; ++s) CHECK(m.d(m.lm().brow_inner[static_cast<std::size_t>(s)]).y() < -2.0);
-    CHECK(1000.0 * (apart(m.P) - apart(m.rig.rest)) < -1.0);
+    CHECK(m.mm() * (apart(m.P) - apart(m.rig.rest)) < -1.0);
     CHECK(m.lid_ratio(0) < 0.9);
   };
   c["sadness"] = [](const Measure& m) {
@@ -502,10 +505,14 @@ TEST_CASE("face rig: bad input gets a message") {
   CHECK(make_face_rig(nan, test::generic_head(), rig).code == ErrorCode::InvalidInput);
 }
 
-TEST_CASE("face rig: every shape on real scans' fits (James, Fran): meaning, no fold, no crossing") {
+TEST_CASE("face rig: every shape on real scans' fits (James, Fran, Demosthenes): meaning, no fold, no crossing") {
   LK_REQUIRE_SHARED("head_scans");
   const auto table = checks();
-  for (const char* rel : {"head_scans/james_menpo3d/james.obj", "head_scans/fran_cyberware/fran_cut.vtk"}) {
+  // Plato (a bearded statue) is left out: one triangle under his beard folds
+  // when the jaw juts forward (docs/design/muscles.md); Gutenberg's scan is
+  // refused by the fit (test_real_scans.cpp).
+  for (const char* rel : {"head_scans/james_menpo3d/james.obj", "head_scans/fran_cyberware/fran_cut.vtk",
+                          "head_scans/demosthenes_photoscan/demosthenes-low-res.obj"}) {
     const std::string path = test::shared_data_dir() + "/" + rel;
     if (!test::exists(path)) {
       WARN("skipped: ../shared/data/" << rel << " is absent");
