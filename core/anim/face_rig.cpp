@@ -408,7 +408,9 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
   const Region corners(lm.mouth_corner.begin(), lm.mouth_corner.end());
   for (int v = 0; v < n; ++v) {
     double w = 0;
-    if (on_core[v] && !on_upper[v]) {
+    if (on_lips[v] && !on_upper[v] && !on_lower[v]) {
+      w = 0.5;  // the mouth bag's seam between the lips: half of each
+    } else if (on_core[v] && !on_upper[v]) {
       w = 1;
     } else if (!on_upper[v]) {
       const double band = smoothstep01((lip_y(P[v].x()) - P[v].y()) / (0.02 * u));

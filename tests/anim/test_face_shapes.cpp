@@ -505,14 +505,13 @@ TEST_CASE("face rig: bad input gets a message") {
   CHECK(make_face_rig(nan, test::generic_head(), rig).code == ErrorCode::InvalidInput);
 }
 
-TEST_CASE("face rig: every shape on real scans' fits (James, Fran, Demosthenes): meaning, no fold, no crossing") {
+TEST_CASE("face rig: every shape on real scans' fits (James, Fran, Demosthenes, Plato): meaning, no fold, no crossing") {
   LK_REQUIRE_SHARED("head_scans");
   const auto table = checks();
-  // Plato (a bearded statue) is left out: one triangle under his beard folds
-  // when the jaw juts forward (docs/design/muscles.md); Gutenberg's scan is
-  // refused by the fit (test_real_scans.cpp).
+  // Gutenberg's scan is refused by the fit (test_real_scans.cpp).
   for (const char* rel : {"head_scans/james_menpo3d/james.obj", "head_scans/fran_cyberware/fran_cut.vtk",
-                          "head_scans/demosthenes_photoscan/demosthenes-low-res.obj"}) {
+                          "head_scans/demosthenes_photoscan/demosthenes-low-res.obj",
+                          "head_scans/threedscans_plato/plato.obj"}) {
     const std::string path = test::shared_data_dir() + "/" + rel;
     if (!test::exists(path)) {
       WARN("skipped: ../shared/data/" << rel << " is absent");
