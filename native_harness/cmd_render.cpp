@@ -1,6 +1,9 @@
 // likeness render: draws a mesh and/or point cloud headlessly (OSMesa) from a
 // canonical view into a PNG, with the same renderer and shaders as the web app.
 #include "command.h"
+#include "expression_head.h"
+
+#include "anim/face_shapes.h"
 
 #include "io/io.h"
 #include "mesh/geometry.h"
@@ -39,11 +42,36 @@ std::string directory_of(const std::string& path) {
 int run_render(const Args& args) {
   if (!only_known_options(kName, args,
                           {"mesh", "points", "texture", "wireframe", "edges-only", "view", "size", "out",
-                           "point-size", "supersample", "no-ao", "flat", "yaw", "pitch", "camera-out"}))
+                           "point-size", "supersample", "no-ao", "flat", "yaw", "pitch", "camera-out", "expression",
+                           "project", "level", "columns", "face"}))
     return 2;
+  // --expression NAME: a head with the generic head's vertices (--mesh, or
+  // --project FILE, or the generic head) posed by the muscle layer and drawn
+  // at --level L (default 2) with its eyes, teeth and tongue.
+  // Several names (comma-separated) make a sheet of --columns tiles, each
+  // --size pixels, in reading order; --face frames the face alone.
+  const bool posing = args.has("expression") || args.has("project");
+  const std::string expression = args.get("expression", "neutral");
+  std::vector<std::string> names;
+  for (std::size_t at = 0; at <= expression.size();) {
+    const std::size_t comma = std::min(expression.find(',', at), expression.size());
+    names.push_back(expression.substr(at, comma - at));
+    at = comma + 1;
+  }
+  std::vector<FaceControls> faces(names.size());
+  int columns = 0;
+  if (!args.get_int("columns", static_cast<int>(names.size()), columns, 1, 64)) return 2;
+  if (posing) {
+    for (std::size_t i = 0; i < names.size(); ++i)
+      if (Status st = face_shape(names[i], faces[i]); !st) return usage_error(st.message + " (see docs/design/muscles.md)");
+    if (args.has("points") || args.has("texture")) return usage_error("--expression draws a head alone: no --points or --texture");
+    if (args.has("project") && args.has("mesh")) return usage_error("give --project or --mesh, not both");
+  }
+  int level = 2;
+  if (!args.get_int("level", 2, level, 0, 4)) return 2;
   const std::string mesh_path = args.get("mesh"), points_path = args.get("points");
   const std::string out_path = args.get("out"), texture_path = args.get("texture");
-  if (mesh_path.empty() && points_path.empty())
+  if (mesh_path.empty() && points_path.empty() && !posing)
     return usage_error("give --mesh FILE and/or --points FILE");
   if (out_path.empty()) return usage_error("--out PNG is required");
   if (args.has("texture") && texture_path.empty()) return usage_error("--texture needs a file");
@@ -66,7 +94,16 @@ int run_render(const Args& args) {
   TriMesh mesh;
   PointCloud cloud;
   Image texture;
-  if (!mesh_path.empty()) {
+  PosedHead posed;
+  ExpressionHead head;
+  if (posing) {
+    s = load_expression_head(args.get("project"), mesh_path, level, head);
+    if (s) s = pose_expression_head(head, FaceControls{}, level, posed);
+    if (!s) return fail(kName, s.message);
+    mesh = posed.head;
+    texture = head.skin;
+    if (texture.empty()) mesh.uvs.clear();
+  } else if (!mesh_path.empty()) {
     s = load_mesh_file(mesh_path, mesh);
     if (!s) return fail(kName, s.message);
   }
@@ -90,7 +127,7 @@ int run_render(const Args& args) {
     if (file_exists(mesh.texture_name)) tex_path = mesh.texture_name;
     else if (file_exists(beside)) tex_path = beside;
   }
-  if (!tex_path.empty()) {
+  if (!tex_path.empty() && !posing) {
     if (mesh.uvs.empty()) return fail(kName, mesh_path + ": the mesh has no uvs, so a texture cannot be applied");
     s = load_image_file(tex_path, texture);
     if (!s) return fail(kName, s.message);
@@ -132,6 +169,18 @@ int run_render(const Args& args) {
         if (!st) return with_context(st, tex_path);
       }
     }
+    for (std::size_t i = 0; i < posed.parts.size(); ++i) {
+      DrawableHandle h;
+      Status st = r.upload_mesh(posed.parts[i], h);
+      const Vec3& c = posed.part_colors[i];
+      if (st) st = r.set_base_color(h, glm::vec3(float(c.x()), float(c.y()), float(c.z())));
+      if (st && !posed.part_textures[i].empty()) {
+        TextureHandle t;
+        st = r.upload_texture(posed.part_textures[i], t);
+        if (st) st = r.attach_texture(h, t);
+      }
+      if (!st) return st;
+    }
     if (cloud.size() > 0) {
       DrawableHandle h;
       Status st = r.upload_points(cloud, h);
@@ -143,6 +192,10 @@ int run_render(const Args& args) {
   // Frame what is drawn (vertices and points), not its box: tighter on round heads.
   std::vector<Vec3> framed = mesh.positions;
   framed.insert(framed.end(), cloud.positions.begin(), cloud.positions.end());
+  if (posing && args.has("face")) {  // the rig's reach at rest: brows to chin
+    framed.clear();
+    for (int v : head.rig.moved) framed.push_back(head.rig.rest[static_cast<std::size_t>(v)]);
+  }
   // --yaw/--pitch: a camera at those angles (degrees, OrbitCamera's) instead
   // of the named view's, framed the same way (e.g. known cameras for
   // detecting landmarks on the generic head, scripts/make-landmark-map).
@@ -164,7 +217,27 @@ int run_render(const Args& args) {
   options.width = options.height = size;
   options.supersample = supersample;
   Image image;
-  s = render_offscreen(setup, camera_for, options, image);
+  if (posing) {
+    // Each name posed and drawn (the occlusion of the rest pose kept), the
+    // tiles laid out in rows.
+    const int rows = (static_cast<int>(names.size()) + columns - 1) / columns;
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      s = pose_expression_head(head, faces[i], level, posed);
+      if (!s) return fail(kName, s.message);
+      const std::vector<Vec2> uvs = mesh.uvs;
+      mesh = posed.head;
+      mesh.uvs = uvs;
+      Image tile;
+      s = render_offscreen(setup, camera_for, options, tile);
+      if (!s) return fail(kName, s.message);
+      if (image.empty()) image = Image::make(tile.width * std::min(columns, static_cast<int>(names.size())), tile.height * rows, tile.channels, 255);
+      const int x0 = static_cast<int>(i) % columns * tile.width, y0 = static_cast<int>(i) / columns * tile.height;
+      for (int y = 0; y < tile.height; ++y)
+        std::copy(tile.at(0, y), tile.at(0, y) + static_cast<std::ptrdiff_t>(tile.width) * tile.channels, image.at(x0, y0 + y));
+    }
+  } else {
+    s = render_offscreen(setup, camera_for, options, image);
+  }
   if (!s) return fail(kName, s.message);
   s = save_png_file(out_path, image);
   if (!s) return fail(kName, s.message);
@@ -188,12 +261,13 @@ int run_render(const Args& args) {
     f << j.dump(1) << "\n";
     if (!f) return fail(kName, camera_out + ": cannot write");
   }
-  std::cout << "wrote " << out_path << " (" << size << "x" << size << ", ";
+  std::cout << "wrote " << out_path << " (" << image.width << "x" << image.height << ", ";
   if (own_angles) std::cout << "yaw " << yaw << ", pitch " << pitch << " degrees";
   else std::cout << to_string(view) << " view";
   if (!mesh.positions.empty()) std::cout << ", " << mesh.num_triangles() << " triangles";
+  if (posing) std::cout << ", expression " << expression;
   if (cloud.size() > 0) std::cout << ", " << cloud.size() << " points";
-  if (!texture.empty()) std::cout << ", textured by " << tex_path;
+  if (!texture.empty()) std::cout << ", textured by " << (posing ? std::string("the project's skin") : tex_path);
   std::cout << ")\n";
   return 0;
 }
@@ -201,7 +275,8 @@ int run_render(const Args& args) {
 Registrar reg({"render",
                "likeness render --mesh FILE [--points FILE] [--texture PNG] [--wireframe | --edges-only] "
                "[--view front|left|right|back|top|three-quarter] [--size N] [--point-size PX] "
-               "[--flat] [--supersample 1..4] [--no-ao] [--yaw DEG --pitch DEG] [--camera-out FILE.json] --out PNG",
+               "[--flat] [--supersample 1..4] [--no-ao] [--yaw DEG --pitch DEG] [--camera-out FILE.json] --out PNG | "
+               "likeness render --expression NAME[,NAME...] [--columns C] [--face] [--project FILE | --mesh FILE] [--level L] [--view ...] --out PNG",
                "draws a mesh (with baked ambient occlusion) and/or point cloud from a canonical view into a PNG "
                "(OSMesa, same shaders as the web app); --yaw/--pitch turn the camera, --camera-out writes its matrices",
                run_render});

@@ -4,6 +4,7 @@
 // (core/project/glb_export.h).
 #include "worker_common.h"
 
+#include "anim/bake.h"
 #include "project/glb_export.h"
 #include "project/pose.h"
 #include "project/project_file.h"
@@ -40,6 +41,51 @@ val export_glb_job(int level) {
   r.set("bytes", bytes_array(bytes.data(), bytes.size()));
   r.set("level", report.level);
   r.set("vertices", report.head_vertices);
+  return r;
+}
+
+// The muscle layer's shapes (core/anim: 10 expressions, ARKit's 52, 15
+// visemes) baked on the kept head at level (put at rest first), for
+// morph-target playback: each shape's moved vertices and their offsets in
+// the scan frame. Returns {ok, level, vertexCount, shapes: [{name, indices
+// (Uint32Array), offsets (Float32Array, 3 per index)}], bakeMs}.
+val face_shapes_job(int level) {
+  if (!kept_project()) return error_result(lk::ErrorCode::InvalidInput, "no fitted head to animate");
+  lk::HeadProject& p = *kept_project();
+  if (level < 0 || level > p.fit.multires.num_levels())
+    return error_result(lk::ErrorCode::InvalidInput, "no level " + std::to_string(level));
+  lk::Status generic_status;
+  const lk::GenericHead* generic = generic_head(generic_status);
+  if (!generic) return error_result(lk::with_context(generic_status, "generic head"));
+  const double t0 = now_ms();
+  lk::FaceRig rig;
+  std::vector<lk::BakedShape> baked;
+  lk::Status st = lk::rest_pose(p);
+  if (st.ok()) st = lk::make_face_rig(p.fit.control, *generic, rig);
+  if (st.ok()) st = lk::bake_face_shapes(rig, &p.fit.multires, level, {}, baked);
+  if (!st.ok()) return error_result(st);
+  const double bake_ms = now_ms() - t0;
+  val shapes = val::array();
+  for (const lk::BakedShape& b : baked) {
+    std::vector<std::uint32_t> indices;
+    std::vector<float> offsets;
+    for (std::size_t i = 0; i < b.level.size(); ++i)
+      if (b.level[i] != lk::Vec3::Zero()) {
+        const lk::Vec3 d = p.frame.head_to_scan * b.level[i];
+        indices.push_back(static_cast<std::uint32_t>(i));
+        offsets.insert(offsets.end(), {static_cast<float>(d.x()), static_cast<float>(d.y()), static_cast<float>(d.z())});
+      }
+    val shape = val::object();
+    shape.set("name", b.name);
+    shape.set("indices", typed_array("Uint32Array", indices));
+    shape.set("offsets", typed_array("Float32Array", offsets));
+    shapes.call<void>("push", shape);
+  }
+  val r = ok_result();
+  r.set("level", level);
+  r.set("vertexCount", p.fit.multires.num_vertices(level));
+  r.set("shapes", shapes);
+  r.set("bakeMs", bake_ms);
   return r;
 }
 
@@ -92,4 +138,5 @@ EMSCRIPTEN_BINDINGS(likeness_worker_project) {
   emscripten::function("save_project_job", &save_project_job);
   emscripten::function("load_project_job", &load_project_job);
   emscripten::function("export_glb_job", &export_glb_job);
+  emscripten::function("face_shapes_job", &face_shapes_job);
 }

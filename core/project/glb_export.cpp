@@ -1,5 +1,6 @@
 #include "project/glb_export.h"
 
+#include "anim/bake.h"
 #include "mesh/geometry.h"
 #include "project/export.h"
 #include "project/gltf_scene.h"
@@ -10,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 namespace lk {
 
@@ -40,29 +42,24 @@ int textured_material(GltfBuilder& w, const std::string& name, const Image& text
 
 void add_child(tinygltf::Model& model, int parent, int child) { model.nodes[parent].children.push_back(child); }
 
-// Level `level` of the fit with the rig posed (jaw open by jaw, brows up by
-// brow) minus the same level at rest: a morph target's offsets.
-Status rig_offsets(const HeadProject& project, int level, double jaw, double brow, std::vector<Vec3>& out) {
-  MultiresMesh posed = project.fit.multires;  // at rest, current
-  const AnimationRig& rig = project.rig;
-  if (Status s = update_control_vertices(posed, rig.moved, rig_targets(rig, jaw, brow)); !s.ok()) return s;
-  const std::vector<Vec3>& rest = project.fit.multires.state.displaced[static_cast<std::size_t>(level)];
-  const std::vector<Vec3>& moved = posed.state.displaced[static_cast<std::size_t>(level)];
-  out.resize(rest.size());
-  for (std::size_t i = 0; i < rest.size(); ++i) out[i] = moved[i] - rest[i];
-  return Status::success();
-}
-
-// A part riding on the jaw (node at the hinge, its mesh about it): its
-// vertices turned as the jaw opens fully, as offsets.
-std::vector<Vec3> jaw_turn(const TriMesh& about_hinge) {
-  const double a = jaw_angle(1.0), c = std::cos(a), s = std::sin(a);
-  std::vector<Vec3> d(about_hinge.positions.size());
-  for (std::size_t i = 0; i < d.size(); ++i) {
-    const Vec3& p = about_hinge.positions[i];
-    d[i] = Vec3(p.x(), c * p.y() - s * p.z(), s * p.y() + c * p.z()) - p;
+// The offsets of a part's vertices (head frame) under each baked shape, as
+// morph targets: only the shapes that move the part (by 10 micrometres or
+// more), so each part carries the names that concern it.
+std::vector<MorphTarget> part_targets(const std::vector<BakedShape>& shapes, const std::vector<Vec3>& rest,
+                                      const std::function<std::vector<Vec3>(const FaceControls&)>& pose) {
+  std::vector<MorphTarget> out;
+  for (const BakedShape& b : shapes) {
+    MorphTarget t;
+    t.name = b.name;
+    t.delta = pose(b.controls);
+    double largest = 0;
+    for (std::size_t i = 0; i < rest.size(); ++i) {
+      t.delta[i] -= rest[i];
+      largest = std::max(largest, t.delta[i].cwiseAbs().maxCoeff());
+    }
+    if (largest >= 1e-5) out.push_back(std::move(t));
   }
-  return d;
+  return out;
 }
 
 }  // namespace
@@ -97,14 +94,17 @@ Status export_glb(HeadProject& project, const GenericHead& generic, const GlbExp
   std::vector<Vec2> uvs;
   if (textured) uvs.assign(project.texture.uvs.begin(), project.texture.uvs.begin() + static_cast<std::ptrdiff_t>(head.positions.size()));
   const int skin = textured_material(w, "skin", textured ? project.texture.skin : Image{}, {0.8, 0.62, 0.52, 1.0}, false);
-  // Morph targets from the rig (pose.h): jawOpen (ARKit's name: the jaw
-  // turns down about its hinge, the lower lip and chin with it) and
-  // likeness_browsUp (both brows lifted whole: no ARKit shape is that).
-  std::vector<MorphTarget> head_targets(2);
-  head_targets[0].name = "jawOpen";
-  head_targets[1].name = "likeness_browsUp";
-  if (Status s = rig_offsets(project, level, 1, 0, head_targets[0].delta); !s.ok()) return s;
-  if (Status s = rig_offsets(project, level, 0, 1, head_targets[1].delta); !s.ok()) return s;
+  // Morph targets: every expression, ARKit shape and viseme of the muscle
+  // layer (core/anim), baked on this level by the local update.
+  FaceRig face;
+  if (Status s = make_face_rig(project.fit.control, generic, face); !s.ok()) return s;
+  std::vector<BakedShape> shapes;
+  {
+    MultiresMesh work = project.fit.multires;  // at rest, current
+    if (Status s = bake_face_shapes(face, &work, level, {}, shapes); !s.ok()) return s;
+  }
+  std::vector<MorphTarget> head_targets;
+  for (const BakedShape& b : shapes) head_targets.push_back({b.name, b.level});
   const int neck = w.node("Neck");
   const int head_node = w.node("Head", w.mesh("head", head.positions, head.normals, uvs, head.triangles, skin, head_targets));
   add_child(model, neck, head_node);
@@ -116,7 +116,11 @@ Status export_glb(HeadProject& project, const GenericHead& generic, const GlbExp
     for (int e = 0; e < 2; ++e) {
       const Vec3 c = parts.placement.eye_center[e];
       const TriMesh eye = about(parts.placed.eye[e], c);
-      add_child(model, head_node, w.node(eye_names[e], w.mesh(eye_names[e], eye.positions, eye.normals, eye.uvs, eye.triangles, eye_mat), c));
+      const std::vector<MorphTarget> turns = part_targets(shapes, parts.placed.eye[e].positions, [&](const FaceControls& fc) {
+        return pose_eye(face, parts.placed.eye[e].positions, fc, e);
+      });
+      add_child(model, head_node,
+                w.node(eye_names[e], w.mesh(eye_names[e], eye.positions, eye.normals, eye.uvs, eye.triangles, eye_mat, turns), c));
     }
     const int teeth_mat = textured_material(w, "teeth", options.teeth_texture, {0.80, 0.74, 0.60, 1.0}, true);
     const int tongue_mat = w.material("tongue", -1, {0.55, 0.16, 0.16, 1.0}, 0.5);
@@ -128,12 +132,18 @@ Status export_glb(HeadProject& project, const GenericHead& generic, const GlbExp
     const int jaw = w.node("Jaw", -1, hinge);
     add_child(model, head_node, jaw);
     const TriMesh lower = about(parts.lower_teeth, hinge), tongue = about(parts.placed.tongue, hinge);
-    // They open with the jaw under the same target name (the Jaw node also
-    // turns them, for tools that drive bones).
-    add_child(model, jaw, w.node("LowerTeeth", w.mesh("LowerTeeth", lower.positions, lower.normals, uv_if(lower, teeth_tex), lower.triangles, teeth_mat,
-                                                      {{"jawOpen", jaw_turn(lower)}})));
+    // They move with the jaw (and the tongue out) under the head's target
+    // names (the Jaw node also turns them, for tools that drive bones).
+    const std::vector<MorphTarget> lower_targets = part_targets(shapes, parts.lower_teeth.positions, [&](const FaceControls& fc) {
+      return pose_lower_teeth(face, parts.lower_teeth.positions, fc);
+    });
+    const std::vector<MorphTarget> tongue_targets = part_targets(shapes, parts.placed.tongue.positions, [&](const FaceControls& fc) {
+      return pose_tongue(face, parts.placed.tongue.positions, fc);
+    });
+    add_child(model, jaw, w.node("LowerTeeth", w.mesh("LowerTeeth", lower.positions, lower.normals, uv_if(lower, teeth_tex),
+                                                      lower.triangles, teeth_mat, lower_targets)));
     add_child(model, jaw, w.node("Tongue", w.mesh("Tongue", tongue.positions, tongue.normals, {}, tongue.triangles, tongue_mat,
-                                                  {{"jawOpen", jaw_turn(tongue)}})));
+                                                  tongue_targets)));
   }
 
   tinygltf::Scene scene;
@@ -145,6 +155,7 @@ Status export_glb(HeadProject& project, const GenericHead& generic, const GlbExp
     report->level = level;
     report->head_vertices = head.num_vertices();
     report->head_triangles = head.num_triangles();
+    report->head_targets = static_cast<int>(head_targets.size());
     report->nodes.clear();
     for (const tinygltf::Node& n : model.nodes) report->nodes.push_back(n.name);
   }

@@ -5,10 +5,12 @@
 // RightEye, Jaw > LowerTeeth, Tongue) whose eye and jaw nodes sit at the
 // eyes' centres and the jaw's hinge, so a tool turns the eyes or the jaw by
 // rotating a node. Head frame, metres, +y up, the face towards +z (glTF's
-// front). At rest, with the rig's two morph targets (jawOpen on the head,
-// lower teeth and tongue; likeness_browsUp on the head). Not yet: the other
-// ARKit shapes, visemes and expressions (they need the muscle layer), and
-// skinning (the Jaw node turns the lower teeth and tongue, not the chin).
+// front). At rest, with every expression, ARKit blendshape and viseme of the
+// muscle layer (anim/face_shapes.h) as a morph target of the head, baked on
+// its level (sparse where that is smaller); the eyes carry the gaze shapes,
+// the lower teeth and tongue the shapes that move the jaw or the tongue,
+// under the same names. Not yet: skinning (the Jaw node turns the lower
+// teeth and tongue, not the chin).
 #pragma once
 #include "head/head_model.h"
 #include "image/image.h"
@@ -34,6 +36,7 @@ struct GlbExportReport {
   int level = 0;
   int head_vertices = 0, head_triangles = 0;
   std::vector<std::string> nodes;  // in file order
+  int head_targets = 0;            // morph targets on the head
 };
 
 // The GLB bytes. Puts the project at rest first. InvalidInput without a

@@ -121,13 +121,7 @@ int GltfBuilder::mesh(const std::string& name, const std::vector<Vec3>& position
   tinygltf::Value::Array names;
   for (const MorphTarget& t : targets) {
     if (t.delta.size() != positions.size()) continue;
-    std::vector<double> tlo, thi;
-    const std::vector<float> d = floats(t.delta, tlo, thi);
-    const int acc = accessor(d.data(), d.size() * 4, n, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3,
-                             TINYGLTF_TARGET_ARRAY_BUFFER);
-    model.accessors.back().minValues = tlo;
-    model.accessors.back().maxValues = thi;
-    prim.targets.push_back({{"POSITION", acc}});
+    prim.targets.push_back({{"POSITION", morph_target(t.delta)}});
     weights.push_back(0);
     names.emplace_back(t.name);
   }
@@ -143,6 +137,63 @@ int GltfBuilder::mesh(const std::string& name, const std::vector<Vec3>& position
   }
   model.meshes.push_back(m);
   return static_cast<int>(model.meshes.size()) - 1;
+}
+
+int GltfBuilder::morph_target(const std::vector<Vec3>& delta) {
+  const int n = static_cast<int>(delta.size());
+  std::vector<double> lo, hi;
+  std::vector<float> d = floats(delta, lo, hi);  // lo, hi: recomputed below
+  // Offsets under 10 micrometres in every axis are dropped (zero): a tenth
+  // of a scan's noise, and a tail of every falloff that would cost bytes.
+  std::vector<std::uint32_t> moved;
+  for (int i = 0; i < n; ++i) {
+    bool keep = false;
+    for (int k = 0; k < 3; ++k) keep = keep || std::abs(d[3 * i + k]) >= 1e-5f;
+    if (keep) moved.push_back(static_cast<std::uint32_t>(i));
+    else d[3 * i] = d[3 * i + 1] = d[3 * i + 2] = 0.0f;
+  }
+  // glTF's min and max are of the values the accessor yields (the dropped
+  // offsets' zeros included).
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(i == 0 ? 1e300 : lo[k], double(d[3 * i + k]));
+      hi[k] = std::max(i == 0 ? -1e300 : hi[k], double(d[3 * i + k]));
+    }
+  const bool short_index = n <= 65536;
+  const std::size_t index_bytes = short_index ? 2 : 4;
+  // A sparse accessor needs one entry at least: a target that moves
+  // nothing keeps vertex 0 with a zero offset.
+  if (moved.empty() && n > 0) moved.push_back(0);
+  int acc = -1;
+  if (moved.size() * (index_bytes + 12) < static_cast<std::size_t>(n) * 12) {
+    std::vector<float> values;
+    for (std::uint32_t i : moved) values.insert(values.end(), {d[3 * i], d[3 * i + 1], d[3 * i + 2]});
+    tinygltf::Accessor a;
+    a.bufferView = -1;  // no base: zeros, replaced where sparse says
+    a.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+    a.count = static_cast<std::size_t>(n);
+    a.type = TINYGLTF_TYPE_VEC3;
+    a.sparse.isSparse = true;
+    a.sparse.count = static_cast<int>(moved.size());
+    if (short_index) {
+      std::vector<std::uint16_t> idx(moved.begin(), moved.end());
+      a.sparse.indices.bufferView = view(idx.data(), idx.size() * 2);
+      a.sparse.indices.componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
+    } else {
+      a.sparse.indices.bufferView = view(moved.data(), moved.size() * 4);
+      a.sparse.indices.componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+    }
+    a.sparse.indices.byteOffset = 0;
+    a.sparse.values.bufferView = view(values.data(), values.size() * 4);
+    a.sparse.values.byteOffset = 0;
+    model.accessors.push_back(a);
+    acc = static_cast<int>(model.accessors.size()) - 1;
+  } else {
+    acc = accessor(d.data(), d.size() * 4, n, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, TINYGLTF_TARGET_ARRAY_BUFFER);
+  }
+  model.accessors[static_cast<std::size_t>(acc)].minValues = lo;
+  model.accessors[static_cast<std::size_t>(acc)].maxValues = hi;
+  return acc;
 }
 
 int GltfBuilder::node(const std::string& name, int mesh, const Vec3& translation) {

@@ -38,10 +38,14 @@ class GltfBuilder {
   // A mesh of one triangle primitive: positions and normals (#V), uvs (#V,
   // or empty; glTF's v runs down the image, so v is flipped), triangles, and
   // morph targets (position offsets; weights 0; names in extras.targetNames,
-  // the convention three.js and avatar tools read).
+  // the convention three.js and avatar tools read). A target is written
+  // sparse (only the vertices it moves, by 10 micrometres or more in some
+  // axis) when that is smaller than dense.
   int mesh(const std::string& name, const std::vector<Vec3>& positions, const std::vector<Vec3>& normals,
            const std::vector<Vec2>& uvs, const std::vector<Tri>& triangles, int material,
            const std::vector<MorphTarget>& targets = {});
+  // The POSITION accessor of one morph target over n vertices (see mesh).
+  int morph_target(const std::vector<Vec3>& delta);
   // A node (name, mesh or -1, translation); returns its index.
   int node(const std::string& name, int mesh = -1, const Vec3& translation = Vec3::Zero());
 };

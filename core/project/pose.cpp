@@ -1,5 +1,6 @@
 #include "project/pose.h"
 
+#include "anim/face_rig.h"
 #include "mesh/geometry.h"
 
 #include <algorithm>
@@ -40,13 +41,7 @@ AnimationRig make_animation_rig(const TriMesh& control, const HeadAnnotations& a
     rig.kind.push_back(AnimationRig::Kind::Brow);
     rig.weight.push_back(x * x * (3.0 - 2.0 * x));  // smoothstep
   }
-  Vec3 top_back(0, -1e9, 1e9);
-  for (size_t i = 0; i < rig.moved.size(); ++i)
-    if (rig.kind[i] == AnimationRig::Kind::Jaw) {
-      top_back.y() = std::max(top_back.y(), rig.rest[i].y());
-      top_back.z() = std::min(top_back.z(), rig.rest[i].z());
-    }
-  rig.jaw_pivot = Vec3(0.5 * (box.min.x() + box.max.x()), top_back.y(), top_back.z());
+  rig.jaw_pivot = jaw_hinge(P, ann);  // the muscle layer's hinge (anim/face_rig.h)
   return rig;
 }
 

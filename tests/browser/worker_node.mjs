@@ -10,7 +10,8 @@
 //     come back as {ok:false, message} or a valid result: never an abort
 //     (an abort kills the page's worker);
 //   - a project file made by `likeness fit --project` opens, saves to the
-//     same bytes, and its cuts and byte flips give messages, never an abort.
+//     same bytes, and its cuts and byte flips give messages, never an abort;
+//     the muscle layer's 77 shapes bake on it (face_shapes_job).
 // Usage: node --no-experimental-fetch worker_node.mjs WEBDIR
 import { createRequire } from 'node:module';
 import fs from 'node:fs';
@@ -146,7 +147,7 @@ for (const [name, full] of [['bin.ply', binaryPly(40)], ['ascii.ply', Buffer.fro
 
 // --- the fit's jobs on bad input: messages, never aborts ------------------------
 {
-  const noFit = [core.animate_frame(0.5, 3), core.export_head(3, 'obj')];
+  const noFit = [core.animate_frame(0.5, 3), core.export_head(3, 'obj'), core.face_shapes_job(2)];
   check('animate/export before any fit say so', noFit.every((r) => !r.ok && /no fitted head/.test(r.message)),
         noFit.map((r) => r.message).join(' | '));
   const lines = [];
@@ -199,6 +200,15 @@ for (const [name, full] of [['bin.ply', binaryPly(40)], ['ascii.ply', Buffer.fro
       check('a project made by `likeness fit --project` opens in wasm as the fit returns it',
             r.ok && r.meshes.levels.length === 1 && r.stages.length === 4 && r.scan.vertexCount > 10000 && r.loadMs >= 0,
             r.ok ? `${full.length} bytes, level 1 ${r.meshes.levels[0].vertexCount} vertices, ${Math.round(r.loadMs)} ms` : r.message);
+      // The muscle layer's shapes baked on the opened head (level 1).
+      const fs1 = core.face_shapes_job(1);
+      const byName = fs1.ok ? Object.fromEntries(fs1.shapes.map((x) => [x.name, x])) : {};
+      const largest = (x) => { let m = 0; for (let i = 0; i + 2 < x.offsets.length; i += 3) m = Math.max(m, Math.hypot(x.offsets[i], x.offsets[i + 1], x.offsets[i + 2])); return m; };
+      check('face_shapes_job bakes the 77 shapes on the opened head, jawOpen moving by over 1 cm, neutral by nothing',
+            fs1.ok && fs1.shapes.length === 77 && fs1.shapes.every((x) => x.indices.length * 3 === x.offsets.length) &&
+            byName.jawOpen && largest(byName.jawOpen) > 0.01 && byName.neutral && byName.neutral.indices.length === 0 &&
+            byName.eyeBlinkLeft && byName.eyeBlinkLeft.indices.length > 0 && core.face_shapes_job(9).ok === false,
+            fs1.ok ? `level ${fs1.level}, ${fs1.vertexCount} vertices, jawOpen ${(1000 * largest(byName.jawOpen || { offsets: [] })).toFixed(1)} mm, ${Math.round(fs1.bakeMs)} ms` : fs1.message);
       const saved = core.save_project_job();
       check('...and saves to the same bytes', saved.ok && Buffer.compare(Buffer.from(saved.bytes), full) === 0,
             saved.ok ? `${saved.bytes.length} bytes` : saved.message);

@@ -2,6 +2,7 @@
 // project comes back bit for bit and poses and exports as the original;
 // the GLB's scene is the head for any glTF reader; cut, damaged, foreign
 // and future files are refused with a reason and never crash.
+#include "anim/bake.h"
 #include "head/generic_head.h"
 #include "io/io.h"
 #include "project/export.h"
@@ -27,6 +28,7 @@
 
 #include <cstring>
 #include <functional>
+#include <map>
 #include <random>
 #include <sstream>
 
@@ -573,39 +575,97 @@ TEST_CASE("GLB export: the head at its level with uvs and skin, the parts under 
   // The teeth's voids are transparent: alpha-masked.
   CHECK(m.materials.at(m.meshes.at(node("UpperTeeth").mesh).primitives[0].material).alphaMode == "MASK");
 
-  // Morph targets from the rig, named in extras.targetNames: jawOpen lowers
-  // the chin by over a centimetre and leaves the brows; likeness_browsUp
-  // lifts the brows and leaves the chin. The lower teeth open with the jaw.
+  // Morph targets: the muscle layer's 77 shapes on the head, named in
+  // extras.targetNames, each what bake_face_shapes makes on level 2 (sparse
+  // accessors read back), with their meaning: jawOpen lowers the chin by
+  // over a centimetre and leaves the brows; browInnerUp lifts the brows and
+  // leaves the chin. The parts carry the shapes that move them.
   const tinygltf::Mesh& hm = m.meshes.at(node("Head").mesh);
-  REQUIRE(hm.primitives[0].targets.size() == 2);
-  REQUIRE(hm.extras.Get("targetNames").ArrayLen() == 2);
-  CHECK(hm.extras.Get("targetNames").Get(0).Get<std::string>() == "jawOpen");
-  CHECK(hm.extras.Get("targetNames").Get(1).Get<std::string>() == "likeness_browsUp");
-  CHECK(hm.weights == std::vector<double>{0, 0});
-  auto delta = [&](int target, int v) {
-    const float* D = data(hm.primitives[0].targets[target].at("POSITION"));
-    return Vec3(D[3 * v], D[3 * v + 1], D[3 * v + 2]);
+  const std::vector<std::string>& names = face_shape_names();
+  REQUIRE(hm.primitives[0].targets.size() == names.size());
+  REQUIRE(hm.extras.Get("targetNames").ArrayLen() == names.size());
+  CHECK(r.head_targets == static_cast<int>(names.size()));
+  for (size_t t = 0; t < names.size(); ++t) CHECK(hm.extras.Get("targetNames").Get(int(t)).Get<std::string>() == names[t]);
+  CHECK(hm.weights == std::vector<double>(names.size(), 0.0));
+  // A target's offsets, dense or sparse (zeros where sparse leaves them).
+  auto offsets = [&](int accessor) {
+    const tinygltf::Accessor& acc = m.accessors.at(accessor);
+    std::vector<Vec3> out(acc.count, Vec3::Zero());
+    if (acc.bufferView >= 0) {
+      const float* D = data(accessor);
+      for (size_t i = 0; i < acc.count; ++i) out[i] = Vec3(D[3 * i], D[3 * i + 1], D[3 * i + 2]);
+    }
+    if (acc.sparse.isSparse) {
+      const tinygltf::BufferView& iv = m.bufferViews.at(acc.sparse.indices.bufferView);
+      const tinygltf::BufferView& vv = m.bufferViews.at(acc.sparse.values.bufferView);
+      const unsigned char* I = m.buffers.at(iv.buffer).data.data() + iv.byteOffset;
+      const float* V = reinterpret_cast<const float*>(m.buffers.at(vv.buffer).data.data() + vv.byteOffset);
+      for (int k = 0; k < acc.sparse.count; ++k) {
+        const size_t i = acc.sparse.indices.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT
+                             ? reinterpret_cast<const std::uint16_t*>(I)[k]
+                             : reinterpret_cast<const std::uint32_t*>(I)[k];
+        out.at(i) = Vec3(V[3 * k], V[3 * k + 1], V[3 * k + 2]);
+      }
+    }
+    return out;
   };
+  FaceRig face;
+  REQUIRE(make_face_rig(p.fit.control, generic, face).ok());
+  MultiresMesh work = p.fit.multires;
+  std::vector<BakedShape> baked;
+  REQUIRE(bake_face_shapes(face, &work, 2, {}, baked).ok());
+  int sparse = 0;
+  std::map<std::string, std::vector<Vec3>> head_delta;
+  for (size_t t = 0; t < names.size(); ++t) {
+    INFO(names[t]);
+    const int acc = hm.primitives[0].targets[t].at("POSITION");
+    sparse += m.accessors.at(acc).sparse.isSparse;
+    head_delta[names[t]] = offsets(acc);
+    const std::vector<Vec3>& d = head_delta[names[t]];
+    REQUIRE(d.size() == baked[t].level.size());
+    double worst = 0;
+    for (size_t i = 0; i < d.size(); ++i) worst = std::max(worst, (d[i] - baked[t].level[i]).cwiseAbs().maxCoeff());
+    CHECK(worst < 1.1e-5);  // float32, and offsets under 10 micrometres dropped
+  }
+  CHECK(sparse > 40);  // most shapes move a part of the face only
   const std::vector<int>& chin = generic.annotations.regions.at("chin");
   const std::vector<int>& brow = generic.annotations.regions.at("brow");
   double chin_drop = 0, chin_brow = 0, brow_lift = 0, brow_jaw = 0;
   for (int v : chin) {
-    chin_drop = std::max(chin_drop, -delta(0, v).y());
-    chin_brow = std::max(chin_brow, delta(1, v).norm());
+    chin_drop = std::max(chin_drop, -head_delta["jawOpen"][v].y());
+    chin_brow = std::max(chin_brow, head_delta["browInnerUp"][v].norm());
   }
   for (int v : brow) {
-    brow_lift = std::max(brow_lift, delta(1, v).y());
-    brow_jaw = std::max(brow_jaw, delta(0, v).norm());
+    brow_lift = std::max(brow_lift, head_delta["browInnerUp"][v].y());
+    brow_jaw = std::max(brow_jaw, head_delta["jawOpen"][v].norm());
   }
   INFO("chin drop " << chin_drop << " m, brow lift " << brow_lift << " m");
   CHECK(chin_drop > 0.01);
   CHECK(chin_brow < 1e-9);
   CHECK(brow_lift > 0.002);
   CHECK(brow_jaw < 1e-9);
+  auto target_names = [&](const std::string& n) {
+    std::vector<std::string> out;
+    const tinygltf::Mesh& mesh = m.meshes.at(node(n).mesh);
+    for (size_t t = 0; t < mesh.extras.Get("targetNames").ArrayLen(); ++t)
+      out.push_back(mesh.extras.Get("targetNames").Get(int(t)).Get<std::string>());
+    REQUIRE(out.size() == mesh.primitives[0].targets.size());
+    return out;
+  };
+  auto has = [](const std::vector<std::string>& v, const std::string& n) { return std::find(v.begin(), v.end(), n) != v.end(); };
+  const std::vector<std::string> left_eye = target_names("LeftEye"), lower = target_names("LowerTeeth"),
+                                 tongue = target_names("Tongue");
+  CHECK(has(left_eye, "eyeLookUpLeft"));
+  CHECK_FALSE(has(left_eye, "eyeLookUpRight"));
+  CHECK_FALSE(has(left_eye, "smile"));
+  CHECK(has(lower, "jawOpen"));
+  CHECK(has(lower, "viseme_aa"));
+  CHECK_FALSE(has(lower, "browInnerUp"));
+  CHECK(has(tongue, "tongueOut"));
   const tinygltf::Primitive& lower_prim = m.meshes.at(node("LowerTeeth").mesh).primitives[0];
-  REQUIRE(lower_prim.targets.size() == 1);
-  const float* LD = data(lower_prim.targets[0].at("POSITION"));
+  const auto jaw_at = std::find(lower.begin(), lower.end(), "jawOpen") - lower.begin();
+  const std::vector<Vec3> LD = offsets(lower_prim.targets[static_cast<size_t>(jaw_at)].at("POSITION"));
   double teeth_drop = 0;
-  for (size_t i = 0; i < parts.lower_teeth.positions.size(); ++i) teeth_drop = std::max(teeth_drop, -double(LD[3 * i + 1]));
+  for (const Vec3& d : LD) teeth_drop = std::max(teeth_drop, -d.y());
   CHECK(teeth_drop > 0.002);
 }

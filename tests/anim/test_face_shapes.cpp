@@ -1,0 +1,540 @@
+// The muscle layer's shapes measured on the mesh (issue 38): every ARKit
+// name, viseme and expression moves the face the way its name says, on the
+// side it names, by a measured amount; nothing turns over and neither the
+// lips nor the lids cross, on the generic head and synthetic people 1-5.
+#include "anim/bake.h"
+#include "anim/face_pose.h"
+#include "anim/face_rig.h"
+#include "anim/face_shapes.h"
+#include "components/components.h"
+#include "io/io.h"
+#include "pipeline/fit_head.h"
+#include "test_data.h"
+#include "mesh/geometry.h"
+#include "test_scan.h"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <functional>
+#include <map>
+#include <set>
+
+using namespace lk;
+
+namespace {
+
+FaceRig rig_of(const GenericHead& head) {
+  FaceRig rig;
+  const Status s = make_face_rig(head.mesh, test::generic_head(), rig);
+  INFO(s.message);
+  REQUIRE(s.ok());
+  return rig;
+}
+
+const FaceRig& generic_rig() {
+  static const FaceRig rig = rig_of(test::generic_head());
+  return rig;
+}
+
+FaceControls shape(const std::string& name) {
+  FaceControls c;
+  const Status s = face_shape(name, c);
+  INFO(s.message);
+  REQUIRE(s.ok());
+  return c;
+}
+
+// A pose of one shape and what the checks read from it (millimetres).
+struct Measure {
+  const FaceRig& rig;
+  FaceControls controls;
+  std::vector<Vec3> P;
+  Measure(const FaceRig& r, const std::string& name) : rig(r), controls(shape(name)), P(pose_face(r, controls)) {}
+  const FaceLandmarks& lm() const { return rig.landmarks; }
+  // Millimetres on the generic head's scale (a head of another size or in
+  // other units is measured against its own eye distance, FaceRig::scale).
+  double mm() const { return 1000.0 / rig.scale; }
+  Vec3 d(int v) const { return mm() * (P[static_cast<std::size_t>(v)] - rig.rest[static_cast<std::size_t>(v)]); }
+  double mouth_gap(const std::vector<Vec3>& Q) const {
+    return mm() * (Q[lm().upper_lip_mid].y() - Q[lm().lower_lip_mid].y());
+  }
+  double gap() const { return mouth_gap(P); }
+  double rest_gap() const { return mouth_gap(rig.rest); }
+  double width_change() const {
+    const auto w = [&](const std::vector<Vec3>& Q) { return Q[lm().mouth_corner[0]].x() - Q[lm().mouth_corner[1]].x(); };
+    return mm() * (w(P) - w(rig.rest));
+  }
+  double thickness_change() const {
+    const auto t = [&](const std::vector<Vec3>& Q) { return Q[lm().upper_lip_top].y() - Q[lm().lower_lip_bottom].y(); };
+    return mm() * (t(P) - t(rig.rest));
+  }
+  // The eye's opening (middle rim column) over its rest opening.
+  double lid_ratio(int eye) const {
+    const auto& up = lm().upper_lid[static_cast<std::size_t>(eye)];
+    const auto& lo = lm().lower_lid[static_cast<std::size_t>(eye)];
+    const std::size_t k = up.size() / 2;
+    return (P[up[k]] - P[lo[k]]).norm() / (rig.rest[up[k]] - rig.rest[lo[k]]).norm();
+  }
+  int lid_mid(int eye) const { return lm().upper_lid[static_cast<std::size_t>(eye)][lm().upper_lid[static_cast<std::size_t>(eye)].size() / 2]; }
+  Vec3 gaze(int eye) const { return eye_rotation(controls, eye) * Vec3::UnitZ(); }
+  bool still(int v) const { return d(v).norm() < 1e-9; }
+};
+
+// The frontmost point of the tongue moves forward by this (mm); past: how
+// far in front of the posed lower lip's middle it ends (mm).
+double tongue_tip_forward(const FaceRig& rig, const FaceControls& c, double* past = nullptr) {
+  ComponentPlacement place;
+  GenericHead fitted{TriMesh{}, test::generic_head().annotations};
+  fitted.mesh.positions = rig.rest;
+  fitted.mesh.triangles = test::generic_head().mesh.triangles;
+  REQUIRE(place_components(fitted, test::generic_head(), place).ok());
+  const TriMesh tongue = build_placed_components(place).tongue;
+  const std::vector<Vec3> posed = pose_tongue(rig, tongue.positions, c);
+  double before = -1e9, after = -1e9;
+  for (std::size_t i = 0; i < posed.size(); ++i) {
+    before = std::max(before, tongue.positions[i].z());
+    after = std::max(after, posed[i].z());
+  }
+  if (past) *past = 1000.0 / rig.scale * (after - pose_face(rig, c)[static_cast<std::size_t>(rig.landmarks.lower_lip_mid)].z());
+  return 1000.0 / rig.scale * (after - before);
+}
+
+using Check = std::function<void(const Measure&)>;
+
+// One side's landmark of a pair moves up (dy > 0) or down (dy < 0) by over
+// |dy| mm, the other side's by under `other` mm in all.
+void pair_moves(const Measure& m, std::array<int, 2> FaceLandmarks::*pair, const char* what, int side, double dy,
+                double other) {
+  const Vec3 a = m.d((m.lm().*pair)[static_cast<std::size_t>(side)]);
+  const Vec3 b = m.d((m.lm().*pair)[static_cast<std::size_t>(1 - side)]);
+  INFO(what << " (mm) " << a.transpose() << ", other side " << b.transpose());
+  CHECK((dy > 0 ? a.y() : -a.y()) > std::abs(dy));
+  CHECK(b.norm() < other);
+}
+
+Check corner(int side, double up, double out, double back) {
+  return [=](const Measure& m) {
+    const double sg = side == 0 ? 1.0 : -1.0;
+    const Vec3 a = m.d(m.lm().mouth_corner[static_cast<std::size_t>(side)]);
+    const Vec3 b = m.d(m.lm().mouth_corner[static_cast<std::size_t>(1 - side)]);
+    INFO("moved corner (mm) " << a.transpose() << ", other corner " << b.transpose());
+    if (up > 0) CHECK(a.y() > up);
+    if (up < 0) CHECK(a.y() < up);
+    if (out > 0) CHECK(sg * a.x() > out);
+    if (back > 0) CHECK(a.z() < -back);
+    CHECK(b.norm() < 0.5);
+  };
+}
+
+Check blink(int eye) {
+  return [=](const Measure& m) {
+    INFO("lid gaps over rest: " << m.lid_ratio(0) << " " << m.lid_ratio(1));
+    CHECK(m.lid_ratio(eye) < 0.10);
+    CHECK(m.lid_ratio(1 - eye) > 0.99);
+  };
+}
+
+Check gaze(int eye, const Vec3& towards, double lid_dy, double lid_dx) {
+  return [=](const Measure& m) {
+    const Vec3 g = m.gaze(eye), other = m.gaze(1 - eye);
+    const Vec3 lid = m.d(m.lid_mid(eye));
+    INFO("gaze " << g.transpose() << ", other " << other.transpose() << ", upper lid (mm) " << lid.transpose());
+    CHECK(g.dot(towards) > std::sin(20.0 * 3.14159265 / 180.0));
+    CHECK((other - Vec3::UnitZ()).norm() < 1e-12);
+    if (lid_dy < 0) CHECK(lid.y() < lid_dy);
+    if (lid_dy > 0) CHECK(lid.y() > lid_dy);
+    if (lid_dx < 0) CHECK(lid.x() < lid_dx);
+    if (lid_dx > 0) CHECK(lid.x() > lid_dx);
+    CHECK(m.still(m.lid_mid(1 - eye)));
+  };
+}
+
+std::map<std::string, Check> checks() {
+  std::map<std::string, Check> c;
+  for (int e = 0; e < 2; ++e) {
+    const std::string side = e == 0 ? "Left" : "Right";
+    const double out = e == 0 ? 1.0 : -1.0;  // the eye's outer side in x
+    c["eyeBlink" + side] = blink(e);
+    c["eyeLookDown" + side] = gaze(e, -Vec3::UnitY(), -0.5, 0);
+    c["eyeLookUp" + side] = gaze(e, Vec3::UnitY(), 0.3, 0);
+    c["eyeLookIn" + side] = gaze(e, Vec3(-out, 0, 0), 0, -0.3 * out);
+    c["eyeLookOut" + side] = gaze(e, Vec3(out, 0, 0), 0, 0.3 * out);
+    if (e == 1) {  // x flips for the right eye: the lid's x moves with the gaze
+      c["eyeLookIn" + side] = gaze(e, Vec3(-out, 0, 0), 0, 0.3);
+      c["eyeLookOut" + side] = gaze(e, Vec3(out, 0, 0), 0, -0.3);
+    }
+    c["eyeSquint" + side] = [e](const Measure& m) {
+      INFO("lid gaps over rest: " << m.lid_ratio(e) << ", other " << m.lid_ratio(1 - e));
+      CHECK(m.lid_ratio(e) < 0.8);
+      CHECK(m.lid_ratio(e) > 0.3);
+      CHECK(m.lid_ratio(1 - e) > 0.99);
+      CHECK(m.d(m.lm().cheek[static_cast<std::size_t>(e)]).y() > 0.5);
+    };
+    c["eyeWide" + side] = [e](const Measure& m) {
+      INFO("lid gaps over rest: " << m.lid_ratio(e) << ", other " << m.lid_ratio(1 - e));
+      CHECK(m.lid_ratio(e) > 1.15);
+      CHECK(m.lid_ratio(1 - e) > 0.99);
+      CHECK(m.lid_ratio(1 - e) < 1.01);
+    };
+    c["mouthSmile" + side] = corner(e, 3.0, 1.5, 0);
+    c["mouthFrown" + side] = corner(e, -3.0, 0, 0);
+    c["mouthDimple" + side] = corner(e, 0, 0, 2.0);
+    c["mouthStretch" + side] = corner(e, 0, 3.0, 0);
+    c["mouthPress" + side] = [e](const Measure& m) {
+      const Vec3 a = m.d(m.lm().upper_lip_side[static_cast<std::size_t>(e)]);
+      const Vec3 b = m.d(m.lm().upper_lip_side[static_cast<std::size_t>(1 - e)]);
+      INFO("upper lip on the side (mm) " << a.transpose() << ", other side " << b.transpose());
+      CHECK(a.z() < -0.5);
+      CHECK(b.norm() < 0.3);
+      CHECK(m.thickness_change() < -0.3);
+    };
+    c["mouthLowerDown" + side] = [e](const Measure& m) {
+      const double a = m.d(m.lm().lower_lip_side[static_cast<std::size_t>(e)]).y();
+      const double b = m.d(m.lm().lower_lip_side[static_cast<std::size_t>(1 - e)]).y();
+      INFO("lower lip dy (mm): side " << a << ", other " << b);
+      CHECK(a < -2.0);
+      CHECK(b > -0.5);
+    };
+    c["mouthUpperUp" + side] = [e](const Measure& m) {
+      const double a = m.d(m.lm().upper_lip_side[static_cast<std::size_t>(e)]).y();
+      const double b = m.d(m.lm().upper_lip_side[static_cast<std::size_t>(1 - e)]).y();
+      INFO("upper lip dy (mm): side " << a << ", other " << b);
+      CHECK(a > 2.0);
+      CHECK(b < 0.5);
+    };
+    c["browDown" + side] = [e, out](const Measure& m) {
+      pair_moves(m, &FaceLandmarks::brow_inner, "inner brow", e, -2.0, 0.5);
+      CHECK(out * m.d(m.lm().brow_inner[static_cast<std::size_t>(e)]).x() < -0.5);  // towards the nose
+    };
+    c["browOuterUp" + side] = [e](const Measure& m) { pair_moves(m, &FaceLandmarks::brow_outer, "outer brow", e, 3.0, 0.5); };
+    c["cheekSquint" + side] = [e](const Measure& m) { pair_moves(m, &FaceLandmarks::cheek, "cheek", e, 1.5, 0.3); };
+    c["noseSneer" + side] = [e](const Measure& m) { pair_moves(m, &FaceLandmarks::nose_wing, "nose wing", e, 2.0, 1.0); };
+  }
+  auto chin = [](const Measure& m) { return m.d(m.lm().chin); };
+  c["jawOpen"] = [chin](const Measure& m) {
+    INFO("chin (mm) " << chin(m).transpose());
+    CHECK(chin(m).y() < -10.0);
+    CHECK(m.still(m.lm().upper_lip_mid));
+  };
+  c["jawForward"] = [chin](const Measure& m) {
+    INFO("chin (mm) " << chin(m).transpose());
+    CHECK(chin(m).z() > 3.0);
+    CHECK(std::abs(chin(m).y()) < 2.0);
+  };
+  c["jawLeft"] = [chin](const Measure& m) { INFO("chin (mm) " << chin(m).transpose()); CHECK(chin(m).x() > 3.0); };
+  c["jawRight"] = [chin](const Measure& m) { INFO("chin (mm) " << chin(m).transpose()); CHECK(chin(m).x() < -3.0); };
+  c["mouthClose"] = [](const Measure& m) {
+    INFO("thickness change " << m.thickness_change() << " mm, gap " << m.gap());
+    CHECK(m.thickness_change() < -1.0);
+    CHECK(m.gap() <= m.rest_gap() + 1e-6);
+  };
+  c["mouthFunnel"] = [](const Measure& m) {
+    INFO("width change " << m.width_change() << " mm, gap " << m.gap());
+    CHECK(m.width_change() < -3.0);
+    CHECK(m.gap() > 2.0);
+  };
+  c["mouthPucker"] = [](const Measure& m) {
+    INFO("width change " << m.width_change() << " mm, gap " << m.gap() << ", upper lip forward " << m.d(m.lm().upper_lip_mid).z());
+    CHECK(m.width_change() < -5.0);
+    CHECK(m.d(m.lm().upper_lip_mid).z() > 2.0);
+    CHECK(m.gap() < 1.0);
+  };
+  c["mouthLeft"] = [](const Measure& m) {
+    CHECK(m.d(m.lm().mouth_corner[0]).x() > 3.0);
+    CHECK(m.d(m.lm().mouth_corner[1]).x() > 3.0);
+  };
+  c["mouthRight"] = [](const Measure& m) {
+    CHECK(m.d(m.lm().mouth_corner[0]).x() < -3.0);
+    CHECK(m.d(m.lm().mouth_corner[1]).x() < -3.0);
+  };
+  c["mouthRollLower"] = [](const Measure& m) {
+    INFO("lower lip " << m.d(m.lm().lower_lip_mid).transpose() << ", upper " << m.d(m.lm().upper_lip_mid).transpose());
+    CHECK(m.d(m.lm().lower_lip_mid).z() < -2.0);
+    CHECK(m.d(m.lm().upper_lip_mid).norm() < 0.5);
+  };
+  c["mouthRollUpper"] = [](const Measure& m) {
+    INFO("upper lip " << m.d(m.lm().upper_lip_mid).transpose() << ", lower " << m.d(m.lm().lower_lip_mid).transpose());
+    CHECK(m.d(m.lm().upper_lip_mid).z() < -2.0);
+    CHECK(m.d(m.lm().lower_lip_mid).norm() < 0.5);
+  };
+  c["mouthShrugLower"] = [chin](const Measure& m) {
+    INFO("lower lip bottom " << m.d(m.lm().lower_lip_bottom).transpose() << ", chin " << chin(m).transpose());
+    CHECK(m.d(m.lm().lower_lip_bottom).y() > 1.5);
+    CHECK(chin(m).y() > 1.0);
+  };
+  c["mouthShrugUpper"] = [](const Measure& m) {
+    INFO("upper lip top " << m.d(m.lm().upper_lip_top).transpose());
+    CHECK(m.d(m.lm().upper_lip_top).y() > 2.0);
+    CHECK(m.d(m.lm().lower_lip_bottom).norm() < 0.5);
+  };
+  c["browInnerUp"] = [](const Measure& m) {
+    CHECK(m.d(m.lm().brow_inner[0]).y() > 3.0);
+    CHECK(m.d(m.lm().brow_inner[1]).y() > 3.0);
+  };
+  c["cheekPuff"] = [](const Measure& m) {
+    const Vec3 a = m.d(m.lm().cheek[0]), b = m.d(m.lm().cheek[1]);
+    INFO("cheeks (mm) " << a.transpose() << " / " << b.transpose());
+    CHECK(a.norm() > 2.0);
+    CHECK(b.norm() > 2.0);
+    CHECK(a.x() > 0.5);
+    CHECK(b.x() < -0.5);
+  };
+  c["tongueOut"] = [](const Measure& m) {
+    double past = 0;
+    const double tip = tongue_tip_forward(m.rig, m.controls, &past);
+    INFO("tongue tip forward " << tip << " mm, " << past << " mm past the lower lip, mouth gap " << m.gap());
+    CHECK(tip > 10.0);
+    CHECK(past > 5.0);
+    CHECK(m.gap() > 3.0);
+  };
+  // Visemes.
+  c["viseme_sil"] = [](const Measure& m) {
+    for (std::size_t v = 0; v < m.P.size(); ++v) REQUIRE(m.P[v] == m.rig.rest[v]);
+  };
+  c["viseme_PP"] = [](const Measure& m) {
+    INFO("thickness change " << m.thickness_change() << ", gap " << m.gap());
+    CHECK(m.thickness_change() < -1.0);
+    CHECK(m.gap() <= m.rest_gap() + 1e-6);
+  };
+  c["viseme_FF"] = [](const Measure& m) {
+    INFO("lower lip " << m.d(m.lm().lower_lip_mid).transpose());
+    CHECK(m.d(m.lm().lower_lip_mid).z() < -1.5);
+    CHECK(m.d(m.lm().upper_lip_top).y() > 0.5);
+  };
+  c["viseme_TH"] = [](const Measure& m) {
+    CHECK(m.gap() > 2.0);
+    CHECK(tongue_tip_forward(m.rig, m.controls) > 5.0);
+  };
+  auto gap_width = [](double gap_lo, double gap_hi, double width_lo, double width_hi) {
+    return [=](const Measure& m) {
+      INFO("mouth gap " << m.gap() << " mm, width change " << m.width_change() << " mm");
+      CHECK(m.gap() > gap_lo);
+      CHECK(m.gap() < gap_hi);
+      CHECK(m.width_change() > width_lo);
+      CHECK(m.width_change() < width_hi);
+    };
+  };
+  c["viseme_DD"] = gap_width(3, 15, -1, 3);
+  c["viseme_kk"] = gap_width(3, 15, 1, 10);
+  c["viseme_CH"] = gap_width(1.5, 10, -20, -2);
+  c["viseme_SS"] = gap_width(-1, 5, 3, 15);
+  c["viseme_nn"] = gap_width(2, 10, -1, 3);
+  c["viseme_RR"] = gap_width(2, 10, -20, -2);
+  c["viseme_aa"] = gap_width(12, 40, -5, 5);
+  c["viseme_E"] = gap_width(5, 20, 2, 15);
+  c["viseme_I"] = gap_width(2, 10, 4, 20);
+  c["viseme_O"] = gap_width(8, 30, -20, -3);
+  c["viseme_U"] = [](const Measure& m) {
+    INFO("width change " << m.width_change());
+    CHECK(m.width_change() < -5.0);
+    CHECK(m.d(m.lm().upper_lip_mid).z() > 2.0);
+  };
+  // Expressions.
+  c["neutral"] = c["viseme_sil"];
+  c["smile"] = [](const Measure& m) {
+    CHECK(m.d(m.lm().mouth_corner[0]).y() > 3.0);
+    CHECK(m.d(m.lm().mouth_corner[1]).y() > 3.0);
+    CHECK(m.width_change() > 2.0);
+  };
+  c["openMouth"] = [](const Measure& m) { INFO("gap " << m.gap()); CHECK(m.gap() > 12.0); };
+  c["surprise"] = [](const Measure& m) {
+    for (int s = 0; s < 2; ++s) {
+      CHECK(m.d(m.lm().brow_inner[static_cast<std::size_t>(s)]).y() > 3.0);
+      CHECK(m.d(m.lm().brow_outer[static_cast<std::size_t>(s)]).y() > 3.0);
+      CHECK(m.lid_ratio(s) > 1.15);
+    }
+    CHECK(m.gap() > 5.0);
+  };
+  c["anger"] = [](const Measure& m) {
+    const auto apart = [&](const std::vector<Vec3>& Q) { return (Q[m.lm().brow_inner[0]] - Q[m.lm().brow_inner[1]]).norm(); };
+    for (int s = 0; s < 2; ++s) CHECK(m.d(m.lm().brow_inner[static_cast<std::size_t>(s)]).y() < -2.0);
+    CHECK(m.mm() * (apart(m.P) - apart(m.rig.rest)) < -1.0);
+    CHECK(m.lid_ratio(0) < 0.9);
+  };
+  c["sadness"] = [](const Measure& m) {
+    for (int s = 0; s < 2; ++s) {
+      CHECK(m.d(m.lm().brow_inner[static_cast<std::size_t>(s)]).y() > 2.0);
+      CHECK(m.d(m.lm().mouth_corner[static_cast<std::size_t>(s)]).y() < -2.0);
+    }
+  };
+  c["disgust"] = [](const Measure& m) {
+    for (int s = 0; s < 2; ++s) {
+      CHECK(m.d(m.lm().nose_wing[static_cast<std::size_t>(s)]).y() > 2.0);
+      CHECK(m.d(m.lm().upper_lip_side[static_cast<std::size_t>(s)]).y() > 1.0);
+    }
+  };
+  c["fear"] = [](const Measure& m) {
+    for (int s = 0; s < 2; ++s) {
+      CHECK(m.d(m.lm().brow_inner[static_cast<std::size_t>(s)]).y() > 2.0);
+      CHECK(m.lid_ratio(s) > 1.1);
+    }
+    CHECK(m.width_change() > 3.0);
+  };
+  c["blink"] = [](const Measure& m) {
+    CHECK(m.lid_ratio(0) < 0.10);
+    CHECK(m.lid_ratio(1) < 0.10);
+  };
+  c["wink"] = blink(0);
+  return c;
+}
+
+// No crossing: each lip-line column's upper vertex stays on or above its
+// lower one, each eye's upper rim column on or above its lower one (as
+// angles about the eye's centre).
+void check_no_crossing(const FaceRig& rig, const std::vector<Vec3>& P, const std::string& what) {
+  const FaceLandmarks& lm = rig.landmarks;
+  for (std::size_t k = 0; k < lm.upper_lip_line.size(); ++k) {
+    INFO(what << ": lip column " << k);
+    CHECK(P[lm.upper_lip_line[k]].y() >= P[lm.lower_lip_line[k]].y() - 1e-9);
+  }
+  for (int e = 0; e < 2; ++e) {
+    const Vec3 c = rig.lids[static_cast<std::size_t>(e)].center;
+    auto angle = [&](int v) { return std::atan2(P[v].y() - c.y(), P[v].z() - c.z()); };
+    const auto& up = lm.upper_lid[static_cast<std::size_t>(e)];
+    const auto& lo = lm.lower_lid[static_cast<std::size_t>(e)];
+    for (std::size_t k = 1; k + 1 < up.size(); ++k) {
+      INFO(what << ": eye " << e << " rim column " << k);
+      CHECK(angle(up[k]) > angle(lo[k]));
+    }
+  }
+}
+
+// The lips stay in front of the teeth: every lip-line column in front of
+// the teeth's frontmost point (the upper lip against the teeth at rest, the
+// lower lip against the teeth moved by the jaw).
+void check_lips_before_teeth(const FaceRig& rig, const FaceControls& c, const std::vector<Vec3>& P, const std::string& what) {
+  ComponentPlacement place;
+  GenericHead fitted{TriMesh{}, test::generic_head().annotations};
+  fitted.mesh.positions = rig.rest;
+  REQUIRE(place_components(fitted, test::generic_head(), place).ok());
+  const TriMesh teeth = build_placed_components(place).teeth;
+  const std::vector<Vec3> moved = pose_lower_teeth(rig, teeth.positions, c);
+  double front_rest = -1e9, front_moved = -1e9;
+  for (std::size_t i = 0; i < teeth.positions.size(); ++i) {
+    front_rest = std::max(front_rest, teeth.positions[i].z());
+    front_moved = std::max(front_moved, moved[i].z());
+  }
+  INFO(what << ": teeth front " << front_rest << " / " << front_moved);
+  for (int v : rig.landmarks.upper_lip_line) CHECK(P[v].z() > front_rest);
+  for (int v : rig.landmarks.lower_lip_line) CHECK(P[v].z() > front_moved);
+}
+
+}  // namespace
+
+TEST_CASE("face shapes: Apple's 52 ARKit names, the 15 visemes and 10 expressions, each with a recipe") {
+  REQUIRE(arkit_names().size() == 52);
+  REQUIRE(viseme_names().size() == 15);
+  REQUIRE(expression_names().size() == 10);
+  const std::set<std::string> unique(face_shape_names().begin(), face_shape_names().end());
+  CHECK(unique.size() == 77);
+  CHECK(viseme_names().front() == "viseme_sil");
+  CHECK(viseme_names().back() == "viseme_U");
+  for (const std::string& n : face_shape_names()) {
+    FaceControls c;
+    INFO(n);
+    CHECK(face_shape(n, c).ok());
+  }
+  FaceControls c;
+  CHECK(face_shape("eyeBlink_L", c).code == ErrorCode::InvalidInput);
+  CHECK_FALSE(face_controls_from_weights({{"smile", 1.0}, {"nope", 0.5}}, c).ok());
+}
+
+TEST_CASE("face rig: neutral weights give the rest shape exactly") {
+  const FaceRig& rig = generic_rig();
+  CHECK(pose_face(rig, FaceControls{}) == rig.rest);
+  std::map<std::string, double> zero;
+  for (const std::string& n : face_shape_names()) zero[n] = 0.0;
+  FaceControls c;
+  REQUIRE(face_controls_from_weights(zero, c).ok());
+  CHECK_FALSE(c.any());
+  CHECK(pose_face(rig, c) == rig.rest);
+  // NaN and out-of-range weights are clamped, not spread.
+  REQUIRE(face_controls_from_weights({{"jawOpen", std::nan("")}, {"smile", -3.0}}, c).ok());
+  CHECK(pose_face(rig, c) == rig.rest);
+}
+
+TEST_CASE("face rig: the lips stay closed (exactly still) when only the brows move") {
+  const FaceRig& rig = generic_rig();
+  for (const char* name : {"browInnerUp", "browOuterUpLeft", "browOuterUpRight", "browDownLeft", "browDownRight"}) {
+    const Measure m(rig, name);
+    INFO(name);
+    for (int v : rig.landmarks.upper_lip_line) CHECK(m.still(v));
+    for (int v : rig.landmarks.lower_lip_line) CHECK(m.still(v));
+    for (int v : rig.landmarks.mouth_corner) CHECK(m.still(v));
+  }
+}
+
+TEST_CASE("face rig: every shape does what its name says, measured on the generic head") {
+  const auto table = checks();
+  for (const std::string& name : face_shape_names()) {
+    INFO(name);
+    auto it = table.find(name);
+    REQUIRE(it != table.end());
+    const Measure m(generic_rig(), name);
+    it->second(m);
+  }
+}
+
+TEST_CASE("face rig: no triangle turns over, no lip or lid crosses, the lips stay before the teeth, every shape, synthetic people 1-5") {
+  const auto table = checks();
+  for (std::uint32_t seed = 0; seed <= 5; ++seed) {
+    const GenericHead head = seed == 0 ? test::generic_head() : test::make_test_head(seed);
+    const FaceRig rig = rig_of(head);
+    for (const std::string& name : face_shape_names()) {
+      const std::string what = "seed " + std::to_string(seed) + ", " + name;
+      INFO(what);
+      const Measure m(rig, name);
+      CHECK(count_turned_triangles(head.mesh.triangles, m.P, rig.rest) == 0);
+      check_no_crossing(rig, m.P, what);
+      check_lips_before_teeth(rig, m.controls, m.P, what);
+      if (seed > 0) table.at(name)(m);  // the same meaning on each person
+    }
+  }
+}
+
+TEST_CASE("face rig: bad input gets a message") {
+  FaceRig rig;
+  TriMesh small;
+  small.positions.assign(10, Vec3::Zero());
+  const Status s = make_face_rig(small, test::generic_head(), rig);
+  CHECK(s.code == ErrorCode::InvalidInput);
+  CHECK(s.message.find("vertices") != std::string::npos);
+  TriMesh nan = test::generic_head().mesh;
+  nan.positions[5].x() = std::nan("");
+  CHECK(make_face_rig(nan, test::generic_head(), rig).code == ErrorCode::InvalidInput);
+}
+
+TEST_CASE("face rig: every shape on real scans' fits (James, Fran, Demosthenes, Plato): meaning, no fold, no crossing") {
+  LK_REQUIRE_SHARED("head_scans");
+  const auto table = checks();
+  // Gutenberg's scan is refused by the fit (test_real_scans.cpp).
+  for (const char* rel : {"head_scans/james_menpo3d/james.obj", "head_scans/fran_cyberware/fran_cut.vtk",
+                          "head_scans/demosthenes_photoscan/demosthenes-low-res.obj",
+                          "head_scans/threedscans_plato/plato.obj"}) {
+    const std::string path = test::shared_data_dir() + "/" + rel;
+    if (!test::exists(path)) {
+      WARN("skipped: ../shared/data/" << rel << " is absent");
+      continue;
+    }
+    PointCloud scan;
+    REQUIRE(load_point_cloud_file(path, scan).ok());
+    FitHeadOptions options;
+    options.levels = 1;  // the rig reads the control mesh only
+    FitHeadResult fit;
+    const Status st = fit_head(scan, test::generic_head(), options, fit);
+    INFO(rel << ": " << st.message);
+    REQUIRE(st.ok());
+    GenericHead head{fit.control, test::generic_head().annotations};
+    const FaceRig rig = rig_of(head);
+    for (const std::string& name : face_shape_names()) {
+      const std::string what = std::string(rel) + ", " + name;
+      INFO(what);
+      const Measure m(rig, name);
+      CHECK(count_turned_triangles(head.mesh.triangles, m.P, rig.rest) == 0);
+      check_no_crossing(rig, m.P, what);
+      check_lips_before_teeth(rig, m.controls, m.P, what);
+      table.at(name)(m);
+    }
+  }
+}
