@@ -76,6 +76,7 @@ const ex = app.expressions = {
   bakeMs: null,         // the worker's bake of the last level fetched
   talking: false,
   talkFrames: 0,
+  talkPeaks: {},        // the last Talk's largest weight per shape drawn
   // Per drawn pose: the JS blend and the viewer's update_positions (ms, sums over frames).
   stats: { frames: 0, blendMs: 0, uploadMs: 0, lastBlendMs: 0, lastUploadMs: 0 },
   // For the tests and the console: copies of the last blended and the rest positions, a shape's data.
@@ -215,17 +216,23 @@ async function startTalk() {
   const generation = ++talkGeneration;
   ex.talking = true;
   ex.talkFrames = 0;
+  ex.talkPeaks = {};
   ex.stats = { frames: 0, blendMs: 0, uploadMs: 0, lastBlendMs: 0, lastUploadMs: 0 };
   ui.talk.textContent = 'Stop talking';
   ui.talk.setAttribute('aria-pressed', 'true');
   talkT0 = performance.now();
+  let drawnAtUpload = -1;
   const frame = () => {
     if (!ex.talking || generation !== talkGeneration) return;
+    // A pose only after the last one was drawn (a slow GPU: no blend thrown away).
+    if (app.viewer.frames_drawn() === drawnAtUpload) { requestAnimationFrame(frame); return; }
     const t = (performance.now() - talkT0) / 1000;
     if (t >= TALK_END) { stopTalk(); return; }
     ex.weights = talkWeights(t);
-    if (!draw()) { stopTalk(false); return; }
+    if (!draw()) { stopTalk(); return; }
+    drawnAtUpload = app.viewer.frames_drawn();
     ex.talkFrames++;
+    for (const [name, w] of Object.entries(ex.weights)) ex.talkPeaks[name] = Math.max(ex.talkPeaks[name] || 0, w);
     const st = ex.stats;
     ui.exprStats.textContent = 'Talking: ' + ex.talkFrames + ' frames, per frame on level ' + baked.level + ': blend ' +
       (st.blendMs / st.frames).toFixed(1) + ' ms + viewer update ' + (st.uploadMs / st.frames).toFixed(1) + ' ms (JavaScript, on the CPU).';

@@ -12,7 +12,7 @@ import { fittedHead } from './fit.mjs';
 const expr = (page) => page.evaluate(() => {
   const e = window.likeness.expressions;
   return { level: e.level, names: e.names.length, bakeMs: e.bakeMs, weights: { ...e.weights }, talking: e.talking,
-           talkFrames: e.talkFrames, stats: { ...e.stats }, pressed: document.getElementById('btn-talk').getAttribute('aria-pressed') };
+           talkFrames: e.talkFrames, talkPeaks: { ...e.talkPeaks }, stats: { ...e.stats }, pressed: document.getElementById('btn-talk').getAttribute('aria-pressed') };
 });
 
 // The largest difference between the blended and the rest positions (0: the rest exactly).
@@ -113,8 +113,11 @@ async function run(s) {
   // Talk to its end (back at rest), then stopped by its button, then by Animate.
   const t3 = await talkMs(page, 3);
   const afterTalk = await fromRest(page);
-  check('Talk plays its frames (visemes, blinks) and ends at rest', t3.talkFrames >= 10 && !t3.talking && t3.pressed === 'false' &&
-        afterTalk.d === 0 && Object.keys(t3.weights).length === 0, `${t3.talkFrames} frames; max |blend - rest| ${afterTalk.d}`);
+  const visemes = Object.keys(t3.talkPeaks).filter((n) => n.startsWith('viseme_') && t3.talkPeaks[n] > 0.3);
+  const blink = t3.talkPeaks.blink || 0;
+  check('Talk plays its frames (visemes cross-fading, blinks) and ends at rest', t3.talkFrames >= 10 && !t3.talking &&
+        t3.pressed === 'false' && visemes.length >= 6 && blink > 0.2 && afterTalk.d === 0 && Object.keys(t3.weights).length === 0,
+        `${t3.talkFrames} frames; visemes over 0.3: ${visemes.join(' ')}; blink peak ${blink.toFixed(2)}; max |blend - rest| ${afterTalk.d}`);
   await page.click('#btn-talk');
   await page.waitForFunction(() => window.likeness.expressions.talkFrames >= 5);
   const playing = await expr(page);
