@@ -50,6 +50,14 @@ async function run(s) {
         baked.names === 77 && (await page.locator('label[for="expr-w-mouthSmileLeft"]').textContent()) === 'mouthSmileLeft',
         `level ${baked.level}, ${baked.names} shapes in ${Math.round(baked.bakeMs)} ms`);
 
+  const sparse = await page.evaluate(() => {
+    const e = window.likeness.expressions;
+    const n = e.names.map((name) => e.shape(name).indices.length);
+    return { offsets: n.reduce((a, b) => a + b, 0), most: Math.max(...n), smile: e.shape('smile').indices.length };
+  });
+  note(`baked shapes at level 3: ${sparse.offsets.toLocaleString('en')} moved vertices over the 77 shapes ` +
+       `(${(sparse.offsets * 16 / 1048576).toFixed(1)} MB as indices + offsets), at most ${sparse.most.toLocaleString('en')} ` +
+       `in one shape, smile ${sparse.smile.toLocaleString('en')}`);
   await page.click('[data-preset="smile"]');
   await page.waitForFunction(() => window.likeness.expressions.weights.smile === 1 && window.likeness.expressions.stats.frames > 0);
   const smile = await canvasImage(page);
@@ -144,7 +152,7 @@ async function run(s) {
   await page.selectOption('#level', '2');
   const t2 = await talkMs(page, 2);
   check('at level 2 the shapes are baked for level 2 and Talk plays', t2.level === 2 && t2.talkFrames >= 10,
-        `level ${t2.level}, ${t2.talkFrames} frames`);
+        `level ${t2.level}, baked in ${Math.round(t2.bakeMs)} ms, ${t2.talkFrames} frames`);
   await page.selectOption('#level', '3');
   await page.check('#show-points');
   await page.waitForTimeout(300);
