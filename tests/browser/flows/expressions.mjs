@@ -4,9 +4,10 @@
 // (by keyboard) adds one shape's weight and the blend is rest + the sum of
 // the weighted offsets on that vertex; Talk plays frames and ends at rest,
 // Stop and Animate stop it; neutral gives the rest positions exactly. The
-// blend's ms per frame at levels 3 and 2 are printed as notes.
+// blend's ms per frame at levels 3 and 2 are printed as notes; the control
+// mesh (level 0) smiles too.
 import path from 'node:path';
-import { canvasImage, check, differingFraction, JOB_TIMEOUT_MS, note, runAlone, SHOT_DIR } from '../harness.mjs';
+import { bannerText, canvasImage, check, differingFraction, JOB_TIMEOUT_MS, note, runAlone, SHOT_DIR } from '../harness.mjs';
 import { fittedHead } from './fit.mjs';
 
 const expr = (page) => page.evaluate(() => {
@@ -153,6 +154,21 @@ async function run(s) {
   const t2 = await talkMs(page, 2);
   check('at level 2 the shapes are baked for level 2 and Talk plays', t2.level === 2 && t2.talkFrames >= 10,
         `level ${t2.level}, baked in ${Math.round(t2.bakeMs)} ms, ${t2.talkFrames} frames`);
+  // The control mesh (level 0): baked and posed the same way.
+  await page.selectOption('#level', '0');
+  await page.click('[data-preset="smile"]');
+  await page.waitForFunction(() => window.likeness.expressions.level === 0 || document.body.dataset.state === 'error', null,
+                             { timeout: JOB_TIMEOUT_MS });
+  await page.waitForTimeout(200);
+  const control = await page.evaluate(() => {
+    const e = window.likeness.expressions, p = e.positions(), r = e.restPositions();
+    let moved = 0;
+    for (let i = 0; i < p.length; i++) if (p[i] !== r[i]) moved++;
+    return { level: e.level, n: p.length / 3, moved, state: document.body.dataset.state };
+  });
+  await page.click('[data-preset="neutral"]');
+  check('on the control mesh (level 0) the smile is baked and shown too', control.level === 0 && control.moved > 0 &&
+        control.state === 'done', JSON.stringify(control) + ' ' + (await bannerText(page)));
   await page.selectOption('#level', '3');
   await page.check('#show-points');
   await page.waitForTimeout(300);
