@@ -10,7 +10,9 @@
 // vertices. GPU blending (morph targets in the renderer's vertex shader, so
 // that playback costs no CPU per frame, as issue 38 asks) is NOT done; the
 // measured cost per frame is in docs/design/page.md. The lower teeth and
-// tongue do not follow the jaw here (the shapes move the skin only).
+// tongue ride on the jaw: the shapes' jaw motions blended as I + sum of
+// w_i (M_i - I) (what the GLB's morph targets on the teeth do); the tongue
+// does not come out (tongueOut moves the skin only here).
 import { app, page, ui, showError } from './state.js';
 import { runJob } from './worker_client.js';
 import { onHeadShown, showStage, view } from './head_view.js';
@@ -77,12 +79,15 @@ const ex = app.expressions = {
   talking: false,
   talkFrames: 0,
   talkPeaks: {},        // the last Talk's largest weight per shape drawn
+  jawMatrix: null,      // the lower teeth's and tongue's last matrix (column-major 4x4, scan frame)
   // Per drawn pose: the JS blend and the viewer's update_positions (ms, sums over frames).
   stats: { frames: 0, blendMs: 0, uploadMs: 0, lastBlendMs: 0, lastUploadMs: 0 },
   // For the tests and the console: copies of the last blended and the rest positions, a shape's data.
   positions: () => (baked ? baked.out.slice() : null),
   restPositions: () => (baked ? baked.rest.slice() : null),
   shape: (name) => (baked && baked.shapes.get(name)) || null,
+  talkWeights: (t) => talkWeights(t),
+  talkSeconds: TALK_END,
 };
 
 function levelMesh(level) {
@@ -109,7 +114,7 @@ function ensureShapes() {
       showError('Expressions: ' + (r.ok ? 'the baked shapes have ' + r.vertexCount + ' vertices, the level ' + mesh.vertexCount : r.message));
       return null;
     }
-    const shapes = new Map(r.shapes.map((s) => [s.name, { indices: s.indices, offsets: s.offsets }]));
+    const shapes = new Map(r.shapes.map((s) => [s.name, { indices: s.indices, offsets: s.offsets, jaw: s.jawMatrix || null }]));
     const rest = new Float32Array(mesh.positions);
     baked = { fit, level, shapes, names: r.shapes.map((s) => s.name), rest, out: rest.slice() };
     Object.assign(ex, { level, names: baked.names, bakeMs: r.bakeMs });
@@ -145,6 +150,7 @@ function draw() {
   const err = app.viewer.update_positions(out);
   const t2 = performance.now();
   if (err) { stopTalk(); showError('Expressions: ' + err); return false; }
+  moveJaw(b);
   const st = ex.stats;
   st.frames++;
   st.lastBlendMs = t1 - t0;
@@ -152,6 +158,18 @@ function draw() {
   st.blendMs += st.lastBlendMs;
   st.uploadMs += st.lastUploadMs;
   return true;
+}
+
+// The lower teeth and tongue (app.jawComponents) on the blended jaw motion.
+const IDENTITY = new Float32Array([1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]);
+function moveJaw(b) {
+  const m = IDENTITY.slice();
+  for (const [name, w] of Object.entries(ex.weights)) {
+    const jaw = w && b.shapes.get(name) && b.shapes.get(name).jaw;
+    if (jaw) for (let i = 0; i < 16; i++) m[i] += w * (jaw[i] - IDENTITY[i]);
+  }
+  ex.jawMatrix = m;
+  for (const i of app.jawComponents || []) app.viewer.set_component_matrix(i, m);
 }
 
 function statsText() {
