@@ -47,8 +47,11 @@ val export_glb_job(int level) {
 // The muscle layer's shapes (core/anim: 10 expressions, ARKit's 52, 15
 // visemes) baked on the kept head at level (put at rest first), for
 // morph-target playback: each shape's moved vertices and their offsets in
-// the scan frame. Returns {ok, level, vertexCount, shapes: [{name, indices
-// (Uint32Array), offsets (Float32Array, 3 per index)}], bakeMs}.
+// the scan frame, and for a shape that moves the jaw its rigid motion in the
+// scan frame (for the lower teeth and tongue; blended as I + sum w (M - I),
+// as the GLB's morph targets on the teeth blend). Returns {ok, level,
+// vertexCount, shapes: [{name, indices (Uint32Array), offsets (Float32Array,
+// 3 per index), jawMatrix? (Float32Array, 4x4 column-major)}], bakeMs}.
 val face_shapes_job(int level) {
   if (!kept_project()) return error_result(lk::ErrorCode::InvalidInput, "no fitted head to animate");
   lk::HeadProject& p = *kept_project();
@@ -79,6 +82,21 @@ val face_shapes_job(int level) {
     shape.set("name", b.name);
     shape.set("indices", typed_array("Uint32Array", indices));
     shape.set("offsets", typed_array("Float32Array", offsets));
+    lk::Mat3 R;
+    lk::Vec3 t;
+    lk::jaw_motion(rig, b.controls, R, t);
+    if (!R.isIdentity() || t != lk::Vec3::Zero()) {
+      // Head frame p -> R (p - hinge) + hinge + t, seen in the scan frame.
+      const lk::Mat3& H = p.frame.head_to_scan;
+      const lk::Vec3 o = p.frame.head_offset, h = rig.jaw.hinge;
+      lk::Mat4 m = lk::Mat4::Identity();
+      m.topLeftCorner<3, 3>() = H * R * H.inverse();
+      m.topRightCorner<3, 1>() = H * (R * (o - h) + h + t - o);
+      std::vector<float> flat(16);
+      for (int col = 0; col < 4; ++col)
+        for (int row = 0; row < 4; ++row) flat[4 * col + row] = static_cast<float>(m(row, col));
+      shape.set("jawMatrix", typed_array("Float32Array", flat));
+    }
     shapes.call<void>("push", shape);
   }
   val r = ok_result();

@@ -216,6 +216,9 @@ const JOBS = {
   // {}: the kept head project as a .likeness.glb file's bytes.
   saveProject: () => core.save_project_job(),
   exportGlb: (msg) => core.export_glb_job(msg.level | 0),
+  // {level}: the muscle layer's 77 shapes baked on the kept head at level
+  // (sparse offsets in the scan frame) for the page's Expressions panel.
+  faceShapes: (msg) => core.face_shapes_job(msg.level | 0),
   // {name, buffer}: a saved project -> the kept head, as 'fit' returns it
   // (plus scan positions, texture, loadMs), without fitting.
   openProject: (msg) => withHeapBytes(msg.buffer, (ptr, size) => core.load_project_job(msg.name, ptr, size)),

@@ -170,7 +170,7 @@ test('Cancel with nothing running does nothing; refresh keeps working and error'
 });
 
 // ---- what each state enables ------------------------------------------------
-const ALWAYS_WITH_HEAD = ['exportObj', 'exportPly', 'exportGlb', 'animate', 'level', 'saveProject', 'showPoints', 'showComponents'];
+const ALWAYS_WITH_HEAD = ['exportObj', 'exportPly', 'exportGlb', 'animate', 'expressions', 'level', 'saveProject', 'showPoints', 'showComponents'];
 test('loading and a failed start-up enable nothing (Cancel neither)', () => {
   for (const s of [{ state: 'loading' }, { state: 'error', fatal: true, fit: true, scanFile: true }]) {
     const c = controlsFor(s);

@@ -209,6 +209,24 @@ for (const [name, full] of [['bin.ply', binaryPly(40)], ['ascii.ply', Buffer.fro
             byName.jawOpen && largest(byName.jawOpen) > 0.01 && byName.neutral && byName.neutral.indices.length === 0 &&
             byName.eyeBlinkLeft && byName.eyeBlinkLeft.indices.length > 0 && core.face_shapes_job(9).ok === false,
             fs1.ok ? `level ${fs1.level}, ${fs1.vertexCount} vertices, jawOpen ${(1000 * largest(byName.jawOpen || { offsets: [] })).toFixed(1)} mm, ${Math.round(fs1.bakeMs)} ms` : fs1.message);
+      // jawOpen's rigid jaw motion (for the lower teeth): applied to the rest
+      // place of the vertex jawOpen moves most (under the lip, whole on the
+      // jaw), it gives that vertex's offset; shapes that leave the jaw have none.
+      const jawCheck = (() => {
+        const x = byName.jawOpen, m = x && x.jawMatrix, rest = r.meshes.levels[0].positions;
+        if (!m || !rest) return null;
+        let k = 0, best = -1;
+        for (let j = 0; j < x.indices.length; j++) {
+          const len = Math.hypot(x.offsets[3 * j], x.offsets[3 * j + 1], x.offsets[3 * j + 2]);
+          if (len > best) { best = len; k = j; }
+        }
+        const v = x.indices[k], p = [rest[3 * v], rest[3 * v + 1], rest[3 * v + 2]];
+        const err = Math.hypot(...[0, 1, 2].map((c) => m[c] * p[0] + m[4 + c] * p[1] + m[8 + c] * p[2] + m[12 + c] - p[c] - x.offsets[3 * k + c]));
+        return { err, len: best };
+      })();
+      check('...jawOpen carries the jaw\'s motion, which moves its chin vertex by its offset; neutral and smile carry none',
+            !!jawCheck && jawCheck.err < 0.05 * jawCheck.len && !byName.neutral.jawMatrix && !(byName.smile || {}).jawMatrix,
+            jawCheck ? `error ${(1000 * jawCheck.err).toFixed(3)} mm of ${(1000 * jawCheck.len).toFixed(1)} mm` : 'no jawMatrix');
       const saved = core.save_project_job();
       check('...and saves to the same bytes', saved.ok && Buffer.compare(Buffer.from(saved.bytes), full) === 0,
             saved.ok ? `${saved.bytes.length} bytes` : saved.message);

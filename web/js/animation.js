@@ -216,11 +216,17 @@ function moveJaw(matrix) {
   for (const i of app.jawComponents) app.viewer.set_component_matrix(i, matrix);
 }
 
+// f() on every stopAnimation, running or not: it is called wherever another
+// job starts or the head changes (expressions.js stops Talk then).
+const stopListeners = [];
+export function onAnimationStop(f) { stopListeners.push(f); }
+
 // Stops and (restPose) puts the head back at rest, the pose export writes,
 // at the chosen level and full resolution. reshow=false when the caller
 // shows another mesh right after.
 export function stopAnimation(restPose = true, reshow = true) {
   const a = app.animation;
+  for (const f of stopListeners) f();
   ui.animate.checked = false;
   if (!a.running) return;
   a.running = false;

@@ -69,6 +69,10 @@ export function showComponents(c) {
   };
 }
 
+// f() after the subdivided head is shown at rest (expressions.js poses it again).
+const shownListeners = [];
+export function onHeadShown(f) { shownListeners.push(f); }
+
 // Shows a fit stage's mesh over the scan points, keeping the view.
 // quiet: no status line; posed: positions to show instead of the rest pose
 // (the adaptation swapping levels while moving).
@@ -90,6 +94,7 @@ export function showStage(row, quiet = false, posed = null) {
   view.level = row === 'subdivide' ? shownLevel() : null;
   ui.distanceLegend.hidden = !map;
   markShown(row);
+  if (row === 'subdivide' && !posed) for (const f of shownListeners) f();
   if (quiet) return;
   const what = row === 'subdivide' ? (ui.level.value === '0' ? 'control mesh' : 'level ' + ui.level.value)
     : stageItem(row).querySelector('.stage-name').textContent + ' result';

@@ -19,6 +19,7 @@
 //   head_view.js      which mesh of the fit is drawn, and how
 //   texture.js        the Texture stage
 //   animation.js      animation and adaptive detail
+//   expressions.js    Expressions: presets, shape sliders, Talk (the muscle layer's baked shapes)
 //   export.js         downloads
 //   project.js        Save project / Open project (.likeness.glb)
 //   keep.js           the head kept in IndexedDB (keep_store.js), offered back after a reload
@@ -35,6 +36,7 @@ import { wirePhotosHead } from './photos_head.js';
 import { wireHeadView } from './head_view.js';
 import { wireTexture } from './texture.js';
 import { wireAnimation } from './animation.js';
+import { wireExpressions } from './expressions.js';
 import { wireExport } from './export.js';
 import { wireProject } from './project.js';
 import { offerRestore, wireKeep } from './keep.js';
@@ -54,6 +56,7 @@ function wire() {
   wirePhotosHead();
   wireHeadView();
   wireAnimation();
+  wireExpressions();
   wireExport();
   wireProject();
   wireTexture();

@@ -143,7 +143,7 @@ export function controlsFor(s) {
     fit: idle && !!s.scanFile,
     // A head from the photos' face points: the main flow when no scan is loaded.
     photosHead: idle && !s.scan && (s.facePoints || 0) > 0,
-    exportObj: head, exportPly: head, exportGlb: head, animate: head, fullDetail: head, level: head, showPoints: head,
+    exportObj: head, exportPly: head, exportGlb: head, animate: head, expressions: head, fullDetail: head, level: head, showPoints: head,
     showComponents: head, saveProject: head,
     texture: head && s.photos > 0,
     exportTextured: head && !!s.texture,

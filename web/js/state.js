@@ -19,6 +19,8 @@ export const ui = {
   fit: $('btn-fit'), autoFit: $('auto-fit'), fitTotal: $('fit-total'), fitView: $('fit-view'),
   level: $('level'), showPoints: $('show-points'), showDistance: $('show-distance'), animate: $('animate'), animStats: $('anim-stats'),
   fullDetail: $('full-detail'),
+  expressions: $('expressions'), exprControls: $('expr-controls'), exprGroup: $('expr-group'), exprSliders: $('expr-sliders'),
+  exprStats: $('expr-stats'), talk: $('btn-talk'),
   fitNotes: $('fit-notes'), fitQuality: $('fit-quality'), qualityTitle: $('quality-title'), qualitySummary: $('quality-summary'),
   qualityList: $('quality-list'),
   showComponents: $('show-components'),
@@ -57,6 +59,7 @@ export const app = window.likeness = {
                          // multiresolution head lives in the worker (animation, export)
   shownStage: null,      // which fit mesh is drawn: align|local_fit|global_fit|subdivide
   animation: { running: false, frames: 0, fps: 0, updateMs: 0 },
+  expressions: null,     // expressions.js: the shape weights, the baked shapes' level, blend timings, talking
   downloads: [],         // [{name, size}] files handed to the browser (tests)
   componentsData: null,  // the worker's last components (meshes, generic eye and teeth textures)
   eyePhoto: null,        // {name, texture, circle, ms}: the iris from a photo of role "eye", on both eyeballs
@@ -110,6 +113,7 @@ function applyState(snap) {
   ui.exportGlb.disabled = !c.exportGlb;
   ui.animate.disabled = !c.animate;
   ui.fullDetail.disabled = !c.fullDetail;
+  ui.exprControls.disabled = !c.expressions;
   ui.level.disabled = !c.level;
   ui.showPoints.disabled = !c.showPoints;
   ui.showComponents.disabled = !c.showComponents;

@@ -2,7 +2,8 @@
 // request) finds no serious or critical violation in each state a person
 // meets: the page ready; an error (a broken scan); a scan loaded; working
 // (a fit running); done (the fitted head, its checks); a photo open to mark
-// landmarks (the clicker); the restore offer after a reload. Ready and done:
+// landmarks (the clicker); the restore offer after a reload; the Expressions
+// panel open. Ready and done (closed and open Expressions):
 // Tab reaches every visible, enabled control, each with a visible focus. A page of its
 // own (?autofit=0); the fit uses a 20k-point synthetic scan (skipped with
 // a note without the native CLI).
@@ -73,6 +74,8 @@ async function keyboardReach(page, label) {
   const controls = await page.evaluate(() => Array.from(document.querySelectorAll(
     'button, input, select, textarea, a[href], [tabindex]:not([tabindex="-1"])')).filter((e) => {
     if (e.disabled || e.closest('[hidden]') || e.tabIndex < 0) return false;
+    // Inside a closed <details>: not shown (Chromium still gives it a box).
+    if (e.closest('details:not([open])') && !e.closest('summary')) return false;
     const r = e.getBoundingClientRect();
     const st = getComputedStyle(e);
     // A visually hidden file input is reached through its label's focus ring.
@@ -106,6 +109,12 @@ async function run(s) {
   await page.waitForFunction(() => window.likeness.fit && window.likeness.fit.quality, null, { timeout: 60000 }).catch(() => {});
   await checkState(page, 'done (the fitted head and its checks)');
   await keyboardReach(page, 'done');
+  // The Expressions panel open: its presets, Talk, group select and sliders.
+  await page.click('#expressions summary');
+  await page.waitForFunction(() => document.querySelectorAll('#expr-sliders input').length > 0, null, { timeout: 60000 }).catch(() => {});
+  await checkState(page, 'done, Expressions open (presets, Talk, shape sliders)');
+  await keyboardReach(page, 'done, Expressions open');
+  await page.click('#expressions summary');
   await page.setInputFiles('#file-input', [{ name: 'front.png', mimeType: 'image/png', buffer: makePng(64, 48) }]);
   await settled(page);
   await page.evaluate(() => window.likeness.openClicker(0));

@@ -6,7 +6,7 @@
 // head, the scan points toggle, the Align row and the level selector switch
 // meshes. fittedHead() is that fit, made once per session and shared with
 // the flows that need a fitted head (fit-checks, fit-threads, export,
-// animation, texture, eye-smile, fit-cancel).
+// animation, expressions, texture, eye-smile, fit-cancel).
 import os from 'node:os';
 import path from 'node:path';
 import { bannerText, canvasImage, check, differingFraction, note, runAlone, setFile, settled, shot, SHOT_DIR,

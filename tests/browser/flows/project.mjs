@@ -1,7 +1,7 @@
 // Save project / Open project: "Save project" downloads the fitted (and,
 // after the texture flow, textured) head as a .likeness.glb; a freshly
 // loaded page opens it and shows the same head without fitting (same level
-// sizes and positions, the same skin), animates and exports it; a cut file
+// sizes and positions, the same skin), animates, smiles (Expressions) and exports it; a cut file
 // is refused with its reason and the head stays; the checks measured again
 // agree with the original's; the file chosen among others in the Inputs
 // card opens too.
@@ -81,6 +81,21 @@ async function run(s) {
   const [qBefore, qAfter] = [await quality(page), await quality(fresh)];
   check('the checks measured again on the opened head are the original\'s', qBefore.ok && JSON.stringify(qBefore) === JSON.stringify(qAfter),
         `original ${JSON.stringify(qBefore)}; opened ${JSON.stringify(qAfter)}`);
+
+  // The opened head takes expressions too (the worker bakes the head it keeps).
+  await fresh.click('#expressions summary');
+  await fresh.click('[data-preset="smile"]');
+  const smiled = await fresh.waitForFunction(() => window.likeness.expressions.stats.frames > 0, null, { timeout: JOB_TIMEOUT_MS })
+    .then(() => fresh.evaluate(() => {
+      const e = window.likeness.expressions, p = e.positions(), r = e.restPositions();
+      let moved = 0;
+      for (let i = 0; i < p.length; i += 3) if (p[i] !== r[i] || p[i + 1] !== r[i + 1] || p[i + 2] !== r[i + 2]) moved++;
+      return { names: e.names.length, moved, smile: e.shape('smile').indices.length };
+    }), () => null);
+  await fresh.click('[data-preset="neutral"]');
+  await fresh.click('#expressions summary');
+  check('...and smiles with the Expressions panel', !!smiled && smiled.names === 77 && smiled.moved > 0 && smiled.moved <= smiled.smile,
+        JSON.stringify(smiled));
 
   // Exported from the opened project: the finest level's OBJ has its vertices.
   const exportP = fresh.waitForEvent('download', { timeout: JOB_TIMEOUT_MS });

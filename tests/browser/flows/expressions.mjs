@@ -1,0 +1,225 @@
+// Expressions (issue 38, in the page) on the fitted head: opening the panel
+// bakes the 77 shapes at the level shown; the smile preset changes the
+// canvas and lifts both mouth corners (along the head's up); a slider
+// (by keyboard) adds one shape's weight and the blend is rest + the sum of
+// the weighted offsets on that vertex; Talk plays frames and ends at rest,
+// Stop and Animate stop it; open mouth turns the lower teeth with the jaw;
+// neutral gives the rest positions exactly. The
+// blend's ms per frame at levels 3 and 2 are printed as notes; the control
+// mesh (level 0) smiles too.
+import path from 'node:path';
+import { bannerText, canvasImage, check, differingFraction, JOB_TIMEOUT_MS, note, runAlone, SHOT_DIR } from '../harness.mjs';
+import { fittedHead } from './fit.mjs';
+
+const expr = (page) => page.evaluate(() => {
+  const e = window.likeness.expressions;
+  return { level: e.level, names: e.names.length, bakeMs: e.bakeMs, weights: { ...e.weights }, talking: e.talking,
+           talkFrames: e.talkFrames, talkPeaks: { ...e.talkPeaks }, stats: { ...e.stats }, pressed: document.getElementById('btn-talk').getAttribute('aria-pressed') };
+});
+
+// The largest difference between the blended and the rest positions (0: the rest exactly).
+const fromRest = (page) => page.evaluate(() => {
+  const e = window.likeness.expressions, p = e.positions(), r = e.restPositions();
+  const level = window.likeness.fit.meshes.levels[e.level - 1].positions;
+  let d = 0, fitted = 0;
+  for (let i = 0; i < p.length; i++) { d = Math.max(d, Math.abs(p[i] - r[i])); fitted = Math.max(fitted, Math.abs(r[i] - level[i])); }
+  return { d, fitted, n: p.length };
+});
+
+async function talkMs(page, level) {
+  await page.click('#btn-talk');
+  // Talk starts once the shapes of this level are baked, and ends by itself.
+  await page.waitForFunction(() => window.likeness.expressions.talking, null, { timeout: JOB_TIMEOUT_MS });
+  await page.waitForFunction(() => !window.likeness.expressions.talking, null, { timeout: JOB_TIMEOUT_MS });
+  const e = await expr(page);
+  note(`Talk on level ${level}: ${e.talkFrames} frames, per frame blend ${(e.stats.blendMs / e.stats.frames).toFixed(2)} ms + ` +
+       `viewer update_positions ${(e.stats.uploadMs / e.stats.frames).toFixed(2)} ms (JS on the CPU)`);
+  return e;
+}
+
+async function run(s) {
+  const { page, fit } = await fittedHead(s);
+  if (!fit) return;
+  await page.selectOption('#level', '3');
+  await page.uncheck('#show-points');  // the face, not the scan's points over it
+  const rest = await canvasImage(page);
+  if (SHOT_DIR) await page.locator('#canvas').screenshot({ path: path.join(SHOT_DIR, 'page_expression_rest.png') });
+  await page.click('#expressions summary');
+  await page.waitForFunction(() => window.likeness.expressions.level !== null &&
+                             document.querySelectorAll('#expr-sliders input').length > 0, null, { timeout: JOB_TIMEOUT_MS });
+  const baked = await expr(page);
+  check('opening Expressions bakes the 77 shapes on the level shown, and shows sliders named by shape', baked.level === 3 &&
+        baked.names === 77 && (await page.locator('label[for="expr-w-mouthSmileLeft"]').textContent()) === 'mouthSmileLeft',
+        `level ${baked.level}, ${baked.names} shapes in ${Math.round(baked.bakeMs)} ms`);
+
+  const sparse = await page.evaluate(() => {
+    const e = window.likeness.expressions;
+    const n = e.names.map((name) => e.shape(name).indices.length);
+    return { offsets: n.reduce((a, b) => a + b, 0), most: Math.max(...n), smile: e.shape('smile').indices.length };
+  });
+  note(`baked shapes at level 3: ${sparse.offsets.toLocaleString('en')} moved vertices over the 77 shapes ` +
+       `(${(sparse.offsets * 16 / 1048576).toFixed(1)} MB as indices + offsets), at most ${sparse.most.toLocaleString('en')} ` +
+       `in one shape, smile ${sparse.smile.toLocaleString('en')}`);
+  await page.click('[data-preset="smile"]');
+  await page.waitForFunction(() => window.likeness.expressions.weights.smile === 1 && window.likeness.expressions.stats.frames > 0);
+  const smile = await canvasImage(page);
+  const smileDiff = differingFraction(rest, smile);
+  // The vertex each side's mouthSmile moves most is the mouth corner's; the
+  // smile moves it along the head's up (fit.headUp, from the worker's frame).
+  const corners = await page.evaluate(() => {
+    const e = window.likeness.expressions, p = e.positions(), r = e.restPositions(), up = window.likeness.fit.headUp;
+    const most = (name) => {
+      const s = e.shape(name);
+      let best = -1, at = -1;
+      for (let k = 0; k < s.indices.length; k++) {
+        const len = Math.hypot(s.offsets[3 * k], s.offsets[3 * k + 1], s.offsets[3 * k + 2]);
+        if (len > best) { best = len; at = s.indices[k]; }
+      }
+      return { at, len: best };
+    };
+    const lift = (v) => (p[3 * v] - r[3 * v]) * up[0] + (p[3 * v + 1] - r[3 * v + 1]) * up[1] + (p[3 * v + 2] - r[3 * v + 2]) * up[2];
+    const L = most('mouthSmileLeft'), R = most('mouthSmileRight');
+    return { left: lift(L.at), right: lift(R.at), leftLen: L.len, rightLen: R.len, leftAt: L.at, rightAt: R.at };
+  });
+  check('the smile preset changes the canvas and lifts both mouth corners', smileDiff > 0.002 &&
+        corners.left > 0.3 * corners.leftLen && corners.right > 0.3 * corners.rightLen,
+        `${(100 * smileDiff).toFixed(2)} % of pixels differ; corners up ${corners.left.toFixed(3)} / ${corners.right.toFixed(3)} ` +
+        `(their mouthSmile offsets ${corners.leftLen.toFixed(3)} / ${corners.rightLen.toFixed(3)})`);
+  if (SHOT_DIR) {
+    await page.locator('#canvas').screenshot({ path: path.join(SHOT_DIR, 'page_expression_smile.png') });
+    await page.locator('#expressions').screenshot({ path: path.join(SHOT_DIR, 'page_expressions_panel.png') });
+  }
+
+  // One slider by keyboard: mouthSmileLeft to 0.10, on top of the smile.
+  await page.selectOption('#expr-group', 'mouth');
+  await page.focus('#expr-w-mouthSmileLeft');
+  for (let i = 0; i < 10; i++) await page.keyboard.press('ArrowRight');
+  await page.waitForTimeout(200);
+  const slid = await expr(page);
+  const sum = await page.evaluate((v) => {
+    const e = window.likeness.expressions, p = e.positions(), r = e.restPositions();
+    const at = (name) => { const s = e.shape(name), k = s.indices.indexOf(v); return k < 0 ? [0, 0, 0] : Array.from(s.offsets.subarray(3 * k, 3 * k + 3)); };
+    const a = at('smile'), b = at('mouthSmileLeft');
+    let err = 0;
+    for (let c = 0; c < 3; c++) err = Math.max(err, Math.abs(p[3 * v + c] - (r[3 * v + c] + a[c] + 0.1 * b[c])));
+    return { err, output: document.querySelector('output[for="expr-w-mouthSmileLeft"]').value };
+  }, corners.leftAt);
+  check('a slider (arrow keys) sets one shape\'s weight; the corner is rest + smile + 0.1 mouthSmileLeft',
+        JSON.stringify(slid.weights) === JSON.stringify({ smile: 1, mouthSmileLeft: 0.1 }) && sum.err < 1e-4 && sum.output === '0.10',
+        `weights ${JSON.stringify(slid.weights)}, shown ${sum.output}, blend error ${sum.err.toExponential(2)}`);
+
+  // Open mouth: the lower teeth and tongue turn with the jaw. The vertex
+  // openMouth moves most (on the chin, whole on the jaw) and the jaw's
+  // matrix applied to its rest place move alike, and down.
+  await page.click('[data-preset="openMouth"]');
+  await page.waitForFunction(() => window.likeness.expressions.weights.openMouth === 1);
+  await page.waitForTimeout(200);
+  const jaw = await page.evaluate(() => {
+    const e = window.likeness.expressions, r = e.restPositions(), m = e.jawMatrix, up = window.likeness.fit.headUp;
+    const s = e.shape('openMouth');
+    let best = -1, k = -1;
+    for (let j = 0; j < s.indices.length; j++) {
+      const len = Math.hypot(s.offsets[3 * j], s.offsets[3 * j + 1], s.offsets[3 * j + 2]);
+      if (len > best) { best = len; k = j; }
+    }
+    const v = s.indices[k], p = [r[3 * v], r[3 * v + 1], r[3 * v + 2]];
+    const moved = [0, 1, 2].map((c) => m[c] * p[0] + m[4 + c] * p[1] + m[8 + c] * p[2] + m[12 + c] - p[c]);
+    const skin = [0, 1, 2].map((c) => s.offsets[3 * k + c]);
+    const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    return { jawDown: dot(moved, up), skinDown: dot(skin, up), jawLen: Math.hypot(...moved), skinLen: best,
+             cos: dot(moved, skin) / (Math.hypot(...moved) * best), components: (window.likeness.jawComponents || []).length };
+  });
+  if (SHOT_DIR) await page.locator('#canvas').screenshot({ path: path.join(SHOT_DIR, 'page_expression_open_mouth.png') });
+  check('open mouth turns the lower teeth and tongue with the jaw: the chin\'s rest place moves as the chin does, down',
+        jaw.components > 0 && jaw.jawDown < 0 && jaw.cos > 0.9 && jaw.jawLen > 0.7 * jaw.skinLen && jaw.jawLen < 1.3 * jaw.skinLen,
+        `jaw moves it ${jaw.jawLen.toFixed(4)} (${jaw.jawDown.toFixed(4)} along up), the skin ${jaw.skinLen.toFixed(4)} ` +
+        `(${jaw.skinDown.toFixed(4)}), cosine ${jaw.cos.toFixed(3)}; ${jaw.components} parts on the jaw`);
+
+  // Neutral: the rest positions exactly (the fitted level's), and the rest image.
+  await page.click('[data-preset="neutral"]');
+  await page.waitForTimeout(200);
+  const neutral = await fromRest(page);
+  const neutralImage = await canvasImage(page);
+  const neutralDiff = differingFraction(rest, neutralImage);
+  const sliderZero = await page.inputValue('#expr-w-mouthSmileLeft');
+  const jawRest = await page.evaluate(() => Array.from(window.likeness.expressions.jawMatrix).join(','));
+  check('neutral gives the rest positions exactly, the rest image, zeroed sliders and the jaw at rest', neutral.d === 0 &&
+        neutral.fitted === 0 && neutralDiff < 0.002 && sliderZero === '0' && jawRest === '1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1',
+        `max |blend - rest| ${neutral.d}, |rest - fitted level| ${neutral.fitted} over ${neutral.n / 3} vertices; ` +
+        `${(100 * neutralDiff).toFixed(3)} % of pixels differ; slider ${sliderZero}`);
+
+  // Talk to its end (back at rest), then stopped by its button, then by Animate.
+  const t3 = await talkMs(page, 3);
+  const afterTalk = await fromRest(page);
+  // What Talk plays, sampled every millisecond (the frames drawn depend on
+  // the GPU): visemes at full weight, the blink closing fully, and no cut:
+  // the fastest change is the blink closing (a smoothstep over 70 ms, at
+  // most 0.0214 per ms), where a cut would jump by a whole weight.
+  const sequence = await page.evaluate(() => {
+    const e = window.likeness.expressions, peaks = {};
+    let jump = 0, prev = {};
+    for (let t = 0; t <= e.talkSeconds; t += 0.001) {
+      const w = e.talkWeights(t);
+      for (const n of new Set([...Object.keys(w), ...Object.keys(prev)])) jump = Math.max(jump, Math.abs((w[n] || 0) - (prev[n] || 0)));
+      for (const [n, v] of Object.entries(w)) peaks[n] = Math.max(peaks[n] || 0, v);
+      prev = w;
+    }
+    return { peaks, jump, end: Object.keys(e.talkWeights(e.talkSeconds)).length };
+  });
+  const visemes = Object.keys(sequence.peaks).filter((n) => n.startsWith('viseme_') && sequence.peaks[n] >= 0.7);
+  const drawn = Object.keys(t3.talkPeaks).filter((n) => n.startsWith('viseme_'));
+  check('Talk plays its frames (visemes cross-fading, blinks) and ends at rest', t3.talkFrames >= 5 && !t3.talking &&
+        t3.pressed === 'false' && visemes.length >= 8 && sequence.peaks.blink > 0.99 && sequence.jump < 0.03 && sequence.end === 0 &&
+        drawn.length >= 3 && afterTalk.d === 0 && Object.keys(t3.weights).length === 0,
+        `${t3.talkFrames} frames drew ${drawn.length} visemes; the sequence: ${visemes.length} visemes at 0.7 or more ` +
+        `(${visemes.join(' ')}), blink peak ${(sequence.peaks.blink || 0).toFixed(2)}, largest step in 1 ms ${sequence.jump.toFixed(4)}; ` +
+        `max |blend - rest| ${afterTalk.d}`);
+  await page.click('#btn-talk');
+  await page.waitForFunction(() => window.likeness.expressions.talkFrames >= 5);
+  const playing = await expr(page);
+  await page.click('#btn-talk');
+  const stoppedAt = (await expr(page)).talkFrames;
+  await page.waitForTimeout(300);
+  const stopped = await expr(page);
+  const stopRest = await fromRest(page);
+  check('Talk stops on its button, at rest, and draws no more frames', playing.talking && playing.pressed === 'true' &&
+        !stopped.talking && stopped.talkFrames === stoppedAt && stopped.pressed === 'false' && stopRest.d === 0,
+        `talking ${playing.talking} -> ${stopped.talking}, frames ${stoppedAt} -> ${stopped.talkFrames}, max |blend - rest| ${stopRest.d}`);
+  await page.click('#btn-talk');
+  await page.waitForFunction(() => window.likeness.expressions.talkFrames >= 3);
+  await page.check('#animate');
+  await page.waitForTimeout(500);
+  const byAnimate = await page.evaluate(() => ({ talking: window.likeness.expressions.talking, running: window.likeness.animation.running,
+                                                 weights: Object.keys(window.likeness.expressions.weights).length }));
+  await page.uncheck('#animate');
+  await page.waitForTimeout(1500);  // the rest pose comes back from the worker
+  check('Animate stops Talk (one thing moves the head at a time)', !byAnimate.talking && byAnimate.running && byAnimate.weights === 0,
+        JSON.stringify(byAnimate));
+
+  // Level 2: baked again for that level, the blend's cost there.
+  await page.selectOption('#level', '2');
+  const t2 = await talkMs(page, 2);
+  check('at level 2 the shapes are baked for level 2 and Talk plays', t2.level === 2 && t2.talkFrames >= 5,
+        `level ${t2.level}, baked in ${Math.round(t2.bakeMs)} ms, ${t2.talkFrames} frames`);
+  // The control mesh (level 0): baked and posed the same way.
+  await page.selectOption('#level', '0');
+  await page.click('[data-preset="smile"]');
+  await page.waitForFunction(() => window.likeness.expressions.level === 0 || document.body.dataset.state === 'error', null,
+                             { timeout: JOB_TIMEOUT_MS });
+  await page.waitForTimeout(200);
+  const control = await page.evaluate(() => {
+    const e = window.likeness.expressions, p = e.positions(), r = e.restPositions();
+    let moved = 0;
+    for (let i = 0; i < p.length; i++) if (p[i] !== r[i]) moved++;
+    return { level: e.level, n: p.length / 3, moved, state: document.body.dataset.state };
+  });
+  await page.click('[data-preset="neutral"]');
+  check('on the control mesh (level 0) the smile is baked and shown too', control.level === 0 && control.moved > 0 &&
+        control.state === 'done', JSON.stringify(control) + ' ' + (await bannerText(page)));
+  await page.selectOption('#level', '3');
+  await page.check('#show-points');
+  await page.waitForTimeout(300);
+}
+
+export const flow = { name: 'expressions', title: 'Expressions: presets, shape sliders, Talk, on the fitted head', run };
+runAlone(import.meta.url, flow);
