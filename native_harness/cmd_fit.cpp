@@ -44,7 +44,7 @@ int run_fit(const Args& args) {
   if (!only_known_options(cmd, args,
                           {"scan", "out", "levels", "up", "facing", "no-orientation-check", "face-only", "whole-head",
                            "no-eye-region", "scanned-neck", "denoise", "no-denoise", "widen-footprints", "data-level", "dump",
-                           "scan-frame", "generic-head", "project"}))
+                           "scan-frame", "generic-head", "project", "no-project"}))
     return 2;
   const std::string scan_path = args.get("scan"), out_dir = args.get("out");
   if (scan_path.empty() || out_dir.empty()) return fail(cmd, "needs --scan FILE and --out DIR");
@@ -81,8 +81,11 @@ int run_fit(const Args& args) {
   const bool dump = args.has("dump"), scan_frame = args.has("scan-frame");
   // --project FILE: the whole head project as one GLB (project_file.h), for
   // `likeness project`, `likeness texture --project` and the page.
-  const std::string project_path = args.get("project");
-  if (args.has("project") && project_path.empty()) return fail(cmd, "--project needs a file name, e.g. head.likeness.glb");
+  // Written to DIR/head.likeness.glb unless --project names another file or
+  // --no-project asks for none (`likeness export --head DIR` reads it).
+  const std::string project_path = args.has("no-project") ? std::string()
+                                   : args.get("project", out_dir + "/head.likeness.glb");
+  if (args.has("project") && args.get("project").empty()) return fail(cmd, "--project needs a file name, e.g. head.likeness.glb");
 
   PointCloud scan;
   Status st = load_point_cloud_file(scan_path, scan);
@@ -182,9 +185,9 @@ int run_fit(const Args& args) {
 Registrar reg({"fit",
                "likeness fit --scan FILE --out DIR [--levels L] [--up X Y Z|+x..-z] [--facing X Y Z|+x..-z] "
                "[--no-orientation-check] [--face-only|--whole-head] [--no-eye-region] [--scanned-neck] [--no-denoise] [--widen-footprints] [--data-level 0|1|2] "
-               "[--dump] [--scan-frame] [--generic-head asset|plate|ring|even|back|nape] [--project FILE.likeness.glb]",
-               "fits the generic head to a scan (jeong2002): control.obj, level1..L.obj, report.json, and with "
-               "--project the head project (a GLB)",
+               "[--dump] [--scan-frame] [--generic-head asset|plate|ring|even|back|nape] [--project FILE.likeness.glb | --no-project]",
+               "fits the generic head to a scan (jeong2002): control.obj, level1..L.obj, report.json and the head "
+               "project head.likeness.glb (--project elsewhere, --no-project none)",
                run_fit});
 
 }  // namespace

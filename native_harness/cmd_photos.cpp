@@ -12,6 +12,8 @@
 #include "photos/synthetic_outlines.h"
 #include "photos/synthetic_views.h"
 #include "pipeline/head_creases.h"
+#include "project/photos_project.h"
+#include "project/project_file.h"
 #include "subdiv/butterfly.h"
 #include "synth/skin_field.h"
 #include "synth/synth_head.h"
@@ -247,6 +249,8 @@ int run_photos(const Args& args) {
 
   // The skin from the recovered cameras, when the photos are given.
   const bool textured = !photo_paths.empty() && levels > 0 && !args.has("no-texture");
+  std::vector<Vec2> chart_uvs;
+  Image skin;
   if (textured) {
     std::vector<std::string> used_paths, used_names;
     std::vector<Camera> cameras;
@@ -257,7 +261,21 @@ int run_photos(const Args& args) {
         cameras.push_back(r.calib.photos[i].camera);
       }
     s = write_photos_texture(r.fit.mesh, bl, level_positions[size_t(levels)], used_paths, used_names, cameras,
-                             texture_size, out_dir);
+                             texture_size, out_dir, &chart_uvs, &skin);
+    if (!s) return fail(cmd, s.message);
+  }
+  // The head project (`likeness export --head DIR`, `likeness project`, the
+  // page's Open project): the head, its levels and its skin.
+  if (levels > 0) {
+    HeadProject project;
+    s = project_from_photos(generic, r, levels, project);
+    if (s && textured) {
+      project.texture.uvs = chart_uvs;
+      project.texture.skin = skin;
+    }
+    Bytes bytes;
+    if (s) s = save_project(project, bytes);
+    if (s) s = write_file(out_dir + "/head.likeness.glb", bytes);
     if (!s) return fail(cmd, s.message);
   }
 
@@ -368,9 +386,10 @@ int run_photos(const Args& args) {
                 photos[i].name.c_str(), yaw, pitch, pc.num_landmarks - pc.num_hidden, pc.num_hidden, pc.median_px);
   }
   const std::string level_files = levels > 0 ? ", level1..level" + std::to_string(levels) + ".obj" : "";
-  std::printf("  wrote %s/control.obj%s, cameras.json, report.json%s%s\n", out_dir.c_str(), level_files.c_str(),
+  std::printf("  wrote %s/control.obj%s, cameras.json, report.json%s%s%s\n", out_dir.c_str(), level_files.c_str(),
               textured ? ", textured.obj, textured.mtl, skin.png" : "",
-              stereo && !r.stereo.patches.empty() ? ", stereo_patches.ply" : "");
+              stereo && !r.stereo.patches.empty() ? ", stereo_patches.ply" : "",
+              levels > 0 ? ", head.likeness.glb (the head project: likeness export --head DIR)" : "");
   return 0;
 }
 
@@ -430,7 +449,7 @@ Registrar photos_reg({"photos",
                       "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--stereo]",
                       "a head from several photos' landmarks (fua1998): self-calibrated cameras, fitted control "
                       "mesh, levels, cameras.json, report.json; with --photos the skin from those cameras "
-                      "(textured.obj, skin.png); with --masks (white or opaque = the person) the head's outline "
+                      "(textured.obj, skin.png); head.likeness.glb, the head project; with --masks (white or opaque = the person) the head's outline "
                       "in each photo as silhouettes (--masks-from-photos: from the photos, plain background only; "
                       "--silhouette-check: silhouettes_N.png, outline and rims drawn on each photo); with --photos "
                       "and --stereo, stereo between pairs of them joins the landmarks (off by default: on real "

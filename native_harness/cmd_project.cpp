@@ -11,6 +11,7 @@
 #include "project/project_file.h"
 
 #include <cstdio>
+#include <sys/stat.h>
 
 namespace lk::cli {
 namespace {
@@ -50,6 +51,25 @@ int run_info(const std::string& path) {
   return 0;
 }
 
+// The head at level with the generic eyes' and teeth's textures and every
+// shape of the muscle layer, at rest (avatar tools pose it).
+int write_glb(const char* cmd, HeadProject& p, int level, const std::string& out) {
+  GenericHead generic;
+  Status st = load_generic_head(generic);
+  if (!st) return fail(cmd, st.message);
+  GlbExportOptions o;
+  o.level = level;
+  use_generic_part_textures(o);
+  Bytes bytes;
+  GlbExportReport r;
+  st = export_glb(p, generic, o, bytes, &r);
+  if (st) st = write_file(out, bytes);
+  if (!st) return fail(cmd, st.message);
+  std::printf("wrote %s: level %d (%d vertices, %d triangles)%s, %zu nodes, %zu bytes, at rest\n", out.c_str(), r.level,
+              r.head_vertices, r.head_triangles, p.texture.empty() ? "" : ", textured", r.nodes.size(), bytes.size());
+  return 0;
+}
+
 int run_export(const std::string& path, const Args& args) {
   const std::string out = args.get("out"), format = args.get("format", "obj");
   if (out.empty()) return fail(kName, "export needs --out FILE");
@@ -71,24 +91,7 @@ int run_export(const std::string& path, const Args& args) {
                 frame == ExportFrame::Scan ? "scan" : "head");
     return 0;
   }
-  if (format == "glb") {
-    // The head at --level (default 2) with the generic eyes' and teeth's
-    // textures, at rest (--pose is ignored: avatar tools pose it).
-    GenericHead generic;
-    if (st = load_generic_head(generic); !st) return fail(kName, st.message);
-    GlbExportOptions o;
-    o.level = args.has("level") ? level : 2;
-    use_generic_part_textures(o);
-    Bytes bytes;
-    GlbExportReport r;
-    st = export_glb(p, generic, o, bytes, &r);
-    if (st) st = write_file(out, bytes);
-    if (!st) return fail(kName, st.message);
-    std::printf("wrote %s: level %d (%d vertices, %d triangles)%s, %zu nodes, %zu bytes, at rest\n", out.c_str(),
-                r.level, r.head_vertices, r.head_triangles, p.texture.empty() ? "" : ", textured", r.nodes.size(),
-                bytes.size());
-    return 0;
-  }
+  if (format == "glb") return write_glb(kName, p, args.has("level") ? level : 2, out);
   if (format != "textured") return fail(kName, "--format takes obj, ply, textured or glb");
   // OUT.obj with OUT.mtl and OUT.png beside it.
   const std::string stem = out.size() > 4 && out.compare(out.size() - 4, 4, ".obj") == 0 ? out.substr(0, out.size() - 4) : out;
@@ -113,6 +116,35 @@ int run_project(const Args& args) {
   }
   return args.positional[0] == "info" ? run_info(args.positional[1]) : run_export(args.positional[1], args);
 }
+
+// likeness export: the GLB for avatar tools from a `likeness fit` or
+// `likeness photos` folder (its head.likeness.glb) or a project file.
+int run_export_head(const Args& args) {
+  const char* cmd = "export";
+  if (!only_known_options(cmd, args, {"head", "out", "level"})) return 2;
+  std::string head = args.get("head");
+  const std::string out = args.get("out");
+  if (head.empty() || out.empty())
+    return fail(cmd, "needs --head DIR (a likeness fit or likeness photos folder) or FILE.likeness.glb, and --out FILE.glb");
+  struct stat info;
+  const bool folder = ::stat(head.c_str(), &info) == 0 && S_ISDIR(info.st_mode);
+  if (folder) head += "/head.likeness.glb";
+  if (folder && ::stat(head.c_str(), &info) != 0)
+    return fail(cmd, head + " not found: `likeness fit` and `likeness photos` write it into their folder (not with "
+                     "--no-project); fit again, or give a project file saved by the page");
+  int level = 2;
+  if (!args.get_int("level", 2, level, 0, 5)) return 2;
+  HeadProject p;
+  if (Status st = read_project_file(head, p); !st.ok()) return fail(cmd, st.message);
+  if (Status st = rest_pose(p); !st.ok()) return fail(cmd, st.message);
+  return write_glb(cmd, p, level, out);
+}
+
+const Registrar export_reg({"export", "likeness export --head DIR|FILE.likeness.glb --out FILE.glb [--level L]",
+                            "the head as a GLB for avatar tools and viewers (level L, default 2): its skin, eyes, teeth "
+                            "and tongue, the 77 expressions, ARKit shapes and visemes as morph targets, a small "
+                            "skeleton; from a likeness fit or likeness photos folder or a project file",
+                            run_export_head});
 
 const Registrar reg({kName,
                      "likeness project info FILE | likeness project export FILE --out PATH [--format obj|ply|textured|glb] "

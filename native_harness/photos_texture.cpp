@@ -9,7 +9,7 @@ namespace lk::cli {
 Status write_photos_texture(const TriMesh& control, const std::vector<ButterflyLevel>& levels,
                             const std::vector<Vec3>& fine_positions, const std::vector<std::string>& image_paths,
                             const std::vector<std::string>& names, const std::vector<Camera>& cameras, int size,
-                            const std::string& out_dir) {
+                            const std::string& out_dir, std::vector<Vec2>* uvs, Image* skin) {
   if (levels.empty() || image_paths.size() != cameras.size() || names.size() != cameras.size())
     return Status::error(ErrorCode::InvalidInput, "texture: no level, or photos and cameras differ in number");
   TriMesh mesh;
@@ -31,6 +31,8 @@ Status write_photos_texture(const TriMesh& control, const std::vector<ButterflyL
   if (s) s = write_file(out_dir + "/textured.obj", write_obj(head.mesh, "textured.mtl"));
   if (s) s = write_file(out_dir + "/textured.mtl", write_mtl("skin.png"));
   if (s) s = save_png_file(out_dir + "/skin.png", head.skin);
+  if (s && uvs) *uvs = mesh.uvs;
+  if (s && skin) *skin = head.skin;
   return s;
 }
 

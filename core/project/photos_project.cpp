@@ -12,6 +12,12 @@ Status photos_project(const GenericHead& generic, const LandmarkMap& map, const 
   if (levels < 1 || levels > 4) return Status::error(ErrorCode::InvalidInput, "photos: levels must be 1..4");
   Status s = run_photos_job(generic, map, photos, options, result);
   if (!s) return s;
+  return project_from_photos(generic, result, levels, project);
+}
+
+Status project_from_photos(const GenericHead& generic, const PhotosJobResult& result, int levels, HeadProject& project) {
+  project = HeadProject{};
+  if (levels < 1 || levels > 4) return Status::error(ErrorCode::InvalidInput, "photos: levels must be 1..4");
   FitHeadResult& fit = project.fit;
   fit.aligned = generic.mesh;
   fit.local = result.fit.mesh;
@@ -19,7 +25,7 @@ Status photos_project(const GenericHead& generic, const LandmarkMap& map, const 
   fit.notes = result.notes;
   // The levels as `likeness photos` writes them: the generic head's creases
   // (eye and lip rims), no displacements.
-  s = build_multires(fit.control, head_creases(fit.control, generic.annotations), levels, fit.multires);
+  Status s = build_multires(fit.control, head_creases(fit.control, generic.annotations), levels, fit.multires);
   if (!s) {
     project = HeadProject{};
     return with_context(s, "photos (levels)");

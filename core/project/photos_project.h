@@ -26,4 +26,9 @@ namespace lk {
 Status photos_project(const GenericHead& generic, const LandmarkMap& map, const std::vector<LandmarkPhoto>& photos,
                       const PhotosJobOptions& options, int levels, HeadProject& project, PhotosJobResult& result);
 
+// The project of a finished photos job (what photos_project makes after
+// running it): for `likeness photos`, which runs the job with its outlines
+// and images itself.
+Status project_from_photos(const GenericHead& generic, const PhotosJobResult& result, int levels, HeadProject& project);
+
 }  // namespace lk

@@ -85,6 +85,17 @@ TEST_CASE("likeness photos --photos textures the head from the recovered cameras
   // --stereo, five views 45 deg apart: no stereo pair, said so in the report.
   const std::string report = read_file_text(dir + "/out/report.json");
   CHECK(report.find("stereo: no two used photos see the head from 10-40 deg apart") != std::string::npos);
+  // The head project beside it, and the GLB for avatar tools from the folder.
+  REQUIRE(lk::test::exists(dir + "/out/head.likeness.glb"));
+  REQUIRE(run("export --head " + dir + "/out --out " + dir + "/head.glb --level 1") == 0);
+  const std::string glb = read_file_text(dir + "/head.glb");
+  REQUIRE(glb.size() > 100000);
+  CHECK(glb.compare(0, 4, "glTF") == 0);
+  CHECK(glb.find("\"jawOpen\"") != std::string::npos);  // the muscle layer's shapes as morph targets
+  CHECK(glb.find("\"image/png\"") != std::string::npos);   // the skin (and the eyes' and teeth's textures)
+  // A folder with no project: a message, no file.
+  CHECK(run("export --head " + dir + "/s --out " + dir + "/none.glb") != 0);
+  CHECK_FALSE(lk::test::exists(dir + "/none.glb"));
   // --no-texture: no skin; no --stereo: none tried (off by default).
   REQUIRE(run("photos --points" + points + " --photos" + photos + " --map " + dir +
               "/s/map.json --levels 1 --no-texture --out " + dir + "/out2") == 0);
