@@ -2,6 +2,7 @@
 #include "common/prng.h"
 #include "photos/self_calibration.h"
 #include "photos/shape_fit.h"
+#include "observation_fd.h"
 #include "photos_scenario.h"
 
 namespace lk {
@@ -63,30 +64,12 @@ TEST_CASE("the feature observations' Jacobian over vertex positions matches fini
       if (s.session.photos[c].present[m]) obs.push_back({int(c), s.landmarks[m], s.session.photos[c].points[m], 0.7, 0.7});
   REQUIRE(obs.size() > 20);
   FeatureSet set(s.generic.mesh, s.session.cameras, obs, 4.0);
-  std::vector<Vec3> p = s.generic.mesh.positions;
-  Eigen::VectorXd r(set.num_residuals());
-  std::vector<Eigen::Triplet<double>> trip;
-  REQUIRE(set.evaluate(p, r, 0, &trip));
-  SparseMat J(set.num_residuals(), 3 * long(p.size()));
-  J.setFromTriplets(trip.begin(), trip.end());
-  const Eigen::MatrixXd Jd = J;
   // Every coordinate of the vertices the observations touch.
   std::vector<int> cols;
   for (const auto& o : obs)
     for (int v : s.generic.mesh.triangles[size_t(o.point.triangle)])
       for (int k = 0; k < 3; ++k) cols.push_back(3 * v + k);
-  const double h = 1e-7;
-  double worst = 0;
-  for (int col : cols) {
-    std::vector<Vec3> a = p, b = p;
-    a[size_t(col / 3)][col % 3] += h;
-    b[size_t(col / 3)][col % 3] -= h;
-    Eigen::VectorXd ra(r.size()), rb(r.size());
-    REQUIRE(set.evaluate(a, ra, 0, nullptr));
-    REQUIRE(set.evaluate(b, rb, 0, nullptr));
-    const Eigen::VectorXd fd = (ra - rb) / (2 * h);
-    worst = std::max(worst, (fd - Jd.col(col)).norm() / (1 + Jd.col(col).norm()));
-  }
+  const double worst = test::check_fd_jacobian(set, s.generic.mesh.positions, cols).worst_relative;
   CHECK(worst < 1e-4);
 }
 

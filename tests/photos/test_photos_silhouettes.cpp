@@ -4,6 +4,7 @@
 #include "photos/photos_job.h"
 #include "photos/silhouette_obs.h"
 #include "photos/synthetic_outlines.h"
+#include "observation_fd.h"
 #include "photos_scenario.h"
 #include "synth/skin_field.h"
 #include "texture/synthetic_photo.h"
@@ -98,30 +99,13 @@ TEST_CASE("the silhouette observations' Jacobian over vertex positions matches f
     so.facet_equations = facet;
     SilhouetteSet set(x.s.generic.mesh, x.s.session.cameras, x.outlines, x.neck, x.chin, so);
     REQUIRE(set.matches().size() > 200);
-    const std::vector<Vec3>& p = x.s.generic.mesh.positions;
-    Eigen::VectorXd r(set.num_residuals());
-    std::vector<Eigen::Triplet<double>> trip;
-    REQUIRE(set.evaluate(p, r, 0, &trip));
-    CHECK(r.norm() > 0);
-    SparseMat J(set.num_residuals(), 3 * long(p.size()));
-    J.setFromTriplets(trip.begin(), trip.end());
     std::vector<int> cols;
     for (size_t i = 0; i < set.matches().size(); i += 23)
       for (int v : {set.matches()[i].a, set.matches()[i].b, set.matches()[i].c})
         for (int k = 0; k < 3; ++k) cols.push_back(3 * v + k);
-    const double h = 1e-7;
-    double worst = 0;
-    for (int col : cols) {
-      std::vector<Vec3> a = p, b = p;
-      a[size_t(col / 3)][col % 3] += h;
-      b[size_t(col / 3)][col % 3] -= h;
-      Eigen::VectorXd ra(r.size()), rb(r.size());
-      REQUIRE(set.evaluate(a, ra, 0, nullptr));
-      REQUIRE(set.evaluate(b, rb, 0, nullptr));
-      const Eigen::VectorXd fd = (ra - rb) / (2 * h);
-      const Eigen::VectorXd an = J.col(col);
-      worst = std::max(worst, (fd - an).norm() / (1 + an.norm()));
-    }
+    const test::FdJacobian fd = test::check_fd_jacobian(set, x.s.generic.mesh.positions, cols);
+    CHECK(fd.residuals.norm() > 0);
+    const double worst = fd.worst_relative;
     std::printf("silhouettes (%s): %zu matches, worst FD mismatch %.2e\n", facet ? "facet" : "rim edge",
                 set.matches().size(), worst);
     // The facet's short pairs curve more: their central differences carry more truncation error.

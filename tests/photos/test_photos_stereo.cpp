@@ -3,6 +3,7 @@
 // and the attractors' facet distance against finite differences.
 #include "common/prng.h"
 #include "mesh/primitives.h"
+#include "observation_fd.h"
 #include "photos/rectify.h"
 #include "photos/stereo.h"
 #include "photos/stereo_obs.h"
@@ -335,24 +336,11 @@ TEST_CASE("the attractor's facet distance and its Jacobian match finite differen
     patches.push_back(p);
   }
   StereoAttractorSet set(sphere, patches, sphere.positions);
-  const int n = set.num_residuals();
-  Eigen::VectorXd r(n);
-  std::vector<Eigen::Triplet<double>> trip;
-  REQUIRE(set.evaluate(sphere.positions, r, 0, &trip));
-  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n, 3 * sphere.num_vertices());
-  for (const auto& t : trip) J(t.row(), t.col()) += t.value();
-  REQUIRE(J.norm() > 0);
-  const double h = 1e-7;
-  double worst = 0;
-  for (int c = 0; c < 3 * sphere.num_vertices(); ++c) {
-    std::vector<Vec3> pp = sphere.positions, pm = sphere.positions;
-    pp[size_t(c / 3)][c % 3] += h;
-    pm[size_t(c / 3)][c % 3] -= h;
-    Eigen::VectorXd rp(n), rm(n);
-    set.evaluate(pp, rp, 0, nullptr);
-    set.evaluate(pm, rm, 0, nullptr);
-    worst = std::max(worst, ((rp - rm) / (2 * h) - J.col(c)).cwiseAbs().maxCoeff());
-  }
+  std::vector<int> cols(size_t(3 * sphere.num_vertices()));
+  for (size_t c = 0; c < cols.size(); ++c) cols[c] = int(c);
+  const test::FdJacobian fd = test::check_fd_jacobian(set, sphere.positions, cols);
+  REQUIRE(fd.jacobian.norm() > 0);
+  const double worst = fd.worst_abs;
   CHECK(worst < 1e-6);
 }
 
