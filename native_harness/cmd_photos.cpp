@@ -11,10 +11,8 @@
 #include "photos_texture.h"
 #include "photos/synthetic_outlines.h"
 #include "photos/synthetic_views.h"
-#include "pipeline/head_creases.h"
 #include "project/photos_project.h"
 #include "project/project_file.h"
-#include "subdiv/butterfly.h"
 #include "synth/skin_field.h"
 #include "synth/synth_head.h"
 #include "texture/synthetic_photo.h"
@@ -233,24 +231,21 @@ int run_photos(const Args& args) {
   if (!s) return fail(cmd, s.message);
   if (!make_dir(out_dir)) return fail(cmd, "cannot create the output folder '" + out_dir + "'");
 
-  // The control mesh and its Butterfly levels (no scan: no displacements).
+  // The control mesh and its Butterfly levels (no scan: no displacements),
+  // as the head project holds them (`likeness export --head DIR`, `likeness
+  // project`, the page's Open project).
   s = write_file(out_dir + "/control.obj", write_obj(r.fit.mesh));
-  std::vector<ButterflyLevel> bl;
-  if (s && levels > 0) s = build_butterfly_levels(r.fit.mesh, head_creases(r.fit.mesh, generic.annotations), levels, bl);
-  std::vector<std::vector<Vec3>> level_positions;
-  if (s && levels > 0) s = apply_all(bl, r.fit.mesh.positions, level_positions);
+  HeadProject project;
+  if (s && levels > 0) s = project_from_photos(generic, r, levels, project);
   for (int l = 1; s && l <= levels; ++l) {
-    TriMesh m;
-    m.positions = level_positions[size_t(l)];
-    m.triangles = bl[size_t(l - 1)].fine_triangles;
+    TriMesh m = project.fit.level_meshes[size_t(l - 1)];
+    m.normals.clear();  // positions and triangles, as before the project was kept
     s = write_file(out_dir + "/level" + std::to_string(l) + ".obj", write_obj(m));
   }
   if (!s) return fail(cmd, s.message);
 
   // The skin from the recovered cameras, when the photos are given.
   const bool textured = !photo_paths.empty() && levels > 0 && !args.has("no-texture");
-  std::vector<Vec2> chart_uvs;
-  Image skin;
   if (textured) {
     std::vector<std::string> used_paths, used_names;
     std::vector<Camera> cameras;
@@ -260,21 +255,14 @@ int run_photos(const Args& args) {
         used_names.push_back(photos[i].name);
         cameras.push_back(r.calib.photos[i].camera);
       }
-    s = write_photos_texture(r.fit.mesh, bl, level_positions[size_t(levels)], used_paths, used_names, cameras,
-                             texture_size, out_dir, &chart_uvs, &skin);
+    s = write_photos_texture(r.fit.mesh, project.fit.multires.levels, project.fit.level_meshes.back().positions,
+                             used_paths, used_names, cameras, texture_size, out_dir, &project.texture.uvs,
+                             &project.texture.skin);
     if (!s) return fail(cmd, s.message);
   }
-  // The head project (`likeness export --head DIR`, `likeness project`, the
-  // page's Open project): the head, its levels and its skin.
   if (levels > 0) {
-    HeadProject project;
-    s = project_from_photos(generic, r, levels, project);
-    if (s && textured) {
-      project.texture.uvs = chart_uvs;
-      project.texture.skin = skin;
-    }
     Bytes bytes;
-    if (s) s = save_project(project, bytes);
+    s = save_project(project, bytes);
     if (s) s = write_file(out_dir + "/head.likeness.glb", bytes);
     if (!s) return fail(cmd, s.message);
   }

@@ -109,12 +109,13 @@ Status texture_project(HeadProject& project, TextureJobInput& input, TextureJobR
     for (const TexturePhoto& p : input.photos) sizes.push_back({p.image.width, p.image.height});
     const Status calibrated = calibrate_texture_photos(input.points, sizes, input.names, input.calibration,
                                                        input.sharing, out.calibration);
-    finish("calibrate");
-    if (!calibrated.ok()) return calibrated;
+    if (!calibrated.ok()) {
+      finish("calibrate");
+      return calibrated;
+    }
     for (size_t i = 0; i < count; ++i) input.photos[i].camera = out.calibration.results[i].camera;
-  } else {
-    finish("calibrate");
   }
+  finish("calibrate");
 
   // 2. The chart on the fitted control mesh (head frame: the view weight
   // assumes the head looks along +z), refined to the finest level; the
