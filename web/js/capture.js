@@ -7,6 +7,7 @@
 // enough (photos_head.js reads app.viewGuide), not after every photo.
 import { app, onPageChange } from './state.js';
 import { handleFiles } from './files.js';
+import { facePhotos, findingFacePoints } from './photos.js';
 import { VIEWS, viewGuide } from './views.js';
 
 const $ = (id) => document.getElementById(id);
@@ -14,12 +15,10 @@ const LEAST = 5;       // photos with face points before the head is made by its
 let taken = 0;
 const waiting = [];    // taken while a job ran
 
-const isFace = (p) => (p.role || 'face') === 'face';
-const pending = (p) => !p.detect || p.detect.state === 'waiting' || p.detect.state === 'running';
 
 // The guide: shown while no scan is loaded and photos are taken or dropped.
 function renderViewGuide() {
-  const photos = app.photos.filter(isFace);
+  const photos = facePhotos();
   const guide = $('view-guide');
   guide.hidden = !!app.scan || !(app.capturing || photos.length);
   const g = app.viewGuide = viewGuide(photos.map((p) => (p.detect ? p.detect.points : null)), LEAST);
@@ -33,8 +32,9 @@ function renderViewGuide() {
     li.textContent = v.label + (n ? ' (' + n + ')' : ': missing');
     list.append(li);
   }
-  const finding = photos.filter(pending).length;
-  const noFace = photos.filter((p) => !pending(p) && !(p.detect && p.detect.points)).length;
+  const finding = photos.filter(findingFacePoints).length;
+  // Detected, and no face: not a photo the detector never saw (restored).
+  const noFace = photos.filter((p) => p.detect && !findingFacePoints(p) && !p.detect.points).length;
   let hint;
   if (waiting.length) hint = waiting.length + ' photo(s) taken meanwhile: added when the current job ends.';
   else if (finding) hint = 'Finding the face in ' + finding + ' photo(s)…';

@@ -48,8 +48,6 @@ export async function checkPhotos(photos, alone) {
                              exifFocalPx: result.focalPx || 0 });
     // Its face points are found now, while the worker checks the next photo
     // (the detector takes one photo at a time, landmarks.js).
-    photo.detect = { state: 'waiting' };
-    renderPhotos();
     findLandmarks([photo]);
   }
   renderPhotos();
@@ -220,6 +218,9 @@ export function texturable() { return facePhotos().filter((p) => photoPoints(p).
 // Photos of role "face" (the default) texture the skin; "eye" and "smile"
 // photos only make the iris and teeth textures.
 export function facePhotos() { return app.photos.filter((p) => (p.role || 'face') === 'face'); }
+// The detector has the photo queued or running (photo.detect, findLandmarks);
+// a photo never sent to it (one restored from a kept head) is not waiting.
+export const findingFacePoints = (p) => !!p.detect && ['waiting', 'running'].includes(p.detect.state);
 
 export function renderPhotos() {
   ui.photoList.textContent = '';

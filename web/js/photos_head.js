@@ -9,14 +9,13 @@
 import { app, ui, beginJob, endJob, live, setStage, setStatus, showError, stageItem } from './state.js';
 import { runJob } from './worker_client.js';
 import { landmarksJson } from './landmarks.js';
-import { facePhotos, renderPhotos } from './photos.js';
+import { facePhotos, findingFacePoints, renderPhotos } from './photos.js';
 import { FIT_STAGES, showHead } from './fit.js';
 import { checkFitQuality } from './checks.js';
 import { stopAnimation } from './animation.js';
 import { forPage } from './wording.js';
 import { runTexture } from './texture.js';
 
-const pending = (p) => p.detect && ['waiting', 'running'].includes(p.detect.state);
 const withPoints = () => facePhotos().filter((p) => p.detect && p.detect.points);
 
 function stats(row, text) {
@@ -87,11 +86,12 @@ export async function makeHeadFromPhotos(trigger = 'button') {
   rowsWaiting(photos.length);
   ui.photosHeadTotal.textContent = '';
   setStatus('Making a head from the face points of ' + photos.length + ' photo' + (photos.length === 1 ? '' : 's') + '…');
+  const prior = exifFocal(photos);
   const t0 = performance.now();
   let result;
   try {
     const list = photos.map((p) => ({ name: p.name, text: JSON.stringify(landmarksJson(p.name, p.width, p.height, p.detect.points)) }));
-    result = await runJob({ type: 'photos', photos: list, options: { levels: 3, focalPx: exifFocal(photos) } }, []);
+    result = await runJob({ type: 'photos', photos: list, options: { levels: 3, focalPx: prior } }, []);
   } catch (e) {
     if (e && e.cancelled) {
       for (const st of FIT_STAGES) setStage(st.row, 'cancelled', 0);
@@ -106,7 +106,7 @@ export async function makeHeadFromPhotos(trigger = 'button') {
   (result.photos || []).forEach((row, k) => { if (photos[k]) photos[k].photosHead = row; });
   const usedCount = (result.photos || []).filter((p) => p.used).length;
   app.photosHead = { trigger, ok: !!result.ok, photos: photos.length, used: usedCount, focalPx: result.focalPx || 0,
-                     exifFocalPx: exifFocal(photos),
+                     exifFocalPx: prior,
                      wallMs, photosMs: result.photosMs || 0, message: result.ok ? '' : result.message,
                      notes: result.notes || [] };
   renderPhotos();
@@ -124,7 +124,7 @@ export async function makeHeadFromPhotos(trigger = 'button') {
                 triangleCount: result.meshes.control.triangleCount };
   showHead(result, 'head from ' + usedCount + ' photos', wallMs, true);
   app.fit.fromPhotos = true;
-  rowsDone(result, photos.length, exifFocal(photos));
+  rowsDone(result, photos.length, prior);
   ui.fitTotal.textContent = 'head from ' + usedCount + ' of ' + photos.length + ' photos in ' + (result.photosMs / 1000).toFixed(2) +
                             ' s in the worker · focal ' + Math.round(result.focalPx) + ' px · the generic head\'s size ' +
                             '(photos without a known focal do not give the scale)';
@@ -141,7 +141,7 @@ export async function makeHeadFromPhotos(trigger = 'button') {
 // and the page at rest (a banner is left for the user to read).
 // While photos are being taken (capture.js), once the views are enough.
 export function photosHeadAfterLandmarks() {
-  if (!ui.autoFit.checked || app.scan || app.photos.some(pending) || !withPoints().length) return;
+  if (!ui.autoFit.checked || app.scan || app.photos.some(findingFacePoints) || !withPoints().length) return;
   if (app.capturing && !(app.viewGuide && app.viewGuide.enough)) return;
   const state = document.body.dataset.state;
   if (state !== 'ready' && state !== 'done') return;
