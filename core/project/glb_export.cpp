@@ -2,6 +2,7 @@
 
 #include "anim/bake.h"
 #include "mesh/geometry.h"
+#include "mesh/topology.h"
 #include "project/export.h"
 #include "project/gltf_scene.h"
 #include "project/parts.h"
@@ -10,6 +11,8 @@
 #include "multires/multires.h"
 
 #include <algorithm>
+#include <array>
+#include <cstdint>
 #include <cmath>
 #include <functional>
 
@@ -62,6 +65,68 @@ std::vector<MorphTarget> part_targets(const std::vector<BakedShape>& shapes, con
   return out;
 }
 
+// The skeleton's joints, in the skin's order.
+enum Joint { kNeck = 0, kHead, kLeftEye, kRightEye, kJaw, kJointCount };
+
+// Each level-`level` head vertex's share of the Neck, Head and Jaw joints
+// (they sum to 1). On the control mesh: the jaw's share is the muscle
+// layer's (anim: the jaw's rigid motion, so turning the Jaw bone opens the
+// mouth as jawOpen's rotation does); the neck region's vertices go from the
+// Head at the head joint's height to the Neck at the neck's bottom
+// (smoothstep; neck_y: the bottom ring's top), so turning the head bends
+// the neck instead of swinging its cut; the rest is the Head's. Finer levels take the mean of their edge's
+// two ends (linear, so the shares stay in [0, 1]).
+std::vector<std::array<double, 3>> head_skin_weights(const MultiresMesh& mr, int level, const FaceRig& face,
+                                                     const HeadAnnotations& annotations, double neck_y, double head_y) {
+  const std::vector<Vec3>& control = mr.control;
+  std::vector<std::array<double, 3>> w(control.size(), {0.0, 1.0, 0.0});  // neck, head, jaw
+  for (std::size_t i = 0; i < face.jaw.index.size(); ++i) w[face.jaw.index[i]][2] = std::clamp(face.jaw.weight[i], 0.0, 1.0);
+  const auto neck = annotations.regions.find("neck");
+  if (neck != annotations.regions.end() && head_y > neck_y)
+    for (int v : neck->second) {
+      const double t = std::clamp((head_y - control[v].y()) / (head_y - neck_y), 0.0, 1.0);
+      w[v][0] = std::min(t * t * (3 - 2 * t), 1.0 - w[v][2]);
+    }
+  for (auto& x : w) x[1] = 1.0 - x[0] - x[2];
+  for (int l = 0; l < level && l < mr.num_levels(); ++l) {
+    const ButterflyLevel& lv = mr.levels[l];
+    w.resize(lv.num_fine_vertices);
+    for (int k = 0; k < lv.num_new_vertices(); ++k)
+      for (int j = 0; j < 3; ++j)
+        w[lv.num_coarse_vertices + k][j] = 0.5 * (w[lv.edge_endpoints[k][0]][j] + w[lv.edge_endpoints[k][1]][j]);
+  }
+  return w;
+}
+
+// The control mesh's open neck: the centre of its boundary loops' vertices
+// (the origin when it has none), and their highest y, below which the
+// neck is all the Neck joint's.
+struct NeckBottom {
+  Vec3 center = Vec3::Zero();
+  double top = 0;
+};
+NeckBottom neck_bottom(const TriMesh& control) {
+  MeshTopology topo;
+  NeckBottom out;
+  Vec3 sum = Vec3::Zero();
+  int n = 0;
+  if (build_topology(control, topo).ok())
+    for (const auto& loop : topo.boundary_loops)
+      for (int v : loop) {
+        sum += control.positions[v];
+        out.top = n++ ? std::max(out.top, control.positions[v].y()) : control.positions[v].y();
+      }
+  if (n) out.center = sum / n;
+  return out;
+}
+
+// A column-major 4x4 translation by -t: the inverse bind matrix of a joint
+// at t whose ancestors only translate.
+void inverse_bind(const Vec3& t, std::vector<float>& out) {
+  const float m[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, float(-t.x()), float(-t.y()), float(-t.z()), 1};
+  out.insert(out.end(), m, m + 16);
+}
+
 }  // namespace
 
 void use_generic_part_textures(GlbExportOptions& options) {
@@ -105,32 +170,87 @@ Status export_glb(HeadProject& project, const GenericHead& generic, const GlbExp
   }
   std::vector<MorphTarget> head_targets;
   for (const BakedShape& b : shapes) head_targets.push_back({b.name, b.level});
-  const int neck = w.node("Neck");
-  const int head_node = w.node("Head", w.mesh("head", head.positions, head.normals, uvs, head.triangles, skin, head_targets));
-  add_child(model, neck, head_node);
+  const int head_mesh = w.mesh("HeadMesh", head.positions, head.normals, uvs, head.triangles, skin, head_targets);
 
+  // The skeleton: Neck (at the neck's bottom) > Head (above it, at the jaw
+  // hinge's height: where the skull turns on the spine) > LeftEye, RightEye,
+  // Jaw; the head mesh is skinned to Neck, Head and Jaw and sits at the
+  // root, as glTF wants of skinned meshes. Every node only translates; each
+  // part mesh is in its node's frame.
+  const Vec3 hinge = project.rig.jaw_pivot;
+  const NeckBottom bottom = neck_bottom(project.fit.control);
+  const Vec3 neck_at = bottom.center;
+  const Vec3 head_at(neck_at.x(), hinge.y(), neck_at.z());
   HeadParts parts;
-  if (place_head_parts(project.fit.control, generic, parts).ok()) {
+  const bool have_parts = place_head_parts(project.fit.control, generic, parts).ok();
+  const Vec3 eye_at[2] = {have_parts ? parts.placement.eye_center[0] : head_at, have_parts ? parts.placement.eye_center[1] : head_at};
+  const int neck = w.node("Neck", -1, neck_at);
+  const int head_node = w.node("Head", -1, head_at - neck_at);
+  add_child(model, neck, head_node);
+  const char* eye_names[2] = {"LeftEye", "RightEye"};  // 0 = the head's left (+x)
+  int eye_node[2];
+  for (int e = 0; e < 2; ++e) {
+    eye_node[e] = w.node(eye_names[e], -1, eye_at[e] - head_at);
+    add_child(model, head_node, eye_node[e]);
+  }
+  const int jaw = w.node("Jaw", -1, hinge - head_at);
+  add_child(model, head_node, jaw);
+  {
+    const Vec3 joint_at[kJointCount] = {neck_at, head_at, eye_at[0], eye_at[1], hinge};
+    std::vector<float> ibm;
+    for (const Vec3& t : joint_at) inverse_bind(t, ibm);
+    tinygltf::Skin sk;
+    sk.name = "HeadSkeleton";
+    sk.joints = {neck, head_node, eye_node[0], eye_node[1], jaw};
+    sk.skeleton = neck;
+    sk.inverseBindMatrices = w.accessor(ibm.data(), ibm.size() * 4, kJointCount, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_MAT4, 0);
+    // Four joint slots per vertex: the joints with a share, largest first,
+    // then unused slots of joint 0 and weight 0 (as the validator wants);
+    // the shares sum to 1.
+    const auto share = head_skin_weights(project.fit.multires, level, face, generic.annotations, bottom.top, head_at.y());
+    const int n = head.num_vertices();
+    std::vector<std::uint8_t> joints(4 * static_cast<std::size_t>(n), 0);
+    std::vector<float> weights(4 * static_cast<std::size_t>(n), 0.0f);
+    for (int v = 0; v < n; ++v) {
+      const float neck_w = static_cast<float>(share[v][0]);
+      float jaw_w = static_cast<float>(share[v][2]);
+      float head_w = 1.0f - neck_w - jaw_w;
+      if (head_w < 0) {  // rounding: the jaw takes what the neck leaves
+        head_w = 0;
+        jaw_w = 1.0f - neck_w;
+      }
+      std::array<std::pair<float, std::uint8_t>, 3> slots = {{{neck_w, kNeck}, {head_w, kHead}, {jaw_w, kJaw}}};
+      std::stable_sort(slots.begin(), slots.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+      for (int k = 0; k < 3 && slots[k].first > 0; ++k) {
+        joints[4 * v + k] = slots[k].second;
+        weights[4 * v + k] = slots[k].first;
+      }
+    }
+    tinygltf::Primitive& prim = model.meshes[head_mesh].primitives[0];
+    prim.attributes["JOINTS_0"] = w.accessor(joints.data(), joints.size(), n, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
+                                             TINYGLTF_TYPE_VEC4, TINYGLTF_TARGET_ARRAY_BUFFER);
+    prim.attributes["WEIGHTS_0"] = w.accessor(weights.data(), weights.size() * 4, n, TINYGLTF_COMPONENT_TYPE_FLOAT,
+                                              TINYGLTF_TYPE_VEC4, TINYGLTF_TARGET_ARRAY_BUFFER);
+    model.skins.push_back(sk);
+  }
+  const int head_mesh_node = w.node("HeadMesh", head_mesh);
+  model.nodes[head_mesh_node].skin = 0;
+
+  if (have_parts) {
     const int eye_mat = textured_material(w, "eye", options.eye_texture, {0.92, 0.92, 0.9, 1.0}, false);
-    const char* eye_names[2] = {"LeftEye", "RightEye"};  // 0 = the head's left (+x)
     for (int e = 0; e < 2; ++e) {
-      const Vec3 c = parts.placement.eye_center[e];
-      const TriMesh eye = about(parts.placed.eye[e], c);
+      const TriMesh eye = about(parts.placed.eye[e], eye_at[e]);
       const std::vector<MorphTarget> turns = part_targets(shapes, parts.placed.eye[e].positions, [&](const FaceControls& fc) {
         return pose_eye(face, parts.placed.eye[e].positions, fc, e);
       });
-      add_child(model, head_node,
-                w.node(eye_names[e], w.mesh(eye_names[e], eye.positions, eye.normals, eye.uvs, eye.triangles, eye_mat, turns), c));
+      model.nodes[eye_node[e]].mesh = w.mesh(eye_names[e], eye.positions, eye.normals, eye.uvs, eye.triangles, eye_mat, turns);
     }
     const int teeth_mat = textured_material(w, "teeth", options.teeth_texture, {0.80, 0.74, 0.60, 1.0}, true);
     const int tongue_mat = w.material("tongue", -1, {0.55, 0.16, 0.16, 1.0}, 0.5);
     auto uv_if = [](const TriMesh& m, bool want) { return want && m.uvs.size() == m.positions.size() ? m.uvs : std::vector<Vec2>{}; };
     const bool teeth_tex = !options.teeth_texture.empty();
-    const TriMesh upper = about(parts.upper_teeth, Vec3::Zero());
+    const TriMesh upper = about(parts.upper_teeth, head_at);
     add_child(model, head_node, w.node("UpperTeeth", w.mesh("UpperTeeth", upper.positions, upper.normals, uv_if(upper, teeth_tex), upper.triangles, teeth_mat)));
-    const Vec3 hinge = project.rig.jaw_pivot;
-    const int jaw = w.node("Jaw", -1, hinge);
-    add_child(model, head_node, jaw);
     const TriMesh lower = about(parts.lower_teeth, hinge), tongue = about(parts.placed.tongue, hinge);
     // They move with the jaw (and the tongue out) under the head's target
     // names (the Jaw node also turns them, for tools that drive bones).
@@ -149,6 +269,7 @@ Status export_glb(HeadProject& project, const GenericHead& generic, const GlbExp
   tinygltf::Scene scene;
   scene.name = "Likeness head";
   scene.nodes.push_back(neck);
+  scene.nodes.push_back(head_mesh_node);
   model.scenes.push_back(scene);
   model.defaultScene = 0;
   if (report) {

@@ -1,16 +1,17 @@
 // A head project as one GLB (glTF 2.0 binary) for avatar tools and
 // viewers (issue 38's export): the head at a chosen level with its uvs and
 // skin, the eyeballs, upper and lower teeth and tongue as their own meshes
-// with their textures, and a small node hierarchy (Neck > Head > LeftEye,
-// RightEye, Jaw > LowerTeeth, Tongue) whose eye and jaw nodes sit at the
-// eyes' centres and the jaw's hinge, so a tool turns the eyes or the jaw by
-// rotating a node. Head frame, metres, +y up, the face towards +z (glTF's
-// front). At rest, with every expression, ARKit blendshape and viseme of the
-// muscle layer (anim/face_shapes.h) as a morph target of the head, baked on
-// its level (sparse where that is smaller); the eyes carry the gaze shapes,
-// the lower teeth and tongue the shapes that move the jaw or the tongue,
-// under the same names. Not yet: skinning (the Jaw node turns the lower
-// teeth and tongue, not the chin).
+// with their textures, and a small skeleton (Neck > Head > LeftEye,
+// RightEye, UpperTeeth, Jaw > LowerTeeth, Tongue) whose eye and jaw joints
+// sit at the eyes' centres and the jaw's hinge. The head mesh (node
+// HeadMesh, at the root) is skinned to Neck, Head and Jaw, so a tool that
+// turns bones turns the head, bends the neck and opens the mouth; the eyes,
+// teeth and tongue ride their nodes. Head frame, metres, +y up, the face
+// towards +z (glTF's front). At rest, with every expression, ARKit
+// blendshape and viseme of the muscle layer (anim/face_shapes.h) as a morph
+// target of the head, baked on its level (sparse where that is smaller);
+// the eyes carry the gaze shapes, the lower teeth and tongue the shapes that
+// move the jaw or the tongue, under the same names.
 #pragma once
 #include "head/head_model.h"
 #include "image/image.h"

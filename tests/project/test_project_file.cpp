@@ -5,6 +5,7 @@
 #include "anim/bake.h"
 #include "head/generic_head.h"
 #include "io/io.h"
+#include "mesh/topology.h"
 #include "project/export.h"
 #include "project/glb_export.h"
 #include "project/parts.h"
@@ -507,8 +508,9 @@ TEST_CASE("GLB export: the head at its level with uvs and skin, the parts under 
     return -1;
   };
   REQUIRE(m.scenes.size() == 1);
-  REQUIRE(m.scenes[0].nodes.size() == 1);
+  REQUIRE(m.scenes[0].nodes.size() == 2);  // the skeleton, and the skinned head at the root
   CHECK(m.nodes[m.scenes[0].nodes[0]].name == "Neck");
+  CHECK(m.nodes[m.scenes[0].nodes[1]].name == "HeadMesh");
   auto children = [&](const std::string& name) {
     std::vector<std::string> out;
     for (int c : node(name).children) out.push_back(m.nodes[c].name);
@@ -528,7 +530,7 @@ TEST_CASE("GLB export: the head at its level with uvs and skin, the parts under 
   REQUIRE(pose_project(p, 0.0).ok());
   TriMesh level2;
   REQUIRE(project_level_mesh(p, 2, ExportFrame::Head, level2).ok());
-  const tinygltf::Primitive& head = m.meshes.at(node("Head").mesh).primitives.at(0);
+  const tinygltf::Primitive& head = m.meshes.at(node("HeadMesh").mesh).primitives.at(0);
   REQUIRE(m.accessors.at(head.attributes.at("POSITION")).count == level2.positions.size());
   CHECK(r.head_vertices == level2.num_vertices());
   const float* P = data(head.attributes.at("POSITION"));
@@ -570,8 +572,20 @@ TEST_CASE("GLB export: the head at its level with uvs and skin, the parts under 
   world_of("UpperTeeth", parts.upper_teeth);
   world_of("LowerTeeth", parts.lower_teeth);
   world_of("Tongue", parts.placed.tongue);
-  CHECK((Vec3(node("Jaw").translation[0], node("Jaw").translation[1], node("Jaw").translation[2]) - p.rig.jaw_pivot).norm() <
-        1e-9);
+  auto world_at = [&](const std::string& name) {  // a joint's place: its translations summed up to the root
+    Vec3 at = Vec3::Zero();
+    for (int i = index(name); i >= 0;) {
+      const tinygltf::Node& a = m.nodes[i];
+      if (a.translation.size() == 3) at += Vec3(a.translation[0], a.translation[1], a.translation[2]);
+      int parent = -1;
+      for (size_t k = 0; k < m.nodes.size(); ++k)
+        for (int c : m.nodes[k].children)
+          if (c == i) parent = static_cast<int>(k);
+      i = parent;
+    }
+    return at;
+  };
+  CHECK((world_at("Jaw") - p.rig.jaw_pivot).norm() < 1e-9);
   // The teeth's voids are transparent: alpha-masked.
   CHECK(m.materials.at(m.meshes.at(node("UpperTeeth").mesh).primitives[0].material).alphaMode == "MASK");
 
@@ -580,7 +594,7 @@ TEST_CASE("GLB export: the head at its level with uvs and skin, the parts under 
   // accessors read back), with their meaning: jawOpen lowers the chin by
   // over a centimetre and leaves the brows; browInnerUp lifts the brows and
   // leaves the chin. The parts carry the shapes that move them.
-  const tinygltf::Mesh& hm = m.meshes.at(node("Head").mesh);
+  const tinygltf::Mesh& hm = m.meshes.at(node("HeadMesh").mesh);
   const std::vector<std::string>& names = face_shape_names();
   REQUIRE(hm.primitives[0].targets.size() == names.size());
   REQUIRE(hm.extras.Get("targetNames").ArrayLen() == names.size());
@@ -668,4 +682,67 @@ TEST_CASE("GLB export: the head at its level with uvs and skin, the parts under 
   double teeth_drop = 0;
   for (const Vec3& d : LD) teeth_drop = std::max(teeth_drop, -d.y());
   CHECK(teeth_drop > 0.002);
+
+  // The skin: the head mesh's vertices share Neck, Head and Jaw; the inverse
+  // bind matrices undo each joint's place. Turning the Jaw joint by 15
+  // degrees about x (linear blend skinning, as glTF defines it) drops the
+  // chin and leaves the brows; turning the Head joint about y moves the
+  // brows and leaves the neck's bottom ring.
+  REQUIRE(m.skins.size() == 1);
+  const tinygltf::Skin& skin = m.skins[0];
+  CHECK(node("HeadMesh").skin == 0);
+  std::vector<std::string> joint_names;
+  for (int j : skin.joints) joint_names.push_back(m.nodes.at(j).name);
+  CHECK(joint_names == std::vector<std::string>{"Neck", "Head", "LeftEye", "RightEye", "Jaw"});
+  const float* IBM = data(skin.inverseBindMatrices);
+  for (size_t j = 0; j < joint_names.size(); ++j) {
+    const Vec3 at = world_at(joint_names[j]);
+    for (int k = 0; k < 3; ++k) CHECK(IBM[16 * j + 12 + k] == Approx(-at[k]).margin(1e-6));
+    CHECK(IBM[16 * j] == 1.0f);
+  }
+  const tinygltf::Accessor& JA = m.accessors.at(head.attributes.at("JOINTS_0"));
+  REQUIRE(JA.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE);
+  REQUIRE(JA.count == level2.positions.size());
+  const tinygltf::BufferView& JV = m.bufferViews.at(JA.bufferView);
+  const unsigned char* J = m.buffers.at(JV.buffer).data.data() + JV.byteOffset + JA.byteOffset;
+  const float* W = data(head.attributes.at("WEIGHTS_0"));
+  auto skinned = [&](size_t v, int turned_joint, const Eigen::Matrix3d& R) {
+    Vec3 out = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) {
+      const int j = J[4 * v + k];
+      const Vec3 at = world_at(joint_names.at(j));
+      const bool turned = j == turned_joint || (turned_joint == 1 && j == 4);  // the jaw turns with the head
+      out += W[4 * v + k] * (turned ? Vec3(R * (level2.positions[v] - at) + at) : level2.positions[v]);
+    }
+    return out;
+  };
+  double worst_sum = 0;
+  for (size_t v = 0; v < level2.positions.size(); ++v) {
+    double sum = 0;
+    for (int k = 0; k < 4; ++k) {
+      CHECK(W[4 * v + k] >= 0.0f);
+      sum += W[4 * v + k];
+    }
+    worst_sum = std::max(worst_sum, std::abs(sum - 1));
+  }
+  CHECK(worst_sum < 1e-6);
+  const Eigen::Matrix3d open = Eigen::AngleAxisd(15 * M_PI / 180, Vec3::UnitX()).matrix();
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(20 * M_PI / 180, Vec3::UnitY()).matrix();
+  double chin_opened = 0, brow_opened = 0, brow_turned = 0;
+  for (int v : chin) chin_opened = std::max(chin_opened, level2.positions[v].y() - skinned(v, 4, open).y());
+  for (int v : brow) {
+    brow_opened = std::max(brow_opened, (skinned(v, 4, open) - level2.positions[v]).norm());
+    brow_turned = std::max(brow_turned, (skinned(v, 1, turn) - level2.positions[v]).norm());
+  }
+  MeshTopology topo;
+  REQUIRE(build_topology(p.fit.control, topo).ok());
+  double bottom_turned = 0;
+  for (const auto& loop : topo.boundary_loops)
+    for (int v : loop) bottom_turned = std::max(bottom_turned, (skinned(v, 1, turn) - level2.positions[v]).norm());
+  INFO("Jaw 15 deg: chin " << chin_opened << " m down, brows " << brow_opened << " m; Head 20 deg: brows "
+                           << brow_turned << " m, the neck's bottom " << bottom_turned << " m");
+  CHECK(chin_opened > 0.005);
+  CHECK(brow_opened < 1e-9);
+  CHECK(brow_turned > 0.01);
+  CHECK(bottom_turned < 1e-9);
 }

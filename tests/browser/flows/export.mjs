@@ -70,7 +70,7 @@ async function run(s) {
       const v = await createRequire(import.meta.url)('gltf-validator').validateBytes(new Uint8Array(glb));
       const json = JSON.parse(glb.toString('utf8', 20, 20 + glb.readUInt32LE(12)));
       const names = json.nodes.map((n) => n.name);
-      const head = json.accessors[json.meshes[json.nodes[names.indexOf('Head')].mesh].primitives[0].attributes.POSITION].count;
+      const head = json.accessors[json.meshes[json.nodes[names.indexOf('HeadMesh')].mesh].primitives[0].attributes.POSITION].count;
       ok = v.issues.numErrors === 0 && head === fit.levels[2] && ['Neck', 'LeftEye', 'RightEye', 'Jaw', 'Tongue'].every((n) => names.includes(n));
       detail = `${glb.length} bytes; validator ${v.issues.numErrors} errors, ${v.issues.numWarnings} warnings; head ${head} vertices; nodes ${names.join(' ')}`;
     }

@@ -67,7 +67,7 @@ async function run(s) {
   const v = await validator.validateBytes(new Uint8Array(made.glb), { maxIssues: 200 });
   const issues = v.issues;
   const errors = issues.messages.filter((m) => m.severity === 0).map((m) => `${m.code} ${m.pointer || ''}`);
-  check('the Khronos glTF-Validator finds no error in the GLB', issues.numErrors === 0,
+  check('the Khronos glTF-Validator finds no error and no warning in the GLB', issues.numErrors === 0 && issues.numWarnings === 0,
         `${issues.numErrors} errors, ${issues.numWarnings} warnings, ${issues.numInfos} infos${errors.length ? ': ' + errors.slice(0, 5).join(', ') : ''}; ` +
         `${v.info.drawCallCount} draw calls, ${v.info.totalVertexCount} vertices, ${v.info.totalTriangleCount} triangles, ` +
         `${(made.glb.length / 1048576).toFixed(2)} MB`);
@@ -92,7 +92,7 @@ window.result = (async () => {
   gltf.scene.traverse((o) => {
     names.push(o.name);
     if (o.isMesh) meshes++;
-    if (o.isMesh && o.name === 'Head') { head = o; headVertices = o.geometry.attributes.position.count; skinTextured = !!o.material.map; }
+    if (o.isMesh && o.name === 'HeadMesh') { head = o; headVertices = o.geometry.attributes.position.count; skinTextured = !!o.material.map; }
   });
   const renderer = new THREE.WebGLRenderer({ canvas: document.getElementById('c'), preserveDrawingBuffer: true });
   const scene = new THREE.Scene(); scene.background = new THREE.Color(0, 0, 0);
@@ -116,7 +116,38 @@ window.result = (async () => {
     return changed / (256 * 256);
   };
   const jawChanged = changedBy('jawOpen'), smileChanged = changedBy('smile');
-  return { names, meshes, headVertices, skinTextured, litFraction: lit / (256 * 256), morphs, jawChanged, smileChanged };
+  // The skeleton: the head is a SkinnedMesh on Neck, Head, LeftEye, RightEye,
+  // Jaw; turning the Jaw bone 0.3 rad about x lowers the skinned head's
+  // lowest-moving vertices (skinned by three.js itself: the chin), leaves the
+  // crown (the highest vertex) and changes the render.
+  const bones = head && head.isSkinnedMesh ? head.skeleton.bones.map((b) => b.name) : [];
+  let boneChanged = 0, chinDrop = 0, crownMoved = -1;
+  const jawBone = gltf.scene.getObjectByName('Jaw');
+  if (head && head.isSkinnedMesh && jawBone) {
+    const pos = head.geometry.attributes.position;
+    const skinnedAll = () => {
+      gltf.scene.updateMatrixWorld(true); head.skeleton.update();
+      const out = new Float32Array(3 * pos.count), v = new THREE.Vector3();
+      for (let i = 0; i < pos.count; i++) { v.fromBufferAttribute(pos, i); head.applyBoneTransform(i, v); out[3 * i] = v.x; out[3 * i + 1] = v.y; out[3 * i + 2] = v.z; }
+      return out;
+    };
+    let crown = 0; for (let i = 1; i < pos.count; i++) if (pos.getY(i) > pos.getY(crown)) crown = i;
+    const before = skinnedAll();
+    jawBone.rotation.x = 0.3;
+    const after = skinnedAll();
+    for (let i = 0; i < pos.count; i++) chinDrop = Math.max(chinDrop, before[3 * i + 1] - after[3 * i + 1]);
+    crownMoved = Math.hypot(after[3 * crown] - before[3 * crown], after[3 * crown + 1] - before[3 * crown + 1], after[3 * crown + 2] - before[3 * crown + 2]);
+    const posed = draw();
+    for (let i = 0; i < posed.length; i += 4) if (Math.abs(posed[i] - rest[i]) + Math.abs(posed[i + 1] - rest[i + 1]) + Math.abs(posed[i + 2] - rest[i + 2]) > 30) boneChanged++;
+    boneChanged /= 256 * 256;
+    // Left on screen for the screenshot: the head turned by its Head bone, the
+    // jaw open by its Jaw bone, smiling by its morph target.
+    const headBone = gltf.scene.getObjectByName('Head');
+    if (headBone) headBone.rotation.y = 0.45;
+    head.morphTargetInfluences[head.morphTargetDictionary.smile] = 1;
+    draw();
+  }
+  return { names, meshes, headVertices, skinTextured, litFraction: lit / (256 * 256), morphs, jawChanged, smileChanged, bones, boneChanged, chinDrop, crownMoved };
 })().catch((e) => ({ error: String(e && e.message || e) }));
 </script>` });
     }
@@ -131,7 +162,7 @@ window.result = (async () => {
   await page.goto(s.origin + '/__glb_test/index.html');
   await page.waitForFunction(() => window.result, null, { timeout: 60000 });
   const got = await page.evaluate(() => window.result);
-  const wanted = ['Neck', 'Head', 'LeftEye', 'RightEye', 'UpperTeeth', 'Jaw', 'LowerTeeth', 'Tongue'];
+  const wanted = ['Neck', 'Head', 'HeadMesh', 'LeftEye', 'RightEye', 'UpperTeeth', 'Jaw', 'LowerTeeth', 'Tongue'];
   const headVerts = Number((/(\d+) vertices/.exec(made.report) || [])[1]);
   check('three.js\'s GLTFLoader loads the GLB: every node, the head\'s vertices, the skin texture',
         !got.error && wanted.every((n) => got.names.includes(n)) && got.headVertices === headVerts && got.skinTextured && got.meshes === 6,
@@ -144,6 +175,9 @@ window.result = (async () => {
         `${(got.morphs || []).length} morph targets${missing.length ? '; missing ' + missing.join(', ') : ''}`);
   check('... and jawOpen, smile at weight 1 each change the render', got.jawChanged > 0.001 && got.smileChanged > 0.001,
         `jawOpen ${(100 * (got.jawChanged || 0)).toFixed(2)}%, smile ${(100 * (got.smileChanged || 0)).toFixed(2)}% of the pixels changed`);
+  check('... the head is skinned to the skeleton Neck, Head, LeftEye, RightEye, Jaw; turning the Jaw bone drops the chin and changes the render',
+        (got.bones || []).join(' ') === 'Neck Head LeftEye RightEye Jaw' && got.chinDrop > 0.005 && got.crownMoved === 0 && got.boneChanged > 0.001,
+        `bones ${(got.bones || []).join(' ')}; Jaw 0.3 rad: chin ${(1000 * (got.chinDrop || 0)).toFixed(1)} mm down, crown moved ${got.crownMoved} m, ${(100 * (got.boneChanged || 0)).toFixed(2)}% of the pixels changed`);
   check('the level-2 GLB with every shape and its textures is under 8 MB', made.glb.length < 8 * 1048576,
         `${(made.glb.length / 1048576).toFixed(2)} MB`);
   await page.close();
