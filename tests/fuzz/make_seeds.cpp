@@ -4,6 +4,7 @@
 // encoder is not ours (JPEG, BMP, TGA), by the smallest text we can write by
 // hand or Debian's stb_image_write. Usage: make_seeds OUT_DIR; files go to
 // OUT_DIR/<target>/.
+#include "../io/exif_builder.h"
 #include "io/io.h"
 #include "mesh/primitives.h"
 #include "photos/landmarks.h"
@@ -124,6 +125,18 @@ int main(int argc, char** argv) {
     stbi_write_bmp_to_func(append, &bmp, im.width, im.height, channels, im.pixels.data());
     stbi_write_tga_to_func(append, &tga, im.width, im.height, channels, im.pixels.data());
     put("image", "c" + c + ".jpg", jpg);
+    if (channels == 3) {  // EXIF: a camera's focal tags, in both byte orders, on stb's picture
+      for (bool big : {false, true}) {
+        exif_test::TiffBuilder tags = exif_test::camera_tags(big);
+        tags.ifd0.back() = tags.shrt(0x0112, 6);  // orientation: turned 90 degrees, which read_image undoes
+        Bytes tagged = exif_test::jpeg_with(tags.build());
+        tagged.resize(tagged.size() - 14);  // the hand-made JPEG's stub tables, scan and end: stb's file follows
+        tagged.insert(tagged.end(), jpg.begin() + 2, jpg.end());
+        put("exif", std::string(big ? "big" : "little") + ".jpg", tagged);
+        put("image", std::string("exif_") + (big ? "big" : "little") + ".jpg", tagged);
+      }
+      put("exif", "plain.jpg", jpg);
+    }
     put("image", "c" + c + ".bmp", bmp);
     put("image", "c" + c + ".tga", tga);
   }
