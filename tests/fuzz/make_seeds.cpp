@@ -83,6 +83,18 @@ int main(int argc, char** argv) {
   PointCloud bare_cloud;
   bare_cloud.positions = cloud.positions;
 
+  {  // outline: a head-like white ellipse on black (a mask), and on a plain grey backdrop (a photo)
+    Image mask = Image::make(64, 80, 1, 0), photo = Image::make(64, 80, 3, 90);
+    for (int y = 0; y < 80; ++y)
+      for (int x = 0; x < 64; ++x) {
+        const double u = (x - 32) / 20.0, v = (y - 36) / 28.0;
+        if (u * u + v * v > 1) continue;
+        mask.pixels[static_cast<size_t>(y) * 64 + x] = 255;
+        for (int c = 0; c < 3; ++c) photo.pixels[(static_cast<size_t>(y) * 64 + x) * 3 + c] = static_cast<std::uint8_t>(200 - 40 * c);
+      }
+    put("outline", "mask.png", write_png(mask));
+    put("outline", "photo.png", write_png(photo));
+  }
   put("ply", "grid_binary.ply", write_ply(grid));
   put("ply", "grid_ascii.ply", write_ply(grid, true));
   put("ply", "corner_uvs.ply", write_ply(corner));
