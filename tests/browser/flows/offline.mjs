@@ -5,12 +5,35 @@
 // installability errors). Then the server is shut down and the browser put
 // offline: a reload starts the page from its copy, with the same core, and
 // a synthetic head scan (`likeness synth-scan`, 20k points; skipped with a
-// note without the native CLI) is loaded and fitted with the network off.
+// note without the native CLI) is loaded and fitted with the network off;
+// then a rendered head photo is dropped and the face detector (its model in
+// the copy) finds its 468 face points, still offline.
 import fs from 'node:fs';
+import os from 'node:os';
 import path from 'node:path';
+import { execFileSync } from 'node:child_process';
+import { fileURLToPath } from 'node:url';
 import { bannerText, check, closeChromium, launchChromium, note, READY_TIMEOUT_MS, runAlone, setFile, settled, shot,
          state, waitForState } from '../harness.mjs';
 import { syntheticScan } from '../synth_scan.mjs';
+import { headWithEyes } from '../landmark_geometry.mjs';
+
+const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../../..');
+
+// The generic head with its eyes rendered by the native CLI as a 640-px photo
+// (as flow `landmarks` does), or null without the CLI.
+function renderedHeadPhoto(webdir) {
+  const bin = [process.env.LK_LIKENESS_BIN, path.join(webdir, '..', 'bin', 'likeness')].filter(Boolean).find((c) => fs.existsSync(c));
+  if (!bin) return null;
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-offline-'));
+  try {
+    const head = headWithEyes(bin, ROOT, dir);
+    execFileSync(bin, ['render', '--mesh', head, '--yaw', '10', '--pitch', '5', '--size', '640', '--out', path.join(dir, 'head.png')]);
+    return fs.readFileSync(path.join(dir, 'head.png'));
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
+}
 
 async function run(s) {
   if (!fs.existsSync(path.join(s.webdir, 'offline.json'))) {
@@ -76,6 +99,20 @@ async function run(s) {
     const fit = await page.evaluate(() => window.likeness.fit && window.likeness.fit.meshes.levels.length);
     check('offline, a scan loads and "Fit head" reaches "done"', sLoad === 'done' && sFit === 'done' && fit > 0,
           `load ${sLoad}, fit ${sFit} after ${Date.now() - tFit} ms, ${fit} levels; ${await bannerText(page)}`);
+
+    // The face detector's model comes from the copy too.
+    const photo = renderedHeadPhoto(s.webdir);
+    if (!photo) return;  // (no CLI: the scan above was skipped already)
+    await page.setInputFiles('#file-input', [{ name: 'offline_face.png', mimeType: 'image/png', buffer: photo }]);
+    await settled(page);
+    const tDetect = Date.now();
+    await page.waitForFunction(() => window.likeness.photos.length > 0 && window.likeness.photos.every((p) =>
+      p.detect && !['waiting', 'running'].includes(p.detect.state)), null, { timeout: 180000 }).catch(() => {});
+    const detect = await page.evaluate(() => (window.likeness.photos.find((p) => p.name === 'offline_face.png') || {}).detect || null);
+    check('offline, a dropped photo\'s face points are found by the detector from the copy',
+          !!detect && detect.state === 'found' && detect.faces === 1 && (detect.points || []).length === 468 && server.requests.length === asked,
+          `${JSON.stringify(detect && { state: detect.state, faces: detect.faces, points: (detect.points || []).length, message: detect.message })} ` +
+          `after ${Date.now() - tDetect} ms; ${server.requests.length - asked} requests reached the server`);
   } finally {
     await context.setOffline(false).catch(() => {});
     await closeChromium(context);
