@@ -4,6 +4,7 @@
 // lookAt + perspective; pixel origin top-left), rays from pixels, ray-triangle
 // hits and closest points on a mesh.
 import fs from 'node:fs';
+import os from 'node:os';
 import path from 'node:path';
 import { execFileSync } from 'node:child_process';
 
@@ -179,4 +180,19 @@ export function headWithEyes(bin, root, dir) {
   }
   fs.writeFileSync(path.join(dir, 'head.obj'), lines.join('\n') + '\n');
   return path.join(dir, 'head.obj');
+}
+
+// The generic head with its eyes rendered by the native CLI `bin` as a
+// size-px photo (yaw 10, pitch 5: a view none of the map's views used), or
+// null without the CLI. For flows that need a face photo.
+export function renderedHeadPhoto(bin, root, size = 640) {
+  if (!bin) return null;
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-head-photo-'));
+  try {
+    const head = headWithEyes(bin, root, dir);
+    execFileSync(bin, ['render', '--mesh', head, '--yaw', '10', '--pitch', '5', '--size', String(size), '--out', path.join(dir, 'head.png')]);
+    return fs.readFileSync(path.join(dir, 'head.png'));
+  } finally {
+    fs.rmSync(dir, { recursive: true, force: true });
+  }
 }

@@ -212,6 +212,8 @@ function pointerMove(e) {
   const photo = clicker.photo;
   const [u, w] = photoPixel(e);
   detected(photo)[clicker.drag] = [Math.min(Math.max(u, 0), photo.width), Math.min(Math.max(w, 0), photo.height)];
+  if (!photo.detect.corrected) photo.detect.corrected = new Set();
+  photo.detect.corrected.add(clicker.drag);  // kept with the photo (keep.js)
   clicker.moved = true;
   drawClicker();
 }

@@ -4,7 +4,10 @@
 //   - What is kept: the project file's bytes from save_project_job (the
 //     fitted, and textured, head with its scan), and what that file does not
 //     hold: the options, the photos (their files, roles, clicks, points
-//     files) and a thumbnail of the viewer.
+//     files, the detector's face points with the user's corrections) and a
+//     thumbnail of the viewer. Photos dropped before there is a head are
+//     kept too, as an entry without a head (its thumbnail the first photo),
+//     which the head made from them later takes over.
 //   - When: right after a fit, a texture or an opened project (a new head is
 //     saved at once, so a worker lost to Cancel can get it back), and a
 //     moment after an option, a photo or a landmark click changed.
@@ -42,6 +45,7 @@ function when(t) {
   return d.toDateString() === now.toDateString() ? 'today at ' + time : d.toLocaleDateString([], { day: 'numeric', month: 'short' }) + ', ' + time;
 }
 
+const photoCount = (n) => n + (n === 1 ? ' photo' : ' photos');
 const baseName = (name) => String(name || 'head').replace(/\.likeness\.glb$/i, '').replace(/\.[^.]*$/, '');
 
 // A small PNG of the viewer's centre. The viewer draws only when something
@@ -70,6 +74,29 @@ function thumbnail() {
   });
 }
 
+// A photo's first frame as a 96-px square thumbnail (an entry without a head).
+async function photoThumbnail(photo) {
+  try {
+    const b = await createImageBitmap(photo.file);
+    const t = document.createElement('canvas'), side = Math.min(b.width, b.height);
+    t.width = t.height = 96;
+    t.getContext('2d').drawImage(b, (b.width - side) / 2, (b.height - side) / 2, side, side, 0, 0, 96, 96);
+    b.close();
+    return t.toDataURL('image/png');
+  } catch (e) {
+    return '';
+  }
+}
+
+// The detector's face points of a photo as kept: what it found, with the
+// user's drags (corrected: the indices moved), or null while none are known.
+function keptDetect(p) {
+  const d = p.detect;
+  if (!d || !d.points || !['found', 'many'].includes(d.state)) return null;
+  return { state: d.state, faces: d.faces, points: d.points.map((q) => (q ? [q[0], q[1]] : null)),
+           corrected: d.corrected ? [...d.corrected] : [] };
+}
+
 // What the project file does not hold: options and photos.
 function pageState() {
   return {
@@ -77,13 +104,20 @@ function pageState() {
                fullDetail: ui.fullDetail.checked },
     photos: app.photos.map((p) => ({ name: p.name, width: p.width, height: p.height, role: p.role || 'face',
                                      clicks: [...p.clicks.entries()], pointsName: p.pointsName || '',
-                                     filePoints: p.filePoints ? Array.from(p.filePoints) : null })),
+                                     filePoints: p.filePoints ? Array.from(p.filePoints) : null, detect: keptDetect(p) })),
   };
+}
+// Kept face points as the page holds them again (no detection needed).
+function restoredDetect(k) {
+  if (!k || !Array.isArray(k.points)) return null;
+  const n = k.corrected && k.corrected.length;
+  return { state: k.state, faces: k.faces, points: k.points, ms: 0, corrected: new Set(k.corrected || []),
+           message: k.points.length + ' face points (kept' + (n ? ', ' + n + ' moved by hand' : '') + ')' };
 }
 const photosKey = () => app.photos.map((p) => p.name + ':' + p.file.size + ':' + p.file.lastModified).join('|');
 
 export function scheduleSave(delay = SAVE_DELAY_MS) {
-  if (OFF || !app.fit) return;
+  if (OFF || (!app.fit && !app.photos.length)) return;
   clearTimeout(timer);
   timer = setTimeout(() => { timer = 0; saveNow(); }, delay);
 }
@@ -107,11 +141,32 @@ function say(e) {
     : 'The head could not be kept in this browser (' + keep.error + '); use Save project to keep it in a file.';
 }
 
+// Photos without a head: one entry of their files and points, no project.
+async function savePhotos() {
+  if (!app.photos.length) return;
+  if (current && current.fit) current = null;  // the head is gone (Reset): the photos start an entry of their own
+  if (!current) current = { id: newId(), fit: null, texture: null, bytes: null, photosKey: null };
+  const key = photosKey();
+  const whole = key !== current.photosKey || !(await hasFile(current.id));
+  const file = whole ? { bytes: null, photos: app.photos.map((p) => p.file) } : null;
+  const first = app.photos[0];
+  const head = { id: current.id, name: baseName(first.name), photosOnly: true, savedAt: Date.now(),
+                 thumb: await photoThumbnail(first), size: app.photos.reduce((n, p) => n + p.file.size, 0),
+                 textured: false, vertices: 0, page: pageState() };
+  await putHead(head, file);
+  current.photosKey = key;
+  await saved(head, !!file);
+}
+const newId = () => 'h' + Date.now().toString(36) + Math.random().toString(36).slice(2, 6);
+
 async function save() {
   const fit = app.fit, texture = app.texture;
-  if (!fit) return;
   // A job may change the worker's head under us; the animation poses it.
-  if (document.body.dataset.state === 'working' || app.animation.running) { scheduleSave(); return; }
+  if (document.body.dataset.state === 'working' || (app.animation && app.animation.running)) { scheduleSave(); return; }
+  if (!fit) {
+    await savePhotos();
+    return;
+  }
   const fresh = !current || current.fit !== fit;
   let bytes = null;
   if (fresh || current.texture !== texture) {
@@ -120,7 +175,8 @@ async function save() {
     if (!r.ok) throw new Error(r.message || r.code);
     bytes = r.bytes;
   }
-  if (fresh) current = { id: 'h' + Date.now().toString(36) + Math.random().toString(36).slice(2, 6), fit, photosKey: null };
+  // A head made from kept photos takes their entry over.
+  if (fresh) current = current && !current.fit ? Object.assign(current, { fit, photosKey: null }) : { id: newId(), fit, photosKey: null };
   if (bytes) Object.assign(current, { bytes, texture });
   const key = photosKey();
   const whole = bytes || key !== current.photosKey || !(await hasFile(current.id));
@@ -131,8 +187,12 @@ async function save() {
                  page: pageState() };
   await putHead(head, file);
   current.photosKey = key;
+  await saved(head, !!file);
+}
+
+async function saved(head, wroteFile) {
   keep.saves++;
-  keep.lastSave = { id: head.id, savedAt: head.savedAt, size: head.size, wroteFile: !!file };
+  keep.lastSave = { id: head.id, savedAt: head.savedAt, size: head.size, wroteFile, photosOnly: !!head.photosOnly };
   keep.error = null;
   el.note.classList.remove('bad');
   el.note.textContent = 'Kept in this browser ' + when(head.savedAt) + ': a reload or a crash loses nothing.';
@@ -160,7 +220,7 @@ export async function renderList() {
     if (h.thumb) img.src = h.thumb;
     const text = document.createElement('div');
     text.className = 'keep-text';
-    text.textContent = h.name + (h.textured ? ' (textured)' : '');
+    text.textContent = h.name + (h.photosOnly ? ' (' + photoCount((h.page.photos || []).length) + ', no head yet)' : h.textured ? ' (textured)' : '');
     const meta = document.createElement('div');
     meta.className = 'keep-meta';
     meta.textContent = when(h.savedAt) + ' · ' + (h.size / 1048576).toFixed(1) + ' MB';
@@ -208,10 +268,15 @@ export async function restoreHead(id) {
     stored = head && await getFile(id);
   } catch (e) { say(e); return; }
   if (!head || !stored) { setStatus('That head is no longer kept in this browser.'); await renderList(); return; }
-  const file = new File([stored.bytes], head.name + '.likeness.glb', { type: 'model/gltf-binary' });
-  await openProject(file);
-  if (!app.project || app.project.name !== file.name || !app.fit) return;  // refused: openProject said why
-  current = { id, fit: app.fit, texture: app.texture, bytes: stored.bytes, photosKey: null };
+  if (head.photosOnly) {
+    if (app.fit) forgetFit();
+    current = { id, fit: null, texture: null, bytes: null, photosKey: null };
+  } else {
+    const file = new File([stored.bytes], head.name + '.likeness.glb', { type: 'model/gltf-binary' });
+    await openProject(file);
+    if (!app.project || app.project.name !== file.name || !app.fit) return;  // refused: openProject said why
+    current = { id, fit: app.fit, texture: app.texture, bytes: stored.bytes, photosKey: null };
+  }
   const o = head.page.options || {};
   if (o.level !== undefined) ui.level.value = o.level;
   ui.autoFit.checked = o.autoFit !== false;
@@ -224,7 +289,7 @@ export async function restoreHead(id) {
     const f = blob instanceof File ? blob : new File([blob], p.name);
     return { name: p.name, file: f, width: p.width, height: p.height, url: URL.createObjectURL(f), role: 'face',
              filePoints: p.filePoints ? new Float64Array(p.filePoints) : null, pointsName: p.pointsName,
-             clicks: new Map(p.clicks || []), calib: null, sent: null };
+             clicks: new Map(p.clicks || []), calib: null, sent: null, detect: restoredDetect(p.detect) };
   }).filter(Boolean);
   current.photosKey = photosKey();
   renderPhotos();
@@ -234,8 +299,10 @@ export async function restoreHead(id) {
     const photo = app.photos.find((x) => x.name === p.name);
     if (photo && p.role && p.role !== 'face') await setPhotoRole(photo, p.role);
   }
-  setStatus('Restored ' + head.name + ' as kept ' + when(head.savedAt) + ', in ' + Math.round(performance.now() - t0) +
-            ' ms without fitting: animate it, texture it or export it.');
+  setStatus(head.photosOnly
+    ? 'Restored ' + photoCount(app.photos.length) + ' as kept ' + when(head.savedAt) + (app.photos.length === 1 ? ', with its face points: add more photos, or make the head from it.' : ', with their face points: add more, or make the head from them.')
+    : 'Restored ' + head.name + ' as kept ' + when(head.savedAt) + ', in ' + Math.round(performance.now() - t0) +
+      ' ms without fitting: animate it, texture it or export it.');
   await renderList();
 }
 
@@ -243,10 +310,12 @@ export async function restoreHead(id) {
 export async function offerRestore() {
   if (OFF) return;
   const heads = await renderList();
-  if (!heads.length || app.fit) return;
+  if (!heads.length || app.fit || app.photos.length) return;
   const h = heads[0];
   keep.offered = h.id;
-  el.offerText.textContent = 'Restore your head from ' + when(h.savedAt) + '? (' + h.name + (h.textured ? ', textured' : '') + ')';
+  el.offerText.textContent = h.photosOnly
+    ? 'Restore your ' + photoCount((h.page.photos || []).length) + ' from ' + when(h.savedAt) + '? (no head was made from them yet)'
+    : 'Restore your head from ' + when(h.savedAt) + '? (' + h.name + (h.textured ? ', textured' : '') + ')';
   el.offer.hidden = false;
 }
 
@@ -274,10 +343,10 @@ export function wireKeep() {
   // A head that became the shown one (fit, texture, opened) is kept at once;
   // anything else a moment later.
   onPageChange((snap) => {
-    if (app.fit) el.offer.hidden = true;  // a head is shown: nothing to offer
+    if (app.fit || app.photos.length) el.offer.hidden = true;  // a head or photos are on the page: nothing to offer
     if (snap.state === 'working' || snap.state === 'loading') return;
     if (app.fit && (!current || current.fit !== app.fit || current.texture !== app.texture)) scheduleSave(0);
-    else if (app.fit) scheduleSave();
+    else if (app.fit || app.photos.length) scheduleSave();
   });
   for (const c of [ui.level, ui.autoFit, ui.showComponents, ui.fullDetail]) c.addEventListener('change', () => scheduleSave());
   for (const c of [ui.clickerCanvas, ui.clickerUndo, ui.clickerSkip, ui.clickerClear, ui.photoList]) {

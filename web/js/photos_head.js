@@ -120,9 +120,10 @@ export async function makeHeadFromPhotos(trigger = 'button') {
     return;
   }
   app.project = null;
-  app.model = { name: 'head from ' + usedCount + ' photos', kind: 'photos', vertexCount: result.meshes.control.vertexCount,
+  const named = 'head from ' + usedCount + (usedCount === 1 ? ' photo' : ' photos');
+  app.model = { name: named, kind: 'photos', vertexCount: result.meshes.control.vertexCount,
                 triangleCount: result.meshes.control.triangleCount };
-  showHead(result, 'head from ' + usedCount + ' photos', wallMs, true);
+  showHead(result, named, wallMs, true);
   app.fit.fromPhotos = true;
   rowsDone(result, photos.length, prior);
   ui.fitTotal.textContent = 'head from ' + usedCount + ' of ' + photos.length + ' photos in ' + (result.photosMs / 1000).toFixed(2) +

@@ -15,7 +15,7 @@ import os from 'node:os';
 import path from 'node:path';
 import { execFileSync } from 'node:child_process';
 import { fileURLToPath } from 'node:url';
-import { check, decodePng, makePhotoPng, note, READY_TIMEOUT_MS, runAlone, settled, waitForState } from '../harness.mjs';
+import { check, decodePng, likenessBin, makePhotoPng, note, READY_TIMEOUT_MS, runAlone, settled, waitForState } from '../harness.mjs';
 import { headWithEyes, project } from '../landmark_geometry.mjs';
 
 const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../../..');
@@ -27,10 +27,6 @@ const TOLERANCE_PX = 8;
 const NAMED = [[4, 'nose tip'], [33, 'right eye outer corner'], [133, 'right eye inner corner'],
                [263, 'left eye outer corner'], [362, 'left eye inner corner'], [61, 'right mouth corner'],
                [291, 'left mouth corner']];
-
-function likenessBin(webdir) {
-  return [process.env.LK_LIKENESS_BIN, path.join(webdir, '..', 'bin', 'likeness')].filter(Boolean).find((c) => fs.existsSync(c));
-}
 
 // The rendered head photo (with its eyeballs, as the map was made) and its camera.
 function renderHead(bin) {

@@ -9,31 +9,14 @@
 // then a rendered head photo is dropped and the face detector (its model in
 // the copy) finds its 468 face points, still offline.
 import fs from 'node:fs';
-import os from 'node:os';
 import path from 'node:path';
-import { execFileSync } from 'node:child_process';
 import { fileURLToPath } from 'node:url';
-import { bannerText, check, closeChromium, launchChromium, note, READY_TIMEOUT_MS, runAlone, setFile, settled, shot,
+import { bannerText, check, closeChromium, likenessBin, launchChromium, note, READY_TIMEOUT_MS, runAlone, setFile, settled, shot,
          state, waitForState } from '../harness.mjs';
 import { syntheticScan } from '../synth_scan.mjs';
-import { headWithEyes } from '../landmark_geometry.mjs';
+import { renderedHeadPhoto } from '../landmark_geometry.mjs';
 
 const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../../..');
-
-// The generic head with its eyes rendered by the native CLI as a 640-px photo
-// (as flow `landmarks` does), or null without the CLI.
-function renderedHeadPhoto(webdir) {
-  const bin = [process.env.LK_LIKENESS_BIN, path.join(webdir, '..', 'bin', 'likeness')].filter(Boolean).find((c) => fs.existsSync(c));
-  if (!bin) return null;
-  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-offline-'));
-  try {
-    const head = headWithEyes(bin, ROOT, dir);
-    execFileSync(bin, ['render', '--mesh', head, '--yaw', '10', '--pitch', '5', '--size', '640', '--out', path.join(dir, 'head.png')]);
-    return fs.readFileSync(path.join(dir, 'head.png'));
-  } finally {
-    fs.rmSync(dir, { recursive: true, force: true });
-  }
-}
 
 async function run(s) {
   if (!fs.existsSync(path.join(s.webdir, 'offline.json'))) {
@@ -101,7 +84,7 @@ async function run(s) {
           `load ${sLoad}, fit ${sFit} after ${Date.now() - tFit} ms, ${fit} levels; ${await bannerText(page)}`);
 
     // The face detector's model comes from the copy too.
-    const photo = renderedHeadPhoto(s.webdir);
+    const photo = renderedHeadPhoto(likenessBin(s.webdir), ROOT);
     if (!photo) return;  // (no CLI: the scan above was skipped already)
     await page.setInputFiles('#file-input', [{ name: 'offline_face.png', mimeType: 'image/png', buffer: photo }]);
     await settled(page);
