@@ -277,15 +277,18 @@ export class Session {
   }
 
   context() {
-    return this.once('context', async () => {
-      const context = await launchChromium('test', { width: 1280, height: 800 }, { hasTouch: true });
-      context.on('request', (req) => {
-        const url = req.url();
-        this.requests.push(url);
-        if (!(this.ownOrigins.some((o) => url.startsWith(o + '/')) || url.startsWith('data:') || url.startsWith('blob:'))) this.foreign.push(url);
-      });
-      return context;
+    return this.once('context', async () => this.watchRequests(await launchChromium('test', { width: 1280, height: 800 }, { hasTouch: true })));
+  }
+
+  // Counts a browser context's requests, and those off the page's origins
+  // (a flow's own browser too); returns the context.
+  watchRequests(context) {
+    context.on('request', (req) => {
+      const url = req.url();
+      this.requests.push(url);
+      if (!(this.ownOrigins.some((o) => url.startsWith(o + '/')) || url.startsWith('data:') || url.startsWith('blob:'))) this.foreign.push(url);
     });
+    return context;
   }
 
   // Console errors and uncaught exceptions of this page fail the run.

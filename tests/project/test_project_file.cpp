@@ -544,18 +544,22 @@ TEST_CASE("GLB export: the head at its level with uvs and skin, the parts under 
   // The parts: each where place_head_parts puts it, in its node's frame.
   HeadParts parts;
   REQUIRE(place_head_parts(p.fit.control, generic, parts).ok());
+  auto world_at = [&](const std::string& name) {  // a node's place: its translations summed up to the root
+    Vec3 at = Vec3::Zero();
+    for (int i = index(name); i >= 0;) {
+      const tinygltf::Node& a = m.nodes[i];
+      if (a.translation.size() == 3) at += Vec3(a.translation[0], a.translation[1], a.translation[2]);
+      int parent = -1;
+      for (size_t k = 0; k < m.nodes.size(); ++k)
+        for (int c : m.nodes[k].children)
+          if (c == i) parent = static_cast<int>(k);
+      i = parent;
+    }
+    return at;
+  };
   auto world_of = [&](const std::string& name, const TriMesh& expect) {
     const tinygltf::Node& n = node(name);
-    Vec3 offset = Vec3::Zero();
-    for (int at = index(name); at >= 0;) {  // sum the translations up to the root
-      const tinygltf::Node& a = m.nodes[at];
-      if (a.translation.size() == 3) offset += Vec3(a.translation[0], a.translation[1], a.translation[2]);
-      int parent = -1;
-      for (size_t i = 0; i < m.nodes.size(); ++i)
-        for (int c : m.nodes[i].children)
-          if (c == at) parent = static_cast<int>(i);
-      at = parent;
-    }
+    const Vec3 offset = world_at(name);
     const tinygltf::Primitive& prim = m.meshes.at(n.mesh).primitives.at(0);
     REQUIRE(m.accessors.at(prim.attributes.at("POSITION")).count == expect.positions.size());
     const float* Q = data(prim.attributes.at("POSITION"));
@@ -572,19 +576,6 @@ TEST_CASE("GLB export: the head at its level with uvs and skin, the parts under 
   world_of("UpperTeeth", parts.upper_teeth);
   world_of("LowerTeeth", parts.lower_teeth);
   world_of("Tongue", parts.placed.tongue);
-  auto world_at = [&](const std::string& name) {  // a joint's place: its translations summed up to the root
-    Vec3 at = Vec3::Zero();
-    for (int i = index(name); i >= 0;) {
-      const tinygltf::Node& a = m.nodes[i];
-      if (a.translation.size() == 3) at += Vec3(a.translation[0], a.translation[1], a.translation[2]);
-      int parent = -1;
-      for (size_t k = 0; k < m.nodes.size(); ++k)
-        for (int c : m.nodes[k].children)
-          if (c == i) parent = static_cast<int>(k);
-      i = parent;
-    }
-    return at;
-  };
   CHECK((world_at("Jaw") - p.rig.jaw_pivot).norm() < 1e-9);
   // The teeth's voids are transparent: alpha-masked.
   CHECK(m.materials.at(m.meshes.at(node("UpperTeeth").mesh).primitives[0].material).alphaMode == "MASK");

@@ -52,12 +52,7 @@ async function photosWithoutHead(s) {
     return;
   }
   const { origin } = await s.serve();
-  const context = await launchChromium('keep-photos', { width: 1280, height: 800 });
-  context.on('request', (req) => {
-    const url = req.url();
-    s.requests.push(url);
-    if (!(url.startsWith(origin + '/') || url.startsWith('data:') || url.startsWith('blob:'))) s.foreign.push(url);
-  });
+  const context = s.watchRequests(await launchChromium('keep-photos', { width: 1280, height: 800 }));
   try {
     const page = s.watch(await context.newPage());
     await page.goto(origin + '/index.html?autofit=0');  // (else Auto-run makes a one-photo head at once)

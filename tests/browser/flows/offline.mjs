@@ -24,12 +24,7 @@ async function run(s) {
     return;
   }
   const { server, origin } = await s.serve();
-  const context = await launchChromium('offline', { width: 1280, height: 800 }, { serviceWorkers: 'allow' });
-  context.on('request', (req) => {
-    const url = req.url();
-    s.requests.push(url);
-    if (!(url.startsWith(origin + '/') || url.startsWith('data:') || url.startsWith('blob:'))) s.foreign.push(url);
-  });
+  const context = s.watchRequests(await launchChromium('offline', { width: 1280, height: 800 }, { serviceWorkers: 'allow' }));
   try {
     const page = s.watch(await context.newPage());
     await page.goto(origin + '/index.html?autofit=0');
