@@ -75,7 +75,9 @@ const layout = (page) => page.evaluate(() => {
   const cam = document.getElementById('camera-input');
   const take = document.getElementById('btn-take-photos');
   const canvas = document.getElementById('canvas').getBoundingClientRect();
+  const bar = document.querySelector('.toolbar').getBoundingClientRect();
   return {
+    toolbar: { top: bar.top, bottom: bar.bottom }, canvasBottom: canvas.bottom,
     scrollWidth: document.scrollingElement.scrollWidth, innerWidth: window.innerWidth,
     coarse: matchMedia('(pointer: coarse)').matches,
     take: visible(take), capture: cam.getAttribute('capture'), accept: cam.getAttribute('accept'),
@@ -107,12 +109,7 @@ async function run(s) {
   const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-phone-'));
   const { server, origin } = await s.serve();
   await desktopHidesCamera(origin);
-  const context = await launchChromium('phone', { width: 390, height: 844 }, { hasTouch: true, isMobile: true });
-  context.on('request', (req) => {
-    const url = req.url();
-    s.requests.push(url);
-    if (!(url.startsWith(origin + '/') || url.startsWith('data:') || url.startsWith('blob:'))) s.foreign.push(url);
-  });
+  const context = s.watchRequests(await launchChromium('phone', { width: 390, height: 844 }, { hasTouch: true, isMobile: true }));
   try {
     execFileSync(bin, ['synth-photos', '--seed', '2', '--cameras', '9', '--out', dir]);
     const page = s.watch(await context.newPage());
@@ -124,6 +121,8 @@ async function run(s) {
           `scroll width ${l.scrollWidth} px, screen ${l.innerWidth} px`);
     check('on a phone the 3D view fills the screen\'s width and is on the first screen',
           l.canvas.width >= 0.9 * l.innerWidth && l.canvas.top < 844 && l.canvas.height >= 300, JSON.stringify(l.canvas));
+    check('on a phone the view controls sit under the 3D view, not over it', l.toolbar.top >= l.canvasBottom - 1 && l.toolbar.bottom <= 844,
+          `view ${l.canvas.top.toFixed(0)}-${l.canvasBottom.toFixed(0)} px, controls ${l.toolbar.top.toFixed(0)}-${l.toolbar.bottom.toFixed(0)} px`);
     check('on a phone "Take photos" is shown, and opens the camera (a file input with capture, images)',
           l.coarse && l.take && l.capture === 'user' && l.accept === 'image/*', `coarse ${l.coarse}, shown ${l.take}, capture ${l.capture}, accept ${l.accept}`);
     check('on a phone every control is at least 44x44 px to tap (WCAG 2.2 asks 24 px at least)', l.small.length === 0,
