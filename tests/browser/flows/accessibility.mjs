@@ -2,13 +2,14 @@
 // request) finds no serious or critical violation in each state a person
 // meets: the page ready; an error (a broken scan); a scan loaded; working
 // (a fit running); done (the fitted head, its checks); a photo open to mark
-// landmarks (the clicker); the restore offer after a reload; the Expressions
-// panel open. Ready and done (closed and open Expressions):
+// landmarks (the clicker); an eye photo used, and one refused; the restore
+// offer after a reload, and the restored head with the kept-heads list; the
+// Expressions panel open. Ready and done (closed and open Expressions):
 // Tab reaches every visible, enabled control, each with a visible focus. A page of its
 // own (?autofit=0); the fit uses a 20k-point synthetic scan (skipped with
 // a note without the native CLI).
 import { createRequire } from 'node:module';
-import { check, makePng, note, runAlone, setFile, settled, waitForState } from '../harness.mjs';
+import { check, makeEyePng, makePhotoPng, makePng, note, runAlone, setFile, settled, waitForState } from '../harness.mjs';
 import { syntheticScan } from '../synth_scan.mjs';
 
 const AXE = createRequire(import.meta.url).resolve('axe-core/axe.min.js');
@@ -121,13 +122,31 @@ async function run(s) {
   await page.waitForSelector('#clicker:not([hidden])', { timeout: 10000 }).catch(() => {});
   await checkState(page, 'a photo open to mark landmarks');
   await page.click('#clicker-close');
+  // An eye photo: its iris on the eyeballs; then a grey card as an eye: the
+  // error beside it.
+  await page.setInputFiles('#file-input', [{ name: 'eye_close.png', mimeType: 'image/png', buffer: makeEyePng() },
+    { name: 'grey_card.png', mimeType: 'image/png', buffer: makePhotoPng(200, 150, () => [128, 128, 128]) }]);
+  await settled(page);
+  const roleSelect = (name) => page.locator('#photo-list li', { hasText: name }).locator('select.photo-role');
+  await roleSelect('eye_close.png').selectOption('eye');
+  await settled(page);
+  await checkState(page, 'an eye photo used for the irises');
+  await roleSelect('grey_card.png').selectOption('eye');
+  await settled(page);
+  await checkState(page, 'an eye photo refused (its error in the banner and beside it)');
   // The head is kept; after a reload the page offers it back.
   await page.waitForTimeout(1500);
   await page.reload();
   await waitForState(page, ['ready', 'error']);
   const offered = await page.waitForSelector('#restore-offer:not([hidden])', { timeout: 30000 }).then(() => true, () => false);
-  if (offered) await checkState(page, 'the restore offer after a reload');
-  else check('the restore offer appears after a reload (to check it)', false);
+  if (offered) {
+    await checkState(page, 'the restore offer after a reload');
+    await page.click('#btn-restore');
+    await page.waitForFunction(() => window.likeness.restored, null, { timeout: 120000 }).catch(() => {});
+    await settled(page);
+    await checkState(page, 'a restored head, with the list of kept heads');
+    await keyboardReach(page, 'a restored head');
+  } else check('the restore offer appears after a reload (to check it)', false);
   await page.close();
 }
 
