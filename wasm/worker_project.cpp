@@ -5,6 +5,7 @@
 #include "worker_common.h"
 
 #include "anim/bake.h"
+#include "anim/expression.h"
 #include "project/glb_export.h"
 #include "project/pose.h"
 #include "project/project_file.h"
@@ -107,6 +108,65 @@ val face_shapes_job(int level) {
   return r;
 }
 
+// The kept head's muscle rig, made once per head: the rig is a function of
+// the control mesh at rest, so one whose rest positions are the head's is
+// the head's.
+const lk::FaceRig* kept_face_rig(lk::HeadProject& p, lk::Status& status) {
+  static lk::FaceRig rig;
+  static bool made = false;
+  if (made && rig.rest == p.fit.control.positions) return &rig;
+  made = false;
+  lk::Status generic_status;
+  const lk::GenericHead* generic = generic_head(generic_status);
+  if (!generic) {
+    status = lk::with_context(generic_status, "generic head");
+    return nullptr;
+  }
+  status = lk::make_face_rig(p.fit.control, *generic, rig);
+  made = status.ok();
+  return made ? &rig : nullptr;
+}
+
+// One frame of the live muscle path (issue 38): weights {name: w} (the
+// shape names of face_shapes_job) pose the kept head's control mesh by the
+// muscle layer and the levels up to `level` follow by the local update
+// (anim/expression.h); the positions are read and the head is put back at
+// rest exactly, so every other job sees it at rest. Returns {ok, level,
+// positions (scan frame), vertexCount, changed (level vertices recomputed),
+// poseMs (pose + local update), restMs (the way back)}.
+val expression_frame_job(val weights, int level) {
+  if (!kept_project()) return error_result(lk::ErrorCode::InvalidInput, "no fitted head to animate");
+  lk::HeadProject& p = *kept_project();
+  lk::MultiresMesh& mr = p.fit.multires;
+  if (level < 0 || level > mr.num_levels())
+    return error_result(lk::ErrorCode::InvalidInput, "no level " + std::to_string(level));
+  std::map<std::string, double> w;
+  const val names = val::global("Object").call<val>("keys", weights);
+  for (int i = 0, n = names["length"].as<int>(); i < n; ++i) {
+    const std::string name = names[i].as<std::string>();
+    w[name] = weights[name].as<double>();
+  }
+  lk::Status st = lk::rest_pose(p);
+  const lk::FaceRig* rig = st.ok() ? kept_face_rig(p, st) : nullptr;
+  if (!rig) return error_result(st);
+  lk::UpdateFootprint footprint;
+  const double t0 = now_ms();
+  st = lk::set_expression(mr, *rig, w, level, &footprint);
+  const double pose_ms = now_ms() - t0;
+  if (!st.ok()) return error_result(st);
+  val r = ok_result();
+  r.set("level", level);
+  r.set("positions", float32_array(p.frame.to_scan(mr.state.displaced[level])));
+  r.set("vertexCount", mr.num_vertices(level));
+  r.set("changed", footprint.displaced_changed.empty() ? 0 : footprint.displaced_changed[level]);
+  r.set("poseMs", pose_ms);
+  const double t1 = now_ms();
+  st = lk::set_expression(mr, *rig, {}, level);
+  r.set("restMs", now_ms() - t1);
+  if (!st.ok()) return error_result(st);
+  return r;
+}
+
 // A saved project's bytes -> the kept project (at rest), without fitting.
 // Returns what fit_head_job does (stages: the saved figures, ms 0) and
 // scan {positions (scan frame), vertexCount}, texture {uvs, skin, level}
@@ -157,4 +217,5 @@ EMSCRIPTEN_BINDINGS(likeness_worker_project) {
   emscripten::function("load_project_job", &load_project_job);
   emscripten::function("export_glb_job", &export_glb_job);
   emscripten::function("face_shapes_job", &face_shapes_job);
+  emscripten::function("expression_frame_job", &expression_frame_job);
 }

@@ -219,6 +219,10 @@ const JOBS = {
   // {level}: the muscle layer's 77 shapes baked on the kept head at level
   // (sparse offsets in the scan frame) for the page's Expressions panel.
   faceShapes: (msg) => core.face_shapes_job(msg.level | 0),
+  // {weights: {name: w}, level}: one frame of the live muscle path (the
+  // head posed by the muscle layer and the local update, read, put back at
+  // rest): {positions, poseMs, restMs, changed}.
+  expression: (msg) => core.expression_frame_job(msg.weights || {}, msg.level | 0),
   // {name, buffer}: a saved project -> the kept head, as 'fit' returns it
   // (plus scan positions, texture, loadMs), without fitting.
   openProject: (msg) => withHeapBytes(msg.buffer, (ptr, size) => core.load_project_job(msg.name, ptr, size)),
