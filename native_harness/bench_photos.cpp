@@ -37,6 +37,17 @@ namespace {
 // gauge of a photo head is free up to scale; unaligned = in the generic
 // head's frame, where the fit's prior keeps it), and the detector's error
 // against the truth's projections per landmark group and view.
+std::vector<std::string> split_list(const std::string& s) {
+  std::vector<std::string> out;
+  size_t a = 0;
+  while (a < s.size()) {
+    const size_t b = std::min(s.find(',', a), s.size());
+    if (b > a) out.push_back(s.substr(a, b - a));
+    a = b + 1;
+  }
+  return out;
+}
+
 struct DetectedScores {
   DistanceStats face, head;
 };
@@ -79,10 +90,27 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
     }
   LandmarkMap mp_map, ph_map;
   std::vector<SurfacePoint> mp_lms, ph_lms;
-  if (!parse_landmark_map_json(mediapipe_landmark_map_text(), mp_map) ||
-      !attach_landmark_map(mp_map, generic.mesh, 0.005, mp_lms) || !placeholder_landmark_map(generic, 468, ph_map) ||
-      !attach_landmark_map(ph_map, generic.mesh, 1e-3, ph_lms))
+  // --photos-detected-map FILE: another map for the detected points (default: the one that ships).
+  std::string map_text = mediapipe_landmark_map_text();
+  if (args.has("photos-detected-map")) {
+    if (!read_file(args.get("photos-detected-map"), bytes, kMaxLandmarkFileBytes)) return 1;
+    map_text.assign(bytes.begin(), bytes.end());
+  }
+  Status map_status = parse_landmark_map_json(map_text, mp_map);
+  if (map_status) map_status = attach_landmark_map(mp_map, generic.mesh, 0.005, mp_lms);
+  if (map_status) map_status = placeholder_landmark_map(generic, 468, ph_map);
+  if (map_status) map_status = attach_landmark_map(ph_map, generic.mesh, 1e-3, ph_lms);
+  if (!map_status) {
+    std::printf("  the map: %s\n", map_status.message.c_str());
     return 1;
+  }
+  // --photos-drop GROUP[,GROUP]: those landmark groups left out of the map (what they cost or bring).
+  for (const std::string& g : split_list(args.get("photos-drop")))
+    for (size_t m = 0; m < mp_map.points.size() && m < group_of.size(); ++m)
+      if (group_of[m] == g) {
+        mp_map.present[m] = 0;
+        mp_lms[m] = SurfacePoint{};
+      }
   std::printf("photos on the real detector's points (%s, %d cameras per seed, MediaPipe map; mm, CPU ms)\n", dir.c_str(),
               cameras);
   std::printf("  %-4s %5s %7s %6s | %-27s | %-27s | %-27s | %-27s | %5s\n", "seed", "used", "focal", "rot",
@@ -144,6 +172,15 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
       }
     }
     PhotosJobOptions opt;
+    // Sensitivity: the bench's --photos-stiffness-scale, and the calibration's focal prior.
+    double stiffness_scale = 1;
+    if (!args.get_double("photos-stiffness-scale", 1.0, stiffness_scale, 1e-6, 1e6) ||
+        !args.get_double("photos-focal-px", 0, opt.calib.focal_prior_px, 0, 1e6) ||
+        !args.get_double("photos-focal-sigma", opt.calib.focal_prior_sigma, opt.calib.focal_prior_sigma, 1e-6, 10) ||
+        !args.get_double("photos-shape-sigma", opt.calib.shape_sigma_m, opt.calib.shape_sigma_m, 1e-6, 1) ||
+        !args.get_double("photos-view-cos", opt.calib.min_view_cos, opt.calib.min_view_cos, -1, 0.99))
+      return 1;
+    for (double& k : opt.fit.stiffness_schedule) k *= stiffness_scale;
     PhotosJobResult r;
     const double t0 = cpu_clock_ms();
     const Status st = run_photos_job(generic, mp_map, photos, opt, r);
@@ -159,10 +196,18 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
                          fa = score_head(r.fit.mesh, person.mesh, face, head, true, &sf);
     double rot = 0;
     int n = 0;
+    std::string views;  // per used photo: true yaw -> recovered yaw (the fit's frame brought onto the truth)
     for (size_t i = 0; i < photos.size(); ++i)
       if (r.calib.photos[i].used) {
-        rot += rotation_angle_deg(transform_camera(r.calib.photos[i].camera, sf).R, truth.cameras[size_t(cam_of[i])].R);
+        const Camera c = transform_camera(r.calib.photos[i].camera, sf);
+        rot += rotation_angle_deg(c.R, truth.cameras[size_t(cam_of[i])].R);
         ++n;
+        double ty, tp, y, p;
+        view_angles(truth.cameras[size_t(cam_of[i])], ty, tp);
+        view_angles(c, y, p);
+        char buf[80];
+        std::snprintf(buf, sizeof buf, " %+.0f/%+.0f->%+.0f/%+.0f", ty, tp, y, p);
+        views += buf;
       }
     const double focal_err = 100 * (r.calib.focal - vo.focal_px) / vo.focal_px;
     std::printf("  %-4d %2d/%-2zu %+6.1f%% %6.2f | %5.2f -> %5.2f (p95 %5.2f) | %5.2f -> %5.2f (p95 %5.2f) | "
@@ -171,6 +216,7 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
                 1000 * fu.face.mean, 1000 * fu.face.p95, 1000 * ga.face.mean, 1000 * fa.face.mean, 1000 * fa.face.p95,
                 1000 * gu.head.mean, 1000 * fu.head.mean, 1000 * fu.head.p95, 1000 * ga.head.mean, 1000 * fa.head.mean,
                 1000 * fa.head.p95, ms);
+    std::printf("       yaw/pitch deg, truth -> recovered:%s\n", views.c_str());
     std::printf("       scale %.3f; landmark error %.2f -> %.2f px (calibration), %.2f -> %.2f px (shape fit)\n", sf.scale,
                 r.calib.initial_rms_px, r.calib.final_rms_px, r.fit.initial_rms_px, r.fit.final_rms_px);
     const double v[9] = {std::abs(focal_err), gu.face.mean, fu.face.mean, ga.face.mean, fa.face.mean,
@@ -195,7 +241,6 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
   for (size_t b = 0; b < kBuckets; ++b)
     std::printf(" %6.2f (%4.0f)", hidden_n[b] ? hidden_sum[b] / hidden_n[b] : 0.0, hidden_n[b]);
   std::printf("  (mapped points turned away from the camera, cos < 0.3)\n");
-  (void)args;
   return 0;
 }
 
