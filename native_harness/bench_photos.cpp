@@ -110,7 +110,7 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
     map_text.assign(bytes.begin(), bytes.end());
   }
   Status map_status = parse_landmark_map_json(map_text, mp_map);
-  if (map_status) map_status = attach_landmark_map(mp_map, generic.mesh, 0.005, mp_lms);
+  if (map_status) map_status = attach_landmark_map(mp_map, generic.mesh, PhotosJobOptions{}.map_max_distance_m, mp_lms);
   if (map_status) map_status = placeholder_landmark_map(generic, 468, ph_map);
   if (map_status) map_status = attach_landmark_map(ph_map, generic.mesh, 1e-3, ph_lms);
   if (!map_status) {
