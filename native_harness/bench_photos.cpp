@@ -202,6 +202,15 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
       std::printf("  %-4d failed: %s\n", seed, st.message.c_str());
       continue;
     }
+    // --photos-true-cameras: the shape fit again with the true cameras
+    // (the calibration's weights kept): what the cameras' errors cost.
+    if (args.has("photos-true-cameras")) {
+      SelfCalibResult calib = r.calib;
+      for (size_t i = 0; i < photos.size(); ++i)
+        if (calib.photos[i].used) calib.photos[i].camera = truth.cameras[size_t(cam_of[i])];
+      calib.focal = vo.focal_px;
+      if (!fit_photos_shape(generic, mp_lms, photos, calib, opt, r.fit)) return 1;
+    }
     Similarity sf;
     const DetectedScores gu = score_head(generic.mesh, person.mesh, face, head, false),
                          ga = score_head(generic.mesh, person.mesh, face, head, true),
