@@ -7,6 +7,8 @@
 #include "command.h"
 #include "timing.h"
 
+#include "io/io.h"
+
 #include "head/generic_head.h"
 #include "photos/ground_truth.h"
 #include "photos/photos_job.h"
@@ -17,12 +19,252 @@
 #include "synth/synth_head.h"
 #include "texture/synthetic_photo.h"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <map>
 
 namespace lk::cli {
 namespace {
+
+// --photos-detected DIR: the real detector's points (MediaPipe in Chromium,
+// tests/browser/detect_synth_photos.mjs) on synth-photos renders, with the
+// MediaPipe map; the truth (person, cameras) re-made from each seed. Prints
+// the head against the truth with and without the best similarity (the
+// gauge of a photo head is free up to scale; unaligned = in the generic
+// head's frame, where the fit's prior keeps it), and the detector's error
+// against the truth's projections per landmark group and view.
+std::vector<std::string> split_list(const std::string& s) {
+  std::vector<std::string> out;
+  size_t a = 0;
+  while (a < s.size()) {
+    const size_t b = std::min(s.find(',', a), s.size());
+    if (b > a) out.push_back(s.substr(a, b - a));
+    a = b + 1;
+  }
+  return out;
+}
+
+// RMS distance of the bundle-adjusted landmarks (seen in >= 2 photos) from
+// their generic-head places: how far the data pulls the shape.
+double landmark_pull_mm(const SelfCalibResult& c, const TriMesh& generic, const std::vector<SurfacePoint>& lms) {
+  double sum = 0;
+  int n = 0;
+  for (size_t m = 0; m < lms.size() && m < c.landmarks.size(); ++m)
+    if (lms[m].valid() && c.landmark_seen[m]) {
+      sum += (c.landmarks[m] - surface_position(generic, lms[m])).squaredNorm();
+      ++n;
+    }
+  return n ? 1000 * std::sqrt(sum / n) : 0.0;
+}
+
+struct DetectedScores {
+  DistanceStats face, head;
+};
+
+DetectedScores score_head(const TriMesh& mesh, const TriMesh& truth, const std::vector<int>& face,
+                          const std::vector<int>& head, bool aligned, Similarity* used = nullptr) {
+  TriMesh m = mesh;
+  if (aligned) {
+    const Similarity s = fit_similarity(mesh.positions, truth.positions, face);
+    for (Vec3& p : m.positions) p = s.apply(p);
+    if (used) *used = s;
+  }
+  return {surface_distances(truth, face, m), surface_distances(truth, head, m)};
+}
+
+int run_bench_detected(const Args& args, const std::string& dir, const GenericHead& generic,
+                       const std::vector<int>& face, const std::vector<int>& head) {
+  using Json = nlohmann::json;
+  Bytes bytes;
+  Json session, groups_json;
+  try {
+    if (!read_file(dir + "/session.json", bytes, 1 << 20)) throw std::runtime_error("no session.json");
+    session = Json::parse(std::string(bytes.begin(), bytes.end()));
+    if (read_file(dir + "/groups.json", bytes, 1 << 20)) groups_json = Json::parse(std::string(bytes.begin(), bytes.end()));
+  } catch (const std::exception& e) {
+    std::printf("  --photos-detected %s: %s (make it with tests/browser/detect_synth_photos.mjs)\n", dir.c_str(), e.what());
+    return 1;
+  }
+  const int cameras = session.value("cameras", 0);
+  // Landmark groups: the detector's own (face oval = "contour"), the rest "other" (nose, cheeks, forehead).
+  std::vector<std::string> group_of(468, "other");
+  if (groups_json.is_object())
+    for (auto it = groups_json.begin(); it != groups_json.end(); ++it) {
+      std::string g = it.key();
+      if (g == "FACE_OVAL") g = "contour";
+      else if (g.find("EYEBROW") != std::string::npos) g = "brows";
+      else if (g.find("EYE") != std::string::npos) g = "eyes";
+      else if (g == "LIPS") g = "lips";
+      for (int k : it.value()) if (k >= 0 && k < 468) group_of[size_t(k)] = g;
+    }
+  LandmarkMap mp_map, ph_map;
+  std::vector<SurfacePoint> mp_lms, ph_lms;
+  // --photos-detected-map FILE: another map for the detected points (default: the one that ships).
+  std::string map_text = mediapipe_landmark_map_text();
+  if (args.has("photos-detected-map")) {
+    if (!read_file(args.get("photos-detected-map"), bytes, kMaxLandmarkFileBytes)) return 1;
+    map_text.assign(bytes.begin(), bytes.end());
+  }
+  Status map_status = parse_landmark_map_json(map_text, mp_map);
+  if (map_status) map_status = attach_landmark_map(mp_map, generic.mesh, PhotosJobOptions{}.map_max_distance_m, mp_lms);
+  if (map_status) map_status = placeholder_landmark_map(generic, 468, ph_map);
+  if (map_status) map_status = attach_landmark_map(ph_map, generic.mesh, 1e-3, ph_lms);
+  if (!map_status) {
+    std::printf("  the map: %s\n", map_status.message.c_str());
+    return 1;
+  }
+  // --photos-drop GROUP[,GROUP]: those landmark groups left out of the map (what they cost or bring).
+  for (const std::string& g : split_list(args.get("photos-drop")))
+    for (size_t m = 0; m < mp_map.points.size() && m < group_of.size(); ++m)
+      if (group_of[m] == g) {
+        mp_map.present[m] = 0;
+        mp_lms[m] = SurfacePoint{};
+      }
+  std::printf("photos on the real detector's points (%s, %d cameras per seed, MediaPipe map; mm, CPU ms)\n", dir.c_str(),
+              cameras);
+  std::printf("  %-4s %5s %7s %6s | %-27s | %-27s | %-27s | %-27s | %5s\n", "seed", "used", "focal", "rot",
+              "face unaligned gen -> fit", "face aligned gen -> fit", "head unaligned gen -> fit",
+              "head aligned gen -> fit", "ms");
+  // Detector error by group and yaw bucket (points facing the camera; those turned away apart).
+  const std::vector<std::string> gnames = {"contour", "brows", "eyes", "lips", "other"};
+  constexpr int kBuckets = 4;  // |yaw| < 15, < 35, < 60, >= 60
+  std::map<std::string, std::array<double, kBuckets>> det_sum, det_n;
+  std::array<double, kBuckets> hidden_sum{}, hidden_n{};
+  double sums[9] = {0};
+  int done = 0;
+  for (int seed : session.value("seeds", std::vector<int>{})) {
+    GenericHead person;
+    SyntheticViewsOptions vo;
+    vo.num_cameras = cameras;
+    SyntheticSession truth;
+    if (!synthesize_head(generic, std::uint32_t(seed), SynthHeadOptions{}, person) ||
+        !make_synthetic_views(person, ph_lms, std::uint32_t(seed), vo, truth))
+      return 1;
+    std::vector<LandmarkPhoto> photos;
+    std::vector<int> cam_of;
+    for (int c = 0; c < cameras; ++c) {
+      char name[32];
+      std::snprintf(name, sizeof name, "view_%02d", c);
+      const std::string path = dir + "/seed" + std::to_string(seed) + "/" + name + ".json";
+      LandmarkPhoto ph;
+      if (!read_file(path, bytes, kMaxLandmarkFileBytes)) continue;  // no face found on that view
+      if (!parse_landmarks_json(std::string(bytes.begin(), bytes.end()), ph)) {
+        std::printf("  %s: unreadable\n", path.c_str());
+        return 1;
+      }
+      photos.push_back(ph);
+      cam_of.push_back(c);
+    }
+    // The detector against the truth: each mapped landmark's true place projected by the true camera.
+    for (size_t i = 0; i < photos.size(); ++i) {
+      const Camera& cam = truth.cameras[size_t(cam_of[i])];
+      double yaw, pitch;
+      view_angles(cam, yaw, pitch);
+      const size_t b = std::abs(yaw) < 15 ? 0 : std::abs(yaw) < 35 ? 1 : std::abs(yaw) < 60 ? 2 : 3;
+      const Vec3 C = -cam.R.transpose() * cam.t;
+      for (size_t m = 0; m < mp_lms.size() && m < photos[i].points.size(); ++m) {
+        if (!mp_lms[m].valid() || !photos[i].present[m]) continue;
+        const Vec3 X = surface_position(person.mesh, mp_lms[m]);
+        const Tri& t = person.mesh.triangles[size_t(mp_lms[m].triangle)];
+        const std::vector<Vec3>& P = person.mesh.positions;
+        const Vec3 n = (P[size_t(t[1])] - P[size_t(t[0])]).cross(P[size_t(t[2])] - P[size_t(t[0])]).normalized();
+        Vec2 uv;
+        if (!cam.project(X, uv)) continue;
+        const double e = (uv - photos[i].points[m]).norm();
+        if (n.dot((C - X).normalized()) < 0.3) {
+          hidden_sum[b] += e;
+          hidden_n[b] += 1;
+          continue;
+        }
+        det_sum[group_of[m]][b] += e;
+        det_n[group_of[m]][b] += 1;
+      }
+    }
+    PhotosJobOptions opt;
+    // Sensitivity: the bench's --photos-stiffness-scale, and the calibration's focal prior.
+    double stiffness_scale = 1;
+    if (!args.get_double("photos-stiffness-scale", 1.0, stiffness_scale, 1e-6, 1e6) ||
+        !args.get_double("photos-focal-px", 0, opt.calib.focal_prior_px, 0, 1e6) ||
+        !args.get_double("photos-focal-sigma", opt.calib.focal_prior_sigma, opt.calib.focal_prior_sigma, 1e-6, 10) ||
+        !args.get_double("photos-shape-sigma", opt.calib.shape_sigma_m, opt.calib.shape_sigma_m, 1e-6, 1) ||
+        !args.get_double("photos-view-cos", opt.calib.min_view_cos, opt.calib.min_view_cos, -1, 0.99))
+      return 1;
+    for (double& k : opt.fit.stiffness_schedule) k *= stiffness_scale;
+    PhotosJobResult r;
+    const double t0 = cpu_clock_ms();
+    const Status st = run_photos_job(generic, mp_map, photos, opt, r);
+    const double ms = cpu_clock_ms() - t0;
+    if (!st) {
+      std::printf("  %-4d failed: %s\n", seed, st.message.c_str());
+      continue;
+    }
+    // --photos-true-cameras: the shape fit again with the true cameras
+    // (the calibration's weights kept): what the cameras' errors cost.
+    if (args.has("photos-true-cameras")) {
+      SelfCalibResult calib = r.calib;
+      for (size_t i = 0; i < photos.size(); ++i)
+        if (calib.photos[i].used) calib.photos[i].camera = truth.cameras[size_t(cam_of[i])];
+      calib.focal = vo.focal_px;
+      if (!fit_photos_shape(generic, mp_lms, photos, calib, opt, r.fit)) return 1;
+    }
+    Similarity sf;
+    const DetectedScores gu = score_head(generic.mesh, person.mesh, face, head, false),
+                         ga = score_head(generic.mesh, person.mesh, face, head, true),
+                         fu = score_head(r.fit.mesh, person.mesh, face, head, false),
+                         fa = score_head(r.fit.mesh, person.mesh, face, head, true, &sf);
+    double rot = 0;
+    int n = 0;
+    std::string views;  // per used photo: true yaw -> recovered yaw (the fit's frame brought onto the truth)
+    for (size_t i = 0; i < photos.size(); ++i)
+      if (r.calib.photos[i].used) {
+        const Camera c = transform_camera(r.calib.photos[i].camera, sf);
+        rot += rotation_angle_deg(c.R, truth.cameras[size_t(cam_of[i])].R);
+        ++n;
+        double ty, tp, y, p;
+        view_angles(truth.cameras[size_t(cam_of[i])], ty, tp);
+        view_angles(c, y, p);
+        char buf[80];
+        std::snprintf(buf, sizeof buf, " %+.0f/%+.0f->%+.0f/%+.0f", ty, tp, y, p);
+        views += buf;
+      }
+    const double focal_err = 100 * (r.calib.focal - vo.focal_px) / vo.focal_px;
+    std::printf("  %-4d %2d/%-2zu %+6.1f%% %6.2f | %5.2f -> %5.2f (p95 %5.2f) | %5.2f -> %5.2f (p95 %5.2f) | "
+                "%5.2f -> %5.2f (p95 %5.2f) | %5.2f -> %5.2f (p95 %5.2f) | %5.0f\n",
+                seed, r.calib.num_used(), photos.size(), focal_err, rot / std::max(1, n), 1000 * gu.face.mean,
+                1000 * fu.face.mean, 1000 * fu.face.p95, 1000 * ga.face.mean, 1000 * fa.face.mean, 1000 * fa.face.p95,
+                1000 * gu.head.mean, 1000 * fu.head.mean, 1000 * fu.head.p95, 1000 * ga.head.mean, 1000 * fa.head.mean,
+                1000 * fa.head.p95, ms);
+    std::printf("       yaw/pitch deg, truth -> recovered:%s\n", views.c_str());
+    std::printf("       scale %.3f; BA landmarks from the generic's %.2f mm rms; landmark error %.2f -> %.2f px (calibration), %.2f -> %.2f px (shape fit)\n", sf.scale,
+                landmark_pull_mm(r.calib, generic.mesh, mp_lms), r.calib.initial_rms_px, r.calib.final_rms_px, r.fit.initial_rms_px, r.fit.final_rms_px);
+    const double v[9] = {std::abs(focal_err), gu.face.mean, fu.face.mean, ga.face.mean, fa.face.mean,
+                         gu.head.mean,        fu.head.mean, ga.head.mean, fa.head.mean};
+    for (int k = 0; k < 9; ++k) sums[k] += v[k];
+    ++done;
+  }
+  if (!done) return 1;
+  const double d = done;
+  std::printf("  mean over %d seeds: |focal err| %.1f %%; face unaligned %.2f -> %.2f, aligned %.2f -> %.2f; "
+              "head unaligned %.2f -> %.2f, aligned %.2f -> %.2f mm (generic -> fit)\n",
+              done, sums[0] / d, 1000 * sums[1] / d, 1000 * sums[2] / d, 1000 * sums[3] / d, 1000 * sums[4] / d,
+              1000 * sums[5] / d, 1000 * sums[6] / d, 1000 * sums[7] / d, 1000 * sums[8] / d);
+  std::printf("  detector vs truth, mean px (count) by |yaw| <15 / <35 / <60 / >=60 deg, points facing the camera:\n");
+  for (const std::string& g : gnames) {
+    std::printf("    %-8s", g.c_str());
+    for (size_t b = 0; b < kBuckets; ++b)
+      std::printf(" %6.2f (%4.0f)", det_n[g][b] ? det_sum[g][b] / det_n[g][b] : 0.0, det_n[g][b]);
+    std::printf("\n");
+  }
+  std::printf("    %-8s", "hidden");
+  for (size_t b = 0; b < kBuckets; ++b)
+    std::printf(" %6.2f (%4.0f)", hidden_n[b] ? hidden_sum[b] / hidden_n[b] : 0.0, hidden_n[b]);
+  std::printf("  (mapped points turned away from the camera, cos < 0.3)\n");
+  return 0;
+}
 
 int run_bench_photos(const Args& args) {
   int seeds = 5, cameras = 10;
@@ -80,6 +322,8 @@ int run_bench_photos(const Args& args) {
   std::vector<int> head;
   for (const char* region : {"face", "scalp", "ears"})
     for (int v : generic.annotations.regions.at(region)) head.push_back(v);
+  const std::string detected_dir = args.get("photos-detected");
+  if (!detected_dir.empty()) return run_bench_detected(args, detected_dir, generic, face, head);
   std::printf("photos (fua1998 + self-calibration): %d cameras, %.1f px landmark noise, placeholder map of %d "
               "generic-head face points (%s), stiffness x%g, lambda_sil %g, masks grown %d px, lambda_feat %g%s (CPU ms)\n",
               cameras, noise, int(landmarks.size()), map_kind.c_str(), stiffness_scale, lambda_sil, grow_px,
@@ -185,6 +429,7 @@ int run_bench_photos(const Args& args) {
                     a.mean_px, a.p95_px, a.matched, a.points, b.mean_px, b.p95_px, b.matched);
         sum_out[with_sil] += b.mean_px;
       }
+      std::printf("       BA landmarks from the generic's %.2f mm rms\n", landmark_pull_mm(r.calib, generic.mesh, landmarks));
       std::printf("       scale of the fit vs truth %.3f; landmark error %.2f -> %.2f px (calibration), %.2f -> %.2f px "
                   "(shape fit); %d photos used\n",
                   sf.scale, r.calib.initial_rms_px, r.calib.final_rms_px, r.fit.initial_rms_px, r.fit.final_rms_px,
@@ -236,7 +481,7 @@ int run_bench_photos(const Args& args) {
 }
 
 BenchRegistrar reg({"photos", "photos to head on synthetic sessions: camera errors, face distances, stage times "
-                              "(--photos-seeds N --photos-cameras C --photos-noise-px S --photos-map vertices|interior --photos-stiffness-scale K --photos-first-seed S --photos-silhouettes both|on|off --photos-lambda-sil L --photos-mask-grow PX --photos-sil-facets --photos-stereo --photos-lambda-features L)",
+                              "(--photos-seeds N --photos-cameras C --photos-noise-px S --photos-map vertices|interior --photos-stiffness-scale K --photos-first-seed S --photos-silhouettes both|on|off --photos-lambda-sil L --photos-mask-grow PX --photos-sil-facets --photos-stereo --photos-lambda-features L; --photos-detected DIR: real-detector points on synth-photos renders, made by tests/browser/detect_synth_photos.mjs)",
                     run_bench_photos});
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include "image/image.h"
 #include "io/exif.h"
 #include "io/io.h"
+#include "photos/landmark_learning.h"
 #include "photos/photos_job.h"
 #include "photos_texture.h"
 #include "photos/synthetic_outlines.h"
@@ -432,6 +433,80 @@ int run_synth_photos(const Args& args) {
   return 0;
 }
 
+// likeness learn-landmark-map: the MediaPipe map re-made from the real
+// detector's points on synthetic sessions (tests/browser/detect_synth_photos.mjs
+// writes DIR: session.json and seedN/view_XX.json); the truth re-made from
+// each seed as synth-photos makes it.
+int run_learn_landmark_map(const Args& args) {
+  const std::string cmd = "learn-landmark-map";
+  if (!only_known_options(cmd, args, {"detected", "out", "map"})) return 2;
+  const std::string dir = args.get("detected"), out_path = args.get("out"), map_path = args.get("map");
+  if (dir.empty() || out_path.empty()) return fail(cmd, "needs --detected DIR and --out MAP.json");
+  Bytes bytes;
+  Status s = read_file(dir + "/session.json", bytes, 1 << 20);
+  if (!s) return fail(cmd, s.message + " (make DIR with tests/browser/detect_synth_photos.mjs)");
+  Json session = Json::parse(std::string(bytes.begin(), bytes.end()), nullptr, false);
+  if (session.is_discarded() || !session.contains("cameras") || !session["cameras"].is_number_integer() ||
+      !session.contains("seeds") || !session["seeds"].is_array())
+    return fail(cmd, dir + "/session.json: needs {\"cameras\": C, \"seeds\": [...]}");
+  const int cameras = session["cameras"].get<int>();
+  if (cameras < 2 || cameras > 64) return fail(cmd, dir + "/session.json: cameras must be 2..64");
+  GenericHead generic;
+  s = load_generic_head(generic);
+  if (!s) return fail(cmd, s.message);
+  std::string map_text = mediapipe_landmark_map_text();
+  if (!map_path.empty()) {
+    s = read_file(map_path, bytes, kMaxLandmarkFileBytes);
+    if (!s) return fail(cmd, s.message);
+    map_text.assign(bytes.begin(), bytes.end());
+  }
+  LandmarkMap start, ph_map;
+  s = parse_landmark_map_json(map_text, start);
+  std::vector<SurfacePoint> ph_lms;
+  if (s) s = placeholder_landmark_map(generic, 468, ph_map);
+  if (s) s = attach_landmark_map(ph_map, generic.mesh, 1e-3, ph_lms);
+  if (!s) return fail(cmd, s.message);
+  std::vector<GenericHead> people;
+  std::vector<DetectedSessionView> sessions;
+  const std::vector<Json> seeds = session["seeds"].get<std::vector<Json>>();
+  people.reserve(seeds.size());
+  for (const Json& js : seeds) {
+    if (!js.is_number_integer() || js.get<int>() < 0) return fail(cmd, dir + "/session.json: seeds must be integers");
+    const int seed = js.get<int>();
+    people.emplace_back();
+    SyntheticViewsOptions vo;
+    vo.num_cameras = cameras;
+    SyntheticSession truth;
+    s = synthesize_head(generic, std::uint32_t(seed), SynthHeadOptions{}, people.back());
+    if (s) s = make_synthetic_views(people.back(), ph_lms, std::uint32_t(seed), vo, truth);
+    if (!s) return fail(cmd, s.message);
+    DetectedSessionView v;
+    v.person = &people.back().mesh;
+    for (int c = 0; c < cameras; ++c) {
+      char name[32];
+      std::snprintf(name, sizeof name, "/view_%02d.json", c);
+      const std::string path = dir + "/seed" + std::to_string(seed) + name;
+      if (!read_file(path, bytes, kMaxLandmarkFileBytes)) continue;  // no face found on that view
+      LandmarkPhoto ph;
+      s = parse_landmarks_json(std::string(bytes.begin(), bytes.end()), ph);
+      if (!s) return fail(cmd, path + ": " + s.message);
+      if (ph.detector != start.detector)
+        return fail(cmd, path + ": points of '" + ph.detector + "', the map is for '" + start.detector + "'");
+      v.cameras.push_back(truth.cameras[size_t(c)]);
+      v.photos.push_back(ph);
+    }
+    sessions.push_back(std::move(v));
+  }
+  LandmarkMap learned;
+  LearnMapReport rep;
+  s = learn_landmark_map(generic.mesh, start, sessions, LearnMapOptions{}, learned, &rep);
+  if (s) s = write_file(out_path, landmark_map_to_json(learned));
+  if (!s) return fail(cmd, s.message);
+  std::printf("learn-landmark-map: %d landmarks re-made from %zu sessions (median move %.2f mm) -> %s\n", rep.learned,
+              sessions.size(), 1000 * rep.median_move_m, out_path.c_str());
+  return 0;
+}
+
 Registrar photos_reg({"photos",
                       "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] [--masks M1.png ... | --masks-from-photos] [--silhouette-check] "
                       "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--stereo]",
@@ -448,5 +523,9 @@ Registrar synth_photos_reg({"synth-photos",
                             "a synthetic photo session with its truth: landmark files, map, rendered views, cameras",
                             run_synth_photos, nullptr});
 
+Registrar learn_map_reg({"learn-landmark-map", "likeness learn-landmark-map --detected DIR --out MAP.json [--map START.json]",
+                         "the MediaPipe landmark map re-made from the real detector's points on synthetic sessions with "
+                         "their truth (tests/browser/detect_synth_photos.mjs writes DIR)",
+                         run_learn_landmark_map, nullptr});
 }  // namespace
 }  // namespace lk::cli

@@ -94,7 +94,7 @@ int LandmarkPhoto::num_present() const {
 Vec3 surface_position(const TriMesh& mesh, const SurfacePoint& p) {
   const Tri& t = mesh.triangles[size_t(p.triangle)];
   return p.barycentric[0] * mesh.positions[size_t(t[0])] + p.barycentric[1] * mesh.positions[size_t(t[1])] +
-         p.barycentric[2] * mesh.positions[size_t(t[2])];
+         p.barycentric[2] * mesh.positions[size_t(t[2])] + p.offset;
 }
 
 // The document of a landmark file or map (what: "landmark file" / "landmark
@@ -208,6 +208,7 @@ Status attach_landmark_map(const LandmarkMap& map, const TriMesh& head, double m
                      "lies " + std::to_string(c.distance * 1000) + " mm from the head's surface (made for another head?)");
     out[i].triangle = c.triangle;
     out[i].barycentric = c.barycentric;
+    out[i].offset = map.points[i] - c.point;
     ++count;
   }
   if (count < 6)

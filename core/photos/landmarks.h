@@ -45,10 +45,14 @@ struct LandmarkMap {
 // lk::SurfacePoint (64 bytes, this one 32), and the likeness binary shared
 // std::vector<lk::SurfacePoint> members between the two layouts (nm).
 inline namespace landmark_points {
-// A point on a mesh that keeps its place when the vertices move.
+// A point on a mesh that keeps its place when the vertices move: a place
+// on one triangle plus a constant offset from it (where the map's point
+// lies off the control mesh: on the smooth surface, or where the detector
+// sees a landmark in front of the skin).
 struct SurfacePoint {
   int triangle = -1;               // -1 = no point
   Vec3 barycentric = Vec3::Zero(); // weights of the triangle's corners 0,1,2
+  Vec3 offset = Vec3::Zero();      // added to the barycentric point, head coordinates
   bool valid() const { return triangle >= 0; }
 };
 }  // namespace landmark_points
@@ -66,9 +70,12 @@ Status parse_landmark_map_json(const std::string& text, LandmarkMap& out);
 std::string landmarks_to_json(const LandmarkPhoto& photo);
 std::string landmark_map_to_json(const LandmarkMap& map);
 
-// Projects every map point onto the mesh (closest point). A point farther
-// than max_distance from the surface means the map was made for another
-// head: InvalidInput naming the index. Fewer than 6 mapped points: Empty.
+// Attaches every map point to the mesh: its closest point (triangle +
+// barycentrics) and the offset from there to the map's point, so that the
+// landmark is where the map says on this mesh and follows it when it
+// deforms. A point farther than max_distance from the surface means the
+// map was made for another head: InvalidInput naming the index. Fewer than
+// 6 mapped points: Empty.
 Status attach_landmark_map(const LandmarkMap& map, const TriMesh& head, double max_distance,
                            std::vector<SurfacePoint>& out);
 

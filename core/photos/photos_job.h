@@ -26,7 +26,7 @@ namespace lk {
 struct PhotosJobOptions {
   SelfCalibOptions calib;
   ShapeFitOptions fit;
-  double map_max_distance_m = 0.005;  // a map point farther from the head: a map for another head
+  double map_max_distance_m = 0.016;  // a map point farther from the head: a map for another head (a re-made map sits up to 12 mm off it: landmark_learning.h)
   double lambda_silhouettes = 0.3;    // fua1998 Sec. 4
   SilhouetteOptions silhouettes;
   bool stereo = true;                 // use the images, when given, for stereo attractors

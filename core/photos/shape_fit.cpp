@@ -17,7 +17,7 @@ bool FeatureSet::evaluate(const std::vector<Vec3>& positions, Eigen::VectorXd& r
   for (const FeatureObservation& o : obs_) {
     const Tri& t = triangles_[size_t(o.point.triangle)];
     const Vec3 X = o.point.barycentric[0] * positions[size_t(t[0])] + o.point.barycentric[1] * positions[size_t(t[1])] +
-                   o.point.barycentric[2] * positions[size_t(t[2])];
+                   o.point.barycentric[2] * positions[size_t(t[2])] + o.point.offset;
     ProjectionJacobian pj;
     if (!projection_jacobian(cameras_[size_t(o.camera)], X, o.pixel, pj)) return false;
     const double s = std::sqrt(o.weight);
@@ -38,7 +38,7 @@ std::vector<double> FeatureSet::errors(const std::vector<Vec3>& positions) const
   for (const FeatureObservation& o : obs_) {
     const Tri& t = triangles_[size_t(o.point.triangle)];
     const Vec3 X = o.point.barycentric[0] * positions[size_t(t[0])] + o.point.barycentric[1] * positions[size_t(t[1])] +
-                   o.point.barycentric[2] * positions[size_t(t[2])];
+                   o.point.barycentric[2] * positions[size_t(t[2])] + o.point.offset;
     Vec2 uv;
     e.push_back(cameras_[size_t(o.camera)].project(X, uv) ? (uv - o.pixel).norm()
                                                           : std::numeric_limits<double>::infinity());
