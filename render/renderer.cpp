@@ -906,10 +906,10 @@ Status Renderer::set_morph_targets(DrawableHandle handle, const std::vector<Morp
   if (shapes.size() > static_cast<size_t>(kMaxMorphTargets))
     return Status::error(ErrorCode::TooLarge, "set_morph_targets: " + std::to_string(shapes.size()) +
                                                   " shapes, the shader takes at most " + std::to_string(kMaxMorphTargets));
-  // The shader's weights (kMaxMorphTargets / 4 vec4s) beside its ~25 other
-  // vectors, and one texture unit in the vertex stage (GLES3 guarantees 256
-  // and 16; checked for odd drivers).
-  if (m.max_vertex_texture_units < 1 || m.max_vertex_uniform_vectors < kMaxMorphTargets / 4 + 32)
+  // The shader's morph uniforms (48 vec4s) beside its ~25 other vectors,
+  // and one texture unit in the vertex stage (GLES3 guarantees 256 and 16;
+  // checked for odd drivers).
+  if (m.max_vertex_texture_units < 1 || m.max_vertex_uniform_vectors < 128)
     return Status::error(ErrorCode::Unsupported, "set_morph_targets: the GL has " + std::to_string(m.max_vertex_texture_units) +
                                                      " vertex texture units and " + std::to_string(m.max_vertex_uniform_vectors) +
                                                      " vertex uniform vectors");
