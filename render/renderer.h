@@ -191,8 +191,10 @@ class Renderer {
   // corners), so one shape at weight 1 shades as the CPU path does; mixes
   // blend normals linearly (then normalized), as glTF viewers do. Stored as
   // a float data texture: per vertex its entries (shape, position offset,
-  // normal offset), 32 bytes each, and per GPU vertex (first entry, count)
-  // as an attribute. Fails, changing nothing, on bad input or when the GL
+  // normal offset), 32 bytes each, and per GPU vertex two attributes:
+  // (first entry, count) and a 128-bit mask of the shapes it has, so the
+  // shader reads only the shapes with a weight (up to 32 of them; more,
+  // and it walks every entry). Fails, changing nothing, on bad input or when the GL
   // limits (texture size, vertex texture units, uniform vectors) cannot
   // hold them; the caller then blends on the CPU. An empty list removes them.
   struct MorphShape {
