@@ -213,7 +213,10 @@ function draw() {
   const v = app.viewer;
   const t0 = performance.now();
   let t1, err;
-  if (ex.path === 'gpu' && gpuReady(b)) {
+  // The wireframe's edges are drawn from the uploaded positions, not blended
+  // in the shader: with the wireframe on, the CPU path keeps them on the face.
+  const gpuDrawn = ex.path === 'gpu' && !ui.wireframe.checked && gpuReady(b);
+  if (gpuDrawn) {
     const w = b.weightArray;
     w.fill(0);
     for (const [name, x] of Object.entries(ex.weights)) {
@@ -237,7 +240,7 @@ function draw() {
   st.lastUploadMs = t2 - t1;
   st.blendMs += st.lastBlendMs;
   st.uploadMs += st.lastUploadMs;
-  st.path = ex.path;
+  st.path = gpuDrawn ? 'gpu' : 'cpu';
   return true;
 }
 
@@ -255,7 +258,7 @@ function moveJaw(b) {
 
 // What a frame cost on the page's side (the drawing itself is the GPU's).
 function costText(blendMs, uploadMs) {
-  return ex.path === 'gpu'
+  return ex.stats.path === 'gpu'
     ? 'weights ' + (blendMs + uploadMs).toFixed(2) + ' ms (blended on the GPU).'
     : 'blend ' + blendMs.toFixed(1) + ' ms + viewer update ' + uploadMs.toFixed(1) + ' ms (JavaScript, on the CPU).';
 }
@@ -397,6 +400,7 @@ export function wireExpressions() {
   }
   ui.talk.addEventListener('click', () => (ex.talking ? stopTalk() : startTalk().catch(() => {})));
   ui.exprGroup.addEventListener('change', buildSliders);
+  ui.wireframe.addEventListener('change', () => { if (Object.keys(ex.weights).length) draw(); });
   // Opening the panel bakes the shapes (not while another job runs).
   ui.expressions.addEventListener('toggle', () => {
     if (ui.expressions.open && app.fit && page.snapshot().state !== 'working') ensureShapes().catch(() => {});

@@ -155,6 +155,15 @@ async function run(s) {
         `${gpuState.targets} morph targets on the viewer (sent in ${Math.round(gpuState.uploadMs)} ms)${gpuState.note ? ', ' + gpuState.note : ''}; ` +
         `GPU vs CPU: max channel difference ${gpuCpu.max}, ${(100 * gpuCpu.fraction).toFixed(3)} % of pixels by more than 2; ` +
         `GPU after CPU: ${(100 * again.fraction).toFixed(3)} %`);
+  // The wireframe's edges are not blended in the shader: with it on, the CPU path draws.
+  await page.check('#wireframe');
+  await page.waitForTimeout(200);
+  const wirePath = await page.evaluate(() => window.likeness.expressions.stats.path);
+  await page.uncheck('#wireframe');
+  await page.waitForTimeout(200);
+  const unwiredPath = await page.evaluate(() => window.likeness.expressions.stats.path);
+  check('with the wireframe on the smile is blended on the CPU (its edges follow), off on the GPU again',
+        wirePath === 'cpu' && unwiredPath === 'gpu', `wireframe on: ${wirePath}, off: ${unwiredPath}`);
   if (SHOT_DIR) {
     await page.locator('#canvas').screenshot({ path: path.join(SHOT_DIR, 'page_expression_smile.png') });
     await page.locator('#expressions').screenshot({ path: path.join(SHOT_DIR, 'page_expressions_panel.png') });
