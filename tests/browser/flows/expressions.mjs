@@ -284,7 +284,17 @@ async function run(s) {
   check('at level 2 the shapes are baked for level 2 and Talk plays', t2.level === 2 && t2.talkFrames >= 5,
         `level ${t2.level}, baked in ${Math.round(t2.bakeMs)} ms, ${t2.talkFrames} frames`);
   await reportCosts(page, 2);
-  // The control mesh (level 0): baked and posed the same way.
+  // The control mesh (level 0): baked and posed the same way, here with a
+  // viewer that refuses the morph targets (as for GL limits): the page says
+  // so on the console and blends on the CPU.
+  const notes = [];
+  const onConsole = (m) => { if (m.type() === 'info') notes.push(m.text()); };
+  page.on('console', onConsole);
+  await page.evaluate(() => {
+    const v = window.likeness.viewer;
+    v.realSetMorphTargets = v.set_morph_targets;
+    v.set_morph_targets = () => 'simulated: the entries do not fit a 2048 texture';
+  });
   await page.selectOption('#level', '0');
   await page.click('[data-preset="smile"]');
   await page.waitForFunction(() => window.likeness.expressions.level === 0 || document.body.dataset.state === 'error', null,
@@ -296,9 +306,20 @@ async function run(s) {
     for (let i = 0; i < p.length; i++) if (p[i] !== r[i]) moved++;
     return { level: e.level, n: p.length / 3, moved, state: document.body.dataset.state };
   });
+  const refused = await page.evaluate(() => ({ path: window.likeness.expressions.path, note: window.likeness.expressions.gpuNote,
+                                               drawn: window.likeness.expressions.stats.path }));
   await page.click('[data-preset="neutral"]');
   check('on the control mesh (level 0) the smile is baked and shown too', control.level === 0 && control.moved > 0 &&
         control.state === 'done', JSON.stringify(control) + ' ' + (await bannerText(page)));
+  check('a viewer that refuses the morph targets: a console note, and the blend on the CPU', refused.path === 'cpu' &&
+        refused.drawn === 'cpu' && /simulated/.test(refused.note || '') && notes.some((n) => /blending on the CPU.*simulated/.test(n)),
+        `${JSON.stringify(refused)}; console: ${JSON.stringify(notes)}`);
+  page.off('console', onConsole);
+  await page.evaluate(() => {
+    const v = window.likeness.viewer;
+    v.set_morph_targets = v.realSetMorphTargets;
+    window.likeness.expressions.path = 'gpu';
+  });
   await page.selectOption('#level', '3');
   await page.check('#show-points');
   await page.waitForTimeout(300);
