@@ -19,7 +19,13 @@ namespace lk {
 namespace {
 
 // Attribute locations, fixed by layout qualifiers in shaders/*.vert.
-enum Attribute : GLuint { kPosition = 0, kNormal = 1, kUv = 2, kColor = 3, kBarycentric = 4, kOcclusion = 5 };
+enum Attribute : GLuint { kPosition = 0, kNormal = 1, kUv = 2, kColor = 3, kBarycentric = 4, kOcclusion = 5, kMorph = 6, kMorphMask = 7 };
+
+// Morph data texture: rows of this many texels (even: an entry's two texels
+// share a row) or GL_MAX_TEXTURE_SIZE when smaller.
+constexpr int kMorphTextureWidth = 4096;
+// Shapes with a weight the shader is told by name (mesh.vert's u_morph_active).
+constexpr int kMaxActiveMorphs = 32;
 
 glm::vec3 srgb_to_linear(const glm::vec3& c) {
   glm::vec3 out;
@@ -164,6 +170,17 @@ struct Renderer::Impl {
     bool closable = false;
     std::vector<std::vector<std::uint32_t>> holes;
     bool has_colors = false, has_uvs = false, has_normals = false, has_occlusion = false;
+    // Morph targets (set_morph_targets): the entries' data texture, the
+    // per-GPU-vertex (first entry, count) buffer, the weights (padded to
+    // whole vec4s) and whether any is non-zero.
+    GLuint morph_texture = 0, morph_buffer = 0, morph_mask_buffer = 0;
+    int morph_count = 0, morph_texture_width = 0;
+    std::vector<float> morph_weights;
+    // The shapes with a non-zero weight (at most kMaxActiveMorphs are listed
+    // to the shader; more: every entry is weighted, mode 2).
+    std::vector<int> morph_active_shapes;
+    std::vector<float> morph_active_weights;
+    int morph_mode = 0;
     TextureHandle texture = kNoHandle;
     DrawStyle style;
     BBox bbox;
@@ -182,6 +199,7 @@ struct Renderer::Impl {
   int next_texture = 0;
   float max_point_size = 64.0f;
   int max_texture_size = 2048;
+  int max_vertex_texture_units = 0, max_vertex_uniform_vectors = 0;
 
   ~Impl() { release_all(); }
 
@@ -192,6 +210,19 @@ struct Renderer::Impl {
       if (b) glDeleteBuffers(1, &b);
     if (d.vao) glDeleteVertexArrays(1, &d.vao);
     if (d.edge_vao) glDeleteVertexArrays(1, &d.edge_vao);
+    release_morph(d);
+  }
+
+  static void release_morph(Drawable& d) {
+    if (d.morph_texture) glDeleteTextures(1, &d.morph_texture);
+    if (d.morph_buffer) glDeleteBuffers(1, &d.morph_buffer);
+    if (d.morph_mask_buffer) glDeleteBuffers(1, &d.morph_mask_buffer);
+    d.morph_texture = d.morph_buffer = d.morph_mask_buffer = 0;
+    d.morph_count = d.morph_texture_width = 0;
+    d.morph_weights.clear();
+    d.morph_active_shapes.clear();
+    d.morph_active_weights.clear();
+    d.morph_mode = 0;
   }
 
   void release_all() {
@@ -461,6 +492,22 @@ struct Renderer::Impl {
     glUniform3fv(u["u_ambient_ground"], 1, glm::value_ptr(l.ambient_ground));
     glUniform1f(u["u_exposure"], l.exposure);
 
+    glUniform1i(u["u_morph_mode"], d.morph_mode);
+    if (d.morph_mode != 0) {
+      glActiveTexture(GL_TEXTURE1);
+      glBindTexture(GL_TEXTURE_2D, d.morph_texture);
+      glUniform1i(u["u_morph_offsets"], 1);
+      glUniform1i(u["u_morph_width"], d.morph_texture_width);
+      if (d.morph_mode == 1) {
+        glUniform1i(u["u_morph_active_count"], static_cast<GLint>(d.morph_active_shapes.size()));
+        glUniform4iv(u["u_morph_active"], kMaxActiveMorphs / 4, d.morph_active_shapes.data());
+        glUniform4fv(u["u_morph_active_weights"], kMaxActiveMorphs / 4, d.morph_active_weights.data());
+      } else {
+        glUniform4fv(u["u_morph_weights"], static_cast<GLsizei>(d.morph_weights.size() / 4), d.morph_weights.data());
+      }
+      glActiveTexture(GL_TEXTURE0);
+    }
+
     // Edges alone are blended over what is already drawn (antialiased lines).
     if (!s.surface) {
       glEnable(GL_BLEND);
@@ -550,6 +597,11 @@ Status Renderer::init(const RendererOptions& options) {
   glGetFloatv(GL_ALIASED_LINE_WIDTH_RANGE, line_range);
   m.max_line_width = std::max(line_range[1], 1.0f);
   glGetIntegerv(GL_MAX_TEXTURE_SIZE, &m.max_texture_size);
+  glGetIntegerv(GL_MAX_VERTEX_TEXTURE_IMAGE_UNITS, &m.max_vertex_texture_units);
+  // Meshes without morph targets leave a_morph_mask (an integer attribute)
+  // disabled: its constant value must be an integer one too (WebGL checks).
+  glVertexAttribI4ui(kMorphMask, 0u, 0u, 0u, 0u);
+  glGetIntegerv(GL_MAX_VERTEX_UNIFORM_VECTORS, &m.max_vertex_uniform_vectors);
 #ifdef GL_PROGRAM_POINT_SIZE
   // Desktop GL needs this for gl_PointSize; GLES3/WebGL2 always honours it.
   glEnable(GL_PROGRAM_POINT_SIZE);
@@ -841,6 +893,211 @@ Status Renderer::update_mesh_positions(DrawableHandle handle, const float* xyz, 
   }
   if (stats) stats->uploaded_vertices = static_cast<int>(uploaded);
   return m.options.check_errors_every_frame ? check_gl("update_mesh_positions") : Status::success();
+}
+
+Status Renderer::set_morph_targets(DrawableHandle handle, const std::vector<MorphShape>& shapes) {
+  Impl& m = *impl_;
+  Impl::Drawable* d = m.find(handle);
+  if (!d || d->is_points) return Status::error(ErrorCode::InvalidInput, "set_morph_targets: no mesh with handle " + std::to_string(handle));
+  if (shapes.empty()) {
+    Impl::release_morph(*d);
+    return Status::success();
+  }
+  if (shapes.size() > static_cast<size_t>(kMaxMorphTargets))
+    return Status::error(ErrorCode::TooLarge, "set_morph_targets: " + std::to_string(shapes.size()) +
+                                                  " shapes, the shader takes at most " + std::to_string(kMaxMorphTargets));
+  // The shader's morph uniforms (48 vec4s) beside its ~25 other vectors,
+  // and one texture unit in the vertex stage (GLES3 guarantees 256 and 16;
+  // checked for odd drivers).
+  if (m.max_vertex_texture_units < 1 || m.max_vertex_uniform_vectors < 128)
+    return Status::error(ErrorCode::Unsupported, "set_morph_targets: the GL has " + std::to_string(m.max_vertex_texture_units) +
+                                                     " vertex texture units and " + std::to_string(m.max_vertex_uniform_vectors) +
+                                                     " vertex uniform vectors");
+  const size_t nv = static_cast<size_t>(d->num_vertices);
+  std::vector<size_t> seen(nv, SIZE_MAX);
+  for (size_t s = 0; s < shapes.size(); ++s) {
+    const MorphShape& shape = shapes[s];
+    if (shape.offsets.size() != 3 * shape.vertices.size())
+      return Status::error(ErrorCode::InvalidInput, "set_morph_targets: shape " + std::to_string(s) + " has " +
+                                                        std::to_string(shape.offsets.size()) + " offset values for " +
+                                                        std::to_string(shape.vertices.size()) + " vertices");
+    for (std::uint32_t v : shape.vertices) {
+      if (v >= nv)
+        return Status::error(ErrorCode::InvalidInput, "set_morph_targets: shape " + std::to_string(s) + " moves vertex " +
+                                                          std::to_string(v) + " of " + std::to_string(nv));
+      if (seen[v] == s)
+        return Status::error(ErrorCode::InvalidInput, "set_morph_targets: shape " + std::to_string(s) + " lists vertex " +
+                                                          std::to_string(v) + " twice");
+      seen[v] = s;
+    }
+    for (float x : shape.offsets)
+      if (!std::isfinite(x))
+        return Status::error(ErrorCode::InvalidInput, "set_morph_targets: shape " + std::to_string(s) + " has a non-finite offset");
+  }
+
+  // Each shape at full weight, renormalized as update_mesh_positions would
+  // (the moved vertices' triangles, their corners), then restored. Entries:
+  // (vertex, shape, position offset, normal offset), all-zero ones dropped.
+  struct Entry {
+    std::uint32_t vertex, shape;
+    float dp[3], dn[3];
+  };
+  std::vector<Entry> entries;
+  std::vector<std::uint32_t> touched_faces, corners, moved;
+  std::vector<float> saved_faces, saved_normals, saved_positions;
+  std::vector<int> moved_slot(nv, -1);  // index into the shape's vertices, or -1
+  for (size_t s = 0; s < shapes.size(); ++s) {
+    const MorphShape& shape = shapes[s];
+    const std::uint32_t stamp = ++d->update_number;
+    touched_faces.clear();
+    corners.clear();
+    moved.clear();
+    saved_positions.clear();
+    for (size_t k = 0; k < shape.vertices.size(); ++k) {
+      const std::uint32_t v = shape.vertices[k];
+      const float* o = &shape.offsets[3 * k];
+      moved_slot[v] = static_cast<int>(k);
+      moved.push_back(v);
+      saved_positions.insert(saved_positions.end(), &d->positions[3 * size_t(v)], &d->positions[3 * size_t(v)] + 3);
+      if (o[0] == 0.0f && o[1] == 0.0f && o[2] == 0.0f) continue;
+      for (int c = 0; c < 3; ++c) d->positions[3 * v + c] += o[c];
+      for (std::uint32_t i = d->vertex_face_start[v]; i < d->vertex_face_start[v + 1]; ++i) {
+        const std::uint32_t f = d->vertex_faces[i];
+        if (d->face_stamp[f] == stamp) continue;
+        d->face_stamp[f] = stamp;
+        touched_faces.push_back(f);
+      }
+    }
+    saved_faces.resize(3 * touched_faces.size());
+    for (size_t i = 0; i < touched_faces.size(); ++i) {
+      std::copy_n(&d->face_normals[3 * size_t(touched_faces[i])], 3, &saved_faces[3 * i]);
+      Impl::compute_face_normal(*d, touched_faces[i]);
+    }
+    for (std::uint32_t f : touched_faces)
+      for (int c = 0; c < 3; ++c) {
+        const std::uint32_t v = static_cast<std::uint32_t>(d->triangles[f][c]);
+        if (d->vertex_stamp[v] == stamp) continue;
+        d->vertex_stamp[v] = stamp;
+        corners.push_back(v);
+      }
+    std::sort(corners.begin(), corners.end());
+    saved_normals.resize(3 * corners.size());
+    for (size_t i = 0; i < corners.size(); ++i) {
+      const std::uint32_t v = corners[i];
+      std::copy_n(&d->normals[3 * size_t(v)], 3, &saved_normals[3 * i]);
+      Impl::compute_vertex_normal(*d, v);
+      Entry e{v, static_cast<std::uint32_t>(s), {0, 0, 0}, {0, 0, 0}};
+      for (int c = 0; c < 3; ++c) e.dn[c] = d->normals[3 * size_t(v) + c] - saved_normals[3 * i + c];
+      if (moved_slot[v] >= 0) std::copy_n(&shape.offsets[3 * size_t(moved_slot[v])], 3, e.dp);
+      bool any = false;
+      for (int c = 0; c < 3; ++c) any = any || e.dp[c] != 0.0f || e.dn[c] != 0.0f;
+      if (any) entries.push_back(e);
+    }
+    // Restore the rest pose exactly (the offsets were added in place).
+    for (size_t i = 0; i < corners.size(); ++i) std::copy_n(&saved_normals[3 * i], 3, &d->normals[3 * size_t(corners[i])]);
+    for (size_t i = 0; i < touched_faces.size(); ++i) std::copy_n(&saved_faces[3 * i], 3, &d->face_normals[3 * size_t(touched_faces[i])]);
+    for (size_t i = 0; i < moved.size(); ++i) {
+      std::copy_n(&saved_positions[3 * i], 3, &d->positions[3 * size_t(moved[i])]);
+      moved_slot[moved[i]] = -1;
+    }
+  }
+
+  // Grouped by vertex (stable: shapes in order within a vertex).
+  std::vector<std::uint32_t> start(nv + 1, 0);
+  for (const Entry& e : entries) ++start[e.vertex + 1];
+  for (size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
+  const size_t total = entries.size();
+  // Indices reach the shader as floats: exact below 2^24.
+  const int width = std::min(kMorphTextureWidth, m.max_texture_size - m.max_texture_size % 2);
+  const size_t rows = (2 * total + size_t(width) - 1) / size_t(width);
+  if (total >= (size_t(1) << 23) || rows > static_cast<size_t>(m.max_texture_size))
+    return Status::error(ErrorCode::TooLarge, "set_morph_targets: " + std::to_string(total) +
+                                                  " morph entries do not fit a " + std::to_string(m.max_texture_size) +
+                                                  " texture");
+  std::vector<float> texels(std::max<size_t>(rows, 1) * size_t(width) * 4, 0.0f);
+  {
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (const Entry& e : entries) {
+      float* t = &texels[8 * size_t(fill[e.vertex]++)];
+      t[0] = e.dp[0], t[1] = e.dp[1], t[2] = e.dp[2], t[3] = static_cast<float>(e.shape);
+      t[4] = e.dn[0], t[5] = e.dn[1], t[6] = e.dn[2], t[7] = 0.0f;
+    }
+  }
+  std::vector<std::uint32_t> vertex_masks(4 * nv, 0u);
+  for (const Entry& e : entries) vertex_masks[4 * size_t(e.vertex) + e.shape / 32] |= 1u << (e.shape % 32);
+  std::vector<float> ranges(2 * static_cast<size_t>(d->vertex_count));
+  std::vector<std::uint32_t> masks(4 * static_cast<size_t>(d->vertex_count));
+  for (size_t g = 0; g < static_cast<size_t>(d->vertex_count); ++g) {
+    const size_t v = Impl::source_of(*d, g);
+    ranges[2 * g] = static_cast<float>(start[v]);
+    ranges[2 * g + 1] = static_cast<float>(start[v + 1] - start[v]);
+    std::copy_n(&vertex_masks[4 * v], 4, &masks[4 * g]);
+  }
+
+  Impl::release_morph(*d);
+  glGenTextures(1, &d->morph_texture);
+  glBindTexture(GL_TEXTURE_2D, d->morph_texture);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, width, static_cast<GLsizei>(std::max<size_t>(rows, 1)), 0, GL_RGBA, GL_FLOAT,
+               texels.data());
+  // Float textures are not filterable in WebGL2: texelFetch only, no mipmaps.
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glBindTexture(GL_TEXTURE_2D, 0);
+  glBindVertexArray(d->vao);
+  glGenBuffers(1, &d->morph_buffer);
+  glBindBuffer(GL_ARRAY_BUFFER, d->morph_buffer);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(ranges.size() * sizeof(float)), ranges.data(), GL_STATIC_DRAW);
+  bind_attribute(d->morph_buffer, kMorph, 2);
+  glGenBuffers(1, &d->morph_mask_buffer);
+  glBindBuffer(GL_ARRAY_BUFFER, d->morph_mask_buffer);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(masks.size() * sizeof(std::uint32_t)), masks.data(), GL_STATIC_DRAW);
+  glEnableVertexAttribArray(kMorphMask);
+  glVertexAttribIPointer(kMorphMask, 4, GL_UNSIGNED_INT, 0, nullptr);
+  glBindVertexArray(0);
+  if (Status s = check_gl("set_morph_targets"); !s) {
+    glBindVertexArray(d->vao);
+    glDisableVertexAttribArray(kMorph);
+    glDisableVertexAttribArray(kMorphMask);
+    glBindVertexArray(0);
+    Impl::release_morph(*d);
+    return s;
+  }
+  d->morph_count = static_cast<int>(shapes.size());
+  d->morph_texture_width = width;
+  d->morph_weights.assign(kMaxMorphTargets, 0.0f);
+  return Status::success();
+}
+
+Status Renderer::set_morph_weights(DrawableHandle handle, const float* weights, size_t count) {
+  Impl::Drawable* d = impl_->find(handle);
+  if (!d || d->is_points) return Status::error(ErrorCode::InvalidInput, "set_morph_weights: no mesh with handle " + std::to_string(handle));
+  if (count > static_cast<size_t>(d->morph_count))
+    return Status::error(ErrorCode::InvalidInput, "set_morph_weights: " + std::to_string(count) + " weights for " +
+                                                      std::to_string(d->morph_count) + " morph targets");
+  if (count > 0 && !weights) return Status::error(ErrorCode::InvalidInput, "set_morph_weights: no weights");
+  for (size_t i = 0; i < count; ++i)
+    if (!std::isfinite(weights[i])) return Status::error(ErrorCode::InvalidInput, "set_morph_weights: a weight is not finite");
+  d->morph_active_shapes.assign(kMaxActiveMorphs, 0);
+  d->morph_active_weights.assign(kMaxActiveMorphs, 0.0f);
+  int active = 0;
+  for (size_t i = 0; i < d->morph_weights.size(); ++i) {
+    const float w = i < count ? weights[i] : 0.0f;
+    d->morph_weights[i] = w;
+    if (w == 0.0f) continue;
+    if (active < kMaxActiveMorphs) {
+      d->morph_active_shapes[size_t(active)] = static_cast<int>(i);
+      d->morph_active_weights[size_t(active)] = w;
+    }
+    ++active;
+  }
+  d->morph_mode = active == 0 ? 0 : active <= kMaxActiveMorphs ? 1 : 2;
+  return Status::success();
+}
+
+int Renderer::morph_target_count(DrawableHandle handle) const {
+  const Impl::Drawable* d = impl_->find(handle);
+  return d ? d->morph_count : 0;
 }
 
 Status Renderer::set_occlusion(DrawableHandle handle, const std::vector<float>& per_vertex) {

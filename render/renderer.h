@@ -43,6 +43,7 @@
 
 #include <glm/glm.hpp>
 
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -179,6 +180,34 @@ class Renderer {
   // changed then). `stats` (optional) says how much was done.
   Status update_mesh_positions(DrawableHandle handle, const float* positions_xyz, size_t vertex_count,
                                MeshUpdateStats* stats = nullptr);
+
+  // Morph targets blended in the vertex shader (glTF-style: position and
+  // normal offsets times weights, summed): a frame of animation is then one
+  // uniform update, nothing re-sent. `shapes` are sparse offsets from the
+  // mesh's CURRENT positions (the rest pose; do not mix with
+  // update_mesh_positions while weights are non-zero). The normal offset of
+  // each shape is computed here, at full weight, as update_mesh_positions
+  // would renormalize that pose (moved vertices and their triangles'
+  // corners), so one shape at weight 1 shades as the CPU path does; mixes
+  // blend normals linearly (then normalized), as glTF viewers do. Stored as
+  // a float data texture: per vertex its entries (shape, position offset,
+  // normal offset), 32 bytes each, and per GPU vertex two attributes:
+  // (first entry, count) and a 128-bit mask of the shapes it has, so the
+  // shader reads only the shapes with a weight (up to 32 of them; more,
+  // and it walks every entry). Fails, changing nothing, on bad input or when the GL
+  // limits (texture size, vertex texture units, uniform vectors) cannot
+  // hold them; the caller then blends on the CPU. An empty list removes them.
+  struct MorphShape {
+    std::vector<std::uint32_t> vertices;  // source vertex indices (< #V), each at most once
+    std::vector<float> offsets;           // 3 per vertex
+  };
+  static constexpr int kMaxMorphTargets = 128;
+  Status set_morph_targets(DrawableHandle handle, const std::vector<MorphShape>& shapes);
+  // Weights, one per shape (fewer: the rest are 0). All zero draws the rest
+  // pose exactly (the shader skips the blend).
+  Status set_morph_weights(DrawableHandle handle, const float* weights, size_t count);
+  // Shapes attached to the mesh (0: none).
+  int morph_target_count(DrawableHandle handle) const;
 
   // Per-vertex ambient occlusion (#V values in [0,1], 1 = open; see
   // ambient_occlusion.h) darkening ambient and, partly, direct light in

@@ -9,6 +9,13 @@
 //   update_positions(positions) -> "" or error: animation frame, same #V
 //     (Float32Array #V*3; only moved vertices are renormalized and re-sent);
 //     last_update() -> {moved, renormalized, uploaded} vertex counts of it
+//   set_morph_targets(counts, indices, offsets) -> "" or error: morph
+//     targets blended in the vertex shader on the shown mesh (counts
+//     Uint32Array #shapes, indices Uint32Array and offsets Float32Array
+//     (3 per index) concatenated over the shapes); set_morph_weights(w)
+//     (Float32Array, one per shape) -> "" or error: a frame of animation;
+//     morph_target_count(), model_serial() (changes with every model shown),
+//     pose_serial() (changes with every update_positions)
 //   show_textured_mesh(positions, indices, uvs, width, height, channels, pixels)
 //     -> "" or error: a head with its skin texture (camera kept)
 //   set_markers(positions, colors) -> "": big points over the model (the
@@ -75,6 +82,8 @@ struct Viewer {
   // Animation: the last frame's positions (reused, #V*3) and what its
   // update did.
   std::vector<float> animation_positions;
+  std::vector<float> morph_weights;  // the last set_morph_weights (reused)
+  int pose_serial = 0;               // update_positions calls so far
   lk::MeshUpdateStats last_update;
 };
 Viewer* g_viewer = nullptr;
@@ -209,8 +218,44 @@ std::string js_update_positions(val positions) {
   const lk::Status s = g_viewer->scene.update_positions(staging.data(), n / 3, &stats);
   if (!s.ok()) return s.message;
   g_viewer->last_update = stats;
+  ++g_viewer->pose_serial;
   return std::string();
 }
+
+// A typed array copied into a vector through a view of the heap (one memcpy).
+template <typename T>
+void copy_typed(const val& array, std::vector<T>& out) {
+  const size_t n = array["length"].as<size_t>();
+  out.resize(n);
+  if (n) val(emscripten::typed_memory_view(n, out.data())).call<void>("set", array);
+}
+
+std::string js_set_morph_targets(val counts, val indices, val offsets) {
+  if (!g_viewer || !g_viewer->startup_error.empty()) return "the viewer is not running";
+  for (const val* a : {&counts, &indices, &offsets})
+    if (a->isUndefined() || a->isNull()) return "set_morph_targets needs counts, indices and offsets";
+  std::vector<std::uint32_t> c, i;
+  std::vector<float> o;
+  copy_typed(counts, c);
+  copy_typed(indices, i);
+  copy_typed(offsets, o);
+  const lk::Status s = g_viewer->scene.set_morph_targets(c.data(), c.size(), i.data(), i.size(), o.data(), o.size());
+  return s.ok() ? std::string() : s.message;
+}
+
+// An animation frame on the GPU: the weights only (a uniform update).
+std::string js_set_morph_weights(val weights) {
+  if (!g_viewer || !g_viewer->startup_error.empty()) return "the viewer is not running";
+  if (weights.isUndefined() || weights.isNull()) return "no weights";
+  std::vector<float>& w = g_viewer->morph_weights;
+  copy_typed(weights, w);
+  const lk::Status s = g_viewer->scene.set_morph_weights(w.data(), w.size());
+  return s.ok() ? std::string() : s.message;
+}
+
+int js_morph_target_count() { return g_viewer ? g_viewer->scene.morph_target_count() : 0; }
+int js_model_serial() { return g_viewer ? g_viewer->scene.model_serial() : 0; }
+int js_pose_serial() { return g_viewer ? g_viewer->pose_serial : 0; }
 
 // A head with its skin texture: the mesh as show_mesh_keep_view plus uvs
 // (#V*2) and the texture (width*height*channels sRGB bytes, 3 or 4 channels).
@@ -406,6 +451,11 @@ EMSCRIPTEN_BINDINGS(likeness_viewer) {
   emscripten::function("show_points", &js_show_points);
   emscripten::function("show_mesh_keep_view", &js_show_mesh_keep_view);
   emscripten::function("update_positions", &js_update_positions);
+  emscripten::function("set_morph_targets", &js_set_morph_targets);
+  emscripten::function("set_morph_weights", &js_set_morph_weights);
+  emscripten::function("morph_target_count", &js_morph_target_count);
+  emscripten::function("model_serial", &js_model_serial);
+  emscripten::function("pose_serial", &js_pose_serial);
   emscripten::function("set_overlay_points", &js_set_overlay_points);
   emscripten::function("show_textured_mesh", &js_show_textured_mesh);
   emscripten::function("set_markers", &js_set_markers);

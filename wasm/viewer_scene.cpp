@@ -105,6 +105,7 @@ Status ViewerScene::replace(DrawableHandle fresh, bool keep_view) {
   if (texture_ != kNoHandle) renderer_.remove_texture(texture_);
   texture_ = kNoHandle;
   model_ = fresh;
+  ++model_serial_;
   bounds_ = box;
   if (model_is_points_) renderer_.set_point_size(model_, point_size_);
   else renderer_.set_wireframe(model_, wireframe_);
@@ -153,6 +154,43 @@ Status ViewerScene::update_positions(const float* positions_xyz, size_t vertex_c
   if (Status s = renderer_.update_mesh_positions(model_, positions_xyz, vertex_count, stats); !s.ok()) return s;
   dirty_ = true;
   return Status::success();
+}
+
+Status ViewerScene::set_morph_targets(const std::uint32_t* counts, size_t shape_count, const std::uint32_t* indices,
+                                      size_t index_count, const float* offsets, size_t offset_count) {
+  if (model_ == kNoHandle || model_is_points_)
+    return Status::error(ErrorCode::InvalidInput, "no mesh is shown to morph");
+  if (offset_count != 3 * index_count)
+    return Status::error(ErrorCode::InvalidInput, std::to_string(offset_count) + " offset values for " +
+                                                      std::to_string(index_count) + " vertices (need 3 per vertex)");
+  std::vector<Renderer::MorphShape> shapes(shape_count);
+  size_t at = 0;
+  for (size_t i = 0; i < shape_count; ++i) {
+    if (counts[i] > index_count - at)
+      return Status::error(ErrorCode::InvalidInput, "the shapes' vertex counts add up to more than the " +
+                                                        std::to_string(index_count) + " indices given");
+    shapes[i].vertices.assign(indices + at, indices + at + counts[i]);
+    shapes[i].offsets.assign(offsets + 3 * at, offsets + 3 * (at + counts[i]));
+    at += counts[i];
+  }
+  if (at != index_count)
+    return Status::error(ErrorCode::InvalidInput, "the shapes' vertex counts add up to " + std::to_string(at) + ", not the " +
+                                                      std::to_string(index_count) + " indices given");
+  if (Status s = renderer_.set_morph_targets(model_, shapes); !s.ok()) return s;
+  dirty_ = true;
+  return Status::success();
+}
+
+Status ViewerScene::set_morph_weights(const float* weights, size_t count) {
+  if (model_ == kNoHandle || model_is_points_)
+    return Status::error(ErrorCode::InvalidInput, "no mesh is shown to morph");
+  if (Status s = renderer_.set_morph_weights(model_, weights, count); !s.ok()) return s;
+  dirty_ = true;
+  return Status::success();
+}
+
+int ViewerScene::morph_target_count() const {
+  return model_ == kNoHandle || model_is_points_ ? 0 : renderer_.morph_target_count(model_);
 }
 
 Status ViewerScene::set_texture(const Image& image) {

@@ -48,6 +48,18 @@ class ViewerScene {
   // Renderer::update_mesh_positions). `stats` is optional.
   Status update_positions(const float* positions_xyz, size_t vertex_count, MeshUpdateStats* stats = nullptr);
 
+  // Morph targets on the shown mesh (Renderer::set_morph_targets): shape i
+  // moves counts[i] vertices, its run of `indices` (concatenated over the
+  // shapes) by 3 floats each of `offsets`. Gone when the model is replaced
+  // (model_serial() changes). set_morph_weights: one weight per shape (a
+  // uniform update, nothing re-sent).
+  Status set_morph_targets(const std::uint32_t* counts, size_t shape_count, const std::uint32_t* indices,
+                           size_t index_count, const float* offsets, size_t offset_count);
+  Status set_morph_weights(const float* weights, size_t count);
+  int morph_target_count() const;
+  // Bumped whenever another model is shown (its morph targets are gone).
+  int model_serial() const { return model_serial_; }
+
   // The skin texture of a textured head: the shown mesh must carry uvs
   // (show_mesh with TriMesh::uvs). Replaced with the model.
   Status set_texture(const Image& image);
@@ -101,6 +113,7 @@ class ViewerScene {
   Renderer renderer_;
   OrbitCamera camera_;
   DrawableHandle model_ = kNoHandle;
+  int model_serial_ = 0;
   bool model_is_points_ = false;
   size_t model_vertices_ = 0;
   TextureHandle texture_ = kNoHandle;

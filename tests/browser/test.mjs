@@ -25,6 +25,7 @@ import { flow as fitThreads } from './flows/fit_threads.mjs';
 import { flow as exportFlow } from './flows/export.mjs';
 import { flow as animation } from './flows/animation.mjs';
 import { flow as expressions } from './flows/expressions.mjs';
+import { flow as followFace } from './flows/follow_face.mjs';
 import { flow as texture } from './flows/texture.mjs';
 import { flow as eyeSmile } from './flows/eye_smile.mjs';
 import { flow as project } from './flows/project.mjs';
@@ -40,5 +41,5 @@ import { flow as glb } from './flows/glb.mjs';
 import { flow as photosHead } from './flows/photos_head.mjs';
 import { flow as phone } from './flows/phone.mjs';
 
-runFlows([startup, scanLoad, startupFailures, fit, fitChecks, fitThreads, exportFlow, animation, expressions, texture, eyeSmile,
+runFlows([startup, scanLoad, startupFailures, fit, fitChecks, fitThreads, exportFlow, animation, expressions, followFace, texture, eyeSmile,
           project, keep, pageStates, fitCancel, photoRefusals, landmarks, photosHead, phone, glb, offline, accessibility, largeScan]);

@@ -409,3 +409,211 @@ TEST_CASE("hidden back faces are culled only when none can be seen", "[render][i
   INFO("inside-out shell, culled vs not: " << 100 * inv.fraction << " % differ");
   CHECK(inv.fraction > 0.05);
 }
+
+namespace {
+
+// A morph target from rest to `posed`: the vertices that moved and their offsets.
+Renderer::MorphShape morph_from(const std::vector<Vec3>& rest, const std::vector<Vec3>& posed) {
+  Renderer::MorphShape shape;
+  for (size_t v = 0; v < rest.size(); ++v) {
+    const Vec3 d = posed[v] - rest[v];
+    if (d.isZero(0.0)) continue;
+    shape.vertices.push_back(static_cast<std::uint32_t>(v));
+    for (int k = 0; k < 3; ++k) shape.offsets.push_back(static_cast<float>(posed[v][k]) - static_cast<float>(rest[v][k]));
+  }
+  return shape;
+}
+
+// A second, overlapping shape: a dent on the upper left of the +z side.
+std::vector<Vec3> dented(const std::vector<Vec3>& p, double amount) {
+  const Vec3 centre(-0.01, 0.05, 0.085);
+  std::vector<Vec3> out = p;
+  for (Vec3& q : out) {
+    const double d = (q - centre).norm();
+    if (d < 0.06) q += Vec3(0.3 * amount, 0.0, -amount) * 0.5 * (1 + std::cos(kPi * d / 0.06));
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("morph targets blended in the vertex shader match the CPU blend", "[render][indexed][morph]") {
+  // The GPU path (set_morph_targets + weights) against the CPU path
+  // (rest + sum w_i offsets_i through update_mesh_positions, normals
+  // recomputed). One shape at weight 1 carries the CPU's own normals, so
+  // the images agree to rounding; a mix blends normals linearly (glTF's
+  // way), so smooth shading differs a little where the shapes overlap, but
+  // flat shading (normals from the blended positions alone) shows the
+  // positions agree; all weights zero is the rest image exactly.
+  const TriMesh rest = seamed_ellipsoid(kRadii, 48, 64);
+  const CameraMatrices cam =
+      canonical_view(CanonicalView::Front, bounding_box(rest.positions), 1.0f).matrices(1.0f);
+  const Image tex = checker_texture();
+  const std::vector<Vec3> bump = bumped(rest.positions, 0.03), dent = dented(rest.positions, 0.02);
+  const std::vector<Renderer::MorphShape> shapes = {morph_from(rest.positions, bump), morph_from(rest.positions, dent)};
+  REQUIRE(shapes[0].vertices.size() > 10);
+  REQUIRE(shapes[1].vertices.size() > 10);
+
+  for (const bool textured : {false, true}) {
+    auto attach = [&](Renderer& r, DrawableHandle h) {
+      if (!textured) return Status::success();
+      TextureHandle t;
+      Status s = r.upload_texture(tex, t);
+      return s ? r.attach_texture(h, t) : s;
+    };
+    auto gpu = [&](std::vector<float> weights, bool flat_shading = false) {
+      return render(
+          [&, weights, flat_shading](Renderer& r) {
+            DrawableHandle h;
+            Status s = r.upload_mesh(rest, h);
+            if (s) r.style(h)->flat_shading = flat_shading;
+            if (s) s = attach(r, h);
+            if (s) s = r.set_morph_targets(h, shapes);
+            if (s) CHECK(r.morph_target_count(h) == 2);
+            if (s) s = r.set_morph_weights(h, weights.data(), weights.size());
+            return s;
+          },
+          cam);
+    };
+    auto cpu = [&](std::vector<float> weights, bool flat_shading = false) {
+      return render(
+          [&, weights, flat_shading](Renderer& r) {
+            DrawableHandle h;
+            Status s = r.upload_mesh(rest, h);
+            if (s) r.style(h)->flat_shading = flat_shading;
+            if (s) s = attach(r, h);
+            std::vector<float> xyz = flat(rest.positions);
+            for (size_t i = 0; i < shapes.size(); ++i)
+              for (size_t k = 0; k < shapes[i].vertices.size(); ++k)
+                for (int c = 0; c < 3; ++c) xyz[3 * shapes[i].vertices[k] + c] += weights[i] * shapes[i].offsets[3 * k + c];
+            if (s) s = r.update_mesh_positions(h, xyz.data(), rest.positions.size());
+            return s;
+          },
+          cam);
+    };
+    const Image at_rest = render(
+        [&](Renderer& r) {
+          DrawableHandle h;
+          Status s = r.upload_mesh(rest, h);
+          return s ? attach(r, h) : s;
+        },
+        cam);
+    const ImageDiff one = compare(gpu({1.0f, 0.0f}), cpu({1.0f, 0.0f}));
+    const ImageDiff mix = compare(gpu({0.6f, 0.8f}), cpu({0.6f, 0.8f}));
+    const ImageDiff mix_flat = compare(gpu({0.6f, 0.8f}, true), cpu({0.6f, 0.8f}, true));
+    const ImageDiff zero = compare(gpu({0.0f, 0.0f}), at_rest);
+    const ImageDiff shown = compare(gpu({0.6f, 0.8f}), at_rest);
+    // The GPU blend must be the weighted one: weights swapped look different.
+    const ImageDiff swapped = compare(gpu({0.8f, 0.6f}, true), cpu({0.6f, 0.8f}, true));
+    INFO("textured " << textured << ": one shape max " << one.max << " (" << 100 * one.fraction << " %), mix max "
+                     << mix.max << " (" << 100 * mix.fraction << " %), flat mix max " << mix_flat.max << " ("
+                     << 100 * mix_flat.fraction << " %), flat swapped " << 100 * swapped.fraction
+                     << " %, zero weights max " << zero.max << ", mix vs rest " << 100 * shown.fraction << " %");
+    CHECK(one.fraction < 0.001);
+    CHECK(one.max <= 8);
+    CHECK(mix_flat.fraction < 0.002);
+    CHECK(mix.fraction < 0.06);  // linear normals, exaggerated shapes (3 and 2 cm on an 11 cm head)
+    CHECK(zero.max == 0);
+    CHECK(shown.fraction > 0.05);
+    CHECK(swapped.fraction > 10 * std::max(mix_flat.fraction, 0.001));
+  }
+}
+
+TEST_CASE("morph targets: shapes past the first 32, and more than 32 weights at once", "[render][indexed][morph]") {
+  // The shader finds a vertex's entry of shape s from a 128-bit mask (bit
+  // counts over the words before s); with more than 32 non-zero weights it
+  // walks every entry instead. Both against the CPU blend, flat shaded (the
+  // positions alone decide the image).
+  const TriMesh rest = seamed_ellipsoid(kRadii, 48, 64);
+  const CameraMatrices cam =
+      canonical_view(CanonicalView::Front, bounding_box(rest.positions), 1.0f).matrices(1.0f);
+  const Renderer::MorphShape bump = morph_from(rest.positions, bumped(rest.positions, 0.03));
+  const Renderer::MorphShape dent = morph_from(rest.positions, dented(rest.positions, 0.02));
+  auto draw = [&](const std::vector<Renderer::MorphShape>& shapes, const std::vector<float>& weights, bool on_gpu) {
+    return render(
+        [&, on_gpu](Renderer& r) {
+          DrawableHandle h;
+          Status s = r.upload_mesh(rest, h);
+          if (s) r.style(h)->flat_shading = true;
+          if (s && on_gpu) {
+            s = r.set_morph_targets(h, shapes);
+            if (s) s = r.set_morph_weights(h, weights.data(), weights.size());
+            return s;
+          }
+          std::vector<float> xyz = flat(rest.positions);
+          for (size_t i = 0; i < shapes.size(); ++i)
+            for (size_t k = 0; k < shapes[i].vertices.size(); ++k)
+              for (int c = 0; c < 3; ++c) xyz[3 * shapes[i].vertices[k] + c] += weights[i] * shapes[i].offsets[3 * k + c];
+          return s ? r.update_mesh_positions(h, xyz.data(), rest.positions.size()) : s;
+        },
+        cam);
+  };
+  // Bump at 5, dent at 70 (third mask word), empty shapes between.
+  std::vector<Renderer::MorphShape> far(72);
+  far[5] = bump;
+  far[70] = dent;
+  std::vector<float> far_w(72, 0.0f);
+  far_w[5] = 0.7f;
+  far_w[70] = 0.9f;
+  const ImageDiff words = compare(draw(far, far_w, true), draw(far, far_w, false));
+  // The bump cut into 40 slices of its vertices, all at weight 1 (mode 2),
+  // and the dent at 0.5 after them.
+  std::vector<Renderer::MorphShape> slices(41);
+  for (size_t k = 0; k < bump.vertices.size(); ++k) {
+    Renderer::MorphShape& piece = slices[k % 40];
+    piece.vertices.push_back(bump.vertices[k]);
+    piece.offsets.insert(piece.offsets.end(), &bump.offsets[3 * k], &bump.offsets[3 * k] + 3);
+  }
+  slices[40] = dent;
+  std::vector<float> slice_w(41, 1.0f);
+  slice_w[40] = 0.5f;
+  const ImageDiff many = compare(draw(slices, slice_w, true), draw(slices, slice_w, false));
+  const ImageDiff moved = compare(draw(slices, slice_w, true), draw(slices, std::vector<float>(41, 0.0f), false));
+  INFO("shapes 5 and 70: max " << words.max << " (" << 100 * words.fraction << " %); 41 weights: max " << many.max << " ("
+                               << 100 * many.fraction << " %), vs rest " << 100 * moved.fraction << " %");
+  CHECK(words.fraction < 0.002);
+  CHECK(many.fraction < 0.002);
+  CHECK(moved.fraction > 0.05);
+}
+
+TEST_CASE("set_morph_targets refuses bad input and changes nothing", "[render][indexed][morph]") {
+  const TriMesh rest = seamed_ellipsoid(kRadii, 12, 16);
+  const CameraMatrices cam = three_quarter(rest);
+  const Image before = render(
+      [&](Renderer& r) {
+        DrawableHandle h;
+        return r.upload_mesh(rest, h);
+      },
+      cam);
+  const Image after = render(
+      [&](Renderer& r) {
+        DrawableHandle h;
+        Status s = r.upload_mesh(rest, h);
+        if (!s) return s;
+        const Renderer::MorphShape good = morph_from(rest.positions, bumped(rest.positions, 0.05, 0.2));
+        REQUIRE(!good.vertices.empty());
+        Renderer::MorphShape bad_index = good, short_offsets = good, nan = good, twice = good;
+        bad_index.vertices[0] = static_cast<std::uint32_t>(rest.positions.size());
+        short_offsets.offsets.pop_back();
+        nan.offsets[1] = std::nanf("");
+        twice.vertices.push_back(twice.vertices[0]);
+        twice.offsets.insert(twice.offsets.end(), {0.0f, 0.0f, 0.0f});
+        for (const Renderer::MorphShape& bad : {bad_index, short_offsets, nan, twice})
+          CHECK(r.set_morph_targets(h, {good, bad}).code == ErrorCode::InvalidInput);
+        CHECK(r.set_morph_targets(h, std::vector<Renderer::MorphShape>(Renderer::kMaxMorphTargets + 1, good)).code ==
+              ErrorCode::TooLarge);
+        CHECK(r.set_morph_targets(h + 7, {good}).code == ErrorCode::InvalidInput);
+        CHECK(r.morph_target_count(h) == 0);
+        const float w = 1.0f;
+        CHECK(r.set_morph_weights(h, &w, 1).code == ErrorCode::InvalidInput);  // no targets
+        // Attached, then a bad weight: refused, the weights stay zero.
+        s = r.set_morph_targets(h, {good});
+        const float nan_w = std::nanf("");
+        CHECK(r.set_morph_weights(h, &nan_w, 1).code == ErrorCode::InvalidInput);
+        const float two[2] = {1.0f, 1.0f};
+        CHECK(r.set_morph_weights(h, two, 2).code == ErrorCode::InvalidInput);
+        return s;
+      },
+      cam);
+  CHECK(compare(before, after).max == 0);
+}

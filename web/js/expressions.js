@@ -4,13 +4,17 @@
 // and their offsets in the scan frame, at one level), fetched once per head
 // and level.
 //
-// The blend runs on the CPU, in JavaScript: positions = rest + sum of
-// w_i * offsets_i over the shapes with a weight (sparse), handed to the
-// viewer's update_positions, which renormalizes and uploads the moved
-// vertices. GPU blending (morph targets in the renderer's vertex shader, so
-// that playback costs no CPU per frame, as issue 38 asks) is NOT done; the
-// measured cost per frame is in docs/design/page.md. The lower teeth and
-// tongue ride on the jaw: the shapes' jaw motions blended as I + sum of
+// The blend runs on the GPU: the shapes go to the viewer once per head and
+// level as morph targets (set_morph_targets: a float data texture read by
+// the vertex shader, normal offsets computed there at full weight), and a
+// frame is only the weights (set_morph_weights, a uniform array): no vertex
+// upload, no loop over vertices here. The CPU blend (positions = rest + sum
+// of w_i * offsets_i over the shapes with a weight, handed to the viewer's
+// update_positions, which renormalizes and uploads the moved vertices) is
+// kept for positions() (tests, the console), for ?morph=cpu, and as the
+// fallback when the viewer refuses the morph targets (GL limits; a console
+// note says why). The measured cost per frame, both paths, is in
+// docs/design/page.md. The lower teeth and tongue ride on the jaw: the shapes' jaw motions blended as I + sum of
 // w_i (M_i - I) (what the GLB's morph targets on the teeth do); the tongue
 // does not come out (tongueOut moves the skin only here).
 import { app, page, ui, showError } from './state.js';
@@ -65,8 +69,10 @@ function groupOf(name) {
 }
 
 // The baked shapes of the head shown: {fit, level, shapes: Map name ->
-// {indices, offsets}, names, rest (the level's rest positions), out (the
-// last blend)}.
+// {indices, offsets}, names, index (name -> shape number), rest (the
+// level's rest positions), out (the last CPU blend), weightArray (the GPU's
+// weights), gpuModel (the viewer's model_serial its morph targets are on),
+// restPose (the viewer's model:pose serials when it last showed the rest)}.
 let baked = null;
 let baking = null;  // {fit, level, promise}
 let talkT0 = 0, talkGeneration = 0;
@@ -82,12 +88,20 @@ const ex = app.expressions = {
   jawMatrix: null,      // the lower teeth's and tongue's last matrix (column-major 4x4, scan frame)
   // Per drawn pose: the JS blend and the viewer's update_positions (ms, sums over frames).
   stats: { frames: 0, blendMs: 0, uploadMs: 0, lastBlendMs: 0, lastUploadMs: 0 },
-  // For the tests and the console: copies of the last blended and the rest positions, a shape's data.
-  positions: () => (baked ? baked.out.slice() : null),
+  // Where the blend runs: 'gpu' (morph targets in the vertex shader) or
+  // 'cpu' (?morph=cpu, or the GPU path refused: gpuNote says why).
+  path: new URLSearchParams(location.search).get('morph') === 'cpu' ? 'cpu' : 'gpu',
+  gpuNote: null,
+  morphUploadMs: null,  // the last set_morph_targets (once per head and level)
+  // For the tests and the console: the blend computed on the CPU and the rest positions, a shape's data.
+  positions: () => (baked ? blendCpu(baked).slice() : null),
   restPositions: () => (baked ? baked.rest.slice() : null),
   shape: (name) => (baked && baked.shapes.get(name)) || null,
   talkWeights: (t) => talkWeights(t),
   talkSeconds: TALK_END,
+  // Tests: set weights as the presets and sliders do; switch the path and redraw.
+  set: (weights) => setWeights(weights),
+  setPath: (path) => { ex.path = path; return fresh(baked) && draw(); },
 };
 
 function levelMesh(level) {
@@ -116,7 +130,9 @@ function ensureShapes() {
     }
     const shapes = new Map(r.shapes.map((s) => [s.name, { indices: s.indices, offsets: s.offsets, jaw: s.jawMatrix || null }]));
     const rest = new Float32Array(mesh.positions);
-    baked = { fit, level, shapes, names: r.shapes.map((s) => s.name), rest, out: rest.slice() };
+    const names = r.shapes.map((s) => s.name);
+    baked = { fit, level, shapes, names, index: new Map(names.map((n, i) => [n, i])), rest, out: rest.slice(),
+              weightArray: new Float32Array(names.length), gpuModel: -1, restPose: '' };
     Object.assign(ex, { level, names: baked.names, bakeMs: r.bakeMs });
     ui.exprStats.textContent = baked.names.length + ' shapes baked on ' + (level === 0 ? 'the control mesh' : 'level ' + level) +
       ' (' + mesh.vertexCount.toLocaleString('en') + ' vertices) in ' + Math.round(r.bakeMs) + ' ms.';
@@ -127,12 +143,8 @@ function ensureShapes() {
   return promise;
 }
 
-// rest + sum w_i offsets_i into baked.out, then onto the screen when the
-// viewer shows this level's mesh. Returns false when it could not be drawn.
-function draw() {
-  const b = baked;
-  if (!fresh(b) || app.shownStage !== 'subdivide' || view.level !== b.level) return false;
-  const t0 = performance.now();
+// rest + sum w_i offsets_i into b.out (the CPU blend).
+function blendCpu(b) {
   const out = b.out;
   out.set(b.rest);
   for (const [name, w] of Object.entries(ex.weights)) {
@@ -146,8 +158,79 @@ function draw() {
       out[i + 2] += w * off[o + 2];
     }
   }
-  const t1 = performance.now();
-  const err = app.viewer.update_positions(out);
+  return out;
+}
+
+const poseKey = (v) => v.model_serial() + ':' + v.pose_serial();
+
+// The GPU path made ready on the model shown: the rest positions on it
+// (anything else that moved it, the CPU path or Animate, is undone once),
+// then the morph targets (once per model: another level or head view
+// replaces the model). False (and the CPU path from then on) when refused.
+function gpuReady(b) {
+  const v = app.viewer;
+  if (b.restPose !== poseKey(v)) {
+    const err = v.update_positions(b.rest);
+    if (err) return gpuRefused(err);
+    b.restPose = poseKey(v);
+  }
+  if (b.gpuModel === v.model_serial() && v.morph_target_count() === b.names.length) return true;
+  if (!b.flat) {
+    let total = 0;
+    for (const n of b.names) total += b.shapes.get(n).indices.length;
+    const counts = new Uint32Array(b.names.length), indices = new Uint32Array(total), offsets = new Float32Array(3 * total);
+    let at = 0;
+    b.names.forEach((n, i) => {
+      const s = b.shapes.get(n);
+      counts[i] = s.indices.length;
+      indices.set(s.indices, at);
+      offsets.set(s.offsets, 3 * at);
+      at += s.indices.length;
+    });
+    b.flat = { counts, indices, offsets };
+  }
+  const t0 = performance.now();
+  const err = v.set_morph_targets(b.flat.counts, b.flat.indices, b.flat.offsets);
+  ex.morphUploadMs = performance.now() - t0;
+  if (err) return gpuRefused(err);
+  b.gpuModel = v.model_serial();
+  return true;
+}
+
+function gpuRefused(err) {
+  ex.path = 'cpu';
+  ex.gpuNote = err;
+  console.info('Expressions: blending on the CPU, the viewer refused the morph targets: ' + err);
+  return false;
+}
+
+// The weights onto the screen when the viewer shows this level's mesh:
+// on the GPU (the weights only) or on the CPU (the blend, uploaded).
+// Returns false when it could not be drawn.
+function draw() {
+  const b = baked;
+  if (!fresh(b) || app.shownStage !== 'subdivide' || view.level !== b.level) return false;
+  const v = app.viewer;
+  const t0 = performance.now();
+  let t1, err;
+  // The wireframe's edges are drawn from the uploaded positions, not blended
+  // in the shader: with the wireframe on, the CPU path keeps them on the face.
+  const gpuDrawn = ex.path === 'gpu' && !ui.wireframe.checked && gpuReady(b);
+  if (gpuDrawn) {
+    const w = b.weightArray;
+    w.fill(0);
+    for (const [name, x] of Object.entries(ex.weights)) {
+      const i = b.index.get(name);
+      if (i !== undefined) w[i] = x;
+    }
+    t1 = performance.now();
+    err = v.set_morph_weights(w);
+  } else {
+    if (b.gpuModel === v.model_serial()) v.set_morph_weights(new Float32Array(0));  // no GPU pose under the CPU's
+    blendCpu(b);
+    t1 = performance.now();
+    err = v.update_positions(b.out);
+  }
   const t2 = performance.now();
   if (err) { stopTalk(); showError('Expressions: ' + err); return false; }
   moveJaw(b);
@@ -157,6 +240,7 @@ function draw() {
   st.lastUploadMs = t2 - t1;
   st.blendMs += st.lastBlendMs;
   st.uploadMs += st.lastUploadMs;
+  st.path = gpuDrawn ? 'gpu' : 'cpu';
   return true;
 }
 
@@ -172,10 +256,39 @@ function moveJaw(b) {
   for (const i of app.jawComponents || []) app.viewer.set_component_matrix(i, m);
 }
 
+// What a frame cost on the page's side (the drawing itself is the GPU's).
+function costText(blendMs, uploadMs) {
+  return ex.stats.path === 'gpu'
+    ? 'weights ' + (blendMs + uploadMs).toFixed(2) + ' ms (blended on the GPU).'
+    : 'blend ' + blendMs.toFixed(1) + ' ms + viewer update ' + uploadMs.toFixed(1) + ' ms (JavaScript, on the CPU).';
+}
+
 function statsText() {
   const st = ex.stats, n = Object.keys(ex.weights).length;
-  return n + (n === 1 ? ' shape' : ' shapes') + ' on level ' + baked.level + ': blend ' + st.lastBlendMs.toFixed(1) +
-    ' ms + viewer update ' + st.lastUploadMs.toFixed(1) + ' ms (JavaScript, on the CPU).';
+  return n + (n === 1 ? ' shape' : ' shapes') + ' on level ' + baked.level + ': ' + costText(st.lastBlendMs, st.lastUploadMs);
+}
+
+// An outside driver of the weights (Follow my face): its stop function,
+// called when the user or the page takes the head over (a preset, a slider,
+// Talk, Animate, another head or job).
+let driver = null;
+export function setDriver(stop) { driver = stop; }
+function stopDriver() {
+  const d = driver;
+  driver = null;
+  if (d) d();
+}
+
+// The driver's weights onto the head (the shapes baked first if need be);
+// nothing while Animate moves the head.
+export async function driveWeights(weights) {
+  if (!app.fit || app.animation.running) return;
+  if (ex.talking) stopTalk(false);
+  if (app.shownStage !== 'subdivide') showStage('subdivide');
+  ex.weights = weights;
+  syncSliders();
+  const b = await ensureShapes();
+  if (b && ex.weights === weights && draw()) ui.exprStats.textContent = statsText();
 }
 
 // New weights onto the head: Animate stops (both would write the head), the
@@ -183,6 +296,7 @@ function statsText() {
 async function setWeights(weights, { fromTalk = false } = {}) {
   if (!app.fit) return;
   if (!fromTalk) stopTalk(false);
+  stopDriver();
   if (app.animation.running) stopAnimation(false);  // clears the weights (onAnimationStop): set them after
   if (app.shownStage !== 'subdivide') showStage('subdivide');
   ex.weights = weights;
@@ -252,8 +366,8 @@ async function startTalk() {
     ex.talkFrames++;
     for (const [name, w] of Object.entries(ex.weights)) ex.talkPeaks[name] = Math.max(ex.talkPeaks[name] || 0, w);
     const st = ex.stats;
-    ui.exprStats.textContent = 'Talking: ' + ex.talkFrames + ' frames, per frame on level ' + baked.level + ': blend ' +
-      (st.blendMs / st.frames).toFixed(1) + ' ms + viewer update ' + (st.uploadMs / st.frames).toFixed(1) + ' ms (JavaScript, on the CPU).';
+    ui.exprStats.textContent = 'Talking: ' + ex.talkFrames + ' frames, per frame on level ' + baked.level + ': ' +
+      costText(st.blendMs / st.frames, st.uploadMs / st.frames);
     requestAnimationFrame(frame);
   };
   requestAnimationFrame(frame);
@@ -273,6 +387,7 @@ function stopTalk(rest = true) {
 // the weights go to zero and the rest pose comes back where it is shown.
 function clearExpressions() {
   const posed = ex.talking || Object.keys(ex.weights).length > 0;
+  stopDriver();
   stopTalk(false);
   ex.weights = {};
   syncSliders();
@@ -285,6 +400,7 @@ export function wireExpressions() {
   }
   ui.talk.addEventListener('click', () => (ex.talking ? stopTalk() : startTalk().catch(() => {})));
   ui.exprGroup.addEventListener('change', buildSliders);
+  ui.wireframe.addEventListener('change', () => { if (Object.keys(ex.weights).length) draw(); });
   // Opening the panel bakes the shapes (not while another job runs).
   ui.expressions.addEventListener('toggle', () => {
     if (ui.expressions.open && app.fit && page.snapshot().state !== 'working') ensureShapes().catch(() => {});

@@ -75,6 +75,25 @@ export function detectLandmarks(image, width, height) {
   });
 }
 
+// Landmarks of the face in a video frame (Follow my face): as
+// detectLandmarks, but without the blank frame first, so the detector
+// tracks the face from frame to frame as its video graph is meant to.
+export function trackLandmarks(video, width, height) {
+  const run = queue.then(async () => {
+    const d = await detector();
+    d.results = null;
+    await d.mesh.send({ image: video });
+    const faces = (d.results && d.results.multiFaceLandmarks) || [];
+    const first = faces[0];
+    return { faces: faces.length, points: first ? first.slice(0, POINT_COUNT).map((p) => [p.x * width, p.y * height]) : null };
+  });
+  queue = run.catch(() => { loading = null; });
+  return run.catch((e) => {
+    const why = e && e.message ? e.message : String(e);
+    throw new Error(/^the face detector/.test(why) ? why : 'the face detector failed (' + why + ')');
+  });
+}
+
 // The points file of a photo, the format the native CLI reads
 // (docs/design/photos.md): pixels, index = landmark index, null = missing.
 export function landmarksJson(name, width, height, points) {

@@ -37,6 +37,7 @@ import { wireHeadView } from './head_view.js';
 import { wireTexture } from './texture.js';
 import { wireAnimation } from './animation.js';
 import { wireExpressions } from './expressions.js';
+import { wireFollowFace } from './follow_face.js';
 import { wireExport } from './export.js';
 import { wireProject } from './project.js';
 import { offerRestore, wireKeep } from './keep.js';
@@ -57,6 +58,7 @@ function wire() {
   wireHeadView();
   wireAnimation();
   wireExpressions();
+  wireFollowFace();
   wireExport();
   wireProject();
   wireTexture();

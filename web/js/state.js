@@ -21,6 +21,7 @@ export const ui = {
   fullDetail: $('full-detail'),
   expressions: $('expressions'), exprControls: $('expr-controls'), exprGroup: $('expr-group'), exprSliders: $('expr-sliders'),
   exprStats: $('expr-stats'), talk: $('btn-talk'),
+  follow: $('follow-face'), followStatus: $('follow-status'), followVideo: $('follow-video'), cameraOn: $('camera-on'),
   fitNotes: $('fit-notes'), fitQuality: $('fit-quality'), qualityTitle: $('quality-title'), qualitySummary: $('quality-summary'),
   qualityList: $('quality-list'),
   showComponents: $('show-components'),
