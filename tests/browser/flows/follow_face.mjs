@@ -83,15 +83,10 @@ async function run(s) {
   const project = path.join(dir, 'fit', 'head.likeness.glb');
 
   const { origin } = await s.serve();
-  const watchRequests = (context) => context.on('request', (req) => {
-    const url = req.url();
-    s.requests.push(url);
-    if (!(url.startsWith(origin + '/') || url.startsWith('data:') || url.startsWith('blob:'))) s.foreign.push(url);
-  });
   const context = await launchChromium('follow', { width: 1280, height: 800 }, {
     args: ['--use-fake-device-for-media-stream', '--use-fake-ui-for-media-stream', `--use-file-for-fake-video-capture=${video}`],
   });
-  watchRequests(context);
+  s.watchRequests(context);
   try {
     const page = s.watch(await context.newPage());
     await page.goto(origin + '/index.html');
@@ -152,7 +147,7 @@ async function run(s) {
 
   // A browser that refuses the camera: a clear message, the toggle back off.
   const refused = await launchChromium('follow-refused', { width: 1280, height: 800 }, { args: ['--use-fake-device-for-media-stream'] });
-  watchRequests(refused);
+  s.watchRequests(refused);
   try {
     await refused.clearPermissions();
     const page = s.watch(await refused.newPage());
