@@ -25,19 +25,51 @@
 #include "mesh/geometry.h"
 #include "texture/correspondences.h"
 
+#include <emscripten/heap.h>
+
 #include <algorithm>
 #include <cmath>
 #include <functional>
 
 namespace lk_worker {
+
+std::unique_ptr<lk::ScanStreamReader>& scan_stream() {
+  static std::unique_ptr<lk::ScanStreamReader> reader;
+  return reader;
+}
+
 namespace {
 
 // ---- loading ------------------------------------------------------------------
 
-// Parses a dropped PLY / OBJ / XYZ / VTK file (reader chosen by
-// lk::read_geometry from the name's extension or the first bytes). Meshes
-// without normals get area-weighted vertex normals so the viewer can shade
-// them; point clouds keep whatever normals the file had (possibly none).
+// The page's arrays for a parsed scan. Meshes without normals get
+// area-weighted vertex normals so the viewer can shade them; point clouds
+// keep whatever normals the file had (possibly none).
+val geometry_result(const std::string& name, lk::TriMesh& mesh, lk::GeometryKind kind,
+                    const lk::ProgressFn& report) {
+  const bool is_mesh = kind == lk::GeometryKind::Mesh;
+  if (mesh.positions.empty()) return error_result(lk::ErrorCode::Empty, name + ": no vertices");
+  if (is_mesh && mesh.normals.size() != mesh.positions.size()) mesh.normals = lk::vertex_normals(mesh);
+  const std::vector<lk::Vec3>& positions = mesh.positions;
+  const lk::BBox box = lk::bounding_box(positions);
+
+  val r = ok_result();
+  r.set("name", name);
+  r.set("kind", std::string(is_mesh ? "mesh" : "points"));
+  r.set("vertexCount", static_cast<double>(positions.size()));
+  r.set("triangleCount", static_cast<double>(is_mesh ? mesh.triangles.size() : 0));
+  r.set("positions", float32_array(positions));
+  r.set("normals", float32_array(mesh.normals.size() == positions.size() ? mesh.normals : std::vector<lk::Vec3>{}));
+  r.set("colors", float32_array(mesh.colors.size() == positions.size() ? mesh.colors : std::vector<lk::Vec3>{}));
+  r.set("indices", uint32_array(is_mesh ? mesh.triangles : std::vector<lk::Tri>{}));
+  r.set("bboxMin", vec3_array(box.min));
+  r.set("bboxMax", vec3_array(box.max));
+  lk::report(report, "load", 1.0);
+  return r;
+}
+
+// Parses a dropped PLY / OBJ / XYZ / VTK file's bytes (reader chosen by
+// lk::read_geometry from the name's extension or the first bytes).
 val parse_geometry(const std::string& name, std::uintptr_t data, std::size_t size, val progress) {
   const lk::ProgressFn report = js_progress(progress);
   if (!lk::report(report, "load", 0.0)) return error_result(lk::ErrorCode::Cancelled, name + ": cancelled");
@@ -49,30 +81,62 @@ val parse_geometry(const std::string& name, std::uintptr_t data, std::size_t siz
   const auto* bytes = reinterpret_cast<const std::uint8_t*>(data);
   lk::Status status = lk::read_geometry(name, bytes, size, mesh, cloud, kind);
   if (!status.ok()) return error_result(lk::with_context(status, name));
+  cloud = lk::PointCloud();  // the mesh holds the same vertices
   if (!lk::report(report, "load", 0.8)) return error_result(lk::ErrorCode::Cancelled, name + ": cancelled");
+  return geometry_result(name, mesh, kind, report);
+}
 
-  const bool is_mesh = kind == lk::GeometryKind::Mesh;
-  const std::vector<lk::Vec3>& positions = is_mesh ? mesh.positions : cloud.positions;
-  if (positions.empty()) return error_result(lk::ErrorCode::Empty, name + ": no vertices");
-  if (is_mesh && mesh.normals.size() != mesh.positions.size()) mesh.normals = lk::vertex_normals(mesh);
-  const std::vector<lk::Vec3>& normals = is_mesh ? mesh.normals : cloud.normals;
-  const std::vector<lk::Vec3>& colors = is_mesh ? mesh.colors : cloud.colors;
-  const lk::BBox box = lk::bounding_box(positions);
+// ---- a scan read in slices (io/scan_stream.h) ------------------------------------
 
+std::string& scan_stream_name() {
+  static std::string name;
+  return name;
+}
+
+// Starts reading a scan of `size` bytes (a File's size: a double from JS).
+val scan_stream_begin(const std::string& name, double size) {
+  scan_stream().reset();
+  if (!(size >= 0) || size > static_cast<double>(lk::kMaxGeometryBytes))
+    return error_result(lk::ErrorCode::TooLarge, name + ": too large: " + std::to_string(static_cast<long long>(size)) +
+                                                     " bytes, the limit is " + std::to_string(lk::kMaxGeometryBytes));
+  scan_stream() = std::make_unique<lk::ScanStreamReader>(name, static_cast<std::uint64_t>(size));
+  scan_stream_name() = name;
+  return ok_result();
+}
+
+// The next slice, at (data, size) in the heap; the reader keeps only what it
+// has not finished parsing. {ok, vertices: the header's count once known}.
+val scan_stream_push(std::uintptr_t data, std::size_t size) {
+  if (!scan_stream()) return error_result(lk::ErrorCode::Internal, "no scan is being read");
+  if (data == 0 && size != 0) return error_result(lk::ErrorCode::Internal, "no input buffer");
+  const lk::Status status = scan_stream()->push(reinterpret_cast<const std::uint8_t*>(data), size);
+  if (!status.ok()) {
+    scan_stream().reset();
+    return error_result(lk::with_context(status, scan_stream_name()));
+  }
   val r = ok_result();
-  r.set("name", name);
-  r.set("kind", std::string(is_mesh ? "mesh" : "points"));
-  r.set("vertexCount", static_cast<double>(positions.size()));
-  r.set("triangleCount", static_cast<double>(is_mesh ? mesh.triangles.size() : 0));
-  r.set("positions", float32_array(positions));
-  r.set("normals", float32_array(normals.size() == positions.size() ? normals : std::vector<lk::Vec3>{}));
-  r.set("colors", float32_array(colors.size() == positions.size() ? colors : std::vector<lk::Vec3>{}));
-  r.set("indices", uint32_array(is_mesh ? mesh.triangles : std::vector<lk::Tri>{}));
-  r.set("bboxMin", vec3_array(box.min));
-  r.set("bboxMax", vec3_array(box.max));
-  lk::report(report, "load", 1.0);
+  r.set("vertices", static_cast<double>(scan_stream()->declared_vertices()));
+  r.set("streaming", scan_stream()->streaming());
   return r;
 }
+
+// Ends the scan being read: parse_geometry's result.
+val parse_scan_stream(val progress) {
+  const lk::ProgressFn report = js_progress(progress);
+  if (!scan_stream()) return error_result(lk::ErrorCode::Internal, "no scan is being read");
+  std::unique_ptr<lk::ScanStreamReader> reader = std::move(scan_stream());
+  const std::string name = scan_stream_name();
+  lk::TriMesh mesh;
+  lk::GeometryKind kind = lk::GeometryKind::PointCloud;
+  const lk::Status status = reader->finish(mesh, kind);
+  reader.reset();
+  if (!status.ok()) return error_result(lk::with_context(status, name));
+  if (!lk::report(report, "load", 0.8)) return error_result(lk::ErrorCode::Cancelled, name + ": cancelled");
+  return geometry_result(name, mesh, kind, report);
+}
+
+// The most the wasm heap may grow to (ALLOW_MEMORY_GROWTH's maximum).
+double heap_max_bytes() { return static_cast<double>(emscripten_get_heap_max()); }
 
 // inspect_image on a dropped photo's bytes (io.h): JPEG or PNG, whole, within
 // the limits, no decompression bomb; {ok, format, width, height (as shown),
@@ -219,6 +283,10 @@ EMSCRIPTEN_BINDINGS(likeness_worker_load) {
   emscripten::function("parallel_loops_run", &parallel_loops_run);
   emscripten::function("helper_jobs_ms", &helper_jobs_ms);
   emscripten::function("parse_geometry", &parse_geometry);
+  emscripten::function("scan_stream_begin", &scan_stream_begin);
+  emscripten::function("scan_stream_push", &scan_stream_push);
+  emscripten::function("parse_scan_stream", &parse_scan_stream);
+  emscripten::function("heap_max_bytes", &heap_max_bytes);
   emscripten::function("check_image", &check_image);
   emscripten::function("photo_focal", &photo_focal);
   emscripten::function("inspect_image", &inspect_image);

@@ -4,6 +4,7 @@
 #include "calib/camera.h"
 #include "head/generic_head.h"
 #include "io/io.h"
+#include "io/scan_stream.h"
 #include "project/project.h"
 #include "teeth/teeth.h"
 
@@ -18,6 +19,11 @@
 namespace lk_worker {
 
 using emscripten::val;
+
+// The scan web/worker.js is reading in slices (scan_stream_begin, then
+// scan_stream_push per slice); parse_scan_stream or fit_head_stream_job
+// finishes it. One at a time: jobs run in order.
+std::unique_ptr<lk::ScanStreamReader>& scan_stream();
 
 template <class T>
 inline val typed_array(const char* type, const std::vector<T>& flat) {

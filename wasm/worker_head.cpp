@@ -103,8 +103,9 @@ val components_object(const lk::HeadProject& p, const lk::GenericHead& generic) 
 // restoreSteps} (pipeline/untangle.h), headFacing and headUp (the head's +z
 // and +y in the scan's frame: the page's view looks at the face with them),
 // the texture landmarks and the placed components.
+val fit_cloud(const std::string& name, lk::PointCloud cloud, double parse_ms, val options, val progress);
+
 val fit_head_job(const std::string& name, std::uintptr_t data, std::size_t size, val options, val progress) {
-  const lk::ProgressFn report = js_progress(progress);
   if (data == 0 && size != 0) return error_result(lk::ErrorCode::Internal, name + ": no input buffer");
   const double t_parse = now_ms();
   lk::TriMesh mesh;
@@ -115,8 +116,33 @@ val fit_head_job(const std::string& name, std::uintptr_t data, std::size_t size,
   // A mesh scan is fitted through its vertices; its triangles (in `cloud`
   // too) are sampled for the displacements, as in the CLI.
   mesh = lk::TriMesh{};
-  const double parse_ms = now_ms() - t_parse;
+  return fit_cloud(name, std::move(cloud), now_ms() - t_parse, options, progress);
+}
 
+// The same on the scan web/worker.js has pushed in slices (scan_stream()):
+// the mesh's arrays move into the cloud, so the vertices are held once.
+val fit_head_stream_job(val options, val progress) {
+  if (!scan_stream()) return error_result(lk::ErrorCode::Internal, "no scan is being read");
+  std::unique_ptr<lk::ScanStreamReader> reader = std::move(scan_stream());
+  const std::string name = has(options, "name") ? options["name"].as<std::string>() : std::string("scan");
+  const double t_parse = now_ms();
+  lk::TriMesh mesh;
+  lk::GeometryKind kind = lk::GeometryKind::PointCloud;
+  const lk::Status status = reader->finish(mesh, kind);
+  reader.reset();
+  if (!status.ok()) return error_result(lk::with_context(status, name));
+  lk::PointCloud cloud;
+  cloud.positions = std::move(mesh.positions);
+  if (mesh.normals.size() == cloud.positions.size()) cloud.normals = std::move(mesh.normals);
+  if (mesh.colors.size() == cloud.positions.size()) cloud.colors = std::move(mesh.colors);
+  cloud.faces = std::move(mesh.triangles);
+  mesh = lk::TriMesh{};
+  return fit_cloud(name, std::move(cloud), now_ms() - t_parse, options, progress);
+}
+
+val fit_cloud(const std::string& name, lk::PointCloud cloud, double parse_ms, val options, val progress) {
+  const lk::ProgressFn report = js_progress(progress);
+  lk::Status status;
   lk::FitHeadOptions opt;
   auto vec3_option = [&](const char* key, lk::Vec3& out) {
     if (!has(options, key) || options[key].isNull()) return true;
@@ -394,6 +420,7 @@ val head_result(const lk::HeadProject& p, const lk::GenericHead& generic) {
 EMSCRIPTEN_BINDINGS(likeness_worker_head) {
   using namespace lk_worker;
   emscripten::function("fit_head_job", &fit_head_job);
+  emscripten::function("fit_head_stream_job", &fit_head_stream_job);
   emscripten::function("warm_up_job", &warm_up_job);
   emscripten::function("animate_frame", &animate_frame);
   emscripten::function("fit_quality_job", &fit_quality_job);

@@ -76,7 +76,7 @@ function coreReady(m, which) {
                   ms: performance.now() - t0 });
     return;
   }
-  postMessage({ type: 'ready', variant, threads: core.parallel_workers(), fallback });
+  postMessage({ type: 'ready', variant, threads: core.parallel_workers(), fallback, scanLimit: scanLimitBytes() });
   while (pending.length) enqueue(pending.shift());
 }
 
@@ -99,6 +99,79 @@ function withHeapBytes(buffer, fn) {
   } finally {
     core._free(ptr);
   }
+}
+
+// Scans are read from the File in slices (File.slice + arrayBuffer), each
+// copied into one reused heap buffer and pushed into the core's stream reader
+// (io/scan_stream.h): neither the JS heap nor the wasm heap ever holds the
+// whole file, and PLY is parsed as it comes.
+const SCAN_SLICE = 8 * 1024 * 1024;
+// Fitting a scan takes at most this many bytes of wasm heap per byte of
+// binary PLY (x y z and normals as floats, 24 bytes a point), measured on a
+// 2M and a 5M-point scan (docs/design/page.md, "Very large scans"); the heap
+// cannot grow beyond core.heap_max_bytes() (2 GiB).
+const FIT_HEAP_PER_FILE_BYTE = 13;
+// And per point the header declares (a PLY with fewer bytes a point, x y z
+// only, has more points in the same bytes).
+const FIT_HEAP_PER_POINT = 320;
+
+// Frees the reader of a scan given up on (an empty one takes its place).
+function dropScanStream() { core.scan_stream_begin('', 0); }
+
+function scanLimitBytes() { return Math.floor(core.heap_max_bytes() / FIT_HEAP_PER_FILE_BYTE); }
+
+function mb(n) { return (n / 1024 / 1024).toFixed(n < 10 * 1024 * 1024 ? 1 : 0) + ' MB'; }
+
+// Reads `file` into the core's scan stream; progress('read', fraction) per
+// slice. -> {ok} or the refusal (a file too large for the heap is refused
+// from its size before a byte is read; a PLY whose header declares too many
+// points, once the header is read).
+async function streamScan(file, progress) {
+  const name = String(file.name || 'scan');
+  const heapMax = core.heap_max_bytes();
+  const limit = scanLimitBytes();
+  if (file.size > limit) {
+    return { ok: false, code: 'TooLarge', message: name + ' is ' + mb(file.size) + ': the page fits scans up to ' +
+             mb(limit) + ' (its WebAssembly memory ends at ' + mb(heapMax) + ', and a fit needs about ' +
+             FIT_HEAP_PER_FILE_BYTE + ' times the file). Thin the scan in your scanning software, or use the ' +
+             'Likeness command-line tool.', bytesRead: 0 };
+  }
+  let r = core.scan_stream_begin(name, file.size);
+  if (!r.ok) return r;
+  const ptr = core._malloc(Math.max(1, Math.min(SCAN_SLICE, file.size)));
+  if (!ptr) return { ok: false, code: 'TooLarge', message: 'not enough memory to read ' + name };
+  let read = 0;
+  try {
+    progress('read', 0);
+    while (read < file.size) {
+      let bytes;
+      try {
+        bytes = new Uint8Array(await file.slice(read, read + SCAN_SLICE).arrayBuffer());
+      } catch (e) {  // e.g. the file was changed or removed on disk since it was chosen
+        dropScanStream();
+        return { ok: false, code: 'InvalidInput', message: name + ' could not be read (' + errorText(e) + ')', bytesRead: read };
+      }
+      if (bytes.length === 0) {
+        dropScanStream();
+        return { ok: false, code: 'Truncated', message: name + ': the file ended early while being read', bytesRead: read };
+      }
+      heapBytes().set(bytes, ptr);
+      r = core.scan_stream_push(ptr, bytes.length);
+      read += bytes.length;
+      if (!r.ok) return r;
+      if (r.vertices * FIT_HEAP_PER_POINT > heapMax) {
+        dropScanStream();
+        return { ok: false, code: 'TooLarge', message: name + ' declares ' + r.vertices.toLocaleString('en') +
+                 ' points: the page fits scans up to ' + Math.floor(heapMax / FIT_HEAP_PER_POINT).toLocaleString('en') +
+                 ' points (its WebAssembly memory ends at ' + mb(heapMax) + '). Thin the scan in your scanning ' +
+                 'software, or use the Likeness command-line tool.', bytesRead: read };
+      }
+      progress('read', read / file.size);
+    }
+  } finally {
+    core._free(ptr);
+  }
+  return { ok: true, bytesRead: read };
 }
 
 // Photos are decoded by the browser's own decoders (createImageBitmap, the
@@ -182,6 +255,24 @@ const JOBS = {
       r.focalPx = f.focalPx;
       r.focalSource = f.source;
     }
+    return r;
+  },
+  // {file}: a scan as a File, read in slices -> what 'parse' returns.
+  parseFile: async (msg, progress) => {
+    const read = await streamScan(msg.file, progress);
+    if (!read.ok) return read;
+    const r = core.parse_scan_stream(progress);
+    r.bytesRead = read.bytesRead;
+    return r;
+  },
+  // {file, options}: 'fit' on a File read in slices.
+  fitFile: async (msg, progress) => {
+    const t0 = performance.now();
+    const read = await streamScan(msg.file, progress);
+    if (!read.ok) return read;
+    const readMs = performance.now() - t0;
+    const r = core.fit_head_stream_job(Object.assign({}, msg.options || {}, { name: String(msg.file.name || 'scan') }), progress);
+    if (r.ok) r.parseMs = readMs + (r.parseMs || 0);  // the parse happens as the slices are read
     return r;
   },
   // {name, buffer, options}: a scan -> the fitted head (jeong2002 Sec. 4-5),
@@ -297,6 +388,7 @@ async function handle(msg) {
     result.workerMs = performance.now() - t0;
     // The core's memory (the wasm heap only grows: its size is the peak so far).
     result.heapBytes = heapBytes().length;
+    result.heapMaxBytes = core.heap_max_bytes();
   }
   postMessage({ type: 'result', id: msg.id, result }, transferables(result));
 }

@@ -1,6 +1,7 @@
 // Readers and writers for meshes, point clouds and images. Parsing works on
 // bytes in memory (the web app hands us the bytes of a dropped file); the
-// *_file helpers are thin wrappers for the native harness.
+// *_file helpers are thin wrappers for the native harness. A scan can also
+// be read from chunks pushed one after another (scan_stream.h).
 //
 // Every reader validates what it reads and fails with a Status whose message
 // names the problem (truncated data, wrong counts, NaN/inf, unsupported

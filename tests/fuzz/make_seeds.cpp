@@ -14,6 +14,7 @@
 
 #include <cstdio>
 #include <string>
+#include <utility>
 
 #define STB_IMAGE_WRITE_STATIC
 #define STB_IMAGE_WRITE_IMPLEMENTATION
@@ -100,6 +101,16 @@ int main(int argc, char** argv) {
   put("ply", "corner_uvs.ply", write_ply(corner));
   put("ply", "bare_ascii.ply", write_ply(bare, true));
   put("ply", "cloud.ply", write_ply(cloud));
+  // fuzz_ply_stream: a chunk-pattern byte, then the file.
+  for (const auto& [name, file] : {std::pair<const char*, Bytes>{"grid_binary", write_ply(grid)},
+                                   {"grid_ascii", write_ply(grid, true)},
+                                   {"corner_uvs", write_ply(corner)}}) {
+    for (std::uint8_t pattern : {0, 3, 7, 11}) {
+      Bytes seed{pattern};
+      seed.insert(seed.end(), file.begin(), file.end());
+      put("ply_stream", std::string(name) + "_" + std::to_string(pattern) + ".ply", seed);
+    }
+  }
 
   put("obj", "grid.obj", write_obj(grid));
   put("obj", "corner_uvs.obj", write_obj(corner));

@@ -8,11 +8,12 @@ import { checkPhotos, readPointFiles, texturable } from './photos.js';
 import { runTexture } from './texture.js';
 import { openProject } from './project.js';
 
-// Largest scan file accepted. Parsing needs up to ~5x the file's size in
-// wasm memory (the bytes, then double-precision positions and the arrays
-// handed back; 2 GiB heap at most): a 408 MB binary PLY of 34M points ran
-// the worker out of memory, 150 MB (12.5M points) loaded. Refuse early with
-// a clear message instead. ?max_mb=N overrides.
+// Largest file accepted at all (scans and photos), checked on the page.
+// A scan is also refused by the worker, from its size and before a byte is
+// read, when the core's memory could not fit it (worker.js, streamScan: the
+// wasm heap's 2 GiB over the heap a fit takes per byte of file, about
+// 158 MB; the drop zone shows that limit once the core is up). ?max_mb=N
+// overrides this one.
 const DEFAULT_MAX_SCAN_MB = 256;
 const maxScanMb = Number(params.get('max_mb')) > 0 ? Number(params.get('max_mb')) : DEFAULT_MAX_SCAN_MB;
 export const MAX_SCAN_BYTES = maxScanMb * 1024 * 1024;
@@ -99,6 +100,9 @@ export async function handleFiles(fileList) {
 // The file input and the drop zone.
 export function wireFiles() {
   ui.maxSize.textContent = formatBytes(MAX_SCAN_BYTES);
+  // Once the core is up (worker_client.js): the scan limit its memory sets.
+  app.showScanLimit = (limit) => { ui.maxSize.textContent = formatBytes(Math.min(MAX_SCAN_BYTES, limit)); };
+  if (app.scanLimit) app.showScanLimit(app.scanLimit);
   ui.fileInput.addEventListener('change', () => {
     const files = ui.fileInput.files;
     handleFiles(files).finally(() => { ui.fileInput.value = ''; });

@@ -84,10 +84,14 @@ export async function runFit() {
   const t0 = performance.now();
   let result;
   try {
-    const buffer = await file.arrayBuffer();
-    if (!live(job)) return;
-    result = await runJob({ type: 'fit', name: file.name, buffer, options: { levels: 3 } }, [buffer],
+    // The worker reads the File in slices (worker.js, streamScan).
+    result = await runJob({ type: 'fitFile', file, options: { levels: 3 } }, [],
       (stage, fraction) => {
+        if (stage === 'read') {
+          const mb = (n) => (n / 1048576).toFixed(0) + ' MB';
+          setStatus('Reading ' + file.name + ' for the fit: ' + mb(fraction * file.size) + ' of ' + mb(file.size) + '…');
+          return;
+        }
         const row = rowOf(stage);
         if (!row) return;
         // Earlier rows are complete once a later stage starts.

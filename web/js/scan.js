@@ -54,11 +54,13 @@ export async function loadScan(file) {
   const t0 = performance.now();
   let result;
   try {
-    const buffer = await file.arrayBuffer();
-    if (!live(job)) throw Object.assign(new Error('cancelled'), { cancelled: true });
-    setStage('load', 'parsing', 0.05, 'active');
-    result = await runJob({ type: 'parse', name: file.name, buffer }, [buffer], (stage, fraction) => {
-      if (stage === 'load') setStage('load', 'parsing', 0.05 + 0.9 * fraction, 'active');
+    // The worker reads the File in slices and parses them as they come
+    // (worker.js, streamScan): progress is the bytes read.
+    result = await runJob({ type: 'parseFile', file }, [], (stage, fraction) => {
+      if (stage === 'read') {
+        setStage('load', formatBytes(fraction * file.size) + ' of ' + formatBytes(file.size), 0.8 * fraction, 'active');
+      }
+      if (stage === 'load') setStage('load', 'parsing', 0.8 + 0.2 * fraction, 'active');
     });
   } catch (e) {
     if (e && e.cancelled) {
@@ -73,6 +75,8 @@ export async function loadScan(file) {
                '. Try a smaller or decimated scan.' };
   }
   if (!live(job)) return;
+  // What the worker read and its heap afterwards (the large-scan flow reads it).
+  app.scanRead = { name: file.name, ok: !!result.ok, bytesRead: result.bytesRead, heapBytes: result.heapBytes || 0 };
   if (!result.ok) {
     let message = result.message || (file.name + ': ' + result.code);
     // The core guessed the format from the bytes; say what we expected.

@@ -73,6 +73,12 @@ function startWorkerOnce() {
         // fallback: why the threaded core did not start (kept across restarts).
         app.workerThreads = { variant: msg.variant || 'single', threads: msg.threads || 1,
                               fallback: msg.fallback || (app.workerThreads && app.workerThreads.fallback) || null };
+        // The largest scan the core's memory fits (worker.js refuses larger
+        // files from their size): the drop zone says so.
+        if (msg.scanLimit > 0) {
+          app.scanLimit = msg.scanLimit;
+          if (app.showScanLimit) app.showScanLimit(msg.scanLimit);  // files.js
+        }
         resolve();
       } else if (msg.type === 'progress') {
         const job = jobs.get(msg.id);

@@ -24,6 +24,12 @@ async function run(s) {
     .map((f) => `${f} ${(fs.statSync(path.join(s.webdir, f)).size / 1024).toFixed(0)} KB`);
   note(`start-up: first paint ${Math.round(paint)} ms, ready (viewer and core up, head drawn) ${Math.round(loadMs)} ms; ` +
        `wasm files: ${wasm.join(', ')}`);
+  // The face-landmark detector (vendor/face_mesh/, 17 MB with its models) is fetched
+  // only once photos are dropped, never for the start (issue 39).
+  const early = await page.evaluate(() => performance.getEntriesByType('resource').map((e) => e.name)
+    .filter((n) => n.includes('face_mesh')));
+  check('the landmark model is not fetched at start-up', early.length === 0,
+        early.length ? early.slice(0, 3).join(', ') : 'no vendor/face_mesh/ request before a photo');
   // Served with COOP/COEP: the page is cross-origin isolated and the worker
   // runs the threaded core, one thread per core up to 4.
   const isolated = await page.evaluate(() => ({ coi: window.crossOriginIsolated, cores: navigator.hardwareConcurrency,

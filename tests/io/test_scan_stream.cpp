@@ -1,0 +1,260 @@
+// The stream readers (scan_stream.h) against the whole-buffer readers: the
+// same mesh, bit for bit, and the same error, for every way of cutting the
+// file into chunks (1 byte, sizes that split the header and the items, the
+// whole file at once).
+#include "io/scan_stream.h"
+#include "io_test_util.h"
+
+#include <catch2/catch.hpp>
+
+#include <cstring>
+#include <random>
+
+using namespace lk;
+using lk::test::ByteWriter;
+using lk::test::bytes_of;
+
+namespace {
+
+template <typename T>
+bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+bool same_mesh(const TriMesh& a, const TriMesh& b) {
+  return same_bits(a.positions, b.positions) && same_bits(a.normals, b.normals) && same_bits(a.colors, b.colors) &&
+         same_bits(a.uvs, b.uvs) && a.uv_per_corner == b.uv_per_corner && a.triangles == b.triangles;
+}
+
+// Chunk sizes cycled through while pushing.
+Status read_in_chunks(const Bytes& file, const std::vector<size_t>& sizes, TriMesh& mesh, GeometryKind& kind) {
+  PlyStreamReader reader(file.size());
+  size_t pos = 0;
+  for (size_t i = 0; pos < file.size(); ++i) {
+    const size_t n = std::min(sizes[i % sizes.size()], file.size() - pos);
+    const Status s = reader.push(file.data() + pos, n);
+    pos += n;
+    if (!s) {
+      // Every later call gives the same error.
+      CHECK(reader.push(file.data(), 0).message == s.message);
+      CHECK(reader.finish(mesh, kind).message == s.message);
+      CHECK(mesh.positions.empty());
+      return s;
+    }
+  }
+  CHECK(reader.bytes_received() == file.size());
+  return reader.finish(mesh, kind);
+}
+
+std::vector<std::vector<size_t>> chunkings(size_t file_size) {
+  std::vector<std::vector<size_t>> out = {{1}, {2}, {3}, {5}, {7}, {11}, {13}, {64}, {1000}, {1, 17, 4}};
+  // The file cut once at every byte (header lines and items split everywhere).
+  for (size_t cut = 1; cut < file_size && file_size < 4000; ++cut) out.push_back({cut, file_size});
+  std::mt19937 rng(7);
+  for (int r = 0; r < 20; ++r) {
+    std::vector<size_t> sizes;
+    for (int k = 0; k < 50; ++k) sizes.push_back(1 + rng() % 97);
+    out.push_back(sizes);
+  }
+  return out;
+}
+
+// The stream agrees with read_ply on `file` for every chunking.
+void check_stream_matches(const Bytes& file) {
+  TriMesh whole;
+  GeometryKind whole_kind = GeometryKind::PointCloud;
+  const Status expected = read_ply(file.data(), file.size(), whole, whole_kind);
+  for (const std::vector<size_t>& sizes : chunkings(file.size())) {
+    TriMesh mesh;
+    GeometryKind kind = GeometryKind::PointCloud;
+    const Status s = read_in_chunks(file, sizes, mesh, kind);
+    INFO("first chunk " << sizes[0] << " of " << file.size() << " bytes; expected: " << expected.message
+                        << "; got: " << s.message);
+    REQUIRE(s.ok() == expected.ok());
+    REQUIRE(s.code == expected.code);
+    REQUIRE(s.message == expected.message);
+    REQUIRE(kind == whole_kind);
+    REQUIRE(same_mesh(mesh, whole));
+  }
+}
+
+TriMesh sample_mesh() {
+  TriMesh m;
+  m.positions = {{0, 0, 0}, {1.5, 0, 0}, {1.5, 2.25, 0}, {0, 2.25, -0.125}, {0.75, 1, 3}};
+  m.triangles = {{0, 1, 2}, {0, 2, 3}, {1, 4, 2}};
+  m.normals = {{0, 0, 1}, {0, 0, 1}, {0, 0.6, 0.8}, {0, -0.6, 0.8}, {1, 0, 0}};
+  m.colors = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {10 / 255.0, 20 / 255.0, 30 / 255.0}, {1, 1, 1}};
+  m.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 1}, {0.5, 0.5}};
+  return m;
+}
+
+PointCloud sample_cloud(int n) {
+  PointCloud c;
+  for (int i = 0; i < n; ++i) {
+    const double t = 0.37 * i;
+    c.positions.push_back(Vec3(std::cos(t) * 0.1, std::sin(t) * 0.1, 0.001 * i));
+    c.normals.push_back(Vec3(std::cos(t), std::sin(t), 0));
+    c.colors.push_back(Vec3((i % 256) / 255.0, ((3 * i) % 256) / 255.0, ((7 * i) % 256) / 255.0));
+  }
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE("PLY stream: the same mesh as read_ply for every chunking, ascii and binary", "[io][ply][stream]") {
+  const TriMesh mesh = sample_mesh();
+  TriMesh corner = mesh;  // per-corner uvs: the faces' texcoord lists
+  corner.uvs.clear();
+  for (int f = 0; f < 3; ++f)
+    for (int k = 0; k < 3; ++k) corner.uvs.push_back(Vec2(0.1 * f, 0.05 * k + 0.5));
+  corner.uv_per_corner = true;
+  for (bool ascii : {false, true}) {
+    INFO("ascii " << ascii);
+    check_stream_matches(write_ply(mesh, ascii));
+    check_stream_matches(write_ply(corner, ascii));
+    check_stream_matches(write_ply(sample_cloud(300), ascii));
+  }
+  // The test means something: the reference read succeeds with every vertex.
+  TriMesh back;
+  GeometryKind kind;
+  const Bytes cloud_bytes = write_ply(sample_cloud(300));
+  REQUIRE(read_ply(cloud_bytes.data(), cloud_bytes.size(), back, kind).ok());
+  CHECK(back.positions.size() == 300);
+  CHECK(kind == GeometryKind::PointCloud);
+}
+
+TEST_CASE("PLY stream: big-endian doubles, skipped elements and CRLF header lines", "[io][ply][stream]") {
+  ByteWriter w(
+      "ply\r\nformat binary_big_endian 1.0\r\ncomment made by hand\r\nelement camera 1\r\nproperty float f\r\n"
+      "element vertex 3\r\nproperty double x\r\nproperty double y\r\nproperty double z\r\nproperty list uchar int junk\r\n"
+      "element face 1\r\nproperty list uchar uint vertex_indices\r\nend_header\n",
+      true);
+  w.put(1.5f);
+  for (int i = 0; i < 3; ++i) {
+    w.put(0.5 * i).put(-1.25 * i).put(3.0 + i);
+    w.put(std::uint8_t(i));
+    for (int k = 0; k < i; ++k) w.put(std::int32_t(k));
+  }
+  w.put(std::uint8_t(3)).put(std::uint32_t(0)).put(std::uint32_t(1)).put(std::uint32_t(2));
+  TriMesh m;
+  GeometryKind kind;
+  REQUIRE(read_ply(w.bytes.data(), w.bytes.size(), m, kind).ok());
+  REQUIRE(m.positions.size() == 3);
+  CHECK(m.positions[2] == Vec3(1.0, -2.5, 5.0));
+  CHECK(kind == GeometryKind::Mesh);
+  check_stream_matches(w.bytes);
+}
+
+TEST_CASE("PLY stream: every error is the whole-buffer reader's, wherever the chunks end", "[io][ply][stream]") {
+  const Bytes good = write_ply(sample_mesh(), false);
+  const Bytes good_ascii = write_ply(sample_mesh(), true);
+  std::vector<Bytes> bad = {
+      Bytes{},
+      bytes_of("pl"),
+      bytes_of("ply"),
+      bytes_of("plyx\n"),
+      bytes_of("ply\nformat ascii 1.0\n"),                                   // no end_header
+      bytes_of("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header"),  // no y, z
+      bytes_of("ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\nend_header"),
+      bytes_of("ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+               "end_header\n1 2 3\n4 5 six\n"),
+      bytes_of("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+               "end_header\n1 2 3\n4 5 6\n"),  // extra data
+      bytes_of("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+               "end_header\n1 2 nan\n"),
+      bytes_of("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+               "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0 1 0 0 0 1 0\n4000 0 1 2\n"),
+      bytes_of("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+               "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0 1 0 0 0 1 0\n3 0 1 9\n"),
+      bytes_of("ply\nformat ascii 1.0\nelement vertex 2147483648\nproperty float x\nend_header\n1\n"),
+      bytes_of("ply\nformat ascii 1.0\nelement junk 5\nend_header\n"),
+      bytes_of("ply\nformat utf8 1.0\nend_header\n"),
+      bytes_of("ply\nformat ascii 1.0\nbogus line\nend_header\n"),
+  };
+  // The good files cut short (the last item unfinished) and with a byte more.
+  for (const Bytes* g : {&good, &good_ascii}) {
+    bad.emplace_back(g->begin(), g->end() - 3);
+    Bytes longer = *g;
+    longer.push_back('7');
+    bad.push_back(longer);
+  }
+  for (const Bytes& file : bad) {
+    TriMesh m;
+    GeometryKind kind;
+    INFO(std::string(file.begin(), file.begin() + std::min<size_t>(file.size(), 160)));
+    REQUIRE_FALSE(read_ply(file.data(), file.size(), m, kind).ok());
+    check_stream_matches(file);
+  }
+}
+
+TEST_CASE("PLY stream: more or fewer bytes than declared are refused", "[io][ply][stream]") {
+  const Bytes file = write_ply(sample_mesh(), false);
+  TriMesh m;
+  GeometryKind kind;
+  {
+    PlyStreamReader reader(file.size() - 1);
+    lk::test::require_error(reader.push(file.data(), file.size()), ErrorCode::InvalidInput, "more bytes than the");
+  }
+  {
+    PlyStreamReader reader(file.size() + 10);
+    // The header promises more bytes than the body holds: refused at end.
+    REQUIRE(reader.push(file.data(), file.size()).ok());
+    lk::test::require_error(reader.finish(m, kind), ErrorCode::Truncated, "the data ends after");
+    CHECK(m.positions.empty());
+  }
+  {
+    PlyStreamReader reader(std::uint64_t(kMaxGeometryBytes) + 1);
+    lk::test::require_error(reader.push(file.data(), 10), ErrorCode::TooLarge, "too large");
+  }
+}
+
+TEST_CASE("Scan stream: what read_geometry gives, PLY streamed and other formats gathered", "[io][stream]") {
+  const Bytes ply = write_ply(sample_cloud(200));
+  const std::string xyz_text = write_xyz(sample_cloud(50));
+  const Bytes xyz(xyz_text.begin(), xyz_text.end());
+  const std::string obj_text = write_obj(sample_mesh());
+  const Bytes obj(obj_text.begin(), obj_text.end());
+  struct Case {
+    std::string name;
+    const Bytes* bytes;
+    bool streamed;
+  };
+  const Case cases[] = {{"scan.ply", &ply, true},   {"scan.PLY", &ply, true},   {"scan.bin", &ply, true},
+                        {"scan.xyz", &xyz, false},  {"scan.obj", &obj, false},  {"scan", &xyz, false},
+                        {"scan.xyz", &ply, false}};
+  for (const Case& c : cases) {
+    TriMesh m0;
+    PointCloud c0;
+    GeometryKind k0;
+    const Status expected = read_geometry(c.name, c.bytes->data(), c.bytes->size(), m0, c0, k0);
+    for (size_t chunk : {size_t(1), size_t(3), size_t(100), c.bytes->size()}) {
+      INFO(c.name << " in chunks of " << chunk);
+      ScanStreamReader reader(c.name, c.bytes->size());
+      Status s;
+      for (size_t pos = 0; pos < c.bytes->size() && s.ok(); pos += chunk)
+        s = reader.push(c.bytes->data() + pos, std::min(chunk, c.bytes->size() - pos));
+      CHECK(reader.streaming() == c.streamed);
+      TriMesh m;
+      PointCloud cloud;
+      GeometryKind k;
+      if (s.ok()) s = reader.finish(m, cloud, k);
+      REQUIRE(s.ok() == expected.ok());
+      CHECK(s.message == expected.message);
+      if (!s.ok()) continue;
+      CHECK(k == k0);
+      CHECK(same_mesh(m, m0));
+      CHECK(same_bits(cloud.positions, c0.positions));
+      CHECK(same_bits(cloud.normals, c0.normals));
+      CHECK(same_bits(cloud.colors, c0.colors));
+      CHECK(cloud.faces == c0.faces);
+    }
+  }
+  // An empty file, whatever its name.
+  for (const char* name : {"empty.ply", "empty"}) {
+    ScanStreamReader reader(name, 0);
+    TriMesh m;
+    PointCloud cloud;
+    GeometryKind k;
+    lk::test::require_error(reader.finish(m, cloud, k), ErrorCode::Empty, "empty");
+  }
+}
