@@ -9,6 +9,9 @@
 //      Before that, the orientation is checked by coarse ICP from every up
 //      axis and eight yaws (guess_orientation), so a scan in another
 //      convention is turned round with a note, or refused with a hint.
+//      A whole head whose points mostly lie off the silhouette-aligned head
+//      (a hat, a beard, a pedestal) is aligned again on its upper face
+//      (face_refine.h) before it is refused.
 //   2. local fitting       fit/local_fit.h             (Sec. 4.2), after
 //      moving the eye region (ours, same header) to the scan's eyes
 //   3. global fitting      fit/global_fit.h            (Sec. 4.3)
