@@ -1,5 +1,7 @@
 #include "pipeline/fit_head.h"
 
+#include "align/face_refine.h"
+
 #include "common/parallel.h"
 #include "head/generic_head.h"
 #include "mesh/geometry.h"
@@ -596,40 +598,67 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
     st = align_initial(generic.mesh, ann, cloud, options.align, out.alignment, progress);
     if (!st) return with_context(st, "initial alignment");
   }
-  out.generic_to_head.A = out.alignment.linear;
-  out.generic_to_head.t = out.alignment.translation;
-  out.aligned = generic.mesh;
-  for (Vec3& p : out.aligned.positions) p = out.generic_to_head.apply(p);
-  out.aligned.normals.clear();
-
-  // The points to fit: the neck below the generic head's neck is not part
-  // of the model, and would drag its boundary down.
+  // The points to fit (the neck below the generic head's neck is not part
+  // of the model, and would drag its boundary down) and the share of them
+  // near the aligned head, for the alignment as it stands.
   std::vector<Vec3> pts;
   std::vector<int> pts_index;  // into the scan, for its normals
-  pts.reserve(n);
-  const ClipPlane neck = transform_plane(ann.neck_clip, out.generic_to_head);
-  for (int i = 0; i < n; ++i)
-    if (!options.cut_neck || neck.keeps(cloud.positions[i])) pts.push_back(cloud.positions[i]), pts_index.push_back(i);
-  out.fitted_points = static_cast<int>(pts.size());
-  if (out.fitted_points < options.min_points)
-    return Status::error(ErrorCode::NotAHead, "only " + std::to_string(out.fitted_points) +
-                                                  " points above the aligned head's neck");
-
-  // Sanity: a head scan lies on (near) the aligned generic head; noise,
-  // furniture or a torso do not.
-  {
+  ClipPlane neck;
+  auto place = [&]() -> Status {
+    out.generic_to_head.A = out.alignment.linear;
+    out.generic_to_head.t = out.alignment.translation;
+    out.aligned = generic.mesh;
+    for (Vec3& p : out.aligned.positions) p = out.generic_to_head.apply(p);
+    out.aligned.normals.clear();
+    pts.clear();
+    pts_index.clear();
+    pts.reserve(n);
+    neck = transform_plane(ann.neck_clip, out.generic_to_head);
+    for (int i = 0; i < n; ++i)
+      if (!options.cut_neck || neck.keeps(cloud.positions[i])) pts.push_back(cloud.positions[i]), pts_index.push_back(i);
+    out.fitted_points = static_cast<int>(pts.size());
+    if (out.fitted_points < options.min_points)
+      return Status::error(ErrorCode::NotAHead, "only " + std::to_string(out.fitted_points) +
+                                                    " points above the aligned head's neck");
     ClosestPointTree tree(out.aligned);
     const std::vector<Vec3> probe = thin(pts, 20000);
     const double near2 = std::pow(options.near_distance_pct / 100.0 * diag, 2);
     int near = 0;
     for (const Vec3& p : probe) near += tree.closest(p, near2).face >= 0;
     out.near_fraction = double(near) / probe.size();
-    if (out.near_fraction < options.min_near_fraction)
-      return Status::error(ErrorCode::NotAHead,
-                           "after alignment only " + pct(100 * out.near_fraction) + "% of the points lie within " +
-                               pct(options.near_distance_pct) + "% of the diagonal of the head surface (need " +
-                               pct(100 * options.min_near_fraction) + "%); this does not look like a head scan");
+    return Status::success();
+  };
+  st = place();
+  if (!st) return st;
+  // Sanity: a head scan lies on (near) the aligned generic head; noise,
+  // furniture or a torso do not. A whole head with surfaces the generic
+  // head lacks (a hat, a beard, a pedestal) may fail it because the
+  // silhouettes misled the alignment: it is aligned again on the face.
+  if (out.near_fraction < options.min_near_fraction && !out.face_only && options.refine_on_face) {
+    st = refine_alignment_on_face(generic.mesh, ann, cloud.positions, scan.faces, out.alignment.linear,
+                                  out.alignment.translation, diag, options.face_refine, out.face_refine);
+    if (st) {
+      out.notes.push_back("after the silhouette alignment only " + pct(100 * out.near_fraction) +
+                          "% of the points lay near the head (a hat, a beard, a pedestal?): aligned again on the face (" +
+                          pct(100 * out.face_refine.near_fraction) + "% of its points on the scan)");
+      out.alignment.linear = out.face_refine.linear;
+      out.alignment.translation = out.face_refine.translation;
+      st = place();
+      if (!st) return st;
+      out.refined_on_face = true;
+      out.alignment.aligned = out.aligned;
+    }
   }
+  // After the face's alignment: the face must lie on the scan as the whole
+  // head would (the same share), and half that share of the points near
+  // the whole head (the rest may be a hat, a beard, shoulders).
+  const bool face_holds = out.refined_on_face && out.face_refine.near_fraction >= options.min_near_fraction &&
+                          out.near_fraction >= 0.5 * options.min_near_fraction;
+  if (out.near_fraction < options.min_near_fraction && !face_holds)
+    return Status::error(ErrorCode::NotAHead,
+                         "after alignment only " + pct(100 * out.near_fraction) + "% of the points lie within " +
+                             pct(options.near_distance_pct) + "% of the diagonal of the head surface (need " +
+                             pct(100 * options.min_near_fraction) + "%); this does not look like a head scan");
   stage_done("initial_alignment", out.aligned, pts);
   if (!report(progress, "initial_alignment", 1.0)) return cancelled();
 

@@ -9,6 +9,9 @@
 //      Before that, the orientation is checked by coarse ICP from every up
 //      axis and eight yaws (guess_orientation), so a scan in another
 //      convention is turned round with a note, or refused with a hint.
+//      A whole head whose points mostly lie off the silhouette-aligned head
+//      (a hat, a beard, a pedestal) is aligned again on its upper face
+//      (face_refine.h) before it is refused.
 //   2. local fitting       fit/local_fit.h             (Sec. 4.2), after
 //      moving the eye region (ours, same header) to the scan's eyes
 //   3. global fitting      fit/global_fit.h            (Sec. 4.3)
@@ -34,6 +37,7 @@
 // connectivity); level l mesh #V_l by 3 / 4^l #F by 3.
 #pragma once
 #include "align/face_alignment.h"
+#include "align/face_refine.h"
 #include "align/initial_alignment.h"
 #include "common/progress.h"
 #include "common/status.h"
@@ -64,6 +68,11 @@ struct FitHeadOptions {
   // near_distance_pct of the aligned generic head (noise or a chair does not).
   double min_near_fraction = 0.6;
   double near_distance_pct = 2.0;    // percent of the bbox diagonal
+  // A whole head that fails the check above after the silhouette alignment
+  // is aligned again on its upper face (align/face_refine.h: a hat, a
+  // beard or a pedestal misled the silhouettes) and checked again.
+  bool refine_on_face = true;
+  FaceRefineOptions face_refine;
   bool cut_neck = true;              // drop points below the generic head's neck plane
   bool measure_stages = true;        // compute the per-stage distance stats
   int stats_max_points = 0;          // measure on at most this many points (0: all)
@@ -277,6 +286,8 @@ struct FitHeadResult {
   BoxFit eye_fit;               // the eye region (skipped when off or the head has no eye rims)
   GlobalFitResult global_fit;
   double near_fraction = 0;     // share of points near the aligned head (sanity check)
+  bool refined_on_face = false; // aligned again on the face (FitHeadOptions::refine_on_face)
+  FaceRefineResult face_refine;
   int pocket_points = 0;        // fitted points nearest to an eye socket / the mouth bag: not fitted
   int neck_points = 0;          // scan points below the neck cut fitted as the neck (fit_scanned_neck)
   int isolated_points = 0;  // skin points left out of fitting as isolated (DisplacementOptions::isolated_density_ratio)

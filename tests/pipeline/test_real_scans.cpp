@@ -4,9 +4,12 @@
 // changed Demosthenes' alignment and gave 100 pairs at the lips and ears
 // before FitHeadOptions::guard_feature_crossings). Skipped with a
 // message when the folder is absent; the scans are never copied into the
-// repo. Gutenberg (beret, beard, pedestal) is refused as not a head after
-// its alignment (docs/design/fit_real_scans.md): a refusal with a message is
-// accepted for it, a fit is held to the same 0 pairs.
+// repo. Gutenberg (beret, beard, pedestal) as given is aligned again on his
+// face (FitHeadOptions::refine_on_face) and held to the same 0 pairs; his
+// copy turned by 0.05 deg is still refused as not a head (the silhouettes
+// leave 8 % of his points near the head, too far for the face's match:
+// docs/design/fit_real_scans.md): a refusal with a message is accepted for
+// that copy only.
 #include "io/io.h"
 #include "pipeline/fit_head.h"
 #include "pipeline/fit_quality.h"
@@ -35,8 +38,10 @@ std::vector<std::string> real_scans() {
   return out;
 }
 
-// Folders of scans refused today (docs/design/fit_real_scans.md, "Not done").
-bool known_refusal(const std::string& path) { return path.find("/threedscans_gutenberg/") != std::string::npos; }
+// Copies of scans refused today (docs/design/fit_real_scans.md, "Not done").
+bool known_refusal(const std::string& path, double degrees) {
+  return degrees != 0 && path.find("/threedscans_gutenberg/") != std::string::npos;
+}
 
 // The scan turned by `degrees` about the vertical through its centroid (the
 // bench's "turn 0.05 deg" copy, native_harness/bench_real.cpp).
@@ -68,7 +73,7 @@ TEST_CASE("fit_head: every real scan fits with no crossing pairs at the lips and
         options.measure_stages = false;  // the crossings are what is checked
         FitHeadResult r;
         const Status st = fit_head(scan, test::generic_head(), options, r);
-        if (!st && known_refusal(path)) {
+        if (!st && known_refusal(path, degrees)) {
           WARN("known refusal, " << path << ": " << st.message);
           CHECK(st.code == ErrorCode::NotAHead);
           CHECK(!st.message.empty());

@@ -1,0 +1,222 @@
+#include "align/face_refine.h"
+
+#include "common/cloud_tree.h"
+#include "mesh/geometry.h"
+#include "raycast/bvh.h"
+
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <algorithm>
+
+namespace lk {
+
+std::vector<int> upper_face_vertices(const TriMesh& generic, const HeadAnnotations& ann) {
+  const int nv = generic.num_vertices();
+  auto mask = [&](const char* name) {
+    std::vector<char> m(nv, 0);
+    if (const auto r = ann.regions.find(name); r != ann.regions.end())
+      for (int v : r->second)
+        if (v >= 0 && v < nv) m[v] = 1;
+    return m;
+  };
+  const std::vector<char> face = mask("face");
+  std::vector<char> out_mask(nv, 0);
+  for (const char* name : {"chin", "jaw", "lips", "neck", "ears"}) {
+    const std::vector<char> m = mask(name);
+    for (int v = 0; v < nv; ++v) out_mask[v] = out_mask[v] || m[v];
+  }
+  for (int v : ann.constrained_vertices)
+    if (v >= 0 && v < nv) out_mask[v] = 1;
+  const std::vector<Vec3> normals = vertex_normals(generic);
+  const Vec3 look = ann.look.normalized();
+  std::vector<int> out;
+  for (int v = 0; v < nv; ++v) {
+    if (!face[v] || out_mask[v]) continue;
+    if (!(normals[v].dot(look) > 0.3)) continue;  // pockets' walls, the sides of the face
+    bool in_pocket = false;  // inside an eyeball's sphere: the socket behind the lids
+    for (const EyeSocket* eye : {&ann.eye_left, &ann.eye_right})
+      in_pocket = in_pocket || (generic.positions[v] - eye->center).norm() < 0.9 * eye->radius;
+    if (!in_pocket) out.push_back(v);
+  }
+  return out;
+}
+
+size_t residual_knee(const std::vector<double>& sorted) {
+  const size_t n = sorted.size();
+  if (n < 3) return 0;
+  const double lo = sorted.front(), span = sorted.back() - sorted.front();
+  if (!(span > 0)) return n - 1;
+  // Normalized curve (x, y in [0, 1]); the chord is y = x. The knee is
+  // where the curve lies farthest below it.
+  size_t best = n - 1;
+  double best_gap = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const double x = double(i) / double(n - 1), y = (sorted[i] - lo) / span;
+    if (x - y > best_gap) best_gap = x - y, best = i;
+  }
+  return best;
+}
+
+namespace {
+
+struct Run {
+  Mat3 linear = Mat3::Identity();
+  Vec3 translation = Vec3::Zero();
+  double score = 0, rms = 0, kept = 0, near = 0;
+  int iterations = 0;
+};
+
+}  // namespace
+
+Status refine_alignment_on_face(const TriMesh& generic, const HeadAnnotations& ann, const std::vector<Vec3>& cloud,
+                                const std::vector<Tri>& faces, const Mat3& linear, const Vec3& translation, double diag,
+                                const FaceRefineOptions& o, FaceRefineResult& out) {
+  out = FaceRefineResult{};
+  if (cloud.size() < 3) return Status::error(ErrorCode::Empty, "face refinement: too few scan points");
+  if (!(diag > 0) || !std::isfinite(diag) || !linear.allFinite() || !translation.allFinite())
+    return Status::error(ErrorCode::InvalidInput, "face refinement: bad alignment or diagonal");
+  if (o.iterations < 1 || !(o.min_keep_fraction > 0 && o.min_keep_fraction <= 1) || !(o.score_clamp_fraction > 0) ||
+      o.pitch_starts_deg.empty() || o.yaw_starts_deg.empty())
+    return Status::error(ErrorCode::InvalidInput, "face refinement: bad options");
+  for (const Vec3& p : cloud)
+    if (!p.allFinite()) return Status::error(ErrorCode::InvalidInput, "face refinement: non-finite scan point");
+  const std::vector<int> ids = upper_face_vertices(generic, ann);
+  if (ids.size() < 10) return Status::error(ErrorCode::Empty, "face refinement: the generic head has no upper face");
+  const int n = static_cast<int>(ids.size());
+  out.samples = n;
+
+  CloudAdaptor adaptor{cloud};
+  const CloudTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  // A scan that came as a mesh is matched on its triangles: a decimated
+  // scan's vertices lie millimetres apart, more than the match should err.
+  MeshBvh surface;
+  if (!faces.empty()) {
+    TriMesh mesh;
+    mesh.positions = cloud;
+    mesh.triangles = faces;
+    for (const Tri& t : faces)
+      for (int v : t)
+        if (v < 0 || v >= static_cast<int>(cloud.size()))
+          return Status::error(ErrorCode::InvalidInput, "face refinement: a scan triangle's index is out of range");
+    const Status st = build_bvh(mesh, surface);
+    if (!st) return st;
+  }
+  const double clamp = o.score_clamp_fraction * diag;
+  const Vec3 look = ann.look.normalized();
+  const Vec3 side = ann.up.normalized().cross(look).normalized();  // the generic's horizontal axis
+
+  auto run_from = [&](const Mat3& A0, const Vec3& t0, int iterations) {
+    Run run;
+    run.linear = A0;
+    run.translation = t0;
+    std::vector<Vec3> model(n), target(n);
+    std::vector<double> dist(n);
+    std::vector<size_t> order(n);
+    double previous = -1;
+    for (int it = 0; it < iterations; ++it) {
+      for (int i = 0; i < n; ++i) {
+        model[i] = run.linear * generic.positions[ids[i]] + run.translation;
+        if (!surface.empty()) {
+          const ClosestPoint c = closest_point(surface, model[i]);
+          target[i] = c.point;
+          dist[i] = c.distance;
+          continue;
+        }
+        size_t idx = 0;
+        double d2 = 0;
+        tree.knnSearch(model[i].data(), 1, &idx, &d2);
+        target[i] = cloud[idx];
+        dist[i] = std::sqrt(d2);
+      }
+      std::iota(order.begin(), order.end(), size_t(0));
+      std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return dist[a] < dist[b]; });
+      std::vector<double> sorted(n);
+      for (int i = 0; i < n; ++i) sorted[i] = dist[order[i]];
+      // The pairs up to the knee of the sorted residuals pull.
+      const size_t knee = residual_knee(sorted);
+      const size_t keep =
+          std::min<size_t>(n, std::max<size_t>(knee + 1, static_cast<size_t>(std::ceil(o.min_keep_fraction * n))));
+      double sum2 = 0, score = 0;
+      int near = 0;
+      for (size_t k = 0; k < keep; ++k) sum2 += sorted[k] * sorted[k];
+      for (double d : dist) score += std::min(d, clamp) * std::min(d, clamp), near += d <= clamp;
+      run.rms = std::sqrt(sum2 / keep);
+      run.kept = double(keep) / n;
+      run.score = score / n;
+      run.near = double(near) / n;
+      run.iterations = it + 1;
+      if (keep < 4 || (previous >= 0 && std::fabs(previous - run.rms) <= o.relative_tolerance * previous)) break;
+      previous = run.rms;
+      Eigen::Matrix3Xd src(3, keep), dst(3, keep);
+      for (size_t k = 0; k < keep; ++k) {
+        src.col(k) = model[order[k]];
+        dst.col(k) = target[order[k]];
+      }
+      const Eigen::Matrix4d M = Eigen::umeyama(src, dst, true);
+      const Mat3 sR = M.topLeftCorner<3, 3>();
+      const double s = sR.col(0).norm();  // (sqrt is exact: the same in wasm)
+      if (!(s > 0) || !std::isfinite(s)) break;
+      run.linear = sR * run.linear;
+      run.translation = sR * run.translation + Vec3(M.topRightCorner<3, 1>());
+    }
+    return run;
+  };
+
+  // The starts keep the given map's rotation and mean scale but not its
+  // stretch: the silhouettes of a hat or a beard stretch the head (wider,
+  // shallower) where the face is not.
+  const Eigen::JacobiSVD<Mat3> svd(linear, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Mat3 rotation = svd.matrixU() * svd.matrixV().transpose();
+  if (rotation.determinant() < 0)
+    return Status::error(ErrorCode::InvalidInput, "face refinement: the alignment mirrors the head");
+  const Mat3 isotropic = (svd.singularValues().sum() / 3.0) * rotation;
+  // The face's centre under the given map: the turns of the starts pivot there.
+  Vec3 centre = Vec3::Zero();
+  for (int v : ids) centre += linear * generic.positions[v] + translation;
+  centre /= n;
+  const Vec3 side_world = (linear * side).normalized(), up_world = (linear * ann.up.normalized()).normalized();
+  bool any = false;
+  Run best;
+  double width = 0;  // the face's extent across, for the starts' shifts
+  {
+    double lo = 1e300, hi = -1e300;
+    for (int v : ids) {
+      const double x = side_world.dot(linear * generic.positions[v]);
+      lo = std::min(lo, x), hi = std::max(hi, x);
+    }
+    width = hi - lo;
+  }
+  for (double shift : o.shift_starts)
+  for (double pitch : o.pitch_starts_deg)
+    for (double yaw : o.yaw_starts_deg) {
+      const double kDeg = 3.14159265358979323846 / 180.0;
+      const Mat3 turn = Mat3(Eigen::AngleAxisd(yaw * kDeg, up_world)) * Mat3(Eigen::AngleAxisd(pitch * kDeg, side_world));
+      // The isotropic map, placed so that the face's centre stays where it was.
+      Vec3 centre_iso = Vec3::Zero();
+      for (int v : ids) centre_iso += isotropic * generic.positions[v];
+      centre_iso /= n;
+      const Run r = run_from(turn * isotropic, centre - turn * centre_iso + shift * width * side_world, o.iterations);
+      out.iterations += r.iterations;
+      if (!any || r.score < best.score) best = r, any = true;
+    }
+  // The best start goes on until it converges (ICP's steps shrink slowly).
+  if (any && o.polish_iterations > 0) {
+    const Run polished = run_from(best.linear, best.translation, o.polish_iterations);
+    out.iterations += polished.iterations;
+    best = polished;
+  }
+  if (!any || !best.linear.allFinite())
+    return Status::error(ErrorCode::NotConverged, "face refinement: no start converged");
+  out.linear = best.linear;
+  out.translation = best.translation;
+  out.score = best.score;
+  out.trimmed_rms = best.rms;
+  out.kept_fraction = best.kept;
+  out.near_fraction = best.near;
+  return Status::success();
+}
+
+}  // namespace lk

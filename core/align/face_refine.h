@@ -1,0 +1,80 @@
+// Refines a whole-head alignment on the FACE alone, for scans with surfaces
+// the generic head lacks (a hat, a long beard, shoulders on a pedestal).
+//
+// jeong2002 Sec. 4.1 matches the silhouettes of the whole head: a beret
+// above the skull and a beard below the chin change the silhouettes, and the
+// generic head lands tilted and off the face (docs/design/fit_real_scans.md,
+// Gutenberg). The upper face (nose, eyes, brow, cheeks, forehead) is rarely
+// covered, so here the generic head's upper-face vertices are matched to
+// their closest scan points (model to scan: the scan may have any extra
+// surface, the face must be on it) by iterative closest points with
+// Umeyama's similarity per iteration (rotation, translation, one scale; the
+// given map's stretch is dropped). Pairs beyond the knee of the sorted
+// residuals do not pull (a beard over the cheeks, a brim over the brow):
+// the trimmed share comes from the data. Several starts (turns about the
+// horizontal and vertical axes through the face, shifts across it) are run
+// and the one with the lowest clamped score is kept. The knee trims hard:
+// from a start far off it stops short of the truth (the synthetic test:
+// 28.6 mm -> about 9 mm); trimming at 2.5 x the median instead converges
+// there but let Gutenberg's face slide into his beret
+// (docs/design/fit_real_scans.md).
+//
+// Shapes: generic.positions #V by 3; cloud #P by 3 (the same frame as the
+// given map's output); faces: the scan's triangles over cloud (#T by 3, or
+// empty for a raw cloud: matched to its points). Results map a generic point p to linear * p +
+// translation.
+#pragma once
+#include "common/status.h"
+#include "common/types.h"
+#include "head/head_model.h"
+#include "mesh/tri_mesh.h"
+
+#include <vector>
+
+namespace lk {
+
+struct FaceRefineOptions {
+  int iterations = 60;          // per start
+  int polish_iterations = 0;    // more for the best start (0: none)
+  double relative_tolerance = 1e-5;  // stop when the trimmed RMS changes less than this
+  // Starts: turns (degrees) of the given alignment about the face's centre,
+  // about the horizontal axis (head up / down) and the vertical one.
+  std::vector<double> pitch_starts_deg = {0.0, 12.0, -12.0};
+  std::vector<double> yaw_starts_deg = {0.0, 20.0, -20.0};
+  // and shifts across the face, as fractions of its width.
+  std::vector<double> shift_starts = {0.0, 0.2, -0.2};
+  // At least this share of the pairs pulls.
+  double min_keep_fraction = 0.3;
+  // Score of a start: mean of min(d, clamp)^2 over all samples, with clamp
+  // this fraction of the diagonal passed in.
+  double score_clamp_fraction = 0.02;
+};
+
+struct FaceRefineResult {
+  Mat3 linear = Mat3::Identity();
+  Vec3 translation = Vec3::Zero();
+  double score = 0;          // see FaceRefineOptions::score_clamp_fraction (cloud units^2)
+  double trimmed_rms = 0;    // over the pairs that pulled in the last iteration
+  double kept_fraction = 0;  // share of the samples that pulled in the last iteration
+  double near_fraction = 0;  // share of the samples within the clamp distance of a scan point
+  int samples = 0;
+  int iterations = 0;        // over all starts
+};
+
+// The generic head's upper-face vertices used for the match: region "face"
+// without the chin, jaw, lips, mouth bag and the eye pockets, facing
+// forward (their normal within 72 deg of ann.look).
+std::vector<int> upper_face_vertices(const TriMesh& generic, const HeadAnnotations& ann);
+
+// The index (into sorted, ascending) of the knee of a sorted residual
+// curve: the point farthest below the chord from its first to its last
+// value, both axes normalized. 0 for fewer than three values.
+size_t residual_knee(const std::vector<double>& sorted);
+
+// Errors: Empty (no points or no face vertices), InvalidInput (non-finite
+// input, diag <= 0, bad options), NotConverged (no start kept pairs).
+Status refine_alignment_on_face(const TriMesh& generic, const HeadAnnotations& ann, const std::vector<Vec3>& cloud,
+                                const std::vector<Tri>& faces, const Mat3& linear, const Vec3& translation, double diag,
+                                const FaceRefineOptions& options, FaceRefineResult& out);
+
+}  // namespace lk
