@@ -189,15 +189,8 @@ for (const [name, full] of [['bin.ply', binaryPly(40)], ['ascii.ply', Buffer.fro
   } else {
     const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-project-'));
     try {
-      execFileSync(bin, ['synth-scan', '--seed', '3', '--points', '20000', '--out', dir], { stdio: 'pipe' });
-      execFileSync(bin, ['fit', '--scan', path.join(dir, 'scan.ply'), '--out', path.join(dir, 'fit'), '--levels', '1',
-                         '--project', path.join(dir, 'p.likeness.glb')], { stdio: 'pipe' });
-      const full = fs.readFileSync(path.join(dir, 'p.likeness.glb'));
-      const open = (bytes) => {
-        const ptr = core._malloc(Math.max(1, bytes.length));
-        core.HEAPU8.set(bytes, ptr);
-        try { return core.load_project_job('p.likeness.glb', ptr, bytes.length); } finally { core._free(ptr); }
-      };
+      const full = fittedProject(bin, dir, 3, 1);
+      const open = openProject;
       const r = open(full);
       check('a project made by `likeness fit --project` opens in wasm as the fit returns it',
             r.ok && r.meshes.levels.length === 1 && r.stages.length === 4 && r.scan.vertexCount > 10000 && r.loadMs >= 0,
@@ -257,6 +250,22 @@ for (const [name, full] of [['bin.ply', binaryPly(40)], ['ascii.ply', Buffer.fro
   }
 }
 
+// The project file bytes of `likeness fit --levels LEVELS` on a 20k-point
+// synthetic scan of SEED, made natively in DIR.
+function fittedProject(bin, dir, seed, levels) {
+  execFileSync(bin, ['synth-scan', '--seed', String(seed), '--points', '20000', '--out', dir], { stdio: 'pipe' });
+  execFileSync(bin, ['fit', '--scan', path.join(dir, 'scan.ply'), '--out', path.join(dir, 'fit'), '--levels', String(levels),
+                     '--project', path.join(dir, 'p.likeness.glb')], { stdio: 'pipe' });
+  return fs.readFileSync(path.join(dir, 'p.likeness.glb'));
+}
+
+// Project file bytes opened as the worker's kept head (load_project_job).
+function openProject(bytes) {
+  const ptr = core._malloc(Math.max(1, bytes.length));
+  core.HEAPU8.set(bytes, ptr);
+  try { return core.load_project_job('p.likeness.glb', ptr, bytes.length); } finally { core._free(ptr); }
+}
+
 // The live muscle path in wasm (expression_frame_job): a level-3 head fitted
 // natively to synthetic person 1 (as `likeness bench --only anim`) opened
 // here; a full expression change (smile <-> surprise) posed and updated to
@@ -266,14 +275,8 @@ for (const [name, full] of [['bin.ply', binaryPly(40)], ['ascii.ply', Buffer.fro
 function liveExpressions(bin) {
   const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-live-'));
   try {
-    execFileSync(bin, ['synth-scan', '--seed', '1', '--points', '20000', '--out', dir], { stdio: 'pipe' });
-    execFileSync(bin, ['fit', '--scan', path.join(dir, 'scan.ply'), '--out', path.join(dir, 'fit'), '--levels', '3',
-                       '--project', path.join(dir, 'p3.likeness.glb')], { stdio: 'pipe' });
-    const bytes = fs.readFileSync(path.join(dir, 'p3.likeness.glb'));
-    const ptr = core._malloc(bytes.length);
-    core.HEAPU8.set(bytes, ptr);
-    let opened;
-    try { opened = core.load_project_job('p3.likeness.glb', ptr, bytes.length); } finally { core._free(ptr); }
+    const bytes = fittedProject(bin, dir, 1, 3);
+    const opened = openProject(bytes);
     if (!opened.ok) { check('a level-3 project opens for the live expressions', false, opened.message); return; }
     const median = (a) => a.slice().sort((x, y) => x - y)[a.length >> 1];
     const timing = {};

@@ -1,5 +1,6 @@
 #include "io/io.h"
 #include "io_test_util.h"
+#include "sample_mesh.h"
 
 #include <catch2/catch.hpp>
 
@@ -21,18 +22,6 @@ Status read(const std::string& text, TriMesh& m) {
   GeometryKind kind;
   const Bytes b = bytes_of(text);
   return read_ply(b.data(), b.size(), m, kind);
-}
-
-// A small mesh with every attribute: a quad split in two and an extra
-// triangle, colors on the 1/255 grid so uchar storage is exact.
-TriMesh sample_mesh() {
-  TriMesh m;
-  m.positions = {{0, 0, 0}, {1.5, 0, 0}, {1.5, 2.25, 0}, {0, 2.25, -0.125}, {0.75, 1, 3}};
-  m.triangles = {{0, 1, 2}, {0, 2, 3}, {1, 4, 2}};
-  m.normals = {{0, 0, 1}, {0, 0, 1}, {0, 0.6, 0.8}, {0, -0.6, 0.8}, {1, 0, 0}};
-  m.colors = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {10 / 255.0, 20 / 255.0, 30 / 255.0}, {1, 1, 1}};
-  m.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 1}, {0.5, 0.5}};
-  return m;
 }
 
 void check_same(const TriMesh& a, const TriMesh& b, double tol) {

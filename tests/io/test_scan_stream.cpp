@@ -4,6 +4,7 @@
 // whole file at once).
 #include "io/scan_stream.h"
 #include "io_test_util.h"
+#include "sample_mesh.h"
 
 #include <catch2/catch.hpp>
 
@@ -76,16 +77,6 @@ void check_stream_matches(const Bytes& file) {
     REQUIRE(kind == whole_kind);
     REQUIRE(same_mesh(mesh, whole));
   }
-}
-
-TriMesh sample_mesh() {
-  TriMesh m;
-  m.positions = {{0, 0, 0}, {1.5, 0, 0}, {1.5, 2.25, 0}, {0, 2.25, -0.125}, {0.75, 1, 3}};
-  m.triangles = {{0, 1, 2}, {0, 2, 3}, {1, 4, 2}};
-  m.normals = {{0, 0, 1}, {0, 0, 1}, {0, 0.6, 0.8}, {0, -0.6, 0.8}, {1, 0, 0}};
-  m.colors = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {10 / 255.0, 20 / 255.0, 30 / 255.0}, {1, 1, 1}};
-  m.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 1}, {0.5, 0.5}};
-  return m;
 }
 
 PointCloud sample_cloud(int n) {
