@@ -102,12 +102,12 @@ Status read_ifd(const Tiff& t, size_t offset, ExifInfo& out, std::set<size_t>& v
     switch (e.tag) {
       case 0x010F: out.make = text(t, e); break;
       case 0x0110: out.model = text(t, e); break;
-      case 0x0112: if (ok) out.orientation = int(v); break;
+      case 0x0112: if (ok && v < 1e6) out.orientation = int(v); break;  // (a LONG can exceed int)
       case 0x920A: if (ok) out.focal_length_mm = v; break;
       case 0xA405: if (ok && v < 1e5) out.focal_length_35mm = int(v); break;
       case 0xA20E: if (ok) out.focal_plane_x_resolution = v; break;
       case 0xA20F: if (ok) out.focal_plane_y_resolution = v; break;
-      case 0xA210: if (ok) out.focal_plane_resolution_unit = int(v); break;
+      case 0xA210: if (ok && v < 1e6) out.focal_plane_resolution_unit = int(v); break;
       case 0xA002: if (ok && v < 1e6) out.pixel_x_dimension = int(v); break;
       case 0xA003: if (ok && v < 1e6) out.pixel_y_dimension = int(v); break;
       case 0x8769:  // the Exif sub-IFD

@@ -102,6 +102,24 @@ TEST_CASE("truncated, mutated and looping EXIF gives errors, never a crash", "[i
   CHECK(s.message.find("loop") != std::string::npos);
 }
 
+// fuzz_exif's first finding (tests/fuzz/regressions/exif/): an orientation
+// or resolution unit stored as a LONG past INT_MAX was converted to int,
+// undefined behaviour; such a tag now reads as absent.
+TEST_CASE("integer tags too large for an int read as absent", "[io][exif]") {
+  for (bool big : {false, true}) {
+    TiffBuilder t = camera_tags(big);
+    t.ifd0.back() = t.lng(0x0112, 3774873600u);
+    t.exif.push_back(t.lng(0xA210, 4000000000u));
+    t.exif.erase(t.exif.begin() + 4);  // the SHORT resolution unit
+    const Bytes jpeg = jpeg_with(t.build());
+    ExifInfo e;
+    REQUIRE(read_jpeg_exif(jpeg.data(), jpeg.size(), e).ok());
+    CHECK(e.orientation == 0);
+    CHECK(e.focal_plane_resolution_unit == 0);
+    CHECK(e.focal_length_mm == 50.0);  // the rest as before
+  }
+}
+
 TEST_CASE("the Kira photos carry no EXIF (the known focal comes from the tutorial)", "[io][exif]") {
   LK_REQUIRE_SHARED("multiview_faces/keentools_kira/0001.jpg");
   for (const char* name : {"0001.jpg", "0002.jpg", "0009.jpg"}) {
