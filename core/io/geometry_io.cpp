@@ -8,20 +8,21 @@ namespace lk {
 
 namespace {
 
-std::string extension_of(const std::string& name) {
-  const size_t slash = name.find_last_of("/\\");
-  const size_t dot = name.find_last_of('.');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
-  return io_detail::lowercase(name.substr(dot + 1));
-}
-
 bool starts_with(const std::uint8_t* data, size_t size, const char* prefix) {
   const size_t n = std::strlen(prefix);
   return size >= n && std::memcmp(data, prefix, n) == 0;
 }
 
+}  // namespace
+
+std::string io_detail::geometry_format_by_name(const std::string& name) {
+  const std::string ext = io_detail::lower_extension(name);
+  if (ext == "txt" || ext == "pts" || ext == "asc" || ext == "xyzn" || ext == "xyzrgb") return "xyz";
+  return ext == "ply" || ext == "obj" || ext == "xyz" || ext == "vtk" ? ext : "";
+}
+
 // Guesses the format from the first meaningful line.
-std::string sniff_format(const std::uint8_t* data, size_t size) {
+std::string io_detail::sniff_geometry_format(const std::uint8_t* data, size_t size) {
   if (starts_with(data, size, "ply\n") || starts_with(data, size, "ply\r\n")) return "ply";
   if (starts_with(data, size, "# vtk DataFile")) return "vtk";
   const char* p = reinterpret_cast<const char*>(data);
@@ -41,8 +42,6 @@ std::string sniff_format(const std::uint8_t* data, size_t size) {
   return "";
 }
 
-}  // namespace
-
 Status read_geometry(const std::string& name, const std::uint8_t* data, size_t size, TriMesh& mesh,
                      PointCloud& cloud, GeometryKind& kind) {
   mesh = TriMesh();
@@ -50,10 +49,9 @@ Status read_geometry(const std::string& name, const std::uint8_t* data, size_t s
   kind = GeometryKind::PointCloud;
   if (size == 0) return Status::error(ErrorCode::Empty, "empty input: no bytes");
   if (Status s = io_detail::check_input_size(size, kMaxGeometryBytes); !s) return s;
-  std::string format = extension_of(name);
-  if (format == "txt" || format == "pts" || format == "asc" || format == "xyzn" || format == "xyzrgb") format = "xyz";
-  if (format != "ply" && format != "obj" && format != "xyz" && format != "vtk") {
-    format = sniff_format(data, size);
+  std::string format = io_detail::geometry_format_by_name(name);
+  if (format.empty()) {
+    format = io_detail::sniff_geometry_format(data, size);
     if (format.empty())
       return Status::error(ErrorCode::Unsupported,
                            "unknown geometry format (expected PLY, OBJ, XYZ or legacy VTK by extension or content)");

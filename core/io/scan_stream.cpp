@@ -2,20 +2,8 @@
 #include "io/scan_stream.h"
 #include "io/text_scan.h"
 
-#include <cstring>
 
 namespace lk {
-
-namespace {
-
-std::string lower_extension(const std::string& name) {
-  const size_t slash = name.find_last_of("/\\");
-  const size_t dot = name.find_last_of('.');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
-  return io_detail::lowercase(name.substr(dot + 1));
-}
-
-}  // namespace
 
 ScanStreamReader::ScanStreamReader(std::string name, std::uint64_t total_size)
     : name_(std::move(name)), total_(total_size) {
@@ -29,17 +17,11 @@ ScanStreamReader::~ScanStreamReader() = default;
 // PLY is streamed when the name says .ply, or says no format read_geometry
 // knows and the bytes start as read_geometry's sniffing recognises a PLY.
 Status ScanStreamReader::decide(bool final) {
-  const std::string ext = lower_extension(name_);
-  const bool known = ext == "ply" || ext == "obj" || ext == "xyz" || ext == "vtk" || ext == "txt" || ext == "pts" ||
-                     ext == "asc" || ext == "xyzn" || ext == "xyzrgb";
-  bool ply = ext == "ply";
-  if (!known) {
+  const std::string format = io_detail::geometry_format_by_name(name_);
+  bool ply = format == "ply";
+  if (format.empty()) {
     if (gathered_.size() < 5 && !final) return Status::success();  // not enough bytes to tell
-    auto starts = [&](const char* prefix) {
-      const size_t n = std::strlen(prefix);
-      return gathered_.size() >= n && std::memcmp(gathered_.data(), prefix, n) == 0;
-    };
-    ply = starts("ply\n") || starts("ply\r\n");
+    ply = io_detail::sniff_geometry_format(gathered_.data(), gathered_.size()) == "ply";
   }
   decided_ = true;
   if (!ply) {

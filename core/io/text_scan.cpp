@@ -223,6 +223,13 @@ std::string lowercase(std::string s) {
   return s;
 }
 
+std::string lower_extension(const std::string& name) {
+  const size_t slash = name.find_last_of("/\\");
+  const size_t dot = name.find_last_of('.');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
+  return lowercase(name.substr(dot + 1));
+}
+
 std::string quote(std::string_view token) {
   std::string s = "'";
   const size_t n = token.size() < 32 ? token.size() : 32;

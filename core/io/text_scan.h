@@ -1,5 +1,6 @@
 // Internal helpers shared by the readers: a whitespace tokenizer over bytes in
-// memory, a fast number parser, and shortest round-trip number formatting.
+// memory, a fast number parser, shortest round-trip number formatting, and
+// how a geometry file's format is told.
 // Not part of the public API (include "io/io.h" instead).
 //
 // Why not iostreams or std::from_chars<double>: iostreams are ~10x slower on
@@ -83,6 +84,13 @@ void append_double(std::string& out, double v);
 void append_int(std::string& out, long long v);  // decimal, as std::to_string
 
 std::string lowercase(std::string s);
+// A file name's extension after its last dot, lowercased ("" when none).
+std::string lower_extension(const std::string& name);
+// How read_geometry picks a reader (geometry_io.cpp): by the name's
+// extension ("ply", "obj", "xyz" for .xyz/.txt/.pts/.asc/.xyzn/.xyzrgb,
+// "vtk"; "" for any other), else by the first bytes ("" when unknown).
+std::string geometry_format_by_name(const std::string& name);
+std::string sniff_geometry_format(const std::uint8_t* data, size_t size);
 // Quotes a token for an error message, shortened if long or binary.
 std::string quote(std::string_view token);
 
