@@ -39,9 +39,8 @@ double rotation_angle_deg(const Mat3& Ra, const Mat3& Rb) {
 }
 
 DistanceStats surface_distances(const TriMesh& from, const std::vector<int>& vertices, const TriMesh& to) {
-  DistanceStats st;
   MeshBvh bvh;
-  if (!build_bvh(to, bvh) || bvh.empty()) return st;
+  if (!build_bvh(to, bvh) || bvh.empty()) return DistanceStats{};
   std::vector<double> d;
   int guess = -1;
   for (int v : vertices) {
@@ -50,14 +49,7 @@ DistanceStats surface_distances(const TriMesh& from, const std::vector<int>& ver
     guess = c.triangle;
     d.push_back(c.distance);
   }
-  if (d.empty()) return st;
-  st.count = int(d.size());
-  double sum = 0;
-  for (double x : d) sum += x;
-  st.mean = sum / double(d.size());
-  std::sort(d.begin(), d.end());
-  st.p95 = d[std::min(d.size() - 1, size_t(0.95 * double(d.size())))];
-  return st;
+  return summarize_distances(d, 0);
 }
 
 }  // namespace lk

@@ -8,6 +8,7 @@
 // Shapes: fit and truth #V, same triangles; vertices: indices into both.
 #pragma once
 #include "calib/camera.h"
+#include "fit/closest_point.h"
 #include "mesh/tri_mesh.h"
 
 #include <vector>
@@ -30,11 +31,8 @@ Camera transform_camera(const Camera& c, const Similarity& s);
 // Angle of R_a^T R_b, degrees.
 double rotation_angle_deg(const Mat3& Ra, const Mat3& Rb);
 
-struct DistanceStats {
-  double mean = 0, p95 = 0;
-  int count = 0;
-};
-// Distances from the listed vertices of `from` to the surface of `to`.
+// Distances from the listed vertices of `from` to the surface of `to`
+// (fit/closest_point.h's summary; no reference diagonal: the _pct fields 0).
 DistanceStats surface_distances(const TriMesh& from, const std::vector<int>& vertices, const TriMesh& to);
 
 }  // namespace lk

@@ -1,5 +1,6 @@
 #include "photos/silhouette_obs.h"
 
+#include "fit/closest_point.h"
 #include "photos/self_calibration.h"
 
 #include <algorithm>
@@ -233,12 +234,9 @@ SilhouetteStats SilhouetteSet::stats(const std::vector<Vec3>& positions) const {
     if (std::isfinite(x)) d.push_back(x);
   }
   st.matched = int(d.size());
-  if (d.empty()) return st;
-  double sum = 0;
-  for (double x : d) sum += x;
-  st.mean_px = sum / double(d.size());
-  std::sort(d.begin(), d.end());
-  st.p95_px = d[std::min(d.size() - 1, size_t(0.95 * double(d.size())))];
+  const DistanceStats s = summarize_distances(d, 0);
+  st.mean_px = s.mean;
+  st.p95_px = s.p95;
   return st;
 }
 
