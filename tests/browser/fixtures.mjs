@@ -96,12 +96,16 @@ export function frontCamera(landmarks, W, H, f) {
   };
 }
 
+// The native CLI the tests run (env LK_LIKENESS_BIN, else WEBDIR/../bin/likeness), or undefined.
+export function likenessBin(webdir) {
+  return [process.env.LK_LIKENESS_BIN, path.join(webdir, '..', 'bin', 'likeness')].filter(Boolean).find((c) => fs.existsSync(c));
+}
+
 // A synthetic smile photo (lips hiding parts of two teeth) made by the
 // native CLI (`likeness teeth --synthetic-smile --input-out`), tinted
 // yellow, or null. webdir: build/web (the binary is looked for in ../bin).
 export function syntheticSmile(webdir) {
-  const candidates = [process.env.LK_LIKENESS_BIN, path.join(webdir, '..', 'bin', 'likeness')].filter(Boolean);
-  const bin = candidates.find((c) => fs.existsSync(c));
+  const bin = likenessBin(webdir);
   if (!bin) return null;
   const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-smile-'));
   try {

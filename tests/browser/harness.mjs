@@ -126,11 +126,6 @@ export async function launchChromium(name, viewport, { hasTouch = false, isMobil
 
 // ----------------------------------------------------------------- checks --
 export const results = [];
-// The native CLI the flows run (env LK_LIKENESS_BIN, else WEBDIR/../bin/likeness), or undefined.
-export function likenessBin(webdir) {
-  return [process.env.LK_LIKENESS_BIN, path.join(webdir, '..', 'bin', 'likeness')].filter(Boolean).find((c) => fs.existsSync(c));
-}
-
 export function check(name, ok, detail = '') {
   results.push({ name, ok: !!ok, detail });
   console.log(`${ok ? 'PASS' : 'FAIL'}  ${name}${detail ? '  (' + detail + ')' : ''}`);

@@ -5,12 +5,12 @@ import { execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
+import { likenessBin } from './fixtures.mjs';
 
 // `points` points of synthetic head `seed`, made by `likeness synth-scan`
 // (env LK_LIKENESS_BIN, else WEBDIR/../bin/likeness): { bytes } or { skip: why }.
 export function syntheticScan(webdir, seed, points = 60000) {
-  const candidates = [process.env.LK_LIKENESS_BIN, path.join(webdir, '..', 'bin', 'likeness')].filter(Boolean);
-  const bin = candidates.find((c) => fs.existsSync(c));
+  const bin = likenessBin(webdir);
   if (!bin) return { skip: 'no native likeness binary (set LK_LIKENESS_BIN)' };
   const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-synth-'));
   try {
@@ -30,8 +30,7 @@ export function syntheticScan(webdir, seed, points = 60000) {
 // happened: docs/journal.md) shows there; the browser test compares the checks
 // the page shows. name: the scan's file name (its extension picks the format).
 export function nativeFit(webdir, bytes, name = 'scan.ply') {
-  const candidates = [process.env.LK_LIKENESS_BIN, path.join(webdir, '..', 'bin', 'likeness')].filter(Boolean);
-  const bin = candidates.find((c) => fs.existsSync(c));
+  const bin = likenessBin(webdir);
   if (!bin) return { skip: 'no native likeness binary (set LK_LIKENESS_BIN)' };
   const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-fit-'));
   try {

@@ -21,6 +21,7 @@ import os from 'node:os';
 import path from 'node:path';
 import { execFileSync } from 'node:child_process';
 import { fileURLToPath } from 'node:url';
+import { likenessBin } from './fixtures.mjs';
 
 const WEBDIR = path.resolve(process.argv[2] || '');
 const HERE = path.dirname(fileURLToPath(import.meta.url));
@@ -183,7 +184,7 @@ for (const [name, full] of [['bin.ply', binaryPly(40)], ['ascii.ply', Buffer.fro
 {
   const noHead = core.save_project_job();
   check('save before any fit says so', !noHead.ok && /no fitted head/.test(noHead.message), noHead.message);
-  const bin = [process.env.LK_LIKENESS_BIN, path.join(WEBDIR, '..', 'bin', 'likeness')].filter(Boolean).find((c) => fs.existsSync(c));
+  const bin = likenessBin(WEBDIR);
   if (!bin) {
     console.log('skip  worker: project files: no native likeness to make one (set LK_LIKENESS_BIN)');
   } else {

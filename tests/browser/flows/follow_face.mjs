@@ -14,16 +14,13 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { execFileSync } from 'node:child_process';
-import { check, closeChromium, JOB_TIMEOUT_MS, launchChromium, note, READY_TIMEOUT_MS, runAlone, SHOT_DIR, waitForState } from '../harness.mjs';
+import { check, closeChromium, JOB_TIMEOUT_MS, launchChromium, likenessBin, note, READY_TIMEOUT_MS, runAlone, SHOT_DIR, waitForState } from '../harness.mjs';
 import { decodePng } from '../fixtures.mjs';
 
 // Long phases: the detector's start and the screenshots are slow under
 // SwiftShader, and the fake camera loops the file.
 const FPS = 5, NEUTRAL_S = 30, OPEN_S = 20, SIZE = 320;
 
-function likenessBin(webdir) {
-  return [process.env.LK_LIKENESS_BIN, path.join(webdir, '..', 'bin', 'likeness')].filter(Boolean).find((c) => fs.existsSync(c));
-}
 
 // A YUV4MPEG2 (4:2:0, BT.601 full range) stream of the PNG frames, each
 // repeated `counts[i]` times.

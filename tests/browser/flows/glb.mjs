@@ -15,7 +15,7 @@ import fs from 'node:fs';
 import { createRequire } from 'node:module';
 import os from 'node:os';
 import path from 'node:path';
-import { check, note, runAlone, shot } from '../harness.mjs';
+import { check, likenessBin, note, runAlone, shot } from '../harness.mjs';
 
 const require = createRequire(import.meta.url);
 
@@ -35,7 +35,7 @@ const ALL_SHAPES = [...EXPRESSIONS, ...ARKIT, ...VISEMES];
 
 // A textured head project and its GLB, made by the CLI: {glb, report} or {skip}.
 function makeGlb(webdir) {
-  const bin = [process.env.LK_LIKENESS_BIN, path.join(webdir, '..', 'bin', 'likeness')].filter(Boolean).find((c) => fs.existsSync(c));
+  const bin = likenessBin(webdir);
   if (!bin) return { skip: 'no native likeness binary (set LK_LIKENESS_BIN)' };
   const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-glb-'));
   const run = (...args) => execFileSync(bin, args, { cwd: dir, stdio: 'pipe' }).toString();

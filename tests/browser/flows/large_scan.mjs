@@ -13,7 +13,7 @@ import { execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
-import { bannerText, check, note, runAlone, settled, state } from '../harness.mjs';
+import { bannerText, check, likenessBin, note, runAlone, settled, state } from '../harness.mjs';
 
 const POINTS = Number(process.env.LK_LARGE_POINTS) > 0 ? Number(process.env.LK_LARGE_POINTS) : 2000000;
 const MB = 1048576;
@@ -48,7 +48,7 @@ function rendererPeakBytes(userDir) {
 }
 
 async function run(s) {
-  const bin = [process.env.LK_LIKENESS_BIN, path.join(s.webdir, '..', 'bin', 'likeness')].filter(Boolean).find((c) => fs.existsSync(c));
+  const bin = likenessBin(s.webdir);
   if (!bin) {
     note('the large scan is not exercised: no native likeness binary (set LK_LIKENESS_BIN)');
     return;

@@ -14,7 +14,7 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { execFileSync } from 'node:child_process';
-import { check, closeChromium, launchChromium, note, READY_TIMEOUT_MS, runAlone, SHOT_DIR, waitForState } from '../harness.mjs';
+import { check, closeChromium, launchChromium, likenessBin, note, READY_TIMEOUT_MS, runAlone, SHOT_DIR, waitForState } from '../harness.mjs';
 
 const ORDER = ['view_04', 'view_03', 'view_05', 'view_02', 'view_06'];
 const LATE = 'view_04';   // another front photo, taken while the head is being made
@@ -42,9 +42,6 @@ function withExif(jpeg, focal35) {
   return Buffer.concat([jpeg.subarray(0, 2), head, Buffer.from('Exif\0\0', 'latin1'), tiff, jpeg.subarray(2)]);
 }
 
-function likenessBin(webdir) {
-  return [process.env.LK_LIKENESS_BIN, path.join(webdir, '..', 'bin', 'likeness')].filter(Boolean).find((c) => fs.existsSync(c));
-}
 
 // The guide and the photos once every photo's face points are in and no
 // job of checking photos runs.

@@ -17,16 +17,13 @@ import os from 'node:os';
 import path from 'node:path';
 import { execFileSync } from 'node:child_process';
 import { fileURLToPath } from 'node:url';
-import { analyse, bannerText, canvasImage, check, differingFraction, makePhotoPng, note, runAlone, SHOT_DIR } from '../harness.mjs';
+import { analyse, bannerText, canvasImage, check, differingFraction, likenessBin, makePhotoPng, note, runAlone, SHOT_DIR } from '../harness.mjs';
 import { readObj } from '../landmark_geometry.mjs';
 
 const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../../..');
 const SEED = 2;
 const CAMERAS = 8;
 
-function likenessBin(webdir) {
-  return [process.env.LK_LIKENESS_BIN, path.join(webdir, '..', 'bin', 'likeness')].filter(Boolean).find((c) => fs.existsSync(c));
-}
 
 // Waits until the page has made (or refused) a head from photos and is at rest.
 async function photosHeadDone(page, timeout = 300000) {
