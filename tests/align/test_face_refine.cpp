@@ -126,7 +126,7 @@ TEST_CASE("face refinement: a head with a beret and a beard is aligned on its fa
   CHECK(r.near_fraction > 0.9);
 }
 
-TEST_CASE("face refinement: the knee of a residual curve; bad input is refused") {
+TEST_CASE("face refinement: the knee of a residual curve, and bad input is refused") {
   // 80 small residuals, then 20 large ones: the knee is at the last small one.
   std::vector<double> d;
   for (int i = 0; i < 80; ++i) d.push_back(0.001 * i / 80.0);

@@ -261,7 +261,7 @@ TEST_CASE("a JPEG cut inside its image data and closed with an end marker is ref
   CHECK(probe.empty());
 }
 
-TEST_CASE("a progressive JPEG cut inside a scan is refused; whole ones decode", "[io][image][untrusted][shared]") {
+TEST_CASE("a progressive JPEG cut inside a scan is refused, and whole ones decode", "[io][image][untrusted][shared]") {
   LK_REQUIRE_SHARED("multiview_faces/keentools_kira/0001.jpg");
   Bytes jpg;
   REQUIRE(read_file(lk::test::shared_data_dir() + "/multiview_faces/keentools_kira/0001.jpg", jpg).ok());

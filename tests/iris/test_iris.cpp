@@ -258,7 +258,7 @@ TEST_CASE("iris: the polar iris is capped, so a huge circle cannot make the synt
   CHECK(polar.radii == 46);
 }
 
-TEST_CASE("iris: portraits are refused as eye photos; a crop of one eye is taken", "[shared]") {
+TEST_CASE("iris: portraits are refused as eye photos, and a crop of one eye is taken", "[shared]") {
   // Issue 36, class 9: a whole-face photo gave a "texture" of its hair or
   // chin (and minutes of work in the page). Each is refused, with a reason.
   const std::string dir = lk::test::shared_data_dir() + "/multiview_faces/keentools_kira/";

@@ -186,7 +186,7 @@ TEST_CASE("untangle: the restore takes a fold within one sheet part of the way b
   CHECK(new_pairs(held, reference, s.creases, 2) == r2.pairs_after);
 }
 
-TEST_CASE("untangle: nothing to do leaves the mesh as it is; bad input fails") {
+TEST_CASE("untangle: nothing to do leaves the mesh as it is, and bad input fails") {
   const Shoved s;
   const std::vector<Vec3>& reference = s.g.mesh.positions;
   UntangleOptions o;

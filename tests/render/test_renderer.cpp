@@ -231,7 +231,7 @@ TEST_CASE("shading varies and the key light comes from the upper left", "[render
   CHECK(c[1] > c[2]);
 }
 
-TEST_CASE("wireframe overlay draws edges; edges-only leaves the surface out", "[render]") {
+TEST_CASE("wireframe overlay draws edges, and edges-only leaves the surface out", "[render]") {
   const int w = 128, h = 128;
   TriMesh coarse;
   append_ellipsoid(coarse, Vec3::Zero(), kHeadRadii, 8, 12);

@@ -46,7 +46,7 @@ double luma(const std::uint8_t* p) { return (0.299 * p[0] + 0.587 * p[1] + 0.114
 
 }  // namespace
 
-TEST_CASE("teeth: synthetic smile is classified; voids transparent, gums recoloured") {
+TEST_CASE("teeth: synthetic smile is classified, and voids transparent, gums recoloured") {
   const Smile s = make_smile();
   lk::TeethResult r;
   const lk::TeethOptions o;
@@ -139,7 +139,7 @@ TEST_CASE("teeth: composite into the generic texture along a curved boundary") {
   CHECK_FALSE(lk::teeth_composite_generic(empty, o, co, tex).ok());
 }
 
-TEST_CASE("teeth: portraits and a closed mouth are refused as smile photos; intraoral photos are taken", "[shared]") {
+TEST_CASE("teeth: portraits and a closed mouth are refused as smile photos, and intraoral photos are taken", "[shared]") {
   // Issue 36, class 9: a whole portrait exited 0 with the photo recoloured.
   const std::string dir = lk::test::shared_data_dir() + "/multiview_faces/keentools_kira/";
   LK_REQUIRE_SHARED("multiview_faces/keentools_kira/0001.jpg");

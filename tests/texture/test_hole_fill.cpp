@@ -83,7 +83,7 @@ TEST_CASE("hole filling: a vertex needing 20 % waits for the 20 % pass") {
   for (int v = 0; v < 6; ++v) CHECK(colors[v].isApprox(Vec3(1, 0.5, 0.25)));
 }
 
-TEST_CASE("hole filling: isolated components get the fallback; bad input is an error") {
+TEST_CASE("hole filling: isolated components get the fallback, and bad input is an error") {
   TriMesh m = plane_grid(2, 0, 1, 0, 1, 0);
   append_mesh(m, plane_grid(2, 2, 3, 0, 1, 0));
   MeshTopology topo;

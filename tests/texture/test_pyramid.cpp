@@ -69,7 +69,7 @@ TEST_CASE("Laplacian pyramid collapses back to its image exactly") {
   }
 }
 
-TEST_CASE("REDUCE keeps constants and halves sizes rounding up; EXPAND keeps constants") {
+TEST_CASE("REDUCE keeps constants and halves sizes rounding up, and EXPAND keeps constants") {
   ImageF c = ImageF::make(37, 20, 3, 0.25f);
   ImageF r, e;
   pyramid_reduce(c, r);

@@ -23,7 +23,7 @@ void write(const std::string& path, const std::string& text) { std::ofstream(pat
 
 }  // namespace
 
-TEST_CASE("likeness texture: synthetic photos in, textured head out; clear errors", "[texture][cli]") {
+TEST_CASE("likeness texture: synthetic photos in, textured head out, and clear errors", "[texture][cli]") {
   LK_REQUIRE_LIKENESS();
   const std::string dir = lk::test::scratch_dir("texture_cli");
   const std::string err = dir + "/err.txt";
