@@ -6,6 +6,7 @@
 #include "io/io.h"
 #include "head/generic_head.h"
 #include "project/export.h"
+#include "project/fit_job.h"
 #include "project/glb_export.h"
 #include "project/pose.h"
 #include "project/project_file.h"
@@ -107,14 +108,44 @@ int run_export(const std::string& path, const Args& args) {
   return 0;
 }
 
+// The project's kept scan fitted again (its options; --levels replaces
+// theirs), saved as a new project file: a head made in the page is fitted
+// natively from what its project file holds.
+int run_refit(const std::string& path, const Args& args) {
+  const std::string out = args.get("out");
+  if (out.empty()) return fail(kName, "refit needs --out FILE.likeness.glb");
+  int levels = 0;
+  if (!args.get_int("levels", 0, levels, 1, 4)) return 2;
+  HeadProject p;
+  if (Status st = read_project_file(path, p); !st.ok()) return fail(kName, st.message);
+  GenericHead generic;
+  if (Status st = load_generic_head(generic); !st.ok()) return fail(kName, st.message);
+  HeadProject refitted;
+  Status st = refit_project(p, generic, levels, refitted);
+  if (!st) return fail(kName, with_context(st, path).message);
+  for (const std::string& note : refitted.fit.notes) std::printf("note: %s\n", note.c_str());
+  for (const FitStageReport& s : refitted.fit.stages)
+    std::printf("%-18s scan to surface: mean %.4f %%, max %.3f %% of the diagonal\n", s.name.c_str(),
+                s.distance.mean_pct, s.distance.max_pct);
+  Bytes bytes;
+  st = save_project(refitted, bytes);
+  if (st) st = write_file(out, bytes);
+  if (!st) return fail(kName, st.message);
+  std::printf("wrote %s: %d levels, fitted again to the %zu scan points the project keeps\n", out.c_str(),
+              refitted.fit.multires.num_levels(), refitted.scan.positions.size());
+  return 0;
+}
+
 int run_project(const Args& args) {
-  // Its two positional words (info|export FILE) are checked below.
-  if (!only_known_options(kName, args, {"level", "format", "out", "pose", "scan-frame"}, 2)) return 2;
-  if (args.positional.size() != 2 || (args.positional[0] != "info" && args.positional[0] != "export")) {
-    fail(kName, "give `info FILE` or `export FILE --out PATH` (see likeness project --help)");
+  // Its two positional words (info|export|refit FILE) are checked below.
+  if (!only_known_options(kName, args, {"level", "levels", "format", "out", "pose", "scan-frame"}, 2)) return 2;
+  const std::string verb = args.positional.empty() ? "" : args.positional[0];
+  if (args.positional.size() != 2 || (verb != "info" && verb != "export" && verb != "refit")) {
+    fail(kName, "give `info FILE`, `export FILE --out PATH` or `refit FILE --out FILE` (see likeness project --help)");
     return 2;
   }
-  return args.positional[0] == "info" ? run_info(args.positional[1]) : run_export(args.positional[1], args);
+  if (verb == "info") return run_info(args.positional[1]);
+  return verb == "export" ? run_export(args.positional[1], args) : run_refit(args.positional[1], args);
 }
 
 // likeness export: the GLB for avatar tools from a `likeness fit` or
@@ -148,8 +179,9 @@ const Registrar export_reg({"export", "likeness export --head DIR|FILE.likeness.
 
 const Registrar reg({kName,
                      "likeness project info FILE | likeness project export FILE --out PATH [--format obj|ply|textured|glb] "
-                     "[--level L] [--pose A] [--scan-frame]",
-                     "what a saved head project holds; its levels re-exported without fitting again", run_project});
+                     "[--level L] [--pose A] [--scan-frame] | likeness project refit FILE --out FILE.likeness.glb [--levels L]",
+                     "what a saved head project holds; its levels re-exported without fitting again; its kept scan "
+                     "fitted again", run_project});
 
 }  // namespace
 }  // namespace lk::cli

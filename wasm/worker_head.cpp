@@ -140,22 +140,12 @@ val fit_head_stream_job(val options, val progress) {
   return fit_cloud(name, std::move(cloud), now_ms() - t_parse, options, progress);
 }
 
-val fit_cloud(const std::string& name, lk::PointCloud cloud, double parse_ms, val options, val progress) {
+// Runs fit (a fit_project or refit_project call making the new project)
+// with the page's stage reporting; on success the new project is kept and
+// returned as head_result with name, parseMs, fitMs and the stages.
+template <class Fit>
+val run_fit(const std::string& name, double parse_ms, val progress, Fit fit) {
   const lk::ProgressFn report = js_progress(progress);
-  lk::Status status;
-  lk::FitHeadOptions opt;
-  auto vec3_option = [&](const char* key, lk::Vec3& out) {
-    if (!has(options, key) || options[key].isNull()) return true;
-    const val v = options[key];
-    if (v["length"].as<int>() != 3) return false;
-    for (int k = 0; k < 3; ++k) out[k] = v[k].as<double>();
-    return true;
-  };
-  if (has(options, "levels")) opt.levels = options["levels"].as<int>();
-  if (!vec3_option("up", opt.up) || !vec3_option("facing", opt.facing))
-    return error_result(lk::ErrorCode::InvalidInput, "up and facing take three numbers");
-  if (opt.levels < 1 || opt.levels > 4) return error_result(lk::ErrorCode::InvalidInput, "levels must be 1..4");
-
   lk::Status generic_status;
   const lk::GenericHead* generic = generic_head(generic_status);
   if (!generic) return error_result(lk::with_context(generic_status, "generic head"));
@@ -189,7 +179,7 @@ val fit_cloud(const std::string& name, lk::PointCloud cloud, double parse_ms, va
 
   auto project = std::make_unique<lk::HeadProject>();
   const double t_fit = now_ms();
-  status = lk::fit_project(std::move(cloud), *generic, opt, *project, observer, inner);
+  const lk::Status status = fit(*generic, *project, observer, inner);
   const double fit_ms = now_ms() - t_fit;
   if (!status.ok()) return error_result(lk::with_context(status, name));
   val r = head_result(*project, *generic);
@@ -199,6 +189,43 @@ val fit_cloud(const std::string& name, lk::PointCloud cloud, double parse_ms, va
   r.set("stages", stages);
   kept_project() = std::move(project);
   return r;
+}
+
+val fit_cloud(const std::string& name, lk::PointCloud cloud, double parse_ms, val options, val progress) {
+  lk::FitHeadOptions opt;
+  auto vec3_option = [&](const char* key, lk::Vec3& out) {
+    if (!has(options, key) || options[key].isNull()) return true;
+    const val v = options[key];
+    if (v["length"].as<int>() != 3) return false;
+    for (int k = 0; k < 3; ++k) out[k] = v[k].as<double>();
+    return true;
+  };
+  if (has(options, "levels")) opt.levels = options["levels"].as<int>();
+  if (!vec3_option("up", opt.up) || !vec3_option("facing", opt.facing))
+    return error_result(lk::ErrorCode::InvalidInput, "up and facing take three numbers");
+  if (opt.levels < 1 || opt.levels > 4) return error_result(lk::ErrorCode::InvalidInput, "levels must be 1..4");
+  return run_fit(name, parse_ms, progress,
+                 [&](const lk::GenericHead& generic, lk::HeadProject& project, const lk::FitStageObserver& observer,
+                     const lk::ProgressFn& inner) {
+                   return lk::fit_project(std::move(cloud), generic, opt, project, observer, inner);
+                 });
+}
+
+// Fits the kept head's scan again (a head opened from a project file keeps
+// its scan's points, not the file) with the options it was fitted with.
+// options: {levels} (optional, 1..4; else the kept head's). Returns what
+// fit_head_job does; on an error the kept head stays.
+val refit_kept_scan_job(val options, val progress) {
+  if (!kept_project()) return error_result(lk::ErrorCode::InvalidInput, "no fitted head to fit again");
+  const int levels = has(options, "levels") ? options["levels"].as<int>() : 0;
+  if (levels < 0 || levels > 4) return error_result(lk::ErrorCode::InvalidInput, "levels must be 1..4");
+  const std::string name = has(options, "name") ? options["name"].as<std::string>() : std::string("the kept scan");
+  const lk::HeadProject& kept = *kept_project();
+  return run_fit(name, 0, progress,
+                 [&](const lk::GenericHead& generic, lk::HeadProject& project, const lk::FitStageObserver& observer,
+                     const lk::ProgressFn& inner) {
+                   return lk::refit_project(kept, generic, levels, project, observer, inner);
+                 });
 }
 
 // A small fit whose only purpose is to run the fit's code once, in a
@@ -421,6 +448,7 @@ EMSCRIPTEN_BINDINGS(likeness_worker_head) {
   using namespace lk_worker;
   emscripten::function("fit_head_job", &fit_head_job);
   emscripten::function("fit_head_stream_job", &fit_head_stream_job);
+  emscripten::function("refit_kept_scan_job", &refit_kept_scan_job);
   emscripten::function("warm_up_job", &warm_up_job);
   emscripten::function("animate_frame", &animate_frame);
   emscripten::function("fit_quality_job", &fit_quality_job);

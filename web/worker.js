@@ -275,6 +275,10 @@ const JOBS = {
     if (r.ok) r.parseMs = readMs + (r.parseMs || 0);  // the parse happens as the slices are read
     return r;
   },
+  // {options: {levels, name}}: the kept head's own scan (a head opened from
+  // a project keeps its points, not the file) fitted again; the kept head
+  // stays when it fails.
+  refit: (msg, progress) => core.refit_kept_scan_job(msg.options || {}, progress),
   // {name, buffer, options}: a scan -> the fitted head (jeong2002 Sec. 4-5),
   // kept in this worker for 'animate' and 'export'. Progress per stage.
   fit: (msg, progress) =>

@@ -18,6 +18,14 @@ namespace lk {
 Status fit_project(PointCloud scan, const GenericHead& generic, const FitHeadOptions& options,
                    HeadProject& project, const FitStageObserver& observer = {}, const ProgressFn& progress = {});
 
+// Fits the generic head again to the scan project keeps (a project opened
+// from a file holds its scan's points and faces, not the scan file), with the
+// options it was fitted with; levels > 0 replaces their levels. refitted
+// becomes the new project; project is left as it was (also on an error).
+// A project without a scan (a head from photos) is refused.
+Status refit_project(const HeadProject& project, const GenericHead& generic, int levels, HeadProject& refitted,
+                     const FitStageObserver& observer = {}, const ProgressFn& progress = {});
+
 // A named control vertex of the generic head (the fitted head has the same
 // vertex indices). "right"/"left" are the person's own sides: +x is the
 // head's left.

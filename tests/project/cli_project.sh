@@ -2,7 +2,7 @@
 # The project file through the CLI: fit writes it, `project info` reads it,
 # `project export` re-exports without fitting (the fit's level to within its
 # rounding), `texture --project` textures it as the page does and saves it,
-# and a cut or foreign file is refused with exit 1 and a reason.
+# `project refit` fits the kept scan again, and a cut or foreign file is refused with exit 1 and a reason.
 # Usage: cli_project.sh LIKENESS WORKDIR
 set -euo pipefail
 L="$1"; W="$2"
@@ -32,6 +32,18 @@ PY
 "$L" project export textured.likeness.glb --format textured --scan-frame --out head.obj > /dev/null
 cmp <(grep '^vt' head.obj) <(grep '^vt' tex/textured.obj)
 cmp <(grep '^v ' head.obj) <(grep '^v ' tex/textured.obj)
+# refit: the kept scan fitted again with the project's options gives the
+# same alignment and fits as the original (the project keeps the scan's
+# points and triangles; its normals, which only the displacements read, not).
+"$L" project refit head.likeness.glb --out refit.likeness.glb > refit.log
+"$L" project info refit.likeness.glb > refit_info.txt
+grep -q "level 2: [0-9]* vertices" refit_info.txt
+for stage in initial_alignment local_fitting global_fitting; do
+  cmp <(grep "^  $stage" info.txt) <(grep "^  $stage" refit_info.txt)
+done
+"$L" project refit head.likeness.glb --levels 1 --out refit1.likeness.glb > /dev/null
+"$L" project info refit1.likeness.glb | grep -q "level 1: [0-9]* vertices"
+if "$L" project info refit1.likeness.glb | grep -q "level 2:"; then echo "--levels 1 kept level 2"; exit 1; fi
 head -c 4000 head.likeness.glb > cut.glb
 if "$L" project info cut.glb 2> err.txt; then echo "a cut file was read"; exit 1; fi
 grep -q "truncated Likeness project" err.txt

@@ -65,6 +65,44 @@ TEST_CASE("project fit: a scan that is no head fails with fit_head's code and a 
   CHECK(p.fit.multires.num_levels() == 0);
 }
 
+TEST_CASE("project refit: the kept scan is fitted again with the project's options, and no scan means no refit") {
+  const test::ProjectScene& s = test::project_scene();
+  const HeadProject p = test::fitted_project();
+  // What the project keeps of its scan: positions and faces (its normals,
+  // which the displacements read, are dropped by fit_project).
+  PointCloud kept;
+  kept.positions = s.person.scan.positions;
+  kept.faces = s.person.scan.faces;
+  FitHeadResult expect;
+  REQUIRE(fit_head(kept, s.generic, test::quick_options(), expect).ok());
+  HeadProject r;
+  const Status st = refit_project(p, s.generic, 0, r);
+  INFO(st.message);
+  REQUIRE(st.ok());
+  CHECK(r.options.levels == test::quick_options().levels);
+  CHECK(same(r.fit.control.positions, expect.control.positions));
+  REQUIRE(r.fit.level_meshes.size() == expect.level_meshes.size());
+  for (size_t l = 0; l < expect.level_meshes.size(); ++l) CHECK(same(r.fit.level_meshes[l].positions, expect.level_meshes[l].positions));
+  CHECK(r.scan.positions == p.scan.positions);
+  CHECK(r.scan.faces == p.scan.faces);
+
+  // levels > 0 replaces the project's.
+  HeadProject one;
+  REQUIRE(refit_project(p, s.generic, 1, one).ok());
+  CHECK(one.options.levels == 1);
+  CHECK(one.fit.multires.num_levels() < r.fit.multires.num_levels());
+
+  // A head without a scan (from photos) is refused; the target is untouched.
+  HeadProject no_scan = p;
+  no_scan.scan = PointCloud{};
+  HeadProject target = one;
+  const Status refused = refit_project(no_scan, s.generic, 0, target);
+  CHECK(refused.code == ErrorCode::InvalidInput);
+  CHECK(refused.message.find("no scan") != std::string::npos);
+  CHECK(same(target.fit.control.positions, one.fit.control.positions));
+  CHECK(target.options.levels == 1);
+}
+
 TEST_CASE("project pose: 0 is the rest pose, 1 opens the jaw by its angle and lifts the brows") {
   HeadProject p = test::fitted_project();
   const MultiresMesh& mr = p.fit.multires;

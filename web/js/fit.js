@@ -64,13 +64,15 @@ export function forgetFit(why) {
 export async function runFit() {
   const state = document.body.dataset.state;
   if (!app.scan || state === 'working' || state === 'loading' || app.startupFailed) return;
-  if (!app.scan.file) {
-    showError('This head was opened from a project file, which keeps the fitted head but not the scan file: ' +
-              'drop the scan to fit it again.');
+  // A head opened from a project (or restored) keeps its scan's points in
+  // the worker, not the file: those are fitted again.
+  const file = app.scan.file;
+  if (!file && !app.scan.kept) {
+    showError('This head keeps no scan to fit again (it was made from photos): drop a scan to fit one.');
     return;
   }
   stopAnimation();
-  const file = app.scan.file;
+  const name = file ? file.name : app.scan.name;
   const job = beginJob('fit');
   if (!job) return;
   nameRows(false);
@@ -80,16 +82,18 @@ export async function runFit() {
   }
   ui.fitTotal.textContent = '';
   ui.fitQuality.hidden = true;
-  setStatus('Fitting the generic head to ' + file.name + '…');
+  setStatus('Fitting the generic head to ' + name + (file ? '' : ' (the scan kept with the head)') + '…');
   const t0 = performance.now();
   let result;
   try {
     // The worker reads the File in slices (worker.js, streamScan).
-    result = await runJob({ type: 'fitFile', file, options: { levels: 3 } }, [],
+    const request = file ? { type: 'fitFile', file, options: { levels: 3 } }
+                         : { type: 'refit', options: { levels: 3, name } };
+    result = await runJob(request, [],
       (stage, fraction) => {
         if (stage === 'read') {
           const mb = (n) => (n / 1048576).toFixed(0) + ' MB';
-          setStatus('Reading ' + file.name + ' for the fit: ' + mb(fraction * file.size) + ' of ' + mb(file.size) + '…');
+          setStatus('Reading ' + name + ' for the fit: ' + mb(fraction * file.size) + ' of ' + mb(file.size) + '…');
           return;
         }
         const row = rowOf(stage);
@@ -109,7 +113,7 @@ export async function runFit() {
       endJob(job);
       return;
     }
-    result = { ok: false, code: 'Internal', message: file.name + ': ' + (e && e.message ? e.message : e) };
+    result = { ok: false, code: 'Internal', message: name + ': ' + (e && e.message ? e.message : e) };
   }
   const wallMs = performance.now() - t0;
   if (!live(job)) return;
@@ -125,8 +129,8 @@ export async function runFit() {
     return;
   }
   app.project = null;
-  showHead(result, file.name, wallMs);
-  setStatus(file.name + ': head fitted in ' + (result.fitMs / 1000).toFixed(2) + ' s. Click a stage to see its mesh; ' +
+  showHead(result, name, wallMs);
+  setStatus(name + ': head fitted in ' + (result.fitMs / 1000).toFixed(2) + ' s. Click a stage to see its mesh; ' +
             'pick a level, animate or export.');
   endJob(job);
   renderPhotos();

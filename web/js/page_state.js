@@ -128,7 +128,8 @@ export class PageState {
 }
 
 // What each control allows in a state, given what the page holds:
-// s = {state, fatal, scanFile (a scan file to fit), fit (a fitted head in
+// s = {state, fatal, scanFile (a scan to fit: a file, or the points a
+// head opened from a project keeps), fit (a fitted head in
 // the worker), texture, photos (how many), distance (a distance map),
 // scan (a scan is loaded or opened), facePoints (photos with face points)}.
 // Returns {control: enabled}; state.js maps the names to elements.

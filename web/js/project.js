@@ -75,7 +75,9 @@ export async function openProject(file) {
     return;
   }
   app.model = { name: file.name, kind: 'project', vertexCount: result.scan.vertexCount, triangleCount: 0 };
-  app.scan = { file: null, display: { positions: display.positions, normals: display.normals, colors: display.colors } };
+  // kept: the worker's head keeps these points, so Fit head fits them again.
+  app.scan = { file: null, kept: result.scan.vertexCount > 0, name: file.name,
+               display: { positions: display.positions, normals: display.normals, colors: display.colors } };
   setStage('load', 'project', 1, 'complete');
   for (const st of FIT_STAGES) stageItem(st.row).classList.remove('coming');
   const wallMs = performance.now() - t0;

@@ -94,7 +94,7 @@ function applyState(snap) {
   document.body.dataset.state = snap.state;
   ui.banner.hidden = !snap.banner;
   if (snap.banner) ui.bannerText.textContent = snap.message;
-  const c = controlsFor({ state: snap.state, fatal: snap.fatal || app.startupFailed, scanFile: !!(app.scan && app.scan.file),
+  const c = controlsFor({ state: snap.state, fatal: snap.fatal || app.startupFailed, scanFile: !!(app.scan && (app.scan.file || app.scan.kept)),
                           fit: !!app.fit, texture: !!app.texture, photos: app.photos.length,
                           distance: !!distanceColors(), scan: !!app.scan,
                           facePoints: app.photos.filter((p) => (p.role || 'face') === 'face' && p.detect && p.detect.points).length });

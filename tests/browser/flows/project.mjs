@@ -4,7 +4,8 @@
 // sizes and positions, the same skin), animates, smiles (Expressions) and exports it; a cut file
 // is refused with its reason and the head stays; the checks measured again
 // agree with the original's; the file chosen among others in the Inputs
-// card opens too.
+// card opens too; "Fit head" on the opened head fits the scan points it
+// keeps again.
 import fs from 'node:fs';
 import { bannerText, check, JOB_TIMEOUT_MS, runAlone, settled, shot, state } from '../harness.mjs';
 import { fittedHead } from './fit.mjs';
@@ -67,7 +68,7 @@ async function run(s) {
         !!opened.project && opened.fitMs === 0 && opened.tags.filter((t) => t === 'saved').length >= 4 &&
         opened.project.loadMs < fit.fitMs / 2,
         `opened in ${wallMs} ms (worker ${opened.project && Math.round(opened.project.loadMs)} ms), fit took ${Math.round(fit.fitMs)} ms; tags ${opened.tags.join('|')}`);
-  check('...and it can be animated, but not fitted again without its scan file', opened.animate && !opened.fitButton,
+  check('...and it can be animated, and fitted again (from the scan points it keeps)', opened.animate && opened.fitButton,
         JSON.stringify({ animate: opened.animate, fit: opened.fitButton }));
   await shot(fresh, 'web_project_open.png');
 
@@ -121,6 +122,34 @@ async function run(s) {
   const dropped = await headPrint(fresh);
   check('a .likeness.glb among the chosen files opens as a project', (await state(fresh)) === 'done' && !!dropped &&
         dropped.sum === after.sum && dropped.skin === after.skin, `${await state(fresh)} ${await bannerText(fresh)}`);
+
+  // "Fit head" on the opened head fits the scan points the project keeps
+  // (no scan file): the same alignment, local and global fit as the
+  // original (the project keeps the scan's points and triangles, not its
+  // normals, which only the displacements read).
+  const t1 = Date.now();
+  await fresh.click('#btn-fit');
+  await fresh.waitForFunction(() => window.likeness.fit && window.likeness.fit.fitMs > 0 || document.body.dataset.state === 'error',
+                              null, { timeout: JOB_TIMEOUT_MS });
+  await settled(fresh);
+  const refit = await fresh.evaluate(() => {
+    const f = window.likeness.fit;
+    return { state: document.body.dataset.state, fitMs: f && f.fitMs, levels: f && f.meshes.levels.map((m) => m.vertexCount),
+             stages: f ? f.stages.map((x) => [x.name, x.meanPct]) : [] };
+  });
+  // before.stages: 'name mean' with the mean to 4 decimals (headPrint).
+  const originalStages = Object.fromEntries(before.stages.map((t) => [t.split(' ')[0], Number(t.split(' ')[1])]));
+  const sameStages = ['initial_alignment', 'local_fitting', 'global_fitting'].every((n) => {
+    const r = refit.stages.find((x) => x[0] === n);
+    return r && r[1].toFixed(4) === originalStages[n].toFixed(4);
+  });
+  const sub = refit.stages.find((x) => x[0] === 'subdivision');
+  check('"Fit head" on an opened project fits its kept scan again: the same alignment and fits as the original, ' +
+        'Table 1 after subdivision within 10 %',
+        refit.state === 'done' && refit.fitMs > 0 && JSON.stringify(refit.levels) === JSON.stringify(before.levels) && sameStages &&
+        !!sub && Math.abs(sub[1] - originalStages.subdivision) <= 0.1 * originalStages.subdivision,
+        `${Date.now() - t1} ms; refit ${JSON.stringify(refit.stages.map((x) => x[0] + ' ' + x[1].toFixed(5)))}; ` +
+        `original ${JSON.stringify(before.stages)}; ${await bannerText(fresh)}`);
   await fresh.close();
 }
 
