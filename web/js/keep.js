@@ -5,9 +5,10 @@
 //     fitted, and textured, head with its scan), and what that file does not
 //     hold: the options, the photos (their files, roles, clicks, points
 //     files, the detector's face points with the user's corrections) and a
-//     thumbnail of the viewer. Photos dropped before there is a head are
-//     kept too, as an entry without a head (its thumbnail the first photo),
-//     which the head made from them later takes over.
+//     thumbnail of the viewer. A scan and photos dropped before there is a
+//     head are kept too, as an entry without a head (the scan file itself
+//     while no head was fitted from it: a reload in the middle of its fit
+//     gets it back), which the head made from them later takes over.
 //   - When: right after a fit, a texture or an opened project (a new head is
 //     saved at once, so a worker lost to Cancel can get it back), and a
 //     moment after an option, a photo or a landmark click changed.
@@ -21,6 +22,7 @@ import { app, params, ui, onPageChange, setStatus } from './state.js';
 import { forgetFit } from './fit.js';
 import { runJob } from './worker_client.js';
 import { openProject } from './project.js';
+import { loadScan } from './scan.js';
 import { renderPhotos } from './photos.js';
 import { setPhotoRole } from './photo_roles.js';
 import { forgetTexture } from './texture.js';
@@ -115,9 +117,18 @@ function restoredDetect(k) {
            message: k.points.length + ' face points (kept' + (n ? ', ' + n + ' moved by hand' : '') + ')' };
 }
 const photosKey = () => app.photos.map((p) => p.name + ':' + p.file.size + ':' + p.file.lastModified).join('|');
+// The dropped scan file while no head is fitted from it (a project's scan is
+// in its bytes); the key of an entry without a head.
+const scanFile = () => (app.scan && app.scan.file) || null;
+const inputsKey = () => { const f = scanFile(); return photosKey() + '#' + (f ? f.name + ':' + f.size + ':' + f.lastModified : ''); };
+// "scan and 2 photos" (an entry without a head)
+function inputsText(h) {
+  const n = (h.page.photos || []).length;
+  return [h.scanName ? 'scan' : '', n ? photoCount(n) : ''].filter(Boolean).join(' and ');
+}
 
 export function scheduleSave(delay = SAVE_DELAY_MS) {
-  if (OFF || (!app.fit && !app.photos.length)) return;
+  if (OFF || (!app.fit && !app.photos.length && !scanFile())) return;
   clearTimeout(timer);
   timer = setTimeout(() => { timer = 0; saveNow(); }, delay);
 }
@@ -141,17 +152,20 @@ function say(e) {
     : 'The head could not be kept in this browser (' + keep.error + '); use Save project to keep it in a file.';
 }
 
-// Photos without a head: one entry of their files and points, no project.
-async function savePhotos() {
-  if (!app.photos.length) return;
-  if (current && current.fit) current = null;  // the head is gone (Reset): the photos start an entry of their own
+// A scan and photos without a head: one entry of their files and points,
+// no project (photosOnly: its historical name; scanName when it has a scan).
+async function saveInputs() {
+  const scan = scanFile();
+  if (!app.photos.length && !scan) return;
+  if (current && current.fit) current = null;  // the head is gone (Reset, a new scan): the inputs start an entry of their own
   if (!current) current = { id: newId(), fit: null, texture: null, bytes: null, photosKey: null };
-  const key = photosKey();
+  const key = inputsKey();
   const whole = key !== current.photosKey || !(await hasFile(current.id));
-  const file = whole ? { bytes: null, photos: app.photos.map((p) => p.file) } : null;
+  const file = whole ? { bytes: null, photos: app.photos.map((p) => p.file), scan } : null;
   const first = app.photos[0];
-  const head = { id: current.id, name: baseName(first.name), photosOnly: true, savedAt: Date.now(),
-                 thumb: await photoThumbnail(first), size: app.photos.reduce((n, p) => n + p.file.size, 0),
+  const head = { id: current.id, name: baseName(scan ? scan.name : first.name), photosOnly: true, scanName: scan ? scan.name : '',
+                 savedAt: Date.now(), thumb: scan ? await thumbnail() : await photoThumbnail(first),
+                 size: app.photos.reduce((n, p) => n + p.file.size, 0) + (scan ? scan.size : 0),
                  textured: false, vertices: 0, page: pageState() };
   await putHead(head, file);
   current.photosKey = key;
@@ -161,12 +175,13 @@ const newId = () => 'h' + Date.now().toString(36) + Math.random().toString(36).s
 
 async function save() {
   const fit = app.fit, texture = app.texture;
-  // A job may change the worker's head under us; the animation poses it.
-  if (document.body.dataset.state === 'working' || (app.animation && app.animation.running)) { scheduleSave(); return; }
+  // Inputs need no worker: kept even while their fit runs.
   if (!fit) {
-    await savePhotos();
+    await saveInputs();
     return;
   }
+  // A job may change the worker's head under us; the animation poses it.
+  if (document.body.dataset.state === 'working' || (app.animation && app.animation.running)) { scheduleSave(); return; }
   const fresh = !current || current.fit !== fit;
   let bytes = null;
   if (fresh || current.texture !== texture) {
@@ -220,7 +235,7 @@ export async function renderList() {
     if (h.thumb) img.src = h.thumb;
     const text = document.createElement('div');
     text.className = 'keep-text';
-    text.textContent = h.name + (h.photosOnly ? ' (' + photoCount((h.page.photos || []).length) + ', no head yet)' : h.textured ? ' (textured)' : '');
+    text.textContent = h.name + (h.photosOnly ? ' (' + inputsText(h) + ', no head yet)' : h.textured ? ' (textured)' : '');
     const meta = document.createElement('div');
     meta.className = 'keep-meta';
     meta.textContent = when(h.savedAt) + ' · ' + (h.size / 1048576).toFixed(1) + ' MB';
@@ -291,7 +306,7 @@ export async function restoreHead(id) {
              filePoints: p.filePoints ? new Float64Array(p.filePoints) : null, pointsName: p.pointsName,
              clicks: new Map(p.clicks || []), calib: null, sent: null, detect: restoredDetect(p.detect) };
   }).filter(Boolean);
-  current.photosKey = photosKey();
+  current.photosKey = head.photosOnly ? inputsKey() : photosKey();
   renderPhotos();
   app.restored = { id, savedAt: head.savedAt, ms: performance.now() - t0 };
   // Eye and smile photos make their textures again (small jobs, no fit).
@@ -299,22 +314,30 @@ export async function restoreHead(id) {
     const photo = app.photos.find((x) => x.name === p.name);
     if (photo && p.role && p.role !== 'face') await setPhotoRole(photo, p.role);
   }
-  setStatus(head.photosOnly
+  if (!(head.photosOnly && stored.scan)) setStatus(head.photosOnly
     ? 'Restored ' + photoCount(app.photos.length) + ' as kept ' + when(head.savedAt) + (app.photos.length === 1 ? ', with its face points: add more photos, or make the head from it.' : ', with their face points: add more, or make the head from them.')
     : 'Restored ' + head.name + ' as kept ' + when(head.savedAt) + ', in ' + Math.round(performance.now() - t0) +
       ' ms without fitting: animate it, texture it or export it.');
   await renderList();
+  // A kept scan is loaded as if dropped again (Auto-run fits it, as it did
+  // before the reload); the entry goes on with it.
+  if (head.photosOnly && stored.scan) {
+    const f = stored.scan instanceof File ? stored.scan : new File([stored.scan], head.scanName || 'scan.ply');
+    current.photosKey = photosKey() + '#' + f.name + ':' + f.size + ':' + f.lastModified;  // inputsKey() once it is loaded
+    await loadScan(f);
+  }
 }
 
 // After a reload: the newest kept head is offered back.
 export async function offerRestore() {
   if (OFF) return;
   const heads = await renderList();
-  if (!heads.length || app.fit || app.photos.length) return;
+  if (!heads.length || app.fit || app.photos.length || scanFile()) return;
   const h = heads[0];
   keep.offered = h.id;
   el.offerText.textContent = h.photosOnly
-    ? 'Restore your ' + photoCount((h.page.photos || []).length) + ' from ' + when(h.savedAt) + '? (no head was made from them yet)'
+    ? 'Restore your ' + inputsText(h) + ' from ' + when(h.savedAt) + '? (no head was made from ' +
+      ((h.page.photos || []).length + (h.scanName ? 1 : 0) === 1 ? 'it' : 'them') + ' yet)'
     : 'Restore your head from ' + when(h.savedAt) + '? (' + h.name + (h.textured ? ', textured' : '') + ')';
   el.offer.hidden = false;
 }
@@ -343,9 +366,10 @@ export function wireKeep() {
   // A head that became the shown one (fit, texture, opened) is kept at once;
   // anything else a moment later.
   onPageChange((snap) => {
-    if (app.fit || app.photos.length) el.offer.hidden = true;  // a head or photos are on the page: nothing to offer
+    if (app.fit || app.photos.length || scanFile()) el.offer.hidden = true;  // a head or inputs are on the page: nothing to offer
     if (snap.state === 'working' || snap.state === 'loading') return;
     if (app.fit && (!current || current.fit !== app.fit || current.texture !== app.texture)) scheduleSave(0);
+    else if (!app.fit && scanFile() && (!current || current.photosKey !== inputsKey())) scheduleSave(0);  // before its fit starts
     else if (app.fit || app.photos.length) scheduleSave();
   });
   for (const c of [ui.level, ui.autoFit, ui.showComponents, ui.fullDetail]) c.addEventListener('change', () => scheduleSave());

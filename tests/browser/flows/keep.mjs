@@ -6,7 +6,8 @@
 // message in the card and leaves the page working. Photos dropped before
 // any head (in a browser of its own) are kept too, with the detector's face
 // points and the user's correction, and come back after a reload without
-// detecting again.
+// detecting again. A scan whose fit a reload interrupts is kept before its
+// fit ends and fitted again after one click (in a browser of its own).
 import fs from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -14,6 +15,7 @@ import { bannerText, check, closeChromium, JOB_TIMEOUT_MS, launchChromium, liken
          runAlone, settled, shot, waitForState } from '../harness.mjs';
 import { renderedHeadPhoto } from '../landmark_geometry.mjs';
 import { fittedHead } from './fit.mjs';
+import { syntheticScan } from '../synth_scan.mjs';
 
 const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../../..');
 
@@ -117,12 +119,65 @@ async function photosWithoutHead(s) {
   }
 }
 
+// A reload in the middle of a fit: the dropped scan (Auto-run on) is kept
+// while its fit runs; the page is closed mid-fit; a new page offers the scan
+// back, and one click loads it again and fits it, the head taking the
+// entry over.
+async function scanMidFit(s) {
+  const synth = syntheticScan(s.webdir, 2);
+  if (synth.skip) {
+    note('a reload in the middle of a fit: not exercised, ' + synth.skip);
+    return;
+  }
+  const { origin } = await s.serve();
+  const context = s.watchRequests(await launchChromium('keep-scan', { width: 1280, height: 800 }));
+  try {
+    const page = s.watch(await context.newPage());
+    await page.goto(origin + '/index.html');
+    await waitForState(page, ['ready', 'error'], READY_TIMEOUT_MS);
+    await page.setInputFiles('#file-input', [{ name: 'midfit_head.ply', mimeType: 'application/octet-stream', buffer: synth.bytes }]);
+    await page.waitForFunction(() => window.likeness.keep.lastSave && window.likeness.keep.lastSave.photosOnly &&
+                                     document.body.dataset.state === 'working', null, { timeout: JOB_TIMEOUT_MS }).catch(() => {});
+    const during = await page.evaluate(() => ({ state: document.body.dataset.state, last: window.likeness.keep.lastSave,
+                                                fit: !!window.likeness.fit }));
+    check('a dropped scan is kept in IndexedDB while its fit runs', during.state === 'working' && !during.fit && !!during.last &&
+          during.last.photosOnly && during.last.wroteFile && during.last.size === synth.bytes.length, JSON.stringify(during));
+    await page.close();  // the reload: the fit in progress is lost with the page
+
+    const other = s.watch(await context.newPage());
+    await other.goto(origin + '/index.html');
+    await waitForState(other, ['ready', 'error'], READY_TIMEOUT_MS);
+    await other.waitForSelector('#restore-offer:not([hidden])', { timeout: 30000 }).catch(() => {});
+    const offer = await other.evaluate(() => document.getElementById('restore-text').textContent);
+    check('after a reload in the middle of the fit the page offers the scan back', 
+          /^Restore your scan from .*\? \(no head was made from it yet\)$/.test(offer), offer);
+    const offered = await other.evaluate(() => window.likeness.keep.offered);
+    await other.click('#btn-restore');
+    await other.waitForFunction(() => (window.likeness.fit && window.likeness.fit.fitMs > 0) || document.body.dataset.state === 'error',
+                                null, { timeout: JOB_TIMEOUT_MS }).catch(() => {});
+    await settled(other);
+    await other.waitForFunction(() => window.likeness.keep.lastSave && !window.likeness.keep.lastSave.photosOnly, null,
+                                { timeout: JOB_TIMEOUT_MS }).catch(() => {});
+    const after = await other.evaluate(() => ({ state: document.body.dataset.state, name: window.likeness.fit && window.likeness.fit.name,
+      fitMs: window.likeness.fit && Math.round(window.likeness.fit.fitMs), last: window.likeness.keep.lastSave,
+      heads: window.likeness.keep.heads.map((h) => h.id) }));
+    check('... one click loads it again and Auto-run fits it; the head takes the kept entry over',
+          after.state === 'done' && after.name === 'midfit_head.ply' && after.fitMs > 0 && !!after.last && !after.last.photosOnly &&
+          after.last.id === offered && after.heads.length === 1, JSON.stringify(after) + ' ' + (await bannerText(other)));
+  } finally {
+    await closeChromium(context);
+  }
+}
+
 async function run(s) {
   await photosWithoutHead(s);
+  await scanMidFit(s);
   const { page, fit } = await fittedHead(s);
   if (!fit) return;
   await settled(page);
   await keptTimes(page, 1);
+  // The scan was kept as loaded (an entry without a head); the head takes it over.
+  await page.waitForFunction(() => !window.likeness.keep.lastSave.photosOnly, null, { timeout: JOB_TIMEOUT_MS });
   // A photo with its points file: kept with the head (the project file
   // does not hold photos), so a restore brings it back with its points.
   const n0 = await page.evaluate(() => window.likeness.keep.saves);
