@@ -96,6 +96,25 @@ inline val image_object(const lk::Image& image) {
   return t;
 }
 
+// An image object as image_object makes it (the eye and smile photo jobs'
+// textures, handed back by the page) -> out; a malformed one is refused.
+inline lk::Status image_from_object(const val& o, lk::Image& out) {
+  if (o.isUndefined() || o.isNull() || o["pixels"].isUndefined())
+    return lk::Status::error(lk::ErrorCode::InvalidInput, "not an image");
+  const int w = o["width"].as<int>(), h = o["height"].as<int>(), c = o["channels"].as<int>();
+  if (w <= 0 || h <= 0 || w > 8192 || h > 8192 || c < 1 || c > 4)
+    return lk::Status::error(lk::ErrorCode::InvalidInput, "image of " + std::to_string(w) + "x" + std::to_string(h) + "x" +
+                                                           std::to_string(c) + " is out of range");
+  std::vector<std::uint8_t> pixels = emscripten::convertJSArrayToNumberVector<std::uint8_t>(o["pixels"]);
+  if (pixels.size() != static_cast<std::size_t>(w) * h * c)
+    return lk::Status::error(lk::ErrorCode::InvalidInput, "image pixels do not match its size");
+  out.width = w;
+  out.height = h;
+  out.channels = c;
+  out.pixels = std::move(pixels);
+  return lk::Status::success();
+}
+
 // Whether an options object gives key (undefined and null objects give none).
 inline bool has(const val& object, const char* key) {
   return !object.isUndefined() && !object.isNull() && !object[key].isUndefined();

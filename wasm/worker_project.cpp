@@ -25,9 +25,10 @@ val save_project_job() {
 }
 
 // The kept head as a GLB at level (glb_export.h), with the generic eyes'
-// and teeth's textures; the project is put at rest. Returns {ok, bytes,
+// and teeth's textures unless parts gives {eyeTexture, teethTexture} (as
+// image_object makes them); the project is put at rest. Returns {ok, bytes,
 // level, vertices}.
-val export_glb_job(int level) {
+val export_glb_job(int level, val parts) {
   if (!kept_project()) return error_result(lk::ErrorCode::InvalidInput, "no fitted head to export");
   lk::Status generic_status;
   const lk::GenericHead* generic = generic_head(generic_status);
@@ -35,6 +36,12 @@ val export_glb_job(int level) {
   lk::GlbExportOptions o;
   o.level = level;
   lk::use_generic_part_textures(o);
+  // The iris and teeth textures made from the user's eye and smile photos
+  // replace the generic ones.
+  if (has(parts, "eyeTexture") && !parts["eyeTexture"].isNull())
+    if (lk::Status st = image_from_object(parts["eyeTexture"], o.eye_texture); !st.ok()) return error_result(lk::with_context(st, "eye texture"));
+  if (has(parts, "teethTexture") && !parts["teethTexture"].isNull())
+    if (lk::Status st = image_from_object(parts["teethTexture"], o.teeth_texture); !st.ok()) return error_result(lk::with_context(st, "teeth texture"));
   lk::Bytes bytes;
   lk::GlbExportReport report;
   if (lk::Status st = lk::export_glb(*kept_project(), *generic, o, bytes, &report); !st.ok()) return error_result(st);

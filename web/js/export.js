@@ -61,11 +61,15 @@ async function exportGlb() {
   const level = Number(ui.level.value) || 2;
   const name = app.fit.name.replace(/\.[^.]*$/, '') + '_head_level' + level + '.glb';
   try {
-    const r = await runJob({ type: 'exportGlb', level }, []);
+    // The irises and teeth from the eye and smile photos, when there are.
+    const parts = { eyeTexture: app.eyePhoto ? app.eyePhoto.texture : null, teethTexture: app.smilePhoto ? app.smilePhoto.texture : null };
+    const r = await runJob({ type: 'exportGlb', level, parts }, []);
     if (!r.ok) { showError('Export failed: ' + r.message); return; }
     download(name, r.bytes, 'model/gltf-binary');
+    const from = [app.eyePhoto ? 'the irises from ' + app.eyePhoto.name : '', app.smilePhoto ? 'the teeth from ' + app.smilePhoto.name : '']
+      .filter(Boolean).join(' and ');
     setStatus('Exported ' + name + ' (level ' + r.level + ', ' + r.vertices.toLocaleString('en') + ' vertices' +
-              (app.texture ? ', textured' : '') + ', with eyes, teeth and tongue; at rest).');
+              (app.texture ? ', textured' : '') + ', with eyes, teeth and tongue' + (from ? ', ' + from : '') + '; at rest).');
   } catch (e) {
     showError('Export failed: ' + (e && e.message ? e.message : e));
   }

@@ -4,10 +4,34 @@
 // as Eye, gives a clear error and keeps the other photos' clicks; eye photos
 // are not used for the skin; a smile photo (made by the native CLI; skipped
 // without it) set to "Smile (teeth)" replaces the teeth texture; removing
-// them gives the generic textures back.
+// them gives the generic textures back; the GLB export carries the photos'
+// iris and teeth textures, and the generic ones again once they are removed.
+import crypto from 'node:crypto';
+import fs from 'node:fs';
+import { createRequire } from 'node:module';
 import { bannerText, check, makeEyePng, makePhotoPng, makePng, note, runAlone, settled, shot,
          syntheticSmile } from '../harness.mjs';
 import { fittedHead } from './fit.mjs';
+
+// "Head (GLB)" clicked: a hash of each textured material's image bytes in
+// the downloaded GLB, by material name ({eye, teeth, ...}), and the status.
+async function glbImages(page) {
+  const downloadP = page.waitForEvent('download', { timeout: 120000 });
+  await page.click('#btn-export-glb');
+  const glb = fs.readFileSync(await (await downloadP).path());
+  await settled(page);
+  const jsonLength = glb.readUInt32LE(12);
+  const gltf = JSON.parse(glb.toString('utf8', 20, 20 + jsonLength));
+  const bin = glb.subarray(20 + jsonLength + 8);
+  const out = {};
+  for (const m of gltf.materials || []) {
+    const t = m.pbrMetallicRoughness && m.pbrMetallicRoughness.baseColorTexture;
+    if (!t) continue;
+    const view = gltf.bufferViews[gltf.images[gltf.textures[t.index].source].bufferView];
+    out[m.name] = crypto.createHash('sha1').update(bin.subarray(view.byteOffset || 0, (view.byteOffset || 0) + view.byteLength)).digest('hex').slice(0, 12);
+  }
+  return { glb, images: out, status: await page.evaluate(() => document.getElementById('status').textContent) };
+}
 
 async function eyeAndSmilePhotos(page, webdir) {
   const before = await page.evaluate(() => ({ tex: window.likeness.componentTextures, n: window.likeness.components,
@@ -20,6 +44,7 @@ async function eyeAndSmilePhotos(page, webdir) {
         (() => { let clear = 0, solid = 0; for (let i = 3; i < tt.pixels.length; i += 4) { if (tt.pixels[i] === 0) clear++; else if (tt.pixels[i] === 255) solid++; }
                  return clear > 0 && solid > 0.3 * tt.pixels.length / 4; })(),
         JSON.stringify(before.tex) + (tt ? ` ${tt.width}x${tt.height}x${tt.channels}, made in ${Math.round(before.teethMs)} ms in the worker` : ' no teeth texture'));
+  const genericGlb = await glbImages(page);
   // A good synthetic eye, then a grey card, both dropped as photos.
   await page.setInputFiles('#file-input', [
     { name: 'eye_close.png', mimeType: 'image/png', buffer: makeEyePng() },
@@ -71,10 +96,24 @@ async function eyeAndSmilePhotos(page, webdir) {
   } else {
     note('the smile photo is not exercised: no native likeness binary (set LK_LIKENESS_BIN)');
   }
+  // The GLB carries the photos' irises (and teeth), not the generic ones.
+  const photoGlb = await glbImages(page);
+  check('"Head (GLB)" exports the iris' + (smile ? ' and teeth' : '') + ' made from the photos in place of the generic textures',
+        !!genericGlb.images.eye && !!photoGlb.images.eye && photoGlb.images.eye !== genericGlb.images.eye &&
+        (!smile || (!!photoGlb.images.teeth && photoGlb.images.teeth !== genericGlb.images.teeth)) &&
+        /irises from eye_close\.png/.test(photoGlb.status),
+        `generic ${JSON.stringify(genericGlb.images)}; with the photos ${JSON.stringify(photoGlb.images)}; "${photoGlb.status}"`);
+  const v = await createRequire(import.meta.url)('gltf-validator').validateBytes(new Uint8Array(photoGlb.glb), { maxIssues: 50 });
+  check('...and the Khronos glTF-Validator finds no error and no warning in it', v.issues.numErrors === 0 && v.issues.numWarnings === 0,
+        `${v.issues.numErrors} errors, ${v.issues.numWarnings} warnings: ` +
+        v.issues.messages.slice(0, 5).map((m) => m.code + ' ' + (m.pointer || '')).join(', '));
   // The test's photos leave; the eyes and teeth go back to the generic textures.
   for (const name of names) await page.locator('#photo-list li', { hasText: name }).locator('.photo-remove').click();
   const reset = await page.evaluate(() => window.likeness.componentTextures);
-  check('removing the eye and smile photos gives the generic textures back', reset.eyes === 'generic' && reset.teeth === 'generic', JSON.stringify(reset));
+  const resetGlb = await glbImages(page);
+  check('removing the eye and smile photos gives the generic textures back, in the view and in the GLB',
+        reset.eyes === 'generic' && reset.teeth === 'generic' && JSON.stringify(resetGlb.images) === JSON.stringify(genericGlb.images),
+        JSON.stringify(reset) + ' ' + JSON.stringify(resetGlb.images));
 }
 
 async function run(s) {
