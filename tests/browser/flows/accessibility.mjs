@@ -2,14 +2,16 @@
 // request) finds no serious or critical violation in each state a person
 // meets: the page ready; an error (a broken scan); a scan loaded; working
 // (a fit running); done (the fitted head, its checks); a photo open to mark
-// landmarks (the clicker); an eye photo used, and one refused; the restore
-// offer after a reload, and the restored head with the kept-heads list; the
+// landmarks (the clicker); an eye photo used, and one refused; a smile photo
+// used; the textured head; the restore offer after a reload, and the
+// restored (textured) head with the kept-heads list; the
 // Expressions panel open. Ready and done (closed and open Expressions):
 // Tab reaches every visible, enabled control, each with a visible focus. A page of its
 // own (?autofit=0); the fit uses a 20k-point synthetic scan (skipped with
 // a note without the native CLI).
 import { createRequire } from 'node:module';
-import { check, makeEyePng, makePhotoPng, makePng, note, runAlone, setFile, settled, waitForState } from '../harness.mjs';
+import { check, frontCamera, makeEyePng, makePhotoPng, makePng, note, runAlone, setFile, settled, syntheticSmile,
+         waitForState } from '../harness.mjs';
 import { syntheticScan } from '../synth_scan.mjs';
 
 const AXE = createRequire(import.meta.url).resolve('axe-core/axe.min.js');
@@ -134,6 +136,31 @@ async function run(s) {
   await roleSelect('grey_card.png').selectOption('eye');
   await settled(page);
   await checkState(page, 'an eye photo refused (its error in the banner and beside it)');
+  await page.click('#error-dismiss');
+  // A smile photo (made by the native CLI) for the teeth.
+  const smile = syntheticSmile(s.webdir);
+  if (smile) {
+    await page.setInputFiles('#file-input', { name: 'smile.png', mimeType: 'image/png', buffer: smile });
+    await settled(page);
+    await roleSelect('smile.png').selectOption('smile');
+    await settled(page);
+    await checkState(page, 'a smile photo used for the teeth');
+  } else note('the smile photo state is not checked: no native likeness binary');
+  // The textured head: a face photo with an exact points file (the other
+  // face photo, without points, leaves first).
+  await page.locator('#photo-list li', { hasText: 'front.png' }).locator('.photo-remove').click();
+  const landmarks = await page.evaluate(() => window.likeness.fit.landmarks);
+  const project = frontCamera(landmarks, 640, 480, 900);
+  const line = (l) => { const [u, v] = project(l.position); return `${u.toFixed(2)} ${v.toFixed(2)} ${l.position.join(' ')}`; };
+  await page.setInputFiles('#file-input', [
+    { name: 'head_front.png', mimeType: 'image/png', buffer: makePhotoPng(640, 480, (x, y) => [180 + Math.round(40 * x / 640), 130, 110 + Math.round(30 * y / 480)]) },
+    { name: 'head_front.txt', mimeType: 'text/plain', buffer: Buffer.from(landmarks.map(line).join('\n') + '\n') }]);
+  await settled(page);
+  await page.click('#btn-texture');
+  await settled(page);
+  const textured = await page.evaluate(() => !!window.likeness.texture && document.body.dataset.state === 'done');
+  if (textured) await checkState(page, 'a textured head (eyes, teeth and skin from photos)');
+  else check('the head is textured (to check that state)', false, await page.evaluate(() => document.getElementById('status').textContent));
   // The head is kept; after a reload the page offers it back.
   await page.waitForTimeout(1500);
   await page.reload();
