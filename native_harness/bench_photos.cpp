@@ -5,6 +5,7 @@
 // stereo points on real faces (Fig. 7: medians 2.33 / 6.38 / 0.55, units
 // not stated); they are printed for reference, not as a like-for-like goal.
 #include "command.h"
+#include "synthetic_session_images.h"
 #include "timing.h"
 
 #include "io/io.h"
@@ -355,20 +356,7 @@ int run_bench_photos(const Args& args) {
     double render_ms = 0;
     if (stereo) {
       const double r0 = cpu_clock_ms();
-      SkinField skin;
-      if (!make_skin_field(person, std::uint32_t(seed), {}, skin)) return 1;
-      for (const Camera& cam : session.cameras) {
-        const Vec3 light = (cam.R.transpose() * Vec3(-0.4, -0.6, -1.0)).normalized();
-        Image photo;
-        if (!render_synthetic_photo(
-                person.mesh, cam,
-                [&](const Vec3& p, const Vec3& nn) -> Vec3 {
-                  return skin_albedo(skin, p) * (0.35 + 0.65 * std::max(0.0, nn.dot(light)));
-                },
-                Vec3(0.55, 0.6, 0.65), photo))
-          return 1;
-        images.push_back(std::move(photo));
-      }
+      if (!render_session_images(person, std::uint32_t(seed), session.cameras, images)) return 1;
       render_ms = cpu_clock_ms() - r0;
     }
     PhotosJobResult r;

@@ -1,5 +1,7 @@
 #include "photos/shape_fit.h"
 
+#include "photos/descent.h"
+
 #include "photos/self_calibration.h"
 
 #include <cmath>
@@ -218,10 +220,19 @@ Status fit_shape(const TriMesh& control, std::vector<std::unique_ptr<Observation
       if (round > 0 || &stiffness != &options.stiffness_schedule.front())
         for (auto& s : sets) s->reweight(problem.positions());
       problem.normalize(lambdas);
-      LmOptions lo;
-      lo.max_iterations = options.max_lm_iterations;
-      lo.relative_tolerance = options.relative_tolerance;
-      const LmReport rep = levenberg_marquardt(problem, lo);
+      LmReport rep;
+      if (options.optimizer == ShapeFitOptions::Optimizer::LevenbergMarquardt) {
+        LmOptions lo;
+        lo.max_iterations = options.max_lm_iterations;
+        lo.relative_tolerance = options.relative_tolerance;
+        rep = levenberg_marquardt(problem, lo);
+      } else {
+        DescentOptions d;
+        d.max_iterations = options.max_descent_iterations;
+        d.relative_tolerance = options.relative_tolerance;
+        rep = options.optimizer == ShapeFitOptions::Optimizer::GradientDescent ? gradient_descent(problem, d)
+                                                                               : quasi_newton(problem, d);
+      }
       if (round == 0) stage.initial_cost = rep.initial_cost;
       stage.final_cost = rep.final_cost;
       stage.lm_iterations += rep.iterations;

@@ -91,6 +91,12 @@ struct ShapeFitOptions {
   int max_lm_iterations = 20;
   // An LM run stops when a step gains less than this share of the cost.
   double relative_tolerance = 1e-5;
+  // The minimizer of each reweighting round: LM (the paper's, the app's),
+  // or for fua1998 Fig. 6's comparison plain gradient descent or L-BFGS
+  // (descent.h), each with up to max_descent_iterations.
+  enum class Optimizer { LevenbergMarquardt, GradientDescent, QuasiNewton };
+  Optimizer optimizer = Optimizer::LevenbergMarquardt;
+  int max_descent_iterations = 500;
 };
 
 struct ShapeFitStage {
