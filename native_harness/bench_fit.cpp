@@ -65,6 +65,10 @@
 namespace lk::cli {
 namespace {
 
+// Issue 35: a synthetic seed fits in 1.3 s of process CPU (the real
+// scans' target is 2 s, bench --only fit-real).
+constexpr double kSyntheticCpuTargetMs = 1300;
+
 using clock_type = std::chrono::steady_clock;
 double ms_since(clock_type::time_point t) {
   return std::chrono::duration<double, std::milli>(clock_type::now() - t).count();
@@ -617,9 +621,9 @@ int run(const Args& args) {
     std::printf("   smooth level %d pleat edges (bent > 90 deg where the generic head bends < 45): %d -> %d in %d steps\n",
                 opt.global.smooth_guard_relief_level, r.global_fit.pleats_before, r.global_fit.pleats_after,
                 r.global_fit.pleat_steps);
-    std::printf("   global fit: %zu iterations in %d rounds; total %.0f ms wall, %.0f ms CPU on up to %d threads (target < 2000 ms wall): %s\n",
+    std::printf("   global fit: %zu iterations in %d rounds; total %.0f ms wall, %.0f ms CPU on up to %d threads (target < %.0f ms CPU): %s\n",
                 r.global_fit.iterations.size(), r.global_fit.rounds, total, total_cpu, parallel_workers(),
-                total < 2000 ? "met" : "MISSED");
+                kSyntheticCpuTargetMs, total_cpu < kSyntheticCpuTargetMs ? "met" : "MISSED");
     if (seed == seeds.front()) {
       // The displacement stage's parts, re-run on the fitted control mesh
       // (without fit_head's pocket zeroing): where its time goes.
@@ -672,8 +676,9 @@ int run(const Args& args) {
   }
   const int ok = static_cast<int>(seeds.size()) - failures;
   if (ok > 0)
-    std::printf("\n   summary: final mean %.4f %% of the diagonal over %d seeds (target <= 0.04; paper 0.04 male, 0.08 female); slowest fit %.0f ms wall, %.0f ms CPU (target 2000 wall)\n",
-                sum_final_mean / ok, ok, worst_total, worst_total_cpu);
+    std::printf("\n   summary: final mean %.4f %% of the diagonal over %d seeds (target <= 0.04; paper 0.04 male, 0.08 female); slowest fit %.0f ms wall, %.0f ms CPU (target: %.0f ms CPU on a synthetic seed, %s)\n",
+                sum_final_mean / ok, ok, worst_total, worst_total_cpu, kSyntheticCpuTargetMs,
+                worst_total_cpu <= kSyntheticCpuTargetMs ? "met" : "NOT met");
   if (ok > 0)
     std::printf("   summary: roughness (level-L face normals vs truth, scanned faces) mean %.2f deg, cheeks+brow %.2f deg; "
                 "truth->surface where scanned %.3f mm (means over %d seeds)\n",

@@ -378,10 +378,22 @@ TEST_CASE("guess_orientation: screening the starts gives the full search's guess
   }
 }
 
-TEST_CASE("guess_orientation: screening gives the full search's guess on the real James and Fran") {
+// The busts too (issue 35): Gutenberg and Plato. Their decisions are
+// close calls (Plato's best other orientation scores 0.811 of the given
+// one's, against better_ratio 0.8), so a cheaper screening that keeps
+// other starts shows here: 5 screening iterations and 4 starts kept give
+// Plato another best (docs/design/fit_real_scans.md, "The fit's CPU").
+// Demosthenes is not here: the screened search and the full one already
+// differ on him (the full one's best other orientation scores 0.79 of the
+// given one's and would turn him; the screened one does not).
+TEST_CASE("guess_orientation: screening gives the full search's guess on the real James, Fran, Gutenberg and Plato") {
   LK_REQUIRE_SHARED("head_scans/james_menpo3d/james.obj");
   LK_REQUIRE_SHARED("head_scans/fran_cyberware/fran_cut.vtk");
-  for (const char* path : {"/head_scans/james_menpo3d/james.obj", "/head_scans/fran_cyberware/fran_cut.vtk"}) {
+  LK_REQUIRE_SHARED("head_scans/threedscans_gutenberg/gutenberg.obj");
+  LK_REQUIRE_SHARED("head_scans/threedscans_plato/plato.obj");
+  for (const char* path : {"/head_scans/james_menpo3d/james.obj", "/head_scans/fran_cyberware/fran_cut.vtk",
+                           "/head_scans/threedscans_gutenberg/gutenberg.obj",
+                           "/head_scans/threedscans_plato/plato.obj"}) {
     PointCloud scan;
     REQUIRE(load_point_cloud_file(test::shared_data_dir() + path, scan).ok());
     const double unit = guess_unit_to_metres(bounding_box(scan.positions).diagonal());
