@@ -90,12 +90,13 @@ function addPhoto(entry) {
 }
 
 // The photo as the detector sees it: at most DETECT_PX on its longer side.
-// The detector finds the face on its own 192-256 px crops, so a 12-megapixel
-// phone photo costs it 3.0 s against 1.8 s at 1800x1200 (Kira's frontal
-// photo, both sizes: docs/design/page.md); its points are fractions of the
-// image, so they come out in the photo's own pixels. The texture still
-// reads the original file.
-const DETECT_PX = 1920;
+// The detector finds the face on its own 192-256 px crops, so a smaller
+// image costs it less and loses little (docs/design/photos.md, "Ten
+// 12-megapixel photos": 1280 px halves the time of 1920 px, its points
+// 2.8 px of a 4000 px photo from the full size's); its points are fractions
+// of the image, so they come out in the photo's own pixels. The texture
+// still reads the original file.
+const DETECT_PX = 1280;
 async function detectionImage(photo) {
   const full = await createImageBitmap(photo.file);  // EXIF orientation applied
   const scale = DETECT_PX / Math.max(full.width, full.height);
