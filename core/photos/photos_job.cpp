@@ -41,7 +41,8 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
                         const std::vector<LandmarkPhoto>& photos, const SelfCalibResult& calib,
                         const PhotosJobOptions& options, ShapeFitResult& fit,
                         const std::vector<PhotoOutline>* outlines, const StereoResult* stereo,
-                        PhotosStereoFit* stereo_fit) {
+                        PhotosStereoFit* stereo_fit, const LandmarkSlide* slide) {
+  if (slide && !slide->has_slide() && !slide->has_sigma()) slide = nullptr;
   if (calib.photos.size() != photos.size())
     return Status::error(ErrorCode::InvalidInput, "shape fit: the calibration is for other photos");
   std::vector<Camera> cameras;
@@ -51,6 +52,7 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
     if (!pc.used) continue;
     const int cam = int(cameras.size());
     cameras.push_back(pc.camera);
+    const SlideView view = slide ? slide_view(*slide, pc.camera.center()) : SlideView{};
     for (size_t m = 0; m < landmarks.size() && m < photos[i].points.size(); ++m) {
       if (!photos[i].present[m] || !landmarks[m].valid() || !(pc.weights[m] > 0)) continue;
       FeatureObservation o;
@@ -58,6 +60,15 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
       o.point = landmarks[m];
       o.pixel = photos[i].points[m];
       o.prior_weight = o.weight = pc.weights[m];
+      if (slide) {
+        // The cameras are fixed here: the shift is a constant offset per observation.
+        o.point.offset += landmark_shift(*slide, int(m), view);
+        if (slide->has_sigma() && options.calib.use_slide_sigma) {
+          const double sp = slide_sigma_px(*slide, int(m), pc.camera, surface_position(generic.mesh, o.point),
+                                           options.calib.min_sigma_px, options.calib.pixel_sigma);
+          o.prior_weight = o.weight = pc.weights[m] * std::pow(options.calib.pixel_sigma / sp, 2);
+        }
+      }
       obs.push_back(o);
     }
   }
@@ -164,7 +175,8 @@ Status run_photos_job(const GenericHead& generic, const LandmarkMap& map, const 
   Status s = attach_landmark_map(map, generic.mesh, options.map_max_distance_m, landmarks);
   if (!s) return s;
 
-  s = self_calibrate(photos, generic.mesh, landmarks, options.calib, result.calib);
+  const LandmarkSlide* slide = options.use_slide && (map.slide.has_slide() || map.slide.has_sigma()) ? &map.slide : nullptr;
+  s = self_calibrate(photos, generic.mesh, landmarks, options.calib, result.calib, slide);
   for (size_t i = 0; i < result.calib.photos.size(); ++i)
     if (!result.calib.photos[i].refusal.empty())
       result.notes.push_back(photo_name(i) + " dropped: " + result.calib.photos[i].refusal);
@@ -183,7 +195,7 @@ Status run_photos_job(const GenericHead& generic, const LandmarkMap& map, const 
                              " deg apart; landmarks only");
   }
   s = fit_photos_shape(generic, landmarks, photos, result.calib, options, result.fit, outlines, &result.stereo,
-                       &result.stereo_fit);
+                       &result.stereo_fit, slide);
   return with_context(s, "photos");
 }
 
