@@ -287,6 +287,25 @@ Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& g
     else pc.refusal = "its landmarks fit no camera: " + s.message;
   }
 
+  // With a slide: each photo posed again (twice) against the landmarks
+  // where the detector sees them from its current camera, a view far to the
+  // side being the one the fixed points place least turned.
+  if (slide && slide->has_slide())
+    for (int i = 0; i < P; ++i) {
+      if (!result.photos[size_t(i)].used) continue;
+      for (int again = 0; again < 2; ++again) {
+        const SlideView v = slide_view(*slide, alone[size_t(i)].camera.center());
+        std::vector<Correspondence> slid = corr[size_t(i)];
+        for (size_t q = 0; q < slid.size(); ++q) slid[q].point += landmark_shift(*slide, corr_index[size_t(i)][q], v);
+        CalibOptions at = co;
+        at.known_focal = alone[size_t(i)].camera.fx;
+        CalibResult r;
+        if (!calibrate_camera(slid, photos[size_t(i)].width, photos[size_t(i)].height, at, r) || upside_down(r.camera))
+          break;
+        alone[size_t(i)] = r;
+      }
+    }
+
   // Visibility: the detector places every landmark, also those the face
   // hides (the far cheek, the outline seen edge-on); it puts them on the
   // silhouette, not where the map says. Each photo keeps only the landmarks
