@@ -47,6 +47,7 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
     return Status::error(ErrorCode::InvalidInput, "shape fit: the calibration is for other photos");
   std::vector<Camera> cameras;
   std::vector<FeatureObservation> obs;
+  double sigma_weight_sum = 0;  // sum of (pixel_sigma / the slide's scatter)^2 over the observations
   for (size_t i = 0; i < photos.size(); ++i) {
     const PhotoCalibration& pc = calib.photos[i];
     if (!pc.used) continue;
@@ -67,14 +68,24 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
           const double sp = slide_sigma_px(*slide, int(m), pc.camera, surface_position(generic.mesh, o.point),
                                            options.calib.min_sigma_px, options.calib.pixel_sigma);
           o.prior_weight = o.weight = pc.weights[m] * std::pow(options.calib.pixel_sigma / sp, 2);
+          sigma_weight_sum += std::pow(options.calib.pixel_sigma / sp, 2);
+        } else {
+          sigma_weight_sum += 1;
         }
+      } else {
+        sigma_weight_sum += 1;
       }
       obs.push_back(o);
     }
   }
+  // eq. 7 scales the features to an RMS gradient of lambda whatever their
+  // weights; landmarks noisier than pixel_sigma (the slide's scatter)
+  // should pull less against the stiffness: lambda times the RMS of
+  // pixel_sigma / scatter (1 without a scatter).
+  const double noise_factor = obs.empty() ? 1.0 : std::sqrt(sigma_weight_sum / double(obs.size()));
   std::vector<std::unique_ptr<ObservationSet>> sets;
   sets.push_back(std::make_unique<FeatureSet>(generic.mesh, cameras, std::move(obs), 2 * options.calib.pixel_sigma));
-  std::vector<double> lambdas = {options.fit.lambda_features};
+  std::vector<double> lambdas = {options.fit.lambda_features * noise_factor};
   if (outlines) {
     if (outlines->size() != photos.size())
       return Status::error(ErrorCode::InvalidInput, "shape fit: one outline per photo needed");
