@@ -125,8 +125,8 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
         mp_map.present[m] = 0;
         mp_lms[m] = SurfacePoint{};
       }
-  std::printf("photos on the real detector's points (%s, %d cameras per seed, MediaPipe map; mm, CPU ms)\n", dir.c_str(),
-              cameras);
+  std::printf("photos on the real detector's points (%s, %d cameras per seed, MediaPipe map%s; mm, CPU ms)\n", dir.c_str(),
+              cameras, !mp_map.slide.has_slide() ? "" : args.has("photos-no-slide") ? ", its slide left out" : " with its slide");
   std::printf("  %-4s %5s %7s %6s | %-27s | %-27s | %-27s | %-27s | %5s\n", "seed", "used", "focal", "rot",
               "face unaligned gen -> fit", "face aligned gen -> fit", "head unaligned gen -> fit",
               "head aligned gen -> fit", "ms");
@@ -169,7 +169,10 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
       const Vec3 C = -cam.R.transpose() * cam.t;
       for (size_t m = 0; m < mp_lms.size() && m < photos[i].points.size(); ++m) {
         if (!mp_lms[m].valid() || !photos[i].present[m]) continue;
-        const Vec3 X = surface_position(person.mesh, mp_lms[m]);
+        // Where the map (with its slide, if any, at the true view) puts the landmark on the person.
+        const Vec3 X = surface_position(person.mesh, mp_lms[m]) +
+                       (args.has("photos-no-slide") ? Vec3::Zero()
+                                                    : landmark_shift(mp_map.slide, int(m), slide_view(mp_map.slide, C)));
         const Tri& t = person.mesh.triangles[size_t(mp_lms[m].triangle)];
         const std::vector<Vec3>& P = person.mesh.positions;
         const Vec3 n = (P[size_t(t[1])] - P[size_t(t[0])]).cross(P[size_t(t[2])] - P[size_t(t[0])]).normalized();
@@ -195,6 +198,9 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
         !args.get_double("photos-view-cos", opt.calib.min_view_cos, opt.calib.min_view_cos, -1, 0.99))
       return 1;
     for (double& k : opt.fit.stiffness_schedule) k *= stiffness_scale;
+    // --photos-no-slide: the map's slide model left out; --photos-no-slide-sigma: its scatter as weights left out.
+    opt.use_slide = !args.has("photos-no-slide");
+    opt.calib.use_slide_sigma = !args.has("photos-no-slide-sigma");
     PhotosJobResult r;
     const double t0 = cpu_clock_ms();
     const Status st = run_photos_job(generic, mp_map, photos, opt, r);
@@ -210,7 +216,9 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
       for (size_t i = 0; i < photos.size(); ++i)
         if (calib.photos[i].used) calib.photos[i].camera = truth.cameras[size_t(cam_of[i])];
       calib.focal = vo.focal_px;
-      if (!fit_photos_shape(generic, mp_lms, photos, calib, opt, r.fit)) return 1;
+      if (!fit_photos_shape(generic, mp_lms, photos, calib, opt, r.fit, nullptr, nullptr, nullptr,
+                            opt.use_slide ? &mp_map.slide : nullptr))
+        return 1;
     }
     Similarity sf;
     const DetectedScores gu = score_head(generic.mesh, person.mesh, face, head, false),
@@ -469,7 +477,7 @@ int run_bench_photos(const Args& args) {
 }
 
 BenchRegistrar reg({"photos", "photos to head on synthetic sessions: camera errors, face distances, stage times "
-                              "(--photos-seeds N --photos-cameras C --photos-noise-px S --photos-map vertices|interior --photos-stiffness-scale K --photos-first-seed S --photos-silhouettes both|on|off --photos-lambda-sil L --photos-mask-grow PX --photos-sil-facets --photos-stereo --photos-lambda-features L; --photos-detected DIR: real-detector points on synth-photos renders, made by tests/browser/detect_synth_photos.mjs)",
+                              "(--photos-seeds N --photos-cameras C --photos-noise-px S --photos-map vertices|interior --photos-stiffness-scale K --photos-first-seed S --photos-silhouettes both|on|off --photos-lambda-sil L --photos-mask-grow PX --photos-sil-facets --photos-stereo --photos-lambda-features L; --photos-detected DIR: real-detector points on synth-photos renders, made by tests/browser/detect_synth_photos.mjs, with --photos-detected-map FILE --photos-no-slide --photos-no-slide-sigma --photos-true-cameras --photos-drop GROUP)",
                     run_bench_photos});
 
 }  // namespace

@@ -20,7 +20,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
+#include <deque>
 #include <cmath>
 #include <cstdio>
 #include <sys/stat.h>
@@ -439,21 +441,13 @@ int run_synth_photos(const Args& args) {
 // each seed as synth-photos makes it.
 int run_learn_landmark_map(const Args& args) {
   const std::string cmd = "learn-landmark-map";
-  if (!only_known_options(cmd, args, {"detected", "out", "map"})) return 2;
-  const std::string dir = args.get("detected"), out_path = args.get("out"), map_path = args.get("map");
-  if (dir.empty() || out_path.empty()) return fail(cmd, "needs --detected DIR and --out MAP.json");
-  Bytes bytes;
-  Status s = read_file(dir + "/session.json", bytes, 1 << 20);
-  if (!s) return fail(cmd, s.message + " (make DIR with tests/browser/detect_synth_photos.mjs)");
-  Json session = Json::parse(std::string(bytes.begin(), bytes.end()), nullptr, false);
-  if (session.is_discarded() || !session.contains("cameras") || !session["cameras"].is_number_integer() ||
-      !session.contains("seeds") || !session["seeds"].is_array())
-    return fail(cmd, dir + "/session.json: needs {\"cameras\": C, \"seeds\": [...]}");
-  const int cameras = session["cameras"].get<int>();
-  if (cameras < 2 || cameras > 64) return fail(cmd, dir + "/session.json: cameras must be 2..64");
+  if (!only_known_options(cmd, args, {"detected", "out", "map", "slide"})) return 2;
+  const std::string dirs = args.get("detected"), out_path = args.get("out"), map_path = args.get("map");
+  if (dirs.empty() || out_path.empty()) return fail(cmd, "needs --detected DIR[,DIR...] and --out MAP.json");
   GenericHead generic;
-  s = load_generic_head(generic);
+  Status s = load_generic_head(generic);
   if (!s) return fail(cmd, s.message);
+  Bytes bytes;
   std::string map_text = mediapipe_landmark_map_text();
   if (!map_path.empty()) {
     s = read_file(map_path, bytes, kMaxLandmarkFileBytes);
@@ -466,38 +460,63 @@ int run_learn_landmark_map(const Args& args) {
   if (s) s = placeholder_landmark_map(generic, 468, ph_map);
   if (s) s = attach_landmark_map(ph_map, generic.mesh, 1e-3, ph_lms);
   if (!s) return fail(cmd, s.message);
-  std::vector<GenericHead> people;
+  std::deque<GenericHead> people;
   std::vector<DetectedSessionView> sessions;
-  const std::vector<Json> seeds = session["seeds"].get<std::vector<Json>>();
-  people.reserve(seeds.size());
-  for (const Json& js : seeds) {
-    if (!js.is_number_integer() || js.get<int>() < 0) return fail(cmd, dir + "/session.json: seeds must be integers");
-    const int seed = js.get<int>();
-    people.emplace_back();
-    SyntheticViewsOptions vo;
-    vo.num_cameras = cameras;
-    SyntheticSession truth;
-    s = synthesize_head(generic, std::uint32_t(seed), SynthHeadOptions{}, people.back());
-    if (s) s = make_synthetic_views(people.back(), ph_lms, std::uint32_t(seed), vo, truth);
-    if (!s) return fail(cmd, s.message);
-    DetectedSessionView v;
-    v.person = &people.back().mesh;
-    for (int c = 0; c < cameras; ++c) {
-      char name[32];
-      std::snprintf(name, sizeof name, "/view_%02d.json", c);
-      const std::string path = dir + "/seed" + std::to_string(seed) + name;
-      if (!read_file(path, bytes, kMaxLandmarkFileBytes)) continue;  // no face found on that view
-      LandmarkPhoto ph;
-      s = parse_landmarks_json(std::string(bytes.begin(), bytes.end()), ph);
-      if (!s) return fail(cmd, path + ": " + s.message);
-      if (ph.detector != start.detector)
-        return fail(cmd, path + ": points of '" + ph.detector + "', the map is for '" + start.detector + "'");
-      v.cameras.push_back(truth.cameras[size_t(c)]);
-      v.photos.push_back(ph);
+  size_t a = 0;
+  while (a < dirs.size()) {
+    const size_t b = std::min(dirs.find(',', a), dirs.size());
+    const std::string dir = dirs.substr(a, b - a);
+    a = b + 1;
+    if (dir.empty()) continue;
+    s = read_file(dir + "/session.json", bytes, 1 << 20);
+    if (!s) return fail(cmd, s.message + " (make DIR with tests/browser/detect_synth_photos.mjs)");
+    Json session = Json::parse(std::string(bytes.begin(), bytes.end()), nullptr, false);
+    if (session.is_discarded() || !session.contains("cameras") || !session["cameras"].is_number_integer() ||
+        !session.contains("seeds") || !session["seeds"].is_array())
+      return fail(cmd, dir + "/session.json: needs {\"cameras\": C, \"seeds\": [...]}");
+    const int cameras = session["cameras"].get<int>();
+    if (cameras < 2 || cameras > 64) return fail(cmd, dir + "/session.json: cameras must be 2..64");
+    for (const Json& js : session["seeds"]) {
+      if (!js.is_number_integer() || js.get<int>() < 0) return fail(cmd, dir + "/session.json: seeds must be integers");
+      const int seed = js.get<int>();
+      people.emplace_back();
+      SyntheticViewsOptions vo;
+      vo.num_cameras = cameras;
+      SyntheticSession truth;
+      s = synthesize_head(generic, std::uint32_t(seed), SynthHeadOptions{}, people.back());
+      if (s) s = make_synthetic_views(people.back(), ph_lms, std::uint32_t(seed), vo, truth);
+      if (!s) return fail(cmd, s.message);
+      DetectedSessionView v;
+      v.person = &people.back().mesh;
+      for (int c = 0; c < cameras; ++c) {
+        char name[32];
+        std::snprintf(name, sizeof name, "/view_%02d.json", c);
+        const std::string path = dir + "/seed" + std::to_string(seed) + name;
+        if (!read_file(path, bytes, kMaxLandmarkFileBytes)) continue;  // no face found on that view
+        LandmarkPhoto ph;
+        s = parse_landmarks_json(std::string(bytes.begin(), bytes.end()), ph);
+        if (!s) return fail(cmd, path + ": " + s.message);
+        if (ph.detector != start.detector)
+          return fail(cmd, path + ": points of '" + ph.detector + "', the map is for '" + start.detector + "'");
+        v.cameras.push_back(truth.cameras[size_t(c)]);
+        v.photos.push_back(ph);
+      }
+      sessions.push_back(std::move(v));
     }
-    sessions.push_back(std::move(v));
   }
   LandmarkMap learned;
+  if (args.has("slide")) {
+    LearnSlideReport rep;
+    s = learn_landmark_slide(generic.mesh, start, sessions, LearnSlideOptions{}, learned, &rep);
+    if (s) s = write_file(out_path, landmark_map_to_json(learned));
+    if (!s) return fail(cmd, s.message);
+    std::printf("learn-landmark-map --slide: %d landmarks from %zu sessions, %d with a slide (views within yaw "
+                "+-%.1f, pitch +-%.1f deg); training scatter %.2f mm with a fixed point, %.2f mm with the slide "
+                "(per coordinate, at the landmark) -> %s\n",
+                rep.learned, sessions.size(), rep.sliding, rep.yaw_range_deg, rep.pitch_range_deg,
+                1000 * rep.rms_fixed_m, 1000 * rep.rms_slide_m, out_path.c_str());
+    return 0;
+  }
   LearnMapReport rep;
   s = learn_landmark_map(generic.mesh, start, sessions, LearnMapOptions{}, learned, &rep);
   if (s) s = write_file(out_path, landmark_map_to_json(learned));
@@ -523,9 +542,10 @@ Registrar synth_photos_reg({"synth-photos",
                             "a synthetic photo session with its truth: landmark files, map, rendered views, cameras",
                             run_synth_photos, nullptr});
 
-Registrar learn_map_reg({"learn-landmark-map", "likeness learn-landmark-map --detected DIR --out MAP.json [--map START.json]",
+Registrar learn_map_reg({"learn-landmark-map", "likeness learn-landmark-map --detected DIR[,DIR...] --out MAP.json [--map START.json] [--slide]",
                          "the MediaPipe landmark map re-made from the real detector's points on synthetic sessions with "
-                         "their truth (tests/browser/detect_synth_photos.mjs writes DIR)",
+                         "their truth (tests/browser/detect_synth_photos.mjs writes DIR); --slide: with the detector's "
+                         "view-dependent slide and scatter per landmark (map version 2, photos/landmark_slide.h)",
                          run_learn_landmark_map, nullptr});
 }  // namespace
 }  // namespace lk::cli

@@ -14,6 +14,7 @@
 #include "common/status.h"
 #include "photos/landmarks.h"
 
+#include <array>
 #include <vector>
 
 namespace lk {
@@ -43,5 +44,39 @@ struct LearnMapReport {
 Status learn_landmark_map(const TriMesh& generic, const LandmarkMap& start,
                           const std::vector<DetectedSessionView>& sessions, const LearnMapOptions& options,
                           LandmarkMap& out, LearnMapReport* report = nullptr);
+
+// The map and the detector's view-dependent slide learned together
+// (landmark_slide.h): per landmark, its offset o from its surface place and
+// its shifts D_k, so that the true camera c sees it at the person's surface
+// place + o + sum_k phi_k(view_c) D_k where the detector put it. Gauss-Newton
+// on the reprojection errors (each view's rows scaled by depth / focal,
+// i.e. metres at the landmark), Huber weights, a Gaussian prior on the
+// shifts (ridge: (noise_m / shift_prior_m)^2). Then the scatter left, per
+// landmark, kernel-smoothed over the views' yaw at sigma_yaw_deg. Done
+// twice: the second pass from the first's points re-attached (their
+// surface place under them). A landmark with fewer views than
+// 2 (terms + 1) keeps a fixed point (no slide) when it has min_views.
+struct LearnSlideOptions {
+  double min_view_cos = 0.3;        // as LearnMapOptions (and the self-calibration's visibility)
+  int min_views = 4;                // over all sessions, for a point
+  int min_sessions = 2;
+  std::vector<std::array<int, 2>> terms = {{1, 0}, {0, 1}, {2, 0}, {1, 1}, {0, 2}, {3, 0}};
+  double shift_prior_m = 0.005;     // expected size of a shift coefficient
+  double noise_m = 0.0015;          // expected scatter (sets the ridge and the Huber threshold, 3 x)
+  double max_offset_m = 0.012;      // as LearnMapOptions
+  std::vector<double> sigma_yaw_deg = {-60, -45, -30, -15, 0, 15, 30, 45, 60};
+  double sigma_kernel_deg = 12;     // Gaussian kernel over the views' yaw for the scatter
+  int passes = 2;
+};
+
+struct LearnSlideReport {
+  int learned = 0, sliding = 0;     // landmarks with a point, and of those with a slide
+  double yaw_range_deg = 0, pitch_range_deg = 0;  // of the training views
+  double rms_fixed_m = 0, rms_slide_m = 0;        // training residual (metres at the landmark, per coordinate): point only, with the slide
+};
+
+Status learn_landmark_slide(const TriMesh& generic, const LandmarkMap& start,
+                            const std::vector<DetectedSessionView>& sessions, const LearnSlideOptions& options,
+                            LandmarkMap& out, LearnSlideReport* report = nullptr);
 
 }  // namespace lk

@@ -6,6 +6,11 @@
 //    "detector":"mediapipe-face-mesh","points":[[x,y] or null, ...]}
 //   {"format":"likeness-landmark-map","version":1,
 //    "detector":"mediapipe-face-mesh","points":[[x,y,z] or null, ...]}
+// Version 2 of the map adds "slide" (landmark_slide.h):
+//    {"yaw_range_deg":Y,"pitch_range_deg":P,"terms":[[i,j],...],
+//     "shifts":[[[x,y,z] per term] or null, ... #M],
+//     "sigma_yaw_deg":[...],"sigma":[[s per yaw] or null, ... #M]}
+// (metres); version 1 files are still read (no slide).
 // Landmark points are pixels (origin at the top-left pixel corner, y down),
 // index = the detector's landmark index. Map points are in the generic head's
 // coordinates (metres); at load they are projected onto the head surface
@@ -16,6 +21,7 @@
 #pragma once
 #include "common/status.h"
 #include "mesh/tri_mesh.h"
+#include "photos/landmark_slide.h"
 
 #include <string>
 #include <vector>
@@ -39,6 +45,7 @@ struct LandmarkMap {
   std::string detector;
   std::vector<Vec3> points;    // #M, generic-head coordinates
   std::vector<char> present;   // #M
+  LandmarkSlide slide;         // the detector's view-dependent slide and scatter (version 2; empty in version 1)
 };
 
 // In its own inline namespace: fit/closest_point.h defines another

@@ -41,16 +41,19 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
                         const std::vector<LandmarkPhoto>& photos, const SelfCalibResult& calib,
                         const PhotosJobOptions& options, ShapeFitResult& fit,
                         const std::vector<PhotoOutline>* outlines, const StereoResult* stereo,
-                        PhotosStereoFit* stereo_fit) {
+                        PhotosStereoFit* stereo_fit, const LandmarkSlide* slide) {
+  if (slide && !slide->has_slide() && !slide->has_sigma()) slide = nullptr;
   if (calib.photos.size() != photos.size())
     return Status::error(ErrorCode::InvalidInput, "shape fit: the calibration is for other photos");
   std::vector<Camera> cameras;
   std::vector<FeatureObservation> obs;
+  double sigma_weight_sum = 0;  // sum of (pixel_sigma / the slide's scatter)^2 over the observations
   for (size_t i = 0; i < photos.size(); ++i) {
     const PhotoCalibration& pc = calib.photos[i];
     if (!pc.used) continue;
     const int cam = int(cameras.size());
     cameras.push_back(pc.camera);
+    const SlideView view = slide ? slide_view(*slide, pc.camera.center()) : SlideView{};
     for (size_t m = 0; m < landmarks.size() && m < photos[i].points.size(); ++m) {
       if (!photos[i].present[m] || !landmarks[m].valid() || !(pc.weights[m] > 0)) continue;
       FeatureObservation o;
@@ -58,12 +61,31 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
       o.point = landmarks[m];
       o.pixel = photos[i].points[m];
       o.prior_weight = o.weight = pc.weights[m];
+      if (slide) {
+        // The cameras are fixed here: the shift is a constant offset per observation.
+        o.point.offset += landmark_shift(*slide, int(m), view);
+        if (slide->has_sigma() && options.calib.use_slide_sigma) {
+          const double sp = slide_sigma_px(*slide, int(m), pc.camera, surface_position(generic.mesh, o.point),
+                                           options.calib.min_sigma_px, options.calib.pixel_sigma);
+          o.prior_weight = o.weight = pc.weights[m] * std::pow(options.calib.pixel_sigma / sp, 2);
+          sigma_weight_sum += std::pow(options.calib.pixel_sigma / sp, 2);
+        } else {
+          sigma_weight_sum += 1;
+        }
+      } else {
+        sigma_weight_sum += 1;
+      }
       obs.push_back(o);
     }
   }
+  // eq. 7 scales the features to an RMS gradient of lambda whatever their
+  // weights; landmarks noisier than pixel_sigma (the slide's scatter)
+  // should pull less against the stiffness: lambda times the RMS of
+  // pixel_sigma / scatter (1 without a scatter).
+  const double noise_factor = obs.empty() ? 1.0 : std::sqrt(sigma_weight_sum / double(obs.size()));
   std::vector<std::unique_ptr<ObservationSet>> sets;
   sets.push_back(std::make_unique<FeatureSet>(generic.mesh, cameras, std::move(obs), 2 * options.calib.pixel_sigma));
-  std::vector<double> lambdas = {options.fit.lambda_features};
+  std::vector<double> lambdas = {options.fit.lambda_features * noise_factor};
   if (outlines) {
     if (outlines->size() != photos.size())
       return Status::error(ErrorCode::InvalidInput, "shape fit: one outline per photo needed");
@@ -164,7 +186,8 @@ Status run_photos_job(const GenericHead& generic, const LandmarkMap& map, const 
   Status s = attach_landmark_map(map, generic.mesh, options.map_max_distance_m, landmarks);
   if (!s) return s;
 
-  s = self_calibrate(photos, generic.mesh, landmarks, options.calib, result.calib);
+  const LandmarkSlide* slide = options.use_slide && (map.slide.has_slide() || map.slide.has_sigma()) ? &map.slide : nullptr;
+  s = self_calibrate(photos, generic.mesh, landmarks, options.calib, result.calib, slide);
   for (size_t i = 0; i < result.calib.photos.size(); ++i)
     if (!result.calib.photos[i].refusal.empty())
       result.notes.push_back(photo_name(i) + " dropped: " + result.calib.photos[i].refusal);
@@ -183,7 +206,7 @@ Status run_photos_job(const GenericHead& generic, const LandmarkMap& map, const 
                              " deg apart; landmarks only");
   }
   s = fit_photos_shape(generic, landmarks, photos, result.calib, options, result.fit, outlines, &result.stereo,
-                       &result.stereo_fit);
+                       &result.stereo_fit, slide);
   return with_context(s, "photos");
 }
 

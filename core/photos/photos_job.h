@@ -32,6 +32,11 @@ struct PhotosJobOptions {
   bool stereo = true;                 // use the images, when given, for stereo attractors
   StereoOptions stereo_options;
   double lambda_stereo = 1.0;         // fua1998 Sec. 4
+  // The map's slide model (landmark_slide.h), when it has one: each
+  // landmark seen where the detector puts it from that camera's view, in
+  // the self-calibration and the shape fit; its scatter weighs the
+  // landmarks (calib.use_slide_sigma).
+  bool use_slide = true;
 };
 
 // What the stereo attractors came to in a fit (fua1998 Fig. 7's measure).
@@ -65,12 +70,14 @@ Status run_photos_stereo(const GenericHead& generic, const std::vector<LandmarkP
 // generic.mesh. outlines: null, or one per photo (empty points: none for
 // that photo), each used photo's as silhouette observations
 // (silhouette_obs.h; the neck region excluded, the chin region's lowest
-// point as the chin line).
+// point as the chin line). slide: null, or the map's slide model: each
+// landmark observed at its point plus its shift for that photo's camera,
+// weighted by its scatter there (as the self-calibration).
 Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoint>& landmarks,
                         const std::vector<LandmarkPhoto>& photos, const SelfCalibResult& calib,
                         const PhotosJobOptions& options, ShapeFitResult& fit,
                         const std::vector<PhotoOutline>* outlines = nullptr, const StereoResult* stereo = nullptr,
-                        PhotosStereoFit* stereo_fit = nullptr);
+                        PhotosStereoFit* stereo_fit = nullptr, const LandmarkSlide* slide = nullptr);
 
 // The silhouette set fit_photos_shape builds (for reports: its stats at the
 // generic and the fitted shape). Null when no used photo has an outline.

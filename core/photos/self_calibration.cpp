@@ -40,8 +40,10 @@ const char* const kUpsideDown =
 struct Observation {
   int camera = 0;    // index into the used cameras
   int landmark = 0;  // index into the active landmarks
+  int map_index = 0; // the landmark's index in the map (for its slide)
   Vec2 pixel = Vec2::Zero();
   double weight = 1; // IRLS weight
+  double sigma = 2;  // noise, pixels
 };
 
 // The bundle adjustment: focal, poses, landmark positions; reprojection
@@ -53,6 +55,13 @@ class BundleProblem : public LeastSquaresProblem {
   std::vector<Vec3> points, prior;
   std::vector<Observation> obs;
   double pixel_sigma = 2, shape_sigma = 0.01, focal_prior = 0, focal_prior_sigma = 0.05;
+  const LandmarkSlide* slide = nullptr;
+
+  // The point observation o sees, at a camera: its 3-D point plus its shift for that view.
+  Vec3 seen_point(const Observation& o, const Camera& c, const Vec3& X) const {
+    if (!slide) return X;
+    return X + landmark_shift(*slide, o.map_index, slide_view(*slide, c.center()));
+  }
 
   int num_parameters() const override { return 1 + 6 * int(cameras.size()) + 3 * int(points.size()); }
   int point_index(int a) const { return 1 + 6 * int(cameras.size()) + 3 * a; }
@@ -69,8 +78,10 @@ class BundleProblem : public LeastSquaresProblem {
       Camera c = cameras[size_t(o.camera)];
       c.fx = c.fy = focal;
       ProjectionJacobian pj;
-      const double s = std::sqrt(o.weight) / pixel_sigma;
-      if (projection_jacobian(c, points[size_t(o.landmark)], o.pixel, pj)) {
+      const double s = std::sqrt(o.weight) / o.sigma;
+      const bool ok = slide ? slid_projection_jacobian(c, points[size_t(o.landmark)], *slide, o.map_index, o.pixel, pj)
+                            : projection_jacobian(c, points[size_t(o.landmark)], o.pixel, pj);
+      if (ok) {
         r.segment<2>(row) = s * pj.residual;
         const int ci = 1 + 6 * o.camera, pi = point_index(o.landmark);
         for (int k = 0; k < 2; ++k) {
@@ -119,8 +130,8 @@ class BundleProblem : public LeastSquaresProblem {
       Camera c = cams[size_t(o.camera)];
       c.fx = c.fy = f;
       Vec2 uv;
-      if (!c.project(pts[size_t(o.landmark)], uv)) return std::numeric_limits<double>::infinity();
-      cost += o.weight * (uv - o.pixel).squaredNorm() / (pixel_sigma * pixel_sigma);
+      if (!c.project(seen_point(o, c, pts[size_t(o.landmark)]), uv)) return std::numeric_limits<double>::infinity();
+      cost += o.weight * (uv - o.pixel).squaredNorm() / (o.sigma * o.sigma);
     }
     for (size_t a = 0; a < pts.size(); ++a) cost += (pts[a] - prior[a]).squaredNorm() / (shape_sigma * shape_sigma);
     if (focal_prior > 0) {
@@ -144,7 +155,8 @@ class BundleProblem : public LeastSquaresProblem {
     Camera c = cameras[size_t(o.camera)];
     c.fx = c.fy = focal;
     Vec2 uv;
-    return c.project(points[size_t(o.landmark)], uv) ? (uv - o.pixel).norm() : std::numeric_limits<double>::infinity();
+    return c.project(seen_point(o, c, points[size_t(o.landmark)]), uv) ? (uv - o.pixel).norm()
+                                                                      : std::numeric_limits<double>::infinity();
   }
 };
 
@@ -178,14 +190,35 @@ bool projection_jacobian(const Camera& camera, const Vec3& X, const Vec2& observ
   return true;
 }
 
+bool slid_projection_jacobian(const Camera& camera, const Vec3& X, const LandmarkSlide& slide, int landmark,
+                              const Vec2& observed, ProjectionJacobian& out) {
+  Mat3 dS;
+  const Vec3 shift = landmark_shift(slide, landmark, slide_view(slide, camera.center()), &dS);
+  if (!projection_jacobian(camera, X + shift, observed, out)) return false;
+  // C = -R^T t; with R <- exp([w]x) R: dC/dw = -R^T [t]x, dC/dt = -R^T.
+  const Eigen::Matrix<double, 2, 3> through = out.d_point * dS;
+  out.d_rotation -= through * camera.R.transpose() * skew(camera.t);
+  out.d_translation -= through * camera.R.transpose();
+  return true;
+}
+
+double slide_sigma_px(const LandmarkSlide& slide, int landmark, const Camera& camera, const Vec3& X, double min_px,
+                      double fallback_px) {
+  const double s = landmark_sigma(slide, landmark, camera.center());
+  const double z = camera.to_camera(X).z();
+  if (!(s > 0) || !(z > 0)) return fallback_px;
+  return std::max(min_px, s * camera.fx / z);
+}
+
 Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& generic,
                       const std::vector<SurfacePoint>& landmarks, const SelfCalibOptions& options,
-                      SelfCalibResult& result) {
+                      SelfCalibResult& result, const LandmarkSlide* slide) {
   result = {};
   const int P = int(photos.size()), M = int(landmarks.size());
   if (!(options.pixel_sigma > 0) || !(options.shape_sigma_m > 0) || !(options.huber_k > 0) ||
       !(options.focal_prior_px >= 0) || !(options.focal_prior_sigma > 0) || options.min_landmarks < 6 || !(options.refuse_factor > 1) ||
-      !(options.refuse_min_sigma >= 0) || !(options.min_view_cos >= -1 && options.min_view_cos < 1))
+      !(options.refuse_min_sigma >= 0) || !(options.min_view_cos >= -1 && options.min_view_cos < 1) ||
+      !(options.min_sigma_px > 0))
     return Status::error(ErrorCode::InvalidInput, "self-calibration: an option is out of range");
   for (const SurfacePoint& s : landmarks)
     if (s.valid() && (s.triangle >= generic.num_triangles()))
@@ -254,6 +287,25 @@ Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& g
     else pc.refusal = "its landmarks fit no camera: " + s.message;
   }
 
+  // With a slide: each photo posed again (twice) against the landmarks
+  // where the detector sees them from its current camera, a view far to the
+  // side being the one the fixed points place least turned.
+  if (slide && slide->has_slide())
+    for (int i = 0; i < P; ++i) {
+      if (!result.photos[size_t(i)].used) continue;
+      for (int again = 0; again < 2; ++again) {
+        const SlideView v = slide_view(*slide, alone[size_t(i)].camera.center());
+        std::vector<Correspondence> slid = corr[size_t(i)];
+        for (size_t q = 0; q < slid.size(); ++q) slid[q].point += landmark_shift(*slide, corr_index[size_t(i)][q], v);
+        CalibOptions at = co;
+        at.known_focal = alone[size_t(i)].camera.fx;
+        CalibResult r;
+        if (!calibrate_camera(slid, photos[size_t(i)].width, photos[size_t(i)].height, at, r) || upside_down(r.camera))
+          break;
+        alone[size_t(i)] = r;
+      }
+    }
+
   // Visibility: the detector places every landmark, also those the face
   // hides (the far cheek, the outline seen edge-on); it puts them on the
   // silhouette, not where the map says. Each photo keeps only the landmarks
@@ -308,6 +360,12 @@ Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& g
     std::vector<std::array<int, 2>> sizes;
     for (int i : used) {
       sets.push_back(corr[size_t(i)]);
+      // The landmarks where the detector sees them from this photo's first camera.
+      if (slide && slide->has_slide()) {
+        const SlideView v = slide_view(*slide, alone[size_t(i)].camera.center());
+        for (size_t q = 0; q < sets.back().size(); ++q)
+          sets.back()[q].point += landmark_shift(*slide, corr_index[size_t(i)][q], v);
+      }
       sizes.push_back({photos[size_t(i)].width, photos[size_t(i)].height});
     }
     SharedCalibResult shared;
@@ -320,6 +378,8 @@ Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& g
     bp.shape_sigma = options.shape_sigma_m;
     bp.focal_prior = options.focal_prior_px;
     bp.focal_prior_sigma = options.focal_prior_sigma;
+    if (slide && slide->has_slide()) bp.slide = slide;
+    const bool slide_sigma = slide && slide->has_sigma() && options.use_slide_sigma;
     std::vector<int> active_of(size_t(M), -1), landmark_of;
     for (size_t k = 0; k < used.size(); ++k) {
       bp.cameras.push_back(shared.photos[k].camera);
@@ -331,7 +391,7 @@ Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& g
           landmark_of.push_back(m);
           bp.points.push_back(generic_points[size_t(m)]);
         }
-        bp.obs.push_back({int(k), active_of[size_t(m)], corr[size_t(used[k])][q].pixel, 1.0});
+        bp.obs.push_back({int(k), active_of[size_t(m)], m, corr[size_t(used[k])][q].pixel, 1.0, options.pixel_sigma});
       }
     }
     bp.prior = bp.points;
@@ -347,10 +407,18 @@ Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& g
     result.initial_rms_px = rms_all();
     result.lm_iterations = 0;
     for (int round = 0; round < options.reweighting_rounds; ++round) {
+      // Each observation's noise: the landmark's scatter at the current view.
+      if (slide_sigma)
+        for (Observation& o : bp.obs) {
+          Camera c = bp.cameras[size_t(o.camera)];
+          c.fx = c.fy = bp.focal;
+          o.sigma = slide_sigma_px(*slide, o.map_index, c, bp.points[size_t(o.landmark)], options.min_sigma_px,
+                                   options.pixel_sigma);
+        }
       // Huber weights from the current errors.
       if (round > 0)
         for (Observation& o : bp.obs) {
-          const double e = bp.error(o) / options.pixel_sigma;
+          const double e = bp.error(o) / o.sigma;
           o.weight = e <= options.huber_k ? 1.0 : (std::isfinite(e) ? options.huber_k / e : 0.0);
         }
       LmOptions lo;

@@ -53,6 +53,11 @@ struct SelfCalibOptions {
   // Refuse a photo whose landmarks fit only a camera that sees the head
   // upside down (head's +y pointing down the image).
   bool refuse_upside_down = true;
+  // With a slide model (landmark_slide.h) that has a scatter: each
+  // observation's noise is the landmark's scatter at that view, in pixels
+  // (at least min_sigma_px), instead of pixel_sigma for all.
+  bool use_slide_sigma = true;
+  double min_sigma_px = 1.0;
 };
 
 // In its own inline namespace: project/texture_job.h and the texture
@@ -87,10 +92,20 @@ struct SelfCalibResult {
 // Fails with InvalidInput on inconsistent sizes or a bad option, NotConverged
 // when fewer than 2 of several photos are usable (the refusals say why per
 // photo). A single photo is calibrated alone (its landmarks' depths then
-// rest on the generic head's prior).
+// rest on the generic head's prior). slide: the detector's view-dependent
+// slide (landmark_slide.h, indexed as landmarks), or null: landmark m is
+// then seen at its point plus its shift for the camera's view, in the
+// initial cameras and in the bundle adjustment (the shift's dependence on
+// the camera's pose included in the Jacobian).
 Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& generic,
                       const std::vector<SurfacePoint>& landmarks, const SelfCalibOptions& options,
-                      SelfCalibResult& result);
+                      SelfCalibResult& result, const LandmarkSlide* slide = nullptr);
+
+// An observation's noise in pixels under the slide's scatter: the
+// landmark's scatter at the camera's view times focal / depth, at least
+// min_px; fallback_px where the slide has no scatter for it.
+double slide_sigma_px(const LandmarkSlide& slide, int landmark, const Camera& camera, const Vec3& X, double min_px,
+                      double fallback_px);
 
 // Where a camera sees the head from, in degrees: yaw = atan2(C.x, C.z)
 // (positive: from the head's left, +x), pitch = the camera centre's
@@ -108,5 +123,11 @@ struct ProjectionJacobian {
   Eigen::Matrix<double, 2, 3> d_rotation, d_translation, d_point;
 };
 bool projection_jacobian(const Camera& camera, const Vec3& X, const Vec2& observed, ProjectionJacobian& out);
+
+// The same for landmark m that slides with the view: the residual of
+// X + landmark_shift(camera centre), and the shift's dependence on the
+// camera's rotation and translation added to those derivatives.
+bool slid_projection_jacobian(const Camera& camera, const Vec3& X, const LandmarkSlide& slide, int landmark,
+                              const Vec2& observed, ProjectionJacobian& out);
 
 }  // namespace lk

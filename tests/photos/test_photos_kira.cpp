@@ -76,19 +76,22 @@ TEST_CASE("the photos job uses every Kira photo the detector read, with cameras 
   CHECK(view["0009"][0] < view["0001"][0] - 5);
   for (const char* n : {"0002", "0008", "0010"}) CHECK(view[n][0] > view["0001"][0] + 15);
 
-  // Reprojection: measured 2.2-3.6 px per photo at or above eye level, 4.4-7.1
-  // px from below (the detector's bias changes with the view).
+  // Reprojection: with the map's slide (core/head/data/README.md) measured
+  // 2.6-4.9 px per photo (median 3.8), the three from below 3.8-4.9; with
+  // the first map (no slide) 2.2-3.6 px at or above eye level but 4.4-7.1 px
+  // from below (the detector's bias changes with the view).
   std::sort(medians.begin(), medians.end());
   CHECK(medians[medians.size() / 2] < 4.0);
-  CHECK(medians.back() < 9.0);
+  CHECK(medians.back() < 6.0);
   CHECK(r.calib.final_rms_px < 6.0);
   CHECK(r.fit.final_rms_px < r.fit.initial_rms_px);
 
   // The focal: the self-calibration does NOT recover the lens (3813.6 px,
-  // SOURCES.md); it settles at about 1800 px (docs/design/photos.md, "On real
-  // photos: Kira"). Held here to its measured neighbourhood so a change shows.
-  CHECK(r.calib.focal > 1500);
-  CHECK(r.calib.focal < 2200);
+  // SOURCES.md); it settles at about 2100 px with the map's slide (1800 px
+  // without it; docs/design/photos.md, "On real photos: Kira"). Held here to
+  // its measured neighbourhood so a change shows.
+  CHECK(r.calib.focal > 1900);
+  CHECK(r.calib.focal < 2400);
 }
 
 }  // namespace
