@@ -1197,19 +1197,32 @@ Status Renderer::upload_morph_band(DrawableHandle handle, MorphJob& job, const M
   glTexSubImage2D(GL_TEXTURE_2D, 0, 0, r0, width, r1 - r0, GL_RGBA, GL_FLOAT, job.band.data());
   glBindTexture(GL_TEXTURE_2D, 0);
   job.rows_sent = r1;
-  if (r1 == data.rows) {
-    glBindVertexArray(d->vao);
-    glGenBuffers(1, &d->morph_buffer);
-    glBindBuffer(GL_ARRAY_BUFFER, d->morph_buffer);
-    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.ranges.size() * sizeof(float)), data.ranges.data(), GL_STATIC_DRAW);
-    bind_attribute(d->morph_buffer, kMorph, 2);
-    glGenBuffers(1, &d->morph_mask_buffer);
-    glBindBuffer(GL_ARRAY_BUFFER, d->morph_mask_buffer);
-    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.masks.size() * sizeof(std::uint32_t)), data.masks.data(), GL_STATIC_DRAW);
-    glEnableVertexAttribArray(kMorphMask);
-    glVertexAttribIPointer(kMorphMask, 4, GL_UNSIGNED_INT, 0, nullptr);
-    glBindVertexArray(0);
-  }
+  done = r1 == data.rows;
+  return Status::success();
+}
+
+Status Renderer::finish_morph_upload(DrawableHandle handle, MorphJob& job, const MorphData& data) {
+  Impl::Drawable* d = impl_->find(handle);
+  if (!d || d->is_points) return Status::error(ErrorCode::InvalidInput, "set_morph_targets: no mesh with handle " + std::to_string(handle));
+  if (data.count == 0) return Status::success();
+  if (job.rows_sent != data.rows || !d->morph_texture ||
+      data.ranges.size() != 2 * static_cast<size_t>(d->vertex_count) || data.masks.size() != 4 * static_cast<size_t>(d->vertex_count))
+    return Status::error(ErrorCode::InvalidInput, "set_morph_targets: the texture's bands are not all sent");
+  glBindVertexArray(d->vao);
+  glGenBuffers(1, &d->morph_buffer);
+  glBindBuffer(GL_ARRAY_BUFFER, d->morph_buffer);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.ranges.size() * sizeof(float)), data.ranges.data(), GL_STATIC_DRAW);
+  bind_attribute(d->morph_buffer, kMorph, 2);
+  glGenBuffers(1, &d->morph_mask_buffer);
+  glBindBuffer(GL_ARRAY_BUFFER, d->morph_mask_buffer);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.masks.size() * sizeof(std::uint32_t)), data.masks.data(), GL_STATIC_DRAW);
+  glEnableVertexAttribArray(kMorphMask);
+  glVertexAttribIPointer(kMorphMask, 4, GL_UNSIGNED_INT, 0, nullptr);
+  glBindVertexArray(0);
+  // Errors are asked for once, here (they stay set until read): in a
+  // browser glGetError waits for the GPU process to finish the work queued
+  // before it (under SwiftShader, the CPU path's last draws), which every
+  // band would pay.
   if (Status s = check_gl("set_morph_targets"); !s) {
     glBindVertexArray(d->vao);
     glDisableVertexAttribArray(kMorph);
@@ -1219,13 +1232,10 @@ Status Renderer::upload_morph_band(DrawableHandle handle, MorphJob& job, const M
     job.rows_sent = 0;
     return s;
   }
-  if (r1 == data.rows) {
-    d->morph_count = data.count;
-    d->morph_texture_width = width;
-    d->morph_weights.assign(kMaxMorphTargets, 0.0f);
-    job.band = {};
-    done = true;
-  }
+  d->morph_count = data.count;
+  d->morph_texture_width = data.width;
+  d->morph_weights.assign(kMaxMorphTargets, 0.0f);
+  job.band = {};
   return Status::success();
 }
 

@@ -233,10 +233,13 @@ class Renderer {
   Status step_morph_targets(MorphJob& job, int max_shapes, bool& done);
   // with_texels false: no texels in `out` (43 MB at level 3 of our heads,
   // a heap growth in wasm); upload_morph_band then writes and sends them a
-  // band of max_rows rows per call (done after the last, which also sets
-  // the per-vertex attributes). The mesh has no morph targets in between.
+  // band of max_rows rows per call (done after the last), and
+  // finish_morph_upload sets the per-vertex attributes and checks for GL
+  // errors (the only check: in a browser it waits for the GPU process).
+  // The mesh has no morph targets in between.
   Status finish_morph_targets(MorphJob& job, MorphData& out, bool with_texels = true);
   Status upload_morph_band(DrawableHandle handle, MorphJob& job, const MorphData& data, int max_rows, bool& done);
+  Status finish_morph_upload(DrawableHandle handle, MorphJob& job, const MorphData& data);
   Status upload_morph_targets(DrawableHandle handle, const MorphData& data);
   // Weights, one per shape (fewer: the rest are 0). All zero draws the rest
   // pose exactly (the shader skips the blend).
