@@ -43,6 +43,7 @@ const SEGMENTS = [
   // The camera 15 degrees above: as if the head looked 15 degrees down.
   { name: 'pitch', args: ['--expression', 'neutral', '--yaw', '0', '--pitch', '15'], turn: { yaw: 0, pitch: -15 } },
 ];
+const YAW_TAG = SEGMENTS.findIndex((g) => g.name === 'yaw') + 1;  // the yaw segment's mark
 const SHAPES = ['eyeBlinkLeft', 'eyeBlinkRight', 'mouthSmileLeft', 'mouthSmileRight', 'browInnerUp', 'mouthPucker', 'jawOpen'];
 // A shape's weight on its own frames (median) must pass RISE; every other
 // tested shape's must stay under LOW, and the other side's under the
@@ -87,15 +88,16 @@ function y4m(pngs, counts) {
   return Buffer.concat(parts);
 }
 
-const followState = (page) => page.evaluate(() => {
+const followState = (page) => page.evaluate((yawTag) => {
   const f = window.likeness.follow;
   const last = f.log[f.log.length - 1];
-  return { tag: last ? last.tag : -1, raw: f.raw, on: f.on, state: f.state, frames: f.frames, faces: f.faces, jaw: f.raw.jawOpen || 0, smoothJaw: f.weights.jawOpen || 0,
+  const yawFrames = f.log.filter((e) => e.tag === yawTag && e.tagAfter === yawTag).length;
+  return { tag: last ? last.tag : -1, yawFrames, raw: f.raw, on: f.on, state: f.state, frames: f.frames, faces: f.faces, jaw: f.raw.jawOpen || 0, smoothJaw: f.weights.jawOpen || 0,
            message: f.message, checked: document.getElementById('follow-face').checked,
            indicator: !document.getElementById('camera-on').hidden, tracks: f.tracks(),
            headJaw: window.likeness.expressions.weights.jawOpen || 0,
-           slider: (document.getElementById('expr-w-jawOpen') || {}).value, view: window.likeness.viewer.view_direction(), stats: document.getElementById('expr-stats').textContent, path: window.likeness.expressions.stats.path || null };
-});
+           slider: (document.getElementById('expr-w-jawOpen') || {}).value, view: window.likeness.viewer.view_direction(), head: { ...f.head }, stats: document.getElementById('expr-stats').textContent, path: window.likeness.expressions.stats.path || null };
+}, YAW_TAG);
 
 async function openProject(page, file) {
   await page.setInputFiles('#project-input', { name: 'head.likeness.glb', mimeType: 'model/gltf-binary', buffer: fs.readFileSync(file) });
@@ -173,14 +175,21 @@ async function run(s) {
     // sent and when their landmarks came back; the video loops if need be.
     let log = [], peakJaw = shut;
     let turnedView = null;
+    const shots = new Set();
     while (Date.now() - t0 < 2 * videoS * 1000 + 20000) {
       log = await page.evaluate(() => window.likeness.follow.log.filter((e) => e.tag === e.tagAfter));
       const f = await followState(page);
       if (f.jaw > peakJaw.jaw) peakJaw = f;
       // The view while the turned head's frames are followed.
-      const yawTag = SEGMENTS.findIndex((g) => g.name === 'yaw') + 1;
-      if (!turnedView && f.tag === yawTag && log.filter((e) => e.tag === yawTag).length >= 2)
-        turnedView = await page.evaluate(() => ({ dir: window.likeness.viewer.view_direction(), head: { ...window.likeness.follow.head } }));
+      // Screenshots of the head following two segments (a smile, the turned head).
+      for (const [name, file] of [['mouthSmileLeft', 'page_follow_face_smile.png'], ['yaw', 'page_follow_face_turn.png']])
+        if (SHOT_DIR && !shots.has(name) && f.tag === SEGMENTS.findIndex((g) => g.name === name) + 1) {
+          shots.add(name);
+          await page.locator('#canvas').screenshot({ path: path.join(SHOT_DIR, file) });
+        }
+      // The view read with the last frame's mark (one evaluate), after a
+      // yaw frame before it has been applied.
+      if (!turnedView && f.tag === YAW_TAG && f.yawFrames >= 2) turnedView = { dir: f.view, head: f.head };
       const counts = SEGMENTS.map((g, i) => log.filter((e) => e.tag === i + 1).length);
       if (counts.every((c) => c >= 3) && turnedView) break;
       await page.waitForTimeout(300);
@@ -228,10 +237,7 @@ async function run(s) {
           !!turnedView && towardsLeft > 0 && angle(turnedView.dir, viewAtRest) > 8 && angle(turnedView.dir, viewAtRest) < 35,
           turnedView ? `head yaw ${turnedView.head.yaw.toFixed(1)}, pitch ${turnedView.head.pitch.toFixed(1)} degrees (smoothed); the view turned ` +
                        `${angle(turnedView.dir, viewAtRest).toFixed(1)} degrees, ${towardsLeft.toFixed(3)} towards the head's left` : 'no frame of the turned head seen');
-    if (SHOT_DIR) {
-      await page.locator('#expr-controls').screenshot({ path: path.join(SHOT_DIR, 'page_follow_face_panel.png') });
-      await page.locator('#canvas').screenshot({ path: path.join(SHOT_DIR, 'page_follow_face.png') });
-    }
+    if (SHOT_DIR) await page.locator('#expr-controls').screenshot({ path: path.join(SHOT_DIR, 'page_follow_face_panel.png') });
     check('the mouth opening in the video drives the head\'s jawOpen (smoothed) through the page\'s blend',
           peakJaw.jaw > 0.5 && peakJaw.headJaw > 0.3,
           `jawOpen from the landmarks ${peakJaw.jaw.toFixed(3)}, smoothed on the head ${peakJaw.headJaw.toFixed(3)} (its slider ${peakJaw.slider}), path ${peakJaw.path}`);
