@@ -265,7 +265,9 @@ function tick(my) {
     follow.weights = w;
     const turn = headTurn(m, s.neutral);
     follow.rawHead = turn;
-    follow.head = { yaw: follow.head.yaw + a * (turn.yaw - follow.head.yaw), pitch: follow.head.pitch + a * (turn.pitch - follow.head.pitch) };
+    // A degenerate face (points on top of each other) gives NaN: the view keeps its last turn.
+    if (Number.isFinite(turn.yaw) && Number.isFinite(turn.pitch))
+      follow.head = { yaw: follow.head.yaw + a * (turn.yaw - follow.head.yaw), pitch: follow.head.pitch + a * (turn.pitch - follow.head.pitch) };
     say('following', 'Camera on: following your face (nothing is recorded or sent).');
     driveWeights(w).then(() => { if (my === generation && session) turnView(session, follow.head); }, () => {});
     next();
