@@ -896,20 +896,66 @@ Status Renderer::update_mesh_positions(DrawableHandle handle, const float* xyz, 
 }
 
 Status Renderer::set_morph_targets(DrawableHandle handle, const std::vector<MorphShape>& shapes) {
+  MorphData data;
+  if (Status s = prepare_morph_targets(handle, shapes, data); !s.ok()) return s;
+  return upload_morph_targets(handle, data);
+}
+
+// The prepare's state between steps: the mesh's rest state copied at
+// begin (so posing the drawn mesh meanwhile changes nothing here), the
+// shapes, the next one to do and the entries so far.
+struct Renderer::MorphJob {
+  struct Entry {
+    std::uint32_t vertex, shape;
+    float dp[3], dn[3];
+  };
+  DrawableHandle handle = kNoHandle;
+  Impl::Drawable mesh;
+  std::vector<MorphShape> shapes;
+  size_t next = 0;
+  std::vector<Entry> entries;
+  std::vector<std::uint32_t> touched_faces, corners, moved;
+  std::vector<float> saved_faces, saved_normals, saved_positions;
+  std::vector<int> moved_slot;  // index into the shape's vertices, or -1
+  int max_texture_size = 0;
+  // Banded upload (finish without texels, then upload_morph_band): the
+  // entry in each texel pair's slot, the rows sent so far, one band's texels.
+  std::vector<std::uint32_t> order;
+  int rows_sent = 0;
+  std::vector<float> band;
+};
+
+void Renderer::MorphJobDeleter::operator()(MorphJob* job) const { delete job; }
+
+namespace {
+// An entry's two texels: (position offset, shape), (normal offset, 0).
+void write_entry(const Renderer::MorphJob::Entry& e, float* t) {
+  t[0] = e.dp[0], t[1] = e.dp[1], t[2] = e.dp[2], t[3] = static_cast<float>(e.shape);
+  t[4] = e.dn[0], t[5] = e.dn[1], t[6] = e.dn[2], t[7] = 0.0f;
+}
+}  // namespace
+
+Status Renderer::prepare_morph_targets(DrawableHandle handle, const std::vector<MorphShape>& shapes, MorphData& out) {
+  out = MorphData{};
+  MorphJobPtr job;
+  if (Status s = begin_morph_targets(handle, shapes, job); !s.ok()) return s;
+  bool done = false;
+  if (Status s = step_morph_targets(*job, kMaxMorphTargets, done); !s.ok()) return s;
+  return finish_morph_targets(*job, out);
+}
+
+Status Renderer::begin_morph_targets(DrawableHandle handle, std::vector<MorphShape> shapes, MorphJobPtr& out) {
   Impl& m = *impl_;
+  out.reset();
   Impl::Drawable* d = m.find(handle);
   if (!d || d->is_points) return Status::error(ErrorCode::InvalidInput, "set_morph_targets: no mesh with handle " + std::to_string(handle));
-  if (shapes.empty()) {
-    Impl::release_morph(*d);
-    return Status::success();
-  }
   if (shapes.size() > static_cast<size_t>(kMaxMorphTargets))
     return Status::error(ErrorCode::TooLarge, "set_morph_targets: " + std::to_string(shapes.size()) +
                                                   " shapes, the shader takes at most " + std::to_string(kMaxMorphTargets));
   // The shader's morph uniforms (48 vec4s) beside its ~25 other vectors,
   // and one texture unit in the vertex stage (GLES3 guarantees 256 and 16;
   // checked for odd drivers).
-  if (m.max_vertex_texture_units < 1 || m.max_vertex_uniform_vectors < 128)
+  if (!shapes.empty() && (m.max_vertex_texture_units < 1 || m.max_vertex_uniform_vectors < 128))
     return Status::error(ErrorCode::Unsupported, "set_morph_targets: the GL has " + std::to_string(m.max_vertex_texture_units) +
                                                      " vertex texture units and " + std::to_string(m.max_vertex_uniform_vectors) +
                                                      " vertex uniform vectors");
@@ -935,19 +981,29 @@ Status Renderer::set_morph_targets(DrawableHandle handle, const std::vector<Morp
         return Status::error(ErrorCode::InvalidInput, "set_morph_targets: shape " + std::to_string(s) + " has a non-finite offset");
   }
 
-  // Each shape at full weight, renormalized as update_mesh_positions would
-  // (the moved vertices' triangles, their corners), then restored. Entries:
-  // (vertex, shape, position offset, normal offset), all-zero ones dropped.
-  struct Entry {
-    std::uint32_t vertex, shape;
-    float dp[3], dn[3];
-  };
-  std::vector<Entry> entries;
-  std::vector<std::uint32_t> touched_faces, corners, moved;
-  std::vector<float> saved_faces, saved_normals, saved_positions;
-  std::vector<int> moved_slot(nv, -1);  // index into the shape's vertices, or -1
-  for (size_t s = 0; s < shapes.size(); ++s) {
-    const MorphShape& shape = shapes[s];
+  MorphJobPtr job(new MorphJob);
+  job->handle = handle;
+  job->mesh = *d;
+  job->shapes = std::move(shapes);
+  job->moved_slot.assign(nv, -1);
+  job->max_texture_size = m.max_texture_size;
+  out = std::move(job);
+  return Status::success();
+}
+
+// Each shape at full weight, renormalized as update_mesh_positions would
+// (the moved vertices' triangles, their corners), then restored. Entries:
+// (vertex, shape, position offset, normal offset), all-zero ones dropped.
+Status Renderer::step_morph_targets(MorphJob& job, int max_shapes, bool& done) {
+  Impl::Drawable* d = &job.mesh;
+  using Entry = MorphJob::Entry;
+  std::vector<Entry>& entries = job.entries;
+  std::vector<std::uint32_t>&touched_faces = job.touched_faces, &corners = job.corners, &moved = job.moved;
+  std::vector<float>&saved_faces = job.saved_faces, &saved_normals = job.saved_normals, &saved_positions = job.saved_positions;
+  std::vector<int>& moved_slot = job.moved_slot;
+  const size_t end = std::min(job.shapes.size(), job.next + static_cast<size_t>(std::max(max_shapes, 0)));
+  for (size_t s = job.next; s < end; ++s) {
+    const MorphShape& shape = job.shapes[s];
     const std::uint32_t stamp = ++d->update_number;
     touched_faces.clear();
     corners.clear();
@@ -1001,32 +1057,51 @@ Status Renderer::set_morph_targets(DrawableHandle handle, const std::vector<Morp
       moved_slot[moved[i]] = -1;
     }
   }
+  job.next = end;
+  done = job.next == job.shapes.size();
+  return Status::success();
+}
 
+Status Renderer::finish_morph_targets(MorphJob& job, MorphData& out, bool with_texels) {
+  out = MorphData{};
+  if (job.next != job.shapes.size())
+    return Status::error(ErrorCode::InvalidInput, "set_morph_targets: " + std::to_string(job.shapes.size() - job.next) +
+                                                      " shapes not prepared yet");
+  if (job.shapes.empty()) return Status::success();
+  const Impl::Drawable* d = &job.mesh;
+  const std::vector<MorphJob::Entry>& entries = job.entries;
+  const size_t nv = static_cast<size_t>(d->num_vertices);
+  const int max_texture_size = job.max_texture_size;
   // Grouped by vertex (stable: shapes in order within a vertex).
   std::vector<std::uint32_t> start(nv + 1, 0);
-  for (const Entry& e : entries) ++start[e.vertex + 1];
+  for (const MorphJob::Entry& e : entries) ++start[e.vertex + 1];
   for (size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
   const size_t total = entries.size();
   // Indices reach the shader as floats: exact below 2^24.
-  const int width = std::min(kMorphTextureWidth, m.max_texture_size - m.max_texture_size % 2);
+  const int width = std::min(kMorphTextureWidth, max_texture_size - max_texture_size % 2);
   const size_t rows = (2 * total + size_t(width) - 1) / size_t(width);
-  if (total >= (size_t(1) << 23) || rows > static_cast<size_t>(m.max_texture_size))
+  if (total >= (size_t(1) << 23) || rows > static_cast<size_t>(max_texture_size))
     return Status::error(ErrorCode::TooLarge, "set_morph_targets: " + std::to_string(total) +
-                                                  " morph entries do not fit a " + std::to_string(m.max_texture_size) +
+                                                  " morph entries do not fit a " + std::to_string(max_texture_size) +
                                                   " texture");
-  std::vector<float> texels(std::max<size_t>(rows, 1) * size_t(width) * 4, 0.0f);
   {
     std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-    for (const Entry& e : entries) {
-      float* t = &texels[8 * size_t(fill[e.vertex]++)];
-      t[0] = e.dp[0], t[1] = e.dp[1], t[2] = e.dp[2], t[3] = static_cast<float>(e.shape);
-      t[4] = e.dn[0], t[5] = e.dn[1], t[6] = e.dn[2], t[7] = 0.0f;
+    if (with_texels) {
+      std::vector<float>& texels = out.texels;
+      texels.assign(std::max<size_t>(rows, 1) * size_t(width) * 4, 0.0f);
+      for (const MorphJob::Entry& e : entries) write_entry(e, &texels[8 * size_t(fill[e.vertex]++)]);
+    } else {
+      job.order.assign(total, 0);
+      for (size_t i = 0; i < total; ++i) job.order[fill[entries[i].vertex]++] = static_cast<std::uint32_t>(i);
+      job.rows_sent = 0;
     }
   }
   std::vector<std::uint32_t> vertex_masks(4 * nv, 0u);
-  for (const Entry& e : entries) vertex_masks[4 * size_t(e.vertex) + e.shape / 32] |= 1u << (e.shape % 32);
-  std::vector<float> ranges(2 * static_cast<size_t>(d->vertex_count));
-  std::vector<std::uint32_t> masks(4 * static_cast<size_t>(d->vertex_count));
+  for (const MorphJob::Entry& e : entries) vertex_masks[4 * size_t(e.vertex) + e.shape / 32] |= 1u << (e.shape % 32);
+  std::vector<float>& ranges = out.ranges;
+  std::vector<std::uint32_t>& masks = out.masks;
+  ranges.assign(2 * static_cast<size_t>(d->vertex_count), 0.0f);
+  masks.assign(4 * static_cast<size_t>(d->vertex_count), 0u);
   for (size_t g = 0; g < static_cast<size_t>(d->vertex_count); ++g) {
     const size_t v = Impl::source_of(*d, g);
     ranges[2 * g] = static_cast<float>(start[v]);
@@ -1034,11 +1109,32 @@ Status Renderer::set_morph_targets(DrawableHandle handle, const std::vector<Morp
     std::copy_n(&vertex_masks[4 * v], 4, &masks[4 * g]);
   }
 
+  out.count = static_cast<int>(job.shapes.size());
+  out.width = width;
+  out.rows = static_cast<int>(std::max<size_t>(rows, 1));
+  out.entries = total;
+  return Status::success();
+}
+
+Status Renderer::upload_morph_targets(DrawableHandle handle, const MorphData& data) {
+  Impl::Drawable* d = impl_->find(handle);
+  if (!d || d->is_points) return Status::error(ErrorCode::InvalidInput, "set_morph_targets: no mesh with handle " + std::to_string(handle));
+  if (data.count == 0) {
+    Impl::release_morph(*d);
+    return Status::success();
+  }
+  if (data.ranges.size() != 2 * static_cast<size_t>(d->vertex_count) || data.masks.size() != 4 * static_cast<size_t>(d->vertex_count) ||
+      data.texels.size() != 4 * size_t(data.width) * size_t(data.rows) || data.count > kMaxMorphTargets)
+    return Status::error(ErrorCode::InvalidInput, "set_morph_targets: the prepared data is not this mesh's");
+  const std::vector<float>& texels = data.texels;
+  const std::vector<float>& ranges = data.ranges;
+  const std::vector<std::uint32_t>& masks = data.masks;
+  const int width = data.width;
   Impl::release_morph(*d);
   glGenTextures(1, &d->morph_texture);
   glBindTexture(GL_TEXTURE_2D, d->morph_texture);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, width, static_cast<GLsizei>(std::max<size_t>(rows, 1)), 0, GL_RGBA, GL_FLOAT,
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, width, data.rows, 0, GL_RGBA, GL_FLOAT,
                texels.data());
   // Float textures are not filterable in WebGL2: texelFetch only, no mipmaps.
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
@@ -1063,9 +1159,83 @@ Status Renderer::set_morph_targets(DrawableHandle handle, const std::vector<Morp
     Impl::release_morph(*d);
     return s;
   }
-  d->morph_count = static_cast<int>(shapes.size());
+  d->morph_count = data.count;
   d->morph_texture_width = width;
   d->morph_weights.assign(kMaxMorphTargets, 0.0f);
+  return Status::success();
+}
+
+Status Renderer::upload_morph_band(DrawableHandle handle, MorphJob& job, const MorphData& data, int max_rows, bool& done) {
+  done = false;
+  Impl::Drawable* d = impl_->find(handle);
+  if (!d || d->is_points) return Status::error(ErrorCode::InvalidInput, "set_morph_targets: no mesh with handle " + std::to_string(handle));
+  if (data.count == 0) {
+    Impl::release_morph(*d);
+    done = true;
+    return Status::success();
+  }
+  if (data.ranges.size() != 2 * static_cast<size_t>(d->vertex_count) || data.masks.size() != 4 * static_cast<size_t>(d->vertex_count) ||
+      job.order.size() != data.entries || data.count > kMaxMorphTargets || max_rows < 1)
+    return Status::error(ErrorCode::InvalidInput, "set_morph_targets: the prepared data is not this mesh's");
+  const int width = data.width;
+  if (job.rows_sent == 0) {  // the texture, its texels sent band by band
+    Impl::release_morph(*d);
+    glGenTextures(1, &d->morph_texture);
+    glBindTexture(GL_TEXTURE_2D, d->morph_texture);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, width, data.rows, 0, GL_RGBA, GL_FLOAT, nullptr);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glBindTexture(GL_TEXTURE_2D, 0);
+  }
+  const int r0 = job.rows_sent, r1 = std::min(data.rows, r0 + max_rows);
+  const size_t slots_per_row = size_t(width) / 2, first = size_t(r0) * slots_per_row;
+  const size_t last = std::min(size_t(r1) * slots_per_row, job.order.size());
+  job.band.assign(size_t(r1 - r0) * size_t(width) * 4, 0.0f);
+  for (size_t slot = first; slot < last; ++slot) write_entry(job.entries[job.order[slot]], &job.band[8 * (slot - first)]);
+  glBindTexture(GL_TEXTURE_2D, d->morph_texture);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+  glTexSubImage2D(GL_TEXTURE_2D, 0, 0, r0, width, r1 - r0, GL_RGBA, GL_FLOAT, job.band.data());
+  glBindTexture(GL_TEXTURE_2D, 0);
+  job.rows_sent = r1;
+  done = r1 == data.rows;
+  return Status::success();
+}
+
+Status Renderer::finish_morph_upload(DrawableHandle handle, MorphJob& job, const MorphData& data) {
+  Impl::Drawable* d = impl_->find(handle);
+  if (!d || d->is_points) return Status::error(ErrorCode::InvalidInput, "set_morph_targets: no mesh with handle " + std::to_string(handle));
+  if (data.count == 0) return Status::success();
+  if (job.rows_sent != data.rows || !d->morph_texture ||
+      data.ranges.size() != 2 * static_cast<size_t>(d->vertex_count) || data.masks.size() != 4 * static_cast<size_t>(d->vertex_count))
+    return Status::error(ErrorCode::InvalidInput, "set_morph_targets: the texture's bands are not all sent");
+  glBindVertexArray(d->vao);
+  glGenBuffers(1, &d->morph_buffer);
+  glBindBuffer(GL_ARRAY_BUFFER, d->morph_buffer);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.ranges.size() * sizeof(float)), data.ranges.data(), GL_STATIC_DRAW);
+  bind_attribute(d->morph_buffer, kMorph, 2);
+  glGenBuffers(1, &d->morph_mask_buffer);
+  glBindBuffer(GL_ARRAY_BUFFER, d->morph_mask_buffer);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.masks.size() * sizeof(std::uint32_t)), data.masks.data(), GL_STATIC_DRAW);
+  glEnableVertexAttribArray(kMorphMask);
+  glVertexAttribIPointer(kMorphMask, 4, GL_UNSIGNED_INT, 0, nullptr);
+  glBindVertexArray(0);
+  // Errors are asked for once, here (they stay set until read): in a
+  // browser glGetError waits for the GPU process to finish the work queued
+  // before it (under SwiftShader, the CPU path's last draws), which every
+  // band would pay.
+  if (Status s = check_gl("set_morph_targets"); !s) {
+    glBindVertexArray(d->vao);
+    glDisableVertexAttribArray(kMorph);
+    glDisableVertexAttribArray(kMorphMask);
+    glBindVertexArray(0);
+    Impl::release_morph(*d);
+    job.rows_sent = 0;
+    return s;
+  }
+  d->morph_count = data.count;
+  d->morph_texture_width = data.width;
+  d->morph_weights.assign(kMaxMorphTargets, 0.0f);
+  job.band = {};
   return Status::success();
 }
 

@@ -203,6 +203,44 @@ class Renderer {
   };
   static constexpr int kMaxMorphTargets = 128;
   Status set_morph_targets(DrawableHandle handle, const std::vector<MorphShape>& shapes);
+  // set_morph_targets in its two halves, for callers that time them or run
+  // them apart: prepare (the checks, the normal offsets, the texture's
+  // texels and the per-vertex attributes, all on the CPU; the mesh is left
+  // as it was) and upload (the GL calls; `data` must come from prepare on
+  // the same mesh, unchanged since). An empty shape list prepares a removal.
+  struct MorphData {
+    int count = 0;                      // shapes
+    int width = 0, rows = 0;            // texture size in texels
+    std::size_t entries = 0;            // (vertex, shape) entries, 2 texels each
+    std::vector<float> texels;          // RGBA32F, width * rows * 4
+    std::vector<float> ranges;          // per GPU vertex: first entry, count
+    std::vector<std::uint32_t> masks;   // per GPU vertex: 4 words of shape bits
+  };
+  Status prepare_morph_targets(DrawableHandle handle, const std::vector<MorphShape>& shapes, MorphData& out);
+  // The prepare in steps, so that a page can spread it over frames (it
+  // measured 2.3 s at once for 77 shapes on 87k vertices in wasm): begin
+  // checks the shapes and copies the mesh's current (rest) state, so the
+  // mesh may be posed meanwhile (update_mesh_positions) without changing
+  // the result; each step prepares up to max_shapes more (done when all
+  // are); finish packs the data for upload_morph_targets.
+  // prepare_morph_targets is begin, one step of all, finish.
+  struct MorphJob;
+  struct MorphJobDeleter {
+    void operator()(MorphJob* job) const;
+  };
+  using MorphJobPtr = std::unique_ptr<MorphJob, MorphJobDeleter>;
+  Status begin_morph_targets(DrawableHandle handle, std::vector<MorphShape> shapes, MorphJobPtr& out);
+  Status step_morph_targets(MorphJob& job, int max_shapes, bool& done);
+  // with_texels false: no texels in `out` (43 MB at level 3 of our heads,
+  // a heap growth in wasm); upload_morph_band then writes and sends them a
+  // band of max_rows rows per call (done after the last), and
+  // finish_morph_upload sets the per-vertex attributes and checks for GL
+  // errors (the only check: in a browser it waits for the GPU process).
+  // The mesh has no morph targets in between.
+  Status finish_morph_targets(MorphJob& job, MorphData& out, bool with_texels = true);
+  Status upload_morph_band(DrawableHandle handle, MorphJob& job, const MorphData& data, int max_rows, bool& done);
+  Status finish_morph_upload(DrawableHandle handle, MorphJob& job, const MorphData& data);
+  Status upload_morph_targets(DrawableHandle handle, const MorphData& data);
   // Weights, one per shape (fewer: the rest are 0). All zero draws the rest
   // pose exactly (the shader skips the blend).
   Status set_morph_weights(DrawableHandle handle, const float* weights, size_t count);

@@ -14,7 +14,12 @@
 //     Uint32Array #shapes, indices Uint32Array and offsets Float32Array
 //     (3 per index) concatenated over the shapes); set_morph_weights(w)
 //     (Float32Array, one per shape) -> "" or error: a frame of animation;
-//     morph_target_count(), model_serial() (changes with every model shown),
+//     begin_morph_targets(counts, indices, offsets) -> "" or error and
+//     continue_morph_targets(budgetMs) -> {done, error}: the same spread
+//     over frames (the page's way: no stall); morph_target_count(),
+//     last_morph_upload() -> {copyMs, splitMs, prepareMs, packMs, uploadMs,
+//     steps, longestStepMs, bands, longestBandMs, syncMs, entries, textureBytes} (where the last one
+//     spent its time), model_serial() (changes with every model shown),
 //     pose_serial() (changes with every update_positions)
 //   show_textured_mesh(positions, indices, uvs, width, height, channels, pixels)
 //     -> "" or error: a head with its skin texture (camera kept)
@@ -83,6 +88,7 @@ struct Viewer {
   // update did.
   std::vector<float> animation_positions;
   std::vector<float> morph_weights;  // the last set_morph_weights (reused)
+  double morph_copy_ms = 0;          // the last set_morph_targets' copy into the heap
   int pose_serial = 0;               // update_positions calls so far
   lk::MeshUpdateStats last_update;
 };
@@ -234,13 +240,67 @@ std::string js_set_morph_targets(val counts, val indices, val offsets) {
   if (!g_viewer || !g_viewer->startup_error.empty()) return "the viewer is not running";
   for (const val* a : {&counts, &indices, &offsets})
     if (a->isUndefined() || a->isNull()) return "set_morph_targets needs counts, indices and offsets";
+  const double t0 = emscripten_get_now();
   std::vector<std::uint32_t> c, i;
   std::vector<float> o;
   copy_typed(counts, c);
   copy_typed(indices, i);
   copy_typed(offsets, o);
+  g_viewer->morph_copy_ms = emscripten_get_now() - t0;
   const lk::Status s = g_viewer->scene.set_morph_targets(c.data(), c.size(), i.data(), i.size(), o.data(), o.size());
   return s.ok() ? std::string() : s.message;
+}
+
+// set_morph_targets over several frames (ViewerScene::begin_morph_targets):
+// begin with the same arrays, then continue_morph_targets(budgetMs) once a
+// frame -> {done, error} until done (uploaded) or an error.
+std::string js_begin_morph_targets(val counts, val indices, val offsets) {
+  if (!g_viewer || !g_viewer->startup_error.empty()) return "the viewer is not running";
+  for (const val* a : {&counts, &indices, &offsets})
+    if (a->isUndefined() || a->isNull()) return "begin_morph_targets needs counts, indices and offsets";
+  const double t0 = emscripten_get_now();
+  std::vector<std::uint32_t> c, i;
+  std::vector<float> o;
+  copy_typed(counts, c);
+  copy_typed(indices, i);
+  copy_typed(offsets, o);
+  g_viewer->morph_copy_ms = emscripten_get_now() - t0;
+  const lk::Status s = g_viewer->scene.begin_morph_targets(c.data(), c.size(), i.data(), i.size(), o.data(), o.size());
+  return s.ok() ? std::string() : s.message;
+}
+
+val js_continue_morph_targets(double budget_ms) {
+  val r = val::object();
+  bool done = false;
+  lk::Status s = g_viewer && g_viewer->startup_error.empty()
+                     ? g_viewer->scene.continue_morph_targets(std::isfinite(budget_ms) ? budget_ms : 0.0, done)
+                     : lk::Status::error(lk::ErrorCode::InvalidInput, "the viewer is not running");
+  r.set("done", done);
+  r.set("error", s.ok() ? std::string() : s.message);
+  return r;
+}
+
+// Where the last set_morph_targets or job spent its time: {copyMs (the
+// typed arrays into the heap), splitMs, prepareMs, packMs, uploadMs, steps,
+// longestStepMs, bands, longestBandMs, syncMs (ViewerScene's MorphUploadTimes),
+// entries, textureBytes}.
+val js_last_morph_upload() {
+  val r = val::object();
+  if (!g_viewer) return r;
+  const lk::web::ViewerScene::MorphUploadTimes& t = g_viewer->scene.last_morph_upload();
+  r.set("copyMs", g_viewer->morph_copy_ms);
+  r.set("splitMs", t.split_ms);
+  r.set("prepareMs", t.prepare_ms);
+  r.set("packMs", t.pack_ms);
+  r.set("uploadMs", t.upload_ms);
+  r.set("steps", t.steps);
+  r.set("longestStepMs", t.longest_step_ms);
+  r.set("bands", t.bands);
+  r.set("syncMs", t.sync_ms);
+  r.set("longestBandMs", t.longest_band_ms);
+  r.set("entries", double(t.entries));
+  r.set("textureBytes", double(t.texture_bytes));
+  return r;
 }
 
 // An animation frame on the GPU: the weights only (a uniform update).
@@ -454,6 +514,9 @@ EMSCRIPTEN_BINDINGS(likeness_viewer) {
   emscripten::function("set_morph_targets", &js_set_morph_targets);
   emscripten::function("set_morph_weights", &js_set_morph_weights);
   emscripten::function("morph_target_count", &js_morph_target_count);
+  emscripten::function("last_morph_upload", &js_last_morph_upload);
+  emscripten::function("begin_morph_targets", &js_begin_morph_targets);
+  emscripten::function("continue_morph_targets", &js_continue_morph_targets);
   emscripten::function("model_serial", &js_model_serial);
   emscripten::function("pose_serial", &js_pose_serial);
   emscripten::function("set_overlay_points", &js_set_overlay_points);

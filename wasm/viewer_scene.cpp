@@ -3,6 +3,7 @@
 #include "head/generic_head.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 namespace lk::web {
@@ -156,14 +157,15 @@ Status ViewerScene::update_positions(const float* positions_xyz, size_t vertex_c
   return Status::success();
 }
 
-Status ViewerScene::set_morph_targets(const std::uint32_t* counts, size_t shape_count, const std::uint32_t* indices,
-                                      size_t index_count, const float* offsets, size_t offset_count) {
+Status ViewerScene::split_shapes(const std::uint32_t* counts, size_t shape_count, const std::uint32_t* indices,
+                                 size_t index_count, const float* offsets, size_t offset_count,
+                                 std::vector<Renderer::MorphShape>& shapes) const {
   if (model_ == kNoHandle || model_is_points_)
     return Status::error(ErrorCode::InvalidInput, "no mesh is shown to morph");
   if (offset_count != 3 * index_count)
     return Status::error(ErrorCode::InvalidInput, std::to_string(offset_count) + " offset values for " +
                                                       std::to_string(index_count) + " vertices (need 3 per vertex)");
-  std::vector<Renderer::MorphShape> shapes(shape_count);
+  shapes.assign(shape_count, {});
   size_t at = 0;
   for (size_t i = 0; i < shape_count; ++i) {
     if (counts[i] > index_count - at)
@@ -176,9 +178,102 @@ Status ViewerScene::set_morph_targets(const std::uint32_t* counts, size_t shape_
   if (at != index_count)
     return Status::error(ErrorCode::InvalidInput, "the shapes' vertex counts add up to " + std::to_string(at) + ", not the " +
                                                       std::to_string(index_count) + " indices given");
-  if (Status s = renderer_.set_morph_targets(model_, shapes); !s.ok()) return s;
+  return Status::success();
+}
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double ms_between(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
+}  // namespace
+
+Status ViewerScene::set_morph_targets(const std::uint32_t* counts, size_t shape_count, const std::uint32_t* indices,
+                                      size_t index_count, const float* offsets, size_t offset_count) {
+  morph_job_.reset();
+  const Clock::time_point t0 = Clock::now();
+  std::vector<Renderer::MorphShape> shapes;
+  if (Status s = split_shapes(counts, shape_count, indices, index_count, offsets, offset_count, shapes); !s.ok()) return s;
+  const Clock::time_point t1 = Clock::now();
+  Renderer::MorphData data;
+  if (Status s = renderer_.prepare_morph_targets(model_, shapes, data); !s.ok()) return s;
+  const Clock::time_point t2 = Clock::now();
+  if (Status s = renderer_.upload_morph_targets(model_, data); !s.ok()) return s;
+  const Clock::time_point t3 = Clock::now();
+  morph_times_ = {};
+  morph_times_.split_ms = ms_between(t0, t1);
+  morph_times_.prepare_ms = ms_between(t1, t2);  // the packing included
+  morph_times_.upload_ms = ms_between(t2, t3);
+  morph_times_.steps = 1;
+  morph_times_.longest_step_ms = morph_times_.prepare_ms;
+  morph_times_.entries = data.entries;
+  morph_times_.texture_bytes = data.texels.size() * sizeof(float);
   dirty_ = true;
   return Status::success();
+}
+
+Status ViewerScene::begin_morph_targets(const std::uint32_t* counts, size_t shape_count, const std::uint32_t* indices,
+                                        size_t index_count, const float* offsets, size_t offset_count) {
+  morph_job_.reset();
+  const Clock::time_point t0 = Clock::now();
+  std::vector<Renderer::MorphShape> shapes;
+  if (Status s = split_shapes(counts, shape_count, indices, index_count, offsets, offset_count, shapes); !s.ok()) return s;
+  if (Status s = renderer_.begin_morph_targets(model_, std::move(shapes), morph_job_); !s.ok()) return s;
+  morph_job_serial_ = model_serial_;
+  morph_job_phase_ = 0;
+  morph_job_data_ = {};
+  morph_times_ = {};
+  morph_times_.split_ms = ms_between(t0, Clock::now());
+  return Status::success();
+}
+
+Status ViewerScene::continue_morph_targets(double budget_ms, bool& done) {
+  done = false;
+  if (!morph_job_) return Status::error(ErrorCode::InvalidInput, "no morph targets are being prepared");
+  if (morph_job_serial_ != model_serial_) {
+    morph_job_.reset();
+    return Status::error(ErrorCode::InvalidInput, "another model was shown while its morph targets were prepared");
+  }
+  const Clock::time_point t0 = Clock::now();
+  Status s;
+  if (morph_job_phase_ == 0) {  // the shapes, one at a time, for about budget_ms
+    bool shapes_done = false;
+    do {
+      const Clock::time_point a = Clock::now();
+      s = renderer_.step_morph_targets(*morph_job_, 1, shapes_done);
+      const double step = ms_between(a, Clock::now());
+      morph_times_.prepare_ms += step;
+      morph_times_.longest_step_ms = std::max(morph_times_.longest_step_ms, step);
+      ++morph_times_.steps;
+    } while (s.ok() && !shapes_done && ms_between(t0, Clock::now()) < budget_ms);
+    if (shapes_done) morph_job_phase_ = 1;
+  } else if (morph_job_phase_ == 1) {  // the entries sorted by vertex, a call of its own
+    s = renderer_.finish_morph_targets(*morph_job_, morph_job_data_, false);
+    morph_times_.pack_ms = ms_between(t0, Clock::now());
+    morph_job_phase_ = 2;
+  } else if (morph_job_phase_ == 3) {  // the attributes and the one GL error check, a call of its own
+    s = renderer_.finish_morph_upload(model_, *morph_job_, morph_job_data_);
+    morph_times_.sync_ms = ms_between(t0, Clock::now());
+    if (s.ok()) {
+      morph_times_.entries = morph_job_data_.entries;
+      morph_times_.texture_bytes = size_t(morph_job_data_.width) * size_t(morph_job_data_.rows) * 4 * sizeof(float);
+      morph_job_.reset();
+      morph_job_data_ = {};
+      done = true;
+      dirty_ = true;
+    }
+  } else {  // the texels written and sent in bands of 32 rows (2 MB), for about budget_ms
+    bool uploaded = false;
+    do {
+      const Clock::time_point a = Clock::now();
+      s = renderer_.upload_morph_band(model_, *morph_job_, morph_job_data_, 32, uploaded);
+      const double step = ms_between(a, Clock::now());
+      morph_times_.upload_ms += step;
+      morph_times_.longest_band_ms = std::max(morph_times_.longest_band_ms, step);
+      ++morph_times_.bands;
+    } while (s.ok() && !uploaded && ms_between(t0, Clock::now()) < budget_ms);
+    if (s.ok() && uploaded) morph_job_phase_ = 3;
+  }
+  if (!s.ok()) morph_job_.reset();
+  return s;
 }
 
 Status ViewerScene::set_morph_weights(const float* weights, size_t count) {

@@ -57,6 +57,33 @@ class ViewerScene {
                            size_t index_count, const float* offsets, size_t offset_count);
   Status set_morph_weights(const float* weights, size_t count);
   int morph_target_count() const;
+  // set_morph_targets spread over calls, so the page never stalls on it:
+  // begin (the checks, the shapes copied, the mesh's rest state kept: the
+  // mesh may be posed on the CPU meanwhile), then each continue prepares
+  // shapes for about budget_ms (at least one), or sorts their entries (a
+  // call of its own), or writes and uploads bands of the texture for about
+  // budget_ms, or sets the attributes and checks for GL errors (a call of
+  // its own: in a browser it waits for the GPU process); done after that. Fails (and drops the job)
+  // when another model was shown since begin.
+  Status begin_morph_targets(const std::uint32_t* counts, size_t shape_count, const std::uint32_t* indices,
+                             size_t index_count, const float* offsets, size_t offset_count);
+  Status continue_morph_targets(double budget_ms, bool& done);
+  bool morph_job_pending() const { return morph_job_ != nullptr; }
+  // Where the last set_morph_targets (or job) spent its time (ms, a steady
+  // clock): the shapes copied out of the flat arrays, the renderer's
+  // prepare (normal offsets; a job: its steps' sum, their number and the
+  // longest), the packing (at once: into texels; a job: the entries sorted
+  // by vertex), the upload (the GL calls; a job: its bands of texels
+  // written and sent, their number and the longest); entries and the data
+  // texture's bytes.
+  struct MorphUploadTimes {
+    double split_ms = 0, prepare_ms = 0, pack_ms = 0, upload_ms = 0;
+    double sync_ms = 0;  // a job's last call: the attributes and the GL error check (it waits for the GPU process)
+    int steps = 0, bands = 0;
+    double longest_step_ms = 0, longest_band_ms = 0;
+    std::size_t entries = 0, texture_bytes = 0;
+  };
+  const MorphUploadTimes& last_morph_upload() const { return morph_times_; }
   // Bumped whenever another model is shown (its morph targets are gone).
   int model_serial() const { return model_serial_; }
 
@@ -114,6 +141,14 @@ class ViewerScene {
   OrbitCamera camera_;
   DrawableHandle model_ = kNoHandle;
   int model_serial_ = 0;
+  MorphUploadTimes morph_times_;
+  Renderer::MorphJobPtr morph_job_;
+  int morph_job_serial_ = 0;       // model_serial_ at begin
+  int morph_job_phase_ = 0;        // 0 the shapes, 1 the packing, 2 the bands, 3 the attributes and error check
+  Renderer::MorphData morph_job_data_;
+  // The flat arrays cut into shapes (set_morph_targets, begin_morph_targets).
+  Status split_shapes(const std::uint32_t* counts, size_t shape_count, const std::uint32_t* indices, size_t index_count,
+                      const float* offsets, size_t offset_count, std::vector<Renderer::MorphShape>& shapes) const;
   bool model_is_points_ = false;
   size_t model_vertices_ = 0;
   TextureHandle texture_ = kNoHandle;

@@ -59,7 +59,8 @@ val export_glb_job(int level, val parts) {
 // scan frame (for the lower teeth and tongue; blended as I + sum w (M - I),
 // as the GLB's morph targets on the teeth blend). Returns {ok, level,
 // vertexCount, shapes: [{name, indices (Uint32Array), offsets (Float32Array,
-// 3 per index), jawMatrix? (Float32Array, 4x4 column-major)}], bakeMs}.
+// 3 per index), jawMatrix? (Float32Array, 4x4 column-major), eyeMatrices?
+// ([left, right], the same, for the gaze shapes)}], bakeMs}.
 val face_shapes_job(int level) {
   if (!kept_project()) return error_result(lk::ErrorCode::InvalidInput, "no fitted head to animate");
   lk::HeadProject& p = *kept_project();
@@ -80,8 +81,12 @@ val face_shapes_job(int level) {
   for (const lk::BakedShape& b : baked) {
     std::vector<std::uint32_t> indices;
     std::vector<float> offsets;
+    // Offsets under a micrometre (head frame, metres) are left out: a third
+    // of the moved vertices at level 3 of our synthetic fit, no visible
+    // motion (a pixel is some 300 micrometres on a head filling 1000), and
+    // each costs the morph targets' prepare and texture (two texels).
     for (std::size_t i = 0; i < b.level.size(); ++i)
-      if (b.level[i] != lk::Vec3::Zero()) {
+      if (b.level[i].squaredNorm() >= 1e-12) {
         const lk::Vec3 d = p.frame.head_to_scan * b.level[i];
         indices.push_back(static_cast<std::uint32_t>(i));
         offsets.insert(offsets.end(), {static_cast<float>(d.x()), static_cast<float>(d.y()), static_cast<float>(d.z())});
@@ -90,20 +95,30 @@ val face_shapes_job(int level) {
     shape.set("name", b.name);
     shape.set("indices", typed_array("Uint32Array", indices));
     shape.set("offsets", typed_array("Float32Array", offsets));
-    lk::Mat3 R;
-    lk::Vec3 t;
-    lk::jaw_motion(rig, b.controls, R, t);
-    if (!R.isIdentity() || t != lk::Vec3::Zero()) {
-      // Head frame p -> R (p - hinge) + hinge + t, seen in the scan frame.
+    // Head frame p -> R (p - h) + h + t, seen in the scan frame, column-major.
+    const auto in_scan = [&](const lk::Mat3& R, const lk::Vec3& h, const lk::Vec3& t) {
       const lk::Mat3& H = p.frame.head_to_scan;
-      const lk::Vec3 o = p.frame.head_offset, h = rig.jaw.hinge;
+      const lk::Vec3 o = p.frame.head_offset;
       lk::Mat4 m = lk::Mat4::Identity();
       m.topLeftCorner<3, 3>() = H * R * H.inverse();
       m.topRightCorner<3, 1>() = H * (R * (o - h) + h + t - o);
       std::vector<float> flat(16);
       for (int col = 0; col < 4; ++col)
         for (int row = 0; row < 4; ++row) flat[4 * col + row] = static_cast<float>(m(row, col));
-      shape.set("jawMatrix", typed_array("Float32Array", flat));
+      return typed_array("Float32Array", flat);
+    };
+    lk::Mat3 R;
+    lk::Vec3 t;
+    lk::jaw_motion(rig, b.controls, R, t);
+    if (!R.isIdentity() || t != lk::Vec3::Zero()) shape.set("jawMatrix", in_scan(R, rig.jaw.hinge, t));
+    // The gaze (eyeLook*): each eyeball turned about its centre, as the
+    // GLB's eye targets (pose_eye); eye 0 the left, 1 the right.
+    const lk::Mat3 left = lk::eye_rotation(b.controls, 0), right = lk::eye_rotation(b.controls, 1);
+    if (!left.isIdentity() || !right.isIdentity()) {
+      val eyes = val::array();
+      eyes.call<void>("push", in_scan(left, rig.lids[0].center, lk::Vec3::Zero()));
+      eyes.call<void>("push", in_scan(right, rig.lids[1].center, lk::Vec3::Zero()));
+      shape.set("eyeMatrices", eyes);
     }
     shapes.call<void>("push", shape);
   }

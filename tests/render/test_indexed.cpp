@@ -529,6 +529,102 @@ TEST_CASE("morph targets blended in the vertex shader match the CPU blend", "[re
   }
 }
 
+TEST_CASE("morph targets prepared in steps while the mesh is posed equal those prepared at once", "[render][indexed][morph]") {
+  // The page spreads the prepare over frames and draws the pose on the CPU
+  // meanwhile (update_mesh_positions on the same mesh): the job works on
+  // the rest state copied at begin, so its data must be the one-call data
+  // exactly; with the mesh posed before begin, it must differ (the normal
+  // offsets are taken from the mesh as it is at begin).
+  const TriMesh rest = seamed_ellipsoid(kRadii, 48, 64);
+  const CameraMatrices cam =
+      canonical_view(CanonicalView::Front, bounding_box(rest.positions), 1.0f).matrices(1.0f);
+  const std::vector<Vec3> bump = bumped(rest.positions, 0.03), dent = dented(rest.positions, 0.02);
+  const std::vector<Renderer::MorphShape> shapes = {morph_from(rest.positions, bump), morph_from(rest.positions, dent),
+                                                    morph_from(rest.positions, bumped(rest.positions, -0.02))};
+  const std::vector<float> posed = flat(bump);
+  render(
+      [&](Renderer& r) {
+        DrawableHandle h;
+        Status s = r.upload_mesh(rest, h);
+        if (!s) return s;
+        Renderer::MorphData once, stepped, from_posed;
+        REQUIRE(r.prepare_morph_targets(h, shapes, once));
+        Renderer::MorphJobPtr job;
+        REQUIRE(r.begin_morph_targets(h, shapes, job));
+        bool done = false;
+        REQUIRE(r.step_morph_targets(*job, 1, done));
+        CHECK(!done);
+        CHECK(r.finish_morph_targets(*job, stepped).code == ErrorCode::InvalidInput);  // two shapes to go
+        REQUIRE(r.update_mesh_positions(h, posed.data(), rest.positions.size()));   // the CPU path's pose meanwhile
+        REQUIRE(r.step_morph_targets(*job, 1, done));
+        CHECK(!done);
+        REQUIRE(r.step_morph_targets(*job, 5, done));
+        CHECK(done);
+        REQUIRE(r.finish_morph_targets(*job, stepped));
+        CHECK(stepped.entries == once.entries);
+        CHECK(stepped.width == once.width);
+        CHECK(stepped.rows == once.rows);
+        CHECK(stepped.texels == once.texels);
+        CHECK(stepped.ranges == once.ranges);
+        CHECK(stepped.masks == once.masks);
+        // Begun on the posed mesh: other normal offsets.
+        REQUIRE(r.prepare_morph_targets(h, shapes, from_posed));
+        CHECK(from_posed.texels != once.texels);
+        // The stepped data uploads and draws as the one-call data.
+        const std::vector<float> rest_xyz = flat(rest.positions);
+        REQUIRE(r.update_mesh_positions(h, rest_xyz.data(), rest.positions.size()));
+        s = r.upload_morph_targets(h, stepped);
+        if (s) CHECK(r.morph_target_count(h) == 3);
+        return s;
+      },
+      cam);
+
+  // Uploaded band by band (no texels in the data, one row per call) it
+  // draws the image of the one-call upload exactly; 12 shapes, so that
+  // the entries fill more than one row of the texture.
+  std::vector<Renderer::MorphShape> many;
+  for (int k = 1; k <= 12; ++k) many.push_back(morph_from(rest.positions, bumped(rest.positions, 0.003 * k * (k % 2 ? 1 : -1))));
+  std::vector<float> weights(many.size(), 0.0f);
+  weights[0] = 0.7f, weights[5] = 0.5f, weights[11] = 0.4f;
+  int rows = 0, calls = 0;
+  const Image at_once = render(
+      [&](Renderer& r) {
+        DrawableHandle h;
+        Status s = r.upload_mesh(rest, h);
+        if (s) s = r.set_morph_targets(h, many);
+        return s ? r.set_morph_weights(h, weights.data(), weights.size()) : s;
+      },
+      cam);
+  const Image banded = render(
+      [&](Renderer& r) {
+        DrawableHandle h;
+        Status s = r.upload_mesh(rest, h);
+        if (!s) return s;
+        Renderer::MorphJobPtr job;
+        Renderer::MorphData data;
+        bool done = false;
+        REQUIRE(r.begin_morph_targets(h, many, job));
+        REQUIRE(r.step_morph_targets(*job, 12, done));
+        REQUIRE(r.finish_morph_targets(*job, data, false));
+        CHECK(data.texels.empty());
+        rows = data.rows;
+        done = false;
+        while (s && !done) {
+          s = r.upload_morph_band(h, *job, data, 1, done);
+          ++calls;
+          CHECK(r.morph_target_count(h) == 0);  // none until the upload is finished
+        }
+        if (s) s = r.finish_morph_upload(h, *job, data);
+        if (s) CHECK(r.morph_target_count(h) == 12);
+        return s ? r.set_morph_weights(h, weights.data(), weights.size()) : s;
+      },
+      cam);
+  INFO(rows << " rows in " << calls << " calls");
+  CHECK(rows > 1);
+  CHECK(calls == rows);
+  CHECK(compare(banded, at_once).max == 0);
+}
+
 TEST_CASE("morph targets: shapes past the first 32, and more than 32 weights at once", "[render][indexed][morph]") {
   // The shader finds a vertex's entry of shape s from a 128-bit mask (bit
   // counts over the words before s); with more than 32 non-zero weights it

@@ -4,19 +4,25 @@
 // and their offsets in the scan frame, at one level), fetched once per head
 // and level.
 //
-// The blend runs on the GPU: the shapes go to the viewer once per head and
-// level as morph targets (set_morph_targets: a float data texture read by
-// the vertex shader, normal offsets computed there at full weight), and a
+// The blend runs on the GPU on a hardware GL: the shapes go to the viewer
+// once per head and level as morph targets (a float data texture read by
+// the vertex shader, normal offsets computed there at full weight; sent
+// over frames, see sendTargets, the CPU path drawing meanwhile), and a
 // frame is only the weights (set_morph_weights, a uniform array): no vertex
 // upload, no loop over vertices here. The CPU blend (positions = rest + sum
 // of w_i * offsets_i over the shapes with a weight, handed to the viewer's
 // update_positions, which renormalizes and uploads the moved vertices) is
-// kept for positions() (tests, the console), for ?morph=cpu, and as the
+// kept for positions() (tests, the console), for ?morph=cpu, as the
 // fallback when the viewer refuses the morph targets (GL limits; a console
-// note says why). The measured cost per frame, both paths, is in
-// docs/design/page.md. The lower teeth and tongue ride on the jaw: the shapes' jaw motions blended as I + sum of
-// w_i (M_i - I) (what the GLB's morph targets on the teeth do); the tongue
-// does not come out (tongueOut moves the skin only here).
+// note says why), and by default on software GL (SwiftShader, llvmpipe:
+// there the vertex shader's blend runs on the CPU and a draw measured 1.4-4
+// times slower than the CPU blend's; see pickPath). The measured cost per
+// frame, both paths, is in docs/design/page.md. The lower teeth and
+// tongue ride on the jaw: the shapes' jaw motions blended as I + sum of
+// w_i (M_i - I) (what the GLB's morph targets on the teeth do); the
+// eyeballs turn with the gaze shapes (eyeLook*) the same way; the tongue
+// does not come out (tongueOut moves the skin only here: the core bends
+// the tongue, not a rigid motion a component's matrix could carry).
 import { app, page, ui, showError } from './state.js';
 import { runJob } from './worker_client.js';
 import { onHeadShown, showStage, view } from './head_view.js';
@@ -86,13 +92,20 @@ const ex = app.expressions = {
   talkFrames: 0,
   talkPeaks: {},        // the last Talk's largest weight per shape drawn
   jawMatrix: null,      // the lower teeth's and tongue's last matrix (column-major 4x4, scan frame)
+  eyeMatrices: null,    // the eyeballs' last matrices [left, right] (the same)
   // Per drawn pose: the JS blend and the viewer's update_positions (ms, sums over frames).
   stats: { frames: 0, blendMs: 0, uploadMs: 0, lastBlendMs: 0, lastUploadMs: 0 },
   // Where the blend runs: 'gpu' (morph targets in the vertex shader) or
-  // 'cpu' (?morph=cpu, or the GPU path refused: gpuNote says why).
-  path: new URLSearchParams(location.search).get('morph') === 'cpu' ? 'cpu' : 'gpu',
+  // 'cpu'; null until the first pose picks it (pickPath: ?morph=cpu|gpu,
+  // else the GL's renderer). pathReason says why; gpuNote why the GPU path
+  // was refused, if it was.
+  path: null,
+  pathReason: null,
+  glRenderer: null,
   gpuNote: null,
-  morphUploadMs: null,  // the last set_morph_targets (once per head and level)
+  morphUploadMs: null,  // the last sending of the morph targets, first pose to uploaded (once per head and level)
+  morphUpload: null,    // its parts (ms; see sendTargets), entries, textureBytes
+  gpuPending: false,    // the morph targets are being sent (the CPU path draws meanwhile)
   // For the tests and the console: the blend computed on the CPU and the rest positions, a shape's data.
   positions: () => (baked ? blendCpu(baked).slice() : null),
   restPositions: () => (baked ? baked.rest.slice() : null),
@@ -101,8 +114,48 @@ const ex = app.expressions = {
   talkSeconds: TALK_END,
   // Tests: set weights as the presets and sliders do; switch the path and redraw.
   set: (weights) => setWeights(weights),
-  setPath: (path) => { ex.path = path; return fresh(baked) && draw(); },
+  setPath: (path) => { ex.path = path; ex.pathReason = 'set by setPath'; return fresh(baked) && draw(); },
 };
+
+// GL drivers that draw on the CPU: Chromium's SwiftShader (headless, or no
+// usable GPU driver), Mesa's llvmpipe and softpipe, Windows' basic driver.
+const SOFTWARE_GL = /swiftshader|llvmpipe|softpipe|software|basic render driver/i;
+
+// The GL's renderer string: the unmasked one (WEBGL_debug_renderer_info)
+// where the browser gives it, else RENDERER. The viewer's context is the
+// canvas' (getContext returns the existing one; called only once the
+// viewer runs, so it never creates a context of its own).
+function glRenderer() {
+  const gl = document.getElementById('canvas').getContext('webgl2');
+  if (!gl) return '';
+  const info = gl.getExtension('WEBGL_debug_renderer_info');
+  return String((info && gl.getParameter(info.UNMASKED_RENDERER_WEBGL)) || gl.getParameter(gl.RENDERER) || '');
+}
+
+// Picks the blend once, at the first pose: ?morph=cpu or ?morph=gpu forces
+// one (tests, comparisons); otherwise software GL blends on the CPU, where
+// the vertex shader's blend is itself CPU work and measured slower than
+// the JavaScript blend (flow expressions prints both at levels 2 and 3),
+// and any other GL on the GPU (a real GPU's blend is a few texel fetches
+// per vertex: assumed faster, not measured here, there is no GPU on the
+// test machine). A console note says which and why.
+function pickPath() {
+  if (ex.path) return;
+  const forced = new URLSearchParams(location.search).get('morph');
+  if (forced === 'cpu' || forced === 'gpu') {
+    ex.path = forced;
+    ex.pathReason = '?morph=' + forced;
+  } else {
+    let r = '';
+    try { r = glRenderer(); } catch (e) { r = ''; }
+    ex.glRenderer = r;
+    const soft = SOFTWARE_GL.test(r);
+    ex.path = soft ? 'cpu' : 'gpu';
+    ex.pathReason = soft ? 'software GL (' + r + '): its vertex shader runs on the CPU, the JavaScript blend draws faster'
+      : 'a hardware GL (' + (r || 'renderer not given') + ')';
+  }
+  console.info('Expressions: blending on the ' + ex.path.toUpperCase() + ', ' + ex.pathReason + ' (?morph=cpu or ?morph=gpu forces one).');
+}
 
 function levelMesh(level) {
   const m = app.fit.meshes;
@@ -128,7 +181,8 @@ function ensureShapes() {
       showError('Expressions: ' + (r.ok ? 'the baked shapes have ' + r.vertexCount + ' vertices, the level ' + mesh.vertexCount : r.message));
       return null;
     }
-    const shapes = new Map(r.shapes.map((s) => [s.name, { indices: s.indices, offsets: s.offsets, jaw: s.jawMatrix || null }]));
+    const shapes = new Map(r.shapes.map((s) => [s.name, { indices: s.indices, offsets: s.offsets, jaw: s.jawMatrix || null,
+                                                          eyes: s.eyeMatrices || null }]));
     const rest = new Float32Array(mesh.positions);
     const names = r.shapes.map((s) => s.name);
     baked = { fit, level, shapes, names, index: new Map(names.map((n, i) => [n, i])), rest, out: rest.slice(),
@@ -163,38 +217,90 @@ function blendCpu(b) {
 
 const poseKey = (v) => v.model_serial() + ':' + v.pose_serial();
 
-// The GPU path made ready on the model shown: the rest positions on it
-// (anything else that moved it, the CPU path or Animate, is undone once),
-// then the morph targets (once per model: another level or head view
-// replaces the model). False (and the CPU path from then on) when refused.
+// The GPU path made ready on the model shown: the morph targets sent
+// (once per model: another level or head view replaces the model; spread
+// over frames, false meanwhile), then the rest positions on it (anything
+// else that moved it, the CPU path or Animate, is undone once). False (and
+// the CPU path from then on) when refused.
 function gpuReady(b) {
   const v = app.viewer;
+  if (!(b.gpuModel === v.model_serial() && v.morph_target_count() === b.names.length) && !sendTargets(b)) return false;
   if (b.restPose !== poseKey(v)) {
     const err = v.update_positions(b.rest);
     if (err) return gpuRefused(err);
     b.restPose = poseKey(v);
   }
-  if (b.gpuModel === v.model_serial() && v.morph_target_count() === b.names.length) return true;
-  if (!b.flat) {
-    let total = 0;
-    for (const n of b.names) total += b.shapes.get(n).indices.length;
-    const counts = new Uint32Array(b.names.length), indices = new Uint32Array(total), offsets = new Float32Array(3 * total);
-    let at = 0;
-    b.names.forEach((n, i) => {
-      const s = b.shapes.get(n);
-      counts[i] = s.indices.length;
-      indices.set(s.indices, at);
-      offsets.set(s.offsets, 3 * at);
-      at += s.indices.length;
-    });
-    b.flat = { counts, indices, offsets };
-  }
-  const t0 = performance.now();
-  const err = v.set_morph_targets(b.flat.counts, b.flat.indices, b.flat.offsets);
-  ex.morphUploadMs = performance.now() - t0;
-  if (err) return gpuRefused(err);
-  b.gpuModel = v.model_serial();
   return true;
+}
+
+// Per frame, at most about this long preparing the morph targets.
+const MORPH_SLICE_MS = 12;
+
+// The morph targets onto the model shown, a slice per frame (the viewer's
+// begin_morph_targets / continue_morph_targets; sent at once they stalled
+// the page 0.5-2.9 s at level 3: the viewer's prepare of the normal
+// offsets and texels, and the GL upload): true once uploaded. Meanwhile the CPU path draws
+// the pose and the next frame goes on.
+function sendTargets(b) {
+  const v = app.viewer;
+  let job = b.job;
+  const now = () => performance.now();
+  if (!job || job.model !== v.model_serial()) {
+    // The viewer takes the mesh as it is at begin as the rest: put the rest on first.
+    if (b.restPose !== poseKey(v)) {
+      const err = v.update_positions(b.rest);
+      if (err) return gpuRefused(err);
+      b.restPose = poseKey(v);
+    }
+    const t0 = now();
+    if (!b.flat) {
+      let total = 0;
+      for (const n of b.names) total += b.shapes.get(n).indices.length;
+      const counts = new Uint32Array(b.names.length), indices = new Uint32Array(total), offsets = new Float32Array(3 * total);
+      let at = 0;
+      b.names.forEach((n, i) => {
+        const s = b.shapes.get(n);
+        counts[i] = s.indices.length;
+        indices.set(s.indices, at);
+        offsets.set(s.offsets, 3 * at);
+        at += s.indices.length;
+      });
+      b.flat = { counts, indices, offsets };
+    }
+    const t1 = now();
+    const err = v.begin_morph_targets(b.flat.counts, b.flat.indices, b.flat.offsets);
+    const t2 = now();
+    if (err) return gpuRefused(err);
+    job = b.job = { model: v.model_serial(), t0, packMs: t1 - t0, calls: 1, busyMs: t2 - t0, longestMs: t2 - t0 };
+    ex.gpuPending = true;
+  } else {
+    const t0 = now();
+    const r = v.continue_morph_targets(MORPH_SLICE_MS);
+    const dt = now() - t0;
+    job.calls++;
+    job.busyMs += dt;
+    // The last call (the GL error check, which waits for the GPU process) apart.
+    if (r.done) job.lastMs = dt; else job.longestMs = Math.max(job.longestMs, dt);
+    if (r.error) {
+      b.job = null;
+      ex.gpuPending = false;
+      return gpuRefused(r.error);
+    }
+    if (r.done) {
+      b.job = null;
+      ex.gpuPending = false;
+      b.gpuModel = v.model_serial();
+      ex.morphUploadMs = now() - job.t0;
+      // Where it went (docs/design/page.md, "No stall on upload"): the
+      // page's packing, the viewer's copy, split, prepare (normal offsets),
+      // packing into texels and GL upload; the calls and the longest one.
+      ex.morphUpload = { pagePackMs: job.packMs, wallMs: ex.morphUploadMs, busyMs: job.busyMs, calls: job.calls,
+                         longestCallMs: job.longestMs, lastCallMs: job.lastMs, ...(v.last_morph_upload ? v.last_morph_upload() : {}) };
+      return true;
+    }
+  }
+  requestAnimationFrame(() => { if (baked === b && b.job === job && ex.path === 'gpu') draw(); });
+  return false;
 }
 
 function gpuRefused(err) {
@@ -211,6 +317,7 @@ function draw() {
   const b = baked;
   if (!fresh(b) || app.shownStage !== 'subdivide' || view.level !== b.level) return false;
   const v = app.viewer;
+  pickPath();
   const t0 = performance.now();
   let t1, err;
   // The wireframe's edges are drawn from the uploaded positions, not blended
@@ -244,16 +351,24 @@ function draw() {
   return true;
 }
 
-// The lower teeth and tongue (app.jawComponents) on the blended jaw motion.
+// The lower teeth and tongue (app.jawComponents) on the blended jaw
+// motion, the eyeballs (app.eyeComponents) on the blended gaze: each
+// I + sum of w_i (M_i - I) over the shapes that have one.
 const IDENTITY = new Float32Array([1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]);
-function moveJaw(b) {
+function blendMatrices(b, pick) {
   const m = IDENTITY.slice();
   for (const [name, w] of Object.entries(ex.weights)) {
-    const jaw = w && b.shapes.get(name) && b.shapes.get(name).jaw;
-    if (jaw) for (let i = 0; i < 16; i++) m[i] += w * (jaw[i] - IDENTITY[i]);
+    const s = w && b.shapes.get(name), x = s && pick(s);
+    if (x) for (let i = 0; i < 16; i++) m[i] += w * (x[i] - IDENTITY[i]);
   }
+  return m;
+}
+function moveJaw(b) {
+  const m = blendMatrices(b, (s) => s.jaw);
   ex.jawMatrix = m;
   for (const i of app.jawComponents || []) app.viewer.set_component_matrix(i, m);
+  ex.eyeMatrices = [0, 1].map((e) => blendMatrices(b, (s) => s.eyes && s.eyes[e]));
+  (app.eyeComponents || []).forEach((i, e) => { if (i !== null && e < 2) app.viewer.set_component_matrix(i, ex.eyeMatrices[e]); });
 }
 
 // What a frame cost on the page's side (the drawing itself is the GPU's).

@@ -6,21 +6,22 @@
 // when another head or job takes over (the expressions are cleared), when a
 // preset, a slider or Talk is used, and when the camera goes away.
 //
-// Per detected frame (at most ~12 per second) the landmarks give a few
-// measures, each divided by a length of the face so that distance to the
-// camera does not matter: each eye's lid gap over its width, the lips' gap,
-// each mouth corner's height along the face's up (chin to forehead) from
-// the eyes' outer corners and the mouth's width over the distance between the
-// eyes' outer corners, the inner and outer brows' heights above the eyes.
-// The first frames with a face (CALIBRATION_FRAMES) are taken as the
-// neutral face; the shapes' weights are the measures' changes from it over
-// a full-motion span (SPAN), clamped to [0, 1] and smoothed over time. The
-// spans are guesses except jawOpen's, set from the detector on our own
-// jawOpen render (the generic head's full jawOpen opens the lips by 0.22 of
-// the eye-corner distance; a person's wide-open mouth, more, clamps at 1);
-// none is calibrated per person.
+// Per detected frame (at most ~12 per second; the tracker is
+// landmarks.js's refined detector, which follows the eyelids) the
+// landmarks give a few measures, each divided by a length of the face so
+// that distance to the camera does not matter: each eye's lid gaps over its
+// width, the lips' gap, each mouth corner's height along the face's up
+// (chin to forehead) from the eyes' outer corners and its distance out from
+// the face's middle, the mouth's width, the inner and outer brows' heights
+// above the eyes, and the nose tip's place across and along the face (the
+// head's yaw and pitch). The first frames with a face (CALIBRATION_FRAMES)
+// are taken as the neutral face; the shapes' weights are the measures'
+// changes from it over a full-motion span (SPAN, set from the tracker on
+// our own renders of each shape), clamped to [0, 1] and smoothed over time;
+// the head's turn turns the view. None is calibrated per person beyond the
+// neutral face, and none was tried on a real face.
 import { app, ui } from './state.js';
-import { trackLandmarks } from './landmarks.js';
+import { closeTracker, trackLandmarks } from './landmarks.js';
 import { driveWeights, setDriver } from './expressions.js';
 import { stopAnimation } from './animation.js';
 
@@ -30,21 +31,34 @@ const SMOOTHING_MS = 90;      // exponential smoothing's time constant
 
 // MediaPipe Face Mesh indices (the subject's left is the image's right).
 const P = {
-  eyeL: { top: 386, bottom: 374, inner: 362, outer: 263 },
-  eyeR: { top: 159, bottom: 145, inner: 133, outer: 33 },
+  // Three upper/lower lid pairs per eye, inner to outer.
+  eyeL: { lids: [[385, 380], [386, 374], [387, 373]], inner: 362, outer: 263 },
+  eyeR: { lids: [[158, 153], [159, 145], [160, 144]], inner: 133, outer: 33 },
   lipTop: 13, lipBottom: 14, cornerL: 291, cornerR: 61,
   browInnerL: 336, browInnerR: 107, browOuterL: 300, browOuterR: 70,
-  forehead: 10, chin: 152,
+  forehead: 10, chin: 152, noseTip: 1, faceL: 454, faceR: 234,
 };
 
-// Change from neutral (in the measure's units) that makes a weight of 1.
+// The nose tip's depth in front of the eyes' outer corners, over the
+// distance between those corners: a head turned by a angle moves the tip
+// by NOSE_DEPTH * sin(a) of that distance across the face (yaw) or along
+// it (pitch). Set from the detector on our own renders (flow follow-face:
+// the generic head seen 20 degrees from the side and 15 from above).
+const NOSE_DEPTH = { yaw: 0.55, pitch: 0.34 };
+const EYE_OVER_FACE_WIDTH = 0.647;
+const MAX_TURN_DEG = 45;
+
+// Change from neutral (in the measure's units) that makes a weight of 1,
+// set from the tracker on our own renders of each shape at full weight
+// (the generic head, flow follow-face; docs/design/page.md has the
+// figures); checked on no real face.
 const SPAN = {
-  blink: 0.75,      // of the neutral lid gap: 75 % closed is a full blink
-  jawOpen: 0.25,    // lip gap over eye-corner distance
-  smile: 0.07,      // corner lift over eye-corner distance
-  smileWide: 0.12,  // mouth width gain over eye-corner distance
-  brow: 0.07,       // brow lift over eye-corner distance
-  pucker: 0.18,     // mouth width loss over eye-corner distance
+  blink: 0.5,       // of the neutral lid opening (renders: 34 % and 80 % closed)
+  jawOpen: 0.25,    // lip gap over eye-corner distance (render: 0.33)
+  smile: 0.1,       // corner lift over eye-corner distance (renders: 0.095-0.127)
+  smileOut: 0.05,   // corner drawn out from the face's middle (renders: 0.049-0.070)
+  brow: 0.05,       // brow lift over eye-corner distance (render: 0.038)
+  pucker: 0.06,     // mouth width loss over eye-corner distance (render: 0.044)
 };
 
 const sub = (a, b) => [a[0] - b[0], a[1] - b[1]];
@@ -55,37 +69,63 @@ const clamp01 = (x) => Math.min(1, Math.max(0, x));
 // The face's measures from its landmarks ([x, y] pixels).
 export function faceMeasures(pts) {
   const at = (i) => pts[i];
-  const scale = len(sub(at(P.eyeL.outer), at(P.eyeR.outer)));
+  // The unit of length: the face's width at the eyes (its outline, 234 to
+  // 454) times the generic head's eye-corner distance over it (0.647), so
+  // the spans read as fractions of the eye-corner distance. Not the eyes'
+  // corners themselves: a closing lid moves its eye's outer corner (4 %
+  // wider on our right-blink render, read as a pucker).
+  const scale = EYE_OVER_FACE_WIDTH * len(sub(at(P.faceL), at(P.faceR)));
   const upRaw = sub(at(P.forehead), at(P.chin));
   const up = [upRaw[0] / len(upRaw), upRaw[1] / len(upRaw)];
   const height = (i, ref) => dot(sub(at(i), at(ref)), up) / scale;
-  const eye = (e) => len(sub(at(e.top), at(e.bottom))) / len(sub(at(e.inner), at(e.outer)));
+  // The eye's opening: its lid gaps' mean over its width.
+  const eye = (e) => e.lids.reduce((a, [t, b]) => a + len(sub(at(t), at(b))), 0) / (e.lids.length * len(sub(at(e.inner), at(e.outer))));
   // Corner heights from the eyes' outer corners (the rigid upper face), so
   // that the jaw dropping (corners down) does not read as a smile.
   const eyes = [(at(P.eyeL.outer)[0] + at(P.eyeR.outer)[0]) / 2, (at(P.eyeL.outer)[1] + at(P.eyeR.outer)[1]) / 2];
+  // Across the face, towards the subject's left (the image's right on a
+  // camera that does not mirror).
+  const acrossRaw = sub(at(P.eyeL.outer), at(P.eyeR.outer));
+  const across = [acrossRaw[0] / len(acrossRaw), acrossRaw[1] / len(acrossRaw)];
+  const nose = sub(at(P.noseTip), eyes);
   return {
+    noseAcross: dot(nose, across) / scale, noseUp: dot(nose, up) / scale,
     eyeL: eye(P.eyeL), eyeR: eye(P.eyeR),
     lipGap: len(sub(at(P.lipTop), at(P.lipBottom))) / scale,
     cornerL: dot(sub(at(P.cornerL), eyes), up) / scale,
     cornerR: dot(sub(at(P.cornerR), eyes), up) / scale,
     mouthWidth: len(sub(at(P.cornerL), at(P.cornerR))) / scale,
+    // Each corner's distance from the face's middle (the eyes' midpoint), across the face.
+    cornerOutL: dot(sub(at(P.cornerL), eyes), across) / scale,
+    cornerOutR: -dot(sub(at(P.cornerR), eyes), across) / scale,
     browInner: (height(P.browInnerL, P.eyeL.inner) + height(P.browInnerR, P.eyeR.inner)) / 2,
     browOuterL: height(P.browOuterL, P.eyeL.outer), browOuterR: height(P.browOuterR, P.eyeR.outer),
   };
 }
 
+// The head's turn (degrees) from the measures m against the neutral ones
+// n: yaw + towards the head's own left, pitch + chin up (the nose tip moves
+// across or up the face by NOSE_DEPTH * sin of the turn).
+export function headTurn(m, n) {
+  const deg = (x, depth) => Math.max(-MAX_TURN_DEG, Math.min(MAX_TURN_DEG, (Math.asin(Math.max(-1, Math.min(1, x / depth))) * 180) / Math.PI));
+  return { yaw: deg(m.noseAcross - n.noseAcross, NOSE_DEPTH.yaw), pitch: deg(m.noseUp - n.noseUp, NOSE_DEPTH.pitch) };
+}
+
 // ARKit weights from the measures m against the neutral ones n.
 export function faceWeights(m, n) {
   const jaw = clamp01((m.lipGap - n.lipGap) / SPAN.jawOpen);
-  const wide = (m.mouthWidth - n.mouthWidth) / SPAN.smileWide;
   const narrow = clamp01((n.mouthWidth - m.mouthWidth) / SPAN.pucker);
-  const smile = (c, c0) => clamp01(0.5 * ((c - c0) / SPAN.smile) + 0.5 * wide);
+  // A smile lifts its corner and draws it out, each side on its own (the
+  // mouth's whole width raised both sides for a one-sided smile); the
+  // product keeps either alone (the jaw dropping draws the corners out, a
+  // closing lid shifts the eyes' corners) from reading as a smile.
+  const smile = (c, c0, o, o0) => clamp01((c - c0) / SPAN.smile) * clamp01((o - o0) / SPAN.smileOut);
   return {
     eyeBlinkLeft: clamp01((1 - m.eyeL / n.eyeL) / SPAN.blink),
     eyeBlinkRight: clamp01((1 - m.eyeR / n.eyeR) / SPAN.blink),
     jawOpen: jaw,
-    mouthSmileLeft: smile(m.cornerL, n.cornerL),
-    mouthSmileRight: smile(m.cornerR, n.cornerR),
+    mouthSmileLeft: smile(m.cornerL, n.cornerL, m.cornerOutL, n.cornerOutL),
+    mouthSmileRight: smile(m.cornerR, n.cornerR, m.cornerOutR, n.cornerOutR),
     browInnerUp: clamp01((m.browInner - n.browInner) / SPAN.brow),
     browOuterUpLeft: clamp01((m.browOuterL - n.browOuterL) / SPAN.brow),
     browOuterUpRight: clamp01((m.browOuterR - n.browOuterR) / SPAN.brow),
@@ -104,6 +144,13 @@ const follow = app.follow = {
   faces: 0,            // frames in which a face was found
   weights: {},         // the last weights applied (smoothed)
   raw: {},             // the last frame's weights (unsmoothed)
+  head: { yaw: 0, pitch: 0 },   // the last head turn applied to the view (degrees, smoothed)
+  rawHead: { yaw: 0, pitch: 0 },
+  // Tests: probe(video) is called as a frame is sent and again when its
+  // landmarks come back; with it set, each frame's {tag, tagAfter, raw,
+  // head} goes to log (the flow reads a mark in its video's corner).
+  probe: null,
+  log: [],
   message: '',
   tracks: () => (session && session.stream ? session.stream.getTracks().map((t) => t.readyState) : []),
   lastStream: null,    // the last stream opened (tests: its tracks end when stopped)
@@ -141,6 +188,9 @@ async function start() {
   follow.frames = follow.faces = 0;
   follow.weights = {};
   follow.raw = {};
+  follow.head = { yaw: 0, pitch: 0 };
+  follow.rawHead = { yaw: 0, pitch: 0 };
+  follow.log = [];
   say('starting', 'Opening the camera…');
   let stream;
   try {
@@ -156,7 +206,7 @@ async function start() {
   const video = ui.followVideo;
   video.srcObject = stream;
   follow.lastStream = stream;
-  session = { stream, video, timer: 0, neutral: null, samples: [], last: performance.now() };
+  session = { stream, video, timer: 0, neutral: null, samples: [], last: performance.now(), turned: { yaw: 0, pitch: 0 } };
   // The camera unplugged or taken away: stop.
   for (const t of stream.getTracks()) t.addEventListener('ended', () => { if (my === generation) stop('The camera stopped.'); });
   setDriver(() => stop('', false));  // the page took the head over: it resets the weights itself
@@ -178,8 +228,13 @@ function tick(my) {
   const next = () => { if (my === generation && session) session.timer = setTimeout(() => tick(my), Math.max(0, FRAME_MS - (performance.now() - t0))); };
   if (!v.videoWidth) { next(); return; }
   follow.frames++;
+  const tag = follow.probe ? follow.probe(v) : undefined;
   trackLandmarks(v, v.videoWidth, v.videoHeight).then((r) => {
     if (my !== generation || !session) return;
+    if (follow.probe && s.neutral && r.points) {
+      const m = faceMeasures(r.points);
+      follow.log.push({ tag, tagAfter: follow.probe(v), raw: faceWeights(m, s.neutral), head: headTurn(m, s.neutral) });
+    }
     if (!r.points) {
       say(s.neutral ? 'no-face' : 'calibrating', 'Camera on. No face found: look at the camera.');
       next();
@@ -208,12 +263,33 @@ function tick(my) {
     }
     follow.raw = raw;
     follow.weights = w;
+    const turn = headTurn(m, s.neutral);
+    follow.rawHead = turn;
+    // A degenerate face (points on top of each other) gives NaN: the view keeps its last turn.
+    if (Number.isFinite(turn.yaw) && Number.isFinite(turn.pitch))
+      follow.head = { yaw: follow.head.yaw + a * (turn.yaw - follow.head.yaw), pitch: follow.head.pitch + a * (turn.pitch - follow.head.pitch) };
     say('following', 'Camera on: following your face (nothing is recorded or sent).');
-    driveWeights(w).catch(() => {});
+    driveWeights(w).then(() => { if (my === generation && session) turnView(session, follow.head); }, () => {});
     next();
   }, (e) => {
     if (my === generation) stop('The face detector failed: ' + (e && e.message ? e.message : e));
   });
+}
+
+// The view turned as the head turns: the head on screen turns as the face
+// in the camera does (the camera's yaw and pitch the opposite of the
+// head's), by the difference from what was applied so far, so the user's
+// own orbiting is kept. OrbitCamera::orbit turns by 180 degrees per canvas
+// height: yaw -= dx, pitch += dy.
+function turnView(s, head) {
+  const v = app.viewer;
+  if (!v || !v.orbit) return;
+  const h = document.getElementById('canvas').height || 1;
+  const want = { yaw: -head.yaw, pitch: -head.pitch };
+  const dYaw = want.yaw - s.turned.yaw, dPitch = want.pitch - s.turned.pitch;
+  if (Math.abs(dYaw) < 0.05 && Math.abs(dPitch) < 0.05) return;
+  v.orbit((-dYaw * h) / 180, (dPitch * h) / 180);
+  s.turned = want;
 }
 
 // Stops the camera (every track) and the loop; `reset`: the head back to
@@ -223,11 +299,13 @@ export function stop(why = '', reset = true) {
   generation++;
   follow.on = false;
   if (had) {
+    turnView(had, { yaw: 0, pitch: 0 });  // the view as it was before following
     clearTimeout(had.timer);
     had.stream.getTracks().forEach((t) => t.stop());
     had.video.srcObject = null;
   }
   session = null;
+  if (had) closeTracker();
   setDriver(null);
   ui.follow.checked = false;
   say(why ? 'error' : 'off', why || 'Camera off.');

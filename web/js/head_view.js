@@ -50,8 +50,15 @@ export function showComponents(c) {
     if (err) errors.push(err); else app.components++;
   };
   app.jawComponents = [];
+  // The eyeballs turn with the gaze shapes (expressions.js): their
+  // component numbers, the left eye's first ([null] where one failed).
+  app.eyeComponents = [];
   const eyeTextured = !!eyeTexture && (c.eyes || []).every((eye) => !!eye.uvs);
-  for (const eye of c.eyes || []) add(eye, eyeTextured ? eyeTexture : null);
+  for (const eye of c.eyes || []) {
+    const before = app.components;
+    add(eye, eyeTextured ? eyeTexture : null);
+    app.eyeComponents.push(app.components > before ? before : null);
+  }
   const teethTextured = !!teethTexture && !!c.teeth && !!c.teeth.uvs;
   if (c.teeth) add(c.teeth, teethTextured ? teethTexture : null);
   // The lower teeth and the tongue ride on the jaw (animate's jawMatrix).

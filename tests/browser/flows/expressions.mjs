@@ -62,6 +62,8 @@ async function frameCosts(page) {
     v.set_profiling(true);
     for (const path of ['cpu', 'gpu']) {
       e.setPath(path);
+      // The GPU path's morph targets are sent over frames first (another level: sent again).
+      while (e.gpuPending) await new Promise((r) => setTimeout(r, 50));
       let js = 0, draw = 0, wall = 0, n = 0;
       for (let i = 0; i < 10; i++) {
         const f0 = v.frames_drawn(), t0 = performance.now();
@@ -80,6 +82,61 @@ async function frameCosts(page) {
     return out;
   });
 }
+
+// The parts of one sending of the morph targets (expressions.morphUpload).
+const uploadText = (u) => `${u.entries.toLocaleString('en')} entries, ${(u.textureBytes / 1048576).toFixed(1)} MB of texture; ` +
+  `${u.wallMs.toFixed(0)} ms from the first pose to uploaded, in ${u.calls} calls over as many frames, ${u.busyMs.toFixed(0)} ms of them busy, ` +
+  `the longest call ${u.longestCallMs.toFixed(1)} ms but the last (attributes and the GL error check, which waits for the GPU ` +
+  `process: ${u.lastCallMs.toFixed(1)} ms, of it ${u.syncMs.toFixed(1)} in the viewer); the page's packing ${u.pagePackMs.toFixed(1)} ms, copy into wasm ${u.copyMs.toFixed(1)}, ` +
+  `split by shape ${u.splitMs.toFixed(1)}, prepare (normal offsets) ${u.prepareMs.toFixed(1)} in ${u.steps} steps (longest ` +
+  `${u.longestStepMs.toFixed(1)}), entries sorted by vertex ${u.packMs.toFixed(1)}, texels written and uploaded ${u.uploadMs.toFixed(1)} ` +
+  `in ${u.bands} bands (longest ${u.longestBandMs.toFixed(1)}) ms` +
+  (u.longestGapMs !== undefined ? `; the longest gap between the page's frames meanwhile ${u.longestGapMs.toFixed(0)} ms` : '');
+
+// The same morph targets sent at once (the viewer's set_morph_targets, the
+// page's way before): one call, where its time goes.
+async function sendAtOnce(page, level) {
+  const once = await page.evaluate(() => {
+    const v = window.likeness.viewer, e = window.likeness.expressions;
+    const names = e.names, total = names.reduce((a, n) => a + e.shape(n).indices.length, 0);
+    const counts = new Uint32Array(names.length), indices = new Uint32Array(total), offsets = new Float32Array(3 * total);
+    let at = 0;
+    names.forEach((n, i) => {
+      const s = e.shape(n);
+      counts[i] = s.indices.length;
+      indices.set(s.indices, at);
+      offsets.set(s.offsets, 3 * at);
+      at += s.indices.length;
+    });
+    const t0 = performance.now();
+    const err = v.set_morph_targets(counts, indices, offsets);
+    const r = { err, callMs: performance.now() - t0, ...v.last_morph_upload() };
+    e.setPath('gpu');  // the weights again (the upload zeroed them)
+    return r;
+  });
+  note(`the same at level ${level} sent at once (set_morph_targets, the page's way before): one call of ${once.callMs.toFixed(0)} ms = ` +
+       `copy into wasm ${once.copyMs.toFixed(1)} + split ${once.splitMs.toFixed(1)} + prepare with packing ${once.prepareMs.toFixed(1)} + ` +
+       `GL upload ${once.uploadMs.toFixed(1)} ms${once.err ? ' (' + once.err + ')' : ''}`);
+  return once;
+}
+
+// Sends the morph targets (the GPU path forced) and waits for them, timing
+// the gaps between the page's animation frames meanwhile (a stall shows as a long gap).
+const sendTargets = (page) => page.evaluate(async () => {
+  const e = window.likeness.expressions;
+  let last = performance.now(), longestGapMs = 0, sending = true;
+  const tick = () => {
+    const t = performance.now();
+    longestGapMs = Math.max(longestGapMs, t - last);
+    last = t;
+    if (sending) requestAnimationFrame(tick);
+  };
+  requestAnimationFrame(tick);
+  e.setPath('gpu');
+  while (e.gpuPending || e.stats.path !== 'gpu') await new Promise((r) => setTimeout(r, 50));
+  sending = false;
+  return { ...e.morphUpload, longestGapMs };
+});
 
 async function reportCosts(page, level) {
   const c = await frameCosts(page);
@@ -109,13 +166,44 @@ async function run(s) {
   const sparse = await page.evaluate(() => {
     const e = window.likeness.expressions;
     const n = e.names.map((name) => e.shape(name).indices.length);
-    return { offsets: n.reduce((a, b) => a + b, 0), most: Math.max(...n), smile: e.shape('smile').indices.length };
+    // Offsets by size (scan units, metres for these scans): how many are of rounding size.
+    const under = [1e-7, 1e-6, 1e-5].map((t) => {
+      let c = 0;
+      for (const name of e.names) {
+        const o = e.shape(name).offsets;
+        for (let k = 0; k < o.length; k += 3) if (Math.hypot(o[k], o[k + 1], o[k + 2]) < t) c++;
+      }
+      return c;
+    });
+    return { offsets: n.reduce((a, b) => a + b, 0), most: Math.max(...n), smile: e.shape('smile').indices.length, under };
   });
   note(`baked shapes at level 3: ${sparse.offsets.toLocaleString('en')} moved vertices over the 77 shapes ` +
        `(${(sparse.offsets * 16 / 1048576).toFixed(1)} MB as indices + offsets), at most ${sparse.most.toLocaleString('en')} ` +
-       `in one shape, smile ${sparse.smile.toLocaleString('en')}`);
+       `in one shape, smile ${sparse.smile.toLocaleString('en')}; offsets shorter than 0.1, 1 and 10 micrometres: ` +
+       sparse.under.map((c) => c.toLocaleString('en')).join(', '));
+  const notesAuto = [];
+  const onConsoleAuto = (m) => { if (m.type() === 'info') notesAuto.push(m.text()); };
+  page.on('console', onConsoleAuto);
   await page.click('[data-preset="smile"]');
   await page.waitForFunction(() => window.likeness.expressions.weights.smile === 1 && window.likeness.expressions.stats.frames > 0);
+  page.off('console', onConsoleAuto);
+  // The first pose picked the blend: SwiftShader (headless Chromium) is
+  // software GL, so the CPU blend, said once on the console.
+  const auto = await page.evaluate(() => {
+    const e = window.likeness.expressions;
+    return { path: e.path, reason: e.pathReason, renderer: e.glRenderer, drawn: e.stats.path };
+  });
+  check('the first pose picks the blend by the GL: the CPU blend on SwiftShader, with a console note', auto.path === 'cpu' &&
+        auto.drawn === 'cpu' && /swiftshader/i.test(auto.renderer || '') && notesAuto.some((n) => /blending on the CPU, software GL/.test(n)),
+        `${JSON.stringify(auto)}; console: ${JSON.stringify(notesAuto)}`);
+  // The GPU path forced from here on (the checks of its images and costs);
+  // its first pose sends the 77 shapes: where that time goes.
+  const upload3 = await sendTargets(page);
+  note('morph targets sent at level 3: ' + uploadText(upload3));
+  const once3 = await sendAtOnce(page, 3);
+  check('level 3: the morph targets go to the viewer over frames, the longest call (but the last GL check) under a third of the call at once',
+        upload3.calls > 10 && upload3.longestCallMs < once3.callMs / 3,
+        `${upload3.calls} calls, the longest ${upload3.longestCallMs.toFixed(1)} ms against ${once3.callMs.toFixed(1)} ms at once`);
   const smile = await canvasImage(page);
   const smileDiff = differingFraction(rest, smile);
   // The vertex each side's mouthSmile moves most is the mouth corner's; the
@@ -214,6 +302,33 @@ async function run(s) {
         `jaw moves it ${jaw.jawLen.toFixed(4)} (${jaw.jawDown.toFixed(4)} along up), the skin ${jaw.skinLen.toFixed(4)} ` +
         `(${jaw.skinDown.toFixed(4)}), cosine ${jaw.cos.toFixed(3)}; ${jaw.components} parts on the jaw`);
 
+  // The gaze shapes turn the eyeballs (eyeLook*, 25 degrees at full
+  // weight in the muscle layer): the left eye out = towards the head's own
+  // left, in = towards its right, up = along its up; the other eye stays.
+  const gaze = {};
+  for (const name of ['eyeLookOutLeft', 'eyeLookInLeft', 'eyeLookUpRight']) {
+    await page.evaluate((n) => window.likeness.expressions.set({ [n]: 1 }), name);
+    gaze[name] = await page.evaluate(() => {
+      const e = window.likeness.expressions, f = window.likeness.fit.headFacing, u = window.likeness.fit.headUp;
+      const left = [u[1] * f[2] - u[2] * f[1], u[2] * f[0] - u[0] * f[2], u[0] * f[1] - u[1] * f[0]];
+      // Each eye's facing turned by its matrix (column-major 3x3 part).
+      const turned = (m) => [0, 1, 2].map((r) => m[r] * f[0] + m[4 + r] * f[1] + m[8 + r] * f[2]);
+      const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+      return { eyes: window.likeness.eyeComponents || null, turns: e.eyeMatrices.map((m) => {
+        const t = turned(m);
+        return { left: dot(t, left), up: dot(t, u), deg: (Math.acos(Math.min(1, dot(t, f))) * 180) / Math.PI };
+      }) };
+    });
+  }
+  const g = gaze, r1 = (x) => x.toFixed(2);
+  check('the gaze shapes turn the eyeballs: left eye out to the head\'s left, in to its right, the right eye up, about 25 degrees, the other eye still',
+        g.eyeLookOutLeft.turns[0].left > 0 && g.eyeLookInLeft.turns[0].left < 0 && g.eyeLookUpRight.turns[1].up > 0 &&
+        [g.eyeLookOutLeft.turns[0], g.eyeLookInLeft.turns[0], g.eyeLookUpRight.turns[1]].every((t) => t.deg > 20 && t.deg < 30) &&
+        g.eyeLookOutLeft.turns[1].deg < 0.1 && g.eyeLookInLeft.turns[1].deg < 0.1 && g.eyeLookUpRight.turns[0].deg < 0.1 &&
+        !!g.eyeLookOutLeft.eyes && g.eyeLookOutLeft.eyes.length === 2 && g.eyeLookOutLeft.eyes.every((i) => i !== null),
+        'eye components ' + JSON.stringify(g.eyeLookOutLeft.eyes) + '; ' + Object.entries(g).map(([n, v]) => n + ': ' + v.turns.map((t, i) => (i ? 'right' : 'left') + ' eye ' + r1(t.deg) + ' deg (left ' + r1(t.left) +
+          ', up ' + r1(t.up) + ')').join(', ')).join('; '));
+
   // Neutral: the rest positions exactly (the fitted level's), and the rest image.
   await page.click('[data-preset="neutral"]');
   await page.waitForTimeout(200);
@@ -228,7 +343,9 @@ async function run(s) {
         jawRest === '1,0,0,0,0,1,0,0,0,0,1,0,0,0,0,1',
         `max |blend - rest| ${neutral.d}, |rest - fitted level| ${neutral.fitted} over ${neutral.n / 3} vertices; ` +
         `${(100 * neutralDiff).toFixed(3)} % of pixels differ (max channel difference ${neutralExact.max}); slider ${sliderZero}`);
-  await reportCosts(page, 3);
+  const costs3 = await reportCosts(page, 3);
+  // From here the blend the page picks by itself (the CPU one on SwiftShader), as users get it.
+  await page.evaluate(() => { window.likeness.expressions.path = null; });
 
   // Talk to its end (back at rest), then stopped by its button, then by Animate.
   const t3 = await talkMs(page, 3);
@@ -283,7 +400,17 @@ async function run(s) {
   const t2 = await talkMs(page, 2);
   check('at level 2 the shapes are baked for level 2 and Talk plays', t2.level === 2 && t2.talkFrames >= 5,
         `level ${t2.level}, baked in ${Math.round(t2.bakeMs)} ms, ${t2.talkFrames} frames`);
-  await reportCosts(page, 2);
+  const costs2 = await reportCosts(page, 2);
+  note('morph targets sent at level 2: ' + uploadText(await page.evaluate(() => window.likeness.expressions.morphUpload)));
+  const once2 = await sendAtOnce(page, 2);
+  const upload2 = await page.evaluate(() => window.likeness.expressions.morphUpload);
+  check('level 2: the longest call of the morph targets sent over frames (but the last GL check) is under a third of the call at once',
+        upload2.longestCallMs < once2.callMs / 3, `${upload2.longestCallMs.toFixed(1)} ms against ${once2.callMs.toFixed(1)} ms`);
+  // The pick measured: on this software GL the CPU blend's frames drew faster (levels 2 and 3 together).
+  check('the blend picked on SwiftShader (CPU) is the faster one measured, levels 2 and 3 together',
+        costs2.cpu.wall + costs3.cpu.wall < costs2.gpu.wall + costs3.gpu.wall,
+        `change to frame, CPU path: level 2 ${costs2.cpu.wall.toFixed(1)} ms, level 3 ${costs3.cpu.wall.toFixed(1)} ms; ` +
+        `GPU path: level 2 ${costs2.gpu.wall.toFixed(1)} ms, level 3 ${costs3.gpu.wall.toFixed(1)} ms`);
   // The control mesh (level 0): baked and posed the same way, here with a
   // viewer that refuses the morph targets (as for GL limits): the page says
   // so on the console and blends on the CPU.
@@ -292,8 +419,8 @@ async function run(s) {
   page.on('console', onConsole);
   await page.evaluate(() => {
     const v = window.likeness.viewer;
-    v.realSetMorphTargets = v.set_morph_targets;
-    v.set_morph_targets = () => 'simulated: the entries do not fit a 2048 texture';
+    v.realBeginMorphTargets = v.begin_morph_targets;
+    v.begin_morph_targets = () => 'simulated: the entries do not fit a 2048 texture';
   });
   await page.selectOption('#level', '0');
   await page.click('[data-preset="smile"]');
@@ -317,8 +444,8 @@ async function run(s) {
   page.off('console', onConsole);
   await page.evaluate(() => {
     const v = window.likeness.viewer;
-    v.set_morph_targets = v.realSetMorphTargets;
-    window.likeness.expressions.path = 'gpu';
+    v.begin_morph_targets = v.realBeginMorphTargets;
+    window.likeness.expressions.path = null;  // picked again by the GL at the next pose
   });
   await page.selectOption('#level', '3');
   await page.check('#show-points');

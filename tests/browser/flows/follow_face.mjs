@@ -1,15 +1,22 @@
 // "Follow my face" (issue 38) with Chromium's fake camera: a browser of its
 // own launched with --use-fake-device-for-media-stream and
 // --use-fake-ui-for-media-stream (the camera allowed without asking) playing
-// a y4m made here from our own renders (`likeness render --expression`):
-// the generic head at rest for NEUTRAL_S seconds, then with jawOpen. The
-// head is a native fit of a synthetic scan opened as a project. Checked: the
-// toggle is off at start; on, the camera opens (indicator shown), the
-// detector finds the face, the neutral frames calibrate, the jaw stays shut
-// during them, and the mouth opening in the video raises jawOpen's weight
-// above 0.5 (and the head's jaw with it, on the GPU path); off, every track
-// of the stream ends and the indicator goes. Then a browser whose camera is
-// refused (no fake UI, permission denied) gets the clear message.
+// a y4m made here from our own renders (`likeness render --expression`,
+// the generic head): at rest for NEUTRAL_S seconds, then SEGMENT_S seconds
+// of each tested shape (eyeBlinkLeft/Right, mouthSmileLeft/Right,
+// browInnerUp, mouthPucker, jawOpen) and of the head seen turned (yaw,
+// pitch). Each frame carries its segment's number in 4 black or white
+// blocks in its top-left corner; the page's follow.probe hook reads them as
+// a frame goes to the detector and when its landmarks come back, so every
+// detected frame is known to be of one segment. The head is a native fit of
+// a synthetic scan opened as a project. Checked: off at start; on, the
+// camera opens (indicator shown), the detector finds the face, the neutral
+// frames calibrate; on each shape's own frames its weight rises above a
+// threshold while the others (the other side's above all: a mirrored
+// mapping would swap them) stay low; the turned head's frames turn the view
+// the same way, by about the render's angle; off, every track of the stream
+// ends, the indicator goes and the view turns back. Then a browser whose
+// camera is refused (no fake UI, permission denied) gets the clear message.
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
@@ -19,13 +26,36 @@ import { decodePng } from '../fixtures.mjs';
 
 // Long phases: the detector's start and the screenshots are slow under
 // SwiftShader, and the fake camera loops the file.
-const FPS = 5, NEUTRAL_S = 30, OPEN_S = 20, SIZE = 320;
+const FPS = 5, NEUTRAL_S = 24, SEGMENT_S = 6, SIZE = 320;
+// The video's segments after the neutral one (number 0): a shape rendered
+// at full weight, or the neutral head seen from a turned camera.
+const SEGMENTS = [
+  { name: 'eyeBlinkLeft', args: ['--expression', 'eyeBlinkLeft'] },
+  { name: 'eyeBlinkRight', args: ['--expression', 'eyeBlinkRight'] },
+  { name: 'mouthSmileLeft', args: ['--expression', 'mouthSmileLeft'] },
+  { name: 'mouthSmileRight', args: ['--expression', 'mouthSmileRight'] },
+  { name: 'browInnerUp', args: ['--expression', 'browInnerUp'] },
+  { name: 'mouthPucker', args: ['--expression', 'mouthPucker'] },
+  { name: 'jawOpen', args: ['--expression', 'jawOpen'] },
+  // The camera 20 degrees towards the head's left (OrbitCamera's yaw):
+  // as if the head turned 20 degrees to its right.
+  { name: 'yaw', args: ['--expression', 'neutral', '--yaw', '20', '--pitch', '0'], turn: { yaw: -20, pitch: 0 } },
+  // The camera 15 degrees above: as if the head looked 15 degrees down.
+  { name: 'pitch', args: ['--expression', 'neutral', '--yaw', '0', '--pitch', '15'], turn: { yaw: 0, pitch: -15 } },
+];
+const YAW_TAG = SEGMENTS.findIndex((g) => g.name === 'yaw') + 1;  // the yaw segment's mark
+const SHAPES = ['eyeBlinkLeft', 'eyeBlinkRight', 'mouthSmileLeft', 'mouthSmileRight', 'browInnerUp', 'mouthPucker', 'jawOpen'];
+// A shape's weight on its own frames (median) must pass RISE; every other
+// tested shape's must stay under LOW, and the other side's under the
+// shape's own minus GAP.
+const RISE = 0.5, LOW = 0.3;
+const MARK = 12;  // the segment mark: 4 blocks of MARK x MARK pixels, bit k at x = k * MARK
 
 
 // A YUV4MPEG2 (4:2:0, BT.601 full range) stream of the PNG frames, each
 // repeated `counts[i]` times.
 function y4m(pngs, counts) {
-  const frames = pngs.map((file) => {
+  const frames = pngs.map((file, index) => {
     const { width: w, height: h, data } = decodePng(fs.readFileSync(file));
     const y = Buffer.alloc(w * h), u = Buffer.alloc((w / 2) * (h / 2)), v = Buffer.alloc((w / 2) * (h / 2));
     const rgb = (i) => [data[4 * i], data[4 * i + 1], data[4 * i + 2]];
@@ -43,6 +73,14 @@ function y4m(pngs, counts) {
         u[j * (w / 2) + i] = Math.max(0, Math.min(255, Math.round(128 - 0.168736 * r - 0.331264 * g + 0.5 * b)));
         v[j * (w / 2) + i] = Math.max(0, Math.min(255, Math.round(128 + 0.5 * r - 0.418688 * g - 0.081312 * b)));
       }
+    // The segment's number, 4 bits: black (16) or white (235) blocks, grey chroma.
+    for (let bit = 0; bit < 4; bit++)
+      for (let j = 0; j < MARK; j++)
+        for (let i = bit * MARK; i < (bit + 1) * MARK; i++) {
+          y[j * w + i] = (index >> bit) & 1 ? 235 : 16;
+          u[(j >> 1) * (w / 2) + (i >> 1)] = 128;
+          v[(j >> 1) * (w / 2) + (i >> 1)] = 128;
+        }
     return { w, h, bytes: Buffer.concat([Buffer.from('FRAME\n'), y, u, v]) };
   });
   const parts = [Buffer.from(`YUV4MPEG2 W${frames[0].w} H${frames[0].h} F${FPS}:1 Ip A1:1 C420jpeg\n`)];
@@ -50,14 +88,16 @@ function y4m(pngs, counts) {
   return Buffer.concat(parts);
 }
 
-const followState = (page) => page.evaluate(() => {
+const followState = (page) => page.evaluate((yawTag) => {
   const f = window.likeness.follow;
-  return { raw: f.raw, on: f.on, state: f.state, frames: f.frames, faces: f.faces, jaw: f.raw.jawOpen || 0, smoothJaw: f.weights.jawOpen || 0,
+  const last = f.log[f.log.length - 1];
+  const yawFrames = f.log.filter((e) => e.tag === yawTag && e.tagAfter === yawTag).length;
+  return { tag: last ? last.tag : -1, yawFrames, raw: f.raw, on: f.on, state: f.state, frames: f.frames, faces: f.faces, jaw: f.raw.jawOpen || 0, smoothJaw: f.weights.jawOpen || 0,
            message: f.message, checked: document.getElementById('follow-face').checked,
            indicator: !document.getElementById('camera-on').hidden, tracks: f.tracks(),
            headJaw: window.likeness.expressions.weights.jawOpen || 0,
-           slider: (document.getElementById('expr-w-jawOpen') || {}).value, stats: document.getElementById('expr-stats').textContent, path: window.likeness.expressions.stats.path || null };
-});
+           slider: (document.getElementById('expr-w-jawOpen') || {}).value, view: window.likeness.viewer.view_direction(), head: { ...f.head }, stats: document.getElementById('expr-stats').textContent, path: window.likeness.expressions.stats.path || null };
+}, YAW_TAG);
 
 async function openProject(page, file) {
   await page.setInputFiles('#project-input', { name: 'head.likeness.glb', mimeType: 'model/gltf-binary', buffer: fs.readFileSync(file) });
@@ -71,10 +111,15 @@ async function run(s) {
     return;
   }
   const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-follow-'));
-  for (const e of ['neutral', 'jawOpen'])
-    execFileSync(bin, ['render', '--expression', e, '--view', 'front', '--face', '--size', String(SIZE), '--out', path.join(dir, e + '.png')]);
+  const pngs = [path.join(dir, 'neutral.png')];
+  execFileSync(bin, ['render', '--expression', 'neutral', '--view', 'front', '--face', '--size', String(SIZE), '--out', pngs[0]]);
+  for (const seg of SEGMENTS) {
+    pngs.push(path.join(dir, seg.name + '.png'));
+    execFileSync(bin, ['render', ...seg.args, '--view', 'front', '--face', '--size', String(SIZE), '--out', pngs[pngs.length - 1]]);
+  }
   const video = path.join(dir, 'face.y4m');
-  fs.writeFileSync(video, y4m([path.join(dir, 'neutral.png'), path.join(dir, 'jawOpen.png')], [NEUTRAL_S * FPS, OPEN_S * FPS]));
+  fs.writeFileSync(video, y4m(pngs, [NEUTRAL_S * FPS, ...SEGMENTS.map(() => SEGMENT_S * FPS)]));
+  const videoS = NEUTRAL_S + SEGMENTS.length * SEGMENT_S;
   execFileSync(bin, ['synth-scan', '--seed', '2', '--points', '60000', '--out', path.join(dir, 'scan')]);
   execFileSync(bin, ['fit', '--scan', path.join(dir, 'scan', 'scan.ply'), '--out', path.join(dir, 'fit'), '--levels', '2']);
   const project = path.join(dir, 'fit', 'head.likeness.glb');
@@ -92,10 +137,25 @@ async function run(s) {
     await page.uncheck('#show-points');  // the face, not the scan's points over it
     await page.click('#expressions summary');
     await page.selectOption('#expr-group', 'jaw');  // jawOpen's slider follows too
+    // The segment's number from the frame's corner marks (the y4m's blocks).
+    await page.evaluate((mark) => {
+      const c = document.createElement('canvas');
+      c.width = 4 * mark;
+      c.height = mark;
+      const g = c.getContext('2d', { willReadFrequently: true });
+      window.likeness.follow.probe = (video) => {
+        g.drawImage(video, 0, 0, 4 * mark, mark, 0, 0, 4 * mark, mark);
+        let n = 0;
+        for (let bit = 0; bit < 4; bit++) if (g.getImageData(bit * mark + mark / 2, mark / 2, 1, 1).data[1] > 128) n |= 1 << bit;
+        return n;
+      };
+    }, MARK);
     const off = await followState(page);
     check('Follow my face is off at start, the camera closed', !off.checked && !off.on && !off.indicator && off.tracks.length === 0,
           JSON.stringify(off));
 
+    // The view before following: the head's turns move it from here, and stopping puts it back.
+    const viewAtRest = await page.evaluate(() => window.likeness.viewer.view_direction());
     const tOn = Date.now();
     await page.check('#follow-face');
     await page.waitForFunction(() => ['calibrating', 'following', 'no-face', 'error'].includes(window.likeness.follow.state), null,
@@ -111,33 +171,85 @@ async function run(s) {
     check('the detector finds the face and calibrates on the neutral frames; the jaw stays shut then',
           shut.faces >= 8 && shut.jaw < 0.2,
           `${shut.faces} faces in ${shut.frames} frames, following ${((t0 - tOn) / 1000).toFixed(1)} s after the toggle; jawOpen ${shut.jaw.toFixed(3)}`);
-    // The video's mouth opens (after NEUTRAL_S from its start): jawOpen rises.
-    let peak = shut;
-    while (Date.now() - t0 < (NEUTRAL_S + OPEN_S) * 1000 + 10000) {
+    // Every segment's frames: detected frames whose mark was the same when
+    // sent and when their landmarks came back; the video loops if need be.
+    let log = [], peakJaw = shut;
+    let turnedView = null;
+    const shots = new Set();
+    while (Date.now() - t0 < 2 * videoS * 1000 + 20000) {
+      log = await page.evaluate(() => window.likeness.follow.log.filter((e) => e.tag === e.tagAfter));
       const f = await followState(page);
-      if (f.jaw > peak.jaw) peak = f;
-      if (f.jaw > 0.5 && f.headJaw > 0.3) break;
-      await page.waitForTimeout(250);
+      if (f.jaw > peakJaw.jaw) peakJaw = f;
+      // The view while the turned head's frames are followed.
+      // Screenshots of the head following two segments (a smile, the turned head).
+      for (const [name, file] of [['mouthSmileLeft', 'page_follow_face_smile.png'], ['yaw', 'page_follow_face_turn.png']])
+        if (SHOT_DIR && !shots.has(name) && f.tag === SEGMENTS.findIndex((g) => g.name === name) + 1) {
+          shots.add(name);
+          await page.locator('#canvas').screenshot({ path: path.join(SHOT_DIR, file) });
+        }
+      // The view read with the last frame's mark (one evaluate), after a
+      // yaw frame before it has been applied.
+      if (!turnedView && f.tag === YAW_TAG && f.yawFrames >= 2) turnedView = { dir: f.view, head: f.head };
+      const counts = SEGMENTS.map((g, i) => log.filter((e) => e.tag === i + 1).length);
+      if (counts.every((c) => c >= 3) && turnedView) break;
+      await page.waitForTimeout(300);
     }
-    if (SHOT_DIR) {
-      // The panel first: the canvas' shot is slow under SwiftShader, and the video loops back to rest.
-      await page.locator('#expr-controls').screenshot({ path: path.join(SHOT_DIR, 'page_follow_face_panel.png') });
-      await page.locator('#canvas').screenshot({ path: path.join(SHOT_DIR, 'page_follow_face.png') });
+    const median = (xs) => { const a = [...xs].sort((p, q) => p - q); return a.length ? a[Math.floor(a.length / 2)] : NaN; };
+    const bySegment = (i) => log.filter((e) => e.tag === i);
+    note('follow-face: ' + log.length + ' detected frames with a clear mark; per segment: ' +
+         ['neutral', ...SEGMENTS.map((g) => g.name)].map((n, i) => n + ' ' + bySegment(i).length).join(', '));
+    for (const [i, seg] of SEGMENTS.entries()) {
+      const frames = bySegment(i + 1);
+      if (seg.turn) continue;
+      const med = Object.fromEntries(SHAPES.map((k) => [k, median(frames.map((e) => e.raw[k]))]));
+      const other = seg.name.endsWith('Left') ? seg.name.replace(/Left$/, 'Right') : seg.name.endsWith('Right') ? seg.name.replace(/Right$/, 'Left') : null;
+      const others = SHAPES.filter((k) => k !== seg.name && k !== other);
+      const ok = frames.length >= 2 && med[seg.name] > RISE && others.every((k) => med[k] < LOW) &&
+                 (!other || (med[other] < LOW));
+      check(`on the ${seg.name} frames ${seg.name} rises above ${RISE}` + (other ? `, ${other} (the other side) stays under ${LOW}` : '') +
+            ` and the other tested shapes stay under ${LOW}`, ok,
+            `${frames.length} frames; medians: ` + SHAPES.map((k) => k + ' ' + med[k].toFixed(2)).join(', '));
     }
-    check('the mouth opening in the video raises jawOpen above 0.5 and drives the head (GPU path); it does not read as a smile or a blink',
-          peak.jaw > 0.5 && peak.headJaw > 0.3 && peak.path === 'gpu' && peak.raw.mouthSmileLeft < 0.3 && peak.raw.mouthSmileRight < 0.3 &&
-          peak.raw.eyeBlinkLeft < 0.3 && peak.raw.eyeBlinkRight < 0.3,
-          `jawOpen from the landmarks ${peak.jaw.toFixed(3)}, smoothed on the head ${peak.headJaw.toFixed(3)} (its slider ${peak.slider}), path ${peak.path}; ` +
-          `${peak.faces} faces in ${peak.frames} frames; all the shapes then: ` +
-          Object.entries(peak.raw).map(([k, v]) => k + ' ' + v.toFixed(2)).join(', '));
+    // The head's turn: on the turned camera's frames, the measured yaw/pitch
+    // have the turn's sign and about its size; the neutral frames read ~0.
+    for (const [i, seg] of SEGMENTS.entries()) {
+      if (!seg.turn) continue;
+      const frames = bySegment(i + 1);
+      const yaw = median(frames.map((e) => e.head.yaw)), pitch = median(frames.map((e) => e.head.pitch));
+      const axis = seg.turn.yaw ? 'yaw' : 'pitch', want = seg.turn[axis], got = axis === 'yaw' ? yaw : pitch, cross = axis === 'yaw' ? pitch : yaw;
+      check(`on the frames of the head turned (${axis} ${want} degrees) the measured ${axis} has its sign and size (within 8 degrees), the other axis under 8`,
+            frames.length >= 2 && Math.abs(got - want) < 8 && Math.abs(cross) < 8,
+            `${frames.length} frames; median yaw ${yaw.toFixed(1)}, pitch ${pitch.toFixed(1)} degrees`);
+    }
+    const neutralFrames = bySegment(0);
+    note('follow-face: on the neutral frames after calibration (' + neutralFrames.length + '), medians: ' +
+         SHAPES.map((k) => k + ' ' + median(neutralFrames.map((e) => e.raw[k])).toFixed(2)).join(', ') +
+         `, yaw ${median(neutralFrames.map((e) => e.head.yaw)).toFixed(1)}, pitch ${median(neutralFrames.map((e) => e.head.pitch)).toFixed(1)}`);
+    // The view turned with the head: the camera moved towards the head's
+    // left (cross(up, facing)) when the head turned to its right.
+    const fitFrame = await page.evaluate(() => ({ up: window.likeness.fit.headUp, facing: window.likeness.fit.headFacing }));
+    const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+    const left = cross(fitFrame.up, fitFrame.facing);
+    const angle = (a, b) => (Math.acos(Math.max(-1, Math.min(1, a[0] * b[0] + a[1] * b[1] + a[2] * b[2]))) * 180) / Math.PI;
+    const moved = turnedView ? [0, 1, 2].map((k) => turnedView.dir[k] - viewAtRest[k]) : [0, 0, 0];
+    const towardsLeft = moved[0] * left[0] + moved[1] * left[1] + moved[2] * left[2];
+    check('the head turned to its right in the video turns the view: the camera goes towards the head\'s left, by about the turn',
+          !!turnedView && towardsLeft > 0 && angle(turnedView.dir, viewAtRest) > 8 && angle(turnedView.dir, viewAtRest) < 35,
+          turnedView ? `head yaw ${turnedView.head.yaw.toFixed(1)}, pitch ${turnedView.head.pitch.toFixed(1)} degrees (smoothed); the view turned ` +
+                       `${angle(turnedView.dir, viewAtRest).toFixed(1)} degrees, ${towardsLeft.toFixed(3)} towards the head's left` : 'no frame of the turned head seen');
+    if (SHOT_DIR) await page.locator('#expr-controls').screenshot({ path: path.join(SHOT_DIR, 'page_follow_face_panel.png') });
+    check('the mouth opening in the video drives the head\'s jawOpen (smoothed) through the page\'s blend',
+          peakJaw.jaw > 0.5 && peakJaw.headJaw > 0.3,
+          `jawOpen from the landmarks ${peakJaw.jaw.toFixed(3)}, smoothed on the head ${peakJaw.headJaw.toFixed(3)} (its slider ${peakJaw.slider}), path ${peakJaw.path}`);
 
     await page.uncheck('#follow-face');
     await page.waitForTimeout(300);
     const stopped = await followState(page);
     const ended = await page.evaluate(() => window.likeness.follow.lastStream.getTracks().map((t) => t.readyState));
     check('toggled off, every track of the camera ends, the indicator goes and the head rests', !stopped.on &&
-          stopped.state === 'off' && !stopped.indicator && ended.length > 0 && ended.every((r) => r === 'ended') && stopped.headJaw === 0,
-          `${JSON.stringify(ended)}; ${stopped.message}`);
+          stopped.state === 'off' && !stopped.indicator && ended.length > 0 && ended.every((r) => r === 'ended') && stopped.headJaw === 0 &&
+          angle(stopped.view, viewAtRest) < 0.1,
+          `${JSON.stringify(ended)}; ${stopped.message}; the view ${angle(stopped.view, viewAtRest).toFixed(2)} degrees from before following`);
   } finally {
     await closeChromium(context);
   }
@@ -164,5 +276,5 @@ async function run(s) {
   }
 }
 
-export const flow = { name: 'follow-face', title: 'Follow my face: the fake camera drives jawOpen', run };
+export const flow = { name: 'follow-face', title: 'Follow my face: the fake camera drives blinks, smiles, brows, pucker, jaw and the head\'s turn', run };
 runAlone(import.meta.url, flow);
