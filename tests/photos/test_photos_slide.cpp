@@ -126,7 +126,7 @@ TEST_CASE("the feature observations with a slid offset keep their Jacobian", "[p
   CHECK(test::check_fd_jacobian(set, generic.mesh.positions, cols).worst_relative < 1e-4);
 }
 
-TEST_CASE("a landmark map of version 2 keeps its slide; version 1 still reads; a bad slide is refused", "[photos][slide]") {
+TEST_CASE("a landmark map of version 2 keeps its slide, version 1 still reads, and a bad slide is refused", "[photos][slide]") {
   LandmarkMap map;
   map.detector = "d";
   map.points = {Vec3(0, 0, 0.1), Vec3(0.01, 0, 0.1), Vec3(0.02, 0, 0.1)};
