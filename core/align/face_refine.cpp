@@ -71,6 +71,44 @@ struct Run {
 
 }  // namespace
 
+Status upper_face_near_fraction(const TriMesh& generic, const HeadAnnotations& ann, const std::vector<Vec3>& cloud,
+                                const std::vector<Tri>& faces, const Mat3& linear, const Vec3& translation,
+                                double diag, double clamp_fraction, double& out) {
+  out = 0;
+  if (cloud.empty()) return Status::error(ErrorCode::Empty, "face near share: no scan points");
+  if (!(diag > 0) || !std::isfinite(diag) || !(clamp_fraction > 0) || !linear.allFinite() || !translation.allFinite())
+    return Status::error(ErrorCode::InvalidInput, "face near share: bad alignment, diagonal or distance");
+  const std::vector<int> ids = upper_face_vertices(generic, ann);
+  if (ids.empty()) return Status::error(ErrorCode::Empty, "face near share: the generic head has no upper face");
+  const double clamp = clamp_fraction * diag;
+  int near = 0;
+  if (!faces.empty()) {
+    TriMesh mesh;
+    mesh.positions = cloud;
+    mesh.triangles = faces;
+    for (const Tri& t : faces)
+      for (int v : t)
+        if (v < 0 || v >= static_cast<int>(cloud.size()))
+          return Status::error(ErrorCode::InvalidInput, "face near share: a scan triangle's index is out of range");
+    MeshBvh surface;
+    const Status st = build_bvh(mesh, surface);
+    if (!st) return st;
+    for (int v : ids) near += closest_point(surface, linear * generic.positions[v] + translation).distance <= clamp;
+  } else {
+    CloudAdaptor adaptor{cloud};
+    const CloudTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+    for (int v : ids) {
+      const Vec3 p = linear * generic.positions[v] + translation;
+      size_t idx = 0;
+      double d2 = 0;
+      tree.knnSearch(p.data(), 1, &idx, &d2);
+      near += std::sqrt(d2) <= clamp;
+    }
+  }
+  out = double(near) / double(ids.size());
+  return Status::success();
+}
+
 Status refine_alignment_on_face(const TriMesh& generic, const HeadAnnotations& ann, const std::vector<Vec3>& cloud,
                                 const std::vector<Tri>& faces, const Mat3& linear, const Vec3& translation, double diag,
                                 const FaceRefineOptions& o, FaceRefineResult& out) {

@@ -71,6 +71,13 @@ std::vector<int> upper_face_vertices(const TriMesh& generic, const HeadAnnotatio
 // value, both axes normalized. 0 for fewer than three values.
 size_t residual_knee(const std::vector<double>& sorted);
 
+// The share of the upper-face vertices that the map (linear, translation)
+// puts within clamp_fraction * diag of the scan (its triangles when given,
+// else its points): FaceRefineResult::near_fraction for a given alignment.
+// Errors as below.
+Status upper_face_near_fraction(const TriMesh& generic, const HeadAnnotations& ann, const std::vector<Vec3>& cloud,
+                                const std::vector<Tri>& faces, const Mat3& linear, const Vec3& translation,
+                                double diag, double clamp_fraction, double& out);
 // Errors: Empty (no points or no face vertices), InvalidInput (non-finite
 // input, diag <= 0, bad options), NotConverged (no start kept pairs).
 Status refine_alignment_on_face(const TriMesh& generic, const HeadAnnotations& ann, const std::vector<Vec3>& cloud,

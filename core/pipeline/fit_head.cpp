@@ -634,7 +634,16 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   // furniture or a torso do not. A whole head with surfaces the generic
   // head lacks (a hat, a beard, a pedestal) may fail it because the
   // silhouettes misled the alignment: it is aligned again on the face.
+  bool silhouette_face_holds = false;  // the silhouettes' own alignment, by the face's rule below
+  const AlignResult silhouette_alignment = out.alignment;
+  const double silhouette_near = out.near_fraction;
+  double silhouette_face_near = 0;
   if (out.near_fraction < options.min_near_fraction && !out.face_only && options.refine_on_face) {
+    st = upper_face_near_fraction(generic.mesh, ann, cloud.positions, scan.faces, out.alignment.linear,
+                                  out.alignment.translation, diag, options.face_refine.score_clamp_fraction,
+                                  silhouette_face_near);
+    silhouette_face_holds = st && silhouette_face_near >= options.min_near_fraction &&
+                            out.near_fraction >= 0.5 * options.min_near_fraction;
     st = refine_alignment_on_face(generic.mesh, ann, cloud.positions, scan.faces, out.alignment.linear,
                                   out.alignment.translation, diag, options.face_refine, out.face_refine);
     if (st) {
@@ -652,8 +661,22 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   // After the face's alignment: the face must lie on the scan as the whole
   // head would (the same share), and half that share of the points near
   // the whole head (the rest may be a hat, a beard, shoulders).
-  const bool face_holds = out.refined_on_face && out.face_refine.near_fraction >= options.min_near_fraction &&
-                          out.near_fraction >= 0.5 * options.min_near_fraction;
+  bool face_holds = out.refined_on_face && out.face_refine.near_fraction >= options.min_near_fraction &&
+                    out.near_fraction >= 0.5 * options.min_near_fraction;
+  if (out.near_fraction < options.min_near_fraction && !face_holds && silhouette_face_holds) {
+    // The face's match went astray while the silhouettes' alignment passes
+    // the face's rule itself (Plato with a generic head whose mouth moved a
+    // few millimetres: docs/design/fit_real_scans.md): that one is kept.
+    if (out.refined_on_face) out.notes.pop_back();  // its "aligned again on the face"
+    out.alignment = silhouette_alignment;
+    st = place();
+    if (!st) return st;
+    out.refined_on_face = false;
+    out.notes.push_back("after the silhouette alignment only " + pct(100 * silhouette_near) +
+                        "% of the points lay near the head, but " + pct(100 * silhouette_face_near) +
+                        "% of its upper face lies on the scan (the face's own match did not hold): kept");
+    face_holds = true;
+  }
   if (out.near_fraction < options.min_near_fraction && !face_holds)
     return Status::error(ErrorCode::NotAHead,
                          "after alignment only " + pct(100 * out.near_fraction) + "% of the points lie within " +
@@ -703,15 +726,23 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
       if (mouth_bag[v]) terms.constrained_vertices.push_back(v);
     for (const Edge& e : topo.edges)
       if (in_eye_socket(e.v0) || in_eye_socket(e.v1)) terms.binding_edges.push_back({{e.v0, e.v1}});
-    const auto ears = ann.regions.find("ears");
-    const bool bind_ears = options.bind_ear_edges == FitHeadOptions::EarBinding::Always ||
-                           (options.bind_ear_edges == FitHeadOptions::EarBinding::FaceOnlyScans && out.face_only);
-    if (bind_ears && ears != ann.regions.end()) {
-      const std::vector<char> in_ear = vertex_mask(ears->second, static_cast<int>(pocket.size()));
-      for (const Edge& e : topo.edges)
-        if (in_ear[e.v0] && in_ear[e.v1]) terms.binding_edges.push_back({{e.v0, e.v1}});
-    }
   }
+  // The ears' edges as binding edges (FitHeadOptions::bind_ear_edges): on
+  // face captures from the start; on whole heads where the free fit folds
+  // an ear (below).
+  std::vector<std::array<int, 2>> ear_edges;
+  std::vector<int> ear_vertices;
+  if (const auto ears = ann.regions.find("ears"); ears != ann.regions.end()) {
+    ear_vertices = ears->second;
+    const std::vector<char> in_ear = vertex_mask(ears->second, static_cast<int>(pocket.size()));
+    for (const Edge& e : topo.edges)
+      if (in_ear[e.v0] && in_ear[e.v1]) ear_edges.push_back({{e.v0, e.v1}});
+  }
+  using EarBinding = FitHeadOptions::EarBinding;
+  const bool bind_ears_first = options.bind_ear_edges == EarBinding::Always ||
+                               (options.bind_ear_edges != EarBinding::Off && out.face_only);
+  const bool bind_ears_where_crossing = options.bind_ear_edges == EarBinding::WhereTheyCross && !out.face_only;
+  if (bind_ears_first) terms.binding_edges.insert(terms.binding_edges.end(), ear_edges.begin(), ear_edges.end());
   // The template as aligned: the rest shape of E_smooth and the orientation
   // every triangle must keep (global_fit.h: local fitting's blend leaves
   // steps at the box walls and may turn triangles, which a rest shape taken
@@ -807,6 +838,57 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   st = fit_global(skin_pts, out.local, topo, terms, global_options, out.control, out.global_fit, progress,
                   &relief_tree);
   if (!st) return with_context(st, "global fitting");
+  if (bind_ears_where_crossing && !ear_edges.empty() && options.levels > 0) {
+    // FitHeadOptions::bind_ear_edges: when the free fit's smooth finest
+    // level crosses itself at an ear, the fit is made again with the ears'
+    // edges bound and kept when its ears do not cross there.
+    auto smooth_ear_pairs = [&](const TriMesh& control, const GlobalFitResult& fit, int& count) -> Status {
+      ButterflyCreases c = creases;
+      for (const auto& e : fit.fold_crease_edges) c.edges.push_back(e);
+      if (!fit.fold_crease_edges.empty()) close_crease_ends(c);
+      MultiresMesh smooth;
+      Status s = build_multires(control, c, options.levels, smooth);
+      if (!s) return s;
+      std::vector<std::array<int, 2>> pairs;
+      s = find_self_intersections(level_mesh(smooth, options.levels), pairs);
+      if (!s) return s;
+      count = count_pairs_touching(smooth, options.levels, pairs, ear_vertices);
+      return Status::success();
+    };
+    int free_pairs = 0;
+    st = smooth_ear_pairs(out.control, out.global_fit, free_pairs);
+    if (!st) return with_context(st, "global fitting (ears)");
+    out.ear_binding.free_pairs = out.ear_binding.bound_pairs = free_pairs;
+    if (free_pairs > 0) {
+      GlobalFitTerms bound = terms;
+      bound.binding_edges.insert(bound.binding_edges.end(), ear_edges.begin(), ear_edges.end());
+      TriMesh control;
+      GlobalFitResult fit;
+      MeshBvh tree;
+      st = fit_global(skin_pts, out.local, topo, bound, global_options, control, fit, progress, &tree);
+      if (!st) return with_context(st, "global fitting (ears bound)");
+      int bound_pairs = 0;
+      st = smooth_ear_pairs(control, fit, bound_pairs);
+      if (!st) return with_context(st, "global fitting (ears)");
+      out.ear_binding.bound_pairs = bound_pairs;
+      std::ostringstream note;
+      note << "the fit folded the ears (" << free_pairs << " crossing pairs at smooth level " << options.levels
+           << "): fitted again with their edges bound (" << bound_pairs << " pairs)";
+      // Kept only when no ear folds: a bound ear that still crossed
+      // (Gutenberg's, under his beret's brim) was beyond the later steps'
+      // reach, where the free one's were not (docs/design/fit_real_scans.md).
+      if (bound_pairs == 0) {
+        out.control = std::move(control);
+        out.global_fit = std::move(fit);
+        relief_tree = std::move(tree);
+        out.ear_binding.bound = true;
+        note << ", kept";
+      } else {
+        note << ", not kept";
+      }
+      out.notes.push_back(note.str());
+    }
+  }
   if (options.carry_mouth_bag) {
     st = carry_mouth_bag(mouth_bag, topo, out.local, out.control);
     if (!st) return with_context(st, "global fitting (mouth bag)");

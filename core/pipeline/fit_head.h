@@ -188,10 +188,17 @@ struct FitHeadOptions {
   // ear keeps its shape and follows the scan as a whole. On face-only
   // captures (FaceOnlyScans), whose ears are seen from the side under hair:
   // free, an ear's thin flap is pulled onto the scalp's points and its own
-  // bowl's at once and folds. Not on whole-head scans, which see the ears
-  // and lost accuracy when bound (figures: docs/design/fit.md).
-  enum class EarBinding { Off, FaceOnlyScans, Always };
-  EarBinding bind_ear_edges = EarBinding::FaceOnlyScans;
+  // bowl's at once and folds. Whole-head scans see the ears and lost
+  // accuracy when always bound (figures: docs/design/fit.md), so with
+  // WhereTheyCross they are fitted free first; when the fitted control
+  // mesh's smooth finest level crosses itself at an ear (a real bust's ear
+  // folded by the data around it, whichever small change the generic head
+  // had: docs/design/fit_real_scans.md), the global fit is run again with
+  // the ear edges bound and kept when its ears do not cross; face captures
+  // are bound from the start. Costs one self-intersection search of the
+  // smooth finest level, and a second global fit when an ear folds.
+  enum class EarBinding { Off, FaceOnlyScans, WhereTheyCross, Always };
+  EarBinding bind_ear_edges = EarBinding::WhereTheyCross;
   // When an ear (a connected part of region "ears") still crosses itself or
   // the head at the finest level, its control vertices take the aligned
   // generic ear's shape, carried by the harmonic interpolation of the
@@ -298,6 +305,13 @@ struct FitHeadResult {
   // aligned generic head's does not have, before, between and after the
   // untangling's steps (the control mesh above is the untangled one).
   UntangleResult untangle;
+  // bind_ear_edges WhereTheyCross: the smooth finest level's pairs at the
+  // ears after the free fit and after the fit with the ears bound (the
+  // same when it was not run), and whether the bound fit was kept.
+  struct EarBinding {
+    int free_pairs = 0, bound_pairs = 0;
+    bool bound = false;
+  } ear_binding;
   int ears_held = 0;            // ears held in their generic shape (hold_crossing_ears)
   // guard_feature_crossings: the finest level's pairs touching the lips or
   // ears before and after it, the steps kept, and the control vertices

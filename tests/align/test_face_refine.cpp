@@ -150,3 +150,45 @@ TEST_CASE("face refinement: the knee of a residual curve, and bad input is refus
   CHECK(refine_alignment_on_face(generic.mesh, generic.annotations, cloud, {}, Mat3::Identity(), Vec3::Zero(), 0.3, {}, r)
             .code == ErrorCode::InvalidInput);
 }
+
+TEST_CASE("upper_face_near_fraction: all of the face on its own surface, none when moved off, the face's share "
+          "when a cheek is missing") {
+  // fit_head keeps the silhouettes' alignment when this share holds though
+  // the face's own match went astray (docs/design/fit_real_scans.md).
+  const GenericHead& generic = test::generic_head();
+  const TriMesh& m = generic.mesh;
+  const HeadAnnotations& ann = generic.annotations;
+  const double diag = bounding_box(m.positions).diagonal();
+  const Mat3 I = Mat3::Identity();
+  double share = -1;
+  // On its own triangles (and on its vertices, the cloud's path): every vertex lies on the scan.
+  REQUIRE(upper_face_near_fraction(m, ann, m.positions, m.triangles, I, Vec3::Zero(), diag, 0.02, share).ok());
+  CHECK(share == 1.0);
+  REQUIRE(upper_face_near_fraction(m, ann, m.positions, {}, I, Vec3::Zero(), diag, 0.02, share).ok());
+  CHECK(share == 1.0);
+  // Moved 10 % of the diagonal along the look direction: off the surface.
+  REQUIRE(upper_face_near_fraction(m, ann, m.positions, m.triangles, I, 0.1 * diag * ann.look.normalized(), diag,
+                                   0.02, share)
+              .ok());
+  CHECK(share < 0.2);
+  // The scan without the triangles of the face's +x half: about half the face.
+  const std::vector<int> face = upper_face_vertices(m, ann);
+  REQUIRE(face.size() > 50);
+  TriMesh half = m;
+  half.triangles.clear();
+  const Vec3 side = ann.up.normalized().cross(ann.look.normalized());
+  for (const Tri& t : m.triangles) {
+    bool keep = false;
+    for (int v : t) keep = keep || side.dot(m.positions[v]) < 0;
+    if (keep) half.triangles.push_back(t);
+  }
+  REQUIRE(upper_face_near_fraction(m, ann, half.positions, half.triangles, I, Vec3::Zero(), diag, 0.001, share).ok());
+  CHECK(share > 0.35);
+  CHECK(share < 0.65);
+  // Bad input is refused with a message.
+  CHECK(upper_face_near_fraction(m, ann, {}, {}, I, Vec3::Zero(), diag, 0.02, share).code == ErrorCode::Empty);
+  CHECK(upper_face_near_fraction(m, ann, m.positions, m.triangles, I, Vec3::Zero(), 0, 0.02, share).code ==
+        ErrorCode::InvalidInput);
+  CHECK(upper_face_near_fraction(m, ann, m.positions, {{0, 1, 1 << 30}}, I, Vec3::Zero(), diag, 0.02, share).code ==
+        ErrorCode::InvalidInput);
+}

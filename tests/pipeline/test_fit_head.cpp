@@ -334,6 +334,9 @@ TEST_CASE("fit_head: holding a crossing ear that does not help leaves the fit as
   FitHeadOptions on;
   on.measure_stages = false;
   on.guard_feature_crossings = false;  // the hold alone (the guard is tested below)
+  // The ears free, as they were before bind_ear_edges' WhereTheyCross
+  // (which takes this sheet's pairs away before the hold: tested below).
+  on.bind_ear_edges = FitHeadOptions::EarBinding::FaceOnlyScans;
   FitHeadOptions off = on;
   off.hold_crossing_ears = false;
   FitHeadResult free_fit, held_fit;
@@ -365,6 +368,7 @@ TEST_CASE("fit_head: the feature guard leaves no crossing pair at the ears and l
   const PointCloud scan = sheet_over_left_ear(s.scan, s.generic.mesh, region->second);
   FitHeadOptions guarded;
   guarded.measure_stages = false;
+  guarded.bind_ear_edges = FitHeadOptions::EarBinding::FaceOnlyScans;  // free ears, as above
   FitHeadOptions unguarded = guarded;
   unguarded.guard_feature_crossings = false;
   FitHeadResult before, after;
@@ -392,4 +396,43 @@ TEST_CASE("fit_head: the feature guard leaves no crossing pair at the ears and l
     moved += after.control.positions[v] != before.control.positions[v];
   CHECK(moved <= after.feature_guard.moved_vertices);
   CHECK(after.feature_guard.relaxed_vertices < after.control.num_vertices() / 10);
+}
+
+TEST_CASE("fit_head: an ear the free fit folds is fitted again bound, and holds without the later steps") {
+  // The sheet over the left ear of the tests above: fitted free, the ear
+  // crosses itself at the smooth level 3 and at level 3. With the ears
+  // bound where they cross (FitHeadOptions::bind_ear_edges, the default)
+  // the global fit runs again with the ear edges as binding edges: no ear
+  // pair at level 3 and neither the hold nor the guard has to act.
+  const Scene& s = scene();
+  const auto region = s.generic.annotations.regions.find("ears");
+  REQUIRE(region != s.generic.annotations.regions.end());
+  const PointCloud scan = sheet_over_left_ear(s.scan, s.generic.mesh, region->second);
+  FitHeadOptions bound;
+  bound.measure_stages = false;
+  FitHeadOptions free_ears = bound;
+  free_ears.bind_ear_edges = FitHeadOptions::EarBinding::FaceOnlyScans;
+  free_ears.hold_crossing_ears = bound.hold_crossing_ears = false;
+  free_ears.guard_feature_crossings = bound.guard_feature_crossings = false;
+  FitHeadResult free_fit, bound_fit;
+  REQUIRE(fit_head(scan, s.generic, free_ears, free_fit).ok());
+  REQUIRE(fit_head(scan, s.generic, bound, bound_fit).ok());
+  FitQuality qf, qb;
+  REQUIRE(measure_fit_quality(free_fit, s.generic.annotations, qf).ok());
+  REQUIRE(measure_fit_quality(bound_fit, s.generic.annotations, qb).ok());
+  INFO("ear pairs at level 3: free " << qf.crossings.ears << " (smooth " << qf.smooth_crossings.ears << "), bound "
+                                     << qb.crossings.ears << " (smooth " << qb.smooth_crossings.ears
+                                     << "); smooth ear pairs the fit saw: " << bound_fit.ear_binding.free_pairs
+                                     << " free, " << bound_fit.ear_binding.bound_pairs << " bound");
+  REQUIRE(qf.crossings.ears > 0);  // the free fit folds the ear
+  CHECK(free_fit.ear_binding.free_pairs == 0);  // not searched with the ears free
+  CHECK(bound_fit.ear_binding.free_pairs > 0);
+  CHECK(bound_fit.ear_binding.bound);
+  CHECK(bound_fit.ear_binding.bound_pairs == 0);
+  CHECK(qb.crossings.ears == 0);
+  CHECK(qb.crossings.lips == 0);
+  CHECK(qb.crossings.total <= qf.crossings.total);
+  bool noted = false;
+  for (const std::string& n : bound_fit.notes) noted = noted || n.find("fitted again with their edges bound") != std::string::npos;
+  CHECK(noted);
 }

@@ -120,3 +120,52 @@ TEST_CASE("fit_head: Plato's ears, under carved hair, cross less when held in th
   CHECK(held_q.crossings.ears < free_q.crossings.ears);
   CHECK(held_q.crossings.total - held_q.crossings.ears <= free_q.crossings.total - free_q.crossings.ears);
 }
+
+TEST_CASE("fit_head: with the wide mouth ring as the generic head, Demosthenes' ears hold by the fit itself and "
+          "Plato is aligned",
+          "[pipeline][real_scans][shared]") {
+  // A generic head changed by a few millimetres at the mouth corners
+  // (GenericHeadBuildOptions::wide_mouth_ring) sent the fit of the real
+  // scans elsewhere: Demosthenes' global fit folded an ear (its control
+  // mesh's smooth level 3: 20 ear pairs) that only the last guard could
+  // relax, and Plato was refused (58.7 % of his points near after the
+  // silhouettes, 15 % after the face's match). Now the ears are fitted
+  // again with their edges bound where the free fit folds them
+  // (FitHeadOptions::bind_ear_edges) and the silhouettes' alignment is kept
+  // when its face lies on the scan (docs/design/fit_real_scans.md, "Ears
+  // that hold"). Not checked here, because not met: Gutenberg with this
+  // head keeps 3 ear pairs.
+  LK_REQUIRE_SHARED("head_scans/demosthenes_photoscan/demosthenes-low-res.obj");
+  LK_REQUIRE_SHARED("head_scans/threedscans_plato/plato.obj");
+  GenericHeadBuildOptions wide_options;
+  wide_options.wide_mouth_ring = true;
+  const GenericHead wide = test::built_generic_head(wide_options);
+  for (const std::string& name : {std::string("demosthenes_photoscan/demosthenes-low-res.obj"),
+                                  std::string("threedscans_plato/plato.obj")}) {
+    DYNAMIC_SECTION(name) {
+      const std::string path = lk::test::shared_data_dir() + "/head_scans/" + name;
+      PointCloud scan;
+      REQUIRE(load_point_cloud_file(path, scan).ok());
+      FitHeadOptions options;
+      options.measure_stages = false;
+      FitHeadResult r;
+      const Status st = fit_head(scan, wide, options, r);
+      INFO(st.message);
+      REQUIRE(st.ok());  // Plato: refused before
+      FitQuality q;
+      REQUIRE(measure_fit_quality(r, wide.annotations, q).ok());
+      INFO("level " << q.level << ": lips " << q.crossings.lips << ", ears " << q.crossings.ears << ", rest "
+                    << q.crossings.rest << "; ears bound " << r.ear_binding.bound << " (smooth pairs "
+                    << r.ear_binding.free_pairs << " free, " << r.ear_binding.bound_pairs << " bound); the guard met "
+                    << r.feature_guard.pairs_before << " pairs at the lips and ears, " << r.ears_held << " ears held");
+      CHECK(q.crossings.lips == 0);
+      CHECK(q.crossings.ears == 0);
+      if (name.find("demosthenes") != std::string::npos) {
+        // The ears hold by the fit, not by the last guard's relaxing.
+        CHECK(r.ear_binding.bound);
+        CHECK(r.feature_guard.pairs_before == 0);
+        CHECK(r.ears_held == 0);
+      }
+    }
+  }
+}
