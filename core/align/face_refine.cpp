@@ -69,6 +69,18 @@ struct Run {
   int iterations = 0;
 };
 
+// The BVH of a scan that came as a mesh (what: the caller, for messages).
+Status scan_surface(const std::vector<Vec3>& cloud, const std::vector<Tri>& faces, const char* what, MeshBvh& out) {
+  for (const Tri& t : faces)
+    for (int v : t)
+      if (v < 0 || v >= static_cast<int>(cloud.size()))
+        return Status::error(ErrorCode::InvalidInput, std::string(what) + ": a scan triangle's index is out of range");
+  TriMesh mesh;
+  mesh.positions = cloud;
+  mesh.triangles = faces;
+  return build_bvh(mesh, out);
+}
+
 }  // namespace
 
 Status upper_face_near_fraction(const TriMesh& generic, const HeadAnnotations& ann, const std::vector<Vec3>& cloud,
@@ -83,15 +95,8 @@ Status upper_face_near_fraction(const TriMesh& generic, const HeadAnnotations& a
   const double clamp = clamp_fraction * diag;
   int near = 0;
   if (!faces.empty()) {
-    TriMesh mesh;
-    mesh.positions = cloud;
-    mesh.triangles = faces;
-    for (const Tri& t : faces)
-      for (int v : t)
-        if (v < 0 || v >= static_cast<int>(cloud.size()))
-          return Status::error(ErrorCode::InvalidInput, "face near share: a scan triangle's index is out of range");
     MeshBvh surface;
-    const Status st = build_bvh(mesh, surface);
+    const Status st = scan_surface(cloud, faces, "face near share", surface);
     if (!st) return st;
     for (int v : ids) near += closest_point(surface, linear * generic.positions[v] + translation).distance <= clamp;
   } else {
@@ -132,14 +137,7 @@ Status refine_alignment_on_face(const TriMesh& generic, const HeadAnnotations& a
   // scan's vertices lie millimetres apart, more than the match should err.
   MeshBvh surface;
   if (!faces.empty()) {
-    TriMesh mesh;
-    mesh.positions = cloud;
-    mesh.triangles = faces;
-    for (const Tri& t : faces)
-      for (int v : t)
-        if (v < 0 || v >= static_cast<int>(cloud.size()))
-          return Status::error(ErrorCode::InvalidInput, "face refinement: a scan triangle's index is out of range");
-    const Status st = build_bvh(mesh, surface);
+    const Status st = scan_surface(cloud, faces, "face refinement", surface);
     if (!st) return st;
   }
   const double clamp = o.score_clamp_fraction * diag;
