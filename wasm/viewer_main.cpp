@@ -236,18 +236,29 @@ void copy_typed(const val& array, std::vector<T>& out) {
   if (n) val(emscripten::typed_memory_view(n, out.data())).call<void>("set", array);
 }
 
-std::string js_set_morph_targets(val counts, val indices, val offsets) {
+// The morph targets' three typed arrays copied out of JS (what: the call,
+// for its message); "" or why not.
+struct MorphArrays {
+  std::vector<std::uint32_t> counts, indices;
+  std::vector<float> offsets;
+};
+std::string copy_morph_arrays(const char* what, val counts, val indices, val offsets, MorphArrays& out) {
   if (!g_viewer || !g_viewer->startup_error.empty()) return "the viewer is not running";
   for (const val* a : {&counts, &indices, &offsets})
-    if (a->isUndefined() || a->isNull()) return "set_morph_targets needs counts, indices and offsets";
+    if (a->isUndefined() || a->isNull()) return std::string(what) + " needs counts, indices and offsets";
   const double t0 = emscripten_get_now();
-  std::vector<std::uint32_t> c, i;
-  std::vector<float> o;
-  copy_typed(counts, c);
-  copy_typed(indices, i);
-  copy_typed(offsets, o);
+  copy_typed(counts, out.counts);
+  copy_typed(indices, out.indices);
+  copy_typed(offsets, out.offsets);
   g_viewer->morph_copy_ms = emscripten_get_now() - t0;
-  const lk::Status s = g_viewer->scene.set_morph_targets(c.data(), c.size(), i.data(), i.size(), o.data(), o.size());
+  return std::string();
+}
+
+std::string js_set_morph_targets(val counts, val indices, val offsets) {
+  MorphArrays m;
+  if (std::string e = copy_morph_arrays("set_morph_targets", counts, indices, offsets, m); !e.empty()) return e;
+  const lk::Status s = g_viewer->scene.set_morph_targets(m.counts.data(), m.counts.size(), m.indices.data(), m.indices.size(),
+                                                         m.offsets.data(), m.offsets.size());
   return s.ok() ? std::string() : s.message;
 }
 
@@ -255,17 +266,10 @@ std::string js_set_morph_targets(val counts, val indices, val offsets) {
 // begin with the same arrays, then continue_morph_targets(budgetMs) once a
 // frame -> {done, error} until done (uploaded) or an error.
 std::string js_begin_morph_targets(val counts, val indices, val offsets) {
-  if (!g_viewer || !g_viewer->startup_error.empty()) return "the viewer is not running";
-  for (const val* a : {&counts, &indices, &offsets})
-    if (a->isUndefined() || a->isNull()) return "begin_morph_targets needs counts, indices and offsets";
-  const double t0 = emscripten_get_now();
-  std::vector<std::uint32_t> c, i;
-  std::vector<float> o;
-  copy_typed(counts, c);
-  copy_typed(indices, i);
-  copy_typed(offsets, o);
-  g_viewer->morph_copy_ms = emscripten_get_now() - t0;
-  const lk::Status s = g_viewer->scene.begin_morph_targets(c.data(), c.size(), i.data(), i.size(), o.data(), o.size());
+  MorphArrays m;
+  if (std::string e = copy_morph_arrays("begin_morph_targets", counts, indices, offsets, m); !e.empty()) return e;
+  const lk::Status s = g_viewer->scene.begin_morph_targets(m.counts.data(), m.counts.size(), m.indices.data(),
+                                                           m.indices.size(), m.offsets.data(), m.offsets.size());
   return s.ok() ? std::string() : s.message;
 }
 
