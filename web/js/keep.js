@@ -116,11 +116,12 @@ function restoredDetect(k) {
   return { state: k.state, faces: k.faces, points: k.points, ms: 0, corrected: new Set(k.corrected || []),
            message: k.points.length + ' face points (kept' + (n ? ', ' + n + ' moved by hand' : '') + ')' };
 }
-const photosKey = () => app.photos.map((p) => p.name + ':' + p.file.size + ':' + p.file.lastModified).join('|');
+const fileKey = (f) => f.name + ':' + f.size + ':' + f.lastModified;
+const photosKey = () => app.photos.map((p) => fileKey(p.file)).join('|');
 // The dropped scan file while no head is fitted from it (a project's scan is
 // in its bytes); the key of an entry without a head.
 const scanFile = () => (app.scan && app.scan.file) || null;
-const inputsKey = () => { const f = scanFile(); return photosKey() + '#' + (f ? f.name + ':' + f.size + ':' + f.lastModified : ''); };
+const inputsKey = (scan = scanFile()) => photosKey() + '#' + (scan ? fileKey(scan) : '');
 // "scan and 2 photos" (an entry without a head)
 function inputsText(h) {
   const n = (h.page.photos || []).length;
@@ -323,7 +324,7 @@ export async function restoreHead(id) {
   // before the reload); the entry goes on with it.
   if (head.photosOnly && stored.scan) {
     const f = stored.scan instanceof File ? stored.scan : new File([stored.scan], head.scanName || 'scan.ply');
-    current.photosKey = photosKey() + '#' + f.name + ':' + f.size + ':' + f.lastModified;  // inputsKey() once it is loaded
+    current.photosKey = inputsKey(f);  // what inputsKey() gives once it is loaded
     await loadScan(f);
   }
 }
