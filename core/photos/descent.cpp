@@ -74,16 +74,14 @@ LmReport quasi_newton(LeastSquaresProblem& problem, const DescentOptions& option
     problem.apply(step);
     applied = x;
     const double f = cost_and_gradient(problem, grad);
+    if (best == std::numeric_limits<double>::infinity()) report.initial_cost = f;  // the first call, at x = 0
+    else if (f < best) ++improvements;
     if (f < best) {
       best = f;
       best_x = x;
-      ++improvements;
     }
     return f;
   };
-  Eigen::VectorXd g;
-  report.initial_cost = cost_and_gradient(problem, g);
-  best = report.initial_cost;
   LBFGSpp::LBFGSParam<double> param;
   param.m = options.lbfgs_memory;
   param.max_iterations = options.max_iterations;
@@ -94,8 +92,7 @@ LmReport quasi_newton(LeastSquaresProblem& problem, const DescentOptions& option
   param.linesearch = LBFGSpp::LBFGS_LINESEARCH_BACKTRACKING_STRONG_WOLFE;
   LBFGSpp::LBFGSSolver<double, LBFGSpp::LineSearchNocedalWright> solver(param);
   Eigen::VectorXd x = Eigen::VectorXd::Zero(n);
-  double fx = report.initial_cost;
-  improvements = 0;
+  double fx = 0;
   try {
     report.iterations = solver.minimize(objective, x, fx);
   } catch (const std::exception&) {
