@@ -41,6 +41,8 @@
 //   frames_drawn() -> number of frames drawn so far (0 until the head is up)
 //   set_profiling(on), last_draw_ms(): glFinish after each draw and its ms
 //   startup_error() -> "" or why the viewer could not start
+//   startup_times() -> [[step, ms], ...]: main()'s steps (SDL, WebGL context,
+//     renderer, generic head)
 // Arrays are JS typed arrays (Float32Array / Uint32Array), shapes as in
 // viewer_scene.h. Nothing throws: failures come back as messages.
 //
@@ -62,6 +64,8 @@
 #include <cstdlib>
 #include <cstdio>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace {
 
@@ -83,6 +87,8 @@ struct Viewer {
   double render_scale = 1.0;
   double last_draw_ms = 0;
   std::string startup_error;
+  // main()'s steps, ms each (startup_times()): where the viewer's start goes.
+  std::vector<std::pair<const char*, double>> startup_ms;
   bool panning = false, orbiting = false;
   // Animation: the last frame's positions (reused, #V*3) and what its
   // update did.
@@ -506,6 +512,19 @@ val js_last_update() {
 }
 
 int js_frames_drawn() { return g_viewer ? g_viewer->frames_drawn : 0; }
+// main()'s steps so far: [[name, ms], ...].
+val js_startup_times() {
+  val r = val::array();
+  if (g_viewer)
+    for (const auto& [name, ms] : g_viewer->startup_ms) {
+      val step = val::array();
+      step.call<void>("push", std::string(name));
+      step.call<void>("push", ms);
+      r.call<void>("push", step);
+    }
+  return r;
+}
+
 std::string js_startup_error() { return g_viewer ? g_viewer->startup_error : std::string("not started"); }
 
 }  // namespace
@@ -546,11 +565,18 @@ EMSCRIPTEN_BINDINGS(likeness_viewer) {
   emscripten::function("last_draw_ms", &js_last_draw_ms);
   emscripten::function("last_update", &js_last_update);
   emscripten::function("startup_error", &js_startup_error);
+  emscripten::function("startup_times", &js_startup_times);
 }
 
 int main(int argc, char** argv) {
   g_viewer = new Viewer();
   Viewer& v = *g_viewer;
+  double step_start = emscripten_get_now();
+  const auto step_done = [&](const char* name) {
+    const double now = emscripten_get_now();
+    v.startup_ms.emplace_back(name, now - step_start);
+    step_start = now;
+  };
   // Arguments from the page (Module.arguments): --msaa N (samples, 0 = off).
   int msaa = 4;
   for (int i = 1; i + 1 < argc; ++i)
@@ -562,6 +588,7 @@ int main(int argc, char** argv) {
     v.startup_error = std::string("SDL_Init failed: ") + SDL_GetError();
     return 0;
   }
+  step_done("SDL_Init");
   SDL_GL_SetAttribute(SDL_GL_CONTEXT_PROFILE_MASK, SDL_GL_CONTEXT_PROFILE_ES);
   SDL_GL_SetAttribute(SDL_GL_CONTEXT_MAJOR_VERSION, 3);
   SDL_GL_SetAttribute(SDL_GL_CONTEXT_MINOR_VERSION, 0);
@@ -574,6 +601,7 @@ int main(int argc, char** argv) {
     v.startup_error = std::string("could not create the window: ") + SDL_GetError();
     return 0;
   }
+  step_done("window");
   // SDL's key handlers call preventDefault on keys, Tab included, which
   // would trap keyboard users in the canvas. Unregister them: web/js/viewer.js
   // handles the view keys (through orbit/pan/zoom below) and lets the rest
@@ -586,15 +614,18 @@ int main(int argc, char** argv) {
     v.startup_error = std::string("WebGL 2 is not available: ") + SDL_GetError();
     return 0;
   }
+  step_done("WebGL context");
   if (lk::Status s = v.scene.init(); !s.ok()) {
     v.startup_error = "the renderer could not start: " + s.message;
     return 0;
   }
+  step_done("renderer (shaders)");
   fit_canvas(v);
   if (std::string err = show_start_head(); !err.empty()) {
     v.startup_error = "could not show the head: " + err;
     return 0;
   }
+  step_done("generic head shown");
   emscripten_set_main_loop(frame, 0, 0);
   return 0;
 }

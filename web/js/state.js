@@ -40,7 +40,7 @@ export const ui = {
 export const app = window.likeness = {
   startedAt: performance.now(),
   loadMs: null,          // page start -> viewer and worker up, head drawn
-  timings: {},           // ms since page start: viewerModule, firstFrame, worker
+  timings: {},           // ms since page start: viewerRuntime (its wasm compiled, before its main), viewerModule, firstFrame, worker
   viewer: null,
   worker: null,
   workerThreads: null,   // {variant: 'threads'|'single', threads}: which core the worker runs

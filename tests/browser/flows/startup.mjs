@@ -5,7 +5,7 @@
 // zooms) and the Wireframe toggle.
 import fs from 'node:fs';
 import path from 'node:path';
-import { analyse, bannerText, canvasImage, check, differingFraction, note, runAlone, shot } from '../harness.mjs';
+import { analyse, bannerText, canvasImage, check, differingFraction, note, runAlone, shot, state } from '../harness.mjs';
 
 async function run(s) {
   const { page, state: s0, wallMs } = await s.mainPage();
@@ -22,8 +22,11 @@ async function run(s) {
     (performance.getEntriesByType('paint').find((e) => e.name === 'first-contentful-paint') || {}).startTime);
   const wasm = fs.readdirSync(s.webdir).filter((f) => f.endsWith('.wasm'))
     .map((f) => `${f} ${(fs.statSync(path.join(s.webdir, f)).size / 1024).toFixed(0)} KB`);
+  const viewerSteps = await page.evaluate(() => window.likeness.viewer.startup_times());
   note(`start-up: first paint ${Math.round(paint)} ms, ready (viewer and core up, head drawn) ${Math.round(loadMs)} ms; ` +
-       `wasm files: ${wasm.join(', ')}`);
+       `wasm files: ${wasm.join(', ')}; the viewer's main: ` + viewerSteps.map(([k, ms]) => `${k} ${ms.toFixed(0)}`).join(', ') + ' ms');
+  check('the viewer reports its start-up steps (SDL, window, WebGL context, renderer, generic head)',
+        viewerSteps.length === 5 && viewerSteps.every(([, ms]) => Number.isFinite(ms) && ms >= 0), JSON.stringify(viewerSteps));
   // The face-landmark detector (vendor/face_mesh/, 17 MB with its models) is fetched
   // only once photos are dropped, never for the start (issue 39).
   const early = await page.evaluate(() => performance.getEntriesByType('resource').map((e) => e.name)
@@ -99,6 +102,30 @@ async function run(s) {
   const unwired = differingFraction(reset, await canvasImage(page));
   check('the wireframe toggle draws the edges and removes them', wireDiff > 0.003 && unwired < 0.002,
         `on: ${(100 * wireDiff).toFixed(2)}% changed, off: ${(100 * unwired).toFixed(2)}%`);
+
+  // One WebGL context: the page reads the renderer's name from the canvas'
+  // own context, which the viewer then draws on (SwiftShader: no
+  // multisampling). With multisampling (?msaa=4, as on a GPU) the canvas is
+  // a fresh copy with a context of its own, still drawn and keyboard-wired.
+  const glOf = (pg) => pg.evaluate(() => {
+    const c = document.getElementById('canvas'), gl = c.getContext('webgl2');
+    return { software: window.likeness.software, msaa: window.likeness.msaa, canvases: document.querySelectorAll('canvas#canvas').length,
+             antialias: gl ? gl.getContextAttributes().antialias : null, samples: gl ? gl.getParameter(gl.SAMPLES) : null };
+  });
+  const gl0 = await glOf(page);
+  check('SwiftShader: no multisampling, and the viewer draws on the context the page read the renderer from',
+        gl0.software === true && gl0.msaa === 0 && gl0.antialias === false && gl0.canvases === 1, JSON.stringify(gl0));
+  const msaaPage = await s.newPage('?autofit=0&msaa=4');
+  const gl4 = await glOf(msaaPage);
+  const msaaHead = await canvasImage(msaaPage);
+  await msaaPage.focus('#canvas');
+  for (let i = 0; i < 4; i++) await msaaPage.keyboard.press('ArrowRight');
+  const msaaKeyed = differingFraction(msaaHead, await canvasImage(msaaPage));
+  check('?msaa=4: a fresh canvas with a multisampled context, the head drawn and the arrow keys wired',
+        await state(msaaPage) === 'ready' && gl4.msaa === 4 && gl4.antialias === true && gl4.samples === 4 &&
+        gl4.canvases === 1 && analyse(msaaHead).fgFraction > 0.03 && msaaKeyed > 0.005,
+        `${JSON.stringify(gl4)}, ${(100 * msaaKeyed).toFixed(1)}% of pixels changed by the keys`);
+  await msaaPage.close();
 }
 
 export const flow = { name: 'startup', title: 'start-up, the head drawn, the view by mouse, keys and touch', run };
