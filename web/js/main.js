@@ -26,7 +26,7 @@
 //   offline.js        the service worker (sw.js): a copy of the app for offline use
 import { app, page, params, ui, clearError, fatalStartup, setStatus } from './state.js';
 import { cancelJobs, startWorker, warmUp } from './worker_client.js';
-import { prepareCanvas, startViewer, wireViewer } from './viewer.js';
+import { startViewer, wireViewer } from './viewer.js';
 import { wireFiles } from './files.js';
 import { loadSample, loadPhotosSample } from './scan.js';
 import { wireClicker } from './clicker.js';
@@ -77,7 +77,6 @@ function threadsNote() {
 }
 
 async function start() {
-  prepareCanvas();
   wire();
   setStatus('Starting the viewer and the core…');
   let coreFailed = null;

@@ -28,42 +28,28 @@ function firstFrame(viewer) {
   });
 }
 
-// The attributes the viewer's SDL asks WebGL for without multisampling.
-const SDL_ATTRIBUTES = { alpha: false, depth: true, stencil: false, antialias: false };
-
-// Decides the viewer's multisampling before it starts, from the WebGL2
-// renderer's name: none on a software WebGL (SwiftShader, llvmpipe: it
-// doubles a level-3 frame's cost, docs/journal.md), 4 samples on a GPU;
-// ?msaa=N overrides. The name is read from #canvas's own context, made
-// with the attributes SDL asks for, which the viewer then gets as its own
-// (a canvas has one context): a throw-away context cost 0.3-2.3 s of the
-// start on SwiftShader. With multisampling the canvas is replaced by a
-// fresh copy, so SDL makes its context with antialias. Called before
-// anything listens on the canvas.
-export function prepareCanvas() {
-  let software = false;
+// True when WebGL2 is drawn on the CPU (SwiftShader, llvmpipe): no GPU.
+function softwareWebGL() {
   try {
-    const gl = ui.canvas.getContext('webgl2', SDL_ATTRIBUTES);
-    if (gl) {
-      let name = String(gl.getParameter(gl.RENDERER));
-      const info = gl.getExtension('WEBGL_debug_renderer_info');
-      if (info) name += ' ' + gl.getParameter(info.UNMASKED_RENDERER_WEBGL);
-      software = /swiftshader|llvmpipe|softpipe|software/i.test(name);
-    }
+    const gl = document.createElement('canvas').getContext('webgl2');
+    if (!gl) return false;
+    let name = String(gl.getParameter(gl.RENDERER));
+    const info = gl.getExtension('WEBGL_debug_renderer_info');
+    if (info) name += ' ' + gl.getParameter(info.UNMASKED_RENDERER_WEBGL);
+    const lose = gl.getExtension('WEBGL_lose_context');
+    if (lose) lose.loseContext();
+    return /swiftshader|llvmpipe|softpipe|software/i.test(name);
   } catch (e) {
-    software = false;
-  }
-  app.software = software;
-  app.msaa = params.has('msaa') ? Math.max(0, Number(params.get('msaa')) || 0) : software ? 0 : 4;
-  if (app.msaa > 0) {
-    const fresh = ui.canvas.cloneNode(false);
-    ui.canvas.replaceWith(fresh);
-    ui.canvas = fresh;
+    return false;
   }
 }
 
 export async function startViewer() {
   await loadScript('likeness_viewer.js');
+  // Multisampling doubles SwiftShader's cost of a level-3 frame (measured:
+  // docs/journal.md), so a software WebGL gets none; ?msaa=N overrides.
+  app.software = softwareWebGL();
+  app.msaa = params.has('msaa') ? Math.max(0, Number(params.get('msaa')) || 0) : app.software ? 0 : 4;
   const viewer = await LikenessViewer({
     canvas: ui.canvas,
     arguments: ['--msaa', String(app.msaa)],

@@ -103,27 +103,24 @@ async function run(s) {
   check('the wireframe toggle draws the edges and removes them', wireDiff > 0.003 && unwired < 0.002,
         `on: ${(100 * wireDiff).toFixed(2)}% changed, off: ${(100 * unwired).toFixed(2)}%`);
 
-  // One WebGL context: the page reads the renderer's name from the canvas'
-  // own context, which the viewer then draws on (SwiftShader: no
-  // multisampling). With multisampling (?msaa=4, as on a GPU) the canvas is
-  // a fresh copy with a context of its own, still drawn and keyboard-wired.
+  // Multisampling: none on SwiftShader (it doubles a level-3 frame's cost);
+  // ?msaa=4 (as a GPU gets by default) gives a multisampled context, drawn.
   const glOf = (pg) => pg.evaluate(() => {
     const c = document.getElementById('canvas'), gl = c.getContext('webgl2');
-    return { software: window.likeness.software, msaa: window.likeness.msaa, canvases: document.querySelectorAll('canvas#canvas').length,
+    return { software: window.likeness.software, msaa: window.likeness.msaa,
              antialias: gl ? gl.getContextAttributes().antialias : null, samples: gl ? gl.getParameter(gl.SAMPLES) : null };
   });
   const gl0 = await glOf(page);
-  check('SwiftShader: no multisampling, and the viewer draws on the context the page read the renderer from',
-        gl0.software === true && gl0.msaa === 0 && gl0.antialias === false && gl0.canvases === 1, JSON.stringify(gl0));
+  check('SwiftShader: no multisampling', gl0.software === true && gl0.msaa === 0 && gl0.antialias === false, JSON.stringify(gl0));
   const msaaPage = await s.newPage('?autofit=0&msaa=4');
   const gl4 = await glOf(msaaPage);
   const msaaHead = await canvasImage(msaaPage);
   await msaaPage.focus('#canvas');
   for (let i = 0; i < 4; i++) await msaaPage.keyboard.press('ArrowRight');
   const msaaKeyed = differingFraction(msaaHead, await canvasImage(msaaPage));
-  check('?msaa=4: a fresh canvas with a multisampled context, the head drawn and the arrow keys wired',
+  check('?msaa=4: a multisampled context, the head drawn and the arrow keys working',
         await state(msaaPage) === 'ready' && gl4.msaa === 4 && gl4.antialias === true && gl4.samples === 4 &&
-        gl4.canvases === 1 && analyse(msaaHead).fgFraction > 0.03 && msaaKeyed > 0.005,
+        analyse(msaaHead).fgFraction > 0.03 && msaaKeyed > 0.005,
         `${JSON.stringify(gl4)}, ${(100 * msaaKeyed).toFixed(1)}% of pixels changed by the keys`);
   await msaaPage.close();
 }
