@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <iterator>
 #include <map>
 #include <set>
 #include <string>
@@ -60,50 +61,73 @@ Status check_gl(const char* where) {
   return Status::error(ErrorCode::Internal, std::string(where) + ": " + errors);
 }
 
-Status compile_shader(GLenum type, const std::string& source, const char* name, GLuint& out) {
-  out = glCreateShader(type);
+// A program whose shaders are compiled and linked but not yet checked. All
+// programs are sent before any is checked: in WebGL each check is a
+// synchronous call to the GPU process (about 30 ms each on SwiftShader, 12 of
+// them at start-up when every shader was checked at once), and GL compiles
+// the next ones meanwhile.
+struct PendingProgram {
+  GLuint program = 0, vs = 0, fs = 0;
+  const char* name = "";
+};
+
+GLuint send_shader(GLenum type, const std::string& source) {
+  const GLuint shader = glCreateShader(type);
   const char* src = source.c_str();
   const GLint len = static_cast<GLint>(source.size());
-  glShaderSource(out, 1, &src, &len);
-  glCompileShader(out);
-  GLint ok = GL_FALSE;
-  glGetShaderiv(out, GL_COMPILE_STATUS, &ok);
-  if (ok == GL_TRUE) return Status::success();
-  GLint log_len = 0;
-  glGetShaderiv(out, GL_INFO_LOG_LENGTH, &log_len);
-  std::string log(static_cast<size_t>(std::max(log_len, 1)), '\0');
-  glGetShaderInfoLog(out, log_len, nullptr, log.data());
-  glDeleteShader(out);
-  out = 0;
-  return Status::error(ErrorCode::Internal, std::string("shader ") + name + " does not compile: " + log);
+  glShaderSource(shader, 1, &src, &len);
+  glCompileShader(shader);
+  return shader;
 }
 
-Status link_program(const std::string& vs_src, const std::string& fs_src, const char* name,
-                    GLuint& out) {
-  GLuint vs = 0, fs = 0;
-  Status s = compile_shader(GL_VERTEX_SHADER, vs_src, name, vs);
-  if (!s) return s;
-  s = compile_shader(GL_FRAGMENT_SHADER, fs_src, name, fs);
-  if (!s) {
-    glDeleteShader(vs);
-    return s;
-  }
-  out = glCreateProgram();
-  glAttachShader(out, vs);
-  glAttachShader(out, fs);
-  glLinkProgram(out);
-  glDeleteShader(vs);  // flagged; freed with the program
-  glDeleteShader(fs);
-  GLint ok = GL_FALSE;
-  glGetProgramiv(out, GL_LINK_STATUS, &ok);
-  if (ok == GL_TRUE) return Status::success();
-  GLint log_len = 0;
-  glGetProgramiv(out, GL_INFO_LOG_LENGTH, &log_len);
-  std::string log(static_cast<size_t>(std::max(log_len, 1)), '\0');
-  glGetProgramInfoLog(out, log_len, nullptr, log.data());
-  glDeleteProgram(out);
+PendingProgram send_program(const std::string& vs_src, const std::string& fs_src, const char* name) {
+  PendingProgram p;
+  p.name = name;
+  p.vs = send_shader(GL_VERTEX_SHADER, vs_src);
+  p.fs = send_shader(GL_FRAGMENT_SHADER, fs_src);
+  p.program = glCreateProgram();
+  glAttachShader(p.program, p.vs);
+  glAttachShader(p.program, p.fs);
+  glLinkProgram(p.program);
+  return p;
+}
+
+std::string info_log(GLuint object, bool program) {
+  GLint len = 0;
+  if (program) glGetProgramiv(object, GL_INFO_LOG_LENGTH, &len);
+  else glGetShaderiv(object, GL_INFO_LOG_LENGTH, &len);
+  std::string log(static_cast<size_t>(std::max(len, 1)), '\0');
+  if (program) glGetProgramInfoLog(object, len, nullptr, log.data());
+  else glGetShaderInfoLog(object, len, nullptr, log.data());
+  return log;
+}
+
+// The link checked (a shader that did not compile fails it; then that
+// shader's log is the message). out: the program, or 0 with the error. The
+// shaders are freed either way.
+Status check_program(PendingProgram& p, GLuint& out) {
   out = 0;
-  return Status::error(ErrorCode::Internal, std::string("program ") + name + " does not link: " + log);
+  GLint ok = GL_FALSE;
+  glGetProgramiv(p.program, GL_LINK_STATUS, &ok);
+  Status s = Status::success();
+  if (ok != GL_TRUE) {
+    for (const GLuint shader : {p.vs, p.fs}) {
+      GLint compiled = GL_FALSE;
+      glGetShaderiv(shader, GL_COMPILE_STATUS, &compiled);
+      if (compiled != GL_TRUE) {
+        s = Status::error(ErrorCode::Internal, std::string("shader ") + p.name + " does not compile: " + info_log(shader, false));
+        break;
+      }
+    }
+    if (s) s = Status::error(ErrorCode::Internal, std::string("program ") + p.name + " does not link: " + info_log(p.program, true));
+    glDeleteProgram(p.program);
+  } else {
+    out = p.program;
+  }
+  glDeleteShader(p.vs);  // flagged while attached; freed with the program
+  glDeleteShader(p.fs);
+  p = {};
+  return s;
 }
 
 bool finite(const Vec3& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
@@ -569,16 +593,20 @@ Status Renderer::init(const RendererOptions& options) {
   impl_->release_all();
   impl_->options = options;
   Impl& m = *impl_;
-  Status s = link_program(text(shaders_mesh_vert, shaders_mesh_vert_size),
-                          text(shaders_mesh_frag, shaders_mesh_frag_size), "mesh", m.mesh_program);
-  if (s) s = link_program(text(shaders_points_vert, shaders_points_vert_size),
-                          text(shaders_points_frag, shaders_points_frag_size), "points",
-                          m.points_program);
-  if (s) s = link_program(text(shaders_background_vert, shaders_background_vert_size),
-                          text(shaders_background_frag, shaders_background_frag_size),
-                          "background", m.background_program);
-  if (s) s = link_program(text(shaders_lines_vert, shaders_lines_vert_size),
-                          text(shaders_lines_frag, shaders_lines_frag_size), "lines", m.lines_program);
+  PendingProgram pending[] = {
+      send_program(text(shaders_mesh_vert, shaders_mesh_vert_size), text(shaders_mesh_frag, shaders_mesh_frag_size), "mesh"),
+      send_program(text(shaders_points_vert, shaders_points_vert_size), text(shaders_points_frag, shaders_points_frag_size),
+                   "points"),
+      send_program(text(shaders_background_vert, shaders_background_vert_size),
+                   text(shaders_background_frag, shaders_background_frag_size), "background"),
+      send_program(text(shaders_lines_vert, shaders_lines_vert_size), text(shaders_lines_frag, shaders_lines_frag_size),
+                   "lines")};
+  GLuint* programs[] = {&m.mesh_program, &m.points_program, &m.background_program, &m.lines_program};
+  Status s = Status::success();
+  for (size_t i = 0; i < std::size(pending); ++i) {  // every one checked, so every shader is freed
+    const Status r = check_program(pending[i], *programs[i]);
+    if (s && !r) s = r;
+  }
   if (!s) {
     m.ready = true;  // so release_all frees what was made
     m.release_all();
