@@ -165,6 +165,7 @@ void size_scratch(MultiresMesh& m) {
     sc.face_mark[l].assign(m.triangles(l).size(), 0);
   }
   sc.stamp = 0;
+  sc.plan = {};
   // Work lists as long as the finest level: no update grows them.
   const size_t most = static_cast<size_t>(m.num_vertices(L));
   for (auto* v : {&sc.changed, &sc.reached, &sc.spread, &sc.targets}) v->reserve(most);
@@ -271,6 +272,71 @@ std::vector<std::vector<char>> propagate_vertex_mask(const MultiresMesh& mesh, c
 
 Status ensure_current(MultiresMesh& mesh) { return mesh.stale_from < 0 ? Status::success() : evaluate(mesh); }
 
+namespace {
+
+// The support of `moved` on every level up to top, without the bit-wise
+// pruning of the marked path (every recomputed vertex counts as changed):
+// the faces whose normals, the vertices whose normals and displaced
+// positions, and the next level's vertices whose base positions an update
+// of that list recomputes, each list ascending.
+void build_plan(MultiresMesh& mesh, const std::vector<int>& moved, int top) {
+  auto& sc = mesh.scratch;
+  auto& plan = sc.plan;
+  plan.moved = moved;
+  plan.top = top;
+  plan.faces.assign(top + 1, {});
+  plan.reached.assign(top + 1, {});
+  plan.targets.assign(top + 1, {});
+  std::vector<int> changed(moved.begin(), moved.end());
+  std::sort(changed.begin(), changed.end());
+  changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
+  const auto closure = [](const std::vector<int>& from, const IndexRows& rows, int count) {
+    std::vector<char> in(static_cast<size_t>(count), 0);
+    for (int u : from)
+      for (int i = rows.offsets[u]; i < rows.offsets[u + 1]; ++i) in[static_cast<size_t>(rows.items[i])] = 1;
+    std::vector<int> out;
+    for (int i = 0; i < count; ++i)
+      if (in[static_cast<size_t>(i)]) out.push_back(i);
+    return out;
+  };
+  for (int l = 0; l <= top; ++l) {
+    const MultiresLevelLinks& links = mesh.links[l];
+    plan.faces[l] = closure(changed, links.vertex_faces, static_cast<int>(mesh.triangles(l).size()));
+    plan.reached[l] = closure(changed, links.normal_reach, mesh.num_vertices(l));
+    if (l == top) break;
+    plan.targets[l] = closure(plan.reached[l], links.refine_reach, mesh.num_vertices(l + 1));
+    changed = plan.targets[l];
+  }
+  plan.built = true;
+}
+
+// The plan replayed: the same kernels on a superset of what the marked path
+// recomputes, so the result is the same bit for bit.
+void run_plan(MultiresMesh& mesh, UpdateFootprint* footprint) {
+  const auto& plan = mesh.scratch.plan;
+  MultiresState& st = mesh.state;
+  for (int l = 0; l <= plan.top; ++l) {
+    const MultiresLevelLinks& links = mesh.links[l];
+    const auto& tris = mesh.triangles(l);
+    for (int f : plan.faces[l]) st.face_normals[l][f] = face_normal(tris, st.base[l], f);
+    for (int v : plan.reached[l]) {
+      st.normals[l][v] = vertex_normal(links.vertex_faces, st.face_normals[l], v);
+      st.displaced[l][v] = displace(st.base[l][v], mesh.displacements[l][v], st.normals[l][v]);
+    }
+    if (footprint) {
+      footprint->base_changed[l] = static_cast<int>(l == 0 ? plan.moved.size() : plan.targets[l - 1].size());
+      footprint->displaced_changed[l] = static_cast<int>(plan.reached[l].size());
+    }
+    if (l == plan.top) break;
+    const ButterflyLevel& next = mesh.levels[l];
+    const int nc = next.num_coarse_vertices;
+    auto& fine = st.base[l + 1];
+    for (int f : plan.targets[l]) fine[f] = f < nc ? st.displaced[l][f] : butterfly_new_vertex(next, f - nc, st.displaced[l]);
+  }
+}
+
+}  // namespace
+
 Status update_control_vertices(MultiresMesh& mesh, const std::vector<int>& moved,
                                const std::vector<Vec3>& new_positions, UpdateFootprint* footprint, int max_level) {
   const int L = mesh.num_levels();
@@ -317,6 +383,22 @@ Status update_control_vertices(MultiresMesh& mesh, const std::vector<int>& moved
   // differs bit-wise, so the next level must look at its dependents. A value
   // that comes out bit-identical (e.g. P' = P + 0 * N where d = 0 and P did
   // not move) stops the spread without changing the result.
+  // A moved list given again: its plan (built on its second time), replayed.
+  auto& plan = sc.plan;
+  if (plan.moved == moved && plan.top == top) {
+    for (size_t i = 0; i < moved.size(); ++i) {
+      mesh.control[moved[i]] = new_positions[i];
+      st.base[0][moved[i]] = new_positions[i];
+    }
+    if (!plan.built) build_plan(mesh, moved, top);
+    run_plan(mesh, footprint);
+    if (top < L) mesh.stale_from = mesh.stale_from < 0 ? top + 1 : std::min(mesh.stale_from, top + 1);
+    return Status::success();
+  }
+  plan = {};
+  plan.moved = moved;
+  plan.top = top;
+
   std::vector<int> &changed = sc.changed, &reached = sc.reached, &spread = sc.spread, &targets = sc.targets;
   changed.clear();
   for (size_t i = 0; i < moved.size(); ++i) {

@@ -76,6 +76,17 @@ struct MultiresMesh {
     std::vector<std::vector<std::uint32_t>> face_mark;                  // L+1, #F_l each
     std::uint32_t stamp = 0;
     std::vector<int> changed, reached, spread, targets;
+    // An animation moves the same control vertices frame after frame: once
+    // a moved list repeats, its work lists per level (faces, normals and
+    // refinement targets, its support on every level without pruning) are
+    // kept and replayed, without marks, gathering or sorting. A different
+    // list drops them.
+    struct Plan {
+      std::vector<int> moved;  // the moved list it is for, as given
+      int top = -1;            // the highest level it reaches
+      bool built = false;
+      std::vector<std::vector<int>> faces, reached, targets;  // per level
+    } plan;
   } scratch;
 
   int num_levels() const { return static_cast<int>(levels.size()); }  // L
