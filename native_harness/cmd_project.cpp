@@ -52,22 +52,53 @@ int run_info(const std::string& path) {
   return 0;
 }
 
-// The head at level with the generic eyes' and teeth's textures and every
-// shape of the muscle layer, at rest (avatar tools pose it).
-int write_glb(const char* cmd, HeadProject& p, int level, const std::string& out) {
+// The eyes' and teeth's textures of an export: a file given, else (with
+// a head folder) DIR/eye.png and DIR/teeth.png where they are (what `likeness
+// eye --out` and `likeness teeth --generic-out` write), else the generic
+// ones, with a note saying which.
+struct PartTextures {
+  std::string eye, teeth;  // files to read; empty: generic
+};
+
+Status part_textures(const PartTextures& files, GlbExportOptions& o) {
+  use_generic_part_textures(o);
+  const std::pair<const std::string*, Image*> parts[2] = {{&files.eye, &o.eye_texture}, {&files.teeth, &o.teeth_texture}};
+  const char* what[2] = {"eye", "teeth"};
+  for (int k = 0; k < 2; ++k) {
+    if (parts[k].first->empty()) {
+      std::printf("note: the generic %s texture\n", what[k]);
+      continue;
+    }
+    // The eyeball's texture RGB; the teeth's RGBA (their voids transparent).
+    if (Status st = load_image_file(*parts[k].first, *parts[k].second, k == 0 ? 3 : 4); !st.ok()) return st;
+    std::printf("%s texture: %s (%dx%d)\n", what[k], parts[k].first->c_str(), parts[k].second->width,
+                parts[k].second->height);
+  }
+  return Status::success();
+}
+
+// The head at level with the eyes' and teeth's textures and every shape of
+// the muscle layer, at rest (avatar tools pose it), with the clips unless
+// animations is false.
+int write_glb(const char* cmd, HeadProject& p, int level, const std::string& out, const PartTextures& textures = {},
+              bool animations = true) {
   GenericHead generic;
   Status st = load_generic_head(generic);
   if (!st) return fail(cmd, st.message);
   GlbExportOptions o;
   o.level = level;
-  use_generic_part_textures(o);
+  o.animations = animations;
+  if (st = part_textures(textures, o); !st) return fail(cmd, st.message);
   Bytes bytes;
   GlbExportReport r;
   st = export_glb(p, generic, o, bytes, &r);
   if (st) st = write_file(out, bytes);
   if (!st) return fail(cmd, st.message);
-  std::printf("wrote %s: level %d (%d vertices, %d triangles)%s, %zu nodes, %zu bytes, at rest\n", out.c_str(), r.level,
-              r.head_vertices, r.head_triangles, p.texture.empty() ? "" : ", textured", r.nodes.size(), bytes.size());
+  std::string clips;
+  for (const std::string& a : r.animations) clips += (clips.empty() ? "" : ", ") + a;
+  std::printf("wrote %s: level %d (%d vertices, %d triangles)%s, %zu nodes, %zu bytes, at rest, animations: %s\n",
+              out.c_str(), r.level, r.head_vertices, r.head_triangles, p.texture.empty() ? "" : ", textured",
+              r.nodes.size(), bytes.size(), clips.empty() ? "none" : clips.c_str());
   return 0;
 }
 
@@ -152,7 +183,7 @@ int run_project(const Args& args) {
 // `likeness photos` folder (its head.likeness.glb) or a project file.
 int run_export_head(const Args& args) {
   const char* cmd = "export";
-  if (!only_known_options(cmd, args, {"head", "out", "level"})) return 2;
+  if (!only_known_options(cmd, args, {"head", "out", "level", "eye-texture", "teeth-texture", "no-animations"})) return 2;
   std::string head = args.get("head");
   const std::string out = args.get("out");
   if (head.empty() || out.empty())
@@ -168,13 +199,20 @@ int run_export_head(const Args& args) {
   HeadProject p;
   if (Status st = read_project_file(head, p); !st.ok()) return fail(cmd, st.message);
   if (Status st = rest_pose(p); !st.ok()) return fail(cmd, st.message);
-  return write_glb(cmd, p, level, out);
+  PartTextures textures{args.get("eye-texture"), args.get("teeth-texture")};
+  const std::string dir = head.substr(0, head.find_last_of('/') + 1);
+  for (auto [file, name] : {std::pair{&textures.eye, "eye.png"}, std::pair{&textures.teeth, "teeth.png"}})
+    if (file->empty() && folder && ::stat((dir + name).c_str(), &info) == 0) *file = dir + name;
+  return write_glb(cmd, p, level, out, textures, !args.has("no-animations"));
 }
 
-const Registrar export_reg({"export", "likeness export --head DIR|FILE.likeness.glb --out FILE.glb [--level L]",
+const Registrar export_reg({"export", "likeness export --head DIR|FILE.likeness.glb --out FILE.glb [--level L] "
+                            "[--eye-texture PNG] [--teeth-texture PNG] [--no-animations]",
                             "the head as a GLB for avatar tools and viewers (level L, default 2): its skin, eyes, teeth "
                             "and tongue, the 77 expressions, ARKit shapes and visemes as morph targets, a small "
-                            "skeleton; from a likeness fit or likeness photos folder or a project file",
+                            "skeleton, the Talk and Blink clips as glTF animations; from a likeness fit or likeness "
+                            "photos folder or a project file. The eyes and teeth take DIR/eye.png (likeness eye --out) "
+                            "and DIR/teeth.png (likeness teeth --generic-out) where they are, else the generic textures",
                             run_export_head});
 
 const Registrar reg({kName,

@@ -404,6 +404,16 @@ std::string js_set_component_matrix(int index, val matrix) {
   return s.ok() ? std::string() : s.message;
 }
 
+// Component index's vertices (#V * 3 floats, its own frame): a tongue out.
+std::string js_set_component_positions(int index, val positions) {
+  if (!g_viewer || !g_viewer->startup_error.empty()) return "the viewer is not running";
+  const std::vector<float> p = from_js<float>(positions);
+  if (index < 0) return "no component " + std::to_string(index);
+  if (p.size() % 3) return "positions: need 3 numbers per vertex";
+  lk::Status s = g_viewer->scene.set_component_positions(static_cast<size_t>(index), p.data(), p.size() / 3);
+  return s.ok() ? std::string() : s.message;
+}
+
 void js_clear_components() {
   if (g_viewer) g_viewer->scene.clear_components();
 }
@@ -548,6 +558,7 @@ EMSCRIPTEN_BINDINGS(likeness_viewer) {
   emscripten::function("add_component", &js_add_component);
   emscripten::function("clear_components", &js_clear_components);
   emscripten::function("set_component_matrix", &js_set_component_matrix);
+  emscripten::function("set_component_positions", &js_set_component_positions);
   emscripten::function("set_components_visible", &js_set_components_visible);
   emscripten::function("set_overlay_visible", &js_set_overlay_visible);
   emscripten::function("show_generic_head", &js_show_generic_head);

@@ -342,6 +342,13 @@ Status ViewerScene::set_component_matrix(size_t index, const glm::mat4& model) {
   return renderer_.set_model_matrix(components_[index], model);
 }
 
+Status ViewerScene::set_component_positions(size_t index, const float* positions_xyz, size_t vertex_count) {
+  if (index >= components_.size())
+    return Status::error(ErrorCode::InvalidInput, "no component " + std::to_string(index));
+  dirty_ = true;
+  return renderer_.update_mesh_positions(components_[index], positions_xyz, vertex_count);
+}
+
 void ViewerScene::set_components_visible(bool on) {
   components_visible_ = on;
   for (DrawableHandle h : components_) renderer_.set_visible(h, on);

@@ -99,6 +99,10 @@ class ViewerScene {
   void set_components_visible(bool on);
   // Moves component `index` (in the order added) rigidly: object -> world.
   Status set_component_matrix(size_t index, const glm::mat4& model);
+  // Moves component `index`'s vertices (#V as added, in its own frame:
+  // before its matrix); the normals follow. For a part that bends (the
+  // tongue out), where a matrix cannot carry it.
+  Status set_component_positions(size_t index, const float* positions_xyz, size_t vertex_count);
 
   // A few big points drawn over everything else (the landmark the page asks
   // the user to click); an empty cloud clears them.

@@ -5,8 +5,10 @@
 #include "worker_common.h"
 
 #include "anim/bake.h"
+#include "anim/clips.h"
 #include "anim/expression.h"
 #include "project/glb_export.h"
+#include "project/parts.h"
 #include "project/pose.h"
 #include "project/project_file.h"
 
@@ -60,7 +62,11 @@ val export_glb_job(int level, val parts) {
 // as the GLB's morph targets on the teeth blend). Returns {ok, level,
 // vertexCount, shapes: [{name, indices (Uint32Array), offsets (Float32Array,
 // 3 per index), jawMatrix? (Float32Array, 4x4 column-major), eyeMatrices?
-// ([left, right], the same, for the gaze shapes)}], bakeMs}.
+// ([left, right], the same, for the gaze shapes), tongueOffsets?
+// (Float32Array, 3 per vertex of the components' tongue, scan frame: its
+// push out before the jaw's motion, for the shapes with tongue out)}],
+// clips (anim/clips.h: [{name, shapes, times, values, slopes}], values and
+// slopes key-major: [k * shapes + s]: what Talk plays), bakeMs}.
 val face_shapes_job(int level) {
   if (!kept_project()) return error_result(lk::ErrorCode::InvalidInput, "no fitted head to animate");
   lk::HeadProject& p = *kept_project();
@@ -77,6 +83,10 @@ val face_shapes_job(int level) {
   if (st.ok()) st = lk::bake_face_shapes(rig, &p.fit.multires, level, {}, baked);
   if (!st.ok()) return error_result(st);
   const double bake_ms = now_ms() - t0;
+  // The tongue as the components job places it (scan frame there), for
+  // its push out, which bends it: no matrix can carry it.
+  lk::HeadParts parts;
+  const bool have_tongue = lk::place_head_parts(p.fit.control, *generic, parts).ok();
   val shapes = val::array();
   for (const lk::BakedShape& b : baked) {
     std::vector<std::uint32_t> indices;
@@ -120,12 +130,42 @@ val face_shapes_job(int level) {
       eyes.call<void>("push", in_scan(right, rig.lids[1].center, lk::Vec3::Zero()));
       shape.set("eyeMatrices", eyes);
     }
+    if (have_tongue && b.controls[lk::kTongueOut] > 0) {
+      lk::FaceControls out_only;
+      out_only[lk::kTongueOut] = b.controls[lk::kTongueOut];
+      const std::vector<lk::Vec3>& rest = parts.placed.tongue.positions;
+      const std::vector<lk::Vec3> pushed = lk::pose_tongue(rig, rest, out_only);
+      std::vector<float> flat;
+      for (std::size_t i = 0; i < rest.size(); ++i) {
+        const lk::Vec3 d = p.frame.head_to_scan * (pushed[i] - rest[i]);
+        flat.insert(flat.end(), {static_cast<float>(d.x()), static_cast<float>(d.y()), static_cast<float>(d.z())});
+      }
+      shape.set("tongueOffsets", typed_array("Float32Array", flat));
+    }
     shapes.call<void>("push", shape);
+  }
+  val clips = val::array();
+  for (const lk::WeightClip& c : lk::weight_clips()) {
+    val o = val::object();
+    o.set("name", c.name);
+    val names = val::array();
+    for (const std::string& n : c.shapes) names.call<void>("push", n);
+    o.set("shapes", names);
+    std::vector<double> values, slopes;
+    for (std::size_t k = 0; k < c.times.size(); ++k) {
+      values.insert(values.end(), c.value[k].begin(), c.value[k].end());
+      slopes.insert(slopes.end(), c.slope[k].begin(), c.slope[k].end());
+    }
+    o.set("times", typed_array("Float64Array", c.times));
+    o.set("values", typed_array("Float64Array", values));
+    o.set("slopes", typed_array("Float64Array", slopes));
+    clips.call<void>("push", o);
   }
   val r = ok_result();
   r.set("level", level);
   r.set("vertexCount", p.fit.multires.num_vertices(level));
   r.set("shapes", shapes);
+  r.set("clips", clips);
   r.set("bakeMs", bake_ms);
   return r;
 }

@@ -1,6 +1,7 @@
 #include "project/glb_export.h"
 
 #include "anim/bake.h"
+#include "anim/clips.h"
 #include "mesh/geometry.h"
 #include "mesh/topology.h"
 #include "project/export.h"
@@ -127,6 +128,72 @@ void inverse_bind(const Vec3& t, std::vector<float>& out) {
   out.insert(out.end(), m, m + 16);
 }
 
+// A mesh node with morph targets, by their names.
+struct MorphedNode {
+  int node = -1;
+  std::vector<std::string> targets;
+};
+
+// The clip as one glTF animation: per node whose targets include some of
+// the clip's shapes, a `weights` channel (CUBICSPLINE: each key's in
+// tangents, values and out tangents over all the mesh's targets; zero for
+// the targets the clip does not drive), the key times shared. False when no
+// node has one of its shapes.
+bool add_weights_animation(GltfBuilder& w, const WeightClip& clip, const std::vector<MorphedNode>& nodes) {
+  tinygltf::Animation anim;
+  anim.name = clip.name;
+  int input = -1;
+  const std::size_t keys = clip.times.size();
+  for (const MorphedNode& n : nodes) {
+    std::vector<int> column(n.targets.size(), -1);  // target -> the clip's shape
+    bool any = false;
+    for (std::size_t t = 0; t < n.targets.size(); ++t)
+      for (std::size_t s = 0; s < clip.shapes.size(); ++s)
+        if (n.targets[t] == clip.shapes[s]) {
+          column[t] = static_cast<int>(s);
+          any = true;
+        }
+    if (!any || keys < 2) continue;
+    if (input < 0) {
+      std::vector<float> times(clip.times.begin(), clip.times.end());
+      input = w.accessor(times.data(), times.size() * 4, static_cast<int>(keys), TINYGLTF_COMPONENT_TYPE_FLOAT,
+                         TINYGLTF_TYPE_SCALAR, 0);
+      w.model.accessors.back().minValues = {double(times.front())};
+      w.model.accessors.back().maxValues = {double(times.back())};
+    }
+    const std::size_t m = n.targets.size();
+    std::vector<float> out(3 * keys * m, 0.0f);
+    for (std::size_t k = 0; k < keys; ++k)
+      for (std::size_t t = 0; t < m; ++t) {
+        if (column[t] < 0) continue;
+        const std::size_t s = static_cast<std::size_t>(column[t]);
+        out[(3 * k + 0) * m + t] = static_cast<float>(clip.slope[k][s]);  // in tangent
+        out[(3 * k + 1) * m + t] = static_cast<float>(clip.value[k][s]);
+        out[(3 * k + 2) * m + t] = static_cast<float>(clip.slope[k][s]);  // out tangent
+      }
+    tinygltf::AnimationSampler sampler;
+    sampler.input = input;
+    sampler.interpolation = "CUBICSPLINE";
+    sampler.output = w.accessor(out.data(), out.size() * 4, static_cast<int>(out.size()), TINYGLTF_COMPONENT_TYPE_FLOAT,
+                                TINYGLTF_TYPE_SCALAR, 0);
+    anim.samplers.push_back(sampler);
+    tinygltf::AnimationChannel channel;
+    channel.sampler = static_cast<int>(anim.samplers.size()) - 1;
+    channel.target_node = n.node;
+    channel.target_path = "weights";
+    anim.channels.push_back(channel);
+  }
+  if (anim.channels.empty()) return false;
+  w.model.animations.push_back(anim);
+  return true;
+}
+
+std::vector<std::string> names_of(const std::vector<MorphTarget>& targets) {
+  std::vector<std::string> out;
+  for (const MorphTarget& t : targets) out.push_back(t.name);
+  return out;
+}
+
 }  // namespace
 
 void use_generic_part_textures(GlbExportOptions& options) {
@@ -235,6 +302,7 @@ Status export_glb(HeadProject& project, const GenericHead& generic, const GlbExp
   }
   const int head_mesh_node = w.node("HeadMesh", head_mesh);
   model.nodes[head_mesh_node].skin = 0;
+  std::vector<MorphedNode> morphed = {{head_mesh_node, names_of(head_targets)}};
 
   if (have_parts) {
     const int eye_mat = textured_material(w, "eye", options.eye_texture, {0.92, 0.92, 0.9, 1.0}, false);
@@ -244,6 +312,7 @@ Status export_glb(HeadProject& project, const GenericHead& generic, const GlbExp
         return pose_eye(face, parts.placed.eye[e].positions, fc, e);
       });
       model.nodes[eye_node[e]].mesh = w.mesh(eye_names[e], eye.positions, eye.normals, eye.uvs, eye.triangles, eye_mat, turns);
+      if (!turns.empty()) morphed.push_back({eye_node[e], names_of(turns)});
     }
     const int teeth_mat = textured_material(w, "teeth", options.teeth_texture, {0.80, 0.74, 0.60, 1.0}, true);
     const int tongue_mat = w.material("tongue", -1, {0.55, 0.16, 0.16, 1.0}, 0.5);
@@ -260,11 +329,20 @@ Status export_glb(HeadProject& project, const GenericHead& generic, const GlbExp
     const std::vector<MorphTarget> tongue_targets = part_targets(shapes, parts.placed.tongue.positions, [&](const FaceControls& fc) {
       return pose_tongue(face, parts.placed.tongue.positions, fc);
     });
-    add_child(model, jaw, w.node("LowerTeeth", w.mesh("LowerTeeth", lower.positions, lower.normals, uv_if(lower, teeth_tex),
-                                                      lower.triangles, teeth_mat, lower_targets)));
-    add_child(model, jaw, w.node("Tongue", w.mesh("Tongue", tongue.positions, tongue.normals, {}, tongue.triangles, tongue_mat,
-                                                  tongue_targets)));
+    const int lower_node = w.node("LowerTeeth", w.mesh("LowerTeeth", lower.positions, lower.normals, uv_if(lower, teeth_tex),
+                                                       lower.triangles, teeth_mat, lower_targets));
+    const int tongue_node = w.node("Tongue", w.mesh("Tongue", tongue.positions, tongue.normals, {}, tongue.triangles, tongue_mat,
+                                                    tongue_targets));
+    add_child(model, jaw, lower_node);
+    add_child(model, jaw, tongue_node);
+    if (!lower_targets.empty()) morphed.push_back({lower_node, names_of(lower_targets)});
+    if (!tongue_targets.empty()) morphed.push_back({tongue_node, names_of(tongue_targets)});
   }
+
+  std::vector<std::string> animations;
+  if (options.animations)
+    for (const WeightClip& clip : weight_clips())
+      if (add_weights_animation(w, clip, morphed)) animations.push_back(clip.name);
 
   tinygltf::Scene scene;
   scene.name = "Likeness head";
@@ -277,6 +355,7 @@ Status export_glb(HeadProject& project, const GenericHead& generic, const GlbExp
     report->head_vertices = head.num_vertices();
     report->head_triangles = head.num_triangles();
     report->head_targets = static_cast<int>(head_targets.size());
+    report->animations = animations;
     report->nodes.clear();
     for (const tinygltf::Node& n : model.nodes) report->nodes.push_back(n.name);
   }

@@ -11,7 +11,9 @@
 // blendshape and viseme of the muscle layer (anim/face_shapes.h) as a morph
 // target of the head, baked on its level (sparse where that is smaller);
 // the eyes carry the gaze shapes, the lower teeth and tongue the shapes that
-// move the jaw or the tongue, under the same names.
+// move the jaw or the tongue, under the same names. With the talking demo
+// and a blink as glTF animations (weights channels, CUBICSPLINE: exactly
+// the page's curves) on every mesh that has targets the clip drives.
 #pragma once
 #include "head/head_model.h"
 #include "image/image.h"
@@ -27,6 +29,9 @@ struct GlbExportOptions {
   int level = 2;          // the head's level (0 = the control mesh); clamped to the levels there are
   Image eye_texture;      // the eyeballs' texture (parts.h: generic_eyeball_texture); empty: white
   Image teeth_texture;    // RGBA, voids transparent (generic_teeth_texture); empty: ivory
+  // glTF animations of the morph weights (anim/clips.h: Talk, Blink), for
+  // viewers that only play clips (model-viewer cannot set single weights).
+  bool animations = true;
 };
 
 // The generic eyeball (256 px) and teeth (512 x 256) textures the page
@@ -38,6 +43,7 @@ struct GlbExportReport {
   int head_vertices = 0, head_triangles = 0;
   std::vector<std::string> nodes;  // in file order
   int head_targets = 0;            // morph targets on the head
+  std::vector<std::string> animations;  // the clips written, in file order
 };
 
 // The GLB bytes. Puts the project at rest first. InvalidInput without a

@@ -205,6 +205,16 @@ for (const [name, full] of [['bin.ply', binaryPly(40)], ['ascii.ply', Buffer.fro
             byName.jawOpen && largest(byName.jawOpen) > 0.01 && byName.neutral && byName.neutral.indices.length === 0 &&
             byName.eyeBlinkLeft && byName.eyeBlinkLeft.indices.length > 0 && core.face_shapes_job(9).ok === false,
             fs1.ok ? `level ${fs1.level}, ${fs1.vertexCount} vertices, jawOpen ${(1000 * largest(byName.jawOpen || { offsets: [] })).toFixed(1)} mm, ${Math.round(fs1.bakeMs)} ms` : fs1.message);
+      // The clips Talk plays (core/anim/clips.h) come with the shapes, and
+      // the shapes with tongue out carry the tongue's push per vertex.
+      const talk = fs1.ok && (fs1.clips || []).find((c) => c.name === 'Talk');
+      const keysOk = talk && talk.times.length > 2 && talk.values.length === talk.times.length * talk.shapes.length &&
+        talk.slopes.length === talk.values.length && talk.shapes.every((n) => byName[n]);
+      const pushed = (x) => !!(x && x.tongueOffsets && x.tongueOffsets.length > 0 && x.tongueOffsets.some((v) => v !== 0));
+      check('face_shapes_job hands over the clips (Talk, Blink, Gaze) and the tongue\'s push for tongueOut and viseme_TH only',
+            !!keysOk && (fs1.clips || []).map((c) => c.name).join(' ') === 'Talk Blink Gaze' && pushed(byName.tongueOut) &&
+            pushed(byName.viseme_TH) && Object.values(byName).filter((x) => x.tongueOffsets).length === 2,
+            talk ? `Talk: ${talk.times.length} keys, ${talk.shapes.length} shapes, ${talk.times[talk.times.length - 1]} s` : 'no Talk clip');
       // jawOpen's rigid jaw motion (for the lower teeth): applied to the rest
       // place of the vertex jawOpen moves most (under the lip, whole on the
       // jaw), it gives that vertex's offset; shapes that leave the jaw have none.

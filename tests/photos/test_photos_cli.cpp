@@ -7,6 +7,8 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
+#include <cstring>
+#include <map>
 
 namespace {
 
@@ -93,6 +95,50 @@ TEST_CASE("likeness photos --photos textures the head from the recovered cameras
   CHECK(glb.compare(0, 4, "glTF") == 0);
   CHECK(glb.find("\"jawOpen\"") != std::string::npos);  // the muscle layer's shapes as morph targets
   CHECK(glb.find("\"image/png\"") != std::string::npos);   // the skin (and the eyes' and teeth's textures)
+  CHECK(glb.find("\"Talk\"") != std::string::npos);      // the talking demo as a glTF animation (on by default)
+  // The head's own eye and teeth textures beside its project (eye.png,
+  // teeth.png, as `likeness eye --out` and `likeness teeth --generic-out`
+  // write them) go into the GLB in place of the generic ones, pixel for pixel.
+  {
+    lk::Image eye = lk::Image::make(48, 40, 3), teeth = lk::Image::make(64, 32, 4);
+    for (int y = 0; y < eye.height; ++y)
+      for (int x = 0; x < eye.width; ++x)
+        for (int k = 0; k < 3; ++k) eye.at(x, y)[k] = static_cast<std::uint8_t>((x * 5 + y * 3 + 70 * k) % 251);
+    for (int y = 0; y < teeth.height; ++y)
+      for (int x = 0; x < teeth.width; ++x)
+        for (int k = 0; k < 4; ++k) teeth.at(x, y)[k] = static_cast<std::uint8_t>(k == 3 ? (x % 7 ? 255 : 0) : (x * 3 + y * 9 + 50 * k) % 256);
+    REQUIRE(lk::save_png_file(dir + "/out/eye.png", eye).ok());
+    REQUIRE(lk::save_png_file(dir + "/out/teeth.png", teeth).ok());
+    REQUIRE(run("export --head " + dir + "/out --out " + dir + "/own.glb --level 0 --no-animations") == 0);
+    const std::string own = read_file_text(dir + "/own.glb");
+    CHECK(own.find("\"Talk\"") == std::string::npos);
+    // The GLB's JSON chunk and its binary chunk; each image's PNG decoded.
+    REQUIRE(own.size() > 28);
+    auto u32 = [&](size_t at) { std::uint32_t v; std::memcpy(&v, own.data() + at, 4); return static_cast<size_t>(v); };
+    const size_t json_len = u32(12);
+    const auto gltf = nlohmann::json::parse(own.substr(20, json_len));
+    const size_t bin = 20 + json_len + 8;
+    std::map<std::string, lk::Image> images;
+    for (const auto& im : gltf["images"]) {
+      const auto& view = gltf["bufferViews"][im["bufferView"].get<size_t>()];
+      const size_t at = bin + view.value("byteOffset", size_t(0)), len = view["byteLength"].get<size_t>();
+      REQUIRE(at + len <= own.size());
+      lk::Image decoded;
+      REQUIRE(lk::read_image(reinterpret_cast<const std::uint8_t*>(own.data() + at), len, decoded).ok());
+      images[im.value("name", std::string())] = decoded;
+    }
+    REQUIRE(images.count("eye"));
+    REQUIRE(images.count("teeth"));
+    CHECK(images["eye"].width == eye.width);
+    CHECK(images["eye"].pixels == eye.pixels);
+    CHECK(images["teeth"].channels == 4);
+    CHECK(images["teeth"].pixels == teeth.pixels);
+    // A texture given that cannot be read: refused, no file.
+    CHECK(run("export --head " + dir + "/out --out " + dir + "/bad.glb --eye-texture " + dir + "/none.png") != 0);
+    CHECK_FALSE(lk::test::exists(dir + "/bad.glb"));
+    std::remove((dir + "/out/eye.png").c_str());
+    std::remove((dir + "/out/teeth.png").c_str());
+  }
   // A folder with no project: a message, no file.
   CHECK(run("export --head " + dir + "/s --out " + dir + "/none.glb") != 0);
   CHECK_FALSE(lk::test::exists(dir + "/none.glb"));

@@ -3,6 +3,7 @@
 // the GLB's scene is the head for any glTF reader; cut, damaged, foreign
 // and future files are refused with a reason and never crash.
 #include "anim/bake.h"
+#include "anim/clips.h"
 #include "head/generic_head.h"
 #include "io/io.h"
 #include "mesh/topology.h"
@@ -736,4 +737,195 @@ TEST_CASE("GLB export: the head at its level with uvs and skin, the parts under 
   CHECK(brow_opened < 1e-9);
   CHECK(brow_turned > 0.01);
   CHECK(bottom_turned < 1e-9);
+}
+
+namespace {
+
+// An accessor's floats (dense), or its values with the sparse ones put in.
+std::vector<float> floats_of(const tinygltf::Model& m, int accessor, int per_element) {
+  const tinygltf::Accessor& acc = m.accessors.at(accessor);
+  REQUIRE(acc.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT);
+  std::vector<float> out(acc.count * static_cast<size_t>(per_element), 0.0f);
+  if (acc.bufferView >= 0) {
+    const tinygltf::BufferView& v = m.bufferViews.at(acc.bufferView);
+    std::memcpy(out.data(), m.buffers.at(v.buffer).data.data() + v.byteOffset + acc.byteOffset, out.size() * 4);
+  }
+  if (acc.sparse.isSparse) {
+    const tinygltf::BufferView& iv = m.bufferViews.at(acc.sparse.indices.bufferView);
+    const tinygltf::BufferView& vv = m.bufferViews.at(acc.sparse.values.bufferView);
+    const unsigned char* I = m.buffers.at(iv.buffer).data.data() + iv.byteOffset;
+    const float* V = reinterpret_cast<const float*>(m.buffers.at(vv.buffer).data.data() + vv.byteOffset);
+    for (int k = 0; k < acc.sparse.count; ++k) {
+      const size_t i = acc.sparse.indices.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT
+                           ? reinterpret_cast<const std::uint16_t*>(I)[k]
+                           : reinterpret_cast<const std::uint32_t*>(I)[k];
+      for (int j = 0; j < per_element; ++j) out.at(per_element * i + j) = V[per_element * k + j];
+    }
+  }
+  return out;
+}
+
+std::vector<std::string> target_names_of(const tinygltf::Mesh& mesh) {
+  std::vector<std::string> out;
+  for (size_t t = 0; t < mesh.extras.Get("targetNames").ArrayLen(); ++t)
+    out.push_back(mesh.extras.Get("targetNames").Get(int(t)).Get<std::string>());
+  return out;
+}
+
+// glTF's CUBICSPLINE at time t over keys (times) and output (per key: m in
+// tangents, m values, m out tangents): the m weights.
+std::vector<double> cubic_spline_at(const std::vector<float>& times, const std::vector<float>& out, size_t m, double t) {
+  std::vector<double> w(m);
+  size_t k = 0;
+  while (k + 2 < times.size() && times[k + 1] <= t) ++k;
+  const double h = times[k + 1] - times[k], u = std::clamp((t - times[k]) / h, 0.0, 1.0);
+  for (size_t j = 0; j < m; ++j) {
+    const double v0 = out[(3 * k + 1) * m + j], b0 = out[(3 * k + 2) * m + j];
+    const double v1 = out[(3 * (k + 1) + 1) * m + j], a1 = out[(3 * (k + 1)) * m + j];
+    w[j] = (2 * u * u * u - 3 * u * u + 1) * v0 + (u * u * u - 2 * u * u + u) * h * b0 + (-2 * u * u * u + 3 * u * u) * v1 +
+           (u * u * u - u * u) * h * a1;
+  }
+  return w;
+}
+
+}  // namespace
+
+TEST_CASE("GLB export: Talk, Blink and Gaze as glTF animations of the morph weights, playing the clips' weights") {
+  HeadProject p = textured_project();
+  GenericHead generic;
+  REQUIRE(load_generic_head(generic).ok());
+  GlbExportOptions o;
+  o.level = 1;
+  Bytes bytes;
+  GlbExportReport r;
+  REQUIRE(export_glb(p, generic, o, bytes, &r).ok());
+  CHECK(r.animations == std::vector<std::string>{"Talk", "Blink", "Gaze"});
+  const tinygltf::Model m = parsed_glb(bytes);
+  REQUIRE(m.animations.size() == 3);
+  const std::vector<WeightClip> clips = weight_clips();
+  std::map<std::string, int> channels_on;  // node name -> channels (over both clips)
+  for (size_t a = 0; a < 3; ++a) {
+    const tinygltf::Animation& anim = m.animations[a];
+    const WeightClip& clip = clips[a];
+    INFO(anim.name);
+    CHECK(anim.name == clip.name);
+    for (const tinygltf::AnimationChannel& ch : anim.channels) {
+      const tinygltf::Node& node = m.nodes.at(ch.target_node);
+      INFO(node.name);
+      channels_on[node.name]++;
+      CHECK(ch.target_path == "weights");
+      const tinygltf::AnimationSampler& s = anim.samplers.at(ch.sampler);
+      CHECK(s.interpolation == "CUBICSPLINE");
+      const std::vector<std::string> names = target_names_of(m.meshes.at(node.mesh));
+      const std::vector<float> times = floats_of(m, s.input, 1), out = floats_of(m, s.output, 1);
+      REQUIRE(times.size() == clip.times.size());
+      REQUIRE(out.size() == 3 * times.size() * names.size());
+      // At every 5 ms, each target's weight by glTF's interpolation is the
+      // clip's for the shapes it drives and 0 for the others.
+      double worst = 0, largest = 0;
+      for (int ms = 0; ms <= static_cast<int>(1000 * clip.duration()); ms += 5) {
+        const std::vector<double> got = cubic_spline_at(times, out, names.size(), ms / 1000.0);
+        const std::vector<double> want = clip_weights(clip, ms / 1000.0);
+        for (size_t t = 0; t < names.size(); ++t) {
+          const auto at = std::find(clip.shapes.begin(), clip.shapes.end(), names[t]);
+          const double w = at == clip.shapes.end() ? 0.0 : want[static_cast<size_t>(at - clip.shapes.begin())];
+          worst = std::max(worst, std::abs(got[t] - w));
+          largest = std::max(largest, got[t]);
+        }
+      }
+      INFO("largest weight " << largest);
+      CHECK(worst < 1e-5);  // float32 keys
+      CHECK(largest > 0.99);
+    }
+  }
+  // Talk drives the head and, through the visemes that open the jaw, the
+  // lower teeth and tongue; Blink only the head (the lids are skin); Gaze
+  // the eyeballs (and the head where the eyeLook shapes move its lids).
+  CHECK(channels_on["HeadMesh"] >= 2);
+  CHECK(channels_on["LowerTeeth"] == 1);
+  CHECK(channels_on["Tongue"] == 1);
+  CHECK(channels_on["LeftEye"] == 1);
+  CHECK(channels_on["RightEye"] == 1);
+
+  o.animations = false;
+  Bytes plain;
+  REQUIRE(export_glb(p, generic, o, plain, &r).ok());
+  CHECK(parsed_glb(plain).animations.empty());
+  CHECK(r.animations.empty());
+  CHECK(plain.size() < bytes.size());
+  INFO("animations cost " << (bytes.size() - plain.size()) << " bytes");
+  CHECK(bytes.size() - plain.size() < 64 * 1024);
+}
+
+TEST_CASE("GLB export: tongueOut pushes the tongue's tip out of the mouth, the other shapes only carry it on the jaw") {
+  HeadProject p = textured_project();
+  GenericHead generic;
+  REQUIRE(load_generic_head(generic).ok());
+  GlbExportOptions o;
+  o.level = 0;
+  o.animations = false;
+  Bytes bytes;
+  REQUIRE(export_glb(p, generic, o, bytes).ok());
+  const tinygltf::Model m = parsed_glb(bytes);
+  const tinygltf::Mesh* tongue = nullptr;
+  for (const tinygltf::Node& n : m.nodes)
+    if (n.name == "Tongue") tongue = &m.meshes.at(n.mesh);
+  REQUIRE(tongue);
+  const std::vector<std::string> names = target_names_of(*tongue);
+  const tinygltf::Primitive& prim = tongue->primitives[0];
+  const std::vector<float> rest = floats_of(m, prim.attributes.at("POSITION"), 3);
+  const size_t n = rest.size() / 3;
+  size_t tip = 0;
+  for (size_t i = 1; i < n; ++i)
+    if (rest[3 * i + 2] > rest[3 * tip + 2]) tip = i;
+  FaceRig face;
+  REQUIRE(make_face_rig(p.fit.control, generic, face).ok());
+  const double lip_z = face.rest[static_cast<size_t>(face.landmarks.lower_lip_mid)].z();
+  HeadParts parts;
+  REQUIRE(place_head_parts(p.fit.control, generic, parts).ok());
+  const Vec3 hinge = p.rig.jaw_pivot;  // the Jaw node's place: the tongue's mesh is about it
+  size_t root = 0;
+  for (size_t i = 1; i < n; ++i)
+    if (rest[3 * i + 2] < rest[3 * root + 2]) root = i;
+  bool saw_out = false;
+  for (size_t t = 0; t < names.size(); ++t) {
+    INFO(names[t]);
+    const std::vector<float> d = floats_of(m, prim.targets[t].at("POSITION"), 3);
+    FaceControls c;
+    REQUIRE(face_shape(names[t], c).ok());
+    // Where the jaw alone would carry each vertex.
+    Mat3 R;
+    Vec3 tr;
+    jaw_motion(face, c, R, tr);
+    auto on_jaw = [&](size_t i) {
+      const Vec3 q = hinge + Vec3(rest[3 * i], rest[3 * i + 1], rest[3 * i + 2]);
+      return Vec3(R * (q - face.jaw.hinge) + face.jaw.hinge + tr - q);
+    };
+    const Vec3 moved_root(d[3 * root], d[3 * root + 1], d[3 * root + 2]);
+    CHECK((moved_root - on_jaw(root)).cwiseAbs().maxCoeff() < 1.1e-5);  // the root stays on the jaw
+    CHECK(std::abs(c[kJawOpen]) + std::abs(c[kJawSide]) + std::abs(c[kJawForward]) + c[kTongueOut] > 0);
+    if (c[kTongueOut] > 0) {
+      // The tip forward (+z) beyond where the jaw carries it, in proportion
+      // to the shape's tongue-out; tongueOut's past the lower lip's front.
+      const double forward = d[3 * tip + 2] - on_jaw(tip).z();
+      const double tip_z = hinge.z() + rest[3 * tip + 2] + d[3 * tip + 2];
+      INFO("tip forward " << 1000 * forward << " mm beyond the jaw's motion, " << 1000 * (tip_z - lip_z)
+                          << " mm past the lower lip");
+      CHECK(forward > 0.9 * c[kTongueOut] * 0.02 * face.scale);
+      if (names[t] == "tongueOut") {
+        saw_out = true;
+        CHECK(tip_z > lip_z + 0.008 * face.scale);
+        WARN("tongueOut: the tongue's tip " << 1000 * d[3 * tip + 2] << " mm forward (" << 1000 * forward
+                                            << " beyond the jaw's motion), " << 1000 * (tip_z - lip_z)
+                                            << " mm past the lower lip's rest front");
+      }
+      continue;
+    }
+    // Any other shape: the tongue rides the jaw rigidly, nothing else.
+    double worst = 0;
+    for (size_t i = 0; i < n; ++i)
+      worst = std::max(worst, (on_jaw(i) - Vec3(d[3 * i], d[3 * i + 1], d[3 * i + 2])).cwiseAbs().maxCoeff());
+    CHECK(worst < 1.1e-5);
+  }
+  CHECK(saw_out);
 }

@@ -21,50 +21,37 @@
 // tongue ride on the jaw: the shapes' jaw motions blended as I + sum of
 // w_i (M_i - I) (what the GLB's morph targets on the teeth do); the
 // eyeballs turn with the gaze shapes (eyeLook*) the same way; the tongue
-// does not come out (tongueOut moves the skin only here: the core bends
-// the tongue, not a rigid motion a component's matrix could carry).
+// out bends the tongue's own vertices (moveTongue).
 import { app, page, ui, showError } from './state.js';
 import { runJob } from './worker_client.js';
 import { onHeadShown, showStage, view } from './head_view.js';
 import { onAnimationStop, stopAnimation } from './animation.js';
 
-// "hello, nice to meet you": [time (s), viseme, weight] keys; the weights
-// cross-fade smoothly from one key to the next (viseme_sil is the rest).
-const PHRASE = [
-  [0.00, 'viseme_sil', 0], [0.12, 'viseme_kk', 0.5], [0.22, 'viseme_E', 0.9], [0.32, 'viseme_nn', 0.7],
-  [0.46, 'viseme_O', 1.0], [0.62, 'viseme_U', 0.5], [0.80, 'viseme_sil', 0],          // hello,
-  [0.92, 'viseme_nn', 0.8], [1.04, 'viseme_aa', 1.0], [1.16, 'viseme_I', 0.8], [1.28, 'viseme_SS', 0.9],  // nice
-  [1.38, 'viseme_DD', 0.8], [1.48, 'viseme_U', 0.8],                                   // to
-  [1.58, 'viseme_PP', 1.0], [1.72, 'viseme_I', 1.0], [1.84, 'viseme_DD', 0.7],         // meet
-  [1.92, 'viseme_I', 0.6], [2.08, 'viseme_U', 1.0], [2.30, 'viseme_sil', 0],            // you
-  [2.60, 'viseme_sil', 0],
-];
-// Blinks: start (s); each closes in 70 ms and opens in 130 ms, as people do.
-const BLINKS = [0.40, 2.20];
-const BLINK_CLOSE = 0.07, BLINK_OPEN = 0.13;
-const TALK_END = PHRASE[PHRASE.length - 1][0];
+// Talk plays the core's Talk clip (core/anim/clips.h: "hello, nice to
+// meet you", visemes cross-fading, two blinks), fetched with the shapes:
+// the same keys the exported GLB's "Talk" animation holds, one source for
+// both. {shapes, times, values, slopes} (values and slopes key-major).
+let talkClip = null;
 
-const smooth = (x) => x * x * (3 - 2 * x);
-
-// The weights at t seconds into Talk.
+// The weights at t seconds into Talk: glTF's cubic Hermite (CUBICSPLINE)
+// between the clip's keys, as a glTF player computes the GLB's clip.
 export function talkWeights(t) {
-  const w = {};
-  const add = (name, v) => { if (v > 0 && name !== 'viseme_sil') w[name] = (w[name] || 0) + v; };
+  const w = {}, c = talkClip;
+  if (!c) return w;
+  const T = c.times, n = c.shapes.length, last = T.length - 1;
+  const x = Math.min(Math.max(t, T[0]), T[last]);
   let k = 0;
-  while (k + 1 < PHRASE.length && PHRASE[k + 1][0] <= t) k++;
-  if (k + 1 < PHRASE.length) {
-    const [t0, a, wa] = PHRASE[k], [t1, b, wb] = PHRASE[k + 1];
-    const s = smooth(Math.min(1, Math.max(0, (t - t0) / (t1 - t0))));
-    add(a, (1 - s) * wa);
-    add(b, s * wb);
-  }
-  for (const b of BLINKS) {
-    const u = t - b;
-    const v = u < 0 ? 0 : u < BLINK_CLOSE ? smooth(u / BLINK_CLOSE) : u < BLINK_CLOSE + BLINK_OPEN ? 1 - smooth((u - BLINK_CLOSE) / BLINK_OPEN) : 0;
-    add('blink', v);
+  while (k + 1 < last && T[k + 1] <= x) k++;
+  const h = T[k + 1] - T[k], u = (x - T[k]) / h, u2 = u * u, u3 = u2 * u;
+  const h00 = 2 * u3 - 3 * u2 + 1, h10 = u3 - 2 * u2 + u, h01 = -2 * u3 + 3 * u2, h11 = u3 - u2;
+  for (let s = 0; s < n; s++) {
+    const i0 = k * n + s, i1 = (k + 1) * n + s;
+    const v = h00 * c.values[i0] + h10 * h * c.slopes[i0] + h01 * c.values[i1] + h11 * h * c.slopes[i1];
+    if (v > 0) w[c.shapes[s]] = v;
   }
   return w;
 }
+const talkEnd = () => (talkClip ? talkClip.times[talkClip.times.length - 1] : 0);
 
 const PRESETS = [...document.querySelectorAll('#expressions [data-preset]')].map((b) => b.dataset.preset);
 function groupOf(name) {
@@ -111,7 +98,8 @@ const ex = app.expressions = {
   restPositions: () => (baked ? baked.rest.slice() : null),
   shape: (name) => (baked && baked.shapes.get(name)) || null,
   talkWeights: (t) => talkWeights(t),
-  talkSeconds: TALK_END,
+  get talkSeconds() { return talkEnd(); },
+  tonguePositions: null,  // the tongue component's last positions (scan frame, before the jaw's matrix)
   // Tests: set weights as the presets and sliders do; switch the path and redraw.
   set: (weights) => setWeights(weights),
   setPath: (path) => { ex.path = path; ex.pathReason = 'set by setPath'; return fresh(baked) && draw(); },
@@ -182,7 +170,8 @@ function ensureShapes() {
       return null;
     }
     const shapes = new Map(r.shapes.map((s) => [s.name, { indices: s.indices, offsets: s.offsets, jaw: s.jawMatrix || null,
-                                                          eyes: s.eyeMatrices || null }]));
+                                                          eyes: s.eyeMatrices || null, tongue: s.tongueOffsets || null }]));
+    talkClip = (r.clips || []).find((c) => c.name === 'Talk') || null;
     const rest = new Float32Array(mesh.positions);
     const names = r.shapes.map((s) => s.name);
     baked = { fit, level, shapes, names, index: new Map(names.map((n, i) => [n, i])), rest, out: rest.slice(),
@@ -369,6 +358,30 @@ function moveJaw(b) {
   for (const i of app.jawComponents || []) app.viewer.set_component_matrix(i, m);
   ex.eyeMatrices = [0, 1].map((e) => blendMatrices(b, (s) => s.eyes && s.eyes[e]));
   (app.eyeComponents || []).forEach((i, e) => { if (i !== null && e < 2) app.viewer.set_component_matrix(i, ex.eyeMatrices[e]); });
+  moveTongue(b);
+}
+
+// The tongue out (tongueOut, viseme_TH) bends it, which no matrix carries:
+// its component's vertices are rest + sum of w_i * push_i (the worker's
+// tongueOffsets, before the jaw's motion: the jaw's matrix then carries
+// them, as the core's pose_tongue does). Sent only while pushed, and once
+// more to put it back.
+let tonguePushed = false;
+function moveTongue(b) {
+  const i = app.tongueComponent, c = app.componentsData, rest = c && c.tongue && c.tongue.positions;
+  if (i === null || i === undefined || !rest) return;
+  let out = null;
+  for (const [name, w] of Object.entries(ex.weights)) {
+    const s = w && b.shapes.get(name), push = s && s.tongue;
+    if (!push || push.length !== rest.length) continue;
+    if (!out) out = Float32Array.from(rest);
+    for (let k = 0; k < push.length; k++) out[k] += w * push[k];
+  }
+  if (!out && !tonguePushed) return;
+  const err = app.viewer.set_component_positions(i, out || rest);
+  if (err) { console.warn('the tongue not moved: ' + err); return; }
+  tonguePushed = !!out;
+  ex.tonguePositions = out || rest;
 }
 
 // What a frame cost on the page's side (the drawing itself is the GPU's).
@@ -474,7 +487,7 @@ async function startTalk() {
     // A pose only after the last one was drawn (a slow GPU: no blend thrown away).
     if (app.viewer.frames_drawn() === drawnAtUpload) { requestAnimationFrame(frame); return; }
     const t = (performance.now() - talkT0) / 1000;
-    if (t >= TALK_END) { stopTalk(); return; }
+    if (t >= talkEnd()) { stopTalk(); return; }
     ex.weights = talkWeights(t);
     if (!draw()) { stopTalk(); return; }
     drawnAtUpload = app.viewer.frames_drawn();

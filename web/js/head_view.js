@@ -50,6 +50,7 @@ export function showComponents(c) {
     if (err) errors.push(err); else app.components++;
   };
   app.jawComponents = [];
+  app.tongueComponent = null;  // the tongue's component number (expressions.js bends it out)
   // The eyeballs turn with the gaze shapes (expressions.js): their
   // component numbers, the left eye's first ([null] where one failed).
   app.eyeComponents = [];
@@ -67,6 +68,7 @@ export function showComponents(c) {
     const before = app.components;
     add(m, tex);
     if (app.components > before) app.jawComponents.push(before);
+    if (app.components > before && m === c.tongue) app.tongueComponent = before;
   }
   if (errors.length) console.warn('components not shown:', errors.join('; '));
   app.componentTextures = {

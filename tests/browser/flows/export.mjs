@@ -58,7 +58,7 @@ async function run(s) {
     check('"Distance map (PLY)" downloads level 3 coloured by distance, measured vertices exactly', ok, detail);
   }
   // "Head (GLB)": the chosen level (3) for avatar tools, valid for the
-  // Khronos validator, with the parts' nodes.
+  // Khronos validator, with the parts' nodes and the clips (core/anim/clips.h).
   {
     await page.click('#btn-export-glb');
     await page.waitForFunction((n) => window.likeness.downloads.length >= n + 5, handed, { timeout: JOB_TIMEOUT_MS });
@@ -71,10 +71,13 @@ async function run(s) {
       const json = JSON.parse(glb.toString('utf8', 20, 20 + glb.readUInt32LE(12)));
       const names = json.nodes.map((n) => n.name);
       const head = json.accessors[json.meshes[json.nodes[names.indexOf('HeadMesh')].mesh].primitives[0].attributes.POSITION].count;
-      ok = v.issues.numErrors === 0 && head === fit.levels[2] && ['Neck', 'LeftEye', 'RightEye', 'Jaw', 'Tongue'].every((n) => names.includes(n));
-      detail = `${glb.length} bytes; validator ${v.issues.numErrors} errors, ${v.issues.numWarnings} warnings; head ${head} vertices; nodes ${names.join(' ')}`;
+      const clips = (json.animations || []).map((a) => a.name);
+      ok = v.issues.numErrors === 0 && head === fit.levels[2] && ['Neck', 'LeftEye', 'RightEye', 'Jaw', 'Tongue'].every((n) => names.includes(n)) &&
+        clips.join(' ') === 'Talk Blink Gaze';
+      detail = `${glb.length} bytes; validator ${v.issues.numErrors} errors, ${v.issues.numWarnings} warnings; head ${head} vertices; nodes ${names.join(' ')}; ` +
+        `animations ${clips.join(' ') || 'none'}`;
     }
-    check('"Head (GLB)" downloads level 3 with eyes, teeth and tongue, valid glTF', ok, detail);
+    check('"Head (GLB)" downloads level 3 with eyes, teeth and tongue and the Talk, Blink and Gaze animations, valid glTF', ok, detail);
   }
   page.off('download', onDownload);
 }

@@ -339,6 +339,35 @@ async function run(s) {
         'eye components ' + JSON.stringify(g.eyeLookOutLeft.eyes) + '; ' + Object.entries(g).map(([n, v]) => n + ': ' + v.turns.map((t, i) => (i ? 'right' : 'left') + ' eye ' + r1(t.deg) + ' deg (left ' + r1(t.left) +
           ', up ' + r1(t.up) + ')').join(', ')).join('; '));
 
+  // tongueOut bends the tongue out: its component's own vertices are
+  // pushed (before the jaw's matrix, which carries them as the core's
+  // pose_tongue does); the frontmost along the face's facing by over 15 mm
+  // (scan units are metres here), its rearmost not at all; smile puts the
+  // tongue back at rest exactly.
+  const tongueAfter = async (w) => {
+    await page.evaluate((x) => window.likeness.expressions.set(x), w);
+    return page.evaluate(() => {
+      const a = window.likeness, e = a.expressions, f = a.fit.headFacing;
+      const rest = a.componentsData && a.componentsData.tongue && a.componentsData.tongue.positions, p = e.tonguePositions;
+      if (!rest || !p) return { component: a.tongueComponent, none: true };
+      const along = (arr, i) => arr[3 * i] * f[0] + arr[3 * i + 1] * f[1] + arr[3 * i + 2] * f[2];
+      let tip = 0, root = 0, moved = 0;
+      for (let i = 0; i < rest.length / 3; i++) {
+        if (along(rest, i) > along(rest, tip)) tip = i;
+        if (along(rest, i) < along(rest, root)) root = i;
+        moved = Math.max(moved, Math.hypot(p[3 * i] - rest[3 * i], p[3 * i + 1] - rest[3 * i + 1], p[3 * i + 2] - rest[3 * i + 2]));
+      }
+      return { component: a.tongueComponent, tip: along(p, tip) - along(rest, tip), root: along(p, root) - along(rest, root), moved };
+    });
+  };
+  const tongueOut = await tongueAfter({ tongueOut: 1 });
+  if (SHOT_DIR) await page.locator('#canvas').screenshot({ path: path.join(SHOT_DIR, 'page_expression_tongue_out.png') });
+  const tongueBack = await tongueAfter({ smile: 1 });
+  check('tongueOut pushes the tongue out in the page (its tip forward by over 15 mm, its root still); smile puts it back at rest exactly',
+        tongueOut.component !== null && tongueOut.tip > 0.015 && Math.abs(tongueOut.root) < 1e-6 && tongueBack.moved === 0,
+        `tongue component ${tongueOut.component}; tongueOut: tip ${(1000 * (tongueOut.tip || 0)).toFixed(1)} mm forward, root ` +
+        `${(1000 * (tongueOut.root || 0)).toFixed(3)} mm; after smile the tongue's vertices differ from rest by ${tongueBack.moved}`);
+
   // Neutral: the rest positions exactly (the fitted level's), and the rest image.
   await page.click('[data-preset="neutral"]');
   await page.waitForTimeout(200);
@@ -384,7 +413,9 @@ async function run(s) {
         `(${visemes.join(' ')}), blink peak ${(sequence.peaks.blink || 0).toFixed(2)}, largest step in 1 ms ${sequence.jump.toFixed(4)}; ` +
         `max |blend - rest| ${afterTalk.d}`);
   await page.click('#btn-talk');
-  await page.waitForFunction(() => window.likeness.expressions.talkFrames >= 5);
+  // This Talk's frames (talkFrames still holds the last Talk's until this
+  // one starts, so the count alone could be read too early).
+  await page.waitForFunction(() => window.likeness.expressions.talking && window.likeness.expressions.talkFrames >= 5);
   const playing = await expr(page);
   await page.click('#btn-talk');
   const stoppedAt = (await expr(page)).talkFrames;
@@ -395,7 +426,7 @@ async function run(s) {
         !stopped.talking && stopped.talkFrames === stoppedAt && stopped.pressed === 'false' && stopRest.d === 0,
         `talking ${playing.talking} -> ${stopped.talking}, frames ${stoppedAt} -> ${stopped.talkFrames}, max |blend - rest| ${stopRest.d}`);
   await page.click('#btn-talk');
-  await page.waitForFunction(() => window.likeness.expressions.talkFrames >= 3);
+  await page.waitForFunction(() => window.likeness.expressions.talking && window.likeness.expressions.talkFrames >= 3);
   await page.check('#animate');
   await page.waitForTimeout(500);
   const byAnimate = await page.evaluate(() => ({ talking: window.likeness.expressions.talking, running: window.likeness.animation.running,

@@ -8,8 +8,11 @@
 // Jaw, teeth, tongue), the head's vertex count, a textured skin, and a
 // WebGL render that shows the head; its morphTargetDictionary holds every
 // expression, ARKit blendshape (Apple's names) and viseme of the muscle
-// layer, and jawOpen and smile at weight 1 each change the render; the file
-// at level 2 with all of them and the textures is under 8 MB.
+// layer, and jawOpen and smile at weight 1 each change the render; its Talk
+// animation played by three.js's AnimationMixer gives the head the
+// sequence's weights at sampled times; the tongue's tongueOut target pushes
+// its tip out; the file at level 2 with all of them and the textures is
+// under 8 MB.
 import { execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import { createRequire } from 'node:module';
@@ -116,6 +119,46 @@ window.result = (async () => {
     return changed / (256 * 256);
   };
   const jawChanged = changedBy('jawOpen'), smileChanged = changedBy('smile');
+  // The Talk clip played by three.js's AnimationMixer: the head's
+  // morphTargetInfluences at sampled times (compared below with the
+  // sequence's weights); then everything back at rest.
+  const clips = gltf.animations.map((a) => a.name + ':' + a.tracks.length);
+  const talk = THREE.AnimationClip.findByName(gltf.animations, 'Talk');
+  const SAMPLED = ['viseme_nn', 'viseme_aa', 'viseme_O', 'viseme_U', 'viseme_PP', 'viseme_I', 'blink', 'jawOpen', 'smile'];
+  const talkAt = {};
+  let talkDuration = 0, talkChanged = 0;
+  if (talk && head) {
+    talkDuration = talk.duration;
+    const mixer = new THREE.AnimationMixer(gltf.scene);
+    mixer.clipAction(talk).play();
+    for (const t of [0.47, 0.98, 1.65]) {
+      mixer.setTime(t);
+      talkAt[t] = Object.fromEntries(SAMPLED.map((n) => [n, head.morphTargetInfluences[head.morphTargetDictionary[n]]]));
+    }
+    mixer.setTime(1.04);  // viseme_aa at 1: the mouth open
+    const posed = draw();
+    for (let i = 0; i < posed.length; i += 4) if (Math.abs(posed[i] - rest[i]) + Math.abs(posed[i + 1] - rest[i + 1]) + Math.abs(posed[i + 2] - rest[i + 2]) > 30) talkChanged++;
+    talkChanged /= 256 * 256;
+    mixer.stopAllAction();
+    mixer.uncacheRoot(gltf.scene);
+    gltf.scene.traverse((o) => { if (o.morphTargetInfluences) o.morphTargetInfluences.fill(0); });
+  }
+  // The tongue's own morph target: tongueOut at 1 pushes its frontmost
+  // vertex forward (+z, the face's front), by three.js's own morphing.
+  let tongueForward = 0, tongueNames = [];
+  const tongue = gltf.scene.getObjectByName('Tongue');
+  if (tongue && tongue.isMesh && tongue.morphTargetDictionary) {
+    tongueNames = Object.keys(tongue.morphTargetDictionary);
+    const pos = tongue.geometry.attributes.position, v = new THREE.Vector3();
+    let tip = 0; for (let i = 1; i < pos.count; i++) if (pos.getZ(i) > pos.getZ(tip)) tip = i;
+    const out = tongue.morphTargetDictionary.tongueOut;
+    if (out !== undefined) {
+      tongue.morphTargetInfluences[out] = 1;
+      tongue.getVertexPosition(tip, v);
+      tongueForward = v.z - pos.getZ(tip);
+      tongue.morphTargetInfluences[out] = 0;
+    }
+  }
   // The skeleton: the head is a SkinnedMesh on Neck, Head, LeftEye, RightEye,
   // Jaw; turning the Jaw bone 0.3 rad about x lowers the skinned head's
   // lowest-moving vertices (skinned by three.js itself: the chin), leaves the
@@ -147,7 +190,8 @@ window.result = (async () => {
     head.morphTargetInfluences[head.morphTargetDictionary.smile] = 1;
     draw();
   }
-  return { names, meshes, headVertices, skinTextured, litFraction: lit / (256 * 256), morphs, jawChanged, smileChanged, bones, boneChanged, chinDrop, crownMoved };
+  return { names, meshes, headVertices, skinTextured, litFraction: lit / (256 * 256), morphs, jawChanged, smileChanged, bones, boneChanged, chinDrop, crownMoved,
+           clips, talkDuration, talkAt, talkChanged, tongueForward, tongueNames };
 })().catch((e) => ({ error: String(e && e.message || e) }));
 </script>` });
     }
@@ -178,6 +222,36 @@ window.result = (async () => {
   check('... the head is skinned to the skeleton Neck, Head, LeftEye, RightEye, Jaw; turning the Jaw bone drops the chin and changes the render',
         (got.bones || []).join(' ') === 'Neck Head LeftEye RightEye Jaw' && got.chinDrop > 0.005 && got.crownMoved === 0 && got.boneChanged > 0.001,
         `bones ${(got.bones || []).join(' ')}; Jaw 0.3 rad: chin ${(1000 * (got.chinDrop || 0)).toFixed(1)} mm down, crown moved ${got.crownMoved} m, ${(100 * (got.boneChanged || 0)).toFixed(2)}% of the pixels changed`);
+  // Talk's weights at the sampled times, from its keys (core/anim/clips.cpp:
+  // [0.46 viseme_O 1.0] -> [0.62 viseme_U 0.5], [0.92 viseme_nn 0.8] ->
+  // [1.04 viseme_aa 1.0], [1.58 viseme_PP 1.0] -> [1.72 viseme_I 1.0],
+  // smoothstep between keys; a blink closing from 0.40 to 0.47), spelled
+  // here independently: a channel on the wrong targets or times fails.
+  const sm = (u) => u * u * (3 - 2 * u);
+  const want = {
+    0.47: { viseme_O: 1 - sm(0.01 / 0.16), viseme_U: 0.5 * sm(0.01 / 0.16), blink: 1 },
+    0.98: { viseme_nn: 0.4, viseme_aa: 0.5 },
+    1.65: { viseme_PP: 0.5, viseme_I: 0.5 },
+  };
+  let worst = 0;
+  const rows = [];
+  for (const [t, w] of Object.entries(want)) {
+    const got1 = (got.talkAt || {})[t] || {};
+    for (const n of ['viseme_nn', 'viseme_aa', 'viseme_O', 'viseme_U', 'viseme_PP', 'viseme_I', 'blink', 'jawOpen', 'smile'])
+    {
+      const d = Math.abs(got1[n] - (w[n] || 0));
+      worst = Math.max(worst, Number.isFinite(d) ? d : Infinity);  // a missing influence fails
+    }
+    rows.push(t + ' s: ' + Object.entries(got1).filter(([, x]) => x > 0.001).map(([n, x]) => n + ' ' + x.toFixed(3)).join(', '));
+  }
+  check('the GLB\'s animations (Talk, Blink, Gaze) play in three.js: AnimationMixer on Talk gives the head the sequence\'s weights at sampled times, and the mouth moves',
+        (got.clips || []).some((c) => c.startsWith('Talk:')) && (got.clips || []).some((c) => c.startsWith('Blink:')) &&
+        Math.abs(got.talkDuration - 2.6) < 1e-3 && worst < 1e-3 && got.talkChanged > 0.001,
+        `clips ${(got.clips || []).join(' ')} (name:tracks), Talk ${got.talkDuration} s; ${rows.join('; ')}; largest difference ${worst.toExponential(2)}; ` +
+        `at 1.04 s ${(100 * (got.talkChanged || 0)).toFixed(2)}% of the pixels changed`);
+  check('the tongue has its own tongueOut target: at weight 1 three.js moves its tip forward by over 15 mm; smile, brows are not on it',
+        got.tongueForward > 0.015 && got.tongueNames.includes('tongueOut') && !got.tongueNames.includes('smile') && !got.tongueNames.includes('browInnerUp'),
+        `tip ${(1000 * (got.tongueForward || 0)).toFixed(1)} mm forward; the tongue's targets: ${(got.tongueNames || []).length} (${(got.tongueNames || []).slice(0, 6).join(', ')}, ...)`);
   check('the level-2 GLB with every shape and its textures is under 8 MB', made.glb.length < 8 * 1048576,
         `${(made.glb.length / 1048576).toFixed(2)} MB`);
   await page.close();
