@@ -65,7 +65,7 @@ bool parse_fit_levels(const Args& args, ShapeFitOptions& fit) {
 // max, and edges grown by more than 15 deg), and the self-crossing pairs of
 // levels 0..3 (head/surface_quality.h).
 constexpr double kCreaseDeg = 15;
-const char* const kFoldRegions[] = {"face", "cheeks", "eyes", "nose", "brow"};
+const char* const kFoldRegions[] = {"face", "cheeks", "eyes", "nose", "brow", "lips", "eye pockets"};
 
 struct FoldFigures {
   std::map<std::string, AddedFolds> regions;
@@ -87,7 +87,7 @@ bool measure_folds(const GenericHead& generic, const TriMesh& mesh, FoldFigures&
 }
 
 struct FoldSums {
-  std::map<std::string, double> p95, max, creased;
+  std::map<std::string, double> p95, max, creased, crossings_in;
   double crossings = 0;
   int n = 0;
 };
@@ -97,6 +97,7 @@ void add_folds(const FoldFigures& f, FoldSums& sums) {
     sums.p95[name] += r.p95_deg;
     sums.max[name] += r.max_deg;
     sums.creased[name] += r.creased;
+    sums.crossings_in[name] += r.crossings;
   }
   sums.crossings += f.crossings;
   ++sums.n;
@@ -110,7 +111,12 @@ void print_fold_means(const FoldSums& sums, const char* label) {
     if (it != sums.p95.end())
       std::printf(" %s %.2f / %.1f / %.1f", r, it->second / sums.n, sums.max.at(r) / sums.n, sums.creased.at(r) / sums.n);
   }
-  std::printf("; crossing pairs %.1f\n", sums.crossings / sums.n);
+  std::printf("; crossing pairs %.1f (levels 0..3); level-3 crossings by region:", sums.crossings / sums.n);
+  for (const char* r : kFoldRegions) {
+    auto it = sums.crossings_in.find(r);
+    if (it != sums.crossings_in.end()) std::printf(" %s %.1f", r, it->second / sums.n);
+  }
+  std::printf("\n");
 }
 
 void print_folds(const char* label, const FoldFigures& f) {
@@ -118,6 +124,11 @@ void print_folds(const char* label, const FoldFigures& f) {
   for (const char* r : kFoldRegions) {
     auto it = f.regions.find(r);
     if (it != f.regions.end()) std::printf(" %s %.1f / %.1f / %d", r, it->second.p95_deg, it->second.max_deg, it->second.creased);
+  }
+  std::printf("; level-3 crossings by region, generic -> fit:");
+  for (const char* r : kFoldRegions) {
+    auto it = f.regions.find(r);
+    if (it != f.regions.end()) std::printf(" %s %d -> %d", r, it->second.generic_crossings, it->second.crossings);
   }
   std::printf("; crossing pairs %d\n", f.crossings);
 }

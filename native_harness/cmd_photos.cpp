@@ -351,9 +351,11 @@ int run_photos(const Args& args) {
     if (measure_added_folds(generic, r.fit.mesh.positions, 3, 15.0, added)) {
       std::string line;
       for (const AddedFolds& g : added) {
-        rep["folds"]["added"][g.region] = {{"p95_deg", g.p95_deg}, {"max_deg", g.max_deg}, {"edges_over_15_deg", g.creased}};
-        char buf[96];
-        std::snprintf(buf, sizeof buf, " %s %.1f / %.1f / %d", g.region.c_str(), g.p95_deg, g.max_deg, g.creased);
+        rep["folds"]["added"][g.region] = {{"p95_deg", g.p95_deg}, {"max_deg", g.max_deg}, {"edges_over_15_deg", g.creased},
+                                           {"level3_crossings", {g.generic_crossings, g.crossings}}};
+        char buf[128];
+        std::snprintf(buf, sizeof buf, " %s %.1f / %.1f / %d (crossings %d -> %d)", g.region.c_str(), g.p95_deg,
+                      g.max_deg, g.creased, g.generic_crossings, g.crossings);
         line += buf;
       }
       int crossings[2] = {0, 0};

@@ -2,6 +2,7 @@
 
 #include "mesh/topology.h"
 #include "multires/multires.h"
+#include "raycast/self_intersection.h"
 
 #include <algorithm>
 #include <cmath>
@@ -55,6 +56,18 @@ Status measure_added_folds(const GenericHead& generic, const std::vector<Vec3>& 
       }
     sets.emplace_back("eyes", eyes);
   }
+  {
+    std::vector<char> lips(nv, 0), pockets(nv, 0);
+    auto it = a.regions.find("lips");
+    if (it != a.regions.end())
+      for (int v : it->second)
+        if (v >= 0 && size_t(v) < nv) lips[size_t(v)] = 1;
+    for (size_t v = 0; v < nv; ++v)
+      for (const EyeSocket* s : {&a.eye_left, &a.eye_right})
+        if ((m.positions[v] - s->center).norm() <= s->radius + 0.0012) pockets[v] = 1;
+    sets.emplace_back("lips", lips);
+    sets.emplace_back("eye pockets", pockets);
+  }
   ButterflyCreases creases;
   for (const CreaseCurve& c : a.creases) add_crease_polyline(c.vertices, c.closed, creases);
   TriMesh fit_control = m;
@@ -70,6 +83,10 @@ Status measure_added_folds(const GenericHead& generic, const std::vector<Vec3>& 
   if (!s) return with_context(s, "added folds");
   const std::vector<double> dg = edge_dihedrals_deg(gl, topo), df = edge_dihedrals_deg(fl, topo);
   const int per_control = 1 << (2 * level);  // a level-L face's ancestor is its index over 4^L
+  std::vector<std::array<int, 2>> crossing[2];
+  s = find_self_intersections(gl, crossing[0]);
+  if (s) s = find_self_intersections(fl, crossing[1]);
+  if (!s) return with_context(s, "added folds");
   for (const auto& [name, vin] : sets) {
     AddedFolds r;
     r.region = name;
@@ -86,6 +103,12 @@ Status measure_added_folds(const GenericHead& generic, const std::vector<Vec3>& 
       grow.push_back(df[e] - dg[e]);
       r.creased += df[e] - dg[e] > crease_deg;
     }
+    auto face_in = [&, &vin = vin](int face) {
+      const Tri& t = m.triangles[size_t(face / per_control)];
+      return vin[size_t(t[0])] && vin[size_t(t[1])] && vin[size_t(t[2])];
+    };
+    for (const auto& p : crossing[0]) r.generic_crossings += face_in(p[0]) || face_in(p[1]);
+    for (const auto& p : crossing[1]) r.crossings += face_in(p[0]) || face_in(p[1]);
     r.edges = int(grow.size());
     if (!grow.empty()) {
       std::sort(grow.begin(), grow.end());

@@ -7,7 +7,11 @@
 //
 // Regions (control faces with all three corners in): face, cheeks, brow,
 // nose (annotations), eyes (skin 1.2-22 mm outside an eyeball's socket
-// sphere, as head/surface_quality.h; chosen at the generic's positions).
+// sphere, as head/surface_quality.h; chosen at the generic's positions),
+// lips (annotation), eye pockets (within 1.2 mm of the socket sphere:
+// hidden behind the eyeballs). Crossings: level-L self-intersecting pairs
+// (raycast/self_intersection.h) with a face in the region, the fit's and
+// the generic's.
 #pragma once
 #include "common/status.h"
 #include "head/head_model.h"
@@ -22,6 +26,7 @@ struct AddedFolds {
   int edges = 0;
   double p95_deg = 0, max_deg = 0;  // growth of the dihedral angle over the generic's (deg; < 0 = smoother)
   int creased = 0;                  // edges whose angle grew by more than crease_deg
+  int crossings = 0, generic_crossings = 0;  // level-L crossing pairs touching the region
 };
 
 // fitted: #V positions of the generic head's control mesh. level 1..4.
