@@ -16,7 +16,8 @@
 // its own cell's node that holds it best: its position projected into the
 // triangle's plane, barycentrics clamped to >= 0 and summed to 1; a node's
 // own vertex gets weight 1 on it. Only the triangles round the vertex's own
-// node are tried, so a lip is never attached across the mouth.
+// node are tried: a vertex is never attached to a far part of the head
+// (a cell can still reach across the mouth slit through the mouth bag).
 //
 // Shapes: control #V; a level's nodes K; attachment #V by K (rows sum to 1);
 // laplacian K by K.
