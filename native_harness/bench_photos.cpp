@@ -5,12 +5,15 @@
 // stereo points on real faces (Fig. 7: medians 2.33 / 6.38 / 0.55, units
 // not stated); they are printed for reference, not as a like-for-like goal.
 #include "command.h"
+#include "photos_fit_options.h"
 #include "synthetic_session_images.h"
 #include "timing.h"
 
 #include "io/io.h"
 
 #include "head/generic_head.h"
+#include "head/surface_quality.h"
+#include "photos/added_folds.h"
 #include "photos/ground_truth.h"
 #include "photos/photos_job.h"
 #include "photos/synthetic_outlines.h"
@@ -47,6 +50,87 @@ std::vector<std::string> split_list(const std::string& s) {
     a = b + 1;
   }
   return out;
+}
+
+// --photos-coarse N:S[,N:S...] and --photos-schedule S[,S...]|none (photos_fit_options.h).
+bool parse_fit_levels(const Args& args, ShapeFitOptions& fit) {
+  std::string why;
+  if (lk::cli::parse_fit_levels(args.get("photos-coarse"), args.get("photos-schedule"), fit, why)) return true;
+  std::printf("  --photos-coarse / --photos-schedule: %s\n", why.c_str());
+  return false;
+}
+
+// Folds (issue 37): per region, how much the fit grew the dihedral angles
+// of the smooth level 3 over the generic head's (photos/added_folds.h: p95,
+// max, and edges grown by more than 15 deg), and the self-crossing pairs of
+// levels 0..3 (head/surface_quality.h).
+constexpr double kCreaseDeg = 15;
+const char* const kFoldRegions[] = {"face", "cheeks", "eyes", "nose", "brow", "lips", "eye pockets"};
+
+struct FoldFigures {
+  std::map<std::string, AddedFolds> regions;
+  int crossings = 0;
+};
+
+bool measure_folds(const GenericHead& generic, const TriMesh& mesh, FoldFigures& out) {
+  out = {};
+  std::vector<AddedFolds> added;
+  if (!measure_added_folds(generic, mesh.positions, 3, kCreaseDeg, added)) return false;
+  for (const AddedFolds& r : added) out.regions[r.region] = r;
+  GenericHead h = generic;
+  h.mesh.positions = mesh.positions;
+  h.mesh.normals.clear();
+  HeadSurfaceQuality q;
+  if (!measure_head_surface(h, 3, q)) return false;
+  for (int c : q.crossing_pairs) out.crossings += c;
+  return true;
+}
+
+struct FoldSums {
+  std::map<std::string, double> p95, max, creased, crossings_in;
+  double crossings = 0;
+  int n = 0;
+};
+
+void add_folds(const FoldFigures& f, FoldSums& sums) {
+  for (const auto& [name, r] : f.regions) {
+    sums.p95[name] += r.p95_deg;
+    sums.max[name] += r.max_deg;
+    sums.creased[name] += r.creased;
+    sums.crossings_in[name] += r.crossings;
+  }
+  sums.crossings += f.crossings;
+  ++sums.n;
+}
+
+void print_fold_means(const FoldSums& sums, const char* label) {
+  if (!sums.n) return;
+  std::printf("  folds added, mean over %d fits (%s), p95 / max deg / edges > %.0f deg:", sums.n, label, kCreaseDeg);
+  for (const char* r : kFoldRegions) {
+    auto it = sums.p95.find(r);
+    if (it != sums.p95.end())
+      std::printf(" %s %.2f / %.1f / %.1f", r, it->second / sums.n, sums.max.at(r) / sums.n, sums.creased.at(r) / sums.n);
+  }
+  std::printf("; crossing pairs %.1f (levels 0..3); level-3 crossings by region:", sums.crossings / sums.n);
+  for (const char* r : kFoldRegions) {
+    auto it = sums.crossings_in.find(r);
+    if (it != sums.crossings_in.end()) std::printf(" %s %.1f", r, it->second / sums.n);
+  }
+  std::printf("\n");
+}
+
+void print_folds(const char* label, const FoldFigures& f) {
+  std::printf("       folds added (%s), p95 / max deg / edges > %.0f deg:", label, kCreaseDeg);
+  for (const char* r : kFoldRegions) {
+    auto it = f.regions.find(r);
+    if (it != f.regions.end()) std::printf(" %s %.1f / %.1f / %d", r, it->second.p95_deg, it->second.max_deg, it->second.creased);
+  }
+  std::printf("; level-3 crossings by region, generic -> fit:");
+  for (const char* r : kFoldRegions) {
+    auto it = f.regions.find(r);
+    if (it != f.regions.end()) std::printf(" %s %d -> %d", r, it->second.generic_crossings, it->second.crossings);
+  }
+  std::printf("; crossing pairs %d\n", f.crossings);
 }
 
 // RMS distance of the bundle-adjusted landmarks (seen in >= 2 photos) from
@@ -137,6 +221,10 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
   std::array<double, kBuckets> hidden_sum{}, hidden_n{};
   double sums[9] = {0};
   int done = 0;
+  FoldFigures generic_folds;
+  if (measure_folds(generic, generic.mesh, generic_folds))
+    std::printf("  the generic head: crossing pairs %d (levels 0..3)\n", generic_folds.crossings);
+  FoldSums fold_sums;
   for (int seed : session.value("seeds", std::vector<int>{})) {
     GenericHead person;
     SyntheticViewsOptions vo;
@@ -201,6 +289,7 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
     // --photos-no-slide: the map's slide model left out; --photos-no-slide-sigma: its scatter as weights left out.
     opt.use_slide = !args.has("photos-no-slide");
     opt.calib.use_slide_sigma = !args.has("photos-no-slide-sigma");
+    if (!parse_fit_levels(args, opt.fit)) return 1;
     PhotosJobResult r;
     const double t0 = cpu_clock_ms();
     const Status st = run_photos_job(generic, mp_map, photos, opt, r);
@@ -250,6 +339,11 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
     std::printf("       yaw/pitch deg, truth -> recovered:%s\n", views.c_str());
     std::printf("       scale %.3f; BA landmarks from the generic's %.2f mm rms; landmark error %.2f -> %.2f px (calibration), %.2f -> %.2f px (shape fit)\n", sf.scale,
                 landmark_pull_mm(r.calib, generic.mesh, mp_lms), r.calib.initial_rms_px, r.calib.final_rms_px, r.fit.initial_rms_px, r.fit.final_rms_px);
+    FoldFigures folds;
+    if (measure_folds(generic, r.fit.mesh, folds)) {
+      print_folds("fit", folds);
+      add_folds(folds, fold_sums);
+    }
     const double v[9] = {std::abs(focal_err), gu.face.mean, fu.face.mean, ga.face.mean, fa.face.mean,
                          gu.head.mean,        fu.head.mean, ga.head.mean, fa.head.mean};
     for (int k = 0; k < 9; ++k) sums[k] += v[k];
@@ -261,6 +355,7 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
               "head unaligned %.2f -> %.2f, aligned %.2f -> %.2f mm (generic -> fit)\n",
               done, sums[0] / d, 1000 * sums[1] / d, 1000 * sums[2] / d, 1000 * sums[3] / d, 1000 * sums[4] / d,
               1000 * sums[5] / d, 1000 * sums[6] / d, 1000 * sums[7] / d, 1000 * sums[8] / d);
+  print_fold_means(fold_sums, "fit");
   std::printf("  detector vs truth, mean px (count) by |yaw| <15 / <35 / <60 / >=60 deg, points facing the camera:\n");
   for (const std::string& g : gnames) {
     std::printf("    %-8s", g.c_str());
@@ -344,6 +439,10 @@ int run_bench_photos(const Args& args) {
   double sum_gen = 0, sum_head_gen = 0, sum_focal = 0, sum_rot = 0;
   double sum_fit_m[2] = {0, 0}, sum_head_fit_m[2] = {0, 0}, sum_head_p95_m[2] = {0, 0}, sum_out[2] = {0, 0};
   double sum_stereo_ms = 0, sum_patch_fit[2] = {0, 0};
+  FoldFigures generic_folds;
+  if (measure_folds(generic, generic.mesh, generic_folds))
+    std::printf("  the generic head: crossing pairs %d (levels 0..3)\n", generic_folds.crossings);
+  FoldSums fold_sums[2];
   for (int seed = first_seed; seed < first_seed + seeds; ++seed) {
     GenericHead person;
     SyntheticViewsOptions vo;
@@ -359,6 +458,7 @@ int run_bench_photos(const Args& args) {
     opt.silhouettes.facet_equations = args.has("photos-sil-facets");
     opt.fit.lambda_features = lambda_features;
     opt.stereo = stereo;
+    if (!parse_fit_levels(args, opt.fit)) return 1;
     // The views rendered as synth-photos writes them (Lambert, light from each camera's upper left).
     std::vector<Image> images;
     double render_ms = 0;
@@ -430,6 +530,11 @@ int run_bench_photos(const Args& args) {
                   "(shape fit); %d photos used\n",
                   sf.scale, r.calib.initial_rms_px, r.calib.final_rms_px, r.fit.initial_rms_px, r.fit.final_rms_px,
                   r.calib.num_used());
+      FoldFigures folds;
+      if (measure_folds(generic, r.fit.mesh, folds)) {
+        print_folds(with_sil ? "fit+sil" : "fit", folds);
+        add_folds(folds, fold_sums[with_sil]);
+      }
       if (stereo) {
         // The patches against the truth (brought by the fit's similarity): the stereo's own accuracy.
         MeshBvh truth_bvh;
@@ -470,6 +575,7 @@ int run_bench_photos(const Args& args) {
                 stereo ? (", stereo patches to the fit median " + std::to_string(1000 * sum_patch_fit[k] / seeds).substr(0, 5) +
                           " mm").c_str() : "");
   }
+  for (int k = 0; k < 2; ++k) print_fold_means(fold_sums[k], k ? "fit+sil" : "fit");
   if (stereo) std::printf("  stereo: %.0f ms CPU per session (render not counted)\n", sum_stereo_ms / seeds);
   std::printf("  issue 37 goal: face mean <= 1.0 mm, visible head mean <= 2.5 mm\n");
   std::printf("  paper Fig. 7 (stereo points to the fitted face, median; real faces, LM): 2.33 6.38 0.55\n");
@@ -477,7 +583,7 @@ int run_bench_photos(const Args& args) {
 }
 
 BenchRegistrar reg({"photos", "photos to head on synthetic sessions: camera errors, face distances, stage times "
-                              "(--photos-seeds N --photos-cameras C --photos-noise-px S --photos-map vertices|interior --photos-stiffness-scale K --photos-first-seed S --photos-silhouettes both|on|off --photos-lambda-sil L --photos-mask-grow PX --photos-sil-facets --photos-stereo --photos-lambda-features L; --photos-detected DIR: real-detector points on synth-photos renders, made by tests/browser/detect_synth_photos.mjs, with --photos-detected-map FILE --photos-no-slide --photos-no-slide-sigma --photos-true-cameras --photos-drop GROUP)",
+                              "(--photos-seeds N --photos-cameras C --photos-noise-px S --photos-map vertices|interior --photos-stiffness-scale K --photos-first-seed S --photos-silhouettes both|on|off --photos-lambda-sil L --photos-mask-grow PX --photos-sil-facets --photos-stereo --photos-lambda-features L --photos-coarse N:S,... --photos-schedule S,...|none; --photos-detected DIR: real-detector points on synth-photos renders, made by tests/browser/detect_synth_photos.mjs, with --photos-detected-map FILE --photos-no-slide --photos-no-slide-sigma --photos-true-cameras --photos-drop GROUP)",
                     run_bench_photos});
 
 }  // namespace

@@ -2,11 +2,14 @@
 // person's head (issue 37, fua1998; core/photos/photos_job.h).
 // likeness synth-photos: a synthetic photo session with its truth, to try it.
 #include "command.h"
+#include "photos_fit_options.h"
 
 #include "head/generic_head.h"
+#include "head/surface_quality.h"
 #include "image/image.h"
 #include "io/exif.h"
 #include "io/io.h"
+#include "photos/added_folds.h"
 #include "photos/landmark_learning.h"
 #include "photos/photos_job.h"
 #include "photos_texture.h"
@@ -115,7 +118,8 @@ Status write_silhouette_check(const std::string& path, const std::string& photo_
 int run_photos(const Args& args) {
   const std::string cmd = "photos";
   if (!only_known_options(cmd, args, {"points", "photos", "masks", "masks-from-photos", "silhouette-check", "map", "out",
-                                      "levels", "focal-px", "texture-size", "no-texture", "stereo", "no-stereo"}))
+                                      "levels", "focal-px", "texture-size", "no-texture", "stereo", "no-stereo", "coarse",
+                                      "schedule"}))
     return 2;
   const std::vector<std::string> points_paths = args.get_all("points"), photo_paths = args.get_all("photos"),
                                  mask_paths = args.get_all("masks");
@@ -221,6 +225,10 @@ int run_photos(const Args& args) {
   }
   PhotosJobOptions opt;
   opt.stereo = stereo;
+  {
+    std::string why;
+    if (!parse_fit_levels(args.get("coarse"), args.get("schedule"), opt.fit, why)) return fail(cmd, why);
+  }
   opt.calib.focal_prior_px = focal_px;
   if (focal_px == 0 && !exif_focals.empty()) {
     std::sort(exif_focals.begin(), exif_focals.end());
@@ -309,7 +317,7 @@ int run_photos(const Args& args) {
               {"shape_fit_rms_px", {r.fit.initial_rms_px, r.fit.final_rms_px}}, {"notes", notes},
               {"seconds", seconds}, {"stages", Json::array()}};
   for (const ShapeFitStage& st : r.fit.stages)
-    rep["stages"].push_back({{"stiffness", st.stiffness}, {"cost", {st.initial_cost, st.final_cost}},
+    rep["stages"].push_back({{"nodes", st.nodes}, {"stiffness", st.stiffness}, {"cost", {st.initial_cost, st.final_cost}},
                              {"lm_iterations", st.lm_iterations}});
   if (with_outlines) {
     // The rim against the masks' outlines, at the generic head and at the fit.
@@ -333,6 +341,35 @@ int run_photos(const Args& args) {
           ++cam;
         }
       }
+    }
+  }
+  // Folds: how much the fit grew the smooth level 3's dihedral angles over
+  // the generic head's, per region (photos/added_folds.h), and the
+  // self-crossing pairs of levels 0..3, the generic head's beside the fit's.
+  {
+    std::vector<AddedFolds> added;
+    if (measure_added_folds(generic, r.fit.mesh.positions, 3, 15.0, added)) {
+      std::string line;
+      for (const AddedFolds& g : added) {
+        rep["folds"]["added"][g.region] = {{"p95_deg", g.p95_deg}, {"max_deg", g.max_deg}, {"edges_over_15_deg", g.creased},
+                                           {"level3_crossings", {g.generic_crossings, g.crossings}}};
+        char buf[128];
+        std::snprintf(buf, sizeof buf, " %s %.1f / %.1f / %d (crossings %d -> %d)", g.region.c_str(), g.p95_deg,
+                      g.max_deg, g.creased, g.generic_crossings, g.crossings);
+        line += buf;
+      }
+      int crossings[2] = {0, 0};
+      for (int which = 0; which < 2; ++which) {
+        GenericHead h = generic;
+        if (which) h.mesh.positions = r.fit.mesh.positions;
+        HeadSurfaceQuality q;
+        if (measure_head_surface(h, 3, q))
+          for (int c : q.crossing_pairs) crossings[which] += c;
+      }
+      rep["folds"]["crossing_pairs"] = {crossings[0], crossings[1]};
+      std::printf("  folds the fit added to level 3, p95 / max deg / edges grown > 15 deg:%s; crossing pairs %d "
+                  "(generic head) -> %d (fit)\n",
+                  line.c_str(), crossings[0], crossings[1]);
     }
   }
   Json pairs = Json::array();
@@ -528,14 +565,16 @@ int run_learn_landmark_map(const Args& args) {
 
 Registrar photos_reg({"photos",
                       "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] [--masks M1.png ... | --masks-from-photos] [--silhouette-check] "
-                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--stereo]",
+                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--stereo] [--coarse N:S,...|none] [--schedule S,...|none]",
                       "a head from several photos' landmarks (fua1998): self-calibrated cameras, fitted control "
                       "mesh, levels, cameras.json, report.json; with --photos the skin from those cameras "
                       "(textured.obj, skin.png); head.likeness.glb, the head project; with --masks (white or opaque = the person) the head's outline "
                       "in each photo as silhouettes (--masks-from-photos: from the photos, plain background only; "
                       "--silhouette-check: silhouettes_N.png, outline and rims drawn on each photo); with --photos "
                       "and --stereo, stereo between pairs of them joins the landmarks (off by default: on real "
-                      "photos it dents the face, docs/design/photos.md)",
+                      "photos it dents the face, docs/design/photos.md); --coarse: the shape fit first over coarse control "
+                      "triangulations of N nodes at stiffness S (fua1998 Sec. 2.1), --schedule: the control mesh's own "
+                      "stiffness stages after them",
                       run_photos, nullptr});
 Registrar synth_photos_reg({"synth-photos",
                             "likeness synth-photos --out DIR [--seed N] [--cameras C] [--noise-px S] [--no-render]",

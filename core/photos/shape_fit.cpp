@@ -1,5 +1,6 @@
 #include "photos/shape_fit.h"
 
+#include "photos/control_levels.h"
 #include "photos/descent.h"
 
 #include "photos/self_calibration.h"
@@ -101,29 +102,36 @@ SparseMat uniform_laplacian(const TriMesh& mesh) {
 
 namespace {
 
-// State: displacements delta (3 #V); residuals: the scaled observation sets,
-// then sqrt(stiffness) (L x I3) delta, then sqrt(tether) delta.
+// State: displacements delta of the current level's nodes (3 K); the
+// vertices are base + A delta (eq. 3, control_levels.h; A = I on the control
+// mesh). Residuals: the scaled observation sets, then sqrt(stiffness)
+// (L x I3) delta on the level's own graph, then sqrt(tether) delta.
 class ShapeProblem : public LeastSquaresProblem {
  public:
   ShapeProblem(const TriMesh& control, std::vector<std::unique_ptr<ObservationSet>>& sets)
-      : p0_(control.positions), sets_(sets), delta_(Eigen::VectorXd::Zero(3 * long(p0_.size()))) {
-    const SparseMat L = uniform_laplacian(control);
-    std::vector<Eigen::Triplet<double>> trip;
-    for (int k = 0; k < L.outerSize(); ++k)
-      for (SparseMat::InnerIterator it(L, k); it; ++it)
-        for (int j = 0; j < 3; ++j) trip.emplace_back(3 * int(it.row()) + j, 3 * int(it.col()) + j, it.value());
-    L3_.resize(3 * long(p0_.size()), 3 * long(p0_.size()));
-    L3_.setFromTriplets(trip.begin(), trip.end());
+      : base_(control.positions), sets_(sets) {
     scales_.assign(sets_.size(), 1.0);
   }
 
   double stiffness = 1, tether = 1e-4;
   std::vector<double> scales_;
 
+  // Starts a level from the current shape: its displacements at zero.
+  void set_level(const ControlLevel& level) {
+    base_ = positions();
+    level_ = &level;
+    delta_ = Eigen::VectorXd::Zero(3 * long(level.num_nodes()));
+    const SparseMat& L = level.laplacian;
+    std::vector<Eigen::Triplet<double>> trip;
+    for (int k = 0; k < L.outerSize(); ++k)
+      for (SparseMat::InnerIterator it(L, k); it; ++it)
+        for (int j = 0; j < 3; ++j) trip.emplace_back(3 * int(it.row()) + j, 3 * int(it.col()) + j, it.value());
+    L3_.resize(delta_.size(), delta_.size());
+    L3_.setFromTriplets(trip.begin(), trip.end());
+  }
+
   std::vector<Vec3> positions(const Eigen::VectorXd& delta) const {
-    std::vector<Vec3> p = p0_;
-    for (size_t i = 0; i < p.size(); ++i) p[i] += delta.segment<3>(3 * long(i));
-    return p;
+    return level_ ? attached_positions(*level_, base_, delta) : base_;
   }
   std::vector<Vec3> positions() const { return positions(delta_); }
 
@@ -141,13 +149,25 @@ class ShapeProblem : public LeastSquaresProblem {
     const int nobs = observation_rows(), npar = num_parameters();
     r.setZero(nobs + 2 * npar);
     int row = 0;
+    std::vector<Eigen::Triplet<double>> over_vertices;  // observation rows by 3 #V
     for (size_t k = 0; k < sets_.size(); ++k) {
       std::vector<Eigen::Triplet<double>> local;
       Eigen::VectorXd rk(sets_[k]->num_residuals());
       if (!sets_[k]->evaluate(p, rk, 0, trip ? &local : nullptr)) return false;
       r.segment(row, rk.size()) = scales_[k] * rk;
-      for (const auto& t : local) trip->emplace_back(row + t.row(), t.col(), scales_[k] * t.value());
+      for (const auto& t : local) over_vertices.emplace_back(row + t.row(), t.col(), scales_[k] * t.value());
       row += int(rk.size());
+    }
+    if (trip) {
+      if (level_->identity) {
+        trip->insert(trip->end(), over_vertices.begin(), over_vertices.end());
+      } else {
+        SparseMat Jv(nobs, 3 * long(p.size()));
+        Jv.setFromTriplets(over_vertices.begin(), over_vertices.end());
+        const SparseMat Jd = attach_jacobian(*level_, Jv);
+        for (int k = 0; k < Jd.outerSize(); ++k)
+          for (SparseMat::InnerIterator it(Jd, k); it; ++it) trip->emplace_back(int(it.row()), int(it.col()), it.value());
+      }
     }
     const double ss = std::sqrt(stiffness), st = std::sqrt(tether);
     r.segment(row, npar) = ss * (L3_ * delta);
@@ -176,8 +196,9 @@ class ShapeProblem : public LeastSquaresProblem {
   void apply(const Eigen::VectorXd& step) override { delta_ += step; }
 
  private:
-  std::vector<Vec3> p0_;
+  std::vector<Vec3> base_;
   std::vector<std::unique_ptr<ObservationSet>>& sets_;
+  const ControlLevel* level_ = nullptr;
   Eigen::VectorXd delta_;
   SparseMat L3_;
 };
@@ -199,25 +220,49 @@ Status fit_shape(const TriMesh& control, std::vector<std::unique_ptr<Observation
     return Status::error(ErrorCode::InvalidInput, "shape fit: one lambda per observation type needed");
   for (double l : lambdas)
     if (!(l >= 0) || !std::isfinite(l)) return Status::error(ErrorCode::InvalidInput, "shape fit: lambda out of range");
-  if (options.stiffness_schedule.empty() || !(options.tether > 0) || options.reweighting_rounds < 1)
+  if ((options.stiffness_schedule.empty() && options.coarse_levels.empty()) || !(options.tether > 0) ||
+      options.reweighting_rounds < 1)
     return Status::error(ErrorCode::InvalidInput, "shape fit: an option is out of range");
   for (double s : options.stiffness_schedule)
     if (!(s > 0) || !std::isfinite(s)) return Status::error(ErrorCode::InvalidInput, "shape fit: stiffness must be > 0");
+  for (const ShapeFitOptions::CoarseLevel& c : options.coarse_levels)
+    if (!(c.stiffness > 0) || !std::isfinite(c.stiffness) || c.nodes < 4)
+      return Status::error(ErrorCode::InvalidInput, "shape fit: a coarse level needs >= 4 nodes and a stiffness > 0");
   if (control.num_vertices() == 0) return Status::error(ErrorCode::InvalidInput, "shape fit: empty control mesh");
+  // The levels, coarse to fine: each coarse one, then the control mesh for the schedule.
+  std::vector<ControlLevel> levels(options.coarse_levels.size() + (options.stiffness_schedule.empty() ? 0 : 1));
+  struct Stage {
+    size_t level;
+    double stiffness;
+  };
+  std::vector<Stage> stages;
+  for (size_t i = 0; i < options.coarse_levels.size(); ++i) {
+    Status s = build_control_level(control, options.coarse_levels[i].nodes, levels[i]);
+    if (!s) return with_context(s, "shape fit");
+    stages.push_back({i, options.coarse_levels[i].stiffness});
+  }
+  if (!options.stiffness_schedule.empty()) {
+    Status s = build_control_level(control, control.num_vertices(), levels.back());
+    if (!s) return with_context(s, "shape fit");
+    for (double k : options.stiffness_schedule) stages.push_back({levels.size() - 1, k});
+  }
   ShapeProblem problem(control, sets);
   problem.tether = options.tether;
+  problem.set_level(levels[0]);
   {
     Eigen::VectorXd r;
     if (!problem.residuals(Eigen::VectorXd::Zero(problem.num_parameters()), r, nullptr))
       return Status::error(ErrorCode::InvalidInput, "shape fit: a feature lies behind its camera on the start shape");
   }
   result.initial_rms_px = feature_rms(sets, problem.positions());
-  for (double stiffness : options.stiffness_schedule) {
+  for (size_t si = 0; si < stages.size(); ++si) {
+    if (si > 0 && stages[si].level != stages[si - 1].level) problem.set_level(levels[stages[si].level]);
     ShapeFitStage stage;
-    stage.stiffness = stiffness;
-    problem.stiffness = stiffness;
+    stage.nodes = levels[stages[si].level].num_nodes();
+    stage.stiffness = stages[si].stiffness;
+    problem.stiffness = stages[si].stiffness;
     for (int round = 0; round < options.reweighting_rounds; ++round) {
-      if (round > 0 || &stiffness != &options.stiffness_schedule.front())
+      if (round > 0 || si > 0)
         for (auto& s : sets) s->reweight(problem.positions());
       problem.normalize(lambdas);
       LmReport rep;

@@ -7,8 +7,10 @@
 // triangulation = our control mesh). Stiffness: ||L delta||^2 with L the
 // uniform graph Laplacian (a thin-plate energy on the displacements rather
 // than the paper's C0 membrane: with only landmark observations, a membrane
-// pulls spikes at the landmarks). Coarse-to-fine: the paper refines the
-// control triangulation; we lower the stiffness over a schedule instead.
+// pulls spikes at the landmarks). Coarse-to-fine: optionally first over
+// coarse control triangulations (control_levels.h, eq. 3: each node moves a
+// patch of the control mesh), then on the control mesh itself with the
+// stiffness lowered over a schedule.
 //
 // Observation types plug in as ObservationSet (features now; silhouettes
 // and stereo later), each scaled per eq. 7: w_type = lambda_type / G_type,
@@ -86,6 +88,18 @@ struct ShapeFitOptions {
   // rounds of LM). Units: the normalized observations are about lambda_type
   // times a 3-D error in metres, the stiffness term is in metres too.
   std::vector<double> stiffness_schedule = {100.0, 10.0, 3.0};
+  // fua1998 Sec. 2.1's progressively finer control triangulations, run
+  // before the stages above: one stage per entry on a coarse triangulation
+  // of that many nodes (control_levels.h), with its stiffness on the
+  // level's own graph. Each level fits displacements of its own nodes on
+  // top of the shape the level before left (the stiffness and the tether
+  // act on that level's displacements); the stiffness_schedule's stages
+  // then do the same on the control mesh. Empty: none (the schedule alone).
+  struct CoarseLevel {
+    int nodes = 0;
+    double stiffness = 1;
+  };
+  std::vector<CoarseLevel> coarse_levels;
   double tether = 1e-4;           // ||delta||^2 weight: fixes what nothing observes
   int reweighting_rounds = 2;
   int max_lm_iterations = 20;
@@ -100,6 +114,7 @@ struct ShapeFitOptions {
 };
 
 struct ShapeFitStage {
+  int nodes = 0;                    // the level's nodes (the control mesh's #V on its own stages)
   double stiffness = 0;
   double initial_cost = 0, final_cost = 0;
   int lm_iterations = 0;
@@ -117,7 +132,8 @@ std::vector<double> observation_type_weights(const std::vector<Vec3>& positions,
                                              const std::vector<std::unique_ptr<ObservationSet>>& sets,
                                              const std::vector<double>& lambdas);
 
-// Fails with InvalidInput on a bad option or an observation set that
+// Fails with InvalidInput on a bad option (an empty schedule is allowed
+// when coarse levels are given) or an observation set that
 // does not match the mesh; NotConverged when no step lowers the cost.
 Status fit_shape(const TriMesh& control, std::vector<std::unique_ptr<ObservationSet>>& sets,
                  const std::vector<double>& lambdas, const ShapeFitOptions& options, ShapeFitResult& result);
