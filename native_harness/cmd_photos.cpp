@@ -119,7 +119,7 @@ int run_photos(const Args& args) {
   const std::string cmd = "photos";
   if (!only_known_options(cmd, args, {"points", "photos", "masks", "masks-from-photos", "silhouette-check", "map", "out",
                                       "levels", "focal-px", "texture-size", "no-texture", "stereo", "no-stereo", "coarse",
-                                      "schedule"}))
+                                      "schedule", "folds"}))
     return 2;
   const std::vector<std::string> points_paths = args.get_all("points"), photo_paths = args.get_all("photos"),
                                  mask_paths = args.get_all("masks");
@@ -343,10 +343,11 @@ int run_photos(const Args& args) {
       }
     }
   }
-  // Folds: how much the fit grew the smooth level 3's dihedral angles over
+  // --folds: how much the fit grew the smooth level 3's dihedral angles over
   // the generic head's, per region (photos/added_folds.h), and the
-  // self-crossing pairs of levels 0..3, the generic head's beside the fit's.
-  {
+  // self-crossing pairs of levels 0..3, the generic head's beside the fit's
+  // (1-2 s of CPU, so asked for).
+  if (args.has("folds")) {
     std::vector<AddedFolds> added;
     if (measure_added_folds(generic, r.fit.mesh.positions, 3, 15.0, added)) {
       std::string line;
@@ -565,7 +566,7 @@ int run_learn_landmark_map(const Args& args) {
 
 Registrar photos_reg({"photos",
                       "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] [--masks M1.png ... | --masks-from-photos] [--silhouette-check] "
-                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--stereo] [--coarse N:S,...|none] [--schedule S,...|none]",
+                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--stereo] [--folds] [--coarse N:S,...|none] [--schedule S,...|none]",
                       "a head from several photos' landmarks (fua1998): self-calibrated cameras, fitted control "
                       "mesh, levels, cameras.json, report.json; with --photos the skin from those cameras "
                       "(textured.obj, skin.png); head.likeness.glb, the head project; with --masks (white or opaque = the person) the head's outline "
