@@ -159,9 +159,12 @@ async function streamScan(file, progress) {
       r = core.scan_stream_push(ptr, bytes.length);
       read += bytes.length;
       if (!r.ok) return r;
-      if (r.vertices * FIT_HEAP_PER_POINT > heapMax) {
+      // The count a PLY header or .pts line declares, or the OBJ / XYZ
+      // vertices read so far: refused as soon as either is too many.
+      const points = Math.max(r.vertices || 0, r.verticesRead || 0);
+      if (points * FIT_HEAP_PER_POINT > heapMax) {
         dropScanStream();
-        return { ok: false, code: 'TooLarge', message: name + ' declares ' + r.vertices.toLocaleString('en') +
+        return { ok: false, code: 'TooLarge', message: name + (r.vertices ? ' declares ' : ' has over ') + points.toLocaleString('en') +
                  ' points: the page fits scans up to ' + Math.floor(heapMax / FIT_HEAP_PER_POINT).toLocaleString('en') +
                  ' points (its WebAssembly memory ends at ' + mb(heapMax) + '). Thin the scan in your scanning ' +
                  'software, or use the Likeness command-line tool.', bytesRead: read };
