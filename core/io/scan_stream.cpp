@@ -1,4 +1,4 @@
-// ScanStreamReader: PLY, OBJ and XYZ parsed as they come, VTK gathered whole.
+// ScanStreamReader: the format told as read_geometry tells it, then parsed as it comes.
 #include "io/scan_stream.h"
 #include "io/text_scan.h"
 
@@ -25,6 +25,7 @@ ScanStreamReader::~ScanStreamReader() = default;
 std::uint64_t ScanStreamReader::declared_vertices() const {
   if (ply_) return ply_->declared_vertices();
   if (xyz_) return xyz_->declared_points();
+  if (vtk_) return vtk_->declared_vertices();
   return 0;
 }
 
@@ -46,11 +47,6 @@ Status ScanStreamReader::decide(bool final) {
                            "unknown geometry format (expected PLY, OBJ, XYZ or legacy VTK by extension or content)");
   }
   decided_ = true;
-  if (format == "vtk") {
-    // Gathered whole for read_vtk; the declared size is within the limit.
-    gathered_.reserve(static_cast<size_t>(total_));
-    return Status::success();
-  }
   Bytes first;
   first.swap(gathered_);
   if (format == "ply") {
@@ -60,6 +56,10 @@ Status ScanStreamReader::decide(bool final) {
   if (format == "obj") {
     obj_ = std::make_unique<ObjStreamReader>(total_);
     return obj_->push(first.data(), first.size());
+  }
+  if (format == "vtk") {
+    vtk_ = std::make_unique<VtkStreamReader>(total_);
+    return vtk_->push(first.data(), first.size());
   }
   xyz_ = std::make_unique<XyzStreamReader>(total_);
   return xyz_->push(first.data(), first.size());
@@ -77,9 +77,9 @@ Status ScanStreamReader::push(const std::uint8_t* data, size_t size) {
     if (ply_) return ply_->push(data, size);
     if (obj_) return obj_->push(data, size);
     if (xyz_) return xyz_->push(data, size);
+    if (vtk_) return vtk_->push(data, size);
     gathered_.insert(gathered_.end(), data, data + size);
-    if (!decided_) return decide(false);
-    return Status::success();
+    return decide(false);
   });
   if (!s) {
     error_ = s;
@@ -109,13 +109,12 @@ Status ScanStreamReader::finish(TriMesh& mesh, GeometryKind& kind) {
       mesh.colors = std::move(cloud.colors);
       return Status::success();
     }
-    Bytes bytes;
-    bytes.swap(gathered_);
-    return read_vtk(bytes.data(), bytes.size(), mesh, kind);
+    return vtk_->finish(mesh, kind);
   });
   ply_.reset();
   obj_.reset();
   xyz_.reset();
+  vtk_.reset();
   gathered_ = Bytes();
   if (!s) mesh = TriMesh();
   error_ = s.ok() ? Status::error(ErrorCode::Internal, "the reader has already finished") : s;

@@ -2,8 +2,8 @@
 // file never has to be held whole (the page reads a File in slices). The
 // result is the same as the whole-buffer readers' (io.h) for every way of
 // cutting the bytes into chunks, errors and messages included: read_ply,
-// read_obj and read_xyz are themselves one push and a finish of
-// PlyStreamReader, ObjStreamReader and XyzStreamReader.
+// read_obj, read_xyz and read_vtk are themselves one push and a finish of
+// these readers.
 //
 // The caller declares the file's size up front (a File's size, a stat): the
 // header's counts are checked against it before any body byte arrives, as
@@ -88,10 +88,31 @@ class XyzStreamReader {
   std::unique_ptr<State> s_;
 };
 
+// Legacy VTK (ASCII POLYDATA), parsed as the bytes come: a section's head
+// (keyword, counts, type names) is read once all of it is at hand, its
+// numbers one by one; only an unfinished head or number is carried.
+class VtkStreamReader {
+ public:
+  explicit VtkStreamReader(std::uint64_t total_size);
+  ~VtkStreamReader();
+  VtkStreamReader(const VtkStreamReader&) = delete;
+  VtkStreamReader& operator=(const VtkStreamReader&) = delete;
+
+  Status push(const std::uint8_t* data, size_t size);
+  Status finish(TriMesh& mesh, GeometryKind& kind);
+  std::uint64_t bytes_received() const;
+  // The POINTS count once its section's head has been read (0 before).
+  std::uint64_t declared_vertices() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> s_;
+};
+
 // Any scan read_geometry reads, from pushed chunks. The format is told as
-// read_geometry tells it (the name's extension, else the first 4 KiB); PLY,
-// OBJ and XYZ are then parsed as the bytes come, legacy VTK is gathered whole
-// and handed to read_vtk at finish. finish gives what read_geometry gives.
+// read_geometry tells it (the name's extension, else the first 4 KiB), then
+// parsed as the bytes come by that format's stream reader. finish gives what
+// read_geometry gives.
 class ScanStreamReader {
  public:
   ScanStreamReader(std::string name, std::uint64_t total_size);
@@ -105,15 +126,16 @@ class ScanStreamReader {
   // to_point_cloud), for callers that move the mesh's arrays themselves.
   Status finish(TriMesh& mesh, GeometryKind& kind);
   // The vertex count the file declares once it has been read (a PLY
-  // header's, a .pts count line's; 0 before, and for formats without one),
+  // header's, a VTK POINTS head's, a .pts count line's; 0 before, and for
+  // OBJ),
   // so a caller can refuse a scan too large for its memory before the body
   // is read.
   std::uint64_t declared_vertices() const;
   // The vertices parsed so far (OBJ, XYZ; a PLY's once finished), so a
   // caller can refuse a scan whose count grows too large while it is read.
   std::uint64_t vertices_read() const;
-  // True once the bytes are known to be parsed as they come (PLY, OBJ, XYZ).
-  bool streaming() const { return ply_ || obj_ || xyz_; }
+  // True once the format is known (its stream reader has the bytes).
+  bool streaming() const { return ply_ || obj_ || xyz_ || vtk_; }
   std::uint64_t bytes_received() const { return received_; }
 
  private:
@@ -123,10 +145,11 @@ class ScanStreamReader {
   std::uint64_t total_ = 0, received_ = 0;
   Status error_;
   bool decided_ = false;
-  Bytes gathered_;  // the bytes before the format is known, or all of a VTK file
+  Bytes gathered_;  // the bytes before the format is known
   std::unique_ptr<PlyStreamReader> ply_;
   std::unique_ptr<ObjStreamReader> obj_;
   std::unique_ptr<XyzStreamReader> xyz_;
+  std::unique_ptr<VtkStreamReader> vtk_;
 };
 
 }  // namespace lk
