@@ -40,7 +40,10 @@ std::uint64_t ScanStreamReader::vertices_read() const {
 Status ScanStreamReader::decide(bool final) {
   std::string format = io_detail::geometry_format_by_name(name_);
   if (format.empty()) {
-    if (gathered_.size() < std::min<std::uint64_t>(total_, kSniffBytes) && !final) return Status::success();
+    // An empty file is read_geometry's "empty input" at finish, not an
+    // unknown format.
+    if (!final && (total_ == 0 || gathered_.size() < std::min<std::uint64_t>(total_, kSniffBytes)))
+      return Status::success();
     format = io_detail::sniff_geometry_format(gathered_.data(), gathered_.size());
     if (format.empty())
       return Status::error(ErrorCode::Unsupported,

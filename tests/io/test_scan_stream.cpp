@@ -255,13 +255,17 @@ TEST_CASE("Scan stream: what read_geometry gives, every format streamed once tol
     }
   }
   // An empty file, whatever its name.
-  for (const char* name : {"empty.ply", "empty"}) {
-    ScanStreamReader reader(name, 0);
-    TriMesh m;
-    PointCloud cloud;
-    GeometryKind k;
-    lk::test::require_error(reader.finish(m, cloud, k), ErrorCode::Empty, "empty");
-  }
+  for (const char* name : {"empty.ply", "empty", "empty.obj", "empty.xyz", "empty.vtk"})
+    for (bool push_nothing : {false, true}) {
+      // A push of no bytes first (found by fuzz_scan_stream: the unnamed
+      // empty file was "unknown geometry format" instead of empty).
+      ScanStreamReader reader(name, 0);
+      if (push_nothing) REQUIRE(reader.push(ply.data(), 0).ok());
+      TriMesh m;
+      PointCloud cloud;
+      GeometryKind k;
+      lk::test::require_error(reader.finish(m, cloud, k), ErrorCode::Empty, "empty input");
+    }
 }
 
 namespace {
