@@ -5,6 +5,7 @@
 #include "io/scan_stream.h"
 #include "io_test_util.h"
 #include "sample_mesh.h"
+#include "test_data.h"
 
 #include <catch2/catch.hpp>
 
@@ -557,4 +558,41 @@ TEST_CASE("VTK stream: the same mesh and the same errors as read_vtk for every c
   const Reading offsets = whole_vtk(files[1]);
   REQUIRE(offsets.status.ok());
   CHECK(offsets.mesh.triangles.size() == 3);
+}
+
+TEST_CASE("Scan stream: the real scans read in chunks are read_geometry's, bit for bit", "[io][stream][shared]") {
+  // OBJ meshes with uvs and normals (photogrammetry, 3D scans), a Cyberware VTK.
+  const char* const scans[] = {"head_scans/james_menpo3d/james.obj", "head_scans/threedscans_plato/plato.obj",
+                               "head_scans/threedscans_gutenberg/gutenberg.obj",
+                               "head_scans/demosthenes_photoscan/demosthenes-low-res.obj",
+                               "head_scans/fran_cyberware/fran_cut.vtk"};
+  int read = 0;
+  for (const char* rel : scans) {
+    const std::string path = lk::test::shared_data_dir() + "/" + rel;
+    Bytes file;
+    if (!read_file(path, file)) {
+      WARN("skipped: ../shared/data/" << rel << " is absent (real data is not in the repo)");
+      continue;
+    }
+    TriMesh whole;
+    PointCloud whole_cloud;
+    GeometryKind whole_kind;
+    REQUIRE(read_geometry(path, file.data(), file.size(), whole, whole_cloud, whole_kind).ok());
+    REQUIRE(whole.num_triangles() > 0);
+    for (size_t chunk : {size_t(1), size_t(7), size_t(4093), size_t(1) << 20}) {
+      INFO(rel << " in chunks of " << chunk);
+      ScanStreamReader reader(path, file.size());
+      for (size_t pos = 0; pos < file.size(); pos += chunk)
+        REQUIRE(reader.push(file.data() + pos, std::min(chunk, file.size() - pos)).ok());
+      TriMesh m;
+      PointCloud cloud;
+      GeometryKind kind;
+      REQUIRE(reader.finish(m, cloud, kind).ok());
+      CHECK(kind == whole_kind);
+      CHECK(same_mesh(m, whole));
+      CHECK(same_bits(cloud.positions, whole_cloud.positions));
+    }
+    ++read;
+  }
+  if (read == 0) WARN("no real scan read");
 }
