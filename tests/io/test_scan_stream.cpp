@@ -504,6 +504,16 @@ TEST_CASE("Scan stream: the declared and the growing vertex counts, for an early
   ScanStreamReader c("scan.ply", ply.size());
   REQUIRE(c.push(ply.data(), 400).ok());
   CHECK(c.declared_vertices() == 100);
+  // A VTK's POINTS count once its head is read (the file declared big
+  // enough to hold them), before any of the points.
+  const Bytes vtk = bytes_of("# vtk DataFile Version 3.0\nscan\nASCII\nDATASET POLYDATA\nPOINTS 5000000 float\n0 0 0 ");
+  ScanStreamReader d("scan.vtk", 40000000);
+  REQUIRE(d.push(vtk.data(), vtk.size()).ok());
+  CHECK(d.streaming());
+  CHECK(d.declared_vertices() == 5000000);
+  // Declared beyond what the file's size can hold: refused at the head.
+  ScanStreamReader e("scan.vtk", 1000);
+  lk::test::require_error(e.push(vtk.data(), vtk.size()), ErrorCode::Truncated, "POINTS declares 5000000 items");
 }
 
 TEST_CASE("VTK stream: the same mesh and the same errors as read_vtk for every chunking", "[io][vtk][stream]") {
