@@ -1,18 +1,29 @@
 // likeness bench --only io: reader speed on a synthetic 300k-point scan in
 // every PLY flavour and XYZ, plus the real OBJ/VTK scans and a photo when
 // ../shared/data (or --data DIR) is present. Median of 5 runs (1 with --quick).
+// Then the memory a 1M-point OBJ and XYZ take to load, held whole and read
+// (as the page's worker did before issue 39) or pushed in 8 MB slices into
+// the stream reader (as it does now): the peak resident memory over the
+// start (Linux only).
 #include "command.h"
 #include "timing.h"
 
 #include "io/io.h"
+#include "io/scan_stream.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <cstring>
+#include <fstream>
 #include <functional>
 #include <string>
+#include <unistd.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 namespace lk::cli {
 namespace {
@@ -49,6 +60,104 @@ Bytes ascii_ply_6_decimals(const PointCloud& c) {
     s += line;
   }
   return Bytes(s.begin(), s.end());
+}
+
+// A field of /proc/self/status in kB (-1 when unreadable).
+long status_kb(const char* key) {
+  std::ifstream f("/proc/self/status");
+  std::string line;
+  const size_t n = std::strlen(key);
+  while (std::getline(f, line))
+    if (line.compare(0, n, key) == 0 && line.size() > n && line[n] == ':') return std::atol(line.c_str() + n + 1);
+  return -1;
+}
+
+// Runs load with the peak resident memory reset (Linux: clear_refs 5), and
+// returns the peak over the memory resident before it, in MB (-1: unknown).
+double peak_mb(const std::function<bool()>& load, bool& ok) {
+#if defined(__GLIBC__)
+  // Large blocks from mmap, given back when freed, and the heap's free
+  // memory released first: what was freed before does not hide the peak.
+  mallopt(M_MMAP_THRESHOLD, 256 * 1024);
+  malloc_trim(0);
+#endif
+  {
+    std::ofstream reset("/proc/self/clear_refs");
+    reset << "5";
+    if (!reset) return -1;
+  }
+  const long base = status_kb("VmRSS");
+  ok = load();
+  const long peak = status_kb("VmHWM");
+  return base < 0 || peak < 0 ? -1 : (peak - base) / 1024.0;
+}
+
+// The scan as text the way scanners write it, 6 decimals a value.
+std::string text_scan(const PointCloud& c, bool obj) {
+  std::string s;
+  char line[128];
+  for (int i = 0; i < c.size(); ++i) {
+    const Vec3 &p = c.positions[i], &n = c.normals[i];
+    if (obj) std::snprintf(line, sizeof(line), "v %.6f %.6f %.6f\n", p.x(), p.y(), p.z());
+    else std::snprintf(line, sizeof(line), "%.6f %.6f %.6f %.6f %.6f %.6f\n", p.x(), p.y(), p.z(), n.x(), n.y(), n.z());
+    s += line;
+  }
+  if (obj)
+    for (int i = 0; i < c.size(); ++i) {
+      const Vec3& n = c.normals[i];
+      std::snprintf(line, sizeof(line), "vn %.6f %.6f %.6f\n", n.x(), n.y(), n.z());
+      s += line;
+    }
+  return s;
+}
+
+int run_memory_rows(int n) {
+  int failures = 0;
+  std::printf("   %-44s %11s %12s\n", "load (the page's worker, natively)", "size", "peak RSS");
+  for (bool obj : {true, false}) {
+    const std::string path = "/tmp/likeness_bench_io_" + std::to_string(::getpid()) + (obj ? ".obj" : ".xyz");
+    size_t size = 0;
+    {
+      const std::string text = text_scan(synthetic_scan(n), obj);
+      size = text.size();
+      if (!write_file(path, text)) {
+        std::printf("   (memory rows skipped: cannot write %s)\n", path.c_str());
+        return 0;
+      }
+    }
+    const std::string what = std::string(obj ? "OBJ" : "XYZ") + ", " + std::to_string(n / 1000000) + "M points + normals";
+    bool ok = false;
+    // Before issue 39: the bytes gathered whole, then read_geometry (a mesh
+    // and a cloud copy of the points).
+    const double whole = peak_mb([&] {
+      Bytes bytes;
+      TriMesh m;
+      PointCloud c;
+      GeometryKind kind;
+      return read_file(path, bytes).ok() && read_geometry(path, bytes.data(), bytes.size(), m, c, kind).ok() &&
+             m.num_vertices() == n;
+    }, ok);
+    failures += !ok;
+    std::printf("   %-44s %8.1f MB %9.1f MB%s\n", (what + ", whole").c_str(), size / 1e6, whole, ok ? "" : " (FAILED)");
+    // Now: 8 MB slices pushed into the stream reader, the mesh's arrays only.
+    const double streamed = peak_mb([&] {
+      ScanStreamReader reader(path, size);
+      std::FILE* f = std::fopen(path.c_str(), "rb");
+      if (!f) return false;
+      std::vector<std::uint8_t> slice(8 << 20);
+      bool pushed = true;
+      for (size_t got; pushed && (got = std::fread(slice.data(), 1, slice.size(), f)) > 0;)
+        pushed = reader.push(slice.data(), got).ok();
+      std::fclose(f);
+      TriMesh m;
+      GeometryKind kind;
+      return pushed && reader.finish(m, kind).ok() && m.num_vertices() == n;
+    }, ok);
+    failures += !ok;
+    std::printf("   %-44s %8.1f MB %9.1f MB%s\n", (what + ", streamed").c_str(), size / 1e6, streamed, ok ? "" : " (FAILED)");
+    std::remove(path.c_str());
+  }
+  return failures;
 }
 
 int run_io_bench(const Args& args) {
@@ -117,10 +226,12 @@ int run_io_bench(const Args& args) {
     row(f.label, bytes.size(), ms, ok);
     failures += !ok;
   }
+  failures += run_memory_rows(1000000);
   return failures ? 1 : 0;
 }
 
-BenchRegistrar reg({"io", "reader speed: 300k-point PLY (binary/ascii), XYZ, real OBJ/VTK scans, JPEG photo",
+BenchRegistrar reg({"io", "reader speed: 300k-point PLY (binary/ascii), XYZ, real OBJ/VTK scans, JPEG photo; "
+                    "the memory a 1M-point OBJ and XYZ take to load, whole and streamed",
                     run_io_bench});
 
 }  // namespace

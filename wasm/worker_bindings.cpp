@@ -105,7 +105,9 @@ val scan_stream_begin(const std::string& name, double size) {
 }
 
 // The next slice, at (data, size) in the heap; the reader keeps only what it
-// has not finished parsing. {ok, vertices: the header's count once known}.
+// has not finished parsing. {ok, vertices: the count the file declares once
+// known (PLY header, .pts count line), verticesRead: the OBJ or XYZ vertices
+// parsed so far}.
 val scan_stream_push(std::uintptr_t data, std::size_t size) {
   if (!scan_stream()) return error_result(lk::ErrorCode::Internal, "no scan is being read");
   if (data == 0 && size != 0) return error_result(lk::ErrorCode::Internal, "no input buffer");
@@ -116,6 +118,7 @@ val scan_stream_push(std::uintptr_t data, std::size_t size) {
   }
   val r = ok_result();
   r.set("vertices", static_cast<double>(scan_stream()->declared_vertices()));
+  r.set("verticesRead", static_cast<double>(scan_stream()->vertices_read()));
   r.set("streaming", scan_stream()->streaming());
   return r;
 }

@@ -76,7 +76,8 @@ function coreReady(m, which) {
                   ms: performance.now() - t0 });
     return;
   }
-  postMessage({ type: 'ready', variant, threads: core.parallel_workers(), fallback, scanLimit: scanLimitBytes() });
+  postMessage({ type: 'ready', variant, threads: core.parallel_workers(), fallback, scanLimit: scanLimitBytes(),
+                textScanLimit: scanLimitBytes('scan.obj') });
   while (pending.length) enqueue(pending.shift());
 }
 
@@ -114,11 +115,20 @@ const FIT_HEAP_PER_FILE_BYTE = 13;
 // And per point the header declares (a PLY with fewer bytes a point, x y z
 // only, has more points in the same bytes).
 const FIT_HEAP_PER_POINT = 320;
+// A text scan (OBJ, XYZ, VTK) is parsed as it comes and never held whole,
+// and takes more bytes a point: a fit took at most 6 bytes of heap per byte
+// of the 2M-point OBJ and XYZ with normals at 6 decimals (5.0 and 6.0,
+// docs/design/page.md). A denser text file (x y z only) has more points in
+// the same bytes: it is refused by the points counted as it is read.
+const FIT_HEAP_PER_TEXT_BYTE = 6;
+const TEXT_SCAN = /\.(obj|xyz|txt|pts|asc|xyzn|xyzrgb|vtk)$/i;
 
 // Frees the reader of a scan given up on (an empty one takes its place).
 function dropScanStream() { core.scan_stream_begin('', 0); }
 
-function scanLimitBytes() { return Math.floor(core.heap_max_bytes() / FIT_HEAP_PER_FILE_BYTE); }
+function heapPerFileByte(name) { return TEXT_SCAN.test(name) ? FIT_HEAP_PER_TEXT_BYTE : FIT_HEAP_PER_FILE_BYTE; }
+
+function scanLimitBytes(name = '') { return Math.floor(core.heap_max_bytes() / heapPerFileByte(name)); }
 
 function mb(n) { return (n / 1024 / 1024).toFixed(n < 10 * 1024 * 1024 ? 1 : 0) + ' MB'; }
 
@@ -129,11 +139,11 @@ function mb(n) { return (n / 1024 / 1024).toFixed(n < 10 * 1024 * 1024 ? 1 : 0) 
 async function streamScan(file, progress) {
   const name = String(file.name || 'scan');
   const heapMax = core.heap_max_bytes();
-  const limit = scanLimitBytes();
+  const limit = scanLimitBytes(name);
   if (file.size > limit) {
-    return { ok: false, code: 'TooLarge', message: name + ' is ' + mb(file.size) + ': the page fits scans up to ' +
+    return { ok: false, code: 'TooLarge', message: name + ' is ' + mb(file.size) + ': the page fits ' + (TEXT_SCAN.test(name) ? 'OBJ, XYZ and VTK scans' : /\.ply$/i.test(name) ? 'PLY scans' : 'scans') + ' up to ' +
              mb(limit) + ' (its WebAssembly memory ends at ' + mb(heapMax) + ', and a fit needs about ' +
-             FIT_HEAP_PER_FILE_BYTE + ' times the file). Thin the scan in your scanning software, or use the ' +
+             heapPerFileByte(name) + ' times the file). Thin the scan in your scanning software, or use the ' +
              'Likeness command-line tool.', bytesRead: 0 };
   }
   let r = core.scan_stream_begin(name, file.size);
@@ -159,9 +169,12 @@ async function streamScan(file, progress) {
       r = core.scan_stream_push(ptr, bytes.length);
       read += bytes.length;
       if (!r.ok) return r;
-      if (r.vertices * FIT_HEAP_PER_POINT > heapMax) {
+      // The count a PLY header or .pts line declares, or the OBJ / XYZ
+      // vertices read so far: refused as soon as either is too many.
+      const points = Math.max(r.vertices || 0, r.verticesRead || 0);
+      if (points * FIT_HEAP_PER_POINT > heapMax) {
         dropScanStream();
-        return { ok: false, code: 'TooLarge', message: name + ' declares ' + r.vertices.toLocaleString('en') +
+        return { ok: false, code: 'TooLarge', message: name + (r.vertices ? ' declares ' : ' has at least ') + points.toLocaleString('en') +
                  ' points: the page fits scans up to ' + Math.floor(heapMax / FIT_HEAP_PER_POINT).toLocaleString('en') +
                  ' points (its WebAssembly memory ends at ' + mb(heapMax) + '). Thin the scan in your scanning ' +
                  'software, or use the Likeness command-line tool.', bytesRead: read };

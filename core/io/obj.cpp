@@ -3,8 +3,11 @@
 // OBJ indexes positions, uvs and normals separately. Our TriMesh has one
 // position per vertex, so uvs become per-vertex when every vertex uses a
 // single uv throughout, and per-corner (uv_per_corner) otherwise, which keeps
-// texture seams exact. Normals are averaged per vertex.
+// texture seams exact. Normals are averaged per vertex. The reader is a
+// stream (ObjStreamReader, scan_stream.h) fed the file line by line; read_obj
+// feeds it the whole buffer at once.
 #include "io/io.h"
+#include "io/scan_stream.h"
 #include "io/text_scan.h"
 
 #include <charconv>
@@ -103,14 +106,18 @@ std::string obj_mtllib(const std::uint8_t* data, size_t size) {
   return "";
 }
 
-namespace {
+// The reader's state between pushes: the vertices, uvs, normals and face
+// corners read so far. Each whole line is one statement; the corners become
+// triangles, uvs and normals at finish.
+struct ObjStreamReader::State {
+  State(std::uint64_t total_size, std::string mtl) : bytes(total_size, kMaxGeometryBytes), mtl_text(std::move(mtl)) {}
 
-Status read_obj_body(const std::uint8_t* data, size_t size, TriMesh& mesh, GeometryKind& kind,
-                     const std::string& mtl_text) {
-  if (size == 0) return Status::error(ErrorCode::Empty, "empty input: no bytes");
-  const char* text = reinterpret_cast<const char*>(data);
-  io_detail::Tokenizer tok(text, text + size);
+  io_detail::StreamBytes bytes;
+  io_detail::LineSplitter lines;
+  std::string mtl_text;
+  int line_number = 0;
 
+  TriMesh mesh;
   std::vector<Vec3> vertex_colors;
   bool all_have_colors = true;
   std::vector<Vec2> texcoords;
@@ -119,10 +126,24 @@ Status read_obj_body(const std::uint8_t* data, size_t size, TriMesh& mesh, Geome
   std::vector<Corner> face;
   std::string used_material;
   int faces_with_uv = 0, faces_without_uv = 0;
-  int num_faces = 0;
 
-  auto error_at = [&tok](ErrorCode code, const std::string& what) {
-    return Status::error(code, "line " + std::to_string(tok.line()) + ": " + what);
+  Status statement(std::string_view line);
+  Status build(TriMesh& out, GeometryKind& kind);
+  void clear() {
+    lines.clear();
+    mesh = TriMesh();
+    vertex_colors = {};
+    texcoords = {};
+    normals = {};
+    corners = {};
+  }
+};
+
+Status ObjStreamReader::State::statement(std::string_view line) {
+  ++line_number;
+  io_detail::Tokenizer tok(line.data(), line.data() + line.size());
+  auto error_at = [this](ErrorCode code, const std::string& what) {
+    return Status::error(code, "line " + std::to_string(line_number) + ": " + what);
   };
   auto read_reals = [&tok](double* out, int min_count, int max_count, int& got, std::string_view& bad) {
     got = 0;
@@ -137,115 +158,116 @@ Status read_obj_body(const std::uint8_t* data, size_t size, TriMesh& mesh, Geome
     return got >= min_count;
   };
 
-  while (!tok.at_end()) {
-    const std::string_view key = tok.next_on_line();
-    if (key.empty() || key[0] == '#') {
-      // blank line or comment
-    } else if (key == "v") {
-      double x[6];
-      int got = 0;
-      std::string_view bad;
-      if (!read_reals(x, 3, 6, got, bad))
-        return error_at(ErrorCode::InvalidInput,
-                        bad.empty() ? "a vertex needs 3 coordinates" : "vertex coordinate " + quote(bad) + " is not a number");
-      const Vec3 p(x[0], x[1], x[2]);
-      if (!p.allFinite())
-        return error_at(ErrorCode::InvalidInput, "vertex " + std::to_string(mesh.positions.size() + 1) +
-                                                     " has a NaN or infinite coordinate");
-      if (mesh.positions.size() >= static_cast<size_t>(INT_MAX))
-        return error_at(ErrorCode::TooLarge, "too many vertices");
-      mesh.positions.push_back(p);
-      if (got == 6 && all_have_colors) {
-        const Vec3 color(x[3], x[4], x[5]);
-        if (!color.allFinite())
-          return error_at(ErrorCode::InvalidInput, "vertex " + std::to_string(mesh.positions.size()) +
-                                                       " has a NaN or infinite color");
-        vertex_colors.push_back(color);
-      } else {
-        all_have_colors = false;
-      }
-    } else if (key == "vt") {
-      double x[3];
-      int got = 0;
-      std::string_view bad;
-      if (!read_reals(x, 1, 3, got, bad))
-        return error_at(ErrorCode::InvalidInput, "texture coordinate " + quote(bad) + " is not a number");
-      const Vec2 uv(x[0], got > 1 ? x[1] : 0.0);
-      if (!uv.allFinite()) return error_at(ErrorCode::InvalidInput, "NaN or infinite texture coordinate");
-      texcoords.push_back(uv);
-    } else if (key == "vn") {
-      double x[3];
-      int got = 0;
-      std::string_view bad;
-      if (!read_reals(x, 3, 3, got, bad))
-        return error_at(ErrorCode::InvalidInput,
-                        bad.empty() ? "a normal needs 3 components" : "normal component " + quote(bad) + " is not a number");
-      const Vec3 n(x[0], x[1], x[2]);
-      if (!n.allFinite()) return error_at(ErrorCode::InvalidInput, "NaN or infinite normal");
-      // Unit length now, so that the per-vertex sums below stay finite.
-      normals.push_back(unit_or_zero(n));
-    } else if (key == "f") {
-      face.clear();
-      for (std::string_view t = tok.next_on_line(); !t.empty(); t = tok.next_on_line()) {
-        // v, v/vt, v//vn or v/vt/vn
-        Corner c;
-        const size_t s1 = t.find('/');
-        const std::string_view vs = t.substr(0, s1);
-        std::string_view ts, ns;
-        if (s1 != std::string_view::npos) {
-          const size_t s2 = t.find('/', s1 + 1);
-          ts = t.substr(s1 + 1, s2 == std::string_view::npos ? std::string_view::npos : s2 - s1 - 1);
-          if (s2 != std::string_view::npos) ns = t.substr(s2 + 1);
-        }
-        const size_t nv = mesh.positions.size();
-        IndexResult r = resolve_index(vs, nv, c.v);
-        if (r == IndexResult::NotAnInteger)
-          return error_at(ErrorCode::InvalidInput, "face corner " + quote(t) + " is not a vertex index");
-        if (r == IndexResult::OutOfRange)
-          return error_at(ErrorCode::InvalidInput, "face refers to vertex " + std::string(vs.substr(0, 24)) +
-                                                       (vs.size() > 24 ? "..." : "") + " but only " +
-                                                       std::to_string(nv) + " vertices are defined before it");
-        if (!ts.empty()) {
-          r = resolve_index(ts, texcoords.size(), c.vt);
-          if (r != IndexResult::Ok)
-            return error_at(ErrorCode::InvalidInput, "face refers to texture coordinate " + quote(ts) + " but only " +
-                                                         std::to_string(texcoords.size()) + " are defined");
-        }
-        if (!ns.empty()) {
-          r = resolve_index(ns, normals.size(), c.vn);
-          if (r != IndexResult::Ok)
-            return error_at(ErrorCode::InvalidInput, "face refers to normal " + quote(ns) + " but only " +
-                                                         std::to_string(normals.size()) + " are defined");
-        }
-        face.push_back(c);
-      }
-      if (face.size() < 3)
-        return error_at(ErrorCode::InvalidInput,
-                        "a face has " + std::to_string(face.size()) + " corners (at least 3 needed)");
-      int with_uv = 0;
-      for (const Corner& c : face) with_uv += c.vt >= 0;
-      if (with_uv != 0 && with_uv != static_cast<int>(face.size()))
-        return error_at(ErrorCode::InvalidInput, "a face has texture coordinates on some corners but not others");
-      (with_uv ? faces_with_uv : faces_without_uv)++;
-      if (faces_with_uv && faces_without_uv)
-        return error_at(ErrorCode::InvalidInput, "some faces have texture coordinates and others do not");
-      ++num_faces;
-      for (size_t k = 1; k + 1 < face.size(); ++k) {
-        corners.push_back(face[0]);
-        corners.push_back(face[k]);
-        corners.push_back(face[k + 1]);
-      }
-    } else if (key == "usemtl") {
-      if (used_material.empty()) used_material = std::string(tok.rest_of_line());
-    } else if (is_statement_name(key)) {
-      // mtllib (read by obj_mtllib), groups, smoothing groups, lines and
-      // free-form geometry: nothing we use.
+  if (tok.at_end()) return Status::success();  // a blank line
+  const std::string_view key = tok.next_on_line();
+  if (key.empty() || key[0] == '#') {
+    // a comment
+  } else if (key == "v") {
+    double x[6];
+    int got = 0;
+    std::string_view bad;
+    if (!read_reals(x, 3, 6, got, bad))
+      return error_at(ErrorCode::InvalidInput,
+                      bad.empty() ? "a vertex needs 3 coordinates" : "vertex coordinate " + quote(bad) + " is not a number");
+    const Vec3 p(x[0], x[1], x[2]);
+    if (!p.allFinite())
+      return error_at(ErrorCode::InvalidInput, "vertex " + std::to_string(mesh.positions.size() + 1) +
+                                                   " has a NaN or infinite coordinate");
+    if (mesh.positions.size() >= static_cast<size_t>(INT_MAX))
+      return error_at(ErrorCode::TooLarge, "too many vertices");
+    mesh.positions.push_back(p);
+    if (got == 6 && all_have_colors) {
+      const Vec3 color(x[3], x[4], x[5]);
+      if (!color.allFinite())
+        return error_at(ErrorCode::InvalidInput, "vertex " + std::to_string(mesh.positions.size()) +
+                                                     " has a NaN or infinite color");
+      vertex_colors.push_back(color);
     } else {
-      return error_at(ErrorCode::InvalidInput, "not an OBJ statement: " + quote(key));
+      all_have_colors = false;
     }
-    tok.skip_line();
+  } else if (key == "vt") {
+    double x[3];
+    int got = 0;
+    std::string_view bad;
+    if (!read_reals(x, 1, 3, got, bad))
+      return error_at(ErrorCode::InvalidInput, "texture coordinate " + quote(bad) + " is not a number");
+    const Vec2 uv(x[0], got > 1 ? x[1] : 0.0);
+    if (!uv.allFinite()) return error_at(ErrorCode::InvalidInput, "NaN or infinite texture coordinate");
+    texcoords.push_back(uv);
+  } else if (key == "vn") {
+    double x[3];
+    int got = 0;
+    std::string_view bad;
+    if (!read_reals(x, 3, 3, got, bad))
+      return error_at(ErrorCode::InvalidInput,
+                      bad.empty() ? "a normal needs 3 components" : "normal component " + quote(bad) + " is not a number");
+    const Vec3 n(x[0], x[1], x[2]);
+    if (!n.allFinite()) return error_at(ErrorCode::InvalidInput, "NaN or infinite normal");
+    // Unit length now, so that the per-vertex sums below stay finite.
+    normals.push_back(unit_or_zero(n));
+  } else if (key == "f") {
+    face.clear();
+    for (std::string_view t = tok.next_on_line(); !t.empty(); t = tok.next_on_line()) {
+      // v, v/vt, v//vn or v/vt/vn
+      Corner c;
+      const size_t s1 = t.find('/');
+      const std::string_view vs = t.substr(0, s1);
+      std::string_view ts, ns;
+      if (s1 != std::string_view::npos) {
+        const size_t s2 = t.find('/', s1 + 1);
+        ts = t.substr(s1 + 1, s2 == std::string_view::npos ? std::string_view::npos : s2 - s1 - 1);
+        if (s2 != std::string_view::npos) ns = t.substr(s2 + 1);
+      }
+      const size_t nv = mesh.positions.size();
+      IndexResult r = resolve_index(vs, nv, c.v);
+      if (r == IndexResult::NotAnInteger)
+        return error_at(ErrorCode::InvalidInput, "face corner " + quote(t) + " is not a vertex index");
+      if (r == IndexResult::OutOfRange)
+        return error_at(ErrorCode::InvalidInput, "face refers to vertex " + std::string(vs.substr(0, 24)) +
+                                                     (vs.size() > 24 ? "..." : "") + " but only " +
+                                                     std::to_string(nv) + " vertices are defined before it");
+      if (!ts.empty()) {
+        r = resolve_index(ts, texcoords.size(), c.vt);
+        if (r != IndexResult::Ok)
+          return error_at(ErrorCode::InvalidInput, "face refers to texture coordinate " + quote(ts) + " but only " +
+                                                       std::to_string(texcoords.size()) + " are defined");
+      }
+      if (!ns.empty()) {
+        r = resolve_index(ns, normals.size(), c.vn);
+        if (r != IndexResult::Ok)
+          return error_at(ErrorCode::InvalidInput, "face refers to normal " + quote(ns) + " but only " +
+                                                       std::to_string(normals.size()) + " are defined");
+      }
+      face.push_back(c);
+    }
+    if (face.size() < 3)
+      return error_at(ErrorCode::InvalidInput,
+                      "a face has " + std::to_string(face.size()) + " corners (at least 3 needed)");
+    int with_uv = 0;
+    for (const Corner& c : face) with_uv += c.vt >= 0;
+    if (with_uv != 0 && with_uv != static_cast<int>(face.size()))
+      return error_at(ErrorCode::InvalidInput, "a face has texture coordinates on some corners but not others");
+    (with_uv ? faces_with_uv : faces_without_uv)++;
+    if (faces_with_uv && faces_without_uv)
+      return error_at(ErrorCode::InvalidInput, "some faces have texture coordinates and others do not");
+    for (size_t k = 1; k + 1 < face.size(); ++k) {
+      corners.push_back(face[0]);
+      corners.push_back(face[k]);
+      corners.push_back(face[k + 1]);
+    }
+  } else if (key == "usemtl") {
+    if (used_material.empty()) used_material = std::string(tok.rest_of_line());
+  } else if (is_statement_name(key)) {
+    // mtllib (read by obj_mtllib), groups, smoothing groups, lines and
+    // free-form geometry: nothing we use.
+  } else {
+    return error_at(ErrorCode::InvalidInput, "not an OBJ statement: " + quote(key));
   }
+  return Status::success();
+}
 
+// Every line has been read: the corners become triangles, uvs and normals.
+Status ObjStreamReader::State::build(TriMesh& out, GeometryKind& kind) {
   const int nv = mesh.num_vertices();
   if (nv == 0) return Status::error(ErrorCode::Empty, "empty: the OBJ has no vertices");
   if (all_have_colors && static_cast<int>(vertex_colors.size()) == nv) mesh.colors = std::move(vertex_colors);
@@ -299,19 +321,57 @@ Status read_obj_body(const std::uint8_t* data, size_t size, TriMesh& mesh, Geome
       }
   }
   kind = nt > 0 ? GeometryKind::Mesh : GeometryKind::PointCloud;
+  out = std::move(mesh);
   return Status::success();
 }
 
-}  // namespace
+ObjStreamReader::ObjStreamReader(std::uint64_t total_size, std::string mtl_text)
+    : s_(std::make_unique<State>(total_size, std::move(mtl_text))) {}
+
+ObjStreamReader::~ObjStreamReader() = default;
+
+std::uint64_t ObjStreamReader::bytes_received() const { return s_->bytes.received; }
+std::uint64_t ObjStreamReader::vertices_read() const { return s_->mesh.positions.size(); }
+
+Status ObjStreamReader::push(const std::uint8_t* data, size_t size) {
+  State& st = *s_;
+  if (Status s = st.bytes.accept(size); !s) return s;
+  Status s = io_detail::guard_allocation(
+      [&] { return st.lines.push(data, size, [&st](std::string_view line) { return st.statement(line); }); });
+  if (!s) {
+    st.bytes.error = s;
+    st.clear();
+  }
+  return s;
+}
+
+Status ObjStreamReader::finish(TriMesh& mesh, GeometryKind& kind) {
+  State& st = *s_;
+  mesh = TriMesh();
+  kind = GeometryKind::PointCloud;
+  if (Status s = st.bytes.complete(); !s) return s;
+  Status s = io_detail::guard_allocation([&] {
+    if (st.bytes.total == 0) return Status::error(ErrorCode::Empty, "empty input: no bytes");
+    if (Status e = st.lines.finish([&st](std::string_view line) { return st.statement(line); }); !e) return e;
+    return st.build(mesh, kind);
+  });
+  st.clear();
+  if (!s) {
+    mesh = TriMesh();  // never hand back half a mesh
+    kind = GeometryKind::PointCloud;
+  }
+  st.bytes.error = s.ok() ? Status::error(ErrorCode::Internal, "the reader has already finished") : s;
+  return s;
+}
 
 Status read_obj(const std::uint8_t* data, size_t size, TriMesh& mesh, GeometryKind& kind,
                 const std::string& mtl_text) {
   mesh = TriMesh();
   kind = GeometryKind::PointCloud;
   if (Status s = io_detail::check_input_size(size, kMaxGeometryBytes); !s) return s;
-  Status s = io_detail::guard_allocation([&] { return read_obj_body(data, size, mesh, kind, mtl_text); });
-  if (!s) mesh = TriMesh();  // never hand back half a mesh
-  return s;
+  ObjStreamReader reader(size, mtl_text);
+  if (Status s = reader.push(data, size); !s) return s;
+  return reader.finish(mesh, kind);
 }
 
 std::string write_obj(const TriMesh& mesh, const std::string& mtl_file) {

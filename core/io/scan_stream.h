@@ -1,8 +1,9 @@
 // Reading a scan from chunks of bytes pushed by the caller, so that a large
 // file never has to be held whole (the page reads a File in slices). The
 // result is the same as the whole-buffer readers' (io.h) for every way of
-// cutting the bytes into chunks, errors and messages included: read_ply is
-// itself one push and a finish of PlyStreamReader.
+// cutting the bytes into chunks, errors and messages included: read_ply,
+// read_obj, read_xyz and read_vtk are themselves one push and a finish of
+// these readers.
 //
 // The caller declares the file's size up front (a File's size, a stat): the
 // header's counts are checked against it before any body byte arrives, as
@@ -42,10 +43,76 @@ class PlyStreamReader {
   std::unique_ptr<State> s_;
 };
 
-// Any scan read_geometry reads, from pushed chunks. PLY (by extension, or
-// an unknown extension and the bytes "ply\n") is parsed as it comes; OBJ,
-// XYZ and VTK are not streamed: their bytes are gathered and handed to
-// read_geometry at finish. finish gives what read_geometry gives.
+// OBJ, parsed line by line as the bytes come: only an unfinished line is
+// carried between pushes. The vertices, uvs, normals and face corners are
+// kept as read; finish resolves them into the mesh as read_obj does (uvs per
+// vertex or per corner, normals averaged per vertex), and takes the texture
+// name from the MTL text given here (read_obj's mtl_text).
+class ObjStreamReader {
+ public:
+  explicit ObjStreamReader(std::uint64_t total_size, std::string mtl_text = "");
+  ~ObjStreamReader();
+  ObjStreamReader(const ObjStreamReader&) = delete;
+  ObjStreamReader& operator=(const ObjStreamReader&) = delete;
+
+  Status push(const std::uint8_t* data, size_t size);
+  Status finish(TriMesh& mesh, GeometryKind& kind);
+  std::uint64_t bytes_received() const;
+  // The "v" lines read so far (an OBJ declares no count).
+  std::uint64_t vertices_read() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> s_;
+};
+
+// XYZ (and Leica .pts), parsed line by line as the bytes come. Whether six
+// or nine columns hold normals or colors, and the colors' scale, depend on
+// every row, so they are decided at finish.
+class XyzStreamReader {
+ public:
+  explicit XyzStreamReader(std::uint64_t total_size);
+  ~XyzStreamReader();
+  XyzStreamReader(const XyzStreamReader&) = delete;
+  XyzStreamReader& operator=(const XyzStreamReader&) = delete;
+
+  Status push(const std::uint8_t* data, size_t size);
+  Status finish(PointCloud& cloud);
+  std::uint64_t bytes_received() const;
+  std::uint64_t points_read() const;
+  // A .pts file's count line, once read (0 when none).
+  std::uint64_t declared_points() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> s_;
+};
+
+// Legacy VTK (ASCII POLYDATA), parsed as the bytes come: a section's head
+// (keyword, counts, type names) is read once all of it is at hand, its
+// numbers one by one; only an unfinished head or number is carried.
+class VtkStreamReader {
+ public:
+  explicit VtkStreamReader(std::uint64_t total_size);
+  ~VtkStreamReader();
+  VtkStreamReader(const VtkStreamReader&) = delete;
+  VtkStreamReader& operator=(const VtkStreamReader&) = delete;
+
+  Status push(const std::uint8_t* data, size_t size);
+  Status finish(TriMesh& mesh, GeometryKind& kind);
+  std::uint64_t bytes_received() const;
+  // The POINTS count once its section's head has been read (0 before).
+  std::uint64_t declared_vertices() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> s_;
+};
+
+// Any scan read_geometry reads, from pushed chunks. The format is told as
+// read_geometry tells it (the name's extension, else the first 4 KiB), then
+// parsed as the bytes come by that format's stream reader. finish gives what
+// read_geometry gives.
 class ScanStreamReader {
  public:
   ScanStreamReader(std::string name, std::uint64_t total_size);
@@ -58,12 +125,17 @@ class ScanStreamReader {
   // The same without the cloud (a copy of the mesh's vertices and faces:
   // to_point_cloud), for callers that move the mesh's arrays themselves.
   Status finish(TriMesh& mesh, GeometryKind& kind);
-  // PLY: the header's vertex count once it has been read (0 before, and for
-  // other formats), so a caller can refuse a scan too large for its memory
-  // before the body is read.
-  std::uint64_t declared_vertices() const { return ply_ ? ply_->declared_vertices() : 0; }
-  // True once the bytes are known to be parsed as they come (PLY).
-  bool streaming() const { return ply_ != nullptr; }
+  // The vertex count the file declares once it has been read (a PLY
+  // header's, a VTK POINTS head's, a .pts count line's; 0 before, and for
+  // OBJ),
+  // so a caller can refuse a scan too large for its memory before the body
+  // is read.
+  std::uint64_t declared_vertices() const;
+  // The vertices parsed so far (OBJ, XYZ; a PLY's once finished), so a
+  // caller can refuse a scan whose count grows too large while it is read.
+  std::uint64_t vertices_read() const;
+  // True once the format is known (its stream reader has the bytes).
+  bool streaming() const { return ply_ || obj_ || xyz_ || vtk_; }
   std::uint64_t bytes_received() const { return received_; }
 
  private:
@@ -73,8 +145,11 @@ class ScanStreamReader {
   std::uint64_t total_ = 0, received_ = 0;
   Status error_;
   bool decided_ = false;
-  Bytes gathered_;  // the bytes before the format is known, or all of a non-PLY file
+  Bytes gathered_;  // the bytes before the format is known
   std::unique_ptr<PlyStreamReader> ply_;
+  std::unique_ptr<ObjStreamReader> obj_;
+  std::unique_ptr<XyzStreamReader> xyz_;
+  std::unique_ptr<VtkStreamReader> vtk_;
 };
 
 }  // namespace lk

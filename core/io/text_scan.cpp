@@ -131,6 +131,29 @@ Status check_input_size(size_t size, size_t limit) {
   return Status::success();
 }
 
+StreamBytes::StreamBytes(std::uint64_t total_size, size_t limit) : total(total_size) {
+  if (total_size > limit)
+    error = Status::error(ErrorCode::TooLarge, "too large: " + std::to_string(total_size) + " bytes, the limit is " +
+                                                   std::to_string(limit));
+}
+
+Status StreamBytes::accept(size_t size) {
+  if (!error.ok()) return error;
+  if (size > total - received)
+    error = Status::error(ErrorCode::InvalidInput,
+                          "more bytes than the " + std::to_string(total) + " the file was declared to have");
+  else
+    received += size;
+  return error;
+}
+
+Status StreamBytes::complete() {
+  if (error.ok() && received != total)
+    error = Status::error(ErrorCode::Truncated, "truncated: the data ends after " + std::to_string(received) +
+                                                    " of the file's " + std::to_string(total) + " bytes");
+  return error;
+}
+
 bool parse_int64(const char* begin, const char* end, std::int64_t& out) {
   if (begin != end && *begin == '+') ++begin;
   auto r = std::from_chars(begin, end, out);

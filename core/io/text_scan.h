@@ -11,6 +11,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <new>
 #include <string>
 #include <string_view>
@@ -76,6 +77,66 @@ class Tokenizer {
   const char* p_;
   const char* end_;
   int line_ = 1;
+};
+
+// Cuts bytes pushed in chunks into lines (split at '\n', the newline not
+// included): only an unfinished line is carried between pushes, so the line
+// readers (OBJ, XYZ) see the same lines whatever the chunks. on_line returns
+// a Status; the first error stops the push.
+class LineSplitter {
+ public:
+  template <typename OnLine>
+  Status push(const std::uint8_t* data, size_t size, OnLine&& on_line) {
+    const char* p = reinterpret_cast<const char*>(data);
+    const char* end = p + size;
+    if (!carry_.empty()) {
+      const char* nl = static_cast<const char*>(std::memchr(p, '\n', size));
+      if (!nl) {
+        carry_.append(p, end);
+        return Status::success();
+      }
+      carry_.append(p, nl);
+      std::string line;
+      line.swap(carry_);
+      if (Status s = on_line(std::string_view(line)); !s) return s;
+      p = nl + 1;
+    }
+    while (p < end) {
+      const char* nl = static_cast<const char*>(std::memchr(p, '\n', static_cast<size_t>(end - p)));
+      if (!nl) {
+        carry_.assign(p, end);
+        break;
+      }
+      if (Status s = on_line(std::string_view(p, static_cast<size_t>(nl - p))); !s) return s;
+      p = nl + 1;
+    }
+    return Status::success();
+  }
+  // After the last push: the last line when the bytes do not end with '\n'.
+  template <typename OnLine>
+  Status finish(OnLine&& on_line) {
+    if (carry_.empty()) return Status::success();
+    std::string line;
+    line.swap(carry_);
+    return on_line(std::string_view(line));
+  }
+  void clear() { std::string().swap(carry_); }
+
+ private:
+  std::string carry_;
+};
+
+// What every stream reader checks of the bytes it is pushed: the size the
+// caller declared (within kind's limit), no more bytes than that, and all of
+// them by the end; once an error is set, every later call returns it.
+struct StreamBytes {
+  StreamBytes(std::uint64_t total_size, size_t limit);
+  // Before a push of size bytes: the sticky error, or more than declared.
+  Status accept(size_t size);
+  // At finish: the sticky error, or fewer bytes than declared.
+  Status complete();
+  std::uint64_t total = 0, received = 0;
+  Status error;
 };
 
 // Shortest "%.Ng" text that reads back as exactly the same double.

@@ -137,6 +137,34 @@ int main(int argc, char** argv) {
       "# vtk DataFile Version 5.1\nt\nASCII\nDATASET POLYDATA\nPOINTS 4 float\n0 0 0 1 0 0 1 1 0 0 1 0\n"
       "POLYGONS 2 6\nOFFSETS vtktypeint64\n0 3 6\nCONNECTIVITY vtktypeint64\n0 1 2 0 2 3\n");
 
+  // fuzz_scan_stream: a name byte (0 .ply, 1 .obj, 2 .xyz, 3 .pts, 4 .vtk,
+  // 5 none), a cut-count byte, the cuts (two bytes each), then the file.
+  {
+    const std::string grid_obj = write_obj(corner), grid_xyz = write_xyz(cloud);
+    const std::string vtk = "# vtk DataFile Version 3.0\nt\nASCII\nDATASET POLYDATA\nPOINTS 4 float\n"
+                            "0 0 0 1 0 0 1 1 0 0 1 0\nPOLYGONS 1 5\n4 0 1 2 3\n";
+    const Bytes ply = write_ply(grid), ply_ascii = write_ply(grid, true);
+    const struct {
+      std::uint8_t name;
+      const char* label;
+      Bytes file;
+    } files[] = {{0, "ply", ply}, {5, "ply_ascii", ply_ascii}, {1, "obj", Bytes(grid_obj.begin(), grid_obj.end())},
+                 {5, "obj", Bytes(grid_obj.begin(), grid_obj.end())}, {2, "xyz", Bytes(grid_xyz.begin(), grid_xyz.end())},
+                 {3, "pts", Bytes{'2', '\n', '0', ' ', '0', ' ', '0', ' ', '9', '\n', '1', ' ', '0', ' ', '0', ' ', '9', '\n'}},
+                 {4, "vtk", Bytes(vtk.begin(), vtk.end())}};
+    for (const auto& f : files)
+      for (int cuts : {0, 1, 5}) {
+        Bytes seed{f.name, static_cast<std::uint8_t>(cuts)};
+        for (int k = 0; k < cuts; ++k) {
+          const size_t at = f.file.size() * (k + 1) / (cuts + 1) + k;  // inside lines and numbers
+          seed.push_back(static_cast<std::uint8_t>(at >> 8));
+          seed.push_back(static_cast<std::uint8_t>(at & 255));
+        }
+        seed.insert(seed.end(), f.file.begin(), f.file.end());
+        put("scan_stream", std::string(f.label) + "_" + std::to_string(f.name) + "_" + std::to_string(cuts), seed);
+      }
+  }
+
   // Images: ours (PNG) and stb_image_write's (JPEG, BMP, TGA), 6x4 pixels.
   for (int channels : {1, 3, 4}) {
     Image im = Image::make(6, 4, channels);

@@ -12,8 +12,8 @@ import { openProject } from './project.js';
 // A scan is also refused by the worker, from its size and before a byte is
 // read, when the core's memory could not fit it (worker.js, streamScan: the
 // wasm heap's 2 GiB over the heap a fit takes per byte of file, about
-// 158 MB; the drop zone shows that limit once the core is up). ?max_mb=N
-// overrides this one.
+// 158 MB of PLY and 341 MB of OBJ, XYZ or VTK; the drop zone shows those
+// limits once the core is up). ?max_mb=N overrides this one.
 const DEFAULT_MAX_SCAN_MB = 256;
 const maxScanMb = Number(params.get('max_mb')) > 0 ? Number(params.get('max_mb')) : DEFAULT_MAX_SCAN_MB;
 export const MAX_SCAN_BYTES = maxScanMb * 1024 * 1024;
@@ -101,8 +101,13 @@ export async function handleFiles(fileList) {
 export function wireFiles() {
   ui.maxSize.textContent = formatBytes(MAX_SCAN_BYTES);
   // Once the core is up (worker_client.js): the scan limit its memory sets.
-  app.showScanLimit = (limit) => { ui.maxSize.textContent = formatBytes(Math.min(MAX_SCAN_BYTES, limit)); };
-  if (app.scanLimit) app.showScanLimit(app.scanLimit);
+  // PLY's limit, and the text formats' when it is higher (they are parsed
+  // as they come, and take more bytes a point).
+  app.showScanLimit = (limit, textLimit) => {
+    const ply = Math.min(MAX_SCAN_BYTES, limit), text = Math.min(MAX_SCAN_BYTES, textLimit || limit);
+    ui.maxSize.textContent = text > ply ? formatBytes(ply) + ' (PLY), ' + formatBytes(text) + ' (OBJ, XYZ, VTK)' : formatBytes(ply);
+  };
+  if (app.scanLimit) app.showScanLimit(app.scanLimit, app.textScanLimit);
   ui.fileInput.addEventListener('change', () => {
     const files = ui.fileInput.files;
     handleFiles(files).finally(() => { ui.fileInput.value = ''; });

@@ -77,7 +77,8 @@ function startWorkerOnce() {
         // files from their size): the drop zone says so.
         if (msg.scanLimit > 0) {
           app.scanLimit = msg.scanLimit;
-          if (app.showScanLimit) app.showScanLimit(msg.scanLimit);  // files.js
+          app.textScanLimit = msg.textScanLimit || msg.scanLimit;
+          if (app.showScanLimit) app.showScanLimit(msg.scanLimit, app.textScanLimit);  // files.js
         }
         resolve();
       } else if (msg.type === 'progress') {
