@@ -489,4 +489,11 @@ TEST_CASE("fit_head: the warm ear refit holds a folded ear as the cold one does,
   CHECK(ear_apart < 0.2 * ear_size);
   CHECK(tw.mean < 1.25 * tc.mean);
   CHECK(warm_fit.global_fit.iterations.size() < cold_fit.global_fit.iterations.size());
+  // A negative number of warm rounds is refused with its name.
+  FitHeadOptions bad = cold;
+  bad.ear_refit_warm_rounds = -1;
+  FitHeadResult refused;
+  const Status st = fit_head(scan, s.generic, bad, refused);
+  CHECK(st.code == ErrorCode::InvalidInput);
+  CHECK(st.message.find("ear_refit_warm_rounds") != std::string::npos);
 }
