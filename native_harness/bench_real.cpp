@@ -37,6 +37,8 @@
 // scan-to-mesh term (FitHeadOptions::back_term).
 // --fit-real-scanned-neck: the scanned neck below the cut is fitted too
 // (FitHeadOptions::fit_scanned_neck on), to compare.
+// --fit-ear-refit-rounds N: the ear refit's warm rounds
+// (FitHeadOptions::ear_refit_warm_rounds; 0: the whole fit again, cold).
 #include "command.h"
 #include "fit_table.h"
 #include "generic_head_choice.h"
@@ -253,9 +255,11 @@ int run(const Args& args) {
       options.untangle_restore_rings > 8 ||
       !args.get_int("fit-hinges-last", hinges_last, hinges_last) || hinges_last < 0 ||
       hinges_last > 1 ||
+      !args.get_int("fit-ear-refit-rounds", options.ear_refit_warm_rounds, options.ear_refit_warm_rounds) ||
+      options.ear_refit_warm_rounds < 0 ||
       !args.get_int("fit-real-copies", 1, copies) || copies < 1 || copies > 13) {
     std::printf("   --fit-crease-trials / --fit-crease-edges / --fit-data-level / --fit-pleat-steps take a whole number, "
-                "--fit-restore-rings one up to 8, --fit-hinges-last 0 or 1, "
+                "--fit-restore-rings one up to 8, --fit-hinges-last 0 or 1, --fit-ear-refit-rounds one >= 0, "
                 "--fit-real-copies one from 1 to 13, --fit-crease-angle and --fit-surface-edges a number\n");
     return 1;
   }

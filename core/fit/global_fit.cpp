@@ -606,18 +606,24 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
                                                       " vertices, the mesh " + std::to_string(nv));
   for (const Vec3& p : terms.fold_reference)
     if (!finite(p)) return Status::error(ErrorCode::InvalidInput, "global fit: non-finite fold reference vertex");
+  if (!terms.start.empty() && static_cast<int>(terms.start.size()) != nv)
+    return Status::error(ErrorCode::InvalidInput, "global fit: the start has " + std::to_string(terms.start.size()) +
+                                                      " vertices, the mesh " + std::to_string(nv));
+  for (const Vec3& p : terms.start)
+    if (!finite(p)) return Status::error(ErrorCode::InvalidInput, "global fit: non-finite start vertex");
   if (!terms.smooth_guard_ignored.empty() && static_cast<int>(terms.smooth_guard_ignored.size()) != nv)
     return Status::error(ErrorCode::InvalidInput, "global fit: smooth_guard_ignored has " +
                                                       std::to_string(terms.smooth_guard_ignored.size()) +
                                                       " flags, the mesh " + std::to_string(nv) + " vertices");
 
   const VecX rest = to_vector(mesh.positions);
+  const VecX start = terms.start.empty() ? rest : to_vector(terms.start);
   const VecX reference = terms.fold_reference.empty() ? rest : to_vector(terms.fold_reference);
   std::vector<Vec3> reference_normals(mesh.triangles.size());
   for (size_t f = 0; f < mesh.triangles.size(); ++f)
     reference_normals[f] = triangle_normal(reference, mesh.triangles[f]);
   for (size_t f = 0; f < mesh.triangles.size(); ++f)
-    result.turned_before += !(triangle_normal(rest, mesh.triangles[f]).dot(reference_normals[f]) > 0);
+    result.turned_before += !(triangle_normal(start, mesh.triangles[f]).dot(reference_normals[f]) > 0);
   // The rest shape is the template as aligned (the reference), not the
   // local fit: see the header.
   const LinearTerm smooth = smooth_term(topology, reference, options.preserve_rest_shape);
@@ -679,7 +685,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
   const bool guarding = options.fold_guard_attempts > 0;
   const bool crossing_guarded = guarding && options.crossing_guard;
   TriMesh check_mesh = mesh;                         // scratch of the crossing check
-  std::vector<std::array<int, 2>> crossing_at_x = crossing_pairs(rest, check_mesh);  // at x, sorted
+  std::vector<std::array<int, 2>> crossing_at_x = crossing_pairs(start, check_mesh);  // at x, sorted
   result.crossing_before = static_cast<int>(crossing_at_x.size());
 
   const double edge = mean_edge_length(mesh);
@@ -703,7 +709,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
     refined_data = &refined_storage;
   result.data_level = refined_data->level;
   int carried_level = -1;
-  VecX x = rest;
+  VecX x = start;
   const int sub_rounds = static_cast<int>(options.smooth_weights.size());
   // Level 0 on the subsample rounds unless data_level_on_subsamples.
   const int data_from = options.data_level_on_subsamples ? 0 : sub_rounds;

@@ -343,6 +343,12 @@ struct GlobalFitTerms {
   // The scan's own triangles (head frame) when it came as a mesh, else
   // empty: E_back's normal rays (GlobalFitOptions::back_ray_edges).
   TriMesh back_surface;
+  // #V by 3 (or empty): where the iterations start (a warm start from an
+  // earlier fit of the same points: fit_head's ear refit). E_binding's edge
+  // vectors and E_constraint's positions are still the input mesh's, and
+  // pairs crossing or triangles turned at the start may stay, as the
+  // input's do. Empty: the iterations start at the input mesh.
+  std::vector<Vec3> start;
 };
 
 struct GlobalFitIteration {

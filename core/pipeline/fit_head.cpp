@@ -517,6 +517,8 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
     return Status::error(ErrorCode::InvalidInput, "levels must be in 0..5");
   if (!(options.scanned_neck_max_angle_deg >= 0 && options.scanned_neck_max_angle_deg <= 90))
     return Status::error(ErrorCode::InvalidInput, "scanned_neck_max_angle_deg must be in 0..90");
+  if (options.ear_refit_warm_rounds < 0)
+    return Status::error(ErrorCode::InvalidInput, "ear_refit_warm_rounds must be >= 0");
   if (generic.mesh.triangles.empty())
     return Status::error(ErrorCode::InvalidInput, "the generic head has no triangles");
   if (n < options.min_points)
@@ -842,6 +844,7 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
     // FitHeadOptions::bind_ear_edges: when the free fit's smooth finest
     // level crosses itself at an ear, the fit is made again with the ears'
     // edges bound and kept when its ears do not cross there.
+    const std::vector<char> ear_mask_control = vertex_mask(ear_vertices, topo.num_vertices);
     auto smooth_ear_pairs = [&](const TriMesh& control, const GlobalFitResult& fit, int& count) -> Status {
       ButterflyCreases c = creases;
       for (const auto& e : fit.fold_crease_edges) c.edges.push_back(e);
@@ -849,9 +852,20 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
       MultiresMesh smooth;
       Status s = build_multires(control, c, options.levels, smooth);
       if (!s) return s;
-      std::vector<std::array<int, 2>> pairs;
-      s = find_self_intersections(level_mesh(smooth, options.levels), pairs);
+      // Only the pairs with a triangle touching an ear count, so only those
+      // are searched: the same pairs as a whole search's that touch one.
+      const TriMesh level = level_mesh(smooth, options.levels);
+      const std::vector<char> ear_mask = propagate_vertex_mask(smooth, ear_mask_control)[options.levels];
+      std::vector<int> ear_triangles;
+      for (int f = 0; f < level.num_triangles(); ++f) {
+        const Tri& t = level.triangles[f];
+        if (ear_mask[t[0]] || ear_mask[t[1]] || ear_mask[t[2]]) ear_triangles.push_back(f);
+      }
+      MeshBvh bvh;
+      s = build_bvh(level, bvh);
       if (!s) return s;
+      std::vector<std::array<int, 2>> pairs;
+      find_intersections_with(bvh, ear_triangles, pairs);
       count = count_pairs_touching(smooth, options.levels, pairs, ear_vertices);
       return Status::success();
     };
@@ -862,10 +876,19 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
     if (free_pairs > 0) {
       GlobalFitTerms bound = terms;
       bound.binding_edges.insert(bound.binding_edges.end(), ear_edges.begin(), ear_edges.end());
+      GlobalFitOptions bound_options = global_options;
+      const int warm_rounds = options.ear_refit_warm_rounds;
+      if (warm_rounds > 0 && warm_rounds < static_cast<int>(bound_options.smooth_weights.size())) {
+        // Warm: from the free fit, only its last (weakest) rounds; the
+        // bound ears' edge vectors are still the locally fitted ones.
+        bound.start = out.control.positions;
+        bound_options.smooth_weights.erase(bound_options.smooth_weights.begin(),
+                                           bound_options.smooth_weights.end() - warm_rounds);
+      }
       TriMesh control;
       GlobalFitResult fit;
       MeshBvh tree;
-      st = fit_global(skin_pts, out.local, topo, bound, global_options, control, fit, progress, &tree);
+      st = fit_global(skin_pts, out.local, topo, bound, bound_options, control, fit, progress, &tree);
       if (!st) return with_context(st, "global fitting (ears bound)");
       int bound_pairs = 0;
       st = smooth_ear_pairs(control, fit, bound_pairs);

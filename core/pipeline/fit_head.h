@@ -199,6 +199,14 @@ struct FitHeadOptions {
   // smooth finest level, and a second global fit when an ear folds.
   enum class EarBinding { Off, FaceOnlyScans, WhereTheyCross, Always };
   EarBinding bind_ear_edges = EarBinding::WhereTheyCross;
+  // WhereTheyCross's second fit, warm: > 0 starts it from the free fit's
+  // control mesh and runs only the last ear_refit_warm_rounds of
+  // GlobalFitOptions::smooth_weights (then the final pass and the guards).
+  // Cheaper (Demosthenes 8.0 -> 6.8 s), its ears hold, but it lands in
+  // another minimum than the whole fit again: Table 1 0.0531 -> 0.0538 %,
+  // a synthetic head 14 % farther from its truth (figures: docs/design/
+  // fit_real_scans.md). 0 (the default): the whole fit from the local fit.
+  int ear_refit_warm_rounds = 0;
   // When an ear (a connected part of region "ears") still crosses itself or
   // the head at the finest level, its control vertices take the aligned
   // generic ear's shape, carried by the harmonic interpolation of the
