@@ -165,7 +165,7 @@ void size_scratch(MultiresMesh& m) {
     sc.face_mark[l].assign(m.triangles(l).size(), 0);
   }
   sc.stamp = 0;
-  sc.plan = {};
+  sc.plans.clear();
   // Work lists as long as the finest level: no update grows them.
   const size_t most = static_cast<size_t>(m.num_vertices(L));
   for (auto* v : {&sc.changed, &sc.reached, &sc.spread, &sc.targets}) v->reserve(most);
@@ -279,11 +279,9 @@ namespace {
 // the faces whose normals, the vertices whose normals and displaced
 // positions, and the next level's vertices whose base positions an update
 // of that list recomputes, each list ascending.
-void build_plan(MultiresMesh& mesh, const std::vector<int>& moved, int top) {
-  auto& sc = mesh.scratch;
-  auto& plan = sc.plan;
-  plan.moved = moved;
-  plan.top = top;
+void build_plan(MultiresMesh& mesh, MultiresMesh::Scratch::Plan& plan) {
+  const std::vector<int>& moved = plan.moved;
+  const int top = plan.top;
   plan.faces.assign(top + 1, {});
   plan.reached.assign(top + 1, {});
   plan.targets.assign(top + 1, {});
@@ -312,8 +310,7 @@ void build_plan(MultiresMesh& mesh, const std::vector<int>& moved, int top) {
 
 // The plan replayed: the same kernels on a superset of what the marked path
 // recomputes, so the result is the same bit for bit.
-void run_plan(MultiresMesh& mesh, UpdateFootprint* footprint) {
-  const auto& plan = mesh.scratch.plan;
+void run_plan(MultiresMesh& mesh, const MultiresMesh::Scratch::Plan& plan, UpdateFootprint* footprint) {
   MultiresState& st = mesh.state;
   for (int l = 0; l <= plan.top; ++l) {
     const MultiresLevelLinks& links = mesh.links[l];
@@ -384,20 +381,27 @@ Status update_control_vertices(MultiresMesh& mesh, const std::vector<int>& moved
   // that comes out bit-identical (e.g. P' = P + 0 * N where d = 0 and P did
   // not move) stops the spread without changing the result.
   // A moved list given again: its plan (built on its second time), replayed.
-  auto& plan = sc.plan;
-  if (plan.moved == moved && plan.top == top) {
+  constexpr size_t kPlans = 4;
+  auto& plans = sc.plans;
+  const auto known = std::find_if(plans.begin(), plans.end(), [&](const MultiresMesh::Scratch::Plan& p) {
+    return p.top == top && p.moved == moved;
+  });
+  if (known != plans.end()) {
+    std::rotate(plans.begin(), known, known + 1);  // most recently used first
     for (size_t i = 0; i < moved.size(); ++i) {
       mesh.control[moved[i]] = new_positions[i];
       st.base[0][moved[i]] = new_positions[i];
     }
-    if (!plan.built) build_plan(mesh, moved, top);
-    run_plan(mesh, footprint);
+    if (!plans.front().built) build_plan(mesh, plans.front());
+    run_plan(mesh, plans.front(), footprint);
     if (top < L) mesh.stale_from = mesh.stale_from < 0 ? top + 1 : std::min(mesh.stale_from, top + 1);
     return Status::success();
   }
-  plan = {};
-  plan.moved = moved;
-  plan.top = top;
+  if (plans.size() == kPlans) plans.pop_back();
+  MultiresMesh::Scratch::Plan fresh;
+  fresh.moved = moved;
+  fresh.top = top;
+  plans.insert(plans.begin(), std::move(fresh));
 
   std::vector<int> &changed = sc.changed, &reached = sc.reached, &spread = sc.spread, &targets = sc.targets;
   changed.clear();

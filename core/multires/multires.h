@@ -79,14 +79,16 @@ struct MultiresMesh {
     // An animation moves the same control vertices frame after frame: once
     // a moved list repeats, its work lists per level (faces, normals and
     // refinement targets, its support on every level without pruning) are
-    // kept and replayed, without marks, gathering or sorting. A different
-    // list drops them.
+    // kept and replayed, without marks, gathering or sorting. The last few
+    // lists are remembered (a pose and its way back, two expressions in
+    // turn), the least recently used first to go.
     struct Plan {
       std::vector<int> moved;  // the moved list it is for, as given
       int top = -1;            // the highest level it reaches
       bool built = false;
       std::vector<std::vector<int>> faces, reached, targets;  // per level
-    } plan;
+    };
+    std::vector<Plan> plans;  // most recently used first
   } scratch;
 
   int num_levels() const { return static_cast<int>(levels.size()); }  // L
