@@ -2,7 +2,6 @@
 
 #include "mesh/topology.h"
 #include "multires/multires.h"
-#include "pipeline/fit_head.h"
 #include "raycast/bvh.h"
 #include "raycast/self_intersection.h"
 
@@ -39,7 +38,6 @@ Status keep_mouth_bag_inside(const GenericHead& generic, const MouthBagOptions& 
   if (bag.empty()) return Status::success();
   MeshTopology topo;
   Status s = build_topology(generic.mesh, topo);
-  if (s) s = carry_mouth_bag(in_bag, topo, generic.mesh, control);
   if (!s || options.level == 0) return with_context(s, "mouth bag");
 
   ButterflyCreases creases;
@@ -71,12 +69,24 @@ Status keep_mouth_bag_inside(const GenericHead& generic, const MouthBagOptions& 
   Vec3 centre = Vec3::Zero();
   for (int v : bag) centre += carried[size_t(v)];
   centre /= double(bag.size());
+  // The bag vertices drawn in: corners of the control faces under the
+  // pairs, and their neighbours within the bag (the rest of the bag, which
+  // a stereo patch may have placed, stays).
+  std::vector<char> in_set(size_t(nv), 0);
+  std::vector<int> set;
+  for (const auto& p : pairs)
+    for (int f : p)
+      for (int v : generic.mesh.triangles[size_t(f / per_control)])
+        if (in_bag[size_t(v)] && !in_set[size_t(v)]) in_set[size_t(v)] = 1, set.push_back(v);
+  for (size_t i = 0, n = set.size(); i < n; ++i)
+    for (int w : topo.rings[size_t(set[i])])
+      if (in_bag[size_t(w)] && !in_set[size_t(w)]) in_set[size_t(w)] = 1, set.push_back(w);
   int best_step = 0;
-  std::vector<Vec3> moved(bag.size());
-  for (int step = 1; step <= options.max_steps && result.pairs_after > 0; ++step) {
+  std::vector<Vec3> moved(set.size());
+  for (int step = 1; step <= options.max_steps && result.pairs_after > 0 && !set.empty(); ++step) {
     const double share = step * options.step_share;
-    for (size_t i = 0; i < bag.size(); ++i) moved[i] = carried[size_t(bag[i])] + share * (centre - carried[size_t(bag[i])]);
-    s = update_control_vertices(mr, bag, moved);
+    for (size_t i = 0; i < set.size(); ++i) moved[i] = carried[size_t(set[i])] + share * (centre - carried[size_t(set[i])]);
+    s = update_control_vertices(mr, set, moved);
     if (!s) return with_context(s, "mouth bag");
     level.positions = mr.state.displaced[size_t(options.level)];
     s = refit_bvh(level, bvh);
@@ -88,7 +98,7 @@ Status keep_mouth_bag_inside(const GenericHead& generic, const MouthBagOptions& 
     }
   }
   result.share = best_step * options.step_share;
-  for (int v : bag) control.positions[size_t(v)] = carried[size_t(v)] + result.share * (centre - carried[size_t(v)]);
+  for (int v : set) control.positions[size_t(v)] = carried[size_t(v)] + result.share * (centre - carried[size_t(v)]);
   return Status::success();
 }
 

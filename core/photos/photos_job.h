@@ -40,7 +40,7 @@ struct PhotosJobOptions {
   bool use_slide = true;
   // Lips that stay whole (photos/lips.h): the generic head's virtual lip
   // edges bound in the shape fit (with fit.binding_weight), and the mouth
-  // bag carried by the lips and kept inside the mouth afterwards.
+  // bag kept inside the mouth afterwards.
   bool bind_lips = true;
   bool keep_mouth_bag = true;
   MouthBagOptions mouth_bag;

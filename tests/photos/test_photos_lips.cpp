@@ -48,19 +48,22 @@ TEST_CASE("the mouth bag kept inside clears the generic head's own crossings at 
   CHECK(r.pairs_after == 0);
   CHECK(r.share > 0);
   CHECK(lips_crossings(generic, control.positions) == 0);
-  // Only the bag moved, by at most share of the way to its centroid (under 5 % here).
+  // Only bag vertices moved (near the corners, not all of them), under 5 % of the way to its centroid.
   std::vector<char> bag(size_t(generic.mesh.num_vertices()), 0);
   for (int v : generic.annotations.constrained_vertices) bag[size_t(v)] = 1;
   for (int v = 0; v < generic.mesh.num_vertices(); ++v)
     if (!bag[size_t(v)]) CHECK(control.positions[size_t(v)] == generic.mesh.positions[size_t(v)]);
+  int bag_moved = 0;
+  for (int v : generic.annotations.constrained_vertices) bag_moved += control.positions[size_t(v)] != generic.mesh.positions[size_t(v)];
+  CHECK(bag_moved > 0);
+  CHECK(bag_moved < int(generic.annotations.constrained_vertices.size()));
   CHECK(r.share < 0.05);
-  // Carry only (level 0): an unmoved head keeps its bag.
+  // Off (level 0): the head is left as it is.
   TriMesh same = generic.mesh;
-  MouthBagOptions carry;
-  carry.level = 0;
-  REQUIRE(keep_mouth_bag_inside(generic, carry, same, r));
-  for (int v = 0; v < generic.mesh.num_vertices(); ++v)
-    CHECK((same.positions[size_t(v)] - generic.mesh.positions[size_t(v)]).norm() < 1e-12);
+  MouthBagOptions off;
+  off.level = 0;
+  REQUIRE(keep_mouth_bag_inside(generic, off, same, r));
+  CHECK(same.positions == generic.mesh.positions);
   // Bad input.
   TriMesh other;
   CHECK(!keep_mouth_bag_inside(generic, {}, other, r));
