@@ -394,6 +394,10 @@ int run_photos(const Args& args) {
               r.calib.focal);
   std::printf("  landmark error: calibration %.2f -> %.2f px, shape fit %.2f -> %.2f px (%.2f s)\n",
               r.calib.initial_rms_px, r.calib.final_rms_px, r.fit.initial_rms_px, r.fit.final_rms_px, seconds);
+  if (r.mouth_bag.pairs_before > 0)
+    std::printf("  mouth bag (photos/lips.h): %d level-3 crossing pairs over it as fitted -> %d, its corners drawn %.0f %% of the "
+                "way to its centroid\n",
+                r.mouth_bag.pairs_before, r.mouth_bag.pairs_after, 100 * r.mouth_bag.share);
   if (stereo) {
     int pairs_used = 0;
     for (const StereoPairReport& p : r.stereo.pairs) pairs_used += p.patches > 0;

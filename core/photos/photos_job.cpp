@@ -41,7 +41,7 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
                         const std::vector<LandmarkPhoto>& photos, const SelfCalibResult& calib,
                         const PhotosJobOptions& options, ShapeFitResult& fit,
                         const std::vector<PhotoOutline>* outlines, const StereoResult* stereo,
-                        PhotosStereoFit* stereo_fit, const LandmarkSlide* slide) {
+                        PhotosStereoFit* stereo_fit, const LandmarkSlide* slide, MouthBagResult* mouth_bag) {
   if (slide && !slide->has_slide() && !slide->has_sigma()) slide = nullptr;
   if (calib.photos.size() != photos.size())
     return Status::error(ErrorCode::InvalidInput, "shape fit: the calibration is for other photos");
@@ -103,7 +103,17 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
   }
   const std::vector<double> start = attractors ? attractors->surface_distances(generic.mesh.positions)
                                                : std::vector<double>();
-  Status s = fit_shape(generic.mesh, sets, lambdas, options.fit, fit);
+  ShapeFitOptions fit_options = options.fit;
+  if (options.bind_lips) {
+    const std::vector<std::array<int, 2>> lips = lip_binding_edges(generic);
+    fit_options.binding_edges.insert(fit_options.binding_edges.end(), lips.begin(), lips.end());
+  }
+  Status s = fit_shape(generic.mesh, sets, lambdas, fit_options, fit);
+  if (s && options.keep_mouth_bag) {
+    MouthBagResult bag;
+    s = keep_mouth_bag_inside(generic, options.mouth_bag, fit.mesh, bag);
+    if (mouth_bag) *mouth_bag = bag;
+  }
   if (s && attractors && stereo_fit) {
     auto median_of = [](std::vector<double> v) {
       std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
@@ -206,7 +216,7 @@ Status run_photos_job(const GenericHead& generic, const LandmarkMap& map, const 
                              " deg apart; landmarks only");
   }
   s = fit_photos_shape(generic, landmarks, photos, result.calib, options, result.fit, outlines, &result.stereo,
-                       &result.stereo_fit, slide);
+                       &result.stereo_fit, slide, &result.mouth_bag);
   return with_context(s, "photos");
 }
 

@@ -11,6 +11,7 @@
 #include "head/head_model.h"
 #include "image/image.h"
 #include "photos/landmarks.h"
+#include "photos/lips.h"
 #include "photos/outline.h"
 #include "photos/self_calibration.h"
 #include "photos/shape_fit.h"
@@ -37,6 +38,12 @@ struct PhotosJobOptions {
   // the self-calibration and the shape fit; its scatter weighs the
   // landmarks (calib.use_slide_sigma).
   bool use_slide = true;
+  // Lips that stay whole (photos/lips.h): the generic head's virtual lip
+  // edges bound in the shape fit (with fit.binding_weight), and the mouth
+  // bag kept inside the mouth afterwards.
+  bool bind_lips = true;
+  bool keep_mouth_bag = true;
+  MouthBagOptions mouth_bag;
 };
 
 // What the stereo attractors came to in a fit (fua1998 Fig. 7's measure).
@@ -53,6 +60,7 @@ struct PhotosJobResult {
   StereoResult stereo;         // pairs tried and their patches (empty without images)
   PhotosStereoFit stereo_fit;
   ShapeFitResult fit;          // fit.mesh: the person's control mesh
+  MouthBagResult mouth_bag;    // what keeping the mouth bag inside did (PhotosJobOptions::keep_mouth_bag)
   std::vector<std::string> notes;  // for people: one photo only, photos dropped, ...
 };
 
@@ -66,7 +74,9 @@ Status run_photos_stereo(const GenericHead& generic, const std::vector<LandmarkP
 // The shape-fit stage alone, from a finished self-calibration: every used
 // photo's landmarks (with their calibration weights) as feature
 // observations, the outlines (if any) as silhouette observations and the
-// stereo patches (if any) as attractors. landmarks: the map attached to
+// stereo patches (if any) as attractors; with options.bind_lips the lips
+// bound, with options.keep_mouth_bag the bag kept inside afterwards
+// (photos/lips.h; mouth_bag: null or its report). landmarks: the map attached to
 // generic.mesh. outlines: null, or one per photo (empty points: none for
 // that photo), each used photo's as silhouette observations
 // (silhouette_obs.h; the neck region excluded, the chin region's lowest
@@ -77,7 +87,8 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
                         const std::vector<LandmarkPhoto>& photos, const SelfCalibResult& calib,
                         const PhotosJobOptions& options, ShapeFitResult& fit,
                         const std::vector<PhotoOutline>* outlines = nullptr, const StereoResult* stereo = nullptr,
-                        PhotosStereoFit* stereo_fit = nullptr, const LandmarkSlide* slide = nullptr);
+                        PhotosStereoFit* stereo_fit = nullptr, const LandmarkSlide* slide = nullptr,
+                        MouthBagResult* mouth_bag = nullptr);
 
 // The silhouette set fit_photos_shape builds (for reports: its stats at the
 // generic and the fitted shape). Null when no used photo has an outline.

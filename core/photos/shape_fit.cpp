@@ -104,13 +104,17 @@ namespace {
 
 // State: displacements delta of the current level's nodes (3 K); the
 // vertices are base + A delta (eq. 3, control_levels.h; A = I on the control
-// mesh). Residuals: the scaled observation sets, then sqrt(stiffness)
-// (L x I3) delta on the level's own graph, then sqrt(tether) delta.
+// mesh). Residuals: the scaled observation sets, the binding edges (over
+// vertices, like the observations), then sqrt(stiffness) (L x I3) delta on
+// the level's own graph, then sqrt(tether) delta.
 class ShapeProblem : public LeastSquaresProblem {
  public:
-  ShapeProblem(const TriMesh& control, std::vector<std::unique_ptr<ObservationSet>>& sets)
-      : base_(control.positions), sets_(sets) {
+  ShapeProblem(const TriMesh& control, std::vector<std::unique_ptr<ObservationSet>>& sets,
+               const std::vector<std::array<int, 2>>& binding_edges, double binding_weight)
+      : base_(control.positions), sets_(sets), binding_(binding_edges), binding_weight_(binding_weight) {
     scales_.assign(sets_.size(), 1.0);
+    for (const auto& e : binding_)
+      rest_.push_back(control.positions[size_t(e[0])] - control.positions[size_t(e[1])]);
   }
 
   double stiffness = 1, tether = 1e-4;
@@ -137,7 +141,7 @@ class ShapeProblem : public LeastSquaresProblem {
 
   int num_parameters() const override { return int(delta_.size()); }
   int observation_rows() const {
-    int n = 0;
+    int n = 3 * int(binding_.size());
     for (const auto& s : sets_) n += s->num_residuals();
     return n;
   }
@@ -157,6 +161,16 @@ class ShapeProblem : public LeastSquaresProblem {
       r.segment(row, rk.size()) = scales_[k] * rk;
       for (const auto& t : local) over_vertices.emplace_back(row + t.row(), t.col(), scales_[k] * t.value());
       row += int(rk.size());
+    }
+    const double sb = std::sqrt(binding_weight_);
+    for (size_t e = 0; e < binding_.size(); ++e) {
+      const int a = binding_[e][0], b = binding_[e][1];
+      r.segment<3>(row) = sb * ((p[size_t(a)] - p[size_t(b)]) - rest_[e]);
+      for (int j = 0; j < 3; ++j) {
+        over_vertices.emplace_back(row + j, 3 * a + j, sb);
+        over_vertices.emplace_back(row + j, 3 * b + j, -sb);
+      }
+      row += 3;
     }
     if (trip) {
       if (level_->identity) {
@@ -198,6 +212,9 @@ class ShapeProblem : public LeastSquaresProblem {
  private:
   std::vector<Vec3> base_;
   std::vector<std::unique_ptr<ObservationSet>>& sets_;
+  const std::vector<std::array<int, 2>>& binding_;
+  double binding_weight_;
+  std::vector<Vec3> rest_;  // each binding edge's x_a - x_b on the start shape
   const ControlLevel* level_ = nullptr;
   Eigen::VectorXd delta_;
   SparseMat L3_;
@@ -229,6 +246,11 @@ Status fit_shape(const TriMesh& control, std::vector<std::unique_ptr<Observation
     if (!(c.stiffness > 0) || !std::isfinite(c.stiffness) || c.nodes < 4)
       return Status::error(ErrorCode::InvalidInput, "shape fit: a coarse level needs >= 4 nodes and a stiffness > 0");
   if (control.num_vertices() == 0) return Status::error(ErrorCode::InvalidInput, "shape fit: empty control mesh");
+  if (!(options.binding_weight >= 0) || !std::isfinite(options.binding_weight))
+    return Status::error(ErrorCode::InvalidInput, "shape fit: the binding weight must be >= 0");
+  for (const auto& e : options.binding_edges)
+    if (e[0] < 0 || e[1] < 0 || e[0] >= control.num_vertices() || e[1] >= control.num_vertices() || e[0] == e[1])
+      return Status::error(ErrorCode::InvalidInput, "shape fit: a binding edge names a vertex the mesh does not have");
   // The levels, coarse to fine: each coarse one, then the control mesh for the schedule.
   std::vector<ControlLevel> levels(options.coarse_levels.size() + (options.stiffness_schedule.empty() ? 0 : 1));
   struct Stage {
@@ -246,7 +268,7 @@ Status fit_shape(const TriMesh& control, std::vector<std::unique_ptr<Observation
     if (!s) return with_context(s, "shape fit");
     for (double k : options.stiffness_schedule) stages.push_back({levels.size() - 1, k});
   }
-  ShapeProblem problem(control, sets);
+  ShapeProblem problem(control, sets, options.binding_edges, options.binding_weight);
   problem.tether = options.tether;
   problem.set_level(levels[0]);
   {

@@ -26,6 +26,7 @@
 #include "photos/landmarks.h"
 #include "photos/sparse_lm.h"
 
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
@@ -101,6 +102,16 @@ struct ShapeFitOptions {
   };
   std::vector<CoarseLevel> coarse_levels;
   double tether = 1e-4;           // ||delta||^2 weight: fixes what nothing observes
+  // Binding edges (the scan fit's E_binding, global_fit.h): vertex pairs
+  // whose difference x_a - x_b keeps its value on the start shape, rows
+  // sqrt(binding_weight) ((x_a - x_b) - r_e) in metres beside the
+  // stiffness's. The photos job binds the generic head's virtual lip edges
+  // (each upper lip line vertex to the lower one under it, 0.3 mm apart):
+  // landmarks on the two lips, each with pixels of noise, otherwise move
+  // the lines independently and cross them (docs/design/photos.md, "Lips
+  // that do not cross").
+  std::vector<std::array<int, 2>> binding_edges;
+  double binding_weight = 1e4;
   int reweighting_rounds = 2;
   int max_lm_iterations = 20;
   // An LM run stops when a step gains less than this share of the cost.
