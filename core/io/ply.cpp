@@ -579,32 +579,10 @@ Status PlyStreamReader::push(const std::uint8_t* data, size_t size) {
   const std::uint64_t data_base = st.received;
   st.received += size;
   Status s = io_detail::guard_allocation([&] {
-    size_t pos = 0;
-    // Finish what is carried with as few of the new bytes as it needs
-    // (growing the offer, so a long item costs linear time), then go on in
-    // the new bytes themselves, without copying them.
-    while (!st.carry.empty() && pos < size) {
-      const size_t old = st.carry.size();
-      const size_t take = std::min(size - pos, std::max<size_t>(old, 64 * 1024));
-      st.carry.insert(st.carry.end(), data + pos, data + pos + take);
-      pos += take;
-      size_t used = 0;
-      if (Status e = st.process(st.carry.data(), st.carry.size(), st.carry_base, false, used); !e) return e;
-      if (used >= old) {
-        pos -= st.carry.size() - used;  // those new bytes are offered again below
-        st.carry.clear();
-      } else {
-        st.carry.erase(st.carry.begin(), st.carry.begin() + static_cast<std::ptrdiff_t>(used));
-        st.carry_base += used;
-      }
-    }
-    if (st.carry.empty() && pos < size) {
-      size_t used = 0;
-      if (Status e = st.process(data + pos, size - pos, data_base + pos, false, used); !e) return e;
-      st.carry.assign(data + pos + used, data + size);
-      st.carry_base = data_base + pos + used;
-    }
-    return Status::success();
+    return io_detail::push_carried(st.carry, st.carry_base, data_base, data, size,
+                                   [&st](const std::uint8_t* d, size_t n, std::uint64_t at, bool final, size_t& used) {
+                                     return st.process(d, n, at, final, used);
+                                   });
   });
   if (!s) {
     st.error = s;

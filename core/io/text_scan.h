@@ -9,12 +9,14 @@
 #pragma once
 #include "common/status.h"
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <new>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace lk::io_detail {
 
@@ -36,6 +38,41 @@ Status guard_allocation(Body&& body) {
 #else
   return body();
 #endif
+}
+
+// One push of a stream reader that parses whole items: process(data, size,
+// offset, final, used) -> Status consumes the items that are complete in
+// [data, data + size) (file offset `offset`) and says how many bytes it
+// used. The unfinished tail is carried (carry, at file offset carry_base)
+// and finished first with as few of the new bytes as it needs (the offer
+// grows, so a long item costs linear time); the rest of the new bytes is
+// processed in place, without copying. data_base: the new bytes' offset.
+template <typename Process>
+Status push_carried(std::vector<std::uint8_t>& carry, std::uint64_t& carry_base, std::uint64_t data_base,
+                    const std::uint8_t* data, size_t size, Process&& process) {
+  size_t pos = 0;
+  while (!carry.empty() && pos < size) {
+    const size_t old = carry.size();
+    const size_t take = std::min(size - pos, std::max<size_t>(old, 64 * 1024));
+    carry.insert(carry.end(), data + pos, data + pos + take);
+    pos += take;
+    size_t used = 0;
+    if (Status e = process(carry.data(), carry.size(), carry_base, false, used); !e) return e;
+    if (used >= old) {
+      pos -= carry.size() - used;  // those new bytes are offered again below
+      carry.clear();
+    } else {
+      carry.erase(carry.begin(), carry.begin() + static_cast<std::ptrdiff_t>(used));
+      carry_base += used;
+    }
+  }
+  if (carry.empty() && pos < size) {
+    size_t used = 0;
+    if (Status e = process(data + pos, size - pos, data_base + pos, false, used); !e) return e;
+    carry.assign(data + pos + used, data + size);
+    carry_base = data_base + pos + used;
+  }
+  return Status::success();
 }
 
 inline bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
