@@ -6,7 +6,9 @@
 // lambda_sil = lambda_feat in [0, 0.5] with lambda_stereo = 1. Printed: the
 // median distance of the stereo points to the fitted surface (Fig. 7's
 // measure), the truth to the fitted face (which the paper could not
-// measure), the minimizer's iterations and CPU time.
+// measure), the minimizer's iterations and CPU time; then Fig. 6(b-d)'s
+// histograms of the stereo points' distances to the fitted surface, per
+// seed and optimizer, one row per x.
 #include "command.h"
 #include "synthetic_session_images.h"
 #include "timing.h"
@@ -18,12 +20,41 @@
 #include "photos/synthetic_views.h"
 #include "synth/synth_head.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <string>
 #include <vector>
 
 namespace lk::cli {
 namespace {
+
+// Fig. 6's bins: 0.1 mm wide up to 1 mm, then one bin for the rest.
+constexpr int kBins = 11;
+constexpr double kBinMm = 0.1;
+
+struct Histogram {
+  double share[kBins] = {};  // percent of the stereo points in each bin
+};
+
+Histogram histogram_mm(const std::vector<double>& distances_m) {
+  Histogram h;
+  if (distances_m.empty()) return h;
+  for (double d : distances_m) h.share[std::min(kBins - 1, int(1000 * d / kBinMm))] += 1;
+  for (double& v : h.share) v *= 100.0 / double(distances_m.size());
+  return h;
+}
+
+void print_histogram_header() {
+  std::printf("  %-4s %-8s %-4s |", "seed", "method", "x");
+  for (int b = 0; b < kBins - 1; ++b) std::printf(" <%3.1f", (b + 1) * kBinMm);
+  std::printf("  >=%.1f mm (%% of the stereo points)\n", (kBins - 1) * kBinMm);
+}
+
+void print_histogram_row(const char* seed, const char* method, double x, const Histogram& h) {
+  std::printf("  %-4s %-8s %-4.1f |", seed, method, x);
+  for (double v : h.share) std::printf(" %4.1f", v);
+  std::printf("\n");
+}
 
 struct Optimizer {
   const char* name;
@@ -47,12 +78,16 @@ int run_bench_photos_optimizers(const Args& args) {
   const double lambdas[] = {0.0, 0.1, 0.3, 0.5};
   std::printf("photos-optimizers (fua1998 Fig. 6-7): %d seeds, %d cameras, 2 px landmark noise, landmarks + the truth's "
               "outlines + stereo, lambda_stereo 1, lambda_sil = lambda_feat = x; gradient descent and L-BFGS up to %d "
-              "iterations a round (LM: %d)\n",
-              seeds, cameras, max_iterations, ShapeFitOptions{}.max_lm_iterations);
+              "iterations a round (LM: %d)%s\n",
+              seeds, cameras, max_iterations, ShapeFitOptions{}.max_lm_iterations,
+              args.has("photos-no-lips") ? "; the lips' binding edges and mouth bag off" : "");
   std::printf("  %-4s %-4s | %-32s | %-32s | %-32s\n", "seed", "x", "LM: stereo med / truth face mm", "gradient descent",
               "L-BFGS");
   // sums[o][l]: stereo median, truth face mean, iterations, cpu ms
   double sums[3][4][4] = {};
+  std::vector<std::string> seed_names;
+  std::vector<Histogram> histograms;  // [seed][optimizer][lambda], flattened
+  Histogram mean_histograms[3][4];
   int counted = 0;
   for (int seed = 1; seed <= seeds; ++seed) {
     GenericHead person;
@@ -75,6 +110,9 @@ int run_bench_photos_optimizers(const Args& args) {
       continue;
     }
     ++counted;
+    seed_names.push_back(std::to_string(seed));
+    histograms.resize(seed_names.size() * 12);
+    Histogram* seed_histograms = &histograms[(seed_names.size() - 1) * 12];
     for (int l = 0; l < 4; ++l) {
       std::printf("  %-4d %-4.1f", seed, lambdas[l]);
       for (int o = 0; o < 3; ++o) {
@@ -82,6 +120,7 @@ int run_bench_photos_optimizers(const Args& args) {
         v.fit.optimizer = optimizers[o].kind;
         v.fit.max_descent_iterations = max_iterations;
         v.fit.lambda_features = v.lambda_silhouettes = lambdas[l];
+        if (args.has("photos-no-lips")) v.bind_lips = v.keep_mouth_bag = false;
         ShapeFitResult fit;
         PhotosStereoFit sf;
         const double t0 = cpu_clock_ms();
@@ -103,6 +142,9 @@ int run_bench_photos_optimizers(const Args& args) {
         acc[1] += 1000 * tf.mean;
         acc[2] += iterations;
         acc[3] += ms;
+        const Histogram h = histogram_mm(sf.distances_fit_m);
+        seed_histograms[o * 4 + l] = h;
+        for (int b = 0; b < kBins; ++b) mean_histograms[o][l].share[b] += h.share[b];
       }
       std::printf("\n");
     }
@@ -118,6 +160,19 @@ int run_bench_photos_optimizers(const Args& args) {
                   sums[o][l][1] / counted, sums[o][l][2] / counted, sums[o][l][3] / counted);
     std::printf("\n");
   }
+  std::printf("  Fig. 6(b-d): the stereo points' distances to the fitted surface, per seed (LM: the paper's (b), "
+              "gradient descent ~ its Euler-Lagrange (c), L-BFGS ~ its MINOS (d))\n");
+  print_histogram_header();
+  for (std::size_t s = 0; s < seed_names.size(); ++s)
+    for (int o = 0; o < 3; ++o)
+      for (int l = 0; l < 4; ++l)
+        print_histogram_row(seed_names[s].c_str(), optimizers[o].name, lambdas[l], histograms[s * 12 + o * 4 + l]);
+  for (int o = 0; o < 3; ++o)
+    for (int l = 0; l < 4; ++l) {
+      Histogram m = mean_histograms[o][l];
+      for (double& v : m.share) v /= counted;
+      print_histogram_row("mean", optimizers[o].name, lambdas[l], m);
+    }
   std::printf("  paper Fig. 7 (median stereo distance, real faces, lambda 0): LM 2.33 / 6.38 / 0.55 for its three "
               "people; Fig. 6(c,d): Euler-Lagrange and MINOS leave fewer points near zero than LM\n");
   return 0;
@@ -125,7 +180,7 @@ int run_bench_photos_optimizers(const Args& args) {
 
 BenchRegistrar reg({"photos-optimizers",
                     "fua1998 Fig. 6-7: the photos shape fit by LM, gradient descent and L-BFGS for lambda_sil = "
-                    "lambda_feat in [0, 0.5] (--photos-seeds N --photos-cameras C --photos-descent-iterations K)",
+                    "lambda_feat in [0, 0.5] (--photos-seeds N --photos-cameras C --photos-descent-iterations K --photos-no-lips)",
                     run_bench_photos_optimizers});
 
 }  // namespace

@@ -131,6 +131,7 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
     r.median_fit_m = median_of(d);
     std::sort(d.begin(), d.end());
     r.p95_fit_m = d[d.size() * 95 / 100];
+    r.distances_fit_m = std::move(d);
   }
   return s;
 }

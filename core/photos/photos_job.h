@@ -52,6 +52,7 @@ struct PhotosStereoFit {
   int inliers = 0;                    // eq. 10 weight >= exp(-3) at the end (within ~3 median distances)
   double median_start_m = 0;          // patch centres to the start surface (generic head)
   double median_fit_m = 0, p95_fit_m = 0;  // to the fitted surface
+  std::vector<double> distances_fit_m;     // each patch centre to the fitted surface, ascending (fua1998 Fig. 6)
   std::vector<double> weights;        // #patches, each attractor's final weight (eq. 10 x normal agreement)
 };
 
