@@ -40,6 +40,7 @@ import { flow as landmarks } from './flows/landmarks.mjs';
 import { flow as glb } from './flows/glb.mjs';
 import { flow as photosHead } from './flows/photos_head.mjs';
 import { flow as phone } from './flows/phone.mjs';
+import { flow as realPhotos } from './flows/real_photos.mjs';
 
 runFlows([startup, scanLoad, startupFailures, fit, fitChecks, fitThreads, exportFlow, animation, expressions, followFace, texture, eyeSmile,
-          project, keep, pageStates, fitCancel, photoRefusals, landmarks, photosHead, phone, glb, offline, accessibility, largeScan]);
+          project, keep, pageStates, fitCancel, photoRefusals, landmarks, photosHead, realPhotos, phone, glb, offline, accessibility, largeScan]);

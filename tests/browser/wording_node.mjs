@@ -3,7 +3,7 @@
 // and the rest of each message is kept.
 // Usage: node tests/browser/wording_node.mjs   (exit 0: every check passed)
 import assert from 'node:assert/strict';
-import { forPage } from '../../web/js/wording.js';
+import { forPage, photoCount } from '../../web/js/wording.js';
 
 const turned = 'the scan seems to face +x with +y up (there its closest-point error is 3.1x smaller than as given): ' +
                'turned it that way; pass --facing 0.74 0 -0.68 --up 0 1 0 to say so';
@@ -19,4 +19,7 @@ assert.ok(!/--facing|--up/.test(h) && /turn the scan so the face looks along/.te
 const faceOnly = 'face-only scan (its upper part is 0.4x as deep as wide; a whole head is 1x or more): aligned by closest points';
 assert.equal(forPage(faceOnly), faceOnly, 'a message without command-line words is left alone');
 assert.ok(!/bbox/.test(forPage('1.2 % of the bbox diagonal')));
-console.log('wording: 6/6 checks passed');
+assert.equal(photoCount(1), '1 photo');
+assert.equal(photoCount(8), '8 photos');
+assert.equal(photoCount(0), '0 photos');
+console.log('wording: 9/9 checks passed');

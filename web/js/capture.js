@@ -9,6 +9,7 @@ import { app, onPageChange } from './state.js';
 import { handleFiles } from './files.js';
 import { facePhotos, findingFacePoints } from './photos.js';
 import { VIEWS, viewGuide } from './views.js';
+import { photoCount } from './wording.js';
 
 const $ = (id) => document.getElementById(id);
 const LEAST = 5;       // photos with face points before the head is made by itself
@@ -36,13 +37,13 @@ function renderViewGuide() {
   // Detected, and no face: not a photo the detector never saw (restored).
   const noFace = photos.filter((p) => p.detect && !findingFacePoints(p) && !p.detect.points).length;
   let hint;
-  if (waiting.length) hint = waiting.length + ' photo(s) taken meanwhile: added when the current job ends.';
-  else if (finding) hint = 'Finding the face in ' + finding + ' photo(s)…';
+  if (waiting.length) hint = photoCount(waiting.length) + ' taken meanwhile: added when the current job ends.';
+  else if (finding) hint = 'Finding the face in ' + photoCount(finding) + '…';
   else if (g.next) hint = 'Next: the ' + g.next.label + ' view: ' + g.next.ask + '.';
-  else if (!g.enough) hint = 'Every view is there. ' + (LEAST - g.withFace) + ' more photo(s) from in between, or a little ' +
+  else if (!g.enough) hint = 'Every view is there. ' + (LEAST - g.withFace) + ' more ' + (LEAST - g.withFace === 1 ? 'photo' : 'photos') + ' from in between, or a little ' +
                              'from above and below, make a better head.';
   else hint = g.withFace + ' photos with a face: enough for a head. More views between these make it better.';
-  if (noFace && !finding) hint += ' No face was found in ' + noFace + ' photo(s): they are kept for the texture but not ' +
+  if (noFace && !finding) hint += ' No face was found in ' + photoCount(noFace) + (noFace === 1 ? ': it is' : ': they are') + ' kept for the texture but not ' +
                                   'used for the shape (a full profile has too little of the face for the detector).';
   $('view-hint').textContent = hint;
 }

@@ -27,6 +27,7 @@ import { renderPhotos } from './photos.js';
 import { setPhotoRole } from './photo_roles.js';
 import { forgetTexture } from './texture.js';
 import { deleteHead, getFile, hasFile, listHeads, putHead } from './keep_store.js';
+import { photoCount } from './wording.js';
 
 export const MAX_HEADS = 5;
 const SAVE_DELAY_MS = Number(params.get('keep_delay_ms')) >= 0 && params.has('keep_delay_ms') ? Number(params.get('keep_delay_ms')) : 1500;
@@ -47,7 +48,6 @@ function when(t) {
   return d.toDateString() === now.toDateString() ? 'today at ' + time : d.toLocaleDateString([], { day: 'numeric', month: 'short' }) + ', ' + time;
 }
 
-const photoCount = (n) => n + (n === 1 ? ' photo' : ' photos');
 const baseName = (name) => String(name || 'head').replace(/\.likeness\.glb$/i, '').replace(/\.[^.]*$/, '');
 
 // A small PNG of the viewer's centre. The viewer draws only when something

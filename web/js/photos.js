@@ -8,6 +8,7 @@ import { runJob } from './worker_client.js';
 import { clicker, closeClicker, openClicker } from './clicker.js';
 import { dropRoleTexture, PHOTO_ROLES, setPhotoRole } from './photo_roles.js';
 import { detectLandmarks } from './landmarks.js';
+import { photoCount } from './wording.js';
 
 // Photos are decoded once in the worker to catch broken files now rather
 // than at the Texture stage; the File objects are kept for that stage.
@@ -55,7 +56,7 @@ export async function checkPhotos(photos, alone) {
   if (failures.length) {
     showError(failures.join(' '));
   } else if (alone) {
-    setStatus(app.photos.length + ' photo(s) kept for the Texture stage. ' +
+    setStatus(photoCount(app.photos.length) + ' kept for the Texture stage. ' +
               (app.fit ? 'Give each its points (a .txt of the same name, or click the photo), then Texture.'
                 : app.model ? 'Fit the head, then texture it.' : 'Drop a head scan (PLY, OBJ, XYZ or VTK) to start.'));
   }
@@ -300,7 +301,7 @@ export function renderPhotos() {
     ui.photoList.append(li);
   }
   const faces = app.photos.filter((p) => p.detect && p.detect.points).length, points = texturable().length;
-  ui.photoCount.textContent = !app.photos.length ? '' : app.photos.length + ' photo(s)' +
+  ui.photoCount.textContent = !app.photos.length ? '' : photoCount(app.photos.length) +
     (faces ? ', ' + faces + ' with face points' : '') + (points || !faces ? ', ' + points + ' with points for the texture' : '');
   refreshControls();
 }

@@ -7,6 +7,7 @@ import { facePhotos, photoPoints, renderPhotos, texturable } from './photos.js';
 import { clicker, closeClicker, updateClicker } from './clicker.js';
 import { stopAnimation } from './animation.js';
 import { showStage } from './head_view.js';
+import { photoCount } from './wording.js';
 
 export function forgetTexture() {
   app.texture = null;
@@ -52,7 +53,7 @@ export async function runTexture() {
   if (!job) return;
   stageItem('texture').classList.remove('coming');
   setStage('texture', '0%', 0, 'active');
-  setStatus('Texturing the head from ' + using.length + ' photo(s)…');
+  setStatus('Texturing the head from ' + photoCount(using.length) + '…');
   const t0 = performance.now();
   let result;
   try {
@@ -104,14 +105,14 @@ export async function runTexture() {
   const rms = using.map((p) => p.calib && p.calib.ok ? p.calib.rms : NaN).filter((x) => !Number.isNaN(x));
   const cameras = fromPhotos ? 'cameras from the head\'s self-calibration'
     : 'calibration rms ' + (rms.length ? Math.min(...rms).toFixed(2) + '-' + Math.max(...rms).toFixed(2) : '?') + ' px';
-  stageItem('texture').querySelector('.stage-stats').textContent = using.length + ' photo(s), ' + cameras + ' · ' +
+  stageItem('texture').querySelector('.stage-stats').textContent = photoCount(using.length) + ', ' + cameras + ' · ' +
     result.skin.width + '² texels · ' + result.steps.map((x) => x.name + ' ' + Math.round(x.ms)).join(', ') + ' ms';
   ui.textureTotal.textContent = 'textured in ' + (result.textureMs / 1000).toFixed(2) + ' s';
   ui.showPoints.checked = false;
   app.viewer.set_overlay_visible(false);
   closeClicker();
   showStage('subdivide');
-  setStatus('Textured from ' + using.length + ' photo(s) in ' + (result.textureMs / 1000).toFixed(2) + ' s. ' +
+  setStatus('Textured from ' + photoCount(using.length) + ' in ' + (result.textureMs / 1000).toFixed(2) + ' s. ' +
             'Animate it, pick a level, or export the textured head.');
   endJob(job);
 }

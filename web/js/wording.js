@@ -3,6 +3,9 @@
 // pass, no file-format jargon. Plain functions of text (tested in Node by
 // tests/browser/wording_node.mjs).
 
+// "1 photo", "8 photos".
+export const photoCount = (n) => n + (n === 1 ? ' photo' : ' photos');
+
 // A fit note or error from the core, for the page.
 export function forPage(text) {
   return String(text)
