@@ -10,7 +10,8 @@ import { landmarksJson } from './landmarks.js';
 
 // drag: the index of the detected face point being dragged (or -1); moved:
 // the drag moved it, so the click that ends it places no landmark.
-export const clicker = { photo: null, image: null, current: 0, view: null, drag: -1, moved: false };
+// corrected: a face point was dragged since the photo was opened.
+export const clicker = { photo: null, image: null, current: 0, view: null, drag: -1, moved: false, corrected: false };
 
 const CLICK_NOTE = 'Click where the named point is in the photo; the red dot on the 3D head shows it. Skip points ' +
   'hidden in this photo. Six points at least, 12-15 spread over the face are best. After texturing, each point shows its ' +
@@ -47,12 +48,17 @@ app.openClicker = (i) => openClicker(app.photos[i]);
 
 export function closeClicker() {
   if (!clicker.photo) return;
+  const corrected = clicker.corrected;
   clicker.photo = null;
+  clicker.corrected = false;
   ui.clicker.hidden = true;
   ui.viewerPane.classList.remove('clicking');
   reframeSoon();
   if (app.viewer) app.viewer.set_markers(new Float32Array(0), null);
   renderPhotos();
+  // Corrected face points make the head from photos again (with Auto-run on,
+  // no scan loaded, the page at rest: photosHeadAfterLandmarks decides).
+  if (corrected && app.afterLandmarks) app.afterLandmarks();
 }
 
 // The 3D view's width changes with the clicker: frame the head again once
@@ -215,6 +221,7 @@ function pointerMove(e) {
   if (!photo.detect.corrected) photo.detect.corrected = new Set();
   photo.detect.corrected.add(clicker.drag);  // kept with the photo (keep.js)
   clicker.moved = true;
+  clicker.corrected = true;
   drawClicker();
 }
 

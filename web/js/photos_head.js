@@ -131,7 +131,8 @@ export async function makeHeadFromPhotos(trigger = 'button') {
                             '(photos without a known focal do not give the scale)';
   ui.photosHeadTotal.textContent = usedCount + ' of ' + photos.length + ' photos used · ' + (wallMs / 1000).toFixed(1) + ' s';
   setStatus('Head made from ' + usedCount + ' photos in ' + (result.photosMs / 1000).toFixed(2) + ' s: no scan, no click. ' +
-            'Texture it from the same photos, pick a level, animate or export; click a photo to correct its points and make it again.');
+            'Texture it from the same photos, pick a level, animate or export; click a photo to correct its points' +
+            (ui.autoFit.checked ? ': the head is made again when you close it.' : ' and make it again.'));
   endJob(job);
   checkFitQuality(app.fit);
   // With Auto-run on, the skin from the same photos, their cameras known: no click.

@@ -53,6 +53,29 @@ async function photosHeadDone(page, timeout = 300000) {
   });
 }
 
+// Opens a photo's view, drags its landmark 1 by (6, 4) CSS px, closes it;
+// remembers the head shown before as window.__firstHead.
+async function correctPointAndClose(page, name) {
+  await page.evaluate(() => { window.__firstHead = window.likeness.photosHead; });
+  await page.locator('#photo-list li', { hasText: name }).click();
+  await page.waitForFunction(() => !document.getElementById('clicker').hidden);
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+  const at = await page.evaluate((n) => {
+    const canvas = document.getElementById('clicker-canvas'), c = canvas.getBoundingClientRect();
+    const p = window.likeness.photos.find((q) => q.name === n), dpr = window.devicePixelRatio || 1;
+    const scale = Math.min(canvas.width / p.width, canvas.height / p.height);
+    const ox = (canvas.width - p.width * scale) / 2, oy = (canvas.height - p.height * scale) / 2;
+    const q = p.detect.points[1];
+    return { x: c.left + (ox + q[0] * scale) / dpr, y: c.top + (oy + q[1] * scale) / dpr };
+  }, name);
+  await page.mouse.move(at.x, at.y);
+  await page.mouse.down();
+  await page.mouse.move(at.x + 3, at.y + 2);
+  await page.mouse.move(at.x + 6, at.y + 4);
+  await page.mouse.up();
+  await page.click('#clicker-close');
+}
+
 // Counts the page's trusted clicks (a user's, or playwright's): none may happen.
 const countClicks = (page) => page.evaluate(() => {
   window.__trustedClicks = 0;
@@ -174,6 +197,17 @@ async function run(s) {
            `no alignment: generic head ${e.generic.toFixed(2)} mm, head from the page's photos ${e.fit.toFixed(2)} mm ` +
            `(focal ${Math.round(r.head.focalPx)} px, truth 1250 px)`);
     }
+    // Correcting a point makes the head again (Auto-run on): drag the nose
+    // tip (landmark 1) of a used photo by 6 CSS px and close the photo.
+    await correctPointAndClose(page, withFace.find((p) => p.used).name);
+    const again = await page.waitForFunction(() => window.likeness.photosHead !== window.__firstHead &&
+                                             !['working', 'loading'].includes(document.body.dataset.state),
+                                             null, { timeout: 300000 }).then(() => page.evaluate(() => ({
+      head: window.likeness.photosHead, textured: !!window.likeness.texture, state: document.body.dataset.state,
+      clicks: window.__trustedClicks })));
+    check('a corrected face point makes the head again when the photo is closed (Auto-run on), and textures it',
+          again.head.ok && again.head.trigger === 'auto' && again.textured && again.state === 'done',
+          `trigger ${again.head.trigger}, ok ${again.head.ok}, textured ${again.textured}, state ${again.state}`);
     // Export works on the kept head (level 3 as OBJ).
     const exported = await page.evaluate(async () => {
       const { runJob } = await import('./js/worker_client.js');
