@@ -6,15 +6,18 @@
 #include "command.h"
 #include "timing.h"
 
+#include "components/components.h"
 #include "head/generic_head.h"
 #include "io/io.h"
 #include "mesh/geometry.h"
+#include "photos/ground_truth.h"
 #include "project/export.h"
 #include "project/pose.h"
 #include "project/project_file.h"
 #include "project/texture_job.h"
 #include "raycast/bvh.h"
 #include "subdiv/butterfly.h"
+#include "synth/skin_field.h"
 #include "texture/binding.h"
 #include "texture/color.h"
 #include "texture/correspondences.h"
@@ -53,6 +56,7 @@ bool is_file(const std::string& path) {
 // computed on the control mesh and refined to it (refine_uv.h).
 struct HeadInput {
   TriMesh mesh;
+  TriMesh control;  // the control mesh when the head has the generic head's topology (else empty)
   std::string description;
   bool uv_from_control = false;
   UvStats control_uv;
@@ -66,6 +70,7 @@ Status load_head(const std::string& spec, const UvOptions& uv_options, HeadInput
     if (!s) return s;
     out.mesh = head.mesh;
     out.mesh.uvs.clear();
+    out.control = out.mesh;
     out.description = "the generic head";
     return Status::success();
   }
@@ -91,6 +96,7 @@ Status load_head(const std::string& spec, const UvOptions& uv_options, HeadInput
   TriMesh control;
   Status s = with_context(load_mesh_file(control_path, control), control_path);
   if (!s) return s;
+  out.control = control;
   if (finest == 0) {
     out.mesh = control;
     out.description = control_path;
@@ -118,6 +124,35 @@ Status load_head(const std::string& spec, const UvOptions& uv_options, HeadInput
   return Status::success();
 }
 
+// The synthetic person's skin of `likeness synth-photos` (tone, blotches,
+// freckles, red lips, dark brows), placed on a head with the generic head's
+// topology: its annotations carried to the control mesh (the head's frame by
+// the best similarity, the eyes as place_components puts them).
+Status person_skin(const TriMesh& control, std::uint32_t seed, SkinField& out) {
+  GenericHead generic;
+  Status s = load_generic_head(generic);
+  if (!s) return s;
+  if (control.num_vertices() != generic.mesh.num_vertices())
+    return Status::error(ErrorCode::InvalidInput, "--field person needs a head with the generic head's topology "
+                                                  "(a `likeness fit` output, a project or 'generic')");
+  GenericHead person = generic;
+  person.mesh.positions = control.positions;
+  std::vector<int> all(std::size_t(control.num_vertices()));
+  for (int v = 0; v < control.num_vertices(); ++v) all[std::size_t(v)] = v;
+  const Similarity frame = fit_similarity(generic.mesh.positions, control.positions, all);
+  person.annotations.look = frame.R * generic.annotations.look;
+  person.annotations.up = frame.R * generic.annotations.up;
+  ComponentPlacement placed;
+  s = place_components(person, generic, placed);
+  if (!s) return s;
+  EyeSocket* eyes[2] = {&person.annotations.eye_left, &person.annotations.eye_right};
+  for (int e = 0; e < 2; ++e) {
+    eyes[e]->center = placed.eye_center[e];
+    eyes[e]->radius = placed.eye_radius[e];
+  }
+  return make_skin_field(person, seed, SkinFieldOptions{}, out);
+}
+
 nlohmann::json vec3(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
 // Writes five ground-truth photos (3000 x 2000 by default, a different
@@ -132,11 +167,20 @@ int make_synthetic(const Args& args, const HeadInput& head, const std::string& d
   const BBox box = bounding_box(mesh.positions);
   const double scale = 0.1 * box.size().y();  // the colour field's finest wavelength
   // "bands": the colourful test field; "skin": one skin tone with faint
-  // mottling, on which a lighting seam is as visible as on a real face.
+  // mottling, on which a lighting seam is as visible as on a real face;
+  // "person": synth-photos' person (seed 1), whose brows and lips show what
+  // texturing does.
   const std::string kind = args.get("field", "bands");
-  if (kind != "bands" && kind != "skin") return usage_error("--field must be 'bands' or 'skin'");
-  const bool skin = kind == "skin";
-  const SurfaceColorFn field = [scale, skin](const Vec3& p, const Vec3&) {
+  if (kind != "bands" && kind != "skin" && kind != "person")
+    return usage_error("--field must be 'bands', 'skin' or 'person'");
+  const bool skin = kind == "skin", person = kind == "person";
+  SkinField person_field;
+  if (person) {
+    const Status ps = person_skin(head.control, 1, person_field);
+    if (!ps) return fail(kName, ps.message);
+  }
+  const SurfaceColorFn field = [scale, skin, person, &person_field](const Vec3& p, const Vec3&) {
+    if (person) return skin_albedo(person_field, p);
     const Vec3 f = procedural_color_field(p, scale);
     if (!skin) return f;
     const double mottle = 0.92 + 0.35 * (f.x() - 0.45) + 0.15 * (f.z() - 0.25);
@@ -155,7 +199,14 @@ int make_synthetic(const Args& args, const HeadInput& head, const std::string& d
     const Vec3 eye = c + Vec3(r * std::sin(angles[i]), 0.05 * r, r * std::cos(angles[i]));
     const Camera cam = look_at_camera(eye, c, Vec3::UnitY(), 0.7 * height * r / box.size().y(), width, height);
     const double gain = gains[i];
-    const SurfaceColorFn lit = [&](const Vec3& p, const Vec3& n) { return (gain * field(p, n)).eval(); };
+    // The person is shaded (Lambert, light from the camera's upper left) as
+    // synth-photos' renders are; the test fields stay unshaded.
+    const Vec3 to_eye = (eye - c).normalized(), left = Vec3::UnitY().cross(to_eye).normalized();
+    const Vec3 light = (to_eye + 0.6 * Vec3::UnitY() + 0.4 * left).normalized();
+    const SurfaceColorFn lit = [&](const Vec3& p, const Vec3& n) {
+      const double shade = person ? 0.45 + 0.65 * std::max(0.0, n.dot(light)) : 1.0;
+      return (gain * shade * field(p, n)).eval();
+    };
     Image photo;
     s = render_synthetic_photo(mesh, cam, lit, Vec3(0.1, 0.12, 0.15), photo);
     if (!s) return fail(kName, s.message);
@@ -231,6 +282,7 @@ int run_texture(const Args& args) {
     if (s) s = with_context(load_project(bytes.data(), bytes.size(), project), project_path);
     if (s) s = rest_pose(project);
     if (s) s = project_level_mesh(project, project.fit.multires.num_levels(), ExportFrame::Scan, head.mesh);
+    if (s) s = project_level_mesh(project, 0, ExportFrame::Scan, head.control);
     head.description = project_path;
   } else {
     s = load_head(head_spec, opt.uv, head);
@@ -305,6 +357,7 @@ int run_texture(const Args& args) {
     head.uv_from_control = true;
     head.control_uv = result.chart;
     if (!project_out.empty()) {
+      ::mkdir(out_dir.c_str(), 0755);  // the project may go inside --out
       Bytes bytes;
       s = save_project(project, bytes);
       if (s) s = write_file(project_out, bytes);
@@ -440,7 +493,7 @@ const Registrar reg({kName,
                      "likeness texture --head DIR|MESH|generic | --project FILE [--project-out FILE] "
                      "--photos P1 P2 ... --points F1 F2 ... --out DIR "
                      "[--size 2048] [--focal PX] [--same-camera | --separate-cameras] [--no-spline] [--dump] | --head ... --make-synthetic DIR "
-                     "[--photo-width 3000 --photo-height 2000] [--even-light] [--field bands|skin]",
+                     "[--photo-width 3000 --photo-height 2000] [--even-light] [--field bands|skin|person]",
                      "skin texture from calibrated photos (tarini2002 Sec. 3.2): binding, resampling, hole filling, "
                      "multiresolution spline",
                      run_texture});

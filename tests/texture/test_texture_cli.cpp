@@ -4,9 +4,14 @@
 // (exit 2) for mismatched counts and unknown options.
 #include "test_data.h"
 
+#include "image/image.h"
+#include "io/io.h"
+
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
@@ -87,4 +92,63 @@ TEST_CASE("likeness texture: synthetic photos in, textured head out, and clear e
   CHECK(run("--head " + dir + "/no_such_fit --photos " + p0 + " --points " + q0 + out, err) == 1);
   CHECK(read_file_text(err).find("no_such_fit") != std::string::npos);
   CHECK(run("--head generic --photos " + p0 + " --points " + q0 + out + " --bogus", err) == 2);
+}
+
+namespace {
+
+// Shares of a photo's head pixels (those unlike its corner, the background)
+// that are much darker than the head's median luminance (brows) and clearly
+// red (lips).
+struct SkinMarks {
+  double dark = 0, red = 0;
+};
+
+SkinMarks skin_marks(const std::string& path) {
+  lk::Image im;
+  REQUIRE(lk::load_image_file(path, im, 3).ok());
+  const std::uint8_t* bg = im.at(0, 0);
+  std::vector<double> lum;
+  std::vector<const std::uint8_t*> head;
+  for (int y = 0; y < im.height; ++y)
+    for (int x = 0; x < im.width; ++x) {
+      const std::uint8_t* p = im.at(x, y);
+      if (std::abs(p[0] - bg[0]) + std::abs(p[1] - bg[1]) + std::abs(p[2] - bg[2]) < 12) continue;
+      head.push_back(p);
+      lum.push_back(0.3 * p[0] + 0.59 * p[1] + 0.11 * p[2]);
+    }
+  REQUIRE(head.size() > 1000);
+  std::vector<double> sorted = lum;
+  std::nth_element(sorted.begin(), sorted.begin() + long(sorted.size() / 2), sorted.end());
+  const double median = sorted[sorted.size() / 2];
+  SkinMarks m;
+  for (size_t i = 0; i < head.size(); ++i) {
+    m.dark += lum[i] < 0.5 * median;
+    m.red += head[i][0] > 1.6 * head[i][1] && head[i][0] > 90;
+  }
+  m.dark /= double(head.size());
+  m.red /= double(head.size());
+  return m;
+}
+
+}  // namespace
+
+// scripts/demo's photos: the synthetic person's skin (brows, lips) on the
+// head, so the textured sample shows what texturing does; the faint "skin"
+// field has neither.
+TEST_CASE("likeness texture --make-synthetic --field person: brows and lips show in the photos", "[texture][cli]") {
+  LK_REQUIRE_LIKENESS();
+  const std::string dir = lk::test::scratch_dir("texture_cli_person");
+  const std::string err = dir + "/err.txt", size = " --photo-width 600 --photo-height 400";
+  REQUIRE(run("--head generic --make-synthetic " + dir + "/person --field person" + size, err) == 0);
+  REQUIRE(run("--head generic --make-synthetic " + dir + "/skin --field skin" + size, err) == 0);
+  const SkinMarks person = skin_marks(dir + "/person/photo0.png"), skin = skin_marks(dir + "/skin/photo0.png");
+  INFO("person: dark " << person.dark << ", red " << person.red << "; skin: dark " << skin.dark << ", red " << skin.red);
+  CHECK(person.dark > 0.003);
+  CHECK(person.red > 0.003);
+  CHECK(skin.dark < 0.0005);
+  CHECK(skin.red < 0.0005);
+  // A head without the generic head's topology cannot carry the person.
+  write(dir + "/tri.obj", "v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nf 1 2 3\n");
+  CHECK(run("--head " + dir + "/tri.obj --make-synthetic " + dir + "/tri --field person", err) == 1);
+  CHECK(read_file_text(err).find("generic head's topology") != std::string::npos);
 }
