@@ -16,9 +16,23 @@ namespace lk_worker {
 namespace {
 
 // The kept head project as a file (core/project/project_file.h: a GLB whose
-// scene is the head, the project in its extras). Returns {ok, bytes}.
-val save_project_job() {
+// scene is the head, the project in its extras), with the eyes' and
+// teeth's textures the page shows: parts {eyeTexture, eyeSource,
+// teethTexture, teethSource} (image_object's form; a missing texture: the
+// generic one) become the project's parts. Returns {ok, bytes}.
+val save_project_job(val parts) {
   if (!kept_project()) return error_result(lk::ErrorCode::InvalidInput, "no fitted head to save");
+  lk::ProjectParts kept;
+  const std::pair<const char*, std::pair<lk::Image*, std::string*>> from[2] = {
+      {"eye", {&kept.eye_texture, &kept.eye_source}}, {"teeth", {&kept.teeth_texture, &kept.teeth_source}}};
+  for (const auto& [name, into] : from) {
+    const std::string key = std::string(name) + "Texture", source = std::string(name) + "Source";
+    if (!has(parts, key.c_str()) || parts[key].isNull()) continue;
+    if (lk::Status st = image_from_object(parts[key], *into.first); !st.ok())
+      return error_result(lk::with_context(st, std::string(name) + " texture"));
+    if (has(parts, source.c_str()) && parts[source].isString()) *into.second = parts[source].as<std::string>();
+  }
+  kept_project()->parts = std::move(kept);
   lk::Bytes bytes;
   if (lk::Status st = lk::save_project(*kept_project(), bytes); !st.ok()) return error_result(st);
   val r = ok_result();
@@ -265,6 +279,17 @@ val load_project_job(const std::string& name, std::uintptr_t data, std::size_t s
     t.set("level", p.fit.multires.num_levels());
     r.set("texture", t);
   }
+  // The eyes' and teeth's textures made from photos, when it keeps them.
+  val parts = val::object();
+  if (!p.parts.eye_texture.empty()) {
+    parts.set("eyeTexture", image_object(p.parts.eye_texture));
+    parts.set("eyeSource", p.parts.eye_source);
+  }
+  if (!p.parts.teeth_texture.empty()) {
+    parts.set("teethTexture", image_object(p.parts.teeth_texture));
+    parts.set("teethSource", p.parts.teeth_source);
+  }
+  r.set("parts", parts);
   r.set("loadMs", now_ms() - t0);
   kept_project() = std::move(project);
   return r;
