@@ -80,7 +80,8 @@ val export_glb_job(int level, val parts) {
 // (Float32Array, 3 per vertex of the components' tongue, scan frame: its
 // push out before the jaw's motion, for the shapes with tongue out)}],
 // clips (anim/clips.h: [{name, shapes, times, values, slopes}], values and
-// slopes key-major: [k * shapes + s]: what Talk plays), bakeMs}.
+// slopes key-major: [k * shapes + s]: what Talk plays), lids ([[upper,
+// lower] vertex of each eye's middle rim column]), bakeMs}.
 val face_shapes_job(int level) {
   if (!kept_project()) return error_result(lk::ErrorCode::InvalidInput, "no fitted head to animate");
   lk::HeadProject& p = *kept_project();
@@ -175,10 +176,24 @@ val face_shapes_job(int level) {
     o.set("slopes", typed_array("Float64Array", slopes));
     clips.call<void>("push", o);
   }
+  // Each eye's middle rim column, upper and lower lid vertex (control
+  // vertices, which every level keeps first): the page measures the lid
+  // gap with them, as the core's semantic checks do.
+  val lids = val::array();
+  for (int e = 0; e < 2; ++e) {
+    const std::vector<int>& up = rig.landmarks.upper_lid[static_cast<std::size_t>(e)];
+    const std::vector<int>& lo = rig.landmarks.lower_lid[static_cast<std::size_t>(e)];
+    if (up.empty() || up.size() != lo.size()) continue;
+    val pair = val::array();
+    pair.call<void>("push", up[up.size() / 2]);
+    pair.call<void>("push", lo[up.size() / 2]);
+    lids.call<void>("push", pair);
+  }
   val r = ok_result();
   r.set("level", level);
   r.set("vertexCount", p.fit.multires.num_vertices(level));
   r.set("shapes", shapes);
+  r.set("lids", lids);
   r.set("clips", clips);
   r.set("bakeMs", bake_ms);
   return r;
