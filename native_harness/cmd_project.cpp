@@ -49,22 +49,38 @@ int run_info(const std::string& path) {
   else
     std::printf("  texture: %dx%d skin, chart on %zu vertices\n", p.texture.skin.width, p.texture.skin.height,
                 p.texture.uvs.size());
+  if (!p.parts.eye_texture.empty())
+    std::printf("  eyes: %dx%d texture from the photo %s\n", p.parts.eye_texture.width, p.parts.eye_texture.height,
+                p.parts.eye_source.c_str());
+  if (!p.parts.teeth_texture.empty())
+    std::printf("  teeth: %dx%d texture from the photo %s\n", p.parts.teeth_texture.width,
+                p.parts.teeth_texture.height, p.parts.teeth_source.c_str());
   return 0;
 }
 
-// The eyes' and teeth's textures of an export: a file given, else (with
-// a head folder) DIR/eye.png and DIR/teeth.png where they are (what `likeness
+// The eyes' and teeth's textures of an export: a file given, else the
+// project's own (made by the page from an eye or smile photo), else (with a
+// head folder) DIR/eye.png and DIR/teeth.png where they are (what `likeness
 // eye --out` and `likeness teeth --generic-out` write), else the generic
 // ones, with a note saying which.
 struct PartTextures {
   std::string eye, teeth;  // files to read; empty: generic
 };
 
-Status part_textures(const PartTextures& files, GlbExportOptions& o) {
+Status part_textures(const PartTextures& files, const ProjectParts& kept, GlbExportOptions& o) {
   use_generic_part_textures(o);
   const std::pair<const std::string*, Image*> parts[2] = {{&files.eye, &o.eye_texture}, {&files.teeth, &o.teeth_texture}};
+  const std::pair<const Image*, const std::string*> in_project[2] = {{&kept.eye_texture, &kept.eye_source},
+                                                                     {&kept.teeth_texture, &kept.teeth_source}};
   const char* what[2] = {"eye", "teeth"};
   for (int k = 0; k < 2; ++k) {
+    if (parts[k].first->empty() && !in_project[k].first->empty()) {
+      // The project keeps the texture the page made from a photo.
+      *parts[k].second = *in_project[k].first;
+      std::printf("%s texture: the project's, from the photo %s (%dx%d)\n", what[k], in_project[k].second->c_str(),
+                  parts[k].second->width, parts[k].second->height);
+      continue;
+    }
     if (parts[k].first->empty()) {
       std::printf("note: the generic %s texture\n", what[k]);
       continue;
@@ -88,7 +104,7 @@ int write_glb(const char* cmd, HeadProject& p, int level, const std::string& out
   GlbExportOptions o;
   o.level = level;
   o.animations = animations;
-  if (st = part_textures(textures, o); !st) return fail(cmd, st.message);
+  if (st = part_textures(textures, p.parts, o); !st) return fail(cmd, st.message);
   Bytes bytes;
   GlbExportReport r;
   st = export_glb(p, generic, o, bytes, &r);
@@ -201,8 +217,11 @@ int run_export_head(const Args& args) {
   if (Status st = rest_pose(p); !st.ok()) return fail(cmd, st.message);
   PartTextures textures{args.get("eye-texture"), args.get("teeth-texture")};
   const std::string dir = head.substr(0, head.find_last_of('/') + 1);
+  // The folder's files stand in only where the project keeps no texture from a photo.
+  const bool kept[2] = {!p.parts.eye_texture.empty(), !p.parts.teeth_texture.empty()};
+  int k = 0;
   for (auto [file, name] : {std::pair{&textures.eye, "eye.png"}, std::pair{&textures.teeth, "teeth.png"}})
-    if (file->empty() && folder && ::stat((dir + name).c_str(), &info) == 0) *file = dir + name;
+    if (!kept[k++] && file->empty() && folder && ::stat((dir + name).c_str(), &info) == 0) *file = dir + name;
   return write_glb(cmd, p, level, out, textures, !args.has("no-animations"));
 }
 
@@ -212,7 +231,8 @@ const Registrar export_reg({"export", "likeness export --head DIR|FILE.likeness.
                             "and tongue, the 77 expressions, ARKit shapes and visemes as morph targets, a small "
                             "skeleton, the Talk and Blink clips as glTF animations; from a likeness fit or likeness "
                             "photos folder or a project file. The eyes and teeth take DIR/eye.png (likeness eye --out) "
-                            "and DIR/teeth.png (likeness teeth --generic-out) where they are, else the generic textures",
+                            "and DIR/teeth.png (likeness teeth --generic-out) where they are, else the generic textures; "
+                            "a project saved by the page with eye or smile photos keeps their textures, used first",
                             run_export_head});
 
 const Registrar reg({kName,

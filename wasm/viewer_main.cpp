@@ -28,7 +28,11 @@
 //   add_component(positions, indices, colors, uvs, width, height, channels, pixels)
 //     -> "" or error: an extra mesh (eyeball, teeth, tongue) drawn with the
 //     model; clear_components(), set_components_visible(on),
-//     set_component_matrix(index, m16) (column-major object -> world)
+//     set_component_matrix(index, m16) (column-major object -> world),
+//     set_component_positions(index, positions),
+//     set_component_morph_targets(index, counts, indices, offsets) and
+//     set_component_morph_weights(index, w) -> "" or error (the tongue's
+//     push on the GPU), component_morph_target_count(index)
 //   set_overlay_points(positions, normals, colors) -> "": the scan under a fit
 //     (empty positions clear it); set_overlay_visible(on)
 //   set_point_size(pixels), set_wireframe(on), reset_view()
@@ -94,6 +98,7 @@ struct Viewer {
   // update did.
   std::vector<float> animation_positions;
   std::vector<float> morph_weights;  // the last set_morph_weights (reused)
+  std::vector<float> component_weights;  // the last set_component_morph_weights (reused)
   double morph_copy_ms = 0;          // the last set_morph_targets' copy into the heap
   int pose_serial = 0;               // update_positions calls so far
   lk::MeshUpdateStats last_update;
@@ -414,6 +419,33 @@ std::string js_set_component_positions(int index, val positions) {
   return s.ok() ? std::string() : s.message;
 }
 
+// The tongue's push as morph targets on component index (the same flat
+// arrays as set_morph_targets, the component's own vertices), and a frame's
+// weights for them (Float32Array, one per shape): no vertex upload.
+std::string js_set_component_morph_targets(int index, val counts, val indices, val offsets) {
+  if (index < 0) return "no component " + std::to_string(index);
+  MorphArrays m;
+  if (std::string e = copy_morph_arrays("set_component_morph_targets", counts, indices, offsets, m); !e.empty()) return e;
+  const lk::Status s = g_viewer->scene.set_component_morph_targets(static_cast<size_t>(index), m.counts.data(), m.counts.size(),
+                                                                   m.indices.data(), m.indices.size(), m.offsets.data(),
+                                                                   m.offsets.size());
+  return s.ok() ? std::string() : s.message;
+}
+
+std::string js_set_component_morph_weights(int index, val weights) {
+  if (!g_viewer || !g_viewer->startup_error.empty()) return "the viewer is not running";
+  if (index < 0) return "no component " + std::to_string(index);
+  if (weights.isUndefined() || weights.isNull()) return "no weights";
+  std::vector<float>& w = g_viewer->component_weights;
+  copy_typed(weights, w);
+  const lk::Status s = g_viewer->scene.set_component_morph_weights(static_cast<size_t>(index), w.data(), w.size());
+  return s.ok() ? std::string() : s.message;
+}
+
+int js_component_morph_target_count(int index) {
+  return g_viewer && index >= 0 ? g_viewer->scene.component_morph_target_count(static_cast<size_t>(index)) : 0;
+}
+
 void js_clear_components() {
   if (g_viewer) g_viewer->scene.clear_components();
 }
@@ -559,6 +591,9 @@ EMSCRIPTEN_BINDINGS(likeness_viewer) {
   emscripten::function("clear_components", &js_clear_components);
   emscripten::function("set_component_matrix", &js_set_component_matrix);
   emscripten::function("set_component_positions", &js_set_component_positions);
+  emscripten::function("set_component_morph_targets", &js_set_component_morph_targets);
+  emscripten::function("set_component_morph_weights", &js_set_component_morph_weights);
+  emscripten::function("component_morph_target_count", &js_component_morph_target_count);
   emscripten::function("set_components_visible", &js_set_components_visible);
   emscripten::function("set_overlay_visible", &js_set_overlay_visible);
   emscripten::function("show_generic_head", &js_show_generic_head);

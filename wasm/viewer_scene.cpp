@@ -162,6 +162,12 @@ Status ViewerScene::split_shapes(const std::uint32_t* counts, size_t shape_count
                                  std::vector<Renderer::MorphShape>& shapes) const {
   if (model_ == kNoHandle || model_is_points_)
     return Status::error(ErrorCode::InvalidInput, "no mesh is shown to morph");
+  return split_flat_shapes(counts, shape_count, indices, index_count, offsets, offset_count, shapes);
+}
+
+Status ViewerScene::split_flat_shapes(const std::uint32_t* counts, size_t shape_count, const std::uint32_t* indices,
+                                      size_t index_count, const float* offsets, size_t offset_count,
+                                      std::vector<Renderer::MorphShape>& shapes) {
   if (offset_count != 3 * index_count)
     return Status::error(ErrorCode::InvalidInput, std::to_string(offset_count) + " offset values for " +
                                                       std::to_string(index_count) + " vertices (need 3 per vertex)");
@@ -347,6 +353,29 @@ Status ViewerScene::set_component_positions(size_t index, const float* positions
     return Status::error(ErrorCode::InvalidInput, "no component " + std::to_string(index));
   dirty_ = true;
   return renderer_.update_mesh_positions(components_[index], positions_xyz, vertex_count);
+}
+
+Status ViewerScene::set_component_morph_targets(size_t index, const std::uint32_t* counts, size_t shape_count,
+                                                const std::uint32_t* indices, size_t index_count, const float* offsets,
+                                                size_t offset_count) {
+  if (index >= components_.size())
+    return Status::error(ErrorCode::InvalidInput, "no component " + std::to_string(index));
+  std::vector<Renderer::MorphShape> shapes;
+  if (Status s = split_flat_shapes(counts, shape_count, indices, index_count, offsets, offset_count, shapes); !s.ok())
+    return s;
+  dirty_ = true;
+  return renderer_.set_morph_targets(components_[index], shapes);
+}
+
+Status ViewerScene::set_component_morph_weights(size_t index, const float* weights, size_t count) {
+  if (index >= components_.size())
+    return Status::error(ErrorCode::InvalidInput, "no component " + std::to_string(index));
+  dirty_ = true;
+  return renderer_.set_morph_weights(components_[index], weights, count);
+}
+
+int ViewerScene::component_morph_target_count(size_t index) const {
+  return index < components_.size() ? renderer_.morph_target_count(components_[index]) : 0;
 }
 
 void ViewerScene::set_components_visible(bool on) {

@@ -103,6 +103,16 @@ class ViewerScene {
   // before its matrix); the normals follow. For a part that bends (the
   // tongue out), where a matrix cannot carry it.
   Status set_component_positions(size_t index, const float* positions_xyz, size_t vertex_count);
+  // Morph targets on component `index` (its vertices as added, its own
+  // frame, before its matrix), blended in the vertex shader as the model's
+  // are: the tongue's own push (tongueOut), so a frame sends weights only.
+  // The flat arrays as set_morph_targets takes them; an empty list removes
+  // them. set_component_morph_weights: one weight per shape.
+  Status set_component_morph_targets(size_t index, const std::uint32_t* counts, size_t shape_count,
+                                     const std::uint32_t* indices, size_t index_count, const float* offsets,
+                                     size_t offset_count);
+  Status set_component_morph_weights(size_t index, const float* weights, size_t count);
+  int component_morph_target_count(size_t index) const;
 
   // A few big points drawn over everything else (the landmark the page asks
   // the user to click); an empty cloud clears them.
@@ -153,6 +163,9 @@ class ViewerScene {
   // The flat arrays cut into shapes (set_morph_targets, begin_morph_targets).
   Status split_shapes(const std::uint32_t* counts, size_t shape_count, const std::uint32_t* indices, size_t index_count,
                       const float* offsets, size_t offset_count, std::vector<Renderer::MorphShape>& shapes) const;
+  static Status split_flat_shapes(const std::uint32_t* counts, size_t shape_count, const std::uint32_t* indices,
+                                  size_t index_count, const float* offsets, size_t offset_count,
+                                  std::vector<Renderer::MorphShape>& shapes);
   bool model_is_points_ = false;
   size_t model_vertices_ = 0;
   TextureHandle texture_ = kNoHandle;

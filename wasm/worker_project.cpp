@@ -16,9 +16,23 @@ namespace lk_worker {
 namespace {
 
 // The kept head project as a file (core/project/project_file.h: a GLB whose
-// scene is the head, the project in its extras). Returns {ok, bytes}.
-val save_project_job() {
+// scene is the head, the project in its extras), with the eyes' and
+// teeth's textures the page shows: parts {eyeTexture, eyeSource,
+// teethTexture, teethSource} (image_object's form; a missing texture: the
+// generic one) become the project's parts. Returns {ok, bytes}.
+val save_project_job(val parts) {
   if (!kept_project()) return error_result(lk::ErrorCode::InvalidInput, "no fitted head to save");
+  lk::ProjectParts kept;
+  const std::pair<const char*, std::pair<lk::Image*, std::string*>> from[2] = {
+      {"eye", {&kept.eye_texture, &kept.eye_source}}, {"teeth", {&kept.teeth_texture, &kept.teeth_source}}};
+  for (const auto& [name, into] : from) {
+    const std::string key = std::string(name) + "Texture", source = std::string(name) + "Source";
+    if (!has(parts, key.c_str()) || parts[key].isNull()) continue;
+    if (lk::Status st = image_from_object(parts[key], *into.first); !st.ok())
+      return error_result(lk::with_context(st, std::string(name) + " texture"));
+    if (has(parts, source.c_str()) && parts[source].isString()) *into.second = parts[source].as<std::string>();
+  }
+  kept_project()->parts = std::move(kept);
   lk::Bytes bytes;
   if (lk::Status st = lk::save_project(*kept_project(), bytes); !st.ok()) return error_result(st);
   val r = ok_result();
@@ -66,7 +80,8 @@ val export_glb_job(int level, val parts) {
 // (Float32Array, 3 per vertex of the components' tongue, scan frame: its
 // push out before the jaw's motion, for the shapes with tongue out)}],
 // clips (anim/clips.h: [{name, shapes, times, values, slopes}], values and
-// slopes key-major: [k * shapes + s]: what Talk plays), bakeMs}.
+// slopes key-major: [k * shapes + s]: what Talk plays), lids ([[upper,
+// lower] vertex of each eye's middle rim column]), bakeMs}.
 val face_shapes_job(int level) {
   if (!kept_project()) return error_result(lk::ErrorCode::InvalidInput, "no fitted head to animate");
   lk::HeadProject& p = *kept_project();
@@ -161,10 +176,24 @@ val face_shapes_job(int level) {
     o.set("slopes", typed_array("Float64Array", slopes));
     clips.call<void>("push", o);
   }
+  // Each eye's middle rim column, upper and lower lid vertex (control
+  // vertices, which every level keeps first): the page measures the lid
+  // gap with them, as the core's semantic checks do.
+  val lids = val::array();
+  for (int e = 0; e < 2; ++e) {
+    const std::vector<int>& up = rig.landmarks.upper_lid[static_cast<std::size_t>(e)];
+    const std::vector<int>& lo = rig.landmarks.lower_lid[static_cast<std::size_t>(e)];
+    if (up.empty() || up.size() != lo.size()) continue;
+    val pair = val::array();
+    pair.call<void>("push", up[up.size() / 2]);
+    pair.call<void>("push", lo[up.size() / 2]);
+    lids.call<void>("push", pair);
+  }
   val r = ok_result();
   r.set("level", level);
   r.set("vertexCount", p.fit.multires.num_vertices(level));
   r.set("shapes", shapes);
+  r.set("lids", lids);
   r.set("clips", clips);
   r.set("bakeMs", bake_ms);
   return r;
@@ -265,6 +294,17 @@ val load_project_job(const std::string& name, std::uintptr_t data, std::size_t s
     t.set("level", p.fit.multires.num_levels());
     r.set("texture", t);
   }
+  // The eyes' and teeth's textures made from photos, when it keeps them.
+  val parts = val::object();
+  if (!p.parts.eye_texture.empty()) {
+    parts.set("eyeTexture", image_object(p.parts.eye_texture));
+    parts.set("eyeSource", p.parts.eye_source);
+  }
+  if (!p.parts.teeth_texture.empty()) {
+    parts.set("teethTexture", image_object(p.parts.teeth_texture));
+    parts.set("teethSource", p.parts.teeth_source);
+  }
+  r.set("parts", parts);
   r.set("loadMs", now_ms() - t0);
   kept_project() = std::move(project);
   return r;

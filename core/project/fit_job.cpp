@@ -33,6 +33,7 @@ Status refit_project(const HeadProject& project, const GenericHead& generic, int
   HeadProject fresh;
   const Status status = fit_project(project.scan, generic, options, fresh, observer, progress);
   if (!status.ok()) return status;
+  fresh.parts = project.parts;  // the eyes' and teeth's textures do not depend on the fit
   refitted = std::move(fresh);
   return Status::success();
 }

@@ -15,6 +15,7 @@
 #include "pipeline/fit_head.h"
 #include "pipeline/fit_quality.h"
 
+#include <string>
 #include <vector>
 
 namespace lk {
@@ -55,6 +56,17 @@ struct ProjectTexture {
   bool empty() const { return uvs.empty() || skin.empty(); }
 };
 
+// The eyeballs' and teeth's textures made from the user's eye and smile
+// photos (parts.h: iris synthesis, teeth_photo_texture), with the photos'
+// names; empty: the generic ones. Kept with the head so a saved project
+// shows and exports the same eyes and teeth without the photos.
+struct ProjectParts {
+  Image eye_texture;    // the eyeball texture (RGB)
+  std::string eye_source;
+  Image teeth_texture;  // the teeth composite (RGBA, voids transparent)
+  std::string teeth_source;
+};
+
 // The finest level's checks at rest (quality_job.h), measured once.
 struct ProjectQuality {
   bool measured = false;
@@ -73,6 +85,7 @@ struct HeadProject {
   AnimationRig rig;
   double pose = 0;          // the animation amount the multires state holds (0: rest)
   ProjectTexture texture;
+  ProjectParts parts;
   ProjectQuality quality;
 };
 

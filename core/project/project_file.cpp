@@ -505,6 +505,26 @@ Status read_project(const tinygltf::Model& model, const json& doc, HeadProject& 
       return with_context(s, "damaged Likeness project: the skin");
     if (p.texture.empty()) return damaged("an empty texture");
   }
+
+  // The eyes' and teeth's textures from the user's photos (version 2; a
+  // version 1 file has none: the generic ones).
+  const json& pj = member(doc, "parts");
+  if (!pj.is_null() && !pj.is_object()) return damaged("the eyes' and teeth's textures");
+  const std::pair<const char*, std::pair<Image*, std::string*>> parts[2] = {
+      {"eye", {&p.parts.eye_texture, &p.parts.eye_source}}, {"teeth", {&p.parts.teeth_texture, &p.parts.teeth_source}}};
+  for (const auto& [name, into] : parts) {
+    const json& part = member(pj, name);
+    if (part.is_null()) continue;
+    const std::string what = std::string("the ") + name + " texture";
+    const auto source = part.find("source");
+    if (!part.is_object() || source == part.end() || !source->is_string()) return damaged(what);
+    std::vector<std::uint8_t> png;
+    if (Status s = r.array(member(part, "texture"), what, "png", 1, png); !s.ok()) return s;
+    if (Status s = read_image(png.data(), png.size(), *into.first, 0, kMaxSkinPixels); !s.ok())
+      return with_context(s, "damaged Likeness project: " + what);
+    if (into.first->empty()) return damaged(what + " is empty");
+    *into.second = source->get<std::string>();
+  }
   return Status::success();
 }
 
@@ -603,6 +623,19 @@ Status save_project(const HeadProject& p, Bytes& out) {
     json skin = {{"type", "png"}, {"width", 1}, {"count", static_cast<int>(png.size())}, {"view", skin_view}};
     doc["texture"] = {{"uvs", w.vec2s(p.texture.uvs)}, {"skin", skin}};
   }
+  // The eyes' and teeth's textures, each a PNG with the photo's name.
+  json parts = json::object();
+  const std::pair<const char*, std::pair<const Image*, const std::string*>> part_list[2] = {
+      {"eye", {&p.parts.eye_texture, &p.parts.eye_source}}, {"teeth", {&p.parts.teeth_texture, &p.parts.teeth_source}}};
+  for (const auto& [name, from] : part_list) {
+    if (from.first->empty()) continue;
+    const Bytes part_png = write_png(*from.first);
+    if (part_png.empty()) return Status::error(ErrorCode::Internal, std::string("could not encode the ") + name + " texture as PNG");
+    const int view = w.view(part_png.data(), part_png.size());
+    parts[name] = {{"source", *from.second},
+                   {"texture", {{"type", "png"}, {"width", 1}, {"count", static_cast<int>(part_png.size())}, {"view", view}}}};
+  }
+  if (!parts.empty()) doc["parts"] = parts;
   // The buffer ends on an 8-byte boundary: no padding after it in the
   // binary chunk, so every byte of the chunk is under the checksum.
   while (model.buffers[0].data.size() % 8) model.buffers[0].data.push_back(0);

@@ -182,7 +182,7 @@ for (const [name, full] of [['bin.ply', binaryPly(40)], ['ascii.ply', Buffer.fro
 
 // --- project files: saved and opened; cut and flipped ones give messages -------
 {
-  const noHead = core.save_project_job();
+  const noHead = core.save_project_job({});
   check('save before any fit says so', !noHead.ok && /no fitted head/.test(noHead.message), noHead.message);
   const bin = likenessBin(WEBDIR);
   if (!bin) {
@@ -233,9 +233,43 @@ for (const [name, full] of [['bin.ply', binaryPly(40)], ['ascii.ply', Buffer.fro
       check('...jawOpen carries the jaw\'s motion, which moves its chin vertex by its offset; neutral and smile carry none',
             !!jawCheck && jawCheck.err < 0.05 * jawCheck.len && !byName.neutral.jawMatrix && !(byName.smile || {}).jawMatrix,
             jawCheck ? `error ${(1000 * jawCheck.err).toFixed(3)} mm of ${(1000 * jawCheck.len).toFixed(1)} mm` : 'no jawMatrix');
-      const saved = core.save_project_job();
+      const saved = core.save_project_job({});
       check('...and saves to the same bytes', saved.ok && Buffer.compare(Buffer.from(saved.bytes), full) === 0,
             saved.ok ? `${saved.bytes.length} bytes` : saved.message);
+      // The eyes' and teeth's textures the page hands over (image objects,
+      // as the eye and smile jobs make them) come back from the file as
+      // they went in; saved without them again, the file is the first.
+      {
+        const image = (w, h, c, seed) => ({ width: w, height: h, channels: c,
+          pixels: Uint8Array.from({ length: w * h * c }, (_, i) => (i * 37 + seed * 101) & 255) });
+        const eye = image(24, 16, 3, 1), teeth = image(20, 10, 4, 2);
+        const withParts = core.save_project_job({ eyeTexture: eye, eyeSource: 'eye close.jpg', teethTexture: teeth, teethSource: 'smile.png' });
+        const back = withParts.ok ? open(Buffer.from(withParts.bytes)) : withParts;
+        const same = (a, b) => !!a && a.width === b.width && a.height === b.height && a.channels === b.channels &&
+          Buffer.compare(Buffer.from(a.pixels), Buffer.from(b.pixels)) === 0;
+        const p = back.ok ? back.parts : {};
+        const plain = core.save_project_job({});
+        const badImage = core.save_project_job({ eyeTexture: { width: 4, height: 4, channels: 3, pixels: new Uint8Array(5) } });
+        check('...with the eye and smile textures the page gives, opened again: the same pixels and photo names; without them, the same bytes as before',
+              back.ok && same(p.eyeTexture, eye) && same(p.teethTexture, teeth) && p.eyeSource === 'eye close.jpg' &&
+              p.teethSource === 'smile.png' && plain.ok && Buffer.compare(Buffer.from(plain.bytes), full) === 0 &&
+              !badImage.ok && /eye texture/.test(badImage.message),
+              back.ok ? `${withParts.bytes.length} bytes with the parts; a bad image: ${badImage.message}` : back.message);
+        // The native CLI reads the page's parts: project info lists them,
+        // export puts them on the eyes and teeth (not the generic ones).
+        if (withParts.ok) {
+          const file = path.join(dir, 'parts.likeness.glb');
+          fs.writeFileSync(file, Buffer.from(withParts.bytes));
+          const info = execFileSync(bin, ['project', 'info', file], { encoding: 'utf8' });
+          const exported = execFileSync(bin, ['export', '--head', file, '--out', path.join(dir, 'parts.glb'), '--level', '1', '--no-animations'],
+                                        { encoding: 'utf8' });
+          check('...and the native CLI reads them: project info lists them, export dresses the eyes and teeth with them',
+                /eyes: 24x16 texture from the photo eye close\.jpg/.test(info) && /teeth: 20x10 texture from the photo smile\.png/.test(info) &&
+                /eye texture: the project's, from the photo eye close\.jpg \(24x16\)/.test(exported) &&
+                /teeth texture: the project's, from the photo smile\.png \(20x10\)/.test(exported),
+                (info + exported).split('\n').filter((l) => /eye|teeth/.test(l)).join(' | '));
+        }
+      }
       let refused = 0, bad = 0, same = 0;
       let rnd = 36;
       const next = () => (rnd = (rnd * 1103515245 + 12345) >>> 0) / 4294967296;
@@ -309,7 +343,7 @@ function liveExpressions(bin) {
     const neutral = core.expression_frame_job({ neutral: 1 }, 3);
     const rest3 = opened.meshes.levels[2].positions;
     const same = neutral.ok && neutral.positions.length === rest3.length && neutral.positions.every((v, i) => v === rest3[i]);
-    const saved = core.save_project_job();
+    const saved = core.save_project_job({});
     const bad = core.expression_frame_job({ notAShape: 1 }, 3);
     check('live expressions in wasm: smile and surprise move the head, neutral gives the rest positions bit for bit, ' +
           'the head stays at rest, an unknown name is a message',

@@ -24,6 +24,7 @@
 #define TINYGLTF_NO_STB_IMAGE_WRITE
 #define TINYGLTF_NO_EXTERNAL_IMAGE
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
 
 #include <catch2/catch.hpp>
@@ -364,9 +365,9 @@ TEST_CASE("project file: foreign, future and edited files are refused with a rea
   }
 
   // A newer version, another format's extras, an edited pose.
-  st = try_load(rewritten(bytes, [](tinygltf::Value::Object& d) { d["version"] = tinygltf::Value(2); }));
+  st = try_load(rewritten(bytes, [](tinygltf::Value::Object& d) { d["version"] = tinygltf::Value(3); }));
   CHECK(st.code == ErrorCode::Unsupported);
-  CHECK(st.message == "made by a newer Likeness (project version 2); this one reads version 1");
+  CHECK(st.message == "made by a newer Likeness (project version 3); this one reads version 2");
   st = try_load(rewritten(bytes, [](tinygltf::Value::Object& d) { d["format"] = tinygltf::Value(std::string("x")); }));
   CHECK(contains(st.message, "not a Likeness project"));
   const Bytes edited = rewritten(bytes, [](tinygltf::Value::Object& d) { d["pose"] = tinygltf::Value(0.5); });
@@ -426,6 +427,142 @@ TEST_CASE("project file: foreign, future and edited files are refused with a rea
     fit["scan_to_head"] = tinygltf::Value(map);
     d["fit"] = tinygltf::Value(fit);
   }, "cannot be inverted");
+}
+
+namespace {
+
+// The file's checksum made again after an edit, as the writer computes it
+// (FNV-1a 64 over the extras without the checksum, each bufferView's
+// place, the buffers), spelled out here so an edited file is a file the
+// reader accepts with its check on: a version 1 file, as the earlier
+// writer made it.
+Bytes resealed(const Bytes& bytes) {
+  tinygltf::TinyGLTF gltf;
+  gltf.SetStoreOriginalJSONForExtrasAndExtensions(true);
+  gltf.SetImageLoader([](tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int,
+                         void*) { return true; },
+                      nullptr);
+  tinygltf::Model m;
+  std::string err, warn;
+  REQUIRE(gltf.LoadBinaryFromMemory(&m, &err, &warn, bytes.data(), static_cast<unsigned>(bytes.size())));
+  nlohmann::json doc = nlohmann::json::parse(m.extras_json_string)["likeness"];
+  doc.erase("checksum");
+  std::uint64_t h = 14695981039346656037ull;
+  const auto add = [&](const void* data, size_t n) {
+    const auto* q = static_cast<const std::uint8_t*>(data);
+    for (size_t i = 0; i < n; ++i) h = (h ^ q[i]) * 1099511628211ull;
+  };
+  const auto add_u64 = [&](std::uint64_t v) { add(&v, sizeof v); };
+  const std::string text = doc.dump();
+  add(text.data(), text.size());
+  add_u64(m.bufferViews.size());
+  for (const tinygltf::BufferView& v : m.bufferViews) {
+    add_u64(static_cast<std::uint64_t>(v.buffer));
+    add_u64(v.byteOffset);
+    add_u64(v.byteLength);
+  }
+  add_u64(m.buffers.size());
+  for (const tinygltf::Buffer& b : m.buffers) {
+    add_u64(b.data.size());
+    add(b.data.data(), b.data.size());
+  }
+  std::string hex(16, '0');
+  for (int i = 0; i < 16; ++i) hex[15 - i] = "0123456789abcdef"[(h >> (4 * i)) & 15];
+  return rewritten(bytes, [&](tinygltf::Value::Object& d) { d["checksum"] = tinygltf::Value(hex); });
+}
+
+// A deterministic image whose every pixel differs from its neighbours.
+Image pattern(int w, int h, int channels, std::uint32_t seed) {
+  Image im = Image::make(w, h, channels, 0);
+  std::mt19937 rng(seed);
+  for (std::uint8_t& v : im.pixels) v = static_cast<std::uint8_t>(rng() & 255u);
+  return im;
+}
+
+}  // namespace
+
+TEST_CASE("project file: the eyes' and teeth's textures from photos come back byte for byte") {
+  HeadProject a = textured_project();
+  a.parts.eye_texture = pattern(96, 64, 3, 1);
+  a.parts.eye_source = "eye close-up.jpg";
+  a.parts.teeth_texture = pattern(64, 32, 4, 2);  // RGBA: the voids' alpha too
+  a.parts.teeth_source = "smile.png";
+  const Bytes bytes = saved(a);
+  const HeadProject b = loaded(bytes);
+  CHECK(b.parts.eye_texture.width == 96);
+  CHECK(b.parts.eye_texture.height == 64);
+  CHECK(b.parts.eye_texture.channels == 3);
+  CHECK(b.parts.eye_texture.pixels == a.parts.eye_texture.pixels);
+  CHECK(b.parts.eye_source == "eye close-up.jpg");
+  CHECK(b.parts.teeth_texture.channels == 4);
+  CHECK(b.parts.teeth_texture.pixels == a.parts.teeth_texture.pixels);
+  CHECK(b.parts.teeth_source == "smile.png");
+  check_same_head(a, b);
+  CHECK(saved(b) == bytes);
+
+  // One part alone: the other stays generic (empty).
+  HeadProject c = textured_project();
+  c.parts.teeth_texture = a.parts.teeth_texture;
+  c.parts.teeth_source = "smile.png";
+  const HeadProject d = loaded(saved(c));
+  CHECK(d.parts.eye_texture.empty());
+  CHECK(d.parts.eye_source.empty());
+  CHECK(d.parts.teeth_texture.pixels == c.parts.teeth_texture.pixels);
+
+  // Without parts the file holds none, and none come back.
+  const Bytes plain = saved(textured_project());
+  CHECK(!contains(std::string(plain.begin(), plain.end()), "\"parts\""));
+  CHECK(loaded(plain).parts.eye_texture.empty());
+
+  // Edited parts behind the checksum are refused with a reason.
+  using Obj = tinygltf::Value::Object;
+  const auto refused = [&](const std::function<void(Obj&)>& edit, const std::string& why) {
+    const Status s = try_load(rewritten(bytes, edit), false);
+    INFO(why << ": " << s.message);
+    CHECK(s.code != ErrorCode::Ok);
+    CHECK(contains(s.message, why));
+  };
+  const auto edit_eye = [](Obj& d, const std::function<void(Obj&)>& f) {
+    Obj parts = d["parts"].Get<Obj>(), eye = parts["eye"].Get<Obj>();
+    f(eye);
+    parts["eye"] = tinygltf::Value(eye);
+    d["parts"] = tinygltf::Value(parts);
+  };
+  refused([&](Obj& d) { edit_eye(d, [](Obj& e) { e["source"] = tinygltf::Value(3); }); }, "the eye texture");
+  refused([&](Obj& d) {
+    edit_eye(d, [](Obj& e) {
+      Obj t = e["texture"].Get<Obj>();
+      t["type"] = tinygltf::Value(std::string("f64"));
+      e["texture"] = tinygltf::Value(t);
+    });
+  }, "the eye texture");
+  refused([&](Obj& d) {  // the rig's integers read as the eye's PNG
+    Obj rig = d["rig"].Get<Obj>();
+    Obj moved = rig["moved"].Get<Obj>();
+    edit_eye(d, [&](Obj& e) {
+      Obj t = e["texture"].Get<Obj>();
+      t["view"] = moved["view"];
+      t["count"] = tinygltf::Value(moved["count"].Get<int>() * 4);
+      e["texture"] = tinygltf::Value(t);
+    });
+  }, "the eye texture");
+  refused([](Obj& d) { d["parts"] = tinygltf::Value(std::string("eyes")); }, "the eyes' and teeth's textures");
+}
+
+TEST_CASE("project file: a version 1 file (before the parts) still opens, with the generic eyes and teeth") {
+  const HeadProject& a = textured_project();
+  const Bytes v1 = resealed(rewritten(saved(a), [](tinygltf::Value::Object& d) { d["version"] = tinygltf::Value(1); }));
+  HeadProject b;
+  const Status st = load_project(v1.data(), v1.size(), b);  // the checksum checked
+  INFO(st.message);
+  REQUIRE(st.ok());
+  check_same_head(a, b);
+  CHECK(b.texture.skin.pixels == a.texture.skin.pixels);
+  CHECK(b.parts.eye_texture.empty());
+  CHECK(b.parts.teeth_texture.empty());
+  // The reseal is a real checksum: the same file with the old one is refused.
+  const Bytes stale = rewritten(saved(a), [](tinygltf::Value::Object& d) { d["version"] = tinygltf::Value(1); });
+  CHECK(contains(try_load(stale).message, "checksum does not match"));
 }
 
 TEST_CASE("project file: every cut of a small project is refused, and says it is cut") {

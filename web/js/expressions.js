@@ -21,22 +21,25 @@
 // tongue ride on the jaw: the shapes' jaw motions blended as I + sum of
 // w_i (M_i - I) (what the GLB's morph targets on the teeth do); the
 // eyeballs turn with the gaze shapes (eyeLook*) the same way; the tongue
-// out bends the tongue's own vertices (moveTongue).
+// out bends the tongue's own vertices (moveTongue), on the GPU path as
+// the tongue component's morph targets.
 import { app, page, ui, showError } from './state.js';
 import { runJob } from './worker_client.js';
 import { onHeadShown, showStage, view } from './head_view.js';
 import { onAnimationStop, stopAnimation } from './animation.js';
 
 // Talk plays the core's Talk clip (core/anim/clips.h: "hello, nice to
-// meet you", visemes cross-fading, two blinks), fetched with the shapes:
-// the same keys the exported GLB's "Talk" animation holds, one source for
-// both. {shapes, times, values, slopes} (values and slopes key-major).
-let talkClip = null;
+// meet you", visemes cross-fading, two blinks) and, with it, its Gaze clip
+// (the eyes to the left, the right and up; other shapes than Talk's),
+// fetched with the shapes: the same keys the exported GLB's "Talk" and
+// "Gaze" animations hold, one source for both. {shapes, times, values,
+// slopes} (values and slopes key-major).
+let talkClip = null, gazeClip = null;
 
-// The weights at t seconds into Talk: glTF's cubic Hermite (CUBICSPLINE)
-// between the clip's keys, as a glTF player computes the GLB's clip.
-export function talkWeights(t) {
-  const w = {}, c = talkClip;
+// A clip's weights at t seconds, added into w: glTF's cubic Hermite
+// (CUBICSPLINE) between the clip's keys, as a glTF player computes the
+// GLB's clip.
+function clipWeights(c, t, w = {}) {
   if (!c) return w;
   const T = c.times, n = c.shapes.length, last = T.length - 1;
   const x = Math.min(Math.max(t, T[0]), T[last]);
@@ -47,11 +50,24 @@ export function talkWeights(t) {
   for (let s = 0; s < n; s++) {
     const i0 = k * n + s, i1 = (k + 1) * n + s;
     const v = h00 * c.values[i0] + h10 * h * c.slopes[i0] + h01 * c.values[i1] + h11 * h * c.slopes[i1];
-    if (v > 0) w[c.shapes[s]] = v;
+    if (v > 0) w[c.shapes[s]] = (w[c.shapes[s]] || 0) + v;
   }
   return w;
 }
-const talkEnd = () => (talkClip ? talkClip.times[talkClip.times.length - 1] : 0);
+
+// The weights at t seconds into Talk alone (what the GLB's Talk plays).
+export function talkWeights(t) { return clipWeights(talkClip, t); }
+// The demo's: Talk and Gaze together.
+function demoWeights(t) { return clipWeights(gazeClip, t, clipWeights(talkClip, t)); }
+const clipEnd = (c) => (c ? c.times[c.times.length - 1] : 0);
+// Talk's keys where the lids are shut (blink 1): a frame that would step
+// over one draws it instead, so a slow GPU (100-200 ms a frame on
+// SwiftShader at level 3, against a 200 ms blink) still shows every blink.
+function shutKeys(c) {
+  const s = c ? c.shapes.indexOf('blink') : -1;
+  return s < 0 ? [] : Array.from(c.times).filter((_, k) => c.values[k * c.shapes.length + s] >= 0.999);
+}
+const talkEnd = () => Math.max(clipEnd(talkClip), clipEnd(gazeClip));
 
 const PRESETS = [...document.querySelectorAll('#expressions [data-preset]')].map((b) => b.dataset.preset);
 function groupOf(name) {
@@ -78,6 +94,8 @@ const ex = app.expressions = {
   talking: false,
   talkFrames: 0,
   talkPeaks: {},        // the last Talk's largest weight per shape drawn
+  talkBlinkFrame: null, // the last Talk's frame drawn with the largest blink weight: {t, weights}
+  lids: [],             // each eye's [upper, lower] lid vertex (middle rim column) of the baked level
   jawMatrix: null,      // the lower teeth's and tongue's last matrix (column-major 4x4, scan frame)
   eyeMatrices: null,    // the eyeballs' last matrices [left, right] (the same)
   // Per drawn pose: the JS blend and the viewer's update_positions (ms, sums over frames).
@@ -98,8 +116,16 @@ const ex = app.expressions = {
   restPositions: () => (baked ? baked.rest.slice() : null),
   shape: (name) => (baked && baked.shapes.get(name)) || null,
   talkWeights: (t) => talkWeights(t),
+  demoWeights: (t) => demoWeights(t),
   get talkSeconds() { return talkEnd(); },
-  tonguePositions: null,  // the tongue component's last positions (scan frame, before the jaw's matrix)
+  tonguePositions: null,  // the tongue component's last positions on the CPU path (scan frame, before the jaw's matrix)
+  // The same computed on demand, whichever path draws (tests, the console).
+  tongueBlend: () => {
+    const c = app.componentsData, rest = c && c.tongue && c.tongue.positions;
+    return baked && rest ? tongueBlend(baked, rest) || rest : null;
+  },
+  tongueStats: { path: null, frames: 0, ms: 0, lastMs: 0, uploads: 0 },  // uploads: the tongue's vertices sent (CPU path)
+  tongueHeld: false,      // tests: the tongue left at rest, to see what its push changes on screen
   // Tests: set weights as the presets and sliders do; switch the path and redraw.
   set: (weights) => setWeights(weights),
   setPath: (path) => { ex.path = path; ex.pathReason = 'set by setPath'; return fresh(baked) && draw(); },
@@ -172,11 +198,12 @@ function ensureShapes() {
     const shapes = new Map(r.shapes.map((s) => [s.name, { indices: s.indices, offsets: s.offsets, jaw: s.jawMatrix || null,
                                                           eyes: s.eyeMatrices || null, tongue: s.tongueOffsets || null }]));
     talkClip = (r.clips || []).find((c) => c.name === 'Talk') || null;
+    gazeClip = (r.clips || []).find((c) => c.name === 'Gaze') || null;
     const rest = new Float32Array(mesh.positions);
     const names = r.shapes.map((s) => s.name);
     baked = { fit, level, shapes, names, index: new Map(names.map((n, i) => [n, i])), rest, out: rest.slice(),
               weightArray: new Float32Array(names.length), gpuModel: -1, restPose: '' };
-    Object.assign(ex, { level, names: baked.names, bakeMs: r.bakeMs });
+    Object.assign(ex, { level, names: baked.names, bakeMs: r.bakeMs, lids: r.lids || [] });
     ui.exprStats.textContent = baked.names.length + ' shapes baked on ' + (level === 0 ? 'the control mesh' : 'level ' + level) +
       ' (' + mesh.vertexCount.toLocaleString('en') + ' vertices) in ' + Math.round(r.bakeMs) + ' ms.';
     buildSliders();
@@ -329,7 +356,7 @@ function draw() {
   }
   const t2 = performance.now();
   if (err) { stopTalk(); showError('Expressions: ' + err); return false; }
-  moveJaw(b);
+  moveJaw(b, gpuDrawn);
   const st = ex.stats;
   st.frames++;
   st.lastBlendMs = t1 - t0;
@@ -352,24 +379,92 @@ function blendMatrices(b, pick) {
   }
   return m;
 }
-function moveJaw(b) {
+function moveJaw(b, gpu) {
   const m = blendMatrices(b, (s) => s.jaw);
   ex.jawMatrix = m;
   for (const i of app.jawComponents || []) app.viewer.set_component_matrix(i, m);
   ex.eyeMatrices = [0, 1].map((e) => blendMatrices(b, (s) => s.eyes && s.eyes[e]));
   (app.eyeComponents || []).forEach((i, e) => { if (i !== null && e < 2) app.viewer.set_component_matrix(i, ex.eyeMatrices[e]); });
-  moveTongue(b);
+  moveTongue(b, gpu);
 }
 
 // The tongue out (tongueOut, viseme_TH) bends it, which no matrix carries:
-// its component's vertices are rest + sum of w_i * push_i (the worker's
-// tongueOffsets, before the jaw's motion: the jaw's matrix then carries
-// them, as the core's pose_tongue does). Sent only while pushed, and once
-// more to put it back.
+// the worker's tongueOffsets per shape, in the tongue's own frame before
+// the jaw's motion (the jaw's matrix then carries them, as the core's
+// pose_tongue does). On the GPU path they are the tongue component's own
+// morph targets (sent once per head and components), and a frame sends
+// its weights only, as for the face; on the CPU path the component's
+// vertices are rest + sum of w_i * push_i, sent while pushed and once more
+// to put it back. ex.tongueStats: the page's time per frame on the tongue.
 let tonguePushed = false;
-function moveTongue(b) {
+
+function tongueNames(b, rest) {
+  if (!b.tongueNames) b.tongueNames = b.names.filter((n) => { const t = b.shapes.get(n).tongue; return !!t && t.length === rest.length; });
+  return b.tongueNames;
+}
+
+// The tongue's morph targets on its component: true once there (sent
+// again when the components were made again); false, and the CPU path for
+// the tongue from then on, when the viewer refuses them.
+function tongueGpuReady(b, i, rest) {
+  const v = app.viewer, names = tongueNames(b, rest), g = b.tongueGpu;
+  if (!names.length || (g && g.failed) || !v.set_component_morph_targets) return false;
+  // The CPU path's push undone: the targets (and their normals) are made from the rest.
+  if (tonguePushed) { v.set_component_positions(i, rest); tonguePushed = false; }
+  if (g && g.component === i && g.rest === rest && v.component_morph_target_count(i) === names.length) return true;
+  const counts = new Uint32Array(names.length), idx = [], off = [];
+  names.forEach((n, k) => {
+    const push = b.shapes.get(n).tongue;
+    for (let j = 0; j < push.length; j += 3) {
+      if (push[j] === 0 && push[j + 1] === 0 && push[j + 2] === 0) continue;
+      idx.push(j / 3);
+      off.push(push[j], push[j + 1], push[j + 2]);
+      counts[k]++;
+    }
+  });
+  const err = v.set_component_morph_targets(i, counts, new Uint32Array(idx), new Float32Array(off));
+  if (err) {
+    b.tongueGpu = { failed: true };
+    console.info('Expressions: the tongue blends on the CPU, the viewer refused its morph targets: ' + err);
+    return false;
+  }
+  b.tongueGpu = { component: i, rest, names, weights: new Float32Array(names.length) };
+  return true;
+}
+
+function moveTongue(b, gpu) {
   const i = app.tongueComponent, c = app.componentsData, rest = c && c.tongue && c.tongue.positions;
   if (i === null || i === undefined || !rest) return;
+  const t0 = performance.now();
+  const v = app.viewer, g = b.tongueGpu;
+  const onGpu = gpu && !ex.tongueHeld && tongueGpuReady(b, i, rest);
+  if (onGpu) {
+    const w = b.tongueGpu.weights;
+    b.tongueGpu.names.forEach((n, k) => { w[k] = ex.weights[n] || 0; });
+    const err = v.set_component_morph_weights(i, w);
+    if (err) { console.warn('the tongue not moved: ' + err); return; }
+    ex.tonguePositions = null;  // on the GPU: ex.tongueBlend() computes them for the tests
+  } else {
+    // Off the GPU path: no GPU push left under the CPU's.
+    if (g && g.component === i && !g.failed && v.component_morph_target_count(i) > 0) v.set_component_morph_weights(i, new Float32Array(0));
+    const out = ex.tongueHeld ? null : tongueBlend(b, rest);
+    if (out || tonguePushed) {
+      const err = v.set_component_positions(i, out || rest);
+      if (err) { console.warn('the tongue not moved: ' + err); return; }
+      tonguePushed = !!out;
+      ex.tongueStats.uploads++;
+    }
+    ex.tonguePositions = out || rest;
+  }
+  const st = ex.tongueStats, dt = performance.now() - t0;
+  st.path = onGpu ? 'gpu' : 'cpu';
+  st.frames++;
+  st.ms += dt;
+  st.lastMs = dt;
+}
+
+// rest + sum of w_i * push_i over the weighted tongue shapes; null when none pushes.
+function tongueBlend(b, rest) {
   let out = null;
   for (const [name, w] of Object.entries(ex.weights)) {
     const s = w && b.shapes.get(name), push = s && s.tongue;
@@ -377,11 +472,7 @@ function moveTongue(b) {
     if (!out) out = Float32Array.from(rest);
     for (let k = 0; k < push.length; k++) out[k] += w * push[k];
   }
-  if (!out && !tonguePushed) return;
-  const err = app.viewer.set_component_positions(i, out || rest);
-  if (err) { console.warn('the tongue not moved: ' + err); return; }
-  tonguePushed = !!out;
-  ex.tonguePositions = out || rest;
+  return out;
 }
 
 // What a frame cost on the page's side (the drawing itself is the GPU's).
@@ -477,22 +568,29 @@ async function startTalk() {
   ex.talking = true;
   ex.talkFrames = 0;
   ex.talkPeaks = {};
+  ex.talkBlinkFrame = null;
   ex.stats = { frames: 0, blendMs: 0, uploadMs: 0, lastBlendMs: 0, lastUploadMs: 0 };
   ui.talk.textContent = 'Stop talking';
   ui.talk.setAttribute('aria-pressed', 'true');
   talkT0 = performance.now();
-  let drawnAtUpload = -1;
+  let drawnAtUpload = -1, lastT = -1;
+  const shut0 = shutKeys(talkClip);
   const frame = () => {
     if (!ex.talking || generation !== talkGeneration) return;
     // A pose only after the last one was drawn (a slow GPU: no blend thrown away).
     if (app.viewer.frames_drawn() === drawnAtUpload) { requestAnimationFrame(frame); return; }
-    const t = (performance.now() - talkT0) / 1000;
-    if (t >= talkEnd()) { stopTalk(); return; }
-    ex.weights = talkWeights(t);
+    const now = (performance.now() - talkT0) / 1000;
+    if (now >= talkEnd()) { stopTalk(); return; }
+    const shut = shut0.find((k) => k > lastT && k <= now);
+    const t = shut !== undefined ? shut : now;
+    lastT = t;
+    ex.weights = demoWeights(t);
     if (!draw()) { stopTalk(); return; }
     drawnAtUpload = app.viewer.frames_drawn();
     ex.talkFrames++;
     for (const [name, w] of Object.entries(ex.weights)) ex.talkPeaks[name] = Math.max(ex.talkPeaks[name] || 0, w);
+    // The frame drawn with the lids most closed (the tests pose it again).
+    if ((ex.weights.blink || 0) > ((ex.talkBlinkFrame && ex.talkBlinkFrame.weights.blink) || 0)) ex.talkBlinkFrame = { t, weights: { ...ex.weights } };
     const st = ex.stats;
     ui.exprStats.textContent = 'Talking: ' + ex.talkFrames + ' frames, per frame on level ' + baked.level + ': ' +
       costText(st.blendMs / st.frames, st.uploadMs / st.frames);

@@ -21,7 +21,7 @@
 import { app, params, ui, onPageChange, setStatus } from './state.js';
 import { forgetFit } from './fit.js';
 import { runJob } from './worker_client.js';
-import { openProject } from './project.js';
+import { openProject, projectParts } from './project.js';
 import { loadScan } from './scan.js';
 import { renderPhotos } from './photos.js';
 import { setPhotoRole } from './photo_roles.js';
@@ -185,15 +185,18 @@ async function save() {
   if (document.body.dataset.state === 'working' || (app.animation && app.animation.running)) { scheduleSave(); return; }
   const fresh = !current || current.fit !== fit;
   let bytes = null;
-  if (fresh || current.texture !== texture) {
-    const r = await runJob({ type: 'saveProject' }, []);
-    if (app.fit !== fit || app.texture !== texture) { scheduleSave(0); return; }  // changed meanwhile
+  const eye = app.eyePhoto, smile = app.smilePhoto;
+  if (fresh || current.texture !== texture || current.eyePhoto !== eye || current.smilePhoto !== smile) {
+    // With the eyes' and teeth's textures shown (a head opened from a file
+    // keeps them without their photos).
+    const r = await runJob({ type: 'saveProject', parts: projectParts() }, []);
+    if (app.fit !== fit || app.texture !== texture || app.eyePhoto !== eye || app.smilePhoto !== smile) { scheduleSave(0); return; }  // changed meanwhile
     if (!r.ok) throw new Error(r.message || r.code);
     bytes = r.bytes;
   }
   // A head made from kept photos takes their entry over.
   if (fresh) current = current && !current.fit ? Object.assign(current, { fit, photosKey: null }) : { id: newId(), fit, photosKey: null };
-  if (bytes) Object.assign(current, { bytes, texture });
+  if (bytes) Object.assign(current, { bytes, texture, eyePhoto: eye, smilePhoto: smile });
   const key = photosKey();
   const whole = bytes || key !== current.photosKey || !(await hasFile(current.id));
   const file = whole ? { bytes: current.bytes, photos: app.photos.map((p) => p.file) } : null;
@@ -291,7 +294,8 @@ export async function restoreHead(id) {
     const file = new File([stored.bytes], head.name + '.likeness.glb', { type: 'model/gltf-binary' });
     await openProject(file);
     if (!app.project || app.project.name !== file.name || !app.fit) return;  // refused: openProject said why
-    current = { id, fit: app.fit, texture: app.texture, bytes: stored.bytes, photosKey: null };
+    current = { id, fit: app.fit, texture: app.texture, eyePhoto: app.eyePhoto, smilePhoto: app.smilePhoto,
+               bytes: stored.bytes, photosKey: null };
   }
   const o = head.page.options || {};
   if (o.level !== undefined) ui.level.value = o.level;
@@ -369,7 +373,8 @@ export function wireKeep() {
   onPageChange((snap) => {
     if (app.fit || app.photos.length || scanFile()) el.offer.hidden = true;  // a head or inputs are on the page: nothing to offer
     if (snap.state === 'working' || snap.state === 'loading') return;
-    if (app.fit && (!current || current.fit !== app.fit || current.texture !== app.texture)) scheduleSave(0);
+    if (app.fit && (!current || current.fit !== app.fit || current.texture !== app.texture ||
+                    current.eyePhoto !== app.eyePhoto || current.smilePhoto !== app.smilePhoto)) scheduleSave(0);
     else if (!app.fit && scanFile() && (!current || current.photosKey !== inputsKey())) scheduleSave(0);  // before its fit starts
     else if (app.fit || app.photos.length) scheduleSave();
   });

@@ -18,11 +18,36 @@ function projectName() {
   return base + '.likeness.glb';
 }
 
+// The eyes' and teeth's textures the page shows (made from the eye and
+// smile photos), which the project file keeps with their photos' names
+// (core's ProjectParts); null where the generic one is shown. Copied to
+// the worker, not transferred: the page keeps showing them.
+export function projectParts() {
+  const e = app.eyePhoto, s = app.smilePhoto;
+  return { eyeTexture: e ? e.texture : null, eyeSource: e ? e.name : '',
+           teethTexture: s ? s.texture : null, teethSource: s ? s.name : '' };
+}
+
+// An opened project's eye and smile textures become the ones shown (as if
+// made from photos of those names); a project without them leaves the
+// user's own eye or smile photo, and drops one that came with an earlier
+// project (no photo of the page made it).
+function takeParts(parts) {
+  const own = (entry) => !!entry && !entry.fromProject;
+  const p = parts || {};
+  app.eyePhoto = p.eyeTexture ? { name: p.eyeSource || 'the project', texture: p.eyeTexture, ms: 0, fromProject: true }
+    : own(app.eyePhoto) ? app.eyePhoto : null;
+  app.smilePhoto = p.teethTexture ? { name: p.teethSource || 'the project', texture: p.teethTexture, ms: 0, fromProject: true }
+    : own(app.smilePhoto) ? app.smilePhoto : null;
+  return [p.eyeTexture ? 'the eyes from ' + app.eyePhoto.name : '', p.teethTexture ? 'the teeth from ' + app.smilePhoto.name : '']
+    .filter(Boolean).join(' and ');
+}
+
 export async function saveProject() {
   if (!app.fit || document.body.dataset.state === 'working') return;
   stopAnimation();
   try {
-    const r = await runJob({ type: 'saveProject' }, []);
+    const r = await runJob({ type: 'saveProject', parts: projectParts() }, []);
     if (!r.ok) { showError('Could not save the project: ' + r.message); return; }
     const name = projectName();
     download(name, r.bytes, 'model/gltf-binary');
@@ -82,6 +107,7 @@ export async function openProject(file) {
   for (const st of FIT_STAGES) stageItem(st.row).classList.remove('coming');
   const wallMs = performance.now() - t0;
   app.project = { name: file.name, loadMs: result.loadMs, wallMs };
+  const partsFrom = takeParts(result.parts);  // before showHead: it dresses the eyes and teeth
   showHead(result, file.name, wallMs);
   if (result.texture) {
     app.texture = { uvs: result.texture.uvs, skin: result.texture.skin, steps: [], textureMs: 0, wallMs: 0,
@@ -94,7 +120,7 @@ export async function openProject(file) {
     showStage('subdivide');
   }
   meta.textContent = formatBytes(file.size) + ' · project';
-  setStatus('Opened ' + file.name + (result.texture ? ' (textured)' : '') + ' in ' + Math.round(wallMs) +
+  setStatus('Opened ' + file.name + (result.texture ? ' (textured)' : '') + (partsFrom ? ', with ' + partsFrom : '') + ' in ' + Math.round(wallMs) +
             ' ms, without fitting: animate it, texture it or export it.');
   endJob(job);
   renderPhotos();

@@ -348,7 +348,7 @@ async function run(s) {
     await page.evaluate((x) => window.likeness.expressions.set(x), w);
     return page.evaluate(() => {
       const a = window.likeness, e = a.expressions, f = a.fit.headFacing;
-      const rest = a.componentsData && a.componentsData.tongue && a.componentsData.tongue.positions, p = e.tonguePositions;
+      const rest = a.componentsData && a.componentsData.tongue && a.componentsData.tongue.positions, p = e.tonguePositions || e.tongueBlend();
       if (!rest || !p) return { component: a.tongueComponent, none: true };
       const along = (arr, i) => arr[3 * i] * f[0] + arr[3 * i + 1] * f[1] + arr[3 * i + 2] * f[2];
       let tip = 0, root = 0, moved = 0;
@@ -367,6 +367,38 @@ async function run(s) {
         tongueOut.component !== null && tongueOut.tip > 0.015 && Math.abs(tongueOut.root) < 1e-6 && tongueBack.moved === 0,
         `tongue component ${tongueOut.component}; tongueOut: tip ${(1000 * (tongueOut.tip || 0)).toFixed(1)} mm forward, root ` +
         `${(1000 * (tongueOut.root || 0)).toFixed(3)} mm; after smile the tongue's vertices differ from rest by ${tongueBack.moved}`);
+
+  // On the GPU path the tongue's push is its component's own morph targets
+  // (a frame sends its weights, no vertex): tongueOut drawn so changes the
+  // picture against the same pose with the tongue held at rest, and draws
+  // the CPU path's picture. Per frame, over 20 frames of tongueOut moving:
+  // the tongue's vertices are sent on the CPU path every frame, never on
+  // the GPU path; the page's time on the tongue is reported.
+  const tongueFrames = (path) => page.evaluate(async (p) => {
+    const a = window.likeness, e = a.expressions;
+    await e.setPath(p);
+    const st = e.tongueStats, before = { frames: st.frames, ms: st.ms, uploads: st.uploads };
+    for (let k = 1; k <= 20; k++) await e.set({ tongueOut: k / 20 });
+    return { path: st.path, frames: st.frames - before.frames, msPerFrame: (st.ms - before.ms) / (st.frames - before.frames),
+             uploads: st.uploads - before.uploads, targets: a.viewer.component_morph_target_count(a.tongueComponent) };
+  }, path);
+  const tongueOnGpu = await tongueFrames('gpu');
+  const outGpu = await canvasImage(page);
+  await page.evaluate(async () => { const e = window.likeness.expressions; e.tongueHeld = true; await e.set({ tongueOut: 1 }); });
+  const heldGpu = await canvasImage(page);
+  await page.evaluate(async () => { const e = window.likeness.expressions; e.tongueHeld = false; await e.set({ tongueOut: 1 }); });
+  const tongueOnCpu = await tongueFrames('cpu');
+  const outCpu = await canvasImage(page);
+  await page.evaluate(() => window.likeness.expressions.setPath('gpu'));
+  const tongueMoves = pixelDiff(outGpu, heldGpu), tongueSame = pixelDiff(outGpu, outCpu);
+  note(`the tongue per frame (tongueOut moving, 20 frames): GPU path ${tongueOnGpu.msPerFrame.toFixed(3)} ms, ` +
+       `CPU path ${tongueOnCpu.msPerFrame.toFixed(3)} ms (the page's side: weights, or blend and upload)`);
+  check('tongueOut on the GPU path moves the tongue on screen by its morph targets, as the CPU path draws it, without sending its vertices',
+        tongueOnGpu.path === 'gpu' && tongueOnGpu.targets >= 1 && tongueOnGpu.uploads === 0 && tongueOnGpu.frames === 20 &&
+        tongueOnCpu.path === 'cpu' && tongueOnCpu.uploads === 20 && tongueMoves.fraction > 0.0002 && tongueMoves.max > 40 && tongueSame.fraction < 0.002,
+        `GPU path: ${tongueOnGpu.targets} tongue targets, ${tongueOnGpu.uploads} vertex uploads in ${tongueOnGpu.frames} frames; ` +
+        `CPU path: ${tongueOnCpu.uploads} in ${tongueOnCpu.frames}; tongue out vs held at rest: ${(100 * tongueMoves.fraction).toFixed(3)} % ` +
+        `of pixels differ (max ${tongueMoves.max}); GPU vs CPU: ${(100 * tongueSame.fraction).toFixed(3)} % (max ${tongueSame.max})`);
 
   // Neutral: the rest positions exactly (the fitted level's), and the rest image.
   await page.click('[data-preset="neutral"]');
@@ -412,6 +444,30 @@ async function run(s) {
         `${t3.talkFrames} frames drew ${drawn.length} visemes; the sequence: ${visemes.length} visemes at 0.7 or more ` +
         `(${visemes.join(' ')}), blink peak ${(sequence.peaks.blink || 0).toFixed(2)}, largest step in 1 ms ${sequence.jump.toFixed(4)}; ` +
         `max |blend - rest| ${afterTalk.d}`);
+  // The lids close during the demo: the frame it drew with the largest
+  // blink weight, posed again, closes each eye's middle rim gap to under
+  // 10 % of its rest opening (the core's eyeBlink check, on the mesh), and
+  // the eyes looked left, right and up meanwhile (the Gaze clip played
+  // with Talk, as the GLB's Gaze animation holds it).
+  const lids = await page.evaluate(async () => {
+    const e = window.likeness.expressions, f = e.talkBlinkFrame;
+    if (!f || e.lids.length !== 2) return { none: true, lids: e.lids.length, frame: !!f };
+    await e.set(f.weights);
+    const p = e.positions(), r = e.restPositions();
+    const gap = (q, [u, l]) => Math.hypot(q[3 * u] - q[3 * l], q[3 * u + 1] - q[3 * l + 1], q[3 * u + 2] - q[3 * l + 2]);
+    const ratios = e.lids.map((pair) => gap(p, pair) / gap(r, pair)), restMm = e.lids.map((pair) => 1000 * gap(r, pair));
+    return { t: f.t, blink: f.weights.blink, ratios, restMm, others: Object.keys(f.weights).filter((n) => n !== 'blink') };
+  });
+  if (SHOT_DIR && !lids.none) await page.locator('#canvas').screenshot({ path: path.join(SHOT_DIR, 'page_talk_blink.png') });
+  await page.evaluate(() => window.likeness.expressions.set({}));
+  const looked = ['eyeLookOutLeft', 'eyeLookInRight', 'eyeLookInLeft', 'eyeLookOutRight', 'eyeLookUpLeft', 'eyeLookUpRight']
+    .map((n) => [n, t3.talkPeaks[n] || 0]);
+  check('the talking demo closes the lids on a blink (each eye\'s gap under 10 % of its rest opening in the frame drawn) and turns the eyes with Gaze',
+        !lids.none && lids.ratios.every((x) => x < 0.10) && lids.blink >= 0.999 &&
+        looked.every(([n, w]) => w > (n.startsWith('eyeLookUp') ? 0.5 : 0.9)),
+        lids.none ? JSON.stringify(lids) : `frame at ${lids.t.toFixed(3)} s, blink ${lids.blink.toFixed(3)} with ${lids.others.join(' ')}: ` +
+        `lid gaps ${lids.ratios.map((x) => (100 * x).toFixed(1) + ' %').join(', ')} of rest (${lids.restMm.map((x) => x.toFixed(1)).join(', ')} mm); ` +
+        `gaze peaks ${looked.map(([n, w]) => n + ' ' + w.toFixed(2)).join(', ')}`);
   await page.click('#btn-talk');
   // This Talk's frames (talkFrames still holds the last Talk's until this
   // one starts, so the count alone could be read too early).

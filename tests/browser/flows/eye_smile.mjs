@@ -9,8 +9,8 @@
 import crypto from 'node:crypto';
 import fs from 'node:fs';
 import { createRequire } from 'node:module';
-import { bannerText, check, makeEyePng, makePhotoPng, makePng, note, runAlone, settled, shot,
-         syntheticSmile } from '../harness.mjs';
+import { bannerText, check, closeChromium, JOB_TIMEOUT_MS, launchChromium, makeEyePng, makePhotoPng, makePng, note,
+         READY_TIMEOUT_MS, runAlone, settled, shot, syntheticSmile, waitForState } from '../harness.mjs';
 import { fittedHead } from './fit.mjs';
 
 // "Head (GLB)" clicked: a hash of each textured material's image bytes in
@@ -33,7 +33,46 @@ async function glbImages(page) {
   return { glb, images: out, status: await page.evaluate(() => document.getElementById('status').textContent) };
 }
 
-async function eyeAndSmilePhotos(page, webdir) {
+// Issue 39's "save, clear storage, open: equal" with the eye and smile
+// photos' textures: "Save project" with them shown, then the file opened in
+// a browser with an empty profile (no IndexedDB, no photos): the eyes and
+// teeth are the photos' again, on screen and in the GLB, byte for byte.
+async function savedAndOpened(s, page, photoGlb, withSmile) {
+  const downloadP = page.waitForEvent('download', { timeout: JOB_TIMEOUT_MS });
+  await page.click('#btn-save-project');
+  const download = await downloadP;
+  const bytes = fs.readFileSync(await download.path());
+  await settled(page);
+  const shown = await page.evaluate(() => window.likeness.componentTextures);
+  const { origin } = await s.serve();
+  const context = s.watchRequests(await launchChromium('eye-smile-open', { width: 1280, height: 800 }));
+  try {
+    const fresh = s.watch(await context.newPage());
+    await fresh.goto(origin + '/index.html');
+    await waitForState(fresh, ['ready', 'error'], READY_TIMEOUT_MS);
+    // Nothing kept in this profile: no head to restore, no photos.
+    const empty = await fresh.evaluate(() => !window.likeness.fit && window.likeness.photos.length === 0 &&
+      !(window.likeness.keep && window.likeness.keep.heads && window.likeness.keep.heads.length));
+    await fresh.setInputFiles('#project-input', { name: download.suggestedFilename(), mimeType: 'model/gltf-binary', buffer: bytes });
+    await settled(fresh);
+    const opened = await fresh.evaluate(() => ({ tex: window.likeness.componentTextures, photos: window.likeness.photos.length,
+      status: document.getElementById('status').textContent, state: document.body.dataset.state }));
+    check('a project saved with eye' + (withSmile ? ' and smile' : '') + ' photos, opened in an empty browser profile, shows their iris' +
+          (withSmile ? ' and teeth' : '') + ' again (no photo in the page)',
+          empty && opened.state === 'done' && opened.photos === 0 && opened.tex.eyes === shown.eyes &&
+          opened.tex.teeth === shown.teeth && opened.tex.teethTextured && /eyes from eye_close\.png/.test(opened.status),
+          `saved ${bytes.length} bytes showing ${JSON.stringify(shown)}; opened ${JSON.stringify(opened)}`);
+    const openedGlb = await glbImages(fresh);
+    check('...and its "Head (GLB)" carries the same eye and teeth images, byte for byte, as before the save',
+          JSON.stringify(openedGlb.images) === JSON.stringify(photoGlb.images) && !!openedGlb.images.eye,
+          `before ${JSON.stringify(photoGlb.images)}; opened ${JSON.stringify(openedGlb.images)}`);
+    await shot(fresh, 'web_project_eye_smile.png');
+  } finally {
+    await closeChromium(context);
+  }
+}
+
+async function eyeAndSmilePhotos(s, page, webdir) {
   const before = await page.evaluate(() => ({ tex: window.likeness.componentTextures, n: window.likeness.components,
     teeth: window.likeness.componentsData && window.likeness.componentsData.teethTexture,
     teethMs: window.likeness.componentsData && window.likeness.componentsData.teethTextureMs,
@@ -103,6 +142,7 @@ async function eyeAndSmilePhotos(page, webdir) {
         (!smile || (!!photoGlb.images.teeth && photoGlb.images.teeth !== genericGlb.images.teeth)) &&
         /irises from eye_close\.png/.test(photoGlb.status),
         `generic ${JSON.stringify(genericGlb.images)}; with the photos ${JSON.stringify(photoGlb.images)}; "${photoGlb.status}"`);
+  await savedAndOpened(s, page, photoGlb, !!smile);
   const v = await createRequire(import.meta.url)('gltf-validator').validateBytes(new Uint8Array(photoGlb.glb), { maxIssues: 50 });
   check('...and the Khronos glTF-Validator finds no error and no warning in it', v.issues.numErrors === 0 && v.issues.numWarnings === 0,
         `${v.issues.numErrors} errors, ${v.issues.numWarnings} warnings: ` +
@@ -129,7 +169,7 @@ async function run(s) {
       for (const [k, l] of window.likeness.fit.landmarks.slice(0, 3).entries()) photo.clicks.set(l.id, { u: 10 + 10 * k, v: 20 });
     });
   }
-  await eyeAndSmilePhotos(page, s.webdir);
+  await eyeAndSmilePhotos(s, page, s.webdir);
 }
 
 export const flow = { name: 'eye-smile', title: 'eye and smile photos: the iris and teeth textures', run };
