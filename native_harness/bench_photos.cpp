@@ -337,8 +337,9 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
                 1000 * gu.head.mean, 1000 * fu.head.mean, 1000 * fu.head.p95, 1000 * ga.head.mean, 1000 * fa.head.mean,
                 1000 * fa.head.p95, ms);
     std::printf("       yaw/pitch deg, truth -> recovered:%s\n", views.c_str());
-    std::printf("       scale %.3f; BA landmarks from the generic's %.2f mm rms; landmark error %.2f -> %.2f px (calibration), %.2f -> %.2f px (shape fit)\n", sf.scale,
-                landmark_pull_mm(r.calib, generic.mesh, mp_lms), r.calib.initial_rms_px, r.calib.final_rms_px, r.fit.initial_rms_px, r.fit.final_rms_px);
+    std::printf("       scale %.3f; focal before the bundle adjustment %+.1f%%; BA landmarks from the generic's %.2f mm rms; landmark error %.2f -> %.2f px (calibration), %.2f -> %.2f px (shape fit)\n", sf.scale,
+                100 * (r.calib.focal_before_ba - vo.focal_px) / vo.focal_px, landmark_pull_mm(r.calib, generic.mesh, mp_lms),
+                r.calib.initial_rms_px, r.calib.final_rms_px, r.fit.initial_rms_px, r.fit.final_rms_px);
     FoldFigures folds;
     if (measure_folds(generic, r.fit.mesh, folds)) {
       print_folds("fit", folds);
