@@ -219,6 +219,13 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
   constexpr int kBuckets = 4;  // |yaw| < 15, < 35, < 60, >= 60
   std::map<std::string, std::array<double, kBuckets>> det_sum, det_n;
   std::array<double, kBuckets> hidden_sum{}, hidden_n{};
+  // The detector's residual at the truth read as a lens: per view, the
+  // relative focal change that best explains it with the view's pose free
+  // (the mapped points facing the camera); negative = the points look
+  // like a shorter lens (docs/design/photos.md, "Why the focal comes out short").
+  std::array<double, kBuckets> lens_sum{}, lens_n{}, lens_min, lens_max;
+  lens_min.fill(1e9);
+  lens_max.fill(-1e9);
   double sums[9] = {0};
   int done = 0;
   FoldFigures generic_folds;
@@ -255,6 +262,8 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
       view_angles(cam, yaw, pitch);
       const size_t b = std::abs(yaw) < 15 ? 0 : std::abs(yaw) < 35 ? 1 : std::abs(yaw) < 60 ? 2 : 3;
       const Vec3 C = -cam.R.transpose() * cam.t;
+      Eigen::Matrix<double, 7, 7> lens_N = Eigen::Matrix<double, 7, 7>::Zero();
+      Eigen::Matrix<double, 7, 1> lens_g = Eigen::Matrix<double, 7, 1>::Zero();
       for (size_t m = 0; m < mp_lms.size() && m < photos[i].points.size(); ++m) {
         if (!mp_lms[m].valid() || !photos[i].present[m]) continue;
         // Where the map (with its slide, if any, at the true view) puts the landmark on the person.
@@ -274,6 +283,20 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
         }
         det_sum[group_of[m]][b] += e;
         det_n[group_of[m]][b] += 1;
+        ProjectionJacobian pj;
+        if (!projection_jacobian(cam, X, photos[i].points[m], pj)) continue;
+        Eigen::Matrix<double, 2, 7> a;
+        a << cam.fx * pj.d_focal, pj.d_rotation, pj.d_translation;
+        lens_N += a.transpose() * a;
+        lens_g -= a.transpose() * pj.residual;
+      }
+      // The focal change (relative) this view's residual alone asks for, its pose free.
+      const double lens = lens_N.ldlt().solve(lens_g)[0];
+      if (std::isfinite(lens)) {
+        lens_sum[b] += lens;
+        lens_n[b] += 1;
+        lens_min[b] = std::min(lens_min[b], lens);
+        lens_max[b] = std::max(lens_max[b], lens);
       }
     }
     PhotosJobOptions opt;
@@ -337,8 +360,9 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
                 1000 * gu.head.mean, 1000 * fu.head.mean, 1000 * fu.head.p95, 1000 * ga.head.mean, 1000 * fa.head.mean,
                 1000 * fa.head.p95, ms);
     std::printf("       yaw/pitch deg, truth -> recovered:%s\n", views.c_str());
-    std::printf("       scale %.3f; BA landmarks from the generic's %.2f mm rms; landmark error %.2f -> %.2f px (calibration), %.2f -> %.2f px (shape fit)\n", sf.scale,
-                landmark_pull_mm(r.calib, generic.mesh, mp_lms), r.calib.initial_rms_px, r.calib.final_rms_px, r.fit.initial_rms_px, r.fit.final_rms_px);
+    std::printf("       scale %.3f; focal before the bundle adjustment %+.1f%%; BA landmarks from the generic's %.2f mm rms; landmark error %.2f -> %.2f px (calibration), %.2f -> %.2f px (shape fit)\n", sf.scale,
+                100 * (r.calib.focal_before_ba - vo.focal_px) / vo.focal_px, landmark_pull_mm(r.calib, generic.mesh, mp_lms),
+                r.calib.initial_rms_px, r.calib.final_rms_px, r.fit.initial_rms_px, r.fit.final_rms_px);
     FoldFigures folds;
     if (measure_folds(generic, r.fit.mesh, folds)) {
       print_folds("fit", folds);
@@ -367,6 +391,11 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
   for (size_t b = 0; b < kBuckets; ++b)
     std::printf(" %6.2f (%4.0f)", hidden_n[b] ? hidden_sum[b] / hidden_n[b] : 0.0, hidden_n[b]);
   std::printf("  (mapped points turned away from the camera, cos < 0.3)\n");
+  std::printf("  the detector's residual at the truth as a focal change, one view alone with its pose free, mean (min .. max) %% by |yaw| bucket:\n   ");
+  for (size_t b = 0; b < kBuckets; ++b)
+    if (lens_n[b]) std::printf(" %+.0f (%+.0f .. %+.0f)", 100 * lens_sum[b] / lens_n[b], 100 * lens_min[b], 100 * lens_max[b]);
+    else std::printf(" -");
+  std::printf("\n");
   return 0;
 }
 

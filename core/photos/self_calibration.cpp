@@ -451,6 +451,7 @@ Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& g
 
     // Done: write the result.
     result.focal = bp.focal;
+    result.focal_before_ba = shared.focal;
     result.final_rms_px = rms_all();
     std::vector<int> seen(size_t(M), 0);
     for (size_t k = 0; k < used.size(); ++k) {

@@ -81,6 +81,7 @@ struct PhotoCalibration {
 
 struct SelfCalibResult {
   double focal = 0;                      // the shared focal, pixels
+  double focal_before_ba = 0;            // the shared calibration's focal, before the bundle adjustment
   std::vector<PhotoCalibration> photos;  // #P
   std::vector<Vec3> landmarks;           // #M, bundle-adjusted 3-D positions (generic where unmapped/unseen)
   std::vector<char> landmark_seen;       // #M, 1 = observed in >= 2 used photos

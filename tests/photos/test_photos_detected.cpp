@@ -205,3 +205,76 @@ TEST_CASE("a landmark map re-made from a detector's points finds where it sees t
 
 }  // namespace
 }  // namespace lk
+
+namespace lk {
+namespace {
+
+// The same session with each detected point replaced by the map's point
+// (with its slide at the true view) on the person, projected by the true
+// camera, plus mix times the detector's residual there: the detector's
+// photos, the same landmarks present, the same views, only the pixels
+// exact (mix 0) or half-way (mix 0.5).
+std::vector<LandmarkPhoto> mixed_points(const DetectedSession& s, const LandmarkMap& map,
+                                        const std::vector<SurfacePoint>& lms, double mix) {
+  std::vector<LandmarkPhoto> out = s.photos;
+  for (size_t i = 0; i < out.size(); ++i) {
+    const Camera& cam = s.truth.cameras[size_t(s.camera_of[i])];
+    for (size_t m = 0; m < lms.size() && m < out[i].points.size(); ++m) {
+      if (!lms[m].valid() || !out[i].present[m]) continue;
+      const Vec3 X = surface_position(s.person.mesh, lms[m]) +
+                     landmark_shift(map.slide, int(m), slide_view(map.slide, cam.center()));
+      Vec2 uv;
+      REQUIRE(cam.project(X, uv));
+      out[i].points[m] = uv + mix * (out[i].points[m] - uv);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("the self-calibration's short focal on detected points comes from the points, not the method",
+          "[photos][detected]") {
+  // docs/design/photos.md, "Why the focal comes out short": on the
+  // detector's photos of seed 2 with exact pixels the focal and the views
+  // are recovered (measured +0.1 %, rotations 0.07 deg; seeds 1-5 within
+  // 0.5 %), so visibility, the slide in the bundle adjustment and the
+  // landmarks' prior do not bias it; the error grows with the share of the
+  // detector's residual kept (half: -4.6 %, all: -7.4 % on seed 2).
+  GenericHead generic;
+  REQUIRE(load_generic_head(generic));
+  LandmarkMap map;
+  std::vector<SurfacePoint> lms;
+  REQUIRE(parse_landmark_map_json(mediapipe_landmark_map_text(), map));
+  REQUIRE(attach_landmark_map(map, generic.mesh, PhotosJobOptions{}.map_max_distance_m, lms));
+  DetectedSession s;
+  load_session(generic, 2, s);
+  const double truth_focal = SyntheticViewsOptions{}.focal_px;
+  auto focal_error = [&](double mix, SelfCalibResult& r) {
+    REQUIRE(self_calibrate(mixed_points(s, map, lms, mix), generic.mesh, lms, SelfCalibOptions{}, r, &map.slide));
+    REQUIRE(r.num_used() == int(s.photos.size()));
+    return (r.focal - truth_focal) / truth_focal;
+  };
+  SelfCalibResult exact, half, full;
+  const double e0 = focal_error(0, exact), e_half = focal_error(0.5, half), e_full = focal_error(1, full);
+  std::printf("seed 2 focal error: exact pixels %+.1f %%, half the detector's residual %+.1f %%, all of it %+.1f %%\n",
+              100 * e0, 100 * e_half, 100 * e_full);
+  CHECK(std::abs(e0) < 0.02);
+  // The views, each brought into the truth's frame by the similarity of
+  // the bundle-adjusted landmarks onto the person's.
+  std::vector<Vec3> from, to;
+  std::vector<int> idx;
+  for (size_t m = 0; m < lms.size(); ++m)
+    if (lms[m].valid() && exact.landmark_seen[m]) {
+      idx.push_back(int(from.size()));
+      from.push_back(exact.landmarks[m]);
+      to.push_back(surface_position(s.person.mesh, lms[m]));
+    }
+  const Similarity sim = fit_similarity(from, to, idx);
+  for (size_t i = 0; i < s.photos.size(); ++i)
+    CHECK(rotation_angle_deg(transform_camera(exact.photos[i].camera, sim).R,
+                             s.truth.cameras[size_t(s.camera_of[i])].R) < 1.0);
+  CHECK(std::abs(e_half) < std::abs(e_full));
+}
+
+}  // namespace lk
