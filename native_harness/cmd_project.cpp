@@ -30,7 +30,8 @@ int run_info(const std::string& path) {
   if (Status st = read_project_file(path, p); !st.ok()) return fail(kName, st.message);
   const FitHeadResult& f = p.fit;
   const MultiresMesh& mr = f.multires;
-  std::printf("%s: Likeness project, version %d\n", path.c_str(), kProjectFileVersion);
+  std::printf("%s: Likeness project, version %d%s\n", path.c_str(), p.file_version,
+              p.file_version < kProjectFileVersion ? " (an older file: saving it again writes this build's version)" : "");
   std::printf("  scan: %zu points%s, unit %s (bbox diagonal %.4g scan units), %d points above the neck cut%s\n",
               p.scan.positions.size(),
               p.scan.faces.empty() ? "" : (", " + std::to_string(p.scan.faces.size()) + " triangles").c_str(),

@@ -87,6 +87,7 @@ struct HeadProject {
   ProjectTexture texture;
   ProjectParts parts;
   ProjectQuality quality;
+  int file_version = 0;     // the version of the file it was read from (0: not read from a file)
 };
 
 }  // namespace lk

@@ -683,6 +683,7 @@ Status load_project(const std::uint8_t* data, std::size_t size, HeadProject& out
   }
   HeadProject p;
   if (Status st = read_project(model, doc, p); !st.ok()) return st;
+  p.file_version = version;
   out = std::move(p);
   return Status::success();
 }

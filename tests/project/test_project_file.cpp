@@ -560,6 +560,11 @@ TEST_CASE("project file: a version 1 file (before the parts) still opens, with t
   CHECK(b.texture.skin.pixels == a.texture.skin.pixels);
   CHECK(b.parts.eye_texture.empty());
   CHECK(b.parts.teeth_texture.empty());
+  CHECK(b.file_version == 1);  // what `likeness project info` prints
+  HeadProject c;
+  const Bytes now = saved(a);
+  REQUIRE(load_project(now.data(), now.size(), c).ok());
+  CHECK(c.file_version == kProjectFileVersion);
   // The reseal is a real checksum: the same file with the old one is refused.
   const Bytes stale = rewritten(saved(a), [](tinygltf::Value::Object& d) { d["version"] = tinygltf::Value(1); });
   CHECK(contains(try_load(stale).message, "checksum does not match"));
