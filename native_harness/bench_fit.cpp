@@ -15,6 +15,7 @@
 // relief's sweeps, GlobalFitOptions::smooth_guard_pleat_steps; 0: off), --fit-no-climb, --fit-remeasure, --fit-no-eye-region (leave the eyes where the alignment put them, FitHeadOptions::fit_eye_region), --fit-scanned-neck (FitHeadOptions::fit_scanned_neck on), --fit-no-creases (plain Butterfly at the
 // eye and lip rims), --fit-displaced-creases, --fit-no-corners-to-smooth,
 // --fit-no-parents-to-smooth, --fit-separation-repeats N, --fit-restarts N (fold_limit.h), --fit-seeds N, --fit-seed N (seed N alone),
+// --fit-ear-refit-late (FitHeadOptions::ear_refit_after_rounds off),
 // --fit-points N (scans of N points instead of 300k), --fit-back off|face-only|always and
 // --fit-back-weight W (the global fit's scan-to-mesh term, FitHeadOptions::back_term),
 // --fit-smooth-region-rings N (FoldLimitOptions::smooth_region_rings, -1: off),
@@ -337,6 +338,7 @@ int run(const Args& args) {
     double below_cut_mm = 1e3 * opt.displacement_below_neck_cut;
     args.get_double("fit-below-cut-mm", below_cut_mm, below_cut_mm);
     opt.displacement_below_neck_cut = below_cut_mm / 1e3;
+    if (args.has("fit-ear-refit-late")) opt.ear_refit_after_rounds = false;
     if (args.has("fit-guard-always")) opt.smooth_guard = FitHeadOptions::SmoothGuard::Always;
     if (args.has("fit-guard-face-only")) opt.smooth_guard = FitHeadOptions::SmoothGuard::FaceOnlyScans;
     if (args.has("fit-guard-off")) opt.smooth_guard = FitHeadOptions::SmoothGuard::Off;

@@ -39,6 +39,8 @@
 // (FitHeadOptions::fit_scanned_neck on), to compare.
 // --fit-ear-refit-rounds N: the ear refit's warm rounds
 // (FitHeadOptions::ear_refit_warm_rounds; 0: the whole fit again, cold).
+// --fit-ear-refit-late: the ear refit decided after each fit's guard
+// (FitHeadOptions::ear_refit_after_rounds off), to compare.
 #include "command.h"
 #include "fit_table.h"
 #include "generic_head_choice.h"
@@ -265,6 +267,7 @@ int run(const Args& args) {
   }
   options.untangle_hinges_last = hinges_last == 1;
   if (args.has("fit-real-scanned-neck")) options.fit_scanned_neck = true;
+  if (args.has("fit-ear-refit-late")) options.ear_refit_after_rounds = false;
   if (!parse_back_term(args, options)) return 1;
   const std::string dump = args.get("fit-real-dump", "");
   if (args.has("fit-data-level")) options.whole_head_data_level = -1;  // on every scan, as given

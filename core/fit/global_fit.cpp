@@ -1051,6 +1051,14 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
     // (see above): a following pass projects afresh.
     if (!result.iterations.empty() && result.iterations.back().energy_after_is_bound) carried_count = -1;
 
+    if (r == base_rounds - 1 && terms.after_rounds) {
+      std::vector<Vec3> now(nv);
+      from_vector(x, now);
+      if (!terms.after_rounds(now)) {
+        result.stopped_after_rounds = true;
+        break;
+      }
+    }
     if (smooth_guarded && r == rounds - 1) {
       const std::vector<std::array<int, 2>> fresh =
           smooth_check.new_pairs_at(x, active_level, active_level_list, mesh.triangles, terms.smooth_guard_ignored);
@@ -1101,6 +1109,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       }
     }
   }
+  if (result.stopped_after_rounds) smooth_guarded = false;
   if (smooth_guarded) {
     if (smooth_best_pairs >= 0 && smooth_best.size() == x.size()) x = smooth_best;
     result.smooth_crossing_after = std::max(0, smooth_best_pairs);

@@ -196,6 +196,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace lk {
@@ -349,6 +350,14 @@ struct GlobalFitTerms {
   // pairs crossing or triangles turned at the start may stay, as the
   // input's do. Empty: the iterations start at the input mesh.
   std::vector<Vec3> start;
+  // Optional: called once with the positions (#V by 3) after the rounds and
+  // the final pass on all points, before the smooth-surface guard's passes,
+  // the fold and pleat relief and the fold creases. Returning false ends
+  // the fit there (GlobalFitResult::stopped_after_rounds: the result is that
+  // state, unguarded), for a caller that has already decided the guarded
+  // result will not be used (fit_head's ear refit). Returning true goes on
+  // exactly as without it.
+  std::function<bool(const std::vector<Vec3>& positions)> after_rounds;
 };
 
 struct GlobalFitIteration {
@@ -409,6 +418,8 @@ struct GlobalFitResult {
   // Fold creases: control edges to refine as creases (pairs of vertices),
   // empty when none was kept.
   std::vector<std::array<int, 2>> fold_crease_edges;
+  // GlobalFitTerms::after_rounds returned false: the guard did not run.
+  bool stopped_after_rounds = false;
 };
 
 // points: the scan points to fit (already stripped of clipped regions), #P.

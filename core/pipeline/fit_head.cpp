@@ -837,18 +837,26 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
   // The relief's tree over the smooth level 3: the fold limiter refits it
   // to the displaced level instead of building one (~50 ms).
   MeshBvh relief_tree;
-  st = fit_global(skin_pts, out.local, topo, terms, global_options, out.control, out.global_fit, progress,
-                  &relief_tree);
-  if (!st) return with_context(st, "global fitting");
-  if (bind_ears_where_crossing && !ear_edges.empty() && options.levels > 0) {
+  const bool ear_refit = bind_ears_where_crossing && !ear_edges.empty() && options.levels > 0;
+  if (!ear_refit) {
+    st = fit_global(skin_pts, out.local, topo, terms, global_options, out.control, out.global_fit, progress,
+                    &relief_tree);
+    if (!st) return with_context(st, "global fitting");
+  } else {
     // FitHeadOptions::bind_ear_edges: when the free fit's smooth finest
     // level crosses itself at an ear, the fit is made again with the ears'
     // edges bound and kept when its ears do not cross there.
     const std::vector<char> ear_mask_control = vertex_mask(ear_vertices, topo.num_vertices);
-    auto smooth_ear_pairs = [&](const TriMesh& control, const GlobalFitResult& fit, int& count) -> Status {
+    // The ears' crossing pairs at smooth level L of `positions` (the
+    // control's triangles), refined with the creases and `fold_creases`.
+    auto smooth_ear_pairs = [&](const std::vector<Vec3>& positions,
+                                const std::vector<std::array<int, 2>>& fold_creases, int& count) -> Status {
       ButterflyCreases c = creases;
-      for (const auto& e : fit.fold_crease_edges) c.edges.push_back(e);
-      if (!fit.fold_crease_edges.empty()) close_crease_ends(c);
+      for (const auto& e : fold_creases) c.edges.push_back(e);
+      if (!fold_creases.empty()) close_crease_ends(c);
+      TriMesh control;
+      control.positions = positions;
+      control.triangles = out.local.triangles;
       MultiresMesh smooth;
       Status s = build_multires(control, c, options.levels, smooth);
       if (!s) return s;
@@ -869,41 +877,73 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
       count = count_pairs_touching(smooth, options.levels, pairs, ear_vertices);
       return Status::success();
     };
-    int free_pairs = 0;
-    st = smooth_ear_pairs(out.control, out.global_fit, free_pairs);
-    if (!st) return with_context(st, "global fitting (ears)");
-    out.ear_binding.free_pairs = out.ear_binding.bound_pairs = free_pairs;
-    if (free_pairs > 0) {
-      GlobalFitTerms bound = terms;
-      bound.binding_edges.insert(bound.binding_edges.end(), ear_edges.begin(), ear_edges.end());
-      GlobalFitOptions bound_options = global_options;
-      const int warm_rounds = options.ear_refit_warm_rounds;
-      if (warm_rounds > 0 && warm_rounds < static_cast<int>(bound_options.smooth_weights.size())) {
-        // Warm: from the free fit, only its last (weakest) rounds; the
-        // bound ears' edge vectors are still the locally fitted ones.
-        bound.start = out.control.positions;
-        bound_options.smooth_weights.erase(bound_options.smooth_weights.begin(),
-                                           bound_options.smooth_weights.end() - warm_rounds);
-      }
-      TriMesh control;
-      GlobalFitResult fit;
-      MeshBvh tree;
-      st = fit_global(skin_pts, out.local, topo, bound, bound_options, control, fit, progress, &tree);
-      if (!st) return with_context(st, "global fitting (ears bound)");
-      int bound_pairs = 0;
-      st = smooth_ear_pairs(control, fit, bound_pairs);
+    GlobalFitTerms bound = terms;
+    bound.binding_edges.insert(bound.binding_edges.end(), ear_edges.begin(), ear_edges.end());
+    GlobalFitOptions bound_options = global_options;
+    const int warm_rounds = options.ear_refit_warm_rounds;
+    const bool warm = warm_rounds > 0 && warm_rounds < static_cast<int>(bound_options.smooth_weights.size());
+    if (warm)
+      bound_options.smooth_weights.erase(bound_options.smooth_weights.begin(),
+                                         bound_options.smooth_weights.end() - warm_rounds);
+    // Decided after the free fit's rounds (FitHeadOptions::
+    // ear_refit_after_rounds): its smooth-surface guard is not paid when the
+    // bound fit is kept. The warm refit starts from the free fit's guarded
+    // result: decided after.
+    const bool early = options.ear_refit_after_rounds && !warm;
+    TriMesh bound_control;
+    GlobalFitResult bound_fit;
+    MeshBvh bound_tree;
+    bool refitted = false;
+    Status inner = Status::success();
+    // The bound fit, whole: its guard does take ears from crossing to clean
+    // (Demosthenes: 31 pairs after its rounds, 0 after the guard), so it is
+    // judged only at its end.
+    auto refit = [&]() -> Status {
+      refitted = true;
+      Status s = fit_global(skin_pts, out.local, topo, bound, bound_options, bound_control, bound_fit, progress,
+                            &bound_tree);
+      if (!s) return with_context(s, "global fitting (ears bound)");
+      return smooth_ear_pairs(bound_control.positions, bound_fit.fold_crease_edges, out.ear_binding.bound_pairs);
+    };
+    GlobalFitTerms free_terms = terms;
+    if (early)
+      free_terms.after_rounds = [&](const std::vector<Vec3>& positions) {
+        int pairs = 0;
+        inner = smooth_ear_pairs(positions, {}, pairs);
+        if (!inner) return false;
+        out.ear_binding.free_pairs = out.ear_binding.bound_pairs = pairs;
+        if (pairs == 0) return true;
+        inner = refit();
+        // The free fit's guard is paid only when the bound fit is not kept.
+        return !(inner && out.ear_binding.bound_pairs == 0);
+      };
+    st = fit_global(skin_pts, out.local, topo, free_terms, global_options, out.control, out.global_fit, progress,
+                    &relief_tree);
+    if (!inner) return with_context(inner, "global fitting (ears)");
+    if (!st) return with_context(st, "global fitting");
+    if (!early) {
+      int free_pairs = 0;
+      st = smooth_ear_pairs(out.control.positions, out.global_fit.fold_crease_edges, free_pairs);
       if (!st) return with_context(st, "global fitting (ears)");
-      out.ear_binding.bound_pairs = bound_pairs;
+      out.ear_binding.free_pairs = out.ear_binding.bound_pairs = free_pairs;
+      if (free_pairs > 0) {
+        if (warm) bound.start = out.control.positions;  // from the free fit, its last rounds only
+        st = refit();
+        if (!st) return with_context(st, "global fitting (ears)");
+      }
+    }
+    if (refitted) {
       std::ostringstream note;
-      note << "the fit folded the ears (" << free_pairs << " crossing pairs at smooth level " << options.levels
-           << "): fitted again with their edges bound (" << bound_pairs << " pairs)";
+      note << "the fit folded the ears (" << out.ear_binding.free_pairs << " crossing pairs at smooth level "
+           << options.levels << "): fitted again with their edges bound (" << out.ear_binding.bound_pairs
+           << " pairs)";
       // Kept only when no ear folds: a bound ear that still crossed
       // (Gutenberg's, under his beret's brim) was beyond the later steps'
       // reach, where the free one's were not (docs/design/fit_real_scans.md).
-      if (bound_pairs == 0) {
-        out.control = std::move(control);
-        out.global_fit = std::move(fit);
-        relief_tree = std::move(tree);
+      if (out.ear_binding.bound_pairs == 0) {
+        out.control = std::move(bound_control);
+        out.global_fit = std::move(bound_fit);
+        relief_tree = std::move(bound_tree);
         out.ear_binding.bound = true;
         note << ", kept";
       } else {

@@ -207,6 +207,18 @@ struct FitHeadOptions {
   // a synthetic head 14 % farther from its truth (figures: docs/design/
   // fit_real_scans.md). 0 (the default): the whole fit from the local fit.
   int ear_refit_warm_rounds = 0;
+  // WhereTheyCross, decided after the free global fit's rounds, before its
+  // smooth-surface guard (GlobalFitTerms::after_rounds): the free fit's
+  // smooth finest level is searched at the ears there; when they cross, the
+  // bound fit runs at once, and when it is kept the free fit's guard (whose
+  // result would be thrown away) is skipped. The same decision as after
+  // the guard wherever the guard never takes the free fit's ears from
+  // crossing to clean or back, which held on every real scan, copy and
+  // synthetic seed measured (docs/design/fit_real_scans.md); the note's
+  // and ear_binding's free count is then the count after the rounds.
+  // false: decided after the free fit's guard. The warm refit
+  // (ear_refit_warm_rounds) starts from the guarded free fit: decided after.
+  bool ear_refit_after_rounds = true;
   // When an ear (a connected part of region "ears") still crosses itself or
   // the head at the finest level, its control vertices take the aligned
   // generic ear's shape, carried by the harmonic interpolation of the
@@ -314,8 +326,9 @@ struct FitHeadResult {
   // untangling's steps (the control mesh above is the untangled one).
   UntangleResult untangle;
   // bind_ear_edges WhereTheyCross: the smooth finest level's pairs at the
-  // ears after the free fit and after the fit with the ears bound (the
-  // same when it was not run), and whether the bound fit was kept.
+  // ears after the free fit (after its rounds with ear_refit_after_rounds)
+  // and after the fit with the ears bound (the same when it was not run),
+  // and whether the bound fit was kept.
   struct EarBinding {
     int free_pairs = 0, bound_pairs = 0;
     bool bound = false;

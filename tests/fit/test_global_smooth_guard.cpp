@@ -96,3 +96,49 @@ TEST_CASE("global fit: the smooth-surface guard refuses ignore flags of the wron
   GlobalFitResult r;
   CHECK(fit_global(c.points, c.start, c.topo, terms, {}, out, r).code == ErrorCode::InvalidInput);
 }
+
+TEST_CASE("global fit: after_rounds sees the state the guard starts from, and ends the fit there when told") {
+  // GlobalFitTerms::after_rounds (fit_head's ear refit decides there).
+  // Going on must give the fit without the hook to the bit; stopping must
+  // hand back the positions the hook saw, unguarded.
+  const StepSheets c = make_step_sheets(0.005, 0.3);
+  GlobalFitOptions guarded;
+  guarded.smooth_guard_level = 2;
+  guarded.smooth_guard_stiffness = 4.0;
+  TriMesh plain_out;
+  GlobalFitResult plain;
+  REQUIRE(fit_global(c.points, c.start, c.topo, c.terms(), guarded, plain_out, plain).ok());
+  REQUIRE(plain.smooth_guard_passes >= 1);  // else the guard has nothing to skip
+
+  GlobalFitTerms on = c.terms();
+  int calls = 0;
+  std::vector<Vec3> seen;
+  on.after_rounds = [&](const std::vector<Vec3>& positions) {
+    ++calls;
+    seen = positions;
+    return true;
+  };
+  TriMesh on_out;
+  GlobalFitResult on_r;
+  REQUIRE(fit_global(c.points, c.start, c.topo, on, guarded, on_out, on_r).ok());
+  CHECK(calls == 1);
+  CHECK(on_out.positions == plain_out.positions);
+  CHECK(on_r.iterations.size() == plain.iterations.size());
+  CHECK(on_r.smooth_crossing_after == plain.smooth_crossing_after);
+  CHECK_FALSE(on_r.stopped_after_rounds);
+  // The hook saw the state the guard counted its pairs on.
+  TriMesh at_hook = c.start;
+  at_hook.positions = seen;
+  CHECK(smooth_pairs(at_hook, c.flat_mesh(), 2) == plain.smooth_crossing_before);
+  CHECK(plain.smooth_crossing_before > 0);
+
+  GlobalFitTerms stop = c.terms();
+  stop.after_rounds = [](const std::vector<Vec3>&) { return false; };
+  TriMesh stop_out;
+  GlobalFitResult stop_r;
+  REQUIRE(fit_global(c.points, c.start, c.topo, stop, guarded, stop_out, stop_r).ok());
+  CHECK(stop_r.stopped_after_rounds);
+  CHECK(stop_out.positions == seen);
+  CHECK(stop_r.smooth_guard_passes == 0);
+  CHECK(stop_r.iterations.size() < plain.iterations.size());
+}

@@ -437,6 +437,42 @@ TEST_CASE("fit_head: an ear the free fit folds is fitted again bound, and holds 
   CHECK(noted);
 }
 
+TEST_CASE("fit_head: the ear refit decided after the rounds gives the head decided after the guards") {
+  // FitHeadOptions::ear_refit_after_rounds: the free fit's ears are judged
+  // before its smooth-surface guard and the free fit's guard is skipped
+  // when the bound fit is kept. On the sheet over the left ear (the free fit
+  // folds it, the bound fit is kept) and on the plain synthetic scan (no ear
+  // folds, no refit) the heads must be the late decision's to the bit.
+  const Scene& s = scene();
+  const auto region = s.generic.annotations.regions.find("ears");
+  REQUIRE(region != s.generic.annotations.regions.end());
+  const PointCloud sheet = sheet_over_left_ear(s.scan, s.generic.mesh, region->second);
+  FitHeadOptions early;
+  early.measure_stages = false;
+  REQUIRE(early.ear_refit_after_rounds);
+  FitHeadOptions late = early;
+  late.ear_refit_after_rounds = false;
+  for (const PointCloud* scan : {&sheet, &s.scan}) {
+    const bool folded = scan == &sheet;
+    FitHeadResult e, l;
+    REQUIRE(fit_head(*scan, s.generic, early, e).ok());
+    REQUIRE(fit_head(*scan, s.generic, late, l).ok());
+    INFO((folded ? "the sheet" : "the plain scan") << ": smooth ear pairs early " << e.ear_binding.free_pairs
+                                                   << " free, " << e.ear_binding.bound_pairs << " bound; late "
+                                                   << l.ear_binding.free_pairs << " free, "
+                                                   << l.ear_binding.bound_pairs << " bound");
+    CHECK((e.ear_binding.free_pairs > 0) == folded);  // the refit runs on the sheet only
+    CHECK((l.ear_binding.free_pairs > 0) == folded);
+    CHECK(e.ear_binding.bound == folded);
+    CHECK(l.ear_binding.bound == folded);
+    CHECK(e.control.positions == l.control.positions);
+    REQUIRE(e.level_meshes.size() == l.level_meshes.size());
+    CHECK(e.level_meshes.back().positions == l.level_meshes.back().positions);
+    CHECK(e.global_fit.iterations.size() == l.global_fit.iterations.size());
+    CHECK(e.global_fit.fold_crease_edges == l.global_fit.fold_crease_edges);
+  }
+}
+
 TEST_CASE("fit_head: the warm ear refit holds a folded ear as the cold one does, near its fit") {
   // FitHeadOptions::ear_refit_warm_rounds: the bound refit starts from the
   // free fit and runs only the last round. On the sheet over the left ear
@@ -459,6 +495,9 @@ TEST_CASE("fit_head: the warm ear refit holds a folded ear as the cold one does,
   REQUIRE(cold.ear_refit_warm_rounds == 0);
   FitHeadOptions warm = cold;
   warm.ear_refit_warm_rounds = 1;
+  // The warm refit is decided after the free fit's guard; so is the cold
+  // one here, to compare the same free fit.
+  cold.ear_refit_after_rounds = false;
   FitHeadResult warm_fit, cold_fit;
   REQUIRE(fit_head(scan, s.generic, warm, warm_fit).ok());
   REQUIRE(fit_head(scan, s.generic, cold, cold_fit).ok());
