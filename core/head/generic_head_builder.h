@@ -24,6 +24,9 @@
 //     and down the neck, where all lean the same way on each side (a
 //     chevron: valence 6); the result is made exactly mirror-symmetric
 //     (x -> -x) and annotated.
+//  5. The face's skin vertices are faired on the shape (Taubin passes, each
+//     projected back onto it; rims, lip lines, ear roots and the midline
+//     kept), so that the interpolating Butterfly levels are not furrowed.
 //
 // Output shapes: mesh.positions #V by 3 (metres; +z look, +y up, +x = the
 // head's left), mesh.triangles #F by 3 (counter-clockwise seen from outside).
@@ -69,6 +72,11 @@ struct GenericHeadBuildOptions {
                                    // level 2, 24 at level 3 -> 0). Not the asset's yet: six
                                    // tests fail with it, among them Demosthenes' ears on the
                                    // real scans (docs/design/generic_head_measured.md).
+  int fair_iterations = 10;        // Taubin passes evening out the skin's control vertices on the
+                                   // shape (rims, lip lines, ear roots kept), which removed the
+                                   // furrows of the smooth level 3 at the brows, eyes, cheeks and
+                                   // nose and its crossings at the mouth corners; the asset's since
+                                   // issue 35 (docs/design/generic_head.md "Fairing"). 0: as before.
   bool mirror_diagonals = true;    // true: each quad on the -x side is split as its mirror image
                                    // on +x is, so triangles mirror as vertices do (issue 35);
                                    // false: each side by shape, as before: 6 quads of each eye
