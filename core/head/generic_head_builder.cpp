@@ -1321,7 +1321,7 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
   // back onto the shape, so the shape is kept and only the sampling moves.
   // Only the face's grid moves: the eye rims, the lip lines, the ears'
   // roots, the midline (the profile: nasion, bridge, tip, lips, chin), the
-  // regular rows behind the ears, the crown, and everything off the shape
+  // nose (its landmarks and box stay as cast), the regular rows behind the ears, the crown, and everything off the shape
   // (pockets, mouth bag, ears, neck) stay. After the quads are split, so the
   // triangles are those of the skin as cast.
   if (options.fair_iterations > 0) {
@@ -1329,7 +1329,9 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
     for (int v = 0; v < nv; ++v) {
       const VertexInfo& vi = b.info[v];
       const int from_midline = std::min(vi.col, kColumns - vi.col);
-      fixed[v] = vi.part != Part::Grid || vi.col == 0 || from_midline >= kBackDiagonalColumn;
+      const bool nose = (from_midline == 1 && vi.row >= 9 && vi.row <= 14) ||
+                        (from_midline == 2 && vi.row >= 10 && vi.row <= 13);
+      fixed[v] = vi.part != Part::Grid || vi.col == 0 || nose || from_midline >= kBackDiagonalColumn;
     }
     for (int side : {1, -1}) {
       for (int v : rim_top[side]) fixed[v] = 1;

@@ -72,11 +72,12 @@ struct GenericHeadBuildOptions {
                                    // level 2, 24 at level 3 -> 0). Not the asset's yet: six
                                    // tests fail with it, among them Demosthenes' ears on the
                                    // real scans (docs/design/generic_head_measured.md).
-  int fair_iterations = 10;        // Taubin passes evening out the skin's control vertices on the
-                                   // shape (rims, lip lines, ear roots kept), which removed the
-                                   // furrows of the smooth level 3 at the brows, eyes, cheeks and
-                                   // nose and its crossings at the mouth corners; the asset's since
-                                   // issue 35 (docs/design/generic_head.md "Fairing"). 0: as before.
+  int fair_iterations = 3;         // Taubin passes evening out the face's skin control vertices on
+                                   // the shape (rims, lip lines, ear roots, midline, nose kept):
+                                   // fewer furrows on the smooth level 3 at the brows, cheeks and
+                                   // mouth, and no crossings at the mouth corners. The asset's since
+                                   // issue 35 (docs/design/generic_head.md "Fairing the skin");
+                                   // 10 smooths more but loses Gutenberg's alignment. 0: as cast.
   bool mirror_diagonals = true;    // true: each quad on the -x side is split as its mirror image
                                    // on +x is, so triangles mirror as vertices do (issue 35);
                                    // false: each side by shape, as before: 6 quads of each eye
