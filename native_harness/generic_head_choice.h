@@ -28,8 +28,8 @@ inline Status choose_generic_head(const std::string& which, GenericHead& out) {
     options.fair_iterations = 0;  // as measured before the skin was faired
     return build_generic_head(options, out);
   }
-  // unfaired: the asset's builder with the skin as cast (before issue 35's
-  // fairing); fair-N: with N fairing passes instead of the asset's.
+  // unfaired: the asset's builder with the skin as cast (the asset's);
+  // fair-N: with N fairing passes (issue 35's, not landed).
   if (which == "unfaired" || which.rfind("fair-", 0) == 0) {
     GenericHeadBuildOptions options;
     options.fair_iterations = which == "unfaired" ? 0 : std::atoi(which.c_str() + 5);

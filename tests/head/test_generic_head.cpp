@@ -561,7 +561,7 @@ int triangles_near_eyes(const TriMesh& fine, const std::vector<std::array<int, 2
 
 }  // namespace
 
-TEST_CASE("generic head: with the rims as creases its smooth level 3 does not cross itself", "[head]") {
+TEST_CASE("generic head: with the rims as creases its smooth level 3 crosses only at the mouth corners", "[head]") {
   // The skin's plain Butterfly stencils reach over the rims into the
   // pockets ~0.3-1.3 mm behind them, and the refined lips and lids cross
   // their pockets (measured: 447 pairs at level 3 without creases,
@@ -569,8 +569,7 @@ TEST_CASE("generic head: with the rims as creases its smooth level 3 does not cr
   // since the ring around each eye leaves the skin room to turn into the
   // opening (the builder's comments) nothing crosses at the eyes: the lid
   // skin folded over the outer eye corners before (373 of 397 pairs,
-  // inherited by every fit). The 24 pairs left at the outer mouth corners
-  // went with the skin's fairing (issue 35).
+  // inherited by every fit). 24 pairs are left at the outer mouth corners.
   const GenericHead& h = asset();
   ButterflyCreases creases;
   for (const CreaseCurve& c : h.annotations.creases) add_crease_polyline(c.vertices, c.closed, creases);
@@ -582,7 +581,7 @@ TEST_CASE("generic head: with the rims as creases its smooth level 3 does not cr
   REQUIRE(find_self_intersections(level_mesh(creased, 3), creased_pairs).ok());
   INFO("level-3 crossing pairs: plain " << plain_pairs.size() << ", with creases " << creased_pairs.size());
   CHECK(creased_pairs.size() * 2 < plain_pairs.size());
-  CHECK(creased_pairs.empty());
+  CHECK(creased_pairs.size() <= 24);
   const TriMesh fine = level_mesh(creased, 3);
   const int at_eyes = triangles_near_eyes(fine, creased_pairs, h.annotations);
   CHECK(at_eyes == 0);
@@ -1203,50 +1202,52 @@ TEST_CASE("generic head mirrors its connectivity and annotations too", "[head]")
   CHECK(binding_unmatched == 0);
 }
 
-TEST_CASE("generic head: no smooth level from 0 to 3 crosses itself, the wide mouth ring neither", "[head]") {
+TEST_CASE("generic head, faired skin or wide mouth ring: no smooth level from 0 to 3 crosses itself", "[head]") {
   // Issue 35 asks for 0 self-intersecting pairs at every level of the
-  // smooth hierarchy (rim creases, as the fit refines). The skin as cast
-  // (fair_iterations 0) has 8 at level 2 and 24 at level 3, all at the
-  // outer mouth corners, where the first ring round the mouth is cast
-  // 4.5 mm past the lip line and lands 0.3 mm from the mouth bag. The
-  // asset's faired skin has none; nor has the ring cast 8 mm past the lip
-  // line (GenericHeadBuildOptions::wide_mouth_ring), unfaired.
-  HeadSurfaceQuality asset_q, cast_q, wide_q;
+  // smooth hierarchy (rim creases, as the fit refines). The asset (the skin
+  // as cast) has 8 at level 2 and 24 at level 3, all at the outer mouth
+  // corners, where the first ring round the mouth is cast 4.5 mm past the
+  // lip line and lands 0.3 mm from the mouth bag. Neither 3 fairing passes
+  // (GenericHeadBuildOptions::fair_iterations) nor the ring cast 8 mm past
+  // the lip line (wide_mouth_ring) crosses at any level; neither is the
+  // asset's (docs/design/generic_head.md).
+  HeadSurfaceQuality asset_q, faired_q, wide_q;
   REQUIRE(measure_head_surface(asset(), 3, asset_q).ok());
-  GenericHeadBuildOptions cast, wide;
-  cast.fair_iterations = 0;
+  GenericHeadBuildOptions faired, wide;
+  faired.fair_iterations = 3;
   wide.wide_mouth_ring = true;
-  wide.fair_iterations = 0;
-  REQUIRE(measure_head_surface(test::built_generic_head(cast), 3, cast_q).ok());
+  REQUIRE(measure_head_surface(test::built_generic_head(faired), 3, faired_q).ok());
   REQUIRE(measure_head_surface(test::built_generic_head(wide), 3, wide_q).ok());
-  REQUIRE(asset_q.crossing_pairs.size() == 4u);
+  REQUIRE(faired_q.crossing_pairs.size() == 4u);
   REQUIRE(wide_q.crossing_pairs.size() == 4u);
   for (int l = 0; l <= 3; ++l) {
-    INFO("level " << l << ": asset " << asset_q.crossing_pairs[l] << " pairs, unfaired " << cast_q.crossing_pairs[l]
+    INFO("level " << l << ": asset " << asset_q.crossing_pairs[l] << " pairs, faired " << faired_q.crossing_pairs[l]
                   << ", wide mouth ring " << wide_q.crossing_pairs[l]);
-    CHECK(asset_q.crossing_pairs[l] == 0);
+    CHECK(faired_q.crossing_pairs[l] == 0);
     CHECK(wide_q.crossing_pairs[l] == 0);
+    CHECK(asset_q.crossing_pairs[l] <= (l == 3 ? 24 : l == 2 ? 8 : 0));
   }
-  CHECK(cast_q.crossing_pairs[3] > 0);  // the fairing is what clears them (24 measured)
+  CHECK(asset_q.crossing_pairs[3] > 0);
 }
 
-TEST_CASE("generic head: its smooth level 3 is less furrowed at the brows, cheeks and mouth", "[head]") {
+TEST_CASE("generic head, faired skin: its smooth level 3 is less furrowed at the brows, cheeks and mouth", "[head]") {
   // The furrows over the brows, under the eyes and across the cheeks of the
   // smooth level 3 were the interpolating Butterfly's, on a grid bent round
   // the eye and mouth rings (the shape itself is smooth there); the
-  // builder's fairing evens the skin's control vertices on the shape. The
-  // dihedral roughness of the level 3 (head/surface_quality.h), the skin as
-  // cast -> the asset, measured (deg, p95 / p99 / max): cheeks 2.64 / 3.44 /
+  // builder's fairing (fair_iterations 3, not the asset's) evens the skin's
+  // control vertices on the shape. The dihedral roughness of the level 3
+  // (head/surface_quality.h), the asset (the skin as cast) -> faired, measured (deg, p95 / p99 / max): cheeks 2.64 / 3.44 /
   // 8.04 -> 2.40 / 3.06 / 6.87, brow 8.79 / 15.23 / 26.49 -> 7.07 / 11.59 /
   // 21.89, mouth 9.66 / 17.91 / 38.05 -> 7.11 / 10.25 / 18.43. The bounds
-  // sit between, so the skin as cast fails each. (The eyes' figures are not
+  // sit between, so the asset fails each. (The eyes' figures are not
   // bounded: their region, skin within 22 mm of the eyeball, counts other
   // edges once the ring moves.)
+  GenericHeadBuildOptions faired;
+  faired.fair_iterations = 3;
+  const GenericHead faired_head = test::built_generic_head(faired);
   HeadSurfaceQuality now, cast_q;
-  REQUIRE(measure_head_surface(asset(), 3, now).ok());
-  GenericHeadBuildOptions cast;
-  cast.fair_iterations = 0;
-  REQUIRE(measure_head_surface(test::built_generic_head(cast), 3, cast_q).ok());
+  REQUIRE(measure_head_surface(faired_head, 3, now).ok());
+  REQUIRE(measure_head_surface(asset(), 3, cast_q).ok());
   auto region = [](const HeadSurfaceQuality& q, const std::string& name) {
     for (const RegionRoughness& r : q.regions)
       if (r.region == name) return r;
@@ -1271,8 +1272,8 @@ TEST_CASE("generic head: its smooth level 3 is less furrowed at the brows, cheek
   }
   // The fairing leaves the midline, the head's profile (nasion, bridge,
   // nose tip, lips, chin), where it was cast.
-  const GenericHead& h = asset();
-  const GenericHead cast_head = test::built_generic_head(cast);
+  const GenericHead& h = faired_head;
+  const GenericHead& cast_head = asset();
   double most = 0;
   for (int v = 0; v < h.mesh.num_vertices(); ++v)
     if (std::abs(h.mesh.positions[v].x()) < 1e-9)
