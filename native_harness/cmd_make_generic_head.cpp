@@ -1,5 +1,6 @@
 // likeness make-generic-head: regenerates the generic head asset
 // (core/head/data/generic_head.{obj,json}) from core/head/generic_head_builder.
+#include <cstdlib>
 #include "command.h"
 
 #include "head/generic_head.h"
@@ -21,7 +22,7 @@ namespace {
 const char* kName = "make-generic-head";
 
 int run_make_generic_head(const Args& args) {
-  if (!only_known_options(kName, args, {"out", "report", "level3", "ring-ear", "plate-ear", "even-eye-corners", "face-rows-at-back", "nape-by-shape", "wide-mouth-ring", "diagonals-by-side"})) return 2;
+  if (!only_known_options(kName, args, {"out", "report", "level3", "ring-ear", "plate-ear", "even-eye-corners", "face-rows-at-back", "nape-by-shape", "wide-mouth-ring", "diagonals-by-side", "fair"})) return 2;
   const std::string out_dir = args.get("out");
   const bool report = args.has("report");
   const std::string level3_path = args.get("level3");
@@ -53,6 +54,12 @@ int run_make_generic_head(const Args& args) {
   // asset's triangles before issue 35.
   if (args.has("wide-mouth-ring")) options.wide_mouth_ring = true;
   if (args.has("diagonals-by-side")) options.mirror_diagonals = false;
+  // --fair N: GenericHeadBuildOptions::fair_iterations (0, the asset's:
+  // the skin as cast; 3 measured for issue 35, not landed).
+  if (args.has("fair")) {
+    options.fair_iterations = std::atoi(args.get("fair").c_str());
+    if (options.fair_iterations < 0 || options.fair_iterations > 100) return fail(kName, "--fair needs 0..100 passes");
+  }
   GenericHead head;
   Status s = build_generic_head(options, head);
   if (!s) return fail(kName, s.message);
@@ -104,7 +111,7 @@ int run_make_generic_head(const Args& args) {
   return 0;
 }
 
-Registrar reg({kName, "likeness make-generic-head --out DIR [--report] [--level3 FILE.obj] [--ring-ear|--plate-ear] [--even-eye-corners] [--face-rows-at-back] [--nape-by-shape] [--wide-mouth-ring] [--diagonals-by-side]",
+Registrar reg({kName, "likeness make-generic-head --out DIR [--report] [--level3 FILE.obj] [--ring-ear|--plate-ear] [--even-eye-corners] [--face-rows-at-back] [--nape-by-shape] [--wide-mouth-ring] [--diagonals-by-side] [--fair N]",
                "builds the generic head control mesh + annotations (writes generic_head.obj/.json; --report: smooth level 3 roughness by region, crossing pairs by level; --level3: that level as a mesh)",
                run_make_generic_head});
 

@@ -12,6 +12,7 @@
 // images, issue 35), "wide-mouth" the builder's default with the wider
 // ring round the mouth (docs/design/generic_head_measured.md).
 #pragma once
+#include <cstdlib>
 #include "head/generic_head.h"
 #include "head/generic_head_builder.h"
 
@@ -24,6 +25,16 @@ inline Status choose_generic_head(const std::string& which, GenericHead& out) {
   if (which == "wide-mouth") {
     GenericHeadBuildOptions options;
     options.wide_mouth_ring = true;
+    options.fair_iterations = 0;  // as measured before the skin was faired
+    return build_generic_head(options, out);
+  }
+  // unfaired: the asset's builder with the skin as cast (the asset's);
+  // fair-N: with N fairing passes (issue 35's, not landed).
+  if (which == "unfaired" || which.rfind("fair-", 0) == 0) {
+    GenericHeadBuildOptions options;
+    options.fair_iterations = which == "unfaired" ? 0 : std::atoi(which.c_str() + 5);
+    if (options.fair_iterations < 0 || options.fair_iterations > 100)
+      return Status::error(ErrorCode::InvalidInput, "fair-N needs N in 0..100");
     return build_generic_head(options, out);
   }
   if (which == "plate" || which == "ring" || which == "even" || which == "back" || which == "nape") {
@@ -33,9 +44,10 @@ inline Status choose_generic_head(const std::string& which, GenericHead& out) {
     options.even_back_rows = which == "back" || which == "nape";
     options.regular_nape = which == "nape";
     options.mirror_diagonals = false;
+    options.fair_iterations = 0;
     return build_generic_head(options, out);
   }
-  return Status::error(ErrorCode::InvalidInput, "unknown generic head '" + which + "' (asset, plate, ring, even, back, nape or wide-mouth)");
+  return Status::error(ErrorCode::InvalidInput, "unknown generic head '" + which + "' (asset, plate, ring, even, back, nape, wide-mouth, unfaired or fair-N)");
 }
 
 }  // namespace lk::cli

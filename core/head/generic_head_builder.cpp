@@ -1310,6 +1310,67 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
                                                   std::to_string(topo.boundary_loops.size()) +
                                                   " boundary loops)");
 
+  // --- 11b. fairing of the skin's control vertices on the shape ---------------
+  // The shape is smooth, but its smooth Butterfly surface was furrowed over
+  // the brows, under the eyes, across the cheeks and beside the nose: the
+  // interpolating stencils see a grid bent round the eye and mouth rings,
+  // its rows bunched and skewed there, and sag and bulge between them (the
+  // same level-3 vertices projected onto the shape show no furrow).
+  // Taubin passes (lambda 0.5, mu -0.53, uniform weights over the
+  // triangles) even the skin's control vertices out, each pass projected
+  // back onto the shape, so the shape is kept and only the sampling moves.
+  // Only the face's grid moves: the eye rims, the lip lines, the ears'
+  // roots, the midline (the profile: nasion, bridge, tip, lips, chin), the
+  // nose (its landmarks and box stay as cast), the regular rows behind the ears, the crown, and everything off the shape
+  // (pockets, mouth bag, ears, neck) stay. After the quads are split, so the
+  // triangles are those of the skin as cast.
+  if (options.fair_iterations > 0) {
+    std::vector<char> fixed(nv, 0);
+    for (int v = 0; v < nv; ++v) {
+      const VertexInfo& vi = b.info[v];
+      const int from_midline = std::min(vi.col, kColumns - vi.col);
+      const bool nose = (from_midline == 1 && vi.row >= 9 && vi.row <= 14) ||
+                        (from_midline == 2 && vi.row >= 10 && vi.row <= 13);
+      fixed[v] = vi.part != Part::Grid || vi.col == 0 || nose || from_midline >= kBackDiagonalColumn;
+    }
+    for (int side : {1, -1}) {
+      for (int v : rim_top[side]) fixed[v] = 1;
+      for (int v : rim_bottom[side]) fixed[v] = 1;
+      for (int r = kEarLowRow; r <= kEarHighRow; ++r)
+        for (int c = kEarCol0; c <= kEarCol1; ++c) fixed[g(r, side * c)] = 1;
+    }
+    for (int v : upper_line) fixed[v] = 1;
+    for (int v : lower_line) fixed[v] = 1;
+    std::vector<std::vector<int>> neighbours(nv);
+    for (const Tri& t : mesh.triangles)
+      for (int k = 0; k < 3; ++k) {
+        neighbours[t[k]].push_back(t[(k + 1) % 3]);
+        neighbours[t[k]].push_back(t[(k + 2) % 3]);
+      }
+    for (auto& n : neighbours) n = sorted_unique(n);
+    std::vector<Vec3>& P = mesh.positions;
+    for (int it = 0; it < options.fair_iterations; ++it)
+      for (double lambda : {0.5, -0.53}) {
+        std::vector<Vec3> next = P;
+        for (int v = 0; v < nv; ++v) {
+          if (fixed[v]) continue;
+          Vec3 avg = Vec3::Zero();
+          for (int w : neighbours[v]) avg += P[w];
+          next[v] += lambda * (avg / double(neighbours[v].size()) - P[v]);
+          if (lambda < 0) next[v] = shape.project(next[v]);
+        }
+        P = next;
+      }
+    // The passes are symmetric up to rounding; make the pairs exact again.
+    for (int v = 0; v < nv; ++v) {
+      if (mirror[v] == v) {
+        P[v].x() = 0;
+      } else if (v < mirror[v]) {
+        P[mirror[v]] = Vec3(-P[v].x(), P[v].y(), P[v].z());
+      }
+    }
+  }
+
   // --- 12. annotations ------------------------------------------------------
   const auto& P = mesh.positions;
   auto azimuth_deg = [&](int col) {

@@ -24,6 +24,9 @@
 //     and down the neck, where all lean the same way on each side (a
 //     chevron: valence 6); the result is made exactly mirror-symmetric
 //     (x -> -x) and annotated.
+//  5. Optionally (fair_iterations) the face's skin vertices are faired on the
+//     shape (Taubin passes, each projected back onto it; rims, lip lines,
+//     ear roots, midline and nose kept), so the Butterfly levels furrow less.
 //
 // Output shapes: mesh.positions #V by 3 (metres; +z look, +y up, +x = the
 // head's left), mesh.triangles #F by 3 (counter-clockwise seen from outside).
@@ -69,6 +72,13 @@ struct GenericHeadBuildOptions {
                                    // level 2, 24 at level 3 -> 0). Not the asset's yet: six
                                    // tests fail with it, among them Demosthenes' ears on the
                                    // real scans (docs/design/generic_head_measured.md).
+  int fair_iterations = 0;         // Taubin passes evening out the face's skin control vertices on
+                                   // the shape (rims, lip lines, ear roots, midline, nose kept).
+                                   // 3: fewer furrows on the smooth level 3 at brows, cheeks and
+                                   // mouth and no crossings at any level; not the asset's: with it
+                                   // Demosthenes' ears cross (4 pairs), Gutenberg turned 0.05 deg
+                                   // is refused, Fran's face alignment varies by seed
+                                   // (docs/design/generic_head.md "Fairing the skin"). 0: as cast.
   bool mirror_diagonals = true;    // true: each quad on the -x side is split as its mirror image
                                    // on +x is, so triangles mirror as vertices do (issue 35);
                                    // false: each side by shape, as before: 6 quads of each eye

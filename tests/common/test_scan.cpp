@@ -32,6 +32,7 @@ const GenericHead& back_rows_generic_head() {
     GenericHeadBuildOptions options;
     options.regular_nape = false;
     options.mirror_diagonals = false;  // the asset's quads of then, split side by side
+    options.fair_iterations = 0;       // and its skin as cast, not faired
     return built_generic_head(options);
   }();
   return generic;
@@ -43,6 +44,7 @@ const GenericHead& corner45_generic_head() {
     options.even_eye_corners = false;
     options.even_back_rows = false;  // the asset's rows of then, too
     options.regular_nape = false;    // and its nape
+    options.fair_iterations = 0;     // and its skin as cast, not faired
     options.mirror_diagonals = false;
     return built_generic_head(options);
   }();

@@ -1202,23 +1202,81 @@ TEST_CASE("generic head mirrors its connectivity and annotations too", "[head]")
   CHECK(binding_unmatched == 0);
 }
 
-TEST_CASE("generic head, wide mouth ring: no smooth level from 0 to 3 crosses itself", "[head]") {
+TEST_CASE("generic head, faired skin or wide mouth ring: no smooth level from 0 to 3 crosses itself", "[head]") {
   // Issue 35 asks for 0 self-intersecting pairs at every level of the
-  // smooth hierarchy (rim creases, as the fit refines). The asset has 8 at
-  // level 2 and 24 at level 3, all at the outer mouth corners, where the
-  // first ring round the mouth is cast 4.5 mm past the lip line and lands
-  // 0.3 mm from the mouth bag; cast 8 mm past it
-  // (GenericHeadBuildOptions::wide_mouth_ring) no level crosses itself.
-  HeadSurfaceQuality asset_q, wide_q;
+  // smooth hierarchy (rim creases, as the fit refines). The asset (the skin
+  // as cast) has 8 at level 2 and 24 at level 3, all at the outer mouth
+  // corners, where the first ring round the mouth is cast 4.5 mm past the
+  // lip line and lands 0.3 mm from the mouth bag. Neither 3 fairing passes
+  // (GenericHeadBuildOptions::fair_iterations) nor the ring cast 8 mm past
+  // the lip line (wide_mouth_ring) crosses at any level; neither is the
+  // asset's (docs/design/generic_head.md).
+  HeadSurfaceQuality asset_q, faired_q, wide_q;
   REQUIRE(measure_head_surface(asset(), 3, asset_q).ok());
-  GenericHeadBuildOptions wide;
+  GenericHeadBuildOptions faired, wide;
+  faired.fair_iterations = 3;
   wide.wide_mouth_ring = true;
+  REQUIRE(measure_head_surface(test::built_generic_head(faired), 3, faired_q).ok());
   REQUIRE(measure_head_surface(test::built_generic_head(wide), 3, wide_q).ok());
+  REQUIRE(faired_q.crossing_pairs.size() == 4u);
   REQUIRE(wide_q.crossing_pairs.size() == 4u);
   for (int l = 0; l <= 3; ++l) {
-    INFO("level " << l << ": asset " << asset_q.crossing_pairs[l] << " pairs, wide mouth ring " << wide_q.crossing_pairs[l]);
+    INFO("level " << l << ": asset " << asset_q.crossing_pairs[l] << " pairs, faired " << faired_q.crossing_pairs[l]
+                  << ", wide mouth ring " << wide_q.crossing_pairs[l]);
+    CHECK(faired_q.crossing_pairs[l] == 0);
     CHECK(wide_q.crossing_pairs[l] == 0);
     CHECK(asset_q.crossing_pairs[l] <= (l == 3 ? 24 : l == 2 ? 8 : 0));
   }
   CHECK(asset_q.crossing_pairs[3] > 0);
+}
+
+TEST_CASE("generic head, faired skin: its smooth level 3 is less furrowed at the brows, cheeks and mouth", "[head]") {
+  // The furrows over the brows, under the eyes and across the cheeks of the
+  // smooth level 3 were the interpolating Butterfly's, on a grid bent round
+  // the eye and mouth rings (the shape itself is smooth there); the
+  // builder's fairing (fair_iterations 3, not the asset's) evens the skin's
+  // control vertices on the shape. The dihedral roughness of the level 3
+  // (head/surface_quality.h), the asset (the skin as cast) -> faired, measured (deg, p95 / p99 / max): cheeks 2.64 / 3.44 /
+  // 8.04 -> 2.40 / 3.06 / 6.87, brow 8.79 / 15.23 / 26.49 -> 7.07 / 11.59 /
+  // 21.89, mouth 9.66 / 17.91 / 38.05 -> 7.11 / 10.25 / 18.43. The bounds
+  // sit between, so the asset fails each. (The eyes' figures are not
+  // bounded: their region, skin within 22 mm of the eyeball, counts other
+  // edges once the ring moves.)
+  GenericHeadBuildOptions faired;
+  faired.fair_iterations = 3;
+  const GenericHead faired_head = test::built_generic_head(faired);
+  HeadSurfaceQuality now, cast_q;
+  REQUIRE(measure_head_surface(faired_head, 3, now).ok());
+  REQUIRE(measure_head_surface(asset(), 3, cast_q).ok());
+  auto region = [](const HeadSurfaceQuality& q, const std::string& name) {
+    for (const RegionRoughness& r : q.regions)
+      if (r.region == name) return r;
+    FAIL("no region " << name);
+    return RegionRoughness{};
+  };
+  struct Bound {
+    const char* region;
+    double p95, p99, max;  // deg
+  };
+  for (const Bound& b : {Bound{"cheeks", 2.55, 3.3, 7.5}, Bound{"brow", 8.0, 13.5, 24.0},
+                         Bound{"mouth", 8.5, 13.0, 25.0}}) {
+    const RegionRoughness r = region(now, b.region), before = region(cast_q, b.region);
+    INFO(b.region << ": p95 / p99 / max " << r.p95_deg << " / " << r.p99_deg << " / " << r.max_deg
+                  << " deg, the skin as cast " << before.p95_deg << " / " << before.p99_deg << " / "
+                  << before.max_deg);
+    CHECK(r.edges > 1000);
+    CHECK(r.p95_deg < b.p95);
+    CHECK(r.p99_deg < b.p99);
+    CHECK(r.max_deg < b.max);
+    CHECK((before.p95_deg >= b.p95 || before.p99_deg >= b.p99 || before.max_deg >= b.max));
+  }
+  // The fairing leaves the midline, the head's profile (nasion, bridge,
+  // nose tip, lips, chin), where it was cast.
+  const GenericHead& h = faired_head;
+  const GenericHead& cast_head = asset();
+  double most = 0;
+  for (int v = 0; v < h.mesh.num_vertices(); ++v)
+    if (std::abs(h.mesh.positions[v].x()) < 1e-9)
+      most = std::max(most, (h.mesh.positions[v] - cast_head.mesh.positions[v]).norm());
+  CHECK(most < 1e-9);  // the midline (the profile) does not move
 }

@@ -139,6 +139,7 @@ TEST_CASE("fit_head: with the wide mouth ring as the generic head, Demosthenes' 
   LK_REQUIRE_SHARED("head_scans/threedscans_plato/plato.obj");
   GenericHeadBuildOptions wide_options;
   wide_options.wide_mouth_ring = true;
+  wide_options.fair_iterations = 0;  // the wide ring as measured, on the skin as cast
   const GenericHead wide = test::built_generic_head(wide_options);
   for (const std::string& name : {std::string("demosthenes_photoscan/demosthenes-low-res.obj"),
                                   std::string("threedscans_plato/plato.obj")}) {
