@@ -16,7 +16,7 @@
 // eye and lip rims), --fit-displaced-creases, --fit-no-corners-to-smooth,
 // --fit-no-parents-to-smooth, --fit-separation-repeats N, --fit-restarts N (fold_limit.h), --fit-seeds N, --fit-seed N (seed N alone),
 // --fit-ear-refit-late (FitHeadOptions::ear_refit_after_rounds off),
-// --fit-points N (scans of N points instead of 300k), --fit-back off|face-only|always and
+// --fit-points N (scans of N points instead of 300k), --fit-thin-cells X (FitHeadOptions::thin_cells_per_edge; 0: never thinned), --fit-back off|face-only|always and
 // --fit-back-weight W (the global fit's scan-to-mesh term, FitHeadOptions::back_term),
 // --fit-smooth-region-rings N (FoldLimitOptions::smooth_region_rings, -1: off),
 // --fit-isolated R (points R times sparser than the scan's sampling are
@@ -356,6 +356,7 @@ int run(const Args& args) {
     if (args.has("fit-no-parents-to-smooth")) opt.fold_limit.crossing_parents_to_smooth = false;
     args.get_int("fit-separation-repeats", opt.fold_limit.separation_repeats, opt.fold_limit.separation_repeats);
     opt.fold_limit.smooth_region_rings = region_rings;
+    args.get_double("fit-thin-cells", opt.thin_cells_per_edge, opt.thin_cells_per_edge);
     st = fit_head(cloud, generic, opt, r, obs);
     std::printf("\n   seed %d: %d points (%d above the neck cut), bbox diagonal %.3f m\n", seed, r.points,
                 r.fitted_points, r.bbox_diagonal);
@@ -365,6 +366,26 @@ int run(const Args& args) {
       continue;
     }
     print_fit_table(stages);
+    {
+      // Thinned or not, the finest level against every point of the scan
+      // above the neck cut (Table 1's final row is over the points fitted:
+      // the cell averages when thinned).
+      const TriMesh& last = r.level_meshes.empty() ? r.control : r.level_meshes.back();
+      ClipPlane neck;
+      neck.point = r.generic_to_head.apply(generic.annotations.neck_clip.point);
+      neck.normal = (r.generic_to_head.A.inverse().transpose() * generic.annotations.neck_clip.normal).normalized();
+      std::vector<Vec3> above;
+      for (const Vec3& p : cloud.positions) {
+        const Vec3 q = r.scan_to_head.apply(p);
+        if (neck.keeps(q)) above.push_back(q);
+      }
+      const DistanceStats full = point_to_surface_stats(above, ClosestPointTree(last), r.bbox_diagonal * r.unit_to_metres);
+      std::printf("   thinning (FitHeadOptions::thin_cells_per_edge %.3g): %s, %d of %d points, cell %.3f mm; "
+                  "Table 1 final over the full scan's %zu points above the cut: mean %.4f%% max %.3f%%\n",
+                  opt.thin_cells_per_edge, r.thinning.thinned ? "thinned" : "not thinned", r.thinning.kept,
+                  r.thinning.points, 1e3 * r.thinning.cell * r.unit_to_metres, above.size(), full.mean_pct,
+                  full.max_pct);
+    }
     double total = 0, total_cpu = 0;
     for (const auto& s : stages) {
       total += s.ms;

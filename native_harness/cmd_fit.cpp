@@ -44,12 +44,14 @@ int run_fit(const Args& args) {
   if (!only_known_options(cmd, args,
                           {"scan", "out", "levels", "up", "facing", "no-orientation-check", "face-only", "whole-head",
                            "no-eye-region", "scanned-neck", "denoise", "no-denoise", "widen-footprints", "data-level", "dump",
-                           "scan-frame", "generic-head", "project", "no-project"}))
+                           "scan-frame", "generic-head", "project", "no-project", "thin-cells"}))
     return 2;
   const std::string scan_path = args.get("scan"), out_dir = args.get("out");
   if (scan_path.empty() || out_dir.empty()) return fail(cmd, "needs --scan FILE and --out DIR");
   FitHeadOptions opt;
   if (!args.get_int("levels", 3, opt.levels, 0, 5)) return 2;
+  // Dense clouds on cell averages (FitHeadOptions::thin_cells_per_edge; off by default).
+  if (!args.get_double("thin-cells", 0, opt.thin_cells_per_edge, 0, 64)) return 2;
   if (!get_vec3(args, "up", opt.up) || !get_vec3(args, "facing", opt.facing))
     return fail(cmd, "--up and --facing take an axis (+x, -y, ...) or three numbers, e.g. --up +z or --up 0 0 1");
   // Conventions the user gave are checked, not overridden: a scan that
@@ -185,7 +187,7 @@ int run_fit(const Args& args) {
 Registrar reg({"fit",
                "likeness fit --scan FILE --out DIR [--levels L] [--up X Y Z|+x..-z] [--facing X Y Z|+x..-z] "
                "[--no-orientation-check] [--face-only|--whole-head] [--no-eye-region] [--scanned-neck] [--no-denoise] [--widen-footprints] [--data-level 0|1|2] "
-               "[--dump] [--scan-frame] [--generic-head asset|plate|ring|even|back|nape] [--project FILE.likeness.glb | --no-project]",
+               "[--thin-cells X] [--dump] [--scan-frame] [--generic-head asset|plate|ring|even|back|nape] [--project FILE.likeness.glb | --no-project]",
                "fits the generic head to a scan (jeong2002): control.obj, level1..L.obj, report.json and the head "
                "project head.likeness.glb (--project elsewhere, --no-project none)",
                run_fit});

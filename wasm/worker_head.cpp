@@ -201,6 +201,11 @@ val fit_cloud(const std::string& name, lk::PointCloud cloud, double parse_ms, va
     return true;
   };
   if (has(options, "levels")) opt.levels = options["levels"].as<int>();
+  // A dense cloud on cell averages (FitHeadOptions::thin_cells_per_edge, off
+  // by default): the page's ?thin=X.
+  if (has(options, "thinCells")) opt.thin_cells_per_edge = options["thinCells"].as<double>();
+  if (!(opt.thin_cells_per_edge >= 0 && opt.thin_cells_per_edge <= 64))
+    return error_result(lk::ErrorCode::InvalidInput, "thinCells must be 0..64");
   if (!vec3_option("up", opt.up) || !vec3_option("facing", opt.facing))
     return error_result(lk::ErrorCode::InvalidInput, "up and facing take three numbers");
   if (opt.levels < 1 || opt.levels > 4) return error_result(lk::ErrorCode::InvalidInput, "levels must be 1..4");
@@ -393,7 +398,7 @@ val stats_object(const lk::DistanceStats& d) {
 }
 
 // What the page shows of a head project, for a fit and an opened project
-// alike: {points, fittedPoints, unitToMetres, notes, headFacing, headUp,
+// alike: {points, fittedPoints, thinnedTo, unitToMetres, notes, headFacing, headUp,
 // untangle, meshes {aligned, local, control, levels}, animatedVertices,
 // landmarks, components}.
 val head_result(const lk::HeadProject& p, const lk::GenericHead& generic) {
@@ -401,6 +406,9 @@ val head_result(const lk::HeadProject& p, const lk::GenericHead& generic) {
   val r = ok_result();
   r.set("points", fit.points);
   r.set("fittedPoints", fit.fitted_points);
+  // A dense cloud fitted on cell averages (FitHeadOptions::thin_cells_per_edge):
+  // how many; 0 when every point was fitted. The notes say it in words.
+  r.set("thinnedTo", fit.thinning.thinned ? fit.thinning.kept : 0);
   r.set("unitToMetres", fit.unit_to_metres);
   // What the fit decided on its own (the scan turned to face +z, a face-only
   // capture, a unit guessed): `likeness fit` prints these as "note:" lines.

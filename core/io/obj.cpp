@@ -106,9 +106,9 @@ std::string obj_mtllib(const std::uint8_t* data, size_t size) {
   return "";
 }
 
-// The reader's state between pushes: the vertices, uvs, normals and face
-// corners read so far. Each whole line is one statement; the corners become
-// triangles, uvs and normals at finish.
+// The reader's state between pushes: the vertices, uvs, normals and
+// triangles read so far. Each whole line is one statement; uvs and normals
+// per vertex are resolved at finish.
 struct ObjStreamReader::State {
   State(std::uint64_t total_size, std::string mtl) : bytes(total_size, kMaxGeometryBytes), mtl_text(std::move(mtl)) {}
 
@@ -122,12 +122,20 @@ struct ObjStreamReader::State {
   bool all_have_colors = true;
   std::vector<Vec2> texcoords;
   std::vector<Vec3> normals;
-  std::vector<Corner> corners;  // 3 per triangle
   std::vector<Corner> face;
   std::string used_material;
   int faces_with_uv = 0, faces_without_uv = 0;
+  // Each face's corners are used as it is read (triangles, uvs, normals),
+  // not held until the end: a corner took 12 bytes, three a triangle, on
+  // top of the triangle's own 12 at the end (issue 39).
+  std::vector<int> corner_uv;     // the texture coordinate of each triangle corner (faces with uv)
+  std::vector<int> uv_of_vertex;  // the first corner's texture coordinate per vertex, or -1
+  bool uv_per_vertex = true;      // so far every vertex's corners have one uv
+  std::vector<Vec3> normal_sum;   // per vertex: the unit normals of its corners, summed
+  bool any_normal = false;
 
   Status statement(std::string_view line);
+  void add_corner(const Corner& c);
   Status build(TriMesh& out, GeometryKind& kind);
   void clear() {
     lines.clear();
@@ -135,9 +143,26 @@ struct ObjStreamReader::State {
     vertex_colors = {};
     texcoords = {};
     normals = {};
-    corners = {};
+    corner_uv = {};
+    uv_of_vertex = {};
+    normal_sum = {};
   }
 };
+
+// One triangle corner, in file order: its uv and normal are taken now.
+void ObjStreamReader::State::add_corner(const Corner& c) {
+  if (c.vt >= 0) {
+    corner_uv.push_back(c.vt);
+    if (uv_of_vertex.size() <= static_cast<size_t>(c.v)) uv_of_vertex.resize(mesh.positions.size(), -1);
+    if (uv_of_vertex[c.v] < 0) uv_of_vertex[c.v] = c.vt;
+    else if (texcoords[uv_of_vertex[c.v]] != texcoords[c.vt]) uv_per_vertex = false;
+  }
+  if (c.vn >= 0) {
+    any_normal = true;
+    if (normal_sum.size() <= static_cast<size_t>(c.v)) normal_sum.resize(mesh.positions.size(), Vec3::Zero());
+    normal_sum[c.v] += normals[c.vn];
+  }
+}
 
 Status ObjStreamReader::State::statement(std::string_view line) {
   ++line_number;
@@ -251,9 +276,10 @@ Status ObjStreamReader::State::statement(std::string_view line) {
     if (faces_with_uv && faces_without_uv)
       return error_at(ErrorCode::InvalidInput, "some faces have texture coordinates and others do not");
     for (size_t k = 1; k + 1 < face.size(); ++k) {
-      corners.push_back(face[0]);
-      corners.push_back(face[k]);
-      corners.push_back(face[k + 1]);
+      mesh.triangles.push_back({face[0].v, face[k].v, face[k + 1].v});
+      add_corner(face[0]);
+      add_corner(face[k]);
+      add_corner(face[k + 1]);
     }
   } else if (key == "usemtl") {
     if (used_material.empty()) used_material = std::string(tok.rest_of_line());
@@ -266,48 +292,36 @@ Status ObjStreamReader::State::statement(std::string_view line) {
   return Status::success();
 }
 
-// Every line has been read: the corners become triangles, uvs and normals.
+// Every line has been read: the uvs and normals the corners gave.
 Status ObjStreamReader::State::build(TriMesh& out, GeometryKind& kind) {
   const int nv = mesh.num_vertices();
   if (nv == 0) return Status::error(ErrorCode::Empty, "empty: the OBJ has no vertices");
   if (all_have_colors && static_cast<int>(vertex_colors.size()) == nv) mesh.colors = std::move(vertex_colors);
-
-  const size_t nt = corners.size() / 3;
-  mesh.triangles.resize(nt);
-  for (size_t f = 0; f < nt; ++f)
-    mesh.triangles[f] = {corners[3 * f].v, corners[3 * f + 1].v, corners[3 * f + 2].v};
+  const size_t nt = mesh.triangles.size();
 
   if (faces_with_uv > 0) {
     // Per-vertex when each vertex always uses one uv and every vertex has one.
-    std::vector<int> uv_of_vertex(nv, -1);
-    bool per_vertex = true;
-    for (const Corner& c : corners) {
-      if (uv_of_vertex[c.v] < 0) uv_of_vertex[c.v] = c.vt;
-      else if (texcoords[uv_of_vertex[c.v]] != texcoords[c.vt]) per_vertex = false;
-    }
+    uv_of_vertex.resize(nv, -1);
+    bool per_vertex = uv_per_vertex;
     for (int v = 0; v < nv && per_vertex; ++v) per_vertex = uv_of_vertex[v] >= 0;
     if (per_vertex) {
       mesh.uvs.resize(nv);
       for (int v = 0; v < nv; ++v) mesh.uvs[v] = texcoords[uv_of_vertex[v]];
     } else {
-      mesh.uvs.resize(corners.size());
-      for (size_t i = 0; i < corners.size(); ++i) mesh.uvs[i] = texcoords[corners[i].vt];
+      mesh.uvs.resize(corner_uv.size());
+      for (size_t i = 0; i < corner_uv.size(); ++i) mesh.uvs[i] = texcoords[corner_uv[i]];
       mesh.uv_per_corner = true;
     }
   }
 
-  bool any_normal = false;
-  for (const Corner& c : corners) any_normal |= c.vn >= 0;
   if (any_normal) {
-    std::vector<Vec3> sum(nv, Vec3::Zero());
-    for (const Corner& c : corners)
-      if (c.vn >= 0) sum[c.v] += normals[c.vn];
+    normal_sum.resize(nv, Vec3::Zero());
     bool complete = true;
-    for (Vec3& n : sum) {
+    for (Vec3& n : normal_sum) {
       n = unit_or_zero(n);
       if (n == Vec3::Zero()) complete = false;
     }
-    if (complete) mesh.normals = std::move(sum);
+    if (complete) mesh.normals = std::move(normal_sum);
   } else if (nt == 0 && static_cast<int>(normals.size()) == nv) {
     mesh.normals = std::move(normals);  // a point cloud stored as v + vn lines (now unit length)
   }

@@ -44,9 +44,11 @@ class PlyStreamReader {
 };
 
 // OBJ, parsed line by line as the bytes come: only an unfinished line is
-// carried between pushes. The vertices, uvs, normals and face corners are
-// kept as read; finish resolves them into the mesh as read_obj does (uvs per
-// vertex or per corner, normals averaged per vertex), and takes the texture
+// carried between pushes. The vertices, uvs and normals are kept as read;
+// each face becomes triangles as it is read, its corners' normals summed per
+// vertex and (faces with uvs) their uv indices kept, not the corners whole;
+// finish resolves them into the mesh as read_obj does (uvs per vertex or per
+// corner, normals averaged per vertex), and takes the texture
 // name from the MTL text given here (read_obj's mtl_text).
 class ObjStreamReader {
  public:

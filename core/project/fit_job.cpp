@@ -11,7 +11,23 @@ Status fit_project(PointCloud scan, const GenericHead& generic, const FitHeadOpt
                    const FitStageObserver& observer, const ProgressFn& progress) {
   project = HeadProject{};
   project.options = options;
-  const Status status = fit_head(scan, generic, options, project.fit, observer, progress);
+  // A dense cloud is thinned first (FitHeadOptions::thin_cells_per_edge), and
+  // the full scan's normals and colours let go before the fit: its
+  // positions stay for the checks.
+  PointCloud thinned;
+  ScanThinning thinning;
+  Status status = thin_scan_for_fit(scan, generic, options, thinned, thinning);
+  if (!status.ok()) return status;
+  if (thinning.thinned) {
+    std::vector<Vec3>().swap(scan.normals);
+    std::vector<Vec3>().swap(scan.colors);
+    status = fit_head_thinned(thinned, thinning, generic, options, project.fit, observer, progress);
+    thinned = PointCloud{};
+  } else {
+    FitHeadOptions once = options;  // thin_scan_for_fit has decided
+    once.thin_cells_per_edge = 0;
+    status = fit_head(scan, generic, once, project.fit, observer, progress);
+  }
   if (!status.ok()) return status;
   // Kept for the checks, which read positions and faces only: a large
   // scan's normals and colours would hold memory (the worker's heap) for

@@ -2,7 +2,7 @@
 // worker: the Pipeline rows follow its stages, then the fitted head is shown
 // over the scan, its checks start, and photos with points are textured when
 // Auto-run is on.
-import { app, ui, beginJob, endJob, live, refreshControls, setStage, setStatus, showError, stageItem } from './state.js';
+import { app, params, ui, beginJob, endJob, live, refreshControls, setStage, setStatus, showError, stageItem } from './state.js';
 import { runJob } from './worker_client.js';
 import { stopAnimation } from './animation.js';
 import { closeClicker } from './clicker.js';
@@ -87,7 +87,10 @@ export async function runFit() {
   let result;
   try {
     // The worker reads the File in slices (worker.js, streamScan).
-    const request = file ? { type: 'fitFile', file, options: { levels: 3 } }
+    // ?thin=X fits a dense cloud on cell averages (FitHeadOptions::thin_cells_per_edge,
+    // off by default: not lossless, docs/design/page.md).
+    const thin = Number(params.get('thin')) > 0 ? { thinCells: Number(params.get('thin')) } : {};
+    const request = file ? { type: 'fitFile', file, options: { levels: 3, ...thin } }
                          : { type: 'refit', options: { levels: 3, name } };
     result = await runJob(request, [],
       (stage, fraction) => {
@@ -152,6 +155,7 @@ export function showHead(result, name, wallMs, photos = false) {
   nameRows(photos);
   app.fit = { name, stages: result.stages, meshes: result.meshes, fitMs: result.fitMs || 0, heapBytes: result.heapBytes || 0,
               parseMs: result.parseMs || 0, wallMs, points: result.points, fittedPoints: result.fittedPoints,
+              thinnedTo: result.thinnedTo || 0,
               animatedVertices: result.animatedVertices, landmarks: result.landmarks || [],
               headFacing: result.headFacing || [0, 0, 1], headUp: result.headUp || [0, 1, 0] };
   forgetTexture();
@@ -169,6 +173,8 @@ export function showHead(result, name, wallMs, photos = false) {
       result.fittedPoints.toLocaleString('en') + ' points fitted when saved'
     : 'fit ' + (result.fitMs / 1000).toFixed(2) + ' s (+ parse ' + Math.round(result.parseMs) +
                             ' ms) · ' + result.fittedPoints.toLocaleString('en') + ' points fitted' +
+                            // A dense scan fitted on cell averages (the notes say how).
+                            (result.thinnedTo ? ' (averages of ' + result.points.toLocaleString('en') + ' scan points)' : '') +
                             (result.heapBytes ? ' · core memory ' + Math.round(result.heapBytes / 1048576) + ' MB' : '') +
                             (app.workerThreads ? ' · ' + app.workerThreads.threads + (app.workerThreads.threads === 1 ? ' thread' : ' threads') +
                              (app.workerThreads.fallback ? ' (threads could not start here)' : '') : '');
