@@ -163,7 +163,8 @@ json options_json(const FitHeadOptions& o) {
           {"smooth_finest_levels", o.displacement.smooth_finest_levels},
           {"max_footprint_points", o.displacement.max_footprint_points},
           {"data_level", o.global.data_level},
-          {"whole_head_data_level", o.whole_head_data_level}};
+          {"whole_head_data_level", o.whole_head_data_level},
+          {"thin_cells_per_edge", o.thin_cells_per_edge}};
 }
 
 // The scene: the finest level at rest, head frame, float32, with normals
@@ -379,6 +380,13 @@ Status read_project(const tinygltf::Model& model, const json& doc, HeadProject& 
       !get_int(o, "max_footprint_points", opt.displacement.max_footprint_points) ||
       !get_int(o, "data_level", opt.global.data_level) || !get_int(o, "whole_head_data_level", opt.whole_head_data_level))
     return damaged("the fit's options");
+  // Dense clouds fitted on cell averages (absent before 29 Nov: every point).
+  const auto thin = o.find("thin_cells_per_edge");
+  if (thin != o.end()) {
+    if (!thin->is_number() || !(thin->get<double>() >= 0) || thin->get<double>() > 1000)
+      return damaged("the fit's options");
+    opt.thin_cells_per_edge = thin->get<double>();
+  }
   opt.scan_kind = static_cast<FitHeadOptions::ScanKind>(scan_kind);
   opt.orientation_check = static_cast<FitHeadOptions::OrientationCheck>(orientation);
 

@@ -570,6 +570,29 @@ TEST_CASE("project file: a version 1 file (before the parts) still opens, with t
   CHECK(contains(try_load(stale).message, "checksum does not match"));
 }
 
+TEST_CASE("project file: the fit's thinning option comes back, and a file without it fits every point") {
+  HeadProject a = textured_project();
+  a.options.thin_cells_per_edge = 4;  // a refit of the opened project thins as the first fit did
+  const Bytes bytes = saved(a);
+  HeadProject b;
+  REQUIRE(load_project(bytes.data(), bytes.size(), b).ok());
+  CHECK(b.options.thin_cells_per_edge == 4);
+  const Bytes older = resealed(rewritten(bytes, [](tinygltf::Value::Object& d) {
+    tinygltf::Value::Object o = d["options"].Get<tinygltf::Value::Object>();
+    o.erase("thin_cells_per_edge");
+    d["options"] = tinygltf::Value(o);
+  }));
+  HeadProject c;
+  REQUIRE(load_project(older.data(), older.size(), c).ok());
+  CHECK(c.options.thin_cells_per_edge == 0);
+  const Bytes bad = resealed(rewritten(bytes, [](tinygltf::Value::Object& d) {
+    tinygltf::Value::Object o = d["options"].Get<tinygltf::Value::Object>();
+    o["thin_cells_per_edge"] = tinygltf::Value(-1.0);
+    d["options"] = tinygltf::Value(o);
+  }));
+  CHECK(contains(try_load(bad).message, "options"));
+}
+
 TEST_CASE("project file: every cut of a small project is refused, and says it is cut") {
   const Bytes& full = small_project();
   INFO("small project: " << full.size() << " bytes");
