@@ -982,7 +982,8 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
     // ear_refit_after_rounds): its smooth-surface guard is not paid when the
     // bound fit is kept. The warm refit starts from the free fit's guarded
     // result: decided after.
-    const bool early = options.ear_refit_after_rounds && !warm;
+    // Only at smooth level 3, where that was measured to agree (fit_head.h).
+    const bool early = options.ear_refit_after_rounds && !warm && options.levels == 3;
     TriMesh bound_control;
     GlobalFitResult bound_fit;
     MeshBvh bound_tree;

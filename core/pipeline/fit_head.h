@@ -228,9 +228,11 @@ struct FitHeadOptions {
   // result would be thrown away) is skipped. The same decision as after
   // the guard wherever the guard never takes the free fit's ears from
   // crossing to clean or back, which held on every real scan, copy and
-  // synthetic seed measured (docs/design/fit_real_scans.md); the note's
-  // and ear_binding's free count is then the count after the rounds.
-  // false: decided after the free fit's guard. The warm refit
+  // synthetic seed measured at smooth level 3 (docs/design/fit_real_scans.md);
+  // the note's and ear_binding's free count is then the count after the
+  // rounds. Used with levels == 3 only: at level 1 the guard's fold creases
+  // do take ears to clean (Demosthenes: no refit after the guard, one kept
+  // after the rounds). false: decided after the free fit's guard. The warm refit
   // (ear_refit_warm_rounds) starts from the guarded free fit: decided after.
   bool ear_refit_after_rounds = true;
   // When an ear (a connected part of region "ears") still crosses itself or
