@@ -341,16 +341,20 @@ void ViewerScene::clear_components() {
   dirty_ = true;
 }
 
-Status ViewerScene::set_component_matrix(size_t index, const glm::mat4& model) {
+Status ViewerScene::check_component(size_t index) const {
   if (index >= components_.size())
     return Status::error(ErrorCode::InvalidInput, "no component " + std::to_string(index));
+  return Status::success();
+}
+
+Status ViewerScene::set_component_matrix(size_t index, const glm::mat4& model) {
+  if (Status s = check_component(index); !s.ok()) return s;
   dirty_ = true;
   return renderer_.set_model_matrix(components_[index], model);
 }
 
 Status ViewerScene::set_component_positions(size_t index, const float* positions_xyz, size_t vertex_count) {
-  if (index >= components_.size())
-    return Status::error(ErrorCode::InvalidInput, "no component " + std::to_string(index));
+  if (Status s = check_component(index); !s.ok()) return s;
   dirty_ = true;
   return renderer_.update_mesh_positions(components_[index], positions_xyz, vertex_count);
 }
@@ -358,8 +362,7 @@ Status ViewerScene::set_component_positions(size_t index, const float* positions
 Status ViewerScene::set_component_morph_targets(size_t index, const std::uint32_t* counts, size_t shape_count,
                                                 const std::uint32_t* indices, size_t index_count, const float* offsets,
                                                 size_t offset_count) {
-  if (index >= components_.size())
-    return Status::error(ErrorCode::InvalidInput, "no component " + std::to_string(index));
+  if (Status s = check_component(index); !s.ok()) return s;
   std::vector<Renderer::MorphShape> shapes;
   if (Status s = split_flat_shapes(counts, shape_count, indices, index_count, offsets, offset_count, shapes); !s.ok())
     return s;
@@ -368,8 +371,7 @@ Status ViewerScene::set_component_morph_targets(size_t index, const std::uint32_
 }
 
 Status ViewerScene::set_component_morph_weights(size_t index, const float* weights, size_t count) {
-  if (index >= components_.size())
-    return Status::error(ErrorCode::InvalidInput, "no component " + std::to_string(index));
+  if (Status s = check_component(index); !s.ok()) return s;
   dirty_ = true;
   return renderer_.set_morph_weights(components_[index], weights, count);
 }

@@ -169,6 +169,8 @@ class ViewerScene {
   bool model_is_points_ = false;
   size_t model_vertices_ = 0;
   TextureHandle texture_ = kNoHandle;
+  // Success when component `index` exists, else "no component N".
+  Status check_component(size_t index) const;
   std::vector<DrawableHandle> components_;
   std::vector<TextureHandle> component_textures_;
   bool components_visible_ = true;
