@@ -21,6 +21,7 @@
 #include "synth/synth_head.h"
 
 #include <algorithm>
+#include <array>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -86,7 +87,7 @@ int run_bench_photos_optimizers(const Args& args) {
   // sums[o][l]: stereo median, truth face mean, iterations, cpu ms
   double sums[3][4][4] = {};
   std::vector<std::string> seed_names;
-  std::vector<Histogram> histograms;  // [seed][optimizer][lambda], flattened
+  std::vector<std::array<std::array<Histogram, 4>, 3>> histograms;  // [seed][optimizer][lambda]
   Histogram mean_histograms[3][4];
   int counted = 0;
   for (int seed = 1; seed <= seeds; ++seed) {
@@ -111,8 +112,7 @@ int run_bench_photos_optimizers(const Args& args) {
     }
     ++counted;
     seed_names.push_back(std::to_string(seed));
-    histograms.resize(seed_names.size() * 12);
-    Histogram* seed_histograms = &histograms[(seed_names.size() - 1) * 12];
+    histograms.emplace_back();
     for (int l = 0; l < 4; ++l) {
       std::printf("  %-4d %-4.1f", seed, lambdas[l]);
       for (int o = 0; o < 3; ++o) {
@@ -143,7 +143,7 @@ int run_bench_photos_optimizers(const Args& args) {
         acc[2] += iterations;
         acc[3] += ms;
         const Histogram h = histogram_mm(sf.distances_fit_m);
-        seed_histograms[o * 4 + l] = h;
+        histograms.back()[o][l] = h;
         for (int b = 0; b < kBins; ++b) mean_histograms[o][l].share[b] += h.share[b];
       }
       std::printf("\n");
@@ -166,7 +166,7 @@ int run_bench_photos_optimizers(const Args& args) {
   for (std::size_t s = 0; s < seed_names.size(); ++s)
     for (int o = 0; o < 3; ++o)
       for (int l = 0; l < 4; ++l)
-        print_histogram_row(seed_names[s].c_str(), optimizers[o].name, lambdas[l], histograms[s * 12 + o * 4 + l]);
+        print_histogram_row(seed_names[s].c_str(), optimizers[o].name, lambdas[l], histograms[s][o][l]);
   for (int o = 0; o < 3; ++o)
     for (int l = 0; l < 4; ++l) {
       Histogram m = mean_histograms[o][l];
