@@ -15,6 +15,7 @@
 #include "photos_texture.h"
 #include "photos/synthetic_outlines.h"
 #include "photos/synthetic_views.h"
+#include "project/eye_from_views.h"
 #include "project/photos_project.h"
 #include "project/project_file.h"
 #include "synth/skin_field.h"
@@ -266,10 +267,28 @@ int run_photos(const Args& args) {
         used_names.push_back(photos[i].name);
         cameras.push_back(r.calib.photos[i].camera);
       }
+    std::vector<Image> decoded;
     s = write_photos_texture(r.fit.mesh, project.fit.multires.levels, project.fit.level_meshes.back().positions,
                              used_paths, used_names, cameras, texture_size, out_dir, &project.texture.uvs,
-                             &project.texture.skin);
+                             &project.texture.skin, &decoded);
     if (!s) return fail(cmd, s.message);
+    // The iris from the same photos (the generic one when none is found).
+    std::vector<const Image*> image_ptrs;
+    for (const Image& im : decoded) image_ptrs.push_back(&im);
+    EyeFromViewsResult eye;
+    const Status eye_status = eye_texture_from_views(project.fit.control, generic, project.frame, image_ptrs, cameras,
+                                                     used_names, EyeFromViewsOptions{}, eye);
+    if (eye_status) {
+      project.parts.eye_texture = eye.texture;
+      project.parts.eye_source = used_names[size_t(eye.photo)];
+      s = save_png_file(out_dir + "/eye.png", eye.texture);
+      if (!s) return fail(cmd, s.message);
+      std::printf("  eyes: the iris from %s's %s eye (%.0f deg from the front, iris radius %.0f px, %.1f deg on the eyeball): eye.png\n",
+                  used_names[size_t(eye.photo)].c_str(), eye.eye == 0 ? "left" : "right", eye.view_angle_deg,
+                  eye.circle.radius, eye.iris_angle_deg);
+    } else {
+      std::printf("  eyes: %s\n", eye_status.message.c_str());
+    }
   }
   if (levels > 0) {
     Bytes bytes;

@@ -27,6 +27,7 @@ Status load_expression_head(const std::string& project_path, const std::string& 
       out.skin = p.texture.skin;
       out.uvs = p.texture.uvs;
     }
+    out.eye_texture = p.parts.eye_texture;
     out.description = project_path;
   } else {
     if (!mesh_path.empty()) {
@@ -58,10 +59,10 @@ Status pose_expression_head(ExpressionHead& h, const FaceControls& controls, int
   out.part_colors.clear();
   if (!h.have_parts) return Status::success();
   out.part_textures.clear();
-  Image iris;
+  Image iris = h.eye_texture;
   EyeballTextureOptions eye_options;
   eye_options.size = 256;
-  if (!generic_eyeball_texture(eye_options, iris).ok()) iris = Image{};
+  if (iris.empty() && !generic_eyeball_texture(eye_options, iris).ok()) iris = Image{};
   auto add = [&](const TriMesh& m, std::vector<Vec3> positions, const Vec3& color, const Image& texture = Image{}) {
     TriMesh posed = m;
     posed.positions = std::move(positions);

@@ -20,6 +20,7 @@ struct ExpressionHead {
   FaceRig rig;
   Image skin;              // empty unless a textured project
   std::vector<Vec2> uvs;   // the finest level's, when textured
+  Image eye_texture;       // the project's own iris (an eye photo's, or found in its photos); empty: the generic one
   HeadParts parts;
   bool have_parts = false;
   std::string description;

@@ -9,7 +9,8 @@ namespace lk::cli {
 Status write_photos_texture(const TriMesh& control, const std::vector<ButterflyLevel>& levels,
                             const std::vector<Vec3>& fine_positions, const std::vector<std::string>& image_paths,
                             const std::vector<std::string>& names, const std::vector<Camera>& cameras, int size,
-                            const std::string& out_dir, std::vector<Vec2>* uvs, Image* skin) {
+                            const std::string& out_dir, std::vector<Vec2>* uvs, Image* skin,
+                            std::vector<Image>* images) {
   if (levels.empty() || image_paths.size() != cameras.size() || names.size() != cameras.size())
     return Status::error(ErrorCode::InvalidInput, "texture: no level, or photos and cameras differ in number");
   TriMesh mesh;
@@ -33,6 +34,8 @@ Status write_photos_texture(const TriMesh& control, const std::vector<ButterflyL
   if (s) s = save_png_file(out_dir + "/skin.png", head.skin);
   if (s && uvs) *uvs = mesh.uvs;
   if (s && skin) *skin = head.skin;
+  if (s && images)
+    for (TexturePhoto& p : photos) images->push_back(std::move(p.image));
   return s;
 }
 

@@ -18,10 +18,12 @@ namespace lk::cli {
 // chart refined to it, textured from the images (image_paths, cameras and
 // names #P, the used photos) at size x size texels; writes
 // out_dir/textured.obj, textured.mtl and skin.png. Errors name the photo.
-// uvs and skin (optional): the chart and the skin, for the head project.
+// uvs and skin (optional): the chart and the skin, for the head project;
+// images (optional): the decoded photos, for the iris (eye_from_views.h).
 Status write_photos_texture(const TriMesh& control, const std::vector<ButterflyLevel>& levels,
                             const std::vector<Vec3>& fine_positions, const std::vector<std::string>& image_paths,
                             const std::vector<std::string>& names, const std::vector<Camera>& cameras, int size,
-                            const std::string& out_dir, std::vector<Vec2>* uvs = nullptr, Image* skin = nullptr);
+                            const std::string& out_dir, std::vector<Vec2>* uvs = nullptr, Image* skin = nullptr,
+                            std::vector<Image>* images = nullptr);
 
 }  // namespace lk::cli

@@ -72,6 +72,10 @@ val texture_job(val photos, val options, val progress) {
     return error_result(lk::ErrorCode::InvalidInput, "texture size must be 16..4096 texels");
   // A head from photos: each photo's camera is the self-calibration's.
   input.cameras_given = has(options, "cameras") && options["cameras"].as<bool>();
+  // And the iris from the same photos, unless the page has one from an eye photo.
+  lk::Status generic_status;
+  if (input.cameras_given && !(has(options, "findEyes") && !options["findEyes"].as<bool>()))
+    input.generic_for_eyes = generic_head(generic_status);
   const int count = photos.isArray() ? photos["length"].as<int>() : 0;
   if (count == 0) return error_result(lk::ErrorCode::InvalidInput, "no photo to texture from");
   if (count > lk::kMaxTexturePhotos)
@@ -154,6 +158,13 @@ val texture_job(val photos, val options, val progress) {
   r.set("vertexCount", static_cast<double>(out.head.mesh.positions.size()));
   r.set("chartL2", out.chart.l2_stretch);
   r.set("textureMs", now_ms() - t_job);
+  // The iris found in the photos (eye_from_views.h), or why not.
+  if (out.eye_status.ok()) {
+    r.set("eyeTexture", image_object(out.eye.texture));
+    r.set("eyeSource", input.names[size_t(out.eye.photo)]);
+  } else if (out.eye_status.code != lk::ErrorCode::Empty) {
+    r.set("eyeNote", out.eye_status.message);
+  }
   return r;
 }
 

@@ -700,16 +700,104 @@ Status iris_texture_from_photo(const Image& photo, const Vec2* guess, IrisResult
   if (!report(progress, "iris", 0.1)) return Status::error(ErrorCode::Cancelled, "iris: cancelled");
   if (Status s = find_iris(small, g, {}, result.circle); !s) return s;
   if (Status s = check_eye_closeup(small, result.circle); !s) return s;
-  if (!report(progress, "iris", 0.2)) return Status::error(ErrorCode::Cancelled, "iris: cancelled");
-  if (Status s = iris_to_polar(small, result.circle, {}, result.input_polar); !s) return s;
-  const ProgressFn synthesis = [&progress](const char*, double f) { return report(progress, "iris", 0.25 + 0.7 * f); };
-  if (Status s = iris_synthesize(result.input_polar, {}, result.synthesized, &result.report, synthesis); !s) return s;
-  const double ratio = result.circle.pupil_radius / result.circle.radius;
+  if (Status s = iris_texture_from_circle(small, result.circle, result, texture_options, progress); !s) return s;
   // The circle in the photo's own pixels.
   result.circle.center = (result.circle.center + Vec2::Constant(0.5)) * factor - Vec2::Constant(0.5);
   result.circle.radius *= factor;
   result.circle.pupil_radius *= factor;
-  return eyeball_texture(result.synthesized, ratio, texture_options, result.texture);
+  return Status::success();
+}
+
+Status iris_texture_from_circle(const Image& photo, const IrisCircle& circle, IrisResult& result,
+                                const EyeballTextureOptions& texture_options, const ProgressFn& progress) {
+  result.circle = circle;
+  if (!report(progress, "iris", 0.2)) return Status::error(ErrorCode::Cancelled, "iris: cancelled");
+  if (Status s = iris_to_polar(photo, circle, {}, result.input_polar); !s) return s;
+  const ProgressFn synthesis = [&progress](const char*, double f) { return report(progress, "iris", 0.25 + 0.7 * f); };
+  if (Status s = iris_synthesize(result.input_polar, {}, result.synthesized, &result.report, synthesis); !s) return s;
+  return eyeball_texture(result.synthesized, circle.pupil_radius / circle.radius, texture_options, result.texture);
+}
+
+namespace {
+
+// Median luminance along the circle (c, r) over the angles (radians, image
+// y down), n samples per arc.
+double arc_median(const Image& im, const Vec2& c, double r, const std::vector<Vec2>& dirs, std::vector<double>& buf) {
+  buf.clear();
+  for (const Vec2& d : dirs) buf.push_back(sample_lum(im, c.x() + r * d.x(), c.y() + r * d.y()));
+  std::nth_element(buf.begin(), buf.begin() + long(buf.size() / 2), buf.end());
+  return buf[buf.size() / 2];
+}
+
+}  // namespace
+
+Status find_iris_near(const Image& photo, const Vec2& guess, double search_px, double min_radius,
+                      double max_radius, IrisCircle& circle) {
+  if (Status s = check_photo(photo); !s) return s;
+  if (!(min_radius >= 2 && max_radius > min_radius && search_px >= 0 && max_radius < 4096 && search_px < 4096))
+    return Status::error(ErrorCode::InvalidInput, "iris search: bad radius range or search distance");
+  // The lateral arcs: 50 deg either side of horizontal, left and right.
+  std::vector<Vec2> right, left, full;
+  for (int i = 0; i < 40; ++i) {
+    const double t = (-50 + 100.0 * (i + 0.5) / 40) * kPi / 180;
+    right.emplace_back(std::cos(t), std::sin(t));
+    left.emplace_back(-std::cos(t), std::sin(t));
+  }
+  for (int i = 0; i < 96; ++i) full.emplace_back(std::cos(2 * kPi * i / 96), std::sin(2 * kPi * i / 96));
+  constexpr double kStep = 1.5;  // the radial derivative's half width, pixels
+  const int k = static_cast<int>(std::lround(2 * kStep));  // kStep in 0.5 px samples
+  std::vector<double> buf, level_left, level_right;
+  double best = -1;
+  Vec2 best_c = guess;
+  double best_r = 0;
+  // A limbus steps from dark to bright on both sides: the score is the
+  // smaller of the two arcs' steps (a catchlight or a lid edge gives one).
+  auto scan = [&](const Vec2& around, double reach, double step) {
+    const Vec2 start = around;
+    for (double dy = -reach; dy <= reach + 1e-9; dy += step)
+      for (double dx = -reach; dx <= reach + 1e-9; dx += step) {
+        const Vec2 c = start + Vec2(dx, dy);
+        level_left.clear();
+        level_right.clear();
+        for (double r = min_radius - kStep; r <= max_radius + kStep + 1e-9; r += 0.5) {
+          level_left.push_back(arc_median(photo, c, r, left, buf));
+          level_right.push_back(arc_median(photo, c, r, right, buf));
+        }
+        for (int i = k; i + k < static_cast<int>(level_left.size()); ++i) {
+          const double step_value = std::min(level_left[size_t(i + k)] - level_left[size_t(i - k)],
+                                             level_right[size_t(i + k)] - level_right[size_t(i - k)]);
+          if (step_value > best) {
+            best = step_value;
+            best_c = c;
+            best_r = min_radius - kStep + 0.5 * i;
+          }
+        }
+      }
+  };
+  scan(guess, search_px, 2.0);
+  scan(best_c, 2.0, 0.5);
+  if (best < 0.04)
+    return Status::error(ErrorCode::NotAHead, "no iris edge near the eye's place (the strongest step is " +
+                                                  std::to_string(static_cast<int>(std::lround(100 * std::max(0.0, best)))) +
+                                                  " % of the luminance range, 4 % needed)");
+  // The pupil: the strongest dark-to-bright step on full circles inside.
+  double pupil = 0.35 * best_r, pupil_step = 0;
+  std::vector<double>& level = level_left;
+  level.clear();
+  const double p0 = 0.15 * best_r, p1 = 0.7 * best_r;
+  for (double r = p0 - kStep; r <= p1 + kStep + 1e-9; r += 0.5) level.push_back(arc_median(photo, best_c, std::max(0.5, r), full, buf));
+  for (int i = k; i + k < static_cast<int>(level.size()); ++i) {
+    const double v = level[size_t(i + k)] - level[size_t(i - k)];
+    if (v > pupil_step) {
+      pupil_step = v;
+      pupil = p0 - kStep + 0.5 * i;
+    }
+  }
+  if (pupil_step < 0.04) pupil = 0.35 * best_r;
+  circle.center = best_c;
+  circle.radius = best_r;
+  circle.pupil_radius = std::clamp(pupil, 0.15 * best_r, 0.7 * best_r);
+  return Status::success();
 }
 
 }  // namespace lk

@@ -147,6 +147,19 @@ Status eyeball_texture(const PolarIris& iris, double pupil_to_iris_ratio,
 // locate the eye.
 Status check_eye_closeup(const Image& photo, const IrisCircle& circle);
 
+// In a photo of a face whose eye's place and size are known (a fitted head
+// seen by its recovered camera): the limbus as the circle with the
+// strongest dark-to-bright step across its left and right arcs (Daugman's
+// integro-differential operator, on the arcs the lids leave uncovered; the
+// median along each arc ignores lashes and catchlights), its centre within
+// search_px of guess and its radius in [min_radius, max_radius] pixels;
+// the pupil as the strongest bright step inside it (0.35 of the iris when
+// none is clear). Works for light irises, where find_iris's dark-disk growth
+// does not. NotAHead when no arc step of at least 0.04 (luminance 0..1) is
+// found: no iris there.
+Status find_iris_near(const Image& photo, const Vec2& guess, double search_px, double min_radius,
+                      double max_radius, IrisCircle& circle);
+
 // Everything above with default options: photo (+ guess or nullptr) -> texture.
 // Photos with a side over max_side pixels are first reduced by an integer
 // box filter (the circle found is given back in the photo's pixels), so the
@@ -160,5 +173,10 @@ struct IrisResult {
 Status iris_texture_from_photo(const Image& photo, const Vec2* guess, IrisResult& result,
                                const EyeballTextureOptions& texture_options = {}, const ProgressFn& progress = {},
                                int max_side = 1024);
+
+// The steps after the circle: polar samples, synthesis, eyeball texture
+// (result.circle = circle).
+Status iris_texture_from_circle(const Image& photo, const IrisCircle& circle, IrisResult& result,
+                                const EyeballTextureOptions& texture_options = {}, const ProgressFn& progress = {});
 
 }  // namespace lk

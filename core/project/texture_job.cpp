@@ -147,6 +147,22 @@ Status texture_project(HeadProject& project, TextureJobInput& input, TextureJobR
   if (!st.ok()) return name_photos(st, input.names);
   project.texture.uvs = std::move(finest_uv);
   project.texture.skin = out.head.skin;
+
+  // 4. The iris from the same photos, where no eye photo gave one.
+  if (input.cameras_given && input.generic_for_eyes && project.parts.eye_texture.empty()) {
+    std::vector<const Image*> images;
+    std::vector<Camera> cameras;
+    for (const TexturePhoto& p : input.photos) {
+      images.push_back(&p.image);
+      cameras.push_back(p.camera);
+    }
+    out.eye_status = eye_texture_from_views(project.fit.control, *input.generic_for_eyes, project.frame, images,
+                                            cameras, input.names, EyeFromViewsOptions{}, out.eye);
+    if (out.eye_status.ok()) {
+      project.parts.eye_texture = out.eye.texture;
+      project.parts.eye_source = input.names.size() > size_t(out.eye.photo) ? input.names[size_t(out.eye.photo)] : "";
+    }
+  }
   return Status::success();
 }
 

@@ -4,6 +4,7 @@
 // calibration and chart steps serve `likeness texture` on a fit's files too.
 #pragma once
 #include "calib/calibrate.h"
+#include "project/eye_from_views.h"
 #include "project/project.h"
 #include "subdiv/butterfly.h"
 #include "texture/texture.h"
@@ -66,6 +67,10 @@ struct TextureJobInput {
   TextureOptions options;
   CalibOptions calibration;
   CameraSharing sharing = CameraSharing::Auto;
+  // With cameras_given (a head from photos) and no eye texture in the
+  // project yet: the iris is looked for in these photos too
+  // (eye_from_views.h) when the generic head is given.
+  const GenericHead* generic_for_eyes = nullptr;
 };
 
 struct TextureJobResult {
@@ -73,10 +78,16 @@ struct TextureJobResult {
   int level = 0;
   UvStats chart;       // the control mesh's chart
   TexturedHead head;   // the level in the scan frame, its skin and report
+  // The iris from the photos (generic_for_eyes): eye_status says whether it
+  // was looked for and found (not looked for: Empty); a failure to find it
+  // is not the job's failure.
+  Status eye_status = Status::error(ErrorCode::Empty, "the iris was not looked for");
+  EyeFromViewsResult eye;
 };
 
 // Textures the project at rest; on success project.texture holds the
-// finest level's chart and the skin. InvalidInput on no fit, a missing
+// finest level's chart and the skin, and project.parts the iris found in
+// the photos (generic_for_eyes). InvalidInput on no fit, a missing
 // level, no photo or too many, fewer than 6 points on a photo; calibration
 // and texture_head errors name the photos; Cancelled from progress
 // (called with the step names above).

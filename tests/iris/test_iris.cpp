@@ -16,6 +16,8 @@ constexpr double kPi = 3.14159265358979323846;
 struct SyntheticEye {
   double cx = 121.3, cy = 98.7, radius = 40, pupil = 14;
   bool eyelid = true, highlight = true;
+  bool light = false;      // a light grey-blue iris, brighter than the skin (find_iris's dark disk fails there)
+  bool lower_lid = false;  // the lower lid over the iris's bottom too
 };
 
 // Radial fibres: per-angle noise made of sines with random phases, a colour
@@ -46,10 +48,12 @@ lk::Image make_eye(const SyntheticEye& e, int w = 240, int h = 200) {
             for (int k = 0; k < 6; ++k) fib += std::sin(freq[k] * t + ph[k] + 3 * f) / 6;
             const double v = 0.75 + 0.35 * fib;
             c[0] = (0.25 + 0.15 * f) * v; c[1] = (0.35 - 0.1 * f) * v; c[2] = (0.45 - 0.2 * f) * v;
+            if (e.light) { c[0] = (0.50 + 0.1 * f) * v; c[1] = (0.60 + 0.05 * f) * v; c[2] = 0.68 * v; }
             if (f > 0.85) for (double& q : c) q *= 0.7;
             if (r < e.pupil) c[0] = c[1] = c[2] = 0.03;
           }
           if (e.eyelid && py < e.cy - 0.6 * e.radius) { c[0] = skin[0]; c[1] = skin[1]; c[2] = skin[2]; }
+          if (e.lower_lid && py > e.cy + 0.75 * e.radius) { c[0] = skin[0]; c[1] = skin[1]; c[2] = skin[2]; }
           if (e.highlight && std::hypot(px - (e.cx + 12), py - (e.cy - 15)) < 5) c[0] = c[1] = c[2] = 1.0;
           for (int k = 0; k < 3; ++k) acc[k] += c[k];
         }
@@ -77,6 +81,38 @@ TEST_CASE("find_iris recovers a synthetic iris's centre within 1 px and radius w
   lk::Vec2 g;
   REQUIRE(lk::iris_default_guess(im, g).ok());
   CHECK((g - lk::Vec2(e.cx, e.cy)).norm() < e.pupil);
+}
+
+TEST_CASE("find_iris_near finds a light iris under both lids with a catchlight in the pupil") {
+  SyntheticEye e;
+  e.light = true;
+  e.lower_lid = true;
+  e.radius = 26;
+  e.pupil = 9;
+  e.cx = 104.6;
+  e.cy = 101.2;
+  lk::Image im = make_eye(e, 211, 211);
+  // A window's reflection across the pupil and the iris (as in a real photo).
+  for (int y = 90; y < 100; ++y)
+    for (int x = 98; x < 114; ++x)
+      for (int k = 0; k < 3; ++k) im.at(x, y)[k] = 245;
+  // The guess as a fitted head's eyeball would give it: some pixels off.
+  for (const lk::Vec2& guess : {lk::Vec2(e.cx + 6, e.cy + 7), lk::Vec2(e.cx - 9, e.cy - 3)}) {
+    lk::IrisCircle c;
+    const lk::Status s = lk::find_iris_near(im, guess, 17, 14, 38, c);
+    REQUIRE(s.ok());
+    INFO("centre " << c.center.transpose() << " radius " << c.radius << " pupil " << c.pupil_radius);
+    CHECK((c.center - lk::Vec2(e.cx, e.cy)).norm() < 1.0);
+    CHECK(std::abs(c.radius - e.radius) < 1.5);
+    CHECK(std::abs(c.pupil_radius - e.pupil) < 2.0);
+  }
+  // Skin only: no iris edge, said so.
+  const lk::Image skin = lk::Image::make(211, 211, 3, 180);
+  lk::IrisCircle c;
+  const lk::Status s = lk::find_iris_near(skin, lk::Vec2(105, 105), 17, 14, 38, c);
+  CHECK(s.code == lk::ErrorCode::NotAHead);
+  CHECK(s.message.find("no iris edge") != std::string::npos);
+  CHECK(lk::find_iris_near(skin, lk::Vec2(105, 105), 17, 38, 14, c).code == lk::ErrorCode::InvalidInput);
 }
 
 TEST_CASE("pixel removal drops the eyelid and the highlight, keeps the clean iris") {

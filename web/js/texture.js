@@ -6,7 +6,7 @@ import { runJob } from './worker_client.js';
 import { facePhotos, photoPoints, renderPhotos, texturable } from './photos.js';
 import { clicker, closeClicker, updateClicker } from './clicker.js';
 import { stopAnimation } from './animation.js';
-import { showStage } from './head_view.js';
+import { showComponents, showStage } from './head_view.js';
 import { photoCount } from './wording.js';
 
 export function forgetTexture() {
@@ -71,7 +71,9 @@ export async function runTexture() {
       photos.push({ name: p.name, buffer: await p.file.arrayBuffer(), points: flat });
     }
     const size = Number(params.get('texture_size')) > 0 ? Number(params.get('texture_size')) : 1024;
-    result = await runJob({ type: 'texture', photos, options: { size, cameras: fromPhotos } }, photos.map((p) => p.buffer),
+    // A head from photos: the worker also looks for the iris in them, unless an eye photo gave one.
+    const findEyes = fromPhotos && !(app.eyePhoto && !app.eyePhoto.fromFacePhotos);
+    result = await runJob({ type: 'texture', photos, options: { size, cameras: fromPhotos, findEyes } }, photos.map((p) => p.buffer),
       (stage, fraction) => {
         // stage is "texture:<step>" (decode, calibrate, chart, bind, resample, ...).
         if (!/^texture/.test(stage)) return;
@@ -101,6 +103,15 @@ export async function runTexture() {
   }
   app.texture = { uvs: result.uvs, skin: result.skin, steps: result.steps, textureMs: result.textureMs, wallMs,
                   level: result.level, photos: using.length };
+  // The iris found in the photos (the person's eye colour) replaces the generic one.
+  let eyes = '';
+  if (result.eyeTexture && (!app.eyePhoto || app.eyePhoto.fromFacePhotos)) {
+    app.eyePhoto = { name: result.eyeSource, texture: result.eyeTexture, ms: 0, fromFacePhotos: true };
+    if (app.viewer && app.componentsData) showComponents(app.componentsData);
+    eyes = ' The eyes\' colour is from ' + result.eyeSource + '.';
+  } else if (result.eyeNote) {
+    eyes = ' The eyes keep the generic iris: no iris was found in the photos.';
+  }
   setStage('texture', Math.round(result.textureMs) + ' ms', 1, 'complete');
   const rms = using.map((p) => p.calib && p.calib.ok ? p.calib.rms : NaN).filter((x) => !Number.isNaN(x));
   const cameras = fromPhotos ? 'cameras from the head\'s self-calibration'
@@ -112,8 +123,8 @@ export async function runTexture() {
   app.viewer.set_overlay_visible(false);
   closeClicker();
   showStage('subdivide');
-  setStatus('Textured from ' + photoCount(using.length) + ' in ' + (result.textureMs / 1000).toFixed(2) + ' s. ' +
-            'Animate it, pick a level, or export the textured head.');
+  setStatus('Textured from ' + photoCount(using.length) + ' in ' + (result.textureMs / 1000).toFixed(2) + ' s.' + eyes +
+            ' Animate it, pick a level, or export the textured head.');
   endJob(job);
 }
 app.textureHead = () => runTexture();

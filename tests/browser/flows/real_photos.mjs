@@ -46,6 +46,18 @@ async function run(s) {
                                       refusal: p.photosHead && p.photosHead.refusal || '', row: rowText(p.name) })),
       texture: L.texture && { photos: L.texture.photos, ms: L.texture.textureMs, size: L.texture.skin.width },
       level3: L.fit && L.fit.meshes.levels.length === 3 ? L.fit.meshes.levels[2].vertexCount : 0,
+      // The iris found in the photos: its texture's mean colour on a ring
+      // inside the iris (the generic iris is brown: red well over blue).
+      eye: L.eyePhoto && (() => {
+        const t = L.eyePhoto.texture, c = [0, 0, 0];
+        for (let i = 0; i < 64; i++) {
+          const a = 2 * Math.PI * i / 64, rho = 0.7 * 30 / 90;
+          const x = Math.floor((0.5 + 0.5 * rho * Math.cos(a)) * t.width), y = Math.floor((0.5 - 0.5 * rho * Math.sin(a)) * t.height);
+          for (let k = 0; k < 3; k++) c[k] += t.pixels[(y * t.width + x) * t.channels + k] / 64;
+        }
+        return { name: L.eyePhoto.name, fromFacePhotos: !!L.eyePhoto.fromFacePhotos, rgb: c.map(Math.round) };
+      })(),
+      status: document.querySelector('#status') ? document.querySelector('#status').textContent : '',
     };
   });
   const detectMs = r.photos.map((p) => p.ms || 0);
@@ -65,6 +77,12 @@ async function run(s) {
   check('real photos: the head is textured from the photos it was made from, with their recovered cameras',
         !!r.texture && r.texture.photos === r.head.used && r.state === 'done',
         r.texture ? `${r.texture.photos} photos, state ${r.state}` : `no texture, state ${r.state}`);
+  // Kira's eyes are blue-grey: the iris found in her frontal photo, not the
+  // generic brown one (whose ring has red over blue by more than 30 levels:
+  // tests/project/test_eye_from_views.cpp).
+  check('real photos: the eyes wear the iris found in the photos (her grey, not the generic brown)',
+        !!r.eye && r.eye.fromFacePhotos && r.eye.rgb[0] - r.eye.rgb[2] < 15 && /eyes' colour is from/.test(r.status),
+        r.eye ? `from ${r.eye.name}, iris ring RGB ${r.eye.rgb.join(' ')}; status "${r.status}"` : 'the generic iris');
   const a = analyse(await canvasImage(page));
   check('real photos: the canvas shows the head', a.fgFraction > 0.05, `foreground ${(100 * a.fgFraction).toFixed(1)} %`);
   if (SHOT_DIR) await page.screenshot({ path: path.join(SHOT_DIR, 'web_photos_kira.png') });
