@@ -49,13 +49,18 @@ void load_session(const GenericHead& generic, int seed, DetectedSession& s) {
   }
 }
 
-TEST_CASE("the committed detector points match their synthetic truth (else regenerate them)", "[photos][detected]") {
-  GenericHead generic;
+// The generic head and the shipped MediaPipe map (with its slide) attached to it.
+void load_shipped_map(GenericHead& generic, LandmarkMap& map, std::vector<SurfacePoint>& lms) {
   REQUIRE(load_generic_head(generic));
-  LandmarkMap map;
-  std::vector<SurfacePoint> lms;
   REQUIRE(parse_landmark_map_json(mediapipe_landmark_map_text(), map));
   REQUIRE(attach_landmark_map(map, generic.mesh, PhotosJobOptions{}.map_max_distance_m, lms));
+}
+
+TEST_CASE("the committed detector points match their synthetic truth (else regenerate them)", "[photos][detected]") {
+  GenericHead generic;
+  LandmarkMap map;
+  std::vector<SurfacePoint> lms;
+  load_shipped_map(generic, map, lms);
   DetectedSession s;
   load_session(generic, 2, s);
   REQUIRE(s.photos.size() == 5);  // the profiles have no face for MediaPipe
@@ -242,11 +247,9 @@ TEST_CASE("the self-calibration's short focal on detected points comes from the 
   // landmarks' prior do not bias it; the error grows with the share of the
   // detector's residual kept (half: -4.6 %, all: -7.4 % on seed 2).
   GenericHead generic;
-  REQUIRE(load_generic_head(generic));
   LandmarkMap map;
   std::vector<SurfacePoint> lms;
-  REQUIRE(parse_landmark_map_json(mediapipe_landmark_map_text(), map));
-  REQUIRE(attach_landmark_map(map, generic.mesh, PhotosJobOptions{}.map_max_distance_m, lms));
+  load_shipped_map(generic, map, lms);
   DetectedSession s;
   load_session(generic, 2, s);
   const double truth_focal = SyntheticViewsOptions{}.focal_px;
@@ -284,11 +287,9 @@ TEST_CASE("a per-photo depth scale learned on other seeds brings the detected se
   // at the truth) takes that up. On the committed seeds 1-5 (not learned
   // on) the mean |focal error| was measured 15.9 % without, 7.6 % with it.
   GenericHead generic;
-  REQUIRE(load_generic_head(generic));
   LandmarkMap map;
   std::vector<SurfacePoint> lms;
-  REQUIRE(parse_landmark_map_json(mediapipe_landmark_map_text(), map));
-  REQUIRE(attach_landmark_map(map, generic.mesh, PhotosJobOptions{}.map_max_distance_m, lms));
+  load_shipped_map(generic, map, lms);
   const double truth_focal = SyntheticViewsOptions{}.focal_px;
   SelfCalibOptions learned;
   learned.depth_scale_sigma = 0.01;

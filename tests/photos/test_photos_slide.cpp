@@ -37,22 +37,31 @@ LandmarkSlide test_slide(int M, std::uint64_t seed) {
   return s;
 }
 
+// A camera looking at the head's origin from a random yaw and pitch inside
+// the test slide's range (not clamped), 0.5-0.7 m away.
+Camera random_head_camera(SplitMix64& rng) {
+  const double yaw = rng.uniform(-0.9, 0.9), pitch = rng.uniform(-0.2, 0.2), d = rng.uniform(0.5, 0.7);
+  const Vec3 C(d * std::sin(yaw) * std::cos(pitch), d * std::sin(pitch), d * std::cos(yaw) * std::cos(pitch));
+  const Vec3 f = -C.normalized(), r = Vec3::UnitY().cross(f).normalized(), u = f.cross(r);
+  Camera c;
+  c.fx = c.fy = rng.uniform(900, 1500);
+  c.cx = 600;
+  c.cy = 800;
+  c.R.row(0) = r.transpose();
+  c.R.row(1) = -u.transpose();
+  c.R.row(2) = f.transpose();
+  c.t = -c.R * C;
+  return c;
+}
+
 TEST_CASE("the slid projection's Jacobian (the shift follows the camera) matches finite differences", "[photos][slide]") {
   const LandmarkSlide slide = test_slide(3, 11);
   SplitMix64 rng(5);
   int checked = 0;
   for (int trial = 0; trial < 30; ++trial) {
-    // A camera looking at the head from yaw, pitch inside the model's range (not clamped).
-    const double yaw = rng.uniform(-0.9, 0.9), pitch = rng.uniform(-0.2, 0.2), d = rng.uniform(0.5, 0.7);
-    const Vec3 C(d * std::sin(yaw) * std::cos(pitch), d * std::sin(pitch), d * std::cos(yaw) * std::cos(pitch));
-    const Vec3 f = -C.normalized(), r = Vec3::UnitY().cross(f).normalized(), u = f.cross(r);
-    Camera c;
-    c.fx = c.fy = rng.uniform(900, 1500);
-    c.cx = 600;
-    c.cy = 800;
-    c.R.row(0) = r.transpose();
-    c.R.row(1) = -u.transpose();
-    c.R.row(2) = f.transpose();
+    // A camera looking at the head, rolled a little about its axis.
+    Camera c = random_head_camera(rng);
+    const Vec3 C = c.center();
     c.R = Eigen::AngleAxisd(rng.uniform(-0.1, 0.1), Vec3::UnitZ()).toRotationMatrix() * c.R;
     c.t = -c.R * C;
     const Vec3 X(rng.uniform(-0.05, 0.05), rng.uniform(-0.05, 0.05), rng.uniform(0.0, 0.1));
@@ -103,17 +112,7 @@ TEST_CASE("the per-photo depth scale's Jacobian (slid projection) matches finite
   int checked = 0;
   double moved = 0;  // the largest pixel move per unit depth scale
   for (int trial = 0; trial < 30; ++trial) {
-    const double yaw = rng.uniform(-0.9, 0.9), pitch = rng.uniform(-0.2, 0.2), d = rng.uniform(0.5, 0.7);
-    const Vec3 C(d * std::sin(yaw) * std::cos(pitch), d * std::sin(pitch), d * std::cos(yaw) * std::cos(pitch));
-    const Vec3 f = -C.normalized(), r = Vec3::UnitY().cross(f).normalized(), u = f.cross(r);
-    Camera c;
-    c.fx = c.fy = rng.uniform(900, 1500);
-    c.cx = 600;
-    c.cy = 800;
-    c.R.row(0) = r.transpose();
-    c.R.row(1) = -u.transpose();
-    c.R.row(2) = f.transpose();
-    c.t = -c.R * C;
+    Camera c = random_head_camera(rng);
     const Vec3 X(rng.uniform(-0.07, 0.07), rng.uniform(-0.07, 0.07), rng.uniform(-0.05, 0.1));
     const Vec2 obs(rng.uniform(400, 800), rng.uniform(600, 1000));
     const int m = trial % 3;
