@@ -306,7 +306,10 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
         !args.get_double("photos-focal-px", 0, opt.calib.focal_prior_px, 0, 1e6) ||
         !args.get_double("photos-focal-sigma", opt.calib.focal_prior_sigma, opt.calib.focal_prior_sigma, 1e-6, 10) ||
         !args.get_double("photos-shape-sigma", opt.calib.shape_sigma_m, opt.calib.shape_sigma_m, 1e-6, 1) ||
-        !args.get_double("photos-view-cos", opt.calib.min_view_cos, opt.calib.min_view_cos, -1, 0.99))
+        !args.get_double("photos-view-cos", opt.calib.min_view_cos, opt.calib.min_view_cos, -1, 0.99) ||
+        !args.get_double("photos-depth-scale", 0, opt.calib.depth_scale_sigma, 0, 10) ||
+        !args.get_double("photos-depth-yaw2", 0, opt.calib.depth_scale_yaw2, -10, 10) ||
+        !args.get_double("photos-depth-0", 1, opt.calib.depth_scale_0, 0.1, 10))
       return 1;
     for (double& k : opt.fit.stiffness_schedule) k *= stiffness_scale;
     // --photos-no-slide: the map's slide model left out; --photos-no-slide-sigma: its scatter as weights left out.
@@ -360,6 +363,12 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
                 1000 * gu.head.mean, 1000 * fu.head.mean, 1000 * fu.head.p95, 1000 * ga.head.mean, 1000 * fa.head.mean,
                 1000 * fa.head.p95, ms);
     std::printf("       yaw/pitch deg, truth -> recovered:%s\n", views.c_str());
+    if (opt.calib.depth_scale_sigma > 0) {
+      std::printf("       per-photo depth scale:");
+      for (size_t i = 0; i < photos.size(); ++i)
+        if (r.calib.photos[i].used) std::printf(" %.3f", r.calib.photos[i].depth_scale);
+      std::printf("\n");
+    }
     std::printf("       scale %.3f; focal before the bundle adjustment %+.1f%%; BA landmarks from the generic's %.2f mm rms; landmark error %.2f -> %.2f px (calibration), %.2f -> %.2f px (shape fit)\n", sf.scale,
                 100 * (r.calib.focal_before_ba - vo.focal_px) / vo.focal_px, landmark_pull_mm(r.calib, generic.mesh, mp_lms),
                 r.calib.initial_rms_px, r.calib.final_rms_px, r.fit.initial_rms_px, r.fit.final_rms_px);
@@ -612,7 +621,7 @@ int run_bench_photos(const Args& args) {
 }
 
 BenchRegistrar reg({"photos", "photos to head on synthetic sessions: camera errors, face distances, stage times "
-                              "(--photos-seeds N --photos-cameras C --photos-noise-px S --photos-map vertices|interior --photos-stiffness-scale K --photos-first-seed S --photos-silhouettes both|on|off --photos-lambda-sil L --photos-mask-grow PX --photos-sil-facets --photos-stereo --photos-lambda-features L --photos-coarse N:S,... --photos-schedule S,...|none; --photos-detected DIR: real-detector points on synth-photos renders, made by tests/browser/detect_synth_photos.mjs, with --photos-detected-map FILE --photos-no-slide --photos-no-slide-sigma --photos-true-cameras --photos-drop GROUP)",
+                              "(--photos-seeds N --photos-cameras C --photos-noise-px S --photos-map vertices|interior --photos-stiffness-scale K --photos-first-seed S --photos-silhouettes both|on|off --photos-lambda-sil L --photos-mask-grow PX --photos-sil-facets --photos-stereo --photos-lambda-features L --photos-coarse N:S,... --photos-schedule S,...|none; --photos-detected DIR: real-detector points on synth-photos renders, made by tests/browser/detect_synth_photos.mjs, with --photos-detected-map FILE --photos-depth-scale SIGMA --photos-depth-0 K0 --photos-depth-yaw2 C --photos-no-slide --photos-no-slide-sigma --photos-true-cameras --photos-drop GROUP)",
                     run_bench_photos});
 
 }  // namespace

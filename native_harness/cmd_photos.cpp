@@ -120,7 +120,7 @@ int run_photos(const Args& args) {
   const std::string cmd = "photos";
   if (!only_known_options(cmd, args, {"points", "photos", "masks", "masks-from-photos", "silhouette-check", "map", "out",
                                       "levels", "focal-px", "texture-size", "no-texture", "stereo", "no-stereo", "coarse",
-                                      "schedule", "folds"}))
+                                      "schedule", "folds", "depth-scale", "depth-0", "depth-yaw2"}))
     return 2;
   const std::vector<std::string> points_paths = args.get_all("points"), photo_paths = args.get_all("photos"),
                                  mask_paths = args.get_all("masks");
@@ -138,7 +138,10 @@ int run_photos(const Args& args) {
   const bool with_outlines = plain_masks || !mask_paths.empty();
   int levels = 3, texture_size = 2048;
   double focal_px = 0;
+  double depth_scale = 0, depth_0 = 1, depth_yaw2 = 0;
   if (!args.get_int("levels", 3, levels, 0, 4) || !args.get_double("focal-px", 0, focal_px, 0, 1e6) ||
+      !args.get_double("depth-scale", 0, depth_scale, 0, 10) || !args.get_double("depth-yaw2", 0, depth_yaw2, -10, 10) ||
+      !args.get_double("depth-0", 1, depth_0, 0.1, 10) ||
       !args.get_int("texture-size", 2048, texture_size, 16, 4096))
     return 2;
   const auto t0 = std::chrono::steady_clock::now();
@@ -231,6 +234,9 @@ int run_photos(const Args& args) {
     if (!parse_fit_levels(args.get("coarse"), args.get("schedule"), opt.fit, why)) return fail(cmd, why);
   }
   opt.calib.focal_prior_px = focal_px;
+  opt.calib.depth_scale_sigma = depth_scale;
+  opt.calib.depth_scale_0 = depth_0;
+  opt.calib.depth_scale_yaw2 = depth_yaw2;
   if (focal_px == 0 && !exif_focals.empty()) {
     std::sort(exif_focals.begin(), exif_focals.end());
     opt.calib.focal_prior_px = exif_focals[exif_focals.size() / 2];
@@ -434,8 +440,9 @@ int run_photos(const Args& args) {
     double yaw, pitch;
     view_angles(pc.camera, yaw, pitch);
     std::printf("  %s: seen from yaw %+.0f deg (+ = the head's left), pitch %+.0f deg (+ = above); "
-                "%d landmarks, %d turned away; median error %.1f px\n",
-                photos[i].name.c_str(), yaw, pitch, pc.num_landmarks - pc.num_hidden, pc.num_hidden, pc.median_px);
+                "%d landmarks, %d turned away; median error %.1f px; depth scale %.3f\n",
+                photos[i].name.c_str(), yaw, pitch, pc.num_landmarks - pc.num_hidden, pc.num_hidden, pc.median_px,
+                pc.depth_scale);
   }
   const std::string level_files = levels > 0 ? ", level1..level" + std::to_string(levels) + ".obj" : "";
   std::printf("  wrote %s/control.obj%s, cameras.json, report.json%s%s%s\n", out_dir.c_str(), level_files.c_str(),
@@ -589,7 +596,7 @@ int run_learn_landmark_map(const Args& args) {
 
 Registrar photos_reg({"photos",
                       "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] [--masks M1.png ... | --masks-from-photos] [--silhouette-check] "
-                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--stereo] [--folds] [--coarse N:S,...|none] [--schedule S,...|none]",
+                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--stereo] [--folds] [--coarse N:S,...|none] [--schedule S,...|none] [--depth-scale SIGMA [--depth-0 K0] [--depth-yaw2 C]]",
                       "a head from several photos' landmarks (fua1998): self-calibrated cameras, fitted control "
                       "mesh, levels, cameras.json, report.json; with --photos the skin from those cameras "
                       "(textured.obj, skin.png); head.likeness.glb, the head project; with --masks (white or opaque = the person) the head's outline "
@@ -598,7 +605,8 @@ Registrar photos_reg({"photos",
                       "and --stereo, stereo between pairs of them joins the landmarks (off by default: on real "
                       "photos it dents the face, docs/design/photos.md); --coarse: the shape fit first over coarse control "
                       "triangulations of N nodes at stiffness S (fua1998 Sec. 2.1), --schedule: the control mesh's own "
-                      "stiffness stages after them",
+                      "stiffness stages after them; --depth-scale: a per-photo depth scale in the bundle adjustment "
+                      "(prior sigma SIGMA, mean K0 + C (yaw/60 deg)^2) for the detector's error shared by a photo's points",
                       run_photos, nullptr});
 Registrar synth_photos_reg({"synth-photos",
                             "likeness synth-photos --out DIR [--seed N] [--cameras C] [--noise-px S] [--no-render]",

@@ -56,6 +56,12 @@ class BundleProblem : public LeastSquaresProblem {
   std::vector<Observation> obs;
   double pixel_sigma = 2, shape_sigma = 0.01, focal_prior = 0, focal_prior_sigma = 0.05;
   const LandmarkSlide* slide = nullptr;
+  // Per-camera depth scale (SelfCalibOptions::depth_scale_sigma): a 7th
+  // parameter per camera when depth_sigma > 0, with its prior at depth_mean.
+  double depth_sigma = 0;
+  std::vector<double> depth, depth_mean;
+  int cam_params() const { return depth_sigma > 0 ? 7 : 6; }
+  double depth_of(int camera) const { return depth_sigma > 0 ? depth[size_t(camera)] : 1.0; }
 
   // The point observation o sees, at a camera: its 3-D point plus its shift for that view.
   Vec3 seen_point(const Observation& o, const Camera& c, const Vec3& X) const {
@@ -63,10 +69,20 @@ class BundleProblem : public LeastSquaresProblem {
     return X + landmark_shift(*slide, o.map_index, slide_view(*slide, c.center()));
   }
 
-  int num_parameters() const override { return 1 + 6 * int(cameras.size()) + 3 * int(points.size()); }
-  int point_index(int a) const { return 1 + 6 * int(cameras.size()) + 3 * a; }
+  int num_parameters() const override { return 1 + cam_params() * int(cameras.size()) + 3 * int(points.size()); }
+  int point_index(int a) const { return 1 + cam_params() * int(cameras.size()) + 3 * a; }
   int num_residuals() const {
-    return 2 * int(obs.size()) + 3 * int(points.size()) + (focal_prior > 0 ? 1 : 0);
+    return 2 * int(obs.size()) + 3 * int(points.size()) + (focal_prior > 0 ? 1 : 0) +
+           (depth_sigma > 0 ? int(cameras.size()) : 0);
+  }
+
+  // Pixel of an observation with the depth scale k (false behind the camera).
+  bool project(const Observation& o, const Camera& c, const Vec3& X, double k, Vec2& uv) const {
+    const Vec3 q = c.R * seen_point(o, c, X);
+    const double z = k * q.z() + c.t.z();
+    if (z <= 1e-9) return false;
+    uv = Vec2(c.fx * (q.x() + c.t.x()) / z + c.cx, c.fy * (q.y() + c.t.y()) / z + c.cy);
+    return true;
   }
 
   void linearize(Eigen::VectorXd& r, SparseMat& J) override {
@@ -79,13 +95,15 @@ class BundleProblem : public LeastSquaresProblem {
       c.fx = c.fy = focal;
       ProjectionJacobian pj;
       const double s = std::sqrt(o.weight) / o.sigma;
-      const bool ok = slide ? slid_projection_jacobian(c, points[size_t(o.landmark)], *slide, o.map_index, o.pixel, pj)
-                            : projection_jacobian(c, points[size_t(o.landmark)], o.pixel, pj);
+      const double dk = depth_of(o.camera);
+      const bool ok = slide ? slid_projection_jacobian(c, points[size_t(o.landmark)], *slide, o.map_index, o.pixel, pj, dk)
+                            : projection_jacobian(c, points[size_t(o.landmark)], o.pixel, pj, dk);
       if (ok) {
         r.segment<2>(row) = s * pj.residual;
-        const int ci = 1 + 6 * o.camera, pi = point_index(o.landmark);
+        const int ci = 1 + cam_params() * o.camera, pi = point_index(o.landmark);
         for (int k = 0; k < 2; ++k) {
           trip.emplace_back(row + k, 0, s * pj.d_focal[k]);
+          if (depth_sigma > 0) trip.emplace_back(row + k, ci + 6, s * pj.d_depth_scale[k]);
           for (int j = 0; j < 3; ++j) {
             trip.emplace_back(row + k, ci + j, s * pj.d_rotation(k, j));
             trip.emplace_back(row + k, ci + 3 + j, s * pj.d_translation(k, j));
@@ -106,31 +124,43 @@ class BundleProblem : public LeastSquaresProblem {
       const double w = 1.0 / (focal_prior_sigma * focal_prior);
       r[row] = w * (focal - focal_prior);
       trip.emplace_back(row, 0, w);
+      ++row;
     }
+    if (depth_sigma > 0)
+      for (size_t k = 0; k < cameras.size(); ++k, ++row) {
+        r[row] = (depth[k] - depth_mean[k]) / depth_sigma;
+        trip.emplace_back(row, 1 + cam_params() * int(k) + 6, 1.0 / depth_sigma);
+      }
     J.resize(num_residuals(), num_parameters());
     J.setFromTriplets(trip.begin(), trip.end());
   }
 
   // The state moved by step, into the given copies.
-  void moved(const Eigen::VectorXd& step, double& f, std::vector<Camera>& cams, std::vector<Vec3>& pts) const {
+  void moved(const Eigen::VectorXd& step, double& f, std::vector<Camera>& cams, std::vector<Vec3>& pts,
+             std::vector<double>& ks) const {
     f = focal + step[0];
     cams = cameras;
+    ks = depth;
+    const long cp = cam_params();
     for (size_t k = 0; k < cams.size(); ++k) {
-      cams[k].R = rotation_increment(step.segment<3>(1 + 6 * long(k))) * cams[k].R;
-      cams[k].t += step.segment<3>(4 + 6 * long(k));
+      cams[k].R = rotation_increment(step.segment<3>(1 + cp * long(k))) * cams[k].R;
+      cams[k].t += step.segment<3>(4 + cp * long(k));
+      if (depth_sigma > 0) ks[k] += step[1 + cp * long(k) + 6];
     }
     pts = points;
     for (size_t a = 0; a < pts.size(); ++a) pts[a] += step.segment<3>(point_index(int(a)));
   }
 
-  double cost_of(double f, const std::vector<Camera>& cams, const std::vector<Vec3>& pts) const {
+  double cost_of(double f, const std::vector<Camera>& cams, const std::vector<Vec3>& pts,
+                 const std::vector<double>& ks) const {
     if (!(f > 0)) return std::numeric_limits<double>::infinity();
     double cost = 0;
     for (const Observation& o : obs) {
       Camera c = cams[size_t(o.camera)];
       c.fx = c.fy = f;
       Vec2 uv;
-      if (!c.project(seen_point(o, c, pts[size_t(o.landmark)]), uv)) return std::numeric_limits<double>::infinity();
+      if (!project(o, c, pts[size_t(o.landmark)], depth_sigma > 0 ? ks[size_t(o.camera)] : 1.0, uv))
+        return std::numeric_limits<double>::infinity();
       cost += o.weight * (uv - o.pixel).squaredNorm() / (o.sigma * o.sigma);
     }
     for (size_t a = 0; a < pts.size(); ++a) cost += (pts[a] - prior[a]).squaredNorm() / (shape_sigma * shape_sigma);
@@ -138,6 +168,11 @@ class BundleProblem : public LeastSquaresProblem {
       const double d = (f - focal_prior) / (focal_prior_sigma * focal_prior);
       cost += d * d;
     }
+    if (depth_sigma > 0)
+      for (size_t k = 0; k < ks.size(); ++k) {
+        const double d = (ks[k] - depth_mean[k]) / depth_sigma;
+        cost += d * d;
+      }
     return cost;
   }
 
@@ -145,18 +180,19 @@ class BundleProblem : public LeastSquaresProblem {
     double f;
     std::vector<Camera> cams;
     std::vector<Vec3> pts;
-    moved(step, f, cams, pts);
-    return cost_of(f, cams, pts);
+    std::vector<double> ks;
+    moved(step, f, cams, pts, ks);
+    return cost_of(f, cams, pts, ks);
   }
-  void apply(const Eigen::VectorXd& step) override { moved(step, focal, cameras, points); }
+  void apply(const Eigen::VectorXd& step) override { moved(step, focal, cameras, points, depth); }
 
   // Pixel error of an observation (inf behind the camera).
   double error(const Observation& o) const {
     Camera c = cameras[size_t(o.camera)];
     c.fx = c.fy = focal;
     Vec2 uv;
-    return c.project(seen_point(o, c, points[size_t(o.landmark)]), uv) ? (uv - o.pixel).norm()
-                                                                      : std::numeric_limits<double>::infinity();
+    return project(o, c, points[size_t(o.landmark)], depth_of(o.camera), uv) ? (uv - o.pixel).norm()
+                                                                             : std::numeric_limits<double>::infinity();
   }
 };
 
@@ -175,9 +211,10 @@ void view_angles(const Camera& camera, double& yaw_deg, double& pitch_deg) {
   pitch_deg = std::atan2(c.y(), std::hypot(c.x(), c.z())) * kDeg;
 }
 
-bool projection_jacobian(const Camera& camera, const Vec3& X, const Vec2& observed, ProjectionJacobian& out) {
+bool projection_jacobian(const Camera& camera, const Vec3& X, const Vec2& observed, ProjectionJacobian& out,
+                         double depth_scale) {
   const Vec3 Xr = camera.R * X;
-  const Vec3 c = Xr + camera.t;
+  const Vec3 c(Xr.x() + camera.t.x(), Xr.y() + camera.t.y(), depth_scale * Xr.z() + camera.t.z());
   if (c.z() <= 1e-9) return false;
   const double iz = 1.0 / c.z(), x = c.x() * iz, y = c.y() * iz, f = camera.fx;
   out.residual = Vec2(f * x + camera.cx - observed.x(), f * y + camera.cy - observed.y());
@@ -185,16 +222,19 @@ bool projection_jacobian(const Camera& camera, const Vec3& X, const Vec2& observ
   Eigen::Matrix<double, 2, 3> dc;
   dc << f * iz, 0, -f * x * iz, 0, f * iz, -f * y * iz;
   out.d_translation = dc;
-  out.d_point = dc * camera.R;
-  out.d_rotation = -dc * skew(Xr);
+  out.d_depth_scale = dc.col(2) * Xr.z();
+  Eigen::Matrix<double, 2, 3> dq = dc;  // d residual / d (R X)
+  dq.col(2) *= depth_scale;
+  out.d_point = dq * camera.R;
+  out.d_rotation = -dq * skew(Xr);
   return true;
 }
 
 bool slid_projection_jacobian(const Camera& camera, const Vec3& X, const LandmarkSlide& slide, int landmark,
-                              const Vec2& observed, ProjectionJacobian& out) {
+                              const Vec2& observed, ProjectionJacobian& out, double depth_scale) {
   Mat3 dS;
   const Vec3 shift = landmark_shift(slide, landmark, slide_view(slide, camera.center()), &dS);
-  if (!projection_jacobian(camera, X + shift, observed, out)) return false;
+  if (!projection_jacobian(camera, X + shift, observed, out, depth_scale)) return false;
   // C = -R^T t; with R <- exp([w]x) R: dC/dw = -R^T [t]x, dC/dt = -R^T.
   const Eigen::Matrix<double, 2, 3> through = out.d_point * dS;
   out.d_rotation -= through * camera.R.transpose() * skew(camera.t);
@@ -218,7 +258,8 @@ Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& g
   if (!(options.pixel_sigma > 0) || !(options.shape_sigma_m > 0) || !(options.huber_k > 0) ||
       !(options.focal_prior_px >= 0) || !(options.focal_prior_sigma > 0) || options.min_landmarks < 6 || !(options.refuse_factor > 1) ||
       !(options.refuse_min_sigma >= 0) || !(options.min_view_cos >= -1 && options.min_view_cos < 1) ||
-      !(options.min_sigma_px > 0))
+      !(options.min_sigma_px > 0) || !(options.depth_scale_sigma >= 0) || !std::isfinite(options.depth_scale_yaw2) ||
+      !(options.depth_scale_0 > 0))
     return Status::error(ErrorCode::InvalidInput, "self-calibration: an option is out of range");
   for (const SurfacePoint& s : landmarks)
     if (s.valid() && (s.triangle >= generic.num_triangles()))
@@ -379,10 +420,15 @@ Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& g
     bp.focal_prior = options.focal_prior_px;
     bp.focal_prior_sigma = options.focal_prior_sigma;
     if (slide && slide->has_slide()) bp.slide = slide;
+    bp.depth_sigma = options.depth_scale_sigma;
     const bool slide_sigma = slide && slide->has_sigma() && options.use_slide_sigma;
     std::vector<int> active_of(size_t(M), -1), landmark_of;
     for (size_t k = 0; k < used.size(); ++k) {
       bp.cameras.push_back(shared.photos[k].camera);
+      double yaw, pitch;
+      view_angles(shared.photos[k].camera, yaw, pitch);
+      bp.depth_mean.push_back(options.depth_scale_0 + options.depth_scale_yaw2 * (yaw / 60) * (yaw / 60));
+      bp.depth.push_back(bp.depth_mean.back());
       const auto& idx = corr_index[size_t(used[k])];
       for (size_t q = 0; q < idx.size(); ++q) {
         const int m = idx[q];
@@ -460,6 +506,7 @@ Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& g
       pc.camera.fx = pc.camera.fy = bp.focal;
       pc.camera.width = photos[size_t(used[k])].width;
       pc.camera.height = photos[size_t(used[k])].height;
+      pc.depth_scale = bp.depth_of(int(k));
       pc.num_outliers = 0;
       double sum = 0;
       int n = 0;

@@ -58,6 +58,16 @@ struct SelfCalibOptions {
   // (at least min_sigma_px), instead of pixel_sigma for all.
   bool use_slide_sigma = true;
   double min_sigma_px = 1.0;
+  // A per-photo depth scale k in the bundle adjustment (0 = off): each
+  // photo sees the landmarks with their depth about the head's origin, along
+  // its optical axis, times k (prior: k ~ N(mean, depth_scale_sigma)). It
+  // takes up an error shared by all of a photo's points that looks like a
+  // nearer or farther camera (the detector's "zoom"), which otherwise moves
+  // the shared focal. The mean: depth_scale_0 + depth_scale_yaw2 *
+  // (yaw / 60 deg)^2 at the photo's view from the shared calibration.
+  double depth_scale_sigma = 0;
+  double depth_scale_0 = 1;
+  double depth_scale_yaw2 = 0;
 };
 
 // In its own inline namespace: project/texture_job.h and the texture
@@ -76,6 +86,7 @@ struct PhotoCalibration {
   int num_hidden = 0;               // landmarks left out as turned away from this camera
   int num_outliers = 0;             // landmarks with error beyond 2 huber_k pixel_sigma
   std::vector<double> weights;      // #N, final IRLS weight of each landmark (0 where absent)
+  double depth_scale = 1;           // the bundle adjustment's per-photo depth scale (1 when off)
 };
 }  // namespace self_calib
 
@@ -118,17 +129,21 @@ void view_angles(const Camera& camera, double& yaw_deg, double& pitch_deg);
 // photo i's observation of landmark m, the pixel residual
 // (project(camera, X) - observed) and its derivatives with respect to the
 // focal (fx = fy), the rotation increment w (R <- exp([w]x) R), t and X.
+// depth_scale k: the point seen at camera coordinates (R X)_xy + t_xy,
+// k (R X)_z + t_z (SelfCalibOptions::depth_scale_sigma); d_depth_scale its
+// derivative.
 struct ProjectionJacobian {
   Vec2 residual = Vec2::Zero();
-  Eigen::Matrix<double, 2, 1> d_focal;
+  Eigen::Matrix<double, 2, 1> d_focal, d_depth_scale;
   Eigen::Matrix<double, 2, 3> d_rotation, d_translation, d_point;
 };
-bool projection_jacobian(const Camera& camera, const Vec3& X, const Vec2& observed, ProjectionJacobian& out);
+bool projection_jacobian(const Camera& camera, const Vec3& X, const Vec2& observed, ProjectionJacobian& out,
+                         double depth_scale = 1);
 
 // The same for landmark m that slides with the view: the residual of
 // X + landmark_shift(camera centre), and the shift's dependence on the
 // camera's rotation and translation added to those derivatives.
 bool slid_projection_jacobian(const Camera& camera, const Vec3& X, const LandmarkSlide& slide, int landmark,
-                              const Vec2& observed, ProjectionJacobian& out);
+                              const Vec2& observed, ProjectionJacobian& out, double depth_scale = 1);
 
 }  // namespace lk

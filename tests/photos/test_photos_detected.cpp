@@ -49,13 +49,18 @@ void load_session(const GenericHead& generic, int seed, DetectedSession& s) {
   }
 }
 
-TEST_CASE("the committed detector points match their synthetic truth (else regenerate them)", "[photos][detected]") {
-  GenericHead generic;
+// The generic head and the shipped MediaPipe map (with its slide) attached to it.
+void load_shipped_map(GenericHead& generic, LandmarkMap& map, std::vector<SurfacePoint>& lms) {
   REQUIRE(load_generic_head(generic));
-  LandmarkMap map;
-  std::vector<SurfacePoint> lms;
   REQUIRE(parse_landmark_map_json(mediapipe_landmark_map_text(), map));
   REQUIRE(attach_landmark_map(map, generic.mesh, PhotosJobOptions{}.map_max_distance_m, lms));
+}
+
+TEST_CASE("the committed detector points match their synthetic truth (else regenerate them)", "[photos][detected]") {
+  GenericHead generic;
+  LandmarkMap map;
+  std::vector<SurfacePoint> lms;
+  load_shipped_map(generic, map, lms);
   DetectedSession s;
   load_session(generic, 2, s);
   REQUIRE(s.photos.size() == 5);  // the profiles have no face for MediaPipe
@@ -242,11 +247,9 @@ TEST_CASE("the self-calibration's short focal on detected points comes from the 
   // landmarks' prior do not bias it; the error grows with the share of the
   // detector's residual kept (half: -4.6 %, all: -7.4 % on seed 2).
   GenericHead generic;
-  REQUIRE(load_generic_head(generic));
   LandmarkMap map;
   std::vector<SurfacePoint> lms;
-  REQUIRE(parse_landmark_map_json(mediapipe_landmark_map_text(), map));
-  REQUIRE(attach_landmark_map(map, generic.mesh, PhotosJobOptions{}.map_max_distance_m, lms));
+  load_shipped_map(generic, map, lms);
   DetectedSession s;
   load_session(generic, 2, s);
   const double truth_focal = SyntheticViewsOptions{}.focal_px;
@@ -275,6 +278,40 @@ TEST_CASE("the self-calibration's short focal on detected points comes from the 
     CHECK(rotation_angle_deg(transform_camera(exact.photos[i].camera, sim).R,
                              s.truth.cameras[size_t(s.camera_of[i])].R) < 1.0);
   CHECK(std::abs(e_half) < std::abs(e_full));
+}
+
+TEST_CASE("a per-photo depth scale learned on other seeds brings the detected sessions' focal closer", "[photos][detected]") {
+  // docs/design/photos.md, "A per-photo depth scale": the detector's points
+  // make each view look as if seen through another lens; the depth scale
+  // learned on seeds 11-20 (the slide's training seeds, with the focal held
+  // at the truth) takes that up. On the committed seeds 1-5 (not learned
+  // on) the mean |focal error| was measured 15.9 % without, 7.6 % with it.
+  GenericHead generic;
+  LandmarkMap map;
+  std::vector<SurfacePoint> lms;
+  load_shipped_map(generic, map, lms);
+  const double truth_focal = SyntheticViewsOptions{}.focal_px;
+  SelfCalibOptions learned;
+  learned.depth_scale_sigma = 0.01;
+  learned.depth_scale_0 = 1.160;
+  learned.depth_scale_yaw2 = -0.212;
+  double without = 0, with = 0;
+  for (int seed = 1; seed <= 5; ++seed) {
+    DetectedSession s;
+    load_session(generic, seed, s);
+    SelfCalibResult a, b;
+    REQUIRE(self_calibrate(s.photos, generic.mesh, lms, SelfCalibOptions{}, a, &map.slide));
+    REQUIRE(self_calibrate(s.photos, generic.mesh, lms, learned, b, &map.slide));
+    REQUIRE(b.num_used() == int(s.photos.size()));
+    const double ea = (a.focal - truth_focal) / truth_focal, eb = (b.focal - truth_focal) / truth_focal;
+    std::printf("seed %d focal error: %+.1f %% -> %+.1f %% with the learned depth scale\n", seed, 100 * ea, 100 * eb);
+    without += std::abs(ea) / 5;
+    with += std::abs(eb) / 5;
+    // Each photo's depth scale stays at its view's learned mean.
+    for (const PhotoCalibration& pc : b.photos) CHECK((pc.depth_scale > 0.9 && pc.depth_scale < 1.2));
+  }
+  CHECK(without > 0.12);
+  CHECK(with < 0.10);
 }
 
 }  // namespace lk

@@ -37,22 +37,31 @@ LandmarkSlide test_slide(int M, std::uint64_t seed) {
   return s;
 }
 
+// A camera looking at the head's origin from a random yaw and pitch inside
+// the test slide's range (not clamped), 0.5-0.7 m away.
+Camera random_head_camera(SplitMix64& rng) {
+  const double yaw = rng.uniform(-0.9, 0.9), pitch = rng.uniform(-0.2, 0.2), d = rng.uniform(0.5, 0.7);
+  const Vec3 C(d * std::sin(yaw) * std::cos(pitch), d * std::sin(pitch), d * std::cos(yaw) * std::cos(pitch));
+  const Vec3 f = -C.normalized(), r = Vec3::UnitY().cross(f).normalized(), u = f.cross(r);
+  Camera c;
+  c.fx = c.fy = rng.uniform(900, 1500);
+  c.cx = 600;
+  c.cy = 800;
+  c.R.row(0) = r.transpose();
+  c.R.row(1) = -u.transpose();
+  c.R.row(2) = f.transpose();
+  c.t = -c.R * C;
+  return c;
+}
+
 TEST_CASE("the slid projection's Jacobian (the shift follows the camera) matches finite differences", "[photos][slide]") {
   const LandmarkSlide slide = test_slide(3, 11);
   SplitMix64 rng(5);
   int checked = 0;
   for (int trial = 0; trial < 30; ++trial) {
-    // A camera looking at the head from yaw, pitch inside the model's range (not clamped).
-    const double yaw = rng.uniform(-0.9, 0.9), pitch = rng.uniform(-0.2, 0.2), d = rng.uniform(0.5, 0.7);
-    const Vec3 C(d * std::sin(yaw) * std::cos(pitch), d * std::sin(pitch), d * std::cos(yaw) * std::cos(pitch));
-    const Vec3 f = -C.normalized(), r = Vec3::UnitY().cross(f).normalized(), u = f.cross(r);
-    Camera c;
-    c.fx = c.fy = rng.uniform(900, 1500);
-    c.cx = 600;
-    c.cy = 800;
-    c.R.row(0) = r.transpose();
-    c.R.row(1) = -u.transpose();
-    c.R.row(2) = f.transpose();
+    // A camera looking at the head, rolled a little about its axis.
+    Camera c = random_head_camera(rng);
+    const Vec3 C = c.center();
     c.R = Eigen::AngleAxisd(rng.uniform(-0.1, 0.1), Vec3::UnitZ()).toRotationMatrix() * c.R;
     c.t = -c.R * C;
     const Vec3 X(rng.uniform(-0.05, 0.05), rng.uniform(-0.05, 0.05), rng.uniform(0.0, 0.1));
@@ -95,6 +104,60 @@ TEST_CASE("the slid projection's Jacobian (the shift follows the camera) matches
     ++checked;
   }
   CHECK(checked == 30);
+}
+
+TEST_CASE("the per-photo depth scale's Jacobian (slid projection) matches finite differences", "[photos][slide]") {
+  const LandmarkSlide slide = test_slide(3, 12);
+  SplitMix64 rng(8);
+  int checked = 0;
+  double moved = 0;  // the largest pixel move per unit depth scale
+  for (int trial = 0; trial < 30; ++trial) {
+    Camera c = random_head_camera(rng);
+    const Vec3 X(rng.uniform(-0.07, 0.07), rng.uniform(-0.07, 0.07), rng.uniform(-0.05, 0.1));
+    const Vec2 obs(rng.uniform(400, 800), rng.uniform(600, 1000));
+    const int m = trial % 3;
+    const double k = rng.uniform(0.6, 1.8);
+    ProjectionJacobian J, J1, Jd;
+    REQUIRE(slid_projection_jacobian(c, X, slide, m, obs, J, k));
+    // k = 1 is the plain projection.
+    REQUIRE(slid_projection_jacobian(c, X, slide, m, obs, J1, 1.0));
+    REQUIRE(slid_projection_jacobian(c, X, slide, m, obs, Jd));
+    CHECK((J1.residual - Jd.residual).norm() < 1e-12);
+    auto res = [&](const Camera& cc, const Vec3& XX, double kk) {
+      ProjectionJacobian j;
+      REQUIRE(slid_projection_jacobian(cc, XX, slide, m, obs, j, kk));
+      return j.residual;
+    };
+    const double h = 1e-6;
+    for (int a = 0; a < 3; ++a) {
+      Vec3 e = Vec3::Zero();
+      e[a] = h;
+      Camera p = c, q = c;
+      p.R = Eigen::AngleAxisd(h, Vec3::Unit(a)).toRotationMatrix() * c.R;
+      q.R = Eigen::AngleAxisd(-h, Vec3::Unit(a)).toRotationMatrix() * c.R;
+      const Vec2 fr = (res(p, X, k) - res(q, X, k)) / (2 * h);
+      CHECK((fr - J.d_rotation.col(a)).norm() < 1e-4 * (1 + J.d_rotation.col(a).norm()));
+      p = c;
+      q = c;
+      p.t += e;
+      q.t -= e;
+      const Vec2 ft = (res(p, X, k) - res(q, X, k)) / (2 * h);
+      CHECK((ft - J.d_translation.col(a)).norm() < 1e-4 * (1 + J.d_translation.col(a).norm()));
+      const Vec2 fx = (res(c, X + e, k) - res(c, X - e, k)) / (2 * h);
+      CHECK((fx - J.d_point.col(a)).norm() < 1e-4 * (1 + J.d_point.col(a).norm()));
+    }
+    const Vec2 fk = (res(c, X, k + h) - res(c, X, k - h)) / (2 * h);
+    CHECK((fk - J.d_depth_scale).norm() < 1e-4 * (1 + J.d_depth_scale.norm()));
+    moved = std::max(moved, J.d_depth_scale.norm());
+    Camera p = c, q = c;
+    p.fx = p.fy = c.fx + 1e-3;
+    q.fx = q.fy = c.fx - 1e-3;
+    CHECK(((res(p, X, k) - res(q, X, k)) / 2e-3 - J.d_focal).norm() < 1e-6 * (1 + J.d_focal.norm()));
+    ++checked;
+  }
+  CHECK(checked == 30);
+  // The depth scale moves the pixels: a point off the head's origin is seen elsewhere.
+  CHECK(moved > 5);
 }
 
 TEST_CASE("the feature observations with a slid offset keep their Jacobian", "[photos][slide]") {
