@@ -1,7 +1,9 @@
 #include "align/face_refine.h"
 
 #include "common/cloud_tree.h"
+#include "common/sampling.h"
 #include "mesh/geometry.h"
+#include "multires/surface_samples.h"
 #include "raycast/bvh.h"
 
 #include <Eigen/Geometry>
@@ -9,7 +11,6 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-#include <algorithm>
 
 namespace lk {
 
@@ -41,6 +42,37 @@ std::vector<int> upper_face_vertices(const TriMesh& generic, const HeadAnnotatio
       in_pocket = in_pocket || (generic.positions[v] - eye->center).norm() < 0.9 * eye->radius;
     if (!in_pocket) out.push_back(v);
   }
+  return out;
+}
+
+std::vector<Vec3> upper_face_samples(const TriMesh& generic, const HeadAnnotations& ann, int count) {
+  const std::vector<int> ids = upper_face_vertices(generic, ann);
+  std::vector<char> keep(generic.positions.size(), 0);
+  for (int v : ids) keep[v] = 1;
+  // Candidates: the vertices (they cover triangles smaller than the
+  // spacing) and points on the Phong surface of the triangles whose corners
+  // are all upper face, some kOversample times as dense as asked; the
+  // voxel grid then keeps one per cell.
+  constexpr double kOversample = 4.0;
+  double area = 0;
+  for (int f = 0; f < generic.num_triangles(); ++f) {
+    const Tri& t = generic.triangles[f];
+    if (keep[t[0]] && keep[t[1]] && keep[t[2]]) area += 0.5 * face_normal_area(generic, f).norm();
+  }
+  PointCloud dense;
+  for (int v : ids) dense.positions.push_back(generic.positions[v]);
+  if (area > 0 && count > 0) {
+    // An n x n split of a triangle of longest edge L = n * spacing has
+    // n^2 parts of about 0.4 spacing^2 each.
+    const double spacing = std::sqrt(area / (0.4 * kOversample * count));
+    SurfaceSampleStats stats;
+    PointCloud extra;
+    if (sample_scan_surface(generic.positions, {}, generic.triangles, keep, spacing, 1e9,
+                            static_cast<int>(20 * kOversample * count) + 100000, extra, stats))
+      dense.positions.insert(dense.positions.end(), extra.positions.begin(), extra.positions.end());
+  }
+  std::vector<Vec3> out;
+  for (int i : stratified_sample(dense.positions, count, 11)) out.push_back(dense.positions[i]);
   return out;
 }
 
@@ -85,32 +117,33 @@ Status scan_surface(const std::vector<Vec3>& cloud, const std::vector<Tri>& face
 
 Status upper_face_near_fraction(const TriMesh& generic, const HeadAnnotations& ann, const std::vector<Vec3>& cloud,
                                 const std::vector<Tri>& faces, const Mat3& linear, const Vec3& translation,
-                                double diag, double clamp_fraction, double& out) {
+                                double diag, double clamp_fraction, double& out, int samples) {
   out = 0;
   if (cloud.empty()) return Status::error(ErrorCode::Empty, "face near share: no scan points");
   if (!(diag > 0) || !std::isfinite(diag) || !(clamp_fraction > 0) || !linear.allFinite() || !translation.allFinite())
     return Status::error(ErrorCode::InvalidInput, "face near share: bad alignment, diagonal or distance");
-  const std::vector<int> ids = upper_face_vertices(generic, ann);
-  if (ids.empty()) return Status::error(ErrorCode::Empty, "face near share: the generic head has no upper face");
+  if (samples < 10) return Status::error(ErrorCode::InvalidInput, "face near share: too few samples asked");
+  const std::vector<Vec3> face = upper_face_samples(generic, ann, samples);
+  if (face.empty()) return Status::error(ErrorCode::Empty, "face near share: the generic head has no upper face");
   const double clamp = clamp_fraction * diag;
   int near = 0;
   if (!faces.empty()) {
     MeshBvh surface;
     const Status st = scan_surface(cloud, faces, "face near share", surface);
     if (!st) return st;
-    for (int v : ids) near += closest_point(surface, linear * generic.positions[v] + translation).distance <= clamp;
+    for (const Vec3& g : face) near += closest_point(surface, linear * g + translation).distance <= clamp;
   } else {
     CloudAdaptor adaptor{cloud};
     const CloudTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-    for (int v : ids) {
-      const Vec3 p = linear * generic.positions[v] + translation;
+    for (const Vec3& g : face) {
+      const Vec3 p = linear * g + translation;
       size_t idx = 0;
       double d2 = 0;
       tree.knnSearch(p.data(), 1, &idx, &d2);
       near += std::sqrt(d2) <= clamp;
     }
   }
-  out = double(near) / double(ids.size());
+  out = double(near) / double(face.size());
   return Status::success();
 }
 
@@ -122,13 +155,13 @@ Status refine_alignment_on_face(const TriMesh& generic, const HeadAnnotations& a
   if (!(diag > 0) || !std::isfinite(diag) || !linear.allFinite() || !translation.allFinite())
     return Status::error(ErrorCode::InvalidInput, "face refinement: bad alignment or diagonal");
   if (o.iterations < 1 || !(o.min_keep_fraction > 0 && o.min_keep_fraction <= 1) || !(o.score_clamp_fraction > 0) ||
-      o.pitch_starts_deg.empty() || o.yaw_starts_deg.empty())
+      o.pitch_starts_deg.empty() || o.yaw_starts_deg.empty() || o.samples < 10)
     return Status::error(ErrorCode::InvalidInput, "face refinement: bad options");
   for (const Vec3& p : cloud)
     if (!p.allFinite()) return Status::error(ErrorCode::InvalidInput, "face refinement: non-finite scan point");
-  const std::vector<int> ids = upper_face_vertices(generic, ann);
-  if (ids.size() < 10) return Status::error(ErrorCode::Empty, "face refinement: the generic head has no upper face");
-  const int n = static_cast<int>(ids.size());
+  const std::vector<Vec3> face = upper_face_samples(generic, ann, o.samples);
+  if (face.size() < 10) return Status::error(ErrorCode::Empty, "face refinement: the generic head has no upper face");
+  const int n = static_cast<int>(face.size());
   out.samples = n;
 
   CloudAdaptor adaptor{cloud};
@@ -154,7 +187,7 @@ Status refine_alignment_on_face(const TriMesh& generic, const HeadAnnotations& a
     double previous = -1;
     for (int it = 0; it < iterations; ++it) {
       for (int i = 0; i < n; ++i) {
-        model[i] = run.linear * generic.positions[ids[i]] + run.translation;
+        model[i] = run.linear * face[i] + run.translation;
         if (!surface.empty()) {
           const ClosestPoint c = closest_point(surface, model[i]);
           target[i] = c.point;
@@ -211,7 +244,7 @@ Status refine_alignment_on_face(const TriMesh& generic, const HeadAnnotations& a
   const Mat3 isotropic = (svd.singularValues().sum() / 3.0) * rotation;
   // The face's centre under the given map: the turns of the starts pivot there.
   Vec3 centre = Vec3::Zero();
-  for (int v : ids) centre += linear * generic.positions[v] + translation;
+  for (const Vec3& g : face) centre += linear * g + translation;
   centre /= n;
   const Vec3 side_world = (linear * side).normalized(), up_world = (linear * ann.up.normalized()).normalized();
   bool any = false;
@@ -219,8 +252,8 @@ Status refine_alignment_on_face(const TriMesh& generic, const HeadAnnotations& a
   double width = 0;  // the face's extent across, for the starts' shifts
   {
     double lo = 1e300, hi = -1e300;
-    for (int v : ids) {
-      const double x = side_world.dot(linear * generic.positions[v]);
+    for (const Vec3& g : face) {
+      const double x = side_world.dot(linear * g);
       lo = std::min(lo, x), hi = std::max(hi, x);
     }
     width = hi - lo;
@@ -232,7 +265,7 @@ Status refine_alignment_on_face(const TriMesh& generic, const HeadAnnotations& a
       const Mat3 turn = Mat3(Eigen::AngleAxisd(yaw * kDeg, up_world)) * Mat3(Eigen::AngleAxisd(pitch * kDeg, side_world));
       // The isotropic map, placed so that the face's centre stays where it was.
       Vec3 centre_iso = Vec3::Zero();
-      for (int v : ids) centre_iso += isotropic * generic.positions[v];
+      for (const Vec3& g : face) centre_iso += isotropic * g;
       centre_iso /= n;
       const Run r = run_from(turn * isotropic, centre - turn * centre_iso + shift * width * side_world, o.iterations);
       out.iterations += r.iterations;

@@ -5,9 +5,10 @@
 // above the skull and a beard below the chin change the silhouettes, and the
 // generic head lands tilted and off the face (docs/design/fit_real_scans.md,
 // Gutenberg). The upper face (nose, eyes, brow, cheeks, forehead) is rarely
-// covered, so here the generic head's upper-face vertices are matched to
-// their closest scan points (model to scan: the scan may have any extra
-// surface, the face must be on it) by iterative closest points with
+// covered, so here points spread evenly over the generic head's upper face
+// (not its vertices, which crowd where the grid does) are matched to their
+// closest scan points (model to scan: the scan may have any extra surface,
+// the face must be on it) by iterative closest points with
 // Umeyama's similarity per iteration (rotation, translation, one scale; the
 // given map's stretch is dropped). Pairs beyond the knee of the sorted
 // residuals do not pull (a beard over the cheeks, a brim over the brow):
@@ -15,7 +16,7 @@
 // horizontal and vertical axes through the face, shifts across it) are run
 // and the one with the lowest clamped score is kept. The knee trims hard:
 // from a start far off it stops short of the truth (the synthetic test:
-// 28.6 mm -> about 9 mm); trimming at 2.5 x the median instead converges
+// 28.6 mm -> about 6 mm); trimming at 2.5 x the median instead converges
 // there but let Gutenberg's face slide into his beret
 // (docs/design/fit_real_scans.md).
 //
@@ -48,6 +49,10 @@ struct FaceRefineOptions {
   // Score of a start: mean of min(d, clamp)^2 over all samples, with clamp
   // this fraction of the diagonal passed in.
   double score_clamp_fraction = 0.02;
+  // About this many points spread evenly over the upper face's surface
+  // (upper_face_samples) are matched, not its vertices: the match must not
+  // depend on how densely the generic head's grid covers each part.
+  int samples = 800;
 };
 
 struct FaceRefineResult {
@@ -66,18 +71,28 @@ struct FaceRefineResult {
 // forward (their normal within 72 deg of ann.look).
 std::vector<int> upper_face_vertices(const TriMesh& generic, const HeadAnnotations& ann);
 
+// About `count` points spread evenly over the upper face's surface: the
+// triangles whose corners are all upper_face_vertices, sampled on their
+// Phong surface (multires/surface_samples.h) together with the vertices,
+// one point kept per cell of a voxel grid (common/sampling.h). Each sample
+// stands for about the same area however the grid is laid out (a faired
+// face's vertices crowd and thin where the cast one's did not). Always the
+// same points for the same mesh.
+std::vector<Vec3> upper_face_samples(const TriMesh& generic, const HeadAnnotations& ann, int count);
+
 // The index (into sorted, ascending) of the knee of a sorted residual
 // curve: the point farthest below the chord from its first to its last
 // value, both axes normalized. 0 for fewer than three values.
 size_t residual_knee(const std::vector<double>& sorted);
 
-// The share of the upper-face vertices that the map (linear, translation)
-// puts within clamp_fraction * diag of the scan (its triangles when given,
-// else its points): FaceRefineResult::near_fraction for a given alignment.
-// Errors as below.
+// The share of the upper face's samples (upper_face_samples, `samples` of
+// them) that the map (linear, translation) puts within clamp_fraction *
+// diag of the scan (its triangles when given, else its points):
+// FaceRefineResult::near_fraction for a given alignment. Errors as below.
 Status upper_face_near_fraction(const TriMesh& generic, const HeadAnnotations& ann, const std::vector<Vec3>& cloud,
                                 const std::vector<Tri>& faces, const Mat3& linear, const Vec3& translation,
-                                double diag, double clamp_fraction, double& out);
+                                double diag, double clamp_fraction, double& out,
+                                int samples = FaceRefineOptions{}.samples);
 // Errors: Empty (no points or no face vertices), InvalidInput (non-finite
 // input, diag <= 0, bad options), NotConverged (no start kept pairs).
 Status refine_alignment_on_face(const TriMesh& generic, const HeadAnnotations& ann, const std::vector<Vec3>& cloud,

@@ -736,7 +736,7 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
   if (out.near_fraction < options.min_near_fraction && !out.face_only && options.refine_on_face) {
     st = upper_face_near_fraction(generic.mesh, ann, cloud.positions, scan.faces, out.alignment.linear,
                                   out.alignment.translation, diag, options.face_refine.score_clamp_fraction,
-                                  silhouette_face_near);
+                                  silhouette_face_near, options.face_refine.samples);
     silhouette_face_holds = st && silhouette_face_near >= options.min_near_fraction &&
                             out.near_fraction >= 0.5 * options.min_near_fraction;
     st = refine_alignment_on_face(generic.mesh, ann, cloud.positions, scan.faces, out.alignment.linear,

@@ -11,6 +11,7 @@
 
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <map>
 #include <random>
 
 using namespace lk;
@@ -61,14 +62,24 @@ double angle_deg(const Mat3& a, const Mat3& b) {
   return std::abs(aa.angle()) * 180 / kPi;
 }
 
-}  // namespace
+// The generic head's own surface with a "beret" and a "beard", moved by a
+// known similarity, and a start turned, shifted and stretched the way
+// silhouettes of a hat and a beard mislead the alignment.
+struct HatAndBeard {
+  std::vector<Vec3> cloud;
+  double diag = 0;
+  Mat3 R_true = Mat3::Identity();
+  double s_true = 1;
+  Vec3 t_true = Vec3::Zero();
+  Mat3 start_linear = Mat3::Identity();
+  Vec3 start_translation = Vec3::Zero();
+};
 
-TEST_CASE("face refinement: a head with a beret and a beard is aligned on its face") {
-  const GenericHead& generic = test::generic_head();
-  const TriMesh& m = generic.mesh;
-  const HeadAnnotations& ann = generic.annotations;
+HatAndBeard hat_and_beard(const TriMesh& m, const HeadAnnotations& ann) {
+  HatAndBeard scene;
+  std::vector<Vec3>& cloud = scene.cloud;
   std::mt19937 rng(5);
-  std::vector<Vec3> cloud = head_samples(m, 30000, rng);
+  cloud = head_samples(m, 30000, rng);
   BBox box = bounding_box(m.positions);
   Vec3 chin = Vec3::Zero();
   const std::vector<int>& chin_ids = ann.regions.at("chin");
@@ -81,19 +92,80 @@ TEST_CASE("face refinement: a head with a beret and a beard is aligned on its fa
   // A long beard: a blob from the chin down, in front of the neck.
   ellipsoid(chin + Vec3(0, -0.08, 0.0), Vec3(0.06, 0.08, 0.05), 12000, [](const Vec3&) { return true; }, rng, cloud);
   // The truth: a similarity into the scan's frame.
-  const Mat3 R_true = Mat3(Eigen::AngleAxisd(0.15, Vec3(0.3, 1, 0.1).normalized()));
-  const double s_true = 1.08;
-  const Vec3 t_true(0.03, -0.02, 0.05);
-  for (Vec3& p : cloud) p = s_true * R_true * p + t_true;
-  const double diag = bounding_box(cloud).diagonal();
+  scene.R_true = Mat3(Eigen::AngleAxisd(0.15, Vec3(0.3, 1, 0.1).normalized()));
+  scene.s_true = 1.08;
+  scene.t_true = Vec3(0.03, -0.02, 0.05);
+  for (Vec3& p : cloud) p = scene.s_true * scene.R_true * p + scene.t_true;
+  scene.diag = bounding_box(cloud).diagonal();
 
   // The start: turned 9 deg down and 6 deg aside, 12 mm off, stretched
   // 15 % wide and 10 % shallow (what Gutenberg's beret and beard did).
   const Mat3 turn = Mat3(Eigen::AngleAxisd(9 * kPi / 180, Vec3::UnitX())) *
                     Mat3(Eigen::AngleAxisd(6 * kPi / 180, Vec3::UnitY()));
   const Mat3 stretch = Vec3(1.15, 1.0, 0.9).asDiagonal();
-  const Mat3 start_linear = s_true * R_true * turn * stretch;
-  const Vec3 start_translation = t_true + Vec3(0.012, -0.006, 0.004);
+  scene.start_linear = scene.s_true * scene.R_true * turn * stretch;
+  scene.start_translation = scene.t_true + Vec3(0.012, -0.006, 0.004);
+  return scene;
+}
+
+// The head with the upper face's triangles on its +x side split 1-to-4 at
+// their edges' midpoints: the same surface, about four times the vertices
+// on one cheek, brow and side of the nose. A midpoint joins every region
+// both its ends are in.
+GenericHead split_one_side(const GenericHead& g) {
+  GenericHead out = g;
+  const TriMesh& m = g.mesh;
+  std::vector<char> upper(m.num_vertices(), 0);
+  for (int v : upper_face_vertices(m, g.annotations)) upper[v] = 1;
+  const Vec3 side = g.annotations.up.normalized().cross(g.annotations.look.normalized());
+  std::map<std::string, std::vector<char>> in;
+  for (const auto& [name, ids] : g.annotations.regions) {
+    std::vector<char>& mask = in[name];
+    mask.assign(m.num_vertices(), 0);
+    for (int v : ids) mask[v] = 1;
+  }
+  std::map<std::pair<int, int>, int> mids;
+  auto midpoint = [&](int a, int b) {
+    const std::pair<int, int> key(std::min(a, b), std::max(a, b));
+    if (const auto it = mids.find(key); it != mids.end()) return it->second;
+    const int id = static_cast<int>(out.mesh.positions.size());
+    out.mesh.positions.push_back(0.5 * (m.positions[a] + m.positions[b]));
+    for (auto& [name, mask] : in)
+      if (mask[a] && mask[b]) out.annotations.regions[name].push_back(id);
+    mids[key] = id;
+    return id;
+  };
+  out.mesh.triangles.clear();
+  out.mesh.normals.clear();
+  for (const Tri& t : m.triangles) {
+    const Vec3 centroid = (m.positions[t[0]] + m.positions[t[1]] + m.positions[t[2]]) / 3.0;
+    if (!(upper[t[0]] && upper[t[1]] && upper[t[2]]) || side.dot(centroid) <= 0) {
+      out.mesh.triangles.push_back(t);
+      continue;
+    }
+    const int ab = midpoint(t[0], t[1]), bc = midpoint(t[1], t[2]), ca = midpoint(t[2], t[0]);
+    out.mesh.triangles.push_back({t[0], ab, ca});
+    out.mesh.triangles.push_back({ab, t[1], bc});
+    out.mesh.triangles.push_back({ca, bc, t[2]});
+    out.mesh.triangles.push_back({ab, bc, ca});
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("face refinement: a head with a beret and a beard is aligned on its face") {
+  const GenericHead& generic = test::generic_head();
+  const TriMesh& m = generic.mesh;
+  const HeadAnnotations& ann = generic.annotations;
+  const HatAndBeard scene = hat_and_beard(m, ann);
+  const std::vector<Vec3>& cloud = scene.cloud;
+  const double diag = scene.diag;
+  const Mat3& R_true = scene.R_true;
+  const double s_true = scene.s_true;
+  const Vec3& t_true = scene.t_true;
+  const Mat3& start_linear = scene.start_linear;
+  const Vec3& start_translation = scene.start_translation;
 
   const std::vector<int> face = upper_face_vertices(m, ann);
   REQUIRE(face.size() > 50);
@@ -121,7 +193,7 @@ TEST_CASE("face refinement: a head with a beret and a beard is aligned on its fa
   const Mat3 start_R = start_svd.matrixU() * start_svd.matrixV().transpose();
   CHECK(error < 0.4 * start_error);
   CHECK(angle_deg(R, R_true) < 0.5 * angle_deg(start_R, R_true));
-  CHECK(std::abs(scale / s_true - 1) < 0.03);
+  CHECK(std::abs(scale / s_true - 1) < 0.035);  // even samples: 1.0474 against 1.08, the face 6.3 mm off (vertices: 8.8 mm)
   CHECK(svd.singularValues().maxCoeff() / svd.singularValues().minCoeff() < 1.0 + 1e-9);
   CHECK(r.near_fraction > 0.9);
 }
@@ -161,10 +233,12 @@ TEST_CASE("upper_face_near_fraction: all of the face on its own surface, none wh
   const double diag = bounding_box(m.positions).diagonal();
   const Mat3 I = Mat3::Identity();
   double share = -1;
-  // On its own triangles (and on its vertices, the cloud's path): every vertex lies on the scan.
+  // On its own triangles (and on points spread over them, the cloud's
+  // path): every sample of the face lies on the scan.
   REQUIRE(upper_face_near_fraction(m, ann, m.positions, m.triangles, I, Vec3::Zero(), diag, 0.02, share).ok());
   CHECK(share == 1.0);
-  REQUIRE(upper_face_near_fraction(m, ann, m.positions, {}, I, Vec3::Zero(), diag, 0.02, share).ok());
+  std::mt19937 rng(3);
+  REQUIRE(upper_face_near_fraction(m, ann, head_samples(m, 30000, rng), {}, I, Vec3::Zero(), diag, 0.02, share).ok());
   CHECK(share == 1.0);
   // Moved 10 % of the diagonal along the look direction: off the surface.
   REQUIRE(upper_face_near_fraction(m, ann, m.positions, m.triangles, I, 0.1 * diag * ann.look.normalized(), diag,
@@ -191,4 +265,82 @@ TEST_CASE("upper_face_near_fraction: all of the face on its own surface, none wh
         ErrorCode::InvalidInput);
   CHECK(upper_face_near_fraction(m, ann, m.positions, {{0, 1, 1 << 30}}, I, Vec3::Zero(), diag, 0.02, share).code ==
         ErrorCode::InvalidInput);
+}
+
+TEST_CASE("face refinement: the match does not depend on how densely the grid covers the face") {
+  // Another person's surface (the generic head deformed, so the best
+  // similarity is a compromise over the face), from a start 3 deg and 3 mm
+  // off: the generic head with four times the vertices on one side of its
+  // face (the same surface) must be placed where the head as it is is. A
+  // match that weighs every vertex alike pulls towards the crowded side
+  // (issue 35: a faired face, whose vertices crowd and thin elsewhere,
+  // turned Gutenberg away).
+  const GenericHead& generic = test::generic_head();
+  const GenericHead split = split_one_side(generic);
+  REQUIRE(split.mesh.num_vertices() > generic.mesh.num_vertices() + 100);
+  const GenericHead person = test::make_test_head(3);
+  std::mt19937 rng(9);
+  const std::vector<Vec3> cloud = head_samples(person.mesh, 30000, rng);
+  const double diag = bounding_box(cloud).diagonal();
+  const Mat3 start = Mat3(Eigen::AngleAxisd(3 * kPi / 180, Vec3(0.2, 1, 0.3).normalized()));
+  const Vec3 shift(0.002, -0.002, 0.001);
+  FaceRefineOptions o;
+  o.polish_iterations = 200;  // each to its minimum, so the minima are compared
+  FaceRefineResult a, b;
+  REQUIRE(refine_alignment_on_face(generic.mesh, generic.annotations, cloud, {}, start, shift, diag, o, a).ok());
+  REQUIRE(refine_alignment_on_face(split.mesh, split.annotations, cloud, {}, start, shift, diag, o, b).ok());
+  // Both maps applied to the (unsplit) upper face: how far apart they put it.
+  const std::vector<int> face = upper_face_vertices(generic.mesh, generic.annotations);
+  double apart = 0;
+  for (int v : face) {
+    const Vec3& p = generic.mesh.positions[v];
+    apart += ((a.linear * p + a.translation) - (b.linear * p + b.translation)).norm();
+  }
+  apart *= 1000.0 / face.size();
+  INFO("the two alignments put the face " << apart << " mm apart");
+  CHECK(apart < 0.6);  // vertices weighed alike: 1.04 mm; even samples 0.41 mm (the split flattens the Phong surface)
+  // The share of the face near a scan: the same face, the same share.
+  const HatAndBeard scene = hat_and_beard(generic.mesh, generic.annotations);
+  double share_a = 0, share_b = 0;
+  REQUIRE(upper_face_near_fraction(generic.mesh, generic.annotations, scene.cloud, {}, scene.start_linear,
+                                   scene.start_translation, scene.diag, 0.02, share_a)
+              .ok());
+  REQUIRE(upper_face_near_fraction(split.mesh, split.annotations, scene.cloud, {}, scene.start_linear,
+                                   scene.start_translation, scene.diag, 0.02, share_b)
+              .ok());
+  INFO("upper face near the hat-and-beard scan from its start: " << share_a << " and " << share_b);
+  CHECK(std::abs(share_a - share_b) < 0.02);
+}
+
+TEST_CASE("upper_face_samples: even over the face's area, the same points each time") {
+  // Split or not, each half of the face gets a share of the samples close
+  // to its share of the area; and the samples are a fixed function of the mesh.
+  const GenericHead& generic = test::generic_head();
+  const GenericHead split = split_one_side(generic);
+  const Vec3 side = generic.annotations.up.normalized().cross(generic.annotations.look.normalized());
+  auto plus_share = [&](const std::vector<Vec3>& pts) {
+    int plus = 0;
+    for (const Vec3& p : pts) plus += side.dot(p) > 0;
+    return double(plus) / pts.size();
+  };
+  const std::vector<Vec3> a = upper_face_samples(generic.mesh, generic.annotations, 1500);
+  const std::vector<Vec3> b = upper_face_samples(split.mesh, split.annotations, 1500);
+  REQUIRE(a.size() > 1000);
+  REQUIRE(b.size() > 1000);
+  CHECK(a.size() < 2000);
+  CHECK(b.size() < 2000);
+  // The face is mirror-symmetric: about half on each side, split or not
+  // (its vertices: well over half on the split side).
+  std::vector<Vec3> split_vertices;
+  for (int v : upper_face_vertices(split.mesh, split.annotations)) split_vertices.push_back(split.mesh.positions[v]);
+  INFO("+x share: samples " << plus_share(a) << " (as is), " << plus_share(b) << " (split); vertices (split) "
+                             << plus_share(split_vertices));
+  CHECK(plus_share(split_vertices) > 0.6);
+  CHECK(std::abs(plus_share(a) - 0.5) < 0.05);
+  CHECK(std::abs(plus_share(b) - 0.5) < 0.05);
+  const std::vector<Vec3> again = upper_face_samples(generic.mesh, generic.annotations, 1500);
+  REQUIRE(again.size() == a.size());
+  int moved = 0;
+  for (size_t i = 0; i < a.size(); ++i) moved += (again[i] - a[i]).norm() != 0.0;
+  CHECK(moved == 0);
 }
