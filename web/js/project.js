@@ -127,7 +127,7 @@ export async function openProject(file) {
   const photos = takeInputs(result.inputs);
   app.project.photos = photos;
   setStatus('Opened ' + file.name + (result.texture ? ' (textured)' : '') + (partsFrom ? ', with ' + partsFrom : '') +
-            (photos ? ', its ' + photoCount(photos) + (photos === 1 ? ' with its face points' : ' with their face points') : '') + ' in ' + Math.round(wallMs) +
+            (photos ? ', its ' + photoCount(photos) + ' (' + app.photos.filter((p) => p.detect && p.detect.points).length + ' with face points)' : '') + ' in ' + Math.round(wallMs) +
             ' ms, without fitting: animate it, texture it or export it.');
   endJob(job);
   renderPhotos();
