@@ -167,6 +167,7 @@ int run_photos(const Args& args) {
   // Each photo's points; a file that cannot be used is named and left out.
   std::vector<LandmarkPhoto> photos;
   std::vector<std::string> image_paths;  // #photos: each kept photo's image ("" without --photos)
+  std::vector<std::string> points_texts; // #photos: each kept photo's points file, as read
   std::vector<Image> images;             // #photos with --photos (for stereo), else empty
   // Stereo is asked for (--stereo): on Kira's real photos its patches dent
   // the face (docs/design/photos.md, Stereo); --no-stereo is kept as the default.
@@ -226,6 +227,7 @@ int run_photos(const Args& args) {
     }
     photos.push_back(ph);
     image_paths.push_back(photo_paths.empty() ? "" : photo_paths[i]);
+    points_texts.emplace_back(bytes.begin(), bytes.end());
   }
   PhotosJobOptions opt;
   opt.stereo = stereo;
@@ -297,6 +299,15 @@ int run_photos(const Args& args) {
     }
   }
   if (levels > 0) {
+    // The project keeps the photos' files and points files as given, so
+    // `likeness project info --extract-photos` and the page's Open project
+    // get them back (project file version 3).
+    for (size_t i = 0; i < photos.size() && !photo_paths.empty(); ++i) {
+      ProjectPhoto kept{photos[i].name, "face", {}, points_texts[i]};
+      s = read_file(image_paths[i], kept.bytes, kMaxImageBytes);
+      if (!s) return fail(cmd, s.message);
+      project.inputs.photos.push_back(std::move(kept));
+    }
     Bytes bytes;
     s = save_project(project, bytes);
     if (s) s = write_file(out_dir + "/head.likeness.glb", bytes);

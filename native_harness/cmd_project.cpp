@@ -10,6 +10,9 @@
 #include "project/glb_export.h"
 #include "project/pose.h"
 #include "project/project_file.h"
+#include "photos/landmarks.h"
+
+#include <nlohmann/json.hpp>
 
 #include <cstdio>
 #include <sys/stat.h>
@@ -56,6 +59,49 @@ int run_info(const std::string& path) {
   if (!p.parts.teeth_texture.empty())
     std::printf("  teeth: %dx%d texture from the photo %s\n", p.parts.teeth_texture.width,
                 p.parts.teeth_texture.height, p.parts.teeth_source.c_str());
+  const ProjectInputs& in = p.inputs;
+  for (const ProjectPhoto& ph : in.photos) {
+    ImageInfo image;
+    LandmarkPhoto points;
+    const bool decoded = inspect_image(ph.bytes.data(), ph.bytes.size(), image).ok();
+    std::string about = "no face points";
+    if (!ph.points.empty() && parse_landmarks_json(ph.points, points).ok()) {
+      const nlohmann::json doc = nlohmann::json::parse(ph.points, nullptr, false);
+      const auto c = doc.find("corrected");
+      const std::size_t moved = c != doc.end() && c->is_array() ? c->size() : 0;
+      about = std::to_string(points.num_present()) + " face points" +
+              (moved ? " (" + std::to_string(moved) + " moved by hand)" : "");
+    }
+    std::printf("  photo %s: %s, %s %dx%d, %zu bytes, %s\n", ph.name.c_str(), ph.role.c_str(),
+                decoded ? image.format : "?", image.width, image.height, ph.bytes.size(), about.c_str());
+  }
+  if (!in.page_options.empty()) std::printf("  page options: %s\n", in.page_options.c_str());
+  return 0;
+}
+
+// The kept photos and their face points as files in dir (NAME and
+// NAME.points.json), and the `likeness photos` line that makes the head
+// again from the face photos that have points.
+int run_extract_photos(const std::string& path, const std::string& dir) {
+  HeadProject p;
+  if (Status st = read_project_file(path, p); !st.ok()) return fail(kName, st.message);
+  if (p.inputs.photos.empty()) return fail(kName, path + " keeps no photos (made before version 3, or from a scan alone)");
+  ::mkdir(dir.c_str(), 0755);
+  std::string photos, points;
+  for (const ProjectPhoto& ph : p.inputs.photos) {
+    const std::string file = dir + "/" + ph.name;
+    if (Status st = write_file(file, ph.bytes); !st.ok()) return fail(kName, st.message);
+    std::printf("wrote %s (%s)\n", file.c_str(), ph.role.c_str());
+    if (ph.points.empty()) continue;
+    const std::string json_file = dir + "/" + ph.name + ".points.json";
+    if (Status st = write_file(json_file, Bytes(ph.points.begin(), ph.points.end())); !st.ok()) return fail(kName, st.message);
+    std::printf("wrote %s\n", json_file.c_str());
+    if (ph.role == "face") {
+      photos += " " + file;
+      points += " " + json_file;
+    }
+  }
+  if (!points.empty()) std::printf("make the head again: likeness photos --photos%s --points%s --out DIR\n", photos.c_str(), points.c_str());
   return 0;
 }
 
@@ -186,13 +232,16 @@ int run_refit(const std::string& path, const Args& args) {
 
 int run_project(const Args& args) {
   // Its two positional words (info|export|refit FILE) are checked below.
-  if (!only_known_options(kName, args, {"level", "levels", "format", "out", "pose", "scan-frame"}, 2)) return 2;
+  if (!only_known_options(kName, args, {"level", "levels", "format", "out", "pose", "scan-frame", "extract-photos"}, 2)) return 2;
   const std::string verb = args.positional.empty() ? "" : args.positional[0];
   if (args.positional.size() != 2 || (verb != "info" && verb != "export" && verb != "refit")) {
     fail(kName, "give `info FILE`, `export FILE --out PATH` or `refit FILE --out FILE` (see likeness project --help)");
     return 2;
   }
-  if (verb == "info") return run_info(args.positional[1]);
+  if (verb == "info") {
+    const int rc = run_info(args.positional[1]);
+    return rc != 0 || !args.has("extract-photos") ? rc : run_extract_photos(args.positional[1], args.get("extract-photos"));
+  }
   return verb == "export" ? run_export(args.positional[1], args) : run_refit(args.positional[1], args);
 }
 
@@ -237,9 +286,10 @@ const Registrar export_reg({"export", "likeness export --head DIR|FILE.likeness.
                             run_export_head});
 
 const Registrar reg({kName,
-                     "likeness project info FILE | likeness project export FILE --out PATH [--format obj|ply|textured|glb] "
+                     "likeness project info FILE [--extract-photos DIR] | likeness project export FILE --out PATH [--format obj|ply|textured|glb] "
                      "[--level L] [--pose A] [--scan-frame] | likeness project refit FILE --out FILE.likeness.glb [--levels L]",
-                     "what a saved head project holds; its levels re-exported without fitting again; its kept scan "
+                     "what a saved head project holds (with --extract-photos its photos and their face points written into DIR, "
+                     "for likeness photos); its levels re-exported without fitting again; its kept scan "
                      "fitted again", run_project});
 
 }  // namespace

@@ -19,8 +19,11 @@ namespace {
 // scene is the head, the project in its extras), with the eyes' and
 // teeth's textures the page shows: parts {eyeTexture, eyeSource,
 // teethTexture, teethSource} (image_object's form; a missing texture: the
-// generic one) become the project's parts. Returns {ok, bytes}.
-val save_project_job(val parts) {
+// generic one) become the project's parts; inputs {photos: [{name, role,
+// bytes (Uint8Array: the file as dropped), points (likeness-landmarks JSON
+// text or '')}], pageOptions (a JSON object's text)} become what the file
+// keeps of the page (project file version 3). Returns {ok, bytes}.
+val save_project_job(val parts, val inputs) {
   if (!kept_project()) return error_result(lk::ErrorCode::InvalidInput, "no fitted head to save");
   lk::ProjectParts kept;
   const std::pair<const char*, std::pair<lk::Image*, std::string*>> from[2] = {
@@ -32,7 +35,30 @@ val save_project_job(val parts) {
       return error_result(lk::with_context(st, std::string(name) + " texture"));
     if (has(parts, source.c_str()) && parts[source].isString()) *into.second = parts[source].as<std::string>();
   }
+  lk::ProjectInputs in;
+  if (has(inputs, "photos")) {
+    const val photos = inputs["photos"];
+    const int n = photos["length"].as<int>();
+    for (int i = 0; i < n; ++i) {
+      const val ph = photos[i];
+      lk::ProjectPhoto photo;
+      if (!ph["name"].isString() || ph["bytes"].isUndefined())
+        return error_result(lk::ErrorCode::InvalidInput, "photo " + std::to_string(i + 1) + " has no name or bytes");
+      photo.name = ph["name"].as<std::string>();
+      if (ph["role"].isString()) photo.role = ph["role"].as<std::string>();
+      photo.bytes = emscripten::convertJSArrayToNumberVector<std::uint8_t>(ph["bytes"]);
+      if (ph["points"].isString()) photo.points = ph["points"].as<std::string>();
+      in.photos.push_back(std::move(photo));
+    }
+  }
+  if (has(inputs, "pageOptions") && inputs["pageOptions"].isString()) in.page_options = inputs["pageOptions"].as<std::string>();
   kept_project()->parts = std::move(kept);
+  // Kept only for this file: the worker's project goes on without them.
+  struct Inputs {
+    lk::HeadProject& p;
+    ~Inputs() { p.inputs = {}; }
+  } hold{*kept_project()};
+  kept_project()->inputs = std::move(in);
   lk::Bytes bytes;
   if (lk::Status st = lk::save_project(*kept_project(), bytes); !st.ok()) return error_result(st);
   val r = ok_result();
@@ -305,6 +331,22 @@ val load_project_job(const std::string& name, std::uintptr_t data, std::size_t s
     parts.set("teethSource", p.parts.teeth_source);
   }
   r.set("parts", parts);
+  // The photos and the page's options it keeps (version 3), for the page to
+  // put back; the worker's project keeps none of them.
+  val in = val::object();
+  val photos = val::array();
+  for (const lk::ProjectPhoto& ph : p.inputs.photos) {
+    val o = val::object();
+    o.set("name", ph.name);
+    o.set("role", ph.role);
+    o.set("bytes", bytes_array(ph.bytes.data(), ph.bytes.size()));
+    o.set("points", ph.points);
+    photos.call<void>("push", o);
+  }
+  in.set("photos", photos);
+  in.set("pageOptions", p.inputs.page_options);
+  r.set("inputs", in);
+  project->inputs = {};
   r.set("loadMs", now_ms() - t0);
   kept_project() = std::move(project);
   return r;

@@ -322,7 +322,7 @@ const JOBS = {
   // {level, base}: the textured head as {obj, mtl, png} bytes.
   exportTextured: (msg) => core.export_textured(msg.level, String(msg.base)),
   // {}: the kept head project as a .likeness.glb file's bytes.
-  saveProject: (msg) => core.save_project_job(msg.parts || {}),
+  saveProject: (msg) => core.save_project_job(msg.parts || {}, msg.inputs || {}),
   // {level, parts: {eyeTexture, teethTexture}}: the head as a GLB; the parts'
   // textures (from eye and smile photos) replace the generic ones.
   exportGlb: (msg) => core.export_glb_job(msg.level | 0, msg.parts || {}),

@@ -11,6 +11,7 @@
 // the SCAN frame (its units and orientation).
 #pragma once
 #include "image/image.h"
+#include "io/io.h"
 #include "mesh/tri_mesh.h"
 #include "pipeline/fit_head.h"
 #include "pipeline/fit_quality.h"
@@ -67,6 +68,27 @@ struct ProjectParts {
   std::string teeth_source;
 };
 
+// A photo the user dropped, kept so the head can be made again from a
+// reopened project (project file version 3): the file's own bytes (JPEG or
+// PNG, never re-encoded), its name and role, and its face points as the
+// page's likeness-landmarks JSON text (photos/landmarks.h), which marks the
+// user's drags as "corrected": [indices]; empty while it has none.
+struct ProjectPhoto {
+  std::string name;
+  std::string role = "face";  // "face", "eye" or "smile" (the page's photo roles)
+  Bytes bytes;
+  std::string points;
+};
+
+// What the user put on the page besides the head: the photos, and the
+// page's options as a JSON object's text (empty: none kept). The core
+// checks the object and keeps its text; the page reads its members.
+struct ProjectInputs {
+  std::vector<ProjectPhoto> photos;
+  std::string page_options;
+  bool empty() const { return photos.empty() && page_options.empty(); }
+};
+
 // The finest level's checks at rest (quality_job.h), measured once.
 struct ProjectQuality {
   bool measured = false;
@@ -86,6 +108,7 @@ struct HeadProject {
   double pose = 0;          // the animation amount the multires state holds (0: rest)
   ProjectTexture texture;
   ProjectParts parts;
+  ProjectInputs inputs;
   ProjectQuality quality;
   int file_version = 0;     // the version of the file it was read from (0: not read from a file)
 };

@@ -1,6 +1,7 @@
 #include "project/project_file.h"
 
 #include "multires/multires.h"
+#include "photos/landmarks.h"
 #include "project/gltf_scene.h"
 
 #include <nlohmann/json.hpp>
@@ -25,6 +26,12 @@ using json = nlohmann::json;
 constexpr std::uint64_t kMaxFinestTriangles = 1u << 23;
 constexpr int kMaxLevels = 6;
 constexpr std::size_t kMaxSkinPixels = 4096u * 4096u;
+// The kept photos (version 3): a photo is at most the page's cap on any
+// file (256 MB, files.js), and a project holds at most 256 of them; the
+// page's options (with clicks and points files) stay far below 1 MB.
+constexpr std::size_t kMaxPhotos = 256;
+constexpr std::size_t kMaxPhotoBytes = std::size_t(256) << 20;
+constexpr std::size_t kMaxPageOptionsBytes = std::size_t(1) << 20;
 
 // FNV-1a, 64 bits: a damaged file's fingerprint, not a security measure.
 struct Fnv1a {
@@ -366,6 +373,88 @@ bool ignore_image(tinygltf::Image*, const int, std::string*, std::string*, int, 
   return true;  // the skin is read from its bufferView by load_project
 }
 
+// A name that is safe as a file name in another folder (project --extract-photos).
+bool plain_file_name(const std::string& n) {
+  if (n.empty() || n.size() > 255 || n == "." || n == "..") return false;
+  for (char c : n)
+    if (c == '/' || c == '\\' || static_cast<unsigned char>(c) < 0x20) return false;
+  return true;
+}
+
+// A photo's face points: a likeness-landmarks document that parses (the
+// CLI's own reader), whose "corrected" indices, if any, name its points.
+Status check_photo_points(const std::string& text, const std::string& what) {
+  LandmarkPhoto lm;
+  if (Status s = parse_landmarks_json(text, lm); !s.ok()) return with_context(s, "damaged Likeness project: " + what);
+  const json doc = json::parse(text, nullptr, /*allow_exceptions=*/false);
+  const json& corrected = member(doc, "corrected");
+  if (corrected.is_null()) return Status::success();
+  if (!corrected.is_array()) return damaged(what + ": \"corrected\" is not a list");
+  for (const json& i : corrected)
+    if (!i.is_number_integer() || i.get<std::int64_t>() < 0 || i.get<std::int64_t>() >= static_cast<std::int64_t>(lm.points.size()))
+      return damaged(what + ": a corrected point that is not one of its points");
+  return Status::success();
+}
+
+// The photos and the page's options (version 3; older files have none).
+Status read_inputs(BinReader& r, const json& doc, ProjectInputs& in) {
+  in = {};
+  const json& pj = member(doc, "photos");
+  if (!pj.is_null() && !pj.is_array()) return damaged("the photos are not a list");
+  if (pj.size() > kMaxPhotos) return damaged(std::to_string(pj.size()) + " photos (at most " + std::to_string(kMaxPhotos) + ")");
+  for (std::size_t i = 0; i < pj.size(); ++i) {
+    const json& e = pj[i];
+    std::string what = "photo " + std::to_string(i + 1);
+    const auto name = e.is_object() ? e.find("name") : e.end();
+    const auto role = e.is_object() ? e.find("role") : e.end();
+    if (!e.is_object() || name == e.end() || !name->is_string() || !plain_file_name(name->get<std::string>()))
+      return damaged(what + ": no plain file name");
+    ProjectPhoto ph;
+    ph.name = name->get<std::string>();
+    what += " (" + ph.name + ")";
+    if (role == e.end() || !role->is_string() ||
+        (*role != "face" && *role != "eye" && *role != "smile"))
+      return damaged(what + ": its role is not face, eye or smile");
+    ph.role = role->get<std::string>();
+    const json& file = member(e, "file");
+    int count = 0;
+    if (!get_int(file, "count", count, 1) || static_cast<std::size_t>(count) > kMaxPhotoBytes)
+      return damaged(what + ": its file is empty or larger than " + std::to_string(kMaxPhotoBytes >> 20) + " MB");
+    if (Status s = r.array(file, what, "image", 1, ph.bytes); !s.ok()) return s;
+    // Its header only (JPEG or PNG, its size): whoever shows it decodes it.
+    ImageInfo info;
+    if (Status s = inspect_image(ph.bytes.data(), ph.bytes.size(), info); !s.ok())
+      return with_context(s, "damaged Likeness project: " + what);
+    const json& points = member(e, "points");
+    if (!points.is_null()) {
+      std::vector<std::uint8_t> text;
+      if (!get_int(points, "count", count, 1) || static_cast<std::size_t>(count) > kMaxLandmarkFileBytes)
+        return damaged(what + ": its face points are empty or too large");
+      if (Status s = r.array(points, what + " face points", "json", 1, text); !s.ok()) return s;
+      ph.points.assign(text.begin(), text.end());
+      if (Status s = check_photo_points(ph.points, what + " face points"); !s.ok()) return s;
+    }
+    in.photos.push_back(std::move(ph));
+  }
+  const json& page = member(doc, "page_options");
+  if (!page.is_null()) {
+    std::vector<std::uint8_t> text;
+    int count = 0;
+    if (!get_int(page, "count", count, 1) || static_cast<std::size_t>(count) > kMaxPageOptionsBytes)
+      return damaged("the page's options are empty or too large");
+    if (Status s = r.array(page, "the page's options", "json", 1, text); !s.ok()) return s;
+    in.page_options.assign(text.begin(), text.end());
+    bool too_deep = false;  // the page nests 6 deep (a click: photos, photo, clicks, pair, point)
+    const json::parser_callback_t depth = [&too_deep](int d, json::parse_event_t, json&) {
+      if (d > 16) too_deep = true;
+      return !too_deep;
+    };
+    if (!json::parse(in.page_options, depth, /*allow_exceptions=*/false).is_object() || too_deep)
+      return damaged("the page's options are not a JSON object of a few levels");
+  }
+  return Status::success();
+}
+
 Status read_project(const tinygltf::Model& model, const json& doc, HeadProject& p) {
   BinReader r{model};
 
@@ -533,7 +622,7 @@ Status read_project(const tinygltf::Model& model, const json& doc, HeadProject& 
     if (into.first->empty()) return damaged(what + " is empty");
     *into.second = source->get<std::string>();
   }
-  return Status::success();
+  return read_inputs(r, doc, p.inputs);
 }
 
 }  // namespace
@@ -644,6 +733,23 @@ Status save_project(const HeadProject& p, Bytes& out) {
                    {"texture", {{"type", "png"}, {"width", 1}, {"count", static_cast<int>(part_png.size())}, {"view", view}}}};
   }
   if (!parts.empty()) doc["parts"] = parts;
+  // The photos as their files' bytes, their points and the page's options
+  // as JSON text (kept verbatim: the reader checks them, the page reads them).
+  const auto text_ref = [&w](const std::string& text) {
+    return json{{"type", "json"}, {"width", 1}, {"count", static_cast<int>(text.size())},
+                {"view", w.view(text.data(), text.size())}};
+  };
+  json photos = json::array();
+  for (const ProjectPhoto& ph : p.inputs.photos) {
+    if (ph.bytes.empty()) return Status::error(ErrorCode::InvalidInput, "the photo " + ph.name + " has no bytes");
+    json e = {{"name", ph.name}, {"role", ph.role},
+              {"file", {{"type", "image"}, {"width", 1}, {"count", static_cast<int>(ph.bytes.size())},
+                        {"view", w.view(ph.bytes.data(), ph.bytes.size())}}}};
+    if (!ph.points.empty()) e["points"] = text_ref(ph.points);
+    photos.push_back(e);
+  }
+  if (!photos.empty()) doc["photos"] = photos;
+  if (!p.inputs.page_options.empty()) doc["page_options"] = text_ref(p.inputs.page_options);
   // The buffer ends on an 8-byte boundary: no padding after it in the
   // binary chunk, so every byte of the chunk is under the checksum.
   while (model.buffers[0].data.size() % 8) model.buffers[0].data.push_back(0);

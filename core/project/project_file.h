@@ -15,18 +15,21 @@ namespace lk {
 // The format's name in extras.likeness.format, and its version: a reader
 // refuses a newer version and anything without the name.
 extern const char* const kProjectFormat;  // "likeness-project"
-// Version 2 adds the eyes' and teeth's textures (parts); version 1 files
-// (no parts) still open.
-constexpr int kProjectFileVersion = 2;
+// Version 2 adds the eyes' and teeth's textures (parts), version 3 the
+// photos (their files, roles, face points) and the page's options
+// (inputs). Versions 1 and 2 still open (without them); a newer version is
+// refused by its number.
+constexpr int kProjectFileVersion = 3;
 
 // The project's bytes. Stored: the scan's positions and faces, the fit's
 // options the CLI and page set, the fitted head (control mesh at rest, the
 // current control positions, creases, displacements of every level, the
 // alignment's meshes and the fit's report figures), the frame, the rig, the
 // pose, the texture's chart and skin (PNG), the eyes' and teeth's textures
-// made from photos (PNG, with the photos' names). Not stored: the checks
-// (measure_project_quality measures them again), the photos and their
-// points. InvalidInput when the project has no fit.
+// made from photos (PNG, with the photos' names), the photos the user
+// dropped (their own bytes, roles, face points) and the page's options.
+// Not stored: the checks (measure_project_quality measures them again).
+// InvalidInput when the project has no fit.
 Status save_project(const HeadProject& project, Bytes& out);
 
 // Rebuilds a saved project without fitting: the levels are evaluated from

@@ -182,7 +182,7 @@ for (const [name, full] of [['bin.ply', binaryPly(40)], ['ascii.ply', Buffer.fro
 
 // --- project files: saved and opened; cut and flipped ones give messages -------
 {
-  const noHead = core.save_project_job({});
+  const noHead = core.save_project_job({}, {});
   check('save before any fit says so', !noHead.ok && /no fitted head/.test(noHead.message), noHead.message);
   const bin = likenessBin(WEBDIR);
   if (!bin) {
@@ -233,7 +233,7 @@ for (const [name, full] of [['bin.ply', binaryPly(40)], ['ascii.ply', Buffer.fro
       check('...jawOpen carries the jaw\'s motion, which moves its chin vertex by its offset; neutral and smile carry none',
             !!jawCheck && jawCheck.err < 0.05 * jawCheck.len && !byName.neutral.jawMatrix && !(byName.smile || {}).jawMatrix,
             jawCheck ? `error ${(1000 * jawCheck.err).toFixed(3)} mm of ${(1000 * jawCheck.len).toFixed(1)} mm` : 'no jawMatrix');
-      const saved = core.save_project_job({});
+      const saved = core.save_project_job({}, {});
       check('...and saves to the same bytes', saved.ok && Buffer.compare(Buffer.from(saved.bytes), full) === 0,
             saved.ok ? `${saved.bytes.length} bytes` : saved.message);
       // The eyes' and teeth's textures the page hands over (image objects,
@@ -243,13 +243,13 @@ for (const [name, full] of [['bin.ply', binaryPly(40)], ['ascii.ply', Buffer.fro
         const image = (w, h, c, seed) => ({ width: w, height: h, channels: c,
           pixels: Uint8Array.from({ length: w * h * c }, (_, i) => (i * 37 + seed * 101) & 255) });
         const eye = image(24, 16, 3, 1), teeth = image(20, 10, 4, 2);
-        const withParts = core.save_project_job({ eyeTexture: eye, eyeSource: 'eye close.jpg', teethTexture: teeth, teethSource: 'smile.png' });
+        const withParts = core.save_project_job({ eyeTexture: eye, eyeSource: 'eye close.jpg', teethTexture: teeth, teethSource: 'smile.png' }, {});
         const back = withParts.ok ? open(Buffer.from(withParts.bytes)) : withParts;
         const same = (a, b) => !!a && a.width === b.width && a.height === b.height && a.channels === b.channels &&
           Buffer.compare(Buffer.from(a.pixels), Buffer.from(b.pixels)) === 0;
         const p = back.ok ? back.parts : {};
-        const plain = core.save_project_job({});
-        const badImage = core.save_project_job({ eyeTexture: { width: 4, height: 4, channels: 3, pixels: new Uint8Array(5) } });
+        const plain = core.save_project_job({}, {});
+        const badImage = core.save_project_job({ eyeTexture: { width: 4, height: 4, channels: 3, pixels: new Uint8Array(5) } }, {});
         check('...with the eye and smile textures the page gives, opened again: the same pixels and photo names; without them, the same bytes as before',
               back.ok && same(p.eyeTexture, eye) && same(p.teethTexture, teeth) && p.eyeSource === 'eye close.jpg' &&
               p.teethSource === 'smile.png' && plain.ok && Buffer.compare(Buffer.from(plain.bytes), full) === 0 &&
@@ -343,7 +343,7 @@ function liveExpressions(bin) {
     const neutral = core.expression_frame_job({ neutral: 1 }, 3);
     const rest3 = opened.meshes.levels[2].positions;
     const same = neutral.ok && neutral.positions.length === rest3.length && neutral.positions.every((v, i) => v === rest3[i]);
-    const saved = core.save_project_job({});
+    const saved = core.save_project_job({}, {});
     const bad = core.expression_frame_job({ notAShape: 1 }, 3);
     check('live expressions in wasm: smile and surprise move the head, neutral gives the rest positions bit for bit, ' +
           'the head stays at rest, an unknown name is a message',

@@ -2,7 +2,9 @@
 # The project file through the CLI: fit writes it, `project info` reads it,
 # `project export` re-exports without fitting (the fit's level to within its
 # rounding), `texture --project` textures it as the page does and saves it,
-# `project refit` fits the kept scan again, and a cut or foreign file is refused with exit 1 and a reason.
+# `project refit` fits the kept scan again, `likeness photos` keeps its photos and points in
+# its project and `project info --extract-photos` gives them back, and a cut or foreign file is
+# refused with exit 1 and a reason.
 # Usage: cli_project.sh LIKENESS WORKDIR
 set -euo pipefail
 L="$1"; W="$2"
@@ -49,4 +51,23 @@ if "$L" project info cut.glb 2> err.txt; then echo "a cut file was read"; exit 1
 grep -q "truncated Likeness project" err.txt
 if "$L" project info scan.ply 2> err.txt; then echo "a PLY was read as a project"; exit 1; fi
 grep -q "not a Likeness project" err.txt
+# photos: `likeness photos` keeps its photos and points files in the project
+# (version 3); `project info --extract-photos` writes them out byte for byte,
+# and `likeness photos` on the extracted files makes the same head again.
+"$L" synth-photos --seed 4 --cameras 5 --out sp > /dev/null
+"$L" photos --points sp/view_0{0..4}.json --photos sp/view_0{0..4}.png --map sp/map.json --levels 1 --no-texture \
+  --out ph1 > ph1.log
+"$L" project info ph1/head.likeness.glb --extract-photos kept > kept.log
+grep -q "Likeness project, version 3" kept.log
+grep -q "photo view_00.png: face, PNG" kept.log
+for i in 0 1 2 3 4; do
+  cmp kept/view_0$i.png sp/view_0$i.png
+  cmp kept/view_0$i.png.points.json sp/view_0$i.json
+done
+grep -q "make the head again: likeness photos --photos kept/view_00.png" kept.log
+"$L" photos --points kept/view_0{0..4}.png.points.json --photos kept/view_0{0..4}.png --map sp/map.json --levels 1 \
+  --no-texture --out ph2 > ph2.log
+cmp ph1/control.obj ph2/control.obj
+if "$L" project info head.likeness.glb --extract-photos none 2> err.txt; then echo "a project without photos extracted some"; exit 1; fi
+grep -q "keeps no photos" err.txt
 echo "cli project: ok"

@@ -11,6 +11,7 @@
 #include "project/glb_export.h"
 #include "project/parts.h"
 #include "project/pose.h"
+#include "photos/landmarks.h"
 #include "project/project_file.h"
 #include "project/quality_job.h"
 #include "project/texture_job.h"
@@ -26,6 +27,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
+// Declarations only (the implementation is in lk_io): JPEGs made here.
+#include <stb/stb_image_write.h>
 
 #include <catch2/catch.hpp>
 
@@ -365,9 +368,9 @@ TEST_CASE("project file: foreign, future and edited files are refused with a rea
   }
 
   // A newer version, another format's extras, an edited pose.
-  st = try_load(rewritten(bytes, [](tinygltf::Value::Object& d) { d["version"] = tinygltf::Value(3); }));
+  st = try_load(rewritten(bytes, [](tinygltf::Value::Object& d) { d["version"] = tinygltf::Value(4); }));
   CHECK(st.code == ErrorCode::Unsupported);
-  CHECK(st.message == "made by a newer Likeness (project version 3); this one reads version 2");
+  CHECK(st.message == "made by a newer Likeness (project version 4); this one reads version 3");
   st = try_load(rewritten(bytes, [](tinygltf::Value::Object& d) { d["format"] = tinygltf::Value(std::string("x")); }));
   CHECK(contains(st.message, "not a Likeness project"));
   const Bytes edited = rewritten(bytes, [](tinygltf::Value::Object& d) { d["pose"] = tinygltf::Value(0.5); });
@@ -547,6 +550,187 @@ TEST_CASE("project file: the eyes' and teeth's textures from photos come back by
     });
   }, "the eye texture");
   refused([](Obj& d) { d["parts"] = tinygltf::Value(std::string("eyes")); }, "the eyes' and teeth's textures");
+}
+
+namespace {
+
+Bytes jpeg_of(const Image& im) {
+  Bytes out;
+  stbi_write_jpg_to_func([](void* c, void* data, int n) {
+    auto* o = static_cast<Bytes*>(c);
+    o->insert(o->end(), static_cast<std::uint8_t*>(data), static_cast<std::uint8_t*>(data) + n);
+  }, &out, im.width, im.height, im.channels, im.pixels.data(), 90);
+  REQUIRE(out.size() > 100);
+  return out;
+}
+
+// A photo's face points as the page writes them: 468 points (a few the
+// detector missed), the dragged ones listed in "corrected".
+std::string page_points(const std::string& name, int w, int h, std::uint32_t seed, const std::vector<int>& corrected) {
+  LandmarkPhoto lm;
+  lm.name = name;
+  lm.width = w;
+  lm.height = h;
+  lm.detector = "mediapipe-face-mesh";
+  std::mt19937 rng(seed);
+  for (int i = 0; i < 468; ++i) {
+    lm.points.push_back(Vec2(std::uniform_real_distribution<double>(0, w)(rng), std::uniform_real_distribution<double>(0, h)(rng)));
+    lm.present.push_back(i % 97 == 5 ? 0 : 1);
+  }
+  nlohmann::json doc = nlohmann::json::parse(landmarks_to_json(lm));
+  doc["corrected"] = corrected;
+  return doc.dump();
+}
+
+// A textured project with a face photo (JPEG) and an eye photo (PNG), the
+// face's points with two drags, and the page's options.
+HeadProject project_with_photos() {
+  HeadProject a = textured_project();
+  ProjectPhoto face{"front photo.jpg", "face", jpeg_of(pattern(120, 90, 3, 7)), page_points("front photo.jpg", 120, 90, 3, {1, 200})};
+  ProjectPhoto eye{"eye close-up.png", "eye", write_png(pattern(40, 30, 3, 8)), ""};
+  a.inputs.photos = {face, eye};
+  a.inputs.page_options = R"({"level":"3","autoFit":true,"thin":4,"textureSize":1024,"fullDetail":false})";
+  return a;
+}
+
+}  // namespace
+
+TEST_CASE("project file: the photos, their face points and the page's options come back byte for byte") {
+  const HeadProject a = project_with_photos();
+  const Bytes bytes = saved(a);
+  const HeadProject b = loaded(bytes);
+  REQUIRE(b.inputs.photos.size() == 2);
+  for (std::size_t i = 0; i < 2; ++i) {
+    INFO("photo " << i);
+    CHECK(b.inputs.photos[i].name == a.inputs.photos[i].name);
+    CHECK(b.inputs.photos[i].role == a.inputs.photos[i].role);
+    CHECK(b.inputs.photos[i].bytes == a.inputs.photos[i].bytes);  // the file itself, not re-encoded
+    CHECK(b.inputs.photos[i].points == a.inputs.photos[i].points);
+  }
+  CHECK(b.inputs.photos[0].bytes[0] == 0xff);  // still the JPEG
+  // The points are the CLI's points file, corrections marked.
+  LandmarkPhoto lm;
+  REQUIRE(parse_landmarks_json(b.inputs.photos[0].points, lm).ok());
+  CHECK(lm.points.size() == 468);
+  CHECK(nlohmann::json::parse(b.inputs.photos[0].points)["corrected"] == nlohmann::json::array({1, 200}));
+  CHECK(b.inputs.page_options == a.inputs.page_options);
+  CHECK(b.file_version == 3);
+  check_same_head(a, b);
+  CHECK(b.texture.skin.pixels == a.texture.skin.pixels);
+  CHECK(saved(b) == bytes);  // the loaded project saves the same file
+  // Without photos or options the file holds none.
+  const Bytes plain = saved(textured_project());
+  CHECK(!contains(std::string(plain.begin(), plain.end()), "\"photos\""));
+  CHECK(loaded(plain).inputs.empty());
+}
+
+TEST_CASE("project file: version 1 and 2 files open without photos, a newer one is refused by its number") {
+  const HeadProject a = project_with_photos();
+  const Bytes bytes = saved(a);
+  for (int v : {1, 2}) {
+    INFO("version " << v);
+    const Bytes old = resealed(rewritten(bytes, [v](tinygltf::Value::Object& d) {
+      d["version"] = tinygltf::Value(v);
+      d.erase("photos");
+      d.erase("page_options");
+    }));
+    HeadProject b;
+    const Status st = load_project(old.data(), old.size(), b);
+    INFO(st.message);
+    REQUIRE(st.ok());
+    CHECK(b.file_version == v);
+    CHECK(b.inputs.empty());
+    check_same_head(a, b);
+  }
+  const Bytes newer = resealed(rewritten(bytes, [](tinygltf::Value::Object& d) { d["version"] = tinygltf::Value(4); }));
+  const Status st = try_load(newer);
+  CHECK(st.code == ErrorCode::Unsupported);
+  CHECK(st.message == "made by a newer Likeness (project version 4); this one reads version 3");
+}
+
+TEST_CASE("project file: a damaged photo entry is refused with a reason, never loaded half") {
+  const HeadProject good = project_with_photos();
+  // Saved with a bad entry (the writer keeps what it is given), so the
+  // checksum is right and the reader's own checks must refuse it.
+  const auto refused_saved = [&](const std::function<void(ProjectInputs&)>& edit, const std::string& why) {
+    HeadProject p = good;
+    edit(p.inputs);
+    Bytes b;
+    REQUIRE(save_project(p, b).ok());
+    HeadProject out;
+    out.pose = 0.25;  // a failed load leaves it untouched
+    const Status s = load_project(b.data(), b.size(), out);
+    INFO(why << ": " << s.message);
+    CHECK(!s.ok());
+    CHECK(contains(s.message, why));
+    CHECK(out.pose == 0.25);
+    CHECK(out.inputs.empty());
+  };
+  refused_saved([](ProjectInputs& in) { in.photos[0].bytes = Bytes{'h', 'e', 'l', 'l', 'o'}; }, "photo 1 (front photo.jpg)");
+  refused_saved([](ProjectInputs& in) { in.photos[0].bytes.resize(10); }, "photo 1 (front photo.jpg)");
+  refused_saved([](ProjectInputs& in) { in.photos[1].name = "../eye.png"; }, "photo 2: no plain file name");
+  refused_saved([](ProjectInputs& in) { in.photos[1].name = ""; }, "photo 2: no plain file name");
+  refused_saved([](ProjectInputs& in) { in.photos[1].role = "hat"; }, "its role is not face, eye or smile");
+  refused_saved([](ProjectInputs& in) { in.photos[0].points = "{\"format\":\"likeness-landmarks\""; }, "face points");
+  refused_saved([](ProjectInputs& in) {
+    nlohmann::json d = nlohmann::json::parse(in.photos[0].points);
+    d["corrected"] = {1, 468};  // past its 468 points
+    in.photos[0].points = d.dump();
+  }, "a corrected point that is not one of its points");
+  refused_saved([](ProjectInputs& in) { in.page_options = "[1, 2]"; }, "the page's options are not a JSON object");
+  refused_saved([](ProjectInputs& in) { in.page_options = "{\"level\":"; }, "the page's options are not a JSON object");
+  refused_saved([](ProjectInputs& in) { in.page_options = "{\"a\":" + std::string(5000, '[') + std::string(5000, ']') + "}"; },
+                "the page's options are not a JSON object");
+
+  // Edited entries behind the checksum.
+  const Bytes bytes = saved(good);
+  using Obj = tinygltf::Value::Object;
+  using Arr = tinygltf::Value::Array;
+  const auto refused = [&](const std::function<void(Obj&)>& edit, const std::string& why) {
+    const Status s = try_load(rewritten(bytes, edit), false);
+    INFO(why << ": " << s.message);
+    CHECK(s.code != ErrorCode::Ok);
+    CHECK(contains(s.message, why));
+  };
+  const auto edit_photo = [](Obj& d, const std::function<void(Obj&)>& f) {
+    Arr photos = d["photos"].Get<Arr>();
+    Obj e = photos[0].Get<Obj>();
+    f(e);
+    photos[0] = tinygltf::Value(e);
+    d["photos"] = tinygltf::Value(photos);
+  };
+  refused([](Obj& d) { d["photos"] = tinygltf::Value(std::string("photos")); }, "the photos are not a list");
+  refused([&](Obj& d) { edit_photo(d, [](Obj& e) { e["name"] = tinygltf::Value(3); }); }, "photo 1: no plain file name");
+  refused([&](Obj& d) {
+    edit_photo(d, [](Obj& e) {
+      Obj f = e["file"].Get<Obj>();
+      f["count"] = tinygltf::Value(f["count"].Get<int>() + 1);  // one byte more than its view
+      e["file"] = tinygltf::Value(f);
+    });
+  }, "photo 1 (front photo.jpg)");
+  refused([&](Obj& d) {
+    edit_photo(d, [](Obj& e) {
+      Obj f = e["file"].Get<Obj>();
+      f["view"] = tinygltf::Value(100000);
+      e["file"] = tinygltf::Value(f);
+    });
+  }, "no such bufferView");
+  refused([&](Obj& d) {  // the rig's integers read as the photo's file
+    const Obj moved = d["rig"].Get<Obj>()["moved"].Get<Obj>();
+    edit_photo(d, [&](Obj& e) {
+      Obj f = e["file"].Get<Obj>();
+      f["view"] = moved.at("view");
+      f["count"] = tinygltf::Value(moved.at("count").Get<int>() * 4);
+      e["file"] = tinygltf::Value(f);
+    });
+  }, "photo 1 (front photo.jpg)");
+  refused([&](Obj& d) {  // the photo's bytes read as its points
+    edit_photo(d, [](Obj& e) {
+      Obj f = e["file"].Get<Obj>();
+      f["type"] = tinygltf::Value(std::string("json"));
+      e["points"] = tinygltf::Value(f);
+    });
+  }, "face points");
 }
 
 TEST_CASE("project file: a version 1 file (before the parts) still opens, with the generic eyes and teeth") {

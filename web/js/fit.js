@@ -2,7 +2,7 @@
 // worker: the Pipeline rows follow its stages, then the fitted head is shown
 // over the scan, its checks start, and photos with points are textured when
 // Auto-run is on.
-import { app, params, ui, beginJob, endJob, live, refreshControls, setStage, setStatus, showError, stageItem } from './state.js';
+import { app, ui, beginJob, endJob, live, refreshControls, setStage, setStatus, showError, stageItem } from './state.js';
 import { runJob } from './worker_client.js';
 import { stopAnimation } from './animation.js';
 import { closeClicker } from './clicker.js';
@@ -11,6 +11,7 @@ import { forgetTexture, runTexture } from './texture.js';
 import { showComponents, showStage } from './head_view.js';
 import { checkFitQuality } from './checks.js';
 import { forPage } from './wording.js';
+import { pageOption } from './project_inputs.js';
 
 // Core stage names -> the Pipeline rows, and the mesh each row shows.
 export const FIT_STAGES = [
@@ -89,7 +90,7 @@ export async function runFit() {
     // The worker reads the File in slices (worker.js, streamScan).
     // ?thin=X fits a dense cloud on cell averages (FitHeadOptions::thin_cells_per_edge,
     // off by default: not lossless, docs/design/page.md).
-    const thin = Number(params.get('thin')) > 0 ? { thinCells: Number(params.get('thin')) } : {};
+    const thin = pageOption('thin') > 0 ? { thinCells: pageOption('thin') } : {};  // ?thin, else a restored project's
     const request = file ? { type: 'fitFile', file, options: { levels: 3, ...thin } }
                          : { type: 'refit', options: { levels: 3, name } };
     result = await runJob(request, [],

@@ -28,6 +28,7 @@ import { setPhotoRole } from './photo_roles.js';
 import { forgetTexture } from './texture.js';
 import { deleteHead, getFile, hasFile, listHeads, putHead } from './keep_store.js';
 import { photoCount } from './wording.js';
+import { applyOptions, pageOptions, photoState, restorePhotos } from './project_inputs.js';
 
 export const MAX_HEADS = 5;
 const SAVE_DELAY_MS = Number(params.get('keep_delay_ms')) >= 0 && params.has('keep_delay_ms') ? Number(params.get('keep_delay_ms')) : 1500;
@@ -90,31 +91,9 @@ async function photoThumbnail(photo) {
   }
 }
 
-// The detector's face points of a photo as kept: what it found, with the
-// user's drags (corrected: the indices moved), or null while none are known.
-function keptDetect(p) {
-  const d = p.detect;
-  if (!d || !d.points || !['found', 'many'].includes(d.state)) return null;
-  return { state: d.state, faces: d.faces, points: d.points.map((q) => (q ? [q[0], q[1]] : null)),
-           corrected: d.corrected ? [...d.corrected] : [] };
-}
-
-// What the project file does not hold: options and photos.
+// What the project file does not hold: options and photos (project_inputs.js).
 function pageState() {
-  return {
-    options: { level: ui.level.value, autoFit: ui.autoFit.checked, showComponents: ui.showComponents.checked,
-               fullDetail: ui.fullDetail.checked },
-    photos: app.photos.map((p) => ({ name: p.name, width: p.width, height: p.height, role: p.role || 'face',
-                                     clicks: [...p.clicks.entries()], pointsName: p.pointsName || '',
-                                     filePoints: p.filePoints ? Array.from(p.filePoints) : null, detect: keptDetect(p) })),
-  };
-}
-// Kept face points as the page holds them again (no detection needed).
-function restoredDetect(k) {
-  if (!k || !Array.isArray(k.points)) return null;
-  const n = k.corrected && k.corrected.length;
-  return { state: k.state, faces: k.faces, points: k.points, ms: 0, corrected: new Set(k.corrected || []),
-           message: k.points.length + ' face points (kept' + (n ? ', ' + n + ' moved by hand' : '') + ')' };
+  return { options: pageOptions(), photos: app.photos.map(photoState) };
 }
 const fileKey = (f) => f.name + ':' + f.size + ':' + f.lastModified;
 const photosKey = () => app.photos.map((p) => fileKey(p.file)).join('|');
@@ -297,20 +276,8 @@ export async function restoreHead(id) {
     current = { id, fit: app.fit, texture: app.texture, eyePhoto: app.eyePhoto, smilePhoto: app.smilePhoto,
                bytes: stored.bytes, photosKey: null };
   }
-  const o = head.page.options || {};
-  if (o.level !== undefined) ui.level.value = o.level;
-  ui.autoFit.checked = o.autoFit !== false;
-  ui.showComponents.checked = o.showComponents !== false;
-  ui.fullDetail.checked = !!o.fullDetail;
-  for (const p of app.photos) URL.revokeObjectURL(p.url);
-  app.photos = (head.page.photos || []).map((p, i) => {
-    const blob = stored.photos && stored.photos[i];
-    if (!blob) return null;
-    const f = blob instanceof File ? blob : new File([blob], p.name);
-    return { name: p.name, file: f, width: p.width, height: p.height, url: URL.createObjectURL(f), role: 'face',
-             filePoints: p.filePoints ? new Float64Array(p.filePoints) : null, pointsName: p.pointsName,
-             clicks: new Map(p.clicks || []), calib: null, sent: null, detect: restoredDetect(p.detect) };
-  }).filter(Boolean);
+  applyOptions(head.page.options);
+  restorePhotos(head.page.photos || [], stored.photos || []);
   current.photosKey = head.photosOnly ? inputsKey() : photosKey();
   renderPhotos();
   app.restored = { id, savedAt: head.savedAt, ms: performance.now() - t0 };

@@ -12,6 +12,8 @@ import { stopAnimation } from './animation.js';
 import { showStage } from './head_view.js';
 import { renderPhotos } from './photos.js';
 import { checkFitQuality } from './checks.js';
+import { projectInputs, takeInputs } from './project_inputs.js';
+import { photoCount } from './wording.js';
 
 function projectName() {
   const base = (app.fit && app.fit.name ? app.fit.name : 'head').replace(/\.likeness\.glb$/i, '').replace(/\.[^.]*$/, '');
@@ -47,7 +49,8 @@ export async function saveProject() {
   if (!app.fit || document.body.dataset.state === 'working') return;
   stopAnimation();
   try {
-    const r = await runJob({ type: 'saveProject', parts: projectParts() }, []);
+    // With the photos' files, their face points and the page's options.
+    const r = await runJob({ type: 'saveProject', parts: projectParts(), inputs: await projectInputs() }, []);
     if (!r.ok) { showError('Could not save the project: ' + r.message); return; }
     const name = projectName();
     download(name, r.bytes, 'model/gltf-binary');
@@ -120,7 +123,11 @@ export async function openProject(file) {
     showStage('subdivide');
   }
   meta.textContent = formatBytes(file.size) + ' · project';
-  setStatus('Opened ' + file.name + (result.texture ? ' (textured)' : '') + (partsFrom ? ', with ' + partsFrom : '') + ' in ' + Math.round(wallMs) +
+  // The photos it keeps (version 3) replace the page's, with their face points.
+  const photos = takeInputs(result.inputs);
+  app.project.photos = photos;
+  setStatus('Opened ' + file.name + (result.texture ? ' (textured)' : '') + (partsFrom ? ', with ' + partsFrom : '') +
+            (photos ? ', its ' + photoCount(photos) + ' (' + app.photos.filter((p) => p.detect && p.detect.points).length + ' with face points)' : '') + ' in ' + Math.round(wallMs) +
             ' ms, without fitting: animate it, texture it or export it.');
   endJob(job);
   renderPhotos();

@@ -1,13 +1,14 @@
 // The Texture stage (tarini2002 Sec. 3): every face photo with
 // correspondences is calibrated and the fitted head textured in the worker;
 // the viewer then shows the skin on the chosen level.
-import { app, params, ui, beginJob, clearError, endJob, live, setStage, setStatus, showError, stageItem } from './state.js';
+import { app, ui, beginJob, clearError, endJob, live, setStage, setStatus, showError, stageItem } from './state.js';
 import { runJob } from './worker_client.js';
 import { facePhotos, photoPoints, renderPhotos, texturable } from './photos.js';
 import { clicker, closeClicker, updateClicker } from './clicker.js';
 import { stopAnimation } from './animation.js';
 import { showComponents, showStage } from './head_view.js';
 import { photoCount } from './wording.js';
+import { pageOption } from './project_inputs.js';
 
 export function forgetTexture() {
   app.texture = null;
@@ -70,7 +71,7 @@ export async function runTexture() {
       pts.list.forEach((x, k) => flat.set([x.u, x.v, x.p[0], x.p[1], x.p[2]], 5 * k));
       photos.push({ name: p.name, buffer: await p.file.arrayBuffer(), points: flat });
     }
-    const size = Number(params.get('texture_size')) > 0 ? Number(params.get('texture_size')) : 1024;
+    const size = pageOption('textureSize') || 1024;  // ?texture_size, else a restored project's
     // A head from photos: the worker also looks for the iris in them, unless an eye photo gave one.
     const findEyes = fromPhotos && !(app.eyePhoto && !app.eyePhoto.fromFacePhotos);
     result = await runJob({ type: 'texture', photos, options: { size, cameras: fromPhotos, findEyes } }, photos.map((p) => p.buffer),

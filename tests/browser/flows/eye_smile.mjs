@@ -36,7 +36,8 @@ async function glbImages(page) {
 // Issue 39's "save, clear storage, open: equal" with the eye and smile
 // photos' textures: "Save project" with them shown, then the file opened in
 // a browser with an empty profile (no IndexedDB, no photos): the eyes and
-// teeth are the photos' again, on screen and in the GLB, byte for byte.
+// teeth are the photos' again, on screen and in the GLB, byte for byte, and
+// the photo rows come back from the file with their roles.
 async function savedAndOpened(s, page, photoGlb, withSmile) {
   const downloadP = page.waitForEvent('download', { timeout: JOB_TIMEOUT_MS });
   await page.click('#btn-save-project');
@@ -44,6 +45,7 @@ async function savedAndOpened(s, page, photoGlb, withSmile) {
   const bytes = fs.readFileSync(await download.path());
   await settled(page);
   const shown = await page.evaluate(() => window.likeness.componentTextures);
+  const photosSaved = await page.evaluate(() => window.likeness.photos.map((p) => p.name + ':' + (p.role || 'face') + ':' + p.file.size).join(' '));
   const { origin } = await s.serve();
   const context = s.watchRequests(await launchChromium('eye-smile-open', { width: 1280, height: 800 }));
   try {
@@ -55,11 +57,12 @@ async function savedAndOpened(s, page, photoGlb, withSmile) {
       !(window.likeness.keep && window.likeness.keep.heads && window.likeness.keep.heads.length));
     await fresh.setInputFiles('#project-input', { name: download.suggestedFilename(), mimeType: 'model/gltf-binary', buffer: bytes });
     await settled(fresh);
-    const opened = await fresh.evaluate(() => ({ tex: window.likeness.componentTextures, photos: window.likeness.photos.length,
+    const opened = await fresh.evaluate(() => ({ tex: window.likeness.componentTextures,
+      photos: window.likeness.photos.map((p) => p.name + ':' + (p.role || 'face') + ':' + p.file.size).join(' '),
       status: document.getElementById('status').textContent, state: document.body.dataset.state }));
     check('a project saved with eye' + (withSmile ? ' and smile' : '') + ' photos, opened in an empty browser profile, shows their iris' +
-          (withSmile ? ' and teeth' : '') + ' again (no photo in the page)',
-          empty && opened.state === 'done' && opened.photos === 0 && opened.tex.eyes === shown.eyes &&
+          (withSmile ? ' and teeth' : '') + ' again, and the photos come back with their roles (project file version 3)',
+          empty && opened.state === 'done' && opened.photos === photosSaved && /:eye:/.test(opened.photos) && opened.tex.eyes === shown.eyes &&
           opened.tex.teeth === shown.teeth && opened.tex.teethTextured && /eyes from eye_close\.png/.test(opened.status),
           `saved ${bytes.length} bytes showing ${JSON.stringify(shown)}; opened ${JSON.stringify(opened)}`);
     const openedGlb = await glbImages(fresh);

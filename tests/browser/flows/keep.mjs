@@ -114,6 +114,82 @@ async function photosWithoutHead(s) {
           JSON.stringify(after && { name: after.name, state: after.state, ms: after.ms, same: after.points === before.points,
                                      message: after.message, status: after.status }));
     await shot(other, 'web_keep_photos.png');
+    await photosInProjectFile(s, other, before.points, photo);
+  } finally {
+    await closeChromium(context);
+  }
+}
+
+// The project file's extras and its bufferViews' bytes (a GLB: header, JSON
+// chunk, binary chunk).
+function glbProject(bytes) {
+  const jsonLength = bytes.readUInt32LE(12);
+  const doc = JSON.parse(bytes.subarray(20, 20 + jsonLength).toString('utf8'));
+  const bin = 20 + jsonLength + 8;
+  const view = (i) => {
+    const v = doc.bufferViews[i], at = bin + (v.byteOffset || 0);
+    return bytes.subarray(at, at + v.byteLength);
+  };
+  return { likeness: doc.extras && doc.extras.likeness, view };
+}
+
+// The project file keeps the photos (version 3): on the page that restored
+// the photo and its dragged point, a head fitted to a synthetic scan beside
+// them is saved with Save project and opened in a browser with an empty
+// profile (no IndexedDB): the photo row comes back with the file's own bytes
+// and the same face points, the dragged one included, with no detection and
+// no fit run.
+async function photosInProjectFile(s, page, points, photo) {
+  const synth = syntheticScan(s.webdir, 2, 20000);
+  if (synth.skip) {
+    note('photos in the project file: not exercised, ' + synth.skip);
+    return;
+  }
+  await page.setInputFiles('#file-input', [{ name: 'photos_scan.ply', mimeType: 'application/octet-stream', buffer: synth.bytes }]);
+  await page.waitForFunction(() => window.likeness.scan && window.likeness.model && document.body.dataset.state !== 'working',
+                             null, { timeout: JOB_TIMEOUT_MS });
+  await page.click('#btn-fit');
+  await page.waitForFunction(() => (window.likeness.fit && window.likeness.fit.fitMs > 0 && document.body.dataset.state === 'done') ||
+                                   document.body.dataset.state === 'error', null, { timeout: JOB_TIMEOUT_MS });
+  const downloadP = page.waitForEvent('download', { timeout: JOB_TIMEOUT_MS });
+  await page.click('#btn-save-project');
+  const download = await downloadP;
+  const bytes = fs.readFileSync(await download.path());
+  const { likeness, view } = glbProject(bytes);
+  const kept = likeness && likeness.photos && likeness.photos[0];
+  const keptPoints = kept && kept.points ? JSON.parse(view(kept.points.view).toString('utf8')) : null;
+  check('Save project writes the photo into the file (version 3) byte for byte, its face points with the dragged one marked',
+        !!kept && likeness.version === 3 && kept.name === 'kept_face.png' && kept.role === 'face' &&
+        Buffer.compare(view(kept.file.view), photo) === 0 && !!keptPoints && JSON.stringify(keptPoints.points) === points &&
+        keptPoints.format === 'likeness-landmarks' && keptPoints.corrected.includes(1) && !!likeness.page_options,
+        JSON.stringify({ version: likeness && likeness.version, kept, corrected: keptPoints && keptPoints.corrected, size: bytes.length }));
+
+  const { origin } = await s.serve();
+  const context = s.watchRequests(await launchChromium('keep-photos-open', { width: 1280, height: 800 }));
+  try {
+    const fresh = s.watch(await context.newPage());
+    await fresh.goto(origin + '/index.html?autofit=0');
+    await waitForState(fresh, ['ready', 'error'], READY_TIMEOUT_MS);
+    await fresh.setInputFiles('#project-input', { name: download.suggestedFilename(), mimeType: 'model/gltf-binary', buffer: bytes });
+    await fresh.waitForFunction(() => (window.likeness.project && window.likeness.fit && document.body.dataset.state === 'done') ||
+                                      document.body.dataset.state === 'error', null, { timeout: JOB_TIMEOUT_MS });
+    await settled(fresh);
+    const got = await fresh.evaluate(async () => {
+      const L = window.likeness, p = L.photos[0];
+      const file = p && new Uint8Array(await p.file.arrayBuffer());
+      return p && { photos: L.photos.length, name: p.name, size: file.length, head: Array.from(file.subarray(0, 8)),
+                    width: p.width, height: p.height, state: p.detect && p.detect.state, ms: p.detect && p.detect.ms,
+                    points: p.detect && JSON.stringify(p.detect.points), message: p.detect && p.detect.message,
+                    fitMs: L.fit.fitMs, rows: document.querySelectorAll('#photo-list li').length,
+                    status: document.getElementById('status').textContent };
+    });
+    check('... Open project in an empty browser brings the photo row back with the same file and face points (the dragged one ' +
+          'too), without detecting or fitting again',
+          !!got && got.photos === 1 && got.rows === 1 && got.name === 'kept_face.png' && got.size === photo.length &&
+          Buffer.compare(Buffer.from(got.head), photo.subarray(0, 8)) === 0 && got.state === 'found' && got.ms === 0 &&
+          got.points === points && /moved by hand/.test(got.message) && got.fitMs === 0 && /its 1 photo/.test(got.status),
+          JSON.stringify(got && { ...got, points: got.points === points }) + ' ' + (await bannerText(fresh)));
+    await shot(fresh, 'web_project_photos.png');
   } finally {
     await closeChromium(context);
   }
