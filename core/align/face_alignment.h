@@ -167,6 +167,12 @@ struct OrientationOptions {
   // scans 1.4-1.7 %), no other orientation can be clearly better and the
   // other 47 starts are skipped (about 0.6 s on every well-posed fit).
   double accept_given_fraction = 0.006;
+  // After the screening, the search also stops when the given orientation
+  // is clearly best: every start ending turned (not consistent with it)
+  // scores at least 1 / better_ratio times the given start's, the margin a
+  // turn needs the other way round. The rest (the kept starts' further
+  // iterations, the candidates' dense scores) could not turn the scan.
+  bool stop_when_given_clearly_best = true;
   double snap_deg = 25.0;  // directions this close to an axis are reported as that axis
 };
 
@@ -177,6 +183,7 @@ struct OrientationGuess {
   double score_given = 0;            // best score consistent with the given orientation (0: none)
   double score_best = 0;
   bool differs = false;              // the scan is clearly in another orientation
+  bool given_clearly_best = false;   // stopped after the screening (stop_when_given_clearly_best)
 };
 
 Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, const PointCloud& cloud,
