@@ -26,6 +26,7 @@ export async function checkPhotos(photos, alone) {
       continue;
     }
     let result;
+    const t0 = performance.now();
     try {
       const buffer = await file.arrayBuffer();
       result = await runJob({ type: 'image', name: file.name, buffer }, [buffer]);
@@ -46,7 +47,7 @@ export async function checkPhotos(photos, alone) {
     meta.parentElement.title = file.name + ': ' + result.width + '×' + result.height +
                                ' photo, kept for the Texture stage';
     const photo = addPhoto({ name: file.name, file, width: result.width, height: result.height, decoder: result.decoder,
-                             exifFocalPx: result.focalPx || 0 });
+                             exifFocalPx: result.focalPx || 0, checkMs: performance.now() - t0 });
     // Its face points are found now, while the worker checks the next photo
     // (the detector takes one photo at a time, landmarks.js).
     findLandmarks([photo]);
@@ -124,13 +125,17 @@ async function findLandmarks(photos) {
     let bitmap = null;
     try {
       bitmap = await detectionImage(photo);
+      const t1 = performance.now();
       const r = await detectLandmarks(bitmap, photo.width, photo.height);
-      const ms = Math.round(performance.now() - t0);
+      const doneAt = performance.now();
+      // ms: from its turn to its points; decodeMs: its detection image;
+      // detectMs: the detector (its loading, for the first photo, included).
+      const ms = Math.round(doneAt - t0), times = { ms, decodeMs: t1 - t0, detectMs: doneAt - t1, doneAt };
       if (!r.points) {
-        photo.detect = { state: 'none', faces: 0, points: null, ms,
+        photo.detect = { state: 'none', faces: 0, points: null, ...times,
                          message: 'no face found: mark its landmarks by clicking instead' };
       } else {
-        photo.detect = { state: r.faces > 1 ? 'many' : 'found', faces: r.faces, points: r.points, ms,
+        photo.detect = { state: r.faces > 1 ? 'many' : 'found', faces: r.faces, points: r.points, ...times,
                          message: r.faces > 1 ? r.faces + ' faces found: points shown for one of them, check it is the right person'
                            : r.points.length + ' face points found' };
       }

@@ -99,7 +99,7 @@ export async function runTexture() {
     showError('Texture: ' + (result.message || result.code));
     return;
   }
-  app.texture = { uvs: result.uvs, skin: result.skin, steps: result.steps, textureMs: result.textureMs, wallMs,
+  app.texture = { uvs: result.uvs, skin: result.skin, steps: result.steps, textureMs: result.textureMs, workerMs: result.workerMs, wallMs,
                   level: result.level, photos: using.length };
   setStage('texture', Math.round(result.textureMs) + ' ms', 1, 'complete');
   const rms = using.map((p) => p.calib && p.calib.ok ? p.calib.rms : NaN).filter((x) => !Number.isNaN(x));
