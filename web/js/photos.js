@@ -7,7 +7,7 @@ import { formatBytes, listFile, MAX_SCAN_BYTES, refuseFile } from './files.js';
 import { runJob } from './worker_client.js';
 import { clicker, closeClicker, openClicker } from './clicker.js';
 import { dropRoleTexture, PHOTO_ROLES, setPhotoRole } from './photo_roles.js';
-import { detectLandmarks } from './landmarks.js';
+import { detectLandmarks, detectorInference } from './landmarks.js';
 import { photoCount } from './wording.js';
 
 // Photos are decoded once in the worker to catch broken files now rather
@@ -116,6 +116,7 @@ async function detectionImage(photo) {
 // {state: 'running' | 'found' | 'none' | 'many' | 'failed', points, faces,
 // message, ms}. Where no face is found the guided clicks remain the way in.
 async function findLandmarks(photos) {
+  app.detectorInference = detectorInference();
   for (const photo of photos) photo.detect = { state: 'waiting' };
   for (const photo of photos) {
     if (!app.photos.includes(photo)) continue;  // removed meanwhile
