@@ -29,7 +29,7 @@ export async function checkPhotos(photos, alone) {
     const t0 = performance.now();
     try {
       const buffer = await file.arrayBuffer();
-      result = await runJob({ type: 'image', name: file.name, buffer }, [buffer]);
+      result = await runJob({ type: 'image', name: file.name, buffer, smallPx: DETECT_PX }, [buffer]);
     } catch (e) {
       if (e && e.cancelled) {
         meta.textContent = formatBytes(file.size) + ' · cancelled';
@@ -47,7 +47,7 @@ export async function checkPhotos(photos, alone) {
     meta.parentElement.title = file.name + ': ' + result.width + '×' + result.height +
                                ' photo, kept for the Texture stage';
     const photo = addPhoto({ name: file.name, file, width: result.width, height: result.height, decoder: result.decoder,
-                             exifFocalPx: result.focalPx || 0, checkMs: performance.now() - t0 });
+                             exifFocalPx: result.focalPx || 0, checkMs: performance.now() - t0, small: result.small || null });
     // Its face points are found now, while the worker checks the next photo
     // (the detector takes one photo at a time, landmarks.js).
     findLandmarks([photo]);
@@ -97,9 +97,14 @@ function addPhoto(entry) {
 // 12-megapixel photos": 1280 px halves the time of 1920 px, its points
 // 2.8 px of a 4000 px photo from the full size's); its points are fractions
 // of the image, so they come out in the photo's own pixels. The texture
-// still reads the original file.
+// still reads the original file. The worker's check made it from its own
+// decode of the photo (photo.small), so the photo is decoded here only where
+// it did not (a photo smaller than that, or the stb decoder).
 const DETECT_PX = 1280;
 async function detectionImage(photo) {
+  const small = photo.small;
+  photo.small = null;
+  if (small) return small;
   const full = await createImageBitmap(photo.file);  // EXIF orientation applied
   const scale = DETECT_PX / Math.max(full.width, full.height);
   if (scale >= 1) return full;
@@ -119,7 +124,10 @@ async function findLandmarks(photos) {
   app.detectorInference = detectorInference();
   for (const photo of photos) photo.detect = { state: 'waiting' };
   for (const photo of photos) {
-    if (!app.photos.includes(photo)) continue;  // removed meanwhile
+    if (!app.photos.includes(photo)) {  // removed meanwhile
+      if (photo.small) photo.small.close();
+      continue;
+    }
     photo.detect = { state: 'running' };
     renderPhotos();
     const t0 = performance.now();
