@@ -77,6 +77,13 @@ function detector() {
   return loading;
 }
 
+// Starts loading the detector (its wasm and models, a few seconds) while
+// the dropped photos are still being checked; a failure is left for the
+// first detection to report.
+export function preloadDetector() {
+  queue = queue.then(() => detector()).catch(() => {});
+}
+
 // Landmarks of the face in `image` (an ImageBitmap, image or canvas of
 // width x height pixels): {faces, points} where points are [x, y] pixels
 // (origin top-left) of the first face, index = the detector's landmark

@@ -7,7 +7,7 @@ import { formatBytes, listFile, MAX_SCAN_BYTES, refuseFile } from './files.js';
 import { runJob } from './worker_client.js';
 import { clicker, closeClicker, openClicker } from './clicker.js';
 import { dropRoleTexture, PHOTO_ROLES, setPhotoRole } from './photo_roles.js';
-import { detectLandmarks, detectorInference } from './landmarks.js';
+import { detectLandmarks, detectorInference, preloadDetector } from './landmarks.js';
 import { photoCount } from './wording.js';
 
 // Photos are decoded once in the worker to catch broken files now rather
@@ -15,6 +15,8 @@ import { photoCount } from './wording.js';
 export async function checkPhotos(photos, alone) {
   const job = beginJob('photos');
   if (!job) return;
+  // The detector loads while the first photo is checked (landmarks.js).
+  if (photos.length) preloadDetector();
   const failures = [];
   for (const file of photos) {
     if (!live(job)) break;
