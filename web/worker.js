@@ -202,7 +202,8 @@ const BROWSER_DECODER = typeof createImageBitmap === 'function' && typeof Offscr
 // smallPx > 0: also {small}, the photo scaled down to smallPx on its longer
 // side from the same decode (an ImageBitmap, for the page's face detector:
 // the page need not decode the photo again), when it is larger than that.
-async function photoPixels(name, buffer, smallPx = 0) {
+// probe false: no truncation probe (a photo the image job already checked).
+async function photoPixels(name, buffer, smallPx = 0, probe = true) {
   if (!BROWSER_DECODER) return { buffer, decoded: null, decoder: 'stb' };
   const info = withHeapBytes(buffer, (ptr, size) => core.inspect_image(name, ptr, size));
   if (!info.ok) return { error: info };
@@ -238,10 +239,10 @@ async function photoPixels(name, buffer, smallPx = 0) {
   if (first.why) return fail(first.why);
   // A JPEG whose image data ends early is filled in silently by the decoder;
   // its probe (one-bits after each scan, io.h) then decodes differently.
-  const probe = withHeapBytes(buffer, (ptr, size) => core.jpeg_truncation_probe(name, ptr, size));
-  if (!probe.ok) return { error: probe };
-  if (probe.probe.length) {
-    const second = await decode(probe.probe);
+  const probed = probe ? withHeapBytes(buffer, (ptr, size) => core.jpeg_truncation_probe(name, ptr, size)) : { ok: true, probe: [] };
+  if (!probed.ok) return { error: probed };
+  if (probed.probe.length) {
+    const second = await decode(probed.probe);
     const a = first.pixels, b = second.pixels;
     let same = !second.why && b.length === a.length;
     if (same) {  // four bytes at a time (RGBA rows: a multiple of 4)
@@ -332,12 +333,14 @@ const JOBS = {
   export: (msg) => core.export_head(msg.level, msg.format),
   // {text}: a points file (u v X Y Z per line) -> {points: Float64Array}.
   points: (msg) => core.parse_points(String(msg.text)),
-  // {photos: [{name, buffer, points: Float64Array}], options}: calibrate each
+  // {photos: [{name, buffer, points: Float64Array, checked}], options}: calibrate each
   // photo and texture the kept head (tarini2002 Sec. 3). Progress 'texture'.
   texture: async (msg, progress) => {
     const photos = [];
     for (const p of msg.photos || []) {
-      const photo = await photoPixels(String(p.name), p.buffer || new ArrayBuffer(0));
+      // checked: the image job checked this file's bytes when it was dropped;
+      // its truncation probe (a second decode) is not made again.
+      const photo = await photoPixels(String(p.name), p.buffer || new ArrayBuffer(0), 0, !p.checked);
       if (photo.error) return photo.error;
       photos.push({ name: p.name, buffer: photo.buffer, decoded: photo.decoded, points: p.points });
     }

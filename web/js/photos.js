@@ -48,7 +48,8 @@ export async function checkPhotos(photos, alone) {
     meta.textContent = formatBytes(file.size) + ' · ' + result.width + '×' + result.height + ' photo';
     meta.parentElement.title = file.name + ': ' + result.width + '×' + result.height +
                                ' photo, kept for the Texture stage';
-    const photo = addPhoto({ name: file.name, file, width: result.width, height: result.height, decoder: result.decoder,
+    // checked: the worker checked these bytes (the texture job need not probe them again).
+    const photo = addPhoto({ name: file.name, file, width: result.width, height: result.height, decoder: result.decoder, checked: true,
                              exifFocalPx: result.focalPx || 0, checkMs: performance.now() - t0, small: result.small || null });
     // Its face points are found now, while the worker checks the next photo
     // (the detector takes one photo at a time, landmarks.js).

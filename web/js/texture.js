@@ -61,14 +61,14 @@ export async function runTexture() {
     for (const p of using) {
       if (fromPhotos) {
         p.sent = [];
-        photos.push({ name: p.name, buffer: await p.file.arrayBuffer() });
+        photos.push({ name: p.name, buffer: await p.file.arrayBuffer(), checked: !!p.checked });
         continue;
       }
       const pts = photoPoints(p);
       p.sent = pts.list.map((x) => ({ label: x.label }));
       const flat = new Float64Array(pts.list.length * 5);
       pts.list.forEach((x, k) => flat.set([x.u, x.v, x.p[0], x.p[1], x.p[2]], 5 * k));
-      photos.push({ name: p.name, buffer: await p.file.arrayBuffer(), points: flat });
+      photos.push({ name: p.name, buffer: await p.file.arrayBuffer(), points: flat, checked: !!p.checked });
     }
     const size = Number(params.get('texture_size')) > 0 ? Number(params.get('texture_size')) : 1024;
     result = await runJob({ type: 'texture', photos, options: { size, cameras: fromPhotos } }, photos.map((p) => p.buffer),
