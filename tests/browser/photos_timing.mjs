@@ -46,12 +46,12 @@ const TIMEOUT_MS = 900000;
 const s1 = (ms) => (ms / 1000).toFixed(2);
 const range = (xs) => xs.length ? `${s1(Math.min(...xs))}-${s1(Math.max(...xs))}` : '-';
 
-// [{name, mimeType, buffer}] of the photos to drop.
+// [{name, mimeType, buffer}] of the photos to drop, or null (skipped, said why).
 async function makePhotos(context, server) {
   if (kira) {
     if (!fs.existsSync(KIRA)) {
       console.log(`photos-timing: skipped, ${KIRA} is absent (../shared/data is not in the repo)`);
-      process.exit(0);
+      return null;
     }
     return fs.readdirSync(KIRA).filter((f) => /\.jpe?g$/i.test(f)).sort()
       .map((f) => ({ name: f, mimeType: 'image/jpeg', buffer: fs.readFileSync(path.join(KIRA, f)) }));
@@ -59,7 +59,7 @@ async function makePhotos(context, server) {
   const bin = likenessBin(root);
   if (!bin) {
     console.log('photos-timing: skipped, no native likeness binary to make the renders (set LK_LIKENESS_BIN)');
-    process.exit(0);
+    return null;
   }
   const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'likeness-photos-timing-'));
   try {
@@ -94,9 +94,13 @@ async function makePhotos(context, server) {
 
 const server = await serveDir(root);
 const context = await launchChromium('photos-timing', { width: 1280, height: 900 });
-let status = 0;
-try {
+const status = await measure().then(() => 0, (e) => { console.error(String(e && e.message ? e.message : e)); return 1; });
+await closeChromium(context, server);
+process.exit(status);
+
+async function measure() {
   const photos = await makePhotos(context, server);
+  if (!photos) return;
   const mb = photos.reduce((a, p) => a + p.buffer.length, 0) / 1e6;
   console.log(`photos: ${photos.length} ${kira ? 'real photos (Kira)' : `renders scaled to ${W}x${H} JPEGs`}, ${mb.toFixed(1)} MB`);
   let lastPoints = null;
@@ -157,10 +161,4 @@ try {
       console.log(`  ${name}: points ${(sum / pts.length).toFixed(2)} px apart on average, ${max.toFixed(2)} px at most`);
     }
   }
-} catch (e) {
-  console.error(String(e && e.message ? e.message : e));
-  status = 1;
-} finally {
-  await closeChromium(context, server);
 }
-process.exit(status);
