@@ -16,10 +16,11 @@
 // textured head. --save FILE writes the face points found (photo -> points),
 // --compare FILE prints, per photo, whether a face was found in both and the
 // mean and largest distance between the points (photo pixels).
-// --detector cpu|gpu forces the detector's inference (the page's ?detector=).
+// --detector cpu|gpu forces the detector's inference (the page's ?detector=);
+// --query adds URL parameters (e.g. threads=1).
 //
 // Usage: node photos_timing.mjs WEBDIR [--kira] [--size 3000x4000] [--runs N]
-//        [--detector cpu|gpu] [--save FILE] [--compare FILE]
+//        [--detector cpu|gpu] [--save FILE] [--compare FILE] [--query K=V&...]
 import { closeChromium, launchChromium, likenessBin, serveDir, takeFlag, takeOption } from './harness.mjs';
 import { execFileSync } from 'node:child_process';
 import fs from 'node:fs';
@@ -34,6 +35,7 @@ const runs = Math.max(1, Number(takeOption(args, '--runs', 1)) || 1);
 const detector = takeOption(args, '--detector', '');
 const saveFile = takeOption(args, '--save', '');
 const compareFile = takeOption(args, '--compare', '');
+const extraQuery = takeOption(args, '--query', '');
 const [webdir] = args;
 if (!webdir || !(W > 0 && H > 0)) {
   console.error('usage: node photos_timing.mjs WEBDIR [--kira] [--size 3000x4000] [--runs N] [--detector cpu|gpu] [--save FILE] [--compare FILE]');
@@ -107,7 +109,7 @@ async function measure() {
   for (let run = 1; run <= runs; run++) {
     const page = await context.newPage();
     page.on('pageerror', (e) => console.log('page error:', e.message));
-    const query = '?keep=0' + (detector ? '&detector=' + detector : '');
+    const query = '?keep=0' + (detector ? '&detector=' + detector : '') + (extraQuery ? '&' + extraQuery : '');
     await page.goto(`http://127.0.0.1:${server.address().port}/index.html${query}`);
     await page.waitForFunction(() => document.body.dataset.state === 'ready', null, { timeout: 180000 });
     await page.evaluate(() => {
