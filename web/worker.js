@@ -240,7 +240,10 @@ async function photoPixels(name, buffer, smallPx = 0, probe = true) {
   // A JPEG whose image data ends early is filled in silently by the decoder;
   // its probe (one-bits after each scan, io.h) then decodes differently.
   const probed = probe ? withHeapBytes(buffer, (ptr, size) => core.jpeg_truncation_probe(name, ptr, size)) : { ok: true, probe: [] };
-  if (!probed.ok) return { error: probed };
+  if (!probed.ok) {
+    if (small) small.close();
+    return { error: probed };
+  }
   if (probed.probe.length) {
     const second = await decode(probed.probe);
     const a = first.pixels, b = second.pixels;
