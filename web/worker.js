@@ -199,12 +199,17 @@ const BROWSER_DECODER = typeof createImageBitmap === 'function' && typeof Offscr
 
 // -> {buffer, decoded: {width, height}, decoder} with the RGBA pixels, or
 // {buffer (the file's bytes), decoded: null, decoder: 'stb'}, or {error: result}.
-async function photoPixels(name, buffer) {
+// smallPx > 0: also {small}, the photo scaled down to smallPx on its longer
+// side from the same decode (an ImageBitmap, for the page's face detector:
+// the page need not decode the photo again), when it is larger than that.
+// probe false: no truncation probe (a photo the image job already checked).
+async function photoPixels(name, buffer, smallPx = 0, probe = true) {
   if (!BROWSER_DECODER) return { buffer, decoded: null, decoder: 'stb' };
   const info = withHeapBytes(buffer, (ptr, size) => core.inspect_image(name, ptr, size));
   if (!info.ok) return { error: info };
   const fail = (why, code = 'InvalidInput') => ({ error: { ok: false, code, message: name + ': ' + why } });
-  const decode = async (bytes) => {
+  let small = null;
+  const decode = async (bytes, wantSmall) => {
     let bitmap;
     try {
       bitmap = await createImageBitmap(new Blob([bytes]), { imageOrientation: 'from-image', premultiplyAlpha: 'none' });
@@ -220,34 +225,54 @@ async function photoPixels(name, buffer) {
       const ctx = canvas.getContext('2d', { willReadFrequently: true });
       if (!ctx) return { why: 'no 2-D canvas to read the decoded pixels from' };
       ctx.drawImage(bitmap, 0, 0);
+      const scale = wantSmall ? smallPx / Math.max(bitmap.width, bitmap.height) : 1;
+      if (scale < 1) {
+        small = await createImageBitmap(bitmap, { resizeWidth: Math.round(bitmap.width * scale),
+                                                  resizeHeight: Math.round(bitmap.height * scale), resizeQuality: 'high' });
+      }
       return { pixels: ctx.getImageData(0, 0, bitmap.width, bitmap.height).data };
     } finally {
       bitmap.close();
     }
   };
-  const first = await decode(buffer);
+  const first = await decode(buffer, smallPx > 0);
   if (first.why) return fail(first.why);
   // A JPEG whose image data ends early is filled in silently by the decoder;
   // its probe (one-bits after each scan, io.h) then decodes differently.
-  const probe = withHeapBytes(buffer, (ptr, size) => core.jpeg_truncation_probe(name, ptr, size));
-  if (!probe.ok) return { error: probe };
-  if (probe.probe.length) {
-    const second = await decode(probe.probe);
+  const probed = probe ? withHeapBytes(buffer, (ptr, size) => core.jpeg_truncation_probe(name, ptr, size)) : { ok: true, probe: [] };
+  if (!probed.ok) {
+    if (small) small.close();
+    return { error: probed };
+  }
+  if (probed.probe.length) {
+    const second = await decode(probed.probe);
     const a = first.pixels, b = second.pixels;
     let same = !second.why && b.length === a.length;
-    for (let i = 0; same && i < a.length; i++) same = a[i] === b[i];
-    if (!same) return fail('truncated JPEG: its image data ends before its last blocks (the decoder would fill them with grey)', 'Truncated');
+    if (same) {  // four bytes at a time (RGBA rows: a multiple of 4)
+      const a4 = new Uint32Array(a.buffer, a.byteOffset, a.length >> 2), b4 = new Uint32Array(b.buffer, b.byteOffset, b.length >> 2);
+      for (let i = 0; same && i < a4.length; i++) same = a4[i] === b4[i];
+    }
+    if (!same) {
+      if (small) small.close();
+      return fail('truncated JPEG: its image data ends before its last blocks (the decoder would fill them with grey)', 'Truncated');
+    }
   }
-  return { buffer: first.pixels.buffer, decoded: { width: info.width, height: info.height }, decoder: 'browser' };
+  return { buffer: first.pixels.buffer, decoded: { width: info.width, height: info.height }, decoder: 'browser', small };
 }
 
 // Runs fn(ptr, size, decoded) on a photo's pixels (or bytes) in the heap;
 // the result says which decoder ran.
-async function withPhoto(name, buffer, fn) {
-  const photo = await photoPixels(name, buffer);
+async function withPhoto(name, buffer, fn, smallPx = 0) {
+  const photo = await photoPixels(name, buffer, smallPx);
   if (photo.error) return photo.error;
   const result = withHeapBytes(photo.buffer, (ptr, size) => fn(ptr, size, photo.decoded));
-  if (result && typeof result === 'object') result.decoder = photo.decoder;
+  if (result && typeof result === 'object') {
+    result.decoder = photo.decoder;
+    if (photo.small) {
+      if (result.ok) result.small = photo.small;
+      else photo.small.close();
+    }
+  }
   return result;
 }
 
@@ -256,11 +281,14 @@ const JOBS = {
   // {name, buffer}: a dropped PLY / OBJ / XYZ / VTK file -> geometry arrays.
   parse: (msg, progress) =>
     withHeapBytes(msg.buffer, (ptr, size) => core.parse_geometry(msg.name, ptr, size, progress)),
-  // {name, buffer}: a dropped photo -> {width, height, channels, decoder} once
-  // decoded, and focalPx, focalSource: the focal its EXIF gives (0: none),
-  // read from the file's bytes (the browser's decoder leaves pixels only).
+  // {name, buffer, smallPx}: a dropped photo -> {width, height, channels,
+  // decoder} once decoded, and focalPx, focalSource: the focal its EXIF gives
+  // (0: none), read from the file's bytes (the browser's decoder leaves
+  // pixels only); small: the photo at most smallPx on its longer side (an
+  // ImageBitmap, transferred; none where the photo is smaller or stb decoded it).
   image: async (msg) => {
-    const r = await withPhoto(msg.name, msg.buffer, (ptr, size, decoded) => core.check_image(msg.name, ptr, size, decoded));
+    const r = await withPhoto(msg.name, msg.buffer, (ptr, size, decoded) => core.check_image(msg.name, ptr, size, decoded),
+                              msg.smallPx | 0);
     if (r && r.ok) {
       // EXIF sits in the file's first segments (APP1, at most 64 kB).
       const head = msg.buffer.slice(0, 256 * 1024);
@@ -308,12 +336,14 @@ const JOBS = {
   export: (msg) => core.export_head(msg.level, msg.format),
   // {text}: a points file (u v X Y Z per line) -> {points: Float64Array}.
   points: (msg) => core.parse_points(String(msg.text)),
-  // {photos: [{name, buffer, points: Float64Array}], options}: calibrate each
+  // {photos: [{name, buffer, points: Float64Array, checked}], options}: calibrate each
   // photo and texture the kept head (tarini2002 Sec. 3). Progress 'texture'.
   texture: async (msg, progress) => {
     const photos = [];
     for (const p of msg.photos || []) {
-      const photo = await photoPixels(String(p.name), p.buffer || new ArrayBuffer(0));
+      // checked: the image job checked this file's bytes when it was dropped;
+      // its truncation probe (a second decode) is not made again.
+      const photo = await photoPixels(String(p.name), p.buffer || new ArrayBuffer(0), 0, !p.checked);
       if (photo.error) return photo.error;
       photos.push({ name: p.name, buffer: photo.buffer, decoded: photo.decoded, points: p.points });
     }
@@ -366,11 +396,12 @@ function withManyHeapBytes(items, fn) {
   }
 }
 
-// Typed arrays anywhere in the result (fit results nest meshes) are
-// transferred, not copied.
+// Typed arrays anywhere in the result (fit results nest meshes) and image
+// bitmaps are transferred, not copied.
 function transferables(result, out = []) {
   for (const value of Object.values(result)) {
     if (ArrayBuffer.isView(value)) { if (value.buffer.byteLength) out.push(value.buffer); }
+    else if (typeof ImageBitmap === 'function' && value instanceof ImageBitmap) out.push(value);
     else if (value && typeof value === 'object') transferables(value, out);
   }
   return out;

@@ -13,6 +13,36 @@ export const POINT_COUNT = 468;
 let loading = null;   // Promise of {mesh, results}: one detector for the page
 let queue = Promise.resolve();
 
+// Where the detector's networks run: 'cpu' (TFLite on XNNPACK, the wasm's
+// SIMD) or 'gpu' (WebGL, the solution's default off Apple devices). On a
+// software WebGL (SwiftShader, llvmpipe: machines without a GPU, headless
+// Chromium) the CPU is 3-4 times faster and its first photo 2 s sooner,
+// with the same points to 0.4 px (docs/design/photos.md, "The detector on
+// the CPU"); with a GPU the default is kept (not measured here).
+// ?detector=cpu|gpu forces it.
+let chosenInference = '';
+export function detectorInference() {
+  if (!chosenInference) {
+    const forced = new URLSearchParams(location.search).get('detector');
+    chosenInference = forced === 'cpu' || forced === 'gpu' ? forced : softwareWebGL() ? 'cpu' : 'gpu';
+  }
+  return chosenInference;
+}
+
+function softwareWebGL() {
+  try {
+    const gl = document.createElement('canvas').getContext('webgl');
+    if (!gl) return true;  // no WebGL to speak of: the CPU it is
+    const info = gl.getExtension('WEBGL_debug_renderer_info');
+    const renderer = String(gl.getParameter(info ? info.UNMASKED_RENDERER_WEBGL : gl.RENDERER));
+    const lose = gl.getExtension('WEBGL_lose_context');
+    if (lose) lose.loseContext();
+    return /swiftshader|llvmpipe|softpipe|software|basic render/i.test(renderer);
+  } catch (e) {
+    return false;
+  }
+}
+
 function loadScript(src) {
   return new Promise((resolve, reject) => {
     const s = document.createElement('script');
@@ -33,7 +63,7 @@ function detector() {
       // detector's options ("RET_CHECK failure ... has_num_classes()",
       // google-ai-edge/mediapipe#3504); the default (0.5) is kept. The JS
       // solution has no static-image mode: see the blank frame below.
-      mesh.setOptions({ maxNumFaces: 2, refineLandmarks: false });
+      mesh.setOptions({ maxNumFaces: 2, refineLandmarks: false, useCpuInference: detectorInference() === 'cpu' });
       const blank = document.createElement('canvas');
       blank.width = blank.height = 64;
       blank.getContext('2d').fillRect(0, 0, 64, 64);
@@ -45,6 +75,13 @@ function detector() {
     loading.catch(() => { loading = null; });  // a later photo may try again
   }
   return loading;
+}
+
+// Starts loading the detector (its wasm and models, a few seconds) while
+// the dropped photos are still being checked; a failure is left for the
+// first detection to report.
+export function preloadDetector() {
+  queue = queue.then(() => detector()).catch(() => {});
 }
 
 // Landmarks of the face in `image` (an ImageBitmap, image or canvas of
@@ -87,7 +124,7 @@ function tracker() {
     tracking = (async () => {
       if (!window.FaceMesh) await loadScript(BASE + 'face_mesh.js');
       const mesh = new window.FaceMesh({ locateFile: (file) => BASE + file });
-      mesh.setOptions({ maxNumFaces: 1, refineLandmarks: true });
+      mesh.setOptions({ maxNumFaces: 1, refineLandmarks: true, useCpuInference: detectorInference() === 'cpu' });
       const holder = { mesh, results: null };
       mesh.onResults((r) => { holder.results = r; });
       await mesh.initialize();

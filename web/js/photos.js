@@ -7,7 +7,7 @@ import { formatBytes, listFile, MAX_SCAN_BYTES, refuseFile } from './files.js';
 import { runJob } from './worker_client.js';
 import { clicker, closeClicker, openClicker } from './clicker.js';
 import { dropRoleTexture, PHOTO_ROLES, setPhotoRole } from './photo_roles.js';
-import { detectLandmarks } from './landmarks.js';
+import { detectLandmarks, detectorInference, preloadDetector } from './landmarks.js';
 import { photoCount } from './wording.js';
 
 // Photos are decoded once in the worker to catch broken files now rather
@@ -15,6 +15,8 @@ import { photoCount } from './wording.js';
 export async function checkPhotos(photos, alone) {
   const job = beginJob('photos');
   if (!job) return;
+  // The detector loads while the first photo is checked (landmarks.js).
+  if (photos.length) preloadDetector();
   const failures = [];
   for (const file of photos) {
     if (!live(job)) break;
@@ -26,9 +28,10 @@ export async function checkPhotos(photos, alone) {
       continue;
     }
     let result;
+    const t0 = performance.now();
     try {
       const buffer = await file.arrayBuffer();
-      result = await runJob({ type: 'image', name: file.name, buffer }, [buffer]);
+      result = await runJob({ type: 'image', name: file.name, buffer, smallPx: DETECT_PX }, [buffer]);
     } catch (e) {
       if (e && e.cancelled) {
         meta.textContent = formatBytes(file.size) + ' · cancelled';
@@ -45,8 +48,9 @@ export async function checkPhotos(photos, alone) {
     meta.textContent = formatBytes(file.size) + ' · ' + result.width + '×' + result.height + ' photo';
     meta.parentElement.title = file.name + ': ' + result.width + '×' + result.height +
                                ' photo, kept for the Texture stage';
-    const photo = addPhoto({ name: file.name, file, width: result.width, height: result.height, decoder: result.decoder,
-                             exifFocalPx: result.focalPx || 0 });
+    // checked: the worker checked these bytes (the texture job need not probe them again).
+    const photo = addPhoto({ name: file.name, file, width: result.width, height: result.height, decoder: result.decoder, checked: true,
+                             exifFocalPx: result.focalPx || 0, checkMs: performance.now() - t0, small: result.small || null });
     // Its face points are found now, while the worker checks the next photo
     // (the detector takes one photo at a time, landmarks.js).
     findLandmarks([photo]);
@@ -96,9 +100,14 @@ function addPhoto(entry) {
 // 12-megapixel photos": 1280 px halves the time of 1920 px, its points
 // 2.8 px of a 4000 px photo from the full size's); its points are fractions
 // of the image, so they come out in the photo's own pixels. The texture
-// still reads the original file.
+// still reads the original file. The worker's check made it from its own
+// decode of the photo (photo.small), so the photo is decoded here only where
+// it did not (a photo smaller than that, or the stb decoder).
 const DETECT_PX = 1280;
 async function detectionImage(photo) {
+  const small = photo.small;
+  photo.small = null;
+  if (small) return small;
   const full = await createImageBitmap(photo.file);  // EXIF orientation applied
   const scale = DETECT_PX / Math.max(full.width, full.height);
   if (scale >= 1) return full;
@@ -115,22 +124,30 @@ async function detectionImage(photo) {
 // {state: 'running' | 'found' | 'none' | 'many' | 'failed', points, faces,
 // message, ms}. Where no face is found the guided clicks remain the way in.
 async function findLandmarks(photos) {
+  app.detectorInference = detectorInference();
   for (const photo of photos) photo.detect = { state: 'waiting' };
   for (const photo of photos) {
-    if (!app.photos.includes(photo)) continue;  // removed meanwhile
+    if (!app.photos.includes(photo)) {  // removed meanwhile
+      if (photo.small) photo.small.close();
+      continue;
+    }
     photo.detect = { state: 'running' };
     renderPhotos();
     const t0 = performance.now();
     let bitmap = null;
     try {
       bitmap = await detectionImage(photo);
+      const t1 = performance.now();
       const r = await detectLandmarks(bitmap, photo.width, photo.height);
-      const ms = Math.round(performance.now() - t0);
+      const doneAt = performance.now();
+      // ms: from its turn to its points; decodeMs: its detection image;
+      // detectMs: the detector (its loading, for the first photo, included).
+      const ms = Math.round(doneAt - t0), times = { ms, decodeMs: t1 - t0, detectMs: doneAt - t1, doneAt };
       if (!r.points) {
-        photo.detect = { state: 'none', faces: 0, points: null, ms,
+        photo.detect = { state: 'none', faces: 0, points: null, ...times,
                          message: 'no face found: mark its landmarks by clicking instead' };
       } else {
-        photo.detect = { state: r.faces > 1 ? 'many' : 'found', faces: r.faces, points: r.points, ms,
+        photo.detect = { state: r.faces > 1 ? 'many' : 'found', faces: r.faces, points: r.points, ...times,
                          message: r.faces > 1 ? r.faces + ' faces found: points shown for one of them, check it is the right person'
                            : r.points.length + ' face points found' };
       }

@@ -62,14 +62,14 @@ export async function runTexture() {
     for (const p of using) {
       if (fromPhotos) {
         p.sent = [];
-        photos.push({ name: p.name, buffer: await p.file.arrayBuffer() });
+        photos.push({ name: p.name, buffer: await p.file.arrayBuffer(), checked: !!p.checked });
         continue;
       }
       const pts = photoPoints(p);
       p.sent = pts.list.map((x) => ({ label: x.label }));
       const flat = new Float64Array(pts.list.length * 5);
       pts.list.forEach((x, k) => flat.set([x.u, x.v, x.p[0], x.p[1], x.p[2]], 5 * k));
-      photos.push({ name: p.name, buffer: await p.file.arrayBuffer(), points: flat });
+      photos.push({ name: p.name, buffer: await p.file.arrayBuffer(), points: flat, checked: !!p.checked });
     }
     const size = pageOption('textureSize') || 1024;  // ?texture_size, else a restored project's
     // A head from photos: the worker also looks for the iris in them, unless an eye photo gave one.
@@ -102,7 +102,7 @@ export async function runTexture() {
     showError('Texture: ' + (result.message || result.code));
     return;
   }
-  app.texture = { uvs: result.uvs, skin: result.skin, steps: result.steps, textureMs: result.textureMs, wallMs,
+  app.texture = { uvs: result.uvs, skin: result.skin, steps: result.steps, textureMs: result.textureMs, workerMs: result.workerMs, wallMs,
                   level: result.level, photos: using.length };
   // The iris found in the photos (the person's eye colour) replaces the generic one.
   let eyes = '';
