@@ -396,6 +396,14 @@ Status check_photo_points(const std::string& text, const std::string& what) {
   return Status::success();
 }
 
+// entry's bytes: its "count" 1..max (else damaged(empty_or_large)), then its view.
+Status read_counted(BinReader& r, const json& entry, const std::string& what, const char* type, std::size_t max,
+                    const std::string& empty_or_large, std::vector<std::uint8_t>& out) {
+  int count = 0;
+  if (!get_int(entry, "count", count, 1) || static_cast<std::size_t>(count) > max) return damaged(empty_or_large);
+  return r.array(entry, what, type, 1, out);
+}
+
 // The photos and the page's options (version 3; older files have none).
 Status read_inputs(BinReader& r, const json& doc, ProjectInputs& in) {
   in = {};
@@ -416,11 +424,11 @@ Status read_inputs(BinReader& r, const json& doc, ProjectInputs& in) {
         (*role != "face" && *role != "eye" && *role != "smile"))
       return damaged(what + ": its role is not face, eye or smile");
     ph.role = role->get<std::string>();
-    const json& file = member(e, "file");
-    int count = 0;
-    if (!get_int(file, "count", count, 1) || static_cast<std::size_t>(count) > kMaxPhotoBytes)
-      return damaged(what + ": its file is empty or larger than " + std::to_string(kMaxPhotoBytes >> 20) + " MB");
-    if (Status s = r.array(file, what, "image", 1, ph.bytes); !s.ok()) return s;
+    if (Status s = read_counted(r, member(e, "file"), what, "image", kMaxPhotoBytes,
+                                what + ": its file is empty or larger than " + std::to_string(kMaxPhotoBytes >> 20) + " MB",
+                                ph.bytes);
+        !s.ok())
+      return s;
     // Its header only (JPEG or PNG, its size): whoever shows it decodes it.
     ImageInfo info;
     if (Status s = inspect_image(ph.bytes.data(), ph.bytes.size(), info); !s.ok())
@@ -428,9 +436,10 @@ Status read_inputs(BinReader& r, const json& doc, ProjectInputs& in) {
     const json& points = member(e, "points");
     if (!points.is_null()) {
       std::vector<std::uint8_t> text;
-      if (!get_int(points, "count", count, 1) || static_cast<std::size_t>(count) > kMaxLandmarkFileBytes)
-        return damaged(what + ": its face points are empty or too large");
-      if (Status s = r.array(points, what + " face points", "json", 1, text); !s.ok()) return s;
+      if (Status s = read_counted(r, points, what + " face points", "json", kMaxLandmarkFileBytes,
+                                  what + ": its face points are empty or too large", text);
+          !s.ok())
+        return s;
       ph.points.assign(text.begin(), text.end());
       if (Status s = check_photo_points(ph.points, what + " face points"); !s.ok()) return s;
     }
@@ -439,10 +448,10 @@ Status read_inputs(BinReader& r, const json& doc, ProjectInputs& in) {
   const json& page = member(doc, "page_options");
   if (!page.is_null()) {
     std::vector<std::uint8_t> text;
-    int count = 0;
-    if (!get_int(page, "count", count, 1) || static_cast<std::size_t>(count) > kMaxPageOptionsBytes)
-      return damaged("the page's options are empty or too large");
-    if (Status s = r.array(page, "the page's options", "json", 1, text); !s.ok()) return s;
+    if (Status s = read_counted(r, page, "the page's options", "json", kMaxPageOptionsBytes,
+                                "the page's options are empty or too large", text);
+        !s.ok())
+      return s;
     in.page_options.assign(text.begin(), text.end());
     bool too_deep = false;  // the page nests 6 deep (a click: photos, photo, clicks, pair, point)
     const json::parser_callback_t depth = [&too_deep](int d, json::parse_event_t, json&) {
@@ -736,15 +745,12 @@ Status save_project(const HeadProject& p, Bytes& out) {
   // The photos as their files' bytes, their points and the page's options
   // as JSON text (kept verbatim: the reader checks them, the page reads them).
   const auto text_ref = [&w](const std::string& text) {
-    return json{{"type", "json"}, {"width", 1}, {"count", static_cast<int>(text.size())},
-                {"view", w.view(text.data(), text.size())}};
+    return w.array(std::vector<std::uint8_t>(text.begin(), text.end()), "json", 1);
   };
   json photos = json::array();
   for (const ProjectPhoto& ph : p.inputs.photos) {
     if (ph.bytes.empty()) return Status::error(ErrorCode::InvalidInput, "the photo " + ph.name + " has no bytes");
-    json e = {{"name", ph.name}, {"role", ph.role},
-              {"file", {{"type", "image"}, {"width", 1}, {"count", static_cast<int>(ph.bytes.size())},
-                        {"view", w.view(ph.bytes.data(), ph.bytes.size())}}}};
+    json e = {{"name", ph.name}, {"role", ph.role}, {"file", w.array(ph.bytes, "image", 1)}};
     if (!ph.points.empty()) e["points"] = text_ref(ph.points);
     photos.push_back(e);
   }
