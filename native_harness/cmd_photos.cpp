@@ -284,11 +284,8 @@ int run_photos(const Args& args) {
     std::vector<const Image*> image_ptrs;
     for (const Image& im : decoded) image_ptrs.push_back(&im);
     EyeFromViewsResult eye;
-    const Status eye_status = eye_texture_from_views(project.fit.control, generic, project.frame, image_ptrs, cameras,
-                                                     used_names, EyeFromViewsOptions{}, eye);
+    const Status eye_status = find_project_iris(project, generic, image_ptrs, cameras, used_names, eye);
     if (eye_status) {
-      project.parts.eye_texture = eye.texture;
-      project.parts.eye_source = used_names[size_t(eye.photo)];
       s = save_png_file(out_dir + "/eye.png", eye.texture);
       if (!s) return fail(cmd, s.message);
       std::printf("  eyes: the iris from %s's %s eye (%.0f deg from the front, iris radius %.0f px, %.1f deg on the eyeball): eye.png\n",

@@ -124,4 +124,16 @@ Status eye_texture_from_views(const TriMesh& control, const GenericHead& generic
   return Status::error(ErrorCode::NotAHead, "no iris found in the photos (" + why + "): the generic iris is kept");
 }
 
+Status find_project_iris(HeadProject& project, const GenericHead& generic, const std::vector<const Image*>& images,
+                         const std::vector<Camera>& cameras, const std::vector<std::string>& names,
+                         EyeFromViewsResult& out) {
+  const Status s =
+      eye_texture_from_views(project.fit.control, generic, project.frame, images, cameras, names, EyeFromViewsOptions{}, out);
+  if (s.ok()) {
+    project.parts.eye_texture = out.texture;
+    project.parts.eye_source = size_t(out.photo) < names.size() ? names[size_t(out.photo)] : "";
+  }
+  return s;
+}
+
 }  // namespace lk

@@ -60,4 +60,10 @@ Status eye_texture_from_views(const TriMesh& control, const GenericHead& generic
                               const std::vector<std::string>& names, const EyeFromViewsOptions& options,
                               EyeFromViewsResult& out);
 
+// The same on a head project (its fitted control mesh and frame): on
+// success project.parts holds the iris and the name of the photo it came from.
+Status find_project_iris(HeadProject& project, const GenericHead& generic, const std::vector<const Image*>& images,
+                         const std::vector<Camera>& cameras, const std::vector<std::string>& names,
+                         EyeFromViewsResult& out);
+
 }  // namespace lk

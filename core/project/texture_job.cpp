@@ -156,12 +156,7 @@ Status texture_project(HeadProject& project, TextureJobInput& input, TextureJobR
       images.push_back(&p.image);
       cameras.push_back(p.camera);
     }
-    out.eye_status = eye_texture_from_views(project.fit.control, *input.generic_for_eyes, project.frame, images,
-                                            cameras, input.names, EyeFromViewsOptions{}, out.eye);
-    if (out.eye_status.ok()) {
-      project.parts.eye_texture = out.eye.texture;
-      project.parts.eye_source = input.names.size() > size_t(out.eye.photo) ? input.names[size_t(out.eye.photo)] : "";
-    }
+    out.eye_status = find_project_iris(project, *input.generic_for_eyes, images, cameras, input.names, out.eye);
   }
   return Status::success();
 }
