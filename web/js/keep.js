@@ -295,9 +295,12 @@ export async function restoreHead(id) {
   current.photosKey = head.photosOnly ? inputsKey() : photosKey();
   renderPhotos();
   app.restored = { id, savedAt: head.savedAt, ms: performance.now() - t0 };
-  // Eye and smile photos make their textures again (small jobs, no fit).
+  // Eye and smile photos make their textures again (small jobs, no fit); a
+  // face photo set to "Eye (iris)" gave the iris with the head's cameras,
+  // which the kept head brings back without them (its eyes are the project's).
   for (const p of head.page.photos || []) {
     const photo = app.photos.find((x) => x.name === p.name);
+    if (photo && photo.eyeFromViews) { photo.role = 'eye'; photo.roleNote = 'the eyes\' colour came from the head\'s photos'; continue; }
     if (photo && p.role && p.role !== 'face') await setPhotoRole(photo, p.role);
   }
   if (!(head.photosOnly && stored.scan)) setStatus(head.photosOnly
