@@ -14,7 +14,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cctype>
 #include <cstdio>
+#include <set>
 #include <sys/stat.h>
 
 namespace lk::cli {
@@ -81,19 +83,37 @@ int run_info(const std::string& path) {
 
 // The kept photos and their face points as files in dir (NAME and
 // NAME.points.json), and the `likeness photos` line that makes the head
-// again from the face photos that have points.
+// again from the face photos that have points. Two photos of the same name
+// (from different folders; compared without case, as some file systems do)
+// would overwrite each other: a later one is written as K_NAME, K its
+// place in the project, and the line says so.
 int run_extract_photos(const std::string& path, const std::string& dir) {
   HeadProject p;
   if (Status st = read_project_file(path, p); !st.ok()) return fail(kName, st.message);
   if (p.inputs.photos.empty()) return fail(kName, path + " keeps no photos (made before version 3, or from a scan alone)");
   ::mkdir(dir.c_str(), 0755);
   std::string photos, points;
-  for (const ProjectPhoto& ph : p.inputs.photos) {
-    const std::string file = dir + "/" + ph.name;
+  std::set<std::string> taken;  // lower-case file names written so far
+  const auto lower = [](std::string s) {
+    for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+  };
+  const auto free_name = [&](const std::string& n) { return !taken.count(lower(n)) && !taken.count(lower(n + ".points.json")); };
+  for (size_t k = 0; k < p.inputs.photos.size(); ++k) {
+    const ProjectPhoto& ph = p.inputs.photos[k];
+    std::string name = ph.name;
+    for (size_t prefix = k + 1; !free_name(name); ++prefix) name = std::to_string(prefix) + "_" + ph.name;
+    taken.insert(lower(name));
+    taken.insert(lower(name + ".points.json"));
+    const std::string file = dir + "/" + name;
     if (Status st = write_file(file, ph.bytes); !st.ok()) return fail(kName, st.message);
-    std::printf("wrote %s (%s)\n", file.c_str(), ph.role.c_str());
+    if (name != ph.name)
+      std::printf("wrote %s (%s; photo %zu, named %s like an earlier one: renamed, not to overwrite it)\n", file.c_str(),
+                  ph.role.c_str(), k + 1, ph.name.c_str());
+    else
+      std::printf("wrote %s (%s)\n", file.c_str(), ph.role.c_str());
     if (ph.points.empty()) continue;
-    const std::string json_file = dir + "/" + ph.name + ".points.json";
+    const std::string json_file = dir + "/" + name + ".points.json";
     if (Status st = write_file(json_file, Bytes(ph.points.begin(), ph.points.end())); !st.ok()) return fail(kName, st.message);
     std::printf("wrote %s\n", json_file.c_str());
     if (ph.role == "face") {

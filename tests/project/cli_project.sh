@@ -3,7 +3,8 @@
 # `project export` re-exports without fitting (the fit's level to within its
 # rounding), `texture --project` textures it as the page does and saves it,
 # `project refit` fits the kept scan again, `likeness photos` keeps its photos and points in
-# its project and `project info --extract-photos` gives them back, and a cut or foreign file is
+# its project and `project info --extract-photos` gives them back (two of the same name
+# both, one renamed), and a cut or foreign file is
 # refused with exit 1 and a reason.
 # Usage: cli_project.sh LIKENESS WORKDIR
 set -euo pipefail
@@ -68,6 +69,19 @@ grep -q "make the head again: likeness photos --photos kept/view_00.png" kept.lo
 "$L" photos --points kept/view_0{0..4}.png.points.json --photos kept/view_0{0..4}.png --map sp/map.json --levels 1 \
   --no-texture --out ph2 > ph2.log
 cmp ph1/control.obj ph2/control.obj
+# Two photos of the same name from different folders: neither overwrites
+# the other; the later one is written as K_NAME and the line says so.
+mkdir -p other && cp sp/view_01.png other/view_00.png
+"$L" photos --points sp/view_0{0,1,2}.json --photos sp/view_00.png other/view_00.png sp/view_02.png --map sp/map.json \
+  --levels 1 --no-texture --out ph3 > ph3.log
+"$L" project info ph3/head.likeness.glb --extract-photos same > same.log
+cmp same/view_00.png sp/view_00.png
+cmp same/view_00.png.points.json sp/view_00.json
+cmp same/2_view_00.png sp/view_01.png
+cmp same/2_view_00.png.points.json sp/view_01.json
+cmp same/view_02.png sp/view_02.png
+grep -q "wrote same/2_view_00.png (face; photo 2, named view_00.png like an earlier one: renamed" same.log
+grep -q "make the head again: likeness photos --photos same/view_00.png same/2_view_00.png same/view_02.png" same.log
 if "$L" project info head.likeness.glb --extract-photos none 2> err.txt; then echo "a project without photos extracted some"; exit 1; fi
 grep -q "keeps no photos" err.txt
 echo "cli project: ok"

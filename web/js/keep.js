@@ -188,6 +188,11 @@ async function save() {
   await saved(head, !!file);
 }
 
+// Other tabs of the page list the same store: each write or delete here
+// tells them to list it again (a head deleted in one tab is gone in all).
+const others = self.BroadcastChannel ? new BroadcastChannel('likeness-keep') : null;
+const tellOthers = () => { if (others) others.postMessage('changed'); };
+
 async function saved(head, wroteFile) {
   keep.saves++;
   keep.lastSave = { id: head.id, savedAt: head.savedAt, size: head.size, wroteFile, photosOnly: !!head.photosOnly };
@@ -195,6 +200,7 @@ async function saved(head, wroteFile) {
   el.note.classList.remove('bad');
   el.note.textContent = 'Kept in this browser ' + when(head.savedAt) + ': a reload or a crash loses nothing.';
   await prune();
+  tellOthers();
 }
 
 // The newest MAX_HEADS stay; older ones go.
@@ -204,9 +210,16 @@ async function prune() {
   await renderList();
 }
 
+// Lists the kept heads. Calls overlap (a save's prune, a Delete, another
+// tab's change): a read begun before a Delete committed would list the
+// deleted head again after the Delete's own refresh, so only the newest
+// call's answer is shown.
+let listing = 0;
 export async function renderList() {
+  const mine = ++listing;
   let heads = [];
   try { heads = await listHeads(); } catch (e) { say(e); }
+  if (mine !== listing) return heads;
   keep.heads = heads.map((h) => ({ id: h.id, name: h.name, savedAt: h.savedAt, size: h.size, textured: h.textured }));
   el.list.textContent = '';
   for (const h of heads) {
@@ -248,6 +261,7 @@ async function removeHead(id) {
   try {
     await deleteHead(id);
     if (current && current.id === id) current = null;  // the next change keeps the head again, as a new entry
+    tellOthers();
   } catch (e) { say(e); }
   if (keep.offered === id) el.offer.hidden = true;
   await renderList();
@@ -281,9 +295,12 @@ export async function restoreHead(id) {
   current.photosKey = head.photosOnly ? inputsKey() : photosKey();
   renderPhotos();
   app.restored = { id, savedAt: head.savedAt, ms: performance.now() - t0 };
-  // Eye and smile photos make their textures again (small jobs, no fit).
+  // Eye and smile photos make their textures again (small jobs, no fit); a
+  // face photo set to "Eye (iris)" gave the iris with the head's cameras,
+  // which the kept head brings back without them (its eyes are the project's).
   for (const p of head.page.photos || []) {
     const photo = app.photos.find((x) => x.name === p.name);
+    if (photo && photo.eyeFromViews) { photo.role = 'eye'; photo.roleNote = 'the eyes\' colour came from the head\'s photos'; continue; }
     if (photo && p.role && p.role !== 'face') await setPhotoRole(photo, p.role);
   }
   if (!(head.photosOnly && stored.scan)) setStatus(head.photosOnly
@@ -333,6 +350,8 @@ function reviveHead() {
 export function wireKeep() {
   if (OFF) return;
   app.reviveHead = reviveHead;
+  keep.refresh = renderList;
+  if (others) others.onmessage = () => { renderList(); };
   el.restore.addEventListener('click', () => restoreHead(keep.offered));
   el.later.addEventListener('click', () => { el.offer.hidden = true; });
   // A head that became the shown one (fit, texture, opened) is kept at once;

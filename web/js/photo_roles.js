@@ -6,6 +6,7 @@ import { runJob } from './worker_client.js';
 import { renderPhotos } from './photos.js';
 import { clicker, closeClicker } from './clicker.js';
 import { showComponents } from './head_view.js';
+import { runTexture } from './texture.js';
 
 export const PHOTO_ROLES = [['face', 'Face (skin)'], ['eye', 'Eye (iris)'], ['smile', 'Smile (teeth)']];
 
@@ -70,10 +71,14 @@ export async function setPhotoRole(photo, role) {
   const state = document.body.dataset.state;
   if (state === 'working' || state === 'loading' || app.startupFailed) { renderPhotos(); return; }
   clearError();
-  dropRoleTexture(photo);
+  // (Before the photo's own iris is dropped: the head's may come from it.)
+  const viaViews = role === 'eye' && eyeFromViews(photo);
+  if (!viaViews) dropRoleTexture(photo);
   photo.role = role;
   photo.roleNote = '';
   photo.roleFailed = false;
+  photo.eyeFromViews = false;
+  if (viaViews) return findEyeInViews(photo);
   if (role === 'face') {
     renderPhotos();
     setStatus(photo.name + ' is a face photo again: it textures the skin.');
@@ -133,3 +138,40 @@ export async function setPhotoRole(photo, role) {
             (app.componentsData ? '; shown with the subdivided head (Show eyes, teeth).' : '; shown once the head is fitted.'));
 }
 app.setPhotoRole = (index, role) => setPhotoRole(app.photos[index], role);
+
+// A face photo (its face points found) that made the head shown from
+// photos: its camera is known, so the iris is looked for where the head's
+// eyeball projects into the photos (the texture job's finder,
+// core/project/eye_from_views.h), which finds light irises the close-up
+// finder misses. The head's other photos are searched beside it, the most
+// frontal eye first.
+function eyeFromViews(photo) {
+  return !!(photo.detect && photo.detect.points && app.fit && app.fit.fromPhotos && photo.photosHead && photo.photosHead.used);
+}
+
+async function findEyeInViews(photo) {
+  if (clicker.photo === photo) closeClicker();
+  // The newest eye photo wins: an earlier one goes back to the face, and
+  // the iris it gave (or one a project brought) gives way.
+  for (const other of app.photos) {
+    if (other !== photo && other.role === 'eye') { dropRoleTexture(other); other.role = 'face'; other.roleNote = ''; other.eyeFromViews = false; }
+  }
+  photo.eyeFromViews = true;
+  // The skin's texture already looked for the iris in these photos with
+  // this head (the worker keeps what it found: it would not look again).
+  const found = app.texture && app.eyePhoto && app.eyePhoto.fromFacePhotos;
+  if (!found) {
+    if (app.eyePhoto) { app.eyePhoto = null; if (app.viewer && app.componentsData) showComponents(app.componentsData); }
+    photo.roleNote = 'finding the iris with the head\'s cameras…';
+    renderPhotos();
+    await runTexture();
+  }
+  if (photo.role !== 'eye' || !photo.eyeFromViews) { renderPhotos(); return; }
+  const e = app.eyePhoto;
+  photo.roleFailed = !e;
+  photo.roleNote = e ? 'iris found with the head\'s cameras' + (e.name !== photo.name ? ' (in ' + e.name + ', the most frontal eye)' : '') +
+                       ', on both eyes'
+    : 'no iris found with the head\'s cameras: the eyes keep the generic iris';
+  renderPhotos();
+  if (e) setStatus('The eyes\' colour is from ' + e.name + ', found with the head\'s cameras; ' + photo.name + ' stays one of the head\'s photos.');
+}

@@ -16,7 +16,9 @@ import { stopAnimation } from './animation.js';
 import { forPage } from './wording.js';
 import { runTexture } from './texture.js';
 
-const withPoints = () => facePhotos().filter((p) => p.detect && p.detect.points);
+// (A face photo set to "Eye (iris)" for its eye colour, photo_roles.js,
+// stays a face photo of the head.)
+const withPoints = () => app.photos.filter((p) => ((p.role || 'face') === 'face' || p.eyeFromViews) && p.detect && p.detect.points);
 
 function stats(row, text) {
   const el = stageItem(row).querySelector('.stage-stats');  // the load row has none

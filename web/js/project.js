@@ -92,11 +92,15 @@ export async function openProject(file) {
   }
   if (app.fit) forgetFit();
   // The scan it was fitted to, as points under the head (thinned as a
-  // dropped scan is); shown first so the view is framed on it.
+  // dropped scan is); shown first so the view is framed on it. A head made
+  // from photos keeps no scan ("no vertices" to show, which refused every
+  // such project): none is loaded, the head alone is shown, and Make head
+  // from photos works on the photos it brings back.
+  const hasScan = result.scan.vertexCount > 0;
   let display = { positions: result.scan.positions, normals: new Float32Array(0), colors: new Float32Array(0),
                   vertexCount: result.scan.vertexCount };
   if (display.vertexCount > MAX_DISPLAY_POINTS) display = thinPoints(display, Math.ceil(display.vertexCount / MAX_DISPLAY_POINTS));
-  const shown = app.viewer.show_points(display.positions, display.normals, display.colors);
+  const shown = hasScan ? app.viewer.show_points(display.positions, display.normals, display.colors) : '';
   if (shown !== '') {
     app.model = null;
     showError(file.name + ': ' + shown);
@@ -104,8 +108,9 @@ export async function openProject(file) {
   }
   app.model = { name: file.name, kind: 'project', vertexCount: result.scan.vertexCount, triangleCount: 0 };
   // kept: the worker's head keeps these points, so Fit head fits them again.
-  app.scan = { file: null, kept: result.scan.vertexCount > 0, name: file.name,
-               display: { positions: display.positions, normals: display.normals, colors: display.colors } };
+  app.scan = hasScan
+    ? { file: null, kept: true, name: file.name, display: { positions: display.positions, normals: display.normals, colors: display.colors } }
+    : null;
   setStage('load', 'project', 1, 'complete');
   for (const st of FIT_STAGES) stageItem(st.row).classList.remove('coming');
   const wallMs = performance.now() - t0;

@@ -50,7 +50,7 @@ export function restoredDetect(k) {
 
 // A photo's row without its file (IndexedDB keeps the file beside it).
 export function photoState(p) {
-  return { name: p.name, width: p.width, height: p.height, role: p.role || 'face', clicks: [...p.clicks.entries()],
+  return { name: p.name, width: p.width, height: p.height, role: p.role || 'face', eyeFromViews: !!p.eyeFromViews, clicks: [...p.clicks.entries()],
            pointsName: p.pointsName || '', filePoints: p.filePoints ? Array.from(p.filePoints) : null, detect: keptDetect(p) };
 }
 
@@ -62,7 +62,7 @@ export function restorePhotos(states, files) {
     const blob = files[i];
     if (!blob) return null;
     const f = blob instanceof File ? blob : new File([blob], p.name);
-    return { name: p.name, file: f, width: p.width, height: p.height, url: URL.createObjectURL(f), role: 'face',
+    return { name: p.name, file: f, width: p.width, height: p.height, url: URL.createObjectURL(f), role: 'face', eyeFromViews: !!p.eyeFromViews,
              filePoints: p.filePoints ? new Float64Array(p.filePoints) : null, pointsName: p.pointsName,
              clicks: new Map(p.clicks || []), calib: null, sent: null, detect: restoredDetect(p.detect) };
   }).filter(Boolean);
@@ -107,6 +107,7 @@ export function takeInputs(inputs) {
     }
     const image = (doc && doc.image) || {};
     return { name: ph.name, width: row.width || image.width, height: row.height || image.height, clicks: row.clicks,
+             eyeFromViews: !!row.eyeFromViews && ph.role === 'eye',
              pointsName: row.pointsName || '', filePoints: row.filePoints || null, detect };
   });
   restorePhotos(states, inputs.photos.map((ph) => new File([ph.bytes], ph.name, { type: MIME(ph.name) })));

@@ -10,6 +10,18 @@ import { showComponents, showStage } from './head_view.js';
 import { photoCount } from './wording.js';
 import { pageOption } from './project_inputs.js';
 
+// The eye texture shown came from the user's own eye photo (a close-up
+// set to "Eye (iris)", or one an opened project made from a photo the page
+// still holds with that role): it wins over the iris found in the face
+// photos. One found in the face photos, or one an opened or restored
+// project brought without its eye photo, gives way to the iris found in
+// the photos of the head now shown.
+export function eyeFromUser() {
+  const e = app.eyePhoto;
+  if (!e || e.fromFacePhotos) return false;
+  return !e.fromProject || app.photos.some((p) => p.role === 'eye' && p.name === e.name && !p.eyeFromViews);
+}
+
 export function forgetTexture() {
   app.texture = null;
   setStage('texture', 'waiting', 0);
@@ -27,7 +39,10 @@ export async function runTexture() {
   // A head from photos is textured from the photos it was made from, with
   // their self-calibrated cameras: no point to click.
   const fromPhotos = !!app.fit.fromPhotos;
-  const using = fromPhotos ? facePhotos().filter((p) => p.photosHead && p.photosHead.used) : texturable();
+  // (A photo that made the head and was then set to "Eye (iris)" stays: its
+  // camera is known, and the iris is looked for in it too.)
+  const using = fromPhotos ? app.photos.filter((p) => ((p.role || 'face') === 'face' || p.eyeFromViews) && p.photosHead && p.photosHead.used)
+    : texturable();
   if (fromPhotos && !using.length) {
     showError('None of the photos made this head (they were removed or changed): make the head from the photos again, then texture it.');
     return;
@@ -73,7 +88,7 @@ export async function runTexture() {
     }
     const size = pageOption('textureSize') || 1024;  // ?texture_size, else a restored project's
     // A head from photos: the worker also looks for the iris in them, unless an eye photo gave one.
-    const findEyes = fromPhotos && !(app.eyePhoto && !app.eyePhoto.fromFacePhotos);
+    const findEyes = fromPhotos && !eyeFromUser();
     result = await runJob({ type: 'texture', photos, options: { size, cameras: fromPhotos, findEyes } }, photos.map((p) => p.buffer),
       (stage, fraction) => {
         // stage is "texture:<step>" (decode, calibrate, chart, bind, resample, ...).
@@ -106,7 +121,7 @@ export async function runTexture() {
                   level: result.level, photos: using.length };
   // The iris found in the photos (the person's eye colour) replaces the generic one.
   let eyes = '';
-  if (result.eyeTexture && (!app.eyePhoto || app.eyePhoto.fromFacePhotos)) {
+  if (result.eyeTexture && !eyeFromUser()) {
     app.eyePhoto = { name: result.eyeSource, texture: result.eyeTexture, ms: 0, fromFacePhotos: true };
     if (app.viewer && app.componentsData) showComponents(app.componentsData);
     eyes = ' The eyes\' colour is from ' + result.eyeSource + '.';

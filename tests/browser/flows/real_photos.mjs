@@ -11,7 +11,7 @@
 import fs from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
-import { analyse, canvasImage, check, note, runAlone, SHOT_DIR } from '../harness.mjs';
+import { analyse, bannerText, canvasImage, check, note, runAlone, shot, SHOT_DIR } from '../harness.mjs';
 
 const SHARED = process.env.LK_SHARED_DATA || path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../../../../shared/data');
 const KIRA = path.join(SHARED, 'multiview_faces', 'keentools_kira');
@@ -86,6 +86,110 @@ async function run(s) {
   const a = analyse(await canvasImage(page));
   check('real photos: the canvas shows the head', a.fgFraction > 0.05, `foreground ${(100 * a.fgFraction).toFixed(1)} %`);
   if (SHOT_DIR) await page.screenshot({ path: path.join(SHOT_DIR, 'web_photos_kira.png') });
+  // The textured head with its found eyes kept in IndexedDB (keep.js), then
+  // this page closed: what a reload brings back.
+  const kept = await page.waitForFunction(() => {
+    const k = window.likeness.keep;
+    return k.lastSave && !k.lastSave.photosOnly && k.heads.some((h) => h.id === k.lastSave.id && h.textured) && k.lastSave.id;
+  }, null, { timeout: 120000 }).then((h) => h.jsonValue(), () => null);
+  const keptState = await page.evaluate(() => JSON.stringify({ last: window.likeness.keep.lastSave, heads: window.likeness.keep.heads,
+                                                               error: window.likeness.keep.error, state: document.body.dataset.state }));
+  await page.close();
+  if (!check('real photos: the textured head is kept in IndexedDB', !!kept, keptState)) return;
+  await remakeRestored(s, kept, r.head.used);
+}
+
+// Issues 37 and 39: the kept head restored in a new page (its project with
+// the photo rows and their face points, no detection, no fit; its iris
+// comes back as the project's), then "Make head from photos" pressed with
+// no new drop: a new head from the restored photos, textured, and its iris
+// found again in the photos (the project's gives way). Then the frontal
+// photo set to "Eye (iris)": a face photo of the head, so its iris is found
+// with the head's cameras (not the close-up finder, which fails on light
+// irises), with no error.
+async function remakeRestored(s, id, used) {
+  const page = await s.newPage();
+  await page.waitForSelector(`#keep-list li[data-id="${id}"] .keep-restore`, { timeout: 30000 });
+  await page.click(`#keep-list li[data-id="${id}"] .keep-restore`);
+  await page.waitForFunction(() => (window.likeness.restored && document.body.dataset.state === 'done') ||
+                                   document.body.dataset.state === 'error', null, { timeout: TIMEOUT_MS });
+  const eye = () => {
+    const L = window.likeness, e = L.eyePhoto;
+    if (!e) return null;
+    const t = e.texture, c = [0, 0, 0];
+    for (let i = 0; i < 64; i++) {
+      const a = 2 * Math.PI * i / 64, rho = 0.7 * 30 / 90;
+      const x = Math.floor((0.5 + 0.5 * rho * Math.cos(a)) * t.width), y = Math.floor((0.5 - 0.5 * rho * Math.sin(a)) * t.height);
+      for (let k = 0; k < 3; k++) c[k] += t.pixels[(y * t.width + x) * t.channels + k] / 64;
+    }
+    return { name: e.name, fromFacePhotos: !!e.fromFacePhotos, fromProject: !!e.fromProject, rgb: c.map(Math.round) };
+  };
+  const restored = await page.evaluate((eyeSrc) => {
+    const L = window.likeness;
+    return { photos: L.photos.length, withPoints: L.photos.filter((p) => p.detect && p.detect.points).length,
+             detected: L.photos.filter((p) => p.detect && p.detect.ms > 0).length, fitMs: L.fit && L.fit.fitMs,
+             scan: !!L.scan, button: !document.getElementById('btn-photos-head').disabled,
+             eye: new Function('return (' + eyeSrc + ')')()(), control: L.fit && Array.from(L.fit.meshes.control.positions.slice(0, 30)) };
+  }, eye.toString());
+  check('restored head from photos: its 10 photo rows with their face points, no detection, no fit, the iris the project kept, ' +
+        'and "Make head from photos" enabled (no scan is loaded)',
+        restored.photos === 10 && restored.withPoints >= used && restored.detected === 0 && restored.fitMs === 0 && !restored.scan &&
+        restored.button && !!restored.eye && restored.eye.fromProject,
+        JSON.stringify({ ...restored, control: undefined }) + ' ' + (await bannerText(page)));
+  await page.evaluate(() => {
+    window.__drops = 0;
+    document.getElementById('file-input').addEventListener('change', () => window.__drops++);
+    window.__restoredFit = window.likeness.fit;
+  });
+  const t0 = Date.now();
+  await page.click('#btn-photos-head', { timeout: 10000 }).catch(() => {});
+  await page.waitForFunction(() => (window.likeness.photosHead && window.likeness.fit !== window.__restoredFit &&
+                                    !['working', 'loading'].includes(document.body.dataset.state)) ||
+                                   document.body.dataset.state === 'error', null, { timeout: TIMEOUT_MS }).catch(() => {});
+  const again = await page.evaluate((eyeSrc) => {
+    const L = window.likeness;
+    return { head: L.photosHead, drops: window.__drops, fromPhotos: !!(L.fit && L.fit.fromPhotos), state: document.body.dataset.state,
+             detected: L.photos.filter((p) => p.detect && p.detect.ms > 0).length,
+             texture: L.texture && L.texture.photos, eye: new Function('return (' + eyeSrc + ')')()(),
+             status: document.getElementById('status').textContent };
+  }, eye.toString());
+  if (again.head) {
+    note(`real-photos: made again from the restored photos in ${((Date.now() - t0) / 1000).toFixed(1)} s (head ` +
+         `${Math.round(again.head.photosMs)} ms in the worker, textured from ${again.texture} photos)`);
+  }
+  check('... "Make head from photos" makes a new head from the restored photos, with no drop and no detection, and textures it',
+        !!again.head && again.head.ok && again.head.trigger === 'button' && again.head.used === used && again.fromPhotos && again.drops === 0 &&
+        again.detected === 0 && again.texture === used && again.state === 'done',
+        JSON.stringify({ ...again, head: again.head && { ok: again.head.ok, used: again.head.used, trigger: again.head.trigger,
+                                                          message: again.head.message } }) + ' ' + (await bannerText(page)));
+  check('... and the iris is found again in its photos: the restored project\'s gives way',
+        !!again.eye && again.eye.fromFacePhotos && !again.eye.fromProject && again.eye.rgb[0] - again.eye.rgb[2] < 15 &&
+        /eyes' colour is from/.test(again.status), JSON.stringify(again.eye) + ' "' + again.status + '"');
+  await shot(page, 'web_photos_kira_again.png');
+
+  // The frontal photo (where the iris was found) set to "Eye (iris)".
+  const frontal = again.eye ? again.eye.name : '0001.jpg';
+  const row = page.locator('#photo-list li', { has: page.locator('.photo-name', { hasText: frontal }) });
+  await row.locator('select.photo-role').selectOption('eye', { timeout: 10000 }).catch(() => {});
+  await page.waitForFunction((n) => {
+    const p = window.likeness.photos.find((x) => x.name === n);
+    return !p || (!/finding/.test(p.roleNote || '') && !['working', 'loading'].includes(document.body.dataset.state));
+  }, frontal, { timeout: TIMEOUT_MS }).catch(() => {});
+  const role = await page.evaluate(([n, eyeSrc]) => {
+    const L = window.likeness, p = L.photos.find((x) => x.name === n) || {};
+    const li = Array.from(document.querySelectorAll('#photo-list li')).find((x) => x.querySelector('.photo-name').textContent === n);
+    return { role: p.role, note: p.roleNote, failed: !!p.roleFailed, state: document.body.dataset.state,
+             eye: new Function('return (' + eyeSrc + ')')()(), row: li ? li.querySelector('.photo-meta').textContent : '',
+             texture: L.texture && L.texture.photos };
+  }, [frontal, eye.toString()]);
+  const banner = await bannerText(page);
+  check(`... ${frontal}, a face photo of the head, set to "Eye (iris)": its iris is found with the head's cameras ` +
+        '(her grey), no error, the row says so',
+        role.role === 'eye' && !role.failed && role.state === 'done' && banner === '' && !!role.eye && role.eye.fromFacePhotos &&
+        role.eye.rgb[0] - role.eye.rgb[2] < 15 && /iris found with the head's cameras/.test(role.row) && role.texture === used,
+        JSON.stringify(role) + ' ' + banner);
+  await row.scrollIntoViewIfNeeded().catch(() => {});
+  await shot(page, 'web_photos_kira_eye_role.png');
   await page.close();
 }
 
