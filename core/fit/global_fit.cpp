@@ -357,8 +357,10 @@ struct SmoothSurfaceCheck {
     // x and the reference are finite and of the level's size (checked by
     // the caller), so the BVH and the search cannot fail.
     std::vector<std::array<int, 2>> pairs;
-    if (bvh.empty()) {
-      build_bvh(level, bvh);
+    if (bvh.empty() || !searched) {
+      // A tree taken over (relief_start_tree) is refitted: the same pairs.
+      if (bvh.empty()) build_bvh(level, bvh);
+      else refit_bvh(level, bvh);
       find_new_self_intersections(bvh, reference_level, pairs);
     } else {
       refit_bvh(level, bvh);
@@ -1159,6 +1161,12 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       auto drop_ignored = [&](std::vector<std::array<int, 2>>& pairs) {
         relief.drop_ignored(pairs, mesh.triangles, terms.smooth_guard_ignored);
       };
+      MeshBvh* start_tree = terms.relief_start_tree;
+      if (start_tree && !start_tree->empty() && start_tree->triangles == relief.levels.back().fine_triangles &&
+          start_tree->positions.size() == relief.reference_level.size()) {
+        relief.bvh = std::move(*start_tree);
+        *start_tree = MeshBvh{};
+      }
       std::vector<char> no_active;
       std::vector<int> no_list;
       std::vector<std::array<int, 2>> current =
