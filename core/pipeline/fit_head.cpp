@@ -945,7 +945,8 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
     // `tree`: a tree over that level's triangles at any positions (a fit's
     // relief tree), refitted here instead of building one (a refitted tree
     // finds the same pairs: raycast/self_intersection.h), and left fitted
-    // to the level; empty or null: a tree is built (and kept when `tree`).
+    // to the level; empty: a tree is built there; null or over other
+    // triangles: one is built for the search only.
     auto smooth_ear_pairs = [&](const std::vector<Vec3>& positions,
                                 const std::vector<std::array<int, 2>>& fold_creases, int& count,
                                 MeshBvh* tree) -> Status {
@@ -967,10 +968,10 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
         const Tri& t = level.triangles[f];
         if (ear_mask[t[0]] || ear_mask[t[1]] || ear_mask[t[2]]) ear_triangles.push_back(f);
       }
-      MeshBvh own;
-      MeshBvh& bvh = tree ? *tree : own;
-      const bool refit = !bvh.empty() && bvh.triangles == level.triangles &&
-                         bvh.positions.size() == level.positions.size();
+      const bool refit = tree && !tree->empty() && tree->triangles == level.triangles &&
+                         tree->positions.size() == level.positions.size();
+      MeshBvh own;  // a given tree over other triangles is left as it is
+      MeshBvh& bvh = tree && (refit || tree->empty()) ? *tree : own;
       s = refit ? refit_bvh(level, bvh) : build_bvh(level, bvh);
       if (!s) return s;
       std::vector<std::array<int, 2>> pairs;
