@@ -357,8 +357,10 @@ struct SmoothSurfaceCheck {
     // x and the reference are finite and of the level's size (checked by
     // the caller), so the BVH and the search cannot fail.
     std::vector<std::array<int, 2>> pairs;
-    if (bvh.empty()) {
-      build_bvh(level, bvh);
+    if (bvh.empty() || !searched) {
+      // A tree taken over (relief_start_tree) is refitted: the same pairs.
+      if (bvh.empty()) build_bvh(level, bvh);
+      else refit_bvh(level, bvh);
       find_new_self_intersections(bvh, reference_level, pairs);
     } else {
       refit_bvh(level, bvh);
@@ -1159,6 +1161,12 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       auto drop_ignored = [&](std::vector<std::array<int, 2>>& pairs) {
         relief.drop_ignored(pairs, mesh.triangles, terms.smooth_guard_ignored);
       };
+      MeshBvh* start_tree = terms.relief_start_tree;
+      if (start_tree && !start_tree->empty() && start_tree->triangles == relief.levels.back().fine_triangles &&
+          start_tree->positions.size() == relief.reference_level.size()) {
+        relief.bvh = std::move(*start_tree);
+        *start_tree = MeshBvh{};
+      }
       std::vector<char> no_active;
       std::vector<int> no_list;
       std::vector<std::array<int, 2>> current =
@@ -1179,28 +1187,43 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
       // `current` outside `active` stay.
       // `outside`: the pairs kept for the level triangles outside `active`;
       // `folds_only`: the window's pairs are filtered to folds.
+      // The last window's triangles and tree, and the control vertices it
+      // was made for: the next call for the same vertices (the line
+      // search's next share, a cluster tried again in the next sweep) refits
+      // that tree to its positions instead of building one (a refitted tree
+      // finds the same pairs: self_intersection.h).
+      TriMesh window;
+      std::vector<int> window_faces, window_moving;  // level triangle ids; the vertices `active` was set for
+      MeshBvh window_bvh;
+      bool window_built = false;
       auto pairs_in_window = [&](const std::vector<Vec3>& level_positions, const std::vector<Vec3>& reference_level,
                                  const std::vector<int>& moving, const std::vector<std::array<int, 2>>& outside,
                                  bool folds_only) {
-        const std::vector<int> ring_of = ring_distances(topology, moving, 4);
-        TriMesh window;
         window.positions = level_positions;
-        std::vector<int> window_faces;  // level triangle ids
-        std::fill(active.begin(), active.end(), 0);
-        for (int f = 0; f < mesh.num_triangles(); ++f) {
-          int nearest = 1 << 20;
-          for (int v : mesh.triangles[f])
-            if (ring_of[v] >= 0) nearest = std::min(nearest, ring_of[v]);
-          if (nearest > 4) continue;
-          for (int c = 0; c < per; ++c) {
-            window_faces.push_back(f * per + c);
-            window.triangles.push_back(relief.level.triangles[f * per + c]);
-            active[f * per + c] = nearest <= 3 ? 2 : 1;  // 2: may change, 1: searched beside it
+        bool searchable = false;
+        if (window_built && moving == window_moving) {
+          searchable = refit_bvh(window, window_bvh).ok();
+        } else {
+          const std::vector<int> ring_of = ring_distances(topology, moving, 4);
+          window.triangles.clear();
+          window_faces.clear();
+          std::fill(active.begin(), active.end(), 0);
+          for (int f = 0; f < mesh.num_triangles(); ++f) {
+            int nearest = 1 << 20;
+            for (int v : mesh.triangles[f])
+              if (ring_of[v] >= 0) nearest = std::min(nearest, ring_of[v]);
+            if (nearest > 4) continue;
+            for (int c = 0; c < per; ++c) {
+              window_faces.push_back(f * per + c);
+              window.triangles.push_back(relief.level.triangles[f * per + c]);
+              active[f * per + c] = nearest <= 3 ? 2 : 1;  // 2: may change, 1: searched beside it
+            }
           }
+          window_moving = moving;
+          searchable = window_built = build_bvh(window, window_bvh).ok();
         }
-        MeshBvh window_bvh;
         std::vector<std::array<int, 2>> pairs;
-        if (build_bvh(window, window_bvh).ok()) find_new_self_intersections(window_bvh, reference_level, pairs);
+        if (searchable) find_new_self_intersections(window_bvh, reference_level, pairs);
         for (auto& p : pairs) {
           p = {window_faces[p[0]], window_faces[p[1]]};
           if (p[0] > p[1]) std::swap(p[0], p[1]);

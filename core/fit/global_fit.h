@@ -358,6 +358,13 @@ struct GlobalFitTerms {
   // result will not be used (fit_head's ear refit). Returning true goes on
   // exactly as without it.
   std::function<bool(const std::vector<Vec3>& positions)> after_rounds;
+  // Optional: a tree over the fold relief's level (smooth level
+  // smooth_guard_relief_level of the input's triangles) at any positions,
+  // e.g. one a caller built to count that level's pairs. The relief's
+  // first search refits it instead of building one (the same pairs) and
+  // moves it out; left alone when the relief does not search or its
+  // triangles differ.
+  MeshBvh* relief_start_tree = nullptr;
 };
 
 struct GlobalFitIteration {

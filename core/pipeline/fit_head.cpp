@@ -942,8 +942,14 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
     const std::vector<char> ear_mask_control = vertex_mask(ear_vertices, topo.num_vertices);
     // The ears' crossing pairs at smooth level L of `positions` (the
     // control's triangles), refined with the creases and `fold_creases`.
+    // `tree`: a tree over that level's triangles at any positions (a fit's
+    // relief tree), refitted here instead of building one (a refitted tree
+    // finds the same pairs: raycast/self_intersection.h), and left fitted
+    // to the level; empty: a tree is built there; null or over other
+    // triangles: one is built for the search only.
     auto smooth_ear_pairs = [&](const std::vector<Vec3>& positions,
-                                const std::vector<std::array<int, 2>>& fold_creases, int& count) -> Status {
+                                const std::vector<std::array<int, 2>>& fold_creases, int& count,
+                                MeshBvh* tree) -> Status {
       ButterflyCreases c = creases;
       for (const auto& e : fold_creases) c.edges.push_back(e);
       if (!fold_creases.empty()) close_crease_ends(c);
@@ -962,15 +968,23 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
         const Tri& t = level.triangles[f];
         if (ear_mask[t[0]] || ear_mask[t[1]] || ear_mask[t[2]]) ear_triangles.push_back(f);
       }
-      MeshBvh bvh;
-      s = build_bvh(level, bvh);
+      const bool refit = tree && !tree->empty() && tree->triangles == level.triangles &&
+                         tree->positions.size() == level.positions.size();
+      MeshBvh own;  // a given tree over other triangles is left as it is
+      MeshBvh& bvh = tree && (refit || tree->empty()) ? *tree : own;
+      s = refit ? refit_bvh(level, bvh) : build_bvh(level, bvh);
       if (!s) return s;
       std::vector<std::array<int, 2>> pairs;
       find_intersections_with(bvh, ear_triangles, pairs);
       count = count_pairs_touching(smooth, options.levels, pairs, ear_vertices);
       return Status::success();
     };
+    // The tree the free fit's check after its rounds builds over smooth
+    // level L: the next relief to search that level (the bound fit's, or
+    // the free fit's own when the bound one is not kept) refits it.
+    MeshBvh ear_tree;
     GlobalFitTerms bound = terms;
+    bound.relief_start_tree = &ear_tree;
     bound.binding_edges.insert(bound.binding_edges.end(), ear_edges.begin(), ear_edges.end());
     GlobalFitOptions bound_options = global_options;
     const int warm_rounds = options.ear_refit_warm_rounds;
@@ -997,13 +1011,15 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
       Status s = fit_global(skin_pts, out.local, topo, bound, bound_options, bound_control, bound_fit, progress,
                             &bound_tree);
       if (!s) return with_context(s, "global fitting (ears bound)");
-      return smooth_ear_pairs(bound_control.positions, bound_fit.fold_crease_edges, out.ear_binding.bound_pairs);
+      return smooth_ear_pairs(bound_control.positions, bound_fit.fold_crease_edges, out.ear_binding.bound_pairs,
+                              &bound_tree);
     };
     GlobalFitTerms free_terms = terms;
+    free_terms.relief_start_tree = &ear_tree;
     if (early)
       free_terms.after_rounds = [&](const std::vector<Vec3>& positions) {
         int pairs = 0;
-        inner = smooth_ear_pairs(positions, {}, pairs);
+        inner = smooth_ear_pairs(positions, {}, pairs, &ear_tree);
         if (!inner) return false;
         out.ear_binding.free_pairs = out.ear_binding.bound_pairs = pairs;
         if (pairs == 0) return true;
@@ -1017,7 +1033,7 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
     if (!st) return with_context(st, "global fitting");
     if (!early) {
       int free_pairs = 0;
-      st = smooth_ear_pairs(out.control.positions, out.global_fit.fold_crease_edges, free_pairs);
+      st = smooth_ear_pairs(out.control.positions, out.global_fit.fold_crease_edges, free_pairs, &relief_tree);
       if (!st) return with_context(st, "global fitting (ears)");
       out.ear_binding.free_pairs = out.ear_binding.bound_pairs = free_pairs;
       if (free_pairs > 0) {

@@ -112,6 +112,53 @@ TEST_CASE("global fit: the fold relief leaves a fit without folds alone") {
   CHECK(r_unguarded.relief_steps == 0);
 }
 
+TEST_CASE("global fit: a relief start tree is refitted and gives the fit its own tree would") {
+  // GlobalFitTerms::relief_start_tree: a tree over the relief level's
+  // triangles at other positions (here the start's level 3) is taken over
+  // and refitted for the relief's first whole search; the fit, its counts
+  // and the relief tree it hands out must be those of a fit that builds its
+  // own. A tree over other triangles (level 2) is left alone.
+  GlobalFitOptions o = guarded_options();
+  o.smooth_guard_relief_when_turned = false;  // the relief searches level 3 whatever turns
+  for (const double low_z : {0.1, 0.2}) {
+    INFO("B's foot at z = " << low_z);
+    const StepSheets c = make_step_sheets(low_z);
+    TriMesh out_own, out_given;
+    GlobalFitResult r_own, r_given;
+    MeshBvh own_tree, handed_tree;
+    REQUIRE(fit_global(c.points, c.start, c.topo, c.terms(), o, out_own, r_own, {}, &own_tree).ok());
+    REQUIRE(r_own.relief_searched);
+    MeshBvh start_tree, level2_tree;
+    REQUIRE(build_bvh(test::butterfly_level(c.start, 3), start_tree).ok());
+    REQUIRE(build_bvh(test::butterfly_level(c.start, 2), level2_tree).ok());
+    GlobalFitTerms terms = c.terms();
+    terms.relief_start_tree = &start_tree;
+    REQUIRE(fit_global(c.points, c.start, c.topo, terms, o, out_given, r_given, {}, &handed_tree).ok());
+    CHECK(start_tree.empty());  // taken over
+    CHECK(out_given.positions == out_own.positions);
+    CHECK(r_given.relief_folds_before == r_own.relief_folds_before);
+    CHECK(r_given.relief_folds_after == r_own.relief_folds_after);
+    CHECK(r_given.relief_steps == r_own.relief_steps);
+    CHECK(r_given.smooth_crossing_after == r_own.smooth_crossing_after);
+    // The handed-out tree: over the same triangles, fitted to the same
+    // positions, and it finds the same pairs as the built one.
+    REQUIRE(!handed_tree.empty());
+    CHECK(handed_tree.triangles == own_tree.triangles);
+    CHECK(handed_tree.positions == own_tree.positions);
+    std::vector<std::array<int, 2>> pairs_own, pairs_handed;
+    find_self_intersections(own_tree, pairs_own);
+    find_self_intersections(handed_tree, pairs_handed);
+    CHECK(pairs_handed == pairs_own);
+    // Other triangles: not taken, the same fit.
+    terms.relief_start_tree = &level2_tree;
+    TriMesh out_level2;
+    GlobalFitResult r_level2;
+    REQUIRE(fit_global(c.points, c.start, c.topo, terms, o, out_level2, r_level2).ok());
+    CHECK(!level2_tree.empty());
+    CHECK(out_level2.positions == out_own.positions);
+  }
+}
+
 TEST_CASE("global fit: the fold relief refuses bad options") {
   const StepSheets c = make_step_sheets(0.1);
   TriMesh out;
