@@ -160,10 +160,7 @@ bool ContourSet::evaluate(const std::vector<Vec3>& P, Eigen::VectorXd& r, int ro
 
 void ContourSet::reweight(const std::vector<Vec3>& positions) {
   matches_ = find_matches(positions);
-  for (Match& m : matches_) {
-    const double d = std::abs(distance(positions, m));
-    m.weight = d <= options_.huber_px ? 1.0 : (std::isfinite(d) ? options_.huber_px / d : 0.0);
-  }
+  for (Match& m : matches_) m.weight = huber_weight(std::abs(distance(positions, m)), options_.huber_px);
 }
 
 std::vector<double> ContourSet::signed_distances(const std::vector<Vec3>& positions) const {

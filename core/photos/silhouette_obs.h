@@ -34,6 +34,7 @@
 #include "photos/shape_fit.h"
 
 #include <array>
+#include <cmath>
 #include <vector>
 
 namespace lk {
@@ -56,6 +57,11 @@ struct ChinLine {
 // determinant over |pb - pa|); ga, gb (may be null): its gradients with
 // respect to pa and pb.
 double line_distance(const Vec2& pa, const Vec2& pb, const Vec2& s, Vec2* ga, Vec2* gb);
+
+// Huber's IRLS weight of a residual of size |d| (0 for an infinite one).
+inline double huber_weight(double abs_d, double threshold) {
+  return abs_d <= threshold ? 1.0 : (std::isfinite(abs_d) ? threshold / abs_d : 0.0);
+}
 
 // A mesh's edges: a, b, the triangle on one side, the one on the other (-1: open border).
 std::vector<std::array<int, 4>> mesh_edge_list(const std::vector<Tri>& triangles);
