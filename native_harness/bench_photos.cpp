@@ -232,6 +232,7 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
   if (measure_folds(generic, generic.mesh, generic_folds))
     std::printf("  the generic head: crossing pairs %d (levels 0..3)\n", generic_folds.crossings);
   FoldSums fold_sums;
+  double outline_acc[3][2][3][3] = {};  // |yaw| bucket, near / far side, temple / cheek / jaw: sum px, sum |px|, count
   for (int seed : session.value("seeds", std::vector<int>{})) {
     GenericHead person;
     SyntheticViewsOptions vo;
@@ -254,6 +255,33 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
       }
       photos.push_back(ph);
       cam_of.push_back(c);
+    }
+    // The detector's face outline against the person's rim, true cameras
+    // (photos/contour_obs.h): mean signed px (+ = outside the rim) and
+    // mean |px| per |yaw| bucket, the near and far side apart.
+    {
+      SelfCalibResult tc;
+      tc.photos.resize(photos.size());
+      for (size_t i = 0; i < photos.size(); ++i) {
+        tc.photos[i].used = true;
+        tc.photos[i].camera = truth.cameras[size_t(cam_of[i])];
+      }
+      TriMesh at = generic.mesh;
+      at.positions = person.mesh.positions;
+      std::string line;
+      for (const ContourDistance& d : contour_distances(at, mp_lms, photos, tc, person.mesh.positions, PhotosJobOptions{}.contours)) {
+        double yaw, pitch;
+        view_angles(tc.photos[size_t(d.photo)].camera, yaw, pitch);
+        const size_t b = std::abs(yaw) < 15 ? 0 : std::abs(yaw) < 35 ? 1 : 2;
+        // Loop positions 1..17 are the person's left (+x): the near side when yaw > 0.
+        const bool near = std::abs(yaw) < 15 || ((d.loop_index < 18) == (yaw > 0));
+        if (!std::isfinite(d.px) || d.loop_index == 0 || d.loop_index == 18) continue;
+        const int j = d.loop_index <= 18 ? d.loop_index : 36 - d.loop_index;  // 1..17 from the top
+        auto& acc = outline_acc[b][near ? 0 : 1][j <= 6 ? 0 : j <= 12 ? 1 : 2];
+        acc[0] += d.px;
+        acc[1] += std::abs(d.px);
+        acc[2] += 1;
+      }
     }
     // The detector against the truth: each mapped landmark's true place projected by the true camera.
     for (size_t i = 0; i < photos.size(); ++i) {
@@ -309,9 +337,12 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
         !args.get_double("photos-view-cos", opt.calib.min_view_cos, opt.calib.min_view_cos, -1, 0.99) ||
         !args.get_double("photos-depth-scale", 0, opt.calib.depth_scale_sigma, 0, 10) ||
         !args.get_double("photos-depth-yaw2", 0, opt.calib.depth_scale_yaw2, -10, 10) ||
-        !args.get_double("photos-depth-0", 1, opt.calib.depth_scale_0, 0.1, 10))
+        !args.get_double("photos-depth-0", 1, opt.calib.depth_scale_0, 0.1, 10) ||
+        !args.get_double("photos-contour-lambda", opt.contour_lambda_scale, opt.contour_lambda_scale, 0, 100))
       return 1;
     for (double& k : opt.fit.stiffness_schedule) k *= stiffness_scale;
+    // --photos-contours: the face outline's jaw landmarks as contour observations (photos/contour_obs.h).
+    opt.contour_landmarks = args.has("photos-contours");
     // --photos-no-slide: the map's slide model left out; --photos-no-slide-sigma: its scatter as weights left out.
     opt.use_slide = !args.has("photos-no-slide");
     opt.calib.use_slide_sigma = !args.has("photos-no-slide-sigma");
@@ -396,6 +427,18 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
       std::printf(" %6.2f (%4.0f)", det_n[g][b] ? det_sum[g][b] / det_n[g][b] : 0.0, det_n[g][b]);
     std::printf("\n");
   }
+  std::printf("  the detector's face outline to the person's rim (true cameras), mean signed / mean |px| (count), + = outside, by |yaw| <15 / <35 / >=35 deg:\n");
+  static const char* band_names[3] = {"temple", "cheek", "jaw"};
+  for (int side = 0; side < 2; ++side)
+    for (int band = 0; band < 3; ++band) {
+      std::printf("    %-4s %-7s", side ? "far" : "near", band_names[band]);
+      for (int b = 0; b < 3; ++b) {
+        const double* a = outline_acc[b][side][band];
+        if (a[2] > 0) std::printf(" %+6.2f / %5.2f (%4.0f)", a[0] / a[2], a[1] / a[2], a[2]);
+        else std::printf("   -                  ");
+      }
+      std::printf("\n");
+    }
   std::printf("    %-8s", "hidden");
   for (size_t b = 0; b < kBuckets; ++b)
     std::printf(" %6.2f (%4.0f)", hidden_n[b] ? hidden_sum[b] / hidden_n[b] : 0.0, hidden_n[b]);
@@ -621,7 +664,7 @@ int run_bench_photos(const Args& args) {
 }
 
 BenchRegistrar reg({"photos", "photos to head on synthetic sessions: camera errors, face distances, stage times "
-                              "(--photos-seeds N --photos-cameras C --photos-noise-px S --photos-map vertices|interior --photos-stiffness-scale K --photos-first-seed S --photos-silhouettes both|on|off --photos-lambda-sil L --photos-mask-grow PX --photos-sil-facets --photos-stereo --photos-lambda-features L --photos-coarse N:S,... --photos-schedule S,...|none; --photos-detected DIR: real-detector points on synth-photos renders, made by tests/browser/detect_synth_photos.mjs, with --photos-detected-map FILE --photos-depth-scale SIGMA --photos-depth-0 K0 --photos-depth-yaw2 C --photos-no-slide --photos-no-slide-sigma --photos-true-cameras --photos-drop GROUP)",
+                              "(--photos-seeds N --photos-cameras C --photos-noise-px S --photos-map vertices|interior --photos-stiffness-scale K --photos-first-seed S --photos-silhouettes both|on|off --photos-lambda-sil L --photos-mask-grow PX --photos-sil-facets --photos-stereo --photos-lambda-features L --photos-coarse N:S,... --photos-schedule S,...|none; --photos-detected DIR: real-detector points on synth-photos renders, made by tests/browser/detect_synth_photos.mjs, with --photos-detected-map FILE --photos-depth-scale SIGMA --photos-depth-0 K0 --photos-depth-yaw2 C --photos-no-slide --photos-no-slide-sigma --photos-true-cameras --photos-drop GROUP --photos-contours --photos-contour-lambda K)",
                     run_bench_photos});
 
 }  // namespace

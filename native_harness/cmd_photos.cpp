@@ -116,11 +116,135 @@ Status write_silhouette_check(const std::string& path, const std::string& photo_
   return write_file(path, write_png(im));
 }
 
+// Mean of the finite values (NaN when none).
+double finite_mean(const std::vector<double>& v) {
+  double sum = 0;
+  int n = 0;
+  for (double x : v)
+    if (std::isfinite(x)) sum += x, ++n;
+  return n ? sum / n : std::nan("");
+}
+
+// The face outline against the rim, per used photo: mean signed mm (+ =
+// the photo's outline outside the head's rim) on each side of the face, in
+// three heights (loop positions 2-6 temple, 7-12 cheek, 13-17 jaw), and
+// the jaw's width at the mouth corners' height (interpolated between the
+// loop's points on each side): the photo's minus the head's.
+void print_contour_report(const std::vector<LandmarkPhoto>& photos, const SelfCalibResult& calib,
+                          const std::vector<ContourDistance>& at_generic, const std::vector<ContourDistance>& at_fit,
+                          Json& rep) {
+  std::printf("  face outline to the rim, mean mm (+ = the photo's outline outside the head), generic -> fit:\n");
+  auto band = [](int k) {  // 0 temple, 1 cheek, 2 jaw, -1 other; side 0 / 1
+    const int j = k <= 18 ? k : 36 - k;
+    return j >= 2 && j <= 6 ? 0 : j >= 7 && j <= 12 ? 1 : j >= 13 && j <= 17 ? 2 : -1;
+  };
+  static const char* bands[3] = {"temple", "cheek", "jaw"};
+  for (size_t i = 0; i < photos.size(); ++i) {
+    if (!calib.photos[i].used) continue;
+    std::string line;
+    Json jp;
+    for (int side = 0; side < 2; ++side)
+      for (int b = 0; b < 3; ++b) {
+        double m[2];
+        for (int w = 0; w < 2; ++w) {
+          std::vector<double> v;
+          for (const ContourDistance& c : w ? at_fit : at_generic)
+            if (c.photo == int(i) && band(c.loop_index) == b && (c.loop_index > 18) == (side == 1)) v.push_back(c.mm);
+          m[w] = finite_mean(v);
+        }
+        char buf[96];
+        std::snprintf(buf, sizeof buf, " %s %s %+.1f -> %+.1f", side ? "R" : "L", bands[b], m[0], m[1]);
+        line += buf;
+        jp[std::string(side ? "right_" : "left_") + bands[b] + "_mm"] = {m[0], m[1]};
+      }
+    // The jaw's width at the mouth corners' height (landmarks 61, 291).
+    const LandmarkPhoto& ph = photos[i];
+    if (ph.points.size() > 291 && ph.present[61] && ph.present[291]) {
+      const double y = 0.5 * (ph.points[61].y() + ph.points[291].y());
+      double x[2] = {0, 0}, d[2][2] = {{0, 0}, {0, 0}};  // per side: the photo's x; generic, fit px at y
+      // Interpolated at height y along one side's points (all: the photo's
+      // x; finite only: the distance to the rim); false outside their span.
+      auto at_height = [&](const std::vector<ContourDistance>& list, int side, bool finite_only, bool want_px,
+                           double& out) {
+        std::vector<const ContourDistance*> seq;
+        for (const ContourDistance& c : list)
+          if (c.photo == int(i) && band(c.loop_index) >= 1 && (c.loop_index > 18) == (side == 1) &&
+              (!finite_only || std::isfinite(c.px)))
+            seq.push_back(&c);
+        std::sort(seq.begin(), seq.end(), [](auto p, auto q) { return p->pixel.y() < q->pixel.y(); });
+        for (size_t k = 0; k + 1 < seq.size(); ++k) {
+          const ContourDistance &a = *seq[k], &b = *seq[k + 1];
+          if (!(a.pixel.y() <= y && y <= b.pixel.y()) || b.pixel.y() - a.pixel.y() < 1e-9) continue;
+          const double t = (y - a.pixel.y()) / (b.pixel.y() - a.pixel.y());
+          out = want_px ? (1 - t) * a.px + t * b.px : a.pixel.x() + t * (b.pixel.x() - a.pixel.x());
+          return true;
+        }
+        return false;
+      };
+      bool ok = true;
+      for (int side = 0; side < 2 && ok; ++side)
+        ok = at_height(at_generic, side, false, false, x[side]) && at_height(at_generic, side, true, true, d[side][0]) &&
+             at_height(at_fit, side, true, true, d[side][1]);
+      // The head's width: the photo's less what its outline lies outside the rim on both sides.
+      double width[3] = {std::abs(x[1] - x[0]), 0, 0};
+      width[1] = width[0] - d[0][0] - d[1][0];
+      width[2] = width[0] - d[0][1] - d[1][1];
+      if (ok) {
+        const double mm_per_px = [&] {
+          std::vector<double> v;
+          for (const ContourDistance& c : at_fit)
+            if (c.photo == int(i) && std::isfinite(c.px) && std::abs(c.px) > 1e-6) v.push_back(c.mm / c.px);
+          return v.empty() ? std::nan("") : finite_mean(v);
+        }();
+        char buf[160];
+        std::snprintf(buf, sizeof buf, "; jaw at the mouth %.0f px wide in the photo, generic %+.0f px (%+.1f mm), fit %+.0f px (%+.1f mm)",
+                      width[0], width[1] - width[0], (width[1] - width[0]) * mm_per_px, width[2] - width[0],
+                      (width[2] - width[0]) * mm_per_px);
+        line += buf;
+        jp["jaw_width_at_mouth_px"] = {width[0], width[1], width[2]};
+      }
+    }
+    std::printf("    %s:%s\n", ph.name.c_str(), line.c_str());
+    rep["face_outline"][ph.name] = jp;
+  }
+}
+
+// The face outline's landmarks on the photo (or grey): each loop landmark
+// green where it is a contour point with a rim at the fit (a line to the
+// rim's crossing of its normal), orange without, the fit's rim (cyan).
+Status write_contour_check(const std::string& path, const std::string& photo_path, const LandmarkPhoto& photo,
+                           const Camera& camera, const TriMesh& generic, const std::vector<Vec3>& fit_positions,
+                           int photo_index, const std::vector<ContourDistance>& at_fit) {
+  Image im;
+  if (photo_path.empty() || !load_image_file(photo_path, im, 3)) im = Image::make(photo.width, photo.height, 3, 96);
+  for (auto& v : im.pixels) v = std::uint8_t(v / 2);
+  static const std::uint8_t cyan[3] = {0, 220, 255}, green[3] = {40, 255, 40}, orange[3] = {255, 140, 0},
+                            white[3] = {255, 255, 255};
+  for (const RimEdge& e : find_rim_edges(fit_positions, generic.triangles, mesh_edge_list(generic.triangles), camera, false))
+    draw_segment(im, e.pa, e.pb, cyan);
+  const auto normals = outline_normals(photo.points, photo.present, mediapipe_face_oval());
+  for (const ContourDistance& c : at_fit) {
+    if (c.photo != photo_index) continue;
+    const bool has = std::isfinite(c.px);
+    if (has)
+      for (const auto& [m, n] : normals)
+        if (m == c.landmark) draw_segment(im, c.pixel, c.pixel - c.px * n, white);
+    for (int dy = -3; dy <= 3; ++dy)
+      for (int dx = -3; dx <= 3; ++dx) {
+        const int x = int(c.pixel.x()) + dx, y = int(c.pixel.y()) + dy;
+        if (x >= 0 && y >= 0 && x < im.width && y < im.height)
+          for (int k = 0; k < 3; ++k) im.at(x, y)[k] = (has ? green : orange)[k];
+      }
+  }
+  return write_file(path, write_png(im));
+}
+
 int run_photos(const Args& args) {
   const std::string cmd = "photos";
   if (!only_known_options(cmd, args, {"points", "photos", "masks", "masks-from-photos", "silhouette-check", "map", "out",
                                       "levels", "focal-px", "texture-size", "no-texture", "stereo", "no-stereo", "coarse",
-                                      "schedule", "folds", "depth-scale", "depth-0", "depth-yaw2"}))
+                                      "schedule", "folds", "depth-scale", "depth-0", "depth-yaw2", "contours",
+                                      "contour-check", "contour-lambda", "focal-sigma", "no-slide"}))
     return 2;
   const std::vector<std::string> points_paths = args.get_all("points"), photo_paths = args.get_all("photos"),
                                  mask_paths = args.get_all("masks");
@@ -139,6 +263,10 @@ int run_photos(const Args& args) {
   int levels = 3, texture_size = 2048;
   double focal_px = 0;
   double depth_scale = 0, depth_0 = 1, depth_yaw2 = 0;
+  double contour_lambda = 0, focal_sigma = 0;
+  if (!args.get_double("contour-lambda", PhotosJobOptions{}.contour_lambda_scale, contour_lambda, 0, 100) ||
+      !args.get_double("focal-sigma", SelfCalibOptions{}.focal_prior_sigma, focal_sigma, 1e-4, 10))
+    return 2;
   if (!args.get_int("levels", 3, levels, 0, 4) || !args.get_double("focal-px", 0, focal_px, 0, 1e6) ||
       !args.get_double("depth-scale", 0, depth_scale, 0, 10) || !args.get_double("depth-yaw2", 0, depth_yaw2, -10, 10) ||
       !args.get_double("depth-0", 1, depth_0, 0.1, 10) ||
@@ -236,6 +364,10 @@ int run_photos(const Args& args) {
     if (!parse_fit_levels(args.get("coarse"), args.get("schedule"), opt.fit, why)) return fail(cmd, why);
   }
   opt.calib.focal_prior_px = focal_px;
+  opt.calib.focal_prior_sigma = focal_sigma;
+  opt.contour_landmarks = args.has("contours");
+  opt.use_slide = !args.has("no-slide");
+  opt.contour_lambda_scale = contour_lambda;
   opt.calib.depth_scale_sigma = depth_scale;
   opt.calib.depth_scale_0 = depth_0;
   opt.calib.depth_scale_yaw2 = depth_yaw2;
@@ -374,6 +506,23 @@ int run_photos(const Args& args) {
           ++cam;
         }
       }
+    }
+  }
+  // The face outline's landmarks against the head's rim in each photo
+  // (contour_obs.h), generic head and fit: per side and height, and the
+  // jaw's width at the mouth corners' height.
+  {
+    std::vector<SurfacePoint> lms;
+    if (attach_landmark_map(map, generic.mesh, opt.map_max_distance_m, lms)) {
+      const auto at_generic = contour_distances(generic.mesh, lms, photos, r.calib, generic.mesh.positions, opt.contours);
+      const auto at_fit = contour_distances(generic.mesh, lms, photos, r.calib, r.fit.mesh.positions, opt.contours);
+      print_contour_report(photos, r.calib, at_generic, at_fit, rep);
+      if (args.has("contour-check"))
+        for (size_t i = 0; s && i < photos.size(); ++i)
+          if (r.calib.photos[i].used)
+            s = write_contour_check(out_dir + "/contours_" + std::to_string(i + 1) + ".png",
+                                    image_paths.empty() ? std::string() : image_paths[i], photos[i],
+                                    r.calib.photos[i].camera, generic.mesh, r.fit.mesh.positions, int(i), at_fit);
     }
   }
   // --folds: how much the fit grew the smooth level 3's dihedral angles over
@@ -604,7 +753,7 @@ int run_learn_landmark_map(const Args& args) {
 
 Registrar photos_reg({"photos",
                       "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] [--masks M1.png ... | --masks-from-photos] [--silhouette-check] "
-                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--stereo] [--folds] [--coarse N:S,...|none] [--schedule S,...|none] [--depth-scale SIGMA [--depth-0 K0] [--depth-yaw2 C]]",
+                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--stereo] [--folds] [--coarse N:S,...|none] [--schedule S,...|none] [--depth-scale SIGMA [--depth-0 K0] [--depth-yaw2 C]] [--focal-sigma S] [--no-slide] [--contours [--contour-lambda K]] [--contour-check]",
                       "a head from several photos' landmarks (fua1998): self-calibrated cameras, fitted control "
                       "mesh, levels, cameras.json, report.json; with --photos the skin from those cameras "
                       "(textured.obj, skin.png); head.likeness.glb, the head project; with --masks (white or opaque = the person) the head's outline "
@@ -614,7 +763,12 @@ Registrar photos_reg({"photos",
                       "photos it dents the face, docs/design/photos.md); --coarse: the shape fit first over coarse control "
                       "triangulations of N nodes at stiffness S (fua1998 Sec. 2.1), --schedule: the control mesh's own "
                       "stiffness stages after them; --depth-scale: a per-photo depth scale in the bundle adjustment "
-                      "(prior sigma SIGMA, mean K0 + C (yaw/60 deg)^2) for the detector's error shared by a photo's points",
+                      "(prior sigma SIGMA, mean K0 + C (yaw/60 deg)^2) for the detector's error shared by a photo's points; "
+                      "--focal-sigma: the focal prior's relative sigma (with --focal-px); --no-slide: the map's "
+                      "view-dependent slide left out; --contours: the face outline's jaw and chin landmarks as "
+                      "contour observations, not fixed surface points (--contour-lambda: their weight, x the "
+                      "features'); the report and --contour-check: contours_N.png, the face outline's landmarks, their distance to "
+                      "the fit's rim and the rims drawn on each photo",
                       run_photos, nullptr});
 Registrar synth_photos_reg({"synth-photos",
                             "likeness synth-photos --out DIR [--seed N] [--cameras C] [--noise-px S] [--no-render]",

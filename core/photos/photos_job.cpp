@@ -47,6 +47,7 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
     return Status::error(ErrorCode::InvalidInput, "shape fit: the calibration is for other photos");
   std::vector<Camera> cameras;
   std::vector<FeatureObservation> obs;
+  std::vector<ContourObservation> contour_obs;
   double sigma_weight_sum = 0;  // sum of (pixel_sigma / the slide's scatter)^2 over the observations
   for (size_t i = 0; i < photos.size(); ++i) {
     const PhotoCalibration& pc = calib.photos[i];
@@ -54,7 +55,15 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
     const int cam = int(cameras.size());
     cameras.push_back(pc.camera);
     const SlideView view = slide ? slide_view(*slide, pc.camera.center()) : SlideView{};
+    std::vector<char> is_contour(photos[i].points.size(), 0);
+    if (options.contour_landmarks && photos[i].detector == kMediaPipeDetector) {
+      std::vector<ContourObservation> c = contour_observations(generic.mesh, landmarks, photos[i].points,
+                                                               photos[i].present, pc.camera, cam, options.contours,
+                                                               is_contour);
+      contour_obs.insert(contour_obs.end(), c.begin(), c.end());
+    }
     for (size_t m = 0; m < landmarks.size() && m < photos[i].points.size(); ++m) {
+      if (is_contour[m]) continue;
       if (!photos[i].present[m] || !landmarks[m].valid() || !(pc.weights[m] > 0)) continue;
       FeatureObservation o;
       o.camera = cam;
@@ -86,6 +95,10 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
   std::vector<std::unique_ptr<ObservationSet>> sets;
   sets.push_back(std::make_unique<FeatureSet>(generic.mesh, cameras, std::move(obs), 2 * options.calib.pixel_sigma));
   std::vector<double> lambdas = {options.fit.lambda_features * noise_factor};
+  if (!contour_obs.empty()) {
+    sets.push_back(std::make_unique<ContourSet>(generic.mesh, cameras, std::move(contour_obs), options.contours));
+    lambdas.push_back(options.fit.lambda_features * noise_factor * options.contour_lambda_scale);
+  }
   if (outlines) {
     if (outlines->size() != photos.size())
       return Status::error(ErrorCode::InvalidInput, "shape fit: one outline per photo needed");

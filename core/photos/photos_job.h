@@ -10,6 +10,7 @@
 #pragma once
 #include "head/head_model.h"
 #include "image/image.h"
+#include "photos/contour_obs.h"
 #include "photos/landmarks.h"
 #include "photos/lips.h"
 #include "photos/outline.h"
@@ -38,6 +39,17 @@ struct PhotosJobOptions {
   // the self-calibration and the shape fit; its scatter weighs the
   // landmarks (calib.use_slide_sigma).
   bool use_slide = true;
+  // The face-outline landmarks (MediaPipe's face oval, jaw and chin; other
+  // detectors: none) seen at a grazing angle as contour observations
+  // (contour_obs.h) instead of fixed surface points in the shape fit; their
+  // lambda is the features' (with its noise factor) times
+  // contour_lambda_scale. The self-calibration still uses them as points.
+  // Off by default: on the real detector's points of synthetic renders
+  // (bench --photos-detected) the face comes out farther from the truth
+  // (docs/design/photos.md, "The face outline as contours").
+  bool contour_landmarks = false;
+  ContourOptions contours;
+  double contour_lambda_scale = 1.0;
   // Lips that stay whole (photos/lips.h): the generic head's virtual lip
   // edges bound in the shape fit (with fit.binding_weight), and the mouth
   // bag kept inside the mouth afterwards.

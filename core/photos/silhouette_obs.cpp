@@ -11,11 +11,9 @@
 
 namespace lk {
 namespace {
-
 double cross2(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+}  // namespace
 
-// Signed distance of s from the line through pa and pb (eq. 11's determinant
-// over |pb - pa|), and its gradients with respect to pa and pb.
 double line_distance(const Vec2& pa, const Vec2& pb, const Vec2& s, Vec2* ga, Vec2* gb) {
   const Vec2 e = pb - pa, w = s - pa;
   const double L = e.norm();
@@ -31,6 +29,8 @@ double line_distance(const Vec2& pa, const Vec2& pb, const Vec2& s, Vec2* ga, Ve
   if (ga) *ga = -dd_de - dd_dw;
   return f / L;
 }
+
+namespace {
 
 // Pixel centres covered by the projected triangles (any facing).
 void raster_footprint(const std::vector<Vec2>& p, const std::vector<char>& ok, const std::vector<Tri>& tris, int w,
@@ -55,13 +55,67 @@ void raster_footprint(const std::vector<Vec2>& p, const std::vector<char>& ok, c
   }
 }
 
-struct RimEdge {
-  int a, b, c;
-  Vec2 pa, pb, outward;
-  bool excluded;
-};
-
 }  // namespace
+
+std::vector<std::array<int, 4>> mesh_edge_list(const std::vector<Tri>& triangles) {
+  std::vector<std::array<int, 4>> edges;
+  std::map<std::pair<int, int>, size_t> index;
+  for (size_t f = 0; f < triangles.size(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int u = triangles[f][size_t(k)], v = triangles[f][size_t((k + 1) % 3)];
+      const auto key = std::make_pair(std::min(u, v), std::max(u, v));
+      auto it = index.find(key);
+      if (it == index.end()) {
+        index.emplace(key, edges.size());
+        edges.push_back({u, v, int(f), -1});
+      } else if (edges[it->second][3] < 0) {
+        edges[it->second][3] = int(f);
+      }
+    }
+  return edges;
+}
+
+std::vector<RimEdge> find_rim_edges(const std::vector<Vec3>& P, const std::vector<Tri>& triangles,
+                                    const std::vector<std::array<int, 4>>& edges, const Camera& cam,
+                                    bool silhouette_only) {
+  std::vector<Vec2> proj(P.size());
+  std::vector<char> ok(P.size());
+  for (size_t v = 0; v < P.size(); ++v) ok[v] = cam.project(P[v], proj[v]);
+  const Vec3 C = cam.center();
+  std::vector<char> front(triangles.size());
+  for (size_t f = 0; f < triangles.size(); ++f) {
+    const Tri& t = triangles[f];
+    const Vec3 n = (P[size_t(t[1])] - P[size_t(t[0])]).cross(P[size_t(t[2])] - P[size_t(t[0])]);
+    front[f] = n.dot(C - P[size_t(t[0])]) > 0;
+  }
+  std::vector<std::uint8_t> fp;
+  if (silhouette_only) raster_footprint(proj, ok, triangles, cam.width, cam.height, fp);
+  std::vector<RimEdge> rims;
+  for (const auto& e : edges) {
+    const int tl = e[2], tr = e[3];
+    const bool border = tr < 0;
+    if (!border && front[size_t(tl)] == front[size_t(tr)]) continue;
+    const int ft = border ? tl : (front[size_t(tl)] ? tl : tr);
+    const Tri& t = triangles[size_t(ft)];
+    int third = t[0];
+    for (int v : t)
+      if (v != e[0] && v != e[1]) third = v;
+    if (!ok[size_t(e[0])] || !ok[size_t(e[1])] || !ok[size_t(third)]) continue;
+    RimEdge r{e[0], e[1], third, proj[size_t(e[0])], proj[size_t(e[1])], Vec2::Zero(), border};
+    const Vec2 d = r.pb - r.pa;
+    if (d.norm() < 1e-9) continue;
+    r.outward = Vec2(-d.y(), d.x()) / d.norm();
+    if ((proj[size_t(third)] - r.pa).dot(r.outward) > 0) r.outward = -r.outward;
+    if (silhouette_only) {
+      const Vec2 q = 0.5 * (r.pa + r.pb) + 2.0 * r.outward;
+      const int qx = int(std::floor(q.x())), qy = int(std::floor(q.y()));
+      if (qx >= 0 && qy >= 0 && qx < cam.width && qy < cam.height && fp[size_t(qy) * size_t(cam.width) + size_t(qx)])
+        continue;  // surface beyond it: an inner occluding contour, not the silhouette
+    }
+    rims.push_back(r);
+  }
+  return rims;
+}
 
 SilhouetteSet::SilhouetteSet(const TriMesh& mesh, std::vector<Camera> cameras, std::vector<PhotoOutline> outlines,
                              std::vector<char> excluded, ChinLine chin, const SilhouetteOptions& options)
@@ -73,64 +127,19 @@ SilhouetteSet::SilhouetteSet(const TriMesh& mesh, std::vector<Camera> cameras, s
       options_(options) {
   excluded_.resize(mesh.positions.size(), 0);
   outlines_.resize(cameras_.size());
-  std::map<std::pair<int, int>, size_t> index;
-  for (size_t f = 0; f < triangles_.size(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      const int u = triangles_[f][size_t(k)], v = triangles_[f][size_t((k + 1) % 3)];
-      const auto key = std::make_pair(std::min(u, v), std::max(u, v));
-      auto it = index.find(key);
-      if (it == index.end()) {
-        index.emplace(key, edges_.size());
-        edges_.push_back({u, v, int(f), -1});
-      } else if (edges_[it->second][3] < 0) {
-        edges_[it->second][3] = int(f);
-      }
-    }
+  edges_ = mesh_edge_list(triangles_);
   reweight(mesh.positions);
 }
 
 std::vector<SilhouetteSet::Match> SilhouetteSet::find_matches(const std::vector<Vec3>& P) const {
   std::vector<Match> out;
-  std::vector<Vec2> proj(P.size());
-  std::vector<char> ok(P.size());
-  std::vector<std::uint8_t> fp;
   for (size_t c = 0; c < cameras_.size(); ++c) {
     const Camera& cam = cameras_[c];
     const PhotoOutline& outline = outlines_[c];
     if (outline.points.empty() || cam.width <= 0 || cam.height <= 0) continue;
-    for (size_t v = 0; v < P.size(); ++v) ok[v] = cam.project(P[v], proj[v]);
-    const Vec3 C = cam.center();
-    std::vector<char> front(triangles_.size());
-    for (size_t f = 0; f < triangles_.size(); ++f) {
-      const Tri& t = triangles_[f];
-      const Vec3 n = (P[size_t(t[1])] - P[size_t(t[0])]).cross(P[size_t(t[2])] - P[size_t(t[0])]);
-      front[f] = n.dot(C - P[size_t(t[0])]) > 0;
-    }
-    raster_footprint(proj, ok, triangles_, cam.width, cam.height, fp);
     // The rim edges on the footprint's border.
-    std::vector<RimEdge> rims;
-    for (const auto& e : edges_) {
-      const int tl = e[2], tr = e[3];
-      const bool border = tr < 0;
-      if (!border && front[size_t(tl)] == front[size_t(tr)]) continue;
-      const int ft = border ? tl : (front[size_t(tl)] ? tl : tr);
-      const Tri& t = triangles_[size_t(ft)];
-      int third = t[0];
-      for (int v : t)
-        if (v != e[0] && v != e[1]) third = v;
-      if (!ok[size_t(e[0])] || !ok[size_t(e[1])] || !ok[size_t(third)]) continue;
-      RimEdge r{e[0], e[1], third, proj[size_t(e[0])], proj[size_t(e[1])], Vec2::Zero(), false};
-      const Vec2 d = r.pb - r.pa;
-      if (d.norm() < 1e-9) continue;
-      r.outward = Vec2(-d.y(), d.x()) / d.norm();
-      if ((proj[size_t(third)] - r.pa).dot(r.outward) > 0) r.outward = -r.outward;
-      const Vec2 q = 0.5 * (r.pa + r.pb) + 2.0 * r.outward;
-      const int qx = int(std::floor(q.x())), qy = int(std::floor(q.y()));
-      if (qx >= 0 && qy >= 0 && qx < cam.width && qy < cam.height && fp[size_t(qy) * size_t(cam.width) + size_t(qx)])
-        continue;  // surface beyond it: an inner occluding contour, not the silhouette
-      r.excluded = border || excluded_[size_t(r.a)] || excluded_[size_t(r.b)];
-      rims.push_back(r);
-    }
+    std::vector<RimEdge> rims = find_rim_edges(P, triangles_, edges_, cam, true);
+    for (RimEdge& r : rims) r.excluded = r.excluded || excluded_[size_t(r.a)] || excluded_[size_t(r.b)];
     // The chin's line: outline points below it are neck and shoulders.
     bool have_chin = false;
     Vec2 chin_px = Vec2::Zero(), down = Vec2::Zero();
@@ -219,10 +228,7 @@ bool SilhouetteSet::evaluate(const std::vector<Vec3>& P, Eigen::VectorXd& r, int
 
 void SilhouetteSet::reweight(const std::vector<Vec3>& positions) {
   matches_ = find_matches(positions);
-  for (Match& m : matches_) {
-    const double d = std::abs(distance(positions, m));
-    m.weight = d <= options_.huber_px ? 1.0 : (std::isfinite(d) ? options_.huber_px / d : 0.0);
-  }
+  for (Match& m : matches_) m.weight = huber_weight(std::abs(distance(positions, m)), options_.huber_px);
 }
 
 SilhouetteStats SilhouetteSet::stats(const std::vector<Vec3>& positions) const {

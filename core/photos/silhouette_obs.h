@@ -34,6 +34,7 @@
 #include "photos/shape_fit.h"
 
 #include <array>
+#include <cmath>
 #include <vector>
 
 namespace lk {
@@ -51,6 +52,34 @@ struct ChinLine {
   std::vector<int> vertices;
   Vec3 up = Vec3::UnitY();
 };
+
+// Signed distance in pixels of s from the line through pa and pb (eq. 11's
+// determinant over |pb - pa|); ga, gb (may be null): its gradients with
+// respect to pa and pb.
+double line_distance(const Vec2& pa, const Vec2& pb, const Vec2& s, Vec2* ga, Vec2* gb);
+
+// Huber's IRLS weight of a residual of size |d| (0 for an infinite one).
+inline double huber_weight(double abs_d, double threshold) {
+  return abs_d <= threshold ? 1.0 : (std::isfinite(abs_d) ? threshold / abs_d : 0.0);
+}
+
+// A mesh's edges: a, b, the triangle on one side, the one on the other (-1: open border).
+std::vector<std::array<int, 4>> mesh_edge_list(const std::vector<Tri>& triangles);
+
+// An occluding-contour edge (a, b) of the mesh in one camera: between a
+// triangle facing the camera and one facing away (or on the open border),
+// c the camera-facing triangle's third vertex; projected, with the image
+// direction away from that triangle.
+struct RimEdge {
+  int a = -1, b = -1, c = -1;
+  Vec2 pa = Vec2::Zero(), pb = Vec2::Zero(), outward = Vec2::Zero();
+  bool excluded = false;  // on the open border (callers add their own exclusions)
+};
+// silhouette_only: only the rims on the border of the mesh's rasterized
+// footprint (not the jaw seen over the neck); else every occluding contour.
+std::vector<RimEdge> find_rim_edges(const std::vector<Vec3>& positions, const std::vector<Tri>& triangles,
+                                    const std::vector<std::array<int, 4>>& edges, const Camera& camera,
+                                    bool silhouette_only);
 
 struct SilhouetteStats {
   int points = 0;         // outline points given
