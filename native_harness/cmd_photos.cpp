@@ -431,6 +431,11 @@ int run_photos(const Args& args) {
     std::printf("  mouth bag (photos/lips.h): %d level-3 crossing pairs over it as fitted -> %d, its corners drawn %.0f %% of the "
                 "way to its centroid\n",
                 r.mouth_bag.pairs_before, r.mouth_bag.pairs_after, 100 * r.mouth_bag.share);
+  if (r.lids.observations > 0)
+    std::printf("  lids (photos/eye_lids.h) turned to %d lid columns: upper %+.2f %+.2f, lower %+.2f %+.2f (left, right; "
+                "+ closes), their gaps' error %.2f -> %.2f px\n",
+                r.lids.observations, r.lids.upper[0], r.lids.upper[1], r.lids.lower[0], r.lids.lower[1],
+                r.lids.rms_before_px, r.lids.rms_after_px);
   if (stereo) {
     int pairs_used = 0;
     for (const StereoPairReport& p : r.stereo.pairs) pairs_used += p.patches > 0;

@@ -270,61 +270,77 @@ Status fit_lid_pose(const GenericHead& generic, const std::vector<SurfacePoint>&
   if (calib.photos.size() != photos.size())
     return Status::error(ErrorCode::InvalidInput, "lid pose: the calibration is for other photos");
   if (!(huber_px > 0)) return Status::error(ErrorCode::InvalidInput, "lid pose: huber_px must be positive");
-  struct Obs {
+  // The opening across each lid column: the upper and the lower contour
+  // point k of one eye in one photo, their distance (not their place: where
+  // the eye sits is the shape fit's, and a shift of the whole opening must
+  // not be fitted by opening one lid and closing the other).
+  struct Column {
     const Camera* camera;
-    int landmark;
-    Vec2 pixel;
+    int upper, lower;
+    double gap_px;
   };
-  std::vector<Obs> obs;
+  std::vector<Column> cols;
   for (size_t i = 0; i < photos.size(); ++i) {
     const PhotoCalibration& pc = calib.photos[i];
     if (!pc.used) continue;
-    for (size_t m = 0; m < lid_points.size() && m < photos[i].points.size(); ++m)
-      if (lid_points[m].valid() && photos[i].present[m] && camera_sees_lids(generic, lid_contour_eye(int(m)), pc.camera))
-        obs.push_back({&pc.camera, int(m), photos[i].points[m]});
+    for (int eye = 0; eye < 2; ++eye) {
+      if (!camera_sees_lids(generic, eye, pc.camera)) continue;
+      const LidContour& c = mediapipe_lid_contour(eye);
+      for (size_t k = 0; k < 7; ++k) {
+        const size_t u = static_cast<size_t>(c.upper[k]), l = static_cast<size_t>(c.lower[k]);
+        if (u >= lid_points.size() || l >= lid_points.size() || !lid_points[u].valid() || !lid_points[l].valid() ||
+            u >= photos[i].points.size() || l >= photos[i].points.size() || !photos[i].present[u] || !photos[i].present[l])
+          continue;
+        cols.push_back({&pc.camera, int(u), int(l), (photos[i].points[u] - photos[i].points[l]).norm()});
+      }
+    }
   }
-  out.observations = static_cast<int>(obs.size());
-  if (obs.empty()) return Status::success();  // no photo marks the lids: the shape fit's stand
+  out.observations = static_cast<int>(cols.size());
+  if (cols.empty()) return Status::success();  // no photo marks the lids: the shape fit's stand
   FaceRig rig;
   if (Status s = make_face_rig(head, generic, rig); !s) return with_context(s, "lid pose");
-  const int channels[4] = {kLidL, kLidR, kLowerLidL, kLowerLidR};
-  auto posed = [&](const Eigen::VectorXd& x) {
+  // One value per eye: g > 0 closes both lids by g (the rig's upper and
+  // lower lid channels), g < 0 opens the upper lid (the rig lowers no lower
+  // lid).
+  auto controls_of = [](const Eigen::VectorXd& g) {
     FaceControls c;
-    for (int k = 0; k < 4; ++k) c[channels[k]] = x[k];
-    return pose_face(rig, c);
+    c[kLidL] = g[0];
+    c[kLidR] = g[1];
+    c[kLowerLidL] = std::max(0.0, g[0]);
+    c[kLowerLidR] = std::max(0.0, g[1]);
+    return c;
   };
   TriMesh at = head;
-  auto cost = [&](const Eigen::VectorXd& x, double* rms) {
-    for (int k = 0; k < 4; ++k)
-      if (x[k] < (k < 2 ? -1.0 : 0.0) || x[k] > 1.0) return std::numeric_limits<double>::infinity();
-    at.positions = posed(x);
+  auto cost = [&](const Eigen::VectorXd& g, double* rms) {
+    if (std::abs(g[0]) > 1 || std::abs(g[1]) > 1) return std::numeric_limits<double>::infinity();
+    at.positions = pose_face(rig, controls_of(g));
     double sum = 0, sq = 0;
-    for (const Obs& o : obs) {
-      Vec2 uv;
-      if (!o.camera->project(surface_position(at, lid_points[static_cast<size_t>(o.landmark)]), uv))
+    for (const Column& c : cols) {
+      Vec2 a, b;
+      if (!c.camera->project(surface_position(at, lid_points[static_cast<size_t>(c.upper)]), a) ||
+          !c.camera->project(surface_position(at, lid_points[static_cast<size_t>(c.lower)]), b))
         return std::numeric_limits<double>::infinity();
-      const double e = (uv - o.pixel).norm();
+      const double e = std::abs((a - b).norm() - c.gap_px);
       sq += e * e;
       sum += e <= huber_px ? e * e : huber_px * (2 * e - huber_px);  // Huber
     }
-    if (rms) *rms = std::sqrt(sq / double(obs.size()));
+    if (rms) *rms = std::sqrt(sq / double(cols.size()));
     return sum;
   };
-  const Eigen::VectorXd x0 = Eigen::VectorXd::Zero(4);
-  cost(x0, &out.rms_before_px);
+  const Eigen::VectorXd g0 = Eigen::VectorXd::Zero(2);
+  cost(g0, &out.rms_before_px);
   PowellOptions po;
-  po.initial_step = Eigen::VectorXd::Constant(4, 0.2);
+  po.initial_step = Eigen::VectorXd::Constant(2, 0.2);
   po.line_absolute_tolerance = 1e-3;
   po.tolerance = 1e-6;
   PowellResult pr;
-  if (Status s = powell_minimize([&](const Eigen::VectorXd& x) { return cost(x, nullptr); }, x0, po, pr); !s)
+  if (Status s = powell_minimize([&](const Eigen::VectorXd& g) { return cost(g, nullptr); }, g0, po, pr); !s)
     return with_context(s, "lid pose");
   cost(pr.x, &out.rms_after_px);
-  for (int e = 0; e < 2; ++e) {
-    out.upper[static_cast<size_t>(e)] = pr.x[e];
-    out.lower[static_cast<size_t>(e)] = pr.x[2 + e];
-  }
-  head.positions = posed(pr.x);
+  const FaceControls best = controls_of(pr.x);
+  out.upper = {best[kLidL], best[kLidR]};
+  out.lower = {best[kLowerLidL], best[kLowerLidR]};
+  head.positions = pose_face(rig, best);
   return Status::success();
 }
 

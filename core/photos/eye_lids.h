@@ -80,18 +80,21 @@ bool camera_sees_lids(const GenericHead& generic, int eye, const Camera& camera)
 // The lids' opening is a pose, not a shape: the thin-plate stiffness of the
 // shape fit holds a 2 mm change across a 12 mm lid back (on a synthetic
 // person with narrower lids the fitted opening stayed 0.04-0.10 of the
-// width too open). So after the shape fit, each eye's upper and lower lid
-// are turned about the eyeball's centre as the face rig turns them
-// (anim/face_rig.h: each lid vertex keeps its distance to the centre, it
-// slides over the eyeball), by the angles that bring the rim onto the
-// photos' lid contour (lid_margin_points) in every used photo that sees
-// the eye (camera_sees_lids); the posed lids become the head's rest.
-// Least squares in pixels with Huber weights (huber_px), Powell over the
-// four lid channels (upper -1..1, lower 0..1: the rig opens no lower lid).
+// width too open). So after the shape fit each eye's lids are turned about
+// the eyeball's centre as the face rig turns them (anim/face_rig.h: a lid
+// vertex keeps its distance to the centre, it slides over the eyeball), by
+// one value per eye (g > 0 closes upper and lower lid by g, g < 0 opens the
+// upper lid: the rig lowers no lower lid), so that the rim's opening across
+// each lid column (upper contour point k to lower point k, lid_margin_points)
+// is the photos' in every used photo that sees the eye (camera_sees_lids);
+// the posed lids become the head's rest. The gaps only, not the places:
+// fitting the places opened one lid and closed the other to shift Kira's
+// openings by 5-10 px. Least squares in pixels with Huber weights (huber_px),
+// Powell.
 struct LidPoseResult {
   std::array<double, 2> upper{}, lower{};  // the rig's kLid*, kLowerLid* per eye (0 = left)
-  double rms_before_px = 0, rms_after_px = 0;  // the lid contour's error, all used photos
-  int observations = 0;
+  double rms_before_px = 0, rms_after_px = 0;  // the columns' gap error, all used photos
+  int observations = 0;                        // lid columns seen
 };
 Status fit_lid_pose(const GenericHead& generic, const std::vector<SurfacePoint>& lid_points,
                     const std::vector<LandmarkPhoto>& photos, const SelfCalibResult& calib, TriMesh& head,
