@@ -69,20 +69,39 @@ void report_eyes(const GenericHead& generic, const TriMesh& fitted, const Landma
   }
 }
 
+// The generic head, the shipped MediaPipe map, and Kira's nine points files
+// (tests/photos/data/kira).
+void load_generic_and_map(GenericHead& generic, LandmarkMap& map) {
+  REQUIRE(load_generic_head(generic));
+  REQUIRE(parse_landmark_map_json(mediapipe_landmark_map_text(), map));
+}
+
+// ... with the map attached to the generic head and its lid contour on the rims.
+void load_lid_points(GenericHead& generic, LandmarkMap& map, std::vector<SurfacePoint>& lms,
+                     std::vector<SurfacePoint>& rim) {
+  load_generic_and_map(generic, map);
+  REQUIRE(attach_landmark_map(map, generic.mesh, PhotosJobOptions{}.map_max_distance_m, lms));
+  REQUIRE(lid_margin_points(generic, lms, rim));
+}
+
+std::vector<LandmarkPhoto> kira_photos() {
+  std::vector<LandmarkPhoto> photos;
+  for (const char* n : {"0001", "0002", "0003", "0004", "0006", "0007", "0008", "0009", "0010"}) {
+    LandmarkPhoto ph;
+    REQUIRE(parse_landmarks_json(test::read_file_text(test::source_dir() + "/tests/photos/data/kira/" + n + ".json"), ph));
+    photos.push_back(ph);
+  }
+  return photos;
+}
+
 // The figures of docs/design/photos.md ("Lids that follow the photos"): run
 // by name, not by ctest (hidden).
 TEST_CASE("lid openings of the photos head on Kira and the detected seeds (report)", "[.][photos][lids][report]") {
   GenericHead generic;
-  REQUIRE(load_generic_head(generic));
   LandmarkMap map;
-  REQUIRE(parse_landmark_map_json(mediapipe_landmark_map_text(), map));
+  load_generic_and_map(generic, map);
   {
-    std::vector<LandmarkPhoto> photos;
-    for (const char* n : {"0001", "0002", "0003", "0004", "0006", "0007", "0008", "0009", "0010"}) {
-      LandmarkPhoto ph;
-      REQUIRE(parse_landmarks_json(test::read_file_text(test::source_dir() + "/tests/photos/data/kira/" + n + ".json"), ph));
-      photos.push_back(ph);
-    }
+    const std::vector<LandmarkPhoto> photos = kira_photos();
     PhotosJobResult r;
     REQUIRE(run_photos_job(generic, map, photos, {}, r));
     const int p = most_frontal(r.calib);
@@ -131,12 +150,9 @@ TEST_CASE("lid openings of the photos head on Kira and the detected seeds (repor
 // the truth's, in the most frontal photo.
 void lid_session(double upper, double lower, bool lids_on_rim, double error[2], double truth_ratio[2]) {
   GenericHead generic;
-  REQUIRE(load_generic_head(generic));
   LandmarkMap map;
-  REQUIRE(parse_landmark_map_json(mediapipe_landmark_map_text(), map));
   std::vector<SurfacePoint> lms, rim;
-  REQUIRE(attach_landmark_map(map, generic.mesh, PhotosJobOptions{}.map_max_distance_m, lms));
-  REQUIRE(lid_margin_points(generic, lms, rim));
+  load_lid_points(generic, map, lms, rim);
   GenericHead person;
   REQUIRE(synthesize_head(generic, 2u, SynthHeadOptions{}, person));
   FaceRig rig;
@@ -219,15 +235,9 @@ void check_blink(const GenericHead& generic, const TriMesh& head) {
 
 TEST_CASE("Kira's fitted lid opening is the detector's, and her head still blinks", "[photos][lids][kira]") {
   GenericHead generic;
-  REQUIRE(load_generic_head(generic));
   LandmarkMap map;
-  REQUIRE(parse_landmark_map_json(mediapipe_landmark_map_text(), map));
-  std::vector<LandmarkPhoto> photos;
-  for (const char* n : {"0001", "0002", "0003", "0004", "0006", "0007", "0008", "0009", "0010"}) {
-    LandmarkPhoto ph;
-    REQUIRE(parse_landmarks_json(test::read_file_text(test::source_dir() + "/tests/photos/data/kira/" + n + ".json"), ph));
-    photos.push_back(ph);
-  }
+  load_generic_and_map(generic, map);
+  const std::vector<LandmarkPhoto> photos = kira_photos();
   // Measured in 0001 (frontal), gap / width: detected 0.421 and 0.414;
   // fitted 0.423 and 0.401 (0.531 and 0.536 before: white above the iris).
   for (bool fix : {true, false}) {
@@ -268,12 +278,9 @@ TEST_CASE("the gap across an outline and MediaPipe's lid contour on the eye rims
   CHECK(opening_gap(ellipse, Vec2(-30, 0), Vec2(30, 0), Vec2(50, 0)) == 0);
 
   GenericHead generic;
-  REQUIRE(load_generic_head(generic));
   LandmarkMap map;
-  REQUIRE(parse_landmark_map_json(mediapipe_landmark_map_text(), map));
   std::vector<SurfacePoint> lms, rim;
-  REQUIRE(attach_landmark_map(map, generic.mesh, PhotosJobOptions{}.map_max_distance_m, lms));
-  REQUIRE(lid_margin_points(generic, lms, rim));
+  load_lid_points(generic, map, lms, rim);
   REQUIRE(rim.size() == lms.size());
   int valid = 0;
   for (size_t m = 0; m < rim.size(); ++m) {
