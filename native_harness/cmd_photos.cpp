@@ -120,7 +120,7 @@ int run_photos(const Args& args) {
   const std::string cmd = "photos";
   if (!only_known_options(cmd, args, {"points", "photos", "masks", "masks-from-photos", "silhouette-check", "map", "out",
                                       "levels", "focal-px", "texture-size", "no-texture", "stereo", "no-stereo", "coarse",
-                                      "schedule", "folds", "depth-scale", "depth-0", "depth-yaw2"}))
+                                      "schedule", "folds", "depth-scale", "depth-0", "depth-yaw2", "lids"}))
     return 2;
   const std::vector<std::string> points_paths = args.get_all("points"), photo_paths = args.get_all("photos"),
                                  mask_paths = args.get_all("masks");
@@ -231,6 +231,7 @@ int run_photos(const Args& args) {
   }
   PhotosJobOptions opt;
   opt.stereo = stereo;
+  opt.lids_on_rim = args.has("lids");  // photos/eye_lids.h: off by default (docs/design/photos.md, "Lids that follow the photos")
   {
     std::string why;
     if (!parse_fit_levels(args.get("coarse"), args.get("schedule"), opt.fit, why)) return fail(cmd, why);
@@ -609,7 +610,7 @@ int run_learn_landmark_map(const Args& args) {
 
 Registrar photos_reg({"photos",
                       "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] [--masks M1.png ... | --masks-from-photos] [--silhouette-check] "
-                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--stereo] [--folds] [--coarse N:S,...|none] [--schedule S,...|none] [--depth-scale SIGMA [--depth-0 K0] [--depth-yaw2 C]]",
+                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--stereo] [--folds] [--coarse N:S,...|none] [--schedule S,...|none] [--depth-scale SIGMA [--depth-0 K0] [--depth-yaw2 C]] [--lids]",
                       "a head from several photos' landmarks (fua1998): self-calibrated cameras, fitted control "
                       "mesh, levels, cameras.json, report.json; with --photos the skin from those cameras "
                       "(textured.obj, skin.png); head.likeness.glb, the head project; with --masks (white or opaque = the person) the head's outline "

@@ -45,8 +45,12 @@ struct PhotosJobOptions {
   bool bind_lips = true;
   // MediaPipe's lid contour observed on the eye rims (eye_lids.h,
   // lid_margin_points) instead of at the map's lid points, which were
-  // learned on renders without eyeballs and open the lids too wide.
-  bool lids_on_rim = true;
+  // learned on renders without eyeballs and open the lids too wide. Off by
+  // default: on the real detector's points from those eyeless renders
+  // (tests/photos/data/detected) it pulls the rims to lids the detector
+  // cannot see and folds the face (docs/design/photos.md, "Lids that follow
+  // the photos"); `likeness photos --lids` turns it on.
+  bool lids_on_rim = false;
   // Then the lids turned over the eyeballs to the photos' lid contour
   // (eye_lids.h, fit_lid_pose; with lids_on_rim and MediaPipe points).
   bool fit_lids = true;
