@@ -244,7 +244,7 @@ int run_photos(const Args& args) {
   if (!only_known_options(cmd, args, {"points", "photos", "masks", "masks-from-photos", "silhouette-check", "map", "out",
                                       "levels", "focal-px", "texture-size", "no-texture", "stereo", "no-stereo", "coarse",
                                       "schedule", "folds", "depth-scale", "depth-0", "depth-yaw2", "contours",
-                                      "contour-check", "contour-lambda", "focal-sigma", "no-slide"}))
+                                      "contour-check", "contour-lambda", "focal-sigma", "no-slide", "lids"}))
     return 2;
   const std::vector<std::string> points_paths = args.get_all("points"), photo_paths = args.get_all("photos"),
                                  mask_paths = args.get_all("masks");
@@ -359,6 +359,7 @@ int run_photos(const Args& args) {
   }
   PhotosJobOptions opt;
   opt.stereo = stereo;
+  opt.lids_on_rim = args.has("lids");  // photos/eye_lids.h: off by default (docs/design/photos.md, "Lids that follow the photos")
   {
     std::string why;
     if (!parse_fit_levels(args.get("coarse"), args.get("schedule"), opt.fit, why)) return fail(cmd, why);
@@ -580,6 +581,11 @@ int run_photos(const Args& args) {
     std::printf("  mouth bag (photos/lips.h): %d level-3 crossing pairs over it as fitted -> %d, its corners drawn %.0f %% of the "
                 "way to its centroid\n",
                 r.mouth_bag.pairs_before, r.mouth_bag.pairs_after, 100 * r.mouth_bag.share);
+  if (r.lids.observations > 0)
+    std::printf("  lids (photos/eye_lids.h) turned to %d lid columns: upper %+.2f %+.2f, lower %+.2f %+.2f (left, right; "
+                "+ closes), their gaps' error %.2f -> %.2f px\n",
+                r.lids.observations, r.lids.upper[0], r.lids.upper[1], r.lids.lower[0], r.lids.lower[1],
+                r.lids.rms_before_px, r.lids.rms_after_px);
   if (stereo) {
     int pairs_used = 0;
     for (const StereoPairReport& p : r.stereo.pairs) pairs_used += p.patches > 0;
@@ -753,7 +759,7 @@ int run_learn_landmark_map(const Args& args) {
 
 Registrar photos_reg({"photos",
                       "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] [--masks M1.png ... | --masks-from-photos] [--silhouette-check] "
-                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--stereo] [--folds] [--coarse N:S,...|none] [--schedule S,...|none] [--depth-scale SIGMA [--depth-0 K0] [--depth-yaw2 C]] [--focal-sigma S] [--no-slide] [--contours [--contour-lambda K]] [--contour-check]",
+                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--stereo] [--folds] [--coarse N:S,...|none] [--schedule S,...|none] [--depth-scale SIGMA [--depth-0 K0] [--depth-yaw2 C]] [--focal-sigma S] [--no-slide] [--contours [--contour-lambda K]] [--contour-check] [--lids]",
                       "a head from several photos' landmarks (fua1998): self-calibrated cameras, fitted control "
                       "mesh, levels, cameras.json, report.json; with --photos the skin from those cameras "
                       "(textured.obj, skin.png); head.likeness.glb, the head project; with --masks (white or opaque = the person) the head's outline "

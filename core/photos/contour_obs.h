@@ -29,8 +29,6 @@
 
 namespace lk {
 
-// The detector whose landmark indices mediapipe_face_oval() names.
-inline constexpr const char* kMediaPipeDetector = "mediapipe-face-mesh";
 // MediaPipe Face Mesh's FACEMESH_FACE_OVAL, in order round the face (36).
 const std::vector<int>& mediapipe_face_oval();
 

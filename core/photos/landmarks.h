@@ -32,6 +32,10 @@ constexpr size_t kMaxLandmarkFileBytes = size_t(4) << 20;  // 468 points need ~2
 constexpr int kMaxLandmarks = 1000;                        // MediaPipe: 468, 478 with irises
 constexpr int kMaxLandmarkImageSide = 65535;
 
+// The detector name MediaPipe Face Mesh's points files carry (the contour
+// and lid observations use its landmark indices).
+inline constexpr const char* kMediaPipeDetector = "mediapipe-face-mesh";
+
 struct LandmarkPhoto {
   std::string name;        // the photo's file name, as written by the exporter
   int width = 0, height = 0;

@@ -1,5 +1,6 @@
 #include "photos/photos_job.h"
 
+#include "photos/eye_lids.h"
 #include "photos/stereo_obs.h"
 
 #include <algorithm>
@@ -41,10 +42,16 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
                         const std::vector<LandmarkPhoto>& photos, const SelfCalibResult& calib,
                         const PhotosJobOptions& options, ShapeFitResult& fit,
                         const std::vector<PhotoOutline>* outlines, const StereoResult* stereo,
-                        PhotosStereoFit* stereo_fit, const LandmarkSlide* slide, MouthBagResult* mouth_bag) {
+                        PhotosStereoFit* stereo_fit, const LandmarkSlide* slide, MouthBagResult* mouth_bag,
+                        LidPoseResult* lids) {
   if (slide && !slide->has_slide() && !slide->has_sigma()) slide = nullptr;
   if (calib.photos.size() != photos.size())
     return Status::error(ErrorCode::InvalidInput, "shape fit: the calibration is for other photos");
+  std::vector<SurfacePoint> lid_points;  // valid where a landmark is a lid contour point seen on the rim
+  if (options.lids_on_rim && std::any_of(photos.begin(), photos.end(), [](const LandmarkPhoto& p) {
+        return p.detector == kMediaPipeDetector;
+      }))
+    if (Status s = lid_margin_points(generic, landmarks, lid_points); !s) return with_context(s, "shape fit");
   std::vector<Camera> cameras;
   std::vector<FeatureObservation> obs;
   std::vector<ContourObservation> contour_obs;
@@ -64,13 +71,17 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
     }
     for (size_t m = 0; m < landmarks.size() && m < photos[i].points.size(); ++m) {
       if (is_contour[m]) continue;
-      if (!photos[i].present[m] || !landmarks[m].valid() || !(pc.weights[m] > 0)) continue;
+      const bool on_rim = m < lid_points.size() && lid_points[m].valid();
+      if (!photos[i].present[m] || !landmarks[m].valid()) continue;
+      if (on_rim ? !camera_sees_lids(generic, lid_contour_eye(int(m)), pc.camera) : !(pc.weights[m] > 0)) continue;
       FeatureObservation o;
       o.camera = cam;
-      o.point = landmarks[m];
+      o.point = on_rim ? lid_points[m] : landmarks[m];
       o.pixel = photos[i].points[m];
-      o.prior_weight = o.weight = pc.weights[m];
-      if (slide) {
+      // On the rim: the calibration's weight was earned at the map's point,
+      // not there; the fit's own Huber reweighting still drops outliers.
+      o.prior_weight = o.weight = on_rim ? 1.0 : pc.weights[m];
+      if (slide && !on_rim) {
         // The cameras are fixed here: the shift is a constant offset per observation.
         o.point.offset += landmark_shift(*slide, int(m), view);
         if (slide->has_sigma() && options.calib.use_slide_sigma) {
@@ -126,6 +137,11 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
     MouthBagResult bag;
     s = keep_mouth_bag_inside(generic, options.mouth_bag, fit.mesh, bag);
     if (mouth_bag) *mouth_bag = bag;
+  }
+  if (s && options.fit_lids && !lid_points.empty()) {
+    LidPoseResult pose;
+    s = fit_lid_pose(generic, lid_points, photos, calib, fit.mesh, pose);
+    if (lids) *lids = pose;
   }
   if (s && attractors && stereo_fit) {
     auto median_of = [](std::vector<double> v) {
@@ -230,7 +246,7 @@ Status run_photos_job(const GenericHead& generic, const LandmarkMap& map, const 
                              " deg apart; landmarks only");
   }
   s = fit_photos_shape(generic, landmarks, photos, result.calib, options, result.fit, outlines, &result.stereo,
-                       &result.stereo_fit, slide, &result.mouth_bag);
+                       &result.stereo_fit, slide, &result.mouth_bag, &result.lids);
   return with_context(s, "photos");
 }
 

@@ -11,6 +11,7 @@
 #include "head/head_model.h"
 #include "image/image.h"
 #include "photos/contour_obs.h"
+#include "photos/eye_lids.h"
 #include "photos/landmarks.h"
 #include "photos/lips.h"
 #include "photos/outline.h"
@@ -54,6 +55,17 @@ struct PhotosJobOptions {
   // edges bound in the shape fit (with fit.binding_weight), and the mouth
   // bag kept inside the mouth afterwards.
   bool bind_lips = true;
+  // MediaPipe's lid contour observed on the eye rims (eye_lids.h,
+  // lid_margin_points) instead of at the map's lid points, which were
+  // learned on renders without eyeballs and open the lids too wide. Off by
+  // default: on the real detector's points from those eyeless renders
+  // (tests/photos/data/detected) it pulls the rims to lids the detector
+  // cannot see and folds the face (docs/design/photos.md, "Lids that follow
+  // the photos"); `likeness photos --lids` turns it on.
+  bool lids_on_rim = false;
+  // Then the lids turned over the eyeballs to the photos' lid contour
+  // (eye_lids.h, fit_lid_pose; with lids_on_rim and MediaPipe points).
+  bool fit_lids = true;
   bool keep_mouth_bag = true;
   MouthBagOptions mouth_bag;
 };
@@ -74,6 +86,7 @@ struct PhotosJobResult {
   PhotosStereoFit stereo_fit;
   ShapeFitResult fit;          // fit.mesh: the person's control mesh
   MouthBagResult mouth_bag;    // what keeping the mouth bag inside did (PhotosJobOptions::keep_mouth_bag)
+  LidPoseResult lids;          // the lids' turn to the photos (PhotosJobOptions::fit_lids; zero when not run)
   std::vector<std::string> notes;  // for people: one photo only, photos dropped, ...
 };
 
@@ -95,13 +108,16 @@ Status run_photos_stereo(const GenericHead& generic, const std::vector<LandmarkP
 // (silhouette_obs.h; the neck region excluded, the chin region's lowest
 // point as the chin line). slide: null, or the map's slide model: each
 // landmark observed at its point plus its shift for that photo's camera,
-// weighted by its scatter there (as the self-calibration).
+// weighted by its scatter there (as the self-calibration). With MediaPipe
+// points, options.lids_on_rim observes the lid contour on the eye rims and
+// options.fit_lids then turns the lids to it (eye_lids.h; lids: null or
+// its report).
 Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoint>& landmarks,
                         const std::vector<LandmarkPhoto>& photos, const SelfCalibResult& calib,
                         const PhotosJobOptions& options, ShapeFitResult& fit,
                         const std::vector<PhotoOutline>* outlines = nullptr, const StereoResult* stereo = nullptr,
                         PhotosStereoFit* stereo_fit = nullptr, const LandmarkSlide* slide = nullptr,
-                        MouthBagResult* mouth_bag = nullptr);
+                        MouthBagResult* mouth_bag = nullptr, LidPoseResult* lids = nullptr);
 
 // The silhouette set fit_photos_shape builds (for reports: its stats at the
 // generic and the fitted shape). Null when no used photo has an outline.
