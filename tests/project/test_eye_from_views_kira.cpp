@@ -9,6 +9,7 @@
 #include "project/eye_from_views.h"
 #include "project/photos_project.h"
 #include "test_data.h"
+#include "test_kira.h"
 #include "io/io.h"
 
 #include <catch2/catch.hpp>
@@ -37,12 +38,7 @@ Vec3 iris_ring_rgb(const Image& texture, double iris_angle_deg) {
 
 TEST_CASE("eye from views on Kira: the iris restricted to the marked photo is found in that photo", "[shared][kira]") {
   LK_REQUIRE_SHARED("multiview_faces/keentools_kira/0001.jpg");
-  std::vector<LandmarkPhoto> photos;
-  for (const char* n : {"0001", "0002", "0003", "0004", "0006", "0007", "0008", "0009", "0010"}) {
-    LandmarkPhoto ph;
-    REQUIRE(parse_landmarks_json(test::read_file_text(test::source_dir() + "/tests/photos/data/kira/" + n + ".json"), ph));
-    photos.push_back(ph);
-  }
+  const std::vector<LandmarkPhoto> photos = test::kira_landmark_photos();
   GenericHead generic;
   REQUIRE(load_generic_head(generic));
   LandmarkMap map;
