@@ -244,7 +244,7 @@ int run_photos(const Args& args) {
   if (!only_known_options(cmd, args, {"points", "photos", "masks", "masks-from-photos", "silhouette-check", "map", "out",
                                       "levels", "focal-px", "texture-size", "no-texture", "stereo", "no-stereo", "coarse",
                                       "schedule", "folds", "depth-scale", "depth-0", "depth-yaw2", "contours",
-                                      "contour-check", "contour-lambda", "focal-sigma", "no-slide", "lids"}))
+                                      "contour-check", "contour-lambda", "focal-sigma", "no-slide", "lids", "iris-photo"}))
     return 2;
   const std::vector<std::string> points_paths = args.get_all("points"), photo_paths = args.get_all("photos"),
                                  mask_paths = args.get_all("masks");
@@ -417,7 +417,16 @@ int run_photos(const Args& args) {
     std::vector<const Image*> image_ptrs;
     for (const Image& im : decoded) image_ptrs.push_back(&im);
     EyeFromViewsResult eye;
-    const Status eye_status = find_project_iris(project, generic, image_ptrs, cameras, used_names, eye);
+    // --iris-photo: the iris looked for in that photo only (the page's photo
+    // set to "Eye (iris)"); else the most frontal eye of all.
+    EyeFromViewsOptions eye_options;
+    const std::string iris_photo = args.get("iris-photo");
+    if (!iris_photo.empty()) {
+      eye_options.only_photo = find_photo_name(used_names, iris_photo);
+      if (eye_options.only_photo < 0)
+        return fail(cmd, "--iris-photo " + iris_photo + ": not one of the photos the head was made from");
+    }
+    const Status eye_status = find_project_iris(project, generic, image_ptrs, cameras, used_names, eye, eye_options);
     if (eye_status) {
       s = save_png_file(out_dir + "/eye.png", eye.texture);
       if (!s) return fail(cmd, s.message);
@@ -759,10 +768,11 @@ int run_learn_landmark_map(const Args& args) {
 
 Registrar photos_reg({"photos",
                       "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] [--masks M1.png ... | --masks-from-photos] [--silhouette-check] "
-                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--stereo] [--folds] [--coarse N:S,...|none] [--schedule S,...|none] [--depth-scale SIGMA [--depth-0 K0] [--depth-yaw2 C]] [--focal-sigma S] [--no-slide] [--contours [--contour-lambda K]] [--contour-check] [--lids]",
+                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--stereo] [--folds] [--coarse N:S,...|none] [--schedule S,...|none] [--depth-scale SIGMA [--depth-0 K0] [--depth-yaw2 C]] [--focal-sigma S] [--no-slide] [--contours [--contour-lambda K]] [--contour-check] [--lids] [--iris-photo NAME]",
                       "a head from several photos' landmarks (fua1998): self-calibrated cameras, fitted control "
                       "mesh, levels, cameras.json, report.json; with --photos the skin from those cameras "
-                      "(textured.obj, skin.png); head.likeness.glb, the head project; with --masks (white or opaque = the person) the head's outline "
+                      "(textured.obj, skin.png) and the iris found in them (eye.png; --iris-photo NAME: in that photo only, "
+                      "else the most frontal eye); head.likeness.glb, the head project; with --masks (white or opaque = the person) the head's outline "
                       "in each photo as silhouettes (--masks-from-photos: from the photos, plain background only; "
                       "--silhouette-check: silhouettes_N.png, outline and rims drawn on each photo); with --photos "
                       "and --stereo, stereo between pairs of them joins the landmarks (off by default: on real "

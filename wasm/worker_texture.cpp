@@ -72,10 +72,15 @@ val texture_job(val photos, val options, val progress) {
     return error_result(lk::ErrorCode::InvalidInput, "texture size must be 16..4096 texels");
   // A head from photos: each photo's camera is the self-calibration's.
   input.cameras_given = has(options, "cameras") && options["cameras"].as<bool>();
-  // And the iris from the same photos, unless the page has one from an eye photo.
+  // And the iris from the same photos, unless the page has one from an eye
+  // photo. findEyes: true: looked for even when the project holds one (the
+  // page knows whose eye it shows); irisPhoto: the photo the user set to
+  // "Eye (iris)", searched alone.
   lk::Status generic_status;
   if (input.cameras_given && !(has(options, "findEyes") && !options["findEyes"].as<bool>()))
     input.generic_for_eyes = generic_head(generic_status);
+  input.replace_eye_texture = has(options, "findEyes") && options["findEyes"].as<bool>();
+  if (has(options, "irisPhoto") && options["irisPhoto"].isString()) input.iris_photo = options["irisPhoto"].as<std::string>();
   const int count = photos.isArray() ? photos["length"].as<int>() : 0;
   if (count == 0) return error_result(lk::ErrorCode::InvalidInput, "no photo to texture from");
   if (count > lk::kMaxTexturePhotos)

@@ -43,7 +43,13 @@ Status eye_texture_from_views(const TriMesh& control, const GenericHead& generic
   // The head's forward direction in the cameras' frame.
   const Vec3 forward = (frame.to_scan(Vec3(0, 0, 1)) - frame.to_scan(Vec3::Zero())).normalized();
   std::vector<Candidate> candidates;
+  const auto photo_name = [&](int i) {
+    return size_t(i) < names.size() ? names[size_t(i)] : "photo " + std::to_string(i + 1);
+  };
+  if (options.only_photo >= static_cast<int>(cameras.size()))
+    return Status::error(ErrorCode::InvalidInput, "eye from photos: no photo " + std::to_string(options.only_photo + 1));
   for (size_t i = 0; i < cameras.size(); ++i) {
+    if (options.only_photo >= 0 && static_cast<int>(i) != options.only_photo) continue;
     if (!images[i] || images[i]->empty()) continue;
     for (int e = 0; e < 2; ++e) {
       const Vec3 c = frame.to_scan(parts.placement.eye_center[e]);
@@ -54,19 +60,21 @@ Status eye_texture_from_views(const TriMesh& control, const GenericHead& generic
   }
   std::sort(candidates.begin(), candidates.end(),
             [](const Candidate& a, const Candidate& b) { return a.angle_deg < b.angle_deg; });
+  const std::string within = std::to_string(static_cast<int>(options.max_view_angle_deg)) + " deg of the front";
+  if (candidates.empty() && options.only_photo >= 0)
+    return Status::error(ErrorCode::NotAHead, photo_name(options.only_photo) +
+                                                  " does not look at either eye from within " + within +
+                                                  ": the generic iris is kept");
   if (candidates.empty())
-    return Status::error(ErrorCode::NotAHead, "no photo looks at the eyes from within " +
-                                                  std::to_string(static_cast<int>(options.max_view_angle_deg)) +
-                                                  " deg of the front: the generic iris is kept");
+    return Status::error(ErrorCode::NotAHead, "no photo looks at the eyes from within " + within +
+                                                  ": the generic iris is kept");
 
   const int attempts = std::min<int>(options.max_attempts, static_cast<int>(candidates.size()));
   for (int k = 0; k < attempts; ++k) {
     const Candidate& cand = candidates[size_t(k)];
     const Camera& cam = cameras[size_t(cand.photo)];
     const Image& photo = *images[size_t(cand.photo)];
-    const std::string where =
-        eye_name(cand.eye) + " in " +
-        (size_t(cand.photo) < names.size() ? names[size_t(cand.photo)] : "photo " + std::to_string(cand.photo + 1));
+    const std::string where = eye_name(cand.eye) + " in " + photo_name(cand.photo);
     const Vec3 centre = frame.to_scan(parts.placement.eye_center[cand.eye]);
     // The eyeball's radius in pixels, across the line of sight.
     const Vec3 side = frame.to_scan(parts.placement.eye_center[cand.eye] + Vec3(parts.placement.eye_radius[cand.eye], 0, 0));
@@ -126,14 +134,27 @@ Status eye_texture_from_views(const TriMesh& control, const GenericHead& generic
 
 Status find_project_iris(HeadProject& project, const GenericHead& generic, const std::vector<const Image*>& images,
                          const std::vector<Camera>& cameras, const std::vector<std::string>& names,
-                         EyeFromViewsResult& out) {
-  const Status s =
-      eye_texture_from_views(project.fit.control, generic, project.frame, images, cameras, names, EyeFromViewsOptions{}, out);
+                         EyeFromViewsResult& out, const EyeFromViewsOptions& options) {
+  const Status s = eye_texture_from_views(project.fit.control, generic, project.frame, images, cameras, names, options, out);
   if (s.ok()) {
     project.parts.eye_texture = out.texture;
     project.parts.eye_source = size_t(out.photo) < names.size() ? names[size_t(out.photo)] : "";
   }
   return s;
+}
+
+int find_photo_name(const std::vector<std::string>& names, const std::string& name) {
+  const auto stem = [](const std::string& n) {
+    const size_t slash = n.find_last_of("/\\");
+    std::string s = slash == std::string::npos ? n : n.substr(slash + 1);
+    const size_t dot = s.find_last_of('.');
+    return dot == std::string::npos || dot == 0 ? s : s.substr(0, dot);
+  };
+  for (size_t i = 0; i < names.size(); ++i)
+    if (names[i] == name) return static_cast<int>(i);
+  for (size_t i = 0; i < names.size(); ++i)
+    if (stem(names[i]) == stem(name)) return static_cast<int>(i);
+  return -1;
 }
 
 }  // namespace lk

@@ -36,6 +36,9 @@ struct EyeFromViewsOptions {
   // iris_angle_deg) is measured in the photo (iris radius against the
   // eyeball's), kept within this range (adult eyes: about 27-35 deg).
   double min_iris_angle_deg = 25, max_iris_angle_deg = 40;
+  // Only this photo (an index into the views) is searched, both its eyes
+  // (the user marked it as the eye's photo); -1: every photo.
+  int only_photo = -1;
 };
 
 struct EyeFromViewsResult {
@@ -64,6 +67,10 @@ Status eye_texture_from_views(const TriMesh& control, const GenericHead& generic
 // success project.parts holds the iris and the name of the photo it came from.
 Status find_project_iris(HeadProject& project, const GenericHead& generic, const std::vector<const Image*>& images,
                          const std::vector<Camera>& cameras, const std::vector<std::string>& names,
-                         EyeFromViewsResult& out);
+                         EyeFromViewsResult& out, const EyeFromViewsOptions& options = {});
+
+// The index of the photo called name in names (as given, or its file name
+// without folder or extension matching: "0007" finds "0007.jpg"); -1: none.
+int find_photo_name(const std::vector<std::string>& names, const std::string& name);
 
 }  // namespace lk

@@ -148,15 +148,23 @@ Status texture_project(HeadProject& project, TextureJobInput& input, TextureJobR
   project.texture.uvs = std::move(finest_uv);
   project.texture.skin = out.head.skin;
 
-  // 4. The iris from the same photos, where no eye photo gave one.
-  if (input.cameras_given && input.generic_for_eyes && project.parts.eye_texture.empty()) {
+  // 4. The iris from the same photos, where no eye photo gave one (or in
+  // the one photo the user marked).
+  const bool search = project.parts.eye_texture.empty() || input.replace_eye_texture || !input.iris_photo.empty();
+  if (input.cameras_given && input.generic_for_eyes && search) {
     std::vector<const Image*> images;
     std::vector<Camera> cameras;
     for (const TexturePhoto& p : input.photos) {
       images.push_back(&p.image);
       cameras.push_back(p.camera);
     }
-    out.eye_status = find_project_iris(project, *input.generic_for_eyes, images, cameras, input.names, out.eye);
+    EyeFromViewsOptions options;
+    if (!input.iris_photo.empty()) options.only_photo = find_photo_name(input.names, input.iris_photo);
+    if (!input.iris_photo.empty() && options.only_photo < 0)
+      out.eye_status = Status::error(ErrorCode::InvalidInput, input.iris_photo + " is not one of the photos textured: " +
+                                                                  "the iris was not looked for");
+    else
+      out.eye_status = find_project_iris(project, *input.generic_for_eyes, images, cameras, input.names, out.eye, options);
   }
   return Status::success();
 }

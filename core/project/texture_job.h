@@ -71,6 +71,14 @@ struct TextureJobInput {
   // project yet: the iris is looked for in these photos too
   // (eye_from_views.h) when the generic head is given.
   const GenericHead* generic_for_eyes = nullptr;
+  // The iris is looked for even when the project holds one (a shell whose
+  // own eye texture is not the user's: the one held may be an older head's
+  // or have been given up).
+  bool replace_eye_texture = false;
+  // The photo the user marked as the eye's (one of names, find_photo_name):
+  // the iris is looked for in it only, whatever the project holds; empty:
+  // in every photo, the most frontal eye first.
+  std::string iris_photo;
 };
 
 struct TextureJobResult {

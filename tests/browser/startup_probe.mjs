@@ -21,7 +21,8 @@ for (let i = 0; i < runs; i++) {
       .map((e) => `${e.name.split('/').pop()} ${Math.round(e.startTime)}-${Math.round(e.responseEnd)}`);
     const nav = performance.getEntriesByType('navigation')[0];
     return { paint: Math.round(paint), dcl: Math.round(nav.domContentLoadedEventEnd), timings: window.likeness.timings,
-             loadMs: Math.round(window.likeness.loadMs), startedAt: Math.round(window.likeness.startedAt), res };
+             loadMs: Math.round(window.likeness.loadMs), startedAt: Math.round(window.likeness.startedAt), res,
+             viewerSteps: window.likeness.viewer ? window.likeness.viewer.startup_times().map(([k, ms]) => k + ' ' + Math.round(ms)) : [] };
   });
   console.log(JSON.stringify(r));
   await page.close();

@@ -7,6 +7,7 @@
 #include "head/generic_head.h"
 #include "photos/photos_job.h"
 #include "test_data.h"
+#include "test_kira.h"
 
 #include <algorithm>
 #include <array>
@@ -20,14 +21,7 @@ namespace {
 
 TEST_CASE("the photos job uses every Kira photo the detector read, with cameras where the photos were taken", "[photos][kira]") {
   const std::vector<std::string> names = {"0001", "0002", "0003", "0004", "0006", "0007", "0008", "0009", "0010"};
-  std::vector<LandmarkPhoto> photos;
-  for (const std::string& n : names) {
-    LandmarkPhoto ph;
-    const std::string text = test::read_file_text(test::source_dir() + "/tests/photos/data/kira/" + n + ".json");
-    REQUIRE_FALSE(text.empty());
-    REQUIRE(parse_landmarks_json(text, ph));
-    photos.push_back(ph);
-  }
+  const std::vector<LandmarkPhoto> photos = test::kira_landmark_photos();  // in the order of names
   GenericHead generic;
   REQUIRE(load_generic_head(generic));
   LandmarkMap map;

@@ -9,6 +9,7 @@
 #include "photos/synthetic_views.h"
 #include "synth/synth_head.h"
 #include "test_data.h"
+#include "test_kira.h"
 
 #include <algorithm>
 #include <catch2/catch.hpp>
@@ -84,15 +85,7 @@ void load_lid_points(GenericHead& generic, LandmarkMap& map, std::vector<Surface
   REQUIRE(lid_margin_points(generic, lms, rim));
 }
 
-std::vector<LandmarkPhoto> kira_photos() {
-  std::vector<LandmarkPhoto> photos;
-  for (const char* n : {"0001", "0002", "0003", "0004", "0006", "0007", "0008", "0009", "0010"}) {
-    LandmarkPhoto ph;
-    REQUIRE(parse_landmarks_json(test::read_file_text(test::source_dir() + "/tests/photos/data/kira/" + n + ".json"), ph));
-    photos.push_back(ph);
-  }
-  return photos;
-}
+std::vector<LandmarkPhoto> kira_photos() { return test::kira_landmark_photos(); }
 
 PhotosJobOptions lids_on() {
   PhotosJobOptions o;

@@ -141,10 +141,9 @@ app.setPhotoRole = (index, role) => setPhotoRole(app.photos[index], role);
 
 // A face photo (its face points found) that made the head shown from
 // photos: its camera is known, so the iris is looked for where the head's
-// eyeball projects into the photos (the texture job's finder,
-// core/project/eye_from_views.h), which finds light irises the close-up
-// finder misses. The head's other photos are searched beside it, the most
-// frontal eye first.
+// eyeball projects into it (the texture job's finder,
+// core/project/eye_from_views.h, restricted to this photo), which finds
+// light irises the close-up finder misses.
 function eyeFromViews(photo) {
   return !!(photo.detect && photo.detect.points && app.fit && app.fit.fromPhotos && photo.photosHead && photo.photosHead.used);
 }
@@ -157,21 +156,19 @@ async function findEyeInViews(photo) {
     if (other !== photo && other.role === 'eye') { dropRoleTexture(other); other.role = 'face'; other.roleNote = ''; other.eyeFromViews = false; }
   }
   photo.eyeFromViews = true;
-  // The skin's texture already looked for the iris in these photos with
-  // this head (the worker keeps what it found: it would not look again).
-  const found = app.texture && app.eyePhoto && app.eyePhoto.fromFacePhotos;
-  if (!found) {
-    if (app.eyePhoto) { app.eyePhoto = null; if (app.viewer && app.componentsData) showComponents(app.componentsData); }
-    photo.roleNote = 'finding the iris with the head\'s cameras…';
-    renderPhotos();
-    await runTexture();
-  }
-  if (photo.role !== 'eye' || !photo.eyeFromViews) { renderPhotos(); return; }
-  const e = app.eyePhoto;
-  photo.roleFailed = !e;
-  photo.roleNote = e ? 'iris found with the head\'s cameras' + (e.name !== photo.name ? ' (in ' + e.name + ', the most frontal eye)' : '') +
-                       ', on both eyes'
-    : 'no iris found with the head\'s cameras: the eyes keep the generic iris';
+  // Looked for again, in this photo alone, whatever iris is shown now (one
+  // found in another photo, or a close-up's given up above): the texture
+  // job sends it as the photo to search (texture.js).
+  if (app.eyePhoto) { app.eyePhoto = null; if (app.viewer && app.componentsData) showComponents(app.componentsData); }
+  photo.roleNote = 'finding the iris in this photo with the head\'s cameras…';
   renderPhotos();
+  await runTexture();
+  if (photo.role !== 'eye' || !photo.eyeFromViews) { renderPhotos(); return; }
+  const e = app.eyePhoto && app.eyePhoto.name === photo.name ? app.eyePhoto : null;
+  photo.roleFailed = !e;
+  photo.roleNote = e ? 'iris found in ' + photo.name + ' with the head\'s cameras, on both eyes'
+    : 'no iris found in ' + photo.name + ' with the head\'s cameras: the eyes keep the generic iris';
+  renderPhotos();
+  if (!e && app.eyeNote) setStatus('The eyes keep the generic iris: ' + app.eyeNote);
   if (e) setStatus('The eyes\' colour is from ' + e.name + ', found with the head\'s cameras; ' + photo.name + ' stays one of the head\'s photos.');
 }

@@ -64,6 +64,7 @@ export async function runTexture() {
               'click more landmarks or skip the photo by clearing its clicks.');
     return;
   }
+  const marked = fromPhotos ? using.find((p) => p.role === 'eye' && p.eyeFromViews) : null;
   stopAnimation();
   const job = beginJob('texture');
   if (!job) return;
@@ -87,9 +88,13 @@ export async function runTexture() {
       photos.push({ name: p.name, buffer: await p.file.arrayBuffer(), points: flat, checked: !!p.checked });
     }
     const size = pageOption('textureSize') || 1024;  // ?texture_size, else a restored project's
-    // A head from photos: the worker also looks for the iris in them, unless an eye photo gave one.
-    const findEyes = fromPhotos && !eyeFromUser();
-    result = await runJob({ type: 'texture', photos, options: { size, cameras: fromPhotos, findEyes } }, photos.map((p) => p.buffer),
+    // A head from photos: the worker also looks for the iris in them, unless
+    // an eye photo gave one; in the one photo set to "Eye (iris)" when the
+    // user marked one of the head's photos (always looked for again then).
+    const findEyes = fromPhotos && (!eyeFromUser() || !!marked);
+    const options = { size, cameras: fromPhotos, findEyes };
+    if (marked) options.irisPhoto = marked.name;
+    result = await runJob({ type: 'texture', photos, options }, photos.map((p) => p.buffer),
       (stage, fraction) => {
         // stage is "texture:<step>" (decode, calibrate, chart, bind, resample, ...).
         if (!/^texture/.test(stage)) return;
@@ -121,12 +126,13 @@ export async function runTexture() {
                   level: result.level, photos: using.length };
   // The iris found in the photos (the person's eye colour) replaces the generic one.
   let eyes = '';
-  if (result.eyeTexture && !eyeFromUser()) {
+  app.eyeNote = result.eyeNote || '';
+  if (result.eyeTexture && (marked || !eyeFromUser())) {
     app.eyePhoto = { name: result.eyeSource, texture: result.eyeTexture, ms: 0, fromFacePhotos: true };
     if (app.viewer && app.componentsData) showComponents(app.componentsData);
     eyes = ' The eyes\' colour is from ' + result.eyeSource + '.';
   } else if (result.eyeNote) {
-    eyes = ' The eyes keep the generic iris: no iris was found in the photos.';
+    eyes = ' The eyes keep the generic iris: no iris was found in ' + (marked ? marked.name : 'the photos') + '.';
   }
   setStage('texture', Math.round(result.textureMs) + ' ms', 1, 'complete');
   const rms = using.map((p) => p.calib && p.calib.ok ? p.calib.rms : NaN).filter((x) => !Number.isNaN(x));

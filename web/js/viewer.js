@@ -28,41 +28,97 @@ function firstFrame(viewer) {
   });
 }
 
-// True when WebGL2 is drawn on the CPU (SwiftShader, llvmpipe): no GPU.
+// The renderer's name of a WebGL2 context (unmasked where the browser allows).
+function rendererName(gl) {
+  let name = String(gl.getParameter(gl.RENDERER));
+  const info = gl.getExtension('WEBGL_debug_renderer_info');
+  if (info) name += ' ' + gl.getParameter(info.UNMASKED_RENDERER_WEBGL);
+  return name;
+}
+const isSoftware = (name) => /swiftshader|llvmpipe|softpipe|software/i.test(name);
+
+// True when WebGL2 is drawn on the CPU (SwiftShader, llvmpipe): no GPU;
+// null when no WebGL2 context could be made (the viewer will say so).
+// Making this throw-away context costs 0.4-2.4 s on SwiftShader (measured,
+// docs/design/page.md), so the answer is kept for the next start.
 function softwareWebGL() {
   try {
     const gl = document.createElement('canvas').getContext('webgl2');
-    if (!gl) return false;
-    let name = String(gl.getParameter(gl.RENDERER));
-    const info = gl.getExtension('WEBGL_debug_renderer_info');
-    if (info) name += ' ' + gl.getParameter(info.UNMASKED_RENDERER_WEBGL);
+    if (!gl) return null;
+    const name = rendererName(gl);
     const lose = gl.getExtension('WEBGL_lose_context');
     if (lose) lose.loseContext();
-    return /swiftshader|llvmpipe|softpipe|software/i.test(name);
+    return isSoftware(name);
   } catch (e) {
-    return false;
+    return null;
   }
+}
+
+// The verdict of the last start (localStorage), checked again on the
+// viewer's own context once it draws: null when unknown (a first visit).
+const SOFTWARE_KEY = 'likeness.softwareWebGL';
+function rememberedSoftware() {
+  try {
+    const v = localStorage.getItem(SOFTWARE_KEY);
+    return v === '1' ? true : v === '0' ? false : null;
+  } catch (e) {
+    return null;
+  }
+}
+
+// A remembered verdict is checked after the first frame, when the page is
+// idle, on the viewer's own context (no new one): a changed GPU or driver
+// corrects it for the next start.
+function rememberSoftware() {
+  const check = () => {
+    try {
+      const gl = ui.canvas.getContext('webgl2');
+      if (gl) localStorage.setItem(SOFTWARE_KEY, isSoftware(rendererName(gl)) ? '1' : '0');
+    } catch (e) { /* no storage: the probe runs at every start */ }
+  };
+  if (window.requestIdleCallback) requestIdleCallback(check, { timeout: 5000 }); else setTimeout(check, 1000);
 }
 
 export async function startViewer() {
   await loadScript('likeness_viewer.js');
-  // Multisampling doubles SwiftShader's cost of a level-3 frame (measured:
-  // docs/journal.md), so a software WebGL gets none; ?msaa=N overrides.
-  app.software = softwareWebGL();
-  app.msaa = params.has('msaa') ? Math.max(0, Number(params.get('msaa')) || 0) : app.software ? 0 : 4;
-  const viewer = await LikenessViewer({
+  app.timings.viewerScript = performance.now() - app.startedAt;
+  // The viewer's wasm is fetched and compiled off the main thread as soon
+  // as the module is made; its main runs only once that is done, so the
+  // arguments are filled in meanwhile (Emscripten reads Module.arguments,
+  // this same array, when it calls main). Before, the probe below ran
+  // first and the wasm's fetch waited for it.
+  const args = ['--msaa', '0'];
+  const made = LikenessViewer({
     canvas: ui.canvas,
-    arguments: ['--msaa', String(app.msaa)],
+    arguments: args,
     print: (t) => console.log('[viewer]', t),
     printErr: (t) => console.warn('[viewer]', t),
     onAbort: (what) => fatalStartup('The 3D viewer stopped: ' + what),
     onRuntimeInitialized: () => { app.timings.viewerRuntime = performance.now() - app.startedAt; },
   });
+  // Multisampling doubles SwiftShader's cost of a level-3 frame (measured:
+  // docs/journal.md), so a software WebGL gets none; ?msaa=N overrides.
+  const remembered = rememberedSoftware();
+  if (remembered !== null) {
+    app.software = remembered;
+  } else {
+    const t0 = performance.now();
+    const software = softwareWebGL();
+    app.timings.softwareProbeMs = performance.now() - t0;
+    app.software = !!software;
+    try {
+      if (software !== null) localStorage.setItem(SOFTWARE_KEY, software ? '1' : '0');
+    } catch (e) { /* no storage: probed at every start */ }
+  }
+  app.msaa = params.has('msaa') ? Math.max(0, Number(params.get('msaa')) || 0) : app.software ? 0 : 4;
+  args[1] = String(app.msaa);
+  const viewer = await made;
   app.viewer = viewer;
   app.timings.viewerModule = performance.now() - app.startedAt;
   await firstFrame(viewer);
   app.timings.firstFrame = performance.now() - app.startedAt;
   ui.overlay.hidden = true;
+  if (remembered !== null) rememberSoftware();
   return viewer;
 }
 

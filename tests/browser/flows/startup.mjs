@@ -112,6 +112,19 @@ async function run(s) {
   });
   const gl0 = await glOf(page);
   check('SwiftShader: no multisampling', gl0.software === true && gl0.msaa === 0 && gl0.antialias === false, JSON.stringify(gl0));
+  // The throw-away context that tells SwiftShader from a GPU (0.4-2.4 s
+  // here) is made on a first visit only; the verdict is remembered, and the
+  // next start uses it (checked again on the viewer's own context).
+  const firstProbe = await page.evaluate(() => window.likeness.timings.softwareProbeMs);
+  const nextPage = await s.newPage('?autofit=0');
+  const next = await nextPage.evaluate(() => ({ software: window.likeness.software, msaa: window.likeness.msaa,
+                                                probeMs: window.likeness.timings.softwareProbeMs,
+                                                remembered: localStorage.getItem('likeness.softwareWebGL') }));
+  check('the software-WebGL verdict is remembered: the next start makes no throw-away context, and still no multisampling',
+        next.probeMs === undefined && next.remembered === '1' && next.software === true &&
+        next.msaa === 0 && await state(nextPage) === 'ready',
+        `first start: ${firstProbe === undefined ? 'remembered from an earlier page' : 'probe ' + Math.round(firstProbe) + ' ms'}; next: ${JSON.stringify(next)}`);
+  await nextPage.close();
   const msaaPage = await s.newPage('?autofit=0&msaa=4');
   const gl4 = await glOf(msaaPage);
   const msaaHead = await canvasImage(msaaPage);
