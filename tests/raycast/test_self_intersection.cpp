@@ -244,6 +244,51 @@ TEST_CASE("self-intersections: re-checks around many triangles find the pairs to
   CHECK(around == expected);
 }
 
+TEST_CASE("self-intersections: re-checks where both triangles of a pair are listed find every such pair", "[raycast]") {
+  // find_intersections_with tests a pair of two listed triangles once, from
+  // its larger id: listing every triangle, a region of both surfaces, or
+  // the same in reverse with repeats gives the full search's pairs that
+  // touch the list, with both triangles listed in many of them.
+  const TriMesh sphere = icosphere(3);  // 1280 triangles
+  const TriMesh two = merged(sphere, sphere, Vec3(1.2, 0.1, 0.05));
+  MeshBvh bvh;
+  REQUIRE(build_bvh(two, bvh).ok());
+  std::vector<std::array<int, 2>> all, around;
+  find_self_intersections(bvh, all);
+  REQUIRE(all == brute_force(two));
+  REQUIRE(all.size() > 20);
+  std::vector<int> every(two.num_triangles());
+  for (int f = 0; f < two.num_triangles(); ++f) every[f] = f;
+  find_intersections_with(bvh, every, around);
+  CHECK(around == all);
+
+  // The triangles near the crossing: all of the first sphere's, every
+  // other one of the second's.
+  const int na = sphere.num_triangles();
+  std::vector<int> region;
+  std::vector<char> in_region(two.num_triangles(), 0);
+  for (int f = 0; f < two.num_triangles(); ++f) {
+    Vec3 c = Vec3::Zero();
+    for (int v : two.triangles[f]) c += two.positions[v] / 3.0;
+    if (c.x() > 0.45 && c.x() < 0.9 && (f < na || f % 2 == 0)) region.push_back(f), in_region[f] = 1;
+  }
+  std::vector<std::array<int, 2>> expected;
+  int both = 0;
+  for (const auto& p : all)
+    if (in_region[p[0]] || in_region[p[1]]) {
+      expected.push_back(p);
+      both += in_region[p[0]] && in_region[p[1]];
+    }
+  CHECK(both > 10);
+  CHECK(static_cast<int>(expected.size()) > both);  // and some with one listed triangle
+  find_intersections_with(bvh, region, around);
+  CHECK(around == expected);
+  std::vector<int> reversed(region.rbegin(), region.rend());
+  reversed.insert(reversed.end(), region.begin(), region.begin() + region.size() / 2);
+  find_intersections_with(bvh, reversed, around);
+  CHECK(around == expected);
+}
+
 namespace {
 
 // The six-segment rule as first written (each segment test computing its
