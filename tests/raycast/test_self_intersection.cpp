@@ -332,6 +332,41 @@ TEST_CASE("triangle pairs: the shortcut tests decide as the plain six-segment ru
   CHECK(apart > 1000);
 }
 
+TEST_CASE("triangle pairs: a mesh pair gets the same answer either way round", "[raycast]") {
+  // find_intersections_with tests a pair of two listed triangles from one
+  // side only, so mesh_triangles_cross(a, b) must equal (b, a): random
+  // triangles over 7 lattice points and 7 random points (many shared
+  // corners and edges, touching, coplanar) and their corner orders.
+  std::uint64_t state = 777;
+  auto next = [&]() {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<int>((state >> 33) % 1000);
+  };
+  std::vector<Vec3> positions;
+  for (int i = 0; i < 7; ++i) positions.emplace_back(next() % 3, next() % 3, next() % 3);
+  for (int i = 0; i < 7; ++i) positions.emplace_back(next() / 500.0, next() / 500.0, next() / 500.0);
+  int crossing = 0, apart = 0, shared_one = 0, shared_one_crossing = 0;
+  for (int k = 0; k < 60000; ++k) {
+    const int base = k % 2 == 0 ? 0 : 7;  // lattice or random corners
+    auto corner = [&]() { return base + next() % 7; };
+    const Tri a{corner(), corner(), corner()}, b{corner(), corner(), corner()};
+    if (a[0] == a[1] || a[1] == a[2] || a[0] == a[2] || b[0] == b[1] || b[1] == b[2] || b[0] == b[2]) continue;
+    const bool ab = mesh_triangles_cross(positions, a, b);
+    INFO("k " << k);
+    REQUIRE(mesh_triangles_cross(positions, b, a) == ab);
+    REQUIRE(mesh_triangles_cross(positions, Tri{b[1], b[2], b[0]}, Tri{a[2], a[1], a[0]}) == ab);
+    (ab ? crossing : apart) += 1;
+    int shared = 0;
+    for (int i : a)
+      for (int j : b) shared += i == j;
+    if (shared == 1) shared_one += 1, shared_one_crossing += ab;
+  }
+  CHECK(crossing > 1000);  // both outcomes, and crossings at one shared corner, are exercised
+  CHECK(apart > 1000);
+  CHECK(shared_one > 1000);
+  CHECK(shared_one_crossing > 100);
+}
+
 TEST_CASE("new self-intersections: only the pairs a move made, not those the reference had", "[raycast]") {
   // A flat square (triangles 0, 1, split along y = x) at z = 0; triangle 2
   // hovers at z = 1 over triangle 0; triangle 3 stands upright through
