@@ -281,9 +281,16 @@ void find_intersections_with(const MeshBvh& bvh, const std::vector<int>& triangl
   // kRun on parallel_for's threads, each run into its own list (the fold
   // limiter's re-checks list hundreds to thousands of triangles), then
   // merged, sorted and deduplicated: the same set on any number of threads.
+  // A pair of two listed triangles is tested once, from its larger id
+  // (mesh_triangles_cross gives the same answer either way round): the
+  // re-checks list regions, whose triangles are mostly each other's
+  // candidates.
   constexpr int kRun = 128;
   const int n = static_cast<int>(triangles.size());
   const int runs = (n + kRun - 1) / kRun;
+  std::vector<char> listed(bvh.num_triangles(), 0);
+  for (int t : triangles)
+    if (t >= 0 && t < bvh.num_triangles()) listed[t] = 1;
   std::vector<std::vector<std::array<int, 2>>> found(runs);
   parallel_for(0, runs, 1, [&](int run, int) {
     PairTester tester{bvh, found[run], 0};
@@ -305,7 +312,7 @@ void find_intersections_with(const MeshBvh& bvh, const std::vector<int>& triangl
         if (node.leaf()) {
           for (int i = 0; i < node.count; ++i) {
             const int other = bvh.triangle_order[node.first + i];
-            if (other != t) tester.test(t, other);
+            if (other != t && !(other > t && listed[other])) tester.test(t, other);
           }
         } else {
           stack.push_back(id + 1);

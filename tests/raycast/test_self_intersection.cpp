@@ -244,6 +244,51 @@ TEST_CASE("self-intersections: re-checks around many triangles find the pairs to
   CHECK(around == expected);
 }
 
+TEST_CASE("self-intersections: re-checks where both triangles of a pair are listed find every such pair", "[raycast]") {
+  // find_intersections_with tests a pair of two listed triangles once, from
+  // its larger id: listing every triangle, a region of both surfaces, or
+  // the same in reverse with repeats gives the full search's pairs that
+  // touch the list, with both triangles listed in many of them.
+  const TriMesh sphere = icosphere(3);  // 1280 triangles
+  const TriMesh two = merged(sphere, sphere, Vec3(1.2, 0.1, 0.05));
+  MeshBvh bvh;
+  REQUIRE(build_bvh(two, bvh).ok());
+  std::vector<std::array<int, 2>> all, around;
+  find_self_intersections(bvh, all);
+  REQUIRE(all == brute_force(two));
+  REQUIRE(all.size() > 20);
+  std::vector<int> every(two.num_triangles());
+  for (int f = 0; f < two.num_triangles(); ++f) every[f] = f;
+  find_intersections_with(bvh, every, around);
+  CHECK(around == all);
+
+  // The triangles near the crossing: all of the first sphere's, every
+  // other one of the second's.
+  const int na = sphere.num_triangles();
+  std::vector<int> region;
+  std::vector<char> in_region(two.num_triangles(), 0);
+  for (int f = 0; f < two.num_triangles(); ++f) {
+    Vec3 c = Vec3::Zero();
+    for (int v : two.triangles[f]) c += two.positions[v] / 3.0;
+    if (c.x() > 0.45 && c.x() < 0.9 && (f < na || f % 2 == 0)) region.push_back(f), in_region[f] = 1;
+  }
+  std::vector<std::array<int, 2>> expected;
+  int both = 0;
+  for (const auto& p : all)
+    if (in_region[p[0]] || in_region[p[1]]) {
+      expected.push_back(p);
+      both += in_region[p[0]] && in_region[p[1]];
+    }
+  CHECK(both > 10);
+  CHECK(static_cast<int>(expected.size()) > both);  // and some with one listed triangle
+  find_intersections_with(bvh, region, around);
+  CHECK(around == expected);
+  std::vector<int> reversed(region.rbegin(), region.rend());
+  reversed.insert(reversed.end(), region.begin(), region.begin() + region.size() / 2);
+  find_intersections_with(bvh, reversed, around);
+  CHECK(around == expected);
+}
+
 namespace {
 
 // The six-segment rule as first written (each segment test computing its
@@ -285,6 +330,41 @@ TEST_CASE("triangle pairs: the shortcut tests decide as the plain six-segment ru
   }
   CHECK(crossing > 1000);  // both outcomes are exercised
   CHECK(apart > 1000);
+}
+
+TEST_CASE("triangle pairs: a mesh pair gets the same answer either way round", "[raycast]") {
+  // find_intersections_with tests a pair of two listed triangles from one
+  // side only, so mesh_triangles_cross(a, b) must equal (b, a): random
+  // triangles over 7 lattice points and 7 random points (many shared
+  // corners and edges, touching, coplanar) and their corner orders.
+  std::uint64_t state = 777;
+  auto next = [&]() {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<int>((state >> 33) % 1000);
+  };
+  std::vector<Vec3> positions;
+  for (int i = 0; i < 7; ++i) positions.emplace_back(next() % 3, next() % 3, next() % 3);
+  for (int i = 0; i < 7; ++i) positions.emplace_back(next() / 500.0, next() / 500.0, next() / 500.0);
+  int crossing = 0, apart = 0, shared_one = 0, shared_one_crossing = 0;
+  for (int k = 0; k < 60000; ++k) {
+    const int base = k % 2 == 0 ? 0 : 7;  // lattice or random corners
+    auto corner = [&]() { return base + next() % 7; };
+    const Tri a{corner(), corner(), corner()}, b{corner(), corner(), corner()};
+    if (a[0] == a[1] || a[1] == a[2] || a[0] == a[2] || b[0] == b[1] || b[1] == b[2] || b[0] == b[2]) continue;
+    const bool ab = mesh_triangles_cross(positions, a, b);
+    INFO("k " << k);
+    REQUIRE(mesh_triangles_cross(positions, b, a) == ab);
+    REQUIRE(mesh_triangles_cross(positions, Tri{b[1], b[2], b[0]}, Tri{a[2], a[1], a[0]}) == ab);
+    (ab ? crossing : apart) += 1;
+    int shared = 0;
+    for (int i : a)
+      for (int j : b) shared += i == j;
+    if (shared == 1) shared_one += 1, shared_one_crossing += ab;
+  }
+  CHECK(crossing > 1000);  // both outcomes, and crossings at one shared corner, are exercised
+  CHECK(apart > 1000);
+  CHECK(shared_one > 1000);
+  CHECK(shared_one_crossing > 100);
 }
 
 TEST_CASE("new self-intersections: only the pairs a move made, not those the reference had", "[raycast]") {
