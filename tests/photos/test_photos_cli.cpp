@@ -195,12 +195,12 @@ TEST_CASE("likeness photos --iris-photo takes the iris from the named photo of K
   LK_REQUIRE_LIKENESS();
   LK_REQUIRE_SHARED("multiview_faces/keentools_kira/0001.jpg");
   const std::string dir = lk::test::scratch_dir("photos_cli_iris_photo");
-  std::string inputs = " --points";
-  for (const char* n : {"0001", "0002", "0003", "0004", "0006", "0007", "0008", "0009", "0010"})
-    inputs += " " + lk::test::source_dir() + "/tests/photos/data/kira/" + n + ".json";
-  inputs += " --photos";
-  for (const char* n : {"0001", "0002", "0003", "0004", "0006", "0007", "0008", "0009", "0010"})
-    inputs += " " + lk::test::shared_data_dir() + "/multiview_faces/keentools_kira/" + n + ".jpg";
+  std::string points = " --points", jpgs = " --photos";
+  for (const char* n : {"0001", "0002", "0003", "0004", "0006", "0007", "0008", "0009", "0010"}) {
+    points += " " + lk::test::source_dir() + "/tests/photos/data/kira/" + n + ".json";
+    jpgs += " " + lk::test::shared_data_dir() + "/multiview_faces/keentools_kira/" + n + ".jpg";
+  }
+  const std::string inputs = points + jpgs;
   // stdout (the report) and stderr kept; the exit code returned.
   auto photos = [&](const std::string& extra, const std::string& out) {
     const int rc = std::system(("'" + std::string(LK_BIN_DIR) + "/likeness' photos" + inputs + extra + " --out " + dir + "/" +
