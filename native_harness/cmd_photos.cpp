@@ -357,6 +357,19 @@ int run_photos(const Args& args) {
     image_paths.push_back(photo_paths.empty() ? "" : photo_paths[i]);
     points_texts.emplace_back(bytes.begin(), bytes.end());
   }
+  // --iris-photo names none of the photos: said before the half-minute fit,
+  // not after it (a photo given but left out by the fit is refused below).
+  const std::string iris_photo = args.get("iris-photo");
+  if (args.has("iris-photo")) {
+    std::vector<std::string> names;
+    for (const LandmarkPhoto& ph : photos) names.push_back(ph.name);
+    if (photo_paths.empty() || args.has("no-texture") || levels == 0)
+      return fail(cmd, "--iris-photo looks for the iris in one of the photos: it needs --photos and a textured head");
+    if (iris_photo.empty()) return fail(cmd, "--iris-photo needs a photo's name (e.g. 0003 or 0003.jpg)");
+    if (find_photo_name(names, iris_photo) < 0)
+      return fail(cmd, "--iris-photo " + iris_photo + ": no photo of that name among the " +
+                           std::to_string(names.size()) + " given (e.g. " + (names.empty() ? "" : names[0]) + ")");
+  }
   PhotosJobOptions opt;
   opt.stereo = stereo;
   opt.lids_on_rim = args.has("lids");  // photos/eye_lids.h: off by default (docs/design/photos.md, "Lids that follow the photos")
@@ -420,7 +433,6 @@ int run_photos(const Args& args) {
     // --iris-photo: the iris looked for in that photo only (the page's photo
     // set to "Eye (iris)"); else the most frontal eye of all.
     EyeFromViewsOptions eye_options;
-    const std::string iris_photo = args.get("iris-photo");
     if (!iris_photo.empty()) {
       eye_options.only_photo = find_photo_name(used_names, iris_photo);
       if (eye_options.only_photo < 0)
