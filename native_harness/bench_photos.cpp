@@ -13,7 +13,9 @@
 
 #include "head/generic_head.h"
 #include "head/surface_quality.h"
+#include "components/components.h"
 #include "photos/added_folds.h"
+#include "photos/eye_lids.h"
 #include "photos/ground_truth.h"
 #include "photos/photos_job.h"
 #include "photos/synthetic_outlines.h"
@@ -233,6 +235,12 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
     std::printf("  the generic head: crossing pairs %d (levels 0..3)\n", generic_folds.crossings);
   FoldSums fold_sums;
   double outline_acc[3][2][3][3] = {};  // |yaw| bucket, near / far side, temple / cheek / jaw: sum px, sum |px|, count
+  // Lid openings (gap / width, photos/eye_lids.h) in the views within 35 deg of
+  // the front, both eyes: the detector's and the fitted head's against the
+  // person's own rim (true cameras; the fitted head by its recovered camera).
+  double lid_acc[4] = {0, 0, 0, 0};  // sum truth, sum detected, sum fitted, count
+  double lid_abs[2] = {0, 0};        // sum |detected - truth|, sum |fitted - truth|
+  int lid_fitted_n = 0;
   for (int seed : session.value("seeds", std::vector<int>{})) {
     GenericHead person;
     SyntheticViewsOptions vo;
@@ -343,6 +351,8 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
     for (double& k : opt.fit.stiffness_schedule) k *= stiffness_scale;
     // --photos-contours: the face outline's jaw landmarks as contour observations (photos/contour_obs.h).
     opt.contour_landmarks = args.has("photos-contours");
+    // --photos-lids: the lid contour observed on the eye rims, the lids turned to it (photos/eye_lids.h).
+    opt.lids_on_rim = args.has("photos-lids");
     // --photos-no-slide: the map's slide model left out; --photos-no-slide-sigma: its scatter as weights left out.
     opt.use_slide = !args.has("photos-no-slide");
     opt.calib.use_slide_sigma = !args.has("photos-no-slide-sigma");
@@ -386,6 +396,36 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
         std::snprintf(buf, sizeof buf, " %+.0f/%+.0f->%+.0f/%+.0f", ty, tp, y, p);
         views += buf;
       }
+    {
+      GenericHead fitted = generic;
+      fitted.mesh.positions = r.fit.mesh.positions;
+      ComponentPlacement tp, fp;
+      if (!place_components(person, generic, tp) || !place_components(fitted, generic, fp)) return 1;
+      for (size_t i = 0; i < photos.size(); ++i) {
+        const Camera& cam = truth.cameras[size_t(cam_of[i])];
+        double yaw, pitch;
+        view_angles(cam, yaw, pitch);
+        if (std::abs(yaw) >= 35) continue;
+        for (int e = 0; e < 2; ++e) {
+          Vec2 c = Vec2::Zero(), fc = Vec2::Zero();
+          LidOpening t, d, f;
+          if (!cam.project(tp.eye_center[e], c) || !head_lid_opening(person.mesh, generic, e, 3, cam, c, t) ||
+              !landmark_lid_opening(photos[i], e, c, d))
+            continue;
+          lid_acc[0] += t.ratio();
+          lid_acc[1] += d.ratio();
+          lid_abs[0] += std::abs(d.ratio() - t.ratio());
+          lid_acc[3] += 1;
+          const Camera& rc = r.calib.photos[i].camera;
+          if (r.calib.photos[i].used && rc.project(fp.eye_center[e], fc) &&
+              head_lid_opening(r.fit.mesh, generic, e, 3, rc, fc, f)) {
+            lid_acc[2] += f.ratio();
+            lid_abs[1] += std::abs(f.ratio() - t.ratio());
+            ++lid_fitted_n;
+          }
+        }
+      }
+    }
     const double focal_err = 100 * (r.calib.focal - vo.focal_px) / vo.focal_px;
     std::printf("  %-4d %2d/%-2zu %+6.1f%% %6.2f | %5.2f -> %5.2f (p95 %5.2f) | %5.2f -> %5.2f (p95 %5.2f) | "
                 "%5.2f -> %5.2f (p95 %5.2f) | %5.2f -> %5.2f (p95 %5.2f) | %5.0f\n",
@@ -420,6 +460,11 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
               done, sums[0] / d, 1000 * sums[1] / d, 1000 * sums[2] / d, 1000 * sums[3] / d, 1000 * sums[4] / d,
               1000 * sums[5] / d, 1000 * sums[6] / d, 1000 * sums[7] / d, 1000 * sums[8] / d);
   print_fold_means(fold_sums, "fit");
+  if (lid_acc[3] > 0)
+    std::printf("  lid opening gap/width, views within 35 deg of the front, both eyes (%.0f): truth %.3f, detected %.3f "
+                "(mean |error| %.3f), fitted %.3f (mean |error| %.3f)\n",
+                lid_acc[3], lid_acc[0] / lid_acc[3], lid_acc[1] / lid_acc[3], lid_abs[0] / lid_acc[3],
+                lid_fitted_n ? lid_acc[2] / lid_fitted_n : 0.0, lid_fitted_n ? lid_abs[1] / lid_fitted_n : 0.0);
   std::printf("  detector vs truth, mean px (count) by |yaw| <15 / <35 / <60 / >=60 deg, points facing the camera:\n");
   for (const std::string& g : gnames) {
     std::printf("    %-8s", g.c_str());
@@ -545,7 +590,7 @@ int run_bench_photos(const Args& args) {
     double render_ms = 0;
     if (stereo) {
       const double r0 = cpu_clock_ms();
-      if (!render_session_images(person, std::uint32_t(seed), session.cameras, images)) return 1;
+      if (!render_session_images(generic, person, std::uint32_t(seed), session.cameras, images)) return 1;
       render_ms = cpu_clock_ms() - r0;
     }
     PhotosJobResult r;
@@ -664,7 +709,7 @@ int run_bench_photos(const Args& args) {
 }
 
 BenchRegistrar reg({"photos", "photos to head on synthetic sessions: camera errors, face distances, stage times "
-                              "(--photos-seeds N --photos-cameras C --photos-noise-px S --photos-map vertices|interior --photos-stiffness-scale K --photos-first-seed S --photos-silhouettes both|on|off --photos-lambda-sil L --photos-mask-grow PX --photos-sil-facets --photos-stereo --photos-lambda-features L --photos-coarse N:S,... --photos-schedule S,...|none; --photos-detected DIR: real-detector points on synth-photos renders, made by tests/browser/detect_synth_photos.mjs, with --photos-detected-map FILE --photos-depth-scale SIGMA --photos-depth-0 K0 --photos-depth-yaw2 C --photos-no-slide --photos-no-slide-sigma --photos-true-cameras --photos-drop GROUP --photos-contours --photos-contour-lambda K)",
+                              "(--photos-seeds N --photos-cameras C --photos-noise-px S --photos-map vertices|interior --photos-stiffness-scale K --photos-first-seed S --photos-silhouettes both|on|off --photos-lambda-sil L --photos-mask-grow PX --photos-sil-facets --photos-stereo --photos-lambda-features L --photos-coarse N:S,... --photos-schedule S,...|none; --photos-detected DIR: real-detector points on synth-photos renders, made by tests/browser/detect_synth_photos.mjs, with --photos-detected-map FILE --photos-depth-scale SIGMA --photos-depth-0 K0 --photos-depth-yaw2 C --photos-no-slide --photos-no-slide-sigma --photos-true-cameras --photos-drop GROUP --photos-contours --photos-contour-lambda K --photos-lids)",
                     run_bench_photos});
 
 }  // namespace

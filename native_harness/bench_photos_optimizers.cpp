@@ -98,7 +98,7 @@ int run_bench_photos_optimizers(const Args& args) {
     std::vector<Image> images;
     if (!synthesize_head(generic, std::uint32_t(seed), SynthHeadOptions{}, person) ||
         !make_synthetic_views(person, landmarks, std::uint32_t(seed), vo, session) ||
-        !render_session_images(person, std::uint32_t(seed), session.cameras, images))
+        !render_session_images(generic, person, std::uint32_t(seed), session.cameras, images))
       return 1;
     PhotosJobOptions opt;
     PhotosJobResult r;

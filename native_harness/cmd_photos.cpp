@@ -13,6 +13,7 @@
 #include "photos/landmark_learning.h"
 #include "photos/photos_job.h"
 #include "photos_texture.h"
+#include "synthetic_session_images.h"
 #include "photos/synthetic_outlines.h"
 #include "photos/synthetic_views.h"
 #include "project/eye_from_views.h"
@@ -659,20 +660,17 @@ int run_synth_photos(const Args& args) {
   if (s) s = write_file(out_dir + "/map.json", landmark_map_to_json(map));
   if (s) s = write_file(out_dir + "/person.obj", write_obj(person.mesh));
   SkinField skin;
+  SyntheticEyes eyes;
   if (s && !args.has("no-render")) s = make_skin_field(person, std::uint32_t(seed), {}, skin);
+  if (s && !args.has("no-render")) s = make_synthetic_eyes(person, generic, std::uint32_t(seed), {}, eyes);
   Json truth = {{"seed", seed}, {"focal_px", vo.focal_px}, {"cameras", Json::array()}};
   for (size_t c = 0; s && c < session.photos.size(); ++c) {
     const std::string stem = out_dir + "/" + session.photos[c].name.substr(0, session.photos[c].name.size() - 4);
     s = write_file(stem + ".json", landmarks_to_json(session.photos[c]));
     truth["cameras"].push_back(camera_json(session.cameras[c]));
     if (!s || args.has("no-render")) continue;
-    // Lambert shading under a light from the camera's upper left.
-    const Vec3 light = (session.cameras[c].R.transpose() * Vec3(-0.4, -0.6, -1.0)).normalized();
     Image photo;
-    s = render_synthetic_photo(
-        person.mesh, session.cameras[c],
-        [&](const Vec3& p, const Vec3& n) -> Vec3 { return skin_albedo(skin, p) * (0.35 + 0.65 * std::max(0.0, n.dot(light))); },
-        Vec3(0.55, 0.6, 0.65), photo);
+    s = render_session_image(person, skin, eyes, session.cameras[c], photo);
     if (s) s = write_file(stem + ".png", write_png(photo));
     // The exact mask a perfect segmentation would give (likeness photos --masks).
     Image mask;

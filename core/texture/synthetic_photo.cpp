@@ -42,11 +42,14 @@ Vec3 procedural_color_field(const Vec3& p, double scale) {
 }
 
 Status render_synthetic_photo(const TriMesh& mesh, const Camera& camera, const SurfaceColorFn& color,
-                              const Vec3& background, Image& photo) {
+                              const Vec3& background, Image& photo, const std::vector<SyntheticSphere>& spheres) {
   const int w = camera.width, h = camera.height;
   if (w <= 0 || h <= 0) return Status::error(ErrorCode::InvalidInput, "synthetic photo: camera has no image size");
   std::string why;
   if (!is_valid(mesh, &why)) return Status::error(ErrorCode::InvalidInput, "synthetic photo: " + why);
+  for (const SyntheticSphere& sp : spheres)
+    if (!(sp.radius > 0) || !sp.color || !sp.center.allFinite())
+      return Status::error(ErrorCode::InvalidInput, "synthetic photo: a sphere needs a centre, radius and colour");
   const std::vector<Vec3> normals = vertex_normals(mesh);
   // Per pixel: nearest depth, its triangle and perspective-correct weights.
   std::vector<float> depth(static_cast<size_t>(w) * h, std::numeric_limits<float>::infinity());
@@ -92,12 +95,27 @@ Status render_synthetic_photo(const TriMesh& mesh, const Camera& camera, const S
     for (int x = 0; x < w; ++x) {
       const size_t i = static_cast<size_t>(y) * w + x;
       Vec3 rgb = background;
-      if (tri[i] >= 0) {
+      const Vec3 dir_cam((x + 0.5 - camera.cx) / camera.fx, (y + 0.5 - camera.cy) / camera.fy, 1.0);
+      const Vec3 eye = camera.center();
+      const Vec3 dir = camera.R.transpose() * dir_cam;
+      // The nearest sphere in front of the triangles (dir's camera z is 1,
+      // so the ray parameter is the depth the z-buffer holds).
+      const SyntheticSphere* hit = nullptr;
+      double hit_s = depth[i];
+      for (const SyntheticSphere& sp : spheres) {
+        const Vec3 oc = eye - sp.center;
+        const double a = dir.squaredNorm(), b = oc.dot(dir), c = oc.squaredNorm() - sp.radius * sp.radius;
+        const double disc = b * b - a * c;
+        if (disc < 0) continue;
+        const double s = (-b - std::sqrt(disc)) / a;
+        if (s > 1e-9 && s < hit_s) hit = &sp, hit_s = s;
+      }
+      if (hit) {
+        const Vec3 P = eye + hit_s * dir;
+        rgb = hit->color(P, (P - hit->center).normalized());
+      } else if (tri[i] >= 0) {
         // The exact surface point: the pixel's ray meets the triangle's plane.
         const Tri& t = mesh.triangles[tri[i]];
-        const Vec3 dir_cam((x + 0.5 - camera.cx) / camera.fx, (y + 0.5 - camera.cy) / camera.fy, 1.0);
-        const Vec3 eye = camera.center();
-        const Vec3 dir = camera.R.transpose() * dir_cam;
         const Vec3 &A = mesh.positions[t[0]], &B = mesh.positions[t[1]], &C = mesh.positions[t[2]];
         const Vec3 n = (B - A).cross(C - A);
         const double denom = n.dot(dir);

@@ -13,16 +13,27 @@
 #include "mesh/tri_mesh.h"
 
 #include <functional>
+#include <vector>
 
 namespace lk {
 
 // Linear RGB in [0,1] of a surface point with its (interpolated, unit) normal.
 using SurfaceColorFn = std::function<Vec3(const Vec3& point, const Vec3& normal)>;
 
-// Renders the photo. Pixels whose centre sees no triangle get `background`.
-// Fails with InvalidInput on a camera without image size or an invalid mesh.
+// An exact sphere drawn with the mesh (e.g. an eyeball in its socket): the
+// z-buffer decides between it and the triangles, its own colour function.
+struct SyntheticSphere {
+  Vec3 center = Vec3::Zero();
+  double radius = 0;
+  SurfaceColorFn color;
+};
+
+// Renders the photo. Pixels whose centre sees no triangle (nor sphere) get
+// `background`. Fails with InvalidInput on a camera without image size, an
+// invalid mesh or a sphere without radius or colour.
 Status render_synthetic_photo(const TriMesh& mesh, const Camera& camera, const SurfaceColorFn& color,
-                              const Vec3& background, Image& photo);
+                              const Vec3& background, Image& photo,
+                              const std::vector<SyntheticSphere>& spheres = {});
 
 // A smooth 3-D colour field with detail at several scales (skin-like hues,
 // linear RGB in about [0.1, 0.8]); `scale` is its finest wavelength in

@@ -99,12 +99,14 @@ TEST_CASE("lid openings of the photos head on Kira and the detected seeds (repor
   GenericHead generic;
   LandmarkMap map;
   load_generic_and_map(generic, map);
-  {
+  for (bool lids : {false, true}) {
     const std::vector<LandmarkPhoto> photos = kira_photos();
+    PhotosJobOptions o;
+    o.lids_on_rim = lids;
     PhotosJobResult r;
-    REQUIRE(run_photos_job(generic, map, photos, lids_on(), r));
+    REQUIRE(run_photos_job(generic, map, photos, o, r));
     const int p = most_frontal(r.calib);
-    std::printf("Kira, photo %s\n", photos[size_t(p)].name.c_str());
+    std::printf("Kira, photo %s, lids on the rim %s\n", photos[size_t(p)].name.c_str(), lids ? "on" : "off");
     EyeReport rep[2];
     report_eyes(generic, r.fit.mesh, photos[size_t(p)], r.calib.photos[size_t(p)].camera, rep);
   }
