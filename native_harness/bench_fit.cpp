@@ -12,7 +12,7 @@
 // --fit-guard-face-only / --fit-guard-off (the global fit's smooth-surface guard and fold relief on
 // face-only captures only / on none; default: every scan; --fit-guard-always is the default), --fit-relief-level L (the guard's fold relief
 // level, GlobalFitOptions::smooth_guard_relief_level; 0: the level-2 guard without relief), --fit-guard-passes N (GlobalFitOptions::smooth_guard_passes), --fit-pleat-steps N (the pleat
-// relief's sweeps, GlobalFitOptions::smooth_guard_pleat_steps; 0: off), --fit-no-climb, --fit-remeasure, --fit-no-eye-region (leave the eyes where the alignment put them, FitHeadOptions::fit_eye_region), --fit-scanned-neck (FitHeadOptions::fit_scanned_neck on), --fit-no-creases (plain Butterfly at the
+// relief's sweeps, GlobalFitOptions::smooth_guard_pleat_steps; 0: off), --fit-no-climb, --fit-remeasure, --fit-no-eye-region (leave the eyes where the alignment put them, FitHeadOptions::fit_eye_region), --fit-no-scanned-neck (FitHeadOptions::fit_scanned_neck off; --fit-scanned-neck: on, the default), --fit-no-creases (plain Butterfly at the
 // eye and lip rims), --fit-displaced-creases, --fit-no-corners-to-smooth,
 // --fit-no-parents-to-smooth, --fit-separation-repeats N, --fit-restarts N (fold_limit.h), --fit-seeds N, --fit-seed N (seed N alone),
 // --fit-ear-refit-late (FitHeadOptions::ear_refit_after_rounds off),
@@ -351,6 +351,7 @@ int run(const Args& args) {
     if (args.has("fit-no-creases")) opt.rim_creases = false;
     if (args.has("fit-no-eye-region")) opt.fit_eye_region = false;
     if (args.has("fit-scanned-neck")) opt.fit_scanned_neck = true;
+    if (args.has("fit-no-scanned-neck")) opt.fit_scanned_neck = false;
     if (args.has("fit-displaced-creases")) opt.fold_limit.undisplaced_creases = false;
     if (args.has("fit-no-corners-to-smooth")) opt.fold_limit.crossing_corners_to_smooth = false;
     if (args.has("fit-no-parents-to-smooth")) opt.fold_limit.crossing_parents_to_smooth = false;

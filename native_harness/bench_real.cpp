@@ -35,8 +35,10 @@
 // memory, and a copy written to a file and fitted again is another draw.
 // --fit-back off|face-only|always, --fit-back-weight W: the global fit's
 // scan-to-mesh term (FitHeadOptions::back_term).
-// --fit-real-scanned-neck: the scanned neck below the cut is fitted too
-// (FitHeadOptions::fit_scanned_neck on), to compare.
+// --fit-real-no-scanned-neck: the scanned neck below the cut is not fitted
+// (FitHeadOptions::fit_scanned_neck off: the figures before it was the
+// default); --fit-real-scanned-neck: on (the default).
+// --fit-real-copy NAME: only the copies whose name holds NAME ("turn").
 // --fit-ear-refit-rounds N: the ear refit's warm rounds
 // (FitHeadOptions::ear_refit_warm_rounds; 0: the whole fit again, cold).
 // --fit-silhouette-level L: the Butterfly level whose silhouettes the
@@ -270,6 +272,8 @@ int run(const Args& args) {
   }
   options.untangle_hinges_last = hinges_last == 1;
   if (args.has("fit-real-scanned-neck")) options.fit_scanned_neck = true;
+  if (args.has("fit-real-no-scanned-neck")) options.fit_scanned_neck = false;
+  const std::string only_copy = args.get("fit-real-copy", "");
   if (args.has("fit-ear-refit-late")) options.ear_refit_after_rounds = false;
   if (!parse_back_term(args, options)) return 1;
   const std::string dump = args.get("fit-real-dump", "");
@@ -296,6 +300,7 @@ int run(const Args& args) {
                 "face -> scan mean / p99 / max mm; neck: points, median / p90 mm");
     std::vector<int> totals;
     for (const Copy& c : nudged_copies(scan, copies)) {
+      if (!only_copy.empty() && c.name.find(only_copy) == std::string::npos) continue;
       DistanceStats table1;
       FitStageObserver obs;
       obs.measured = [&](const FitStageReport& r) {

@@ -305,9 +305,13 @@ void fade_displacements(const std::vector<char>& mask, MultiresMesh& mr) {
 
 // FitHeadOptions::guard_feature_crossings. tree: a tree over the finest
 // level's triangles (the relief's), refitted here and left fitted to the
-// level as it ends when `searched` is set.
+// level as it ends when `searched` is set. kept: #V flags or empty, control
+// vertices no step moves or relaxes (the scanned neck, fitted where it is
+// scanned: the wide steps round the lips had carried it back to the
+// generic neck).
 Status guard_feature_crossings(const FitHeadOptions& options, const HeadAnnotations& ann, const MeshTopology& topo,
-                               FitHeadResult& out, MeshBvh& tree, bool& searched) {
+                               const std::vector<char>& kept_vertices, FitHeadResult& out, MeshBvh& tree,
+                               bool& searched) {
   searched = false;
   MultiresMesh& mr = out.multires;
   const int L = mr.num_levels();
@@ -462,6 +466,8 @@ Status guard_feature_crossings(const FitHeadOptions& options, const HeadAnnotati
               for (int w : topo.rings[v]) grown[w] = 1;
           mask.swap(grown);
         }
+        if (!kept_vertices.empty())
+          for (int v = 0; v < nv; ++v) mask[v] = mask[v] && !kept_vertices[v];
         bool kept = false;
         st = try_step(mask, step, kept);
         if (!st) return st;
@@ -872,6 +878,8 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
   const auto neck_region = ann.regions.find("neck");
   const bool scanned_neck = options.cut_neck && options.fit_scanned_neck && !out.face_only &&
                             neck_region != ann.regions.end();
+  std::vector<Vec3> neck_pts;  // FitHeadOptions::fit_scanned_neck's points below the cut
+  std::vector<int> neck_index;
   if (scanned_neck) {
     // FitHeadOptions::fit_scanned_neck: the scan's neck below the cut, on
     // the neck's triangles and along their normals (not beyond its rim).
@@ -893,19 +901,16 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
       const double along = std::abs(normal.dot(off)), size = normal.norm() * off.norm();
       take[i] = size == 0 || along >= min_cos * size;
     });
-    std::vector<Vec3> band;
-    std::vector<int> band_index;
     for (int i = 0; i < n; ++i)
-      if (take[i]) band.push_back(cloud.positions[i]), band_index.push_back(i);
-    out.neck_points = static_cast<int>(band.size());
-    skin_pts.insert(skin_pts.end(), band.begin(), band.end());
-    skin_index.insert(skin_index.end(), band_index.begin(), band_index.end());
+      if (take[i]) neck_pts.push_back(cloud.positions[i]), neck_index.push_back(i);
   }
   // Points far sparser than the scan's own sampling (hair returns, stray
   // reflections) are not skin: fitted as a surface they raised bumps along
   // the hairline. They stay in the reported distances (Table 1 is over all
-  // points).
+  // points). The neck's are dropped among themselves, as the band's below.
   out.isolated_points = drop_isolated_points(options.displacement.isolated_density_ratio, skin_pts, skin_index);
+  out.isolated_points += drop_isolated_points(options.displacement.isolated_density_ratio, neck_pts, neck_index);
+  out.neck_points = static_cast<int>(neck_pts.size());
   if (static_cast<int>(skin_pts.size()) < options.min_points)
     return Status::error(ErrorCode::NotAHead, "only " + std::to_string(skin_pts.size()) +
                                                   " points lie on the skin of the aligned head");
@@ -1062,6 +1067,34 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
       out.notes.push_back(note.str());
     }
   }
+  std::vector<Vec3> neck_shift;  // #V or empty: how far the neck's fit moved each control vertex
+  if (!neck_pts.empty()) {
+    // FitHeadOptions::fit_scanned_neck: the neck is fitted after the head,
+    // the head held. In the head's own fit the neck's points made it another
+    // fit (a bust turned by 0.05 deg: ears crossing that no later step
+    // relaxed); here only the neck's control vertices move, in the last
+    // round's smoothing, to all points, and the others are put back where
+    // the head's fit left them, to the bit.
+    const std::vector<char> in_neck = vertex_mask(neck_region->second, out.control.num_vertices());
+    GlobalFitTerms neck_terms = terms;
+    neck_terms.constrained_vertices.clear();
+    for (int v = 0; v < out.control.num_vertices(); ++v)
+      if (!in_neck[v] || mouth_bag[v]) neck_terms.constrained_vertices.push_back(v);
+    GlobalFitOptions neck_options = global_options;
+    neck_options.smooth_weights = {global_options.smooth_weights.back()};
+    std::vector<Vec3> all = skin_pts;
+    all.insert(all.end(), neck_pts.begin(), neck_pts.end());
+    TriMesh neck_control;
+    GlobalFitResult neck_fit;
+    st = fit_global(all, out.control, topo, neck_terms, neck_options, neck_control, neck_fit, progress);
+    if (!st) return with_context(st, "global fitting (scanned neck)");
+    neck_shift.assign(out.control.num_vertices(), Vec3::Zero());
+    for (int v = 0; v < out.control.num_vertices(); ++v)
+      if (in_neck[v] && !mouth_bag[v]) {
+        neck_shift[v] = neck_control.positions[v] - out.control.positions[v];
+        out.control.positions[v] = neck_control.positions[v];
+      }
+  }
   if (options.carry_mouth_bag) {
     st = carry_mouth_bag(mouth_bag, topo, out.local, out.control);
     if (!st) return with_context(st, "global fitting (mouth bag)");
@@ -1090,6 +1123,8 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
   PointCloud fitted;
   fitted.positions = skin_pts;
   std::vector<int> measured_index = skin_index;  // into the scan
+  fitted.positions.insert(fitted.positions.end(), neck_pts.begin(), neck_pts.end());
+  measured_index.insert(measured_index.end(), neck_index.begin(), neck_index.end());
   if (!scanned_neck && options.cut_neck && options.displacement_below_neck_cut > 0 &&
       neck_region != ann.regions.end()) {
     // The band just below the neck cut (see FitHeadOptions) where its
@@ -1124,7 +1159,11 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
     // A scan that came as a mesh: its triangles between the measured points.
     std::vector<char> measured(cloud.positions.size(), 0);
     for (int i : measured_index) measured[i] = 1;
-    const double spacing = options.surface_sample_edges * mean_edge_length(out.control) / double(1 << options.levels);
+    // Spaced as without the neck's fit, so that the head above the cut is
+    // measured on the same samples as the head fitted without it.
+    TriMesh spaced = out.control;
+    for (size_t v = 0; v < neck_shift.size(); ++v) spaced.positions[v] -= neck_shift[v];
+    const double spacing = options.surface_sample_edges * mean_edge_length(spaced) / double(1 << options.levels);
     st = sample_scan_surface(cloud.positions, head_normals, scan.faces, measured, spacing,
                              options.surface_sample_max_edge_ratio, options.surface_sample_max, fitted,
                              out.surface_samples);
@@ -1154,7 +1193,9 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
   st = hold_crossing_ears(options, ann, topo, creases, out, displace, ears_reverted);
   if (!st) return with_context(st, "displacements (ears)");
   bool guard_searched = false;
-  st = guard_feature_crossings(options, ann, topo, out, relief_tree, guard_searched);
+  std::vector<char> neck_fitted;  // the neck's control vertices, when fitted to the scanned neck
+  if (!neck_shift.empty()) neck_fitted = vertex_mask(neck_region->second, topo.num_vertices);
+  st = guard_feature_crossings(options, ann, topo, neck_fitted, out, relief_tree, guard_searched);
   if (!st) return with_context(st, "displacements (lips and ears)");
   for (int l = 1; l <= options.levels; ++l) out.level_meshes.push_back(level_mesh(out.multires, l));
   const TriMesh finest = level_mesh(out.multires, options.levels);

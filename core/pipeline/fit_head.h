@@ -141,15 +141,14 @@ struct FitHeadOptions {
   // the aligned generic neck, whose nearest point of the locally fitted
   // head is inside a neck triangle and lies along its normal within
   // scanned_neck_max_angle_deg (not beyond the neck's lower rim: shoulders,
-  // a chest or a pillar flaring out below it), join the global fit and the
-  // displacements; everything below the generic neck's end is cut. Table
-  // 1's distances stay over the points above the cut. Face-only captures
-  // keep the band above (their cut passes under the ear lobes). Off by
-  // default: it takes the busts' necks from centimetres to a tenth of a
-  // millimetre, but Demosthenes turned by 0.05 deg kept 10 crossing pairs
-  // at an ear that the guard below did not remove (figures:
-  // docs/design/fit_real_scans.md). false: the band above on every scan.
-  bool fit_scanned_neck = false;
+  // a chest or a pillar flaring out below it), are fitted after the head's
+  // global fit, by the neck's control vertices alone (the rest held where
+  // the head's fit left them), and join the displacements; everything below
+  // the generic neck's end is cut. Table 1's distances stay over the points
+  // above the cut. Face-only captures keep the band above (their cut passes
+  // under the ear lobes). false: the band above on every scan (the figures
+  // before it was on; docs/design/fit_real_scans.md).
+  bool fit_scanned_neck = true;
   double scanned_neck_max_angle_deg = 45.0;
   // Scans that come as meshes (PointCloud::faces): their triangles are
   // sampled every surface_sample_edges x the finest level's mean edge and
