@@ -777,11 +777,12 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
     // the silhouettes' minima lie too close to choose by them or by the
     // face: other pitches are matched and the share of the points near the
     // head chooses (FitHeadOptions::choose_face_pitch; Gutenberg turned by
-    // 0.05 deg: docs/design/align.md, "Choosing the pitch").
+    // 0.05 deg: docs/design/align.md, "Choosing the pitch"). Not when the
+    // silhouettes' own alignment passes the face's rule: it is kept below.
     const bool holds = out.refined_on_face && out.face_refine.near_fraction >= options.min_near_fraction &&
                        out.near_fraction >= 0.5 * options.min_near_fraction;
     FaceRefineResult chosen;
-    if (st && !holds && options.choose_face_pitch &&
+    if (st && !holds && !silhouette_face_holds && options.choose_face_pitch &&
         refine_alignment_on_face(generic.mesh, ann, cloud.positions, scan.faces, silhouette_alignment.linear,
                                  silhouette_alignment.translation, diag, options.face_refine, chosen, share_near)) {
       for (const FaceRefineCandidate& c : chosen.candidates)
