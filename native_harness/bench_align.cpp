@@ -55,13 +55,6 @@ double relative_rms(const GenericHead& generic, const GenericHead& truth, const 
 
 int run_align_bench(const Args& args) {
   const bool quick = args.has("quick");
-  // --fit-silhouette-level L: draw the generic's Butterfly level L (AlignOptions::silhouette_level).
-  const AlignOptions defaults;
-  int silhouette_level = defaults.silhouette_level;
-  if (!args.get_int("fit-silhouette-level", silhouette_level, silhouette_level)) {
-    std::printf("   --fit-silhouette-level takes a whole number\n");
-    return 1;
-  }
   GenericHead generic;
   std::string generic_name = "analytic stand-in head (synth/analytic_head.h)";
 #ifdef LK_BENCH_ALIGN_HAVE_HEAD
@@ -102,7 +95,6 @@ int run_align_bench(const Args& args) {
     AlignOptions o;
     o.resolution = run.resolution;
     o.coarse_resolutions = run.coarse;
-    o.silhouette_level = silhouette_level;
     AlignResult r;
     const double c0 = cpu_clock_ms(), w0 = wall_clock_ms();
     st = align_initial(generic.mesh, generic.annotations, cloud, o, r);
@@ -114,23 +106,15 @@ int run_align_bench(const Args& args) {
     }
     // One evaluation at the final resolution: rasterize the placed generic
     // into the three views and XOR-count against the cloud's masks.
-    // (The surface drawn is the generic's silhouette level, as align_initial's.)
-    TriMesh surface;
-    st = silhouette_surface(generic.mesh, generic.annotations, o.silhouette_level, surface);
-    if (!st) {
-      std::printf("   %-22s silhouette surface failed: %s\n", run.name, st.message.c_str());
-      ++failures;
-      continue;
-    }
     std::array<SilhouetteMask, kSilhouetteViews> cloud_masks, mesh_masks;
     rasterize_point_silhouettes(cloud.positions, r.frame.window, r.frame.clips, o.splat, cloud_masks);
     const int reps = 200;
     long long sink = 0;
     const double e0 = cpu_clock_ms();
     for (int k = 0; k < reps; ++k) {
-      std::vector<Vec3> moved(surface.positions.size());
-      for (size_t i = 0; i < moved.size(); ++i) moved[i] = r.linear * surface.positions[i] + r.translation;
-      rasterize_mesh_silhouettes(moved, surface.triangles, r.frame.window, r.frame.clips, mesh_masks,
+      std::vector<Vec3> moved(generic.mesh.positions.size());
+      for (size_t i = 0; i < moved.size(); ++i) moved[i] = r.linear * generic.mesh.positions[i] + r.translation;
+      rasterize_mesh_silhouettes(moved, generic.mesh.triangles, r.frame.window, r.frame.clips, mesh_masks,
                                  o.cull_back_faces);
       for (int v = 0; v < kSilhouetteViews; ++v) sink += xor_count(mesh_masks[v], cloud_masks[v]);
     }
@@ -159,10 +143,10 @@ int run_align_bench(const Args& args) {
   const std::string dir = args.get("dump");
   if (!dir.empty() && !dump_result.levels.empty()) {
     std::array<Image, kSilhouetteViews> before, after;
-    st = align_difference_images(generic.mesh, generic.annotations, dump_result.initial_linear,
-                                 dump_result.initial_translation, cloud, dump_result.frame, dump_options, before);
-    if (st) st = align_difference_images(generic.mesh, generic.annotations, dump_result.linear,
-                                         dump_result.translation, cloud, dump_result.frame, dump_options, after);
+    st = align_difference_images(generic.mesh, dump_result.initial_linear, dump_result.initial_translation, cloud,
+                                 dump_result.frame, dump_options, before);
+    if (st) st = align_difference_images(generic.mesh, dump_result.linear, dump_result.translation, cloud,
+                                         dump_result.frame, dump_options, after);
     if (st) st = save_png_file(dir + "/align_xor_before.png", concat_views(before));
     if (st) st = save_png_file(dir + "/align_xor_after.png", concat_views(after));
     if (!st) {

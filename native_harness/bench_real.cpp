@@ -41,8 +41,6 @@
 // --fit-real-copy NAME: only the copies whose name holds NAME ("turn").
 // --fit-ear-refit-rounds N: the ear refit's warm rounds
 // (FitHeadOptions::ear_refit_warm_rounds; 0: the whole fit again, cold).
-// --fit-silhouette-level L: the Butterfly level whose silhouettes the
-// initial alignment draws (AlignOptions::silhouette_level; 0: control)
 // --fit-ear-refit-late: the ear refit decided after each fit's guard
 // (FitHeadOptions::ear_refit_after_rounds off), to compare.
 #include "command.h"
@@ -263,11 +261,10 @@ int run(const Args& args) {
       hinges_last > 1 ||
       !args.get_int("fit-ear-refit-rounds", options.ear_refit_warm_rounds, options.ear_refit_warm_rounds) ||
       options.ear_refit_warm_rounds < 0 ||
-      !args.get_int("fit-real-copies", 1, copies) || copies < 1 || copies > 13 ||
-      !args.get_int("fit-silhouette-level", options.align.silhouette_level, options.align.silhouette_level)) {
+      !args.get_int("fit-real-copies", 1, copies) || copies < 1 || copies > 13) {
     std::printf("   --fit-crease-trials / --fit-crease-edges / --fit-data-level / --fit-pleat-steps take a whole number, "
                 "--fit-restore-rings one up to 8, --fit-hinges-last 0 or 1, --fit-ear-refit-rounds one >= 0, "
-                "--fit-real-copies one from 1 to 13, --fit-silhouette-level a whole number, --fit-crease-angle and --fit-surface-edges a number\n");
+                "--fit-real-copies one from 1 to 13, --fit-crease-angle and --fit-surface-edges a number\n");
     return 1;
   }
   options.untangle_hinges_last = hinges_last == 1;

@@ -14,7 +14,11 @@
 // residuals do not pull (a beard over the cheeks, a brim over the brow):
 // the trimmed share comes from the data. Several starts (turns about the
 // horizontal and vertical axes through the face, shifts across it) are run
-// and the one with the lowest clamped score is kept. The knee trims hard:
+// and the one with the lowest clamped score is kept. That score cannot tell
+// the head's pitch: Gutenberg's face lies on his scan from pitches 11-55 deg
+// apart. Given a measure of the whole alignment (the share of the scan near
+// the head), pitch candidates are run briefly and the measure picks the one
+// that goes on (docs/design/align.md, "Choosing the pitch"). The knee trims hard:
 // from a start far off it stops short of the truth (the synthetic test:
 // 28.6 mm -> about 6 mm); trimming at 2.5 x the median instead converges
 // there but let Gutenberg's face slide into his beret
@@ -30,6 +34,7 @@
 #include "head/head_model.h"
 #include "mesh/tri_mesh.h"
 
+#include <functional>
 #include <vector>
 
 namespace lk {
@@ -53,6 +58,24 @@ struct FaceRefineOptions {
   // (upper_face_samples) are matched, not its vertices: the match must not
   // depend on how densely the generic head's grid covers each part.
   int samples = 800;
+  // With a whole-scan measure (refine_alignment_on_face's `whole`): pitch
+  // candidates, turns (degrees) of the given alignment about the face's
+  // centre added to every pitch start. Each candidate's starts are matched
+  // for candidate_iterations; the best of them by the clamped score stands
+  // for the candidate; the candidate the measure rates highest continues
+  // up to `iterations` in all, kept where the measure does not drop. The
+  // face's own score cannot tell the pitches apart
+  // (a beard and a beret carry face-like surface: docs/design/align.md).
+  std::vector<double> candidate_pitches_deg = {0.0, 15.0, -15.0, 30.0, -30.0};
+  int candidate_iterations = 20;
+};
+
+// One pitch candidate, as the whole-scan measure rated it.
+struct FaceRefineCandidate {
+  double pitch_deg = 0;
+  double measure = 0;        // the whole-scan measure of its pose (higher is better)
+  double score = 0;          // its best start's clamped score
+  double near_fraction = 0;  // its best start's share of the face on the scan
 };
 
 struct FaceRefineResult {
@@ -64,7 +87,15 @@ struct FaceRefineResult {
   double near_fraction = 0;  // share of the samples within the clamp distance of a scan point
   int samples = 0;
   int iterations = 0;        // over all starts
+  std::vector<FaceRefineCandidate> candidates;  // with a whole-scan measure: each pitch candidate
+  int chosen = -1;                              // the one that continued (-1: no measure given)
+  double continued_measure = -1;                // the measure after it continued (kept when not lower)
 };
+
+// A measure of a whole alignment (world point = linear * generic point +
+// translation) on the scan, higher is better: e.g. the share of the scan
+// near the aligned head.
+using AlignmentMeasure = std::function<double(const Mat3& linear, const Vec3& translation)>;
 
 // The generic head's upper-face vertices used for the match: region "face"
 // without the chin, jaw, lips, mouth bag and the eye pockets, facing
@@ -93,10 +124,13 @@ Status upper_face_near_fraction(const TriMesh& generic, const HeadAnnotations& a
                                 const std::vector<Tri>& faces, const Mat3& linear, const Vec3& translation,
                                 double diag, double clamp_fraction, double& out,
                                 int samples = FaceRefineOptions{}.samples);
+// With `whole` given, the pitch candidates (FaceRefineOptions::
+// candidate_pitches_deg) are tried and `whole` chooses among them.
 // Errors: Empty (no points or no face vertices), InvalidInput (non-finite
 // input, diag <= 0, bad options), NotConverged (no start kept pairs).
 Status refine_alignment_on_face(const TriMesh& generic, const HeadAnnotations& ann, const std::vector<Vec3>& cloud,
                                 const std::vector<Tri>& faces, const Mat3& linear, const Vec3& translation, double diag,
-                                const FaceRefineOptions& options, FaceRefineResult& out);
+                                const FaceRefineOptions& options, FaceRefineResult& out,
+                                const AlignmentMeasure& whole = {});
 
 }  // namespace lk

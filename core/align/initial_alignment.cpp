@@ -4,7 +4,6 @@
 #include "common/helper_thread.h"
 #include "mesh/geometry.h"
 #include "numeric/powell.h"
-#include "subdiv/butterfly.h"
 
 #include <algorithm>
 #include <cmath>
@@ -17,7 +16,6 @@ namespace {
 constexpr int kMinPoints = 50;         // fewer cannot outline a head in 64^2 pixels
 constexpr int kMinResolution = 16;
 constexpr int kMaxResolution = 4096;
-constexpr int kMaxSilhouetteLevel = 3;  // 64x the control triangles
 constexpr double kPi = 3.14159265358979323846;
 
 // Value at fraction q of the sorted values (q in [0,1]), by selection.
@@ -79,11 +77,8 @@ Status validate_inputs(const TriMesh& generic, const PointCloud& cloud, const Al
                            std::to_string(kMinResolution) + ", " + std::to_string(kMaxResolution) + "]");
   if (!(o.window_margin >= 0.0 && o.window_margin < 10.0) || !(o.init_slab_fraction > 0.0 && o.init_slab_fraction <= 1.0) ||
       !(o.init_outlier_fraction >= 0.0 && o.init_outlier_fraction < 0.2) || !(o.step_translation > 0.0) ||
-      !(o.step_rotation_deg > 0.0) || !(o.step_scale > 0.0) || !(o.tolerance > 0.0) ||
-      o.silhouette_level < 0 || o.silhouette_level > kMaxSilhouetteLevel)
-    return Status::error(ErrorCode::InvalidInput,
-                         "align: an option is out of range (margin, slab/outlier fraction, steps, tolerance, "
-                         "silhouette level)");
+      !(o.step_rotation_deg > 0.0) || !(o.step_scale > 0.0) || !(o.tolerance > 0.0))
+    return Status::error(ErrorCode::InvalidInput, "align: an option is out of range (margin, slab/outlier fraction, steps, tolerance)");
   return Status::success();
 }
 
@@ -193,27 +188,6 @@ void views_xor(const std::array<SilhouetteMask, kSilhouetteViews>& a,
 
 }  // namespace
 
-Status silhouette_surface(const TriMesh& generic, const HeadAnnotations& ann, int level, TriMesh& out) {
-  if (level <= 0) {
-    out = generic;
-    return Status::success();
-  }
-  // The crease curves as the fit refines them; their canthi corners
-  // (pipeline/head_creases.h) lie inside the outline and are left out.
-  ButterflyCreases creases;
-  for (const CreaseCurve& c : ann.creases) add_crease_polyline(c.vertices, c.closed, creases);
-  std::vector<ButterflyLevel> levels;
-  Status st = build_butterfly_levels(generic, creases, level, levels);
-  if (!st) return with_context(st, "align: the generic head's silhouette surface");
-  std::vector<std::vector<Vec3>> positions;
-  st = apply_all(levels, generic.positions, positions);
-  if (!st) return st;
-  out = TriMesh{};
-  out.positions = std::move(positions.back());
-  out.triangles = levels.back().fine_triangles;
-  return Status::success();
-}
-
 int total_xor(const std::array<int, kSilhouetteViews>& per_view) {
   int sum = 0;
   for (int c : per_view) sum += c;
@@ -226,14 +200,9 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
   Status st = validate_inputs(generic, cloud, options);
   if (!st) return st;
 
-  // Drawn and measured in place of the control triangles (the options).
-  TriMesh surface;
-  st = silhouette_surface(generic, ann, options.silhouette_level, surface);
-  if (!st) return st;
-
   AffineModel model;
   std::vector<ClipPlane> generic_clips;
-  st = initialize(surface, ann, cloud, options, model, generic_clips);
+  st = initialize(generic, ann, cloud, options, model, generic_clips);
   if (!st) return st;
   double q[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
   model.transform_of(q, out.initial_linear, out.initial_translation);
@@ -259,9 +228,9 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
 
   // The world-fixed window: the kept cloud and the initially placed generic.
   BBox box = bounding_box(cloud_kept);
-  std::vector<Vec3> placed(surface.positions.size());
+  std::vector<Vec3> placed(generic.positions.size());
   for (size_t i = 0; i < placed.size(); ++i) {
-    placed[i] = out.initial_linear * surface.positions[i] + out.initial_translation;
+    placed[i] = out.initial_linear * generic.positions[i] + out.initial_translation;
     bool keep = true;
     for (const ClipPlane& c : frame.clips) keep = keep && c.keeps(placed[i]);
     if (keep) box.extend(placed[i]);
@@ -275,16 +244,16 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
 
   // Buffers reused by every evaluation of the objective.
   std::array<SilhouetteMask, kSilhouetteViews> cloud_masks, mesh_masks, other_masks;
-  std::vector<Vec3> moved(surface.positions.size());
+  std::vector<Vec3> moved(generic.positions.size());
   auto move_mesh = [&](const double* params) {
     Mat3 linear;
     Vec3 translation;
     model.transform_of(params, linear, translation);
-    for (size_t i = 0; i < moved.size(); ++i) moved[i] = linear * surface.positions[i] + translation;
+    for (size_t i = 0; i < moved.size(); ++i) moved[i] = linear * generic.positions[i] + translation;
   };
   auto render_mesh = [&](const double* params, const ViewWindow& window) {
     move_mesh(params);
-    rasterize_mesh_silhouettes(moved, surface.triangles, window, frame.clips, mesh_masks,
+    rasterize_mesh_silhouettes(moved, generic.triangles, window, frame.clips, mesh_masks,
                                options.cull_back_faces);
   };
 
@@ -311,10 +280,10 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
     // the same pixels, so the same D. (Powell's evaluations follow one
     // another, so they cannot be spread instead.)
     HelperThread helper;
-    const int half_triangles = static_cast<int>(surface.triangles.size()) / 2;
+    const int half_triangles = static_cast<int>(generic.triangles.size()) / 2;
     const std::function<void(int)> draw_half = [&](int k) {
       const TriangleRange range = k == 0 ? TriangleRange{0, half_triangles} : TriangleRange{half_triangles};
-      rasterize_mesh_silhouettes(moved, surface.triangles, window, frame.clips, k == 0 ? mesh_masks : other_masks,
+      rasterize_mesh_silhouettes(moved, generic.triangles, window, frame.clips, k == 0 ? mesh_masks : other_masks,
                                  options.cull_back_faces, range);
     };
     const ObjectiveFn objective = [&](const Eigen::VectorXd& p) -> double {
@@ -414,22 +383,19 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
   return Status::success();
 }
 
-Status align_difference_images(const TriMesh& generic, const HeadAnnotations& ann, const Mat3& linear,
-                               const Vec3& translation, const PointCloud& cloud, const AlignFrame& frame,
+Status align_difference_images(const TriMesh& generic, const Mat3& linear, const Vec3& translation,
+                               const PointCloud& cloud, const AlignFrame& frame,
                                const AlignOptions& options, std::array<Image, kSilhouetteViews>& out) {
   const int n = frame.window.resolution;
   if (n < kMinResolution || n > kMaxResolution)
     return Status::error(ErrorCode::InvalidInput, "align_difference_images: the frame has no valid window (run align_initial first)");
   std::string why;
   if (!is_valid(generic, &why)) return Status::error(ErrorCode::InvalidInput, "align_difference_images: " + why);
-  TriMesh surface;
-  Status st = silhouette_surface(generic, ann, options.silhouette_level, surface);
-  if (!st) return st;
   std::array<SilhouetteMask, kSilhouetteViews> cloud_masks, mesh_masks;
   rasterize_point_silhouettes(cloud.positions, frame.window, frame.clips, options.splat, cloud_masks);
-  std::vector<Vec3> moved(surface.positions.size());
-  for (size_t i = 0; i < moved.size(); ++i) moved[i] = linear * surface.positions[i] + translation;
-  rasterize_mesh_silhouettes(moved, surface.triangles, frame.window, frame.clips, mesh_masks,
+  std::vector<Vec3> moved(generic.positions.size());
+  for (size_t i = 0; i < moved.size(); ++i) moved[i] = linear * generic.positions[i] + translation;
+  rasterize_mesh_silhouettes(moved, generic.triangles, frame.window, frame.clips, mesh_masks,
                              options.cull_back_faces);
   for (int v = 0; v < kSilhouetteViews; ++v) {
     Image im = Image::make(n, n, 3, 0);

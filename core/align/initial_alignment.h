@@ -24,10 +24,6 @@
 //    (nose) instead, with one uniform scale. Powell then fits the three scales.
 //  - Sparse clouds: holes are closed morphologically (silhouette.h) instead of
 //    raising the point size, so the outline does not grow.
-//  - AlignOptions::silhouette_level can draw (and start from the extremes
-//    of) a Butterfly level of G instead of its control triangles. Off by
-//    default: on Gutenberg it moves the search into another of several
-//    nearly equal minima (docs/design/align.md, "Silhouettes of a finer level").
 #pragma once
 #include "align/silhouette.h"
 #include "common/progress.h"
@@ -53,11 +49,6 @@ struct AlignOptions {
   // head behind its back plane (both from HeadAnnotations).
   bool use_neck_clip = true;
   bool use_back_clip = true;
-  // Butterfly levels (subdiv/butterfly.h, with the annotations' crease
-  // curves) of the generic head whose silhouettes are drawn and whose
-  // extremes start the search; 0 draws the control triangles (the paper).
-  // The result's transform applies to the control mesh all the same.
-  int silhouette_level = 0;
   // Draw only the generic's triangles that face each view (half the work;
   // needs the outward, counter-clockwise orientation of head_model.h).
   bool cull_back_faces = true;
@@ -134,23 +125,17 @@ struct AlignResult {
 Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const PointCloud& cloud,
                      const AlignOptions& options, AlignResult& out, const ProgressFn& progress = {});
 
-// The surface align_initial draws for generic: its Butterfly level `level`
-// with the annotations' crease curves as creases (level 0: generic itself).
-// Errors: those of build_butterfly_levels.
-Status silhouette_surface(const TriMesh& generic, const HeadAnnotations& ann, int level, TriMesh& out);
-
 // Sum over views of xor_count.
 int total_xor(const std::array<int, kSilhouetteViews>& per_view);
 
 // Debug images like the paper's Fig. 2, one per view (front, side, top), each
 // frame.window.resolution square, RGB: white where exactly one silhouette
 // covers (the XOR the optimizer counts), dark grey where both cover, black
-// elsewhere. Draws generic's silhouette surface (options.silhouette_level,
-// with ann's creases) under (linear, translation) against the cloud, with
-// the frame's clip planes and the options' hole filling. Pass
+// elsewhere. Draws generic under (linear, translation) against the cloud,
+// with the frame's clip planes and the options' hole filling. Pass
 // result.initial_* for "before" and result.linear/translation for "after".
-Status align_difference_images(const TriMesh& generic, const HeadAnnotations& ann, const Mat3& linear,
-                               const Vec3& translation, const PointCloud& cloud, const AlignFrame& frame,
+Status align_difference_images(const TriMesh& generic, const Mat3& linear, const Vec3& translation,
+                               const PointCloud& cloud, const AlignFrame& frame,
                                const AlignOptions& options, std::array<Image, kSilhouetteViews>& out);
 
 // The three views side by side with 2-pixel gaps, for a single PNG.

@@ -44,6 +44,18 @@ std::vector<Vec3> thin(const std::vector<Vec3>& p, int max_points) {
   return out;
 }
 
+// The share of pts (every stride-th, at most max_points) within near_distance
+// of the surface: the check that a scan lies on the aligned head.
+double near_share(const TriMesh& surface, const std::vector<Vec3>& pts, double near_distance, int max_points) {
+  const std::vector<Vec3> probe = thin(pts, max_points);
+  if (probe.empty()) return 0;
+  ClosestPointTree tree(surface);
+  const double near2 = near_distance * near_distance;
+  int near = 0;
+  for (const Vec3& p : probe) near += tree.closest(p, near2).face >= 0;
+  return double(near) / probe.size();
+}
+
 // The eye sockets and the mouth bag are pockets the scanner never sees; a
 // normal line from their vertices meets the outer skin (the lids, the lips)
 // and would push the pocket out through it. Their displacements, and those
@@ -721,13 +733,20 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
     if (out.fitted_points < options.min_points)
       return Status::error(ErrorCode::NotAHead, "only " + std::to_string(out.fitted_points) +
                                                     " points above the aligned head's neck");
-    ClosestPointTree tree(out.aligned);
-    const std::vector<Vec3> probe = thin(pts, 20000);
-    const double near2 = std::pow(options.near_distance_pct / 100.0 * diag, 2);
-    int near = 0;
-    for (const Vec3& p : probe) near += tree.closest(p, near2).face >= 0;
-    out.near_fraction = double(near) / probe.size();
+    out.near_fraction = near_share(out.aligned, pts, options.near_distance_pct / 100.0 * diag, 20000);
     return Status::success();
+  };
+  // The same share for another alignment, on fewer points: what chooses the
+  // face's pitch (FitHeadOptions::choose_face_pitch).
+  const AlignmentMeasure share_near = [&](const Mat3& linear, const Vec3& translation) {
+    const AffineMap map{linear, translation};
+    TriMesh moved = generic.mesh;
+    for (Vec3& p : moved.positions) p = map.apply(p);
+    const ClipPlane cut = transform_plane(ann.neck_clip, map);
+    std::vector<Vec3> kept;
+    for (const Vec3& p : cloud.positions)
+      if (!options.cut_neck || cut.keeps(p)) kept.push_back(p);
+    return near_share(moved, kept, options.near_distance_pct / 100.0 * diag, options.choose_pitch_points);
   };
   st = place();
   if (!st) return st;
@@ -739,6 +758,8 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
   const AlignResult silhouette_alignment = out.alignment;
   const double silhouette_near = out.near_fraction;
   double silhouette_face_near = 0;
+  const size_t notes_before_face = out.notes.size();
+  std::string pitches_tried;  // the face's pitch candidates and their shares, for the messages
   if (out.near_fraction < options.min_near_fraction && !out.face_only && options.refine_on_face) {
     st = upper_face_near_fraction(generic.mesh, ann, cloud.positions, scan.faces, out.alignment.linear,
                                   out.alignment.translation, diag, options.face_refine.score_clamp_fraction,
@@ -758,6 +779,39 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
       out.refined_on_face = true;
       out.alignment.aligned = out.aligned;
     }
+    // When that match (from the silhouettes' pitch) does not hold either,
+    // the silhouettes' minima lie too close to choose by them or by the
+    // face: other pitches are matched and the share of the points near the
+    // head chooses (FitHeadOptions::choose_face_pitch; Gutenberg turned by
+    // 0.05 deg: docs/design/align.md, "Choosing the pitch"). Not when the
+    // silhouettes' own alignment passes the face's rule: it is kept below.
+    const bool holds = out.refined_on_face && out.face_refine.near_fraction >= options.min_near_fraction &&
+                       out.near_fraction >= 0.5 * options.min_near_fraction;
+    FaceRefineResult chosen;
+    if (st && !holds && !silhouette_face_holds && options.choose_face_pitch &&
+        refine_alignment_on_face(generic.mesh, ann, cloud.positions, scan.faces, silhouette_alignment.linear,
+                                 silhouette_alignment.translation, diag, options.face_refine, chosen, share_near)) {
+      for (const FaceRefineCandidate& c : chosen.candidates)
+        pitches_tried += (pitches_tried.empty() ? "" : ", ") + pct(c.pitch_deg) + " deg " + pct(100 * c.measure) + "%";
+      const AlignResult first = out.alignment;
+      const double first_near = out.near_fraction;
+      out.alignment.linear = chosen.linear;
+      out.alignment.translation = chosen.translation;
+      st = place();
+      if (!st) return st;
+      if (out.near_fraction > first_near) {
+        out.face_refine = chosen;
+        out.alignment.aligned = out.aligned;
+        out.notes.push_back("the face's match left only " + pct(100 * first_near) +
+                            "% of the points near the head: its pitch chosen again by that share (" + pitches_tried +
+                            "): " + pct(chosen.candidates[chosen.chosen].pitch_deg) + " deg, " +
+                            pct(100 * out.near_fraction) + "% near");
+      } else {
+        out.alignment = first;
+        st = place();
+        if (!st) return st;
+      }
+    }
   }
   // After the face's alignment: the face must lie on the scan as the whole
   // head would (the same share), and half that share of the points near
@@ -768,7 +822,7 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
     // The face's match went astray while the silhouettes' alignment passes
     // the face's rule itself (Plato with a generic head whose mouth moved a
     // few millimetres: docs/design/fit_real_scans.md): that one is kept.
-    if (out.refined_on_face) out.notes.pop_back();  // its "aligned again on the face"
+    out.notes.resize(notes_before_face);  // its "aligned again on the face"
     out.alignment = silhouette_alignment;
     st = place();
     if (!st) return st;
@@ -782,7 +836,9 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
     return Status::error(ErrorCode::NotAHead,
                          "after alignment only " + pct(100 * out.near_fraction) + "% of the points lie within " +
                              pct(options.near_distance_pct) + "% of the diagonal of the head surface (need " +
-                             pct(100 * options.min_near_fraction) + "%); this does not look like a head scan");
+                             pct(100 * options.min_near_fraction) + "%" +
+                             (pitches_tried.empty() ? "" : "; aligned on the face from pitches " + pitches_tried) +
+                             "); this does not look like a head scan");
   stage_done("initial_alignment", out.aligned, pts);
   if (!report(progress, "initial_alignment", 1.0)) return cancelled();
 

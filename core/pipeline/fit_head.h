@@ -87,6 +87,13 @@ struct FitHeadOptions {
   // beard or a pedestal misled the silhouettes) and checked again.
   bool refine_on_face = true;
   FaceRefineOptions face_refine;
+  // When that alignment on the face does not pass the check either, the
+  // face is matched again from the pitch candidates (FaceRefineOptions::
+  // candidate_pitches_deg), the one with the largest share of the points
+  // near the head (measured as the check above, on at most
+  // choose_pitch_points of them) chosen, and kept when that share is larger.
+  bool choose_face_pitch = true;
+  int choose_pitch_points = 4000;
   bool cut_neck = true;              // drop points below the generic head's neck plane
   bool measure_stages = true;        // compute the per-stage distance stats
   int stats_max_points = 0;          // measure on at most this many points (0: all)

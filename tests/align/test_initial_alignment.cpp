@@ -160,34 +160,28 @@ TEST_CASE("align difference images show the XOR the optimizer counts", "[align]"
   const GenericHead generic = test::synthetic_head();
   const Affine truth = random_affine(5, 10.0, 0.15, 0.2, 1.0);
   const PointCloud cloud = transformed(test::sample_surface(generic.mesh, 30000, 9), truth);
-  for (int level : {0, 1}) {
-    INFO("silhouette level " << level);
-    AlignOptions o;
-    o.resolution = 128;
-    o.coarse_resolutions = {64};
-    o.silhouette_level = level;
-    AlignResult r;
-    REQUIRE(align_initial(generic.mesh, generic.annotations, cloud, o, r).ok());
-    std::array<Image, kSilhouetteViews> before, after;
-    REQUIRE(align_difference_images(generic.mesh, generic.annotations, r.initial_linear, r.initial_translation, cloud,
-                                    r.frame, o, before).ok());
-    REQUIRE(align_difference_images(generic.mesh, generic.annotations, r.linear, r.translation, cloud, r.frame, o,
-                                    after).ok());
-    for (int v = 0; v < kSilhouetteViews; ++v) {
-      REQUIRE(before[v].width == 128);
-      REQUIRE(before[v].channels == 3);
-      int white_before = 0, white_after = 0;
-      for (int i = 0; i < 128 * 128; ++i) {
-        white_before += before[v].pixels[3 * i] == 255;
-        white_after += after[v].pixels[3 * i] == 255;
-      }
-      CHECK(white_before == r.xor_before[v]);
-      CHECK(white_after == r.xor_after[v]);
+  AlignOptions o;
+  o.resolution = 128;
+  o.coarse_resolutions = {64};
+  AlignResult r;
+  REQUIRE(align_initial(generic.mesh, generic.annotations, cloud, o, r).ok());
+  std::array<Image, kSilhouetteViews> before, after;
+  REQUIRE(align_difference_images(generic.mesh, r.initial_linear, r.initial_translation, cloud, r.frame, o, before).ok());
+  REQUIRE(align_difference_images(generic.mesh, r.linear, r.translation, cloud, r.frame, o, after).ok());
+  for (int v = 0; v < kSilhouetteViews; ++v) {
+    REQUIRE(before[v].width == 128);
+    REQUIRE(before[v].channels == 3);
+    int white_before = 0, white_after = 0;
+    for (int i = 0; i < 128 * 128; ++i) {
+      white_before += before[v].pixels[3 * i] == 255;
+      white_after += after[v].pixels[3 * i] == 255;
+    }
+    CHECK(white_before == r.xor_before[v]);
+    CHECK(white_after == r.xor_after[v]);
   }
   const Image strip = concat_views(after);
   CHECK(strip.width == 3 * 128 + 4);
   CHECK(strip.height == 128);
-  }
 }
 
 TEST_CASE("align refuses degenerate input with a clear error", "[align]") {
@@ -270,10 +264,10 @@ TEST_CASE("align puts the generic on a virtual structured-light scan of another 
                        << total_xor(r.xor_after));
   // For people to look at: build/test_scratch/align/virtual_scan_xor_{before,after}.png
   std::array<Image, kSilhouetteViews> before, after;
-  REQUIRE(align_difference_images(generic.mesh, generic.annotations, r.initial_linear, r.initial_translation,
-                                  transformed(scan, pose), r.frame, AlignOptions{}, before).ok());
-  REQUIRE(align_difference_images(generic.mesh, generic.annotations, r.linear, r.translation,
-                                  transformed(scan, pose), r.frame, AlignOptions{}, after).ok());
+  REQUIRE(align_difference_images(generic.mesh, r.initial_linear, r.initial_translation, transformed(scan, pose),
+                                  r.frame, AlignOptions{}, before).ok());
+  REQUIRE(align_difference_images(generic.mesh, r.linear, r.translation, transformed(scan, pose), r.frame,
+                                  AlignOptions{}, after).ok());
   const std::string dir = test::scratch_dir("align");
   CHECK(save_png_file(dir + "/virtual_scan_xor_before.png", concat_views(before)).ok());
   CHECK(save_png_file(dir + "/virtual_scan_xor_after.png", concat_views(after)).ok());
@@ -394,35 +388,4 @@ TEST_CASE("align with several starts keeps the one with the least D on the coars
   REQUIRE(!fractions.empty());
   for (size_t i = 1; i < fractions.size(); ++i) CHECK(fractions[i] >= fractions[i - 1]);
   CHECK(fractions.back() == 1.0);
-}
-
-TEST_CASE("align drawing a Butterfly level recovers random affine transforms as the control triangles do", "[align]") {
-  // AlignOptions::silhouette_level 1: the silhouettes of the head's first
-  // smooth level (4x the triangles, the control vertices kept). The surface
-  // passes through the control vertices, so the same truths are recovered.
-  const GenericHead& generic = test::generic_head();
-  TriMesh surface;
-  REQUIRE(silhouette_surface(generic.mesh, generic.annotations, 1, surface).ok());
-  REQUIRE(surface.num_triangles() == 4 * generic.mesh.num_triangles());
-  REQUIRE(surface.num_vertices() > generic.mesh.num_vertices());
-  for (int v = 0; v < generic.mesh.num_vertices(); ++v) REQUIRE(surface.positions[v] == generic.mesh.positions[v]);
-  TriMesh same;
-  REQUIRE(silhouette_surface(generic.mesh, generic.annotations, 0, same).ok());
-  CHECK(same.positions == generic.mesh.positions);
-  const PointCloud samples = test::sample_surface(generic.mesh, 30000, 5);
-  for (unsigned seed : {1u, 2u}) {
-    const Affine truth = random_affine(seed, 10.0, 0.15, 0.2, 1000.0);
-    AlignOptions o;
-    o.silhouette_level = 1;
-    AlignResult r;
-    REQUIRE(align_initial(generic.mesh, generic.annotations, transformed(samples, truth), o, r).ok());
-    const double err = relative_rms(generic, r, truth);
-    INFO("seed " << seed << ": relative RMS " << err);
-    CHECK(err < 0.02);
-    check_monotone(r);
-  }
-  AlignOptions bad;
-  bad.silhouette_level = 4;
-  AlignResult r;
-  CHECK(align_initial(generic.mesh, generic.annotations, samples, bad, r).code == ErrorCode::InvalidInput);
 }

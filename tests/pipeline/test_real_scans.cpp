@@ -5,11 +5,11 @@
 // before FitHeadOptions::guard_feature_crossings). Skipped with a
 // message when the folder is absent; the scans are never copied into the
 // repo. Gutenberg (beret, beard, pedestal) as given is aligned again on his
-// face (FitHeadOptions::refine_on_face) and held to the same 0 pairs; his
-// copy turned by 0.05 deg is still refused as not a head (the silhouettes
-// leave 8 % of his points near the head, too far for the face's match:
-// docs/design/fit_real_scans.md): a refusal with a message is accepted for
-// that copy only.
+// face (FitHeadOptions::refine_on_face) and held to the same 0 pairs; so is
+// his copy turned by 0.05 deg, refused until the face's pitch was chosen by
+// the share of his points near the head (FitHeadOptions::choose_face_pitch:
+// its silhouettes leave 8 % of them near after the face's match,
+// docs/design/align.md, "Choosing the pitch").
 #include "io/io.h"
 #include "pipeline/fit_head.h"
 #include "pipeline/fit_quality.h"
@@ -36,11 +36,6 @@ std::vector<std::string> real_scans() {
     }
   std::sort(out.begin(), out.end());
   return out;
-}
-
-// Copies of scans refused today (docs/design/fit_real_scans.md, "Not done").
-bool known_refusal(const std::string& path, double degrees) {
-  return degrees != 0 && path.find("/threedscans_gutenberg/") != std::string::npos;
 }
 
 // The scan turned by `degrees` about the vertical through its centroid (the
@@ -73,12 +68,6 @@ TEST_CASE("fit_head: every real scan fits with no crossing pairs at the lips and
         options.measure_stages = false;  // the crossings are what is checked
         FitHeadResult r;
         const Status st = fit_head(scan, test::generic_head(), options, r);
-        if (!st && known_refusal(path, degrees)) {
-          WARN("known refusal, " << path << ": " << st.message);
-          CHECK(st.code == ErrorCode::NotAHead);
-          CHECK(!st.message.empty());
-          continue;
-        }
         INFO(st.message);
         REQUIRE(st.ok());
         FitQuality q;
