@@ -932,6 +932,10 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
   }
   out.pocket_points = static_cast<int>(pts.size() - skin_pts.size());
   const auto neck_region = ann.regions.find("neck");
+  // The neck's control vertices (#V flags; empty: no neck region).
+  const std::vector<char> in_neck = neck_region == ann.regions.end()
+                                        ? std::vector<char>{}
+                                        : vertex_mask(neck_region->second, out.local.num_vertices());
   const bool scanned_neck = options.cut_neck && options.fit_scanned_neck && !out.face_only &&
                             neck_region != ann.regions.end();
   std::vector<Vec3> neck_pts;  // FitHeadOptions::fit_scanned_neck's points below the cut
@@ -939,7 +943,6 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
   if (scanned_neck) {
     // FitHeadOptions::fit_scanned_neck: the scan's neck below the cut, on
     // the neck's triangles and along their normals (not beyond its rim).
-    const std::vector<char> in_neck = vertex_mask(neck_region->second, out.local.num_vertices());
     double lowest = 0;  // the aligned generic neck's lower end, below the cut
     for (const Vec3& v : out.aligned.positions) lowest = std::min(lowest, neck.normal.dot(v - neck.point));
     const double min_cos = std::cos(options.scanned_neck_max_angle_deg * 3.14159265358979323846 / 180.0);
@@ -1131,7 +1134,6 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
     // relaxed); here only the neck's control vertices move, in the last
     // round's smoothing, to all points, and the others are put back where
     // the head's fit left them, to the bit.
-    const std::vector<char> in_neck = vertex_mask(neck_region->second, out.control.num_vertices());
     GlobalFitTerms neck_terms = terms;
     neck_terms.constrained_vertices.clear();
     for (int v = 0; v < out.control.num_vertices(); ++v)
@@ -1187,7 +1189,6 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
     // nearest surface is the neck's (on a face scan the cut passes under
     // the ear lobes: 20 mm of band with no such test tripled James's ear
     // crossings), without its isolated returns, like the points above.
-    const std::vector<char> in_neck = vertex_mask(neck_region->second, out.local.num_vertices());
     std::vector<Vec3> band;
     std::vector<int> band_index;
     for (int i = 0; i < n; ++i) {
@@ -1249,9 +1250,9 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
   st = hold_crossing_ears(options, ann, topo, creases, out, displace, ears_reverted);
   if (!st) return with_context(st, "displacements (ears)");
   bool guard_searched = false;
-  std::vector<char> neck_fitted;  // the neck's control vertices, when fitted to the scanned neck
-  if (!neck_shift.empty()) neck_fitted = vertex_mask(neck_region->second, topo.num_vertices);
-  st = guard_feature_crossings(options, ann, topo, neck_fitted, out, relief_tree, guard_searched);
+  // The neck's control vertices stay where the neck's fit put them, when it ran.
+  st = guard_feature_crossings(options, ann, topo, neck_shift.empty() ? std::vector<char>{} : in_neck, out, relief_tree,
+                               guard_searched);
   if (!st) return with_context(st, "displacements (lips and ears)");
   for (int l = 1; l <= options.levels; ++l) out.level_meshes.push_back(level_mesh(out.multires, l));
   const TriMesh finest = level_mesh(out.multires, options.levels);
