@@ -1,4 +1,4 @@
-#include "photos/synthetic_eyes.h"
+#include "synth/synthetic_eyes.h"
 
 #include "common/prng.h"
 #include "iris/iris.h"

@@ -1,8 +1,8 @@
-// The synthetic people's eyes (photos/synthetic_eyes.h) in their renders:
+// The synthetic people's eyes (synth/synthetic_eyes.h) in their renders:
 // eyeballs placed as the pipeline places them show through the lid opening,
 // white round an iris of the seed's colour, and nowhere else.
 #include "head/generic_head.h"
-#include "photos/synthetic_eyes.h"
+#include "synth/synthetic_eyes.h"
 #include "synth/skin_field.h"
 #include "synth/synth_head.h"
 #include "texture/color.h"
