@@ -6,7 +6,7 @@
 #include "calib/camera.h"
 #include "head/generic_head.h"
 #include "image/image.h"
-#include "photos/synthetic_eyes.h"
+#include "synth/synthetic_eyes.h"
 #include "synth/skin_field.h"
 #include "texture/synthetic_photo.h"
 

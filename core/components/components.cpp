@@ -1,6 +1,8 @@
 // Generic component meshes and their placement (Tarini et al. 2002, Sec. 4).
 #include "components/components.h"
 
+#include "iris/iris.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -36,24 +38,21 @@ TriMesh make_eyeball(int rings, int segments) {
   rings = std::max(rings, 4);
   segments = std::max(segments, 6);
   // theta from the front axis (+z): ring 0 is the front pole.
-  m.positions.push_back(Vec3(0, 0, 1));
-  m.normals.push_back(Vec3(0, 0, 1));
-  m.uvs.push_back(Vec2(0.5, 0.5));
+  const auto add = [&m](const Vec3& d) {
+    m.positions.push_back(d);
+    m.normals.push_back(d);
+    m.uvs.push_back(eyeball_uv(d));
+  };
+  add(Vec3(0, 0, 1));
   for (int r = 1; r < rings; ++r) {
     const double theta = kPi * r / rings;
     for (int s = 0; s < segments; ++s) {
       const double phi = 2 * kPi * s / segments;
-      const Vec3 d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
-      m.positions.push_back(d);
-      m.normals.push_back(d);
-      const double rho = std::min(1.0, theta / (kPi / 2));
-      m.uvs.push_back(Vec2(0.5 + 0.5 * rho * std::cos(phi), 0.5 - 0.5 * rho * std::sin(phi)));
+      add(Vec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)));
     }
   }
   const int back = static_cast<int>(m.positions.size());
-  m.positions.push_back(Vec3(0, 0, -1));
-  m.normals.push_back(Vec3(0, 0, -1));
-  m.uvs.push_back(Vec2(1.0, 0.5));  // sclera
+  add(Vec3(0, 0, -1));  // uv on the rim: sclera
   auto v = [&](int r, int s) { return 1 + (r - 1) * segments + (s % segments); };
   for (int s = 0; s < segments; ++s) m.triangles.push_back({0, v(1, s), v(1, s + 1)});
   for (int r = 1; r + 1 < rings; ++r)

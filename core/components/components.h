@@ -3,8 +3,8 @@
 //
 // Model frames: +z forward (out of the face), +y up, +x the head's left.
 // make_eyeball: unit sphere, per-vertex uvs in the eyeball texture layout of
-//   iris/iris.h (azimuthal equidistant, frontal hemisphere; the back
-//   hemisphere maps onto the rim, i.e. sclera).
+//   iris/iris.h (eyeball_uv: azimuthal equidistant, frontal hemisphere; the
+//   back hemisphere maps onto the rim, i.e. sclera).
 // make_teeth_arch: upper and lower arches around a parabola, width 1 (x in
 //   [-0.5, 0.5]), each a closed band; its uvs put the upper front teeth in the
 //   texture's upper half and the lower ones in the lower half. A plain band:

@@ -535,6 +535,14 @@ Status iris_synthesize(const PolarIris& input, const IrisSynthesisOptions& optio
   return Status::success();
 }
 
+double eyeball_rho(const Vec3& d) { return std::acos(std::clamp(d.z(), -1.0, 1.0)) / (kPi / 2); }
+
+Vec2 eyeball_uv(const Vec3& d) {
+  const double rho = std::min(1.0, eyeball_rho(d));
+  const double phi = std::atan2(d.y(), d.x());
+  return Vec2(0.5 + 0.5 * rho * std::cos(phi), 0.5 - 0.5 * rho * std::sin(phi));
+}
+
 Status eyeball_texture(const PolarIris& iris, double pupil_to_iris_ratio,
                        const EyeballTextureOptions& options, Image& texture) {
   if (iris.angles < 8 || iris.radii < 2 || iris.rgb.size() != static_cast<size_t>(iris.angles) * iris.radii * 3)

@@ -30,6 +30,14 @@
 
 namespace lk {
 
+// The eyeball texture's layout (above) for a unit direction d from the
+// eyeball's centre: rho = acos(d.z) / (pi/2), unclamped (>= 1 off the
+// texture's disk, at or behind the equator).
+double eyeball_rho(const Vec3& d);
+// Its (u, v), rho clamped to 1: directions at or behind the equator land on
+// the disk's rim (sclera), the back pole (0, 0, -1) on (1, 0.5).
+Vec2 eyeball_uv(const Vec3& d);
+
 struct IrisCircle {
   Vec2 center = Vec2::Zero();  // pixels, x right, y down (pixel centres at integers)
   double radius = 0;           // iris (limbus) radius, pixels

@@ -1,10 +1,13 @@
 // Generic components placed into the generic head and into a transformed copy.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "components/components.h"
 #include "head/generic_head.h"
+#include "iris/iris.h"
 
 namespace {
 
@@ -34,6 +37,31 @@ TEST_CASE("components: generic meshes are closed and the eyeball uvs follow the 
   const lk::TriMesh teeth = lk::make_teeth_arch();
   CHECK(teeth.triangles.size() >= 300);
   CHECK(teeth.triangles.size() <= 500);
+}
+
+TEST_CASE("components: the eyeball's uvs are eyeball_uv of its vertices, as from its angles before") {
+  const double pi = 3.14159265358979323846;
+  for (int rings : {16, 7})
+    for (int segments : {24, 9}) {
+      const lk::TriMesh eye = lk::make_eyeball(rings, segments);
+      REQUIRE(eye.uvs.size() == size_t(2 + (rings - 1) * segments));
+      // The uvs as make_eyeball wrote them from the ring's and segment's angles.
+      std::vector<lk::Vec2> before{lk::Vec2(0.5, 0.5)};
+      for (int r = 1; r < rings; ++r)
+        for (int s = 0; s < segments; ++s) {
+          const double theta = pi * r / rings, phi = 2 * pi * s / segments;
+          const double rho = std::min(1.0, theta / (pi / 2));
+          before.push_back(lk::Vec2(0.5 + 0.5 * rho * std::cos(phi), 0.5 - 0.5 * rho * std::sin(phi)));
+        }
+      before.push_back(lk::Vec2(1.0, 0.5));
+      double worst = 0;
+      for (size_t i = 0; i < eye.uvs.size(); ++i) {
+        CHECK(eye.uvs[i] == lk::eyeball_uv(eye.positions[i]));
+        worst = std::max(worst, (eye.uvs[i] - before[i]).cwiseAbs().maxCoeff());
+      }
+      INFO(rings << " rings, " << segments << " segments: largest change " << worst);
+      CHECK(worst < 1e-12);
+    }
 }
 
 TEST_CASE("components: placed inside the generic head, following a transformed head") {

@@ -240,6 +240,62 @@ TEST_CASE("eyeball texture: black pupil, iris colour at the iris, white-ish scle
   CHECK(t.at(x, 256)[2] > t.at(x, 256)[0]);
 }
 
+TEST_CASE("eyeball_uv follows the texture layout: pupil on the axis, the iris ring at its angle, no seam") {
+  const double deg = kPi / 180;
+  auto dir = [&](double theta_deg, double phi_deg) {
+    const double t = theta_deg * deg, p = phi_deg * deg;
+    return lk::Vec3(std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t));
+  };
+  // The layout as iris.h writes it, from the angles.
+  for (double theta : {0.0, 10.0, 30.0, 60.0, 89.0, 90.0})
+    for (double phi = -180; phi < 180; phi += 15) {
+      const double rho = theta / 90;
+      const lk::Vec2 want(0.5 + 0.5 * rho * std::cos(phi * deg), 0.5 - 0.5 * rho * std::sin(phi * deg));
+      INFO("theta " << theta << " phi " << phi);
+      CHECK((lk::eyeball_uv(dir(theta, phi)) - want).norm() < 1e-12);
+      CHECK(std::abs(lk::eyeball_rho(dir(theta, phi)) - rho) < 1e-12);
+    }
+  CHECK(lk::eyeball_uv(lk::Vec3(0, 0, 1)) == lk::Vec2(0.5, 0.5));
+  // +x right, +y up (v down) on the equator; behind it the rim, the back pole at (1, 0.5).
+  CHECK((lk::eyeball_uv(lk::Vec3(1, 0, 0)) - lk::Vec2(1, 0.5)).norm() < 1e-15);
+  CHECK((lk::eyeball_uv(lk::Vec3(0, 1, 0)) - lk::Vec2(0.5, 0)).norm() < 1e-15);
+  CHECK(lk::eyeball_uv(lk::Vec3(0, 0, -1)) == lk::Vec2(1, 0.5));
+  CHECK(lk::eyeball_rho(dir(120, 40)) > 1);
+  CHECK(std::abs((lk::eyeball_uv(dir(120, 40)) - lk::Vec2(0.5, 0.5)).norm() - 0.5) < 1e-12);
+  // No seam: across atan2's cut (phi = +-180) and across the equator.
+  CHECK((lk::eyeball_uv(dir(45, 180 - 1e-7)) - lk::eyeball_uv(dir(45, -180 + 1e-7))).norm() < 1e-8);
+  CHECK((lk::eyeball_uv(dir(90 - 1e-7, 70)) - lk::eyeball_uv(dir(90 + 1e-7, 70))).norm() < 1e-8);
+
+  // eyeball_texture draws its iris where eyeball_uv puts the documented
+  // angles: a uniform green iris of 30 deg, the pupil 0.35 of it (10.5 deg).
+  lk::PolarIris iris;
+  iris.angles = 16;
+  iris.radii = 4;
+  iris.valid.assign(16 * 4, 1);
+  for (int i = 0; i < 16 * 4; ++i) iris.rgb.insert(iris.rgb.end(), {0.1f, 0.6f, 0.2f});
+  lk::EyeballTextureOptions o;
+  o.veins = 0;
+  lk::Image t;
+  REQUIRE(lk::eyeball_texture(iris, 0.35, o, t).ok());
+  auto texel = [&](const lk::Vec3& d) {
+    const lk::Vec2 uv = lk::eyeball_uv(d);
+    return t.at(std::min(t.width - 1, int(uv.x() * t.width)), std::min(t.height - 1, int(uv.y() * t.height)));
+  };
+  for (double phi = -180; phi < 180; phi += 30) {
+    INFO("phi " << phi);
+    CHECK(texel(dir(5, phi))[1] < 20);  // pupil
+    const std::uint8_t* in = texel(dir(20, phi));
+    CHECK((in[1] > 140 && in[0] < 40));  // iris
+    // The iris ends at 30 deg: the first sclera texel (all channels bright)
+    // outward from 20 deg lies within the limbus's blend (0.08 of the iris).
+    double edge = 0;
+    for (double theta = 20; theta < 45 && edge == 0; theta += 0.1)
+      if (texel(dir(theta, phi))[0] > 180) edge = theta;
+    CHECK(edge > 30 - 2.5);
+    CHECK(edge < 30 + 2.5);
+  }
+}
+
 TEST_CASE("iris: bad input gives clear errors") {
   lk::IrisCircle c;
   lk::Vec2 g;

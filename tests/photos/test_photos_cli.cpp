@@ -103,7 +103,7 @@ TEST_CASE("likeness photos --photos textures the head from the recovered cameras
   // teeth.png, as `likeness eye --out` and `likeness teeth --generic-out`
   // write them) go into the GLB in place of the generic ones, pixel for pixel,
   // where the project keeps none from the photos. synth-photos draws the
-  // eyes (photos/synthetic_eyes.h), so the iris found in them is kept and
+  // eyes (synth/synthetic_eyes.h), so the iris found in them is kept and
   // the folder's eye.png does not replace it; the teeth stand in.
   {
     lk::Image photos_eye;

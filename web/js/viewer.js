@@ -66,15 +66,20 @@ function rememberedSoftware() {
   }
 }
 
+// Keeps a verdict (true: software) for the next start.
+function storeSoftware(software) {
+  try {
+    localStorage.setItem(SOFTWARE_KEY, software ? '1' : '0');
+  } catch (e) { /* no storage: the probe runs at every start */ }
+}
+
 // A remembered verdict is checked after the first frame, when the page is
 // idle, on the viewer's own context (no new one): a changed GPU or driver
 // corrects it for the next start.
 function rememberSoftware() {
   const check = () => {
-    try {
-      const gl = ui.canvas.getContext('webgl2');
-      if (gl) localStorage.setItem(SOFTWARE_KEY, isSoftware(rendererName(gl)) ? '1' : '0');
-    } catch (e) { /* no storage: the probe runs at every start */ }
+    const gl = ui.canvas.getContext('webgl2');
+    if (gl) storeSoftware(isSoftware(rendererName(gl)));
   };
   if (window.requestIdleCallback) requestIdleCallback(check, { timeout: 5000 }); else setTimeout(check, 1000);
 }
@@ -106,9 +111,7 @@ export async function startViewer() {
     const software = softwareWebGL();
     app.timings.softwareProbeMs = performance.now() - t0;
     app.software = !!software;
-    try {
-      if (software !== null) localStorage.setItem(SOFTWARE_KEY, software ? '1' : '0');
-    } catch (e) { /* no storage: probed at every start */ }
+    if (software !== null) storeSoftware(software);
   }
   app.msaa = params.has('msaa') ? Math.max(0, Number(params.get('msaa')) || 0) : app.software ? 0 : 4;
   args[1] = String(app.msaa);

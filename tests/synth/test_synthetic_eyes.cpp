@@ -1,8 +1,8 @@
-// The synthetic people's eyes (photos/synthetic_eyes.h) in their renders:
+// The synthetic people's eyes (synth/synthetic_eyes.h) in their renders:
 // eyeballs placed as the pipeline places them show through the lid opening,
 // white round an iris of the seed's colour, and nowhere else.
 #include "head/generic_head.h"
-#include "photos/synthetic_eyes.h"
+#include "synth/synthetic_eyes.h"
 #include "synth/skin_field.h"
 #include "synth/synth_head.h"
 #include "texture/color.h"
@@ -122,6 +122,37 @@ TEST_CASE("synthetic eyes show in the lid opening of a frontal render, white rou
       CHECK(dark_pupil > 10);
     }
   }
+}
+
+TEST_CASE("synthetic eyes: the albedo is the eyeball texture's texel at the layout's angles, sclera behind",
+          "[photos][synth][eye]") {
+  GenericHead generic, person;
+  REQUIRE(load_generic_head(generic));
+  REQUIRE(synthesize_head(generic, 2, SynthHeadOptions{}, person));
+  SyntheticEyes eyes;
+  REQUIRE(make_synthetic_eyes(person, generic, 2, {}, eyes));
+  const Image& t = eyes.texture;
+  REQUIRE(t.width > 0);
+  int compared = 0;
+  for (int e = 0; e < 2; ++e)
+    for (double theta = 0.5; theta < 180; theta += 3)
+      for (double phi = -179; phi < 180; phi += 7) {
+        const Vec3 d(std::sin(theta * kDeg) * std::cos(phi * kDeg), std::sin(theta * kDeg) * std::sin(phi * kDeg),
+                     std::cos(theta * kDeg));
+        // The layout (iris/iris.h) from the angles; behind the equator the
+        // sclera texel at the disk's right edge.
+        const double rho = theta / 90, u = 0.5 + 0.5 * rho * std::cos(phi * kDeg),
+                     v = 0.5 - 0.5 * rho * std::sin(phi * kDeg);
+        const double fx = u * t.width, fy = v * t.height;
+        // A texel border within rounding of the direction: either side is right.
+        if (rho < 1 && (std::abs(fx - std::round(fx)) < 1e-6 || std::abs(fy - std::round(fy)) < 1e-6)) continue;
+        const std::uint8_t* want = rho >= 1 ? t.at(t.width - 1, t.height / 2) : t.at(int(fx), int(fy));
+        INFO("eye " << e << " theta " << theta << " phi " << phi);
+        CHECK(synthetic_eye_albedo(eyes, e, eyes.placement.eye_center[e] + eyes.placement.eye_radius[e] * d) ==
+              linear(want));
+        ++compared;
+      }
+  CHECK(compared > 3000);
 }
 
 TEST_CASE("synthetic eyes: the iris colour varies with the seed", "[photos][synth][eye]") {

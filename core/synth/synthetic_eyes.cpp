@@ -1,4 +1,4 @@
-#include "photos/synthetic_eyes.h"
+#include "synth/synthetic_eyes.h"
 
 #include "common/prng.h"
 #include "iris/iris.h"
@@ -10,8 +10,6 @@
 namespace lk {
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // Iris base colours people have (linear RGB): dark brown, brown, hazel,
 // green, blue, grey.
@@ -59,17 +57,14 @@ Status make_synthetic_eyes(const GenericHead& person, const GenericHead& generic
 
 Vec3 synthetic_eye_albedo(const SyntheticEyes& eyes, int e, const Vec3& point) {
   const Vec3 d = (point - eyes.placement.eye_center[e]).normalized();
-  // The texture's layout (iris/iris.h): azimuthal equidistant about +z.
-  const double rho = std::acos(std::clamp(d.z(), -1.0, 1.0)) / (kPi / 2);
   const Image& t = eyes.texture;
-  if (rho >= 1 || t.width <= 0) {
+  if (eyeball_rho(d) >= 1 || t.width <= 0) {
     const std::uint8_t* p = t.width > 0 ? t.at(t.width - 1, t.height / 2) : nullptr;  // sclera
     return p ? Vec3(srgb8_to_linear(p[0]), srgb8_to_linear(p[1]), srgb8_to_linear(p[2])) : Vec3(0.8, 0.78, 0.75);
   }
-  const double phi = std::atan2(d.y(), d.x());
-  const double u = 0.5 + 0.5 * rho * std::cos(phi), v = 0.5 - 0.5 * rho * std::sin(phi);
-  const int x = std::clamp(static_cast<int>(u * t.width), 0, t.width - 1);
-  const int y = std::clamp(static_cast<int>(v * t.height), 0, t.height - 1);
+  const Vec2 uv = eyeball_uv(d);
+  const int x = std::clamp(static_cast<int>(uv.x() * t.width), 0, t.width - 1);
+  const int y = std::clamp(static_cast<int>(uv.y() * t.height), 0, t.height - 1);
   const std::uint8_t* p = t.at(x, y);
   return Vec3(srgb8_to_linear(p[0]), srgb8_to_linear(p[1]), srgb8_to_linear(p[2]));
 }
