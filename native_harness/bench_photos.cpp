@@ -6,6 +6,7 @@
 // not stated); they are printed for reference, not as a like-for-like goal.
 #include "command.h"
 #include "photos_fit_options.h"
+#include "photos_pulls_report.h"
 #include "synthetic_session_images.h"
 #include "timing.h"
 
@@ -241,6 +242,13 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
   double lid_acc[4] = {0, 0, 0, 0};  // sum truth, sum detected, sum fitted, count
   double lid_abs[2] = {0, 0};        // sum |detected - truth|, sum |fitted - truth|
   int lid_fitted_n = 0;
+  // --photos-pulls: per group the fitted displacement's outward share on
+  // the cheeks and the jaw (photos/fit_pulls.h), summed over seeds; and
+  // against the truth: the fit's and the generic's outward offset from the
+  // person (each brought onto it by its best similarity over the face), mm.
+  std::map<std::string, std::array<double, 6>> pull_sums;  // group: start, end per region (cheeks, jaw, ears)
+  std::array<double, 9> width_sums{};                       // per region: fit - truth, generic - truth, fit itself
+  int pull_runs = 0;
   for (int seed : session.value("seeds", std::vector<int>{})) {
     GenericHead person;
     SyntheticViewsOptions vo;
@@ -426,6 +434,57 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
         }
       }
     }
+    if (args.has("photos-pulls") || args.has("photos-pulls-by-photo")) {
+      SelfCalibResult calib = r.calib;
+      if (args.has("photos-true-cameras"))
+        for (size_t i = 0; i < photos.size(); ++i)
+          if (calib.photos[i].used) calib.photos[i].camera = truth.cameras[size_t(cam_of[i])];
+      PhotosFitPulls pulls;
+      const Status ps = measure_photos_fit_pulls(generic, mp_lms, photos, calib, opt, r.fit.mesh.positions, pulls,
+                                                 nullptr, nullptr, opt.use_slide ? &mp_map.slide : nullptr,
+                                                 args.has("photos-pulls-by-photo") ? PullGrouping::Photos
+                                                                                   : PullGrouping::Landmarks);
+      if (!ps) {
+        std::printf("       pulls: %s\n", ps.message.c_str());
+      } else {
+        std::printf("%s", fit_pulls_table(pulls, "       ").c_str());
+        const Similarity sg = fit_similarity(generic.mesh.positions, person.mesh.positions, face);
+        const Vec3 lateral = generic.annotations.up.cross(generic.annotations.look).normalized();
+        std::string line = "       outward offset from the person (aligned), mm:";
+        for (size_t k = 0; k < pulls.regions.size() && k < 3; ++k) {
+          double fit_off = 0, gen_off = 0;
+          int cnt = 0;
+          for (int v : pulls.regions[k].vertices) {
+            const double side = generic.mesh.positions[size_t(v)].dot(lateral) > 0 ? 1.0 : -1.0;
+            const Vec3& t = person.mesh.positions[size_t(v)];
+            fit_off += side * (sf.apply(r.fit.mesh.positions[size_t(v)]) - t).dot(lateral);
+            gen_off += side * (sg.apply(generic.mesh.positions[size_t(v)]) - t).dot(lateral);
+            ++cnt;
+          }
+          fit_off /= std::max(1, cnt);
+          gen_off /= std::max(1, cnt);
+          char buf[120];
+          std::snprintf(buf, sizeof buf, " %s generic %+.2f, fit %+.2f;", pulls.regions[k].name.c_str(), 1000 * gen_off,
+                        1000 * fit_off);
+          line += buf;
+          width_sums[3 * k] += fit_off;
+          width_sums[3 * k + 1] += gen_off;
+          width_sums[3 * k + 2] += pulls.end.displacement_m[k];
+        }
+        std::printf("%s\n", line.c_str());
+        for (const FitPullGroup& g : pulls.end.groups) {
+          auto& acc = pull_sums[g.name];
+          for (size_t k = 0; k < 3 && k < g.share_m.size(); ++k)
+            acc[3 + k] += std::isfinite(g.share_m[k]) ? g.share_m[k] : 0.0;
+        }
+        for (const FitPullGroup& g : pulls.start.groups) {
+          auto& acc = pull_sums[g.name];
+          for (size_t k = 0; k < 3 && k < g.share_m.size(); ++k)
+            acc[k] += std::isfinite(g.share_m[k]) ? g.share_m[k] : 0.0;
+        }
+        ++pull_runs;
+      }
+    }
     const double focal_err = 100 * (r.calib.focal - vo.focal_px) / vo.focal_px;
     std::printf("  %-4d %2d/%-2zu %+6.1f%% %6.2f | %5.2f -> %5.2f (p95 %5.2f) | %5.2f -> %5.2f (p95 %5.2f) | "
                 "%5.2f -> %5.2f (p95 %5.2f) | %5.2f -> %5.2f (p95 %5.2f) | %5.0f\n",
@@ -460,6 +519,22 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
               done, sums[0] / d, 1000 * sums[1] / d, 1000 * sums[2] / d, 1000 * sums[3] / d, 1000 * sums[4] / d,
               1000 * sums[5] / d, 1000 * sums[6] / d, 1000 * sums[7] / d, 1000 * sums[8] / d);
   print_fold_means(fold_sums, "fit");
+  if (pull_runs > 0) {
+    const double pr = pull_runs;
+    std::printf("  pulls, mean over %d seeds, outward mm (first step / fitted share) on the cheeks, the jaw, the ears:\n",
+                pull_runs);
+    for (const auto& [name, a] : pull_sums)
+      if (name != "stiffness")
+        std::printf("    %-16s cheeks %+6.2f / %+6.2f   jaw %+6.2f / %+6.2f   ears %+6.2f / %+6.2f\n", name.c_str(),
+                    1000 * a[0] / pr, 1000 * a[3] / pr, 1000 * a[1] / pr, 1000 * a[4] / pr, 1000 * a[2] / pr,
+                    1000 * a[5] / pr);
+    std::printf("    the fit moved the cheeks %+.2f, the jaw %+.2f, the ears %+.2f mm outward; against the person (aligned): "
+                "cheeks generic %+.2f -> fit %+.2f, jaw generic %+.2f -> fit %+.2f, ears generic %+.2f -> fit %+.2f mm "
+                "(+ = wider than the person)\n",
+                1000 * width_sums[2] / pr, 1000 * width_sums[5] / pr, 1000 * width_sums[8] / pr, 1000 * width_sums[1] / pr,
+                1000 * width_sums[0] / pr, 1000 * width_sums[4] / pr, 1000 * width_sums[3] / pr, 1000 * width_sums[7] / pr,
+                1000 * width_sums[6] / pr);
+  }
   if (lid_acc[3] > 0)
     std::printf("  lid opening gap/width, views within 35 deg of the front, both eyes (%.0f): truth %.3f, detected %.3f "
                 "(mean |error| %.3f), fitted %.3f (mean |error| %.3f)\n",
@@ -709,7 +784,7 @@ int run_bench_photos(const Args& args) {
 }
 
 BenchRegistrar reg({"photos", "photos to head on synthetic sessions: camera errors, face distances, stage times "
-                              "(--photos-seeds N --photos-cameras C --photos-noise-px S --photos-map vertices|interior --photos-stiffness-scale K --photos-first-seed S --photos-silhouettes both|on|off --photos-lambda-sil L --photos-mask-grow PX --photos-sil-facets --photos-stereo --photos-lambda-features L --photos-coarse N:S,... --photos-schedule S,...|none; --photos-detected DIR: real-detector points on synth-photos renders, made by tests/browser/detect_synth_photos.mjs, with --photos-detected-map FILE --photos-depth-scale SIGMA --photos-depth-0 K0 --photos-depth-yaw2 C --photos-no-slide --photos-no-slide-sigma --photos-true-cameras --photos-drop GROUP --photos-contours --photos-contour-lambda K --photos-lids)",
+                              "(--photos-seeds N --photos-cameras C --photos-noise-px S --photos-map vertices|interior --photos-stiffness-scale K --photos-first-seed S --photos-silhouettes both|on|off --photos-lambda-sil L --photos-mask-grow PX --photos-sil-facets --photos-stereo --photos-lambda-features L --photos-coarse N:S,... --photos-schedule S,...|none; --photos-detected DIR: real-detector points on synth-photos renders, made by tests/browser/detect_synth_photos.mjs, with --photos-detected-map FILE --photos-depth-scale SIGMA --photos-depth-0 K0 --photos-depth-yaw2 C --photos-no-slide --photos-no-slide-sigma --photos-true-cameras --photos-drop GROUP --photos-contours --photos-contour-lambda K --photos-lids --photos-pulls --photos-pulls-by-photo)",
                     run_bench_photos});
 
 }  // namespace

@@ -3,6 +3,7 @@
 // likeness synth-photos: a synthetic photo session with its truth, to try it.
 #include "command.h"
 #include "photos_fit_options.h"
+#include "photos_pulls_report.h"
 
 #include "head/generic_head.h"
 #include "head/surface_quality.h"
@@ -245,7 +246,7 @@ int run_photos(const Args& args) {
   if (!only_known_options(cmd, args, {"points", "photos", "masks", "masks-from-photos", "silhouette-check", "map", "out",
                                       "levels", "focal-px", "texture-size", "no-texture", "stereo", "no-stereo", "coarse",
                                       "schedule", "folds", "depth-scale", "depth-0", "depth-yaw2", "contours",
-                                      "contour-check", "contour-lambda", "focal-sigma", "no-slide", "lids", "iris-photo"}))
+                                      "contour-check", "contour-lambda", "focal-sigma", "no-slide", "lids", "iris-photo", "pulls", "pulls-by-photo", "pulls-by-landmark"}))
     return 2;
   const std::vector<std::string> points_paths = args.get_all("points"), photo_paths = args.get_all("photos"),
                                  mask_paths = args.get_all("masks");
@@ -548,6 +549,27 @@ int run_photos(const Args& args) {
                                     r.calib.photos[i].camera, generic.mesh, r.fit.mesh.positions, int(i), at_fit);
     }
   }
+  // --pulls: which observation groups move the cheeks and the jaw outward
+  // (photos/fit_pulls.h): the first step's split, the fitted displacement's
+  // split, the forces at the end.
+  if (args.has("pulls") || args.has("pulls-by-photo") || args.has("pulls-by-landmark")) {
+    std::vector<SurfacePoint> lms;
+    PhotosFitPulls pulls;
+    const LandmarkSlide* slide = opt.use_slide && (map.slide.has_slide() || map.slide.has_sigma()) ? &map.slide : nullptr;
+    Status ps = attach_landmark_map(map, generic.mesh, opt.map_max_distance_m, lms);
+    if (ps)
+      ps = measure_photos_fit_pulls(generic, lms, photos, r.calib, opt, r.fit.mesh.positions, pulls,
+                                    with_outlines ? &outlines : nullptr, &r.stereo, slide,
+                                    args.has("pulls-by-photo")      ? PullGrouping::Photos
+                                    : args.has("pulls-by-landmark") ? PullGrouping::EachLandmark
+                                                                    : PullGrouping::Landmarks);
+    if (ps) {
+      std::printf("%s", fit_pulls_table(pulls, "  ", args.has("pulls-by-landmark") ? 15 : 0).c_str());
+      rep["fit_pulls"] = fit_pulls_json(pulls);
+    } else {
+      std::printf("  pulls: %s\n", ps.message.c_str());
+    }
+  }
   // --folds: how much the fit grew the smooth level 3's dihedral angles over
   // the generic head's, per region (photos/added_folds.h), and the
   // self-crossing pairs of levels 0..3, the generic head's beside the fit's
@@ -778,7 +800,7 @@ int run_learn_landmark_map(const Args& args) {
 
 Registrar photos_reg({"photos",
                       "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] [--masks M1.png ... | --masks-from-photos] [--silhouette-check] "
-                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--stereo] [--folds] [--coarse N:S,...|none] [--schedule S,...|none] [--depth-scale SIGMA [--depth-0 K0] [--depth-yaw2 C]] [--focal-sigma S] [--no-slide] [--contours [--contour-lambda K]] [--contour-check] [--lids] [--iris-photo NAME]",
+                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--stereo] [--folds] [--coarse N:S,...|none] [--schedule S,...|none] [--depth-scale SIGMA [--depth-0 K0] [--depth-yaw2 C]] [--focal-sigma S] [--no-slide] [--contours [--contour-lambda K]] [--contour-check] [--lids] [--iris-photo NAME] [--pulls | --pulls-by-photo | --pulls-by-landmark]",
                       "a head from several photos' landmarks (fua1998): self-calibrated cameras, fitted control "
                       "mesh, levels, cameras.json, report.json; with --photos the skin from those cameras "
                       "(textured.obj, skin.png) and the iris found in them (eye.png; --iris-photo NAME: in that photo only, "
@@ -794,7 +816,10 @@ Registrar photos_reg({"photos",
                       "view-dependent slide left out; --contours: the face outline's jaw and chin landmarks as "
                       "contour observations, not fixed surface points (--contour-lambda: their weight, x the "
                       "features'); the report and --contour-check: contours_N.png, the face outline's landmarks, their distance to "
-                      "the fit's rim and the rims drawn on each photo",
+                      "the fit's rim and the rims drawn on each photo; --pulls: which observation groups move the cheeks and the "
+                      "jaw outward (the first step's and the fitted displacement's split, the forces at the end; report.json's fit_pulls; "
+                      "--pulls-by-photo: the features split by photo instead of by landmark group, --pulls-by-landmark: by landmark, "
+                      "the 15 widening the cheeks most and the 3 narrowing them most printed)",
                       run_photos, nullptr});
 Registrar synth_photos_reg({"synth-photos",
                             "likeness synth-photos --out DIR [--seed N] [--cameras C] [--noise-px S] [--no-render]",

@@ -38,16 +38,15 @@ Status run_photos_stereo(const GenericHead& generic, const std::vector<LandmarkP
   return s;
 }
 
-Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoint>& landmarks,
-                        const std::vector<LandmarkPhoto>& photos, const SelfCalibResult& calib,
-                        const PhotosJobOptions& options, ShapeFitResult& fit,
-                        const std::vector<PhotoOutline>* outlines, const StereoResult* stereo,
-                        PhotosStereoFit* stereo_fit, const LandmarkSlide* slide, MouthBagResult* mouth_bag,
-                        LidPoseResult* lids) {
+Status make_photos_observations(const GenericHead& generic, const std::vector<SurfacePoint>& landmarks,
+                                const std::vector<LandmarkPhoto>& photos, const SelfCalibResult& calib,
+                                const PhotosJobOptions& options, const std::vector<PhotoOutline>* outlines,
+                                const StereoResult* stereo, const LandmarkSlide* slide, PhotosObservations& out) {
+  out = {};
   if (slide && !slide->has_slide() && !slide->has_sigma()) slide = nullptr;
   if (calib.photos.size() != photos.size())
     return Status::error(ErrorCode::InvalidInput, "shape fit: the calibration is for other photos");
-  std::vector<SurfacePoint> lid_points;  // valid where a landmark is a lid contour point seen on the rim
+  std::vector<SurfacePoint>& lid_points = out.lid_points;  // valid where a landmark is a lid contour point seen on the rim
   if (options.lids_on_rim && std::any_of(photos.begin(), photos.end(), [](const LandmarkPhoto& p) {
         return p.detector == kMediaPipeDetector;
       }))
@@ -76,6 +75,7 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
       if (on_rim ? !camera_sees_lids(generic, lid_contour_eye(int(m)), pc.camera) : !(pc.weights[m] > 0)) continue;
       FeatureObservation o;
       o.camera = cam;
+      o.landmark = int(m);
       o.point = on_rim ? lid_points[m] : landmarks[m];
       o.pixel = photos[i].points[m];
       // On the rim: the calibration's weight was earned at the map's point,
@@ -103,9 +103,10 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
   // should pull less against the stiffness: lambda times the RMS of
   // pixel_sigma / scatter (1 without a scatter).
   const double noise_factor = obs.empty() ? 1.0 : std::sqrt(sigma_weight_sum / double(obs.size()));
-  std::vector<std::unique_ptr<ObservationSet>> sets;
+  std::vector<std::unique_ptr<ObservationSet>>& sets = out.sets;
   sets.push_back(std::make_unique<FeatureSet>(generic.mesh, cameras, std::move(obs), 2 * options.calib.pixel_sigma));
-  std::vector<double> lambdas = {options.fit.lambda_features * noise_factor};
+  std::vector<double>& lambdas = out.lambdas;
+  lambdas = {options.fit.lambda_features * noise_factor};
   if (!contour_obs.empty()) {
     sets.push_back(std::make_unique<ContourSet>(generic.mesh, cameras, std::move(contour_obs), options.contours));
     lambdas.push_back(options.fit.lambda_features * noise_factor * options.contour_lambda_scale);
@@ -118,21 +119,34 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
       lambdas.push_back(options.lambda_silhouettes);
     }
   }
-  const StereoAttractorSet* attractors = nullptr;
   if (options.stereo && stereo && !stereo->patches.empty()) {
     auto set = std::make_unique<StereoAttractorSet>(generic.mesh, stereo->patches, generic.mesh.positions);
-    attractors = set.get();
+    out.attractors = set.get();
     sets.push_back(std::move(set));
     lambdas.push_back(options.lambda_stereo);
   }
-  const std::vector<double> start = attractors ? attractors->surface_distances(generic.mesh.positions)
-                                               : std::vector<double>();
-  ShapeFitOptions fit_options = options.fit;
+  out.fit = options.fit;
   if (options.bind_lips) {
     const std::vector<std::array<int, 2>> lips = lip_binding_edges(generic);
-    fit_options.binding_edges.insert(fit_options.binding_edges.end(), lips.begin(), lips.end());
+    out.fit.binding_edges.insert(out.fit.binding_edges.end(), lips.begin(), lips.end());
   }
-  Status s = fit_shape(generic.mesh, sets, lambdas, fit_options, fit);
+  return Status::success();
+}
+
+Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoint>& landmarks,
+                        const std::vector<LandmarkPhoto>& photos, const SelfCalibResult& calib,
+                        const PhotosJobOptions& options, ShapeFitResult& fit,
+                        const std::vector<PhotoOutline>* outlines, const StereoResult* stereo,
+                        PhotosStereoFit* stereo_fit, const LandmarkSlide* slide, MouthBagResult* mouth_bag,
+                        LidPoseResult* lids) {
+  PhotosObservations obs;
+  if (Status s = make_photos_observations(generic, landmarks, photos, calib, options, outlines, stereo, slide, obs); !s)
+    return s;
+  const StereoAttractorSet* attractors = obs.attractors;
+  const std::vector<SurfacePoint>& lid_points = obs.lid_points;
+  const std::vector<double> start = attractors ? attractors->surface_distances(generic.mesh.positions)
+                                               : std::vector<double>();
+  Status s = fit_shape(generic.mesh, obs.sets, obs.lambdas, obs.fit, fit);
   if (s && options.keep_mouth_bag) {
     MouthBagResult bag;
     s = keep_mouth_bag_inside(generic, options.mouth_bag, fit.mesh, bag);

@@ -26,6 +26,8 @@
 
 namespace lk {
 
+class StereoAttractorSet;
+
 struct PhotosJobOptions {
   SelfCalibOptions calib;
   ShapeFitOptions fit;
@@ -118,6 +120,23 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
                         const std::vector<PhotoOutline>* outlines = nullptr, const StereoResult* stereo = nullptr,
                         PhotosStereoFit* stereo_fit = nullptr, const LandmarkSlide* slide = nullptr,
                         MouthBagResult* mouth_bag = nullptr, LidPoseResult* lids = nullptr);
+
+// The observations fit_photos_shape fits with, as it builds them (for
+// measurements of a fit, fit_pulls.h): the sets with one lambda each, the
+// fit's options with the lips bound, the lid points seen on the rims (empty
+// without options.lids_on_rim), and the stereo attractors' set (or null).
+// Each feature's FeatureObservation::landmark is its landmark index.
+struct PhotosObservations {
+  std::vector<std::unique_ptr<ObservationSet>> sets;
+  std::vector<double> lambdas;
+  ShapeFitOptions fit;
+  std::vector<SurfacePoint> lid_points;
+  const StereoAttractorSet* attractors = nullptr;
+};
+Status make_photos_observations(const GenericHead& generic, const std::vector<SurfacePoint>& landmarks,
+                                const std::vector<LandmarkPhoto>& photos, const SelfCalibResult& calib,
+                                const PhotosJobOptions& options, const std::vector<PhotoOutline>* outlines,
+                                const StereoResult* stereo, const LandmarkSlide* slide, PhotosObservations& out);
 
 // The silhouette set fit_photos_shape builds (for reports: its stats at the
 // generic and the fitted shape). Null when no used photo has an outline.

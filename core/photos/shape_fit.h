@@ -60,6 +60,7 @@ struct FeatureObservation {
   Vec2 pixel = Vec2::Zero();
   double weight = 1;             // current IRLS weight
   double prior_weight = 1;       // e.g. from the self-calibration; multiplies the Huber weight
+  int landmark = -1;             // the detector's landmark index, for reports (fit_pulls.h); -1: none
 };
 
 class FeatureSet : public ObservationSet {
