@@ -5,6 +5,7 @@
 // deliberately broken copy below must show the defect it was given, so the
 // guard cannot pass on a broken asset.
 #include "head/generic_head.h"
+#include "head/generic_head_builder.h"
 #include "mesh/topology.h"
 #include "test_scan.h"
 
@@ -378,4 +379,13 @@ TEST_CASE("generic head guard: a broken copy of the asset shows its defect", "[h
       if (box.name == "mouth") box.max.x() -= 0.01;
     expect(b, "box");
   }
+}
+
+TEST_CASE("generic head guard: the builder's head with nostrils has no defect", "[head]") {
+  GenericHeadBuildOptions options;
+  options.nostrils = true;
+  const GenericHead h = test::built_generic_head(options);
+  const std::vector<std::string> defects = generic_head_defects(h);
+  INFO(defects.size() << " defects:" << listed(defects));
+  CHECK(defects.empty());
 }
