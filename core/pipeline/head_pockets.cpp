@@ -43,6 +43,10 @@ std::vector<char> pocket_vertices(const MeshTopology& topo, const HeadAnnotation
   std::vector<char> pocket = eye_socket_vertices(topo, ann);
   for (int v : ann.constrained_vertices)
     if (v >= 0 && v < topo.num_vertices) pocket[v] = 1;
+  for (const char* name : {"nostril_left", "nostril_right"})
+    if (const auto it = ann.regions.find(name); it != ann.regions.end())
+      for (int v : it->second)
+        if (v >= 0 && v < topo.num_vertices) pocket[v] = 1;
   return pocket;
 }
 

@@ -1,7 +1,8 @@
 // The generic head's pockets (head/head_model.h) as vertex flags: the eye
-// sockets, which the eyeballs fill, and the mouth bag behind the lips. The
-// scanner never sees them: the fit does not displace them (fit_head.cpp),
-// and the checks report their crossings apart (fit_quality.h).
+// sockets, which the eyeballs fill, the mouth bag behind the lips and the
+// nostrils' pockets. The scanner never sees them (or little of a nostril):
+// the fit does not displace them (fit_head.cpp), and the checks report their
+// crossings apart (fit_quality.h).
 #pragma once
 #include "head/head_model.h"
 #include "mesh/topology.h"
@@ -15,7 +16,10 @@ namespace lk {
 // flags (topo.num_vertices); a rim that cuts nothing off gives no pocket.
 std::vector<char> eye_socket_vertices(const MeshTopology& topo, const HeadAnnotations& ann);
 
-// The eye sockets and the mouth bag (HeadAnnotations::constrained_vertices).
+// The eye sockets, the mouth bag (HeadAnnotations::constrained_vertices) and
+// the nostrils' pockets where the head has them (regions nostril_left /
+// nostril_right, GenericHeadBuildOptions::nostrils): a scan sees little of
+// a nostril's inside, so like a socket it keeps its shape and follows its rim.
 std::vector<char> pocket_vertices(const MeshTopology& topo, const HeadAnnotations& ann);
 
 }  // namespace lk
