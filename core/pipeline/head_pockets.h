@@ -11,6 +11,12 @@
 
 namespace lk {
 
+// The vertices a closed loop of the mesh cuts off from the rest of it: every
+// connected piece of the mesh without the loop but the largest (the loop
+// itself is not in it). #V flags (topo.num_vertices); none when the loop
+// cuts nothing off.
+std::vector<char> vertices_cut_off(const MeshTopology& topo, const std::vector<int>& loop);
+
 // Each eye socket is the part of the mesh its rim loop (EyeSocket::rim)
 // cuts off from the rest of the head; the rim itself is not in it. #V
 // flags (topo.num_vertices); a rim that cuts nothing off gives no pocket.

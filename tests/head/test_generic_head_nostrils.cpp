@@ -6,6 +6,7 @@
 #include "head/generic_head_builder.h"
 #include "head/surface_quality.h"
 #include "mesh/topology.h"
+#include "pipeline/head_pockets.h"
 #include "test_scan.h"
 
 #include <catch2/catch.hpp>
@@ -37,35 +38,6 @@ const CreaseCurve* crease_named(const HeadAnnotations& a, const std::string& nam
   for (const CreaseCurve& c : a.creases)
     if (c.name == name) return &c;
   return nullptr;
-}
-
-// The vertices the closed loop `rim` cuts off from the rest of the mesh (all
-// components without the rim but the largest).
-std::set<int> cut_off_by(const MeshTopology& topo, const std::vector<int>& rim) {
-  const int n = topo.num_vertices;
-  std::vector<int> component(n, -1);
-  for (int v : rim) component[v] = -2;
-  std::vector<int> sizes;
-  for (int seed = 0; seed < n; ++seed) {
-    if (component[seed] != -1) continue;
-    const int id = int(sizes.size());
-    sizes.push_back(0);
-    std::vector<int> stack = {seed};
-    component[seed] = id;
-    while (!stack.empty()) {
-      const int v = stack.back();
-      stack.pop_back();
-      ++sizes[id];
-      for (int w : topo.rings[v])
-        if (component[w] == -1) component[w] = id, stack.push_back(w);
-    }
-  }
-  std::set<int> out;
-  if (sizes.size() < 2) return out;
-  const int largest = int(std::max_element(sizes.begin(), sizes.end()) - sizes.begin());
-  for (int v = 0; v < n; ++v)
-    if (component[v] >= 0 && component[v] != largest) out.insert(v);
-  return out;
 }
 
 // Everything wrong with the nostrils of `h`. `plain`: the head without
@@ -127,7 +99,10 @@ std::vector<std::string> nostril_defects(const GenericHead& h, const GenericHead
       if (topo.find_edge(rv[k], rv[(k + 1) % rv.size()]) < 0) defect("rim", side, " rim is not a loop of mesh edges");
     // Closed: the rim cuts off exactly the pocket, none of whose vertices
     // lies on a boundary.
-    const std::set<int> cut = cut_off_by(topo, rv);
+    std::set<int> cut;
+    const std::vector<char> cut_flags = vertices_cut_off(topo, rv);
+    for (int v = 0; v < n; ++v)
+      if (cut_flags[v]) cut.insert(v);
     if (cut != std::set<int>(pocket_it->second.begin(), pocket_it->second.end()))
       defect("pocket", "the ", side, " rim cuts off ", cut.size(), " vertices, not its pocket's ",
              pocket_it->second.size());
