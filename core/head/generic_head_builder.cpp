@@ -1221,11 +1221,11 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
   // --- 9b. nostrils (options.nostrils) -----------------------------------------
   // In the quad under the nose on each side (kNostrilRow, columns 0..1) an
   // oval of 8 rim vertices, inset in the quad's bilinear parameters and
-  // projected onto the shape, is joined to the quad's corners by a strip of
-  // triangles; the rim continues inwards (up into the nose, along the
-  // shape's inward normal) as two rings, each narrower and deeper, closed by
-  // a strip of quads: a shallow closed pocket, as the mouth bag is, so the
-  // head stays a disk. Built after the relaxation, so every other vertex is
+  // moved along the quad's normal onto the shape, is joined to the quad's
+  // corners by a strip of triangles; the rim continues inwards (up into the
+  // nose) as two rings, each narrower and deeper, closed by a strip: a
+  // shallow closed pocket (3.9 mm), as the mouth bag is, so the head stays
+  // a disk. Built after the relaxation, so every other vertex is
   // where it is without nostrils. Built on the left (+x) and mirrored
   // vertex for vertex and face for face onto the right.
   std::map<int, std::vector<int>> nostril_rim, nostril_pocket;  // by side
@@ -1253,7 +1253,7 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
       return (1 - u) * (1 - v) * b.positions[p00] + u * (1 - v) * b.positions[p10] + u * v * b.positions[p11] +
              (1 - u) * v * b.positions[p01];
     };
-    // The oval: 0.66 x 0.54 of the quad (about 10 x 5 mm), its long axis
+    // The oval: 0.66 x 0.54 of the quad (10.8 x 5.1 mm), its long axis
     // leaning from under the tip (near the columella) back and out towards
     // the alar base, as a nostril does seen from below.
     const double uc = 0.53, vc = 0.50, half_long = 0.33, half_short = 0.27;
