@@ -191,7 +191,7 @@ int run_fit(const Args& args) {
 Registrar reg({"fit",
                "likeness fit --scan FILE --out DIR [--levels L] [--up X Y Z|+x..-z] [--facing X Y Z|+x..-z] "
                "[--no-orientation-check] [--face-only|--whole-head] [--no-eye-region] [--no-scanned-neck] [--no-denoise] [--widen-footprints] [--data-level 0|1|2] "
-               "[--thin-cells X] [--dump] [--scan-frame] [--generic-head asset|plate|ring|even|back|nape] [--project FILE.likeness.glb | --no-project]",
+               "[--thin-cells X] [--dump] [--scan-frame] [--generic-head asset|plate|ring|even|back|nape|wide-mouth|nostrils|unfaired|fair-N] [--project FILE.likeness.glb | --no-project]",
                "fits the generic head to a scan (jeong2002): control.obj, level1..L.obj, report.json and the head "
                "project head.likeness.glb (--project elsewhere, --no-project none)",
                run_fit});

@@ -22,7 +22,7 @@ namespace {
 const char* kName = "make-generic-head";
 
 int run_make_generic_head(const Args& args) {
-  if (!only_known_options(kName, args, {"out", "report", "level3", "ring-ear", "plate-ear", "even-eye-corners", "face-rows-at-back", "nape-by-shape", "wide-mouth-ring", "diagonals-by-side", "fair"})) return 2;
+  if (!only_known_options(kName, args, {"out", "report", "level3", "ring-ear", "plate-ear", "even-eye-corners", "face-rows-at-back", "nape-by-shape", "wide-mouth-ring", "diagonals-by-side", "fair", "nostrils"})) return 2;
   const std::string out_dir = args.get("out");
   const bool report = args.has("report");
   const std::string level3_path = args.get("level3");
@@ -54,6 +54,9 @@ int run_make_generic_head(const Args& args) {
   // asset's triangles before issue 35.
   if (args.has("wide-mouth-ring")) options.wide_mouth_ring = true;
   if (args.has("diagonals-by-side")) options.mirror_diagonals = false;
+  // --nostrils: GenericHeadBuildOptions::nostrils (open nostrils with
+  // shallow pockets; not the asset's yet).
+  if (args.has("nostrils")) options.nostrils = true;
   // --fair N: GenericHeadBuildOptions::fair_iterations (0, the asset's:
   // the skin as cast; 3 measured for issue 35, not landed).
   if (args.has("fair")) {
@@ -111,7 +114,7 @@ int run_make_generic_head(const Args& args) {
   return 0;
 }
 
-Registrar reg({kName, "likeness make-generic-head --out DIR [--report] [--level3 FILE.obj] [--ring-ear|--plate-ear] [--even-eye-corners] [--face-rows-at-back] [--nape-by-shape] [--wide-mouth-ring] [--diagonals-by-side] [--fair N]",
+Registrar reg({kName, "likeness make-generic-head --out DIR [--report] [--level3 FILE.obj] [--ring-ear|--plate-ear] [--even-eye-corners] [--face-rows-at-back] [--nape-by-shape] [--wide-mouth-ring] [--diagonals-by-side] [--fair N] [--nostrils]",
                "builds the generic head control mesh + annotations (writes generic_head.obj/.json; --report: smooth level 3 roughness by region, crossing pairs by level; --level3: that level as a mesh)",
                run_make_generic_head});
 

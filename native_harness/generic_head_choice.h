@@ -10,7 +10,8 @@
 // from 8518b1e until the nape was made regular), "nape" that with the
 // regular nape (the asset's until its quads were split as their mirror
 // images, issue 35), "wide-mouth" the builder's default with the wider
-// ring round the mouth (docs/design/generic_head_measured.md).
+// ring round the mouth (docs/design/generic_head_measured.md), "nostrils"
+// the builder's default with open nostrils (docs/design/generic_head.md).
 #pragma once
 #include <cstdlib>
 #include "head/generic_head.h"
@@ -22,6 +23,11 @@ namespace lk::cli {
 
 inline Status choose_generic_head(const std::string& which, GenericHead& out) {
   if (which == "asset") return load_generic_head(out);
+  if (which == "nostrils") {  // the asset's builder with open nostrils (issue 35, not the asset's yet)
+    GenericHeadBuildOptions options;
+    options.nostrils = true;
+    return build_generic_head(options, out);
+  }
   if (which == "wide-mouth") {
     GenericHeadBuildOptions options;
     options.wide_mouth_ring = true;
@@ -47,7 +53,7 @@ inline Status choose_generic_head(const std::string& which, GenericHead& out) {
     options.fair_iterations = 0;
     return build_generic_head(options, out);
   }
-  return Status::error(ErrorCode::InvalidInput, "unknown generic head '" + which + "' (asset, plate, ring, even, back, nape, wide-mouth, unfaired or fair-N)");
+  return Status::error(ErrorCode::InvalidInput, "unknown generic head '" + which + "' (asset, plate, ring, even, back, nape, wide-mouth, nostrils, unfaired or fair-N)");
 }
 
 }  // namespace lk::cli

@@ -181,6 +181,11 @@ constexpr int kEarHighRow = 17;
 constexpr int kEyeCol0 = 2, kEyeCol1 = 6;     // eye opening: 4 quads wide, 1 high
 constexpr int kMouthHalfWidth = 3;            // lip line spans columns -3..3
 constexpr int kEarCol0 = 12, kEarCol1 = 14;   // ear root: 2 quads wide, 6 high
+// The nose's underside: the quad between the columella (column 0) and
+// column 1, rows 11 (subnasale, the alar base) .. 12 (under the tip). It
+// faces down; with GenericHeadBuildOptions::nostrils each side's holds a
+// nostril.
+constexpr int kNostrilRow = 11;
 
 // The ear's rings inside its root wall, from the helix rim inwards (section
 // 8). scale: of the helix outline about kEarConchaCenter (1: the outline);
@@ -284,7 +289,7 @@ double corner_bulge(double x, double y) {
   return 1.0 + 0.16 * std::pow(std::sin(2 * a), 4);
 }
 
-enum class Part { Grid, Neck, Cap, LowerLipLine, EyePocket, MouthBag, Ear };
+enum class Part { Grid, Neck, Cap, LowerLipLine, EyePocket, MouthBag, Ear, NostrilRim, NostrilPocket };
 
 struct VertexInfo {
   Part part = Part::Grid;
@@ -1213,6 +1218,145 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
     }
   }
 
+  // --- 9b. nostrils (options.nostrils) -----------------------------------------
+  // In the quad under the nose on each side (kNostrilRow, columns 0..1) an
+  // oval of 8 rim vertices, inset in the quad's bilinear parameters and
+  // moved along the quad's normal onto the shape, is joined to the quad's
+  // corners by a strip of triangles; the rim continues inwards (up into the
+  // nose) as two rings, each narrower and deeper, closed by a strip: a
+  // shallow closed pocket (3.9 mm), as the mouth bag is, so the head stays
+  // a disk. Built after the relaxation, so every other vertex is
+  // where it is without nostrils. Built on the left (+x) and mirrored
+  // vertex for vertex and face for face onto the right.
+  std::map<int, std::vector<int>> nostril_rim, nostril_pocket;  // by side
+  if (options.nostrils) {
+    const int p00 = g(kNostrilRow, 0), p10 = g(kNostrilRow, 1), p11 = g(kNostrilRow + 1, 1), p01 = g(kNostrilRow + 1, 0);
+    auto remove_quad = [&](std::set<int> corners) {
+      for (auto it = b.polygons.begin(); it != b.polygons.end(); ++it)
+        if (std::set<int>(it->begin(), it->end()) == corners) {
+          b.polygons.erase(it);
+          return true;
+        }
+      return false;
+    };
+    if (!remove_quad({p00, p10, p11, p01}) ||
+        !remove_quad({p00, g(kNostrilRow, -1), g(kNostrilRow + 1, -1), p01}))
+      return Status::error(ErrorCode::Internal, "generic head: no quad under the nose for the nostrils");
+    const size_t first_new_polygon = b.polygons.size();
+    const int first_new_vertex = static_cast<int>(b.positions.size());
+    // The quad's corners by their bilinear parameters (u across from the
+    // midline, v forwards from the alar base to the tip).
+    std::vector<int> loop = {p00, p10, p11, p01};
+    const std::map<int, std::array<double, 2>> corner_uv = {{p00, {0, 0}}, {p10, {1, 0}}, {p11, {1, 1}}, {p01, {0, 1}}};
+    b.orient_loop(loop);
+    auto bilinear = [&](double u, double v) {
+      return (1 - u) * (1 - v) * b.positions[p00] + u * (1 - v) * b.positions[p10] + u * v * b.positions[p11] +
+             (1 - u) * v * b.positions[p01];
+    };
+    // The oval: 0.66 x 0.54 of the quad (10.8 x 5.1 mm), its long axis
+    // leaning from under the tip (near the columella) back and out towards
+    // the alar base, as a nostril does seen from below.
+    const double uc = 0.53, vc = 0.50, half_long = 0.33, half_short = 0.27;
+    const double axis = std::atan2(1.0, -0.35);
+    const Vec3 along(std::cos(axis), std::sin(axis), 0), across(-std::sin(axis), std::cos(axis), 0);
+    // The rim turns the way the loop does in (u, v), starting at the oval's front end.
+    double area = 0;
+    for (size_t k = 0; k < loop.size(); ++k) {
+      const auto& a = corner_uv.at(loop[k]);
+      const auto& c = corner_uv.at(loop[(k + 1) % loop.size()]);
+      area += a[0] * c[1] - c[0] * a[1];
+    }
+    const double turn = area > 0 ? 1 : -1;
+    constexpr int kRimCount = 8;
+    std::vector<int> rim;
+    std::vector<double> rim_angle;
+    VertexInfo rim_info;
+    rim_info.part = Part::NostrilRim;
+    rim_info.side = 1;
+    // One direction for the whole nostril: the quad's normal, outwards
+    // (down). The rim is the oval moved along it onto the shape, and the
+    // pocket goes in against it: each vertex's own normal (the nearest
+    // point of the shape) bent the oval and sent the pocket out through the
+    // ala where the tip's, the wings' and the bridge's volumes blend.
+    Vec3 out_dir = (b.positions[p11] - b.positions[p00]).cross(b.positions[p01] - b.positions[p10]).normalized();
+    if (out_dir.dot(shape.gradient(bilinear(0.5, 0.5))) < 0) out_dir = -out_dir;
+    auto onto_shape = [&](const Vec3& p) {  // the shape's point nearest p along out_dir
+      const double step = 0.0001;
+      for (double t = 0; t < 0.01; t += step)
+        for (double sign : {1.0, -1.0}) {
+          const Vec3 a = p + sign * t * out_dir, c = p + sign * (t + step) * out_dir;
+          if ((shape.distance(a) < 0) == (shape.distance(c) < 0)) continue;
+          Vec3 lo = a, hi = c;
+          for (int k = 0; k < 40; ++k) {
+            const Vec3 mid = 0.5 * (lo + hi);
+            ((shape.distance(mid) < 0) == (shape.distance(lo) < 0) ? lo : hi) = mid;
+          }
+          return Vec3(0.5 * (lo + hi));
+        }
+      return p;
+    };
+    for (int k = 0; k < kRimCount; ++k) {
+      const double t = turn * 2 * kPi * k / kRimCount;
+      const Vec3 uv = Vec3(uc, vc, 0) + half_long * std::cos(t) * along + half_short * std::sin(t) * across;
+      rim.push_back(b.add(onto_shape(bilinear(uv.x(), uv.y())), rim_info));
+      rim_angle.push_back(std::atan2(uv.y() - vc, uv.x() - uc));
+    }
+    // Places along the rings from the rim's first vertex, in the loop's turn.
+    auto place = [&](double angle) {
+      double s = turn * (angle - rim_angle[0]) / (2 * kPi);
+      return s - std::floor(s);
+    };
+    std::vector<double> s_rim, s_loop;
+    for (double a : rim_angle) s_rim.push_back(place(a));
+    for (int v : loop) s_loop.push_back(place(std::atan2(corner_uv.at(v)[1] - vc, corner_uv.at(v)[0] - uc)));
+    const int start = static_cast<int>(std::min_element(s_loop.begin(), s_loop.end()) - s_loop.begin());
+    std::rotate(loop.begin(), loop.begin() + start, loop.end());
+    std::rotate(s_loop.begin(), s_loop.begin() + start, s_loop.end());
+    b.join_rings(loop, s_loop, rim, s_rim);
+    // The pocket: two rings, 1.8 and 3.8 mm in (against out_dir),
+    // 25 % and 55 % of the way to the rim's centre, then closed across.
+    Vec3 centre = Vec3::Zero();
+    for (int v : rim) centre += b.positions[v];
+    centre /= double(kRimCount);
+    VertexInfo pocket_info;
+    pocket_info.part = Part::NostrilPocket;
+    pocket_info.side = 1;
+    std::vector<int> ring = rim, pocket;
+    for (const auto& [depth, inward] : {std::pair<double, double>{0.0018, 0.25}, {0.0038, 0.55}}) {
+      std::vector<Vec3> next;
+      for (int v : rim) {
+        const Vec3& p = b.positions[v];
+        next.push_back(p - depth * out_dir + inward * (centre - p));
+      }
+      ring = b.extrude(ring, next, pocket_info);
+      pocket.insert(pocket.end(), ring.begin(), ring.end());
+    }
+    std::vector<int> top(ring.begin(), ring.begin() + kRimCount / 2 + 1), bottom = {ring[0]};
+    for (int k = kRimCount - 1; k >= kRimCount / 2; --k) bottom.push_back(ring[k]);
+    b.close_between(top, bottom);
+    nostril_rim[1] = rim;
+    nostril_pocket[1] = pocket;
+    // The right nostril: each new vertex mirrored, each face mirrored with
+    // its winding reversed (the quad's corners map column c -> -c).
+    std::map<int, int> to_right = {{p00, p00}, {p01, p01}, {p10, g(kNostrilRow, -1)}, {p11, g(kNostrilRow + 1, -1)}};
+    const int last_new_vertex = static_cast<int>(b.positions.size());
+    for (int v = first_new_vertex; v < last_new_vertex; ++v) {
+      VertexInfo vi = b.info[v];
+      vi.side = -1;
+      const Vec3 p = b.positions[v];
+      to_right[v] = b.add(Vec3(-p.x(), p.y(), p.z()), vi);
+    }
+    const size_t last_new_polygon = b.polygons.size();
+    for (size_t f = first_new_polygon; f < last_new_polygon; ++f) {
+      std::vector<int> poly = b.polygons[f];
+      for (int& v : poly) v = to_right.at(v);
+      std::reverse(poly.begin(), poly.end());
+      b.polygons.push_back(poly);
+    }
+    for (int v : rim) nostril_rim[-1].push_back(to_right.at(v));
+    for (int v : pocket) nostril_pocket[-1].push_back(to_right.at(v));
+  }
+
   // --- 10. mirror symmetry: pair vertices and make the pairs exact -----------
   const int nv = static_cast<int>(b.positions.size());
   std::vector<int> mirror(nv, -1);
@@ -1423,6 +1567,17 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
     if (b.info[v].chain > 0) R["upper_lip"].push_back(v);
     if (b.info[v].chain < 0) R["lower_lip"].push_back(v);
   }
+  // The nostrils: rim and pocket are the nose's (they move with it) and the
+  // face's (as the other pockets are); the pocket behind each rim is
+  // nostril_left / nostril_right.
+  for (int side : {1, -1}) {
+    for (const auto* ids : {&nostril_rim[side], &nostril_pocket[side]})
+      for (int v : *ids) {
+        R["face"].push_back(v);
+        R["nose"].push_back(v);
+      }
+    if (!nostril_pocket[side].empty()) R[side > 0 ? "nostril_left" : "nostril_right"] = nostril_pocket[side];
+  }
   R["ear_left"] = ear_vertices[1];
   R["ear_right"] = ear_vertices[-1];
   if (options.ring_ear) {  // the helix rims (the asset's plate ear does not name them)
@@ -1504,6 +1659,10 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
   ann.creases.push_back({"eye_rim_right", ann.eye_right.rim, true});
   ann.creases.push_back({"upper_lip_line", upper_line, false});
   ann.creases.push_back({"lower_lip_line", lower_line, false});
+  if (options.nostrils) {
+    ann.creases.push_back({"nostril_rim_left", nostril_rim[1], true});
+    ann.creases.push_back({"nostril_rim_right", nostril_rim[-1], true});
+  }
   const Vec3 slit_mid = 0.5 * (P[upper_line[kMouthHalfWidth]] + P[lower_line[kMouthHalfWidth]]);
   ann.mouth_center = slit_mid - Vec3(0, 0, 0.008);
   ann.mouth_width = (P[upper_line.front()] - P[upper_line.back()]).norm();

@@ -17,7 +17,8 @@
 //     concentric ellipses (edge loops for animation). The eye openings are
 //     4 x 1 holes continued inwards as closed pockets around the eyeballs;
 //     the mouth is a slit (upper and lower lip vertices separate) continued
-//     as a closed mouth bag. Ears are a 2 x 6 grid patch extruded into a flap
+//     as a closed mouth bag (with nostrils, each nostril is an oval on the
+//     nose's underside continued as a shallow closed pocket). Ears are a 2 x 6 grid patch extruded into a flap
 //     with a rim and a real concavity behind it (or, with ring_ear, rings
 //     from that patch's border out to a helix rim and in to a concha).
 //  4. Quads are split along their better diagonal, except behind the ears
@@ -79,6 +80,13 @@ struct GenericHeadBuildOptions {
                                    // Demosthenes' ears cross (4 pairs), Gutenberg turned 0.05 deg
                                    // is refused, Fran's face alignment varies by seed
                                    // (docs/design/generic_head.md "Fairing the skin"). 0: as cast.
+  bool nostrils = false;            // true: each nostril an oval opening on the nose's underside
+                                   // (8 rim vertices inset into the quad between the columella and
+                                   // column 1, rows 11-12) continued as a shallow closed pocket
+                                   // ~4 mm deep; its rim a crease, the pocket the region
+                                   // nostril_left/right (issue 35). false: the asset's two dimples.
+                                   // Every other vertex is the asset's; docs/design/generic_head.md
+                                   // "Nostrils" says what it measured and why it is not the asset's.
   bool mirror_diagonals = true;    // true: each quad on the -x side is split as its mirror image
                                    // on +x is, so triangles mirror as vertices do (issue 35);
                                    // false: each side by shape, as before: 6 quads of each eye

@@ -64,6 +64,12 @@ Status measure_head_surface(const GenericHead& head, int level, HeadSurfaceQuali
       return Status::error(ErrorCode::InvalidInput, std::string("head annotations have no region ") + name);
     sets.emplace_back(name, vertex_mask(it->second, nv));
   }
+  // The nose's skin without the nostrils' pockets (as the mouth's without
+  // the mouth bag): their rims are creases, meant to be sharp.
+  for (const char* pocket : {"nostril_left", "nostril_right"})
+    if (const auto it = a.regions.find(pocket); it != a.regions.end())
+      for (int v : it->second)
+        if (v >= 0 && v < nv) sets[2].second[v] = 0;
   {
     // Lid and eye-corner skin: near an eyeball, outside its socket pocket
     // (the pocket sits at the eyeball's radius plus a clearance under 1 mm,

@@ -8,7 +8,8 @@
 //  - Crossings: self-intersecting triangle pairs (raycast/self_intersection.h)
 //    of every level 0..L.
 // Regions (control faces, all three corners in): cheeks, brow, nose ("cheeks",
-// "brow", "nose" of the annotations), eyes (skin within 22 mm of an eyeball
+// "brow", "nose" of the annotations; the nose without the nostril pockets,
+// "nostril_left" / "nostril_right", where there are any), eyes (skin within 22 mm of an eyeball
 // centre, the socket pocket left out), mouth ("lips" without the mouth bag),
 // ears ("ears").
 #pragma once

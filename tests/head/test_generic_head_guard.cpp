@@ -1,11 +1,14 @@
 // Guards of the generic head asset (issue 35): one function lists every
 // defect of a head (mirror symmetry of positions, triangles and annotations;
 // annotation indices, landmarks, regions, creases, binding edges, clip
-// planes, eye sockets, boxes). The committed asset must have none, and each
+// planes, eye sockets, boxes; the nostrils where a head has them). The
+// committed asset and the builder's head with nostrils must have none, and each
 // deliberately broken copy below must show the defect it was given, so the
 // guard cannot pass on a broken asset.
 #include "head/generic_head.h"
+#include "head/generic_head_builder.h"
 #include "mesh/topology.h"
+#include "pipeline/head_pockets.h"
 #include "test_scan.h"
 
 #include <catch2/catch.hpp>
@@ -245,6 +248,67 @@ std::vector<std::string> generic_head_defects(const GenericHead& h, double mirro
     }
   }
   if (a.eye_left.center.x() <= 0 || a.eye_right.center.x() >= 0) defect("eye", "the left eye is not on +x");
+  // --- nostrils, where the head has them (GenericHeadBuildOptions::nostrils):
+  //     each a rim crease facing down under the nose, cutting off a closed,
+  //     shallow pocket that is its region nostril_left / nostril_right
+  {
+  for (const std::string side : {"left", "right"}) {
+      const CreaseCurve* rim = nullptr;
+      for (const CreaseCurve& c : a.creases)
+        if (c.name == "nostril_rim_" + side) rim = &c;
+      const auto pocket_it = a.regions.find("nostril_" + side);
+      if (!rim && pocket_it == a.regions.end()) continue;  // no nostril (the asset)
+      if (!rim || !rim->closed || rim->vertices.size() < 6) {
+        defect("nostril", "no closed crease nostril_rim_", side, " of 6 or more vertices");
+        continue;
+      }
+      if (pocket_it == a.regions.end() || pocket_it->second.empty()) {
+        defect("nostril", "no region nostril_", side);
+        continue;
+      }
+      const std::vector<int>& rv = rim->vertices;
+      for (size_t k = 0; k < rv.size(); ++k)
+        if (topo.find_edge(rv[k], rv[(k + 1) % rv.size()]) < 0) defect("nostril", side, " rim is not a loop of mesh edges");
+      // Closed: the rim cuts off exactly the pocket, none of whose vertices
+      // lies on a boundary.
+      std::set<int> cut;
+      const std::vector<char> cut_flags = vertices_cut_off(topo, rv);
+      for (int v = 0; v < n; ++v)
+        if (cut_flags[v]) cut.insert(v);
+      if (cut != std::set<int>(pocket_it->second.begin(), pocket_it->second.end()))
+        defect("nostril", "the ", side, " rim cuts off ", cut.size(), " vertices, not its pocket's ",
+               pocket_it->second.size());
+      for (int v : cut)
+        if (topo.is_boundary(v)) defect("nostril", side, " pocket vertex ", v, " is on a boundary (open)");
+      // On the nose's underside: the rim's plane faces down, its centre under
+      // the nose's tip region and off the midline on its own side.
+      Vec3 c = Vec3::Zero();
+      for (int v : rv) c += m.positions[v];
+      c /= double(rv.size());
+      Vec3 normal = Vec3::Zero();  // Newell's normal of the rim polygon, oriented outwards below
+      for (size_t k = 0; k < rv.size(); ++k) normal += (m.positions[rv[k]] - c).cross(m.positions[rv[(k + 1) % rv.size()]] - c);
+      normal.normalize();
+      if (normal.y() > 0) normal = -normal;
+      if (normal.y() > -0.7) defect("nostril", side, " rim does not face down (normal ", normal.transpose(), ")");
+      if ((side == "left") != (c.x() > 0.002)) defect("nostril", side, " rim is on the wrong side (x ", c.x(), ")");
+      if (!(c.y() < -0.010 && c.y() > -0.030 && c.z() > 0.095 && c.z() < 0.125))
+        defect("nostril", side, " rim centre ", c.transpose(), " is not under the nose");
+      // Open: the opening is a few mm across.
+      double width = 0;
+      for (int p : rv)
+        for (int q : rv) width = std::max(width, (m.positions[p] - m.positions[q]).norm());
+      if (!(width > 0.006 && width < 0.016)) defect("nostril", side, " nostril is ", width * 1000, " mm long");
+      // Shallow: every pocket vertex above the rim's plane (inside the nose),
+      // the deepest 2-6 mm.
+      double deepest = 0;
+      for (int v : cut) {
+        const double depth = -(m.positions[v] - c).dot(normal);
+        if (depth < 0.0003) defect("nostril", side, " pocket vertex ", v, " is not behind the rim (", depth * 1000, " mm)");
+        deepest = std::max(deepest, depth);
+      }
+      if (!(deepest > 0.002 && deepest < 0.006)) defect("nostril", side, " pocket is ", deepest * 1000, " mm deep");
+    }
+  }
   return defects;
 }
 
@@ -267,6 +331,14 @@ int off_midline_vertex(const GenericHead& h, const std::string& region) {
     if (h.mesh.positions[v].x() > 0.01) return v;
   FAIL("no off-midline vertex in " << region);
   return -1;
+}
+
+// The left nostril's rim crease (the head must have one).
+const std::vector<int>& nostril_rim_left(const GenericHead& h) {
+  for (const CreaseCurve& c : h.annotations.creases)
+    if (c.name == "nostril_rim_left") return c.vertices;
+  FAIL("no crease nostril_rim_left");
+  return h.annotations.creases.front().vertices;
 }
 
 }  // namespace
@@ -377,5 +449,67 @@ TEST_CASE("generic head guard: a broken copy of the asset shows its defect", "[h
     for (FeatureBox& box : b.annotations.boxes)
       if (box.name == "mouth") box.max.x() -= 0.01;
     expect(b, "box");
+  }
+}
+
+TEST_CASE("generic head guard: the builder's head with nostrils has no defect", "[head]") {
+  GenericHeadBuildOptions options;
+  options.nostrils = true;
+  const GenericHead h = test::built_generic_head(options);
+  const std::vector<std::string> defects = generic_head_defects(h);
+  INFO(defects.size() << " defects:" << listed(defects));
+  CHECK(defects.empty());
+}
+
+TEST_CASE("generic head guard: a broken copy of the head with nostrils shows its defect", "[head]") {
+  GenericHeadBuildOptions options;
+  options.nostrils = true;
+  const GenericHead good = test::built_generic_head(options);
+  auto expect = [&](const GenericHead& broken, const std::string& kind) {
+    const std::vector<std::string> defects = generic_head_defects(broken);
+    INFO("expected a '" << kind << "' defect; got " << defects.size() << ":" << listed(defects));
+    CHECK(has_kind(defects, kind));
+  };
+  const std::vector<int>& pocket = good.annotations.regions.at("nostril_left");
+  const std::vector<int>& rim = nostril_rim_left(good);
+  Vec3 down = Vec3::Zero();  // out of the pocket: from its centre to the rim's
+  for (int v : rim) down += good.mesh.positions[v] / double(rim.size());
+  for (int v : pocket) down -= good.mesh.positions[v] / double(pocket.size());
+  down.normalize();
+  // Each break: what it does, the defect kind it must show, and how.
+  struct Break {
+    const char* what;
+    const char* kind;
+    std::function<void(GenericHead&)> apply;
+  };
+  const std::set<int> in_pocket(pocket.begin(), pocket.end());
+  const std::vector<Break> breaks = {
+      {"the pocket's floor and walls removed (an open pocket)", "mesh",
+       [&](GenericHead& b) {
+         std::vector<Tri> kept;
+         for (const Tri& t : b.mesh.triangles)
+           if (!(in_pocket.count(t[0]) && in_pocket.count(t[1]) && in_pocket.count(t[2]))) kept.push_back(t);
+         REQUIRE(kept.size() < b.mesh.triangles.size());
+         b.mesh.triangles = kept;
+       }},
+      {"the pocket pushed 8 mm deeper", "nostril", [&](GenericHead& b) { for (int v : pocket) b.mesh.positions[v] -= 0.008 * down; }},
+      {"the pocket pulled out below the rim", "nostril", [&](GenericHead& b) { for (int v : pocket) b.mesh.positions[v] += 0.006 * down; }},
+      {"a pocket vertex left out of its region", "nostril", [](GenericHead& b) { b.annotations.regions["nostril_left"].pop_back(); }},
+      {"the rim crease dropped", "nostril",
+       [](GenericHead& b) {
+         auto& c = b.annotations.creases;
+         c.erase(std::remove_if(c.begin(), c.end(), [](const CreaseCurve& k) { return k.name == "nostril_rim_left"; }), c.end());
+       }},
+      {"two rim vertices swapped", "nostril",
+       [](GenericHead& b) {
+         for (CreaseCurve& c : b.annotations.creases)
+           if (c.name == "nostril_rim_left") std::swap(c.vertices[1], c.vertices[2]);
+       }},
+  };
+  for (const Break& k : breaks) {
+    INFO(k.what);
+    GenericHead b = good;
+    k.apply(b);
+    expect(b, k.kind);
   }
 }

@@ -6,6 +6,7 @@
 #include "pipeline/head_creases.h"
 #include "pipeline/head_pockets.h"
 #include "head/generic_head.h"
+#include "head/generic_head_builder.h"
 
 #include <algorithm>
 #include "mesh/topology.h"
@@ -122,6 +123,34 @@ TEST_CASE("crossing pairs in an eye socket count as eye sockets, after lips and 
   c = count_crossings_by_region(mr, 2, pairs, ann);
   CHECK(c.eye_sockets == 0);
   CHECK(c.rest == n);
+}
+
+TEST_CASE("the pockets: eye sockets, mouth bag and, on a head with nostrils, the nostrils' pockets but not their rims", "[fit_quality]") {
+  GenericHeadBuildOptions options;
+  options.nostrils = true;
+  GenericHead h;
+  REQUIRE(build_generic_head(options, h).ok());
+  MeshTopology topo;
+  REQUIRE(build_topology(h.mesh, topo).ok());
+  const std::vector<char> pocket = pocket_vertices(topo, h.annotations);
+  const std::vector<char> sockets = eye_socket_vertices(topo, h.annotations);
+  int nostril_vertices = 0;
+  for (const char* name : {"nostril_left", "nostril_right"})
+    for (int v : h.annotations.regions.at(name)) {
+      CHECK(pocket[v] == 1);
+      CHECK(sockets[v] == 0);
+      ++nostril_vertices;
+    }
+  CHECK(nostril_vertices > 0);
+  for (const CreaseCurve& c : h.annotations.creases)
+    if (c.name.rfind("nostril_rim", 0) == 0)
+      for (int v : c.vertices) CHECK(pocket[v] == 0);
+  // Nothing else: the rest are the sockets and the mouth bag.
+  std::vector<char> expected = sockets;
+  for (int v : h.annotations.constrained_vertices) expected[v] = 1;
+  for (const char* name : {"nostril_left", "nostril_right"})
+    for (int v : h.annotations.regions.at(name)) expected[v] = 1;
+  CHECK(pocket == expected);
 }
 
 TEST_CASE("turned-over and degenerate triangles are counted against a reference", "[fit_quality]") {
