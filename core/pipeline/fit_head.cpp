@@ -1088,8 +1088,12 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
         out.ear_binding.free_pairs = out.ear_binding.bound_pairs = pairs;
         if (pairs == 0) return true;
         inner = refit();
-        // The free fit's guard is paid only when the bound fit is not kept.
-        return !(inner && out.ear_binding.bound_pairs == 0);
+        // The free fit's guard is paid only when the bound fit is not kept;
+        // then its relief refits the bound fit's tree (the same level's
+        // triangles) instead of building one.
+        const bool kept = inner && out.ear_binding.bound_pairs == 0;
+        if (inner && !kept) ear_tree = std::move(bound_tree);
+        return !kept;
       };
     st = fit_global(skin_pts, out.local, topo, free_terms, global_options, out.control, out.global_fit, progress,
                     &relief_tree);
