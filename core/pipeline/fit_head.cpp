@@ -1088,8 +1088,12 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
         out.ear_binding.free_pairs = out.ear_binding.bound_pairs = pairs;
         if (pairs == 0) return true;
         inner = refit();
-        // The free fit's guard is paid only when the bound fit is not kept.
-        return !(inner && out.ear_binding.bound_pairs == 0);
+        // The free fit's guard is paid only when the bound fit is not kept;
+        // then its relief refits the bound fit's tree (the same level's
+        // triangles) instead of building one.
+        const bool kept = inner && out.ear_binding.bound_pairs == 0;
+        if (inner && !kept) ear_tree = std::move(bound_tree);
+        return !kept;
       };
     st = fit_global(skin_pts, out.local, topo, free_terms, global_options, out.control, out.global_fit, progress,
                     &relief_tree);
@@ -1140,12 +1144,21 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
       if (!in_neck[v] || mouth_bag[v]) neck_terms.constrained_vertices.push_back(v);
     GlobalFitOptions neck_options = global_options;
     neck_options.smooth_weights = {global_options.smooth_weights.back()};
+    // Only this fit's positions are used: the fold creases it would choose
+    // (a search that never moves a vertex, ~0.2 s on the busts) are not
+    // searched, and its relief takes over the head's relief tree and hands
+    // it back refitted (the same tree, no level-3 build).
+    neck_options.smooth_guard_crease_max_edges = 0;
+    neck_terms.relief_start_tree = &relief_tree;
     std::vector<Vec3> all = skin_pts;
     all.insert(all.end(), neck_pts.begin(), neck_pts.end());
     TriMesh neck_control;
     GlobalFitResult neck_fit;
-    st = fit_global(all, out.control, topo, neck_terms, neck_options, neck_control, neck_fit, progress);
+    const bool had_tree = !relief_tree.empty();
+    MeshBvh neck_tree;
+    st = fit_global(all, out.control, topo, neck_terms, neck_options, neck_control, neck_fit, progress, &neck_tree);
     if (!st) return with_context(st, "global fitting (scanned neck)");
+    if (had_tree && relief_tree.empty()) relief_tree = std::move(neck_tree);  // taken over: back, refitted
     neck_shift.assign(out.control.num_vertices(), Vec3::Zero());
     for (int v = 0; v < out.control.num_vertices(); ++v)
       if (in_neck[v] && !mouth_bag[v]) {
