@@ -297,6 +297,13 @@ Status hold_crossing_ears(const FitHeadOptions& options, const HeadAnnotations& 
   return Status::success();
 }
 
+// Whether tree was built over mesh's triangles (the relief's tree may be
+// over another level when the fold limiter left it alone): refit it, else
+// build one.
+bool tree_over(const TriMesh& mesh, const MeshBvh& tree) {
+  return !tree.empty() && tree.triangles == mesh.triangles && tree.positions.size() == mesh.positions.size();
+}
+
 // Scales the displacements of every level by a weight that is 0 on the
 // control vertices in `mask` and 1 elsewhere, a new vertex taking the mean of
 // its edge's endpoints: the detail fades out toward the masked area instead
@@ -360,7 +367,7 @@ Status guard_feature_crossings(const FitHeadOptions& options, const HeadAnnotati
   if (best_features == 0 && (!others_too || best_others == 0)) return Status::success();
 
   searched = true;
-  st = tree.empty() ? build_bvh(level, tree) : refit_bvh(level, tree);
+  st = tree_over(level, tree) ? refit_bvh(level, tree) : build_bvh(level, tree);
   if (!st) return st;
   std::vector<Vec3> best_control = mr.control;
   std::vector<std::vector<double>> best_displacements = mr.displacements;
@@ -1295,7 +1302,7 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
       out.feature_guard = first;
       out.notes.resize(notes_guarded);
       TriMesh level = level_mesh(out.multires, options.levels);
-      st = refit_bvh(level, relief_tree);
+      st = tree_over(level, relief_tree) ? refit_bvh(level, relief_tree) : build_bvh(level, relief_tree);
       if (!st) return with_context(st, "displacements (measured again)");
     } else {
       const FitHeadResult::FeatureGuard second = out.feature_guard;
