@@ -118,20 +118,28 @@ struct Row {
   double value[kPoseGain + 8];
 };
 
-bool residual_row(const ImageF& g, double scale, const PhotoRegistration& reg, const Vec3& X, double consensus,
-                  Row& row) {
-  const Camera& cam = reg.camera;
-  const Vec3 xc = cam.to_camera(X);
+// Projection p of X, its camera-frame point xc and dp/dxc. False behind the camera.
+bool project_with_jacobian(const Camera& cam, const Vec3& X, Vec2& p, Vec3& xc, Eigen::Matrix<double, 2, 3>& dp_dxc) {
+  xc = cam.to_camera(X);
   if (xc.z() <= 1e-12) return false;
   const double x = xc.x() / xc.z(), y = xc.y() / xc.z();
   const double r2 = x * x + y * y, d = 1 + cam.k1 * r2 + cam.k2 * r2 * r2;
   const double dd = 2 * (cam.k1 + 2 * cam.k2 * r2);  // d(d)/dx = dd * x
-  const Vec2 p(cam.fx * d * x + cam.cx, cam.fy * d * y + cam.cy);
-  // dp / d(x, y), then d(x, y) / dxc.
+  p = Vec2(cam.fx * d * x + cam.cx, cam.fy * d * y + cam.cy);
   Eigen::Matrix2d dp_dxy;
   dp_dxy << cam.fx * (d + dd * x * x), cam.fx * dd * x * y, cam.fy * dd * x * y, cam.fy * (d + dd * y * y);
   Eigen::Matrix<double, 2, 3> dxy_dxc;
   dxy_dxc << 1 / xc.z(), 0, -x / xc.z(), 0, 1 / xc.z(), -y / xc.z();
+  dp_dxc = dp_dxy * dxy_dxc;
+  return true;
+}
+
+bool residual_row(const ImageF& g, double scale, const PhotoRegistration& reg, const Vec3& X, double consensus,
+                  Row& row) {
+  Vec2 p;
+  Vec3 xc;
+  Eigen::Matrix<double, 2, 3> dp_dxc;
+  if (!project_with_jacobian(reg.camera, X, p, xc, dp_dxc)) return false;
   Vec2 q = p;
   Eigen::Matrix2d dq_dp = Eigen::Matrix2d::Identity();
   Cell cell;
@@ -152,7 +160,7 @@ bool residual_row(const ImageF& g, double scale, const PhotoRegistration& reg, c
   grad /= scale;
   row.r = reg.gain * value + reg.bias - consensus;
   const Eigen::RowVector2d ag = reg.gain * grad.transpose();
-  const Eigen::RowVector3d dr_dxc = ag * dq_dp * dp_dxy * dxy_dxc;
+  const Eigen::RowVector3d dr_dxc = ag * dq_dp * dp_dxc;
   const Eigen::RowVector3d dr_domega = -dr_dxc * skew(xc);  // d(omega x xc) = -[xc]x d(omega)
   row.n = 0;
   for (int j = 0; j < 3; ++j) { row.index[row.n] = j; row.value[row.n++] = dr_domega(j); }
@@ -403,6 +411,36 @@ Status register_photos(const TriMesh& mesh, const std::vector<Vec3>& normals, co
     report.photos[i].vertices = counts[i];
   }
 
+  // The pose prior: the mean squared image motion of the photo's vertices,
+  // theta^T P theta with P = mean of J^T J (J = dp/d(omega, dt) at the
+  // starting pose), weighted so that pose_prior_px of motion costs as much
+  // as a residual of 0.01 per vertex. Without it, on real photos (hair and
+  // background that the head mesh does not have, a surface cm off) the
+  // photometric cost has minima several degrees away.
+  std::vector<Eigen::Matrix<double, 6, 6>> prior(np, Eigen::Matrix<double, 6, 6>::Zero());
+  std::vector<Eigen::Matrix<double, 6, 1>> theta(np, Eigen::Matrix<double, 6, 1>::Zero());
+  for (int i = 0; i < np; ++i) {
+    double wsum = 0;
+    for (int v : used) {
+      if (!part(v, i)) continue;
+      Vec2 p;
+      Vec3 xc;
+      Eigen::Matrix<double, 2, 3> dp_dxc;
+      if (!project_with_jacobian(photos[i].camera, mesh.positions[v], p, xc, dp_dxc)) continue;
+      Eigen::Matrix<double, 2, 6> J;
+      J.leftCols<3>() = -dp_dxc * skew(xc);
+      J.rightCols<3>() = dp_dxc;
+      prior[i] += weight(v, i) * J.transpose() * J;
+      wsum += weight(v, i);
+    }
+    if (wsum > 0) prior[i] /= wsum;
+    // Its diagonal only: the full matrix is nearly singular along the trade
+    // of a turn against a sideways move (no image motion), and the pose
+    // wandered along it (5.8 deg in tests/texture/test_register.cpp).
+    prior[i] = Eigen::Matrix<double, 6, 6>(prior[i].diagonal().asDiagonal());
+  }
+  const double prior_scale =
+      options.pose_prior_px > 0 ? 1e-4 / (options.pose_prior_px * options.pose_prior_px) : 0.0;
   std::vector<double> damping(np, 1e-3);
   for (int l = options.levels - 1; l >= 0; --l) {
     const Level& level = levels[l];
@@ -411,6 +449,25 @@ Status register_photos(const TriMesh& mesh, const std::vector<Vec3>& normals, co
       for (int i = 0; i < np; ++i) {
         if (i == report.reference) continue;
         PhotoRegistration& reg = report.photos[i];
+        // The gain in closed form (weighted means of the photo and of the
+        // others agree), not by Gauss-Newton: a free gain and bias let a
+        // photo flatten itself towards the others' mean (a -> 0), which on
+        // Kira "won" with gains of 0.25-0.45 and cameras thrown 3-14 deg.
+        {
+          double sum_c = 0, sum_g = 0;
+          for (size_t k = 0; k < used.size(); ++k) {
+            const size_t j = k * np + i;
+            const double c = others(k, i);
+            if (c < 0 || !has[j]) continue;
+            sum_c += weight(used[k], i) * c;
+            sum_g += weight(used[k], i) * (own[j] - reg.bias) / reg.gain;
+          }
+          if (sum_g > 1e-9 && sum_c > 1e-9) {
+            reg.gain = sum_c / sum_g;
+            reg.bias = 0;
+            refresh_photo(level, i);
+          }
+        }
         Eigen::MatrixXd H = Eigen::MatrixXd::Zero(nparam, nparam);
         Eigen::VectorXd b = Eigen::VectorXd::Zero(nparam);
         double cost = 0;
@@ -426,7 +483,7 @@ Status register_photos(const TriMesh& mesh, const std::vector<Vec3>& normals, co
           ++n;
           for (int a = 0; a < row.n; ++a) {
             b(row.index[a]) += w * row.value[a] * row.r;
-            for (int c = 0; c < row.n; ++c) H(row.index[a], row.index[c]) += w * row.value[a] * row.value[c];
+            for (int e = 0; e < row.n; ++e) H(row.index[a], row.index[e]) += w * row.value[a] * row.value[e];
           }
         }
         if (n < nparam) continue;  // too little overlap to move this photo
@@ -455,13 +512,16 @@ Status register_photos(const TriMesh& mesh, const std::vector<Vec3>& normals, co
               }
             }
           }
-        if (!options.refine_pose)
-          for (int j = 0; j < 6; ++j) {
-            H.row(j).setZero();
-            H.col(j).setZero();
-            H(j, j) = 1;
-            b(j) = 0;
-          }
+        const double sp = prior_scale * n;
+        H.topLeftCorner<6, 6>() += sp * prior[i];
+        b.head<6>() += sp * prior[i] * theta[i];
+        cost += sp * theta[i].dot(prior[i] * theta[i]);
+        for (int j = options.refine_pose ? 6 : 0; j < kPoseGain; ++j) {  // gain and bias (and pose) held
+          H.row(j).setZero();
+          H.col(j).setZero();
+          H(j, j) = 1;
+          b(j) = 0;
+        }
         // Levenberg-Marquardt on this photo with C fixed: accept a step only
         // when it lowers the photo's cost.
         for (int attempt = 0; attempt < 6; ++attempt) {
@@ -477,9 +537,12 @@ Status register_photos(const TriMesh& mesh, const std::vector<Vec3>& normals, co
           trial.bias += delta(7);
           for (int a = 0; a < K * K; ++a) trial.field[a] += Vec2(delta(kPoseGain + 2 * a), delta(kPoseGain + 2 * a + 1));
           long m = 0;
-          const double trial_cost = photo_cost(level, i, trial, &m) + field_cost(trial, s);
+          const Eigen::Matrix<double, 6, 1> trial_theta = theta[i] + delta.head<6>();
+          const double trial_cost = photo_cost(level, i, trial, &m) + field_cost(trial, s) +
+                                    sp * trial_theta.dot(prior[i] * trial_theta);
           if (m >= n * 0.95 && trial_cost < cost) {
             reg = std::move(trial);
+            theta[i] = trial_theta;
             damping[i] = std::max(1e-6, damping[i] * 0.3);
             refresh_photo(level, i);
             break;

@@ -37,7 +37,10 @@
 namespace lk {
 
 struct RegisterOptions {
-  int field_nodes = 6;           // lattice nodes per side of F (0 = no field: pose and gain only)
+  // Lattice nodes per side of F (0 = no field: pose and gain only). Off by
+  // default: on the ground truth the field lowered the texture's PSNR
+  // (39.9 -> 35.9 dB in tests/texture/test_register.cpp; docs/design/texture.md).
+  int field_nodes = 0;
   bool refine_pose = true;
   // Coarse to fine: the luminance halved (2x2 box) levels-1 times, each
   // coarser level blurred by blur_px (sigma, in that level's pixels; the
@@ -50,8 +53,12 @@ struct RegisterOptions {
   // nodes towards 0 and lambda_s |f_k - f_l|^2 (lattice neighbours) keeps F
   // smooth; both scaled by the photo's residual count / K^2 so they weigh
   // the same whatever the mesh's density.
-  double field_weight = 1e-4;
-  double field_smoothness = 1e-3;
+  double field_weight = 1e-5;
+  double field_smoothness = 1e-4;
+  // Prior on the pose change: a mean image motion of the photo's vertices
+  // of pose_prior_px costs as much as a luminance residual of 0.01 at every
+  // vertex (0 = no prior). Self-calibrated cameras are a few pixels off.
+  double pose_prior_px = 10.0;
   int reference = -1;            // photo held fixed; -1 = the one facing the shared vertices most (summed <N, V>)
   // A vertex takes part in photo i only where <N, V_i> >= min_facing:
   // grazing views smear a pixel's blur over much surface and mix in the

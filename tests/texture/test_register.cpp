@@ -203,9 +203,10 @@ TEST_CASE("registration recovers a turned and moved camera and leaves true ones 
                                   << " deg, luminance rms " << rep.rms_before << " -> " << rep.rms_after);
     // The projection is what texturing uses; the pose itself is pinned only
     // up to the trade of a turn against a sideways move at 0.9 m (measured
-    // 0.34 deg left with the vertices within 0.33 px), so it is not checked
+    // 0.35 deg left with the vertices within 0.59 px; the pose prior of
+    // 10 px holds back a little of a 10 px error), so it is not checked
     // tighter than "most of the turn undone".
-    CHECK(gap_after < 0.5);
+    CHECK(gap_after < 0.8);
     CHECK(angle < 0.45);
     CHECK(rep.rms_after < 0.5 * rep.rms_before);
     // The reference is held; the other true camera stays within a fraction of a pixel.
@@ -219,7 +220,8 @@ TEST_CASE("registration recovers a turned and moved camera and leaves true ones 
   }
 
   SECTION("pose and correction field") {
-    RegisterOptions opt;  // defaults: 6 x 6 field
+    RegisterOptions opt;
+    opt.field_nodes = 6;
     RegisterReport rep;
     REQUIRE(register_photos(s.mesh, s.normals, binding, photos, opt, rep).ok());
     CHECK(rep.reference == 0);  // the frontal photo is the main one of most vertices
@@ -243,6 +245,9 @@ TEST_CASE("registration lowers the texture's error against the truth when a came
   photos[2].camera = perturbed(s.photos[2].camera, 0.5, Vec3(-1, 0.4, 0.1), Vec3(-0.002, 0.003, 0));
   TextureOptions opt;
   opt.size = 512;
+  // Both perturbed cameras are ~10 px off: a prior wider than that (the
+  // default 10 px keeps 3-4 dB of the error here: 34.5 dB).
+  opt.registration.pose_prior_px = 30;
   TexturedHead truth_cams, off, fixed;
   REQUIRE(texture_head(s.mesh, s.photos, opt, truth_cams).ok());
   REQUIRE(texture_head(s.mesh, photos, opt, off).ok());
@@ -258,7 +263,7 @@ TEST_CASE("registration lowers the texture's error against the truth when a came
   const double p_true = texture_psnr(truth_cams, 512), p_off = texture_psnr(off, 512), p_fixed = texture_psnr(fixed, 512);
   WARN("texture vs field, PSNR dB: true cameras " << p_true << ", two cameras off " << p_off << ", registered "
                                                   << p_fixed);
-  CHECK(p_fixed > p_off + 10);
-  CHECK(p_fixed > p_true - 3);
+  CHECK(p_fixed > p_off + 15);
+  CHECK(p_fixed > p_true - 4);
 }
 
