@@ -351,19 +351,24 @@ Status register_photos(const TriMesh& mesh, const std::vector<Vec3>& normals, co
     if (w <= 1e-9) return -1.0;
     return (sum_all[k] - (has[j] ? weight(used[k], i) * own[j] : 0.0)) / w;
   };
-  // One photo's weighted photometric cost (and residual count) given C.
-  auto photo_cost = [&](const Level& level, int i, const PhotoRegistration& reg, long* count) {
-    double cost = 0;
-    long n = 0;
+  // Calls fn(weight, row) for each residual of photo i (with `reg`) against C_-i.
+  auto for_each_residual = [&](const Level& level, int i, const PhotoRegistration& reg, const auto& fn) {
     for (size_t k = 0; k < used.size(); ++k) {
       const int v = used[k];
       const double c = others(k, i);
       if (c < 0 || !part(v, i)) continue;
       Row row;
-      if (!residual_row(level.images[i], level.scale, reg, mesh.positions[v], c, row)) continue;
-      cost += weight(v, i) * row.r * row.r;
-      ++n;
+      if (residual_row(level.images[i], level.scale, reg, mesh.positions[v], c, row)) fn(weight(v, i), row);
     }
+  };
+  // One photo's weighted photometric cost (and residual count) given C.
+  auto photo_cost = [&](const Level& level, int i, const PhotoRegistration& reg, long* count) {
+    double cost = 0;
+    long n = 0;
+    for_each_residual(level, i, reg, [&](double w, const Row& row) {
+      cost += w * row.r * row.r;
+      ++n;
+    });
     if (count) *count = n;
     return cost;
   };
@@ -387,15 +392,10 @@ Status register_photos(const TriMesh& mesh, const std::vector<Vec3>& normals, co
     for (int i = 0; i < np; ++i) {
       long m = 0;
       double e = 0;
-      for (size_t k = 0; k < used.size(); ++k) {
-        const int v = used[k];
-        const double c = others(k, i);
-        if (c < 0 || !part(v, i)) continue;
-        Row row;
-        if (!residual_row(level.images[i], level.scale, report.photos[i], mesh.positions[v], c, row)) continue;
+      for_each_residual(level, i, report.photos[i], [&](double, const Row& row) {
         e += row.r * row.r;
         ++m;
-      }
+      });
       per_photo[i] = m ? std::sqrt(e / m) : 0.0;
       counts[i] = static_cast<int>(m);
       sum += e;
@@ -472,20 +472,14 @@ Status register_photos(const TriMesh& mesh, const std::vector<Vec3>& normals, co
         Eigen::VectorXd b = Eigen::VectorXd::Zero(nparam);
         double cost = 0;
         long n = 0;
-        for (size_t k = 0; k < used.size(); ++k) {
-          const int v = used[k];
-          const double c = others(k, i);
-          if (c < 0 || !part(v, i)) continue;
-          Row row;
-          if (!residual_row(level.images[i], level.scale, reg, mesh.positions[v], c, row)) continue;
-          const double w = weight(v, i);
+        for_each_residual(level, i, reg, [&](double w, const Row& row) {
           cost += w * row.r * row.r;
           ++n;
           for (int a = 0; a < row.n; ++a) {
             b(row.index[a]) += w * row.value[a] * row.r;
             for (int e = 0; e < row.n; ++e) H(row.index[a], row.index[e]) += w * row.value[a] * row.value[e];
           }
-        }
+        });
         if (n < nparam) continue;  // too little overlap to move this photo
         // The field's regulariser (Gauss-Newton of a quadratic: exact).
         const double s = static_cast<double>(n) / std::max(1, K * K);
