@@ -23,7 +23,8 @@ int usage_error(const std::string& message) {
 int run_texture_selftest_command(const Args& args) {
   if (!only_known_options(kName, args,
                           {"seed", "out", "size", "photos", "photo-size", "levels", "light-spread", "noise",
-                           "per-photo-focal", "diagnose", "supersample"}))
+                           "per-photo-focal", "diagnose", "supersample", "perturb-deg", "surface-error-mm",
+                           "register"}))
     return 2;
   const std::string out = args.get("out");
   if (out.empty()) return usage_error("--out DIR is required");
@@ -33,13 +34,16 @@ int run_texture_selftest_command(const Args& args) {
       !args.get_int("photos", 5, opt.photos, 1, 7) || !args.get_int("photo-size", 1200, photo_size, 96, 4096) ||
       !args.get_int("levels", 3, opt.subdivision_levels, 0, 4) || !args.get_int("supersample", 2, opt.supersample, 1, 4) ||
       !args.get_double("light-spread", 0.12, opt.light_spread, 0, 1) ||
-      !args.get_double("noise", 0.5, opt.landmark_noise_px, 0))
+      !args.get_double("noise", 0.5, opt.landmark_noise_px, 0) ||
+      !args.get_double("perturb-deg", 0, opt.perturb_deg, 0, 10) ||
+      !args.get_double("surface-error-mm", 0, opt.surface_error_mm, 0, 20))
     return 2;
   opt.seed = static_cast<std::uint32_t>(seed);
   opt.photo_width = opt.eval_width = photo_size;
   opt.photo_height = opt.eval_height = photo_size * 2 / 3;
   opt.shared_focal = !args.has("per-photo-focal");
   opt.diagnostics = args.has("diagnose");
+  opt.register_photos = args.has("register");
   // Fail before minutes of work when the results cannot be written.
   ::mkdir(out.c_str(), 0755);
   struct stat folder;
@@ -87,6 +91,21 @@ int run_texture_selftest_command(const Args& args) {
                 c.landmarks, c.rms_px, c.focal, c.focal_true, 100 * c.focal_error, c.rotation_error_deg,
                 c.centre_error_mm, c.vertex_error_px);
   }
+  if (opt.perturb_deg > 0 || opt.surface_error_mm > 0)
+    std::printf("  misregistered on purpose: photos 1.. turned %.2f deg, surface off by up to %.1f mm\n",
+                opt.perturb_deg, opt.surface_error_mm);
+  std::printf("  cameras used, mean vertex reprojection err vs the truth (px):");
+  for (double e : r.vertex_error_used_px) std::printf(" %.2f", e);
+  std::printf("\n");
+  if (r.texture_report.registered) {
+    const RegisterReport& g = r.texture_report.registration;
+    std::printf("  registration (reference photo %d, %d vertices): luminance rms %.4f -> %.4f\n", g.reference,
+                g.vertices, g.rms_before, g.rms_after);
+    for (size_t i = 0; i < g.photos.size(); ++i)
+      std::printf("    photo %zu: rms %.4f -> %.4f, turned %.3f deg, moved %.2f mm, field <= %.2f px, gain %.3f\n", i,
+                  g.photos[i].rms_before, g.photos[i].rms_after, g.photos[i].rotation_deg, g.photos[i].translation_mm,
+                  g.photos[i].field_max_px, g.photos[i].gain);
+  }
   std::printf("  timings (wall ms):");
   for (const auto& [name, ms] : r.timings_ms) std::printf(" %s %.0f;", name.c_str(), ms);
   std::printf("\nwrote %s/{truth,ours,nospline,error,skin,skin_nospline,skin_truth,face_mask,photo_*}.png and report.json\n",
@@ -96,7 +115,8 @@ int run_texture_selftest_command(const Args& args) {
 
 Registrar reg({"texture-selftest",
                "likeness texture-selftest --out DIR [--seed N] [--size 1024] [--photos 5] [--photo-size 1200] "
-               "[--levels 3] [--light-spread 0.12] [--noise 0.5] [--per-photo-focal] [--diagnose] [--supersample 2]",
+               "[--levels 3] [--light-spread 0.12] [--noise 0.5] [--per-photo-focal] [--diagnose] [--supersample 2] "
+               "[--perturb-deg D] [--surface-error-mm A] [--register]",
                "ground-truth texturing check (tarini2002 Sec. 3.2): synthetic photos under different lights, "
                "calibration, texture_head with/without spline, held-out view scored by PSNR/SSIM/seam",
                run_texture_selftest_command});

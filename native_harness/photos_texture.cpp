@@ -4,13 +4,17 @@
 #include "project/texture_job.h"
 #include "texture/texture.h"
 
+#include <chrono>
+#include <cstdio>
+#include <string>
+
 namespace lk::cli {
 
 Status write_photos_texture(const TriMesh& control, const std::vector<ButterflyLevel>& levels,
                             const std::vector<Vec3>& fine_positions, const std::vector<std::string>& image_paths,
                             const std::vector<std::string>& names, const std::vector<Camera>& cameras, int size,
                             const std::string& out_dir, std::vector<Vec2>* uvs, Image* skin,
-                            std::vector<Image>* images) {
+                            std::vector<Image>* images, bool register_photos) {
   if (levels.empty() || image_paths.size() != cameras.size() || names.size() != cameras.size())
     return Status::error(ErrorCode::InvalidInput, "texture: no level, or photos and cameras differ in number");
   TriMesh mesh;
@@ -27,8 +31,28 @@ Status write_photos_texture(const TriMesh& control, const std::vector<ButterflyL
   }
   TextureOptions options;
   options.size = size;
+  options.register_photos = register_photos;
   TexturedHead head;
-  s = name_photos(texture_head(mesh, photos, options, head), names);
+  std::chrono::steady_clock::time_point start;
+  double register_ms = 0;
+  s = name_photos(texture_head(mesh, photos, options, head,
+                               [&](const char* step, double f) {
+                                 if (std::string(step) != "register") return true;
+                                 if (f == 0) start = std::chrono::steady_clock::now();
+                                 else register_ms = std::chrono::duration<double, std::milli>(
+                                                        std::chrono::steady_clock::now() - start).count();
+                                 return true;
+                               }),
+                  names);
+  if (s && head.report.registered) {
+    const RegisterReport& g = head.report.registration;
+    std::printf("texture registration: %.0f ms (wall), reference %s, %d vertices, luminance rms %.4f -> %.4f\n",
+                register_ms, names[g.reference].c_str(), g.vertices, g.rms_before, g.rms_after);
+    for (size_t i = 0; i < g.photos.size(); ++i)
+      std::printf("  %s: rms %.4f -> %.4f, turned %.3f deg, moved %.1f mm, field <= %.2f px, gain %.3f\n",
+                  names[i].c_str(), g.photos[i].rms_before, g.photos[i].rms_after, g.photos[i].rotation_deg,
+                  g.photos[i].translation_mm, g.photos[i].field_max_px, g.photos[i].gain);
+  }
   if (s) s = write_file(out_dir + "/textured.obj", write_obj(head.mesh, "textured.mtl"));
   if (s) s = write_file(out_dir + "/textured.mtl", write_mtl("skin.png"));
   if (s) s = save_png_file(out_dir + "/skin.png", head.skin);

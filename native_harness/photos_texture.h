@@ -24,6 +24,6 @@ Status write_photos_texture(const TriMesh& control, const std::vector<ButterflyL
                             const std::vector<Vec3>& fine_positions, const std::vector<std::string>& image_paths,
                             const std::vector<std::string>& names, const std::vector<Camera>& cameras, int size,
                             const std::string& out_dir, std::vector<Vec2>* uvs = nullptr, Image* skin = nullptr,
-                            std::vector<Image>* images = nullptr);
+                            std::vector<Image>* images = nullptr, bool register_photos = false);
 
 }  // namespace lk::cli

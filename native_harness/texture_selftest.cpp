@@ -14,6 +14,7 @@
 #include "texture/color.h"
 #include "uv/stretch_param.h"
 
+#include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -456,15 +457,61 @@ Status run_texture_selftest(const SelftestOptions& opt, SelftestResult& result,
   }
   timings.emplace_back("calibrate", ms_since(t0));
 
+  // Misregistration on purpose (see SelftestOptions): turned cameras and a
+  // surface mm off the true one.
+  std::vector<Camera> texturing_cameras = cameras;
+  SplitMix64 perturb_rng(hash_mix(opt.seed, 0x9E7B0ull));
+  for (int i = 1; i < opt.photos && opt.perturb_deg > 0; ++i) {
+    Vec3 axis(perturb_rng.gaussian(), perturb_rng.gaussian(), perturb_rng.gaussian());
+    axis.normalize();
+    const Mat3 turn = Eigen::AngleAxisd(opt.perturb_deg * M_PI / 180.0, axis).toRotationMatrix();
+    Camera& c = texturing_cameras[i];
+    const Vec3 centre = c.center();
+    c.R = turn * c.R;
+    c.t = -c.R * centre;
+  }
+  TriMesh texturing_mesh = scene.fine;
+  if (opt.surface_error_mm > 0) {
+    // Three plane waves of 5-8 cm wavelength in seeded directions: smooth
+    // like a fitted head's error, amplitude-normalized to surface_error_mm.
+    Vec3 dir[3];
+    double phase[3], wavelength[3];
+    for (int k = 0; k < 3; ++k) {
+      dir[k] = Vec3(perturb_rng.gaussian(), perturb_rng.gaussian(), perturb_rng.gaussian()).normalized();
+      phase[k] = perturb_rng.uniform(0, 2 * M_PI);
+      wavelength[k] = perturb_rng.uniform(0.05, 0.08);
+    }
+    for (int v = 0; v < texturing_mesh.num_vertices(); ++v) {
+      double d = 0;
+      for (int k = 0; k < 3; ++k) d += std::sin(2 * M_PI * dir[k].dot(positions[v]) / wavelength[k] + phase[k]) / 3;
+      texturing_mesh.positions[v] += 1e-3 * opt.surface_error_mm * d * normals[v];
+    }
+  }
+  result.vertex_error_used_px.assign(opt.photos, 0.0);
+  for (int i = 0; i < opt.photos; ++i) {
+    double sum = 0;
+    long count = 0;
+    const Camera& t = true_cameras[i];
+    for (int v = 0; v < scene.fine.num_vertices(); v += 7) {
+      if (normals[v].dot((t.center() - positions[v]).normalized()) < 0.1) continue;
+      Vec2 a, b;
+      if (!t.project(positions[v], a) || !texturing_cameras[i].project(texturing_mesh.positions[v], b)) continue;
+      sum += (a - b).norm();
+      ++count;
+    }
+    result.vertex_error_used_px[i] = count ? sum / count : 0.0;
+  }
+
   // 4. Texturing, timed per step through the progress callback.
   std::vector<TexturePhoto> photos(opt.photos);
   for (int i = 0; i < opt.photos; ++i) {
     photos[i].image = result.photos[i];
-    photos[i].camera = cameras[i];
+    photos[i].camera = texturing_cameras[i];
   }
   TextureOptions texture_options;
   texture_options.size = opt.texture_size;
   texture_options.keep_unblended = true;
+  texture_options.register_photos = opt.register_photos;
   std::map<std::string, Clock::time_point> step_start;
   std::vector<std::pair<std::string, double>> steps;
   ProgressFn progress = [&](const char* step, double fraction) {
@@ -474,7 +521,7 @@ Status run_texture_selftest(const SelftestOptions& opt, SelftestResult& result,
   };
   t0 = Clock::now();
   TexturedHead textured;
-  s = texture_head(scene.fine, photos, texture_options, textured, progress);
+  s = texture_head(texturing_mesh, photos, texture_options, textured, progress);
   if (!s) return with_context(s, "texture_head");
   timings.emplace_back("texture (total)", ms_since(t0));
   timings.insert(timings.end(), steps.begin(), steps.end());
@@ -499,7 +546,10 @@ Status run_texture_selftest(const SelftestOptions& opt, SelftestResult& result,
   if (result.face_pixels == 0) return Status::error(ErrorCode::Internal, "the face is not in the held-out view");
   std::vector<int> labels;
   ChartRaster raster;
-  s = seam_labels(scene.fine, normals, bvh, cameras, texture_options, labels, raster);
+  std::vector<Camera> used_cameras = texturing_cameras;
+  if (textured.report.registered)
+    for (int i = 0; i < opt.photos; ++i) used_cameras[i] = textured.report.registration.photos[i].camera;
+  s = seam_labels(scene.fine, normals, bvh, used_cameras, texture_options, labels, raster);
   if (!s) return with_context(s, "seam labels");
   scene.truth_texture = truth_texture(scene.fine, scene.fine_truth.colors, raster);
   result.truth_skin = scene.truth_texture;
@@ -555,7 +605,10 @@ std::string selftest_report_json(const SelftestOptions& opt, const SelftestResul
                   {"supersample", opt.supersample},
                   {"landmark_noise_px", opt.landmark_noise_px},
                   {"light_spread", opt.light_spread},
-                  {"shared_focal", opt.shared_focal}};
+                  {"shared_focal", opt.shared_focal},
+                  {"perturb_deg", opt.perturb_deg},
+                  {"surface_error_mm", opt.surface_error_mm},
+                  {"register_photos", opt.register_photos}};
   j["mesh"] = {{"control_triangles", r.control_triangles}, {"vertices", r.vertices}, {"triangles", r.triangles}};
   j["evaluation"] = "held-out view (yaw 25, pitch 6 deg), unlit albedo renders, face-region pixels; "
                     "truth albedo = photo 0's neutral light";
@@ -604,6 +657,17 @@ std::string selftest_report_json(const SelftestOptions& opt, const SelftestResul
                   {"texels_case", {t.texels_case[0], t.texels_case[1], t.texels_case[2]}},
                   {"chart_texels", t.chart_texels},
                   {"spline_levels", t.spline_levels}};
+  j["vertex_error_used_px"] = r.vertex_error_used_px;
+  if (t.registered) {
+    json regs = json::array();
+    for (const PhotoRegistration& p : t.registration.photos)
+      regs.push_back({{"vertices", p.vertices}, {"rms_before", p.rms_before}, {"rms_after", p.rms_after},
+                      {"gain", p.gain}, {"bias", p.bias}, {"rotation_deg", p.rotation_deg},
+                      {"translation_mm", p.translation_mm}, {"field_max_px", p.field_max_px}});
+    j["registration"] = {{"reference", t.registration.reference}, {"vertices", t.registration.vertices},
+                         {"rms_before", t.registration.rms_before}, {"rms_after", t.registration.rms_after},
+                         {"photos", regs}};
+  }
   json timings = json::object();
   for (const auto& [name, ms] : r.timings_ms) timings[name] = ms;
   j["timings_ms"] = timings;

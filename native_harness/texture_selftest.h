@@ -61,6 +61,14 @@ struct SelftestOptions {
   double light_spread = 0.12;        // photo i > 0: intensity 1 +- (0.6..1) spread, tint +- spread/3 per channel
   bool shared_focal = true;          // calibrate_cameras_shared (one lens) vs one calibrate_camera per photo
   bool diagnostics = false;          // also run neutral light (calibrated and true cameras)
+  // Misregistration as the no-click photos path has it: every photo but
+  // photo 0 turned by perturb_deg about a seeded axis through its calibrated
+  // centre, and the surface given to texture_head displaced along its
+  // normals by a smooth seeded field of amplitude surface_error_mm (the
+  // truth is still scored on the true surface, same chart).
+  double perturb_deg = 0;
+  double surface_error_mm = 0;
+  bool register_photos = false;      // texture_head's photometric re-registration (texture/register.h)
 };
 
 // What calibration recovered for one photo, against the true camera.
@@ -98,6 +106,7 @@ struct SelftestResult {
   SelftestScores neutral_light, neutral_light_nospline;
   SelftestScores neutral_light_true_cameras, neutral_light_true_cameras_nospline;
   TextureReport texture_report;
+  std::vector<double> vertex_error_used_px;    // #P mean |project - project_true| of the cameras texture_head got
   std::vector<std::pair<std::string, double>> timings_ms;  // stage -> wall ms, in order
   // Images for people.
   std::vector<Image> photos;

@@ -163,12 +163,16 @@ Status texture_head(const TriMesh& mesh, const std::vector<TexturePhoto>& photos
   VertexBinding binding;
   s = bind_vertices(mesh, normals, bvh, cameras, options.binding, binding);
   if (!s) return s;
-  rep.photos.assign(np, TexturePhotoReport());
-  for (int v = 0; v < mesh.num_vertices(); ++v) {
-    if (!binding.bound(v)) ++rep.vertices_unbound;
-    else ++rep.photos[binding.main_photo[v]].vertices_main;
-    for (int i = 0; i < np; ++i) rep.photos[i].vertices_valid += binding.is_valid(v, i);
-  }
+  auto count_bound = [&] {
+    rep.vertices_unbound = 0;
+    rep.photos.assign(np, TexturePhotoReport());
+    for (int v = 0; v < mesh.num_vertices(); ++v) {
+      if (!binding.bound(v)) ++rep.vertices_unbound;
+      else ++rep.photos[binding.main_photo[v]].vertices_main;
+      for (int i = 0; i < np; ++i) rep.photos[i].vertices_valid += binding.is_valid(v, i);
+    }
+  };
+  count_bound();
   for (int i = 0; i < np; ++i)
     if (rep.photos[i].vertices_valid == 0)
       return Status::error(ErrorCode::NotAHead,
@@ -176,11 +180,35 @@ Status texture_head(const TriMesh& mesh, const std::vector<TexturePhoto>& photos
                                " sees no vertex of the head (wrong calibration, points or photo?)");
   if (!report(progress, "bind", 1)) return cancelled("bind");
 
+  // 2b. Re-registration: photos whose cameras and surface disagree by a few
+  // pixels would put features twice into the blend.
+  std::vector<TexturePhoto> registered;
+  const std::vector<TexturePhoto>* used_photos = &photos;
+  if (options.register_photos && np >= 2) {
+    if (!report(progress, "register", 0)) return cancelled("register");
+    s = register_photos(mesh, normals, binding, photos, options.registration, rep.registration);
+    if (s) {
+      registered = photos;
+      for (int i = 0; i < np; ++i) {
+        apply_registration(rep.registration.photos[i], registered[i]);
+        cameras[i] = registered[i].camera;
+      }
+      used_photos = &registered;
+      rep.registered = true;
+      s = bind_vertices(mesh, normals, bvh, cameras, options.binding, binding);
+      if (!s) return s;
+      count_bound();
+    } else if (s.code != ErrorCode::Empty) {
+      return with_context(s, "registration");
+    }
+    if (!report(progress, "register", 1)) return cancelled("register");
+  }
+
   // 3-4. Vertex colours, hole filling, resampling of the chart.
   if (!report(progress, "fill holes", 0)) return cancelled("fill holes");
   std::vector<Vec3> vertex_colors;
   std::vector<char> colored;
-  bound_vertex_colors(mesh, normals, binding, photos, vertex_colors, colored);
+  bound_vertex_colors(mesh, normals, binding, *used_photos, vertex_colors, colored);
   MeshTopology topology;
   s = build_topology(mesh, topology);
   if (!s) return with_context(s, "head mesh");
@@ -195,7 +223,7 @@ Status texture_head(const TriMesh& mesh, const std::vector<TexturePhoto>& photos
   rep.chart_texels = raster.covered;
   ImageF blended;
   ResampleStats stats;
-  s = resample_texture(mesh, normals, uv, binding, photos, raster, vertex_colors, blended, stats, &out.region);
+  s = resample_texture(mesh, normals, uv, binding, *used_photos, raster, vertex_colors, blended, stats, &out.region);
   if (!s) return s;
   for (int k = 0; k < 3; ++k) {
     rep.triangles_case[k] = stats.triangles_case[k];
@@ -253,7 +281,7 @@ Status texture_head(const TriMesh& mesh, const std::vector<TexturePhoto>& photos
       // own colours elsewhere: an image without seams of its own, so only
       // the masks decide where its light ends (Burt & Adelson's premise).
       if (photo_image.empty()) photo_image = ImageF::make(size, size, 3, 0.f);
-      rep.photos[i].texels_seen = resample_single_photo(mesh, uv, binding, photos, i, raster, photo_image, &seen);
+      rep.photos[i].texels_seen = resample_single_photo(mesh, uv, binding, *used_photos, i, raster, photo_image, &seen);
       if (in_mask == 0) continue;  // its shrunk region is empty: nothing of its own to add
       push_pull_fill(photo_image, seen);
       s = blender.add(photo_image, mask);
@@ -265,7 +293,7 @@ Status texture_head(const TriMesh& mesh, const std::vector<TexturePhoto>& photos
     // past the chart so the pyramids see no black border. Made last, so at
     // most one full-size image besides the blender's pyramids is alive.
     ImageF complement_image;
-    s = resample_feathered(mesh, uv, binding, photos, raster, vertex_colors, complement_image);
+    s = resample_feathered(mesh, uv, binding, *used_photos, raster, vertex_colors, complement_image);
     if (!s) return s;
     push_pull_fill(complement_image, chart);
     s = blender.add(complement_image, complement);

@@ -7,6 +7,8 @@
 //      correspondences (core/calib), shared by the CLI and the web app;
 //   1. parameterize_stretch (core/uv, Sec. 3.1) when the mesh has no uvs;
 //   2. bind_vertices (binding.h): valid photos and main photo per vertex;
+//      optionally register_photos (register.h) then binds again with the
+//      refined cameras and the photos warped by their correction fields;
 //   3. rasterize_chart + resample_texture (chart_raster.h, resample.h):
 //      the paper's three triangle cases, <N,V>-weighted, in linear light;
 //   4. fill_vertex_colors (hole_fill.h): 80/60/40/20 % one-ring passes,
@@ -22,7 +24,8 @@
 // texture_head runs them all. There are no clocks in the core: progress is
 // reported with the step names below at fraction 0 when a step starts and 1
 // when it ends, so a caller can time each step from the callback:
-//   "parameterize", "bind", "resample", "fill holes", "spline", "dilate".
+//   "parameterize", "bind", "register" (only with register_photos),
+//   "resample", "fill holes", "spline", "dilate".
 //
 // Shapes: mesh positions #V by 3, triangles #F by 3, uvs #V by 2 (optional,
 // per vertex); photos #P (1..kMaxTexturePhotos) RGB/RGBA/gray 8-bit sRGB;
@@ -36,6 +39,7 @@
 #include "mesh/tri_mesh.h"
 #include "texture/binding.h"
 #include "texture/hole_fill.h"
+#include "texture/register.h"
 #include "texture/resample.h"
 #include "uv/stretch_param.h"
 
@@ -75,6 +79,11 @@ struct TextureOptions {
   double conservative_texels = 0.75;
   UvOptions uv;                         // used only when the mesh has no uvs
   bool keep_unblended = false;          // also return the texture before the spline
+  // Photometric re-registration of the photos on the surface (register.h)
+  // between binding and resampling: refined poses, gains and a smooth 2-D
+  // correction per photo, then the binding is made again with them.
+  bool register_photos = false;
+  RegisterOptions registration;
 };
 
 struct TexturePhotoReport {
@@ -96,6 +105,8 @@ struct TextureReport {
   int spline_levels = 0;               // 0 when the spline was off
   bool parameterized = false;          // uvs computed here (else taken from the mesh)
   UvStats uv;                          // stretch of the chart used (measured either way)
+  bool registered = false;             // register_photos ran and its corrections were used
+  RegisterReport registration;         // its figures (photos empty when it did not run)
 };
 
 struct TexturedHead {
