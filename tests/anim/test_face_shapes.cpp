@@ -2,13 +2,20 @@
 // name, viseme and expression moves the face the way its name says, on the
 // side it names, by a measured amount; nothing turns over and neither the
 // lips nor the lids cross, on the generic head and synthetic people 1-5.
+// Then the crossings the shapes alone and combined make on the control mesh
+// and on level 2 with the teeth, on those heads and the real scans' fits
+// (bounded by today's worst where issue 38's goal is not met yet).
 #include "anim/bake.h"
+#include "anim/clips.h"
 #include "anim/face_pose.h"
 #include "anim/face_rig.h"
 #include "anim/face_shapes.h"
 #include "components/components.h"
 #include "io/io.h"
 #include "pipeline/fit_head.h"
+#include "pipeline/head_creases.h"
+#include "project/parts.h"
+#include "raycast/self_intersection.h"
 #include "test_data.h"
 #include "mesh/geometry.h"
 #include "test_scan.h"
@@ -16,8 +23,10 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstdlib>
 #include <functional>
 #include <map>
+#include <random>
 #include <set>
 
 using namespace lk;
@@ -402,8 +411,8 @@ void check_no_crossing(const FaceRig& rig, const std::vector<Vec3>& P, const std
 
 // The lips stay in front of the teeth: every lip-line column in front of
 // the teeth's frontmost point (the upper lip against the teeth at rest, the
-// lower lip against the teeth moved by the jaw).
-void check_lips_before_teeth(const FaceRig& rig, const FaceControls& c, const std::vector<Vec3>& P, const std::string& what) {
+// lower lip against the teeth moved by the jaw). Returns the columns behind.
+int lips_behind_teeth(const FaceRig& rig, const FaceControls& c, const std::vector<Vec3>& P, const std::string& what) {
   ComponentPlacement place;
   GenericHead fitted{TriMesh{}, test::generic_head().annotations};
   fitted.mesh.positions = rig.rest;
@@ -415,9 +424,262 @@ void check_lips_before_teeth(const FaceRig& rig, const FaceControls& c, const st
     front_rest = std::max(front_rest, teeth.positions[i].z());
     front_moved = std::max(front_moved, moved[i].z());
   }
-  INFO(what << ": teeth front " << front_rest << " / " << front_moved);
-  for (int v : rig.landmarks.upper_lip_line) CHECK(P[v].z() > front_rest);
-  for (int v : rig.landmarks.lower_lip_line) CHECK(P[v].z() > front_moved);
+  int behind = 0;
+  for (int v : rig.landmarks.upper_lip_line) behind += P[v].z() > front_rest ? 0 : 1;
+  for (int v : rig.landmarks.lower_lip_line) behind += P[v].z() > front_moved ? 0 : 1;
+  if (behind) UNSCOPED_INFO(what << ": " << behind << " lip columns behind the teeth's front " << front_rest << " / " << front_moved);
+  return behind;
+}
+
+void check_lips_before_teeth(const FaceRig& rig, const FaceControls& c, const std::vector<Vec3>& P, const std::string& what) {
+  CHECK(lips_behind_teeth(rig, c, P, what) == 0);
+}
+
+// The crossings a pose makes on a surface with the teeth: triangle pairs
+// that intersect posed but not at rest (raycast/self_intersection.h, the
+// search the fit's guard uses), by where they are, and the face's triangles
+// turned over. The mouth bag (the annotations' constrained vertices: inner
+// lips and bag) already passes through the placed teeth at rest (400 pairs
+// on the generic head's control mesh, 604 at level 2), so its pairs with the
+// teeth only slide as the lips move; they are counted apart. The lids are
+// the vertices that turn whole with them (weight 1: rims and socket rings).
+struct Crossings {
+  int lids = 0;         // face pairs with a lid triangle
+  int bag = 0;          // face pairs of mouth-bag triangles only
+  int face = 0;         // the face's other pairs (lips' outside, skin)
+  int teeth = 0;        // the teeth against the face outside the mouth bag
+  int bag_teeth = 0;    // the teeth against the mouth bag (not bounded)
+  int turned = 0;       // the face's triangles turned over
+  int behind = 0;       // lip-line columns behind the teeth's front (control mesh, lips_behind_teeth)
+};
+
+struct SurfaceWithTeeth {
+  std::vector<Tri> triangles;  // the face's, then the upper teeth's, then the lower teeth's
+  std::vector<Vec3> rest;
+  std::vector<char> bag, lid;  // per face triangle
+  int face_triangles = 0, face_vertices = 0, lower_first = 0;  // lower_first: the lower teeth's first vertex
+  std::vector<Vec3> lower_rest;
+  // bag_v, lid_v: per face vertex.
+  void build(const std::vector<Vec3>& face_rest, const std::vector<Tri>& face_tris, const std::vector<char>& bag_v,
+             const std::vector<char>& lid_v, const HeadParts& parts) {
+    triangles = face_tris;
+    rest = face_rest;
+    face_triangles = static_cast<int>(face_tris.size());
+    face_vertices = static_cast<int>(face_rest.size());
+    for (const Tri& t : face_tris) {
+      bag.push_back(bag_v[t[0]] && bag_v[t[1]] && bag_v[t[2]]);
+      lid.push_back(lid_v[t[0]] || lid_v[t[1]] || lid_v[t[2]]);
+    }
+    for (const TriMesh* part : {&parts.upper_teeth, &parts.lower_teeth}) {
+      const int base = static_cast<int>(rest.size());
+      if (part == &parts.lower_teeth) lower_first = base;
+      for (const Tri& t : part->triangles) triangles.push_back(Tri{t[0] + base, t[1] + base, t[2] + base});
+      rest.insert(rest.end(), part->positions.begin(), part->positions.end());
+    }
+    lower_rest = parts.lower_teeth.positions;
+  }
+  // face_posed: the face's posed positions (#face_vertices).
+  Crossings count(const FaceRig& rig, const FaceControls& c, const std::vector<Vec3>& face_posed) const {
+    std::vector<Vec3> P = face_posed;
+    P.insert(P.end(), rest.begin() + face_vertices, rest.begin() + lower_first);
+    const std::vector<Vec3> lower = pose_lower_teeth(rig, lower_rest, c);
+    P.insert(P.end(), lower.begin(), lower.end());
+    Crossings out;
+    const std::vector<Tri> face(triangles.begin(), triangles.begin() + face_triangles);
+    out.turned = count_turned_triangles(face, face_posed, std::vector<Vec3>(rest.begin(), rest.begin() + face_vertices));
+    TriMesh m;
+    m.positions = P;
+    m.triangles = triangles;
+    MeshBvh bvh;
+    REQUIRE(build_bvh(m, bvh).ok());
+    std::vector<char> changed;
+    std::vector<int> moved;
+    moved_triangles(triangles, rest, P, changed, moved);
+    std::vector<std::array<int, 2>> pairs;
+    REQUIRE(find_new_self_intersections(bvh, rest, pairs, &moved).ok());
+    for (const auto& p : pairs) {
+      const bool a = p[0] < face_triangles, b = p[1] < face_triangles;
+      if (a && b) {
+        if (lid[p[0]] || lid[p[1]]) ++out.lids;
+        else if (bag[p[0]] && bag[p[1]]) ++out.bag;
+        else ++out.face;
+      } else if (a || b) {
+        if (bag[a ? p[0] : p[1]]) ++out.bag_teeth;
+        else ++out.teeth;
+      }  // teeth against teeth: the arches' own (the lower moves rigidly)
+    }
+    return out;
+  }
+};
+
+// A head's rig checks beyond one shape alone: the control mesh and the
+// multiresolution head's level `level`, each with the teeth.
+struct HeadScene {
+  const FaceRig& rig;
+  const TriMesh& control;  // at rest
+  MultiresMesh live;       // levels up to `level` follow the poses
+  int level = 2;
+  SurfaceWithTeeth on_control, on_level;
+  HeadScene(const FaceRig& r, const TriMesh& ctrl, const MultiresMesh& mr, int lvl) : rig(r), control(ctrl), live(mr), level(lvl) {
+    HeadParts parts;
+    REQUIRE(place_head_parts(control, test::generic_head(), parts).ok());
+    std::vector<char> bag(rig.rest.size(), 0), lid(rig.rest.size(), 0);
+    for (int v : test::generic_head().annotations.constrained_vertices) bag[static_cast<std::size_t>(v)] = 1;
+    for (const EyeLids& L : rig.lids)
+      for (std::size_t i = 0; i < L.index.size(); ++i)
+        if (L.weight[i] >= 1.0) lid[static_cast<std::size_t>(L.index[i])] = 1;
+    on_control.build(rig.rest, control.triangles, bag, lid, parts);
+    REQUIRE(ensure_current(live).ok());
+    const auto bag_l = propagate_vertex_mask(live, bag), lid_l = propagate_vertex_mask(live, lid);
+    const std::size_t l = static_cast<std::size_t>(level);
+    on_level.build(live.state.displaced[l], live.triangles(level), bag_l[l], lid_l[l], parts);
+  }
+  Crossings at_control(const FaceControls& c, const std::vector<Vec3>& P) const { return on_control.count(rig, c, P); }
+  Crossings at_level(const FaceControls& c) {
+    REQUIRE(pose_multires(live, rig, c, level).ok());
+    return on_level.count(rig, c, live.state.displaced[static_cast<std::size_t>(level)]);
+  }
+};
+
+// The combinations avatar tools make (issue 38): each a weight vector over
+// shape names, with its label.
+std::vector<std::pair<std::string, std::map<std::string, double>>> combinations() {
+  std::vector<std::pair<std::string, std::map<std::string, double>>> out;
+  for (const std::string& v : viseme_names())
+    out.push_back({v + " + eyeBlink", {{v, 1.0}, {"eyeBlinkLeft", 1.0}, {"eyeBlinkRight", 1.0}}});
+  out.push_back({"jawOpen + mouthSmile", {{"jawOpen", 1.0}, {"mouthSmileLeft", 1.0}, {"mouthSmileRight", 1.0}}});
+  out.push_back({"jawOpen + mouthSmileLeft", {{"jawOpen", 1.0}, {"mouthSmileLeft", 1.0}}});
+  out.push_back({"mouthPucker + jawOpen", {{"mouthPucker", 1.0}, {"jawOpen", 1.0}}});
+  for (const char* s : {"Left", "Right"})
+    out.push_back({std::string("eyeBlink + browDown") + s,
+                   {{std::string("eyeBlink") + s, 1.0}, {std::string("browDown") + s, 1.0}}});
+  out.push_back({"eyeBlink + browDown both", {{"eyeBlinkLeft", 1.0}, {"eyeBlinkRight", 1.0}, {"browDownLeft", 1.0}, {"browDownRight", 1.0}}});
+  out.push_back({"cheekPuff + mouthClose", {{"cheekPuff", 1.0}, {"mouthClose", 1.0}}});
+  // The Talk clip every 40 ms.
+  const WeightClip& talk = talk_clip();
+  for (double t = 0; t <= talk.duration() + 1e-9; t += 0.04) {
+    const std::vector<double> w = clip_weights(talk, t);
+    std::map<std::string, double> m;
+    for (std::size_t i = 0; i < w.size(); ++i) m[talk.shapes[i]] = w[i];
+    out.push_back({"Talk at " + std::to_string(t) + " s", m});
+  }
+  // Seeded random weight vectors over the 52 ARKit names: 30 sparse (each
+  // name on with probability 0.25), 10 dense (every name), weights in [0, 1].
+  std::mt19937 rng(38);
+  const auto uniform = [&] { return double(rng() >> 8) / double(1u << 24); };
+  for (int k = 0; k < 40; ++k) {
+    std::map<std::string, double> m;
+    for (const std::string& n : arkit_names())
+      if (k >= 30 || uniform() < 0.25) m[n] = uniform();
+    out.push_back({"random ARKit weights #" + std::to_string(k), m});
+  }
+  return out;
+}
+
+// The most new pairs (and turned triangles) one case may make, per place:
+// 0 where the rig meets issue 38's goal; where it does not yet, the worst
+// measured (docs/design/muscles.md, "Crossings on the levels"), so that a
+// change making any of them worse fails. The mouth bag's pairs with the
+// teeth are not bounded (they slide through the teeth at rest).
+struct Limits {
+  Crossings control, level;
+};
+
+Crossings at_most(int lids, int face, int bag, int teeth, int turned, int behind = 0) {
+  Crossings c;
+  c.lids = lids, c.face = face, c.bag = bag, c.teeth = teeth, c.turned = turned, c.behind = behind;
+  return c;
+}
+
+void merge_max(Crossings& a, const Crossings& b) {
+  a.lids = std::max(a.lids, b.lids), a.bag = std::max(a.bag, b.bag), a.face = std::max(a.face, b.face);
+  a.teeth = std::max(a.teeth, b.teeth), a.bag_teeth = std::max(a.bag_teeth, b.bag_teeth), a.turned = std::max(a.turned, b.turned);
+  a.behind = std::max(a.behind, b.behind);
+}
+
+std::string crossings_text(const Crossings& c) {
+  return "lids " + std::to_string(c.lids) + ", face " + std::to_string(c.face) + ", mouth bag " + std::to_string(c.bag) +
+         ", teeth " + std::to_string(c.teeth) + ", bag-teeth " + std::to_string(c.bag_teeth) + ", turned " +
+         std::to_string(c.turned) + ", lip columns behind the teeth " + std::to_string(c.behind);
+}
+
+void check_within(const Crossings& c, const Crossings& limit) {
+  CHECK(c.lids <= limit.lids);
+  CHECK(c.face <= limit.face);
+  CHECK(c.bag <= limit.bag);
+  CHECK(c.teeth <= limit.teeth);
+  CHECK(c.turned <= limit.turned);
+  CHECK(c.behind <= limit.behind);
+}
+
+// Per head and kind (shapes alone, combinations): the sums and the worst
+// case per place; printed with LK_RIG_REPORT=1 (the design note's figures).
+struct Tally {
+  std::string head;
+  int cases = 0;
+  Crossings control, level, control_worst, level_worst;
+  void add(const Crossings& c, const Crossings& l) {
+    ++cases;
+    auto sum = [](Crossings& a, const Crossings& b) {
+      a.lids += b.lids, a.bag += b.bag, a.face += b.face, a.teeth += b.teeth, a.bag_teeth += b.bag_teeth, a.turned += b.turned,
+          a.behind += b.behind;
+    };
+    sum(control, c);
+    sum(level, l);
+    merge_max(control_worst, c);
+    merge_max(level_worst, l);
+  }
+  void report(const char* kind) const {
+    if (std::getenv("LK_RIG_REPORT") == nullptr) return;
+    WARN(head << ", " << kind << " (" << cases << " cases): control mesh sums " << crossings_text(control) << "; worst case "
+              << crossings_text(control_worst) << " | level sums " << crossings_text(level) << "; worst case "
+              << crossings_text(level_worst));
+  }
+};
+
+// Every shape alone at full weight, then every combination: no lip or lid
+// column crossing on the control mesh; its lip columns behind the teeth's
+// front, new pairs and turned triangles, and those of the level, within
+// `alone` (shapes alone) or `combined`.
+void check_head_crossings(HeadScene& scene, const std::string& head, const Limits& alone, const Limits& combined) {
+  Tally shapes{head}, combos{head};
+  auto one = [&](const std::string& what, const FaceControls& c, Tally& tally, const Limits& limits) {
+    INFO(what);
+    const std::vector<Vec3> P = pose_face(scene.rig, c);
+    Crossings ctrl = scene.at_control(c, P);
+    ctrl.behind = lips_behind_teeth(scene.rig, c, P, what);
+    const Crossings lvl = scene.at_level(c);
+    INFO("new on the control mesh: " << crossings_text(ctrl) << "; on level " << scene.level << ": " << crossings_text(lvl));
+    check_within(ctrl, limits.control);
+    check_within(lvl, limits.level);
+    check_no_crossing(scene.rig, P, what);
+    tally.add(ctrl, lvl);
+  };
+  for (const std::string& name : face_shape_names()) one(head + ", " + name, shape(name), shapes, alone);
+  for (const auto& [label, weights] : combinations()) {
+    FaceControls c;
+    REQUIRE(face_controls_from_weights(weights, c).ok());
+    one(head + ", " + label, c, combos, combined);
+  }
+  REQUIRE(pose_multires(scene.live, scene.rig, FaceControls{}, scene.level).ok());
+  shapes.report("the 77 shapes alone");
+  combos.report("combinations");
+}
+
+// A real scan of ../shared/data fitted with options; false (with a
+// warning) when the file is absent.
+bool fit_real_scan(const char* rel, const FitHeadOptions& options, FitHeadResult& fit) {
+  const std::string path = test::shared_data_dir() + "/" + rel;
+  if (!test::exists(path)) {
+    WARN("skipped: ../shared/data/" << rel << " is absent");
+    return false;
+  }
+  PointCloud scan;
+  REQUIRE(load_point_cloud_file(path, scan).ok());
+  const Status st = fit_head(scan, test::generic_head(), options, fit);
+  INFO(rel << ": " << st.message);
+  REQUIRE(st.ok());
+  return true;
 }
 
 }  // namespace
@@ -493,6 +755,30 @@ TEST_CASE("face rig: no triangle turns over, no lip or lid crosses, the lips sta
   }
 }
 
+// The worst case per place (lids, face, mouth bag, teeth, turned, lip
+// columns behind the teeth), measured 30 Nov 2026 with LK_RIG_REPORT=1; 0
+// where issue 38's goal is met. Synthetic heads: exactly today's worst
+// over the generic head and people 1-5.
+const Limits kSyntheticAlone{at_most(0, 14, 4, 0, 0), at_most(328, 90, 34, 0, 14)};
+const Limits kSyntheticCombined{at_most(0, 30, 4, 0, 2), at_most(364, 130, 42, 0, 61)};
+// The five real scans' fits: today's worst over the five plus a quarter
+// (another branch's change to the fit moves these figures a little).
+// (today's worst: alone, control 29 34 2 38 4 0 and level 328 355 35 48 43;
+// combined, control 31 36 4 36 3 1 and level 331 588 34 48 93).
+const Limits kRealAlone{at_most(37, 43, 3, 48, 5, 0), at_most(410, 444, 44, 60, 54)};
+const Limits kRealCombined{at_most(39, 45, 5, 45, 4, 2), at_most(414, 735, 43, 60, 117)};
+
+TEST_CASE("face rig: crossings on the control mesh and level 2 with the teeth, every shape and the combinations avatar tools make, generic head and synthetic people 1-5: no lip or lid column crossing, the rest within today's worst") {
+  for (std::uint32_t seed = 0; seed <= 5; ++seed) {
+    const GenericHead head = seed == 0 ? test::generic_head() : test::make_test_head(seed);
+    const FaceRig rig = rig_of(head);
+    MultiresMesh mr;
+    REQUIRE(build_multires(head.mesh, head_creases(head.mesh, head.annotations), 2, mr).ok());
+    HeadScene scene(rig, head.mesh, mr, 2);
+    check_head_crossings(scene, seed == 0 ? "generic head" : "seed " + std::to_string(seed), kSyntheticAlone, kSyntheticCombined);
+  }
+}
+
 TEST_CASE("face rig: bad input gets a message") {
   FaceRig rig;
   TriMesh small;
@@ -508,23 +794,16 @@ TEST_CASE("face rig: bad input gets a message") {
 TEST_CASE("face rig: every shape on real scans' fits (James, Fran, Demosthenes, Plato): meaning, no fold, no crossing") {
   LK_REQUIRE_SHARED("head_scans");
   const auto table = checks();
-  // Gutenberg's scan is refused by the fit (test_real_scans.cpp).
+  // Gutenberg fits (since the face's pitch is chosen) but misses checks
+  // here (docs/design/muscles.md, "Crossings on the levels, combinations");
+  // his rig's crossings are measured in the next test.
   for (const char* rel : {"head_scans/james_menpo3d/james.obj", "head_scans/fran_cyberware/fran_cut.vtk",
                           "head_scans/demosthenes_photoscan/demosthenes-low-res.obj",
                           "head_scans/threedscans_plato/plato.obj"}) {
-    const std::string path = test::shared_data_dir() + "/" + rel;
-    if (!test::exists(path)) {
-      WARN("skipped: ../shared/data/" << rel << " is absent");
-      continue;
-    }
-    PointCloud scan;
-    REQUIRE(load_point_cloud_file(path, scan).ok());
     FitHeadOptions options;
     options.levels = 1;  // the rig reads the control mesh only
     FitHeadResult fit;
-    const Status st = fit_head(scan, test::generic_head(), options, fit);
-    INFO(rel << ": " << st.message);
-    REQUIRE(st.ok());
+    if (!fit_real_scan(rel, options, fit)) continue;
     GenericHead head{fit.control, test::generic_head().annotations};
     const FaceRig rig = rig_of(head);
     for (const std::string& name : face_shape_names()) {
@@ -536,5 +815,21 @@ TEST_CASE("face rig: every shape on real scans' fits (James, Fran, Demosthenes, 
       check_lips_before_teeth(rig, m.controls, m.P, what);
       table.at(name)(m);
     }
+  }
+}
+
+TEST_CASE("face rig: the page's fits of the five real scans, control mesh and level 2, every shape and the combinations: no lip or lid column crossing, new pairs within today's worst") {
+  LK_REQUIRE_SHARED("head_scans");
+  for (const char* rel : {"head_scans/james_menpo3d/james.obj", "head_scans/fran_cyberware/fran_cut.vtk",
+                          "head_scans/demosthenes_photoscan/demosthenes-low-res.obj",
+                          "head_scans/threedscans_gutenberg/gutenberg.obj", "head_scans/threedscans_plato/plato.obj"}) {
+    FitHeadOptions options;  // the page's fit (3 levels); the GLB exports level 2
+    options.measure_stages = false;
+    FitHeadResult fit;
+    if (!fit_real_scan(rel, options, fit)) continue;
+    GenericHead head{fit.control, test::generic_head().annotations};
+    const FaceRig rig = rig_of(head);
+    HeadScene scene(rig, head.mesh, fit.multires, 2);
+    check_head_crossings(scene, rel, kRealAlone, kRealCombined);
   }
 }
