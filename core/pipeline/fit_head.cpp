@@ -1194,6 +1194,7 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
     close_crease_ends(creases);
   }
   stage_done("global_fitting", out.control, pts);
+  const std::vector<Vec3> global_control = out.control.positions;
 
   // 4. Displaced Butterfly levels.
   if (observer.started) observer.started("subdivision");
@@ -1329,6 +1330,18 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
     }
     guard_searched = true;
   }
+  // The ear hold and the guard may move control vertices after the global
+  // fit's figures were taken; those figures describe the control mesh the fit
+  // returns, so they are measured again on it and handed to the observer
+  // again (FitStageObserver::measured).
+  if (options.measure_stages && out.control.positions != global_control)
+    for (FitStageReport& rep : out.stages)
+      if (rep.name == "global_fitting") {
+        ClosestPointTree closest;
+        closest.build(out.control);
+        rep.distance = point_to_surface_stats(thin(pts, options.stats_max_points), closest, diag);
+        if (observer.measured) observer.measured(rep);
+      }
   for (int l = 1; l <= options.levels; ++l) out.level_meshes.push_back(level_mesh(out.multires, l));
   const TriMesh finest = level_mesh(out.multires, options.levels);
   // The fold limiter (or the guard) hands back its tree (the relief's),

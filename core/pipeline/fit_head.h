@@ -315,7 +315,10 @@ struct FitStageReport {
 
 // Called by fit_head at stage boundaries. finished() comes right after the
 // stage's work and BEFORE its stats are measured, so a timer stopped there
-// times the work only; measured() follows with the stats.
+// times the work only; measured() follows with the stats. measured() comes
+// once more for "global_fitting" when the ear hold or the crossing guard
+// moved control vertices after it: the later figures are the returned
+// control mesh's, and replace the earlier.
 struct FitStageObserver {
   std::function<void(const std::string& stage)> started;
   std::function<void(const std::string& stage, const TriMesh& surface)> finished;
