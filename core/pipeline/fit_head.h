@@ -311,14 +311,18 @@ struct FitHeadOptions {
 struct FitStageReport {
   std::string name;
   DistanceStats distance;  // scan points to the surface after the stage
+  // The same on the stage's own surface, as the stage left it: differs from
+  // distance only for "global_fitting" when later steps (untangling, the ear
+  // hold, the crossing guard) moved the control mesh the fit returns.
+  DistanceStats as_fitted;
 };
 
 // Called by fit_head at stage boundaries. finished() comes right after the
 // stage's work and BEFORE its stats are measured, so a timer stopped there
 // times the work only; measured() follows with the stats. measured() comes
-// once more for "global_fitting" when the ear hold or the crossing guard
-// moved control vertices after it: the later figures are the returned
-// control mesh's, and replace the earlier.
+// once more for "global_fitting" when the untangling, the ear hold or the
+// crossing guard moved control vertices after it: the later figures are the
+// returned control mesh's, and replace the earlier.
 struct FitStageObserver {
   std::function<void(const std::string& stage)> started;
   std::function<void(const std::string& stage, const TriMesh& surface)> finished;
