@@ -43,6 +43,12 @@
 // (FitHeadOptions::ear_refit_warm_rounds; 0: the whole fit again, cold).
 // --fit-ear-refit-late: the ear refit decided after each fit's guard
 // (FitHeadOptions::ear_refit_after_rounds off), to compare.
+// --fit-untangle-level K: the whole heads' untangling level
+// (FitHeadOptions::untangle_level; 0: off); --fit-guard-others 0|1: the
+// guard's steps for the pairs away from the lips and ears
+// (FitHeadOptions::guard_other_crossings); --fit-guard-remeasure 0|1:
+// the detail measured again where the guard moved control vertices
+// (FitHeadOptions::guard_remeasure).
 #include "command.h"
 #include "fit_table.h"
 #include "generic_head_choice.h"
@@ -246,6 +252,8 @@ int run(const Args& args) {
   FitHeadOptions options;
   int copies = 1;
   int hinges_last = options.untangle_hinges_last ? 1 : 0;
+  int guard_others = options.guard_other_crossings ? 1 : 0;
+  int guard_remeasure = options.guard_remeasure ? 1 : 0;
   if (!args.get_int("fit-crease-trials", options.global.smooth_guard_crease_trials,
                     options.global.smooth_guard_crease_trials) ||
       !args.get_int("fit-crease-edges", options.global.smooth_guard_crease_max_edges,
@@ -261,13 +269,21 @@ int run(const Args& args) {
       hinges_last > 1 ||
       !args.get_int("fit-ear-refit-rounds", options.ear_refit_warm_rounds, options.ear_refit_warm_rounds) ||
       options.ear_refit_warm_rounds < 0 ||
-      !args.get_int("fit-real-copies", 1, copies) || copies < 1 || copies > 13) {
+      !args.get_int("fit-real-copies", 1, copies) || copies < 1 || copies > 13 ||
+      !args.get_int("fit-untangle-level", options.untangle_level, options.untangle_level) ||
+      options.untangle_level < 0 || options.untangle_level > 3 ||
+      !args.get_int("fit-guard-others", guard_others, guard_others) || guard_others < 0 || guard_others > 1 ||
+      !args.get_int("fit-guard-remeasure", guard_remeasure, guard_remeasure) || guard_remeasure < 0 ||
+      guard_remeasure > 1) {
     std::printf("   --fit-crease-trials / --fit-crease-edges / --fit-data-level / --fit-pleat-steps take a whole number, "
                 "--fit-restore-rings one up to 8, --fit-hinges-last 0 or 1, --fit-ear-refit-rounds one >= 0, "
-                "--fit-real-copies one from 1 to 13, --fit-crease-angle and --fit-surface-edges a number\n");
+                "--fit-real-copies one from 1 to 13, --fit-untangle-level one from 0 to 3, --fit-guard-others / --fit-guard-remeasure 0 or 1, "
+                "--fit-crease-angle and --fit-surface-edges a number\n");
     return 1;
   }
   options.untangle_hinges_last = hinges_last == 1;
+  options.guard_other_crossings = guard_others == 1;
+  options.guard_remeasure = guard_remeasure == 1;
   if (args.has("fit-real-scanned-neck")) options.fit_scanned_neck = true;
   if (args.has("fit-real-no-scanned-neck")) options.fit_scanned_neck = false;
   const std::string only_copy = args.get("fit-real-copy", "");

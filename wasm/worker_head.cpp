@@ -166,10 +166,18 @@ val run_fit(const std::string& name, double parse_ms, val progress, Fit fit) {
     stage_ms.set(stage, now_ms() - t_stage);
     lk::report(report, stage.c_str(), 1.0);
   };
+  // A stage measured again (global_fitting, when the guard moved the control
+  // mesh after it) replaces its first figures.
   observer.measured = [&](const lk::FitStageReport& r) {
     val o = stats_object(r.distance);
     o.set("name", r.name);
     o.set("ms", stage_ms[r.name]);
+    const int n = stages["length"].as<int>();
+    for (int i = 0; i < n; ++i)
+      if (stages[i]["name"].as<std::string>() == r.name) {
+        stages.set(i, o);
+        return;
+      }
     stages.call<void>("push", o);
   };
   const lk::ProgressFn inner = [&](const char*, double fraction) {

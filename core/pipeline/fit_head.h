@@ -266,6 +266,15 @@ struct FitHeadOptions {
   // fits them cleanly. The note says what was relaxed.
   bool guard_feature_crossings = true;
   int feature_guard_rounds = 6;
+  // Then the same steps for every other crossing pair (the scalp, the neck's
+  // seam, the eye rims), per cluster, kept when they leave fewer such pairs
+  // and no more at the lips and ears: a head that crosses itself anywhere
+  // is a defect a user sees and exports. Needs guard_feature_crossings.
+  bool guard_other_crossings = true;
+  // When the guard moved control vertices, the displacements are measured
+  // again over the moved control mesh (its dropped detail back), the guard
+  // runs again on that, and the result is kept when it leaves no more pairs.
+  bool guard_remeasure = true;
   // The global fit's scan-to-mesh term E_back (GlobalFitOptions::back_*:
   // control vertices over scanned skin held to the scan's surface under
   // them; ears and pockets left out) with this weight. On face captures,
@@ -302,11 +311,18 @@ struct FitHeadOptions {
 struct FitStageReport {
   std::string name;
   DistanceStats distance;  // scan points to the surface after the stage
+  // The same on the stage's own surface, as the stage left it: differs from
+  // distance only for "global_fitting" when later steps (untangling, the ear
+  // hold, the crossing guard) moved the control mesh the fit returns.
+  DistanceStats as_fitted;
 };
 
 // Called by fit_head at stage boundaries. finished() comes right after the
 // stage's work and BEFORE its stats are measured, so a timer stopped there
-// times the work only; measured() follows with the stats.
+// times the work only; measured() follows with the stats. measured() comes
+// once more for "global_fitting" when the untangling, the ear hold or the
+// crossing guard moved control vertices after it: the later figures are the
+// returned control mesh's, and replace the earlier.
 struct FitStageObserver {
   std::function<void(const std::string& stage)> started;
   std::function<void(const std::string& stage, const TriMesh& surface)> finished;
@@ -362,6 +378,8 @@ struct FitHeadResult {
   // whose displacements it dropped / that it moved toward the generic shape.
   struct FeatureGuard {
     int pairs_before = 0, pairs_after = 0, steps = 0, relaxed_vertices = 0, moved_vertices = 0;
+    int other_pairs_before = 0, other_pairs_after = 0;  // the pairs touching neither (guard_other_crossings)
+    bool remeasured = false;  // guard_remeasure was kept (pairs_after, other_pairs_after: after it)
   } feature_guard;
 };
 

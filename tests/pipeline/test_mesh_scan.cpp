@@ -58,8 +58,11 @@ TEST_CASE("fit_head: a synthetic head's truth mesh as a mesh scan comes closer w
   INFO("vertices only, fitted on the flat control triangles: " << table1(without_flat));
   CHECK(without_flat.global_fit.data_level == 0);
   CHECK(table1(without) < 0.8 * table1(without_flat));
-  // The stages before the displacements do not read the faces.
-  CHECK(with_faces.stages[2].distance.mean_pct == without.stages[2].distance.mean_pct);
+  // The stages before the displacements do not read the faces. (The ear
+  // hold, which reads the displacements, may move the returned control mesh
+  // after the global fit: its figures as the global fit left it.)
+  CHECK(with_faces.stages[2].as_fitted.mean_pct == without.stages[2].as_fitted.mean_pct);
+  CHECK(with_faces.stages[1].distance.mean_pct == without.stages[1].distance.mean_pct);
 }
 
 TEST_CASE("fit_head: the real James's triangles take level 3 onto his face capture", "[pipeline][mesh_scan][shared]") {
