@@ -502,6 +502,8 @@ int run_photos(const Args& args) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   Json rep = {{"photos_used", r.calib.num_used()}, {"photos_given", points_paths.size()},
               {"focal_px", r.calib.focal},
+              {"focal_landmarks_px", {r.calib.focal_landmarks_raw, r.calib.focal_landmarks, r.calib.focal_landmarks_sigma}},
+              {"focal_prior_px", {r.calib.focal_prior, r.calib.focal_prior_sigma}},
               {"calibration_rms_px", {r.calib.initial_rms_px, r.calib.final_rms_px}},
               {"shape_fit_rms_px", {r.fit.initial_rms_px, r.fit.final_rms_px}}, {"notes", notes},
               {"seconds", seconds}, {"stages", Json::array()}};
@@ -619,6 +621,11 @@ int run_photos(const Args& args) {
   if (!s) return fail(cmd, s.message);
   std::printf("likeness photos: %d of %zu photos used, focal %.1f px\n", r.calib.num_used(), points_paths.size(),
               r.calib.focal);
+  if (r.calib.focal_landmarks > 0)
+    std::printf("  focal: the landmarks' %.0f px, over the detector's ratio %.0f +- %.0f px (spread over the photos), "
+                "with the prior %.0f +- %.0f px (%s)\n",
+                r.calib.focal_landmarks_raw, r.calib.focal_landmarks, r.calib.focal_landmarks_sigma, r.calib.focal_prior,
+                r.calib.focal_prior_sigma, opt.calib.focal_prior_px > 0 ? "given or EXIF" : "a phone's 26 mm, no EXIF");
   std::printf("  landmark error: calibration %.2f -> %.2f px, shape fit %.2f -> %.2f px (%.2f s)\n",
               r.calib.initial_rms_px, r.calib.final_rms_px, r.fit.initial_rms_px, r.fit.final_rms_px, seconds);
   if (r.mouth_bag.pairs_before > 0)

@@ -15,6 +15,8 @@
 //    loses its pull.
 // 4. A photo whose robust RMS reprojection error stays far above the others'
 //    (another person, a mislabelled file) is refused and step 3 re-run.
+// 5. With >= 3 photos: the adjustment's focal weighed by the photos'
+//    disagreement and combined with a prior (SelfCalibOptions, below).
 //
 // Coordinates: the generic head's (metres). Principal points at the image
 // centres, no distortion (phone photos are undistorted by the phone).
@@ -82,12 +84,11 @@ struct SelfCalibOptions {
   // diagonal, 43.27 mm) as the prior, and its relative sigma (0 = none).
   double typical_focal_35mm = 26;
   double typical_focal_sigma = 0.08;
-  // With a slide model (a learned detector): the detector's landmarks' focal
-  // over the true one, mean over the sessions the shipped slide was learned
-  // on (MediaPipe, seeds 11-20, 8 cameras: 0.853, docs/design/photos.md);
-  // the landmarks' focal (and its jackknife sigma) is divided by it. Re-
-  // measure it with a new map or detector. 1 = none.
-  double slide_focal_ratio = 0.853;
+  // With a slide model (a learned detector): that detector's landmarks'
+  // focal over the true one, measured on its training sessions; the
+  // landmarks' focal (and its jackknife sigma) is divided by it. 1 = none.
+  // The photos job sets MediaPipe's (PhotosJobOptions::mediapipe_focal_ratio).
+  double slide_focal_ratio = 1;
 };
 
 // In its own inline namespace: project/texture_job.h and the texture
