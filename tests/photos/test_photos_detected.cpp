@@ -64,6 +64,25 @@ struct ShippedMap {
   ShippedMap() { load_shipped_map(generic, map, lms); }
 };
 
+// A seed's committed detected session calibrated with options a and with
+// b (the map's slide): both results, each focal's relative error, and the
+// session (for its photos' count).
+struct TwoCalibrations {
+  DetectedSession session;
+  SelfCalibResult a, b;
+  double ea = 0, eb = 0;
+};
+void calibrate_twice(const GenericHead& generic, const LandmarkMap& map, const std::vector<SurfacePoint>& lms, int seed,
+                     const SelfCalibOptions& oa, const SelfCalibOptions& ob, TwoCalibrations& out) {
+  load_session(generic, seed, out.session);
+  REQUIRE(self_calibrate(out.session.photos, generic.mesh, lms, oa, out.a, &map.slide));
+  REQUIRE(self_calibrate(out.session.photos, generic.mesh, lms, ob, out.b, &map.slide));
+  REQUIRE(out.b.num_used() == int(out.session.photos.size()));
+  const double truth = SyntheticViewsOptions{}.focal_px;
+  out.ea = (out.a.focal - truth) / truth;
+  out.eb = (out.b.focal - truth) / truth;
+}
+
 TEST_CASE("the committed detector points match their synthetic truth (else regenerate them)", "[photos][detected]") {
   GenericHead generic;
   LandmarkMap map;
@@ -303,7 +322,6 @@ TEST_CASE("a per-photo depth scale learned on other seeds brings the detected se
   LandmarkMap map;
   std::vector<SurfacePoint> lms;
   load_shipped_map(generic, map, lms);
-  const double truth_focal = SyntheticViewsOptions{}.focal_px;
   SelfCalibOptions plain, learned;  // the bundle adjustment's own focal (no prior, no detector's ratio)
   plain.focal_from_jackknife = learned.focal_from_jackknife = false;
   learned.depth_scale_sigma = 0.01;
@@ -311,13 +329,10 @@ TEST_CASE("a per-photo depth scale learned on other seeds brings the detected se
   learned.depth_scale_yaw2 = -0.212;
   double without = 0, with = 0;
   for (int seed = 1; seed <= 5; ++seed) {
-    DetectedSession s;
-    load_session(generic, seed, s);
-    SelfCalibResult a, b;
-    REQUIRE(self_calibrate(s.photos, generic.mesh, lms, plain, a, &map.slide));
-    REQUIRE(self_calibrate(s.photos, generic.mesh, lms, learned, b, &map.slide));
-    REQUIRE(b.num_used() == int(s.photos.size()));
-    const double ea = (a.focal - truth_focal) / truth_focal, eb = (b.focal - truth_focal) / truth_focal;
+    TwoCalibrations t;
+    calibrate_twice(generic, map, lms, seed, plain, learned, t);
+    const SelfCalibResult& b = t.b;
+    const double ea = t.ea, eb = t.eb;
     std::printf("seed %d focal error: %+.1f %% -> %+.1f %% with the learned depth scale\n", seed, 100 * ea, 100 * eb);
     without += std::abs(ea) / 5;
     with += std::abs(eb) / 5;
@@ -344,13 +359,10 @@ TEST_CASE("the detected sessions' focal comes within 10 % with no EXIF, and exac
   plain.focal_from_jackknife = false;
   weighed.slide_focal_ratio = PhotosJobOptions{}.mediapipe_focal_ratio;  // as the photos job sets it
   for (int seed = 1; seed <= 5; ++seed) {
-    DetectedSession s;
-    load_session(generic, seed, s);
-    SelfCalibResult a, b;
-    REQUIRE(self_calibrate(s.photos, generic.mesh, lms, plain, a, &map.slide));
-    REQUIRE(self_calibrate(s.photos, generic.mesh, lms, weighed, b, &map.slide));
-    REQUIRE(b.num_used() == int(s.photos.size()));
-    const double ea = (a.focal - truth_focal) / truth_focal, eb = (b.focal - truth_focal) / truth_focal;
+    TwoCalibrations t;
+    calibrate_twice(generic, map, lms, seed, plain, weighed, t);
+    const SelfCalibResult &a = t.a, &b = t.b;
+    const double ea = t.ea, eb = t.eb;
     std::printf("seed %d focal error: %+.1f %% -> %+.1f %% (landmarks over the ratio %+.1f %% +- %.1f %%)\n", seed,
                 100 * ea, 100 * eb, 100 * (b.focal_landmarks - truth_focal) / truth_focal,
                 100 * b.focal_landmarks_sigma / truth_focal);
