@@ -363,6 +363,7 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
     opt.lids_on_rim = args.has("photos-lids");
     // --photos-no-slide: the map's slide model left out; --photos-no-slide-sigma: its scatter as weights left out.
     opt.use_slide = !args.has("photos-no-slide");
+    opt.calib.focal_from_jackknife = args.has("photos-focal-jackknife");
     opt.calib.use_slide_sigma = !args.has("photos-no-slide-sigma");
     if (!parse_fit_levels(args, opt.fit)) return 1;
     PhotosJobResult r;

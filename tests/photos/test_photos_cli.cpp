@@ -236,8 +236,5 @@ TEST_CASE("likeness photos --iris-photo takes the iris from the named photo of K
   for (size_t i = 0; i < eye_marked.pixels.size(); ++i) diff += std::abs(eye_marked.pixels[i] - eye_frontal.pixels[i]);
   diff /= double(eye_marked.pixels.size());
   std::printf("eye.png from 0003.jpg against from 0001.jpg: mean |difference| %.2f levels\n", diff);
-  // 12.0 measured with the cameras at 2114 px; 1.55 since the focal takes
-  // the phone's prior where the landmarks disagree (1387 px, 2026-11-30:
-  // both irises grey); 0.0 when the name is ignored.
-  CHECK(diff > 1);
+  CHECK(diff > 3);  // 12.0 measured; 0.0 when the name is ignored
 }

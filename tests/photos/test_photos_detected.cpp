@@ -131,9 +131,8 @@ TEST_CASE("the photos job on real-detector points keeps every view and the camer
   // with the map's slide (docs/design/photos.md, "The detector's slide")
   // measured within 4.5 deg (+58.6 -> +54.1 the worst) and the focal 7 %
   // short; with a map without the slide the turned views came out less
-  // turned (+58 -> +48 deg) and the focal 20 % short (997 px). With the
-  // focal weighed by the photos' disagreement and a phone's prior
-  // (2026-11-30): 1.5 % short (1231 px), held within 5 % so a change shows.
+  // turned (+58 -> +48 deg) and the focal 20 % short (997 px). (With
+  // --focal-jackknife, not the default: 1.5 % short, 1231 px.)
   double last = -1e9;
   for (size_t i = 0; i < s.photos.size(); ++i) {
     double ty, tp, y, p;
@@ -146,8 +145,8 @@ TEST_CASE("the photos job on real-detector points keeps every view and the camer
     last = y;
   }
   std::printf("focal %.0f px (truth 1250)\n", r.calib.focal);
-  CHECK(r.calib.focal > 0.95 * 1250);
-  CHECK(r.calib.focal < 1.05 * 1250);
+  CHECK(r.calib.focal > 0.87 * 1250);
+  CHECK(r.calib.focal < 1.1 * 1250);
   // The face against the person, each head brought onto the truth by its
   // best similarity: measured 1.19 mm for the fit, 1.18 for the generic
   // head; with the first map (no slide) the fit was 3.22 mm, with the
@@ -343,7 +342,7 @@ TEST_CASE("a per-photo depth scale learned on other seeds brings the detected se
   CHECK(with < 0.10);
 }
 
-TEST_CASE("the detected sessions' focal comes within 10 % with no EXIF, and exact points override the prior",
+TEST_CASE("the focal weighed by the photos' disagreement comes within 10 % on the detected sessions with no EXIF, and exact points override the prior",
           "[photos][detected]") {
   // docs/design/photos.md, "The focal from the landmarks, honestly
   // weighed": the bundle adjustment's focal over the detector's measured
@@ -355,8 +354,8 @@ TEST_CASE("the detected sessions' focal comes within 10 % with no EXIF, and exac
   const LandmarkMap& map = shipped.map;
   const std::vector<SurfacePoint>& lms = shipped.lms;
   const double truth_focal = SyntheticViewsOptions{}.focal_px;
-  SelfCalibOptions plain, weighed;
-  plain.focal_from_jackknife = false;
+  SelfCalibOptions plain, weighed;  // weighed: as `likeness photos --focal-jackknife` (not the default)
+  weighed.focal_from_jackknife = true;
   weighed.slide_focal_ratio = PhotosJobOptions{}.mediapipe_focal_ratio;  // as the photos job sets it
   for (int seed = 1; seed <= 5; ++seed) {
     TwoCalibrations t;
@@ -378,6 +377,7 @@ TEST_CASE("the detected sessions' focal comes within 10 % with no EXIF, and exac
   DetectedSession s;
   load_session(generic, 2, s);
   SelfCalibOptions far_prior;  // no detector's ratio: exact pixels are not MediaPipe's
+  far_prior.focal_from_jackknife = true;
   far_prior.typical_focal_35mm = 39;
   SelfCalibResult r;
   REQUIRE(self_calibrate(mixed_points(s, map, lms, 0), generic.mesh, lms, far_prior, r, &map.slide));
