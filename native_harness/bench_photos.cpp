@@ -363,6 +363,7 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
     opt.lids_on_rim = args.has("photos-lids");
     // --photos-no-slide: the map's slide model left out; --photos-no-slide-sigma: its scatter as weights left out.
     opt.use_slide = !args.has("photos-no-slide");
+    opt.calib.focal_from_jackknife = args.has("photos-focal-jackknife");
     opt.calib.use_slide_sigma = !args.has("photos-no-slide-sigma");
     if (!parse_fit_levels(args, opt.fit)) return 1;
     PhotosJobResult r;
@@ -493,6 +494,12 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
                 1000 * gu.head.mean, 1000 * fu.head.mean, 1000 * fu.head.p95, 1000 * ga.head.mean, 1000 * fa.head.mean,
                 1000 * fa.head.p95, ms);
     std::printf("       yaw/pitch deg, truth -> recovered:%s\n", views.c_str());
+    if (r.calib.focal_landmarks > 0)
+      std::printf("       focal from the landmarks %+.1f%%, over the detector's ratio %+.1f%% +- %.1f%% (jackknife over the photos), prior %+.1f%% +- %.1f%%\n",
+                  100 * (r.calib.focal_landmarks_raw - vo.focal_px) / vo.focal_px,
+                  100 * (r.calib.focal_landmarks - vo.focal_px) / vo.focal_px,
+                  100 * r.calib.focal_landmarks_sigma / vo.focal_px, 100 * (r.calib.focal_prior - vo.focal_px) / vo.focal_px,
+                  100 * r.calib.focal_prior_sigma / vo.focal_px);
     if (opt.calib.depth_scale_sigma > 0) {
       std::printf("       per-photo depth scale:");
       for (size_t i = 0; i < photos.size(); ++i)

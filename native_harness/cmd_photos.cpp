@@ -246,7 +246,7 @@ int run_photos(const Args& args) {
   if (!only_known_options(cmd, args, {"points", "photos", "masks", "masks-from-photos", "silhouette-check", "map", "out",
                                       "levels", "focal-px", "texture-size", "no-texture", "register-texture", "stereo", "no-stereo", "coarse",
                                       "schedule", "folds", "depth-scale", "depth-0", "depth-yaw2", "contours",
-                                      "contour-check", "contour-lambda", "focal-sigma", "no-slide", "lids", "iris-photo", "pulls", "pulls-by-photo", "pulls-by-landmark"}))
+                                      "contour-check", "contour-lambda", "focal-sigma", "no-slide", "lids", "iris-photo", "pulls", "pulls-by-photo", "pulls-by-landmark", "focal-jackknife"}))
     return 2;
   const std::vector<std::string> points_paths = args.get_all("points"), photo_paths = args.get_all("photos"),
                                  mask_paths = args.get_all("masks");
@@ -381,6 +381,7 @@ int run_photos(const Args& args) {
   }
   opt.calib.focal_prior_px = focal_px;
   opt.calib.focal_prior_sigma = focal_sigma;
+  opt.calib.focal_from_jackknife = args.has("focal-jackknife");
   opt.contour_landmarks = args.has("contours");
   opt.use_slide = !args.has("no-slide");
   opt.contour_lambda_scale = contour_lambda;
@@ -502,6 +503,8 @@ int run_photos(const Args& args) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   Json rep = {{"photos_used", r.calib.num_used()}, {"photos_given", points_paths.size()},
               {"focal_px", r.calib.focal},
+              {"focal_landmarks_px", {r.calib.focal_landmarks_raw, r.calib.focal_landmarks, r.calib.focal_landmarks_sigma}},
+              {"focal_prior_px", {r.calib.focal_prior, r.calib.focal_prior_sigma}},
               {"calibration_rms_px", {r.calib.initial_rms_px, r.calib.final_rms_px}},
               {"shape_fit_rms_px", {r.fit.initial_rms_px, r.fit.final_rms_px}}, {"notes", notes},
               {"seconds", seconds}, {"stages", Json::array()}};
@@ -619,6 +622,11 @@ int run_photos(const Args& args) {
   if (!s) return fail(cmd, s.message);
   std::printf("likeness photos: %d of %zu photos used, focal %.1f px\n", r.calib.num_used(), points_paths.size(),
               r.calib.focal);
+  if (r.calib.focal_landmarks > 0)
+    std::printf("  focal: the landmarks' %.0f px, over the detector's ratio %.0f +- %.0f px (spread over the photos), "
+                "with the prior %.0f +- %.0f px (%s)\n",
+                r.calib.focal_landmarks_raw, r.calib.focal_landmarks, r.calib.focal_landmarks_sigma, r.calib.focal_prior,
+                r.calib.focal_prior_sigma, opt.calib.focal_prior_px > 0 ? "given or EXIF" : "a phone's 26 mm, no EXIF");
   std::printf("  landmark error: calibration %.2f -> %.2f px, shape fit %.2f -> %.2f px (%.2f s)\n",
               r.calib.initial_rms_px, r.calib.final_rms_px, r.fit.initial_rms_px, r.fit.final_rms_px, seconds);
   if (r.mouth_bag.pairs_before > 0)
@@ -800,7 +808,7 @@ int run_learn_landmark_map(const Args& args) {
 
 Registrar photos_reg({"photos",
                       "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] [--masks M1.png ... | --masks-from-photos] [--silhouette-check] "
-                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--register-texture] [--stereo] [--folds] [--coarse N:S,...|none] [--schedule S,...|none] [--depth-scale SIGMA [--depth-0 K0] [--depth-yaw2 C]] [--focal-sigma S] [--no-slide] [--contours [--contour-lambda K]] [--contour-check] [--lids] [--iris-photo NAME] [--pulls | --pulls-by-photo | --pulls-by-landmark]",
+                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--register-texture] [--stereo] [--folds] [--coarse N:S,...|none] [--schedule S,...|none] [--depth-scale SIGMA [--depth-0 K0] [--depth-yaw2 C]] [--focal-sigma S] [--focal-jackknife] [--no-slide] [--contours [--contour-lambda K]] [--contour-check] [--lids] [--iris-photo NAME] [--pulls | --pulls-by-photo | --pulls-by-landmark]",
                       "a head from several photos' landmarks (fua1998): self-calibrated cameras, fitted control "
                       "mesh, levels, cameras.json, report.json; with --photos the skin from those cameras "
                       "(textured.obj, skin.png; --register-texture: the photos re-registered on the head first, "
@@ -813,7 +821,7 @@ Registrar photos_reg({"photos",
                       "triangulations of N nodes at stiffness S (fua1998 Sec. 2.1), --schedule: the control mesh's own "
                       "stiffness stages after them; --depth-scale: a per-photo depth scale in the bundle adjustment "
                       "(prior sigma SIGMA, mean K0 + C (yaw/60 deg)^2) for the detector's error shared by a photo's points; "
-                      "--focal-sigma: the focal prior's relative sigma (with --focal-px); --no-slide: the map's "
+                      "--focal-sigma: the focal prior's relative sigma (with --focal-px); --focal-jackknife: the landmarks' focal weighed by the photos' disagreement, over the detector's ratio, with EXIF or a phone's 26 mm prior (not the default); --no-slide: the map's "
                       "view-dependent slide left out; --contours: the face outline's jaw and chin landmarks as "
                       "contour observations, not fixed surface points (--contour-lambda: their weight, x the "
                       "features'); the report and --contour-check: contours_N.png, the face outline's landmarks, their distance to "

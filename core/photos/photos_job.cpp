@@ -241,7 +241,9 @@ Status run_photos_job(const GenericHead& generic, const LandmarkMap& map, const 
   if (!s) return s;
 
   const LandmarkSlide* slide = options.use_slide && (map.slide.has_slide() || map.slide.has_sigma()) ? &map.slide : nullptr;
-  s = self_calibrate(photos, generic.mesh, landmarks, options.calib, result.calib, slide);
+  SelfCalibOptions calib = options.calib;
+  if (slide && map.detector == kMediaPipeDetector) calib.slide_focal_ratio = options.mediapipe_focal_ratio;
+  s = self_calibrate(photos, generic.mesh, landmarks, calib, result.calib, slide);
   for (size_t i = 0; i < result.calib.photos.size(); ++i)
     if (!result.calib.photos[i].refusal.empty())
       result.notes.push_back(photo_name(i) + " dropped: " + result.calib.photos[i].refusal);

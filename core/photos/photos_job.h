@@ -37,6 +37,12 @@ struct PhotosJobOptions {
   bool stereo = true;                 // use the images, when given, for stereo attractors
   StereoOptions stereo_options;
   double lambda_stereo = 1.0;         // fua1998 Sec. 4
+  // MediaPipe's landmarks' focal over the true one with the shipped map's
+  // slide (mean over its training sessions, seeds 11-20; docs/design/
+  // photos.md, "The focal from the landmarks, honestly weighed"): given to
+  // the self-calibration (calib.slide_focal_ratio) when the map is
+  // MediaPipe's and its slide is used. Re-measure it with a re-made map.
+  double mediapipe_focal_ratio = 0.853;
   // The map's slide model (landmark_slide.h), when it has one: each
   // landmark seen where the detector puts it from that camera's view, in
   // the self-calibration and the shape fit; its scatter weighs the

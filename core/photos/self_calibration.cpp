@@ -196,7 +196,27 @@ class BundleProblem : public LeastSquaresProblem {
   }
 };
 
+// The problem without camera `drop` (its observations gone, the others'
+// camera indices moved down): the jackknife's leave-one-photo-out.
+BundleProblem without_camera(const BundleProblem& bp, int drop) {
+  BundleProblem out = bp;
+  out.cameras.erase(out.cameras.begin() + drop);
+  if (!out.depth.empty()) out.depth.erase(out.depth.begin() + drop);
+  if (!out.depth_mean.empty()) out.depth_mean.erase(out.depth_mean.begin() + drop);
+  out.obs.clear();
+  for (Observation o : bp.obs) {
+    if (o.camera == drop) continue;
+    if (o.camera > drop) --o.camera;
+    out.obs.push_back(o);
+  }
+  return out;
+}
+
 }  // namespace
+
+double typical_focal_px(double focal_35mm, int width, int height) {
+  return focal_35mm * std::hypot(double(width), double(height)) / 43.27;
+}
 
 int SelfCalibResult::num_used() const {
   int n = 0;
@@ -413,11 +433,22 @@ Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& g
     Status s = calibrate_cameras_shared(sets, sizes, co, shared);
     if (!s) return with_context(s, "self-calibration");
 
+    // The focal's prior: EXIF's, else the typical phone's (its image size the photos' median diagonal).
+    double prior_px = options.focal_prior_px, prior_sigma = options.focal_prior_sigma;
+    if (!(prior_px > 0) && options.typical_focal_35mm > 0 && options.typical_focal_sigma > 0) {
+      std::vector<double> typ;
+      for (const auto& wh : sizes) typ.push_back(typical_focal_px(options.typical_focal_35mm, wh[0], wh[1]));
+      prior_px = median_of(typ);
+      prior_sigma = options.typical_focal_sigma;
+    }
+    const double ratio = slide && slide->has_slide() ? options.slide_focal_ratio : 1.0;
+    const bool jackknife = options.focal_from_jackknife && used.size() >= 3 && (prior_px > 0 || ratio != 1.0);
+
     BundleProblem bp;
     bp.focal = shared.focal;
     bp.pixel_sigma = options.pixel_sigma;
     bp.shape_sigma = options.shape_sigma_m;
-    bp.focal_prior = options.focal_prior_px;
+    bp.focal_prior = jackknife ? 0.0 : options.focal_prior_px;  // the jackknife adds its prior afterwards
     bp.focal_prior_sigma = options.focal_prior_sigma;
     if (slide && slide->has_slide()) bp.slide = slide;
     bp.depth_sigma = options.depth_scale_sigma;
@@ -493,6 +524,42 @@ Status self_calibrate(const std::vector<LandmarkPhoto>& photos, const TriMesh& g
                     med[size_t(worst)], typical);
       pc.refusal = buf;
       continue;
+    }
+
+    // The landmarks' focal, its spread over the photos left out in turn,
+    // and the prior: combined as two Gaussians; the adjustment again at
+    // that focal (held by a tight prior).
+    if (jackknife) {
+      const int n = int(used.size());
+      std::vector<double> loo(static_cast<size_t>(n));
+      for (int k = 0; k < n; ++k) {
+        BundleProblem sub = without_camera(bp, k);
+        LmOptions lo;
+        lo.max_iterations = 30;
+        result.lm_iterations += levenberg_marquardt(sub, lo).iterations;
+        loo[size_t(k)] = sub.focal;
+      }
+      double mean = 0, var = 0;
+      for (double f : loo) mean += f / n;
+      for (double f : loo) var += (f - mean) * (f - mean);
+      var *= double(n - 1) / n;
+      // The detector's measured bias taken out of the landmarks' focal and its spread.
+      const double fl = bp.focal / ratio;
+      var /= ratio * ratio;
+      const double pv = (prior_sigma * prior_px) * (prior_sigma * prior_px);
+      const double combined = prior_px > 0 && var > 0 ? (fl / var + prior_px / pv) / (1 / var + 1 / pv) : fl;
+      result.focal_landmarks_raw = bp.focal;
+      result.focal_landmarks = fl;
+      result.focal_landmarks_sigma = std::sqrt(var);
+      result.focal_prior = prior_px;
+      result.focal_prior_sigma = prior_sigma * prior_px;
+      bp.focal_prior = combined;
+      bp.focal_prior_sigma = 1e-4;
+      for (Camera& c : bp.cameras) c.t.z() *= combined / bp.focal;  // the same image size at the new focal
+      bp.focal = combined;
+      LmOptions lo;
+      lo.max_iterations = 30;
+      result.lm_iterations += levenberg_marquardt(bp, lo).iterations;
     }
 
     // Done: write the result.

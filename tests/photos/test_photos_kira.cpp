@@ -86,6 +86,23 @@ TEST_CASE("the photos job uses every Kira photo the detector read, with cameras 
   // its measured neighbourhood so a change shows.
   CHECK(r.calib.focal > 1900);
   CHECK(r.calib.focal < 2400);
+
+  // With the focal weighed by the photos' disagreement (--focal-jackknife,
+  // not the default) and her lens's focal as the prior (`--focal-px
+  // 3813.6`, 5 % sigma; her JPEGs give our EXIF reader none): the
+  // landmarks' spread no longer outweighs it; measured 3506 px (without
+  // the weighing: 2221 px; docs/design/photos.md, "The focal from the
+  // landmarks, honestly weighed").
+  PhotosJobOptions exif;
+  exif.calib.focal_prior_px = 3813.6;
+  exif.calib.focal_from_jackknife = true;
+  PhotosJobResult e;
+  REQUIRE(run_photos_job(generic, map, photos, exif, e));
+  std::printf("focal with the EXIF prior, weighed: %.1f px\n", e.calib.focal);
+  CHECK(e.calib.focal_landmarks_raw > 1900);
+  CHECK(e.calib.focal_landmarks_raw < 2400);
+  CHECK(e.calib.focal > 3300);
+  CHECK(e.calib.focal < 3813.6);
 }
 
 }  // namespace
