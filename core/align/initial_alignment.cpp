@@ -2,6 +2,7 @@
 #include "align/initial_alignment.h"
 
 #include "common/helper_thread.h"
+#include "common/rotation.h"
 #include "mesh/geometry.h"
 #include "numeric/powell.h"
 
@@ -39,8 +40,7 @@ struct AffineModel {
 
   void transform_of(const double* q, Mat3& linear, Vec3& translation) const {
     const Vec3 rv(q[3], q[4], q[5]);
-    const double angle = rv.norm();
-    const Mat3 rot = angle > 0.0 ? Eigen::AngleAxisd(angle, rv / angle).toRotationMatrix() : Mat3::Identity();
+    const Mat3 rot = rotation_from_vector(rv);
     const Vec3 scales(scale * std::exp(q[6]), scale * std::exp(q[7]), scale * std::exp(q[8]));
     const Mat3 rs = rot * scales.asDiagonal();
     linear = rs * facing;

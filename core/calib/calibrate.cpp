@@ -1,6 +1,7 @@
 #include "calib/calibrate.h"
 
 #include "common/prng.h"
+#include "common/rotation.h"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -148,8 +149,7 @@ Camera apply(const Camera& base, const FreeParams& fp, const VecX& p) {
   if (fp.k2) c.k2 = p[j++];
   const Vec3 w = p.segment<3>(j);
   j += 3;
-  const double angle = w.norm();
-  if (angle > 0) c.R = Eigen::AngleAxisd(angle, w / angle).toRotationMatrix() * base.R;
+  c.R = rotation_from_vector(w) * base.R;
   c.t = p.segment<3>(j);
   return c;
 }
@@ -560,8 +560,7 @@ struct JointProblem {
     for (size_t i = 0; i < c.size(); ++i) {
       c[i].fx = c[i].fy = p[0];
       const Vec3 w = p.segment<3>(1 + 6 * Eigen::Index(i));
-      const double angle = w.norm();
-      if (angle > 0) c[i].R = Eigen::AngleAxisd(angle, w / angle).toRotationMatrix() * base[i].R;
+      c[i].R = rotation_from_vector(w) * base[i].R;
       c[i].t = p.segment<3>(4 + 6 * Eigen::Index(i));
     }
     return c;

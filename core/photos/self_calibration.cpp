@@ -1,6 +1,7 @@
 #include "photos/self_calibration.h"
 
 #include "calib/calibrate.h"
+#include "common/rotation.h"
 #include "mesh/geometry.h"
 #include "photos/sparse_lm.h"
 
@@ -12,17 +13,6 @@
 
 namespace lk {
 namespace {
-
-Mat3 skew(const Vec3& v) {
-  Mat3 m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-
-Mat3 rotation_increment(const Vec3& w) {
-  const double a = w.norm();
-  return a > 0 ? Eigen::AngleAxisd(a, w / a).toRotationMatrix() : Mat3::Identity();
-}
 
 double median_of(std::vector<double> v) {
   if (v.empty()) return 0;
@@ -143,7 +133,7 @@ class BundleProblem : public LeastSquaresProblem {
     ks = depth;
     const long cp = cam_params();
     for (size_t k = 0; k < cams.size(); ++k) {
-      cams[k].R = rotation_increment(step.segment<3>(1 + cp * long(k))) * cams[k].R;
+      cams[k].R = rotation_from_vector(step.segment<3>(1 + cp * long(k))) * cams[k].R;
       cams[k].t += step.segment<3>(4 + cp * long(k));
       if (depth_sigma > 0) ks[k] += step[1 + cp * long(k) + 6];
     }

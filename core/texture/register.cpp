@@ -1,5 +1,6 @@
 #include "texture/register.h"
 
+#include "common/rotation.h"
 #include "texture/color.h"
 
 #include <Eigen/Dense>
@@ -94,18 +95,6 @@ Cell lattice_cell(const PhotoRegistration& reg, const Vec2& p) {
     c.dwy[0] = -(1 - fx) / sy; c.dwy[1] = -fx / sy; c.dwy[2] = (1 - fx) / sy; c.dwy[3] = fx / sy;
   }
   return c;
-}
-
-Mat3 skew(const Vec3& a) {
-  Mat3 m;
-  m << 0, -a.z(), a.y(), a.z(), 0, -a.x(), -a.y(), a.x(), 0;
-  return m;
-}
-
-Mat3 rotation_of(const Vec3& omega) {
-  const double angle = omega.norm();
-  if (angle < 1e-15) return Mat3::Identity();
-  return Eigen::AngleAxisd(angle, omega / angle).toRotationMatrix();
 }
 
 // Residual a G(q) + b - C at the level's scale (pixel positions divided by
@@ -524,7 +513,7 @@ Status register_photos(const TriMesh& mesh, const std::vector<Vec3>& normals, co
           const Eigen::VectorXd delta = A.ldlt().solve(-b);
           if (!delta.allFinite()) break;
           PhotoRegistration trial = reg;
-          const Mat3 dR = rotation_of(delta.segment<3>(0));
+          const Mat3 dR = rotation_from_vector(delta.segment<3>(0));
           trial.camera.R = dR * reg.camera.R;
           trial.camera.t = dR * reg.camera.t + delta.segment<3>(3);
           trial.gain += delta(6);
