@@ -694,19 +694,20 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
   if (!st) return with_context(st, "generic head");
   const HeadAnnotations& ann = generic.annotations;
 
-  // tree (optional): a tree over exactly `surface`, taken over for the
-  // closest points instead of building one.
+  // The scan points' distances to `surface`; tree (optional): a tree over
+  // exactly `surface`, taken over for the closest points instead of building one.
+  auto surface_distance = [&](const TriMesh& surface, const std::vector<Vec3>& pts, MeshBvh* tree = nullptr) {
+    ClosestPointTree closest;
+    if (tree) closest.build(surface, *tree);
+    else closest.build(surface);
+    return point_to_surface_stats(thin(pts, options.stats_max_points), closest, diag);
+  };
   auto stage_done = [&](const char* name, const TriMesh& surface, const std::vector<Vec3>& pts,
                         MeshBvh* tree = nullptr) {
     if (observer.finished) observer.finished(name, surface);
     FitStageReport rep;
     rep.name = name;
-    if (options.measure_stages) {
-      ClosestPointTree closest;
-      if (tree) closest.build(surface, *tree);
-      else closest.build(surface);
-      rep.distance = point_to_surface_stats(thin(pts, options.stats_max_points), closest, diag);
-    }
+    if (options.measure_stages) rep.distance = surface_distance(surface, pts, tree);
     rep.as_fitted = rep.distance;
     out.stages.push_back(rep);
     if (observer.measured) observer.measured(rep);
@@ -1344,9 +1345,7 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
   if (options.measure_stages && out.control.positions != global_control)
     for (FitStageReport& rep : out.stages)
       if (rep.name == "global_fitting") {
-        ClosestPointTree closest;
-        closest.build(out.control);
-        rep.distance = point_to_surface_stats(thin(pts, options.stats_max_points), closest, diag);
+        rep.distance = surface_distance(out.control, pts);
         if (observer.measured) observer.measured(rep);
       }
   for (int l = 1; l <= options.levels; ++l) out.level_meshes.push_back(level_mesh(out.multires, l));
