@@ -231,7 +231,11 @@ export async function renderList() {
     if (h.thumb) img.src = h.thumb;
     const text = document.createElement('div');
     text.className = 'keep-text';
-    text.textContent = h.name + (h.photosOnly ? ' (' + inputsText(h) + ', no head yet)' : h.textured ? ' (textured)' : '');
+    // Inputs whose head was just made are kept as that head once its
+    // project file is written (a second or two): say so meanwhile.
+    const keeping = h.photosOnly && !!app.fit && !!current && current.id === h.id && !current.fit;
+    text.textContent = h.name + (keeping ? ' (keeping the head made from them\u2026)'
+      : h.photosOnly ? ' (' + inputsText(h) + ', no head yet)' : h.textured ? ' (textured)' : '');
     const meta = document.createElement('div');
     meta.className = 'keep-meta';
     meta.textContent = when(h.savedAt) + ' · ' + (h.size / 1048576).toFixed(1) + ' MB';
@@ -359,6 +363,7 @@ export function wireKeep() {
   onPageChange((snap) => {
     if (app.fit || app.photos.length || scanFile()) el.offer.hidden = true;  // a head or inputs are on the page: nothing to offer
     if (snap.state === 'working' || snap.state === 'loading') return;
+    if (app.fit && current && !current.fit) renderList();  // its inputs' entry: "keeping the head"
     if (app.fit && (!current || current.fit !== app.fit || current.texture !== app.texture ||
                     current.eyePhoto !== app.eyePhoto || current.smilePhoto !== app.smilePhoto)) scheduleSave(0);
     else if (!app.fit && scanFile() && (!current || current.photosKey !== inputsKey())) scheduleSave(0);  // before its fit starts
