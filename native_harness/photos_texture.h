@@ -20,10 +20,14 @@ namespace lk::cli {
 // out_dir/textured.obj, textured.mtl and skin.png. Errors name the photo.
 // uvs and skin (optional): the chart and the skin, for the head project;
 // images (optional): the decoded photos, for the iris (eye_from_views.h).
+// Also writes out_dir/sources.png: each texel coloured by where its fine
+// detail comes from (one colour per photo, white = blended from >= 2 photos,
+// grey = interpolated, black = background), the doubling diagnostic.
 Status write_photos_texture(const TriMesh& control, const std::vector<ButterflyLevel>& levels,
                             const std::vector<Vec3>& fine_positions, const std::vector<std::string>& image_paths,
                             const std::vector<std::string>& names, const std::vector<Camera>& cameras, int size,
                             const std::string& out_dir, std::vector<Vec2>* uvs = nullptr, Image* skin = nullptr,
-                            std::vector<Image>* images = nullptr, bool register_photos = false);
+                            std::vector<Image>* images = nullptr, bool register_photos = false,
+                            bool label_regions = false);
 
 }  // namespace lk::cli
