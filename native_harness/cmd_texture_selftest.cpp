@@ -1,8 +1,8 @@
 // likeness texture-selftest: synthetic photos of a head with a known skin
 // albedo -> calibration -> texture_head -> re-render of a held-out view,
 // scored against the truth (see texture_selftest.h).
-#include <algorithm>
 #include "command.h"
+#include "photos_texture.h"
 #include "texture_selftest.h"
 
 #include "io/io.h"
@@ -108,15 +108,7 @@ int run_texture_selftest_command(const Args& args) {
                   g.photos[i].rms_before, g.photos[i].rms_after, g.photos[i].rotation_deg, g.photos[i].translation_mm,
                   g.photos[i].field_max_px, g.photos[i].gain);
   }
-  {
-    const TextureReport& t = r.texture_report;
-    std::printf("  chart texels whose fine detail blends >= 2 photos: %ld of %ld (%.1f%%)\n", t.texels_blended,
-                t.chart_texels, 100.0 * t.texels_blended / std::max(1L, t.chart_texels));
-    if (t.labeled)
-      std::printf("  region labelling: energy %.1f -> %.1f, boundary edges %d -> %d, %d triangles relabelled, %d passes\n",
-                  t.labeling.energy_before, t.labeling.energy_after, t.labeling.boundary_edges_before,
-                  t.labeling.boundary_edges_after, t.labeling.triangles_changed, t.labeling.passes);
-  }
+  print_blend_figures(r.texture_report, "  ");
   std::printf("  timings (wall ms):");
   for (const auto& [name, ms] : r.timings_ms) std::printf(" %s %.0f;", name.c_str(), ms);
   std::printf("\nwrote %s/{truth,ours,nospline,error,skin,skin_nospline,skin_truth,face_mask,photo_*}.png and report.json\n",

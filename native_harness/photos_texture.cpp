@@ -11,6 +11,15 @@
 
 namespace lk::cli {
 
+void print_blend_figures(const TextureReport& t, const char* indent) {
+  std::printf("%schart texels whose fine detail blends >= 2 photos: %ld of %ld (%.1f%%)\n", indent, t.texels_blended,
+              t.chart_texels, 100.0 * t.texels_blended / std::max(1L, t.chart_texels));
+  if (t.labeled)
+    std::printf("%sregion labelling: energy %.1f -> %.1f, boundary edges %d -> %d, %d triangles relabelled, %d passes\n",
+                indent, t.labeling.energy_before, t.labeling.energy_after, t.labeling.boundary_edges_before,
+                t.labeling.boundary_edges_after, t.labeling.triangles_changed, t.labeling.passes);
+}
+
 Status write_photos_texture(const TriMesh& control, const std::vector<ButterflyLevel>& levels,
                             const std::vector<Vec3>& fine_positions, const std::vector<std::string>& image_paths,
                             const std::vector<std::string>& names, const std::vector<Camera>& cameras, int size,
@@ -55,15 +64,7 @@ Status write_photos_texture(const TriMesh& control, const std::vector<ButterflyL
                   names[i].c_str(), g.photos[i].rms_before, g.photos[i].rms_after, g.photos[i].rotation_deg,
                   g.photos[i].translation_mm, g.photos[i].field_max_px, g.photos[i].gain);
   }
-  if (s) {
-    const TextureReport& t = head.report;
-    std::printf("texture: %ld of %ld chart texels blend >= 2 photos at fine scale (%.1f%%)\n", t.texels_blended,
-                t.chart_texels, 100.0 * t.texels_blended / std::max(1L, t.chart_texels));
-    if (t.labeled)
-      std::printf("texture regions labelled: energy %.1f -> %.1f, boundary edges %d -> %d, %d triangles relabelled\n",
-                  t.labeling.energy_before, t.labeling.energy_after, t.labeling.boundary_edges_before,
-                  t.labeling.boundary_edges_after, t.labeling.triangles_changed);
-  }
+  if (s) print_blend_figures(head.report, "texture: ");
   if (s && !head.source.empty()) {
     static const unsigned char kPalette[6][3] = {{230, 60, 60}, {60, 170, 60}, {60, 90, 230}, {230, 200, 40}, {200, 60, 220}, {40, 200, 220}};
     Image map = Image::make(size, size, 3, 0);

@@ -8,11 +8,17 @@
 #include "image/image.h"
 #include "mesh/tri_mesh.h"
 #include "subdiv/butterfly.h"
+#include "texture/texture.h"
 
 #include <string>
 #include <vector>
 
 namespace lk::cli {
+
+// Prints the chart texels whose fine detail blends >= 2 photos and, when it
+// ran, the region labelling's figures (texture/labeling.h), each line
+// started with `indent`.
+void print_blend_figures(const TextureReport& report, const char* indent);
 
 // The finest of levels (positions fine_positions) with the control mesh's
 // chart refined to it, textured from the images (image_paths, cameras and
