@@ -48,7 +48,7 @@ class MaxFlow {
     while (bfs(s, t)) {
       it_ = head_;
       while (true) {
-        const double f = push(s, t, std::numeric_limits<double>::infinity());
+        const double f = push(s, t);
         if (f <= 0) break;
         flow += f;
       }
@@ -75,7 +75,7 @@ class MaxFlow {
     return level_[t] >= 0;
   }
   // One augmenting path in the level graph (iterative, no deep recursion).
-  double push(int s, int t, double) {
+  double push(int s, int t) {
     std::vector<int> path;  // arcs
     int u = s;
     while (true) {
