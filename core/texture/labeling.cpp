@@ -1,10 +1,20 @@
 #include "texture/labeling.h"
 
+#include "mesh/geometry.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <unordered_map>
+
+// GCC 12 warns of a maybe-uninitialized boost::optional inside Boost.Graph's
+// edge iterator (a known false positive of its headers).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include <boost/graph/adjacency_list.hpp>
+#include <boost/graph/boykov_kolmogorov_max_flow.hpp>
+#pragma GCC diagnostic pop
 
 namespace lk {
 namespace {
@@ -33,79 +43,40 @@ std::vector<Edge> triangle_edges(const TriMesh& mesh) {
   return edges;
 }
 
-// Dinic's maximum flow; after max_flow, on_source_side(v) tells the minimum cut.
-class MaxFlow {
- public:
-  explicit MaxFlow(int n) : head_(n, -1), level_(n), it_(n) {}
-  void add_edge(int u, int v, double cap, double rev_cap = 0) {
-    arcs_.push_back({v, head_[u], cap});
-    head_[u] = static_cast<int>(arcs_.size()) - 1;
-    arcs_.push_back({u, head_[v], rev_cap});
-    head_[v] = static_cast<int>(arcs_.size()) - 1;
-  }
-  double max_flow(int s, int t) {
-    double flow = 0;
-    while (bfs(s, t)) {
-      it_ = head_;
-      while (true) {
-        const double f = push(s, t);
-        if (f <= 0) break;
-        flow += f;
-      }
-    }
-    return flow;
-  }
-  bool on_source_side(int v) const { return level_[v] >= 0; }
-
- private:
-  struct Arc {
-    int to, next;
-    double cap;
-  };
-  bool bfs(int s, int t) {
-    std::fill(level_.begin(), level_.end(), -1);
-    std::vector<int> queue{s};
-    level_[s] = 0;
-    for (size_t q = 0; q < queue.size(); ++q)
-      for (int a = head_[queue[q]]; a >= 0; a = arcs_[a].next)
-        if (arcs_[a].cap > kEps && level_[arcs_[a].to] < 0) {
-          level_[arcs_[a].to] = level_[queue[q]] + 1;
-          queue.push_back(arcs_[a].to);
-        }
-    return level_[t] >= 0;
-  }
-  // One augmenting path in the level graph (iterative, no deep recursion).
-  double push(int s, int t) {
-    std::vector<int> path;  // arcs
-    int u = s;
-    while (true) {
-      if (u == t) {
-        double f = std::numeric_limits<double>::infinity();
-        for (int a : path) f = std::min(f, arcs_[a].cap);
-        for (int a : path) {
-          arcs_[a].cap -= f;
-          arcs_[a ^ 1].cap += f;
-        }
-        return f;
-      }
-      int& a = it_[u];
-      while (a >= 0 && !(arcs_[a].cap > kEps && level_[arcs_[a].to] == level_[u] + 1)) a = arcs_[a].next;
-      if (a >= 0) {
-        path.push_back(a);
-        u = arcs_[a].to;
-      } else {  // dead end: retreat
-        if (path.empty()) return 0;
-        level_[u] = -2;  // not reachable in this phase any more (still "source side" is recomputed by bfs)
-        u = arcs_[path.back() ^ 1].to;
-        path.pop_back();
-        it_[u] = arcs_[it_[u]].next;
-      }
-    }
-  }
-  static constexpr double kEps = 1e-12;
-  std::vector<Arc> arcs_;
-  std::vector<int> head_, level_, it_;
+// Boost.Graph's graph for one expansion move's minimum cut (Boykov &
+// Kolmogorov 2004): every arc has its reverse, as the algorithm needs.
+using Traits = boost::adjacency_list_traits<boost::vecS, boost::vecS, boost::directedS>;
+struct CutNode {
+  boost::default_color_type color = boost::white_color;
+  long distance = 0;
+  Traits::edge_descriptor predecessor;
 };
+struct CutArc {
+  double capacity = 0, residual = 0;
+  Traits::edge_descriptor reverse;
+};
+using CutGraph = boost::adjacency_list<boost::vecS, boost::vecS, boost::directedS, CutNode, CutArc>;
+
+void add_arc(CutGraph& g, int u, int v, double cap, double rev_cap = 0) {
+  const auto uv = boost::add_edge(u, v, g).first;
+  const auto vu = boost::add_edge(v, u, g).first;
+  g[uv].capacity = cap;
+  g[vu].capacity = rev_cap;
+  g[uv].reverse = vu;
+  g[vu].reverse = uv;
+}
+
+// Minimum cut: true for the nodes left on the source side (the source's
+// tree, black, after the flow).
+std::vector<char> source_side(CutGraph& g, int s, int t) {
+  boost::boykov_kolmogorov_max_flow(g, boost::get(&CutArc::capacity, g), boost::get(&CutArc::residual, g),
+                                    boost::get(&CutArc::reverse, g), boost::get(&CutNode::predecessor, g),
+                                    boost::get(&CutNode::color, g), boost::get(&CutNode::distance, g),
+                                    boost::get(boost::vertex_index, g), s, t);
+  std::vector<char> out(boost::num_vertices(g));
+  for (size_t v = 0; v < out.size(); ++v) out[v] = g[v].color == boost::black_color;
+  return out;
+}
 
 }  // namespace
 
@@ -122,80 +93,121 @@ Status label_regions(const TriMesh& mesh, const VertexBinding& binding, const st
     const Tri& t = mesh.triangles[f];
     return binding.valid[t[0]] & binding.valid[t[1]] & binding.valid[t[2]];
   };
+  const std::vector<Edge> edges = triangle_edges(mesh);
+  // The surface's direction at the scale of the face: area-weighted triangle
+  // normals diffused over the triangle adjacency (Jacobi steps of the mean
+  // with the three neighbours; a walk of k steps spreads about
+  // 0.5 h sqrt(k) for edge length h, so k = (2 face_radius / h)^2).
+  std::vector<Vec3> broad(nf, Vec3::Zero()), centroid(nf);
+  for (int f = 0; f < nf; ++f) {
+    const Tri& t = mesh.triangles[f];
+    centroid[f] = (mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]) / 3.0;
+  }
+  if (options.face_weight > 0 && options.face_radius > 0) {
+    for (int f = 0; f < nf; ++f) broad[f] = face_normal_area(mesh, f);
+    const double h = std::max(1e-12, mean_edge_length(mesh));
+    const int steps = std::min(4000, static_cast<int>(std::ceil(std::pow(2.0 * options.face_radius / h, 2))));
+    std::vector<Vec3> next(nf);
+    for (int it = 0; it < steps; ++it) {
+      next = broad;
+      for (const Edge& ed : edges)
+        if (ed.g >= 0) {
+          next[ed.f] += broad[ed.g];
+          next[ed.g] += broad[ed.f];
+        }
+      for (int f = 0; f < nf; ++f) broad[f] = 0.25 * next[f];
+    }
+    for (Vec3& n : broad) n = n.norm() > 0 ? Vec3(n.normalized()) : Vec3::Zero();
+  }
+  std::vector<Vec3> centres(np);
+  for (int i = 0; i < np; ++i) centres[i] = photos[i].camera.center();
+  const double w = options.face_weight;
   auto data = [&](int f, int i) {
     const Tri& t = mesh.triangles[f];
     double s = 0;
     for (int k = 0; k < 3; ++k) s += binding.facing[static_cast<size_t>(t[k]) * np + i];
-    return 1.0 - s / 3.0;
+    double face = 0;
+    if (w > 0) face = broad[f].dot((centres[i] - centroid[f]).normalized());
+    return 1.0 - ((1 - w) * s / 3.0 + w * face);
   };
 
-  const std::vector<Edge> edges = triangle_edges(mesh);
   const int ns = std::max(2, options.edge_samples);
-  // Photo i's colours at ns points along edge e, cached.
-  std::vector<std::vector<std::vector<float>>> samples(edges.size());
-  auto edge_colors = [&](int e, int i) -> const std::vector<float>& {
-    auto& per = samples[e];
-    if (per.empty()) per.resize(np);
-    std::vector<float>& c = per[i];
-    if (c.empty()) {
-      c.assign(static_cast<size_t>(ns) * 3, 0.f);
-      const Vec3& A = mesh.positions[edges[e].a];
-      const Vec3& B = mesh.positions[edges[e].b];
-      for (int s = 0; s < ns; ++s) {
-        const double t = static_cast<double>(s) / (ns - 1);
+  // Pair index of photos i < j, and per-edge caches over all pairs.
+  const int pairs = np * (np - 1) / 2;
+  auto pair_index = [&](int i, int j) { return i * np - i * (i + 1) / 2 + (j - i - 1); };
+  // Disagreement of photos i < j on edge e alone: the mean absolute
+  // difference (linear RGB) at ns points along it, -1 where not both valid.
+  std::vector<float> local(edges.size() * pairs);
+  std::vector<char> local_done(edges.size(), 0);
+  std::vector<float> colors(static_cast<size_t>(np) * ns * 3);
+  auto fill_local = [&](int e) {
+    if (local_done[e]) return;
+    local_done[e] = 1;
+    const Edge& E = edges[e];
+    const std::uint64_t both = binding.valid[E.a] & binding.valid[E.b];
+    for (int i = 0; i < np; ++i) {
+      if (!((both >> i) & 1u)) continue;
+      float* c = &colors[static_cast<size_t>(i) * ns * 3];
+      std::fill_n(c, ns * 3, 0.f);
+      for (int k = 0; k < ns; ++k) {
+        const double t = static_cast<double>(k) / (ns - 1);
         Vec2 px;
-        if (photos[i].camera.project((1 - t) * A + t * B, px)) sample_bilinear(photos[i].image, px.x(), px.y(), &c[s * 3]);
+        if (photos[i].camera.project((1 - t) * mesh.positions[E.a] + t * mesh.positions[E.b], px))
+          sample_bilinear(photos[i].image, px.x(), px.y(), c + k * 3);
       }
     }
-    return c;
+    for (int i = 0; i < np; ++i)
+      for (int j = i + 1; j < np; ++j) {
+        float& out = local[static_cast<size_t>(e) * pairs + pair_index(i, j)];
+        if (!((both >> i) & (both >> j) & 1u)) {
+          out = -1.f;
+          continue;
+        }
+        const float* ci = &colors[static_cast<size_t>(i) * ns * 3];
+        const float* cj = &colors[static_cast<size_t>(j) * ns * 3];
+        double d = 0;
+        for (int k = 0; k < ns * 3; ++k) d += std::abs(ci[k] - cj[k]);
+        out = static_cast<float>(d / (ns * 3));
+      }
   };
-  // Disagreement of photos i and j on edge e alone (-1: not both valid there).
-  auto local = [&](int e, int i, int j) {
-    const Edge& E = edges[e];
-    if (!binding.is_valid(E.a, i) || !binding.is_valid(E.b, i) || !binding.is_valid(E.a, j) || !binding.is_valid(E.b, j))
-      return -1.0;
-    const std::vector<float>& ci = edge_colors(e, i);
-    const std::vector<float>& cj = edge_colors(e, j);
-    double d = 0;
-    for (size_t k = 0; k < ci.size(); ++k) d += std::abs(ci[k] - cj[k]);
-    return d / ci.size();
-  };
-  // Edges whose midpoints lie within seam_radius of edge e's (through edges
-  // sharing vertices), computed once per edge that can be a boundary.
   std::vector<std::vector<int>> vertex_edges(mesh.num_vertices());
   for (int e = 0; e < static_cast<int>(edges.size()); ++e) {
     vertex_edges[edges[e].a].push_back(e);
     vertex_edges[edges[e].b].push_back(e);
   }
   auto midpoint = [&](int e) { return Vec3(0.5 * (mesh.positions[edges[e].a] + mesh.positions[edges[e].b])); };
-  std::vector<std::vector<int>> near(edges.size());
-  auto neighbourhood = [&](int e) -> const std::vector<int>& {
-    std::vector<int>& out = near[e];
-    if (!out.empty()) return out;
-    const Vec3 m = midpoint(e);
-    out.push_back(e);
-    for (size_t q = 0; q < out.size(); ++q)
-      for (int v : {edges[out[q]].a, edges[out[q]].b})
-        for (int e2 : vertex_edges[v])
-          if (std::find(out.begin(), out.end(), e2) == out.end() && (midpoint(e2) - m).norm() <= options.seam_radius)
-            out.push_back(e2);
-    return out;
-  };
-  // Seam cost: the largest disagreement within seam_radius, so a boundary
-  // keeps that far from any feature the two photos show at different
-  // places (between two copies the photos agree on the edge itself).
-  // A max of per-edge L1 differences still obeys the triangle inequality.
-  std::vector<float> seam_cache(edges.size() * np * np, -1.f);
+  // Seam cost: the largest disagreement over the edges whose midpoints lie
+  // within seam_radius of the shared edge's (reached through shared
+  // vertices), so a boundary keeps that far from any feature the two photos
+  // show at different places (between two copies the photos agree on the
+  // edge itself). A max of per-edge L1 differences still obeys the triangle
+  // inequality. All pairs of an edge at once, on first use.
+  std::vector<float> seam_cache(edges.size() * pairs, 0.f);
+  std::vector<char> seam_done(edges.size(), 0);
+  std::vector<int> stamp(edges.size(), -1), near;
   auto seam = [&](int e, int i, int j) {
     if (i == j) return 0.0;
     if (i > j) std::swap(i, j);
-    float& c = seam_cache[(static_cast<size_t>(e) * np + i) * np + j];
-    if (c < 0) {
-      double d = 0;
-      for (int e2 : neighbourhood(e)) d = std::max(d, local(e2, i, j));
-      c = static_cast<float>(d);
+    float* c = &seam_cache[static_cast<size_t>(e) * pairs];
+    if (!seam_done[e]) {
+      seam_done[e] = 1;
+      const Vec3 m = midpoint(e);
+      near.assign(1, e);
+      stamp[e] = e;
+      for (size_t q = 0; q < near.size(); ++q)
+        for (int v : {edges[near[q]].a, edges[near[q]].b})
+          for (int e2 : vertex_edges[v])
+            if (stamp[e2] != e && (midpoint(e2) - m).norm() <= options.seam_radius) {
+              stamp[e2] = e;
+              near.push_back(e2);
+            }
+      for (int e2 : near) {
+        fill_local(e2);
+        const float* l = &local[static_cast<size_t>(e2) * pairs];
+        for (int k = 0; k < pairs; ++k) c[k] = std::max(c[k], l[k]);
+      }
     }
-    return options.smoothness * (options.seam_floor + c);
+    return options.smoothness * (options.seam_floor + c[pair_index(i, j)]);
   };
   auto energy = [&](int& boundary) {
     double E = 0;
@@ -215,10 +227,6 @@ Status label_regions(const TriMesh& mesh, const VertexBinding& binding, const st
 
   report.energy_before = energy(report.boundary_edges_before);
   const std::vector<int> initial = region;
-  // Alpha-expansion (Boykov, Veksler & Zabih 2001): for each photo alpha,
-  // one minimum cut decides which triangles switch to alpha. The seam cost
-  // is a metric (a mean absolute difference over fixed samples plus a
-  // constant), so each move is exact and the energy never rises.
   std::vector<int> node(nf, -1), tris;
   for (int f = 0; f < nf; ++f)
     if (cases[f] == TriangleCase::CommonPhoto) {
@@ -227,45 +235,74 @@ Status label_regions(const TriMesh& mesh, const VertexBinding& binding, const st
     }
   const int n = static_cast<int>(tris.size());
   const double kBig = 1e9;  // alpha not valid for all three corners
+  std::vector<std::vector<int>> around(options.icm ? nf : 0);  // ICM: each triangle's case-1 edges
+  if (options.icm)
+    for (int e = 0; e < static_cast<int>(edges.size()); ++e)
+      if (edges[e].g >= 0 && node[edges[e].f] >= 0 && node[edges[e].g] >= 0) {
+        around[edges[e].f].push_back(e);
+        around[edges[e].g].push_back(e);
+      }
   for (int cycle = 0; cycle < options.max_passes; ++cycle) {
     int changed = 0;
-    for (int alpha = 0; alpha < np; ++alpha) {
-      // Node x = 0 (source side): keep the label; x = 1 (sink side): alpha.
-      std::vector<double> delta(n, 0.0);  // cost(x = 1) - cost(x = 0)
-      MaxFlow graph(n + 2);
-      const int S = n, T = n + 1;
-      for (int k = 0; k < n; ++k) {
-        const int f = tris[k];
-        const double keep = data(f, region[f]);
-        const double take = ((common(f) >> alpha) & 1u) ? data(f, alpha) : kBig;
-        delta[k] += region[f] == alpha ? 0.0 : take - keep;
-      }
-      for (int e = 0; e < static_cast<int>(edges.size()); ++e) {
-        const Edge& ed = edges[e];
-        if (ed.g < 0 || node[ed.f] < 0 || node[ed.g] < 0) continue;
-        const int a = region[ed.f], b = region[ed.g];
-        const double A = seam(e, a, b), B = seam(e, a, alpha), C = seam(e, alpha, b);
-        // E(x_f, x_g) = A + (C - A) x_f + (0 - C) x_g + (B + C - A)(1 - x_f) x_g
-        delta[node[ed.f]] += C - A;
-        delta[node[ed.g]] += -C;
-        const double w = std::max(0.0, B + C - A);
-        if (w > 0) graph.add_edge(node[ed.f], node[ed.g], w);
-      }
-      for (int k = 0; k < n; ++k) {
-        if (region[tris[k]] == alpha) {
-          graph.add_edge(S, k, kBig * 4);  // already alpha: x = 0 and x = 1 are the same label
-        } else if (delta[k] > 0) {
-          graph.add_edge(S, k, delta[k]);
-        } else if (delta[k] < 0) {
-          graph.add_edge(k, T, -delta[k]);
+    if (options.icm) {
+      // Iterated conditional modes (the baseline): each triangle in turn
+      // takes the label that is cheapest given its neighbours' labels.
+      for (int f : tris) {
+        int best = region[f];
+        double best_cost = std::numeric_limits<double>::infinity();
+        for (int l = 0; l < np; ++l) {
+          if (!((common(f) >> l) & 1u)) continue;
+          double c = data(f, l);
+          for (int e : around[f]) c += seam(e, l, region[edges[e].f == f ? edges[e].g : edges[e].f]);
+          if (c < best_cost - 1e-12) {
+            best_cost = c;
+            best = l;
+          }
         }
+        changed += best != region[f];
+        region[f] = best;
       }
-      graph.max_flow(S, T);
-      for (int k = 0; k < n; ++k)
-        if (!graph.on_source_side(k) && region[tris[k]] != alpha) {
-          region[tris[k]] = alpha;
-          ++changed;
+    } else {
+      // Alpha-expansion (Boykov, Veksler & Zabih 2001): for each photo
+      // alpha, one minimum cut decides which triangles switch to alpha.
+      for (int alpha = 0; alpha < np; ++alpha) {
+        // Node x = 0 (source side): keep the label; x = 1 (sink side): alpha.
+        std::vector<double> delta(n, 0.0);  // cost(x = 1) - cost(x = 0)
+        CutGraph graph(n + 2);
+        const int S = n, T = n + 1;
+        for (int k = 0; k < n; ++k) {
+          const int f = tris[k];
+          const double keep = data(f, region[f]);
+          const double take = ((common(f) >> alpha) & 1u) ? data(f, alpha) : kBig;
+          delta[k] += region[f] == alpha ? 0.0 : take - keep;
         }
+        for (int e = 0; e < static_cast<int>(edges.size()); ++e) {
+          const Edge& ed = edges[e];
+          if (ed.g < 0 || node[ed.f] < 0 || node[ed.g] < 0) continue;
+          const int a = region[ed.f], b = region[ed.g];
+          const double A = seam(e, a, b), B = seam(e, a, alpha), C = seam(e, alpha, b);
+          // E(x_f, x_g) = A + (C - A) x_f + (0 - C) x_g + (B + C - A)(1 - x_f) x_g
+          delta[node[ed.f]] += C - A;
+          delta[node[ed.g]] += -C;
+          const double wfg = std::max(0.0, B + C - A);
+          if (wfg > 0) add_arc(graph, node[ed.f], node[ed.g], wfg);
+        }
+        for (int k = 0; k < n; ++k) {
+          if (region[tris[k]] == alpha) {
+            add_arc(graph, S, k, kBig * 4);  // already alpha: x = 0 and x = 1 are the same label
+          } else if (delta[k] > 0) {
+            add_arc(graph, S, k, delta[k]);
+          } else if (delta[k] < 0) {
+            add_arc(graph, k, T, -delta[k]);
+          }
+        }
+        const std::vector<char> keep = source_side(graph, S, T);
+        for (int k = 0; k < n; ++k)
+          if (!keep[k] && region[tris[k]] != alpha) {
+            region[tris[k]] = alpha;
+            ++changed;
+          }
+      }
     }
     report.passes = cycle + 1;
     if (changed == 0) break;

@@ -2,17 +2,19 @@
 // mosaicing of image-based texture maps"): every case-1 triangle (resample.h)
 // gets one of its common photos as its label, minimising
 //   E = sum_f D_f(l_f) + lambda * sum_{f~g, l_f != l_g} (seam_floor + d_fg)
-// with D_f(i) = 1 - mean_k <N(v_k), V_i> over f's corners (prefers frontal
-// views) and d_fg the mean absolute difference (linear RGB) of photos l_f
-// and l_g: the largest mean absolute difference (linear RGB, sampled along
-// mesh edges) over the edges within seam_radius of the shared edge. So
+// with D_f(i) = 1 - <N, V_i> (prefers frontal views; N the corners'
+// normals, optionally mixed with the face-scale normal, face_weight) and
+// d_fg the disagreement of photos l_f and l_g: the largest mean absolute
+// difference (linear RGB, sampled along mesh edges) over the edges within
+// seam_radius of the shared edge. So
 // boundaries go where the photos agree over a band wider than the
 // misregistration, not across a brow nor between the two copies of it that
 // a mm-off surface shows (there the photos agree on the edge itself).
 // Case-2/3 triangles keep kRegionFilled and add no seam term.
 // Minimised by alpha-expansion (one min cut per photo and cycle, Boykov,
-// Veksler & Zabih 2001) from the largest-<N,V> labels of classify_triangles;
-// d is a metric, so every move is exact and the energy never rises.
+// Veksler & Zabih 2001; the cut by Boost.Graph's boykov_kolmogorov_max_flow)
+// from the largest-<N,V> labels of classify_triangles; d is a metric, so
+// every move is exact and the energy never rises.
 //
 // Shapes: mesh #V / #F, photos #P (same order as the binding), region #F.
 #pragma once
@@ -34,6 +36,16 @@ struct LabelingOptions {
   // units (metres for the heads here): above the expected parallax of a
   // feature between two photos (surface error x tan of their angle).
   double seam_radius = 0.004;
+  // Weight of the face-scale view direction in the data term: D_f(i) =
+  // 1 - ((1 - w) mean_k <N(v_k), V_i> + w <N_face(f), V_i>), N_face the
+  // normal averaged over about face_radius (mesh units) around f, so where
+  // the nose, eyes and brows turn small patches towards side photos the
+  // photo most frontal to the face as a whole still wins them.
+  double face_weight = 0.0;
+  double face_radius = 0.02;
+  // Minimise by iterated conditional modes instead of alpha-expansion (the
+  // baseline the tests hold the expansion against).
+  bool icm = false;
 };
 
 struct LabelingReport {

@@ -139,3 +139,36 @@ TEST_CASE("the region labelling gives each triangle one common photo and never r
   std::vector<int> wrong(3, 0);
   CHECK_FALSE(label_regions(mesh, binding, s.photos, cases, LabelingOptions(), wrong, rep).ok());
 }
+
+TEST_CASE("the region labelling's expansion by Boost's max-flow ends no higher than ICM") {
+  const Scene& s = scene();
+  const TriMesh& mesh = s.mesh;
+  const std::vector<Vec3> normals = vertex_normals(mesh);
+  MeshBvh bvh;
+  REQUIRE(build_bvh(mesh, bvh).ok());
+  VertexBinding binding;
+  REQUIRE(bind_vertices(mesh, normals, bvh, {s.photos[0].camera, s.photos[1].camera}, BindingOptions(), binding).ok());
+  std::vector<TriangleCase> cases;
+  std::vector<int> start;
+  classify_triangles(mesh, binding, cases, start);
+  // Plain and with the face-scale data term; a stronger seam weight makes
+  // the energy's minimum far from the start, where ICM's one-triangle moves
+  // stop early (a boundary moves only if each single step pays).
+  for (double face_weight : {0.0, 0.5})
+    for (double smoothness : {1.0, 8.0}) {
+      LabelingOptions opt;
+      opt.face_weight = face_weight;
+      opt.smoothness = smoothness;
+      opt.max_passes = 20;
+      std::vector<int> expansion = start, icm = start;
+      LabelingReport rep_expansion, rep_icm;
+      REQUIRE(label_regions(mesh, binding, s.photos, cases, opt, expansion, rep_expansion).ok());
+      opt.icm = true;
+      REQUIRE(label_regions(mesh, binding, s.photos, cases, opt, icm, rep_icm).ok());
+      WARN("face weight " << face_weight << " smoothness " << smoothness << ": start " << rep_expansion.energy_before
+                          << ", ICM " << rep_icm.energy_after << ", expansion " << rep_expansion.energy_after);
+      CHECK(rep_icm.energy_after <= rep_icm.energy_before + 1e-9);
+      CHECK(rep_expansion.energy_after <= rep_icm.energy_after + 1e-9);
+      CHECK(rep_expansion.energy_after < rep_expansion.energy_before);
+    }
+}
