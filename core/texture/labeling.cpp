@@ -10,11 +10,15 @@
 
 // GCC 12 warns of a maybe-uninitialized boost::optional inside Boost.Graph's
 // edge iterator (a known false positive of its headers).
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
 #include <boost/graph/adjacency_list.hpp>
 #include <boost/graph/boykov_kolmogorov_max_flow.hpp>
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic pop
+#endif
 
 namespace lk {
 namespace {
@@ -94,30 +98,64 @@ Status label_regions(const TriMesh& mesh, const VertexBinding& binding, const st
     return binding.valid[t[0]] & binding.valid[t[1]] & binding.valid[t[2]];
   };
   const std::vector<Edge> edges = triangle_edges(mesh);
-  // The surface's direction at the scale of the face: area-weighted triangle
-  // normals diffused over the triangle adjacency (Jacobi steps of the mean
-  // with the three neighbours; a walk of k steps spreads about
-  // 0.5 h sqrt(k) for edge length h, so k = (2 face_radius / h)^2).
+  // The surface's direction at the scale of the face: the area-weighted
+  // normals Gaussian-averaged (sigma = face_radius) around each triangle.
+  // Cheaply: normals summed into cells of sigma / 2, the average taken at
+  // the cells' corners over the cells within 3 sigma, and trilinearly
+  // interpolated at each triangle's centroid.
   std::vector<Vec3> broad(nf, Vec3::Zero()), centroid(nf);
   for (int f = 0; f < nf; ++f) {
     const Tri& t = mesh.triangles[f];
     centroid[f] = (mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]]) / 3.0;
   }
-  if (options.face_weight > 0 && options.face_radius > 0) {
-    for (int f = 0; f < nf; ++f) broad[f] = face_normal_area(mesh, f);
-    const double h = std::max(1e-12, mean_edge_length(mesh));
-    const int steps = std::min(4000, static_cast<int>(std::ceil(std::pow(2.0 * options.face_radius / h, 2))));
-    std::vector<Vec3> next(nf);
-    for (int it = 0; it < steps; ++it) {
-      next = broad;
-      for (const Edge& ed : edges)
-        if (ed.g >= 0) {
-          next[ed.f] += broad[ed.g];
-          next[ed.g] += broad[ed.f];
-        }
-      for (int f = 0; f < nf; ++f) broad[f] = 0.25 * next[f];
+  if (options.face_weight > 0 && options.face_radius > 0 && nf > 0) {
+    const double sigma = options.face_radius, cell = std::max(0.5 * sigma, mean_edge_length(mesh));
+    auto key = [](long x, long y, long z) {
+      return (static_cast<std::uint64_t>(x + (1 << 20)) << 42) | (static_cast<std::uint64_t>(y + (1 << 20)) << 21) |
+             static_cast<std::uint64_t>(z + (1 << 20));
+    };
+    struct Cell {
+      Vec3 normal = Vec3::Zero(), at = Vec3::Zero();
+      double area = 0;
+    };
+    std::unordered_map<std::uint64_t, Cell> cells;
+    auto index = [&](const Vec3& p, int k) { return static_cast<long>(std::floor(p[k] / cell)); };
+    for (int f = 0; f < nf; ++f) {
+      const Vec3 n = face_normal_area(mesh, f);
+      Cell& c = cells[key(index(centroid[f], 0), index(centroid[f], 1), index(centroid[f], 2))];
+      c.normal += n;
+      c.at += n.norm() * centroid[f];
+      c.area += n.norm();
     }
-    for (Vec3& n : broad) n = n.norm() > 0 ? Vec3(n.normalized()) : Vec3::Zero();
+    for (auto& kv : cells)
+      if (kv.second.area > 0) kv.second.at /= kv.second.area;
+    const long reach = static_cast<long>(std::ceil(3 * sigma / cell));
+    std::unordered_map<std::uint64_t, Vec3> corner;
+    auto corner_normal = [&](long x, long y, long z) -> const Vec3& {
+      auto it = corner.find(key(x, y, z));
+      if (it != corner.end()) return it->second;
+      const Vec3 at(x * cell, y * cell, z * cell);
+      Vec3 sum = Vec3::Zero();
+      for (long i = x - reach; i <= x + reach; ++i)
+        for (long j = y - reach; j <= y + reach; ++j)
+          for (long k = z - reach; k <= z + reach; ++k) {
+            auto c = cells.find(key(i, j, k));
+            if (c == cells.end()) continue;
+            sum += std::exp(-(c->second.at - at).squaredNorm() / (2 * sigma * sigma)) * c->second.normal;
+          }
+      return corner.emplace(key(x, y, z), sum).first->second;
+    };
+    for (int f = 0; f < nf; ++f) {
+      const Vec3 q = centroid[f] / cell;
+      const long x = static_cast<long>(std::floor(q.x())), y = static_cast<long>(std::floor(q.y())),
+                 z = static_cast<long>(std::floor(q.z()));
+      const double u = q.x() - x, v = q.y() - y, w = q.z() - z;
+      Vec3 n = Vec3::Zero();
+      for (int c = 0; c < 8; ++c)
+        n += ((c & 1) ? u : 1 - u) * ((c & 2) ? v : 1 - v) * ((c & 4) ? w : 1 - w) *
+             corner_normal(x + (c & 1), y + ((c >> 1) & 1), z + ((c >> 2) & 1));
+      broad[f] = n.norm() > 0 ? Vec3(n.normalized()) : Vec3::Zero();
+    }
   }
   std::vector<Vec3> centres(np);
   for (int i = 0; i < np; ++i) centres[i] = photos[i].camera.center();

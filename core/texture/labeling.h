@@ -38,11 +38,12 @@ struct LabelingOptions {
   double seam_radius = 0.004;
   // Weight of the face-scale view direction in the data term: D_f(i) =
   // 1 - ((1 - w) mean_k <N(v_k), V_i> + w <N_face(f), V_i>), N_face the
-  // normal averaged over about face_radius (mesh units) around f, so where
-  // the nose, eyes and brows turn small patches towards side photos the
-  // photo most frontal to the face as a whole still wins them.
-  double face_weight = 0.0;
-  double face_radius = 0.02;
+  // normals Gaussian-averaged with sigma face_radius (mesh units) around f,
+  // so where the nose, eyes and brows turn small patches towards side
+  // photos, the photo most frontal to the face as a whole still wins them
+  // (one photo over the central face; 0 = the per-triangle term alone).
+  double face_weight = 1.0;
+  double face_radius = 0.05;
   // Minimise by iterated conditional modes instead of alpha-expansion (the
   // baseline the tests hold the expansion against).
   bool icm = false;
