@@ -70,6 +70,26 @@ void stripe_profile(const TexturedHead& out, int size, double& runs_per_row, dou
   runs_per_row = double(runs) / rows;
 }
 
+// The labelling's inputs: the binding of the photos to the mesh and
+// classify_triangles' cases and largest-<N,V> regions.
+struct Inputs {
+  VertexBinding binding;
+  std::vector<TriangleCase> cases;
+  std::vector<int> region;
+};
+
+Inputs labeling_inputs(const TriMesh& mesh, const std::vector<TexturePhoto>& photos) {
+  Inputs in;
+  const std::vector<Vec3> normals = vertex_normals(mesh);
+  MeshBvh bvh;
+  REQUIRE(build_bvh(mesh, bvh).ok());
+  std::vector<Camera> cameras;
+  for (const TexturePhoto& ph : photos) cameras.push_back(ph.camera);
+  REQUIRE(bind_vertices(mesh, normals, bvh, cameras, BindingOptions(), in.binding).ok());
+  classify_triangles(mesh, in.binding, in.cases, in.region);
+  return in;
+}
+
 }  // namespace
 
 TEST_CASE("the region labelling keeps a feature single where a mm-off surface doubles it") {
@@ -99,14 +119,10 @@ TEST_CASE("the region labelling keeps a feature single where a mm-off surface do
 TEST_CASE("the region labelling gives each triangle one common photo and never raises the energy") {
   const Scene& s = scene();
   const TriMesh& mesh = s.mesh;
-  const std::vector<Vec3> normals = vertex_normals(mesh);
-  MeshBvh bvh;
-  REQUIRE(build_bvh(mesh, bvh).ok());
-  VertexBinding binding;
-  REQUIRE(bind_vertices(mesh, normals, bvh, {s.photos[0].camera, s.photos[1].camera}, BindingOptions(), binding).ok());
-  std::vector<TriangleCase> cases;
-  std::vector<int> region;
-  classify_triangles(mesh, binding, cases, region);
+  const Inputs in = labeling_inputs(mesh, s.photos);
+  const VertexBinding& binding = in.binding;
+  const std::vector<TriangleCase>& cases = in.cases;
+  std::vector<int> region = in.region;
   const std::vector<int> start = region;
   LabelingReport rep;
   REQUIRE(label_regions(mesh, binding, s.photos, cases, LabelingOptions(), region, rep).ok());
@@ -143,14 +159,10 @@ TEST_CASE("the region labelling gives each triangle one common photo and never r
 TEST_CASE("the region labelling's expansion by Boost's max-flow ends no higher than ICM") {
   const Scene& s = scene();
   const TriMesh& mesh = s.mesh;
-  const std::vector<Vec3> normals = vertex_normals(mesh);
-  MeshBvh bvh;
-  REQUIRE(build_bvh(mesh, bvh).ok());
-  VertexBinding binding;
-  REQUIRE(bind_vertices(mesh, normals, bvh, {s.photos[0].camera, s.photos[1].camera}, BindingOptions(), binding).ok());
-  std::vector<TriangleCase> cases;
-  std::vector<int> start;
-  classify_triangles(mesh, binding, cases, start);
+  const Inputs in = labeling_inputs(mesh, s.photos);
+  const VertexBinding& binding = in.binding;
+  const std::vector<TriangleCase>& cases = in.cases;
+  const std::vector<int>& start = in.region;
   // Plain and with the face-scale data term; a stronger seam weight makes
   // the energy's minimum far from the start, where ICM's one-triangle moves
   // stop early (a boundary moves only if each single step pays).
@@ -189,15 +201,10 @@ TEST_CASE("the region labelling's face-scale data term gives a ridge one photo")
     REQUIRE(render_synthetic_photo(mesh, ph.camera, stripe_color, Vec3(0, 0, 0), ph.image).ok());
     photos.push_back(std::move(ph));
   }
-  const std::vector<Vec3> normals = vertex_normals(mesh);
-  MeshBvh bvh;
-  REQUIRE(build_bvh(mesh, bvh).ok());
-  VertexBinding binding;
-  REQUIRE(bind_vertices(mesh, normals, bvh, {photos[0].camera, photos[1].camera, photos[2].camera}, BindingOptions(),
-                        binding).ok());
-  std::vector<TriangleCase> cases;
-  std::vector<int> start;
-  classify_triangles(mesh, binding, cases, start);
+  const Inputs in = labeling_inputs(mesh, photos);
+  const VertexBinding& binding = in.binding;
+  const std::vector<TriangleCase>& cases = in.cases;
+  const std::vector<int>& start = in.region;
   // Share of the ridge's case-1 triangles (|x| < 8 mm) labelled frontal.
   auto frontal_share = [&](const std::vector<int>& region) {
     int ridge = 0, frontal = 0;
