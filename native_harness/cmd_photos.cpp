@@ -244,7 +244,7 @@ Status write_contour_check(const std::string& path, const std::string& photo_pat
 int run_photos(const Args& args) {
   const std::string cmd = "photos";
   if (!only_known_options(cmd, args, {"points", "photos", "masks", "masks-from-photos", "silhouette-check", "map", "out",
-                                      "levels", "focal-px", "texture-size", "no-texture", "register-texture", "stereo", "no-stereo", "coarse",
+                                      "levels", "focal-px", "texture-size", "no-texture", "register-texture", "label-texture", "stereo", "no-stereo", "coarse",
                                       "schedule", "folds", "depth-scale", "depth-0", "depth-yaw2", "contours",
                                       "contour-check", "contour-lambda", "focal-sigma", "no-slide", "lids", "iris-photo", "pulls", "pulls-by-photo", "pulls-by-landmark", "focal-jackknife"}))
     return 2;
@@ -427,7 +427,8 @@ int run_photos(const Args& args) {
     std::vector<Image> decoded;
     s = write_photos_texture(r.fit.mesh, project.fit.multires.levels, project.fit.level_meshes.back().positions,
                              used_paths, used_names, cameras, texture_size, out_dir, &project.texture.uvs,
-                             &project.texture.skin, &decoded, args.has("register-texture"));
+                             &project.texture.skin, &decoded, args.has("register-texture"),
+                             args.has("label-texture"));
     if (!s) return fail(cmd, s.message);
     // The iris from the same photos (the generic one when none is found).
     std::vector<const Image*> image_ptrs;
@@ -808,10 +809,11 @@ int run_learn_landmark_map(const Args& args) {
 
 Registrar photos_reg({"photos",
                       "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] [--masks M1.png ... | --masks-from-photos] [--silhouette-check] "
-                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--register-texture] [--stereo] [--folds] [--coarse N:S,...|none] [--schedule S,...|none] [--depth-scale SIGMA [--depth-0 K0] [--depth-yaw2 C]] [--focal-sigma S] [--focal-jackknife] [--no-slide] [--contours [--contour-lambda K]] [--contour-check] [--lids] [--iris-photo NAME] [--pulls | --pulls-by-photo | --pulls-by-landmark]",
+                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--register-texture] [--label-texture] [--stereo] [--folds] [--coarse N:S,...|none] [--schedule S,...|none] [--depth-scale SIGMA [--depth-0 K0] [--depth-yaw2 C]] [--focal-sigma S] [--focal-jackknife] [--no-slide] [--contours [--contour-lambda K]] [--contour-check] [--lids] [--iris-photo NAME] [--pulls | --pulls-by-photo | --pulls-by-landmark]",
                       "a head from several photos' landmarks (fua1998): self-calibrated cameras, fitted control "
                       "mesh, levels, cameras.json, report.json; with --photos the skin from those cameras "
-                      "(textured.obj, skin.png; --register-texture: the photos re-registered on the head first, "
+                      "(textured.obj, skin.png, sources.png; --label-texture: one photo per texture region, texture/labeling.h; "
+                      "--register-texture: the photos re-registered on the head first, "
                       "texture/register.h) and the iris found in them (eye.png; --iris-photo NAME: in that photo only, "
                       "else the most frontal eye); head.likeness.glb, the head project; with --masks (white or opaque = the person) the head's outline "
                       "in each photo as silhouettes (--masks-from-photos: from the photos, plain background only; "

@@ -2,6 +2,7 @@
 // albedo -> calibration -> texture_head -> re-render of a held-out view,
 // scored against the truth (see texture_selftest.h).
 #include "command.h"
+#include "photos_texture.h"
 #include "texture_selftest.h"
 
 #include "io/io.h"
@@ -24,7 +25,7 @@ int run_texture_selftest_command(const Args& args) {
   if (!only_known_options(kName, args,
                           {"seed", "out", "size", "photos", "photo-size", "levels", "light-spread", "noise",
                            "per-photo-focal", "diagnose", "supersample", "perturb-deg", "surface-error-mm",
-                           "register"}))
+                           "register", "label-regions"}))
     return 2;
   const std::string out = args.get("out");
   if (out.empty()) return usage_error("--out DIR is required");
@@ -44,6 +45,7 @@ int run_texture_selftest_command(const Args& args) {
   opt.shared_focal = !args.has("per-photo-focal");
   opt.diagnostics = args.has("diagnose");
   opt.register_photos = args.has("register");
+  opt.label_regions = args.has("label-regions");
   // Fail before minutes of work when the results cannot be written.
   ::mkdir(out.c_str(), 0755);
   struct stat folder;
@@ -106,6 +108,7 @@ int run_texture_selftest_command(const Args& args) {
                   g.photos[i].rms_before, g.photos[i].rms_after, g.photos[i].rotation_deg, g.photos[i].translation_mm,
                   g.photos[i].field_max_px, g.photos[i].gain);
   }
+  print_blend_figures(r.texture_report, "  ");
   std::printf("  timings (wall ms):");
   for (const auto& [name, ms] : r.timings_ms) std::printf(" %s %.0f;", name.c_str(), ms);
   std::printf("\nwrote %s/{truth,ours,nospline,error,skin,skin_nospline,skin_truth,face_mask,photo_*}.png and report.json\n",
@@ -116,7 +119,7 @@ int run_texture_selftest_command(const Args& args) {
 Registrar reg({"texture-selftest",
                "likeness texture-selftest --out DIR [--seed N] [--size 1024] [--photos 5] [--photo-size 1200] "
                "[--levels 3] [--light-spread 0.12] [--noise 0.5] [--per-photo-focal] [--diagnose] [--supersample 2] "
-               "[--perturb-deg D] [--surface-error-mm A] [--register]",
+               "[--perturb-deg D] [--surface-error-mm A] [--register] [--label-regions]",
                "ground-truth texturing check (tarini2002 Sec. 3.2): synthetic photos under different lights, "
                "calibration, texture_head with/without spline, held-out view scored by PSNR/SSIM/seam",
                run_texture_selftest_command});

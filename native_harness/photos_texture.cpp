@@ -4,17 +4,27 @@
 #include "project/texture_job.h"
 #include "texture/texture.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <string>
 
 namespace lk::cli {
 
+void print_blend_figures(const TextureReport& t, const char* indent) {
+  std::printf("%schart texels whose fine detail blends >= 2 photos: %ld of %ld (%.1f%%)\n", indent, t.texels_blended,
+              t.chart_texels, 100.0 * t.texels_blended / std::max(1L, t.chart_texels));
+  if (t.labeled)
+    std::printf("%sregion labelling: energy %.1f -> %.1f, boundary edges %d -> %d, %d triangles relabelled, %d passes\n",
+                indent, t.labeling.energy_before, t.labeling.energy_after, t.labeling.boundary_edges_before,
+                t.labeling.boundary_edges_after, t.labeling.triangles_changed, t.labeling.passes);
+}
+
 Status write_photos_texture(const TriMesh& control, const std::vector<ButterflyLevel>& levels,
                             const std::vector<Vec3>& fine_positions, const std::vector<std::string>& image_paths,
                             const std::vector<std::string>& names, const std::vector<Camera>& cameras, int size,
                             const std::string& out_dir, std::vector<Vec2>* uvs, Image* skin,
-                            std::vector<Image>* images, bool register_photos) {
+                            std::vector<Image>* images, bool register_photos, bool label_regions) {
   if (levels.empty() || image_paths.size() != cameras.size() || names.size() != cameras.size())
     return Status::error(ErrorCode::InvalidInput, "texture: no level, or photos and cameras differ in number");
   TriMesh mesh;
@@ -32,6 +42,7 @@ Status write_photos_texture(const TriMesh& control, const std::vector<ButterflyL
   TextureOptions options;
   options.size = size;
   options.register_photos = register_photos;
+  options.label_regions = label_regions;
   TexturedHead head;
   std::chrono::steady_clock::time_point start;
   double register_ms = 0;
@@ -52,6 +63,19 @@ Status write_photos_texture(const TriMesh& control, const std::vector<ButterflyL
       std::printf("  %s: rms %.4f -> %.4f, turned %.3f deg, moved %.1f mm, field <= %.2f px, gain %.3f\n",
                   names[i].c_str(), g.photos[i].rms_before, g.photos[i].rms_after, g.photos[i].rotation_deg,
                   g.photos[i].translation_mm, g.photos[i].field_max_px, g.photos[i].gain);
+  }
+  if (s) print_blend_figures(head.report, "texture: ");
+  if (s && !head.source.empty()) {
+    static const unsigned char kPalette[6][3] = {{230, 60, 60}, {60, 170, 60}, {60, 90, 230}, {230, 200, 40}, {200, 60, 220}, {40, 200, 220}};
+    Image map = Image::make(size, size, 3, 0);
+    for (size_t j = 0; j < head.source.size(); ++j) {
+      const int r = head.source[j];
+      unsigned char* px = &map.pixels[j * 3];
+      if (r >= 0) std::copy_n(kPalette[r % 6], 3, px);
+      else if (r == kRegionBlended) std::fill_n(px, 3, 255);
+      else if (r == kRegionFilled) std::fill_n(px, 3, 128);
+    }
+    s = save_png_file(out_dir + "/sources.png", map);
   }
   if (s) s = write_file(out_dir + "/textured.obj", write_obj(head.mesh, "textured.mtl"));
   if (s) s = write_file(out_dir + "/textured.mtl", write_mtl("skin.png"));

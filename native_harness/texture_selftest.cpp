@@ -512,6 +512,7 @@ Status run_texture_selftest(const SelftestOptions& opt, SelftestResult& result,
   texture_options.size = opt.texture_size;
   texture_options.keep_unblended = true;
   texture_options.register_photos = opt.register_photos;
+  texture_options.label_regions = opt.label_regions;
   std::map<std::string, Clock::time_point> step_start;
   std::vector<std::pair<std::string, double>> steps;
   ProgressFn progress = [&](const char* step, double fraction) {
@@ -608,7 +609,7 @@ std::string selftest_report_json(const SelftestOptions& opt, const SelftestResul
                   {"shared_focal", opt.shared_focal},
                   {"perturb_deg", opt.perturb_deg},
                   {"surface_error_mm", opt.surface_error_mm},
-                  {"register_photos", opt.register_photos}};
+                  {"register_photos", opt.register_photos}, {"label_regions", opt.label_regions}};
   j["mesh"] = {{"control_triangles", r.control_triangles}, {"vertices", r.vertices}, {"triangles", r.triangles}};
   j["evaluation"] = "held-out view (yaw 25, pitch 6 deg), unlit albedo renders, face-region pixels; "
                     "truth albedo = photo 0's neutral light";

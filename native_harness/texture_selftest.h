@@ -69,6 +69,7 @@ struct SelftestOptions {
   double perturb_deg = 0;
   double surface_error_mm = 0;
   bool register_photos = false;      // texture_head's photometric re-registration (texture/register.h)
+  bool label_regions = false;        // texture_head's one-photo-per-region labelling (texture/labeling.h)
 };
 
 // What calibration recovered for one photo, against the true camera.

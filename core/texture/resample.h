@@ -34,6 +34,7 @@ namespace lk {
 
 constexpr int kRegionBackground = -1;  // texel outside the chart
 constexpr int kRegionFilled = -2;      // coloured by interpolation (cases 2 and 3)
+constexpr int kRegionBlended = -3;     // fine detail blended from two or more photos (texture.h source)
 
 enum class TriangleCase : signed char { CommonPhoto = 1, AllBound = 2, SomeUnbound = 3 };
 

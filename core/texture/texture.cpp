@@ -257,6 +257,13 @@ Status texture_head(const TriMesh& mesh, const std::vector<TexturePhoto>& photos
     std::vector<TriangleCase> cases;
     std::vector<int> tri_region;
     classify_triangles(mesh, binding, cases, tri_region);
+    if (options.label_regions && np >= 2) {
+      s = label_regions(mesh, binding, *used_photos, cases, options.labeling, tri_region, rep.labeling);
+      if (!s) return with_context(s, "region labelling");
+      rep.labeled = true;
+      for (size_t j = 0; j < raster.triangle.size(); ++j)
+        if (raster.triangle[j] >= 0) out.region[j] = tri_region[raster.triangle[j]];
+    }
     SplineBlender blender;
     s = blender.begin(size, size, 3, options.spline_levels);
     if (!s) return s;
@@ -266,7 +273,13 @@ Status texture_head(const TriMesh& mesh, const std::vector<TexturePhoto>& photos
     ImageF photo_image;
     std::vector<char> seen;
     for (int i = 0; i < np; ++i) {
-      const std::vector<char> keep = shrunk_region_triangles(mesh, tri_region, i);
+      std::vector<char> keep;
+      if (rep.labeled) {
+        keep.resize(tri_region.size());
+        for (size_t f = 0; f < keep.size(); ++f) keep[f] = tri_region[f] == i;
+      } else {
+        keep = shrunk_region_triangles(mesh, tri_region, i);
+      }
       long in_mask = 0;
       for (size_t j = 0; j < raster.triangle.size(); ++j) {
         const int f = raster.triangle[j];
@@ -289,6 +302,20 @@ Status texture_head(const TriMesh& mesh, const std::vector<TexturePhoto>& photos
       if (!report(progress, "spline", (i + 1.0) / (np + 1.0))) return cancelled("spline");
     }
     ImageF().pixels.swap(photo_image.pixels);
+    out.source.assign(raster.triangle.size(), kRegionBackground);
+    for (size_t j = 0; j < raster.triangle.size(); ++j) {
+      const int f = raster.triangle[j];
+      if (f < 0) continue;
+      if (complement.pixels[j] == 0.f) {
+        out.source[j] = tri_region[f];
+        continue;
+      }
+      const Tri& t = mesh.triangles[f];
+      const std::uint64_t any = binding.valid[t[0]] | binding.valid[t[1]] | binding.valid[t[2]];
+      const bool several = (any & (any - 1)) != 0;
+      out.source[j] = several ? kRegionBlended : kRegionFilled;
+      rep.texels_blended += several;
+    }
     // The complement image: the seam-free (feathered) resampling, filled
     // past the chart so the pyramids see no black border. Made last, so at
     // most one full-size image besides the blender's pyramids is alive.

@@ -39,6 +39,7 @@
 #include "mesh/tri_mesh.h"
 #include "texture/binding.h"
 #include "texture/hole_fill.h"
+#include "texture/labeling.h"
 #include "texture/register.h"
 #include "texture/resample.h"
 #include "uv/stretch_param.h"
@@ -84,6 +85,13 @@ struct TextureOptions {
   // correction per photo, then the binding is made again with them.
   bool register_photos = false;
   RegisterOptions registration;
+  // One photo per region (labeling.h): the spline's regions become a
+  // labelling that prefers frontal views and puts its boundaries where the
+  // photos agree, and the masks are the regions themselves (not shrunk), so
+  // at fine scales each texel of a region shows that photo alone and the
+  // feathered blend is left only to the case-2/3 triangles.
+  bool label_regions = false;
+  LabelingOptions labeling;
 };
 
 struct TexturePhotoReport {
@@ -107,6 +115,11 @@ struct TextureReport {
   UvStats uv;                          // stretch of the chart used (measured either way)
   bool registered = false;             // register_photos ran and its corrections were used
   RegisterReport registration;         // its figures (photos empty when it did not run)
+  bool labeled = false;                // label_regions ran
+  LabelingReport labeling;             // its figures
+  // Chart texels whose fine detail mixes two or more photos: the spline's
+  // complement (feathered blend) over triangles whose corners see >= 2 photos.
+  long texels_blended = 0;
 };
 
 struct TexturedHead {
@@ -114,6 +127,10 @@ struct TexturedHead {
   Image skin;              // size x size x 3, sRGB
   Image unblended;         // the same before the spline (only with keep_unblended)
   std::vector<int> region; // size * size: photo index, kRegionFilled or kRegionBackground
+  // size * size, spline on (else empty): where each texel's fine detail comes
+  // from: the photo whose mask holds it, kRegionBlended (complement over >= 2
+  // photos), kRegionFilled (complement over < 2 photos) or kRegionBackground.
+  std::vector<int> source;
   TextureReport report;
 };
 
