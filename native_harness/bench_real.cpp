@@ -39,6 +39,11 @@
 // (FitHeadOptions::fit_scanned_neck off: the figures before it was the
 // default); --fit-real-scanned-neck: on (the default).
 // --fit-real-copy NAME: only the copies whose name holds NAME ("turn").
+// --fit-real-sweep: the copies of swept_copies instead (shifts along each
+// axis, turns of 0.05-5 deg about each axis); every copy prints where its
+// alignment put the head against the as-given copy's (turn, scale,
+// vertices apart) and which path it took. --fit-real-align-only: stops
+// each fit once its alignment is final (the alignment's figures only).
 // --fit-ear-refit-rounds N: the ear refit's warm rounds
 // (FitHeadOptions::ear_refit_warm_rounds; 0: the whole fit again, cold).
 // --fit-ear-refit-late: the ear refit decided after each fit's guard
@@ -65,6 +70,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -97,7 +103,54 @@ Status dump_copy(const std::string& prefix, const FitHeadResult& r) {
 struct Copy {
   std::string name;
   PointCloud cloud;
+  Mat3 linear = Mat3::Identity();  // copy point = centroid + linear * (p - centroid) + offset
+  Vec3 offset = Vec3::Zero();
+  Vec3 centroid = Vec3::Zero();
 };
+
+// --fit-real-sweep: the scan, shifted by 2.5e-4 of its diagonal along each
+// axis, and turned by 0.05, 0.5, 2 and 5 degrees about x (tilt), y (turn)
+// and z (roll), about its centroid: a fit must land in the same basin on
+// all of them (issue 35).
+std::vector<Copy> swept_copies(const PointCloud& scan) {
+  Vec3 centroid = Vec3::Zero();
+  for (const Vec3& p : scan.positions) centroid += p;
+  centroid /= std::max(1, scan.size());
+  const double shift = 2.5e-4 * bounding_box(scan.positions).diagonal();
+  std::vector<Copy> copies = {Copy{"as given", scan, Mat3::Identity(), Vec3::Zero(), centroid}};
+  auto add = [&](const std::string& name, const Mat3& linear, const Vec3& offset) {
+    Copy c{name, scan, linear, offset, centroid};
+    for (Vec3& p : c.cloud.positions) p = centroid + linear * (p - centroid) + offset;
+    for (Vec3& q : c.cloud.normals) q = (linear * q).normalized();
+    copies.push_back(std::move(c));
+  };
+  const char* axes[3] = {"tilt", "turn", "roll"};
+  for (int a = 0; a < 3; ++a) {
+    Vec3 off = Vec3::Zero();
+    off[a] = shift;
+    add(std::string("shift ") + "xyz"[a], Mat3::Identity(), off);
+  }
+  for (double deg : {0.05, 0.5, 2.0, 5.0})
+    for (int a = 0; a < 3; ++a) {
+      char name[32];
+      std::snprintf(name, sizeof name, "%s %g deg", axes[a], deg);
+      add(name, Mat3(Eigen::AngleAxisd(deg * 3.14159265358979323846 / 180.0, Vec3::Unit(a))), Vec3::Zero());
+    }
+  return copies;
+}
+
+// The aligned generic head's vertices in the ORIGINAL scan's frame and
+// units (the copy's nudge undone), so copies' alignments compare.
+std::vector<Vec3> aligned_in_scan(const FitHeadResult& r, const Copy& c) {
+  const Mat3 to_scan = r.scan_to_head.A.inverse();
+  const Mat3 undo = c.linear.inverse();
+  std::vector<Vec3> out;
+  for (const Vec3& p : r.aligned.positions) {
+    const Vec3 q = to_scan * (p - r.scan_to_head.t);
+    out.push_back(c.centroid + undo * (q - c.offset - c.centroid));
+  }
+  return out;
+}
 
 // The scan and its four nudged copies; with `count` above 5, up to eight
 // more (the other directions, axes and sign), as one fit on five copies
@@ -129,10 +182,10 @@ std::vector<Copy> nudged_copies(const PointCloud& scan, int count) {
                           {"tilt 0.05 deg", turned(turn, Vec3::UnitX()), Vec3::Zero()},
                           {"roll 0.05 deg", turned(turn, Vec3::UnitZ()), Vec3::Zero()}};
   // The scan itself, bit for bit (p - c + c already changes last bits).
-  std::vector<Copy> copies = {Copy{"as given", scan}};
+  std::vector<Copy> copies = {Copy{"as given", scan, I, Vec3::Zero(), centroid}};
   for (const Nudge& n : nudges) {
     if (static_cast<int>(copies.size()) >= count) break;
-    Copy c{n.name, scan};
+    Copy c{n.name, scan, n.linear, n.offset, centroid};
     for (Vec3& p : c.cloud.positions) p = centroid + n.linear * (p - centroid) + n.offset;
     for (Vec3& q : c.cloud.normals) q = (n.linear * q).normalized();
     copies.push_back(std::move(c));
@@ -287,6 +340,16 @@ int run(const Args& args) {
   if (args.has("fit-real-scanned-neck")) options.fit_scanned_neck = true;
   if (args.has("fit-real-no-scanned-neck")) options.fit_scanned_neck = false;
   const std::string only_copy = args.get("fit-real-copy", "");
+  const bool sweep = args.has("fit-real-sweep"), align_only = args.has("fit-real-align-only");
+  // --fit-align-pitches A,B,...: the silhouettes' pitch starts (deg);
+  // --fit-align-polish 0|1: the ICP polish (AlignOptions).
+  if (args.has("fit-align-pitches")) {
+    options.align.pitch_starts_deg.clear();
+    std::string list = args.get("fit-align-pitches", "0") + ",";
+    for (size_t a = 0, b; (b = list.find(',', a)) != std::string::npos; a = b + 1)
+      if (b > a) options.align.pitch_starts_deg.push_back(std::atof(list.substr(a, b - a).c_str()));
+  }
+  if (args.has("fit-align-polish")) options.align.polish = args.get("fit-align-polish", "1") != "0";
   if (args.has("fit-ear-refit-late")) options.ear_refit_after_rounds = false;
   if (!parse_back_term(args, options)) return 1;
   const std::string dump = args.get("fit-real-dump", "");
@@ -312,7 +375,9 @@ int run(const Args& args) {
                 "pairs", "lips", "ears", "socket", "rest", "smooth", "cpu s",
                 "face -> scan mean / p99 / max mm; neck: points, median / p90 mm");
     std::vector<int> totals;
-    for (const Copy& c : nudged_copies(scan, copies)) {
+    std::vector<Vec3> given_pose;  // the as-given copy's aligned head, scan frame
+    const std::vector<Copy> all_copies = sweep ? swept_copies(scan) : nudged_copies(scan, copies);
+    for (const Copy& c : all_copies) {
       if (!only_copy.empty() && c.name.find(only_copy) == std::string::npos) continue;
       DistanceStats table1;
       FitStageObserver obs;
@@ -329,8 +394,58 @@ int run(const Args& args) {
       };
       FitHeadResult r;
       const double cpu0 = cpu_clock_ms();
-      st = fit_head(c.cloud, generic, options, r, obs);
+      // --fit-real-align-only: stopped once the alignment is final.
+      const ProgressFn stop_after_alignment = [&](const char* stage, double f) {
+        return !(align_only && std::string(stage) == "initial_alignment" && f >= 1.0);
+      };
+      st = fit_head(c.cloud, generic, options, r, obs, stop_after_alignment);
       const double cpu_s = 1e-3 * (cpu_clock_ms() - cpu0);
+      if ((st || (align_only && st.code == ErrorCode::Cancelled)) && !r.aligned.positions.empty()) {
+        // Where this copy's alignment put the head against the as-given
+        // copy's, in the scan's frame: turn (deg), scale ratio, vertices
+        // apart (mm); and which path it took.
+        const std::vector<Vec3> pose = aligned_in_scan(r, c);
+        if (c.name == "as given") given_pose = pose;
+        std::printf("   %-14s pose: %s", c.name.c_str(), r.face_only ? "face patch" : r.refined_on_face ? "face match" : "silhouettes");
+        if (!r.face_only)
+          std::printf(", D %d, turn %.4f %.4f %.4f, log scales %.4f %.4f %.4f", total_xor(r.alignment.xor_after),
+                      r.alignment.parameters[3], r.alignment.parameters[4], r.alignment.parameters[5],
+                      r.alignment.parameters[6], r.alignment.parameters[7], r.alignment.parameters[8]);
+        if (!r.face_only && r.alignment.polished)
+          std::printf(", polished by %.2f deg, scale %.4f (D %d)", r.alignment.polish_turn_deg, r.alignment.polish_scale,
+                      total_xor(r.alignment.xor_polished));
+        std::printf(", near %.1f %%", 100 * r.near_fraction);
+        for (const FaceRefineCandidate& k : r.face_refine.candidates)
+          std::printf("%s%+.0f: %.1f", &k == &r.face_refine.candidates.front() ? "; pitches " : ", ", k.pitch_deg,
+                      100 * k.measure);
+        if (!given_pose.empty() && given_pose.size() == pose.size()) {
+          Mat3 A = Mat3::Zero(), B = Mat3::Zero();  // least squares: pose ~ M * given (centred)
+          Vec3 ca = Vec3::Zero(), cb = Vec3::Zero();
+          for (size_t i = 0; i < pose.size(); ++i) ca += given_pose[i], cb += pose[i];
+          ca /= pose.size();
+          cb /= pose.size();
+          double rms = 0, worst = 0;
+          for (size_t i = 0; i < pose.size(); ++i) {
+            A += (pose[i] - cb) * (given_pose[i] - ca).transpose();
+            B += (given_pose[i] - ca) * (given_pose[i] - ca).transpose();
+            const double d = (pose[i] - given_pose[i]).norm();
+            rms += d * d;
+            worst = std::max(worst, d);
+          }
+          const Mat3 M = A * B.inverse();
+          Eigen::JacobiSVD<Mat3> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
+          const Mat3 R = svd.matrixU() * svd.matrixV().transpose();
+          const double angle = std::acos(std::clamp(0.5 * (R.trace() - 1), -1.0, 1.0)) * 180 / 3.14159265358979323846;
+          const double pct = 100 / r.bbox_diagonal;
+          std::printf("; against as given: turned %.3f deg, scale %.4f, vertices %.3f %% of the diagonal rms, %.3f max",
+                      angle, std::cbrt(M.determinant()), pct * std::sqrt(rms / pose.size()), pct * worst);
+        }
+        std::printf(", %.2f s\n", cpu_s);
+      }
+      if (align_only) {
+        if (!(st.code == ErrorCode::Cancelled)) std::printf("   %-14s %s\n", c.name.c_str(), st ? "not stopped" : st.message.c_str());
+        continue;
+      }
       FitQuality q;
       if (st) st = measure_fit_quality(r, generic.annotations, q);
       if (!st) {

@@ -2,6 +2,7 @@
 #include "align/face_alignment.h"
 
 #include "common/parallel.h"
+#include "common/rotation.h"
 #include "common/sampling.h"
 #include "mesh/geometry.h"
 #include "raycast/bvh.h"
@@ -635,6 +636,93 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
   out.rotation.row(0) = out.up.cross(out.facing).transpose();
   out.rotation.row(1) = out.up.transpose();
   out.rotation.row(2) = out.facing.transpose();
+  return Status::success();
+}
+
+Status fit_scaled_rotation_icp(const TriMesh& surface, const std::vector<Vec3>& samples, const Mat3& axes,
+                               const FaceAlignOptions& o, double clamp, ScaledRotationFit& out) {
+  out = ScaledRotationFit{};
+  if (samples.size() < static_cast<size_t>(kMinPoints) || surface.triangles.empty())
+    return Status::error(ErrorCode::Empty, "fit_scaled_rotation_icp: too few samples or no triangles");
+  if (!axes.allFinite() || !(std::fabs(axes.determinant()) > 0.5))
+    return Status::error(ErrorCode::InvalidInput, "fit_scaled_rotation_icp: the axes are not a rotation");
+  MeshBvh tree;
+  Status st = build_bvh(surface, tree);
+  if (!st) return with_context(st, "fit_scaled_rotation_icp");
+  // Point-to-plane Gauss-Newton (Chen & Medioni 1992): each step linearizes
+  // x -> x + sum_k sigma_k u_k u_k^T (x - c) + omega x (x - c) + tau about
+  // the samples' centroid c, u_k the surface's axes as turned so far.
+  // Point-to-point ICP slides along a head's flat directions (its pitch) by
+  // a fraction of a degree per iteration and stops wherever its tolerance
+  // is met; this converges to the minimum. The map stays
+  // R * (axes diag(d) axes^T) * x + t.
+  Vec3 c = Vec3::Zero();
+  for (const Vec3& p : samples) c += p;
+  c /= double(samples.size());
+  const int n = static_cast<int>(samples.size());
+  Mat3 R = Mat3::Identity();
+  Vec3 d = Vec3::Ones(), t = Vec3::Zero();
+  std::vector<int> face(n, -1);
+  std::vector<Vec3> q(n), nrm(n);
+  std::vector<double> dist(n);
+  const double extent = bounding_box(samples).diagonal();
+  for (int it = 0; it < o.max_iterations; ++it) {
+    const Mat3 M = R * axes * d.asDiagonal() * axes.transpose();
+    const Mat3 Minv = M.inverse(), normal_map = Minv.transpose();
+    parallel_for(0, n, 256, [&](int i, int) {
+      const ClosestPoint cp = closest_point_near(tree, Minv * (samples[i] - t), face[i]);
+      face[i] = cp.triangle;
+      const Tri& f = surface.triangles[cp.triangle];
+      const Vec3 fn = (surface.positions[f[1]] - surface.positions[f[0]])
+                          .cross(surface.positions[f[2]] - surface.positions[f[0]]);
+      q[i] = M * cp.point + t;
+      nrm[i] = (normal_map * fn).normalized();
+      dist[i] = (q[i] - samples[i]).norm();
+    });
+    // Pairs beyond the clamp do not pull either: the steps lower the same
+    // clamped score that chooses between poses (a beard or a pedestal
+    // farther than the clamp from the head would pull it off the face).
+    const double trim = std::max(std::min(o.trim_factor * quantile(dist, 0.5), clamp), 1e-12 * extent);
+    const Mat3 U = R * axes;
+    Eigen::Matrix<double, 9, 9> H = Eigen::Matrix<double, 9, 9>::Zero();
+    Eigen::Matrix<double, 9, 1> g = Eigen::Matrix<double, 9, 1>::Zero();
+    int kept = 0;
+    double sum2 = 0, score = 0;
+    for (int i = 0; i < n; ++i) {
+      score += std::min(dist[i], clamp) * std::min(dist[i], clamp);
+      if (!(dist[i] <= trim) || !nrm[i].allFinite()) continue;
+      const Vec3 r = q[i] - c;
+      Eigen::Matrix<double, 9, 1> J;
+      for (int k = 0; k < 3; ++k) J[k] = nrm[i].dot(U.col(k)) * U.col(k).dot(r);
+      J.segment<3>(3) = r.cross(nrm[i]);
+      J.segment<3>(6) = nrm[i];
+      const double e = nrm[i].dot(q[i] - samples[i]);
+      H += J * J.transpose();
+      g += J * e;
+      sum2 += dist[i] * dist[i];
+      ++kept;
+    }
+    out.iterations = it + 1;
+    out.rms = kept ? std::sqrt(sum2 / kept) : 0;
+    out.inlier_fraction = double(kept) / n;
+    out.score = score / n;
+    if (kept < 9) break;
+    const Eigen::Matrix<double, 9, 1> step = H.ldlt().solve(-g);
+    if (!step.allFinite() || !((Vec3::Ones() + step.head<3>()).minCoeff() > 0.5)) break;
+    // The step composed onto the map: x -> dR S (M x + t - c) + c + tau.
+    const Mat3 dR = rotation_from_vector(step.segment<3>(3));
+    const Vec3 grow = Vec3::Ones() + step.head<3>();
+    const Mat3 S = U * grow.asDiagonal() * U.transpose();
+    t = dR * (S * (t - c)) + c + step.segment<3>(6);
+    R = dR * R;
+    d = d.cwiseProduct(grow);
+    if (step.head<6>().cwiseAbs().maxCoeff() < 1e-7 && step.segment<3>(6).norm() < 1e-7 * extent) break;
+  }
+  out.linear = R * axes * d.asDiagonal() * axes.transpose();
+  out.rotation = R;
+  out.scales = d;
+  out.translation = t;
+  if (!(out.inlier_fraction > 0)) return Status::error(ErrorCode::NotConverged, "fit_scaled_rotation_icp: no pairs kept");
   return Status::success();
 }
 

@@ -190,6 +190,22 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
                          const OrientationOptions& options, OrientationGuess& out,
                          const ProgressFn& progress = {});
 
+// Trimmed point-to-plane ICP of samples onto surface (FaceAlignOptions'
+// max_iterations and trim_factor), from the identity, over a rotation, a
+// scale along each of the given axes (columns, a rotation) and a
+// translation: linear * surface + translation fits the samples, with
+// linear = rotation * axes * diag(scales) * axes^T. score: mean of
+// min(d, clamp)^2 over all samples.
+struct ScaledRotationFit {
+  Mat3 linear = Mat3::Identity(), rotation = Mat3::Identity();
+  Vec3 scales = Vec3::Ones();
+  Vec3 translation = Vec3::Zero();
+  double rms = 0, score = 0, inlier_fraction = 0;
+  int iterations = 0;
+};
+Status fit_scaled_rotation_icp(const TriMesh& surface, const std::vector<Vec3>& samples, const Mat3& axes,
+                               const FaceAlignOptions& options, double clamp, ScaledRotationFit& out);
+
 // "+x", "-z", ... for an axis direction; "(0.1, 0.7, 0.7)" otherwise.
 std::string axis_name(const Vec3& direction);
 

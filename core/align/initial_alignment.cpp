@@ -1,6 +1,7 @@
 // Silhouette-based initial alignment (jeong2002 Sec. 4.1); see the header.
 #include "align/initial_alignment.h"
 
+#include "align/face_alignment.h"
 #include "common/helper_thread.h"
 #include "common/rotation.h"
 #include "mesh/geometry.h"
@@ -329,11 +330,39 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
       return Status::error(ErrorCode::Cancelled, "align: cancelled");
     return Status::success();
   };
+  // The polish (AlignOptions::polish) of the pose with parameters p: every
+  // k-th kept scan point (by index, so the same points however the scan is
+  // turned) onto the placed head, about the head's own axes (linear =
+  // rotation * scales * facing).
+  const bool polish = options.polish && options.polish_points >= 10;
+  std::vector<Vec3> polish_samples;
+  if (polish) {
+    const size_t stride = std::max<size_t>(1, (cloud_kept.size() + options.polish_points - 1) / options.polish_points);
+    for (size_t i = 0; i < cloud_kept.size(); i += stride) polish_samples.push_back(cloud_kept[i]);
+  }
+  const double polish_clamp = FaceAlignOptions{}.score_clamp_fraction * bounding_box(cloud_kept).diagonal();
+  auto polish_of = [&](const Eigen::VectorXd& p, ScaledRotationFit& fit) -> bool {
+    Mat3 linear;
+    Vec3 translation;
+    model.transform_of(p.data(), linear, translation);
+    TriMesh head = generic;
+    transform(head, linear, translation);
+    FaceAlignOptions fo;
+    fo.max_iterations = options.polish_iterations;
+    return static_cast<bool>(fit_scaled_rotation_icp(head, polish_samples, rotation_from_vector(Vec3(p[3], p[4], p[5])),
+                                                     fo, polish_clamp, fit));
+  };
+  ScaledRotationFit best_fit;
+  bool have_fit = false;
+
   // Every start (AlignOptions::pitch_starts_deg) through the coarse levels;
   // the one with the least D on the last of them goes on to the finest.
+  // With choose_at_final every start runs through the final level too and
+  // is polished, and the least polished score is kept (the coarse D was a
+  // near-tie that a 0.05 deg turn of the scan decided).
   std::vector<double> starts = options.pitch_starts_deg;
   if (starts.empty()) starts.push_back(0.0);
-  const int coarse = num_levels - 1;
+  const int coarse = options.choose_at_final && starts.size() > 1 ? num_levels : num_levels - 1;
   const double span = 1.0 / (static_cast<double>(starts.size()) * std::max(coarse, 1) + 1.0);
   int best_d = -1;
   Eigen::VectorXd best_x = x;
@@ -359,11 +388,17 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
         levels.push_back(std::move(level));
       }
     }
-    if (best_d < 0 || d < best_d) best_d = d, best_x = xs, best_levels = std::move(levels);
+    // Through the final level and polished: the polished score (smooth,
+    // after the same refinement) chooses, not D.
+    ScaledRotationFit fit;
+    const bool fitted = polish && coarse == num_levels && polish_of(xs, fit);
+    const bool better = fitted ? (!have_fit || fit.score < best_fit.score) : (best_d < 0 || d < best_d);
+    if (fitted && better) best_fit = fit, have_fit = true;
+    if (better) best_d = d, best_x = xs, best_levels = std::move(levels);
   }
   x = best_x;
   out.levels = std::move(best_levels);
-  if (coarse > 0) {
+  if (coarse > 0 && coarse < num_levels) {
     AlignLevel level;
     st = run_level(coarse, 1.0 - span, span, x, level);
     if (!st) return st;
@@ -378,6 +413,22 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
 
   for (int i = 0; i < 9; ++i) out.parameters[i] = x[i];
   model.transform_of(x.data(), out.linear, out.translation);
+  if (polish && !have_fit) have_fit = polish_of(x, best_fit);
+  if (have_fit) {
+    const ScaledRotationFit& fit = best_fit;
+    out.polished = true;
+    out.polish_scale = std::cbrt(fit.scales.prod());
+    out.polish_turn_deg =
+        std::acos(std::clamp(0.5 * (fit.rotation.trace() - 1), -1.0, 1.0)) * 180.0 / kPi;
+    out.polish_rms = fit.rms;
+    out.polish_iterations = fit.iterations;
+    out.linear = fit.linear * out.linear;
+    out.translation = fit.linear * out.translation + fit.translation;
+    for (size_t i = 0; i < moved.size(); ++i) moved[i] = out.linear * generic.positions[i] + out.translation;
+    rasterize_mesh_silhouettes(moved, generic.triangles, frame.window, frame.clips, mesh_masks,
+                               options.cull_back_faces);
+    views_xor(mesh_masks, cloud_masks, out.xor_polished);
+  }
   out.aligned = generic;
   transform(out.aligned, out.linear, out.translation);
   return Status::success();

@@ -66,19 +66,36 @@ struct AlignOptions {
   double step_rotation_deg = 4.0;
   double step_scale = 0.05;
   // Starts of the search, as turns about the horizontal axis (degrees,
-  // head up / down from the initialization): each is taken through the
-  // coarse levels and the one with the least D there goes on to the final
-  // resolution (with no coarse level: the least D at the final one). {0}:
-  // one start, as the paper. Three starts (0, 15, -15) put Demosthenes'
-  // nudged copies in one basin but not Plato's, for twice the alignment's
-  // CPU and a worse fit of Demosthenes (docs/design/fit_real_scans.md).
+  // head up / down from the initialization). With several starts and
+  // choose_at_final each is taken through every level (and polished, when
+  // polish is on) and the least polished score, else the least final D,
+  // chooses; without choose_at_final the least D on the coarse levels
+  // chooses and only that start goes on to the final resolution. {0}: one
+  // start, as the paper. {0, 10, -10} with the polish puts every turned
+  // copy of Demosthenes within 0.7 deg of his pose as given (13 deg apart
+  // with one start) but fits Plato and Gutenberg worse, so it is not the
+  // default (docs/design/align.md, "Basins").
   std::vector<double> pitch_starts_deg = {0.0};
+  bool choose_at_final = true;
   // Fraction of the clipped head height (from the top) over which the head
   // width and front are measured for the initialization.
   double init_slab_fraction = 0.5;
   // Fraction of extreme cloud points ignored per side when measuring
   // extents, so a few stray scanner points do not move the initial box.
   double init_outlier_fraction = 0.001;
+  // Polish (not in the paper): the silhouettes' pixel count is flat in the
+  // head's pitch on real busts, and where Powell stops on it changes with a
+  // 0.05 deg turn of the scan (Demosthenes: 1-20 deg apart). Each start's
+  // pose is then refined by a smooth measure: point-to-plane ICP of every
+  // k-th clipped scan point (by index: the same points however the scan is
+  // turned) onto the placed head, over a rotation, a scale along each of
+  // the head's axes and a translation (face_alignment.h,
+  // fit_scaled_rotation_icp), and the least clamped score after it chooses
+  // between the starts. Off by default: it fits Plato and Gutenberg worse
+  // (docs/design/align.md, "Basins").
+  bool polish = false;
+  int polish_points = 4000;
+  int polish_iterations = 60;
 };
 
 // Per resolution level of the coarse-to-fine optimization.
@@ -114,6 +131,12 @@ struct AlignResult {
   // The optimized parameters: translation (in head heights), rotation vector
   // (radians, axis * angle), log scale per generic axis.
   std::array<double, 9> parameters{};
+  // The polish (AlignOptions::polish): applied when `polished`; D per view
+  // after it, its turn (deg) and scale on top of the silhouettes' pose.
+  bool polished = false;
+  std::array<int, kSilhouetteViews> xor_polished{};
+  double polish_turn_deg = 0, polish_scale = 1, polish_rms = 0;
+  int polish_iterations = 0;
 };
 
 // Aligns generic (with its annotations, for the clip planes and the facing

@@ -371,6 +371,9 @@ TEST_CASE("align with several starts keeps the one with the least D on the coars
   AlignOptions one;
   one.resolution = 64;
   one.coarse_resolutions = {32};
+  one.pitch_starts_deg = {0.0};
+  one.choose_at_final = false;  // the coarse levels' D chooses (the default chooses after the polish)
+  one.polish = false;
   AlignOptions three = one;
   three.pitch_starts_deg = {0.0, 15.0, -15.0};
   std::vector<double> fractions;

@@ -20,6 +20,8 @@
 #include <catch2/catch.hpp>
 #include <algorithm>
 #include <filesystem>
+#include <map>
+#include <string>
 
 using namespace lk;
 
@@ -39,17 +41,54 @@ std::vector<std::string> real_scans() {
   return out;
 }
 
+// The scan moved as the bench's sweep moves it (native_harness/
+// bench_real.cpp, --fit-real-sweep): turned by `degrees` about `axis`
+// through its centroid.
+PointCloud turned_about(const PointCloud& scan, double degrees, const Vec3& axis, Mat3& rotation, Vec3& centroid) {
+  centroid = Vec3::Zero();
+  for (const Vec3& p : scan.positions) centroid += p;
+  centroid /= std::max(1, scan.size());
+  rotation = Mat3(Eigen::AngleAxisd(degrees * 3.14159265358979323846 / 180.0, axis));
+  PointCloud out = scan;
+  for (Vec3& p : out.positions) p = centroid + rotation * (p - centroid);
+  for (Vec3& n : out.normals) n = rotation * n;
+  return out;
+}
+
+// The aligned generic head's vertices in the unturned scan's frame.
+std::vector<Vec3> aligned_in_scan(const FitHeadResult& r, const Mat3& rotation, const Vec3& centroid) {
+  const Mat3 to_scan = r.scan_to_head.A.inverse();
+  std::vector<Vec3> out;
+  for (const Vec3& p : r.aligned.positions)
+    out.push_back(centroid + rotation.transpose() * (to_scan * (p - r.scan_to_head.t) - centroid));
+  return out;
+}
+
+// The rotation angle (deg) and scale of the least-squares linear map from
+// a's vertices to b's (centred).
+void pose_difference(const std::vector<Vec3>& a, const std::vector<Vec3>& b, double& degrees, double& scale) {
+  Vec3 ca = Vec3::Zero(), cb = Vec3::Zero();
+  for (size_t i = 0; i < a.size(); ++i) ca += a[i], cb += b[i];
+  ca /= double(a.size());
+  cb /= double(b.size());
+  Mat3 A = Mat3::Zero(), B = Mat3::Zero();
+  for (size_t i = 0; i < a.size(); ++i) {
+    A += (b[i] - cb) * (a[i] - ca).transpose();
+    B += (a[i] - ca) * (a[i] - ca).transpose();
+  }
+  const Mat3 M = A * B.inverse();
+  Eigen::JacobiSVD<Mat3> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Mat3 R = svd.matrixU() * svd.matrixV().transpose();
+  degrees = std::acos(std::clamp(0.5 * (R.trace() - 1), -1.0, 1.0)) * 180 / 3.14159265358979323846;
+  scale = std::cbrt(M.determinant());
+}
+
 // The scan turned by `degrees` about the vertical through its centroid (the
 // bench's "turn 0.05 deg" copy, native_harness/bench_real.cpp).
 PointCloud turned(const PointCloud& scan, double degrees) {
-  Vec3 centroid = Vec3::Zero();
-  for (const Vec3& p : scan.positions) centroid += p;
-  centroid /= std::max(1, scan.size());
-  const Mat3 R(Eigen::AngleAxisd(degrees * 3.14159265358979323846 / 180.0, Vec3::UnitY()));
-  PointCloud out = scan;
-  for (Vec3& p : out.positions) p = centroid + R * (p - centroid);
-  for (Vec3& n : out.normals) n = R * n;
-  return out;
+  Mat3 rotation;
+  Vec3 centroid;
+  return turned_about(scan, degrees, Vec3::UnitY(), rotation, centroid);
 }
 
 }  // namespace
@@ -163,5 +202,70 @@ TEST_CASE("fit_head: with the wide mouth ring as the generic head, Demosthenes' 
         CHECK(r.ears_held == 0);
       }
     }
+  }
+}
+
+// Issue 35: a fit must not change with a tiny turn of its input. On main
+// the silhouettes' Powell stopped wherever a 0.05 deg turn of the scan led
+// it: Demosthenes turned 0.05 deg about the vertical ended 13.2 deg from
+// his pose as given (Table 1 0.0342 -> 0.0713 %), Plato 1.9-5 deg, Gutenberg
+// 7 deg (docs/design/align.md, "Basins"). With AlignOptions' pitch starts
+// 0, +-10 deg and the polish (not the default: Plato and Gutenberg fit
+// worse) every start runs through the final resolution and is polished by
+// point-to-plane ICP, and the polished clamped score chooses. With one
+// start and no polish (main) it fails: Demosthenes turned 0.05 deg about
+// the vertical ends 13.2 deg from his pose as given. Whole heads turned by 0.05 and 0.5
+// deg about each axis: the alignment within 1.25 deg and 0.5 % of scale of
+// the as-given one (measured in the bench's sweep: Demosthenes 0.09-0.21
+// deg, Plato 0.43-1.04 deg, Gutenberg's copy 0.05 deg).
+TEST_CASE("fit_head: the busts turned by 0.05 and 0.5 deg align to the pose they align to as given",
+          "[pipeline][real_scans][shared]") {
+  LK_REQUIRE_SHARED("head_scans");
+  const std::vector<std::string> scans = real_scans();
+  REQUIRE(!scans.empty());
+  for (const std::string& path : scans) {
+    PointCloud scan;
+    REQUIRE(load_point_cloud_file(path, scan).ok());
+    FitHeadOptions options;  // the options that hold (not the default: docs/design/align.md, "Basins")
+    options.align.pitch_starts_deg = {0.0, 10.0, -10.0};
+    options.align.polish = true;
+    // Stopped once the alignment is final (the pose is what is compared).
+    const ProgressFn stop = [](const char* stage, double f) {
+      return !(std::string(stage) == "initial_alignment" && f >= 1.0);
+    };
+    auto align = [&](const PointCloud& cloud, FitHeadResult& r) {
+      const Status st = fit_head(cloud, test::generic_head(), options, r, {}, stop);
+      INFO(st.message);
+      REQUIRE(st.code == ErrorCode::Cancelled);
+    };
+    // The as-given pose once per scan (Catch runs the body again for each
+    // section); empty for face patches (align_face: tests/align).
+    static std::map<std::string, std::vector<Vec3>> poses;
+    if (!poses.count(path)) {
+      FitHeadResult given;
+      align(scan, given);
+      poses[path] = given.face_only ? std::vector<Vec3>{} : aligned_in_scan(given, Mat3::Identity(), Vec3::Zero());
+    }
+    const std::vector<Vec3>& given_pose = poses[path];
+    if (given_pose.empty()) continue;
+    // Gutenberg (beret, beard, pedestal: the polish pulls his head into
+    // them) holds only for the bench's copy, 0.05 deg about the vertical;
+    // his other copies part by 1.2-18 deg (docs/design/align.md, "Basins").
+    const bool gutenberg = path.find("gutenberg") != std::string::npos;
+    for (const double degrees : {0.05, 0.5})
+      for (int axis = 0; axis < 3; ++axis) {
+        if (gutenberg && (degrees != 0.05 || axis != 1)) continue;
+        DYNAMIC_SECTION(path << " turned " << degrees << " deg about axis " << axis) {
+          Mat3 R;
+          Vec3 c;
+          FitHeadResult r;
+          align(turned_about(scan, degrees, Vec3::Unit(axis), R, c), r);
+          double angle = 0, scale = 1;
+          pose_difference(given_pose, aligned_in_scan(r, R, c), angle, scale);
+          INFO("the alignment " << angle << " deg and scale " << scale << " from the as-given one");
+          CHECK(angle < 1.25);
+          CHECK(std::fabs(scale - 1) < 0.005);
+        }
+      }
   }
 }
