@@ -136,10 +136,53 @@ Check corner(int side, double up, double out, double back) {
   };
 }
 
+// The eye's opening where it is seen, on level 2 (the GLB's level): in a
+// slab 1 mm wide about the middle rim column, the angle about the eye's
+// centre from the upper lid's lowest refined vertex to the lower lid's
+// highest (the lids' vertices turning whole, carried down the levels), over
+// the same at rest. Negative: the refined lids cross there.
+double refined_lid_ratio(const Measure& m, int eye) {
+  const FaceRig& rig = m.rig;
+  const EyeLids& L = rig.lids[static_cast<std::size_t>(eye)];
+  TriMesh mesh;
+  mesh.positions = rig.rest;
+  mesh.triangles = test::generic_head().mesh.triangles;
+  MultiresMesh head;
+  REQUIRE(build_multires(mesh, head_creases(mesh, test::generic_head().annotations), 2, head).ok());
+  const std::vector<Vec3> rest = head.state.displaced[2];
+  REQUIRE(pose_multires(head, rig, m.controls, 2).ok());
+  const std::vector<Vec3>& posed = head.state.displaced[2];
+  std::vector<char> up_v(rig.rest.size(), 0), low_v(rig.rest.size(), 0);
+  for (std::size_t i = 0; i < L.index.size(); ++i)
+    if (L.weight[i] >= 1.0) (L.upper[i] ? up_v : low_v)[static_cast<std::size_t>(L.index[i])] = 1;
+  const std::vector<char> up = propagate_vertex_mask(head, up_v)[2], low = propagate_vertex_mask(head, low_v)[2];
+  const double x_mid = rig.rest[static_cast<std::size_t>(m.lid_mid(eye))].x();
+  auto opening = [&](const std::vector<Vec3>& R, const std::vector<Vec3>& Q) {
+    double lowest = 1e9, highest = -1e9;
+    for (std::size_t v = 0; v < Q.size(); ++v) {
+      if (std::abs(R[v].x() - x_mid) > 0.0005 * rig.scale || R[v].z() <= L.center.z()) continue;
+      const double a = std::atan2(Q[v].y() - L.center.y(), Q[v].z() - L.center.z());
+      if (up[v]) lowest = std::min(lowest, a);
+      if (low[v]) highest = std::max(highest, a);
+    }
+    REQUIRE(lowest < 1e9);
+    REQUIRE(highest > -1e9);
+    return lowest - highest;
+  };
+  return opening(rest, posed) / opening(rest, rest);
+}
+
+// Closed: the refined lids (what is drawn) within a tenth of their rest
+// opening and not crossed; the control rims stop short of meeting by what
+// the refined margins round into the opening (face_rig.cpp, lid_rig), on
+// these heads a fifth of their gap at most.
 Check blink(int eye) {
   return [=](const Measure& m) {
-    INFO("lid gaps over rest: " << m.lid_ratio(0) << " " << m.lid_ratio(1));
-    CHECK(m.lid_ratio(eye) < 0.10);
+    const double refined = refined_lid_ratio(m, eye);
+    INFO("lid gaps over rest: " << m.lid_ratio(0) << " " << m.lid_ratio(1) << ", refined (level 2) " << refined);
+    CHECK(refined < 0.10);
+    CHECK(refined > 0.0);
+    CHECK(m.lid_ratio(eye) < 0.20);
     CHECK(m.lid_ratio(1 - eye) > 0.99);
   };
 }
@@ -381,8 +424,13 @@ std::map<std::string, Check> checks() {
     CHECK(m.width_change() > 3.0);
   };
   c["blink"] = [](const Measure& m) {
-    CHECK(m.lid_ratio(0) < 0.10);
-    CHECK(m.lid_ratio(1) < 0.10);
+    for (int e = 0; e < 2; ++e) {
+      const double refined = refined_lid_ratio(m, e);
+      INFO("eye " << e << ": lid gap over rest " << m.lid_ratio(e) << ", refined (level 2) " << refined);
+      CHECK(refined < 0.10);
+      CHECK(refined > 0.0);
+      CHECK(m.lid_ratio(e) < 0.20);
+    }
   };
   c["wink"] = blink(0);
   return c;
@@ -756,17 +804,19 @@ TEST_CASE("face rig: no triangle turns over, no lip or lid crosses, the lips sta
 }
 
 // The worst case per place (lids, face, mouth bag, teeth, turned, lip
-// columns behind the teeth), measured 30 Nov 2026 with LK_RIG_REPORT=1; 0
-// where issue 38's goal is met. Synthetic heads: exactly today's worst
-// over the generic head and people 1-5.
-const Limits kSyntheticAlone{at_most(0, 14, 4, 0, 0), at_most(328, 90, 34, 0, 14)};
-const Limits kSyntheticCombined{at_most(0, 30, 4, 0, 2), at_most(364, 130, 42, 0, 61)};
+// columns behind the teeth), measured 30 Nov 2026 with LK_RIG_REPORT=1 after
+// the lids' closing on the refined margins; 0 where issue 38's goal is met.
+// Synthetic heads: exactly today's worst over the generic head and people
+// 1-5 (the level's lid pairs combined: a blink with a look down on the
+// generic head and seed 1, 8 in one case).
+const Limits kSyntheticAlone{at_most(0, 14, 4, 0, 0), at_most(0, 90, 34, 0, 10)};
+const Limits kSyntheticCombined{at_most(0, 30, 4, 0, 2), at_most(8, 130, 42, 0, 61)};
 // The five real scans' fits: today's worst over the five plus a quarter
 // (another branch's change to the fit moves these figures a little).
-// (today's worst: alone, control 29 34 2 38 4 0 and level 328 355 35 48 43;
-// combined, control 31 36 4 36 3 1 and level 331 588 34 48 93).
-const Limits kRealAlone{at_most(37, 43, 3, 48, 5, 0), at_most(410, 444, 44, 60, 54)};
-const Limits kRealCombined{at_most(39, 45, 5, 45, 4, 2), at_most(414, 735, 43, 60, 117)};
+// (today's worst: alone, control 6 34 2 38 4 0 and level 27 355 35 48 41;
+// combined, control 11 36 4 36 3 1 and level 27 588 34 48 90).
+const Limits kRealAlone{at_most(8, 43, 3, 48, 5, 0), at_most(34, 444, 44, 60, 52)};
+const Limits kRealCombined{at_most(14, 45, 5, 45, 4, 2), at_most(34, 735, 43, 60, 113)};
 
 TEST_CASE("face rig: crossings on the control mesh and level 2 with the teeth, every shape and the combinations avatar tools make, generic head and synthetic people 1-5: no lip or lid column crossing, the rest within today's worst") {
   for (std::uint32_t seed = 0; seed <= 5; ++seed) {
