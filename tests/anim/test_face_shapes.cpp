@@ -810,18 +810,18 @@ TEST_CASE("face rig: no triangle turns over, no lip or lid crosses, the lips sta
 
 // The worst case per place (lids, face, mouth bag, teeth, turned, lip
 // columns behind the teeth), measured 30 Nov 2026 with LK_RIG_REPORT=1 after
-// the lids' closing on the refined margins; 0 where issue 38's goal is met.
-// Synthetic heads: exactly today's worst over the generic head and people
-// 1-5 (the level's lid pairs combined: a blink with a look down on the
-// generic head and seed 1, 8 in one case).
-const Limits kSyntheticAlone{at_most(0, 14, 4, 0, 0), at_most(0, 90, 34, 0, 10)};
-const Limits kSyntheticCombined{at_most(0, 30, 4, 0, 2), at_most(8, 130, 42, 0, 61)};
+// the lids' closing on the refined margins and cheekPuff off the ears; 0
+// where issue 38's goal is met. Synthetic heads: exactly today's worst over
+// the generic head and people 1-5 (the level's lid pairs combined: 8 in one
+// case on the generic head and seed 1).
+const Limits kSyntheticAlone{at_most(0, 14, 4, 0, 0), at_most(0, 86, 34, 0, 10)};
+const Limits kSyntheticCombined{at_most(0, 30, 4, 0, 2), at_most(8, 130, 42, 0, 57)};
 // The five real scans' fits: today's worst over the five plus a quarter
 // (another branch's change to the fit moves these figures a little).
-// (today's worst: alone, control 6 34 2 38 4 0 and level 27 355 35 48 41;
-// combined, control 11 36 4 36 3 1 and level 27 588 34 48 90).
-const Limits kRealAlone{at_most(8, 43, 3, 48, 5, 0), at_most(34, 444, 44, 60, 52)};
-const Limits kRealCombined{at_most(14, 45, 5, 45, 4, 2), at_most(34, 735, 43, 60, 113)};
+// (today's worst: alone, control 6 34 2 38 4 0 and level 27 148 35 48 41;
+// combined, control 11 36 4 36 3 1 and level 27 294 34 48 90).
+const Limits kRealAlone{at_most(8, 43, 3, 48, 5, 0), at_most(34, 185, 44, 60, 52)};
+const Limits kRealCombined{at_most(14, 45, 5, 45, 4, 2), at_most(34, 368, 43, 60, 113)};
 
 TEST_CASE("face rig: crossings on the control mesh and level 2 with the teeth, every shape and the combinations avatar tools make, generic head and synthetic people 1-5: no lip or lid column crossing, the rest within today's worst") {
   for (std::uint32_t seed = 0; seed <= 5; ++seed) {
