@@ -119,6 +119,7 @@ Status lid_rig(const std::vector<Vec3>& P, const MultiresMesh& fine, double min_
     lids.index.push_back(static_cast<int>(v));
     lids.weight.push_back(w);
     lids.gap.push_back(g);
+    lids.cap.push_back(0.96);
     lids.upper.push_back(up ? 1 : 0);
     // Closed, both rims meet at the column's mean radius and x (a scan's
     // lids need not sit at one distance from the eyeball's centre, nor
@@ -131,8 +132,9 @@ Status lid_rig(const std::vector<Vec3>& P, const MultiresMesh& fine, double min_
   // vertices, next to the pocket's sharp turn), by up to a tenth of a
   // radian on the generic head, so rims 4 % of the gap apart left the
   // refined lids crossed. Per column, how far each refined lid reaches past
-  // its rim's angle into the opening; the column's gap is scaled so that
-  // fully closed (the shares' cap) the refined margins stay min_gap apart.
+  // its rim's angle into the opening; the column's cap on the two lids'
+  // shares together (0.96 of the gap) is lowered so that the refined
+  // margins stay min_gap apart. Partly closed poses are unchanged.
   // The lids turn whole, so their refined margins keep their rest shape.
   {
     const int level = fine.num_levels();
@@ -159,13 +161,13 @@ Status lid_rig(const std::vector<Vec3>& P, const MultiresMesh& fine, double min_
       if (up_fine[v]) reach_up[c] = std::max(reach_up[c], upper_at_a(p.x()) - angle(p));
       if (low_fine[v]) reach_low[c] = std::max(reach_low[c], angle(p) - lower_at_a(p.x()));
     }
-    std::vector<std::pair<double, double>> scale;
+    std::vector<std::pair<double, double>> cap;
     for (std::size_t k = 0; k < m; ++k) {
       const double g = columns.y[k], sep = reach_up[k] + reach_low[k] + min_gap / rim_at(xs[k]);
-      scale.emplace_back(xs[k], g > 0 ? std::clamp((1.0 - sep / g) / 0.96, 0.0, 1.0) : 1.0);
+      cap.emplace_back(xs[k], g > 0 ? std::clamp(1.0 - sep / g, 0.0, 0.96) : 0.96);
     }
-    const Profile scale_at = Profile::through(scale);
-    for (std::size_t i = 0; i < lids.index.size(); ++i) lids.gap[i] *= scale_at(P[static_cast<std::size_t>(lids.index[i])].x());
+    const Profile cap_at = Profile::through(cap);
+    for (std::size_t i = 0; i < lids.index.size(); ++i) lids.cap[i] = cap_at(P[static_cast<std::size_t>(lids.index[i])].x());
   }
   return Status::success();
 }

@@ -815,11 +815,11 @@ TEST_CASE("face rig: no triangle turns over, no lip or lid crosses, the lips sta
 // the generic head and people 1-5 (the level's lid pairs combined: 8 in one
 // case on the generic head and seed 1).
 const Limits kSyntheticAlone{at_most(0, 14, 4, 0, 0), at_most(0, 86, 34, 0, 10)};
-const Limits kSyntheticCombined{at_most(0, 30, 4, 0, 2), at_most(8, 130, 42, 0, 57)};
+const Limits kSyntheticCombined{at_most(0, 30, 4, 0, 2), at_most(8, 130, 42, 0, 58)};
 // The five real scans' fits: today's worst over the five plus a quarter
 // (another branch's change to the fit moves these figures a little).
 // (today's worst: alone, control 6 34 2 38 4 0 and level 27 148 35 48 41;
-// combined, control 11 36 4 36 3 1 and level 27 294 34 48 90).
+// combined, control 11 36 4 36 3 1 and level 30 294 34 48 92).
 const Limits kRealAlone{at_most(8, 43, 3, 48, 5, 0), at_most(34, 185, 44, 60, 52)};
 const Limits kRealCombined{at_most(14, 45, 5, 45, 4, 2), at_most(34, 368, 43, 60, 113)};
 
