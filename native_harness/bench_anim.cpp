@@ -13,7 +13,7 @@
 
 #include "anim/bake.h"
 #include "head/generic_head.h"
-#include "pipeline/head_creases.h"
+#include "head/head_creases.h"
 #include "project/glb_export.h"
 #include "project/pose.h"
 #include "synth/synth_head.h"

@@ -17,7 +17,7 @@
 
 #if __has_include("head/generic_head.h") && !defined(LK_BENCH_NO_HEAD)
 #include "head/generic_head.h"
-#include "pipeline/head_creases.h"
+#include "head/head_creases.h"
 #define LK_BENCH_HAVE_HEAD 1
 #endif
 

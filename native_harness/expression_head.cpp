@@ -3,7 +3,7 @@
 #include "anim/face_pose.h"
 #include "head/generic_head.h"
 #include "io/io.h"
-#include "pipeline/head_creases.h"
+#include "head/head_creases.h"
 #include "project/pose.h"
 #include "project/project_file.h"
 

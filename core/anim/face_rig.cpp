@@ -5,7 +5,7 @@
 #include "components/components.h"
 #include "head/generic_head.h"
 #include "mesh/geometry.h"
-#include "pipeline/head_creases.h"
+#include "head/head_creases.h"
 #include "multires/multires.h"
 
 #include <algorithm>

@@ -2,7 +2,7 @@
 
 #include "anim/face_pose.h"
 #include "numeric/powell.h"
-#include "pipeline/head_creases.h"
+#include "head/head_creases.h"
 #include "subdiv/butterfly.h"
 
 #include <algorithm>

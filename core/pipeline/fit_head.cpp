@@ -7,7 +7,7 @@
 #include "mesh/geometry.h"
 #include "mesh/topology.h"
 #include "pipeline/fit_quality.h"
-#include "pipeline/head_creases.h"
+#include "head/head_creases.h"
 #include "pipeline/head_pockets.h"
 #include "pipeline/untangle.h"
 #include "raycast/self_intersection.h"

@@ -1,6 +1,6 @@
 #include "project/photos_project.h"
 
-#include "pipeline/head_creases.h"
+#include "head/head_creases.h"
 #include "project/pose.h"
 
 namespace lk {

@@ -4,7 +4,7 @@
 #include "anim/bake.h"
 #include "anim/expression.h"
 #include "anim/face_pose.h"
-#include "pipeline/head_creases.h"
+#include "head/head_creases.h"
 #include "test_scan.h"
 
 #include <catch2/catch.hpp>

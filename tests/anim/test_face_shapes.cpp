@@ -13,7 +13,7 @@
 #include "components/components.h"
 #include "io/io.h"
 #include "pipeline/fit_head.h"
-#include "pipeline/head_creases.h"
+#include "head/head_creases.h"
 #include "project/parts.h"
 #include "raycast/self_intersection.h"
 #include "test_data.h"

@@ -6,7 +6,7 @@
 #include "head/head_model.h"
 #include "multires/multires.h"
 #include "pipeline/fit_quality.h"
-#include "pipeline/head_creases.h"
+#include "head/head_creases.h"
 #include "raycast/self_intersection.h"
 
 #include <catch2/catch.hpp>

@@ -3,7 +3,7 @@
 #include "multires/multires.h"
 #include "pipeline/fit_head.h"
 #include "pipeline/fit_quality.h"
-#include "pipeline/head_creases.h"
+#include "head/head_creases.h"
 #include "pipeline/head_pockets.h"
 #include "head/generic_head.h"
 #include "head/generic_head_builder.h"

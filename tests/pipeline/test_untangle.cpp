@@ -8,7 +8,7 @@
 #include "mesh/geometry.h"
 #include "mesh/topology.h"
 #include "multires/multires.h"
-#include "pipeline/head_creases.h"
+#include "head/head_creases.h"
 #include "pipeline/untangle.h"
 #include "raycast/bvh.h"
 #include "raycast/self_intersection.h"

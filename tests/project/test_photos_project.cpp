@@ -3,7 +3,7 @@
 // the project jobs (animate, export, checks) working on it; a session with
 // too few usable photos fails with each photo's reason and no project.
 #include "../photos/photos_scenario.h"
-#include "pipeline/head_creases.h"
+#include "head/head_creases.h"
 #include "project/export.h"
 #include "project/photos_project.h"
 #include "project/pose.h"

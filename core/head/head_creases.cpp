@@ -1,4 +1,4 @@
-#include "pipeline/head_creases.h"
+#include "head/head_creases.h"
 
 #include <algorithm>
 
