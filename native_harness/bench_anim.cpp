@@ -47,11 +47,6 @@ int run_bench_anim(const Args& args) {
   std::printf("   %-66s %10s\n", "case", "cpu (median)");
   int failures = 0;
   int flip = 0;
-  const double rig_ms = median_cpu_ms(reps, [&] {
-    FaceRig again;
-    (void)make_face_rig(head.mesh, generic, again);
-  });
-  std::printf("   %-66s %7.3f ms\n", "make the rig (make_face_rig, the lids measured on level 2)", rig_ms);
   const double pose_ms = median_cpu_ms(reps, [&] { (void)pose_face(rig, (++flip & 1) ? smile : surprise); });
   std::printf("   %-66s %7.3f ms\n", "pose the control mesh (pose_face)", pose_ms);
   for (int level : {2, 3}) {

@@ -24,24 +24,20 @@ Mat3 turn_x(double a) {
 
 // The shares of the rest gap an eye's upper lid comes down and its lower lid
 // comes up (negative: opens), from its lid, lower-lid and pitch channels.
+// Together they never exceed 0.96: the lids meet but do not cross.
 void lid_shares(const FaceControls& c, int eye, double& upper, double& lower) {
   const double lid = c[kLidL + eye], low = c[kLowerLidL + eye], pitch = c[kGazePitchL + eye];
   upper = (lid > 0 ? 0.73 * lid : 0.25 * lid) + (pitch < 0 ? -0.3 * pitch : -0.15 * pitch);
   lower = 0.23 * std::max(0.0, lid) + 0.35 * low + (pitch < 0 ? 0.1 * pitch : 0.05 * pitch);
-}
-
-// Together the shares never exceed the column's cap (at most 0.96): the
-// lids, and their refined margins, meet but do not cross.
-void cap_shares(double cap, double& upper, double& lower) {
   const double sum = upper + lower;
-  if (sum > cap) {
+  if (sum > 0.96) {
     if (upper > 0 && lower > 0) {
-      upper *= cap / sum;
-      lower *= cap / sum;
+      upper *= 0.96 / sum;
+      lower *= 0.96 / sum;
     } else if (upper > 0) {
-      upper = cap - lower;
+      upper = 0.96 - lower;
     } else {
-      lower = cap - upper;
+      lower = 0.96 - upper;
     }
   }
 }
@@ -96,18 +92,16 @@ std::vector<Vec3> pose_face(const FaceRig& rig, const FaceControls& controls) {
     }
   }
   for (int eye = 0; eye < 2; ++eye) {
-    double upper0 = 0, lower0 = 0;
-    lid_shares(c, eye, upper0, lower0);
+    double upper = 0, lower = 0;
+    lid_shares(c, eye, upper, lower);
     const double yaw = 0.2 * c[kGazeYawL + eye] * kGazeAngle;
-    if (upper0 == 0 && lower0 == 0 && yaw == 0) continue;
+    if (upper == 0 && lower == 0 && yaw == 0) continue;
     const EyeLids& L = rig.lids[static_cast<std::size_t>(eye)];
+    // How far the lids have closed: the rims' radii and x meet as they do.
+    const double closed = std::clamp((upper + lower) / 0.96, 0.0, 1.0);
     for (std::size_t i = 0; i < L.index.size(); ++i) {
       Vec3& p = P[static_cast<std::size_t>(L.index[i])];
       const double w = L.weight[i];
-      double upper = upper0, lower = lower0;
-      cap_shares(L.cap[i], upper, lower);
-      // How far the lids have closed: the rims' radii and x meet as they do.
-      const double closed = L.cap[i] > 0 ? std::clamp((upper + lower) / L.cap[i], 0.0, 1.0) : 0.0;
       // The upper lid turns down (negative about x), the lower lid up.
       const double a = L.upper[i] ? -w * L.gap[i] * upper : w * L.gap[i] * lower;
       const Vec3 d = p - L.center;

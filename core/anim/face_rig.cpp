@@ -5,8 +5,6 @@
 #include "components/components.h"
 #include "head/generic_head.h"
 #include "mesh/geometry.h"
-#include "head/head_creases.h"
-#include "multires/multires.h"
 
 #include <algorithm>
 #include <cmath>
@@ -57,9 +55,8 @@ void push(SparseField& f, int v, const Vec3& d) {
   f.delta.push_back(d);
 }
 
-// fine: the head at rest refined to the level the closing is measured on.
-Status lid_rig(const std::vector<Vec3>& P, const MultiresMesh& fine, double min_gap, const EyeSocket& socket, const Vec3& center,
-               double radius, EyeLids& lids, std::vector<int>& upper, std::vector<int>& lower, const char* name) {
+Status lid_rig(const std::vector<Vec3>& P, const EyeSocket& socket, const Vec3& center, double radius, EyeLids& lids,
+               std::vector<int>& upper, std::vector<int>& lower, const char* name) {
   const std::vector<int>& rim = socket.rim;
   if (rim.size() < 6 || rim.size() % 2)
     return Status::error(ErrorCode::InvalidInput, std::string("the ") + name + " rim needs an even loop of >= 6 vertices");
@@ -76,7 +73,7 @@ Status lid_rig(const std::vector<Vec3>& P, const MultiresMesh& fine, double min_
   lids.center = center;
   lids.radius = radius;
   auto angle = [&](const Vec3& p) { return std::atan2(p.y() - center.y(), p.z() - center.z()); };
-  std::vector<std::pair<double, double>> gap, meet, rim_r, upper_r, lower_r, upper_dx, lower_dx, upper_a, lower_a;
+  std::vector<std::pair<double, double>> gap, meet, rim_r, upper_r, lower_r, upper_dx, lower_dx;
   for (std::size_t k = 0; k < m; ++k) {
     const Vec3 &u = P[upper[k]], &l = P[lower[k]];
     const double x = 0.5 * (u.x() + l.x()), g = angle(u) - angle(l);
@@ -89,8 +86,6 @@ Status lid_rig(const std::vector<Vec3>& P, const MultiresMesh& fine, double min_
     lower_r.emplace_back(x, (l - center).norm());
     upper_dx.emplace_back(x, x - u.x());
     lower_dx.emplace_back(x, x - l.x());
-    upper_a.emplace_back(x, angle(u));
-    lower_a.emplace_back(x, angle(l));
   }
   const Profile gap_at = Profile::through(gap), meet_at = Profile::through(meet), rim_at = Profile::through(rim_r);
   const Profile upper_at = Profile::through(upper_r), lower_at = Profile::through(lower_r);
@@ -98,76 +93,21 @@ Status lid_rig(const std::vector<Vec3>& P, const MultiresMesh& fine, double min_
   const double x0 = gap_at.x.front(), x1 = gap_at.x.back();
   for (std::size_t v = 0; v < P.size(); ++v) {
     const Vec3 d = P[v] - center;
-    if (P[v].x() <= x0 || P[v].x() >= x1) continue;
+    if (P[v].x() <= x0 || P[v].x() >= x1 || d.z() <= 0) continue;
     const double rr = rim_at(P[v].x()), r = d.norm();
-    const bool up = angle(P[v]) > meet_at(P[v].x());
-    const double own = up ? upper_at(P[v].x()) : lower_at(P[v].x());  // this lid's rim radius
-    // In front of the eye's centre: 1 within the lid's own rim radius (its
-    // rim turns whole where the two rims sit at different radii), fading
-    // over 0.8 eye radii outside it. Behind it, only the socket's pocket
-    // (inside the rim's radius), fading from 1 at the centre's plane to 0
-    // at the back: the pocket's rings next to the margin turn with it, so
-    // the refined margin keeps its rest shape instead of being pulled over
-    // the other lid by a pocket vertex left behind (docs/design/muscles.md).
-    double w = 0;
-    if (d.z() > 0)
-      w = r <= 1.01 * own ? 1.0 : 1.0 - smoothstep01((r - 1.01 * own) / (0.8 * radius));
-    else if (r <= 1.01 * std::max(rr, own))
-      w = 1.0 - smoothstep01(std::atan2(-d.z(), std::hypot(d.x(), d.y())) / 1.5707963267948966);
+    const double w = r <= 1.01 * rr ? 1.0 : 1.0 - smoothstep01((r - 1.01 * rr) / (0.8 * radius));
     const double g = gap_at(P[v].x());
     if (w <= 0 || g <= 0) continue;
     lids.index.push_back(static_cast<int>(v));
     lids.weight.push_back(w);
     lids.gap.push_back(g);
-    lids.cap.push_back(0.96);
+    const bool up = angle(P[v]) > meet_at(P[v].x());
     lids.upper.push_back(up ? 1 : 0);
     // Closed, both rims meet at the column's mean radius and x (a scan's
     // lids need not sit at one distance from the eyeball's centre, nor
     // their columns at one x).
-    lids.radial.push_back(rr - own);
+    lids.radial.push_back(rr - (up ? upper_at(P[v].x()) : lower_at(P[v].x())));
     lids.shift.push_back(up ? upper_dx_at(P[v].x()) : lower_dx_at(P[v].x()));
-  }
-  // The closing measured on the refined surface: its margins round off
-  // into the opening (Butterfly's rule about the socket ring's valence-5
-  // vertices, next to the pocket's sharp turn), by up to a tenth of a
-  // radian on the generic head, so rims 4 % of the gap apart left the
-  // refined lids crossed. Per column, how far each refined lid reaches past
-  // its rim's angle into the opening; the column's cap on the two lids'
-  // shares together (0.96 of the gap) is lowered so that the refined
-  // margins stay min_gap apart. Partly closed poses are unchanged.
-  // The lids turn whole, so their refined margins keep their rest shape.
-  {
-    const int level = fine.num_levels();
-    const std::vector<Vec3>& fine_positions = fine.state.displaced[static_cast<std::size_t>(level)];
-    const Profile upper_at_a = Profile::through(upper_a), lower_at_a = Profile::through(lower_a);
-    std::vector<char> up_mask(P.size(), 0), low_mask(P.size(), 0);
-    for (std::size_t i = 0; i < lids.index.size(); ++i)
-      if (lids.weight[i] >= 1.0) (lids.upper[i] ? up_mask : low_mask)[static_cast<std::size_t>(lids.index[i])] = 1;
-    const std::vector<char> up_fine = propagate_vertex_mask(fine, up_mask)[static_cast<std::size_t>(level)];
-    const std::vector<char> low_fine = propagate_vertex_mask(fine, low_mask)[static_cast<std::size_t>(level)];
-    // Each refined vertex counts for its nearest column. (Bounding the
-    // closing interpolated between two columns instead, at every quarter of
-    // their spacing, left no pair on James either but the generic head's
-    // eye open by 14 % of its rest opening at level 2.)
-    const Profile& columns = gap_at;  // the columns' x, ascending, and their gaps
-    const std::vector<double>& xs = columns.x;
-    std::vector<double> reach_up(m, 0.0), reach_low(m, 0.0);
-    for (std::size_t v = 0; v < fine_positions.size(); ++v) {
-      if (!up_fine[v] && !low_fine[v]) continue;
-      const Vec3& p = fine_positions[v];
-      if (p.x() <= x0 || p.x() >= x1 || p.z() <= center.z()) continue;
-      const std::size_t k = static_cast<std::size_t>(std::lower_bound(xs.begin(), xs.end(), p.x()) - xs.begin());
-      const std::size_t c = k > 0 && (k == m || p.x() - xs[k - 1] < xs[k] - p.x()) ? k - 1 : k;
-      if (up_fine[v]) reach_up[c] = std::max(reach_up[c], upper_at_a(p.x()) - angle(p));
-      if (low_fine[v]) reach_low[c] = std::max(reach_low[c], angle(p) - lower_at_a(p.x()));
-    }
-    std::vector<std::pair<double, double>> cap;
-    for (std::size_t k = 0; k < m; ++k) {
-      const double g = columns.y[k], sep = reach_up[k] + reach_low[k] + min_gap / rim_at(xs[k]);
-      cap.emplace_back(xs[k], g > 0 ? std::clamp(1.0 - sep / g, 0.0, 0.96) : 0.96);
-    }
-    const Profile cap_at = Profile::through(cap);
-    for (std::size_t i = 0; i < lids.index.size(); ++i) lids.cap[i] = cap_at(P[static_cast<std::size_t>(lids.index[i])].x());
   }
   return Status::success();
 }
@@ -278,14 +218,9 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
   // the jaw, so the lowest of all would be under the chin.
   lm.chin = front_mid(chin, -1, 0.025 * u);
 
-  // The rest surface at level 2 (what the GLB exports), with the head's
-  // creases, for the lids' closing.
-  MultiresMesh fine;
-  if (Status s = build_multires(control, head_creases(control, ann), 2, fine); !s.ok())
-    return with_context(s, "the lids' refined margins");
   const EyeSocket* sockets[2] = {&ann.eye_left, &ann.eye_right};
   for (int s = 0; s < 2; ++s)
-    if (Status st = lid_rig(P, fine, 0.0001 * u, *sockets[s], place.eye_center[s], place.eye_radius[s], rig.lids[static_cast<std::size_t>(s)],
+    if (Status st = lid_rig(P, *sockets[s], place.eye_center[s], place.eye_radius[s], rig.lids[static_cast<std::size_t>(s)],
                             lm.upper_lid[static_cast<std::size_t>(s)], lm.lower_lid[static_cast<std::size_t>(s)],
                             s == 0 ? "left eye" : "right eye");
         !st.ok())
@@ -429,13 +364,8 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
     }
   }
   // Cheeks blown out along their normals: the cheek region's weight,
-  // smoothed over the mesh's edges so it fades, none on the lips, lids or
-  // ears and the skin next to them (the smoothing reached the ears' roots,
-  // whose folds, moved along their normals, crossed at level 2: all of
-  // James' 338 pairs were on or against an ear).
+  // smoothed over the mesh's edges so it fades, none on the lips or lids.
   {
-    const Region* ears = find_region(ann, "ears");
-    const std::vector<char> on_ears = ears ? vertex_mask(*ears, n) : std::vector<char>(static_cast<std::size_t>(n), 0);
     std::vector<double> w(static_cast<std::size_t>(n), 0.0);
     for (int v : cheeks) w[static_cast<std::size_t>(v)] = 1.0;
     std::vector<std::set<int>> ring(static_cast<std::size_t>(n));
@@ -453,18 +383,9 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
       }
       w.swap(next);
     }
-    // The ears and two rings of skin about them stay.
-    std::vector<char> near_ears = on_ears;
-    for (int it = 0; it < 2; ++it) {
-      std::vector<char> next = near_ears;
-      for (int v = 0; v < n; ++v)
-        if (near_ears[static_cast<std::size_t>(v)])
-          for (int nb : ring[static_cast<std::size_t>(v)]) next[static_cast<std::size_t>(nb)] = 1;
-      near_ears.swap(next);
-    }
     const std::vector<Vec3> normals = vertex_normals(control);
     for (int v = 0; v < n; ++v)
-      if (!on_lips[v] && !near_ears[static_cast<std::size_t>(v)])
+      if (!on_lips[v])
         push(rig.field[kCheekPuff], v, 0.006 * u * w[static_cast<std::size_t>(v)] * off_lids(v) * normals[static_cast<std::size_t>(v)]);
   }
 

@@ -44,8 +44,6 @@ struct EyeLids {
   std::vector<int> index;
   std::vector<double> weight;  // 1 on the rim and the socket's first ring, falling to 0 outwards
   std::vector<double> gap;     // the column's rest gap angle (0 at the corners)
-  std::vector<double> cap;     // the most of the gap both lids close together here: 0.96, or less where
-                               // the refined margins (level 2) meet first
   std::vector<double> radial;  // the column's mean rim radius minus this lid's rim radius (metres)
   std::vector<double> shift;   // the column's mean rim x minus this lid's rim x (metres)
   std::vector<char> upper;     // 1: upper lid, 0: lower lid
