@@ -350,11 +350,6 @@ int run(const Args& args) {
       if (b > a) options.align.pitch_starts_deg.push_back(std::atof(list.substr(a, b - a).c_str()));
   }
   if (args.has("fit-align-polish")) options.align.polish = args.get("fit-align-polish", "1") != "0";
-  // --fit-align-polish-face 0|1, --fit-align-polish-points N: the polish on
-  // the upper face only, on N scan points.
-  if (args.has("fit-align-polish-face")) options.align.polish_face_only = args.get("fit-align-polish-face", "1") != "0";
-  if (args.has("fit-align-polish-points"))
-    options.align.polish_points = std::atoi(args.get("fit-align-polish-points", "4000").c_str());
   if (args.has("fit-ear-refit-late")) options.ear_refit_after_rounds = false;
   if (!parse_back_term(args, options)) return 1;
   const std::string dump = args.get("fit-real-dump", "");

@@ -707,9 +707,7 @@ Status fit_scaled_rotation_icp(const TriMesh& surface, const std::vector<Vec3>& 
     out.inlier_fraction = double(kept) / n;
     out.score = score / n;
     if (kept < 9) break;
-    Eigen::Matrix<double, 9, 1> step = Eigen::Matrix<double, 9, 1>::Zero();
-    if (o.fit_scales) step = H.ldlt().solve(-g);
-    else step.tail<6>() = H.bottomRightCorner<6, 6>().ldlt().solve(-g.tail<6>());
+    const Eigen::Matrix<double, 9, 1> step = H.ldlt().solve(-g);
     if (!step.allFinite() || !((Vec3::Ones() + step.head<3>()).minCoeff() > 0.5)) break;
     // The step composed onto the map: x -> dR S (M x + t - c) + c + tau.
     const Mat3 dR = rotation_from_vector(step.segment<3>(3));

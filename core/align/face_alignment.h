@@ -98,9 +98,6 @@ struct FaceAlignOptions {
   int final_points = 20000;    // samples for the polish and the choice
   double polish_tolerance = 1e-5;
   int max_iterations = 60;
-  // fit_scaled_rotation_icp: fit the scales along the axes (else a
-  // rotation and a translation only).
-  bool fit_scales = true;
   double relative_tolerance = 1e-4;  // stop when the trimmed RMS changes less than this
   // Pairs farther than trim_factor * median distance do not pull (the part
   // of a scan the head does not model: shoulders, hair strands, a collar).

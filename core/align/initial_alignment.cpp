@@ -2,9 +2,6 @@
 #include "align/initial_alignment.h"
 
 #include "align/face_alignment.h"
-#include "align/face_refine.h"
-#include "common/cloud_tree.h"
-#include "raycast/bvh.h"
 #include "common/helper_thread.h"
 #include "common/rotation.h"
 #include "mesh/geometry.h"
@@ -12,7 +9,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <memory>
 #include <string>
 
 namespace lk {
@@ -23,7 +19,6 @@ constexpr int kMinPoints = 50;         // fewer cannot outline a head in 64^2 pi
 constexpr int kMinResolution = 16;
 constexpr int kMaxResolution = 4096;
 constexpr double kPi = 3.14159265358979323846;
-constexpr int kFacePolishRounds = 3;  // AlignOptions::polish_face_only: choose the face's samples, fit; again
 
 // Value at fraction q of the sorted values (q in [0,1]), by selection.
 double quantile(std::vector<double> values, double q) {
@@ -346,40 +341,6 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
     for (size_t i = 0; i < cloud_kept.size(); i += stride) polish_samples.push_back(cloud_kept[i]);
   }
   const double polish_clamp = FaceAlignOptions{}.score_clamp_fraction * bounding_box(cloud_kept).diagonal();
-  // AlignOptions::polish_face_only: the polish pulls by the scan samples
-  // nearest the head's upper face (chosen again each round from the pose
-  // so far, fixed within it: a set chosen inside the ICP let the head slide
-  // off until few points counted), and the starts are compared by the
-  // upper face's samples onto the scan (model to scan: the face must lie
-  // on the scan, whatever else the scan holds).
-  std::vector<char> face_triangle;
-  std::vector<Vec3> face_samples;
-  CloudAdaptor kept_adaptor{cloud_kept};
-  std::unique_ptr<CloudTree> kept_tree;
-  if (polish && options.polish_face_only) {
-    std::vector<char> face(generic.positions.size(), 0);
-    for (int v : upper_face_vertices(generic, ann)) face[v] = 1;
-    face_triangle.resize(generic.triangles.size());
-    for (size_t f = 0; f < generic.triangles.size(); ++f) {
-      const Tri& t = generic.triangles[f];
-      face_triangle[f] = face[t[0]] && face[t[1]] && face[t[2]];
-    }
-    face_samples = upper_face_samples(generic, ann, FaceRefineOptions{}.samples);
-    kept_tree = std::make_unique<CloudTree>(3, kept_adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-  }
-  // Mean of min(d, clamp)^2 from the placed upper face's samples to the
-  // nearest kept scan points.
-  auto face_score = [&](const Mat3& linear, const Vec3& translation) {
-    double sum = 0;
-    for (const Vec3& g : face_samples) {
-      const Vec3 p = linear * g + translation;
-      size_t idx = 0;
-      double d2 = 0;
-      kept_tree->knnSearch(p.data(), 1, &idx, &d2);
-      sum += std::min(d2, polish_clamp * polish_clamp);
-    }
-    return face_samples.empty() ? 0.0 : sum / double(face_samples.size());
-  };
   auto polish_of = [&](const Eigen::VectorXd& p, ScaledRotationFit& fit) -> bool {
     Mat3 linear;
     Vec3 translation;
@@ -388,42 +349,8 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
     transform(head, linear, translation);
     FaceAlignOptions fo;
     fo.max_iterations = options.polish_iterations;
-    const Mat3 axes = rotation_from_vector(Vec3(p[3], p[4], p[5]));
-    if (!options.polish_face_only)
-      return static_cast<bool>(fit_scaled_rotation_icp(head, polish_samples, axes, fo, polish_clamp, fit));
-    fo.fit_scales = false;
-    // Rounds: the samples nearest the upper face under the pose so far,
-    // then the ICP on them; the fits compose onto the first head. Turned
-    // and moved only: the face alone does not hold the head's three
-    // scales (with them it shrank 4-6 % and slid off Demosthenes' face),
-    // the silhouettes' scales stay.
-    ScaledRotationFit total;
-    bool any = false;
-    for (int round = 0; round < kFacePolishRounds; ++round) {
-      TriMesh moved_head = head;
-      transform(moved_head, total.linear, total.translation);
-      MeshBvh tree;
-      if (!build_bvh(moved_head, tree)) return false;
-      std::vector<Vec3> chosen;
-      for (const Vec3& s : polish_samples) {
-        const ClosestPoint cp = closest_point(tree, s);
-        if (cp.found() && face_triangle[cp.triangle] && cp.distance <= polish_clamp) chosen.push_back(s);
-      }
-      ScaledRotationFit round_fit;
-      if (!fit_scaled_rotation_icp(moved_head, chosen, total.rotation * axes, fo, polish_clamp, round_fit)) break;
-      total.linear = round_fit.linear * total.linear;
-      total.translation = round_fit.linear * total.translation + round_fit.translation;
-      total.rotation = round_fit.rotation * total.rotation;
-      total.scales = total.scales.cwiseProduct(round_fit.scales);
-      total.rms = round_fit.rms;
-      total.iterations += round_fit.iterations;
-      total.inlier_fraction = round_fit.inlier_fraction;
-      any = true;
-    }
-    if (!any) return false;
-    total.score = face_score(total.linear * linear, total.linear * translation + total.translation);
-    fit = total;
-    return true;
+    return static_cast<bool>(fit_scaled_rotation_icp(head, polish_samples, rotation_from_vector(Vec3(p[3], p[4], p[5])),
+                                                     fo, polish_clamp, fit));
   };
   ScaledRotationFit best_fit;
   bool have_fit = false;

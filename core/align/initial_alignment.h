@@ -94,10 +94,6 @@ struct AlignOptions {
   // between the starts. Off by default: it fits Plato and Gutenberg worse
   // (docs/design/align.md, "Basins").
   bool polish = false;
-  // Polish on the face only: the scan points nearest the head's upper face
-  // (face_refine.h, upper_face_vertices) pull, not those nearest its scalp,
-  // chin, neck or ears, where a beret, a beard or a pedestal lies.
-  bool polish_face_only = false;
   int polish_points = 4000;
   int polish_iterations = 60;
 };
