@@ -292,8 +292,8 @@ constexpr double kLeastTeethHeight = 0.3;
 // kept clear by the depth behind the lip lines instead.
 constexpr double kBiteBand = 0.1;
 // The skin's least depth in front of an arch, as a share of the generic
-// head's least there (16 mm upper, 14 mm lower): room for the lips' and
-// the chin's inward travel under the shapes (mouthRollLower, viseme_PP).
+// head's least there: room for the lips' and the chin's inward travel
+// under the shapes (mouthRollLower, viseme_PP).
 constexpr double kClearance = 0.5;
 // The skin's travel towards the arches' ends under the shapes (the
 // mentalis lifts the chin), as a share of an arch's height: the skin is
@@ -305,11 +305,11 @@ constexpr int kSamples = 16;
 
 // The skin around the mouth in front of each arch (0 upper, 1 lower),
 // sampled on a grid over the arch's front (at the generic relation,
-// teeth_height 1) and kTravel beyond its end, but for the band at the bite: at each sample (x, height)
-// the outermost z of the triangles of the lip and chin regions outside the
-// mouth bag above it, as depth in front of the arch's front face
-// (make_teeth_model's parabola at x; negative: the skin is behind it).
-// Samples without skin in front are left out.
+// teeth_height 1) and kTravel beyond its end, but for the band at the
+// bite: at each sample (x, height) the outermost z of the triangles of the
+// lip and chin regions outside the mouth bag there, as depth in front of
+// the arch's front face (make_teeth_model's parabola at x; negative: the
+// skin is behind it). Samples with no such triangle are left out.
 using Room = std::vector<std::pair<double, double>>;  // (height, depth)
 
 void skin_in_front(const GenericHead& head, const ComponentPlacement& p, Room room[2]) {
@@ -394,11 +394,10 @@ Status place_components(const GenericHead& fitted, const GenericHead& generic, C
   out.mouth_center = mf.slit + s * (generic.annotations.mouth_center - mg.slit);
   out.mouth_center.z() = mf.back + s * (generic.annotations.mouth_center.z() - mg.back);
   out.mouth_width = s * generic.annotations.mouth_width;
-  // Each arch's height: it ends below the first skin (lips, chin) that
-  // comes within half the generic head's least depth of its front face
-  // (the least over the generic head's own samples) (a
-  // receding lower lip or chin, e.g. Demosthenes' bust, would otherwise
-  // meet the lower gums as the lips move).
+  // Each arch's height: it ends kTravel short of the first skin (lips,
+  // chin) that comes within kClearance of the generic head's least depth
+  // (over its own samples) of the arch's front face; a receding chin, e.g.
+  // Demosthenes' bust, would otherwise meet the lower gums as it moves.
   ComponentPlacement pg;
   pg.mouth_center = generic.annotations.mouth_center;
   pg.mouth_width = generic.annotations.mouth_width;
