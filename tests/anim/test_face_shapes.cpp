@@ -864,8 +864,9 @@ TEST_CASE("face rig: the page's fits of the five real scans, control mesh and le
 // A head whose lower lip and chin recede behind the generic head's, as
 // Demosthenes' bust (his lower lip's front 10 mm behind the slit, the skin
 // 15 mm below it behind the placed teeth's front): the generic head with
-// the skin below the mouth pushed back by up to 10 mm, fading out at the
-// mouth line, beyond the mouth's width and 4 cm back.
+// the skin below the mouth pushed back, from 0 at the mouth line to 18 mm
+// from 15 mm below it (13 mm at the lower lip's front row), fading out
+// beyond the mouth's width and 5 cm back.
 GenericHead receding_chin_head() {
   GenericHead head = test::generic_head();
   const FaceRig& rig = generic_rig();
@@ -878,7 +879,7 @@ GenericHead receding_chin_head() {
   for (std::size_t v = 0; v < P.size(); ++v) {
     const Vec3 d = P[v] - slit;
     if (bag[v] || d.y() >= 0 || std::abs(d.x()) >= half || d.z() <= -0.05) continue;
-    const double t = std::clamp((-d.y() - 0.006) / 0.010, 0.0, 1.0), sx = 1 - (d.x() / half) * (d.x() / half), sz = 1 + d.z() / 0.05;
+    const double t = std::min(1.0, -d.y() / 0.015), sx = 1 - (d.x() / half) * (d.x() / half), sz = 1 + d.z() / 0.05;
     P[v].z() -= 0.018 * t * t * (3 - 2 * t) * sx * sx * sz;
   }
   return head;
