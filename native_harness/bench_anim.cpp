@@ -12,6 +12,7 @@
 #include "timing.h"
 
 #include "anim/bake.h"
+#include "components/components.h"
 #include "head/generic_head.h"
 #include "head/head_creases.h"
 #include "project/glb_export.h"
@@ -49,6 +50,10 @@ int run_bench_anim(const Args& args) {
   int flip = 0;
   const double pose_ms = median_cpu_ms(reps, [&] { (void)pose_face(rig, (++flip & 1) ? smile : surprise); });
   std::printf("   %-66s %7.3f ms\n", "pose the control mesh (pose_face)", pose_ms);
+  const double rig_ms = median_cpu_ms(reps, [&] { FaceRig r; (void)make_face_rig(head.mesh, generic, r); });
+  std::printf("   %-66s %7.3f ms\n", "make the rig (make_face_rig, with the teeth's placement)", rig_ms);
+  const double place_ms = median_cpu_ms(reps, [&] { ComponentPlacement p; (void)place_components(head, generic, p); });
+  std::printf("   %-66s %7.3f ms\n", "place the eyes and teeth (place_components)", place_ms);
   for (int level : {2, 3}) {
     MultiresMesh live = mr;
     UpdateFootprint fp;

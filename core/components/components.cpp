@@ -243,6 +243,126 @@ TriMesh make_tongue(int rings, int segments) {
   return m;
 }
 
+namespace {
+
+// The mouth of a head with the generic head's annotations: the slit between
+// the lip lines' middle vertices, the width between their ends (the
+// corners) and the rearmost z of the lines' other vertices.
+struct MouthFrame {
+  Vec3 slit = Vec3::Zero();
+  double width = 0, back = 0;
+};
+
+bool mouth_frame(const GenericHead& head, MouthFrame& f) {
+  const std::vector<int>* lines[2] = {nullptr, nullptr};
+  for (const CreaseCurve& c : head.annotations.creases) {
+    if (c.name == "upper_lip_line") lines[0] = &c.vertices;
+    if (c.name == "lower_lip_line") lines[1] = &c.vertices;
+  }
+  if (!lines[0] || !lines[1] || lines[0]->size() < 3 || lines[0]->size() != lines[1]->size()) return false;
+  const auto& P = head.mesh.positions;
+  const int n = static_cast<int>(P.size());
+  for (const auto* l : lines)
+    for (int v : *l)
+      if (v < 0 || v >= n || !P[static_cast<size_t>(v)].allFinite()) return false;
+  const auto at = [&](int v) { return P[static_cast<size_t>(v)]; };
+  const std::vector<int>& up = *lines[0];
+  const std::vector<int>& low = *lines[1];
+  const size_t mid = up.size() / 2;
+  f.slit = 0.5 * (at(up[mid]) + at(low[mid]));
+  f.width = (at(up.front()) - at(up.back())).norm();
+  if (!(f.width > 0)) return false;
+  f.back = 1e300;
+  for (const auto* l : lines)
+    for (size_t k = 1; k + 1 < l->size(); ++k) f.back = std::min(f.back, at((*l)[k]).z());
+  return true;
+}
+
+// The placed teeth's frame (build_placed_components): the model's origin
+// (the upper arch's front at the bite) and its width.
+void teeth_frame(const ComponentPlacement& p, Vec3& origin, double& width) {
+  width = 0.9 * p.mouth_width;
+  origin = p.mouth_center - Vec3(0, 0, 0.1 * p.mouth_width);
+}
+
+// The least height an arch keeps (of the generic relation), whatever the
+// skin in front: below it the crowns would vanish.
+constexpr double kLeastTeethHeight = 0.3;
+// The lips at the bite (within this share of an arch's height of it) are
+// kept clear by the depth behind the lip lines instead.
+constexpr double kBiteBand = 0.1;
+// The skin's least depth in front of an arch, as a share of the generic
+// head's least there: room for the lips' and the chin's inward travel
+// under the shapes (mouthRollLower, viseme_PP).
+constexpr double kClearance = 0.5;
+// The skin's travel towards the arches' ends under the shapes (the
+// mentalis lifts the chin), as a share of an arch's height: the skin is
+// looked at that far beyond each arch's end, and an arch ends that far
+// short of skin too close in front of it.
+constexpr double kTravel = 0.4;
+// Samples across and up each arch (skin_in_front).
+constexpr int kSamples = 16;
+
+// The skin around the mouth in front of each arch (0 upper, 1 lower),
+// sampled on a grid over the arch's front (at the generic relation,
+// teeth_height 1) and kTravel beyond its end, but for the band at the
+// bite: at each sample (x, height) the outermost z of the triangles of the
+// lip and chin regions outside the mouth bag there, as depth in front of
+// the arch's front face (make_teeth_model's parabola at x; negative: the
+// skin is behind it). Samples with no such triangle are left out.
+using Room = std::vector<std::pair<double, double>>;  // (height, depth)
+
+void skin_in_front(const GenericHead& head, const ComponentPlacement& p, Room room[2]) {
+  const TeethModelOptions t;
+  Vec3 o;
+  double w = 0;
+  teeth_frame(p, o, w);
+  const auto& P = head.mesh.positions;
+  std::vector<char> bag(P.size(), 0), skin(P.size(), 0);
+  for (int v : head.annotations.constrained_vertices)
+    if (v >= 0 && v < static_cast<int>(P.size())) bag[static_cast<size_t>(v)] = 1;
+  for (const char* name : {"lips", "upper_lip", "lower_lip", "chin"}) {
+    auto it = head.annotations.regions.find(name);
+    if (it == head.annotations.regions.end()) continue;
+    for (int v : it->second)
+      if (v >= 0 && v < static_cast<int>(P.size())) skin[static_cast<size_t>(v)] = 1;
+  }
+  std::vector<std::array<Vec3, 3>> tris;
+  for (const Tri& f : head.mesh.triangles) {
+    if (f[0] < 0 || f[1] < 0 || f[2] < 0 || f[0] >= static_cast<int>(P.size()) || f[1] >= static_cast<int>(P.size()) ||
+        f[2] >= static_cast<int>(P.size()))
+      continue;
+    bool any = false, inside = false;
+    for (int k = 0; k < 3; ++k) any |= skin[static_cast<size_t>(f[k])] != 0, inside |= bag[static_cast<size_t>(f[k])] != 0;
+    if (any && !inside) tris.push_back({P[static_cast<size_t>(f[0])] - o, P[static_cast<size_t>(f[1])] - o, P[static_cast<size_t>(f[2])] - o});
+  }
+  for (int k = 0; k < 2; ++k) {
+    const double half = 0.5 * w * (k ? t.lower_scale : 1.0);
+    const double h = (k ? t.lower_height : t.upper_height) * w;
+    for (int i = 0; i <= kSamples; ++i)
+      for (int j = 0; j <= kSamples; ++j) {
+        const double q = -0.9 + 1.8 * i / kSamples;  // across 90 % of the arch's width
+        const double dy = h * (kBiteBand + (1 + kTravel - kBiteBand) * j / kSamples);
+        const double x = q * half, y = k ? -dy : dy;
+        double z = -1e300;
+        for (const auto& c : tris) {
+          const double d = (c[1].y() - c[2].y()) * (c[0].x() - c[2].x()) + (c[2].x() - c[1].x()) * (c[0].y() - c[2].y());
+          if (std::abs(d) < 1e-30) continue;
+          const double l0 = ((c[1].y() - c[2].y()) * (x - c[2].x()) + (c[2].x() - c[1].x()) * (y - c[2].y())) / d;
+          const double l1 = ((c[2].y() - c[0].y()) * (x - c[2].x()) + (c[0].x() - c[2].x()) * (y - c[2].y())) / d;
+          const double l2 = 1 - l0 - l1;
+          if (l0 < 0 || l1 < 0 || l2 < 0) continue;
+          z = std::max(z, l0 * c[0].z() + l1 * c[1].z() + l2 * c[2].z());
+        }
+        if (z < -1e299) continue;
+        const double front = -(k ? t.lower_inset * w : 0.0) - t.depth * 2 * half * q * q;
+        room[k].push_back({dy, z - front});
+      }
+  }
+}
+
+}  // namespace
+
 Status place_components(const GenericHead& fitted, const GenericHead& generic, ComponentPlacement& out) {
   if (fitted.mesh.positions.size() != generic.mesh.positions.size())
     return Status::error(ErrorCode::InvalidInput,
@@ -261,16 +381,39 @@ Status place_components(const GenericHead& fitted, const GenericHead& generic, C
     out.eye_center[e] = cf + s * (sockets[e]->center - cg);
     out.eye_radius[e] = s * sockets[e]->radius;
   }
-  auto lips = generic.annotations.regions.find("lips");
-  if (lips == generic.annotations.regions.end())
-    return Status::error(ErrorCode::InvalidInput, "the head has no 'lips' vertex set");
-  Vec3 cg, cf;
-  double sg, sf;
-  if (!set_frame(generic.mesh, lips->second, cg, sg) || !set_frame(fitted.mesh, lips->second, cf, sf))
-    return Status::error(ErrorCode::InvalidInput, "the head's lip vertices are unusable");
-  const double s = sf / sg;
-  out.mouth_center = cf + s * (generic.annotations.mouth_center - cg);
+  MouthFrame mg, mf;
+  if (!mouth_frame(generic, mg) || !mouth_frame(fitted, mf))
+    return Status::error(ErrorCode::InvalidInput, "the head's lip lines are missing or unusable");
+  // Each measure of the mouth from its own fitted feature, keeping the
+  // generic head's relation to it (so the generic head places exactly its
+  // annotated mouth): across from the slit between the lips' middles, depth
+  // from the lips' rearmost column (the teeth keep the generic clearance
+  // behind the whole lip line, not only behind its middle), size from the
+  // mouth's width.
+  const double s = mf.width / mg.width;
+  out.mouth_center = mf.slit + s * (generic.annotations.mouth_center - mg.slit);
+  out.mouth_center.z() = mf.back + s * (generic.annotations.mouth_center.z() - mg.back);
   out.mouth_width = s * generic.annotations.mouth_width;
+  // Each arch's height: it ends kTravel short of the first skin (lips,
+  // chin) that comes within kClearance of the generic head's least depth
+  // (over its own samples) of the arch's front face; a receding chin, e.g.
+  // Demosthenes' bust, would otherwise meet the lower gums as it moves.
+  ComponentPlacement pg;
+  pg.mouth_center = generic.annotations.mouth_center;
+  pg.mouth_width = generic.annotations.mouth_width;
+  Room rg[2], rf[2];
+  skin_in_front(generic, pg, rg);
+  skin_in_front(fitted, out, rf);
+  const TeethModelOptions t;
+  for (int k = 0; k < 2; ++k) {
+    double least = 1e300;
+    for (const auto& [dy, depth] : rg[k]) least = std::min(least, depth);
+    const double full = (k ? t.lower_height : t.upper_height) * 0.9 * out.mouth_width;
+    double h = full;
+    for (const auto& [dy, depth] : rf[k])
+      if (depth < kClearance * s * least) h = std::min(h, dy - kTravel * full);
+    out.teeth_height[k] = std::max(kLeastTeethHeight, h / full);
+  }
   return Status::success();
 }
 
@@ -280,10 +423,14 @@ PlacedComponents build_placed_components(const ComponentPlacement& p) {
     c.eye[e] = make_eyeball();
     transform(c.eye[e], Vec3::Constant(p.eye_radius[e]), p.eye_center[e]);
   }
-  // Teeth: 90% of the mouth width, set back behind the lips by 10% of it.
-  const double w = 0.9 * p.mouth_width;
+  // Teeth: 90% of the mouth width, set back behind the lips by 10% of it
+  // (teeth_frame); each arch's height as place_components allows.
+  Vec3 origin;
+  double w = 0;
+  teeth_frame(p, origin, w);
   c.teeth = make_teeth_model().mesh;
-  transform(c.teeth, Vec3(w, w, w), p.mouth_center - Vec3(0, 0, 0.1 * p.mouth_width));
+  for (Vec3& q : c.teeth.positions) q.y() *= q.y() > 0 ? p.teeth_height[0] : p.teeth_height[1];
+  transform(c.teeth, Vec3(w, w, w), origin);
   c.tongue = make_tongue();
   transform(c.tongue, Vec3(0.8 * w, w, w), p.mouth_center - Vec3(0, 0.1 * w, 0.25 * p.mouth_width));
   return c;

@@ -71,14 +71,19 @@ TeethModel make_teeth_model(const TeethModelOptions& options = {});
 struct ComponentPlacement {
   Vec3 eye_center[2] = {Vec3::Zero(), Vec3::Zero()};  // 0 = left (+x), 1 = right
   double eye_radius[2] = {0, 0};
-  Vec3 mouth_center = Vec3::Zero();
+  Vec3 mouth_center = Vec3::Zero();  // the bite plane's middle, behind the lips
   double mouth_width = 0;
+  double teeth_height[2] = {1, 1};   // upper, lower arch: height over the generic relation (<= 1)
 };
 
-// Placement from the fitted head's annotated vertices (eye rim loops, lip
-// vertices), so it follows the fitted geometry: each component keeps its
-// offset from the centroid of its vertex set in the generic head, scaled by
-// the ratio of the set's size (mean distance to its centroid) fitted/generic.
+// Placement from the fitted head's annotated vertices, so it follows the
+// fitted geometry. Eyes: each keeps its offset from the centroid of its rim
+// in the generic head, scaled by the ratio of the rim's size (mean distance
+// to its centroid) fitted/generic. Mouth (teeth, tongue): from the fitted
+// lip lines and mouth bag, each measure keeping the generic head's relation
+// to its own feature: across from the slit between the lips, depth behind
+// the lip lines' rearmost vertex, size from the corners' distance, and each
+// arch no taller (relative to the width) than the fitted bag holds it.
 // Both heads must share the generic head's topology and be in the head frame.
 Status place_components(const GenericHead& fitted, const GenericHead& generic, ComponentPlacement& out);
 

@@ -73,6 +73,10 @@ TEST_CASE("components: placed inside the generic head, following a transformed h
   CHECK((p.eye_center[0] - a.eye_left.center).norm() < 1e-9);
   CHECK((p.eye_center[1] - a.eye_right.center).norm() < 1e-9);
   CHECK(std::abs(p.mouth_width - a.mouth_width) < 1e-12);
+  CHECK((p.mouth_center - a.mouth_center).norm() < 1e-12);
+  // The generic head's teeth are the measure of the others' room: full height.
+  CHECK(p.teeth_height[0] == 1.0);
+  CHECK(p.teeth_height[1] == 1.0);
 
   // Eyeballs inside their sockets: behind the rim's front-most vertex.
   const char* rims[2] = {"eye_rim_left", "eye_rim_right"};
@@ -102,6 +106,8 @@ TEST_CASE("components: placed inside the generic head, following a transformed h
   CHECK((pf.eye_center[0] - (1.2 * a.eye_left.center + shift)).norm() < 1e-9);
   CHECK(std::abs(pf.eye_radius[1] - 1.2 * a.eye_right.radius) < 1e-9);
   CHECK((pf.mouth_center - (1.2 * a.mouth_center + shift)).norm() < 1e-9);
+  CHECK(pf.teeth_height[0] == 1.0);
+  CHECK(pf.teeth_height[1] == 1.0);
 }
 
 TEST_CASE("components: a head with another topology is refused") {
