@@ -51,14 +51,21 @@ bool parse_fit_levels(const std::string& coarse, const std::string& schedule, co
   }
   if (!follow.empty()) {
     double k = 0, w = 0;
-    char tail = 0;
-    const int got = std::sscanf(follow.c_str(), "%lf:%lf%c", &k, &w, &tail);
-    if ((got != 1 && got != 2) || !(k >= 0) || !std::isfinite(k) || !(w >= 0) || !std::isfinite(w)) {
+    char* end = nullptr;
+    k = std::strtod(follow.c_str(), &end);
+    bool empty = end == follow.c_str();
+    const bool has_w = *end == ':';
+    if (has_w) {
+      const char* w_text = end + 1;
+      w = std::strtod(w_text, &end);
+      empty = empty || end == w_text;
+    }
+    if (empty || *end != 0 || !(k >= 0) || !std::isfinite(k) || !(w >= 0) || !std::isfinite(w)) {
       why = "follow is K or K:W (numbers >= 0: the weight, and its share where observations are), got '" + follow + "'";
       return false;
     }
     fit.follow = k;
-    fit.follow_observed = got == 2 ? w : 0.0;
+    fit.follow_observed = has_w ? w : 0.0;
   }
   if (fit.stiffness_schedule.empty() && fit.coarse_levels.empty()) {
     why = "no stage left: give coarse levels or a stiffness schedule";

@@ -5,6 +5,7 @@
 #include "photos/photos_job.h"
 #include "photos/shape_fit.h"
 #include "photos_scenario.h"
+#include "test_data.h"
 
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -161,6 +162,15 @@ TEST_CASE("with the follow term the fit's pulls still add up to the fitted displ
   }
   // The check has power: the plain thin plate's normal equations miss the cheeks by more than 10 %.
   CHECK(std::abs(wrong.end.explained_m[0] - pulls.end.displacement_m[0]) > 0.1 * std::abs(pulls.end.displacement_m[0]));
+}
+
+TEST_CASE("likeness photos --follow takes K or K:W and refuses anything else", "[photos][follow][cli]") {
+  LK_REQUIRE_LIKENESS();
+  const std::string dir = test::scratch_dir("photos_follow_cli");
+  const std::string points = test::source_dir() + "/tests/photos/data/kira/0001.json";
+  CHECK(test::run_likeness("photos --points " + points + " --levels 0 --no-texture --out " + dir + " --follow 0.003:0") == 0);
+  for (const char* bad : {"0.01x", "-1", "0.01:", ":1", "abc"})
+    CHECK(test::run_likeness("photos --points " + points + " --levels 0 --no-texture --out " + dir + " --follow " + bad) != 0);
 }
 
 }  // namespace
