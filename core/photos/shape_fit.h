@@ -7,7 +7,9 @@
 // triangulation = our control mesh). Stiffness: ||L delta||^2 with L the
 // uniform graph Laplacian (a thin-plate energy on the displacements rather
 // than the paper's C0 membrane: with only landmark observations, a membrane
-// pulls spikes at the landmarks). Coarse-to-fine: optionally first over
+// pulls spikes at the landmarks); optionally relative to a fitted
+// similarity with a term that makes unobserved parts follow it
+// (ShapeFitOptions::follow, off by default). Coarse-to-fine: optionally first over
 // coarse control triangulations (control_levels.h, eq. 3: each node moves a
 // patch of the control mesh), then on the control mesh itself with the
 // stiffness lowered over a schedule.
