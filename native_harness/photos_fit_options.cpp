@@ -18,7 +18,8 @@ std::vector<std::string> comma_list(const std::string& s) {
 
 }  // namespace
 
-bool parse_fit_levels(const std::string& coarse, const std::string& schedule, ShapeFitOptions& fit, std::string& why) {
+bool parse_fit_levels(const std::string& coarse, const std::string& schedule, const std::string& follow,
+                      ShapeFitOptions& fit, std::string& why) {
   if (coarse == "none") {
     fit.coarse_levels.clear();
   } else if (!coarse.empty()) {
@@ -47,6 +48,24 @@ bool parse_fit_levels(const std::string& coarse, const std::string& schedule, Sh
       }
       fit.stiffness_schedule.push_back(k);
     }
+  }
+  if (!follow.empty()) {
+    double k = 0, w = 0;
+    char* end = nullptr;
+    k = std::strtod(follow.c_str(), &end);
+    bool empty = end == follow.c_str();
+    const bool has_w = *end == ':';
+    if (has_w) {
+      const char* w_text = end + 1;
+      w = std::strtod(w_text, &end);
+      empty = empty || end == w_text;
+    }
+    if (empty || *end != 0 || !(k >= 0) || !std::isfinite(k) || !(w >= 0) || !std::isfinite(w)) {
+      why = "follow is K or K:W (numbers >= 0: the weight, and its share where observations are), got '" + follow + "'";
+      return false;
+    }
+    fit.follow = k;
+    fit.follow_observed = has_w ? w : 0.0;
   }
   if (fit.stiffness_schedule.empty() && fit.coarse_levels.empty()) {
     why = "no stage left: give coarse levels or a stiffness schedule";

@@ -67,25 +67,30 @@ Status measure_fit_pulls(const TriMesh& start, const std::vector<Vec3>& x,
     }
   }
   const int rows = int(res.size());
-  SparseMat J(rows, n);
+  // The state as the fit's: the displacements, then the regularizer's
+  // similarity (options.follow > 0), which no observation row touches.
+  const int e = regularizer_extra_parameters(options.follow), na = n + e;
+  SparseMat J(rows, na);
   J.setFromTriplets(trip.begin(), trip.end());
   const Eigen::Map<const Eigen::VectorXd> r(res.data(), rows);
-  // S = stiffness (L x I3)^T (L x I3) + tether I, on the start mesh's graph (the fit's control level).
+  // S = R^T R, R the regularizer's rows on the start mesh's graph (the fit's control level).
+  // The follow term's weights as the fit sets them at the start of its control level.
   const SparseMat L = uniform_laplacian(start);
-  std::vector<Eigen::Triplet<double>> lt;
-  for (int k = 0; k < L.outerSize(); ++k)
-    for (SparseMat::InnerIterator it(L, k); it; ++it)
-      for (int j = 0; j < 3; ++j) lt.emplace_back(3 * int(it.row()) + j, 3 * int(it.col()) + j, it.value());
-  SparseMat L3(n, n);
-  L3.setFromTriplets(lt.begin(), lt.end());
-  SparseMat I(n, n);
-  I.setIdentity();
-  const SparseMat S = SparseMat(stiffness * (SparseMat(L3.transpose()) * L3)) + options.tether * I;
+  std::vector<double> fw;
+  if (e) fw = follow_node_weights(observed_vertices(sets, start.positions), L, options.follow_observed);
+  const SparseMat Rg = regularizer_matrix(start.positions, L, stiffness, options.tether, options.follow, fw);
+  const SparseMat S = SparseMat(Rg.transpose()) * Rg;
   const SparseMat H = SparseMat(SparseMat(J.transpose()) * J) + S;
   Eigen::SimplicialLDLT<SparseMat> solver(H);
   if (solver.info() != Eigen::Success) return Status::error(ErrorCode::NotConverged, "fit pulls: the normal equations are singular");
-  Eigen::VectorXd D(n);
+  Eigen::VectorXd D = Eigen::VectorXd::Zero(na);
   for (int v = 0; v < V; ++v) D.segment<3>(3 * v) = x[size_t(v)] - start.positions[size_t(v)];
+  if (e) {  // the similarity that minimizes the regularizer at these displacements
+    const SparseMat Rt = Rg.rightCols(e);
+    const Eigen::MatrixXd A = Eigen::MatrixXd(SparseMat(Rt.transpose()) * Rt);
+    const Eigen::VectorXd b = -(Rt.transpose() * (Rg.leftCols(n) * D.head(n)));
+    D.tail(e) = A.ldlt().solve(b);
+  }
   const Eigen::VectorXd w = J * D - r;  // the linearized rows at D = 0
 
   // Outward unit per region vertex: away from the start shape's midline along `lateral`.
@@ -121,14 +126,14 @@ Status measure_fit_pulls(const TriMesh& start, const std::vector<Vec3>& x,
         ++out.groups[size_t(g)].rows;
       }
     const Eigen::VectorXd Dg = solver.solve(J.transpose() * wg);
-    forces.push_back(-(J.transpose() * rg));
+    forces.push_back(-(J.transpose() * rg).head(n));
     for (size_t k = 0; k < R; ++k) {
       out.groups[size_t(g)].share_m.push_back(outward_mean(Dg, regions[k]));
       out.explained_m[k] += out.groups[size_t(g)].share_m.back();
     }
   }
   out.groups.push_back({"stiffness", 0, std::vector<double>(R, std::nan("")), {}});
-  forces.push_back(-(S * D));
+  forces.push_back(-(S * D).head(n));
   if (!(force_unit > 0)) {
     force_unit = 0;
     for (int g = 0; g < G; ++g)

@@ -2,7 +2,8 @@
 // which way (issue 37: Kira's lower face comes out wide). The fit's normal
 // equations linearized at a shape x, H = J^T J + S (J: every observation
 // row as the fit scales it, eq. 7, and the binding rows; S: the stiffness
-// and the tether of one stage), give each row group k its share of the
+// and the tether of one stage, shape_fit.h's regularizer_matrix; with its
+// follow term the similarity's parameters join D), give each row group k its share of the
 // displacement D = x - start:
 //   D_k = H^-1 J_k^T (J_k D - r_k(x)),
 // which sum to D when x is a minimum of that stage (the end of the fit)

@@ -100,13 +100,118 @@ SparseMat uniform_laplacian(const TriMesh& mesh) {
   return L;
 }
 
+Vec3 similarity_displacement(const Vec3& x, const Vec3& centroid, const Eigen::Matrix<double, 7, 1>& theta) {
+  const Vec3 d = x - centroid;
+  return theta[0] * d + Vec3(theta[1], theta[2], theta[3]).cross(d) + Vec3(theta[4], theta[5], theta[6]);
+}
+
 namespace {
 
-// State: displacements delta of the current level's nodes (3 K); the
-// vertices are base + A delta (eq. 3, control_levels.h; A = I on the control
-// mesh). Residuals: the scaled observation sets, the binding edges (over
-// vertices, like the observations), then sqrt(stiffness) (L x I3) delta on
-// the level's own graph, then sqrt(tether) delta.
+Vec3 centroid_of(const std::vector<Vec3>& nodes) {
+  Vec3 c = Vec3::Zero();
+  for (const Vec3& p : nodes) c += p;
+  return nodes.empty() ? c : Vec3(c / double(nodes.size()));
+}
+
+}  // namespace
+
+SparseMat regularizer_matrix(const std::vector<Vec3>& nodes, const SparseMat& laplacian, double stiffness,
+                             double tether, double follow, const std::vector<double>& follow_weights) {
+  const int K = int(nodes.size()), n = 3 * K, e = regularizer_extra_parameters(follow);
+  const Vec3 c = centroid_of(nodes);
+  // B: 3K by 7, the similarity's displacement per node coordinate; column
+  // j of B is similarity_displacement with theta = e_j.
+  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(n, e);
+  if (e)
+    for (int i = 0; i < K; ++i)
+      for (int j = 0; j < 7; ++j)
+        B.block<3, 1>(3 * i, j) = similarity_displacement(nodes[size_t(i)], c, Eigen::Matrix<double, 7, 1>::Unit(j));
+  std::vector<Eigen::Triplet<double>> trip;
+  const double ss = std::sqrt(stiffness), sf = std::sqrt(follow * stiffness), st = std::sqrt(tether);
+  int row = 0;
+  // sqrt(k) (L x I3) delta, then minus sqrt(k) (L x I3) B theta.
+  Eigen::MatrixXd LB = Eigen::MatrixXd::Zero(n, e);
+  for (int k = 0; k < laplacian.outerSize(); ++k)
+    for (SparseMat::InnerIterator it(laplacian, k); it; ++it)
+      for (int j = 0; j < 3; ++j) {
+        trip.emplace_back(row + 3 * int(it.row()) + j, 3 * int(it.col()) + j, ss * it.value());
+        if (e) LB.row(3 * int(it.row()) + j) += it.value() * B.row(3 * int(it.col()) + j);
+      }
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < e; ++j)
+      if (LB(i, j) != 0) trip.emplace_back(row + i, n + j, -ss * LB(i, j));
+  row += n;
+  if (e) {
+    for (int i = 0; i < n; ++i) {
+      const double w = sf * (follow_weights.empty() ? 1.0 : std::sqrt(follow_weights[size_t(i / 3)]));
+      if (w == 0) continue;
+      trip.emplace_back(row + i, i, w);
+      for (int j = 0; j < e; ++j)
+        if (B(i, j) != 0) trip.emplace_back(row + i, n + j, -w * B(i, j));
+    }
+    row += n;
+  }
+  for (int i = 0; i < n; ++i) trip.emplace_back(row + i, i, st);
+  row += n;
+  SparseMat R(row, n + e);
+  R.setFromTriplets(trip.begin(), trip.end());
+  return R;
+}
+
+Eigen::VectorXd regularizer_residuals(const std::vector<Vec3>& nodes, const SparseMat& laplacian, double stiffness,
+                                      double tether, double follow, const Eigen::VectorXd& state,
+                                      const std::vector<double>& follow_weights) {
+  const int K = int(nodes.size()), n = 3 * K, e = regularizer_extra_parameters(follow);
+  const Vec3 c = centroid_of(nodes);
+  Eigen::Matrix<double, 7, 1> theta = Eigen::Matrix<double, 7, 1>::Zero();
+  if (e) theta = state.segment<7>(n);
+  // The non-similar part of each node's displacement.
+  std::vector<Vec3> u(static_cast<size_t>(K));
+  for (int i = 0; i < K; ++i) u[size_t(i)] = state.segment<3>(3 * i) - similarity_displacement(nodes[size_t(i)], c, theta);
+  Eigen::VectorXd r = Eigen::VectorXd::Zero((e ? 3 : 2) * n);
+  for (int k = 0; k < laplacian.outerSize(); ++k)
+    for (SparseMat::InnerIterator it(laplacian, k); it; ++it)
+      r.segment<3>(3 * int(it.row())) += std::sqrt(stiffness) * it.value() * u[size_t(it.col())];
+  int row = n;
+  if (e) {
+    for (int i = 0; i < K; ++i)
+      r.segment<3>(row + 3 * i) = std::sqrt(follow * stiffness * (follow_weights.empty() ? 1.0 : follow_weights[size_t(i)])) *
+                                  u[size_t(i)];
+    row += n;
+  }
+  r.segment(row, n) = std::sqrt(tether) * state.head(n);
+  return r;
+}
+
+std::vector<double> follow_node_weights(const std::vector<bool>& observed_nodes, const SparseMat& laplacian,
+                                        double observed_weight) {
+  Eigen::VectorXd w(long(observed_nodes.size()));
+  for (size_t i = 0; i < observed_nodes.size(); ++i) w[long(i)] = observed_nodes[i] ? observed_weight : 1.0;
+  for (int pass = 0; pass < 3; ++pass) w -= 0.5 * (laplacian * w);
+  return std::vector<double>(w.data(), w.data() + w.size());
+}
+
+std::vector<bool> observed_vertices(const std::vector<std::unique_ptr<ObservationSet>>& sets,
+                                    const std::vector<Vec3>& positions) {
+  std::vector<bool> seen(positions.size(), false);
+  for (const auto& set : sets) {
+    Eigen::VectorXd r(set->num_residuals());
+    std::vector<Eigen::Triplet<double>> trip;
+    if (r.size() == 0 || !set->evaluate(positions, r, 0, &trip)) continue;
+    for (const auto& t : trip)
+      if (t.value() != 0 && size_t(t.col() / 3) < seen.size()) seen[size_t(t.col() / 3)] = true;
+  }
+  return seen;
+}
+
+namespace {
+
+// State: displacements delta of the current level's nodes (3 K), then the
+// regularizer's similarity (options.follow > 0); the vertices are base + A
+// delta (eq. 3, control_levels.h; A = I on the control mesh). Residuals: the
+// scaled observation sets, the binding edges (over vertices, like the
+// observations), then the regularizer's rows (regularizer_matrix) on the
+// level's own graph.
 class ShapeProblem : public LeastSquaresProblem {
  public:
   ShapeProblem(const TriMesh& control, std::vector<std::unique_ptr<ObservationSet>>& sets,
@@ -117,25 +222,36 @@ class ShapeProblem : public LeastSquaresProblem {
       rest_.push_back(control.positions[size_t(e[0])] - control.positions[size_t(e[1])]);
   }
 
-  double stiffness = 1, tether = 1e-4;
+  double tether = 1e-4, follow = 0, follow_observed = 0;
   std::vector<double> scales_;
 
   // Starts a level from the current shape: its displacements at zero.
   void set_level(const ControlLevel& level) {
     base_ = positions();
     level_ = &level;
-    delta_ = Eigen::VectorXd::Zero(3 * long(level.num_nodes()));
-    const SparseMat& L = level.laplacian;
-    std::vector<Eigen::Triplet<double>> trip;
-    for (int k = 0; k < L.outerSize(); ++k)
-      for (SparseMat::InnerIterator it(L, k); it; ++it)
-        for (int j = 0; j < 3; ++j) trip.emplace_back(3 * int(it.row()) + j, 3 * int(it.col()) + j, it.value());
-    L3_.resize(delta_.size(), delta_.size());
-    L3_.setFromTriplets(trip.begin(), trip.end());
+    nodes_.clear();
+    for (int v : level.nodes) nodes_.push_back(base_[size_t(v)]);
+    num_delta_ = 3 * level.num_nodes();
+    // The follow term's weight per node: follow_observed where a vertex of
+    // the node's cell is observed, 1 elsewhere, smoothed.
+    weights_.clear();
+    if (follow > 0) {
+      const std::vector<bool> seen = observed_vertices(sets_, base_);
+      std::vector<bool> seen_node(size_t(level.num_nodes()), false);
+      for (size_t v = 0; v < seen.size(); ++v)
+        if (seen[v]) seen_node[size_t(level.cell[v])] = true;
+      weights_ = follow_node_weights(seen_node, level.laplacian, follow_observed);
+    }
+    delta_ = Eigen::VectorXd::Zero(num_delta_ + regularizer_extra_parameters(follow));
+    set_stiffness(stiffness_);
+  }
+  void set_stiffness(double k) {
+    stiffness_ = k;
+    if (level_) R_ = regularizer_matrix(nodes_, level_->laplacian, stiffness_, tether, follow, weights_);
   }
 
-  std::vector<Vec3> positions(const Eigen::VectorXd& delta) const {
-    return level_ ? attached_positions(*level_, base_, delta) : base_;
+  std::vector<Vec3> positions(const Eigen::VectorXd& state) const {
+    return level_ ? attached_positions(*level_, base_, state.head(num_delta_)) : base_;
   }
   std::vector<Vec3> positions() const { return positions(delta_); }
 
@@ -150,8 +266,8 @@ class ShapeProblem : public LeastSquaresProblem {
 
   bool residuals(const Eigen::VectorXd& delta, Eigen::VectorXd& r, std::vector<Eigen::Triplet<double>>* trip) const {
     const std::vector<Vec3> p = positions(delta);
-    const int nobs = observation_rows(), npar = num_parameters();
-    r.setZero(nobs + 2 * npar);
+    const int nobs = observation_rows();
+    r.setZero(nobs + R_.rows());
     int row = 0;
     std::vector<Eigen::Triplet<double>> over_vertices;  // observation rows by 3 #V
     for (size_t k = 0; k < sets_.size(); ++k) {
@@ -183,16 +299,11 @@ class ShapeProblem : public LeastSquaresProblem {
           for (SparseMat::InnerIterator it(Jd, k); it; ++it) trip->emplace_back(int(it.row()), int(it.col()), it.value());
       }
     }
-    const double ss = std::sqrt(stiffness), st = std::sqrt(tether);
-    r.segment(row, npar) = ss * (L3_ * delta);
+    r.segment(row, R_.rows()) = R_ * delta;
     if (trip)
-      for (int k = 0; k < L3_.outerSize(); ++k)
-        for (SparseMat::InnerIterator it(L3_, k); it; ++it)
-          trip->emplace_back(row + int(it.row()), int(it.col()), ss * it.value());
-    row += npar;
-    r.segment(row, npar) = st * delta;
-    if (trip)
-      for (int j = 0; j < npar; ++j) trip->emplace_back(row + j, j, st);
+      for (int k = 0; k < R_.outerSize(); ++k)
+        for (SparseMat::InnerIterator it(R_, k); it; ++it)
+          trip->emplace_back(row + int(it.row()), int(it.col()), it.value());
     return true;
   }
 
@@ -216,8 +327,12 @@ class ShapeProblem : public LeastSquaresProblem {
   double binding_weight_;
   std::vector<Vec3> rest_;  // each binding edge's x_a - x_b on the start shape
   const ControlLevel* level_ = nullptr;
-  Eigen::VectorXd delta_;
-  SparseMat L3_;
+  std::vector<Vec3> nodes_;  // the level's nodes on its start shape
+  std::vector<double> weights_;  // the follow term's per node
+  int num_delta_ = 0;
+  double stiffness_ = 1;
+  Eigen::VectorXd delta_;    // the state: node displacements, then the similarity
+  SparseMat R_;              // the regularizer's rows (regularizer_matrix)
 };
 
 double feature_rms(const std::vector<std::unique_ptr<ObservationSet>>& sets, const std::vector<Vec3>& p) {
@@ -245,6 +360,9 @@ Status fit_shape(const TriMesh& control, std::vector<std::unique_ptr<Observation
   for (const ShapeFitOptions::CoarseLevel& c : options.coarse_levels)
     if (!(c.stiffness > 0) || !std::isfinite(c.stiffness) || c.nodes < 4)
       return Status::error(ErrorCode::InvalidInput, "shape fit: a coarse level needs >= 4 nodes and a stiffness > 0");
+  if (!(options.follow >= 0) || !std::isfinite(options.follow) || !(options.follow_observed >= 0) ||
+      !std::isfinite(options.follow_observed))
+    return Status::error(ErrorCode::InvalidInput, "shape fit: follow must be >= 0");
   if (control.num_vertices() == 0) return Status::error(ErrorCode::InvalidInput, "shape fit: empty control mesh");
   if (!(options.binding_weight >= 0) || !std::isfinite(options.binding_weight))
     return Status::error(ErrorCode::InvalidInput, "shape fit: the binding weight must be >= 0");
@@ -270,6 +388,8 @@ Status fit_shape(const TriMesh& control, std::vector<std::unique_ptr<Observation
   }
   ShapeProblem problem(control, sets, options.binding_edges, options.binding_weight);
   problem.tether = options.tether;
+  problem.follow = options.follow;
+  problem.follow_observed = options.follow_observed;
   problem.set_level(levels[0]);
   {
     Eigen::VectorXd r;
@@ -282,7 +402,7 @@ Status fit_shape(const TriMesh& control, std::vector<std::unique_ptr<Observation
     ShapeFitStage stage;
     stage.nodes = levels[stages[si].level].num_nodes();
     stage.stiffness = stages[si].stiffness;
-    problem.stiffness = stages[si].stiffness;
+    problem.set_stiffness(stages[si].stiffness);
     for (int round = 0; round < options.reweighting_rounds; ++round) {
       if (round > 0 || si > 0)
         for (auto& s : sets) s->reweight(problem.positions());

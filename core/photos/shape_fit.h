@@ -7,7 +7,9 @@
 // triangulation = our control mesh). Stiffness: ||L delta||^2 with L the
 // uniform graph Laplacian (a thin-plate energy on the displacements rather
 // than the paper's C0 membrane: with only landmark observations, a membrane
-// pulls spikes at the landmarks). Coarse-to-fine: optionally first over
+// pulls spikes at the landmarks); optionally relative to a fitted
+// similarity with a term that makes unobserved parts follow it
+// (ShapeFitOptions::follow, off by default). Coarse-to-fine: optionally first over
 // coarse control triangulations (control_levels.h, eq. 3: each node moves a
 // patch of the control mesh), then on the control mesh itself with the
 // stiffness lowered over a schedule.
@@ -103,6 +105,19 @@ struct ShapeFitOptions {
   };
   std::vector<CoarseLevel> coarse_levels;
   double tether = 1e-4;           // ||delta||^2 weight: fixes what nothing observes
+  // What the photos do not observe (ears, the back of the jaw, the skull)
+  // follows the head's overall shape: > 0 makes the stiffness act on the
+  // displacement less a similarity of the level's start shape (regularizer_
+  // matrix below; its 7 parameters fitted with the shape) and adds
+  // follow * stiffness ||delta - similarity||^2. The thin plate alone
+  // continues the nearest pull's slope into unobserved parts; with this
+  // term their non-similar part decays over about follow^(-1/4) edges.
+  // follow_observed: the term's weight at the nodes that observations
+  // touch (observed_vertices), relative to the rest's 1; at 0 the photos'
+  // observed parts keep the plain thin plate and the term acts only where
+  // nothing is observed. 0: the plain thin plate.
+  double follow = 0;
+  double follow_observed = 0;
   // Binding edges (the scan fit's E_binding, global_fit.h): vertex pairs
   // whose difference x_a - x_b keeps its value on the start shape, rows
   // sqrt(binding_weight) ((x_a - x_b) - r_e) in metres beside the
@@ -149,6 +164,34 @@ std::vector<double> observation_type_weights(const std::vector<Vec3>& positions,
 // does not match the mesh; NotConverged when no step lowers the cost.
 Status fit_shape(const TriMesh& control, std::vector<std::unique_ptr<ObservationSet>>& sets,
                  const std::vector<double>& lambdas, const ShapeFitOptions& options, ShapeFitResult& result);
+
+// The fit's regularizer rows on one level, linear in its state [delta (3 K);
+// theta (regularizer_extra_parameters(follow))], nodes at `nodes`, K by K
+// graph Laplacian L:
+//   sqrt(stiffness) (L x I3) (delta - B theta)
+//   sqrt(follow w_k stiffness) (delta_k - (B theta)_k)   (only when follow > 0)
+//   sqrt(tether) delta
+// with B theta = similarity_displacement: a linearized similarity about the
+// nodes' centroid (theta = 0 and follow = 0: the plain thin plate and tether).
+// follow_weights (K, or empty: all 1) multiply the follow rows' weight per node.
+SparseMat regularizer_matrix(const std::vector<Vec3>& nodes, const SparseMat& laplacian, double stiffness,
+                             double tether, double follow, const std::vector<double>& follow_weights = {});
+// The same residuals evaluated directly (for tests of the matrix).
+Eigen::VectorXd regularizer_residuals(const std::vector<Vec3>& nodes, const SparseMat& laplacian, double stiffness,
+                                      double tether, double follow, const Eigen::VectorXd& state,
+                                      const std::vector<double>& follow_weights = {});
+// The follow term's weight per node: observed_weight at observed nodes, 1
+// elsewhere, then smoothed over the level's graph (three passes of
+// w <- w - L w / 2) so that the term does not switch on across one edge,
+// which creases the surface there.
+std::vector<double> follow_node_weights(const std::vector<bool>& observed_nodes, const SparseMat& laplacian,
+                                        double observed_weight);
+// The vertices (#V) some observation row depends on at these positions.
+std::vector<bool> observed_vertices(const std::vector<std::unique_ptr<ObservationSet>>& sets,
+                                    const std::vector<Vec3>& positions);
+inline int regularizer_extra_parameters(double follow) { return follow > 0 ? 7 : 0; }
+// s (x - c) + w x (x - c) + t for theta = (s, w, t), c the centroid.
+Vec3 similarity_displacement(const Vec3& x, const Vec3& centroid, const Eigen::Matrix<double, 7, 1>& theta);
 
 // The uniform graph Laplacian, #V by #V: (L d)_i = d_i - mean of d over i's neighbours.
 SparseMat uniform_laplacian(const TriMesh& mesh);
