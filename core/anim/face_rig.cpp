@@ -364,8 +364,13 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
     }
   }
   // Cheeks blown out along their normals: the cheek region's weight,
-  // smoothed over the mesh's edges so it fades, none on the lips or lids.
+  // smoothed over the mesh's edges so it fades, none on the lips, lids or
+  // ears and the skin next to them (the smoothing reached the ears' roots,
+  // whose folds, moved along their normals, crossed at level 2: all of
+  // James' 338 pairs were on or against an ear).
   {
+    const Region* ears = find_region(ann, "ears");
+    const std::vector<char> on_ears = ears ? vertex_mask(*ears, n) : std::vector<char>(static_cast<std::size_t>(n), 0);
     std::vector<double> w(static_cast<std::size_t>(n), 0.0);
     for (int v : cheeks) w[static_cast<std::size_t>(v)] = 1.0;
     std::vector<std::set<int>> ring(static_cast<std::size_t>(n));
@@ -383,9 +388,18 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
       }
       w.swap(next);
     }
+    // The ears and two rings of skin about them stay.
+    std::vector<char> near_ears = on_ears;
+    for (int it = 0; it < 2; ++it) {
+      std::vector<char> next = near_ears;
+      for (int v = 0; v < n; ++v)
+        if (near_ears[static_cast<std::size_t>(v)])
+          for (int nb : ring[static_cast<std::size_t>(v)]) next[static_cast<std::size_t>(nb)] = 1;
+      near_ears.swap(next);
+    }
     const std::vector<Vec3> normals = vertex_normals(control);
     for (int v = 0; v < n; ++v)
-      if (!on_lips[v])
+      if (!on_lips[v] && !near_ears[static_cast<std::size_t>(v)])
         push(rig.field[kCheekPuff], v, 0.006 * u * w[static_cast<std::size_t>(v)] * off_lids(v) * normals[static_cast<std::size_t>(v)]);
   }
 
