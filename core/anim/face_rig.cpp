@@ -78,8 +78,11 @@ Status lid_rig(const std::vector<Vec3>& P, const EyeSocket& socket, const Vec3& 
     const Vec3 &u = P[upper[k]], &l = P[lower[k]];
     const double x = 0.5 * (u.x() + l.x()), g = angle(u) - angle(l);
     if (!(g > -1e-9)) return Status::error(ErrorCode::InvalidInput, std::string("the ") + name + " rim's upper lid is below its lower lid");
+    // The corner columns (the canthi) close by 0.6 of theirs: fully closed,
+    // the skin just past them pinched and folded at level 2 (9 pairs per
+    // blink on the generic head; 0 at 0.6 and 0.65, 4 at 0.75).
     const bool corner = k == 0 || k + 1 == m;
-    gap.emplace_back(x, corner ? 0.0 : g);
+    gap.emplace_back(x, corner ? 0.6 * g : g);
     meet.emplace_back(x, angle(l) + 0.25 * g);
     rim_r.emplace_back(x, 0.5 * ((u - center).norm() + (l - center).norm()));
     upper_r.emplace_back(x, (u - center).norm());
@@ -90,24 +93,56 @@ Status lid_rig(const std::vector<Vec3>& P, const EyeSocket& socket, const Vec3& 
   const Profile gap_at = Profile::through(gap), meet_at = Profile::through(meet), rim_at = Profile::through(rim_r);
   const Profile upper_at = Profile::through(upper_r), lower_at = Profile::through(lower_r);
   const Profile upper_dx_at = Profile::through(upper_dx), lower_dx_at = Profile::through(lower_dx);
-  const double x0 = gap_at.x.front(), x1 = gap_at.x.back();
+  // The corner columns close too (the generic head's canthi are rim edges
+  // 1.7 mm long, which stayed open, eyeball showing); past them the lids'
+  // weight fades to 0 within a tenth of the eye's radius, so the skin
+  // beyond the canthi stays.
+  const double x0 = gap_at.x.front(), x1 = gap_at.x.back(), fade = 0.1 * radius;
+  // A rim vertex takes its own column's values and lid, not those at its x:
+  // a fitted rim's columns need not be upright (Gutenberg's middle upper
+  // vertex sits 5 mm along x from its lower one, where the interpolated gap
+  // turned it past the lower rim).
+  std::map<int, std::pair<double, bool>> on_rim;  // rim vertex -> (its column's x, upper)
+  for (std::size_t k = 0; k < m; ++k) {
+    const double x = 0.5 * (P[upper[k]].x() + P[lower[k]].x());
+    on_rim[upper[k]] = {x, true};
+    on_rim[lower[k]] = {x, false};
+  }
   for (std::size_t v = 0; v < P.size(); ++v) {
     const Vec3 d = P[v] - center;
-    if (P[v].x() <= x0 || P[v].x() >= x1 || d.z() <= 0) continue;
-    const double rr = rim_at(P[v].x()), r = d.norm();
-    const double w = r <= 1.01 * rr ? 1.0 : 1.0 - smoothstep01((r - 1.01 * rr) / (0.8 * radius));
-    const double g = gap_at(P[v].x());
+    const auto rim_v = on_rim.find(static_cast<int>(v));
+    const bool is_rim = rim_v != on_rim.end();
+    const double x = is_rim ? rim_v->second.first : P[v].x();
+    if (!is_rim && (x <= x0 - fade || x >= x1 + fade)) continue;
+    const double past = is_rim ? 0.0 : std::max(x0 - x, x - x1);  // beyond the corner columns (> 0)
+    const double rr = rim_at(x), r = d.norm();
+    const bool up = is_rim ? rim_v->second.second : angle(P[v]) > meet_at(x);
+    const double own = up ? upper_at(x) : lower_at(x);  // this lid's rim radius
+    // In front of the eye's centre: 1 within the lid's own rim radius (the
+    // rim turns whole where the two rims sit at different radii; the mean
+    // of both left a scan's upper rim at 0.9997), fading over 0.8 eye radii
+    // outside it. Behind it, only the socket's pocket (inside the rim's
+    // radius), fading from 1 at the centre's plane to 0 at the back, so the
+    // pocket next to the margin turns with it rather than being left behind
+    // (docs/design/muscles.md, "The lids closed at level 2").
+    double w = 0;
+    if (d.z() > 0)
+      w = r <= 1.01 * own ? 1.0 : 1.0 - smoothstep01((r - 1.01 * own) / (0.8 * radius));
+    else if (r <= 1.01 * std::max(rr, own))
+      w = 1.0 - smoothstep01(std::atan2(-d.z(), std::hypot(d.x(), d.y())) / 1.5707963267948966);
+    if (is_rim) w = 1.0;
+    if (past > 0) w *= 1.0 - smoothstep01(past / fade);
+    const double g = gap_at(x);
     if (w <= 0 || g <= 0) continue;
     lids.index.push_back(static_cast<int>(v));
     lids.weight.push_back(w);
     lids.gap.push_back(g);
-    const bool up = angle(P[v]) > meet_at(P[v].x());
     lids.upper.push_back(up ? 1 : 0);
     // Closed, both rims meet at the column's mean radius and x (a scan's
     // lids need not sit at one distance from the eyeball's centre, nor
     // their columns at one x).
-    lids.radial.push_back(rr - (up ? upper_at(P[v].x()) : lower_at(P[v].x())));
-    lids.shift.push_back(up ? upper_dx_at(P[v].x()) : lower_dx_at(P[v].x()));
+    lids.radial.push_back(rr - own);
+    lids.shift.push_back(up ? upper_dx_at(x) : lower_dx_at(x));
   }
   return Status::success();
 }
@@ -364,8 +399,13 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
     }
   }
   // Cheeks blown out along their normals: the cheek region's weight,
-  // smoothed over the mesh's edges so it fades, none on the lips or lids.
+  // smoothed over the mesh's edges so it fades, none on the lips, lids or
+  // ears and the skin next to them (the smoothing reached the ears' roots,
+  // whose folds, moved along their normals, crossed at level 2: all of
+  // James' 338 pairs were on or against an ear).
   {
+    const Region* ears = find_region(ann, "ears");
+    const std::vector<char> on_ears = ears ? vertex_mask(*ears, n) : std::vector<char>(static_cast<std::size_t>(n), 0);
     std::vector<double> w(static_cast<std::size_t>(n), 0.0);
     for (int v : cheeks) w[static_cast<std::size_t>(v)] = 1.0;
     std::vector<std::set<int>> ring(static_cast<std::size_t>(n));
@@ -383,9 +423,18 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
       }
       w.swap(next);
     }
+    // The ears and two rings of skin about them stay.
+    std::vector<char> near_ears = on_ears;
+    for (int it = 0; it < 2; ++it) {
+      std::vector<char> next = near_ears;
+      for (int v = 0; v < n; ++v)
+        if (near_ears[static_cast<std::size_t>(v)])
+          for (int nb : ring[static_cast<std::size_t>(v)]) next[static_cast<std::size_t>(nb)] = 1;
+      near_ears.swap(next);
+    }
     const std::vector<Vec3> normals = vertex_normals(control);
     for (int v = 0; v < n; ++v)
-      if (!on_lips[v])
+      if (!on_lips[v] && !near_ears[static_cast<std::size_t>(v)])
         push(rig.field[kCheekPuff], v, 0.006 * u * w[static_cast<std::size_t>(v)] * off_lids(v) * normals[static_cast<std::size_t>(v)]);
   }
 

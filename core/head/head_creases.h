@@ -13,7 +13,11 @@ namespace lk {
 // annotations belong to, facing +z) as crease corners: the 4-point rule
 // would otherwise carry the rim round the sharp corner in a smooth loop,
 // which pleated the lids at James's outer eye corners (docs/journal.md,
-// "The eye corners as crease corners").
+// "The eye corners as crease corners"); and behind each rim its socket
+// ring (the pocket's vertices next to the rim) as a crease too, so the
+// refined lid margin, the strip between the two, depends on those rings
+// alone and does not bulge into the eye's opening (docs/design/muscles.md,
+// "The lids closed at level 2").
 ButterflyCreases head_creases(const TriMesh& mesh, const HeadAnnotations& annotations);
 
 }  // namespace lk

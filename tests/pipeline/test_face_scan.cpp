@@ -236,7 +236,9 @@ TEST_CASE("fit_head: the real Fran (Cyberware face patch) is turned to face +z a
   CHECK(r.orientation.facing.z() < -0.5);
   CHECK(r.face_only);
   CHECK(r.near_fraction > 0.7);
-  CHECK(r.stages[2].distance.mean_pct < 0.14);  // 0.116 measured (docs/journal.md)
+  // 0.116 measured (docs/journal.md); 0.138 -> 0.143 with the eyes' socket
+  // rings as creases (docs/design/muscles.md, "The lids closed at level 2").
+  CHECK(r.stages[2].distance.mean_pct < 0.145);
   CHECK(r.stages[3].distance.mean_pct < 0.2);
   // At one level the guard leaves the pairs away from the lips and ears
   // alone (4 here): its steps for them moved 21 control vertices toward the
@@ -268,7 +270,9 @@ TEST_CASE("fit_head: the real James (menpo3d face capture in mm)") {
   for (const auto& s : r.stages) INFO(s.name << " mean " << s.distance.mean_pct << " %");
   CHECK(r.unit_to_metres == 0.001);
   CHECK_FALSE(r.orientation.differs);
-  CHECK(r.stages[2].distance.mean_pct < 0.14);  // 0.116 measured (docs/journal.md)
+  // 0.116 measured (docs/journal.md); 0.138 -> 0.143 with the eyes' socket
+  // rings as creases (docs/design/muscles.md, "The lids closed at level 2").
+  CHECK(r.stages[2].distance.mean_pct < 0.145);
   CHECK(r.stages[3].distance.mean_pct < 0.2);
   // The crease band from the eye corners to the ears was 36 control
   // triangles turned over against the aligned generic head (local fitting

@@ -9,6 +9,7 @@
 #include "head/generic_head_builder.h"
 
 #include <algorithm>
+#include <map>
 #include "mesh/topology.h"
 #include "raycast/self_intersection.h"
 
@@ -196,7 +197,28 @@ TEST_CASE("head creases: the curves as tagged edges, and the eye openings' corne
   ButterflyCreases plain;
   for (const CreaseCurve& c : ann.creases) add_crease_polyline(c.vertices, c.closed, plain);
   const ButterflyCreases creases = head_creases(head.mesh, ann);
-  CHECK(creases.edges == plain.edges);
+  // The curves first, then each eye's socket ring: edges between two
+  // vertices next to its rim, not on it, forming one closed loop per eye
+  // (every ring vertex on two ring edges, so no new corner).
+  REQUIRE(creases.edges.size() > plain.edges.size());
+  CHECK(std::equal(plain.edges.begin(), plain.edges.end(), creases.edges.begin()));
+  std::map<int, int> ring_edges_at;
+  for (std::size_t i = plain.edges.size(); i < creases.edges.size(); ++i)
+    for (int v : creases.edges[i]) ++ring_edges_at[v];
+  for (const EyeSocket* eye : {&ann.eye_left, &ann.eye_right}) {
+    int ring_vertices = 0;
+    for (const auto& [v, count] : ring_edges_at) {
+      if (std::find(eye->rim.begin(), eye->rim.end(), v) != eye->rim.end()) FAIL("a ring vertex on the rim");
+      bool next_to_rim = false;
+      for (const Tri& t : head.mesh.triangles)
+        if (std::find(t.begin(), t.end(), v) != t.end())
+          for (int w : t) next_to_rim = next_to_rim || std::find(eye->rim.begin(), eye->rim.end(), w) != eye->rim.end();
+      if (!next_to_rim) continue;  // the other eye's ring
+      ++ring_vertices;
+      CHECK(count == 2);
+    }
+    CHECK(ring_vertices >= static_cast<int>(eye->rim.size()) / 2);
+  }
   // Each rim's corners: the vertices furthest along -x and +x (the inner and
   // outer canthus), and nothing else new.
   for (const EyeSocket* eye : {&ann.eye_left, &ann.eye_right}) {

@@ -93,6 +93,8 @@ TEST_CASE("fit_head: the real James's triangles take level 3 onto his face captu
   INFO("face to scan: " << back.vertices << " vertices, mean " << back.mean * 1e3 << " mm, p99 " << back.p99 * 1e3
                         << " mm, max " << back.max * 1e3 << " mm");
   CHECK(back.vertices > 25000);
-  CHECK(back.mean < 0.000133);
-  CHECK(back.p99 < 0.002);
+  // With the eyes' socket rings as creases (docs/design/muscles.md, "The
+  // lids closed at level 2") mean 0.129 -> 0.143 mm, p99 1.88 -> 2.03 mm.
+  CHECK(back.mean < 0.000145);
+  CHECK(back.p99 < 0.0021);
 }
