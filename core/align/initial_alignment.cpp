@@ -246,6 +246,9 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
   // Buffers reused by every evaluation of the objective.
   std::array<SilhouetteMask, kSilhouetteViews> cloud_masks, mesh_masks, other_masks;
   std::vector<Vec3> moved(generic.positions.size());
+  std::vector<MeshEdge> edges;  // for the smooth score's outline points
+  if (options.smooth_score) edges = mesh_edges(generic.triangles, static_cast<int>(generic.positions.size()));
+  std::array<std::vector<Vec2>, kSilhouetteViews> outline_points;
   auto move_mesh = [&](const double* params) {
     Mat3 linear;
     Vec3 translation;
@@ -287,7 +290,26 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
       rasterize_mesh_silhouettes(moved, generic.triangles, window, frame.clips, k == 0 ? mesh_masks : other_masks,
                                  options.cull_back_faces, range);
     };
+    OutlineField fields[kSilhouetteViews];
+    if (options.smooth_score) {
+      const double cap = std::max(4.0, window.resolution / static_cast<double>(std::max(1, options.smooth_cap_divisor)));
+      for (int v = 0; v < kSilhouetteViews; ++v) fields[v] = make_outline_field(cloud_masks[v], cap);
+    }
     const ObjectiveFn objective = [&](const Eigen::VectorXd& p) -> double {
+      if (options.smooth_score) {
+        if (!helper.threaded()) {
+          render_mesh(p.data(), window);
+        } else {
+          move_mesh(p.data());
+          helper.run(draw_half);
+          for (int v = 0; v < kSilhouetteViews; ++v)
+            for (size_t w = 0; w < mesh_masks[v].bits.size(); ++w) mesh_masks[v].bits[w] |= other_masks[v].bits[w];
+        }
+        mesh_outline_points(moved, generic.triangles, edges, window, frame.clips, mesh_masks, outline_points);
+        double d = 0.0;
+        for (int v = 0; v < kSilhouetteViews; ++v) d += outline_chamfer(fields[v], outline_points[v]);
+        return d;
+      }
       if (!helper.threaded()) {
         render_mesh(p.data(), window);
         double d = 0.0;
@@ -310,8 +332,9 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
     // D cannot change for moves well below a pixel: stop line searches at a
     // quarter pixel of translation, in units of the direction length.
     po.line_tolerance = 0.01;
+    // The smooth score has a slope below a pixel: a twentieth of one.
     po.line_absolute_tolerance =
-        0.25 * window.pixel_size() / (model.head_height * options.step_translation * level_scale);
+        (options.smooth_score ? 0.05 : 0.25) * window.pixel_size() / (model.head_height * options.step_translation * level_scale);
     PowellResult pr;
     const ProgressFn level_progress = [&](const char*, double f) {
       return report(progress, "align", progress_from + f * progress_span);

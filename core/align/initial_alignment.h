@@ -96,6 +96,16 @@ struct AlignOptions {
   bool polish = false;
   int polish_points = 4000;
   int polish_iterations = 60;
+  // Smooth score (not in the paper): Powell minimizes the symmetric chamfer
+  // distance between the outlines of the mesh's and the scan's silhouettes
+  // (silhouette.h, outline_chamfer) instead of the integer D, so it sees a
+  // slope under sub-pixel moves; reverse distances are capped at
+  // max(4 px, resolution / smooth_cap_divisor). D is still reported and
+  // still chooses between pitch starts. Off by default: measured less
+  // unstable than D on Demosthenes and Plato but still 1-9 deg apart, and it
+  // refuses Gutenberg as given (docs/design/align.md, "A smooth silhouette score").
+  bool smooth_score = false;
+  int smooth_cap_divisor = 16;
 };
 
 // Per resolution level of the coarse-to-fine optimization.

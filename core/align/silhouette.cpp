@@ -387,3 +387,187 @@ void rasterize_point_silhouettes(const std::vector<Vec3>& points, const ViewWind
 }
 
 }  // namespace lk
+
+namespace lk {
+
+OutlineField make_outline_field(const SilhouetteMask& mask, double cap_px) {
+  OutlineField f;
+  const int n = mask.size, g = n + 2;
+  f.size = n;
+  f.cap_px = cap_px > 0.0 ? cap_px : 1.0;
+  // Distances (padded grid: outside the window is uncovered) from every
+  // pixel centre to the nearest covered and the nearest uncovered centre;
+  // half a pixel less is the distance to the pixel edges between them.
+  std::vector<char> covered(static_cast<size_t>(g) * g, 0), uncovered(covered.size(), 1);
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      const size_t i = static_cast<size_t>(y + 1) * g + x + 1;
+      covered[i] = mask.get(x, y);
+      uncovered[i] = !covered[i];
+    }
+  std::vector<double> to_covered, to_uncovered;
+  squared_distance_2d(covered, g, to_covered);
+  squared_distance_2d(uncovered, g, to_uncovered);
+  f.signed_distance.resize(static_cast<size_t>(n) * n);
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      const size_t i = static_cast<size_t>(y + 1) * g + x + 1;
+      f.signed_distance[static_cast<size_t>(y) * n + x] =
+          covered[i] ? static_cast<float>(0.5 - std::sqrt(to_uncovered[i]))
+                     : static_cast<float>(std::sqrt(std::min(to_covered[i], 4.0 * g * g)) - 0.5);
+    }
+  static const int kDx[4] = {1, -1, 0, 0}, kDy[4] = {0, 0, 1, -1};
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      if (!mask.get(x, y)) continue;
+      for (int k = 0; k < 4; ++k) {
+        const int xn = x + kDx[k], yn = y + kDy[k];
+        if (xn >= 0 && yn >= 0 && xn < n && yn < n && mask.get(xn, yn)) continue;
+        f.edge_points.emplace_back(x + 0.5 + 0.5 * kDx[k], y + 0.5 + 0.5 * kDy[k]);
+      }
+    }
+  return f;
+}
+
+double outline_distance_at(const OutlineField& f, const Vec2& p) {
+  const int n = f.size;
+  if (n == 0) return 0.0;
+  // Bilinear between pixel centres, clamped to the window; beyond it the
+  // distance grows by the excess.
+  const double u = p.x() - 0.5, v = p.y() - 0.5;
+  const double uc = std::clamp(u, 0.0, n - 1.0), vc = std::clamp(v, 0.0, n - 1.0);
+  const int x0 = std::min(static_cast<int>(uc), n - 2 < 0 ? 0 : n - 2), y0 = std::min(static_cast<int>(vc), n - 2 < 0 ? 0 : n - 2);
+  const int x1 = std::min(x0 + 1, n - 1), y1 = std::min(y0 + 1, n - 1);
+  const double ax = uc - x0, ay = vc - y0;
+  auto at = [&](int x, int y) { return static_cast<double>(f.signed_distance[static_cast<size_t>(y) * n + x]); };
+  const double s = (1 - ay) * ((1 - ax) * at(x0, y0) + ax * at(x1, y0)) + ay * ((1 - ax) * at(x0, y1) + ax * at(x1, y1));
+  return std::fabs(s) + std::hypot(u - uc, v - vc);
+}
+
+std::vector<MeshEdge> mesh_edges(const std::vector<Tri>& triangles, int vertex_count) {
+  std::vector<std::array<int, 3>> half;  // (min vertex, max vertex, triangle)
+  half.reserve(triangles.size() * 3);
+  for (size_t t = 0; t < triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const int a = triangles[t][k], b = triangles[t][(k + 1) % 3];
+      if (a < 0 || b < 0 || a >= vertex_count || b >= vertex_count || a == b) continue;
+      half.push_back({std::min(a, b), std::max(a, b), static_cast<int>(t)});
+    }
+  std::sort(half.begin(), half.end());
+  std::vector<MeshEdge> edges;
+  for (size_t i = 0; i < half.size();) {
+    size_t j = i + 1;
+    while (j < half.size() && half[j][0] == half[i][0] && half[j][1] == half[i][1]) ++j;
+    MeshEdge e;
+    e.a = half[i][0];
+    e.b = half[i][1];
+    e.t0 = half[i][2];
+    if (j - i == 2) e.t1 = half[i + 1][2];  // else open (or non-manifold: treated as open)
+    edges.push_back(e);
+    i = j;
+  }
+  return edges;
+}
+
+void mesh_outline_points(const std::vector<Vec3>& positions, const std::vector<Tri>& triangles,
+                         const std::vector<MeshEdge>& edges, const ViewWindow& window,
+                         const std::vector<ClipPlane>& clips,
+                         const std::array<SilhouetteMask, kSilhouetteViews>& masks,
+                         std::array<std::vector<Vec2>, kSilhouetteViews>& out) {
+  const int n = window.resolution;
+  const int nv = static_cast<int>(positions.size());
+  // The world direction each view looks from (only the sign matters).
+  const int view_axis[kSilhouetteViews] = {2, 0, 1};
+  std::vector<unsigned char> facing(triangles.size());  // bit v: faces view v
+  for (size_t t = 0; t < triangles.size(); ++t) {
+    const Tri& tri = triangles[t];
+    const Vec3 normal = (positions[tri[1]] - positions[tri[0]]).cross(positions[tri[2]] - positions[tri[0]]);
+    unsigned char bits = 0;
+    for (int v = 0; v < kSilhouetteViews; ++v)
+      if (normal[view_axis[v]] > 0) bits |= 1u << v;
+    facing[t] = bits;
+  }
+  auto kept = [&](const Vec3& p, int skip) {
+    for (int c = 0; c < static_cast<int>(clips.size()); ++c)
+      if (c != skip && !clips[c].keeps(p)) return false;
+    return true;
+  };
+  // Next to the mask's outline: the point's pixel differs from one of its
+  // 8 neighbours (outside the window counts as uncovered, and points
+  // outside the window are kept).
+  auto on_outline = [&](int v, const Vec2& q) {
+    const int x = static_cast<int>(std::floor(q.x())), y = static_cast<int>(std::floor(q.y()));
+    if (x < 0 || y < 0 || x >= n || y >= n) return true;
+    auto get = [&](int xx, int yy) { return xx >= 0 && yy >= 0 && xx < n && yy < n && masks[v].get(xx, yy); };
+    const bool centre = get(x, y);
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx)
+        if (get(x + dx, y + dy) != centre) return true;
+    return false;
+  };
+  std::vector<unsigned char> added(static_cast<size_t>(nv), 0);
+  for (int v = 0; v < kSilhouetteViews; ++v) out[v].clear();
+  auto add_vertex = [&](int i, int v) {
+    if (added[i] & (1u << v)) return;
+    added[i] |= 1u << v;
+    if (!kept(positions[i], -1)) return;
+    const Vec2 q = window.project(positions[i], static_cast<SilhouetteView>(v));
+    if (on_outline(v, q)) out[v].push_back(q);
+  };
+  for (const MeshEdge& e : edges) {
+    for (int v = 0; v < kSilhouetteViews; ++v) {
+      const bool contour = e.t1 < 0 || ((facing[e.t0] ^ facing[e.t1]) & (1u << v));
+      if (!contour) continue;
+      add_vertex(e.a, v);
+      add_vertex(e.b, v);
+    }
+    // Where the edge crosses a clip plane: the cut's outline.
+    const Vec3& pa = positions[e.a];
+    const Vec3& pb = positions[e.b];
+    for (int c = 0; c < static_cast<int>(clips.size()); ++c) {
+      const double da = clips[c].normal.dot(pa - clips[c].point), db = clips[c].normal.dot(pb - clips[c].point);
+      if ((da >= 0) == (db >= 0)) continue;
+      const Vec3 x = pa + (da / (da - db)) * (pb - pa);
+      if (!kept(x, c)) continue;
+      for (int v = 0; v < kSilhouetteViews; ++v) {
+        const Vec2 q = window.project(x, static_cast<SilhouetteView>(v));
+        if (on_outline(v, q)) out[v].push_back(q);
+      }
+    }
+  }
+}
+
+double outline_chamfer(const OutlineField& f, const std::vector<Vec2>& points) {
+  const double cap = f.cap_px;
+  const double edge_count = static_cast<double>(f.edge_points.size());
+  if (points.empty()) return 2.0 * cap * edge_count;
+  // Forward: the outline points' distance to the field's outline.
+  double forward = 0.0;
+  for (const Vec2& p : points) forward += outline_distance_at(f, p);
+  forward *= edge_count / static_cast<double>(points.size());
+  // Reverse: each edge point to the nearest outline point, capped; the
+  // points are bucketed in cells of cap_px (clamped to the window), so the
+  // 3 x 3 cells around an edge point hold every point within the cap.
+  const int cells = std::max(1, static_cast<int>(std::ceil(f.size / cap)));
+  auto cell_of = [&](double c) { return std::clamp(static_cast<int>(std::floor(c / cap)), 0, cells - 1); };
+  std::vector<int> start(static_cast<size_t>(cells) * cells + 1, 0), order(points.size());
+  for (const Vec2& p : points) ++start[static_cast<size_t>(cell_of(p.y())) * cells + cell_of(p.x()) + 1];
+  for (size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
+  std::vector<int> fill(start.begin(), start.end() - 1);
+  for (size_t i = 0; i < points.size(); ++i)
+    order[fill[static_cast<size_t>(cell_of(points[i].y())) * cells + cell_of(points[i].x())]++] = static_cast<int>(i);
+  double reverse = 0.0;
+  for (const Vec2& e : f.edge_points) {
+    const int cx = cell_of(e.x()), cy = cell_of(e.y());
+    double best = cap * cap;
+    for (int y = std::max(0, cy - 1); y <= std::min(cells - 1, cy + 1); ++y)
+      for (int x = std::max(0, cx - 1); x <= std::min(cells - 1, cx + 1); ++x) {
+        const size_t c = static_cast<size_t>(y) * cells + x;
+        for (int k = start[c]; k < start[c + 1]; ++k) best = std::min(best, (points[order[k]] - e).squaredNorm());
+      }
+    reverse += std::sqrt(best);
+  }
+  return forward + reverse;
+}
+
+}  // namespace lk
