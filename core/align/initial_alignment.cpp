@@ -246,8 +246,11 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
   // Buffers reused by every evaluation of the objective.
   std::array<SilhouetteMask, kSilhouetteViews> cloud_masks, mesh_masks, other_masks;
   std::vector<Vec3> moved(generic.positions.size());
-  std::vector<MeshEdge> edges;  // for the smooth score's outline points
-  if (options.smooth_score) edges = mesh_edges(generic.triangles, static_cast<int>(generic.positions.size()));
+  MeshTopology topology;  // the smooth score's outline points follow its edges
+  if (options.smooth_score) {
+    const Status st = build_topology(generic, topology);
+    if (!st) return with_context(st, "align: the smooth score needs the head's edges");
+  }
   std::array<std::vector<Vec2>, kSilhouetteViews> outline_points;
   auto move_mesh = [&](const double* params) {
     Mat3 linear;
@@ -305,7 +308,7 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
           for (int v = 0; v < kSilhouetteViews; ++v)
             for (size_t w = 0; w < mesh_masks[v].bits.size(); ++w) mesh_masks[v].bits[w] |= other_masks[v].bits[w];
         }
-        mesh_outline_points(moved, generic.triangles, edges, window, frame.clips, mesh_masks, outline_points);
+        mesh_outline_points(moved, generic.triangles, topology.edges, window, frame.clips, mesh_masks, outline_points);
         double d = 0.0;
         for (int v = 0; v < kSilhouetteViews; ++v) d += outline_chamfer(fields[v], outline_points[v]);
         return d;

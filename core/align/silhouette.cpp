@@ -386,10 +386,6 @@ void rasterize_point_silhouettes(const std::vector<Vec3>& points, const ViewWind
   if (info) info->points_kept = kept;
 }
 
-}  // namespace lk
-
-namespace lk {
-
 OutlineField make_outline_field(const SilhouetteMask& mask, double cap_px) {
   OutlineField f;
   const int n = mask.size, g = n + 2;
@@ -444,33 +440,8 @@ double outline_distance_at(const OutlineField& f, const Vec2& p) {
   return std::fabs(s) + std::hypot(u - uc, v - vc);
 }
 
-std::vector<MeshEdge> mesh_edges(const std::vector<Tri>& triangles, int vertex_count) {
-  std::vector<std::array<int, 3>> half;  // (min vertex, max vertex, triangle)
-  half.reserve(triangles.size() * 3);
-  for (size_t t = 0; t < triangles.size(); ++t)
-    for (int k = 0; k < 3; ++k) {
-      const int a = triangles[t][k], b = triangles[t][(k + 1) % 3];
-      if (a < 0 || b < 0 || a >= vertex_count || b >= vertex_count || a == b) continue;
-      half.push_back({std::min(a, b), std::max(a, b), static_cast<int>(t)});
-    }
-  std::sort(half.begin(), half.end());
-  std::vector<MeshEdge> edges;
-  for (size_t i = 0; i < half.size();) {
-    size_t j = i + 1;
-    while (j < half.size() && half[j][0] == half[i][0] && half[j][1] == half[i][1]) ++j;
-    MeshEdge e;
-    e.a = half[i][0];
-    e.b = half[i][1];
-    e.t0 = half[i][2];
-    if (j - i == 2) e.t1 = half[i + 1][2];  // else open (or non-manifold: treated as open)
-    edges.push_back(e);
-    i = j;
-  }
-  return edges;
-}
-
 void mesh_outline_points(const std::vector<Vec3>& positions, const std::vector<Tri>& triangles,
-                         const std::vector<MeshEdge>& edges, const ViewWindow& window,
+                         const std::vector<Edge>& edges, const ViewWindow& window,
                          const std::vector<ClipPlane>& clips,
                          const std::array<SilhouetteMask, kSilhouetteViews>& masks,
                          std::array<std::vector<Vec2>, kSilhouetteViews>& out) {
@@ -514,16 +485,16 @@ void mesh_outline_points(const std::vector<Vec3>& positions, const std::vector<T
     const Vec2 q = window.project(positions[i], static_cast<SilhouetteView>(v));
     if (on_outline(v, q)) out[v].push_back(q);
   };
-  for (const MeshEdge& e : edges) {
+  for (const Edge& e : edges) {
     for (int v = 0; v < kSilhouetteViews; ++v) {
-      const bool contour = e.t1 < 0 || ((facing[e.t0] ^ facing[e.t1]) & (1u << v));
+      const bool contour = e.boundary() || ((facing[e.f0] ^ facing[e.f1]) & (1u << v));
       if (!contour) continue;
-      add_vertex(e.a, v);
-      add_vertex(e.b, v);
+      add_vertex(e.v0, v);
+      add_vertex(e.v1, v);
     }
     // Where the edge crosses a clip plane: the cut's outline.
-    const Vec3& pa = positions[e.a];
-    const Vec3& pb = positions[e.b];
+    const Vec3& pa = positions[e.v0];
+    const Vec3& pb = positions[e.v1];
     for (int c = 0; c < static_cast<int>(clips.size()); ++c) {
       const double da = clips[c].normal.dot(pa - clips[c].point), db = clips[c].normal.dot(pb - clips[c].point);
       if ((da >= 0) == (db >= 0)) continue;

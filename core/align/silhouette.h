@@ -19,6 +19,7 @@
 #pragma once
 #include "common/types.h"
 #include "head/head_model.h"
+#include "mesh/topology.h"
 
 #include <array>
 #include <cstdint>
@@ -131,7 +132,6 @@ void rasterize_point_silhouettes(const std::vector<Vec3>& points, const ViewWind
 // Pixels outside the mask count as empty.
 SilhouetteMask close_mask(const SilhouetteMask& mask, double radius_px);
 
-
 // Smooth outline distance (AlignOptions::smooth_score): the XOR count is an
 // integer, flat under sub-pixel moves, so Powell stops wherever its line
 // searches run out of pixels. This symmetric chamfer score between the
@@ -150,20 +150,14 @@ OutlineField make_outline_field(const SilhouetteMask& mask, double cap_px);
 // |signed distance| of the field at pixel coordinates p (bilinear, clamped).
 double outline_distance_at(const OutlineField& field, const Vec2& p);
 
-// The edges of a triangle mesh with their one or two triangles.
-struct MeshEdge {
-  int a = 0, b = 0;       // vertices
-  int t0 = -1, t1 = -1;   // triangles (t1 = -1 on an open boundary)
-};
-std::vector<MeshEdge> mesh_edges(const std::vector<Tri>& triangles, int vertex_count);
-
 // Points on the outline of a mesh in each view, continuous in its pose:
 // the ends of contour edges (between a triangle facing the view and one
 // facing away, or open) and the crossings of edges with the clip planes,
 // kept where they lie next to the outline of the mesh's own mask (masks,
 // from rasterize_mesh_silhouettes) and on the kept side of every plane.
+// edges: the mesh's (MeshTopology::edges, mesh/topology.h).
 void mesh_outline_points(const std::vector<Vec3>& positions, const std::vector<Tri>& triangles,
-                         const std::vector<MeshEdge>& edges, const ViewWindow& window,
+                         const std::vector<Edge>& edges, const ViewWindow& window,
                          const std::vector<ClipPlane>& clips,
                          const std::array<SilhouetteMask, kSilhouetteViews>& masks,
                          std::array<std::vector<Vec2>, kSilhouetteViews>& out);

@@ -252,7 +252,7 @@ namespace {
 // Chamfer score and XOR count of the synthetic head turned by pitch_deg
 // about x (through centre) against the target masks.
 void scores_at(const GenericHead& head, double pitch_deg, const Vec3& centre, const ViewWindow& window,
-               const std::vector<ClipPlane>& clips, const std::vector<MeshEdge>& edges,
+               const std::vector<ClipPlane>& clips, const std::vector<Edge>& edges,
                const std::array<SilhouetteMask, kSilhouetteViews>& target,
                const std::array<OutlineField, kSilhouetteViews>& fields, double& chamfer, int& xor_d) {
   const Mat3 r = Eigen::AngleAxisd(pitch_deg * 3.14159265358979 / 180.0, Vec3::UnitX()).toRotationMatrix();
@@ -283,7 +283,9 @@ TEST_CASE("the outline chamfer score slopes under small pitches where the XOR co
   rasterize_point_silhouettes(cloud.positions, window, clips, PointSplatOptions{}, target);
   std::array<OutlineField, kSilhouetteViews> fields;
   for (int v = 0; v < kSilhouetteViews; ++v) fields[v] = make_outline_field(target[v], 16.0);
-  const std::vector<MeshEdge> edges = mesh_edges(head.mesh.triangles, head.mesh.num_vertices());
+  MeshTopology topology;
+  REQUIRE(build_topology(head.mesh, topology).ok());
+  const std::vector<Edge>& edges = topology.edges;
   const Vec3 centre = box.center();
   auto chamfer_at = [&](double pitch, int* xor_d = nullptr) {
     double chamfer = 0;
