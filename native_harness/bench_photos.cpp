@@ -44,16 +44,6 @@ namespace {
 // gauge of a photo head is free up to scale; unaligned = in the generic
 // head's frame, where the fit's prior keeps it), and the detector's error
 // against the truth's projections per landmark group and view.
-std::vector<std::string> split_list(const std::string& s) {
-  std::vector<std::string> out;
-  size_t a = 0;
-  while (a < s.size()) {
-    const size_t b = std::min(s.find(',', a), s.size());
-    if (b > a) out.push_back(s.substr(a, b - a));
-    a = b + 1;
-  }
-  return out;
-}
 
 // --photos-coarse N:S[,N:S...], --photos-schedule S[,S...]|none and --photos-follow K[:W] (photos_fit_options.h).
 bool parse_fit_levels(const Args& args, ShapeFitOptions& fit) {

@@ -345,9 +345,8 @@ int run(const Args& args) {
   // --fit-align-polish 0|1: the ICP polish (AlignOptions).
   if (args.has("fit-align-pitches")) {
     options.align.pitch_starts_deg.clear();
-    std::string list = args.get("fit-align-pitches", "0") + ",";
-    for (size_t a = 0, b; (b = list.find(',', a)) != std::string::npos; a = b + 1)
-      if (b > a) options.align.pitch_starts_deg.push_back(std::atof(list.substr(a, b - a).c_str()));
+    for (const std::string& item : split_list(args.get("fit-align-pitches", "0")))
+      options.align.pitch_starts_deg.push_back(std::atof(item.c_str()));
   }
   if (args.has("fit-align-polish")) options.align.polish = args.get("fit-align-polish", "1") != "0";
   // --fit-align-smooth 0|1: the outlines' chamfer score instead of D (AlignOptions::smooth_score).
@@ -355,9 +354,8 @@ int run(const Args& args) {
   // --fit-align-coarse A,B,...: the coarse resolutions (AlignOptions; "none": the final one only).
   if (args.has("fit-align-coarse")) {
     options.align.coarse_resolutions.clear();
-    std::string list = args.get("fit-align-coarse", "none") + ",";
-    for (size_t a = 0, b; (b = list.find(',', a)) != std::string::npos; a = b + 1)
-      if (b > a && list.substr(a, b - a) != "none") options.align.coarse_resolutions.push_back(std::atoi(list.substr(a, b - a).c_str()));
+    for (const std::string& item : split_list(args.get("fit-align-coarse", "none")))
+      if (item != "none") options.align.coarse_resolutions.push_back(std::atoi(item.c_str()));
   }
   // --fit-align-tolerance T: Powell's relative decrease per sweep (AlignOptions::tolerance).
   if (args.has("fit-align-tolerance")) options.align.tolerance = std::atof(args.get("fit-align-tolerance", "1e-4").c_str());

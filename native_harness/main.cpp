@@ -1,6 +1,7 @@
 // likeness: the native command-line harness.
 #include "command.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -13,6 +14,17 @@ namespace lk::cli {
 std::map<std::string, Command>& registry() {
   static std::map<std::string, Command> r;
   return r;
+}
+
+std::vector<std::string> split_list(const std::string& s) {
+  std::vector<std::string> out;
+  size_t a = 0;
+  while (a < s.size()) {
+    const size_t b = std::min(s.find(',', a), s.size());
+    if (b > a) out.push_back(s.substr(a, b - a));
+    a = b + 1;
+  }
+  return out;
 }
 
 std::string Args::get(const std::string& key, const std::string& def) const {
