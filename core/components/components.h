@@ -83,7 +83,8 @@ struct ComponentPlacement {
 // lip lines and mouth bag, each measure keeping the generic head's relation
 // to its own feature: across from the slit between the lips, depth behind
 // the lip lines' rearmost vertex, size from the corners' distance, and each
-// arch no taller (relative to the width) than the fitted bag holds it.
+// arch cut short where the fitted lip and chin skin in front of it comes
+// nearer than half the generic head's least clearance.
 // Both heads must share the generic head's topology and be in the head frame.
 Status place_components(const GenericHead& fitted, const GenericHead& generic, ComponentPlacement& out);
 
