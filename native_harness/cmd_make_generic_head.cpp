@@ -22,7 +22,7 @@ namespace {
 const char* kName = "make-generic-head";
 
 int run_make_generic_head(const Args& args) {
-  if (!only_known_options(kName, args, {"out", "report", "level3", "ring-ear", "plate-ear", "even-eye-corners", "face-rows-at-back", "nape-by-shape", "wide-mouth-ring", "diagonals-by-side", "fair", "nostrils"})) return 2;
+  if (!only_known_options(kName, args, {"out", "report", "level3", "ring-ear", "plate-ear", "even-eye-corners", "face-rows-at-back", "nape-by-shape", "wide-mouth-ring", "diagonals-by-side", "fair", "nostrils", "teeth-mouth-bag"})) return 2;
   const std::string out_dir = args.get("out");
   const bool report = args.has("report");
   const std::string level3_path = args.get("level3");
@@ -57,6 +57,9 @@ int run_make_generic_head(const Args& args) {
   // --nostrils: GenericHeadBuildOptions::nostrils (open nostrils with
   // shallow pockets; not the asset's yet).
   if (args.has("nostrils")) options.nostrils = true;
+  // --teeth-mouth-bag: GenericHeadBuildOptions::teeth_mouth_bag (the bag
+  // round the placed teeth; not the asset's).
+  if (args.has("teeth-mouth-bag")) options.teeth_mouth_bag = true;
   // --fair N: GenericHeadBuildOptions::fair_iterations (0, the asset's:
   // the skin as cast; 3 measured for issue 35, not landed).
   if (args.has("fair")) {
@@ -114,7 +117,7 @@ int run_make_generic_head(const Args& args) {
   return 0;
 }
 
-Registrar reg({kName, "likeness make-generic-head --out DIR [--report] [--level3 FILE.obj] [--ring-ear|--plate-ear] [--even-eye-corners] [--face-rows-at-back] [--nape-by-shape] [--wide-mouth-ring] [--diagonals-by-side] [--fair N] [--nostrils]",
+Registrar reg({kName, "likeness make-generic-head --out DIR [--report] [--level3 FILE.obj] [--ring-ear|--plate-ear] [--even-eye-corners] [--face-rows-at-back] [--nape-by-shape] [--wide-mouth-ring] [--diagonals-by-side] [--fair N] [--nostrils] [--teeth-mouth-bag]",
                "builds the generic head control mesh + annotations (writes generic_head.obj/.json; --report: smooth level 3 roughness by region, crossing pairs by level; --level3: that level as a mesh)",
                run_make_generic_head});
 

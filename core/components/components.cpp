@@ -2,6 +2,7 @@
 #include "components/components.h"
 
 #include "iris/iris.h"
+#include "raycast/bvh.h"
 
 #include <algorithm>
 #include <cmath>
@@ -327,15 +328,25 @@ void skin_in_front(const GenericHead& head, const ComponentPlacement& p, Room ro
     for (int v : it->second)
       if (v >= 0 && v < static_cast<int>(P.size())) skin[static_cast<size_t>(v)] = 1;
   }
-  std::vector<std::array<Vec3, 3>> tris;
+  // The lip and chin triangles outside the bag, in the teeth's frame; the
+  // outermost z at (x, y) is the first hit of a ray cast along -z from in
+  // front of them all.
+  TriMesh skin_mesh;
+  skin_mesh.positions.reserve(P.size());
+  for (const Vec3& q : P) skin_mesh.positions.push_back(q - o);
   for (const Tri& f : head.mesh.triangles) {
     if (f[0] < 0 || f[1] < 0 || f[2] < 0 || f[0] >= static_cast<int>(P.size()) || f[1] >= static_cast<int>(P.size()) ||
         f[2] >= static_cast<int>(P.size()))
       continue;
     bool any = false, inside = false;
     for (int k = 0; k < 3; ++k) any |= skin[static_cast<size_t>(f[k])] != 0, inside |= bag[static_cast<size_t>(f[k])] != 0;
-    if (any && !inside) tris.push_back({P[static_cast<size_t>(f[0])] - o, P[static_cast<size_t>(f[1])] - o, P[static_cast<size_t>(f[2])] - o});
+    if (any && !inside) skin_mesh.triangles.push_back(f);
   }
+  double front_z = 0;
+  for (const Tri& f : skin_mesh.triangles)
+    for (int k = 0; k < 3; ++k) front_z = std::max(front_z, skin_mesh.positions[static_cast<size_t>(f[k])].z());
+  MeshBvh bvh;
+  if (!build_bvh(skin_mesh, bvh).ok()) return;  // a non-finite vertex: no room measured
   for (int k = 0; k < 2; ++k) {
     const double half = 0.5 * w * (k ? t.lower_scale : 1.0);
     const double h = (k ? t.lower_height : t.upper_height) * w;
@@ -344,17 +355,12 @@ void skin_in_front(const GenericHead& head, const ComponentPlacement& p, Room ro
         const double q = -0.9 + 1.8 * i / kSamples;  // across 90 % of the arch's width
         const double dy = h * (kBiteBand + (1 + kTravel - kBiteBand) * j / kSamples);
         const double x = q * half, y = k ? -dy : dy;
-        double z = -1e300;
-        for (const auto& c : tris) {
-          const double d = (c[1].y() - c[2].y()) * (c[0].x() - c[2].x()) + (c[2].x() - c[1].x()) * (c[0].y() - c[2].y());
-          if (std::abs(d) < 1e-30) continue;
-          const double l0 = ((c[1].y() - c[2].y()) * (x - c[2].x()) + (c[2].x() - c[1].x()) * (y - c[2].y())) / d;
-          const double l1 = ((c[2].y() - c[0].y()) * (x - c[2].x()) + (c[0].x() - c[2].x()) * (y - c[2].y())) / d;
-          const double l2 = 1 - l0 - l1;
-          if (l0 < 0 || l1 < 0 || l2 < 0) continue;
-          z = std::max(z, l0 * c[0].z() + l1 * c[1].z() + l2 * c[2].z());
-        }
-        if (z < -1e299) continue;
+        Ray ray;
+        ray.origin = Vec3(x, y, front_z + w);
+        ray.direction = -Vec3::UnitZ();
+        const RayHit hit = intersect_first(bvh, ray);
+        if (!hit.hit()) continue;
+        const double z = ray.origin.z() - hit.t;
         const double front = -(k ? t.lower_inset * w : 0.0) - t.depth * 2 * half * q * q;
         room[k].push_back({dy, z - front});
       }

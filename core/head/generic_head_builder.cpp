@@ -858,6 +858,7 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
 
   // --- 7. mouth bag behind the lip line -------------------------------------
   std::vector<int> bag_vertices;
+  std::vector<Vec3> old_bag;  // the bag's vertices as without options.teeth_mouth_bag (the mouth box)
   {
     std::vector<int> top = upper_line, bottom = lower_line;
     std::vector<int> loop = top;
@@ -867,10 +868,22 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
     // the lips towards the gums, then the back of the bag. Offsets (m) from
     // the lip line for the upper side; the lower side mirrors in y.
     const Vec3 profile[] = {{0, 0.0025, -0.0050}, {0, 0.0085, -0.0110}, {0, 0.0075, -0.0230}};
+    // With options.teeth_mouth_bag the bag holds the placed teeth (core/
+    // components: 0.9 of the mouth's width, their front 12.6 mm behind the
+    // slit, 11.1 mm up and 10.3 mm down from the bite, 24.6 mm deep): the
+    // inner lips as above; then the vestibule, 13.5 mm up/down at full height
+    // across the mouth, 9.5 mm behind the lip line (3 mm in front of the
+    // teeth), its corners turned in as before; then the back, flat 41 mm
+    // behind the slit (3.8 mm behind the teeth), as tall, its sides at 1.5
+    // times the lip columns' x and the corners' at 1.2 (beyond the molars'
+    // ends). The mouth's feature box keeps the bag's extent before (local
+    // fitting's box, jeong2002 Sec. 4.2), so local fitting is unchanged.
+    const Vec3 slit = 0.5 * (b.positions[upper_line[kMouthHalfWidth]] + b.positions[lower_line[kMouthHalfWidth]]);
     VertexInfo vi;
     vi.part = Part::MouthBag;
     std::vector<int> ring = loop;
-    for (const Vec3& off : profile) {
+    for (int step = 0; step < 3; ++step) {
+      const Vec3& off = profile[step];
       std::vector<Vec3> next;
       for (int v : loop) {
         const Vec3& p = b.positions[v];
@@ -880,7 +893,12 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
         Vec3 o(0, chain * off.y() * taper, off.z());
         // The corners of the mouth turn inwards, narrowing the bag behind them.
         if (chain == 0) o.x() = (p.x() > 0 ? -1 : 1) * 0.3 * -off.z();
-        next.push_back(p + o);
+        Vec3 q = p + o;
+        old_bag.push_back(q);
+        if (options.teeth_mouth_bag && step == 1) q = Vec3(p.x() + o.x(), p.y() + chain * 0.0135, p.z() - 0.0095);
+        if (options.teeth_mouth_bag && step == 2)
+          q = Vec3(p.x() * (chain == 0 ? 1.2 : 1.5), chain == 0 ? p.y() : slit.y() + chain * 0.0135, slit.z() - 0.041);
+        next.push_back(q);
       }
       std::vector<int> new_ring = b.extrude(ring, next, vi);
       std::map<int, int> to_new;
@@ -1628,9 +1646,21 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
   }
   {
     std::vector<int> mouth_ids = R["lips"];
-    ann.boxes.push_back(make_box("mouth", mouth_ids, 0.008,
-                                 {upper_line.front(), upper_line.back(), g(kSlitRow + 1, 0),
-                                  g(kSlitRow - 1, 0)}));
+    FeatureBox box = make_box("mouth", mouth_ids, 0.008,
+                              {upper_line.front(), upper_line.back(), g(kSlitRow + 1, 0), g(kSlitRow - 1, 0)});
+    if (options.teeth_mouth_bag) {  // the box of the bag before (see step 7)
+      std::vector<Vec3> pts = old_bag;
+      std::vector<char> in_bag(P.size(), 0);
+      for (int v : bag_vertices) in_bag[static_cast<size_t>(v)] = 1;
+      for (int v : mouth_ids)
+        if (!in_bag[static_cast<size_t>(v)]) pts.push_back(P[v]);
+      std::vector<int> all(pts.size());
+      for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
+      const BBox bb = box_of(pts, all);
+      box.min = bb.min - Vec3::Constant(0.008);
+      box.max = bb.max + Vec3::Constant(0.008);
+    }
+    ann.boxes.push_back(box);
   }
   // Binding edges: behind the ears, plus virtual upper-lower lip edges.
   for (int side : {1, -1})

@@ -87,6 +87,12 @@ struct GenericHeadBuildOptions {
                                    // nostril_left/right (issue 35). false: the asset's two dimples.
                                    // Every other vertex is the asset's; docs/design/generic_head.md
                                    // "Nostrils" says what it measured and why it is not the asset's.
+  bool teeth_mouth_bag = false;     // true: the mouth bag holds the placed teeth (core/components):
+                                   // a vestibule in front of them at their full height and a back
+                                   // and sides beyond them, the same 36 vertices. Not the asset's
+                                   // yet: the rig's shapes and the fits do not keep the teeth
+                                   // inside it (docs/design/muscles.md, "The mouth bag round the
+                                   // teeth"). false: the asset's bag, which the teeth pass through.
   bool mirror_diagonals = true;    // true: each quad on the -x side is split as its mirror image
                                    // on +x is, so triangles mirror as vertices do (issue 35);
                                    // false: each side by shape, as before: 6 quads of each eye
