@@ -349,6 +349,25 @@ int run(const Args& args) {
       options.align.pitch_starts_deg.push_back(std::atof(item.c_str()));
   }
   if (args.has("fit-align-polish")) options.align.polish = args.get("fit-align-polish", "1") != "0";
+  // --fit-align-loss trim|tukey|gm: the polish's weights (AlignOptions::polish_loss);
+  // --fit-align-choose polish|face: what chooses between polished starts
+  // (the polished score, or the face's distance: AlignOptions::choose_by_face).
+  if (args.has("fit-align-loss")) {
+    const std::string loss = args.get("fit-align-loss", "trim");
+    if (loss != "trim" && loss != "tukey" && loss != "gm") {
+      std::printf("   --fit-align-loss takes trim, tukey or gm\n");
+      return 1;
+    }
+    options.align.polish_loss = loss == "tukey" ? IcpLoss::Tukey : loss == "gm" ? IcpLoss::GemanMcClure : IcpLoss::Trim;
+  }
+  if (args.has("fit-align-choose")) {
+    const std::string choose = args.get("fit-align-choose", "polish");
+    if (choose != "polish" && choose != "face") {
+      std::printf("   --fit-align-choose takes polish or face\n");
+      return 1;
+    }
+    options.align.choose_by_face = choose == "face";
+  }
   // --fit-align-smooth 0|1: the outlines' chamfer score instead of D (AlignOptions::smooth_score).
   if (args.has("fit-align-smooth")) options.align.smooth_score = args.get("fit-align-smooth", "1") != "0";
   // --fit-align-coarse A,B,...: the coarse resolutions (AlignOptions; "none": the final one only).
@@ -423,6 +442,14 @@ int run(const Args& args) {
         if (!r.face_only && r.alignment.polished)
           std::printf(", polished by %.2f deg, scale %.4f (D %d)", r.alignment.polish_turn_deg, r.alignment.polish_scale,
                       total_xor(r.alignment.xor_polished));
+        if (!r.face_only && r.alignment.starts.size() > 1)
+          for (size_t k = 0; k < r.alignment.starts.size(); ++k) {
+            const AlignResult::Start& a = r.alignment.starts[k];
+            std::printf("%s%s%+.0f: D %d", k ? ", " : "; starts ", int(k) == r.alignment.chosen ? "*" : "", a.pitch_deg,
+                        a.xor_final);
+            if (a.polish_score >= 0) std::printf(" score %.4g", a.polish_score);
+            if (a.face_distance >= 0) std::printf(" face %.4g", a.face_distance);
+          }
         std::printf(", near %.1f %%", 100 * r.near_fraction);
         for (const FaceRefineCandidate& k : r.face_refine.candidates)
           std::printf("%s%+.0f: %.1f", &k == &r.face_refine.candidates.front() ? "; pitches " : ", ", k.pitch_deg,

@@ -640,7 +640,7 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
 }
 
 Status fit_scaled_rotation_icp(const TriMesh& surface, const std::vector<Vec3>& samples, const Mat3& axes,
-                               const FaceAlignOptions& o, double clamp, ScaledRotationFit& out) {
+                               const FaceAlignOptions& o, double clamp, ScaledRotationFit& out, IcpLoss loss) {
   out = ScaledRotationFit{};
   if (samples.size() < static_cast<size_t>(kMinPoints) || surface.triangles.empty())
     return Status::error(ErrorCode::Empty, "fit_scaled_rotation_icp: too few samples or no triangles");
@@ -683,6 +683,28 @@ Status fit_scaled_rotation_icp(const TriMesh& surface, const std::vector<Vec3>& 
     // clamped score that chooses between poses (a beard or a pedestal
     // farther than the clamp from the head would pull it off the face).
     const double trim = std::max(std::min(o.trim_factor * quantile(dist, 0.5), clamp), 1e-12 * extent);
+    // The M-estimators' scale: from the pairs within the clamp (the junk
+    // beyond it must not widen it), floored so a perfect fit cannot
+    // divide by zero.
+    double s = 0;
+    if (loss != IcpLoss::Trim) {
+      std::vector<double> within;
+      within.reserve(n);
+      for (int i = 0; i < n; ++i)
+        if (dist[i] <= clamp) within.push_back(dist[i]);
+      s = std::max(1.4826 * quantile(within, 0.5), 1e-9 * extent);
+      out.loss_scale = s;
+    }
+    auto weight = [&](double di) -> double {
+      if (!(di <= clamp)) return 0.0;
+      if (loss == IcpLoss::Trim) return di <= trim ? 1.0 : 0.0;
+      const double u = di / s;
+      if (loss == IcpLoss::Tukey) {
+        const double v = u / 4.685;
+        return v < 1 ? (1 - v * v) * (1 - v * v) : 0.0;
+      }
+      return 1.0 / ((1 + u * u) * (1 + u * u));
+    };
     const Mat3 U = R * axes;
     Eigen::Matrix<double, 9, 9> H = Eigen::Matrix<double, 9, 9>::Zero();
     Eigen::Matrix<double, 9, 1> g = Eigen::Matrix<double, 9, 1>::Zero();
@@ -690,15 +712,16 @@ Status fit_scaled_rotation_icp(const TriMesh& surface, const std::vector<Vec3>& 
     double sum2 = 0, score = 0;
     for (int i = 0; i < n; ++i) {
       score += std::min(dist[i], clamp) * std::min(dist[i], clamp);
-      if (!(dist[i] <= trim) || !nrm[i].allFinite()) continue;
+      const double w = weight(dist[i]);
+      if (!(w > 0) || !nrm[i].allFinite()) continue;
       const Vec3 r = q[i] - c;
       Eigen::Matrix<double, 9, 1> J;
       for (int k = 0; k < 3; ++k) J[k] = nrm[i].dot(U.col(k)) * U.col(k).dot(r);
       J.segment<3>(3) = r.cross(nrm[i]);
       J.segment<3>(6) = nrm[i];
       const double e = nrm[i].dot(q[i] - samples[i]);
-      H += J * J.transpose();
-      g += J * e;
+      H += w * J * J.transpose();
+      g += w * J * e;
       sum2 += dist[i] * dist[i];
       ++kept;
     }

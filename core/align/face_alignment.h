@@ -190,21 +190,35 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
                          const OrientationOptions& options, OrientationGuess& out,
                          const ProgressFn& progress = {});
 
-// Trimmed point-to-plane ICP of samples onto surface (FaceAlignOptions'
+// How fit_scaled_rotation_icp weighs a pair at distance d from the
+// surface. Trim: 1 up to min(trim_factor * median d, clamp), else 0.
+// Tukey / GemanMcClure: an M-estimator's weight, re-weighted every
+// iteration (IRLS), with the scale s = 1.4826 * median d over the pairs
+// within the clamp (a normal residual's sigma): Tukey's biweight
+// (1 - (d / 4.685 s)^2)^2 inside 4.685 s and 0 outside, Geman-McClure's
+// 1 / (1 + (d / s)^2)^2. The trim's cut-off is hard: pairs just inside
+// 2.5 x the median (a shoulder, a pedestal's rim, hair) pull as much as
+// the face; the M-estimators fade them out smoothly, so the minimum does
+// not jump as pairs cross a threshold. Pairs beyond the clamp never pull.
+enum class IcpLoss { Trim, Tukey, GemanMcClure };
+
+// Point-to-plane ICP of samples onto surface (FaceAlignOptions'
 // max_iterations and trim_factor), from the identity, over a rotation, a
 // scale along each of the given axes (columns, a rotation) and a
 // translation: linear * surface + translation fits the samples, with
-// linear = rotation * axes * diag(scales) * axes^T. score: mean of
-// min(d, clamp)^2 over all samples.
+// linear = rotation * axes * diag(scales) * axes^T, the pairs weighed by
+// `loss`. score: mean of min(d, clamp)^2 over all samples.
 struct ScaledRotationFit {
   Mat3 linear = Mat3::Identity(), rotation = Mat3::Identity();
   Vec3 scales = Vec3::Ones();
   Vec3 translation = Vec3::Zero();
-  double rms = 0, score = 0, inlier_fraction = 0;
+  double rms = 0, score = 0, inlier_fraction = 0;  // rms and inliers over the pairs that pull (weight > 0)
+  double loss_scale = 0;  // the M-estimator's s in the last iteration (0 with Trim)
   int iterations = 0;
 };
 Status fit_scaled_rotation_icp(const TriMesh& surface, const std::vector<Vec3>& samples, const Mat3& axes,
-                               const FaceAlignOptions& options, double clamp, ScaledRotationFit& out);
+                               const FaceAlignOptions& options, double clamp, ScaledRotationFit& out,
+                               IcpLoss loss = IcpLoss::Trim);
 
 // "+x", "-z", ... for an axis direction; "(0.1, 0.7, 0.7)" otherwise.
 std::string axis_name(const Vec3& direction);

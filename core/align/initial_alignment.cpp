@@ -2,6 +2,8 @@
 #include "align/initial_alignment.h"
 
 #include "align/face_alignment.h"
+#include "align/face_refine.h"
+#include "common/cloud_tree.h"
 #include "common/helper_thread.h"
 #include "common/rotation.h"
 #include "mesh/geometry.h"
@@ -9,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <string>
 
 namespace lk {
@@ -376,7 +379,32 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
     FaceAlignOptions fo;
     fo.max_iterations = options.polish_iterations;
     return static_cast<bool>(fit_scaled_rotation_icp(head, polish_samples, rotation_from_vector(Vec3(p[3], p[4], p[5])),
-                                                     fo, polish_clamp, fit));
+                                                     fo, polish_clamp, fit, options.polish_loss));
+  };
+  // The face's distance (AlignOptions::choose_by_face) of a polished pose:
+  // the upper face's samples placed by it, each to its nearest kept scan
+  // point, clamped and averaged.
+  const bool by_face = polish && options.choose_by_face && options.face_samples >= 10;
+  std::vector<Vec3> face_samples;
+  if (by_face) face_samples = upper_face_samples(generic, ann, options.face_samples);
+  const double face_clamp = options.face_clamp_fraction * bounding_box(cloud_kept).diagonal();
+  CloudAdaptor kept_adaptor{cloud_kept};
+  std::unique_ptr<CloudTree> kept_tree;
+  if (by_face && !face_samples.empty())
+    kept_tree = std::make_unique<CloudTree>(3, kept_adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  auto face_distance_of = [&](const Eigen::VectorXd& p, const ScaledRotationFit& fit) -> double {
+    Mat3 linear;
+    Vec3 translation;
+    model.transform_of(p.data(), linear, translation);
+    double sum = 0;
+    for (const Vec3& g : face_samples) {
+      const Vec3 w = fit.linear * (linear * g + translation) + fit.translation;
+      size_t idx = 0;
+      double d2 = 0;
+      kept_tree->knnSearch(w.data(), 1, &idx, &d2);
+      sum += std::min(std::sqrt(d2), face_clamp);
+    }
+    return sum / double(face_samples.size());
   };
   ScaledRotationFit best_fit;
   bool have_fit = false;
@@ -418,9 +446,18 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
     // after the same refinement) chooses, not D.
     ScaledRotationFit fit;
     const bool fitted = polish && coarse == num_levels && polish_of(xs, fit);
-    const bool better = fitted ? (!have_fit || fit.score < best_fit.score) : (best_d < 0 || d < best_d);
+    AlignResult::Start record;
+    record.pitch_deg = starts[k];
+    record.xor_final = d;
+    if (fitted) record.polish_score = fit.score;
+    if (fitted && kept_tree) record.face_distance = face_distance_of(xs, fit);
+    const bool by_face_here = record.face_distance >= 0;
+    const bool better = !fitted ? (best_d < 0 || d < best_d)
+                                : !have_fit || (by_face_here ? record.face_distance < out.starts[out.chosen].face_distance
+                                                             : fit.score < best_fit.score);
     if (fitted && better) best_fit = fit, have_fit = true;
-    if (better) best_d = d, best_x = xs, best_levels = std::move(levels);
+    if (better) best_d = d, best_x = xs, best_levels = std::move(levels), out.chosen = static_cast<int>(k);
+    out.starts.push_back(record);
   }
   x = best_x;
   out.levels = std::move(best_levels);

@@ -25,6 +25,7 @@
 //  - Sparse clouds: holes are closed morphologically (silhouette.h) instead of
 //    raising the point size, so the outline does not grow.
 #pragma once
+#include "align/face_alignment.h"
 #include "align/silhouette.h"
 #include "common/progress.h"
 #include "common/status.h"
@@ -96,6 +97,22 @@ struct AlignOptions {
   bool polish = false;
   int polish_points = 4000;
   int polish_iterations = 60;
+  // How the polish weighs its pairs (face_alignment.h): Trim is session
+  // 46's hard cut at 2.5 x the median; Tukey and GemanMcClure are robust
+  // weights whose scale comes from the median distance, so shoulders, a
+  // pedestal and hair fade out instead of pulling up to a threshold.
+  IcpLoss polish_loss = IcpLoss::Trim;
+  // With several polished starts: keep the one whose upper face
+  // (face_refine.h, upper_face_samples, face_samples of them) lies closest
+  // to the kept scan points (mean of min(d, face_clamp_fraction * the kept
+  // scan's diagonal)), instead of the least whole-scan polished score: the
+  // face must lie on the scan whatever else the scan holds. Off: with
+  // Tukey's polish it holds Demosthenes' turned copies within 0.5 deg but
+  // not Gutenberg's (up to 16 deg), and fits all three busts worse as
+  // given (docs/design/align.md, "A robust polish").
+  bool choose_by_face = false;
+  int face_samples = 800;
+  double face_clamp_fraction = 0.02;
   // Smooth score (not in the paper): Powell minimizes the symmetric chamfer
   // distance between the outlines of the mesh's and the scan's silhouettes
   // (silhouette.h, outline_chamfer) instead of the integer D, so it sees a
@@ -147,6 +164,16 @@ struct AlignResult {
   std::array<int, kSilhouetteViews> xor_polished{};
   double polish_turn_deg = 0, polish_scale = 1, polish_rms = 0;
   int polish_iterations = 0;
+  // Every pitch start as it ended (with several starts and choose_at_final):
+  // its final D, polished score and face distance (AlignOptions::
+  // choose_by_face; -1 when not measured); `chosen` indexes the one kept.
+  struct Start {
+    double pitch_deg = 0;
+    int xor_final = 0;
+    double polish_score = -1, face_distance = -1;
+  };
+  std::vector<Start> starts;
+  int chosen = 0;
 };
 
 // Aligns generic (with its annotations, for the clip planes and the facing
