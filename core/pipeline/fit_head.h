@@ -241,6 +241,17 @@ struct FitHeadOptions {
   // after the rounds). false: decided after the free fit's guard. The warm refit
   // (ear_refit_warm_rounds) starts from the guarded free fit: decided after.
   bool ear_refit_after_rounds = true;
+  // WhereTheyCross's bound fit given up after its rounds, before its guard,
+  // when its ears' pairs at smooth level 3 there are more than this: not
+  // kept, and its guard (whose result would be thrown away) is not paid.
+  // Every bound fit kept in the measurements had at most 31 pairs there
+  // (its guard took them to 0), the ones given up 193-415 never reached 0
+  // (docs/design/fit_real_scans.md). The same head wherever the decision
+  // is the same; the bound count reported is then the one after the
+  // rounds. 100: about three times the most a kept one had, half the
+  // fewest of the given-up ones. 0: off (judged at its end, as before).
+  // Cold refits at levels == 3 only.
+  int ear_refit_give_up_pairs = 100;
   // When an ear (a connected part of region "ears") still crosses itself or
   // the head at the finest level, its control vertices take the aligned
   // generic ear's shape, carried by the harmonic interpolation of the
