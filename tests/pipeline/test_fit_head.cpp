@@ -485,14 +485,14 @@ TEST_CASE("fit_head: a bound ear refit given up after its rounds leaves the free
   // its ears crossing after its rounds) a bound of 1 gives it up: the head
   // must be the free fit's (ears never bound) to the bit, the bound count
   // the one after its rounds. A bound above that count changes nothing:
-  // the head is the one judged at the end (0: off), to the bit.
+  // the head is the one judged at the end (0, the default), to the bit.
   const Scene& s = scene();
   const auto region = s.generic.annotations.regions.find("ears");
   REQUIRE(region != s.generic.annotations.regions.end());
   const PointCloud sheet = sheet_over_left_ear(s.scan, s.generic.mesh, region->second);
   FitHeadOptions judged;
   judged.measure_stages = false;
-  judged.ear_refit_give_up_pairs = 0;
+  REQUIRE(judged.ear_refit_give_up_pairs == 0);  // off by default
   FitHeadOptions free_ears = judged;
   free_ears.bind_ear_edges = FitHeadOptions::EarBinding::FaceOnlyScans;  // a whole head: never bound
   FitHeadOptions give_up = judged;
