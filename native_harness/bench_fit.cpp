@@ -16,6 +16,7 @@
 // eye and lip rims), --fit-displaced-creases, --fit-no-corners-to-smooth,
 // --fit-no-parents-to-smooth, --fit-separation-repeats N, --fit-restarts N (fold_limit.h), --fit-seeds N, --fit-seed N (seed N alone),
 // --fit-ear-refit-late (FitHeadOptions::ear_refit_after_rounds off),
+// --fit-ear-give-up N (FitHeadOptions::ear_refit_give_up_pairs),
 // --fit-points N (scans of N points instead of 300k), --fit-thin-cells X (FitHeadOptions::thin_cells_per_edge; 0: never thinned), --fit-back off|face-only|always and
 // --fit-back-weight W (the global fit's scan-to-mesh term, FitHeadOptions::back_term),
 // --fit-smooth-region-rings N (FoldLimitOptions::smooth_region_rings, -1: off),
@@ -339,6 +340,7 @@ int run(const Args& args) {
     args.get_double("fit-below-cut-mm", below_cut_mm, below_cut_mm);
     opt.displacement_below_neck_cut = below_cut_mm / 1e3;
     if (args.has("fit-ear-refit-late")) opt.ear_refit_after_rounds = false;
+    if (!args.get_int("fit-ear-give-up", opt.ear_refit_give_up_pairs, opt.ear_refit_give_up_pairs, 0)) return 1;
     if (args.has("fit-guard-always")) opt.smooth_guard = FitHeadOptions::SmoothGuard::Always;
     if (args.has("fit-guard-face-only")) opt.smooth_guard = FitHeadOptions::SmoothGuard::FaceOnlyScans;
     if (args.has("fit-guard-off")) opt.smooth_guard = FitHeadOptions::SmoothGuard::Off;

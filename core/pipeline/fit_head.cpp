@@ -1095,11 +1095,30 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
     // The bound fit, whole: its guard does take ears from crossing to clean
     // (Demosthenes: 31 pairs after its rounds, 0 after the guard), so it is
     // judged only at its end.
+    // FitHeadOptions::ear_refit_give_up_pairs: the bound fit ends after its
+    // rounds when its ears cross there beyond what any kept one did. Its
+    // count refits ear_tree (the free fit's, which the bound fit's relief
+    // would take over), so a given-up fit leaves the free fit's relief a
+    // tree over that level as before.
+    const int give_up = !warm && options.levels == 3 ? options.ear_refit_give_up_pairs : 0;
+    bool given_up = false;
+    Status bound_inner = Status::success();
+    if (give_up > 0)
+      bound.after_rounds = [&](const std::vector<Vec3>& positions) {
+        int pairs = 0;
+        bound_inner = smooth_ear_pairs(positions, {}, pairs, &ear_tree);
+        if (!bound_inner || pairs <= give_up) return bound_inner.ok();
+        given_up = true;
+        out.ear_binding.bound_pairs = pairs;
+        return false;
+      };
     auto refit = [&]() -> Status {
       refitted = true;
       Status s = fit_global(skin_pts, out.local, topo, bound, bound_options, bound_control, bound_fit, progress,
                             &bound_tree);
+      if (!bound_inner) return with_context(bound_inner, "global fitting (ears bound)");
       if (!s) return with_context(s, "global fitting (ears bound)");
+      if (given_up) return Status::success();
       return smooth_ear_pairs(bound_control.positions, bound_fit.fold_crease_edges, out.ear_binding.bound_pairs,
                               &bound_tree);
     };
@@ -1116,8 +1135,8 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
         // The free fit's guard is paid only when the bound fit is not kept;
         // then its relief refits the bound fit's tree (the same level's
         // triangles) instead of building one.
-        const bool kept = inner && out.ear_binding.bound_pairs == 0;
-        if (inner && !kept) ear_tree = std::move(bound_tree);
+        const bool kept = inner && !given_up && out.ear_binding.bound_pairs == 0;
+        if (inner && !kept && !given_up) ear_tree = std::move(bound_tree);
         return !kept;
       };
     st = fit_global(skin_pts, out.local, topo, free_terms, global_options, out.control, out.global_fit, progress,
@@ -1139,11 +1158,13 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
       std::ostringstream note;
       note << "the fit folded the ears (" << out.ear_binding.free_pairs << " crossing pairs at smooth level "
            << options.levels << "): fitted again with their edges bound (" << out.ear_binding.bound_pairs
-           << " pairs)";
+           << (given_up ? " pairs after its rounds)" : " pairs)");
       // Kept only when no ear folds: a bound ear that still crossed
       // (Gutenberg's, under his beret's brim) was beyond the later steps'
       // reach, where the free one's were not (docs/design/fit_real_scans.md).
-      if (out.ear_binding.bound_pairs == 0) {
+      if (given_up) {
+        note << ", given up";
+      } else if (out.ear_binding.bound_pairs == 0) {
         out.control = std::move(bound_control);
         out.global_fit = std::move(bound_fit);
         relief_tree = std::move(bound_tree);

@@ -241,6 +241,17 @@ struct FitHeadOptions {
   // after the rounds). false: decided after the free fit's guard. The warm refit
   // (ear_refit_warm_rounds) starts from the guarded free fit: decided after.
   bool ear_refit_after_rounds = true;
+  // WhereTheyCross's bound fit given up after its rounds, before its guard,
+  // when its ears' pairs at smooth level 3 there are more than this: not
+  // kept, and its guard (whose result would be thrown away) is not paid.
+  // The same head wherever the decision is the same (the bound count
+  // reported is then the one after the rounds). 0 (the default): judged at
+  // its end. Off because no count separates them: at 100, Plato's five
+  // copies (193-368 pairs there, none kept) save 1-2 s of CPU, but
+  // Gutenberg turned by 0.05 deg (106 there, 0 at its end, kept) is given
+  // up and fits worse (docs/design/fit_real_scans.md, session 48). Cold
+  // refits at levels == 3 only.
+  int ear_refit_give_up_pairs = 0;
   // When an ear (a connected part of region "ears") still crosses itself or
   // the head at the finest level, its control vertices take the aligned
   // generic ear's shape, carried by the harmonic interpolation of the

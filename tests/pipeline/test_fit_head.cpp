@@ -478,6 +478,56 @@ TEST_CASE("fit_head: the ear refit decided after the rounds gives the head decid
   }
 }
 
+TEST_CASE("fit_head: a bound ear refit given up after its rounds leaves the free fit's head to the bit") {
+  // FitHeadOptions::ear_refit_give_up_pairs: the bound fit ends after its
+  // rounds when its ears cross there in more pairs than the option allows.
+  // On the sheet over the left ear (free fit folds, bound fit kept with
+  // its ears crossing after its rounds) a bound of 1 gives it up: the head
+  // must be the free fit's (ears never bound) to the bit, the bound count
+  // the one after its rounds. A bound above that count changes nothing:
+  // the head is the one judged at the end (0, the default), to the bit.
+  const Scene& s = scene();
+  const auto region = s.generic.annotations.regions.find("ears");
+  REQUIRE(region != s.generic.annotations.regions.end());
+  const PointCloud sheet = sheet_over_left_ear(s.scan, s.generic.mesh, region->second);
+  FitHeadOptions judged;
+  judged.measure_stages = false;
+  REQUIRE(judged.ear_refit_give_up_pairs == 0);  // off by default
+  FitHeadOptions free_ears = judged;
+  free_ears.bind_ear_edges = FitHeadOptions::EarBinding::FaceOnlyScans;  // a whole head: never bound
+  FitHeadOptions give_up = judged;
+  give_up.ear_refit_give_up_pairs = 1;
+  FitHeadResult j, f, g;
+  REQUIRE(fit_head(sheet, s.generic, judged, j).ok());
+  REQUIRE(fit_head(sheet, s.generic, free_ears, f).ok());
+  REQUIRE(fit_head(sheet, s.generic, give_up, g).ok());
+  INFO("smooth ear pairs: judged at the end " << j.ear_binding.free_pairs << " free, " << j.ear_binding.bound_pairs
+                                              << " bound; given up " << g.ear_binding.free_pairs << " free, "
+                                              << g.ear_binding.bound_pairs << " bound after its rounds");
+  REQUIRE(j.ear_binding.free_pairs > 0);  // the refit runs
+  CHECK(j.ear_binding.bound);
+  CHECK(g.ear_binding.free_pairs == j.ear_binding.free_pairs);
+  CHECK_FALSE(g.ear_binding.bound);
+  CHECK(g.ear_binding.bound_pairs > 1);
+  CHECK(g.control.positions == f.control.positions);
+  REQUIRE(g.level_meshes.size() == f.level_meshes.size());
+  CHECK(g.level_meshes.back().positions == f.level_meshes.back().positions);
+  CHECK(g.global_fit.iterations.size() == f.global_fit.iterations.size());
+  CHECK(g.global_fit.fold_crease_edges == f.global_fit.fold_crease_edges);
+  bool noted = false;
+  for (const std::string& n : g.notes) noted = noted || n.find("given up") != std::string::npos;
+  CHECK(noted);
+  // Above the bound fit's count after its rounds: judged at its end.
+  FitHeadOptions high = judged;
+  high.ear_refit_give_up_pairs = g.ear_binding.bound_pairs;
+  FitHeadResult h;
+  REQUIRE(fit_head(sheet, s.generic, high, h).ok());
+  CHECK(h.ear_binding.bound);
+  CHECK(h.control.positions == j.control.positions);
+  REQUIRE(h.level_meshes.size() == j.level_meshes.size());
+  CHECK(h.level_meshes.back().positions == j.level_meshes.back().positions);
+}
+
 TEST_CASE("fit_head: the warm ear refit holds a folded ear as the cold one does, near its fit") {
   // FitHeadOptions::ear_refit_warm_rounds: the bound refit starts from the
   // free fit and runs only the last round. On the sheet over the left ear
