@@ -102,8 +102,12 @@ std::vector<Vec3> pose_face(const FaceRig& rig, const FaceControls& controls) {
     for (std::size_t i = 0; i < L.index.size(); ++i) {
       Vec3& p = P[static_cast<std::size_t>(L.index[i])];
       const double w = L.weight[i];
-      // The upper lid turns down (negative about x), the lower lid up.
-      const double a = L.upper[i] ? -w * L.gap[i] * upper : w * L.gap[i] * lower;
+      // The upper lid turns down (negative about x), the lower lid up; while
+      // the lids close, a vertex inside the opening by its share of it (the
+      // opening's angles map monotonically onto the closed opening's).
+      // Opening, each lid turns whole (the two agree where upper + lower = 0).
+      const double t = upper + lower > 0 ? L.opening[i] : (L.upper[i] ? 1.0 : 0.0);
+      const double a = -w * L.gap[i] * (t * (upper + lower) - lower);
       const Vec3 d = p - L.center;
       Vec3 e = turn_y(w * yaw) * turn_x(a) * d;
       const double r = d.norm();

@@ -73,7 +73,7 @@ Status lid_rig(const std::vector<Vec3>& P, const EyeSocket& socket, const Vec3& 
   lids.center = center;
   lids.radius = radius;
   auto angle = [&](const Vec3& p) { return std::atan2(p.y() - center.y(), p.z() - center.z()); };
-  std::vector<std::pair<double, double>> gap, meet, rim_r, upper_r, lower_r, upper_dx, lower_dx;
+  std::vector<std::pair<double, double>> gap, meet, upper_a, lower_a, rim_r, upper_r, lower_r, upper_dx, lower_dx;
   for (std::size_t k = 0; k < m; ++k) {
     const Vec3 &u = P[upper[k]], &l = P[lower[k]];
     const double x = 0.5 * (u.x() + l.x()), g = angle(u) - angle(l);
@@ -84,6 +84,8 @@ Status lid_rig(const std::vector<Vec3>& P, const EyeSocket& socket, const Vec3& 
     const bool corner = k == 0 || k + 1 == m;
     gap.emplace_back(x, corner ? 0.6 * g : g);
     meet.emplace_back(x, angle(l) + 0.25 * g);
+    upper_a.emplace_back(x, angle(u));
+    lower_a.emplace_back(x, angle(l));
     rim_r.emplace_back(x, 0.5 * ((u - center).norm() + (l - center).norm()));
     upper_r.emplace_back(x, (u - center).norm());
     lower_r.emplace_back(x, (l - center).norm());
@@ -92,6 +94,7 @@ Status lid_rig(const std::vector<Vec3>& P, const EyeSocket& socket, const Vec3& 
   }
   const Profile gap_at = Profile::through(gap), meet_at = Profile::through(meet), rim_at = Profile::through(rim_r);
   const Profile upper_at = Profile::through(upper_r), lower_at = Profile::through(lower_r);
+  const Profile upper_a_at = Profile::through(upper_a), lower_a_at = Profile::through(lower_a);
   const Profile upper_dx_at = Profile::through(upper_dx), lower_dx_at = Profile::through(lower_dx);
   // The corner columns close too (the generic head's canthi are rim edges
   // 1.7 mm long, which stayed open, eyeball showing); past them the lids'
@@ -138,6 +141,14 @@ Status lid_rig(const std::vector<Vec3>& P, const EyeSocket& socket, const Vec3& 
     lids.weight.push_back(w);
     lids.gap.push_back(g);
     lids.upper.push_back(up ? 1 : 0);
+    // A fitted head's margin and socket ring may sit inside the opening's
+    // angle (Fran's rings 2-3 degrees in front of their rims): turned by
+    // their rim's angle they pass the other lid's ring. Inside the opening
+    // a vertex turns by its share of it (face_pose.cpp).
+    const double a_up = upper_a_at(x), a_low = lower_a_at(x), a = angle(P[v]);
+    double t = up ? 1.0 : 0.0;
+    if (!is_rim && a_up - a_low > 1e-9 && d.z() > 0) t = std::clamp((a - a_low) / (a_up - a_low), 0.0, 1.0);
+    lids.opening.push_back(t);
     // Closed, both rims meet at the column's mean radius and x (a scan's
     // lids need not sit at one distance from the eyeball's centre, nor
     // their columns at one x).

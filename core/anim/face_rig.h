@@ -47,6 +47,11 @@ struct EyeLids {
   std::vector<double> radial;  // the column's mean rim radius minus this lid's rim radius (metres)
   std::vector<double> shift;   // the column's mean rim x minus this lid's rim x (metres)
   std::vector<char> upper;     // 1: upper lid, 0: lower lid
+  // Where the vertex sits in its column's opening at rest, as a share of the
+  // angle from the lower rim (0) to the upper rim (1), clamped: 1 on and
+  // above the upper rim, 0 on and below the lower rim. Closing maps the
+  // opening onto the closed one, so no two vertices pass each other.
+  std::vector<double> opening;
 };
 
 // The jaw: vertices with their share of its rigid motion.
