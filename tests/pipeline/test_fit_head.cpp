@@ -319,6 +319,14 @@ static PointCloud sheet_over_left_ear(const PointCloud& scan_in, const TriMesh& 
   return scan;
 }
 
+// The scene's scan with the sheet over the generic head's left ear.
+static PointCloud scene_sheet_over_left_ear() {
+  const Scene& s = scene();
+  const auto region = s.generic.annotations.regions.find("ears");
+  REQUIRE(region != s.generic.annotations.regions.end());
+  return sheet_over_left_ear(s.scan, s.generic.mesh, region->second);
+}
+
 TEST_CASE("fit_head: holding a crossing ear that does not help leaves the fit as it was") {
   // A sheet over the left ear (every scan point within 0.6 ear sizes of its
   // centre pushed out to the ear's outer side) crosses the ear at level 3.
@@ -328,9 +336,7 @@ TEST_CASE("fit_head: holding a crossing ear that does not help leaves the fit as
   // so. (Plato's ears, where holding helps, are checked in
   // test_real_scans.cpp.)
   const Scene& s = scene();
-  const auto region = s.generic.annotations.regions.find("ears");
-  REQUIRE(region != s.generic.annotations.regions.end());
-  const PointCloud scan = sheet_over_left_ear(s.scan, s.generic.mesh, region->second);
+  const PointCloud scan = scene_sheet_over_left_ear();
   FitHeadOptions on;
   on.measure_stages = false;
   on.guard_feature_crossings = false;  // the hold alone (the guard is tested below)
@@ -344,7 +350,7 @@ TEST_CASE("fit_head: holding a crossing ear that does not help leaves the fit as
   REQUIRE(fit_head(scan, s.generic, on, held_fit).ok());
   std::vector<std::array<int, 2>> pairs;
   REQUIRE(find_self_intersections(free_fit.level_meshes.back(), pairs).ok());
-  const int ears_free = count_pairs_touching(free_fit.multires, free_fit.multires.num_levels(), pairs, region->second);
+  const int ears_free = count_pairs_touching(free_fit.multires, free_fit.multires.num_levels(), pairs, s.generic.annotations.regions.at("ears"));
   INFO(pairs.size() << " pairs at level 3 without the hold, " << ears_free << " at the ears");
   REQUIRE(ears_free > 0);  // else the hold is not tried and this tests nothing
   bool noted = false;
@@ -363,9 +369,7 @@ TEST_CASE("fit_head: the feature guard leaves no crossing pair at the ears and l
   // as fitted away from the crossing (the rest of the head follows the
   // scan as before).
   const Scene& s = scene();
-  const auto region = s.generic.annotations.regions.find("ears");
-  REQUIRE(region != s.generic.annotations.regions.end());
-  const PointCloud scan = sheet_over_left_ear(s.scan, s.generic.mesh, region->second);
+  const PointCloud scan = scene_sheet_over_left_ear();
   FitHeadOptions guarded;
   guarded.measure_stages = false;
   guarded.bind_ear_edges = FitHeadOptions::EarBinding::FaceOnlyScans;  // free ears, as above
@@ -405,9 +409,7 @@ TEST_CASE("fit_head: an ear the free fit folds is fitted again bound, and holds 
   // the global fit runs again with the ear edges as binding edges: no ear
   // pair at level 3 and neither the hold nor the guard has to act.
   const Scene& s = scene();
-  const auto region = s.generic.annotations.regions.find("ears");
-  REQUIRE(region != s.generic.annotations.regions.end());
-  const PointCloud scan = sheet_over_left_ear(s.scan, s.generic.mesh, region->second);
+  const PointCloud scan = scene_sheet_over_left_ear();
   FitHeadOptions bound;
   bound.measure_stages = false;
   // The displacements without the scanned neck's points (the 10 mm band),
@@ -449,9 +451,7 @@ TEST_CASE("fit_head: the ear refit decided after the rounds gives the head decid
   // folds it, the bound fit is kept) and on the plain synthetic scan (no ear
   // folds, no refit) the heads must be the late decision's to the bit.
   const Scene& s = scene();
-  const auto region = s.generic.annotations.regions.find("ears");
-  REQUIRE(region != s.generic.annotations.regions.end());
-  const PointCloud sheet = sheet_over_left_ear(s.scan, s.generic.mesh, region->second);
+  const PointCloud sheet = scene_sheet_over_left_ear();
   FitHeadOptions early;
   early.measure_stages = false;
   REQUIRE(early.ear_refit_after_rounds);
@@ -487,9 +487,7 @@ TEST_CASE("fit_head: a bound ear refit given up after its rounds leaves the free
   // the one after its rounds. A bound above that count changes nothing:
   // the head is the one judged at the end (0, the default), to the bit.
   const Scene& s = scene();
-  const auto region = s.generic.annotations.regions.find("ears");
-  REQUIRE(region != s.generic.annotations.regions.end());
-  const PointCloud sheet = sheet_over_left_ear(s.scan, s.generic.mesh, region->second);
+  const PointCloud sheet = scene_sheet_over_left_ear();
   FitHeadOptions judged;
   judged.measure_stages = false;
   REQUIRE(judged.ear_refit_give_up_pairs == 0);  // off by default
@@ -540,9 +538,7 @@ TEST_CASE("fit_head: the warm ear refit holds a folded ear as the cold one does,
   // (the right half, away from the sheet: 0.83 against 0.74 mm): the warm
   // refit lands in another minimum, which is why it is not the default.
   const Scene& s = scene();
-  const auto region = s.generic.annotations.regions.find("ears");
-  REQUIRE(region != s.generic.annotations.regions.end());
-  const PointCloud scan = sheet_over_left_ear(s.scan, s.generic.mesh, region->second);
+  const PointCloud scan = scene_sheet_over_left_ear();
   FitHeadOptions cold;
   cold.measure_stages = false;
   cold.hold_crossing_ears = false;
@@ -561,7 +557,7 @@ TEST_CASE("fit_head: the warm ear refit holds a folded ear as the cold one does,
   REQUIRE(measure_fit_quality(cold_fit, s.generic.annotations, qc).ok());
   double ear_apart = 0;
   std::vector<Vec3> left_ear;
-  for (int v : region->second)
+  for (int v : s.generic.annotations.regions.at("ears"))
     if (cold_fit.control.positions[v].x() > 0) {  // +x is left
       ear_apart = std::max(ear_apart, (warm_fit.control.positions[v] - cold_fit.control.positions[v]).norm());
       left_ear.push_back(cold_fit.control.positions[v]);
