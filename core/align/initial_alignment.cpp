@@ -387,7 +387,7 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
   const bool by_face = polish && options.choose_by_face && options.face_samples >= 10;
   std::vector<Vec3> face_samples;
   if (by_face) face_samples = upper_face_samples(generic, ann, options.face_samples);
-  const double face_clamp = options.face_clamp_fraction * bounding_box(cloud_kept).diagonal();
+  const double face_clamp = by_face ? options.face_clamp_fraction * bounding_box(cloud_kept).diagonal() : 0.0;
   CloudAdaptor kept_adaptor{cloud_kept};
   std::unique_ptr<CloudTree> kept_tree;
   if (by_face && !face_samples.empty())
