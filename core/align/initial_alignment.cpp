@@ -251,8 +251,8 @@ Status align_initial(const TriMesh& generic, const HeadAnnotations& ann, const P
   std::vector<Vec3> moved(generic.positions.size());
   MeshTopology topology;  // the smooth score's outline points follow its edges
   if (options.smooth_score) {
-    const Status st = build_topology(generic, topology);
-    if (!st) return with_context(st, "align: the smooth score needs the head's edges");
+    const Status built = build_topology(generic, topology);
+    if (!built) return with_context(built, "align: the smooth score needs the head's edges");
   }
   std::array<std::vector<Vec2>, kSilhouetteViews> outline_points;
   auto move_mesh = [&](const double* params) {
