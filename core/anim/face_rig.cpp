@@ -318,7 +318,21 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
     return 1.0 - smoothstep01((P[v].y() - lip_y(P[v].x())) / (0.006 * u) + 0.5);
   };
   auto everywhere = [](int) { return 1.0; };
-  auto off_lids = [&](int v) { return 1.0 - lid_weight[static_cast<std::size_t>(v)]; };
+  // The skin muscles leave the lids to the lid rig, and fade in over 1.5
+  // eye radii from the nearest rim vertex: past the canthi the lids' weight
+  // falls to 0 within a tenth of a radius, and a fitted head's next control
+  // vertices sit 5-6 mm out, so a brow lifting them by 1-2 mm sheared the
+  // skin against the still corner, which folded into the lid margin at
+  // level 2 (James' browOuterUp and surprise; docs/design/muscles.md).
+  // 1.5 had the fewest lid pairs over the five real scans' fits of 1, 1.5, 2.
+  std::vector<double> near_rim(static_cast<std::size_t>(n), 1.0);
+  for (int s = 0; s < 2; ++s)
+    for (int v = 0; v < n; ++v) {
+      const double d = nearest_distance(P[static_cast<std::size_t>(v)], P, sockets[s]->rim);
+      near_rim[static_cast<std::size_t>(v)] =
+          std::min(near_rim[static_cast<std::size_t>(v)], smoothstep01(d / (1.5 * place.eye_radius[s])));
+    }
+  auto off_lids = [&](int v) { return (1.0 - lid_weight[static_cast<std::size_t>(v)]) * near_rim[static_cast<std::size_t>(v)]; };
 
   // Linear muscles (Waters), per side.
   for (int s = 0; s < 2; ++s) {
