@@ -90,21 +90,29 @@ struct IcpProgress {
   double previous = -1;
   bool done = false;
   IcpRun run;
+  std::vector<int> near;  // each sample's nearest triangle in the last iteration (-1: none yet)
 };
 
 // Point-to-point ICP of the faced generic (tree over it) onto the samples,
 // until run.iterations reaches `until` (at most o.max_iterations).
 // parallel: the closest points of an iteration on parallel_for's threads
 // (false when the caller already runs several ICPs in parallel); the
-// result does not depend on it.
+// result does not depend on it. near (optional, one per sample): each
+// sample's nearest triangle from an earlier run on the same samples, where
+// this run's first searches start, updated as it goes (default: progress's
+// own, so that going on starts where it stopped); the result does not
+// depend on it either (closest_point_near).
 void continue_icp(const MeshBvh& tree, const std::vector<Vec3>& samples, IcpProgress& progress,
-                  const FaceAlignOptions& o, int until, double clamp, bool parallel) {
+                  const FaceAlignOptions& o, int until, double clamp, bool parallel,
+                  std::vector<int>* near = nullptr) {
   IcpRun& run = progress.run;
   Similarity& T = progress.next;
   double& previous = progress.previous;
   std::vector<Vec3> model(samples.size());
   std::vector<double> dist(samples.size());
-  std::vector<int> face(samples.size(), -1);  // the last iteration's nearest triangle per sample
+  if (!near) near = &progress.near;
+  if (near->size() != samples.size()) near->assign(samples.size(), -1);
+  std::vector<int>& face = *near;  // the last iteration's nearest triangle per sample
   const int last = std::min(until, o.max_iterations);
   if (run.iterations >= o.max_iterations) progress.done = true;
   for (int it = run.iterations; it < last && !progress.done; ++it) {
@@ -163,10 +171,10 @@ void continue_icp(const MeshBvh& tree, const std::vector<Vec3>& samples, IcpProg
 }
 
 IcpRun run_icp(const MeshBvh& tree, const std::vector<Vec3>& samples, const Similarity& T, const FaceAlignOptions& o,
-               double clamp, bool parallel) {
+               double clamp, bool parallel, std::vector<int>* near = nullptr) {
   IcpProgress progress;
   progress.next = T;
-  continue_icp(tree, samples, progress, o, o.max_iterations, clamp, parallel);
+  continue_icp(tree, samples, progress, o, o.max_iterations, clamp, parallel, near);
   return progress.run;
 }
 
@@ -406,10 +414,15 @@ Status align_face(const TriMesh& generic, const HeadAnnotations& ann, const Poin
   const std::vector<Vec3> final_set = subset(cloud.positions, o.final_points, o.seed + 2ull);
   FaceAlignOptions polish_options = o;
   polish_options.relative_tolerance = o.polish_tolerance;
+  // Each set's nearest triangles carried from run to run (a polish starts
+  // where its refinement ended, a hop next to the polish): the searches
+  // start there, the same answers.
+  std::vector<int> refine_near(refine_set.size(), -1), final_near(final_set.size(), -1);
   have = false;
   for (size_t c = 0; c < candidates.size(); ++c) {
-    const IcpRun refined = run_icp(search.tree, refine_set, runs[candidates[c]].T, o, search.clamp, true);
-    const IcpRun polished = run_icp(search.tree, final_set, refined.T, polish_options, search.clamp, true);
+    const IcpRun refined = run_icp(search.tree, refine_set, runs[candidates[c]].T, o, search.clamp, true, &refine_near);
+    const IcpRun polished =
+        run_icp(search.tree, final_set, refined.T, polish_options, search.clamp, true, &final_near);
     out.iterations += refined.iterations + polished.iterations;
     if (polished.inliers > 0 && (!have || polished.score < best.score)) {
       best = polished;
@@ -431,7 +444,7 @@ Status align_face(const TriMesh& generic, const HeadAnnotations& ann, const Poin
     for (double f : {1 + hop, 1 - hop}) {
       Similarity T = best.T;
       T.s *= f;
-      const IcpRun hopped = run_icp(search.tree, final_set, T, polish_options, search.clamp, true);
+      const IcpRun hopped = run_icp(search.tree, final_set, T, polish_options, search.clamp, true, &final_near);
       out.iterations += hopped.iterations;
       if (hopped.inliers > 0 && hopped.score < (1 - o.scale_hop_gain) * best.score) best = hopped;
     }
@@ -539,6 +552,7 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
   // turned one's: the real James 0.49, Fran and the busts 1.01-1.33). Only
   // the given start is then scored on the dense samples, for the scores.
   const std::vector<Vec3> dense = subset(cloud.positions, o.final_points, o.seed + 1ull);
+  std::vector<int> dense_near(dense.size(), -1);  // nearest triangles carried from run to run (continue_icp)
   FaceAlignOptions score_only = fo;
   score_only.max_iterations = 1;  // (run_icp's first iteration scores its start)
   if (o.stop_when_given_clearly_best && ran[0] && runs[0].inliers > 0 && is_consistent(runs[0])) {
@@ -546,7 +560,8 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
     for (int k = 1; k < num_starts; ++k)
       if (ran[k] && runs[k].inliers > 0 && !is_consistent(runs[k]) && !(runs[0].score <= o.better_ratio * runs[k].score))
         clearly_best = false;
-    const IcpRun given = clearly_best ? run_icp(search.tree, dense, runs[0].T, score_only, search.clamp, true) : IcpRun{};
+    const IcpRun given =
+        clearly_best ? run_icp(search.tree, dense, runs[0].T, score_only, search.clamp, true, &dense_near) : IcpRun{};
     if (given.inliers > 0) {
       out.score_given = out.score_best = given.score;
       out.given_clearly_best = true;
@@ -595,8 +610,10 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
       if (std::find(picked.begin(), picked.end(), k) == picked.end()) picked.push_back(k);
       break;
     }
+  std::vector<int> best_near;  // the best's nearest triangles on the dense samples, for its polish
   for (size_t c = 0; c < picked.size(); ++c) {
-    const IcpRun run = run_icp(search.tree, dense, runs[picked[c]].T, score_only, search.clamp, true);
+    std::fill(dense_near.begin(), dense_near.end(), -1);
+    const IcpRun run = run_icp(search.tree, dense, runs[picked[c]].T, score_only, search.clamp, true, &dense_near);
     if (!(run.inliers > 0)) continue;
     if (is_consistent(run) && (!have_given || run.score < out.score_given)) {
       out.score_given = run.score;
@@ -605,6 +622,7 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
     if (!have_best || run.score < best.score) {
       best = run;
       have_best = true;
+      best_near = dense_near;
     }
   }
   // A best result consistent with the given orientation leaves the scan as
@@ -615,7 +633,7 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
     FaceAlignOptions polish_options = fo;
     polish_options.max_iterations = 4 * o.iterations;
     polish_options.relative_tolerance = 0.1 * fo.polish_tolerance;
-    const IcpRun polished = run_icp(search.tree, dense, best.T, polish_options, search.clamp, true);
+    const IcpRun polished = run_icp(search.tree, dense, best.T, polish_options, search.clamp, true, &best_near);
     if (polished.inliers > 0) {
       best = polished;
       if (is_consistent(best) && best.score < out.score_given) out.score_given = best.score;

@@ -185,12 +185,17 @@ Status refine_alignment_on_face(const TriMesh& generic, const HeadAnnotations& a
     std::vector<Vec3> model(n), target(n);
     std::vector<double> dist(n);
     std::vector<size_t> order(n);
+    // Each sample's nearest scan triangle of the last iteration: where the
+    // next search starts (closest_point_near gives closest_point's answer
+    // to the bit, the hint only prunes the tree).
+    std::vector<int> near_triangle(n, -1);
     double previous = -1;
     for (int it = 0; it < iterations; ++it) {
       for (int i = 0; i < n; ++i) {
         model[i] = run.linear * face[i] + run.translation;
         if (!surface.empty()) {
-          const ClosestPoint c = closest_point(surface, model[i]);
+          const ClosestPoint c = closest_point_near(surface, model[i], near_triangle[i]);
+          near_triangle[i] = c.triangle;
           target[i] = c.point;
           dist[i] = c.distance;
           continue;
