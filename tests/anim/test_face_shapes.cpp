@@ -886,11 +886,12 @@ const Limits kSyntheticCombined{at_most(0, 30, 4, 0, 2), at_most(0, 130, 42, 0, 
 // browOuterUpRight, which does not move them: as before; a closing shape
 // at most 11, Plato's eyeLookDownLeft), bounded at a quarter more. The
 // level-2 lids (1 Dec, session 49, the skin muscles fading in over 1.5 eye
-// radii from the rims): exactly today's worst, 11 in one shape alone
-// (Plato's eyeLookDownLeft) and 13 in a combination (Plato's random ARKit
-// weights #3, at his right inner canthus).
-const Limits kRealAlone{at_most(0, 43, 3, 0, 5, 0), at_most(11, 185, 47, 0, 32)};
-const Limits kRealCombined{at_most(0, 45, 5, 0, 4, 0), at_most(13, 365, 43, 0, 117)};
+// radii from the rims): today's worst, 11 in one shape alone (Plato's
+// eyeLookDownLeft) and 13 in a combination (Plato's random ARKit weights
+// #3, at his right inner canthus), bounded at a quarter more (a fit's last
+// bits differ between machines: Fran's, session 48).
+const Limits kRealAlone{at_most(0, 43, 3, 0, 5, 0), at_most(14, 185, 47, 0, 32)};
+const Limits kRealCombined{at_most(0, 45, 5, 0, 4, 0), at_most(16, 365, 43, 0, 117)};
 
 TEST_CASE("face rig: crossings on the control mesh and level 2 with the teeth, every shape and the combinations avatar tools make, generic head and synthetic people 1-5: no lip or lid column crossing, the rest within today's worst") {
   for (std::uint32_t seed = 0; seed <= 5; ++seed) {
