@@ -1486,6 +1486,10 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
   // nose (its landmarks and box stay as cast), the regular rows behind the ears, the crown, and everything off the shape
   // (pockets, mouth bag, ears, neck) stay. After the quads are split, so the
   // triangles are those of the skin as cast.
+  // The skin as cast: what the alignment matches (GenericHead::
+  // alignment_positions) and where the annotations below are taken, so a
+  // faired head is annotated and aligned exactly as the cast one.
+  const std::vector<Vec3> cast_positions = mesh.positions;
   if (options.fair_iterations > 0) {
     std::vector<char> fixed(nv, 0);
     for (int v = 0; v < nv; ++v) {
@@ -1533,8 +1537,10 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
     }
   }
 
+  if (options.fair_iterations > 0) out.alignment_positions = cast_positions;
+
   // --- 12. annotations ------------------------------------------------------
-  const auto& P = mesh.positions;
+  const auto& P = cast_positions;
   auto azimuth_deg = [&](int col) {
     double a = column_azimuth(col) * 180 / kPi;
     return a > 180 ? a - 360 : a;

@@ -77,6 +77,11 @@ struct HeadAnnotations {
 struct GenericHead {
   TriMesh mesh;
   HeadAnnotations annotations;
+  // The skin as cast, before its control vertices were faired on the shape
+  // (the same shape, other samples; empty when the head was not faired):
+  // what the initial alignment matches, so that the alignment's choices do
+  // not hang on how the face's grid samples the shape.
+  std::vector<Vec3> alignment_positions;
 };
 
 }  // namespace lk

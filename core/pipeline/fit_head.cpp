@@ -693,6 +693,17 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
   st = build_topology(generic.mesh, topo);
   if (!st) return with_context(st, "generic head");
   const HeadAnnotations& ann = generic.annotations;
+  // What the alignment matches: the skin as cast where the head was faired
+  // (GenericHead::alignment_positions), else the head itself.
+  GenericHead cast;
+  const bool faired = generic.alignment_positions.size() == generic.mesh.positions.size();
+  if (faired) {
+    cast.mesh = generic.mesh;
+    cast.mesh.positions = generic.alignment_positions;
+    cast.mesh.normals.clear();
+    cast.annotations = generic.annotations;
+  }
+  const GenericHead& to_align = faired ? cast : generic;
 
   // The scan points' distances to `surface`; tree (optional): a tree over
   // exactly `surface`, taken over for the closest points instead of building one.
@@ -716,24 +727,24 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
 
   // 1. Initial alignment.
   if (observer.started) observer.started("initial_alignment");
-  st = check_orientation(generic, options, R, cloud, out, progress);
+  st = check_orientation(to_align, options, R, cloud, out, progress);
   if (!st) return st;
   st = estimate_coverage(cloud, options.coverage, out.coverage);
   if (!st) return with_context(st, "coverage");
   out.face_only = options.scan_kind == FitHeadOptions::ScanKind::FaceOnly ||
                   (options.scan_kind == FitHeadOptions::ScanKind::Auto && out.coverage.face_only);
   if (out.face_only) {
-    st = align_face(generic.mesh, ann, cloud, options.face_align, out.face_alignment, progress);
+    st = align_face(to_align.mesh, ann, cloud, options.face_align, out.face_alignment, progress);
     if (!st) return with_context(st, "initial alignment (face-only scan)");
     out.alignment.linear = out.alignment.initial_linear = out.face_alignment.linear;
     out.alignment.translation = out.alignment.initial_translation = out.face_alignment.translation;
-    out.alignment.aligned = generic.mesh;
+    out.alignment.aligned = to_align.mesh;
     transform(out.alignment.aligned, out.alignment.linear, out.alignment.translation);
     out.notes.push_back("face-only scan (its upper part is " + pct(out.coverage.depth_to_width) +
                         "x as deep as wide; a whole head is 1x or more): aligned by closest points, and the "
                         "unscanned back, scalp and ears keep the generic head's shape");
   } else {
-    st = align_initial(generic.mesh, ann, cloud, options.align, out.alignment, progress);
+    st = align_initial(to_align.mesh, ann, cloud, options.align, out.alignment, progress);
     if (!st) return with_context(st, "initial alignment");
   }
   // The points to fit (the neck below the generic head's neck is not part
@@ -745,7 +756,7 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
   auto place = [&]() -> Status {
     out.generic_to_head.A = out.alignment.linear;
     out.generic_to_head.t = out.alignment.translation;
-    out.aligned = generic.mesh;
+    out.aligned = to_align.mesh;
     for (Vec3& p : out.aligned.positions) p = out.generic_to_head.apply(p);
     out.aligned.normals.clear();
     pts.clear();
@@ -765,7 +776,7 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
   // face's pitch (FitHeadOptions::choose_face_pitch).
   const AlignmentMeasure share_near = [&](const Mat3& linear, const Vec3& translation) {
     const AffineMap map{linear, translation};
-    TriMesh moved = generic.mesh;
+    TriMesh moved = to_align.mesh;
     for (Vec3& p : moved.positions) p = map.apply(p);
     const ClipPlane cut = transform_plane(ann.neck_clip, map);
     std::vector<Vec3> kept;
@@ -786,12 +797,12 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
   const size_t notes_before_face = out.notes.size();
   std::string pitches_tried;  // the face's pitch candidates and their shares, for the messages
   if (out.near_fraction < options.min_near_fraction && !out.face_only && options.refine_on_face) {
-    st = upper_face_near_fraction(generic.mesh, ann, cloud.positions, scan.faces, out.alignment.linear,
+    st = upper_face_near_fraction(to_align.mesh, ann, cloud.positions, scan.faces, out.alignment.linear,
                                   out.alignment.translation, diag, options.face_refine.score_clamp_fraction,
                                   silhouette_face_near, options.face_refine.samples);
     silhouette_face_holds = st && silhouette_face_near >= options.min_near_fraction &&
                             out.near_fraction >= 0.5 * options.min_near_fraction;
-    st = refine_alignment_on_face(generic.mesh, ann, cloud.positions, scan.faces, out.alignment.linear,
+    st = refine_alignment_on_face(to_align.mesh, ann, cloud.positions, scan.faces, out.alignment.linear,
                                   out.alignment.translation, diag, options.face_refine, out.face_refine);
     if (st) {
       out.notes.push_back("after the silhouette alignment only " + pct(100 * out.near_fraction) +
@@ -814,7 +825,7 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
                        out.near_fraction >= 0.5 * options.min_near_fraction;
     FaceRefineResult chosen;
     if (st && !holds && !silhouette_face_holds && options.choose_face_pitch &&
-        refine_alignment_on_face(generic.mesh, ann, cloud.positions, scan.faces, silhouette_alignment.linear,
+        refine_alignment_on_face(to_align.mesh, ann, cloud.positions, scan.faces, silhouette_alignment.linear,
                                  silhouette_alignment.translation, diag, options.face_refine, chosen, share_near)) {
       for (const FaceRefineCandidate& c : chosen.candidates)
         pitches_tried += (pitches_tried.empty() ? "" : ", ") + pct(c.pitch_deg) + " deg " + pct(100 * c.measure) + "%";
@@ -864,6 +875,12 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
                              pct(100 * options.min_near_fraction) + "%" +
                              (pitches_tried.empty() ? "" : "; aligned on the face from pitches " + pitches_tried) +
                              "); this does not look like a head scan");
+  if (faired) {  // the fit starts from the faired skin, placed as the cast one was aligned
+    out.aligned = generic.mesh;
+    for (Vec3& p : out.aligned.positions) p = out.generic_to_head.apply(p);
+    out.aligned.normals.clear();
+    out.alignment.aligned = out.aligned;
+  }
   stage_done("initial_alignment", out.aligned, pts);
   if (!report(progress, "initial_alignment", 1.0)) return cancelled();
 

@@ -587,3 +587,35 @@ TEST_CASE("fit_head: the warm ear refit holds a folded ear as the cold one does,
   CHECK(st.code == ErrorCode::InvalidInput);
   CHECK(st.message.find("ear_refit_warm_rounds") != std::string::npos);
 }
+
+TEST_CASE("fit_head: a faired generic head is aligned as its skin as cast, and fitted from its own skin") {
+  // GenericHead::alignment_positions: fairing moves only how the face's
+  // control vertices sample the shape, yet the alignment's choices hung on
+  // that sampling (docs/design/generic_head.md). A faired head is aligned
+  // on its skin as cast, so it lands exactly where the cast head does.
+  const Scene& s = scene();
+  GenericHeadBuildOptions cast_options, faired_options;
+  cast_options.fair_iterations = 0;
+  faired_options.fair_iterations = 3;
+  const GenericHead cast = test::built_generic_head(cast_options);
+  const GenericHead faired = test::built_generic_head(faired_options);
+  REQUIRE(faired.alignment_positions == cast.mesh.positions);
+  REQUIRE(cast.alignment_positions.empty());
+  REQUIRE(faired.mesh.positions != cast.mesh.positions);
+  FitHeadOptions o = quick_options();
+  o.levels = 0;
+  FitHeadResult by_cast, by_faired, by_own_skin;
+  REQUIRE(fit_head(s.scan, cast, o, by_cast).ok());
+  REQUIRE(fit_head(s.scan, faired, o, by_faired).ok());
+  CHECK(by_faired.generic_to_head.A == by_cast.generic_to_head.A);
+  CHECK(by_faired.generic_to_head.t == by_cast.generic_to_head.t);
+  // The fit starts from the faired skin, placed by that alignment.
+  for (size_t v = 0; v < faired.mesh.positions.size(); ++v)
+    REQUIRE((by_faired.aligned.positions[v] - by_faired.generic_to_head.apply(faired.mesh.positions[v])).norm() == 0.0);
+  // Aligned on its own skin instead, the same head lands elsewhere: what
+  // the cast positions are there for.
+  GenericHead own = faired;
+  own.alignment_positions.clear();
+  REQUIRE(fit_head(s.scan, own, o, by_own_skin).ok());
+  CHECK(by_own_skin.generic_to_head.A != by_cast.generic_to_head.A);
+}
