@@ -56,7 +56,9 @@
 // guard's steps for the pairs away from the lips and ears
 // (FitHeadOptions::guard_other_crossings); --fit-guard-remeasure 0|1:
 // the detail measured again where the guard moved control vertices
-// (FitHeadOptions::guard_remeasure).
+// (FitHeadOptions::guard_remeasure); --fit-pleat-undo 0|1: pleat steps
+// undone where the untangled level still crosses
+// (FitHeadOptions::pleat_undo_where_crossing).
 #include "command.h"
 #include "fit_table.h"
 #include "generic_head_choice.h"
@@ -310,6 +312,7 @@ int run(const Args& args) {
   int hinges_last = options.untangle_hinges_last ? 1 : 0;
   int guard_others = options.guard_other_crossings ? 1 : 0;
   int guard_remeasure = options.guard_remeasure ? 1 : 0;
+  int pleat_undo = options.pleat_undo_where_crossing ? 1 : 0;
   if (!args.get_int("fit-crease-trials", options.global.smooth_guard_crease_trials,
                     options.global.smooth_guard_crease_trials) ||
       !args.get_int("fit-crease-edges", options.global.smooth_guard_crease_max_edges,
@@ -330,16 +333,18 @@ int run(const Args& args) {
       options.untangle_level < 0 || options.untangle_level > 3 ||
       !args.get_int("fit-guard-others", guard_others, guard_others) || guard_others < 0 || guard_others > 1 ||
       !args.get_int("fit-guard-remeasure", guard_remeasure, guard_remeasure) || guard_remeasure < 0 ||
-      guard_remeasure > 1) {
+      guard_remeasure > 1 || !args.get_int("fit-pleat-undo", pleat_undo, pleat_undo) || pleat_undo < 0 ||
+      pleat_undo > 1) {
     std::printf("   --fit-crease-trials / --fit-crease-edges / --fit-data-level / --fit-pleat-steps take a whole number, "
                 "--fit-restore-rings one up to 8, --fit-hinges-last 0 or 1, --fit-ear-refit-rounds one >= 0, "
-                "--fit-real-copies one from 1 to 13, --fit-untangle-level one from 0 to 3, --fit-guard-others / --fit-guard-remeasure 0 or 1, "
+                "--fit-real-copies one from 1 to 13, --fit-untangle-level one from 0 to 3, --fit-guard-others / --fit-guard-remeasure / --fit-pleat-undo 0 or 1, "
                 "--fit-crease-angle and --fit-surface-edges a number\n");
     return 1;
   }
   options.untangle_hinges_last = hinges_last == 1;
   options.guard_other_crossings = guard_others == 1;
   options.guard_remeasure = guard_remeasure == 1;
+  options.pleat_undo_where_crossing = pleat_undo == 1;
   if (args.has("fit-real-scanned-neck")) options.fit_scanned_neck = true;
   if (args.has("fit-real-no-scanned-neck")) options.fit_scanned_neck = false;
   const std::string only_copy = args.get("fit-real-copy", "");

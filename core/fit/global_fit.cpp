@@ -1427,6 +1427,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
         for (const Edge& e : topology.edges) mean_edge += (x.segment<3>(3 * e.v0) - x.segment<3>(3 * e.v1)).norm();
         const double max_move =
             options.smooth_guard_pleat_max_move_edges * mean_edge / std::max<size_t>(1, topology.edges.size());
+        const VecX x_before_pleats = x;
         std::vector<char> failed_pleat(nv, 0), face_mark(nf, 0), edge_mark(edge_faces.size(), 0);
         for (int step = 0; step < options.smooth_guard_pleat_steps && pleats_now > 0; ++step) {
           std::vector<int> pleated_faces;
@@ -1499,6 +1500,7 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
               refit_bvh_vertices(relief.bvh, refit_index, relief.level.positions, best_moved);
               for (int v : cluster) moved_ever[v] = 1;
               ++result.pleat_steps;
+              result.pleat_step_vertices.push_back(cluster);
               progress_made = true;
             }
           }
@@ -1506,6 +1508,8 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
         }
         result.pleats_after = pleats_now;
         if (result.pleat_steps > 0) {
+          result.pleat_shift.resize(nv);
+          from_vector(VecX(x - x_before_pleats), result.pleat_shift);
           std::vector<std::array<int, 2>> folds = all_now;
           keep_folds(folds);
           result.relief_folds_after = static_cast<int>(folds.size());

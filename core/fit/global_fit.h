@@ -420,6 +420,12 @@ struct GlobalFitResult {
   // Pleat relief: the relief level's pleat edges (header comment) before
   // and after it, and its steps.
   int pleats_before = 0, pleats_after = 0, pleat_steps = 0;
+  // Each kept pleat step's control vertices, and how far the steps moved
+  // every vertex (#V, zero where none moved; empty without a step): what
+  // fit_head needs to undo steps where the surface it returns still
+  // crosses (FitHeadOptions::pleat_undo_where_crossing).
+  std::vector<std::vector<int>> pleat_step_vertices;
+  std::vector<Vec3> pleat_shift;
   int relief_steps = 0;
   int relief_vertices = 0;
   // Fold creases: control edges to refine as creases (pairs of vertices),

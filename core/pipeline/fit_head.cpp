@@ -1250,9 +1250,73 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
   untangle.hinges_last = options.untangle_hinges_last;
   untangle.restore_rings = options.untangle_restore_rings;
   untangle.restore_share = options.untangle_restore_share;
+  const std::vector<Vec3> before_untangle = out.control.positions;
   st = untangle_smooth_surface(out.aligned.positions, creases, diag, topo, terms.smooth_guard_ignored, untangle,
                                out.control, out.untangle);
   if (!st) return with_context(st, "subdivision (untangling)");
+  const std::vector<std::vector<int>>& pleat_steps = out.global_fit.pleat_step_vertices;
+  const std::vector<Vec3>& pleat_shift = out.global_fit.pleat_shift;
+  if (options.pleat_undo_where_crossing && out.untangle.pairs_after > 0 && !pleat_steps.empty() &&
+      static_cast<int>(pleat_shift.size()) == topo.num_vertices) {
+    // FitHeadOptions::pleat_undo_where_crossing: the steps near the pairs
+    // left (then all of them) undone, the untangling run again from there.
+    const int nv = topo.num_vertices;
+    std::vector<char> near(nv, 0);
+    for (int f : out.untangle.crossing_faces)
+      for (int v : out.control.triangles[f]) near[v] = 1;
+    for (int r = 0; r < 2; ++r) {
+      std::vector<char> grown = near;
+      for (int v = 0; v < nv; ++v)
+        if (near[v])
+          for (int w : topo.rings[v]) grown[w] = 1;
+      near.swap(grown);
+    }
+    // The steps touching `near`, closed over shared vertices (a vertex two
+    // steps moved goes back only with both).
+    std::vector<char> undo_local(pleat_steps.size(), 0), undone(nv, 0);
+    for (size_t k = 0; k < pleat_steps.size(); ++k)
+      for (int v : pleat_steps[k]) undo_local[k] = undo_local[k] || near[v];
+    for (bool grew = true; grew;) {
+      grew = false;
+      for (size_t k = 0; k < pleat_steps.size(); ++k)
+        if (undo_local[k])
+          for (int v : pleat_steps[k]) undone[v] = 1;
+      for (size_t k = 0; k < pleat_steps.size(); ++k)
+        if (!undo_local[k])
+          for (int v : pleat_steps[k])
+            if (undone[v]) undo_local[k] = 1, grew = true;
+    }
+    const std::vector<char> undo_all(pleat_steps.size(), 1);
+    const bool local_differs = undo_local != undo_all;
+    const std::vector<char>* undos[] = {&undo_local, &undo_all};
+    for (const std::vector<char>* undo : undos) {
+      if (undo == &undo_all && !local_differs) continue;
+      if (std::find(undo->begin(), undo->end(), 1) == undo->end()) continue;
+      std::vector<char> back(nv, 0);
+      for (size_t k = 0; k < pleat_steps.size(); ++k)
+        if ((*undo)[k])
+          for (int v : pleat_steps[k]) back[v] = 1;
+      TriMesh trial = out.control;
+      trial.positions = before_untangle;
+      for (int v = 0; v < nv; ++v)
+        if (back[v]) trial.positions[v] -= pleat_shift[v];
+      UntangleResult trial_result;
+      st = untangle_smooth_surface(out.aligned.positions, creases, diag, topo, terms.smooth_guard_ignored, untangle,
+                                   trial, trial_result);
+      if (!st) return with_context(st, "subdivision (untangling, pleat steps undone)");
+      if (trial_result.pairs_after >= out.untangle.pairs_after) continue;
+      const int left = out.untangle.pairs_after, steps = static_cast<int>(std::count(undo->begin(), undo->end(), 1));
+      out.control = std::move(trial);
+      out.untangle = std::move(trial_result);
+      out.pleat_steps_undone = steps;
+      out.notes.push_back("the smooth level " + std::to_string(untangle.level) + " still crossed itself (" +
+                          std::to_string(left) + " pairs) where the global fit's pleat relief had stepped: " +
+                          std::to_string(steps) + " of its " + std::to_string(pleat_steps.size()) +
+                          " steps undone, untangled again (" + std::to_string(out.untangle.pairs_after) +
+                          " pairs left)");
+      if (out.untangle.pairs_after == 0) break;
+    }
+  }
   st = build_multires(out.control, creases, options.levels, out.multires);
   if (!st) return with_context(st, "subdivision");
   PointCloud fitted;

@@ -198,6 +198,15 @@ struct FitHeadOptions {
   bool untangle_hinges_last = true;
   int untangle_restore_rings = 4;
   double untangle_restore_share = 0.25;
+  // The global fit's pleat relief (GlobalFitOptions::smooth_guard_pleat_steps)
+  // judged on the surface the fit returns: when the untangled level still
+  // crosses itself, the pleat steps whose vertices reach (within two rings:
+  // Butterfly's support) a control face under those pairs are undone, with
+  // every step sharing a vertex with them, then all steps, and the
+  // untangling runs again from there; kept when it leaves fewer pairs. A
+  // pleat step near a crossing can hold it there (Fran as given: 4 pairs the
+  // erosion takes out without the steps and not with them).
+  bool pleat_undo_where_crossing = true;
   // After global fitting, the mouth bag (held where local fitting put it)
   // follows its lips (carry_mouth_bag below). Held in place, it poked out
   // through the skin where the lips moved back: Fran's mouth corner went
@@ -392,6 +401,8 @@ struct FitHeadResult {
     int other_pairs_before = 0, other_pairs_after = 0;  // the pairs touching neither (guard_other_crossings)
     bool remeasured = false;  // guard_remeasure was kept (pairs_after, other_pairs_after: after it)
   } feature_guard;
+  // FitHeadOptions::pleat_undo_where_crossing: the pleat steps undone (0: none).
+  int pleat_steps_undone = 0;
 };
 
 // Fits generic (the generic head with annotations, in metres) to scan.

@@ -273,6 +273,11 @@ Status untangle_smooth_surface(const std::vector<Vec3>& reference, const Butterf
   }
   control.positions = best;
   result.pairs_after = static_cast<int>(pairs.size());
+  for (const auto& p : pairs)
+    for (int f : p) result.crossing_faces.push_back(f / faces_per_control);
+  std::sort(result.crossing_faces.begin(), result.crossing_faces.end());
+  result.crossing_faces.erase(std::unique(result.crossing_faces.begin(), result.crossing_faces.end()),
+                              result.crossing_faces.end());
   for (int v = 0; v < nv; ++v) result.restored_vertices += ever[v];
   return Status::success();
 }

@@ -59,6 +59,7 @@ struct UntangleResult {
   int pairs_after = 0;         // ... at the end
   int restore_steps = 0;       // restore steps kept
   int restored_vertices = 0;   // control vertices a kept restore step moved
+  std::vector<int> crossing_faces;  // control faces under the new pairs left at the end (sorted, unique)
 };
 
 // reference: the aligned generic head's positions (#V, same triangles as
