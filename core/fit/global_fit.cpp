@@ -778,9 +778,9 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
     if (carried_count == count) {
       proj = std::move(carried);
     } else if (carried_count > 0 && carried_count < count) {
-      std::vector<SurfaceHit> start(count);  // face -1: searched from scratch
-      std::copy(carried.hits.begin(), carried.hits.end(), start.begin());
-      project(set, data, x, 1e300, &start, proj);
+      std::vector<SurfaceHit> hint(count);  // face -1: searched from scratch
+      std::copy(carried.hits.begin(), carried.hits.end(), hint.begin());
+      project(set, data, x, 1e300, &hint, proj);
     } else {
       project(set, data, x, 1e300, nullptr, proj);
     }
