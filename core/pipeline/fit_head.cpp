@@ -297,6 +297,17 @@ Status hold_crossing_ears(const FitHeadOptions& options, const HeadAnnotations& 
   return Status::success();
 }
 
+// The vertex mask grown by `rings` rings of neighbours (ring_distances).
+std::vector<char> grown_by_rings(const MeshTopology& topo, const std::vector<char>& mask, int rings) {
+  std::vector<int> sources;
+  for (int v = 0; v < static_cast<int>(mask.size()); ++v)
+    if (mask[v]) sources.push_back(v);
+  const std::vector<int> ring = ring_distances(topo, sources, rings);
+  std::vector<char> out(mask.size(), 0);
+  for (size_t v = 0; v < out.size(); ++v) out[v] = ring[v] >= 0;
+  return out;
+}
+
 // Whether tree was built over mesh's triangles (the relief's tree may be
 // over another level when the fold limiter left it alone): refit it, else
 // build one.
@@ -426,15 +437,7 @@ Status guard_feature_crossings(const FitHeadOptions& options, const HeadAnnotati
     if (share > 0 || step.smoothing > 0) {
       // The detail over the moved vertices' Butterfly support (two rings)
       // was measured from the old surface: it goes too.
-      std::vector<char> wide = mask;
-      for (int r = 0; r < 2; ++r) {
-        std::vector<char> grown = wide;
-        for (int v = 0; v < nv; ++v)
-          if (wide[v])
-            for (int w : topo.rings[v]) grown[w] = 1;
-        wide.swap(grown);
-      }
-      fade_displacements(wide, mr);
+      fade_displacements(grown_by_rings(topo, mask, 2), mr);
     } else {
       fade_displacements(mask, mr);
     }
@@ -491,14 +494,7 @@ Status guard_feature_crossings(const FitHeadOptions& options, const HeadAnnotati
       for (const std::vector<int>& cluster : clusters) {
         const std::vector<char> start = vertex_mask(cluster, nv);
         for (const Step& step : steps) {
-          std::vector<char> mask = start;
-          for (int r = 0; r < step.rings; ++r) {
-            std::vector<char> grown = mask;
-            for (int v = 0; v < nv; ++v)
-              if (mask[v])
-                for (int w : topo.rings[v]) grown[w] = 1;
-            mask.swap(grown);
-          }
+          std::vector<char> mask = grown_by_rings(topo, start, step.rings);
           if (!kept_vertices.empty())
             for (int v = 0; v < nv; ++v) mask[v] = mask[v] && !kept_vertices[v];
           bool kept = false;
@@ -1261,16 +1257,10 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
     // FitHeadOptions::pleat_undo_where_crossing: the steps near the pairs
     // left (then all of them) undone, the untangling run again from there.
     const int nv = topo.num_vertices;
-    std::vector<char> near(nv, 0);
+    std::vector<char> under(nv, 0);
     for (int f : out.untangle.crossing_faces)
-      for (int v : out.control.triangles[f]) near[v] = 1;
-    for (int r = 0; r < 2; ++r) {
-      std::vector<char> grown = near;
-      for (int v = 0; v < nv; ++v)
-        if (near[v])
-          for (int w : topo.rings[v]) grown[w] = 1;
-      near.swap(grown);
-    }
+      for (int v : out.control.triangles[f]) under[v] = 1;
+    const std::vector<char> near = grown_by_rings(topo, under, 2);
     // The steps touching `near`, closed over shared vertices (a vertex two
     // steps moved goes back only with both).
     std::vector<char> undo_local(pleat_steps.size(), 0), undone(nv, 0);
@@ -1286,15 +1276,13 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
           for (int v : pleat_steps[k])
             if (undone[v]) undo_local[k] = 1, grew = true;
     }
-    const std::vector<char> undo_all(pleat_steps.size(), 1);
-    const bool local_differs = undo_local != undo_all;
-    const std::vector<char>* undos[] = {&undo_local, &undo_all};
-    for (const std::vector<char>* undo : undos) {
-      if (undo == &undo_all && !local_differs) continue;
-      if (std::find(undo->begin(), undo->end(), 1) == undo->end()) continue;
+    std::vector<std::vector<char>> undos = {undo_local};
+    if (const std::vector<char> undo_all(pleat_steps.size(), 1); undo_local != undo_all) undos.push_back(undo_all);
+    for (const std::vector<char>& undo : undos) {
+      if (std::find(undo.begin(), undo.end(), 1) == undo.end()) continue;
       std::vector<char> back(nv, 0);
       for (size_t k = 0; k < pleat_steps.size(); ++k)
-        if ((*undo)[k])
+        if (undo[k])
           for (int v : pleat_steps[k]) back[v] = 1;
       TriMesh trial = out.control;
       trial.positions = before_untangle;
@@ -1305,7 +1293,7 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
                                    trial, trial_result);
       if (!st) return with_context(st, "subdivision (untangling, pleat steps undone)");
       if (trial_result.pairs_after >= out.untangle.pairs_after) continue;
-      const int left = out.untangle.pairs_after, steps = static_cast<int>(std::count(undo->begin(), undo->end(), 1));
+      const int left = out.untangle.pairs_after, steps = static_cast<int>(std::count(undo.begin(), undo.end(), 1));
       out.control = std::move(trial);
       out.untangle = std::move(trial_result);
       out.pleat_steps_undone = steps;
