@@ -124,15 +124,17 @@ Status lid_rig(const std::vector<Vec3>& P, const EyeSocket& socket, const Vec3& 
     // In front of the eye's centre: 1 within the lid's own rim radius (the
     // rim turns whole where the two rims sit at different radii; the mean
     // of both left a scan's upper rim at 0.9997), fading over 0.8 eye radii
-    // outside it. Behind it, only the socket's pocket (inside the rim's
-    // radius), fading from 1 at the centre's plane to 0 at the back, so the
-    // pocket next to the margin turns with it rather than being left behind
-    // (docs/design/muscles.md, "The lids closed at level 2").
-    double w = 0;
-    if (d.z() > 0)
-      w = r <= 1.01 * own ? 1.0 : 1.0 - smoothstep01((r - 1.01 * own) / (0.8 * radius));
-    else if (r <= 1.01 * std::max(rr, own))
-      w = 1.0 - smoothstep01(std::atan2(-d.z(), std::hypot(d.x(), d.y())) / 1.5707963267948966);
+    // outside it. Behind it, fading from that at the centre's plane to 0 at
+    // the back: the pocket (inside the rim's radius) from 1, so the pocket
+    // next to the margin turns with it rather than being left behind
+    // (docs/design/muscles.md, "The lids closed at level 2"), and the skin
+    // outside it from its front weight, not cut from that to 0 at the plane
+    // (a jump where a fitted head's skin about the eye crosses it; session 50).
+    const double front = r <= 1.01 * own ? 1.0 : 1.0 - smoothstep01((r - 1.01 * own) / (0.8 * radius));
+    double w = front;
+    if (d.z() <= 0)
+      w = (r <= 1.01 * std::max(rr, own) ? 1.0 : front) *
+          (1.0 - smoothstep01(std::atan2(-d.z(), std::hypot(d.x(), d.y())) / 1.5707963267948966));
     if (is_rim) w = 1.0;
     if (past > 0) w *= 1.0 - smoothstep01(past / fade);
     const double g = gap_at(x);
