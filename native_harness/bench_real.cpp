@@ -38,6 +38,10 @@
 // --fit-real-no-scanned-neck: the scanned neck below the cut is not fitted
 // (FitHeadOptions::fit_scanned_neck off: the figures before it was the
 // default); --fit-real-scanned-neck: on (the default).
+// --fit-real-stages: per copy, Table 1 after each stage, the local fit's
+// points per box, the global fit's guards, the untangling, the crossing
+// guard and the control faces the untangling left crossing (to find where
+// two generic heads' fits part: docs/design/generic_head.md, session 50).
 // --fit-real-copy NAME: only the copies whose name holds NAME ("turn").
 // --fit-real-sweep: the copies of swept_copies instead (shifts along each
 // axis, turns of 0.05-5 deg about each axis); every copy prints where its
