@@ -38,6 +38,10 @@
 // --fit-real-no-scanned-neck: the scanned neck below the cut is not fitted
 // (FitHeadOptions::fit_scanned_neck off: the figures before it was the
 // default); --fit-real-scanned-neck: on (the default).
+// --fit-real-stages: per copy, Table 1 after each stage, the local fit's
+// points per box, the global fit's guards, the untangling, the crossing
+// guard and the control faces the untangling left crossing (to find where
+// two generic heads' fits part: docs/design/generic_head.md, session 50).
 // --fit-real-copy NAME: only the copies whose name holds NAME ("turn").
 // --fit-real-sweep: the copies of swept_copies instead (shifts along each
 // axis, turns of 0.05-5 deg about each axis); every copy prints where its
@@ -349,6 +353,7 @@ int run(const Args& args) {
   if (args.has("fit-real-no-scanned-neck")) options.fit_scanned_neck = false;
   const std::string only_copy = args.get("fit-real-copy", "");
   const bool sweep = args.has("fit-real-sweep"), align_only = args.has("fit-real-align-only");
+  const bool stages = args.has("fit-real-stages");
   // --fit-align-pitches A,B,...: the silhouettes' pitch starts (deg);
   // --fit-align-polish 0|1: the ICP polish (AlignOptions).
   if (args.has("fit-align-pitches")) {
@@ -500,6 +505,33 @@ int run(const Args& args) {
       }
       for (const std::string& note : r.notes)
         std::printf("   %-14s note: %s\n", "", note.c_str());
+      if (stages) {  // --fit-real-stages: Table 1 after each stage (mean / max %)
+        std::printf("   %-14s stages:", "");
+        for (const FitStageReport& s : r.stages) {
+          std::printf(" %s %.4f / %.3f", s.name.c_str(), s.distance.mean_pct, s.distance.max_pct);
+          if (s.as_fitted.mean_pct != s.distance.mean_pct) std::printf(" (as fitted %.4f)", s.as_fitted.mean_pct);
+          std::printf(";");
+        }
+        std::printf(" local fit:");
+        for (const BoxFit& b : r.local_fit.boxes) std::printf(" %s %d pts", b.name.c_str(), b.points);
+        std::printf("; global: smooth pairs %d -> %d, relief folds %d -> %d, pleats %d -> %d (%d steps), creases %zu, "
+                    "untangle %d -> %d, guard %d+%d -> %d+%d, pleats undone %d, ears %s\n",
+                    r.global_fit.smooth_crossing_before, r.global_fit.smooth_crossing_after,
+                    r.global_fit.relief_folds_before, r.global_fit.relief_folds_after, r.global_fit.pleats_before,
+                    r.global_fit.pleats_after, r.global_fit.pleat_steps, r.global_fit.fold_crease_edges.size(),
+                    r.untangle.pairs_before, r.untangle.pairs_after, r.feature_guard.pairs_before,
+                    r.feature_guard.other_pairs_before, r.feature_guard.pairs_after,
+                    r.feature_guard.other_pairs_after, r.pleat_steps_undone,
+                    r.ear_binding.bound ? "bound" : "free");
+        if (!r.untangle.crossing_faces.empty()) {
+          std::printf("   %-14s untangle left faces:", "");
+          for (int f : r.untangle.crossing_faces) {
+            const Tri& t = r.control.triangles[f];
+            std::printf(" %d(%d %d %d)", f, t[0], t[1], t[2]);
+          }
+          std::printf("\n");
+        }
+      }
       const CrossingCounts& x = q.crossings;
       CoveredDistances back;
       st = measure_fit_to_scan(r, c.cloud, generic, back, "face");

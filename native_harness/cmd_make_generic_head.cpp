@@ -22,7 +22,7 @@ namespace {
 const char* kName = "make-generic-head";
 
 int run_make_generic_head(const Args& args) {
-  if (!only_known_options(kName, args, {"out", "report", "level3", "ring-ear", "plate-ear", "even-eye-corners", "face-rows-at-back", "nape-by-shape", "wide-mouth-ring", "diagonals-by-side", "fair", "nostrils", "teeth-mouth-bag"})) return 2;
+  if (!only_known_options(kName, args, {"out", "report", "level3", "ring-ear", "plate-ear", "even-eye-corners", "face-rows-at-back", "nape-by-shape", "wide-mouth-ring", "diagonals-by-side", "fair", "fair-rim-rings", "nostrils", "teeth-mouth-bag"})) return 2;
   const std::string out_dir = args.get("out");
   const bool report = args.has("report");
   const std::string level3_path = args.get("level3");
@@ -65,6 +65,13 @@ int run_make_generic_head(const Args& args) {
   if (args.has("fair")) {
     options.fair_iterations = std::atoi(args.get("fair").c_str());
     if (options.fair_iterations < 0 || options.fair_iterations > 100) return fail(kName, "--fair needs 0..100 passes");
+  }
+  // --fair-rim-rings K: GenericHeadBuildOptions::fair_keep_rim_rings (the
+  // K rings round the eye rims and lip lines kept as cast; session 50).
+  if (args.has("fair-rim-rings")) {
+    options.fair_keep_rim_rings = std::atoi(args.get("fair-rim-rings").c_str());
+    if (options.fair_keep_rim_rings < 0 || options.fair_keep_rim_rings > 10)
+      return fail(kName, "--fair-rim-rings needs 0..10 rings");
   }
   GenericHead head;
   Status s = build_generic_head(options, head);
@@ -117,7 +124,7 @@ int run_make_generic_head(const Args& args) {
   return 0;
 }
 
-Registrar reg({kName, "likeness make-generic-head --out DIR [--report] [--level3 FILE.obj] [--ring-ear|--plate-ear] [--even-eye-corners] [--face-rows-at-back] [--nape-by-shape] [--wide-mouth-ring] [--diagonals-by-side] [--fair N] [--nostrils] [--teeth-mouth-bag]",
+Registrar reg({kName, "likeness make-generic-head --out DIR [--report] [--level3 FILE.obj] [--ring-ear|--plate-ear] [--even-eye-corners] [--face-rows-at-back] [--nape-by-shape] [--wide-mouth-ring] [--diagonals-by-side] [--fair N [--fair-rim-rings K]] [--nostrils] [--teeth-mouth-bag]",
                "builds the generic head control mesh + annotations (writes generic_head.obj/.json; --report: smooth level 3 roughness by region, crossing pairs by level; --level3: that level as a mesh)",
                run_make_generic_head});
 

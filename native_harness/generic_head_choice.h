@@ -39,6 +39,9 @@ inline Status choose_generic_head(const std::string& which, GenericHead& out) {
   if (which == "unfaired" || which.rfind("fair-", 0) == 0) {
     GenericHeadBuildOptions options;
     options.fair_iterations = which == "unfaired" ? 0 : std::atoi(which.c_str() + 5);
+    // fair-N-rK: the K rings round the rims and lip lines kept as cast too.
+    if (const size_t r = which.find("-r", 5); r != std::string::npos)
+      options.fair_keep_rim_rings = std::atoi(which.c_str() + r + 2);
     if (options.fair_iterations < 0 || options.fair_iterations > 100)
       return Status::error(ErrorCode::InvalidInput, "fair-N needs N in 0..100");
     return build_generic_head(options, out);

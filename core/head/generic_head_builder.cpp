@@ -1514,6 +1514,23 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
         neighbours[t[k]].push_back(t[(k + 2) % 3]);
       }
     for (auto& n : neighbours) n = sorted_unique(n);
+    // fair_keep_rim_rings: the rings round the eye rims and lip lines stay
+    // as cast too, so the faired grid meets the creases as the cast one does.
+    std::vector<char> rim(nv, 0);
+    for (int side : {1, -1}) {
+      for (int v : rim_top[side]) rim[v] = 1;
+      for (int v : rim_bottom[side]) rim[v] = 1;
+    }
+    for (int v : upper_line) rim[v] = 1;
+    for (int v : lower_line) rim[v] = 1;
+    for (int ring = 0; ring < options.fair_keep_rim_rings; ++ring) {
+      std::vector<char> grown = rim;
+      for (int v = 0; v < nv; ++v)
+        if (rim[v])
+          for (int w : neighbours[v]) grown[w] = 1;
+      rim = grown;
+    }
+    for (int v = 0; v < nv; ++v) fixed[v] = fixed[v] || rim[v];
     std::vector<Vec3>& P = mesh.positions;
     for (int it = 0; it < options.fair_iterations; ++it)
       for (double lambda : {0.5, -0.53}) {

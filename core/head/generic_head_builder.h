@@ -80,6 +80,9 @@ struct GenericHeadBuildOptions {
                                    // Demosthenes' ears cross (4 pairs), Gutenberg turned 0.05 deg
                                    // is refused, Fran's face alignment varies by seed
                                    // (docs/design/generic_head.md "Fairing the skin"). 0: as cast.
+  int fair_keep_rim_rings = 0;     // with fair_iterations: this many rings of vertices round the eye
+                                   // rims and lip lines kept as cast too (session 50, measured:
+                                   // docs/design/generic_head.md). 0: only the rims and lines.
   bool nostrils = false;            // true: each nostril an oval opening on the nose's underside
                                    // (8 rim vertices inset into the quad between the columella and
                                    // column 1, rows 11-12) continued as a shallow closed pocket

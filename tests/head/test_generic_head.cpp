@@ -1280,3 +1280,32 @@ TEST_CASE("generic head, faired skin: its smooth level 3 is less furrowed at the
       most = std::max(most, (h.mesh.positions[v] - cast_head.mesh.positions[v]).norm());
   CHECK(most < 1e-9);  // the midline (the profile) does not move
 }
+
+TEST_CASE("generic head, faired skin with the rings round the rims kept: those rings stay as cast", "[head]") {
+  // GenericHeadBuildOptions::fair_keep_rim_rings (session 50): the faired
+  // fits depart where the fairing moved the vertices next to the eye rims
+  // and lip lines (docs/design/generic_head.md); with 1 ring kept, every
+  // neighbour of a crease vertex is where the skin was cast, and the
+  // fairing still moves the skin farther out.
+  GenericHeadBuildOptions kept;
+  kept.fair_iterations = 3;
+  kept.fair_keep_rim_rings = 1;
+  const GenericHead head = test::built_generic_head(kept);
+  REQUIRE(head.alignment_positions.size() == head.mesh.positions.size());
+  const int nv = head.mesh.num_vertices();
+  std::vector<char> crease(nv, 0), ring(nv, 0);
+  for (const auto& curve : head.annotations.creases)
+    for (int v : curve.vertices) crease[v] = 1;
+  for (const Tri& t : head.mesh.triangles)
+    for (int k = 0; k < 3; ++k)
+      if (crease[t[k]]) ring[t[(k + 1) % 3]] = ring[t[(k + 2) % 3]] = 1;
+  int ring_moved = 0, ring_count = 0, moved_elsewhere = 0;
+  for (int v = 0; v < nv; ++v) {
+    const bool moved = head.mesh.positions[v] != head.alignment_positions[v];
+    if (ring[v] || crease[v]) ring_count += ring[v], ring_moved += moved;
+    else moved_elsewhere += moved;
+  }
+  CHECK(ring_count > 0);
+  CHECK(ring_moved == 0);
+  CHECK(moved_elsewhere > 0);
+}
