@@ -295,12 +295,12 @@ struct FitHeadOptions {
   // again over the moved control mesh (its dropped detail back), the guard
   // runs again on that, and the result is kept when it leaves no more pairs.
   bool guard_remeasure = true;
-  // The guard's choice by cost (off): per cluster, the first step of the
-  // ladder that leaves fewer pairs and up to guard_cost_extra_tries steps
-  // after it are tried, and of those leaving no more pairs than the first,
-  // the one whose level lies least farther from the scan's measured points
-  // (summed over the points near what it moved) is kept.
-  bool guard_choose_by_cost = false;
+  // The guard's choice by cost: per cluster, the first step of the ladder
+  // that leaves fewer pairs and up to guard_cost_extra_tries steps after it
+  // are tried, and of those leaving no more pairs than the first, the one
+  // whose level lies least farther from the scan's measured points (summed
+  // over the points near what it moved) is kept (false: the first).
+  bool guard_choose_by_cost = true;
   int guard_cost_extra_tries = 3;
   // The global fit's scan-to-mesh term E_back (GlobalFitOptions::back_*:
   // control vertices over scanned skin held to the scan's surface under
