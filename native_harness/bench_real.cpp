@@ -62,7 +62,10 @@
 // the detail measured again where the guard moved control vertices
 // (FitHeadOptions::guard_remeasure); --fit-pleat-undo 0|1: pleat steps
 // undone where the untangled level still crosses
-// (FitHeadOptions::pleat_undo_where_crossing).
+// (FitHeadOptions::pleat_undo_where_crossing); --fit-guard-by-cost 0|1
+// and --fit-guard-cost-tries N: the guard's step chosen by what it loses
+// among the first that helps and N after it
+// (FitHeadOptions::guard_choose_by_cost, guard_cost_extra_tries).
 #include "command.h"
 #include "fit_table.h"
 #include "generic_head_choice.h"
@@ -317,6 +320,7 @@ int run(const Args& args) {
   int guard_others = options.guard_other_crossings ? 1 : 0;
   int guard_remeasure = options.guard_remeasure ? 1 : 0;
   int pleat_undo = options.pleat_undo_where_crossing ? 1 : 0;
+  int guard_by_cost = options.guard_choose_by_cost ? 1 : 0;
   if (!args.get_int("fit-crease-trials", options.global.smooth_guard_crease_trials,
                     options.global.smooth_guard_crease_trials) ||
       !args.get_int("fit-crease-edges", options.global.smooth_guard_crease_max_edges,
@@ -338,10 +342,14 @@ int run(const Args& args) {
       !args.get_int("fit-guard-others", guard_others, guard_others) || guard_others < 0 || guard_others > 1 ||
       !args.get_int("fit-guard-remeasure", guard_remeasure, guard_remeasure) || guard_remeasure < 0 ||
       guard_remeasure > 1 || !args.get_int("fit-pleat-undo", pleat_undo, pleat_undo) || pleat_undo < 0 ||
-      pleat_undo > 1) {
+      pleat_undo > 1 || !args.get_int("fit-guard-by-cost", guard_by_cost, guard_by_cost) || guard_by_cost < 0 ||
+      guard_by_cost > 1 ||
+      !args.get_int("fit-guard-cost-tries", options.guard_cost_extra_tries, options.guard_cost_extra_tries) ||
+      options.guard_cost_extra_tries < 0) {
     std::printf("   --fit-crease-trials / --fit-crease-edges / --fit-data-level / --fit-pleat-steps take a whole number, "
                 "--fit-restore-rings one up to 8, --fit-hinges-last 0 or 1, --fit-ear-refit-rounds one >= 0, "
-                "--fit-real-copies one from 1 to 13, --fit-untangle-level one from 0 to 3, --fit-guard-others / --fit-guard-remeasure / --fit-pleat-undo 0 or 1, "
+                "--fit-real-copies one from 1 to 13, --fit-untangle-level one from 0 to 3, --fit-guard-others / --fit-guard-remeasure / --fit-pleat-undo / --fit-guard-by-cost 0 or 1, "
+                "--fit-guard-cost-tries one >= 0, "
                 "--fit-crease-angle and --fit-surface-edges a number\n");
     return 1;
   }
@@ -349,6 +357,7 @@ int run(const Args& args) {
   options.guard_other_crossings = guard_others == 1;
   options.guard_remeasure = guard_remeasure == 1;
   options.pleat_undo_where_crossing = pleat_undo == 1;
+  options.guard_choose_by_cost = guard_by_cost == 1;
   if (args.has("fit-real-scanned-neck")) options.fit_scanned_neck = true;
   if (args.has("fit-real-no-scanned-neck")) options.fit_scanned_neck = false;
   const std::string only_copy = args.get("fit-real-copy", "");

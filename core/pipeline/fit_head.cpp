@@ -16,6 +16,7 @@
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace lk {
@@ -161,6 +162,20 @@ double guess_unit_to_metres(double d) {
     }
   }
   return best;
+}
+
+// See fit_head.h (FitHeadOptions::guard_choose_by_cost).
+int choose_guard_step(const std::vector<GuardTry>& tries, bool by_cost, int extra_tries) {
+  int first = -1;
+  for (int k = 0; k < static_cast<int>(tries.size()) && first < 0; ++k)
+    if (tries[k].helps) first = k;
+  if (first < 0 || !by_cost) return first;
+  int chosen = first;
+  const int last = std::min(static_cast<int>(tries.size()) - 1, first + std::max(extra_tries, 0));
+  for (int k = first + 1; k <= last; ++k)
+    if (tries[k].helps && tries[k].pairs_left <= tries[first].pairs_left && tries[k].cost < tries[chosen].cost)
+      chosen = k;
+  return chosen;
 }
 
 // See fit_head.h and FitHeadOptions::carry_mouth_bag.
@@ -340,8 +355,8 @@ void fade_displacements(const std::vector<char>& mask, MultiresMesh& mr) {
 // scanned: the wide steps round the lips had carried it back to the
 // generic neck).
 Status guard_feature_crossings(const FitHeadOptions& options, const HeadAnnotations& ann, const MeshTopology& topo,
-                               const std::vector<char>& kept_vertices, FitHeadResult& out, MeshBvh& tree,
-                               bool& searched) {
+                               const std::vector<char>& kept_vertices, const std::vector<Vec3>& scan_points,
+                               double cost_margin, FitHeadResult& out, MeshBvh& tree, bool& searched) {
   searched = false;
   MultiresMesh& mr = out.multires;
   const int L = mr.num_levels();
@@ -412,11 +427,40 @@ Status guard_feature_crossings(const FitHeadOptions& options, const HeadAnnotati
     while (parent[v] != v) v = parent[v] = parent[parent[v]];
     return v;
   };
-  // One step on `mask`; kept (true) when it leaves fewer pairs at the lips
-  // and ears and fewer in all (for_features), or fewer elsewhere and no
-  // more at the lips and ears.
-  auto try_step = [&](const std::vector<char>& mask, const Step& step, bool for_features, bool& kept) -> Status {
-    kept = false;
+  // FitHeadOptions::guard_choose_by_cost: what a step loses, measured on
+  // the scan's points near what it moved (their distance to the step's
+  // level minus to the level before it), against a tree over that level.
+  const bool by_cost = options.guard_choose_by_cost && !scan_points.empty();
+  MeshBvh best_tree;
+  if (by_cost) {
+    TriMesh before = level;
+    st = build_bvh(before, best_tree);
+    if (!st) return st;
+  }
+  std::vector<double> best_distance(by_cost ? scan_points.size() : 0, -1.0);  // -1: not yet measured
+  auto step_cost = [&]() {
+    Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (int t : moved_list)
+      for (int v : level.triangles[t]) {
+        lo = lo.cwiseMin(best_level[v]).cwiseMin(level.positions[v]);
+        hi = hi.cwiseMax(best_level[v]).cwiseMax(level.positions[v]);
+      }
+    lo.array() -= cost_margin;
+    hi.array() += cost_margin;
+    double cost = 0;
+    for (size_t i = 0; i < scan_points.size(); ++i) {
+      const Vec3& p = scan_points[i];
+      if ((p.array() < lo.array()).any() || (p.array() > hi.array()).any()) continue;
+      if (best_distance[i] < 0) best_distance[i] = closest_point(best_tree, p).distance;
+      cost += closest_point(tree, p).distance - best_distance[i];
+    }
+    return cost;
+  };
+  // One step on `mask` tried: the level it gives (in mr, level, tree) and
+  // its pairs.
+  std::vector<std::array<int, 2>> trial;
+  int trial_features = 0, trial_others = 0;
+  auto try_step = [&](const std::vector<char>& mask, const Step& step) -> Status {
     const double share = step.share;
     mr.control = best_control;
     if (share > 0) {
@@ -449,23 +493,40 @@ Status guard_feature_crossings(const FitHeadOptions& options, const HeadAnnotati
     r = refit_bvh(level, tree);
     if (!r) return r;
     find_intersections_with(tree, moved_list, found);
-    std::vector<std::array<int, 2>> trial = pairs_after_change(pairs, moved_tris, found);
-    int features = 0, others = 0;
-    split(trial, features, others);
-    const bool fewer = for_features ? features < best_features && features + others < best_features + best_others
-                                     : features <= best_features && others < best_others;
-    if (!fewer) return Status::success();
-    best_features = features;
-    best_others = others;
-    pairs = std::move(trial);
+    trial = pairs_after_change(pairs, moved_tris, found);
+    split(trial, trial_features, trial_others);
+    return Status::success();
+  };
+  // A step is kept when it leaves fewer pairs at the lips and ears and
+  // fewer in all (for_features), or fewer elsewhere and no more at the lips
+  // and ears.
+  auto fewer = [&](bool for_features) {
+    return for_features ? trial_features < best_features && trial_features + trial_others < best_features + best_others
+                        : trial_features <= best_features && trial_others < best_others;
+  };
+  auto keep_step = [&](const std::vector<char>& mask, const Step& step) {
+    best_features = trial_features;
+    best_others = trial_others;
+    pairs = trial;
     best_control = mr.control;
     best_displacements = mr.displacements;
     best_level = level.positions;
+    const bool moves = step.share > 0 || step.smoothing > 0;
     for (int v = 0; v < nv; ++v)
-      if (mask[v]) relaxed[v] = 1, moved_ever[v] = moved_ever[v] || share > 0 || step.smoothing > 0;
+      if (mask[v]) relaxed[v] = 1, moved_ever[v] = moved_ever[v] || moves;
     ++out.feature_guard.steps;
-    kept = true;
-    return Status::success();
+  };
+  std::ostringstream steps_note;  // which step each cluster kept
+  auto describe = [](const Step& step) {
+    std::ostringstream d;
+    if (step.share > 0)
+      d << (step.share < 1 ? "half" : "all") << " the way to the generic shape";
+    else if (step.smoothing > 0)
+      d << step.smoothing << " smoothing sweeps";
+    else
+      d << "displacements dropped";
+    d << " over " << step.rings << " rings";
+    return d.str();
   };
   // The lips and ears first, then (guard_other_crossings) every other pair.
   for (const bool for_features : {true, false}) {
@@ -493,17 +554,55 @@ Status guard_feature_crossings(const FitHeadOptions& options, const HeadAnnotati
       bool any = false;
       for (const std::vector<int>& cluster : clusters) {
         const std::vector<char> start = vertex_mask(cluster, nv);
-        for (const Step& step : steps) {
+        const int before = for_features ? best_features : best_others;
+        // The ladder from the least change to the most; the first step
+        // that leaves fewer pairs is kept, or (by_cost) the one that loses
+        // least among it and the next guard_cost_extra_tries steps, leaving
+        // no more pairs than it.
+        const int num_steps = static_cast<int>(sizeof(steps) / sizeof(steps[0]));
+        auto mask_of = [&](const Step& step) {
           std::vector<char> mask = grown_by_rings(topo, start, step.rings);
           if (!kept_vertices.empty())
             for (int v = 0; v < nv; ++v) mask[v] = mask[v] && !kept_vertices[v];
-          bool kept = false;
-          st = try_step(mask, step, for_features, kept);
+          return mask;
+        };
+        std::vector<GuardTry> tries;
+        std::ostringstream costs;
+        int first = -1;
+        for (int k = 0; k < num_steps; ++k) {
+          if (first >= 0 && (!by_cost || k > first + options.guard_cost_extra_tries)) break;
+          st = try_step(mask_of(steps[k]), steps[k]);
           if (!st) return st;
-          if (kept) {
-            any = true;
-            break;
+          GuardTry t;
+          t.helps = fewer(for_features);
+          t.pairs_left = trial_features + trial_others;
+          if (t.helps && first < 0) first = k;
+          if (t.helps && by_cost) {
+            t.cost = step_cost();
+            costs << (costs.tellp() > 0 ? ", " : "") << k << ": " << t.pairs_left << " pairs, +"
+                  << 1e6 * t.cost / static_cast<double>(scan_points.size()) << " um";
           }
+          tries.push_back(t);
+        }
+        const int chosen = choose_guard_step(tries, by_cost, options.guard_cost_extra_tries);
+        if (chosen >= 0) {
+          if (chosen + 1 != static_cast<int>(tries.size())) {
+            // Tried again: the steps are deterministic from the kept state.
+            st = try_step(mask_of(steps[chosen]), steps[chosen]);
+            if (!st) return st;
+          }
+          keep_step(mask_of(steps[chosen]), steps[chosen]);
+          if (by_cost) {
+            std::fill(best_distance.begin(), best_distance.end(), -1.0);
+            st = refit_bvh(level, best_tree);
+            if (!st) return st;
+          }
+          any = true;
+          steps_note << (steps_note.tellp() > 0 ? "; " : "") << (for_features ? "lips/ears " : "elsewhere ")
+                     << cluster.size() << " corners: " << describe(steps[chosen]) << " (" << before << " -> "
+                     << (for_features ? best_features : best_others) << " pairs";
+          if (by_cost) steps_note << "; step " << chosen << " of those that help: " << costs.str();
+          steps_note << ")";
         }
         if ((for_features ? best_features : best_others) == 0) break;
       }
@@ -535,7 +634,7 @@ Status guard_feature_crossings(const FitHeadOptions& options, const HeadAnnotati
        << out.feature_guard.relaxed_vertices << " control vertices there were dropped";
   if (out.feature_guard.moved_vertices)
     note << " and " << out.feature_guard.moved_vertices << " of them smoothed or moved toward the generic shape";
-  note << " (" << best_features << " and " << best_others << " pairs left)";
+  note << " (" << best_features << " and " << best_others << " pairs left); steps kept: " << steps_note.str();
   out.notes.push_back(note.str());
   return Status::success();
 }
@@ -1380,8 +1479,8 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
   if (!st) return with_context(st, "displacements (ears)");
   bool guard_searched = false;
   // The neck's control vertices stay where the neck's fit put them, when it ran.
-  st = guard_feature_crossings(options, ann, topo, neck_shift.empty() ? std::vector<char>{} : in_neck, out, relief_tree,
-                               guard_searched);
+  st = guard_feature_crossings(options, ann, topo, neck_shift.empty() ? std::vector<char>{} : in_neck,
+                               fitted.positions, dopt.max_distance, out, relief_tree, guard_searched);
   if (!st) return with_context(st, "displacements (lips and ears)");
   if (options.guard_remeasure && options.levels >= 2 && out.feature_guard.moved_vertices > 0) {
     // FitHeadOptions::guard_remeasure: the detail over the control vertices
@@ -1401,8 +1500,8 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
     if (!st) return with_context(st, "displacements (measured again)");
     out.feature_guard = FitHeadResult::FeatureGuard{};
     bool searched_again = false;
-    st = guard_feature_crossings(options, ann, topo, neck_shift.empty() ? std::vector<char>{} : in_neck, out,
-                                 relief_tree, searched_again);
+    st = guard_feature_crossings(options, ann, topo, neck_shift.empty() ? std::vector<char>{} : in_neck,
+                                 fitted.positions, dopt.max_distance, out, relief_tree, searched_again);
     if (!st) return with_context(st, "displacements (measured again)");
     if (out.feature_guard.pairs_after > first.pairs_after ||
         out.feature_guard.other_pairs_after > first.other_pairs_after) {

@@ -295,6 +295,13 @@ struct FitHeadOptions {
   // again over the moved control mesh (its dropped detail back), the guard
   // runs again on that, and the result is kept when it leaves no more pairs.
   bool guard_remeasure = true;
+  // The guard's choice by cost: per cluster, the first step of the ladder
+  // that leaves fewer pairs and up to guard_cost_extra_tries steps after it
+  // are tried, and of those leaving no more pairs than the first, the one
+  // whose level lies least farther from the scan's measured points (summed
+  // over the points near what it moved) is kept (false: the first).
+  bool guard_choose_by_cost = true;
+  int guard_cost_extra_tries = 3;
   // The global fit's scan-to-mesh term E_back (GlobalFitOptions::back_*:
   // control vertices over scanned skin held to the scan's surface under
   // them; ears and pockets left out) with this weight. On face captures,
@@ -425,6 +432,20 @@ Status thin_scan_for_fit(const PointCloud& scan, const GenericHead& generic, con
 Status fit_head_thinned(const PointCloud& thinned, const ScanThinning& thinning, const GenericHead& generic,
                         const FitHeadOptions& options, FitHeadResult& out, const FitStageObserver& observer = {},
                         const ProgressFn& progress = {});
+
+// One step of the crossing guard's ladder as tried on a cluster: whether
+// it leaves fewer pairs (FitHeadOptions::guard_feature_crossings' rule),
+// the pairs it leaves and what it loses (guard_choose_by_cost).
+struct GuardTry {
+  bool helps = false;
+  int pairs_left = 0;
+  double cost = 0;
+};
+// The step the guard keeps among `tries` (ladder order, least change
+// first): -1 when none helps; else the first that helps, or (by_cost) of
+// it and the extra_tries steps after it, the one losing least among those
+// that help and leave no more pairs than it (the first of equals).
+int choose_guard_step(const std::vector<GuardTry>& tries, bool by_cost, int extra_tries);
 
 // The mouth bag follows its lips (FitHeadOptions::carry_mouth_bag). The bag
 // is held where local fitting put it during global fitting (E_constraint:

@@ -619,3 +619,27 @@ TEST_CASE("fit_head: a faired generic head is aligned as its skin as cast, and f
   REQUIRE(fit_head(s.scan, own, o, by_own_skin).ok());
   CHECK(by_own_skin.generic_to_head.A != by_cast.generic_to_head.A);
 }
+
+TEST_CASE("choose_guard_step: by cost, the cheaper step that clears as many pairs is kept, not the first") {
+  // A cluster's ladder as tried: step 0 does not help, step 1 clears the
+  // pairs at a cost of 5, step 2 clears them at 2, step 3 clears them at 1
+  // but lies beyond one extra try, step 4 costs less but leaves a pair.
+  std::vector<GuardTry> tries(5);
+  tries[0] = {false, 6, 0.0};
+  tries[1] = {true, 0, 5.0};
+  tries[2] = {true, 0, 2.0};
+  tries[3] = {true, 0, 1.0};
+  tries[4] = {true, 1, 0.5};
+  CHECK(choose_guard_step(tries, false, 3) == 1);  // the ladder's rule: the first that helps
+  CHECK(choose_guard_step(tries, true, 0) == 1);   // no extra try: the same
+  CHECK(choose_guard_step(tries, true, 1) == 2);   // the cheaper within one extra try
+  CHECK(choose_guard_step(tries, true, 3) == 3);   // step 4 leaves more pairs than the first
+  tries[2].helps = false;                          // a cheap step that does not help is never kept
+  tries[3].helps = false;
+  CHECK(choose_guard_step(tries, true, 1) == 1);
+  for (GuardTry& t : tries) t.helps = false;
+  CHECK(choose_guard_step(tries, true, 3) == -1);
+  // Equal costs: the first (the least change).
+  std::vector<GuardTry> equal = {{true, 0, 1.0}, {true, 0, 1.0}};
+  CHECK(choose_guard_step(equal, true, 1) == 0);
+}
