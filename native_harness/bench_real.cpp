@@ -66,6 +66,12 @@
 // and --fit-guard-cost-tries N: the guard's step chosen by what it loses
 // among the first that helps and N after it
 // (FitHeadOptions::guard_choose_by_cost, guard_cost_extra_tries).
+// --fit-face-screen I,K: the face refinement's starts screened after I
+// iterations, the K best going on (FaceRefineOptions::screen_iterations,
+// screen_keep; 0: off); --fit-orient-screen-points N: the orientation
+// check's screening on N of its samples (OrientationOptions::screen_points).
+// With --fit-real-align-only each copy's pose line also prints the final
+// map and the orientation check's outcome, to compare two runs to the bit.
 #include "command.h"
 #include "fit_table.h"
 #include "generic_head_choice.h"
@@ -398,6 +404,14 @@ int run(const Args& args) {
     for (const std::string& item : split_list(args.get("fit-align-coarse", "none")))
       if (item != "none") options.align.coarse_resolutions.push_back(std::atoi(item.c_str()));
   }
+  // --fit-face-screen, --fit-orient-screen-points: see the header comment.
+  if (args.has("fit-face-screen")) {
+    const std::vector<std::string> items = split_list(args.get("fit-face-screen", "0"));
+    options.face_refine.screen_iterations = items.empty() ? 0 : std::atoi(items[0].c_str());
+    if (items.size() > 1) options.face_refine.screen_keep = std::atoi(items[1].c_str());
+  }
+  if (!args.get_int("fit-orient-screen-points", options.orientation.screen_points, options.orientation.screen_points))
+    return 1;
   // --fit-align-tolerance T: Powell's relative decrease per sweep (AlignOptions::tolerance).
   if (args.has("fit-align-tolerance")) options.align.tolerance = std::atof(args.get("fit-align-tolerance", "1e-4").c_str());
   if (args.has("fit-ear-refit-late")) options.ear_refit_after_rounds = false;
@@ -474,6 +488,15 @@ int run(const Args& args) {
             if (a.face_distance >= 0) std::printf(" face %.4g", a.face_distance);
           }
         std::printf(", near %.1f %%", 100 * r.near_fraction);
+        if (align_only) {  // the final map and the orientation check's outcome, to compare runs to the bit
+          const Mat3& A = r.generic_to_head.A;
+          const Vec3& t = r.generic_to_head.t;
+          std::printf("; map %.12g %.12g %.12g %.12g %.12g %.12g %.12g %.12g %.12g | %.12g %.12g %.12g", A(0, 0),
+                      A(0, 1), A(0, 2), A(1, 0), A(1, 1), A(1, 2), A(2, 0), A(2, 1), A(2, 2), t.x(), t.y(), t.z());
+          std::printf("; orientation %s %s, scores %.6g / %.6g", r.orientation.differs ? "turned" : "kept",
+                      r.orientation.given_clearly_best ? "(given clearly best)" : "", r.orientation.score_best,
+                      r.orientation.score_given);
+        }
         for (const FaceRefineCandidate& k : r.face_refine.candidates)
           std::printf("%s%+.0f: %.1f", &k == &r.face_refine.candidates.front() ? "; pitches " : ", ", k.pitch_deg,
                       100 * k.measure);

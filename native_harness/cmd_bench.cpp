@@ -28,7 +28,7 @@ int run_bench(const Args& args) {
            "fit-restarts", "fit-restore-rings", "fit-scan-noise-mm", "fit-seed", "fit-seeds", "fit-separate-rounds",
            "fit-separation-repeats", "fit-smooth-agreement", "fit-smooth-iterations", "fit-smooth-levels",
            "fit-smooth-max-radius", "fit-smooth-region-rings", "fit-smooth-strength", "fit-stations",
-           "fit-surface-edges", "fit-thin-cells", "fit-untangle-level", "fit-guard-others", "fit-guard-remeasure", "fit-pleat-undo", "fit-guard-by-cost", "fit-guard-cost-tries", "photos-seeds", "photos-cameras", "photos-noise-px", "photos-map", "photos-stiffness-scale", "photos-first-seed",
+           "fit-surface-edges", "fit-thin-cells", "fit-untangle-level", "fit-guard-others", "fit-guard-remeasure", "fit-pleat-undo", "fit-guard-by-cost", "fit-guard-cost-tries", "fit-face-screen", "fit-orient-screen-points", "photos-seeds", "photos-cameras", "photos-noise-px", "photos-map", "photos-stiffness-scale", "photos-first-seed",
            "photos-silhouettes", "photos-lambda-sil", "photos-mask-grow", "photos-sil-facets", "photos-stereo", "photos-lambda-features", "photos-detected", "photos-focal-px", "photos-shape-sigma", "photos-view-cos", "photos-drop", "photos-detected-map", "photos-focal-sigma", "photos-true-cameras", "photos-no-slide", "photos-no-slide-sigma", "photos-coarse", "photos-schedule", "photos-follow", "photos-no-lips", "photos-descent-iterations", "photos-depth-scale", "photos-depth-0", "photos-depth-yaw2", "photos-contours", "photos-contour-lambda", "photos-lids", "photos-pulls", "photos-pulls-by-photo", "photos-focal-jackknife"}))
     return 2;
   const auto only_list = args.get_all("only");

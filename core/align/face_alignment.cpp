@@ -486,7 +486,8 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
   Status st = check_cloud(cloud, "guess_orientation");
   if (!st) return st;
   if (!(o.better_ratio > 0 && o.better_ratio <= 1) || o.points < kMinPoints || o.iterations < 1 ||
-      o.final_points < kMinPoints || o.candidates < 1 || o.screen_iterations < 0 || o.screen_keep < 1)
+      o.final_points < kMinPoints || o.candidates < 1 || o.screen_iterations < 0 || o.screen_keep < 1 ||
+      (o.screen_points != 0 && o.screen_points < kMinPoints))
     return Status::error(ErrorCode::InvalidInput, "guess_orientation: an option is out of range");
   if (generic.triangles.empty())
     return Status::error(ErrorCode::Empty, "guess_orientation: the generic head has no triangles");
@@ -500,6 +501,12 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
   // and stratified samples weigh the neck and the back of a synthetic head
   // more, which made every whole-head fit run all 48 starts (+1.6 s CPU).
   const std::vector<Vec3> samples = random_subset(cloud.positions, o.points, o.seed);
+  // The screening's samples (OrientationOptions::screen_points): the first
+  // of the same shuffle, so a subset of `samples`.
+  const bool fewer = o.screen_iterations > 0 && o.screen_iterations < o.iterations && o.screen_points > 0 &&
+                     o.screen_points < static_cast<int>(samples.size());
+  const std::vector<Vec3> screen_samples =
+      fewer ? std::vector<Vec3>(samples.begin(), samples.begin() + o.screen_points) : samples;
   // +y first: its first yaw is the given orientation (see accept_given_fraction).
   const std::vector<Vec3> axes = {Vec3::UnitY(), Vec3::UnitX(), -Vec3::UnitX(), -Vec3::UnitY(),
                                   Vec3::UnitZ(), -Vec3::UnitZ()};
@@ -516,6 +523,7 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
   std::vector<IcpProgress> icps(num_starts);
   std::vector<IcpRun> runs(num_starts);
   std::vector<char> ran(num_starts, 0);
+  std::vector<Similarity> initial(num_starts);  // each start's pose, for screen_points
   // Screening (OrientationOptions::screen_iterations): the first
   // `first_stage` iterations of every start, then only the best go on.
   const int first_stage = o.screen_iterations > 0 ? std::min(o.screen_iterations, o.iterations) : o.iterations;
@@ -531,7 +539,11 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
     IcpProgress& icp = icps[start];
     ran[start] = search.start(samples, Q, 1.0, icp.next);
     if (!ran[start]) return;
-    continue_icp(search.tree, samples, icp, fo, start == 0 ? o.iterations : first_stage, search.clamp, false);
+    initial[start] = icp.next;
+    if (start == 0)
+      continue_icp(search.tree, samples, icp, fo, o.iterations, search.clamp, false);
+    else
+      continue_icp(search.tree, screen_samples, icp, fo, first_stage, search.clamp, false);
     runs[start] = icp.run;
   };
   const auto is_consistent = [&](const IcpRun& run) {
@@ -589,6 +601,10 @@ Status guess_orientation(const TriMesh& generic, const HeadAnnotations& ann, con
     }
     parallel_for(0, static_cast<int>(go_on.size()), 1, [&](int i, int) {
       IcpProgress& icp = icps[go_on[i]];
+      if (fewer) {  // run again from its start on all samples: the full search's bits for this start
+        icp = IcpProgress{};
+        icp.next = initial[go_on[i]];
+      }
       continue_icp(search.tree, samples, icp, fo, o.iterations, search.clamp, false);
       runs[go_on[i]] = icp.run;
     });

@@ -145,6 +145,12 @@ struct OrientationOptions {
   // the real and turned face patches (tests/align; docs/design/align.md).
   int screen_iterations = 10;
   int screen_keep = 8;
+  // The screening on this many of the `points` samples (0: all); the starts
+  // kept run again from their start on all `points`: the full search's bits
+  // per kept start. The 25 real-scan copies keep every map to the bit, ~0.25 s
+  // less each; continuing from the screened pose moved Fran's turn and one
+  // copy's fit (docs/design/align.md, session 50).
+  int screen_points = 150;
   // The best `candidates` distinct coarse results and the best one
   // consistent with the given orientation are scored on final_points
   // samples (all points when the cloud has no more), the decision is made

@@ -99,6 +99,12 @@ struct Run {
   Vec3 translation = Vec3::Zero();
   double score = 0, rms = 0, kept = 0, near = 0;
   int iterations = 0;
+  // What a run needs to go on where it stopped (the same bits as running
+  // through): the last trimmed RMS, whether it converged, and each
+  // sample's nearest scan triangle of the last iteration.
+  double previous = -1;
+  bool done = false;
+  std::vector<int> near_triangle;
 };
 
 // The BVH of a scan that came as a mesh (what: the caller, for messages).
@@ -156,6 +162,7 @@ Status refine_alignment_on_face(const TriMesh& generic, const HeadAnnotations& a
     return Status::error(ErrorCode::InvalidInput, "face refinement: bad alignment or diagonal");
   if (o.iterations < 1 || !(o.min_keep_fraction > 0 && o.min_keep_fraction <= 1) || !(o.score_clamp_fraction > 0) ||
       o.pitch_starts_deg.empty() || o.yaw_starts_deg.empty() || o.shift_starts.empty() || o.samples < 10 ||
+      o.screen_iterations < 0 || o.screen_keep < 1 ||
       (whole && (o.candidate_pitches_deg.empty() || o.candidate_iterations < 1)))
     return Status::error(ErrorCode::InvalidInput, "face refinement: bad options");
   for (const Vec3& p : cloud)
@@ -178,19 +185,17 @@ Status refine_alignment_on_face(const TriMesh& generic, const HeadAnnotations& a
   const Vec3 look = ann.look.normalized();
   const Vec3 side = ann.up.normalized().cross(look).normalized();  // the generic's horizontal axis
 
-  auto run_from = [&](const Mat3& A0, const Vec3& t0, int iterations) {
-    Run run;
-    run.linear = A0;
-    run.translation = t0;
-    std::vector<Vec3> model(n), target(n);
-    std::vector<double> dist(n);
-    std::vector<size_t> order(n);
+  // Runs `run` on until it has made `until` iterations in all or converged.
+  std::vector<Vec3> model(n), target(n);
+  std::vector<double> dist(n), sorted(n);
+  std::vector<size_t> order(n);
+  auto advance = [&](Run& run, int until) {
     // Each sample's nearest scan triangle of the last iteration: where the
     // next search starts (closest_point_near gives closest_point's answer
     // to the bit, the hint only prunes the tree).
-    std::vector<int> near_triangle(n, -1);
-    double previous = -1;
-    for (int it = 0; it < iterations; ++it) {
+    std::vector<int>& near_triangle = run.near_triangle;
+    if (near_triangle.size() != size_t(n)) near_triangle.assign(n, -1);
+    for (int it = run.iterations; it < until && !run.done; ++it) {
       for (int i = 0; i < n; ++i) {
         model[i] = run.linear * face[i] + run.translation;
         if (!surface.empty()) {
@@ -208,7 +213,6 @@ Status refine_alignment_on_face(const TriMesh& generic, const HeadAnnotations& a
       }
       std::iota(order.begin(), order.end(), size_t(0));
       std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return dist[a] < dist[b]; });
-      std::vector<double> sorted(n);
       for (int i = 0; i < n; ++i) sorted[i] = dist[order[i]];
       // The pairs up to the knee of the sorted residuals pull.
       const size_t knee = residual_knee(sorted);
@@ -223,8 +227,11 @@ Status refine_alignment_on_face(const TriMesh& generic, const HeadAnnotations& a
       run.score = score / n;
       run.near = double(near) / n;
       run.iterations = it + 1;
-      if (keep < 4 || (previous >= 0 && std::fabs(previous - run.rms) <= o.relative_tolerance * previous)) break;
-      previous = run.rms;
+      if (keep < 4 || (run.previous >= 0 && std::fabs(run.previous - run.rms) <= o.relative_tolerance * run.previous)) {
+        run.done = true;
+        break;
+      }
+      run.previous = run.rms;
       Eigen::Matrix3Xd src(3, keep), dst(3, keep);
       for (size_t k = 0; k < keep; ++k) {
         src.col(k) = model[order[k]];
@@ -233,10 +240,19 @@ Status refine_alignment_on_face(const TriMesh& generic, const HeadAnnotations& a
       const Eigen::Matrix4d M = Eigen::umeyama(src, dst, true);
       const Mat3 sR = M.topLeftCorner<3, 3>();
       const double s = sR.col(0).norm();  // (sqrt is exact: the same in wasm)
-      if (!(s > 0) || !std::isfinite(s)) break;
+      if (!(s > 0) || !std::isfinite(s)) {
+        run.done = true;
+        break;
+      }
       run.linear = sR * run.linear;
       run.translation = sR * run.translation + Vec3(M.topRightCorner<3, 1>());
     }
+  };
+  auto run_from = [&](const Mat3& A0, const Vec3& t0, int iterations) {
+    Run run;
+    run.linear = A0;
+    run.translation = t0;
+    advance(run, iterations);
     return run;
   };
 
@@ -270,19 +286,37 @@ Status refine_alignment_on_face(const TriMesh& generic, const HeadAnnotations& a
   Vec3 centre_iso = Vec3::Zero();  // the isotropic map's face centre
   for (const Vec3& g : face) centre_iso += isotropic * g;
   centre_iso /= n;
+  // With screening (FaceRefineOptions::screen_iterations) every start runs
+  // that far first and only the screen_keep best by the clamped score go on.
   auto best_of_starts = [&](double candidate, int iterations) {
-    bool found = false;
-    Run winner;
+    std::vector<Run> runs;
     for (double shift : o.shift_starts)
       for (double pitch : o.pitch_starts_deg)
         for (double yaw : o.yaw_starts_deg) {
           const Mat3 turn = Mat3(Eigen::AngleAxisd(yaw * kDeg, up_world)) *
                             Mat3(Eigen::AngleAxisd((pitch + candidate) * kDeg, side_world));
           // The isotropic map, placed so that the face's centre stays where it was.
-          const Run r = run_from(turn * isotropic, centre - turn * centre_iso + shift * width * side_world, iterations);
-          out.iterations += r.iterations;
-          if (!found || r.score < winner.score) winner = r, found = true;
+          Run r;
+          r.linear = turn * isotropic;
+          r.translation = centre - turn * centre_iso + shift * width * side_world;
+          runs.push_back(std::move(r));
         }
+    const int count = static_cast<int>(runs.size());
+    std::vector<char> goes_on(count, 1);
+    if (o.screen_iterations > 0 && o.screen_iterations < iterations && o.screen_keep < count) {
+      for (Run& r : runs) advance(r, o.screen_iterations);
+      std::vector<int> rank(count);
+      std::iota(rank.begin(), rank.end(), 0);
+      std::stable_sort(rank.begin(), rank.end(), [&](int a, int b) { return runs[a].score < runs[b].score; });
+      for (int k = o.screen_keep; k < count; ++k) goes_on[rank[k]] = 0;
+    }
+    bool found = false;
+    Run winner;
+    for (int k = 0; k < count; ++k) {
+      if (goes_on[k]) advance(runs[k], iterations);
+      out.iterations += runs[k].iterations;
+      if (goes_on[k] && (!found || runs[k].score < winner.score)) winner = runs[k], found = true;
+    }
     return winner;
   };
   if (!whole) {

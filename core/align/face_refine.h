@@ -68,6 +68,13 @@ struct FaceRefineOptions {
   // (a beard and a beret carry face-like surface: docs/design/align.md).
   std::vector<double> candidate_pitches_deg = {0.0, 15.0, -15.0, 30.0, -30.0};
   int candidate_iterations = 20;
+  // Screening (successive halving): every start runs screen_iterations
+  // first, and only the screen_keep best by the clamped score go on to
+  // `iterations` (or candidate_iterations) and into the choice; the same
+  // result to the bit whenever the start that wins the full search is
+  // among them. 0: every start runs through.
+  int screen_iterations = 0;
+  int screen_keep = 3;
 };
 
 // One pitch candidate, as the whole-scan measure rated it.

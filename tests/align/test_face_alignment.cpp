@@ -380,6 +380,29 @@ TEST_CASE("guess_orientation: screening the starts gives the full search's guess
   }
 }
 
+// OrientationOptions::screen_points (150 by default): the screening on
+// fewer samples turns the lying patch as the screening on all 600 does, to
+// the bit (the kept starts run again from their start on all samples); the
+// real scans are checked by the screening tests below.
+TEST_CASE("guess_orientation: screening on fewer samples turns a lying patch as the full search does") {
+  const Mat3 lying = Eigen::AngleAxisd(M_PI / 2, Vec3::UnitX()).toRotationMatrix();
+  PointCloud turned;
+  for (const Vec3& p : face_patch(0.08, 3000, 3).positions) turned.positions.push_back(lying * p);
+  OrientationOptions all, fewer;
+  all.screen_points = 0;
+  fewer.screen_points = 150;
+  OrientationGuess full, screened;
+  REQUIRE(guess_orientation(generic().mesh, generic().annotations, turned, all, full).ok());
+  REQUIRE(guess_orientation(generic().mesh, generic().annotations, turned, fewer, screened).ok());
+  CHECK(full.differs);
+  CHECK(screened.differs);
+  CHECK(screened.rotation == full.rotation);
+  CHECK(screened.score_best == full.score_best);
+  fewer.screen_points = 5;
+  CHECK(guess_orientation(generic().mesh, generic().annotations, turned, fewer, screened).code ==
+        ErrorCode::InvalidInput);
+}
+
 // The busts too (issue 35): Gutenberg and Plato. Their decisions are
 // close calls (Plato's best other orientation scores 0.811 of the given
 // one's, against better_ratio 0.8), so a cheaper screening that keeps

@@ -434,3 +434,35 @@ TEST_CASE("face refinement: from a wrong pitch, the candidate with most of the s
   CHECK(chosen.candidates[chosen.chosen].pitch_deg < 0);
   for (const FaceRefineCandidate& c : chosen.candidates) CHECK(c.measure <= chosen.candidates[chosen.chosen].measure);
 }
+
+// FaceRefineOptions::screen_iterations (successive halving): a screened
+// start that goes on gives the bits it gives run through (every start kept:
+// the same result, iterations and all); with a few kept, the hat-and-beard
+// scene's winner is among them (the same result in fewer iterations); bad
+// screening options are refused.
+TEST_CASE("face refinement: screening the starts keeps the winner's result to the bit") {
+  const GenericHead& generic = test::generic_head();
+  const HatAndBeard scene = hat_and_beard(generic.mesh, generic.annotations);
+  auto refine = [&](int screen_iterations, int screen_keep, FaceRefineResult& r) {
+    FaceRefineOptions o;
+    o.screen_iterations = screen_iterations;
+    o.screen_keep = screen_keep;
+    return refine_alignment_on_face(generic.mesh, generic.annotations, scene.cloud, {}, scene.start_linear,
+                                    scene.start_translation, scene.diag, o, r);
+  };
+  FaceRefineResult full, all_kept, few_kept;
+  REQUIRE(refine(0, 3, full).ok());
+  REQUIRE(refine(10, 27, all_kept).ok());
+  REQUIRE(refine(10, 3, few_kept).ok());
+  CHECK(all_kept.linear == full.linear);
+  CHECK(all_kept.translation == full.translation);
+  CHECK(all_kept.score == full.score);
+  CHECK(all_kept.iterations == full.iterations);
+  INFO("iterations: full " << full.iterations << ", 3 kept " << few_kept.iterations);
+  CHECK(few_kept.linear == full.linear);
+  CHECK(few_kept.translation == full.translation);
+  CHECK(few_kept.iterations < full.iterations);
+  FaceRefineResult bad;
+  CHECK(refine(-1, 3, bad).code == ErrorCode::InvalidInput);
+  CHECK(refine(10, 0, bad).code == ErrorCode::InvalidInput);
+}
