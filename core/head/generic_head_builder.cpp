@@ -1499,14 +1499,20 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
                         (from_midline == 2 && vi.row >= 10 && vi.row <= 13);
       fixed[v] = vi.part != Part::Grid || vi.col == 0 || nose || from_midline >= kBackDiagonalColumn;
     }
-    for (int side : {1, -1}) {
-      for (int v : rim_top[side]) fixed[v] = 1;
-      for (int v : rim_bottom[side]) fixed[v] = 1;
+    for (int side : {1, -1})
       for (int r = kEarLowRow; r <= kEarHighRow; ++r)
         for (int c = kEarCol0; c <= kEarCol1; ++c) fixed[g(r, side * c)] = 1;
+    // The eye rims and lip lines, and (fair_keep_rim_rings) that many rings
+    // round them, stay as cast, so the faired grid meets the creases as the
+    // cast one does.
+    std::vector<int> rims(upper_line.begin(), upper_line.end());
+    rims.insert(rims.end(), lower_line.begin(), lower_line.end());
+    for (int side : {1, -1}) {
+      rims.insert(rims.end(), rim_top[side].begin(), rim_top[side].end());
+      rims.insert(rims.end(), rim_bottom[side].begin(), rim_bottom[side].end());
     }
-    for (int v : upper_line) fixed[v] = 1;
-    for (int v : lower_line) fixed[v] = 1;
+    const std::vector<int> from_rims = ring_distances(topo, rims, options.fair_keep_rim_rings);
+    for (int v = 0; v < nv; ++v) fixed[v] = fixed[v] || from_rims[v] >= 0;
     std::vector<std::vector<int>> neighbours(nv);
     for (const Tri& t : mesh.triangles)
       for (int k = 0; k < 3; ++k) {
@@ -1514,23 +1520,6 @@ Status build_generic_head(const GenericHeadBuildOptions& options, GenericHead& o
         neighbours[t[k]].push_back(t[(k + 2) % 3]);
       }
     for (auto& n : neighbours) n = sorted_unique(n);
-    // fair_keep_rim_rings: the rings round the eye rims and lip lines stay
-    // as cast too, so the faired grid meets the creases as the cast one does.
-    std::vector<char> rim(nv, 0);
-    for (int side : {1, -1}) {
-      for (int v : rim_top[side]) rim[v] = 1;
-      for (int v : rim_bottom[side]) rim[v] = 1;
-    }
-    for (int v : upper_line) rim[v] = 1;
-    for (int v : lower_line) rim[v] = 1;
-    for (int ring = 0; ring < options.fair_keep_rim_rings; ++ring) {
-      std::vector<char> grown = rim;
-      for (int v = 0; v < nv; ++v)
-        if (rim[v])
-          for (int w : neighbours[v]) grown[w] = 1;
-      rim = grown;
-    }
-    for (int v = 0; v < nv; ++v) fixed[v] = fixed[v] || rim[v];
     std::vector<Vec3>& P = mesh.positions;
     for (int it = 0; it < options.fair_iterations; ++it)
       for (double lambda : {0.5, -0.53}) {
