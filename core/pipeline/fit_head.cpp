@@ -433,8 +433,7 @@ Status guard_feature_crossings(const FitHeadOptions& options, const HeadAnnotati
   const bool by_cost = options.guard_choose_by_cost && !scan_points.empty();
   MeshBvh best_tree;
   if (by_cost) {
-    TriMesh before = level;
-    st = build_bvh(before, best_tree);
+    st = build_bvh(level, best_tree);
     if (!st) return st;
   }
   std::vector<double> best_distance(by_cost ? scan_points.size() : 0, -1.0);  // -1: not yet measured
@@ -586,12 +585,13 @@ Status guard_feature_crossings(const FitHeadOptions& options, const HeadAnnotati
         }
         const int chosen = choose_guard_step(tries, by_cost, options.guard_cost_extra_tries);
         if (chosen >= 0) {
+          const std::vector<char> mask = mask_of(steps[chosen]);
           if (chosen + 1 != static_cast<int>(tries.size())) {
             // Tried again: the steps are deterministic from the kept state.
-            st = try_step(mask_of(steps[chosen]), steps[chosen]);
+            st = try_step(mask, steps[chosen]);
             if (!st) return st;
           }
-          keep_step(mask_of(steps[chosen]), steps[chosen]);
+          keep_step(mask, steps[chosen]);
           if (by_cost) {
             std::fill(best_distance.begin(), best_distance.end(), -1.0);
             st = refit_bvh(level, best_tree);
