@@ -17,6 +17,7 @@
 // --fit-no-parents-to-smooth, --fit-separation-repeats N, --fit-restarts N (fold_limit.h), --fit-seeds N, --fit-seed N (seed N alone),
 // --fit-ear-refit-late (FitHeadOptions::ear_refit_after_rounds off),
 // --fit-ear-give-up N (FitHeadOptions::ear_refit_give_up_pairs),
+// --fit-neck-guard 0|1 (FitHeadOptions::scanned_neck_smooth_guard),
 // --fit-points N (scans of N points instead of 300k), --fit-thin-cells X (FitHeadOptions::thin_cells_per_edge; 0: never thinned), --fit-back off|face-only|always and
 // --fit-back-weight W (the global fit's scan-to-mesh term, FitHeadOptions::back_term),
 // --fit-smooth-region-rings N (FoldLimitOptions::smooth_region_rings, -1: off),
@@ -341,6 +342,11 @@ int run(const Args& args) {
     opt.displacement_below_neck_cut = below_cut_mm / 1e3;
     if (args.has("fit-ear-refit-late")) opt.ear_refit_after_rounds = false;
     if (!args.get_int("fit-ear-give-up", opt.ear_refit_give_up_pairs, opt.ear_refit_give_up_pairs, 0)) return 1;
+    {
+      int neck_guard = opt.scanned_neck_smooth_guard ? 1 : 0;
+      if (!args.get_int("fit-neck-guard", neck_guard, neck_guard, 0, 1)) return 1;
+      opt.scanned_neck_smooth_guard = neck_guard == 1;
+    }
     if (args.has("fit-guard-always")) opt.smooth_guard = FitHeadOptions::SmoothGuard::Always;
     if (args.has("fit-guard-face-only")) opt.smooth_guard = FitHeadOptions::SmoothGuard::FaceOnlyScans;
     if (args.has("fit-guard-off")) opt.smooth_guard = FitHeadOptions::SmoothGuard::Off;

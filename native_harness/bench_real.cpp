@@ -52,6 +52,8 @@
 // (FitHeadOptions::ear_refit_warm_rounds; 0: the whole fit again, cold).
 // --fit-ear-refit-late: the ear refit decided after each fit's guard
 // (FitHeadOptions::ear_refit_after_rounds off), to compare.
+// --fit-neck-guard 0|1: the scanned neck's fit with the smooth-surface
+// guard (FitHeadOptions::scanned_neck_smooth_guard).
 // --fit-ear-give-up N: the bound ear refit given up after its rounds when
 // its ears cross there in more than N pairs
 // (FitHeadOptions::ear_refit_give_up_pairs; 0: judged at its end).
@@ -416,6 +418,11 @@ int run(const Args& args) {
   if (args.has("fit-align-tolerance")) options.align.tolerance = std::atof(args.get("fit-align-tolerance", "1e-4").c_str());
   if (args.has("fit-ear-refit-late")) options.ear_refit_after_rounds = false;
   if (!args.get_int("fit-ear-give-up", options.ear_refit_give_up_pairs, options.ear_refit_give_up_pairs, 0)) return 1;
+  {
+    int neck_guard = options.scanned_neck_smooth_guard ? 1 : 0;
+    if (!args.get_int("fit-neck-guard", neck_guard, neck_guard, 0, 1)) return 1;
+    options.scanned_neck_smooth_guard = neck_guard == 1;
+  }
   if (!parse_back_term(args, options)) return 1;
   const std::string dump = args.get("fit-real-dump", "");
   if (args.has("fit-data-level")) options.whole_head_data_level = -1;  // on every scan, as given

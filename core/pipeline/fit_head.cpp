@@ -1307,6 +1307,7 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
     // searched, and its relief takes over the head's relief tree and hands
     // it back refitted (the same tree, no level-3 build).
     neck_options.smooth_guard_crease_max_edges = 0;
+    if (!options.scanned_neck_smooth_guard) neck_options.smooth_guard_level = 0;
     neck_terms.relief_start_tree = &relief_tree;
     std::vector<Vec3> all = skin_pts;
     all.insert(all.end(), neck_pts.begin(), neck_pts.end());

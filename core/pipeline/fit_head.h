@@ -157,6 +157,14 @@ struct FitHeadOptions {
   // before it was on; docs/design/fit_real_scans.md).
   bool fit_scanned_neck = true;
   double scanned_neck_max_angle_deg = 45.0;
+  // The scanned neck's fit runs the global fit's smooth-surface guard
+  // (GlobalFitOptions::smooth_guard_*: its passes on all points, the fold
+  // and pleat relief) as the head's fit does. Off: its round and its pass
+  // on all points only; crossings the neck leaves on the finest level are
+  // the crossing guard's (guard_other_crossings), as anywhere else.
+  // Figures (CPU and the fits, 25 copies): docs/design/fit_real_scans.md,
+  // session 51.
+  bool scanned_neck_smooth_guard = false;
   // Scans that come as meshes (PointCloud::faces): their triangles are
   // sampled every surface_sample_edges x the finest level's mean edge and
   // the samples are measured with the scan's points (multires/

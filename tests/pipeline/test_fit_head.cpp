@@ -295,6 +295,17 @@ TEST_CASE("fit_head: a scanned neck thicker than the generic one is fitted where
                    << 1e3 * d_off << " mm without");
   CHECK(d_on < 0.001);
   CHECK(d_off > 0.003);
+  // The neck's fit with the smooth-surface guard (main's before session 51)
+  // lies on the same points: the guard's work is at the held head.
+  REQUIRE(!on.scanned_neck_smooth_guard);
+  FitHeadOptions guarded = on;
+  guarded.scanned_neck_smooth_guard = true;
+  FitHeadResult r_guarded;
+  REQUIRE(fit_head(scan, s.generic, guarded, r_guarded).ok());
+  const double d_guarded = median_distance(r_guarded.level_meshes.back());
+  INFO("with the neck's fit guarded: " << 1e3 * d_guarded << " mm");
+  CHECK(d_guarded < 0.001);
+  CHECK(std::abs(d_on - d_guarded) < 0.0002);
   FitHeadResult bad;
   on.scanned_neck_max_angle_deg = -1;
   const Status st = fit_head(scan, s.generic, on, bad);
