@@ -3,6 +3,8 @@
 #include "command.h"
 #include "expression_head.h"
 
+#include <cstdio>
+
 #include "anim/face_shapes.h"
 
 #include "io/io.h"
@@ -43,7 +45,7 @@ int run_render(const Args& args) {
   if (!only_known_options(kName, args,
                           {"mesh", "points", "texture", "wireframe", "edges-only", "view", "size", "out",
                            "point-size", "supersample", "no-ao", "flat", "yaw", "pitch", "camera-out", "expression",
-                           "project", "level", "columns", "face"}))
+                           "project", "level", "columns", "face", "lid-seal"}))
     return 2;
   // --expression NAME: a head with the generic head's vertices (--mesh, or
   // --project FILE, or the generic head) posed by the muscle layer and drawn
@@ -97,7 +99,10 @@ int run_render(const Args& args) {
   PosedHead posed;
   ExpressionHead head;
   if (posing) {
-    s = load_expression_head(args.get("project"), mesh_path, level, head);
+    LidSeal seal;  // --lid-seal RIM,CORNER: the closed lids' option (docs/design/muscles.md)
+    if (args.has("lid-seal") && std::sscanf(args.get("lid-seal").c_str(), "%lf,%lf", &seal.rim, &seal.corner) != 2)
+      return usage_error("--lid-seal needs RIM,CORNER (e.g. 0.995,0.6)");
+    s = load_expression_head(args.get("project"), mesh_path, level, head, seal);
     if (s) s = pose_expression_head(head, FaceControls{}, level, posed);
     if (!s) return fail(kName, s.message);
     mesh = posed.head;
@@ -276,7 +281,7 @@ Registrar reg({"render",
                "likeness render --mesh FILE [--points FILE] [--texture PNG] [--wireframe | --edges-only] "
                "[--view front|left|right|back|top|three-quarter] [--size N] [--point-size PX] "
                "[--flat] [--supersample 1..4] [--no-ao] [--yaw DEG --pitch DEG] [--camera-out FILE.json] --out PNG | "
-               "likeness render --expression NAME[,NAME...] [--columns C] [--face] [--project FILE | --mesh FILE] [--level L] [--view ...] --out PNG",
+               "likeness render --expression NAME[,NAME...] [--columns C] [--face] [--project FILE | --mesh FILE] [--level L] [--lid-seal RIM,CORNER] [--view ...] --out PNG",
                "draws a mesh (with baked ambient occlusion) and/or point cloud from a canonical view into a PNG "
                "(OSMesa, same shaders as the web app); --yaw/--pitch turn the camera, --camera-out writes its matrices",
                run_render});

@@ -12,7 +12,7 @@
 namespace lk::cli {
 
 Status load_expression_head(const std::string& project_path, const std::string& mesh_path, int levels,
-                            ExpressionHead& out) {
+                            ExpressionHead& out, const LidSeal& seal) {
   if (Status s = load_generic_head(out.generic); !s.ok()) return s;
   TriMesh control;
   if (!project_path.empty()) {
@@ -44,7 +44,7 @@ Status load_expression_head(const std::string& project_path, const std::string& 
     if (Status s = build_multires(control, head_creases(control, out.generic.annotations), levels, out.multires); !s.ok())
       return s;
   }
-  if (Status s = make_face_rig(control, out.generic, out.rig); !s.ok()) return with_context(s, out.description);
+  if (Status s = make_face_rig(control, out.generic, out.rig, seal); !s.ok()) return with_context(s, out.description);
   out.have_parts = place_head_parts(control, out.generic, out.parts).ok();
   return Status::success();
 }

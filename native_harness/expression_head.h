@@ -28,8 +28,9 @@ struct ExpressionHead {
 
 // project_path (a .likeness.glb project) or mesh_path (generic topology) or
 // neither (the generic head, refined to `levels`).
+// seal: how the closed lids meet (LidSeal, default: as the asset's rig).
 Status load_expression_head(const std::string& project_path, const std::string& mesh_path, int levels,
-                            ExpressionHead& out);
+                            ExpressionHead& out, const LidSeal& seal = {});
 
 // The head at `level` posed by controls (the multires is posed and left so)
 // and its parts posed with it: eyes, upper teeth, lower teeth, tongue.

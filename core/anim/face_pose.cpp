@@ -107,7 +107,9 @@ std::vector<Vec3> pose_face(const FaceRig& rig, const FaceControls& controls) {
       // opening's angles map monotonically onto the closed opening's).
       // Opening, each lid turns whole (the two agree where upper + lower = 0).
       const double t = upper + lower > 0 ? L.opening[i] : (L.upper[i] ? 1.0 : 0.0);
-      const double a = -w * L.gap[i] * (t * (upper + lower) - lower);
+      // The rims turn further by their seal as the lids close (1 elsewhere).
+      const double f = 1.0 + closed * (L.seal[i] - 1.0);
+      const double a = -w * L.gap[i] * f * (t * (upper + lower) - lower);
       const Vec3 d = p - L.center;
       Vec3 e = turn_y(w * yaw) * turn_x(a) * d;
       const double r = d.norm();

@@ -55,8 +55,8 @@ void push(SparseField& f, int v, const Vec3& d) {
   f.delta.push_back(d);
 }
 
-Status lid_rig(const std::vector<Vec3>& P, const EyeSocket& socket, const Vec3& center, double radius, EyeLids& lids,
-               std::vector<int>& upper, std::vector<int>& lower, const char* name) {
+Status lid_rig(const std::vector<Vec3>& P, const EyeSocket& socket, const Vec3& center, double radius, const LidSeal& seal,
+               EyeLids& lids, std::vector<int>& upper, std::vector<int>& lower, const char* name) {
   const std::vector<int>& rim = socket.rim;
   if (rim.size() < 6 || rim.size() % 2)
     return Status::error(ErrorCode::InvalidInput, std::string("the ") + name + " rim needs an even loop of >= 6 vertices");
@@ -106,10 +106,14 @@ Status lid_rig(const std::vector<Vec3>& P, const EyeSocket& socket, const Vec3& 
   // vertex sits 5 mm along x from its lower one, where the interpolated gap
   // turned it past the lower rim).
   std::map<int, std::pair<double, bool>> on_rim;  // rim vertex -> (its column's x, upper)
+  std::map<int, double> rim_seal;                  // rim vertex -> its factor on the closing turn
   for (std::size_t k = 0; k < m; ++k) {
     const double x = 0.5 * (P[upper[k]].x() + P[lower[k]].x());
     on_rim[upper[k]] = {x, true};
     on_rim[lower[k]] = {x, false};
+    const bool corner = k == 0 || k + 1 == m;
+    const double f = corner ? seal.corner / 0.6 * (seal.rim / 0.96) : seal.rim / 0.96;
+    rim_seal[upper[k]] = rim_seal[lower[k]] = std::max(1.0, f);
   }
   for (std::size_t v = 0; v < P.size(); ++v) {
     const Vec3 d = P[v] - center;
@@ -151,6 +155,7 @@ Status lid_rig(const std::vector<Vec3>& P, const EyeSocket& socket, const Vec3& 
     double t = up ? 1.0 : 0.0;
     if (!is_rim && a_up - a_low > 1e-9 && d.z() > 0) t = std::clamp((a - a_low) / (a_up - a_low), 0.0, 1.0);
     lids.opening.push_back(t);
+    lids.seal.push_back(is_rim ? rim_seal[static_cast<int>(v)] : 1.0);
     // Closed, both rims meet at the column's mean radius and x (a scan's
     // lids need not sit at one distance from the eyeball's centre, nor
     // their columns at one x).
@@ -178,7 +183,7 @@ Vec3 jaw_hinge(const std::vector<Vec3>& P, const HeadAnnotations& ann) {
   return Vec3(0.5 * (box.min.x() + box.max.x()), top_back.y(), top_back.z());
 }
 
-Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig& out) {
+Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig& out, const LidSeal& seal) {
   const HeadAnnotations& ann = generic.annotations;
   const std::vector<Vec3>& P = control.positions;
   const int n = static_cast<int>(P.size());
@@ -268,7 +273,7 @@ Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig
 
   const EyeSocket* sockets[2] = {&ann.eye_left, &ann.eye_right};
   for (int s = 0; s < 2; ++s)
-    if (Status st = lid_rig(P, *sockets[s], place.eye_center[s], place.eye_radius[s], rig.lids[static_cast<std::size_t>(s)],
+    if (Status st = lid_rig(P, *sockets[s], place.eye_center[s], place.eye_radius[s], seal, rig.lids[static_cast<std::size_t>(s)],
                             lm.upper_lid[static_cast<std::size_t>(s)], lm.lower_lid[static_cast<std::size_t>(s)],
                             s == 0 ? "left eye" : "right eye");
         !st.ok())

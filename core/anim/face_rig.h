@@ -52,6 +52,23 @@ struct EyeLids {
   // above the upper rim, 0 on and below the lower rim. Closing maps the
   // opening onto the closed one, so no two vertices pass each other.
   std::vector<double> opening;
+  // How much further than the others this vertex turns once the lids have
+  // closed, as a factor on its closing turn: 1 but on the rims with a
+  // LidSeal beyond today's (the rims then meet closer while the socket
+  // rings behind keep the others' 4 % gap).
+  std::vector<double> seal;
+};
+
+// How far the closed lids' rims close (docs/design/muscles.md, "The closed
+// eye's light line"; an option, off by default): each rim column by `rim`
+// of its rest gap, the corner columns (the canthi) by corner x rim; every
+// other lid vertex keeps 0.96 (the 4 % light line). {0.96, 0.6} is the
+// default rig. {0.995, 0.6} hides most of the line on the generic head and
+// synthetic people with no new pair, but adds lid pairs and turned
+// triangles on real scans' fits.
+struct LidSeal {
+  double rim = 0.96;
+  double corner = 0.6;
 };
 
 // The jaw: vertices with their share of its rigid motion.
@@ -86,7 +103,7 @@ struct FaceRig {
 // the head frame; the eyeballs where components/components.h places them).
 // InvalidInput when the mesh does not have the generic head's vertex count
 // or a region, rim or lip line the rig needs is missing or malformed.
-Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig& out);
+Status make_face_rig(const TriMesh& control, const GenericHead& generic, FaceRig& out, const LidSeal& seal = {});
 
 // The jaw's hinge: at the head's middle in x, at the top and back of the
 // lower lip, chin and jaw regions (the temporomandibular joint's place).

@@ -33,9 +33,9 @@ using namespace lk;
 
 namespace {
 
-FaceRig rig_of(const GenericHead& head) {
+FaceRig rig_of(const GenericHead& head, const LidSeal& seal = {}) {
   FaceRig rig;
-  const Status s = make_face_rig(head.mesh, test::generic_head(), rig);
+  const Status s = make_face_rig(head.mesh, test::generic_head(), rig, seal);
   INFO(s.message);
   REQUIRE(s.ok());
   return rig;
@@ -634,6 +634,54 @@ struct HeadScene {
     on_level.build(live.state.displaced[l], live.triangles(level), bag_l[l], lid_l[l], parts);
   }
   Crossings at_control(const FaceControls& c, const std::vector<Vec3>& P) const { return on_control.count(rig, c, P); }
+  // The eyeball of `eye` seen from the front through level `level` posed by
+  // c, in square millimetres (the head's own: metres x 1000): rays along +z
+  // from the eyeball's front on a 0.1 mm grid over its disk; a ray sees the
+  // eyeball when no skin triangle lies in front of it, as the renders draw
+  // it (skin and eyeballs depth-tested, from the front). in_opening: only
+  // the rays inside the rest rim's outline seen from the front (what the
+  // closed lids must cover; outside it a fit's eyeball that pokes through
+  // the skin shows at rest too).
+  struct Seen {
+    double all = 0, in_opening = 0;
+  };
+  Seen eyeball_seen(const FaceControls& c, int eye) {
+    REQUIRE(pose_multires(live, rig, c, level).ok());
+    TriMesh m;
+    m.positions = live.state.displaced[static_cast<std::size_t>(level)];
+    m.triangles = live.triangles(level);
+    MeshBvh bvh;
+    REQUIRE(build_bvh(m, bvh).ok());
+    const EyeLids& L = rig.lids[static_cast<std::size_t>(eye)];
+    std::vector<Vec3> outline;  // the rest rim, upper lid then lower lid back
+    for (int v : rig.landmarks.upper_lid[static_cast<std::size_t>(eye)]) outline.push_back(rig.rest[static_cast<std::size_t>(v)]);
+    const auto& lower = rig.landmarks.lower_lid[static_cast<std::size_t>(eye)];
+    for (auto it = lower.rbegin(); it != lower.rend(); ++it) outline.push_back(rig.rest[static_cast<std::size_t>(*it)]);
+    auto inside = [&](double x, double y) {
+      bool in = false;
+      for (std::size_t i = 0, j = outline.size() - 1; i < outline.size(); j = i++) {
+        const Vec3 &a = outline[i], &b = outline[j];
+        if ((a.y() > y) != (b.y() > y) && x < a.x() + (y - a.y()) * (b.x() - a.x()) / (b.y() - a.y())) in = !in;
+      }
+      return in;
+    };
+    const double h = 1e-4, R = L.radius;
+    const int n = static_cast<int>(std::ceil(R / h));
+    int all = 0, open = 0;
+    for (int i = -n; i <= n; ++i)
+      for (int j = -n; j <= n; ++j) {
+        const double x = i * h, y = j * h, rr = x * x + y * y;
+        if (rr >= R * R) continue;
+        Ray ray;
+        ray.origin = L.center + Vec3(x, y, std::sqrt(R * R - rr));
+        ray.direction = Vec3::UnitZ();
+        if (intersect_any(bvh, ray)) continue;
+        ++all;
+        if (inside(ray.origin.x(), ray.origin.y())) ++open;
+      }
+    const double cell = (h * 1000) * (h * 1000);
+    return {all * cell, open * cell};
+  }
   Crossings at_level(const FaceControls& c) {
     REQUIRE(pose_multires(live, rig, c, level).ok());
     return on_level.count(rig, c, live.state.displaced[static_cast<std::size_t>(level)]);
@@ -742,7 +790,29 @@ struct Tally {
 // control mesh; its lip columns behind the teeth's
 // front, new pairs and turned triangles, and those of the level, within
 // `alone` (shapes alone) or `combined`.
-void check_head_crossings(HeadScene& scene, const std::string& head, const Limits& alone, const Limits& combined) {
+// The closed eyes (eyeBlinkLeft, eyeBlinkRight, blink, wink) at the scene's
+// level: the eyeball seen through the closed lids inside the rim's outline
+// under seen_mm2 per eye (issue 38: no light line between the lids).
+void check_closed_eyes_hidden(HeadScene& scene, const std::string& head, double seen_mm2) {
+  const std::vector<std::pair<std::string, std::vector<int>>> closing = {
+      {"eyeBlinkLeft", {0}}, {"eyeBlinkRight", {1}}, {"blink", {0, 1}}, {"wink", {0}}};
+  const bool report = std::getenv("LK_RIG_REPORT") != nullptr;
+  if (report)
+    for (int e = 0; e < 2; ++e) {
+      const HeadScene::Seen rest = scene.eyeball_seen(FaceControls{}, e);
+      WARN(head << ", eye " << e << " at rest: eyeball seen " << rest.all << " mm2, inside the rim " << rest.in_opening << " mm2");
+    }
+  for (const auto& [name, eyes] : closing)
+    for (int e : eyes) {
+      const HeadScene::Seen seen = scene.eyeball_seen(shape(name), e);
+      INFO(head << ", " << name << ", eye " << e << ": eyeball seen " << seen.all << " mm2, inside the rim " << seen.in_opening << " mm2");
+      if (report) WARN(head << ", " << name << ", eye " << e << " closed: eyeball seen " << seen.all << " mm2, inside the rim " << seen.in_opening << " mm2");
+      CHECK(seen.in_opening < seen_mm2);
+    }
+}
+
+void check_head_crossings(HeadScene& scene, const std::string& head, const Limits& alone, const Limits& combined,
+                          double seen_mm2) {
   Tally shapes{head}, combos{head};
   {
     INFO(head << ": the teeth through the lips or skin at rest");
@@ -770,6 +840,7 @@ void check_head_crossings(HeadScene& scene, const std::string& head, const Limit
     REQUIRE(face_controls_from_weights(weights, c).ok());
     one(head + ", " + label, c, combos, combined);
   }
+  check_closed_eyes_hidden(scene, head, seen_mm2);
   REQUIRE(pose_multires(scene.live, scene.rig, FaceControls{}, scene.level).ok());
   shapes.report("the 77 shapes alone");
   combos.report("combinations");
@@ -890,6 +961,22 @@ const Limits kSyntheticCombined{at_most(0, 30, 4, 0, 2), at_most(0, 130, 42, 0, 
 // eyeLookDownLeft) and 13 in a combination (Plato's random ARKit weights
 // #3, at his right inner canthus), bounded at a quarter more (a fit's last
 // bits differ between machines: Fran's, session 48).
+// The eyeball seen through a closed eye inside the rim's outline, per eye,
+// at level 2 (the renders' and the GLB's level), mm2. Issue 38's goal is
+// under 1 mm2; not met (docs/design/muscles.md, "The closed eye's light
+// line"): the 4 % gap the lids keep shows 7.0-7.2 mm2 on the generic head
+// and seeds 1-5 (bounded at today's worst), and on the page's fits of the
+// real scans James 8.6 / 7.6, Fran 6.5 / 7.4, Demosthenes 0.02 / 0.01,
+// Gutenberg 55.7 / 58.6 (not the seam alone; not located), Plato 27.1 /
+// 13.2 (bounded at today's worst per head plus a quarter, as their pairs;
+// Demosthenes at the goal).
+constexpr double kSyntheticClosedEyeSeen = 7.5;
+double real_closed_eye_seen(const std::string& rel) {
+  for (const auto& [name, worst] : std::vector<std::pair<const char*, double>>{
+           {"james", 8.62}, {"fran", 7.41}, {"demosthenes", 0.8}, {"gutenberg", 58.59}, {"plato", 27.14}})
+    if (rel.find(name) != std::string::npos) return 1.25 * worst;
+  return 1.0;
+}
 const Limits kRealAlone{at_most(0, 43, 3, 0, 5, 0), at_most(14, 185, 47, 0, 32)};
 const Limits kRealCombined{at_most(0, 45, 5, 0, 4, 0), at_most(16, 365, 43, 0, 117)};
 
@@ -900,7 +987,35 @@ TEST_CASE("face rig: crossings on the control mesh and level 2 with the teeth, e
     MultiresMesh mr;
     REQUIRE(build_multires(head.mesh, head_creases(head.mesh, head.annotations), 2, mr).ok());
     HeadScene scene(rig, head.mesh, mr, 2);
-    check_head_crossings(scene, seed == 0 ? "generic head" : "seed " + std::to_string(seed), kSyntheticAlone, kSyntheticCombined);
+    check_head_crossings(scene, seed == 0 ? "generic head" : "seed " + std::to_string(seed), kSyntheticAlone, kSyntheticCombined,
+                         kSyntheticClosedEyeSeen);
+  }
+}
+
+TEST_CASE("face rig: the lid seal option (rims closing to 0.995 of their gap) hides the closed eye's light line on the generic head and synthetic people 1-5, with no lid pair at level 2") {
+  // Off by default: on the real scans' fits it adds lid pairs and turned
+  // triangles (docs/design/muscles.md, "The closed eye's light line").
+  const LidSeal seal{0.995, 0.6};
+  for (std::uint32_t seed = 0; seed <= 5; ++seed) {
+    const GenericHead head = seed == 0 ? test::generic_head() : test::make_test_head(seed);
+    MultiresMesh mr;
+    REQUIRE(build_multires(head.mesh, head_creases(head.mesh, head.annotations), 2, mr).ok());
+    const FaceRig plain = rig_of(head), sealed = rig_of(head, seal);
+    HeadScene before(plain, head.mesh, mr, 2), after(sealed, head.mesh, mr, 2);
+    for (const char* name : {"eyeBlinkLeft", "eyeBlinkRight", "blink", "wink"})
+      for (int e = 0; e < 2; ++e) {
+        const FaceControls c = shape(name);
+        if (e == 1 && (std::string(name) == "eyeBlinkLeft" || std::string(name) == "wink")) continue;
+        if (e == 0 && std::string(name) == "eyeBlinkRight") continue;
+        const double a = before.eyeball_seen(c, e).in_opening, b = after.eyeball_seen(c, e).in_opening;
+        INFO("seed " << seed << ", " << name << ", eye " << e << ": eyeball seen inside the rim " << a << " -> " << b << " mm2");
+        if (std::getenv("LK_RIG_REPORT"))
+          WARN("seed " << seed << ", " << name << ", eye " << e << ": eyeball seen inside the rim " << a << " -> " << b << " mm2 with the seal");
+        CHECK(b < 3.0);
+        CHECK(b < 0.5 * a);
+        CHECK(after.at_level(c).lids == 0);
+        CHECK(after.at_control(c, pose_face(sealed, c)).lids == 0);
+      }
   }
 }
 
@@ -961,7 +1076,7 @@ TEST_CASE("face rig: the page's fits of the five real scans, control mesh and le
     GenericHead head{fit.control, test::generic_head().annotations};
     const FaceRig rig = rig_of(head);
     HeadScene scene(rig, head.mesh, fit.multires, 2);
-    check_head_crossings(scene, rel, kRealAlone, kRealCombined);
+    check_head_crossings(scene, rel, kRealAlone, kRealCombined, real_closed_eye_seen(rel));
   }
 }
 
