@@ -631,9 +631,14 @@ int run_photos(const Args& args) {
   std::printf("  landmark error: calibration %.2f -> %.2f px, shape fit %.2f -> %.2f px (%.2f s)\n",
               r.calib.initial_rms_px, r.calib.final_rms_px, r.fit.initial_rms_px, r.fit.final_rms_px, seconds);
   if (r.mouth_bag.pairs_before > 0)
-    std::printf("  mouth bag (photos/lips.h): %d level-3 crossing pairs over it as fitted -> %d, its corners drawn %.0f %% of the "
-                "way to its centroid\n",
-                r.mouth_bag.pairs_before, r.mouth_bag.pairs_after, 100 * r.mouth_bag.share);
+    std::printf("  mouth bag (photos/lips.h): %d crossing pairs over it as fitted (levels %d..%d) -> %d, its corners drawn "
+                "%.1f %% of the way to its centroid\n",
+                r.mouth_bag.pairs_before, opt.mouth_bag.all_levels ? 0 : opt.mouth_bag.level, opt.mouth_bag.level,
+                r.mouth_bag.pairs_after, 100 * r.mouth_bag.share);
+  if (r.untangle.pairs_before > 0)
+    std::printf("  untangle (pipeline/untangle.h, level %d against the generic head): %d new crossing pairs -> %d, "
+                "%d control vertices restored\n",
+                opt.untangle.level, r.untangle.pairs_before, r.untangle.pairs_after, r.untangle.restored_vertices);
   if (r.lids.observations > 0)
     std::printf("  lids (photos/eye_lids.h) turned to %d lid columns: upper %+.2f %+.2f, lower %+.2f %+.2f (left, right; "
                 "+ closes), their gaps' error %.2f -> %.2f px\n",

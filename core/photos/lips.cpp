@@ -45,25 +45,49 @@ Status keep_mouth_bag_inside(const GenericHead& generic, const MouthBagOptions& 
   MultiresMesh mr;
   s = build_multires(control, creases, options.level, mr);
   if (!s) return with_context(s, "mouth bag");
-  TriMesh level;
-  level.triangles = mr.triangles(options.level);
-  level.positions = mr.state.displaced[size_t(options.level)];
-  MeshBvh bvh;
-  s = build_bvh(level, bvh);
-  if (!s) return with_context(s, "mouth bag");
-  // The level's triangles over a control face with a corner in the bag
-  // (child c of triangle g is 4 g + c on every level).
-  const int per_control = 1 << (2 * options.level);
-  std::vector<int> over_bag;
-  for (int f = 0; f < generic.mesh.num_triangles(); ++f) {
-    const Tri& t = generic.mesh.triangles[size_t(f)];
-    if (in_bag[size_t(t[0])] || in_bag[size_t(t[1])] || in_bag[size_t(t[2])])
-      for (int c = 0; c < per_control; ++c) over_bag.push_back(f * per_control + c);
+  // Every level 0..L is checked (a head exports each of them): per level
+  // its mesh, tree and the triangles over a control face with a corner in
+  // the bag (child c of triangle g is 4 g + c on every level).
+  const int first = options.all_levels ? 0 : options.level;
+  const int count = options.level - first + 1;
+  std::vector<TriMesh> levels(static_cast<size_t>(count));
+  std::vector<MeshBvh> trees(static_cast<size_t>(count));
+  std::vector<std::vector<int>> over_bag(static_cast<size_t>(count));
+  for (int i = 0; i < count; ++i) {
+    const int k = first + i;
+    levels[size_t(i)].triangles = mr.triangles(k);
+    levels[size_t(i)].positions = mr.state.displaced[size_t(k)];
+    s = build_bvh(levels[size_t(i)], trees[size_t(i)]);
+    if (!s) return with_context(s, "mouth bag");
+    const int per_control = 1 << (2 * k);
+    for (int f = 0; f < generic.mesh.num_triangles(); ++f) {
+      const Tri& t = generic.mesh.triangles[size_t(f)];
+      if (in_bag[size_t(t[0])] || in_bag[size_t(t[1])] || in_bag[size_t(t[2])])
+        for (int c = 0; c < per_control; ++c) over_bag[size_t(i)].push_back(f * per_control + c);
+    }
   }
-  std::vector<std::array<int, 2>> pairs;
-  find_intersections_with(bvh, over_bag, pairs);
-  result.pairs_before = result.pairs_after = int(pairs.size());
-  if (pairs.empty()) return Status::success();
+  // The pairs over the bag on every level checked, as control faces (the
+  // pairs' ancestors), and their count.
+  std::vector<std::array<int, 2>> pairs, control_pairs;
+  auto search = [&]() -> Status {
+    control_pairs.clear();
+    for (int i = 0; i < count; ++i) {
+      const int k = first + i;
+      if (levels[size_t(i)].positions != mr.state.displaced[size_t(k)]) {
+        levels[size_t(i)].positions = mr.state.displaced[size_t(k)];
+        Status r = refit_bvh(levels[size_t(i)], trees[size_t(i)]);
+        if (!r) return r;
+      }
+      find_intersections_with(trees[size_t(i)], over_bag[size_t(i)], pairs);
+      const int per_control = 1 << (2 * k);
+      for (const auto& p : pairs) control_pairs.push_back({p[0] / per_control, p[1] / per_control});
+    }
+    return Status::success();
+  };
+  s = search();
+  if (!s) return with_context(s, "mouth bag");
+  result.pairs_before = result.pairs_after = int(control_pairs.size());
+  if (control_pairs.empty()) return Status::success();
 
   const std::vector<Vec3> carried = control.positions;
   Vec3 centre = Vec3::Zero();
@@ -74,9 +98,9 @@ Status keep_mouth_bag_inside(const GenericHead& generic, const MouthBagOptions& 
   // a stereo patch may have placed, stays).
   std::vector<char> in_set(size_t(nv), 0);
   std::vector<int> set;
-  for (const auto& p : pairs)
+  for (const auto& p : control_pairs)
     for (int f : p)
-      for (int v : generic.mesh.triangles[size_t(f / per_control)])
+      for (int v : generic.mesh.triangles[size_t(f)])
         if (in_bag[size_t(v)] && !in_set[size_t(v)]) in_set[size_t(v)] = 1, set.push_back(v);
   for (size_t i = 0, n = set.size(); i < n; ++i)
     for (int w : topo.rings[size_t(set[i])])
@@ -87,13 +111,10 @@ Status keep_mouth_bag_inside(const GenericHead& generic, const MouthBagOptions& 
     const double share = step * options.step_share;
     for (size_t i = 0; i < set.size(); ++i) moved[i] = carried[size_t(set[i])] + share * (centre - carried[size_t(set[i])]);
     s = update_control_vertices(mr, set, moved);
+    if (s) s = search();
     if (!s) return with_context(s, "mouth bag");
-    level.positions = mr.state.displaced[size_t(options.level)];
-    s = refit_bvh(level, bvh);
-    if (!s) return with_context(s, "mouth bag");
-    find_intersections_with(bvh, over_bag, pairs);
-    if (int(pairs.size()) < result.pairs_after) {
-      result.pairs_after = int(pairs.size());
+    if (int(control_pairs.size()) < result.pairs_after) {
+      result.pairs_after = int(control_pairs.size());
       best_step = step;
     }
   }

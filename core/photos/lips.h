@@ -11,8 +11,8 @@
 // 2. The mouth bag inside the mouth. At the mouth corners the bag's nearest
 //    vertices sit 1.5 mm inside the corner, and the generic head's own
 //    level 3 already crosses there (24 pairs); a fit that moves a corner
-//    moves those crossings to other faces. So where the level's triangles
-//    over the bag (annotations.constrained_vertices, seen by no photo)
+//    moves those crossings to other faces. So where the triangles of any
+//    level 0..L over the bag (annotations.constrained_vertices, seen by no photo)
 //    cross anything, the bag corners of the control faces under the pairs
 //    and their bag neighbours are drawn towards the bag's centroid, step by
 //    step (a share of each one's distance to it), until nothing crosses;
@@ -34,13 +34,20 @@ namespace lk {
 std::vector<std::array<int, 2>> lip_binding_edges(const GenericHead& generic);
 
 struct MouthBagOptions {
-  int level = 3;            // the smooth level checked (1-4); 0: off
-  double step_share = 0.01; // each step draws the bag this share of the way to its centroid
-  int max_steps = 10;
+  int level = 3;              // the finest smooth level checked (1-4); 0: off
+  double step_share = 0.005;  // each step draws the bag this share of the way to its centroid (half-steps:
+                              // every level clear with the least draw, docs/design/photos.md)
+  int max_steps = 20;         // at most 10 % of the way
+  // Check every level 0..level, not the finest alone: the coarser levels
+  // are exported too, and fits crossed there (over the bag below level 3;
+  // the generic's own such pairs are on level 2 at the mouth corners)
+  // where level 3 was clean (docs/design/photos.md, "No crossing at any
+  // level").
+  bool all_levels = true;
 };
 
 struct MouthBagResult {
-  int pairs_before = 0;     // level pairs with a triangle over the bag, as fitted
+  int pairs_before = 0;     // pairs with a triangle over the bag on the levels checked, as fitted
   int pairs_after = 0;
   double share = 0;         // the share of the way to the centroid kept (0: not drawn in)
 };

@@ -2,6 +2,8 @@
 
 #include "photos/eye_lids.h"
 #include "photos/stereo_obs.h"
+#include "mesh/geometry.h"
+#include "mesh/topology.h"
 
 #include <algorithm>
 #include <cmath>
@@ -133,12 +135,32 @@ Status make_photos_observations(const GenericHead& generic, const std::vector<Su
   return Status::success();
 }
 
+namespace {
+
+// The scan fit's untangle (pipeline/untangle.h) on a photos head: the
+// generic head is the reference (the fit stays in its frame), its
+// bounding-box diagonal the erosion's scale, no vertex pinned.
+Status untangle_photos_head(const GenericHead& generic, const UntangleOptions& options, TriMesh& control,
+                            UntangleResult& result) {
+  MeshTopology topology;
+  Status s = build_topology(generic.mesh, topology);
+  if (!s) return with_context(s, "untangle");
+  ButterflyCreases creases;
+  for (const CreaseCurve& c : generic.annotations.creases) add_crease_polyline(c.vertices, c.closed, creases);
+  const double diagonal = bounding_box(generic.mesh.positions).diagonal();
+  return with_context(untangle_smooth_surface(generic.mesh.positions, creases, diagonal, topology, {}, options,
+                                              control, result),
+                      "untangle");
+}
+
+}  // namespace
+
 Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoint>& landmarks,
                         const std::vector<LandmarkPhoto>& photos, const SelfCalibResult& calib,
                         const PhotosJobOptions& options, ShapeFitResult& fit,
                         const std::vector<PhotoOutline>* outlines, const StereoResult* stereo,
                         PhotosStereoFit* stereo_fit, const LandmarkSlide* slide, MouthBagResult* mouth_bag,
-                        LidPoseResult* lids) {
+                        LidPoseResult* lids, UntangleResult* untangled) {
   PhotosObservations obs;
   if (Status s = make_photos_observations(generic, landmarks, photos, calib, options, outlines, stereo, slide, obs); !s)
     return s;
@@ -151,6 +173,11 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
     MouthBagResult bag;
     s = keep_mouth_bag_inside(generic, options.mouth_bag, fit.mesh, bag);
     if (mouth_bag) *mouth_bag = bag;
+  }
+  if (s && options.untangle.level > 0) {
+    UntangleResult u;
+    s = untangle_photos_head(generic, options.untangle, fit.mesh, u);
+    if (untangled) *untangled = u;
   }
   if (s && options.fit_lids && !lid_points.empty()) {
     LidPoseResult pose;
@@ -262,7 +289,7 @@ Status run_photos_job(const GenericHead& generic, const LandmarkMap& map, const 
                              " deg apart; landmarks only");
   }
   s = fit_photos_shape(generic, landmarks, photos, result.calib, options, result.fit, outlines, &result.stereo,
-                       &result.stereo_fit, slide, &result.mouth_bag, &result.lids);
+                       &result.stereo_fit, slide, &result.mouth_bag, &result.lids, &result.untangle);
   return with_context(s, "photos");
 }
 

@@ -19,6 +19,7 @@
 #include "photos/shape_fit.h"
 #include "photos/silhouette_obs.h"
 #include "photos/stereo.h"
+#include "pipeline/untangle.h"
 
 #include <memory>
 #include <string>
@@ -27,6 +28,14 @@
 namespace lk {
 
 class StereoAttractorSet;
+
+// The scan fit's untangle on the photos head's level 3 (its other fields
+// the scan fit's defaults).
+inline UntangleOptions photos_untangle_options() {
+  UntangleOptions o;
+  o.level = 3;
+  return o;
+}
 
 struct PhotosJobOptions {
   SelfCalibOptions calib;
@@ -76,6 +85,13 @@ struct PhotosJobOptions {
   bool fit_lids = true;
   bool keep_mouth_bag = true;
   MouthBagOptions mouth_bag;
+  // Then what still crosses on the smooth level untangle.level that the
+  // generic head's does not (a silhouette folds an ear's control face into
+  // itself) is untangled by the scan fit's step (pipeline/untangle.h:
+  // erosion, then part of the way back to the generic's umbrella shape),
+  // with the generic head as the reference; a head that crosses nothing
+  // new is left as it is. untangle.level = 0: off.
+  UntangleOptions untangle = photos_untangle_options();
 };
 
 // What the stereo attractors came to in a fit (fua1998 Fig. 7's measure).
@@ -94,6 +110,7 @@ struct PhotosJobResult {
   PhotosStereoFit stereo_fit;
   ShapeFitResult fit;          // fit.mesh: the person's control mesh
   MouthBagResult mouth_bag;    // what keeping the mouth bag inside did (PhotosJobOptions::keep_mouth_bag)
+  UntangleResult untangle;     // what the untangle did (PhotosJobOptions::untangle; zero when nothing crossed)
   LidPoseResult lids;          // the lids' turn to the photos (PhotosJobOptions::fit_lids; zero when not run)
   std::vector<std::string> notes;  // for people: one photo only, photos dropped, ...
 };
@@ -110,7 +127,8 @@ Status run_photos_stereo(const GenericHead& generic, const std::vector<LandmarkP
 // observations, the outlines (if any) as silhouette observations and the
 // stereo patches (if any) as attractors; with options.bind_lips the lips
 // bound, with options.keep_mouth_bag the bag kept inside afterwards
-// (photos/lips.h; mouth_bag: null or its report). landmarks: the map attached to
+// (photos/lips.h; mouth_bag: null or its report), then options.untangle
+// (untangled: null or its report). landmarks: the map attached to
 // generic.mesh. outlines: null, or one per photo (empty points: none for
 // that photo), each used photo's as silhouette observations
 // (silhouette_obs.h; the neck region excluded, the chin region's lowest
@@ -125,7 +143,8 @@ Status fit_photos_shape(const GenericHead& generic, const std::vector<SurfacePoi
                         const PhotosJobOptions& options, ShapeFitResult& fit,
                         const std::vector<PhotoOutline>* outlines = nullptr, const StereoResult* stereo = nullptr,
                         PhotosStereoFit* stereo_fit = nullptr, const LandmarkSlide* slide = nullptr,
-                        MouthBagResult* mouth_bag = nullptr, LidPoseResult* lids = nullptr);
+                        MouthBagResult* mouth_bag = nullptr, LidPoseResult* lids = nullptr,
+                        UntangleResult* untangled = nullptr);
 
 // The observations fit_photos_shape fits with, as it builds them (for
 // measurements of a fit, fit_pulls.h): the sets with one lambda each, the
