@@ -24,20 +24,20 @@ Mat3 turn_x(double a) {
 
 // The shares of the rest gap an eye's upper lid comes down and its lower lid
 // comes up (negative: opens), from its lid, lower-lid and pitch channels.
-// Together they never exceed 0.96: the lids meet but do not cross.
+// Together they never exceed kLidClosedShare: the lids meet but do not cross.
 void lid_shares(const FaceControls& c, int eye, double& upper, double& lower) {
   const double lid = c[kLidL + eye], low = c[kLowerLidL + eye], pitch = c[kGazePitchL + eye];
   upper = (lid > 0 ? 0.73 * lid : 0.25 * lid) + (pitch < 0 ? -0.3 * pitch : -0.15 * pitch);
   lower = 0.23 * std::max(0.0, lid) + 0.35 * low + (pitch < 0 ? 0.1 * pitch : 0.05 * pitch);
   const double sum = upper + lower;
-  if (sum > 0.96) {
+  if (sum > kLidClosedShare) {
     if (upper > 0 && lower > 0) {
-      upper *= 0.96 / sum;
-      lower *= 0.96 / sum;
+      upper *= kLidClosedShare / sum;
+      lower *= kLidClosedShare / sum;
     } else if (upper > 0) {
-      upper = 0.96 - lower;
+      upper = kLidClosedShare - lower;
     } else {
-      lower = 0.96 - upper;
+      lower = kLidClosedShare - upper;
     }
   }
 }
@@ -98,7 +98,7 @@ std::vector<Vec3> pose_face(const FaceRig& rig, const FaceControls& controls) {
     if (upper == 0 && lower == 0 && yaw == 0) continue;
     const EyeLids& L = rig.lids[static_cast<std::size_t>(eye)];
     // How far the lids have closed: the rims' radii and x meet as they do.
-    const double closed = std::clamp((upper + lower) / 0.96, 0.0, 1.0);
+    const double closed = std::clamp((upper + lower) / kLidClosedShare, 0.0, 1.0);
     for (std::size_t i = 0; i < L.index.size(); ++i) {
       Vec3& p = P[static_cast<std::size_t>(L.index[i])];
       const double w = L.weight[i];

@@ -82,7 +82,7 @@ Status lid_rig(const std::vector<Vec3>& P, const EyeSocket& socket, const Vec3& 
     // the skin just past them pinched and folded at level 2 (9 pairs per
     // blink on the generic head; 0 at 0.6 and 0.65, 4 at 0.75).
     const bool corner = k == 0 || k + 1 == m;
-    gap.emplace_back(x, corner ? 0.6 * g : g);
+    gap.emplace_back(x, corner ? kCanthusGapShare * g : g);
     meet.emplace_back(x, angle(l) + 0.25 * g);
     upper_a.emplace_back(x, angle(u));
     lower_a.emplace_back(x, angle(l));
@@ -112,7 +112,7 @@ Status lid_rig(const std::vector<Vec3>& P, const EyeSocket& socket, const Vec3& 
     on_rim[upper[k]] = {x, true};
     on_rim[lower[k]] = {x, false};
     const bool corner = k == 0 || k + 1 == m;
-    const double f = corner ? seal.corner / 0.6 * (seal.rim / 0.96) : seal.rim / 0.96;
+    const double f = corner ? seal.corner / kCanthusGapShare * (seal.rim / kLidClosedShare) : seal.rim / kLidClosedShare;
     rim_seal[upper[k]] = rim_seal[lower[k]] = std::max(1.0, f);
   }
   for (std::size_t v = 0; v < P.size(); ++v) {

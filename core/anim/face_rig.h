@@ -66,9 +66,14 @@ struct EyeLids {
 // default rig. {0.995, 0.6} hides most of the line on the generic head and
 // synthetic people with no new pair, but adds lid pairs and turned
 // triangles on real scans' fits.
+// The share of its rest gap a closed lid pair closes (the 4 % light line),
+// and the share of a column's gap the corner columns (the canthi) close by.
+constexpr double kLidClosedShare = 0.96;
+constexpr double kCanthusGapShare = 0.6;
+
 struct LidSeal {
-  double rim = 0.96;
-  double corner = 0.6;
+  double rim = kLidClosedShare;
+  double corner = kCanthusGapShare;
 };
 
 // The jaw: vertices with their share of its rigid motion.
