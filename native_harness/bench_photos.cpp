@@ -13,6 +13,7 @@
 #include "io/io.h"
 
 #include "head/generic_head.h"
+#include "head/head_creases.h"
 #include "head/surface_quality.h"
 #include "components/components.h"
 #include "photos/added_folds.h"
@@ -75,7 +76,7 @@ bool measure_folds(const GenericHead& generic, const TriMesh& mesh, FoldFigures&
   h.mesh.positions = mesh.positions;
   h.mesh.normals.clear();
   HeadSurfaceQuality q;
-  if (!measure_head_surface(h, 3, q)) return false;
+  if (!measure_head_surface(h, head_creases(generic.mesh, generic.annotations), 3, q)) return false;
   for (int c : q.crossing_pairs) out.crossings += c;
   return true;
 }

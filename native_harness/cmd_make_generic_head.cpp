@@ -5,6 +5,7 @@
 
 #include "head/generic_head.h"
 #include "head/generic_head_builder.h"
+#include "head/head_creases.h"
 #include "head/surface_quality.h"
 #include "io/io.h"
 #include "mesh/geometry.h"
@@ -83,7 +84,7 @@ int run_make_generic_head(const Args& args) {
     HeadSurfaceQuality q;
     s = measure_head_surface(head, 3, q);
     if (!s) return fail(kName, s.message);
-    std::printf("smooth level %d with the rim creases, angle between adjacent triangles' normals (deg):\n", q.level);
+    std::printf("smooth level %d with the head's creases (rims, canthi, socket rings), angle between adjacent triangles' normals (deg):\n", q.level);
     std::printf("  %-7s %6s %6s %6s %6s %6s\n", "region", "edges", "mean", "p95", "p99", "max");
     for (const RegionRoughness& r : q.regions)
       std::printf("  %-7s %6d %6.2f %6.2f %6.2f %6.2f\n", r.region.c_str(), r.edges, r.mean_deg, r.p95_deg,
@@ -94,10 +95,8 @@ int run_make_generic_head(const Args& args) {
   }
   // --level3 FILE: that smooth level 3 as a mesh, to render and look at.
   if (!level3_path.empty()) {
-    ButterflyCreases creases;
-    for (const CreaseCurve& c : head.annotations.creases) add_crease_polyline(c.vertices, c.closed, creases);
     MultiresMesh smooth;
-    s = build_multires(head.mesh, creases, 3, smooth);
+    s = build_multires(head.mesh, head_creases(head.mesh, head.annotations), 3, smooth);
     if (s) s = write_file(level3_path, write_obj(level_mesh(smooth, 3)));
     if (!s) return fail(kName, s.message);
     std::printf("wrote %s\n", level3_path.c_str());

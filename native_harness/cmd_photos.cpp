@@ -6,6 +6,7 @@
 #include "photos_pulls_report.h"
 
 #include "head/generic_head.h"
+#include "head/head_creases.h"
 #include "head/surface_quality.h"
 #include "image/image.h"
 #include "io/exif.h"
@@ -591,11 +592,12 @@ int run_photos(const Args& args) {
         line += buf;
       }
       int crossings[2] = {0, 0};
+      const ButterflyCreases creases = head_creases(generic.mesh, generic.annotations);
       for (int which = 0; which < 2; ++which) {
         GenericHead h = generic;
         if (which) h.mesh.positions = r.fit.mesh.positions;
         HeadSurfaceQuality q;
-        if (measure_head_surface(h, 3, q))
+        if (measure_head_surface(h, creases, 3, q))
           for (int c : q.crossing_pairs) crossings[which] += c;
       }
       rep["folds"]["crossing_pairs"] = {crossings[0], crossings[1]};

@@ -41,7 +41,7 @@ Status load_expression_head(const std::string& project_path, const std::string& 
       return Status::error(ErrorCode::InvalidInput, out.description + " does not have the generic head's " +
                                                         std::to_string(out.generic.mesh.num_vertices()) + " vertices");
     control.triangles = out.generic.mesh.triangles;
-    if (Status s = build_multires(control, head_creases(control, out.generic.annotations), levels, out.multires); !s.ok())
+    if (Status s = build_multires(control, head_creases(out.generic.mesh, out.generic.annotations), levels, out.multires); !s.ok())
       return s;
   }
   if (Status s = make_face_rig(control, out.generic, out.rig, seal); !s.ok()) return with_context(s, out.description);

@@ -61,6 +61,12 @@ void add_socket_ring(const TriMesh& mesh, const MeshTopology& topo, const std::v
 }  // namespace
 
 ButterflyCreases head_creases(const TriMesh& mesh, const HeadAnnotations& annotations) {
+  MeshTopology topo;
+  if (!build_topology(mesh, topo).ok()) topo = MeshTopology{};  // curves and corners only, as before
+  return head_creases(mesh, topo, annotations);
+}
+
+ButterflyCreases head_creases(const TriMesh& mesh, const MeshTopology& topo, const HeadAnnotations& annotations) {
   ButterflyCreases creases;
   for (const CreaseCurve& c : annotations.creases) add_crease_polyline(c.vertices, c.closed, creases);
   const int nv = mesh.num_vertices();
@@ -75,8 +81,7 @@ ButterflyCreases head_creases(const TriMesh& mesh, const HeadAnnotations& annota
     creases.corners.push_back(lo);
     creases.corners.push_back(hi);
   }
-  MeshTopology topo;
-  if (build_topology(mesh, topo).ok()) {
+  if (topo.rings.size() == static_cast<std::size_t>(nv)) {
     ButterflyCreases rings;
     for (const EyeSocket* eye : {&annotations.eye_left, &annotations.eye_right}) add_socket_ring(mesh, topo, eye->rim, rings);
     // An edge facing the rim twice is listed once; a ring vertex with other

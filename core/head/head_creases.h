@@ -3,6 +3,7 @@
 // fit, the checks' helpers and the benchmarks take them from.
 #pragma once
 #include "head/head_model.h"
+#include "mesh/topology.h"
 #include "subdiv/butterfly.h"
 
 namespace lk {
@@ -18,6 +19,15 @@ namespace lk {
 // refined lid margin, the strip between the two, depends on those rings
 // alone and does not bulge into the eye's opening (docs/design/muscles.md,
 // "The lids closed at level 2").
+//
+// The canthi are read off `mesh`'s positions, so a fitted head takes its
+// generic head's creases (pass the generic head, as the scan fit does): on
+// a fitted or turned head another rim vertex can lie furthest along x, and
+// the head would then be refined with other corners than the ones its
+// checks and its other levels used.
 ButterflyCreases head_creases(const TriMesh& mesh, const HeadAnnotations& annotations);
+
+// The same, with `mesh`'s topology already built.
+ButterflyCreases head_creases(const TriMesh& mesh, const MeshTopology& topology, const HeadAnnotations& annotations);
 
 }  // namespace lk

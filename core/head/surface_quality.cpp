@@ -1,6 +1,7 @@
 #include "head/surface_quality.h"
 
 #include "head/generic_head.h"
+#include "head/head_creases.h"
 #include "mesh/topology.h"
 #include "multires/multires.h"
 #include "raycast/self_intersection.h"
@@ -49,6 +50,11 @@ std::vector<double> dihedral_angles(const TriMesh& mesh, const std::vector<char>
 }
 
 Status measure_head_surface(const GenericHead& head, int level, HeadSurfaceQuality& out) {
+  return measure_head_surface(head, head_creases(head.mesh, head.annotations), level, out);
+}
+
+Status measure_head_surface(const GenericHead& head, const ButterflyCreases& creases, int level,
+                            HeadSurfaceQuality& out) {
   if (level < 1 || level > 4) return Status::error(ErrorCode::InvalidInput, "surface level must be 1..4");
   const TriMesh& m = head.mesh;
   const HeadAnnotations& a = head.annotations;
@@ -94,8 +100,6 @@ Status measure_head_surface(const GenericHead& head, int level, HeadSurfaceQuali
     sets.emplace_back("ears", vertex_mask(ears->second, nv));
   }
 
-  ButterflyCreases creases;
-  for (const CreaseCurve& c : a.creases) add_crease_polyline(c.vertices, c.closed, creases);
   MultiresMesh smooth;
   Status s = build_multires(m, creases, level, smooth);
   if (!s.ok()) return with_context(s, "smooth levels of the head");

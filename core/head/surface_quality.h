@@ -1,6 +1,7 @@
 // How clean the generic head's smooth surface is (issue 35): the smooth
-// Modified Butterfly levels of a control mesh, refined with its rim creases
-// as the fit refines them, measured for what a person would notice.
+// Modified Butterfly levels of a control mesh, refined with the creases its
+// levels are refined with (head/head_creases.h), measured for what a person
+// would notice.
 //  - Roughness per region: the angle between the normals of adjacent
 //    level-L triangles whose control ancestors both lie in the region. A
 //    smooth head with ~2 mm triangles turns by a few degrees per edge; folds,
@@ -15,6 +16,7 @@
 #pragma once
 #include "common/status.h"
 #include "head/head_model.h"
+#include "subdiv/butterfly.h"
 
 #include <string>
 #include <vector>
@@ -33,9 +35,15 @@ struct HeadSurfaceQuality {
   std::vector<int> crossing_pairs;       // level 0..L
 };
 
-// Refines head.mesh smoothly (its annotation creases) to `level` (1..4) and
-// measures it. Fails with InvalidInput on a mesh Butterfly cannot refine or
+// Refines head.mesh smoothly to `level` (1..4) with `creases` and measures
+// it. Fails with InvalidInput on a mesh Butterfly cannot refine or
 // annotations that name no such region.
+Status measure_head_surface(const GenericHead& head, const ButterflyCreases& creases, int level,
+                            HeadSurfaceQuality& out);
+
+// The same with the head's own creases (head/head_creases.h: its rims,
+// canthi and socket rings, as its levels are refined). A fitted head is
+// measured with its generic head's creases, the overload above.
 Status measure_head_surface(const GenericHead& head, int level, HeadSurfaceQuality& out);
 
 // The dihedral angles (deg, sorted) between adjacent triangles of `mesh`

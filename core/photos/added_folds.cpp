@@ -1,5 +1,6 @@
 #include "photos/added_folds.h"
 
+#include "head/head_creases.h"
 #include "mesh/topology.h"
 #include "multires/multires.h"
 #include "raycast/self_intersection.h"
@@ -68,8 +69,9 @@ Status measure_added_folds(const GenericHead& generic, const std::vector<Vec3>& 
     sets.emplace_back("lips", lips);
     sets.emplace_back("eye pockets", pockets);
   }
-  ButterflyCreases creases;
-  for (const CreaseCurve& c : a.creases) add_crease_polyline(c.vertices, c.closed, creases);
+  // Both refined with the generic head's creases (head/head_creases.h), as
+  // the fit's exported levels are: the same corners and rings on both.
+  const ButterflyCreases creases = head_creases(m, a);
   TriMesh fit_control = m;
   fit_control.positions = fitted;
   fit_control.normals.clear();

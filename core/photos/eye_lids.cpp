@@ -208,7 +208,7 @@ Status refined_eye_rim(const TriMesh& head, const GenericHead& generic, int eye,
     topo.positions = head.positions;
     topo.triangles = generic.mesh.triangles;
     std::vector<ButterflyLevel> levels;
-    if (Status s = build_butterfly_levels(topo, head_creases(topo, generic.annotations), level, levels); !s) return s;
+    if (Status s = build_butterfly_levels(topo, head_creases(generic.mesh, generic.annotations), level, levels); !s) return s;
     for (const ButterflyLevel& lv : levels) {
       std::map<std::pair<int, int>, int> wanted;
       for (size_t i = 0; i < loop.size(); ++i) {
@@ -243,13 +243,15 @@ Status head_lid_opening(const TriMesh& head, const GenericHead& generic, int eye
                         const Vec2& centre, LidOpening& out) {
   std::vector<Vec3> rim;
   if (Status s = refined_eye_rim(head, generic, eye, level, rim); !s) return s;
-  // The corners: the rim's ends along the head's x (as head_creases), on the
-  // control mesh, whose rim vertices the refined loop keeps.
+  // The corners: the rim's ends along x on the generic head (the canthi
+  // head_creases makes crease corners), on the control mesh, whose rim
+  // vertices the refined loop keeps.
   const std::vector<int>& loop = (eye == 0 ? generic.annotations.eye_left : generic.annotations.eye_right).rim;
+  const std::vector<Vec3>& at = generic.mesh.positions;
   int lo = loop[0], hi = loop[0];
   for (int v : loop) {
-    if (head.positions[static_cast<size_t>(v)].x() < head.positions[static_cast<size_t>(lo)].x()) lo = v;
-    if (head.positions[static_cast<size_t>(v)].x() > head.positions[static_cast<size_t>(hi)].x()) hi = v;
+    if (at[static_cast<size_t>(v)].x() < at[static_cast<size_t>(lo)].x()) lo = v;
+    if (at[static_cast<size_t>(v)].x() > at[static_cast<size_t>(hi)].x()) hi = v;
   }
   std::vector<Vec2> outline(rim.size());
   for (size_t i = 0; i < rim.size(); ++i)

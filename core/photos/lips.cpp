@@ -1,5 +1,6 @@
 #include "photos/lips.h"
 
+#include "head/head_creases.h"
 #include "mesh/topology.h"
 #include "multires/multires.h"
 #include "raycast/bvh.h"
@@ -40,10 +41,8 @@ Status keep_mouth_bag_inside(const GenericHead& generic, const MouthBagOptions& 
   Status s = build_topology(generic.mesh, topo);
   if (!s || options.level == 0) return with_context(s, "mouth bag");
 
-  ButterflyCreases creases;
-  for (const CreaseCurve& c : generic.annotations.creases) add_crease_polyline(c.vertices, c.closed, creases);
   MultiresMesh mr;
-  s = build_multires(control, creases, options.level, mr);
+  s = build_multires(control, head_creases(generic.mesh, topo, generic.annotations), options.level, mr);
   if (!s) return with_context(s, "mouth bag");
   // Every level 0..L is checked (a head exports each of them): per level
   // its mesh, tree and the triangles over a control face with a corner in

@@ -3,6 +3,7 @@
 #include "photos/eye_lids.h"
 #include "photos/stereo_obs.h"
 #include "mesh/geometry.h"
+#include "head/head_creases.h"
 #include "mesh/topology.h"
 
 #include <algorithm>
@@ -145,8 +146,7 @@ Status untangle_photos_head(const GenericHead& generic, const UntangleOptions& o
   MeshTopology topology;
   Status s = build_topology(generic.mesh, topology);
   if (!s) return with_context(s, "untangle");
-  ButterflyCreases creases;
-  for (const CreaseCurve& c : generic.annotations.creases) add_crease_polyline(c.vertices, c.closed, creases);
+  const ButterflyCreases creases = head_creases(generic.mesh, topology, generic.annotations);
   const double diagonal = bounding_box(generic.mesh.positions).diagonal();
   return with_context(untangle_smooth_surface(generic.mesh.positions, creases, diagonal, topology, {}, options,
                                               control, result),

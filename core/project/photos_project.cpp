@@ -24,8 +24,8 @@ Status project_from_photos(const GenericHead& generic, const PhotosJobResult& re
   fit.control = result.fit.mesh;
   fit.notes = result.notes;
   // The levels as `likeness photos` writes them: the generic head's creases
-  // (eye and lip rims), no displacements.
-  Status s = build_multires(fit.control, head_creases(fit.control, generic.annotations), levels, fit.multires);
+  // (eye and lip rims, the canthi, the socket rings), no displacements.
+  Status s = build_multires(fit.control, head_creases(generic.mesh, generic.annotations), levels, fit.multires);
   if (!s) {
     project = HeadProject{};
     return with_context(s, "photos (levels)");

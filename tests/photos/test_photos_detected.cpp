@@ -181,8 +181,11 @@ TEST_CASE("the photos job on real-detector points keeps every view and the camer
     // The face and lips regions hold the mouth bag: drawing its corners in
     // until no level 0..3 crosses (2026-12-01) grows 8 edges there by more
     // than 15 deg (0 when level 3 alone was checked and level 2 kept 4
-    // pairs); the bag step moves bag vertices only.
-    CHECK(f.creased <= (f.region == "face" || f.region == "lips" ? 10 : 2));
+    // pairs); the bag step moves bag vertices only. Measured with the creases
+    // the head is exported with (head_creases: the canthi as corners and the
+    // socket rings, 2026-12-02) the face also grows 3 edges at the outer eye
+    // corners on seed 2 (11 in all; 8 with the rim curves alone).
+    CHECK(f.creased <= (f.region == "face" ? 12 : f.region == "lips" ? 10 : 2));
     if (f.region != "face") CHECK(f.max_deg < 20);
   }
   // No crossing on any level 0..3 the head exports: 4 pairs over the mouth

@@ -12,6 +12,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <cmath>
+
 using namespace lk;
 
 namespace {
@@ -42,9 +44,9 @@ TEST_CASE("photos project: the photos job's head, its CLI levels, a rig, and the
   for (size_t i = 0; i < p.fit.control.positions.size(); ++i)
     moved = std::max(moved, (p.fit.control.positions[i] - s.generic.mesh.positions[i]).norm());
   CHECK(moved > 1e-3);
-  // The levels `likeness photos` writes (build_butterfly_levels with the head's creases).
+  // The levels `likeness photos` writes (build_butterfly_levels with the generic head's creases).
   std::vector<ButterflyLevel> bl;
-  REQUIRE(build_butterfly_levels(direct.fit.mesh, head_creases(direct.fit.mesh, s.generic.annotations), 3, bl));
+  REQUIRE(build_butterfly_levels(direct.fit.mesh, head_creases(s.generic.mesh, s.generic.annotations), 3, bl));
   std::vector<std::vector<Vec3>> cli_levels;
   REQUIRE(apply_all(bl, direct.fit.mesh.positions, cli_levels));
   REQUIRE(p.fit.level_meshes.size() == 3);
@@ -84,6 +86,32 @@ TEST_CASE("photos project: the photos job's head, its CLI levels, a rig, and the
   CHECK(p.quality.status.ok());
   CHECK(p.quality.fit.level == 3);
   CHECK((!p.quality.to_scan_status.ok() || p.quality.to_scan.vertices == 0));
+}
+
+// The canthi (the eye rims' crease corners) are the generic head's rim
+// vertices furthest along x, whatever the fitted head's positions: where a
+// fit draws the lid vertex next to an outer corner 1 mm beyond it, corners
+// picked on the fitted head would give the exported levels other creases
+// than the photos job's checks and steps used.
+TEST_CASE("photos project: the levels take the generic head's creases, whatever the fitted positions") {
+  const test::PhotoScenario s = test::make_photo_scenario(1, SyntheticViewsOptions{});
+  PhotosJobResult r;
+  r.fit.mesh = s.generic.mesh;
+  r.fit.mesh.normals.clear();
+  const std::vector<int>& rim = s.generic.annotations.eye_left.rim;
+  REQUIRE(rim.size() > 3);
+  size_t outer = 0;
+  for (size_t i = 0; i < rim.size(); ++i)
+    if (s.generic.mesh.positions[size_t(rim[i])].x() > s.generic.mesh.positions[size_t(rim[outer])].x()) outer = i;
+  const int next = rim[(outer + 1) % rim.size()];
+  r.fit.mesh.positions[size_t(next)].x() = s.generic.mesh.positions[size_t(rim[outer])].x() + 1e-3;
+  const ButterflyCreases generic_creases = head_creases(s.generic.mesh, s.generic.annotations);
+  const ButterflyCreases fitted_creases = head_creases(r.fit.mesh, s.generic.annotations);
+  REQUIRE(fitted_creases.corners != generic_creases.corners);  // the fitted extremes are other vertices
+  HeadProject p;
+  REQUIRE(project_from_photos(s.generic, r, 2, p));
+  CHECK(p.fit.multires.creases.corners == generic_creases.corners);
+  CHECK(p.fit.multires.creases.edges == generic_creases.edges);
 }
 
 TEST_CASE("photos project: fewer than two usable photos: no project, each photo's reason") {
