@@ -47,8 +47,10 @@ namespace {
 // against the truth's projections per landmark group and view.
 
 // --photos-coarse N:S[,N:S...], --photos-schedule S[,S...]|none and --photos-follow K[:W] (photos_fit_options.h).
+// --photos-symmetry W: the shape fit's mirror-symmetry weight (shape_fit.h).
 bool parse_fit_levels(const Args& args, ShapeFitOptions& fit) {
   std::string why;
+  if (!args.get_double("photos-symmetry", fit.symmetry_weight, fit.symmetry_weight, 0, 1e6)) return false;
   if (lk::cli::parse_fit_levels(args.get("photos-coarse"), args.get("photos-schedule"), args.get("photos-follow"), fit, why))
     return true;
   std::printf("  --photos-coarse / --photos-schedule / --photos-follow: %s\n", why.c_str());
@@ -783,7 +785,7 @@ int run_bench_photos(const Args& args) {
 }
 
 BenchRegistrar reg({"photos", "photos to head on synthetic sessions: camera errors, face distances, stage times "
-                              "(--photos-seeds N --photos-cameras C --photos-noise-px S --photos-map vertices|interior --photos-stiffness-scale K --photos-first-seed S --photos-silhouettes both|on|off --photos-lambda-sil L --photos-mask-grow PX --photos-sil-facets --photos-stereo --photos-lambda-features L --photos-coarse N:S,... --photos-schedule S,...|none --photos-follow K[:W]; --photos-detected DIR: real-detector points on synth-photos renders, made by tests/browser/detect_synth_photos.mjs, with --photos-detected-map FILE --photos-depth-scale SIGMA --photos-depth-0 K0 --photos-depth-yaw2 C --photos-no-slide --photos-no-slide-sigma --photos-true-cameras --photos-drop GROUP --photos-contours --photos-contour-lambda K --photos-lids --photos-pulls --photos-pulls-by-photo)",
+                              "(--photos-seeds N --photos-cameras C --photos-noise-px S --photos-map vertices|interior --photos-stiffness-scale K --photos-first-seed S --photos-silhouettes both|on|off --photos-lambda-sil L --photos-mask-grow PX --photos-sil-facets --photos-stereo --photos-lambda-features L --photos-coarse N:S,... --photos-schedule S,...|none --photos-follow K[:W] --photos-symmetry W; --photos-detected DIR: real-detector points on synth-photos renders, made by tests/browser/detect_synth_photos.mjs, with --photos-detected-map FILE --photos-depth-scale SIGMA --photos-depth-0 K0 --photos-depth-yaw2 C --photos-no-slide --photos-no-slide-sigma --photos-true-cameras --photos-drop GROUP --photos-contours --photos-contour-lambda K --photos-lids --photos-pulls --photos-pulls-by-photo)",
                     run_bench_photos});
 
 }  // namespace

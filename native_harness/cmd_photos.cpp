@@ -247,7 +247,7 @@ int run_photos(const Args& args) {
   if (!only_known_options(cmd, args, {"points", "photos", "masks", "masks-from-photos", "silhouette-check", "map", "out",
                                       "levels", "focal-px", "texture-size", "no-texture", "register-texture", "label-texture", "stereo", "no-stereo", "coarse",
                                       "schedule", "follow", "folds", "depth-scale", "depth-0", "depth-yaw2", "contours",
-                                      "contour-check", "contour-lambda", "focal-sigma", "no-slide", "lids", "iris-photo", "pulls", "pulls-by-photo", "pulls-by-landmark", "focal-jackknife"}))
+                                      "contour-check", "contour-lambda", "focal-sigma", "no-slide", "lids", "iris-photo", "pulls", "pulls-by-photo", "pulls-by-landmark", "focal-jackknife", "symmetry"}))
     return 2;
   const std::vector<std::string> points_paths = args.get_all("points"), photo_paths = args.get_all("photos"),
                                  mask_paths = args.get_all("masks");
@@ -380,6 +380,8 @@ int run_photos(const Args& args) {
     std::string why;
     if (!parse_fit_levels(args.get("coarse"), args.get("schedule"), args.get("follow"), opt.fit, why)) return fail(cmd, why);
   }
+  if (!args.get_double("symmetry", opt.fit.symmetry_weight, opt.fit.symmetry_weight, 0, 1e6))
+    return fail(cmd, "--symmetry W: a weight >= 0");
   opt.calib.focal_prior_px = focal_px;
   opt.calib.focal_prior_sigma = focal_sigma;
   opt.calib.focal_from_jackknife = args.has("focal-jackknife");
@@ -816,7 +818,7 @@ int run_learn_landmark_map(const Args& args) {
 
 Registrar photos_reg({"photos",
                       "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] [--masks M1.png ... | --masks-from-photos] [--silhouette-check] "
-                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--register-texture] [--label-texture] [--stereo] [--folds] [--coarse N:S,...|none] [--schedule S,...|none] [--follow K[:W]] [--depth-scale SIGMA [--depth-0 K0] [--depth-yaw2 C]] [--focal-sigma S] [--focal-jackknife] [--no-slide] [--contours [--contour-lambda K]] [--contour-check] [--lids] [--iris-photo NAME] [--pulls | --pulls-by-photo | --pulls-by-landmark]",
+                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--register-texture] [--label-texture] [--stereo] [--folds] [--coarse N:S,...|none] [--schedule S,...|none] [--follow K[:W]] [--symmetry W] [--depth-scale SIGMA [--depth-0 K0] [--depth-yaw2 C]] [--focal-sigma S] [--focal-jackknife] [--no-slide] [--contours [--contour-lambda K]] [--contour-check] [--lids] [--iris-photo NAME] [--pulls | --pulls-by-photo | --pulls-by-landmark]",
                       "a head from several photos' landmarks (fua1998): self-calibrated cameras, fitted control "
                       "mesh, levels, cameras.json, report.json; with --photos the skin from those cameras "
                       "(textured.obj, skin.png, sources.png; --label-texture: one photo per texture region, texture/labeling.h; "
@@ -830,7 +832,8 @@ Registrar photos_reg({"photos",
                       "triangulations of N nodes at stiffness S (fua1998 Sec. 2.1), --schedule: the control mesh's own "
                       "stiffness stages after them; --follow K[:W]: the stiffness on the displacement less a fitted similarity, "
                       "plus K x stiffness ||displacement - similarity||^2 where no observation is (W x that where one is; "
-                      "default 0): unobserved parts follow the head, not the nearest pull; --depth-scale: a per-photo depth scale in the bundle adjustment "
+                      "default 0): unobserved parts follow the head, not the nearest pull; --symmetry W: the shape fit asks each "
+                      "displacement, mirrored, of the other side (weight W, default 0: off); --depth-scale: a per-photo depth scale in the bundle adjustment "
                       "(prior sigma SIGMA, mean K0 + C (yaw/60 deg)^2) for the detector's error shared by a photo's points; "
                       "--focal-sigma: the focal prior's relative sigma (with --focal-px); --focal-jackknife: the landmarks' focal weighed by the photos' disagreement, over the detector's ratio, with EXIF or a phone's 26 mm prior (not the default); --no-slide: the map's "
                       "view-dependent slide left out; --contours: the face outline's jaw and chin landmarks as "

@@ -66,6 +66,20 @@ Status measure_fit_pulls(const TriMesh& start, const std::vector<Vec3>& x,
       }
     }
   }
+  if (options.symmetry_weight > 0 && !options.mirror_pairs.empty()) {
+    for (const auto& e : options.mirror_pairs)
+      if (e[0] < 0 || e[1] < 0 || e[0] >= V || e[1] >= V)
+        return Status::error(ErrorCode::InvalidInput, "fit pulls: a bad mirror pair");
+    Eigen::VectorXd rs;
+    std::vector<Eigen::Triplet<double>> js;
+    symmetry_residuals(start.positions, x, options.mirror_pairs, options.symmetry_weight, rs, &js);
+    const int row0 = int(res.size()), g = group_id("symmetry");
+    for (const auto& t : js) trip.emplace_back(row0 + t.row(), t.col(), t.value());
+    for (int i = 0; i < int(rs.size()); ++i) {
+      res.push_back(rs[i]);
+      group_of_row.push_back(g);
+    }
+  }
   const int rows = int(res.size());
   // The state as the fit's: the displacements, then the regularizer's
   // similarity (options.follow > 0), which no observation row touches.

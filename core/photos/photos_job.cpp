@@ -129,6 +129,12 @@ Status make_photos_observations(const GenericHead& generic, const std::vector<Su
     lambdas.push_back(options.lambda_stereo);
   }
   out.fit = options.fit;
+  // The symmetry term (shape_fit.h) pairs the generic head's mirror vertices.
+  if (out.fit.symmetry_weight > 0 && out.fit.mirror_pairs.empty()) {
+    out.fit.mirror_pairs = mirror_vertex_pairs(generic.mesh);
+    if (out.fit.mirror_pairs.empty())
+      return Status::error(ErrorCode::InvalidInput, "photos: the symmetry term needs a mirror-symmetric generic head");
+  }
   if (options.bind_lips) {
     const std::vector<std::array<int, 2>> lips = lip_binding_edges(generic);
     out.fit.binding_edges.insert(out.fit.binding_edges.end(), lips.begin(), lips.end());

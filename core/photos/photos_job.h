@@ -37,9 +37,19 @@ inline UntangleOptions photos_untangle_options() {
   return o;
 }
 
+// The shape fit as the photos job runs it: ShapeFitOptions' defaults with
+// the mirror-symmetry term on (weight 0.3; the job pairs the generic head's
+// mirror vertices): on the detector's points the two sides' errors differ
+// and the face does not (docs/design/photos.md, "A symmetric shape fit").
+inline ShapeFitOptions photos_fit_options() {
+  ShapeFitOptions o;
+  o.symmetry_weight = 0.3;
+  return o;
+}
+
 struct PhotosJobOptions {
   SelfCalibOptions calib;
-  ShapeFitOptions fit;
+  ShapeFitOptions fit = photos_fit_options();
   double map_max_distance_m = 0.016;  // a map point farther from the head: a map for another head (a re-made map sits up to 12 mm off it: landmark_learning.h)
   double lambda_silhouettes = 0.3;    // fua1998 Sec. 4
   SilhouetteOptions silhouettes;

@@ -5,6 +5,7 @@
 
 #include "photos/self_calibration.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <set>
@@ -78,6 +79,54 @@ std::vector<double> observation_type_weights(const std::vector<Vec3>& positions,
     w[k] = G > 0 ? lambdas[k] / G : 0;
   }
   return w;
+}
+
+std::vector<std::array<int, 2>> mirror_vertex_pairs(const TriMesh& mesh, double tolerance_m) {
+  // Sorted by x so each vertex looks for its mirror in a narrow window.
+  const int n = mesh.num_vertices();
+  std::vector<int> order(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) order[size_t(i)] = i;
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return mesh.positions[size_t(a)].x() < mesh.positions[size_t(b)].x(); });
+  std::vector<double> xs(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) xs[size_t(i)] = mesh.positions[size_t(order[size_t(i)])].x();
+  std::vector<std::array<int, 2>> pairs;
+  for (int a = 0; a < n; ++a) {
+    const Vec3& p = mesh.positions[size_t(a)];
+    const Vec3 m(-p.x(), p.y(), p.z());
+    int best = -1;
+    double best_d = tolerance_m;
+    for (auto it = std::lower_bound(xs.begin(), xs.end(), m.x() - tolerance_m);
+         it != xs.end() && *it <= m.x() + tolerance_m; ++it) {
+      const int b = order[size_t(it - xs.begin())];
+      const double d = (mesh.positions[size_t(b)] - m).norm();
+      if (d <= best_d) best = b, best_d = d;
+    }
+    if (best < 0) return {};
+    if (a <= best) pairs.push_back({a, best});
+  }
+  return pairs;
+}
+
+void symmetry_residuals(const std::vector<Vec3>& start, const std::vector<Vec3>& positions,
+                        const std::vector<std::array<int, 2>>& pairs, double weight, Eigen::VectorXd& r,
+                        std::vector<Eigen::Triplet<double>>* jacobian) {
+  const double s = std::sqrt(weight);
+  r.resize(3 * long(pairs.size()));
+  for (size_t k = 0; k < pairs.size(); ++k) {
+    const int a = pairs[k][0], b = pairs[k][1], row = 3 * int(k);
+    const Vec3 da = positions[size_t(a)] - start[size_t(a)], db = positions[size_t(b)] - start[size_t(b)];
+    r.segment<3>(row) = s * (Vec3(-da.x(), da.y(), da.z()) - db);
+    if (!jacobian) continue;
+    for (int j = 0; j < 3; ++j) {
+      const double sa = j == 0 ? -s : s;  // d/dx_a of s S x_a
+      if (a != b) {
+        jacobian->emplace_back(row + j, 3 * a + j, sa);
+        jacobian->emplace_back(row + j, 3 * b + j, -s);
+      } else if (sa != s) {
+        jacobian->emplace_back(row + j, 3 * a + j, sa - s);  // on the plane: -2 s along x, 0 else
+      }
+    }
+  }
 }
 
 SparseMat uniform_laplacian(const TriMesh& mesh) {
@@ -215,8 +264,11 @@ namespace {
 class ShapeProblem : public LeastSquaresProblem {
  public:
   ShapeProblem(const TriMesh& control, std::vector<std::unique_ptr<ObservationSet>>& sets,
-               const std::vector<std::array<int, 2>>& binding_edges, double binding_weight)
-      : base_(control.positions), sets_(sets), binding_(binding_edges), binding_weight_(binding_weight) {
+               const std::vector<std::array<int, 2>>& binding_edges, double binding_weight,
+               const std::vector<std::array<int, 2>>& mirror_pairs, double symmetry_weight)
+      : base_(control.positions), start_(control.positions), sets_(sets), binding_(binding_edges),
+        binding_weight_(binding_weight), mirror_(mirror_pairs), symmetry_weight_(symmetry_weight) {
+    if (!(symmetry_weight_ > 0)) mirror_ = {};
     scales_.assign(sets_.size(), 1.0);
     for (const auto& e : binding_)
       rest_.push_back(control.positions[size_t(e[0])] - control.positions[size_t(e[1])]);
@@ -257,7 +309,7 @@ class ShapeProblem : public LeastSquaresProblem {
 
   int num_parameters() const override { return int(delta_.size()); }
   int observation_rows() const {
-    int n = 3 * int(binding_.size());
+    int n = 3 * int(binding_.size() + mirror_.size());
     for (const auto& s : sets_) n += s->num_residuals();
     return n;
   }
@@ -287,6 +339,14 @@ class ShapeProblem : public LeastSquaresProblem {
         over_vertices.emplace_back(row + j, 3 * b + j, -sb);
       }
       row += 3;
+    }
+    if (!mirror_.empty()) {
+      Eigen::VectorXd rs;
+      std::vector<Eigen::Triplet<double>> js;
+      symmetry_residuals(start_, p, mirror_, symmetry_weight_, rs, trip ? &js : nullptr);
+      r.segment(row, rs.size()) = rs;
+      for (const auto& t : js) over_vertices.emplace_back(row + t.row(), t.col(), t.value());
+      row += int(rs.size());
     }
     if (trip) {
       if (level_->identity) {
@@ -322,9 +382,12 @@ class ShapeProblem : public LeastSquaresProblem {
 
  private:
   std::vector<Vec3> base_;
+  std::vector<Vec3> start_;  // the control mesh given to the fit (the symmetry's reference)
   std::vector<std::unique_ptr<ObservationSet>>& sets_;
   const std::vector<std::array<int, 2>>& binding_;
   double binding_weight_;
+  std::vector<std::array<int, 2>> mirror_;
+  double symmetry_weight_;
   std::vector<Vec3> rest_;  // each binding edge's x_a - x_b on the start shape
   const ControlLevel* level_ = nullptr;
   std::vector<Vec3> nodes_;  // the level's nodes on its start shape
@@ -369,6 +432,13 @@ Status fit_shape(const TriMesh& control, std::vector<std::unique_ptr<Observation
   for (const auto& e : options.binding_edges)
     if (e[0] < 0 || e[1] < 0 || e[0] >= control.num_vertices() || e[1] >= control.num_vertices() || e[0] == e[1])
       return Status::error(ErrorCode::InvalidInput, "shape fit: a binding edge names a vertex the mesh does not have");
+  if (!(options.symmetry_weight >= 0) || !std::isfinite(options.symmetry_weight))
+    return Status::error(ErrorCode::InvalidInput, "shape fit: the symmetry weight must be >= 0");
+  if (options.symmetry_weight > 0 && options.mirror_pairs.empty())
+    return Status::error(ErrorCode::InvalidInput, "shape fit: a symmetry weight without mirror pairs");
+  for (const auto& e : options.mirror_pairs)
+    if (e[0] < 0 || e[1] < 0 || e[0] >= control.num_vertices() || e[1] >= control.num_vertices())
+      return Status::error(ErrorCode::InvalidInput, "shape fit: a mirror pair names a vertex the mesh does not have");
   // The levels, coarse to fine: each coarse one, then the control mesh for the schedule.
   std::vector<ControlLevel> levels(options.coarse_levels.size() + (options.stiffness_schedule.empty() ? 0 : 1));
   struct Stage {
@@ -386,7 +456,8 @@ Status fit_shape(const TriMesh& control, std::vector<std::unique_ptr<Observation
     if (!s) return with_context(s, "shape fit");
     for (double k : options.stiffness_schedule) stages.push_back({levels.size() - 1, k});
   }
-  ShapeProblem problem(control, sets, options.binding_edges, options.binding_weight);
+  ShapeProblem problem(control, sets, options.binding_edges, options.binding_weight, options.mirror_pairs,
+                       options.symmetry_weight);
   problem.tether = options.tether;
   problem.follow = options.follow;
   problem.follow_observed = options.follow_observed;

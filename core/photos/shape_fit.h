@@ -128,6 +128,16 @@ struct ShapeFitOptions {
   // that do not cross").
   std::vector<std::array<int, 2>> binding_edges;
   double binding_weight = 1e4;
+  // Mirror symmetry about the plane x = 0 (the generic head's): for each
+  // pair (a, b) of mirror vertices (mirror_vertex_pairs; a == b on the
+  // midline) rows sqrt(symmetry_weight) (S (x_a - s_a) - (x_b - s_b)) in
+  // metres, s the start shape, S = diag(-1, 1, 1): a displacement on one
+  // side is asked for, mirrored, on the other. A face is close to
+  // symmetric and its two sides' detector errors are not, so the term
+  // keeps what both sides' landmarks agree on and damps what one side's
+  // alone asks for (a crooked nose, one cheek wider). 0: off.
+  std::vector<std::array<int, 2>> mirror_pairs;
+  double symmetry_weight = 0;
   int reweighting_rounds = 2;
   int max_lm_iterations = 20;
   // An LM run stops when a step gains less than this share of the cost.
@@ -192,6 +202,17 @@ std::vector<bool> observed_vertices(const std::vector<std::unique_ptr<Observatio
 inline int regularizer_extra_parameters(double follow) { return follow > 0 ? 7 : 0; }
 // s (x - c) + w x (x - c) + t for theta = (s, w, t), c the centroid.
 Vec3 similarity_displacement(const Vec3& x, const Vec3& centroid, const Eigen::Matrix<double, 7, 1>& theta);
+
+// The vertex pairs of a mesh symmetric about x = 0: (a, b) with b the
+// vertex at a's mirror image (within tolerance_m), a <= b, every vertex in
+// one pair (a == b on the plane). Empty when some vertex has no mirror.
+std::vector<std::array<int, 2>> mirror_vertex_pairs(const TriMesh& mesh, double tolerance_m = 1e-6);
+// The symmetry term's rows (ShapeFitOptions::mirror_pairs), 3 per pair, at
+// `positions` against `start`; with `jacobian`, its entries over the vertex
+// coordinates (column 3 v + axis).
+void symmetry_residuals(const std::vector<Vec3>& start, const std::vector<Vec3>& positions,
+                        const std::vector<std::array<int, 2>>& pairs, double weight, Eigen::VectorXd& r,
+                        std::vector<Eigen::Triplet<double>>* jacobian);
 
 // The uniform graph Laplacian, #V by #V: (L d)_i = d_i - mean of d over i's neighbours.
 SparseMat uniform_laplacian(const TriMesh& mesh);
