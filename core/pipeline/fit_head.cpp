@@ -1336,15 +1336,23 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
         TriMesh reach_control;
         GlobalFitResult reach_fit;
         st = fit_global(neck_pts, out.control, topo, reach_terms, reach_options, reach_control, reach_fit, progress);
-        if (!st) return with_context(st, "global fitting (scanned neck, its own points)");
-        neck_terms.start = out.control.positions;  // the head exactly where its fit left it
-        for (int v = 0; v < out.control.num_vertices(); ++v)
-          if (in_neck[v] && !mouth_bag[v]) neck_terms.start[v] = reach_control.positions[v];
-        out.neck_reach.reached = true;
+        if (st.code == ErrorCode::Cancelled) return st;
         std::ostringstream note;
         note << "the scanned neck lay beyond the head fit's trimming distance (median " << 1e3 * d[d.size() / 2]
-             << " mm, trimmed beyond " << 1e3 * tau << " mm): fitted to its own points first";
+             << " mm, trimmed beyond " << 1e3 * tau << " mm): ";
+        if (st) {
+          neck_terms.start = out.control.positions;  // the head exactly where its fit left it
+          for (int v = 0; v < out.control.num_vertices(); ++v)
+            if (in_neck[v] && !mouth_bag[v]) neck_terms.start[v] = reach_control.positions[v];
+          out.neck_reach.reached = true;
+          note << "fitted to its own points first";
+        } else {
+          // The held round alone, as without the option (the neck is an
+          // extra; a fit of its few points that fails does not fail the head).
+          note << "its fit to its own points failed (" << st.message << "): the held round alone";
+        }
         out.notes.push_back(note.str());
+        st = Status::success();
       }
     }
     TriMesh neck_control;
