@@ -18,6 +18,7 @@
 // --fit-ear-refit-late (FitHeadOptions::ear_refit_after_rounds off),
 // --fit-ear-give-up N (FitHeadOptions::ear_refit_give_up_pairs),
 // --fit-neck-guard 0|1 (FitHeadOptions::scanned_neck_smooth_guard),
+// --fit-neck-reach 0|1 (FitHeadOptions::scanned_neck_reach),
 // --fit-points N (scans of N points instead of 300k), --fit-thin-cells X (FitHeadOptions::thin_cells_per_edge; 0: never thinned), --fit-back off|face-only|always and
 // --fit-back-weight W (the global fit's scan-to-mesh term, FitHeadOptions::back_term),
 // --fit-smooth-region-rings N (FoldLimitOptions::smooth_region_rings, -1: off),
@@ -346,6 +347,9 @@ int run(const Args& args) {
       int neck_guard = opt.scanned_neck_smooth_guard ? 1 : 0;
       if (!args.get_int("fit-neck-guard", neck_guard, neck_guard, 0, 1)) return 1;
       opt.scanned_neck_smooth_guard = neck_guard == 1;
+      int neck_reach = opt.scanned_neck_reach ? 1 : 0;
+      if (!args.get_int("fit-neck-reach", neck_reach, neck_reach, 0, 1)) return 1;
+      opt.scanned_neck_reach = neck_reach == 1;
     }
     if (args.has("fit-guard-always")) opt.smooth_guard = FitHeadOptions::SmoothGuard::Always;
     if (args.has("fit-guard-face-only")) opt.smooth_guard = FitHeadOptions::SmoothGuard::FaceOnlyScans;

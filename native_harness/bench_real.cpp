@@ -54,6 +54,8 @@
 // (FitHeadOptions::ear_refit_after_rounds off), to compare.
 // --fit-neck-guard 0|1: the scanned neck's fit with the smooth-surface
 // guard (FitHeadOptions::scanned_neck_smooth_guard).
+// --fit-neck-reach 0|1: a scanned neck beyond the head fit's trimming
+// distance fitted to its own points first (FitHeadOptions::scanned_neck_reach).
 // --fit-ear-give-up N: the bound ear refit given up after its rounds when
 // its ears cross there in more than N pairs
 // (FitHeadOptions::ear_refit_give_up_pairs; 0: judged at its end).
@@ -422,6 +424,9 @@ int run(const Args& args) {
     int neck_guard = options.scanned_neck_smooth_guard ? 1 : 0;
     if (!args.get_int("fit-neck-guard", neck_guard, neck_guard, 0, 1)) return 1;
     options.scanned_neck_smooth_guard = neck_guard == 1;
+    int neck_reach = options.scanned_neck_reach ? 1 : 0;
+    if (!args.get_int("fit-neck-reach", neck_reach, neck_reach, 0, 1)) return 1;
+    options.scanned_neck_reach = neck_reach == 1;
   }
   if (!parse_back_term(args, options)) return 1;
   const std::string dump = args.get("fit-real-dump", "");

@@ -19,7 +19,7 @@ int run_bench(const Args& args) {
           "bench", args,
           {"only", "quick", "size", "data", "dump", "save-scans", "truth-head", "fit-arc", "fit-area-ratio", "fit-back",
            "fit-back-weight", "fit-below-cut-mm", "fit-cap-pct", "fit-crease-angle", "fit-crease-edges",
-           "fit-crease-trials", "fit-data-level", "fit-displaced-creases", "fit-ear-refit-late", "fit-ear-give-up", "fit-neck-guard", "fit-ear-refit-rounds", "fit-edge-fade", "fit-footprint",
+           "fit-crease-trials", "fit-data-level", "fit-displaced-creases", "fit-ear-refit-late", "fit-ear-give-up", "fit-neck-guard", "fit-neck-reach", "fit-ear-refit-rounds", "fit-edge-fade", "fit-footprint",
            "fit-guard-always", "fit-guard-face-only", "fit-guard-off", "fit-guard-passes", "fit-head",
            "fit-hinges-last", "fit-isolated", "fit-levels", "fit-line-edges", "fit-no-climb",
            "fit-no-corners-to-smooth", "fit-no-creases", "fit-no-eye-region", "fit-scanned-neck", "fit-no-scanned-neck", "fit-no-parents-to-smooth",

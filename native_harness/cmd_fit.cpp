@@ -43,7 +43,7 @@ int run_fit(const Args& args) {
   const std::string cmd = "fit";
   if (!only_known_options(cmd, args,
                           {"scan", "out", "levels", "up", "facing", "no-orientation-check", "face-only", "whole-head",
-                           "no-eye-region", "scanned-neck", "no-scanned-neck", "denoise", "no-denoise", "widen-footprints", "data-level", "dump",
+                           "no-eye-region", "scanned-neck", "no-scanned-neck", "neck-reach", "denoise", "no-denoise", "widen-footprints", "data-level", "dump",
                            "scan-frame", "generic-head", "project", "no-project", "thin-cells"}))
     return 2;
   const std::string scan_path = args.get("scan"), out_dir = args.get("out");
@@ -67,6 +67,8 @@ int run_fit(const Args& args) {
     return fail(cmd, "give --scanned-neck or --no-scanned-neck, not both");
   if (args.has("scanned-neck")) opt.fit_scanned_neck = true;
   if (args.has("no-scanned-neck")) opt.fit_scanned_neck = false;
+  // FitHeadOptions::scanned_neck_reach (off by default)
+  if (args.has("neck-reach")) opt.scanned_neck_reach = true;
   // Denoising of the finest level's displacements by smoothing over the mesh
   // (DisplacementOptions::smooth_*) is on by default; --denoise (its name
   // when it was opt-in) is accepted and changes nothing.
@@ -190,7 +192,7 @@ int run_fit(const Args& args) {
 
 Registrar reg({"fit",
                "likeness fit --scan FILE --out DIR [--levels L] [--up X Y Z|+x..-z] [--facing X Y Z|+x..-z] "
-               "[--no-orientation-check] [--face-only|--whole-head] [--no-eye-region] [--no-scanned-neck] [--no-denoise] [--widen-footprints] [--data-level 0|1|2] "
+               "[--no-orientation-check] [--face-only|--whole-head] [--no-eye-region] [--no-scanned-neck] [--neck-reach] [--no-denoise] [--widen-footprints] [--data-level 0|1|2] "
                "[--thin-cells X] [--dump] [--scan-frame] [--generic-head asset|plate|ring|even|back|nape|wide-mouth|nostrils|unfaired|fair-N] [--project FILE.likeness.glb | --no-project]",
                "fits the generic head to a scan (jeong2002): control.obj, level1..L.obj, report.json and the head "
                "project head.likeness.glb (--project elsewhere, --no-project none)",

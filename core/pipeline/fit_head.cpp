@@ -3,6 +3,7 @@
 #include "align/face_refine.h"
 
 #include "common/parallel.h"
+#include "fit/closest_point.h"
 #include "head/generic_head.h"
 #include "mesh/geometry.h"
 #include "mesh/topology.h"
@@ -1311,6 +1312,49 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
     neck_terms.relief_start_tree = &relief_tree;
     std::vector<Vec3> all = skin_pts;
     all.insert(all.end(), neck_pts.begin(), neck_pts.end());
+    if (options.scanned_neck_reach && !out.global_fit.iterations.empty()) {
+      // FitHeadOptions::scanned_neck_reach: the held round trims every
+      // residual beyond the head's trimming distance, so a neck farther off
+      // than that (most of it: its median) is not pulled at all. It is then
+      // fitted to its own points first, over the head's rounds (their
+      // trimming from the neck's own residuals), the head held; the held
+      // round below starts there.
+      const double tau = out.global_fit.iterations.back().trim_distance;
+      const ClosestPointTree head_tree(out.control);
+      std::vector<double> d(neck_pts.size());
+      parallel_for(0, static_cast<int>(neck_pts.size()), 1024,
+                   [&](int i, int) { d[i] = std::sqrt(head_tree.closest(neck_pts[i]).squared_distance); });
+      std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+      out.neck_reach.median_before = d[d.size() / 2];
+      out.neck_reach.trim_distance = tau;
+      if (out.neck_reach.median_before > tau) {
+        GlobalFitOptions reach_options = neck_options;
+        reach_options.smooth_weights = global_options.smooth_weights;
+        reach_options.smooth_guard_level = 0;  // the held round's pass guards as it does without the reach
+        GlobalFitTerms reach_terms = neck_terms;
+        reach_terms.relief_start_tree = nullptr;
+        TriMesh reach_control;
+        GlobalFitResult reach_fit;
+        st = fit_global(neck_pts, out.control, topo, reach_terms, reach_options, reach_control, reach_fit, progress);
+        if (st.code == ErrorCode::Cancelled) return st;
+        std::ostringstream note;
+        note << "the scanned neck lay beyond the head fit's trimming distance (median " << 1e3 * d[d.size() / 2]
+             << " mm, trimmed beyond " << 1e3 * tau << " mm): ";
+        if (st) {
+          neck_terms.start = out.control.positions;  // the head exactly where its fit left it
+          for (int v = 0; v < out.control.num_vertices(); ++v)
+            if (in_neck[v] && !mouth_bag[v]) neck_terms.start[v] = reach_control.positions[v];
+          out.neck_reach.reached = true;
+          note << "fitted to its own points first";
+        } else {
+          // The held round alone, as without the option (the neck is an
+          // extra; a fit of its few points that fails does not fail the head).
+          note << "its fit to its own points failed (" << st.message << "): the held round alone";
+        }
+        out.notes.push_back(note.str());
+        st = Status::success();
+      }
+    }
     TriMesh neck_control;
     GlobalFitResult neck_fit;
     const bool had_tree = !relief_tree.empty();

@@ -165,6 +165,21 @@ struct FitHeadOptions {
   // Figures (CPU and the fits, 25 copies): docs/design/fit_real_scans.md,
   // session 51.
   bool scanned_neck_smooth_guard = false;
+  // The scanned neck's held fit reaches a neck centimetres off: when the
+  // median distance of the neck's points to the head's fit exceeds the
+  // trimming distance of the head fit's last pass (its held round counts
+  // every point beyond that as an outlier, and such a neck was not pulled:
+  // Gutenberg's, 45 mm median), the neck's control vertices are first
+  // fitted to the neck's points alone over the head's rounds of smoothing
+  // (the trimming then taken from the neck's own residuals), the rest
+  // held, and the held round starts there. Necks within the trimming
+  // distance are fitted as without it. Off by default: it reaches
+  // Gutenberg's neck (11.4 -> 0.1 mm median) and Demosthenes' Table 1 is
+  // lower, but not every head figure is the same or better (Gutenberg's
+  // and Plato's Table 1 up by 0.0002 %, a shifted Plato's smooth level 3
+  // from 0 to 20 pairs; docs/design/fit_real_scans.md, "The scanned neck
+  // reached where it lies centimetres off").
+  bool scanned_neck_reach = false;
   // Scans that come as meshes (PointCloud::faces): their triangles are
   // sampled every surface_sample_edges x the finest level's mean edge and
   // the samples are measured with the scan's points (multires/
@@ -391,6 +406,14 @@ struct FitHeadResult {
   FaceRefineResult face_refine;
   int pocket_points = 0;        // fitted points nearest to an eye socket / the mouth bag: not fitted
   int neck_points = 0;          // scan points below the neck cut fitted as the neck (fit_scanned_neck)
+  // FitHeadOptions::scanned_neck_reach: the neck points' median distance to
+  // the head's fit and the head fit's last trimming distance (0 when the
+  // option is off or no neck was fitted), and whether the neck was fitted
+  // to its own points first.
+  struct NeckReach {
+    double median_before = 0, trim_distance = 0;
+    bool reached = false;
+  } neck_reach;
   int isolated_points = 0;  // skin points left out of fitting as isolated (DisplacementOptions::isolated_density_ratio)
   SurfaceSampleStats surface_samples;  // samples of the scan's triangles measured (0: a raw cloud)
   int zeroed_displacements = 0; // displacements dropped in pockets or because they folded triangles

@@ -313,6 +313,80 @@ TEST_CASE("fit_head: a scanned neck thicker than the generic one is fitted where
   CHECK(st.message.find("scanned_neck_max_angle_deg") != std::string::npos);
 }
 
+TEST_CASE("fit_head: a scanned neck centimetres off the generic one is reached with scanned_neck_reach") {
+  // The scan's points below the generic neck plane pushed 25 mm out along
+  // their normals (Gutenberg's neck lay 45 mm off the head's fit, median).
+  // The held round trims residuals beyond the head fit's trimming distance
+  // (a few millimetres), so without the reach it pulls almost none of them.
+  const Scene& s = scene();
+  const ClipPlane& generic_cut = s.generic.annotations.neck_clip;
+  PointCloud scan = s.scan;
+  REQUIRE(scan.normals.size() == scan.positions.size());
+  for (size_t i = 0; i < scan.positions.size(); ++i)
+    if (!generic_cut.keeps(scan.positions[i])) scan.positions[i] += 0.025 * scan.normals[i].normalized();
+  FitHeadOptions on = quick_options(), off = quick_options();
+  on.fit_scanned_neck = off.fit_scanned_neck = true;
+  on.scanned_neck_reach = true;
+  off.scanned_neck_reach = false;
+  // The control mesh each global fit hands on (the neck's fit included).
+  TriMesh global_on, global_off;
+  FitStageObserver obs_on, obs_off;
+  obs_on.finished = [&](const std::string& name, const TriMesh& m) {
+    if (name == "global_fitting") global_on = m;
+  };
+  obs_off.finished = [&](const std::string& name, const TriMesh& m) {
+    if (name == "global_fitting") global_off = m;
+  };
+  FitHeadResult r_on, r_off;
+  REQUIRE(fit_head(scan, s.generic, on, r_on, obs_on).ok());
+  REQUIRE(fit_head(scan, s.generic, off, r_off, obs_off).ok());
+  REQUIRE(r_on.neck_points > 1000);
+  CHECK(r_on.neck_points == r_off.neck_points);
+  CHECK(r_on.neck_reach.reached);
+  CHECK(r_on.neck_reach.median_before > r_on.neck_reach.trim_distance);
+  CHECK(!r_off.neck_reach.reached);
+  CHECK(r_on.fitted_points == r_off.fitted_points);
+  // The pushed points between the aligned cut and the aligned neck's lower
+  // end, to each fit's finest level.
+  const AffineMap& m = r_on.generic_to_head;
+  const Vec3 p0 = m.apply(generic_cut.point);
+  const Vec3 n = (m.A.inverse().transpose() * generic_cut.normal).normalized();
+  double lowest = 0;
+  for (const Vec3& v : r_on.aligned.positions) lowest = std::min(lowest, n.dot(v - p0));
+  std::vector<Vec3> neck;
+  for (const Vec3& p : scan.positions) {
+    const double h = n.dot(p - p0);
+    if (h < -0.005 && h > lowest + 0.005) neck.push_back(p);
+  }
+  REQUIRE(neck.size() > 500);
+  auto median_distance = [&](const TriMesh& mesh) {
+    const ClosestPointTree tree(mesh);
+    std::vector<double> d;
+    for (const Vec3& p : neck) d.push_back(std::sqrt(tree.closest(p).squared_distance));
+    std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+    return d[d.size() / 2];
+  };
+  const double d_on = median_distance(r_on.level_meshes.back());
+  const double d_off = median_distance(r_off.level_meshes.back());
+  INFO(neck.size() << " neck points: median distance " << 1e3 * d_on << " mm with the reach, " << 1e3 * d_off
+                   << " mm without; the neck's median " << 1e3 * r_on.neck_reach.median_before
+                   << " mm off the head's fit, trimmed beyond " << 1e3 * r_on.neck_reach.trim_distance << " mm");
+  CHECK(d_on < 0.001);
+  CHECK(d_off > 0.005);
+  // Only the neck's control vertices moved: the head's are where the
+  // head's fit left them, to the bit, with the reach as without it.
+  REQUIRE(global_on.num_vertices() == global_off.num_vertices());
+  std::vector<char> neck_vertex(global_on.num_vertices(), 0);
+  for (int v : s.generic.annotations.regions.at("neck")) neck_vertex[v] = 1;
+  int head_moved = 0, neck_moved = 0;
+  for (int v = 0; v < global_on.num_vertices(); ++v) {
+    const bool moved = global_on.positions[v] != global_off.positions[v];
+    (neck_vertex[v] ? neck_moved : head_moved) += moved ? 1 : 0;
+  }
+  CHECK(head_moved == 0);
+  CHECK(neck_moved > 0);
+}
+
 // The scan with a sheet over the left ear: every point within 0.6 ear
 // sizes of the ear's centre pushed out to the ear's outer side (it crosses
 // the ear at level 3). ears: the "ears" region of head.
