@@ -264,10 +264,9 @@ TEST_CASE("a landmark map re-made from a detector's points finds where it sees t
 // mesh's asymmetry (mean |S d_a - d_b| over the mirror pairs) 3.22 -> 0.15
 // mm.
 TEST_CASE("on the detector's points the symmetric fit is closer to the person and mirror-symmetric", "[photos][detected][symmetry]") {
-  GenericHead generic;
-  REQUIRE(load_generic_head(generic));
-  LandmarkMap map;
-  REQUIRE(parse_landmark_map_json(mediapipe_landmark_map_text(), map));
+  const ShippedMap shipped;
+  const GenericHead& generic = shipped.generic;
+  const LandmarkMap& map = shipped.map;
   DetectedSession s;
   load_session(generic, 1, s);
   REQUIRE(s.photos.size() >= 4);

@@ -37,6 +37,32 @@ FitHeadOptions quick_options() {
   return o;
 }
 
+// The scan's points between the aligned neck cut and the aligned generic
+// neck's lower end (5 mm off each: off the cut and the neck's end), in the
+// frame of `fit`.
+std::vector<Vec3> points_along_neck(const PointCloud& scan, const FitHeadResult& fit, const ClipPlane& generic_cut) {
+  const AffineMap& m = fit.generic_to_head;
+  const Vec3 p0 = m.apply(generic_cut.point);
+  const Vec3 n = (m.A.inverse().transpose() * generic_cut.normal).normalized();
+  double lowest = 0;
+  for (const Vec3& v : fit.aligned.positions) lowest = std::min(lowest, n.dot(v - p0));
+  std::vector<Vec3> neck;
+  for (const Vec3& p : scan.positions) {
+    const double h = n.dot(p - p0);
+    if (h < -0.005 && h > lowest + 0.005) neck.push_back(p);
+  }
+  return neck;
+}
+
+// The median distance of `points` to `mesh`.
+double median_distance_to(const TriMesh& mesh, const std::vector<Vec3>& points) {
+  const ClosestPointTree tree(mesh);
+  std::vector<double> d;
+  for (const Vec3& p : points) d.push_back(std::sqrt(tree.closest(p).squared_distance));
+  std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+  return d[d.size() / 2];
+}
+
 }  // namespace
 
 TEST_CASE("fit_head: a synthetic scan is fitted, each stage closer than the last") {
@@ -271,24 +297,9 @@ TEST_CASE("fit_head: a scanned neck thicker than the generic one is fitted where
   CHECK(r_on.fitted_points == r_off.fitted_points);
   // The scan's points between the aligned cut and the aligned neck's lower
   // end, to each fit's finest level.
-  const AffineMap& m = r_on.generic_to_head;
-  const Vec3 p0 = m.apply(generic_cut.point);
-  const Vec3 n = (m.A.inverse().transpose() * generic_cut.normal).normalized();
-  double lowest = 0;
-  for (const Vec3& v : r_on.aligned.positions) lowest = std::min(lowest, n.dot(v - p0));
-  std::vector<Vec3> neck;
-  for (const Vec3& p : scan.positions) {
-    const double h = n.dot(p - p0);
-    if (h < -0.005 && h > lowest + 0.005) neck.push_back(p);  // off the cut and the neck's end
-  }
+  const std::vector<Vec3> neck = points_along_neck(scan, r_on, generic_cut);
   REQUIRE(neck.size() > 500);
-  auto median_distance = [&](const TriMesh& mesh) {
-    const ClosestPointTree tree(mesh);
-    std::vector<double> d;
-    for (const Vec3& p : neck) d.push_back(std::sqrt(tree.closest(p).squared_distance));
-    std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
-    return d[d.size() / 2];
-  };
+  auto median_distance = [&](const TriMesh& mesh) { return median_distance_to(mesh, neck); };
   const double d_on = median_distance(r_on.level_meshes.back());
   const double d_off = median_distance(r_off.level_meshes.back());
   INFO(neck.size() << " neck points: median distance " << 1e3 * d_on << " mm with the scanned neck fitted, "
@@ -348,24 +359,9 @@ TEST_CASE("fit_head: a scanned neck centimetres off the generic one is reached w
   CHECK(r_on.fitted_points == r_off.fitted_points);
   // The pushed points between the aligned cut and the aligned neck's lower
   // end, to each fit's finest level.
-  const AffineMap& m = r_on.generic_to_head;
-  const Vec3 p0 = m.apply(generic_cut.point);
-  const Vec3 n = (m.A.inverse().transpose() * generic_cut.normal).normalized();
-  double lowest = 0;
-  for (const Vec3& v : r_on.aligned.positions) lowest = std::min(lowest, n.dot(v - p0));
-  std::vector<Vec3> neck;
-  for (const Vec3& p : scan.positions) {
-    const double h = n.dot(p - p0);
-    if (h < -0.005 && h > lowest + 0.005) neck.push_back(p);
-  }
+  const std::vector<Vec3> neck = points_along_neck(scan, r_on, generic_cut);
   REQUIRE(neck.size() > 500);
-  auto median_distance = [&](const TriMesh& mesh) {
-    const ClosestPointTree tree(mesh);
-    std::vector<double> d;
-    for (const Vec3& p : neck) d.push_back(std::sqrt(tree.closest(p).squared_distance));
-    std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
-    return d[d.size() / 2];
-  };
+  auto median_distance = [&](const TriMesh& mesh) { return median_distance_to(mesh, neck); };
   const double d_on = median_distance(r_on.level_meshes.back());
   const double d_off = median_distance(r_off.level_meshes.back());
   INFO(neck.size() << " neck points: median distance " << 1e3 * d_on << " mm with the reach, " << 1e3 * d_off
