@@ -129,11 +129,12 @@ Status make_photos_observations(const GenericHead& generic, const std::vector<Su
     lambdas.push_back(options.lambda_stereo);
   }
   out.fit = options.fit;
-  // The symmetry term (shape_fit.h) pairs the generic head's mirror vertices.
+  // The symmetry term (shape_fit.h) pairs the generic head's mirror
+  // vertices; a head that is not mirror-symmetric is fitted without it
+  // (run_photos_job says so).
   if (out.fit.symmetry_weight > 0 && out.fit.mirror_pairs.empty()) {
     out.fit.mirror_pairs = mirror_vertex_pairs(generic.mesh);
-    if (out.fit.mirror_pairs.empty())
-      return Status::error(ErrorCode::InvalidInput, "photos: the symmetry term needs a mirror-symmetric generic head");
+    if (out.fit.mirror_pairs.empty()) out.fit.symmetry_weight = 0;
   }
   if (options.bind_lips) {
     const std::vector<std::array<int, 2>> lips = lip_binding_edges(generic);
@@ -294,7 +295,13 @@ Status run_photos_job(const GenericHead& generic, const LandmarkMap& map, const 
                              std::to_string(int(options.stereo_options.max_angle_deg)) +
                              " deg apart; landmarks only");
   }
-  s = fit_photos_shape(generic, landmarks, photos, result.calib, options, result.fit, outlines, &result.stereo,
+  PhotosJobOptions fit_options = options;
+  if (fit_options.fit.symmetry_weight > 0 && fit_options.fit.mirror_pairs.empty()) {
+    fit_options.fit.mirror_pairs = mirror_vertex_pairs(generic.mesh);
+    if (fit_options.fit.mirror_pairs.empty())
+      result.notes.push_back("the generic head is not mirror-symmetric: the shape fit does without its symmetry term");
+  }
+  s = fit_photos_shape(generic, landmarks, photos, result.calib, fit_options, result.fit, outlines, &result.stereo,
                        &result.stereo_fit, slide, &result.mouth_bag, &result.lids, &result.untangle);
   return with_context(s, "photos");
 }

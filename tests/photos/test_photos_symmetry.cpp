@@ -3,7 +3,9 @@
 // head's mirror pairs and the rows against finite differences (what it does
 // to a fit on the detector's points: test_photos_detected.cpp).
 #include "head/generic_head.h"
+#include "photos/photos_job.h"
 #include "photos/shape_fit.h"
+#include "photos_scenario.h"
 
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -87,6 +89,28 @@ TEST_CASE("the symmetry rows: zero on a mirrored displacement, their Jacobian ag
   }
   std::printf("symmetry rows: worst relative difference to finite differences %.2e\n", worst);
   CHECK(worst < 1e-8);
+}
+
+
+TEST_CASE("a generic head that is not mirror-symmetric is fitted without the symmetry term, and the job says so", "[photos][symmetry]") {
+  const test::PhotoScenario s = test::make_photo_scenario(1);
+  GenericHead bent = s.generic;
+  int back = 0;  // the vertex farthest back, away from every landmark
+  for (int v = 0; v < bent.mesh.num_vertices(); ++v)
+    if (bent.mesh.positions[size_t(v)].z() < bent.mesh.positions[size_t(back)].z()) back = v;
+  bent.mesh.positions[size_t(back)].x() += 0.002;
+  REQUIRE(mirror_vertex_pairs(bent.mesh).empty());
+  const std::string note = "the generic head is not mirror-symmetric: the shape fit does without its symmetry term";
+  auto has_note = [&](const PhotosJobResult& r) {
+    for (const std::string& n : r.notes)
+      if (n == note) return true;
+    return false;
+  };
+  PhotosJobResult on_bent, on_generic;
+  REQUIRE(run_photos_job(bent, s.map, s.session.photos, PhotosJobOptions{}, on_bent));
+  CHECK(has_note(on_bent));
+  REQUIRE(run_photos_job(s.generic, s.map, s.session.photos, PhotosJobOptions{}, on_generic));
+  CHECK_FALSE(has_note(on_generic));
 }
 
 }  // namespace
