@@ -41,6 +41,21 @@ Status run_photos_stereo(const GenericHead& generic, const std::vector<LandmarkP
   return s;
 }
 
+namespace {
+
+// The symmetry term (shape_fit.h) pairs the generic head's mirror vertices
+// once; a head that is not mirror-symmetric is fitted without the term
+// (false: the caller says so).
+bool pair_mirror_vertices(const GenericHead& generic, ShapeFitOptions& fit) {
+  if (!(fit.symmetry_weight > 0) || !fit.mirror_pairs.empty()) return true;
+  fit.mirror_pairs = mirror_vertex_pairs(generic.mesh);
+  if (!fit.mirror_pairs.empty()) return true;
+  fit.symmetry_weight = 0;
+  return false;
+}
+
+}  // namespace
+
 Status make_photos_observations(const GenericHead& generic, const std::vector<SurfacePoint>& landmarks,
                                 const std::vector<LandmarkPhoto>& photos, const SelfCalibResult& calib,
                                 const PhotosJobOptions& options, const std::vector<PhotoOutline>* outlines,
@@ -129,13 +144,7 @@ Status make_photos_observations(const GenericHead& generic, const std::vector<Su
     lambdas.push_back(options.lambda_stereo);
   }
   out.fit = options.fit;
-  // The symmetry term (shape_fit.h) pairs the generic head's mirror
-  // vertices; a head that is not mirror-symmetric is fitted without it
-  // (run_photos_job says so).
-  if (out.fit.symmetry_weight > 0 && out.fit.mirror_pairs.empty()) {
-    out.fit.mirror_pairs = mirror_vertex_pairs(generic.mesh);
-    if (out.fit.mirror_pairs.empty()) out.fit.symmetry_weight = 0;
-  }
+  pair_mirror_vertices(generic, out.fit);
   if (options.bind_lips) {
     const std::vector<std::array<int, 2>> lips = lip_binding_edges(generic);
     out.fit.binding_edges.insert(out.fit.binding_edges.end(), lips.begin(), lips.end());
@@ -296,11 +305,8 @@ Status run_photos_job(const GenericHead& generic, const LandmarkMap& map, const 
                              " deg apart; landmarks only");
   }
   PhotosJobOptions fit_options = options;
-  if (fit_options.fit.symmetry_weight > 0 && fit_options.fit.mirror_pairs.empty()) {
-    fit_options.fit.mirror_pairs = mirror_vertex_pairs(generic.mesh);
-    if (fit_options.fit.mirror_pairs.empty())
-      result.notes.push_back("the generic head is not mirror-symmetric: the shape fit does without its symmetry term");
-  }
+  if (!pair_mirror_vertices(generic, fit_options.fit))
+    result.notes.push_back("the generic head is not mirror-symmetric: the shape fit does without its symmetry term");
   s = fit_photos_shape(generic, landmarks, photos, result.calib, fit_options, result.fit, outlines, &result.stereo,
                        &result.stereo_fit, slide, &result.mouth_bag, &result.lids, &result.untangle);
   return with_context(s, "photos");

@@ -1338,7 +1338,7 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
         st = fit_global(neck_pts, out.control, topo, reach_terms, reach_options, reach_control, reach_fit, progress);
         if (st.code == ErrorCode::Cancelled) return st;
         std::ostringstream note;
-        note << "the scanned neck lay beyond the head fit's trimming distance (median " << 1e3 * d[d.size() / 2]
+        note << "the scanned neck lay beyond the head fit's trimming distance (median " << 1e3 * out.neck_reach.median_before
              << " mm, trimmed beyond " << 1e3 * tau << " mm): ";
         if (st) {
           neck_terms.start = out.control.positions;  // the head exactly where its fit left it
