@@ -247,7 +247,7 @@ int run_photos(const Args& args) {
   if (!only_known_options(cmd, args, {"points", "photos", "masks", "masks-from-photos", "silhouette-check", "map", "out",
                                       "levels", "focal-px", "texture-size", "no-texture", "register-texture", "label-texture", "stereo", "no-stereo", "coarse",
                                       "schedule", "follow", "folds", "depth-scale", "depth-0", "depth-yaw2", "contours",
-                                      "contour-check", "contour-lambda", "focal-sigma", "no-slide", "lids", "iris-photo", "pulls", "pulls-by-photo", "pulls-by-landmark", "focal-jackknife", "symmetry"}))
+                                      "contour-check", "contour-lambda", "focal-sigma", "no-slide", "lids", "iris-photo", "pulls", "pulls-by-photo", "pulls-by-landmark", "focal-jackknife", "symmetry", "no-skin-detail"}))
     return 2;
   const std::vector<std::string> points_paths = args.get_all("points"), photo_paths = args.get_all("photos"),
                                  mask_paths = args.get_all("masks");
@@ -403,12 +403,13 @@ int run_photos(const Args& args) {
   if (!s) return fail(cmd, s.message);
   if (!make_dir(out_dir)) return fail(cmd, "cannot create the output folder '" + out_dir + "'");
 
-  // The control mesh and its Butterfly levels (no scan: no displacements),
-  // as the head project holds them (`likeness export --head DIR`, `likeness
+  // The control mesh and its Butterfly levels (no scan: the generic head's
+  // skin detail as their displacements, unless --no-skin-detail), as the
+  // head project holds them (`likeness export --head DIR`, `likeness
   // project`, the page's Open project).
   s = write_file(out_dir + "/control.obj", write_obj(r.fit.mesh));
   HeadProject project;
-  if (s && levels > 0) s = project_from_photos(generic, r, levels, project);
+  if (s && levels > 0) s = project_from_photos(generic, r, levels, project, !args.has("no-skin-detail"));
   for (int l = 1; s && l <= levels; ++l) {
     TriMesh m = project.fit.level_meshes[size_t(l - 1)];
     m.normals.clear();  // positions and triangles, as before the project was kept
@@ -818,7 +819,7 @@ int run_learn_landmark_map(const Args& args) {
 
 Registrar photos_reg({"photos",
                       "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] [--masks M1.png ... | --masks-from-photos] [--silhouette-check] "
-                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--register-texture] [--label-texture] [--stereo] [--folds] [--coarse N:S,...|none] [--schedule S,...|none] [--follow K[:W]] [--symmetry W] [--depth-scale SIGMA [--depth-0 K0] [--depth-yaw2 C]] [--focal-sigma S] [--focal-jackknife] [--no-slide] [--contours [--contour-lambda K]] [--contour-check] [--lids] [--iris-photo NAME] [--pulls | --pulls-by-photo | --pulls-by-landmark]",
+                      "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--register-texture] [--label-texture] [--stereo] [--folds] [--coarse N:S,...|none] [--schedule S,...|none] [--follow K[:W]] [--symmetry W] [--no-skin-detail] [--depth-scale SIGMA [--depth-0 K0] [--depth-yaw2 C]] [--focal-sigma S] [--focal-jackknife] [--no-slide] [--contours [--contour-lambda K]] [--contour-check] [--lids] [--iris-photo NAME] [--pulls | --pulls-by-photo | --pulls-by-landmark]",
                       "a head from several photos' landmarks (fua1998): self-calibrated cameras, fitted control "
                       "mesh, levels, cameras.json, report.json; with --photos the skin from those cameras "
                       "(textured.obj, skin.png, sources.png; --label-texture: one photo per texture region, texture/labeling.h; "
@@ -833,7 +834,7 @@ Registrar photos_reg({"photos",
                       "stiffness stages after them; --follow K[:W]: the stiffness on the displacement less a fitted similarity, "
                       "plus K x stiffness ||displacement - similarity||^2 where no observation is (W x that where one is; "
                       "default 0): unobserved parts follow the head, not the nearest pull; --symmetry W: the shape fit asks each "
-                      "displacement, mirrored, of the other side (weight W, default 0: off); --depth-scale: a per-photo depth scale in the bundle adjustment "
+                      "displacement, mirrored, of the other side (weight W, default 0.3; 0: off); --no-skin-detail: the levels without the generic head's skin detail (the furrows of its smooth levels left in); --depth-scale: a per-photo depth scale in the bundle adjustment "
                       "(prior sigma SIGMA, mean K0 + C (yaw/60 deg)^2) for the detector's error shared by a photo's points; "
                       "--focal-sigma: the focal prior's relative sigma (with --focal-px); --focal-jackknife: the landmarks' focal weighed by the photos' disagreement, over the detector's ratio, with EXIF or a phone's 26 mm prior (not the default); --no-slide: the map's "
                       "view-dependent slide left out; --contours: the face outline's jaw and chin landmarks as "

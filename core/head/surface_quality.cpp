@@ -2,6 +2,7 @@
 
 #include "head/generic_head.h"
 #include "head/head_creases.h"
+#include "head/skin_detail.h"
 #include "mesh/topology.h"
 #include "multires/multires.h"
 #include "raycast/self_intersection.h"
@@ -54,7 +55,7 @@ Status measure_head_surface(const GenericHead& head, int level, HeadSurfaceQuali
 }
 
 Status measure_head_surface(const GenericHead& head, const ButterflyCreases& creases, int level,
-                            HeadSurfaceQuality& out) {
+                            HeadSurfaceQuality& out, const std::vector<std::vector<double>>* detail) {
   if (level < 1 || level > 4) return Status::error(ErrorCode::InvalidInput, "surface level must be 1..4");
   const TriMesh& m = head.mesh;
   const HeadAnnotations& a = head.annotations;
@@ -102,6 +103,7 @@ Status measure_head_surface(const GenericHead& head, const ButterflyCreases& cre
 
   MultiresMesh smooth;
   Status s = build_multires(m, creases, level, smooth);
+  if (s.ok() && detail) s = apply_skin_detail(*detail, smooth);
   if (!s.ok()) return with_context(s, "smooth levels of the head");
 
   for (int l = 0; l <= level; ++l) {

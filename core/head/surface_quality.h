@@ -36,10 +36,12 @@ struct HeadSurfaceQuality {
 };
 
 // Refines head.mesh smoothly to `level` (1..4) with `creases` and measures
-// it. Fails with InvalidInput on a mesh Butterfly cannot refine or
-// annotations that name no such region.
+// it; with `detail`, its levels displaced by it (head/skin_detail.h,
+// apply_skin_detail). Fails with InvalidInput on a mesh Butterfly cannot
+// refine, annotations that name no such region or a detail of another
+// topology.
 Status measure_head_surface(const GenericHead& head, const ButterflyCreases& creases, int level,
-                            HeadSurfaceQuality& out);
+                            HeadSurfaceQuality& out, const std::vector<std::vector<double>>* detail = nullptr);
 
 // The same with the head's own creases (head/head_creases.h: its rims,
 // canthi and socket rings, as its levels are refined). A fitted head is

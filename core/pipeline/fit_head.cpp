@@ -9,7 +9,7 @@
 #include "mesh/topology.h"
 #include "pipeline/fit_quality.h"
 #include "head/head_creases.h"
-#include "pipeline/head_pockets.h"
+#include "head/head_pockets.h"
 #include "pipeline/untangle.h"
 #include "raycast/self_intersection.h"
 

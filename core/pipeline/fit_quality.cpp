@@ -5,7 +5,7 @@
 #include "mesh/topology.h"
 #include "multires/displacement.h"
 #include "pipeline/fit_head.h"
-#include "pipeline/head_pockets.h"
+#include "head/head_pockets.h"
 #include "raycast/self_intersection.h"
 
 #include <algorithm>

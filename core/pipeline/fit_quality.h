@@ -29,7 +29,7 @@ struct GenericHead;
 // Crossing pairs split by head region (annotations carried down the
 // levels): a pair touching a lip vertex counts as lips, else one touching an
 // ear vertex as ears, else one touching an eye socket's pocket
-// (pipeline/head_pockets.h: behind the lids, where the eyeball sits) as
+// (head/head_pockets.h: behind the lids, where the eyeball sits) as
 // eye_sockets, else rest.
 struct CrossingCounts {
   int total = 0, lips = 0, ears = 0, eye_sockets = 0, rest = 0;

@@ -1,6 +1,7 @@
 #include "project/photos_project.h"
 
 #include "head/head_creases.h"
+#include "head/skin_detail.h"
 #include "project/pose.h"
 
 namespace lk {
@@ -15,7 +16,8 @@ Status photos_project(const GenericHead& generic, const LandmarkMap& map, const 
   return project_from_photos(generic, result, levels, project);
 }
 
-Status project_from_photos(const GenericHead& generic, const PhotosJobResult& result, int levels, HeadProject& project) {
+Status project_from_photos(const GenericHead& generic, const PhotosJobResult& result, int levels, HeadProject& project,
+                           bool skin_detail) {
   project = HeadProject{};
   if (levels < 1 || levels > 4) return Status::error(ErrorCode::InvalidInput, "photos: levels must be 1..4");
   FitHeadResult& fit = project.fit;
@@ -24,8 +26,15 @@ Status project_from_photos(const GenericHead& generic, const PhotosJobResult& re
   fit.control = result.fit.mesh;
   fit.notes = result.notes;
   // The levels as `likeness photos` writes them: the generic head's creases
-  // (eye and lip rims, the canthi, the socket rings), no displacements.
+  // (eye and lip rims, the canthi, the socket rings) and, no scan having
+  // measured any, the generic head's skin detail as displacements
+  // (head/skin_detail.h).
   Status s = build_multires(fit.control, head_creases(generic.mesh, generic.annotations), levels, fit.multires);
+  if (s && skin_detail) {
+    std::vector<std::vector<double>> detail;
+    s = generic_skin_detail(generic, levels, SkinDetailOptions{}, detail);
+    if (s) s = apply_skin_detail(detail, fit.multires);
+  }
   if (!s) {
     project = HeadProject{};
     return with_context(s, "photos (levels)");

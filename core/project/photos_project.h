@@ -6,8 +6,9 @@
 // What differs from a scan's project: there is no scan (project.scan is
 // empty, so the checks have no distance to a scan), the head frame is the
 // scan frame (metres, the generic head's size: scale is not observable from
-// uncalibrated photos), and the levels carry no displacements (no scan to
-// measure them on): they are the fitted control mesh's Butterfly levels, as
+// uncalibrated photos), and the levels carry no measured displacements (no
+// scan to measure them on): they are the fitted control mesh's Butterfly
+// levels with the generic head's skin detail (head/skin_detail.h), as
 // `likeness photos` writes them.
 #pragma once
 #include "photos/photos_job.h"
@@ -29,6 +30,9 @@ Status photos_project(const GenericHead& generic, const LandmarkMap& map, const 
 // The project of a finished photos job (what photos_project makes after
 // running it): for `likeness photos`, which runs the job with its outlines
 // and images itself.
-Status project_from_photos(const GenericHead& generic, const PhotosJobResult& result, int levels, HeadProject& project);
+// skin_detail false: the plain Butterfly levels (`likeness photos
+// --no-skin-detail`), the furrows of the generic head's smooth levels left in.
+Status project_from_photos(const GenericHead& generic, const PhotosJobResult& result, int levels, HeadProject& project,
+                           bool skin_detail = true);
 
 }  // namespace lk

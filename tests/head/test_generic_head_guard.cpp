@@ -8,7 +8,7 @@
 #include "head/generic_head.h"
 #include "head/generic_head_builder.h"
 #include "mesh/topology.h"
-#include "pipeline/head_pockets.h"
+#include "head/head_pockets.h"
 #include "test_scan.h"
 
 #include <catch2/catch.hpp>

@@ -4,7 +4,7 @@
 #include "pipeline/fit_head.h"
 #include "pipeline/fit_quality.h"
 #include "head/head_creases.h"
-#include "pipeline/head_pockets.h"
+#include "head/head_pockets.h"
 #include "head/generic_head.h"
 #include "head/generic_head_builder.h"
 
@@ -92,7 +92,7 @@ TEST_CASE("crossing pairs in an eye socket count as eye sockets, after lips and 
   // The crossing sheets and a small triangle far off (8, 9, 10). A rim loop
   // of vertex 8 alone cuts the mesh into sheet A, sheet B and (9, 10); all
   // but the largest (A, the first of equals) are the socket
-  // (pipeline/head_pockets.h), so every pair touches it.
+  // (head/head_pockets.h), so every pair touches it.
   TriMesh m = crossing_sheets();
   m.positions.push_back({5, 5, 5});
   m.positions.push_back({6, 5, 5});

@@ -4,7 +4,9 @@
 // too few usable photos fails with each photo's reason and no project.
 #include "../photos/photos_scenario.h"
 #include "head/head_creases.h"
+#include "head/skin_detail.h"
 #include "project/export.h"
+#include "raycast/self_intersection.h"
 #include "project/photos_project.h"
 #include "project/pose.h"
 #include "project/quality_job.h"
@@ -44,20 +46,46 @@ TEST_CASE("photos project: the photos job's head, its CLI levels, a rig, and the
   for (size_t i = 0; i < p.fit.control.positions.size(); ++i)
     moved = std::max(moved, (p.fit.control.positions[i] - s.generic.mesh.positions[i]).norm());
   CHECK(moved > 1e-3);
-  // The levels `likeness photos` writes (build_butterfly_levels with the generic head's creases).
+  // Without the skin detail: the levels build_butterfly_levels makes with
+  // the generic head's creases (`likeness photos --no-skin-detail`).
+  HeadProject plain;
+  REQUIRE(project_from_photos(s.generic, direct, 3, plain, false));
   std::vector<ButterflyLevel> bl;
   REQUIRE(build_butterfly_levels(direct.fit.mesh, head_creases(s.generic.mesh, s.generic.annotations), 3, bl));
   std::vector<std::vector<Vec3>> cli_levels;
   REQUIRE(apply_all(bl, direct.fit.mesh.positions, cli_levels));
-  REQUIRE(p.fit.level_meshes.size() == 3);
+  REQUIRE(plain.fit.level_meshes.size() == 3);
   for (int l = 1; l <= 3; ++l) {
-    CHECK(p.fit.level_meshes[size_t(l - 1)].triangles == bl[size_t(l - 1)].fine_triangles);
-    const std::vector<Vec3>& a = p.fit.level_meshes[size_t(l - 1)].positions;
+    CHECK(plain.fit.level_meshes[size_t(l - 1)].triangles == bl[size_t(l - 1)].fine_triangles);
+    const std::vector<Vec3>& a = plain.fit.level_meshes[size_t(l - 1)].positions;
     const std::vector<Vec3>& b = cli_levels[size_t(l)];
     REQUIRE(a.size() == b.size());
     double worst = 0;
     for (size_t i = 0; i < a.size(); ++i) worst = std::max(worst, (a[i] - b[i]).norm());
     CHECK(worst < 1e-12);
+  }
+  // By default (`likeness photos`, the page) the levels carry the generic
+  // head's skin detail as displacements: the same triangles, moved by at
+  // most its bound along the normals.
+  std::vector<std::vector<double>> detail;
+  REQUIRE(generic_skin_detail(s.generic, 3, SkinDetailOptions{}, detail));
+  REQUIRE(p.fit.level_meshes.size() == 3);
+  for (int l = 1; l <= 3; ++l) {
+    CHECK(p.fit.multires.displacements[size_t(l)] == detail[size_t(l)]);
+    CHECK(p.fit.level_meshes[size_t(l - 1)].triangles == plain.fit.level_meshes[size_t(l - 1)].triangles);
+  }
+  {
+    const std::vector<Vec3>& a = p.fit.level_meshes[2].positions;
+    const std::vector<Vec3>& b = plain.fit.level_meshes[2].positions;
+    double worst = 0;
+    for (size_t i = 0; i < a.size(); ++i) worst = std::max(worst, (a[i] - b[i]).norm());
+    CHECK(worst > 1e-4);
+    CHECK(worst < 3 * SkinDetailOptions{}.max_distance);
+    // No crossing the plain level has not.
+    std::vector<std::array<int, 2>> with_detail, without;
+    REQUIRE(find_self_intersections(p.fit.level_meshes[2], with_detail));
+    REQUIRE(find_self_intersections(plain.fit.level_meshes[2], without));
+    CHECK(with_detail.size() <= without.size());
   }
   // Frame: what is shown is the head frame (no scan).
   CHECK(p.scan.positions.empty());

@@ -1,4 +1,4 @@
-#include "pipeline/head_pockets.h"
+#include "head/head_pockets.h"
 
 #include <algorithm>
 

@@ -1,0 +1,124 @@
+#include "head/skin_detail.h"
+
+#include "head/head_creases.h"
+#include "head/head_pockets.h"
+#include "head/head_shape.h"
+#include "mesh/topology.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace lk {
+namespace {
+
+// Newton's method along n from p onto the shape's zero set: the signed
+// step t with distance(p + t n) = 0, or 0 when it does not converge within
+// max_distance (a normal grazing the shape, a vertex off it).
+double distance_along(const HeadShape& shape, const Vec3& p, const Vec3& n, double max_distance) {
+  const double h = 1e-6;
+  double t = 0;
+  for (int k = 0; k < 20; ++k) {
+    const Vec3 q = p + t * n;
+    const double f = shape.distance(q);
+    if (std::abs(f) < 1e-9) return std::abs(t) <= max_distance ? t : 0.0;
+    const double slope = (shape.distance(q + h * n) - shape.distance(q - h * n)) / (2 * h);
+    if (!(std::abs(slope) > 0.3)) return 0.0;
+    t -= f / slope;
+    if (!(std::abs(t) <= 2 * max_distance)) return 0.0;
+  }
+  return 0.0;
+}
+
+}  // namespace
+
+Status generic_skin_detail(const GenericHead& head, int levels, const SkinDetailOptions& options,
+                           std::vector<std::vector<double>>& detail) {
+  detail.clear();
+  if (levels < 0 || options.max_distance <= 0 || options.fade_rings < 0 || options.lid_rings < 0 ||
+      options.smooth_passes < 0)
+    return Status::error(ErrorCode::InvalidInput, "skin detail: levels >= 0, max_distance > 0, fade_rings and lid_rings >= 0");
+  MeshTopology topo;
+  Status s = build_topology(head.mesh, topo);
+  if (!s) return with_context(s, "skin detail");
+  MultiresMesh mr;
+  s = build_multires(head.mesh, head_creases(head.mesh, topo, head.annotations), levels, mr);
+  if (!s) return with_context(s, "skin detail");
+
+  std::vector<char> skin(topo.num_vertices, 1);
+  const std::vector<char> pockets = pocket_vertices(topo, head.annotations);
+  for (int v = 0; v < topo.num_vertices; ++v)
+    if (pockets[v] || topo.is_boundary(v)) skin[v] = 0;
+  for (const auto& [name, vertices] : head.annotations.regions)
+    if (name.rfind("ear", 0) == 0 || name == "nose" || name.find("lip") != std::string::npos)
+      for (int v : vertices)
+        if (v >= 0 && v < topo.num_vertices) skin[v] = 0;
+  // The lids: the control rings round each eye rim.
+  std::vector<int> rims;
+  for (const EyeSocket* eye : {&head.annotations.eye_left, &head.annotations.eye_right})
+    rims.insert(rims.end(), eye->rim.begin(), eye->rim.end());
+  const std::vector<int> from_rim = ring_distances(topo, rims, options.lid_rings);
+  for (int v = 0; v < topo.num_vertices; ++v)
+    if (from_rim[v] >= 0) skin[v] = 0;
+  for (const auto& e : mr.creases.edges)
+    for (int v : e)
+      if (v >= 0 && v < topo.num_vertices) skin[v] = 0;
+  const std::vector<std::vector<char>> skin_levels = propagate_vertex_mask(mr, skin);
+
+  const HeadShape shape;
+  for (int l = 1; l <= levels; ++l) {
+    const std::vector<Vec3>& base = mr.state.base[l];
+    const std::vector<Vec3>& normals = mr.state.normals[l];
+    std::vector<double>& d = mr.displacements[l];
+    // How far each vertex lies from the non-skin ones, in rings of this level.
+    const TriMesh level = level_mesh(mr, l);
+    MeshTopology level_topo;
+    s = build_topology(level, level_topo);
+    if (!s) return with_context(s, "skin detail");
+    std::vector<int> off;
+    for (int v = 0; v < static_cast<int>(base.size()); ++v)
+      if (!skin_levels[l][v]) off.push_back(v);
+    const std::vector<int> rings = ring_distances(level_topo, off, options.fade_rings + 1);
+    for (int v = 0; v < static_cast<int>(base.size()); ++v) {
+      if (!skin_levels[l][v]) continue;
+      const double weight =
+          rings[v] < 0 ? 1.0 : std::min(1.0, double(rings[v]) / double(options.fade_rings + 1));
+      d[v] = weight * distance_along(shape, base[v], normals[v], options.max_distance);
+    }
+    // Where the shape creases (the lid's fold under the brow) the steps
+    // along neighbouring normals differ vertex to vertex: averaged with the
+    // one-ring, skin vertices only, the detail keeps its broad part.
+    for (int pass = 0; pass < options.smooth_passes; ++pass) {
+      std::vector<double> next = d;
+      for (int v = 0; v < static_cast<int>(base.size()); ++v) {
+        if (!skin_levels[l][v] || level_topo.rings[v].empty()) continue;
+        double sum = 0;
+        for (int w : level_topo.rings[v]) sum += d[w];
+        next[v] = 0.5 * d[v] + 0.5 * sum / level_topo.rings[v].size();
+      }
+      d = std::move(next);
+    }
+    s = evaluate(mr);
+    if (!s) return with_context(s, "skin detail");
+  }
+  detail = mr.displacements;
+  return Status::success();
+}
+
+Status apply_skin_detail(const std::vector<std::vector<double>>& detail, MultiresMesh& mesh) {
+  const int levels = mesh.num_levels();
+  for (int l = 0; l <= levels; ++l) {
+    std::vector<double>& d = mesh.displacements[l];
+    if (l == 0 || l >= static_cast<int>(detail.size())) {
+      std::fill(d.begin(), d.end(), 0.0);
+      continue;
+    }
+    if (detail[l].size() != d.size())
+      return Status::error(ErrorCode::InvalidInput, "skin detail: level " + std::to_string(l) + " has " +
+                                                        std::to_string(d.size()) + " vertices, the detail " +
+                                                        std::to_string(detail[l].size()));
+    d = detail[l];
+  }
+  return evaluate(mesh);
+}
+
+}  // namespace lk

@@ -1,0 +1,54 @@
+// The generic head's skin detail (issues 35 and 37): the shape its smooth
+// levels leave out.
+//
+// Every control vertex of the generic head lies on the shape it was cast
+// from (head_shape.h), but the interpolating Butterfly levels between them
+// sag and bulge where the grid bends round the eyes and the mouth: the
+// furrows over the brows, across the cheeks and along the jaw that every
+// head shows where no data covers it (docs/design/generic_head.md, "Fairing
+// the skin"). Measured level by level (level l displaced before level l+1
+// is refined, as multires.h evaluates), each skin vertex's signed distance
+// along its level's normal to the shape is a displacement that puts the
+// levels back on it. A head whose levels no scan measured (a photos head)
+// carries these displacements, so it shows the shape and not the furrows.
+#pragma once
+#include "common/status.h"
+#include "head/head_model.h"
+#include "multires/multires.h"
+
+#include <vector>
+
+namespace lk {
+
+struct SkinDetailOptions {
+  // A vertex farther than this from the shape along its normal (or whose
+  // normal runs along the shape) keeps 0 (m).
+  double max_distance = 0.002;
+  // The detail fades in over this many rings of each level from the
+  // vertices that take none.
+  int fade_rings = 2;
+  // Control rings round each eye rim left out (the lids: the shape's socket
+  // blends make the detail ragged there).
+  int lid_rings = 0;
+  // Passes of averaging each level's detail with its one-ring.
+  int smooth_passes = 2;
+};
+
+// detail: levels + 1 arrays (#V_l of the generic head's levels, built with
+// head_creases); detail[0] is all 0 (the control vertices lie on the shape).
+// Skin: every control vertex but the ears, the nose, the lips, the lids
+// (lid_rings), the pockets (eye sockets, mouth bag, nostrils:
+// head_pockets.h), the neck's open border and the creases' vertices (eye and
+// lip rims, socket rings); a refined vertex is skin when both ends of its
+// edge are. Other vertices take 0. Why not the nose and lips: a fit moves
+// them most, and the cast shape's nose tip and lip volumes laid on another
+// nose and mouth raise lumps there (seen on Kira's photos head).
+Status generic_skin_detail(const GenericHead& head, int levels, const SkinDetailOptions& options,
+                           std::vector<std::vector<double>>& detail);
+
+// Sets mesh's displacements to detail level by level (levels of mesh beyond
+// detail, and mesh.displacements[0], are set to 0) and evaluates it. Fails
+// with InvalidInput when a level's size differs (another head's topology).
+Status apply_skin_detail(const std::vector<std::vector<double>>& detail, MultiresMesh& mesh);
+
+}  // namespace lk
