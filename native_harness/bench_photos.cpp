@@ -14,6 +14,7 @@
 
 #include "head/generic_head.h"
 #include "head/head_creases.h"
+#include "head/skin_detail.h"
 #include "head/surface_quality.h"
 #include "components/components.h"
 #include "photos/added_folds.h"
@@ -67,7 +68,29 @@ const char* const kFoldRegions[] = {"face", "cheeks", "eyes", "nose", "brow", "l
 struct FoldFigures {
   std::map<std::string, AddedFolds> regions;
   int crossings = 0;
+  // The levels as the photos project makes them, with the generic head's
+  // skin detail (head/skin_detail.h): their crossing pairs (levels 0..3)
+  // and the smooth level 3's roughness p95 (deg) per region without and
+  // with it (head/surface_quality.h).
+  bool detailed = false;
+  int detail_crossings = 0;
+  std::map<std::string, double> plain_p95, detail_p95;
 };
+
+// The skin detail the photos project puts on a head's levels, once per
+// bench, with its CPU time.
+const std::vector<std::vector<double>>* bench_skin_detail(const GenericHead& generic) {
+  static std::vector<std::vector<double>> detail;
+  static bool done = false, ok = false;
+  if (!done) {
+    done = true;
+    const double t0 = cpu_clock_ms();
+    ok = generic_skin_detail(generic, 3, SkinDetailOptions{}, detail).ok();
+    std::printf("  the generic head's skin detail (levels 1..3): %s, %.0f ms CPU\n", ok ? "made" : "failed",
+                cpu_clock_ms() - t0);
+  }
+  return ok ? &detail : nullptr;
+}
 
 bool measure_folds(const GenericHead& generic, const TriMesh& mesh, FoldFigures& out) {
   out = {};
@@ -78,15 +101,28 @@ bool measure_folds(const GenericHead& generic, const TriMesh& mesh, FoldFigures&
   h.mesh.positions = mesh.positions;
   h.mesh.normals.clear();
   HeadSurfaceQuality q;
-  if (!measure_head_surface(h, head_creases(generic.mesh, generic.annotations), 3, q)) return false;
+  const ButterflyCreases creases = head_creases(generic.mesh, generic.annotations);
+  if (!measure_head_surface(h, creases, 3, q)) return false;
   for (int c : q.crossing_pairs) out.crossings += c;
+  HeadSurfaceQuality qd;
+  if (const auto* detail = bench_skin_detail(generic); detail && measure_head_surface(h, creases, 3, qd, detail)) {
+    out.detailed = true;
+    for (int c : qd.crossing_pairs) out.detail_crossings += c;
+    for (const RegionRoughness& r : q.regions) out.plain_p95[r.region] = r.p95_deg;
+    for (const RegionRoughness& r : qd.regions) out.detail_p95[r.region] = r.p95_deg;
+  }
   return true;
 }
+
+const char* const kDetailRegions[] = {"cheeks", "brow", "nose", "eyes", "mouth"};
 
 struct FoldSums {
   std::map<std::string, double> p95, max, creased, crossings_in;
   double crossings = 0;
   int n = 0;
+  std::map<std::string, double> plain_p95, detail_p95;
+  double detail_crossings = 0;
+  int detailed = 0;
 };
 
 void add_folds(const FoldFigures& f, FoldSums& sums) {
@@ -98,6 +134,12 @@ void add_folds(const FoldFigures& f, FoldSums& sums) {
   }
   sums.crossings += f.crossings;
   ++sums.n;
+  if (f.detailed) {
+    for (const auto& [name, v] : f.plain_p95) sums.plain_p95[name] += v;
+    for (const auto& [name, v] : f.detail_p95) sums.detail_p95[name] += v;
+    sums.detail_crossings += f.detail_crossings;
+    ++sums.detailed;
+  }
 }
 
 void print_fold_means(const FoldSums& sums, const char* label) {
@@ -114,6 +156,13 @@ void print_fold_means(const FoldSums& sums, const char* label) {
     if (it != sums.crossings_in.end()) std::printf(" %s %.1f", r, it->second / sums.n);
   }
   std::printf("\n");
+  if (!sums.detailed) return;
+  std::printf("  skin detail, mean over %d fits (%s): smooth level 3 roughness p95 deg without -> with:", sums.detailed,
+              label);
+  for (const char* r : kDetailRegions)
+    if (sums.plain_p95.count(r) && sums.detail_p95.count(r))
+      std::printf(" %s %.2f -> %.2f", r, sums.plain_p95.at(r) / sums.detailed, sums.detail_p95.at(r) / sums.detailed);
+  std::printf("; crossing pairs with it %.1f (levels 0..3)\n", sums.detail_crossings / sums.detailed);
 }
 
 void print_folds(const char* label, const FoldFigures& f) {
@@ -127,7 +176,14 @@ void print_folds(const char* label, const FoldFigures& f) {
     auto it = f.regions.find(r);
     if (it != f.regions.end()) std::printf(" %s %d -> %d", r, it->second.generic_crossings, it->second.crossings);
   }
-  std::printf("; crossing pairs %d\n", f.crossings);
+  std::printf("; crossing pairs %d", f.crossings);
+  if (f.detailed) {
+    std::printf("; with the skin detail %d, roughness p95", f.detail_crossings);
+    for (const char* r : kDetailRegions)
+      if (f.plain_p95.count(r) && f.detail_p95.count(r))
+        std::printf(" %s %.1f -> %.1f", r, f.plain_p95.at(r), f.detail_p95.at(r));
+  }
+  std::printf("\n");
 }
 
 // RMS distance of the bundle-adjusted landmarks (seen in >= 2 photos) from

@@ -7,6 +7,7 @@
 
 #include "head/generic_head.h"
 #include "head/head_creases.h"
+#include "head/skin_detail.h"
 #include "head/surface_quality.h"
 #include "image/image.h"
 #include "io/exif.h"
@@ -409,7 +410,10 @@ int run_photos(const Args& args) {
   // project`, the page's Open project).
   s = write_file(out_dir + "/control.obj", write_obj(r.fit.mesh));
   HeadProject project;
-  if (s && levels > 0) s = project_from_photos(generic, r, levels, project, !args.has("no-skin-detail"));
+  std::vector<std::vector<double>> skin_detail;
+  const bool with_detail = levels > 0 && !args.has("no-skin-detail");
+  if (s && with_detail) s = generic_skin_detail(generic, levels, SkinDetailOptions{}, skin_detail);
+  if (s && levels > 0) s = project_from_photos(generic, r, levels, project, with_detail ? &skin_detail : nullptr);
   for (int l = 1; s && l <= levels; ++l) {
     TriMesh m = project.fit.level_meshes[size_t(l - 1)];
     m.normals.clear();  // positions and triangles, as before the project was kept

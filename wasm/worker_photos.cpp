@@ -6,6 +6,7 @@
 #include "worker_common.h"
 
 #include "photos/landmarks.h"
+#include "head/skin_detail.h"
 #include "project/photos_project.h"
 
 #include <memory>
@@ -24,6 +25,21 @@ const lk::LandmarkMap* mediapipe_map(lk::Status& status) {
     have = true;
   }
   return &map;
+}
+
+// The generic head's skin detail for `levels` (head/skin_detail.h), made
+// once per worker and level count.
+const std::vector<std::vector<double>>* skin_detail(const lk::GenericHead& generic, int levels, lk::Status& status) {
+  static std::vector<std::vector<double>> detail[5];
+  static bool have[5] = {};
+  status = lk::Status::success();
+  if (levels < 0 || levels > 4) return nullptr;
+  if (!have[levels]) {
+    status = lk::generic_skin_detail(generic, levels, lk::SkinDetailOptions{}, detail[levels]);
+    if (!status.ok()) return nullptr;
+    have[levels] = true;
+  }
+  return &detail[levels];
 }
 
 // photos: [{name, text}] (text: the photo's likeness-landmarks JSON);
@@ -76,7 +92,10 @@ val photos_head_job(val photos, val options) {
   auto project = std::make_unique<lk::HeadProject>();
   lk::PhotosJobResult job;
   const double t0 = now_ms();
-  status = lk::photos_project(*generic, *map, parsed, opt, levels, *project, job);
+  // (the first job of a worker makes the skin detail: counted in its time)
+  const std::vector<std::vector<double>>* detail = skin_detail(*generic, levels, status);
+  if (!detail) return error_result(lk::with_context(status, "the generic head's skin detail"));
+  status = lk::photos_project(*generic, *map, parsed, opt, levels, *project, job, detail);
   const double photos_ms = now_ms() - t0;
 
   val rows = val::array();

@@ -1,5 +1,6 @@
 #include "head/skin_detail.h"
 
+#include "common/parallel.h"
 #include "head/head_creases.h"
 #include "head/head_pockets.h"
 #include "head/head_shape.h"
@@ -69,31 +70,38 @@ Status generic_skin_detail(const GenericHead& head, int levels, const SkinDetail
     const std::vector<Vec3>& base = mr.state.base[l];
     const std::vector<Vec3>& normals = mr.state.normals[l];
     std::vector<double>& d = mr.displacements[l];
-    // How far each vertex lies from the non-skin ones, in rings of this level.
-    const TriMesh level = level_mesh(mr, l);
-    MeshTopology level_topo;
-    s = build_topology(level, level_topo);
-    if (!s) return with_context(s, "skin detail");
-    std::vector<int> off;
-    for (int v = 0; v < static_cast<int>(base.size()); ++v)
-      if (!skin_levels[l][v]) off.push_back(v);
-    const std::vector<int> rings = ring_distances(level_topo, off, options.fade_rings + 1);
-    for (int v = 0; v < static_cast<int>(base.size()); ++v) {
-      if (!skin_levels[l][v]) continue;
+    // The level's one-rings (each vertex's normal reach is itself and its
+    // one-ring: multires.h), and how far each vertex lies from the non-skin
+    // ones in rings of this level (breadth first, up to the fade's width).
+    const IndexRows& ring = mr.links[l].normal_reach;
+    const int nl = static_cast<int>(base.size());
+    std::vector<int> rings(nl, -1), front;
+    for (int v = 0; v < nl; ++v)
+      if (!skin_levels[l][v]) rings[v] = 0, front.push_back(v);
+    for (int r = 1; r <= options.fade_rings && !front.empty(); ++r) {
+      std::vector<int> next_front;
+      for (int v : front)
+        for (int k = ring.offsets[v]; k < ring.offsets[v + 1]; ++k)
+          if (const int w = ring.items[k]; rings[w] < 0) rings[w] = r, next_front.push_back(w);
+      front = std::move(next_front);
+    }
+    parallel_for(0, nl, 1024, [&](int v, int) {
+      if (!skin_levels[l][v]) return;
       const double weight =
           rings[v] < 0 ? 1.0 : std::min(1.0, double(rings[v]) / double(options.fade_rings + 1));
       d[v] = weight * distance_along(shape, base[v], normals[v], options.max_distance);
-    }
+    });
     // Where the shape creases (the lid's fold under the brow) the steps
     // along neighbouring normals differ vertex to vertex: averaged with the
     // one-ring, skin vertices only, the detail keeps its broad part.
     for (int pass = 0; pass < options.smooth_passes; ++pass) {
       std::vector<double> next = d;
-      for (int v = 0; v < static_cast<int>(base.size()); ++v) {
-        if (!skin_levels[l][v] || level_topo.rings[v].empty()) continue;
+      for (int v = 0; v < nl; ++v) {
         double sum = 0;
-        for (int w : level_topo.rings[v]) sum += d[w];
-        next[v] = 0.5 * d[v] + 0.5 * sum / level_topo.rings[v].size();
+        int count = 0;
+        for (int k = ring.offsets[v]; k < ring.offsets[v + 1]; ++k)
+          if (const int w = ring.items[k]; w != v) sum += d[w], ++count;
+        if (skin_levels[l][v] && count > 0) next[v] = 0.5 * d[v] + 0.5 * sum / count;
       }
       d = std::move(next);
     }

@@ -7,17 +7,18 @@
 namespace lk {
 
 Status photos_project(const GenericHead& generic, const LandmarkMap& map, const std::vector<LandmarkPhoto>& photos,
-                      const PhotosJobOptions& options, int levels, HeadProject& project, PhotosJobResult& result) {
+                      const PhotosJobOptions& options, int levels, HeadProject& project, PhotosJobResult& result,
+                      const std::vector<std::vector<double>>* skin_detail) {
   project = HeadProject{};
   result = PhotosJobResult{};
   if (levels < 1 || levels > 4) return Status::error(ErrorCode::InvalidInput, "photos: levels must be 1..4");
   Status s = run_photos_job(generic, map, photos, options, result);
   if (!s) return s;
-  return project_from_photos(generic, result, levels, project);
+  return project_from_photos(generic, result, levels, project, skin_detail);
 }
 
 Status project_from_photos(const GenericHead& generic, const PhotosJobResult& result, int levels, HeadProject& project,
-                           bool skin_detail) {
+                           const std::vector<std::vector<double>>* skin_detail) {
   project = HeadProject{};
   if (levels < 1 || levels > 4) return Status::error(ErrorCode::InvalidInput, "photos: levels must be 1..4");
   FitHeadResult& fit = project.fit;
@@ -28,13 +29,9 @@ Status project_from_photos(const GenericHead& generic, const PhotosJobResult& re
   // The levels as `likeness photos` writes them: the generic head's creases
   // (eye and lip rims, the canthi, the socket rings) and, no scan having
   // measured any, the generic head's skin detail as displacements
-  // (head/skin_detail.h).
+  // (head/skin_detail.h) when given.
   Status s = build_multires(fit.control, head_creases(generic.mesh, generic.annotations), levels, fit.multires);
-  if (s && skin_detail) {
-    std::vector<std::vector<double>> detail;
-    s = generic_skin_detail(generic, levels, SkinDetailOptions{}, detail);
-    if (s) s = apply_skin_detail(detail, fit.multires);
-  }
+  if (s && skin_detail) s = apply_skin_detail(*skin_detail, fit.multires);
   if (!s) {
     project = HeadProject{};
     return with_context(s, "photos (levels)");

@@ -20,19 +20,24 @@ namespace lk {
 
 // Runs run_photos_job(generic, map, photos, options, result) and, when it
 // succeeds, makes project a new project of its control mesh with `levels`
-// (1..4) Butterfly levels. fit.aligned is the generic head (the shape the
+// (1..4) Butterfly levels (project_from_photos, with skin_detail). fit.aligned is the generic head (the shape the
 // self-calibration starts from), fit.local and fit.control the fitted
 // control mesh; fit.notes are the job's notes. On an error project is left
 // empty and result holds what the job got to (each photo's refusal).
 Status photos_project(const GenericHead& generic, const LandmarkMap& map, const std::vector<LandmarkPhoto>& photos,
-                      const PhotosJobOptions& options, int levels, HeadProject& project, PhotosJobResult& result);
+                      const PhotosJobOptions& options, int levels, HeadProject& project, PhotosJobResult& result,
+                      const std::vector<std::vector<double>>* skin_detail = nullptr);
 
 // The project of a finished photos job (what photos_project makes after
 // running it): for `likeness photos`, which runs the job with its outlines
 // and images itself.
-// skin_detail false: the plain Butterfly levels (`likeness photos
-// --no-skin-detail`), the furrows of the generic head's smooth levels left in.
+// skin_detail: the generic head's skin detail (head/skin_detail.h,
+// generic_skin_detail of `generic`, made once and reused by the caller: it
+// costs a few hundred milliseconds), put on the levels as displacements, as
+// `likeness photos` and the page do; null: the plain Butterfly levels
+// (`likeness photos --no-skin-detail`), the furrows of the generic head's
+// smooth levels left in.
 Status project_from_photos(const GenericHead& generic, const PhotosJobResult& result, int levels, HeadProject& project,
-                           bool skin_detail = true);
+                           const std::vector<std::vector<double>>* skin_detail = nullptr);
 
 }  // namespace lk

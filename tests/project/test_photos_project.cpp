@@ -32,9 +32,11 @@ TEST_CASE("photos project: the photos job's head, its CLI levels, a rig, and the
   PhotosJobResult direct;
   REQUIRE(run_photos_job(s.generic, s.map, photos, PhotosJobOptions{}, direct));
 
+  std::vector<std::vector<double>> detail;
+  REQUIRE(generic_skin_detail(s.generic, 3, SkinDetailOptions{}, detail));
   HeadProject p;
   PhotosJobResult r;
-  REQUIRE(photos_project(s.generic, s.map, photos, PhotosJobOptions{}, 3, p, r));
+  REQUIRE(photos_project(s.generic, s.map, photos, PhotosJobOptions{}, 3, p, r, &detail));
   // The same core job, bit for bit.
   CHECK(p.fit.control.positions == direct.fit.mesh.positions);
   CHECK(p.fit.control.triangles == s.generic.mesh.triangles);
@@ -49,7 +51,7 @@ TEST_CASE("photos project: the photos job's head, its CLI levels, a rig, and the
   // Without the skin detail: the levels build_butterfly_levels makes with
   // the generic head's creases (`likeness photos --no-skin-detail`).
   HeadProject plain;
-  REQUIRE(project_from_photos(s.generic, direct, 3, plain, false));
+  REQUIRE(project_from_photos(s.generic, direct, 3, plain));
   std::vector<ButterflyLevel> bl;
   REQUIRE(build_butterfly_levels(direct.fit.mesh, head_creases(s.generic.mesh, s.generic.annotations), 3, bl));
   std::vector<std::vector<Vec3>> cli_levels;
@@ -64,11 +66,9 @@ TEST_CASE("photos project: the photos job's head, its CLI levels, a rig, and the
     for (size_t i = 0; i < a.size(); ++i) worst = std::max(worst, (a[i] - b[i]).norm());
     CHECK(worst < 1e-12);
   }
-  // By default (`likeness photos`, the page) the levels carry the generic
-  // head's skin detail as displacements: the same triangles, moved by at
-  // most its bound along the normals.
-  std::vector<std::vector<double>> detail;
-  REQUIRE(generic_skin_detail(s.generic, 3, SkinDetailOptions{}, detail));
+  // With the skin detail (`likeness photos`, the page) the levels carry it
+  // as displacements: the same triangles, moved by at most its bound along
+  // the normals.
   REQUIRE(p.fit.level_meshes.size() == 3);
   for (int l = 1; l <= 3; ++l) {
     CHECK(p.fit.multires.displacements[size_t(l)] == detail[size_t(l)]);
