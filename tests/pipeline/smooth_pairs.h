@@ -28,11 +28,13 @@ inline int smooth_region_pairs(const TriMesh& control, const ButterflyCreases& c
   return count_pairs_touching(mr, level, pairs, it->second);
 }
 
-// With the head's crease curves as the fit refines them (head_creases; the
-// eye corners taken from `control`, which faces +z like the generic head).
-inline int smooth_region_pairs(const TriMesh& control, const HeadAnnotations& ann, int level,
+// With the generic head's crease curves, as the fit refines its levels
+// (head_creases of the generic head: its rims, its canthi, its socket
+// rings; corners picked on the fitted control could be other vertices).
+inline int smooth_region_pairs(const TriMesh& control, const GenericHead& generic, int level,
                                const std::string& region) {
-  return smooth_region_pairs(control, head_creases(control, ann), ann, level, region);
+  return smooth_region_pairs(control, head_creases(generic.mesh, generic.annotations), generic.annotations, level,
+                             region);
 }
 
 }  // namespace lk::test

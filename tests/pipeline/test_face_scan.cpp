@@ -253,7 +253,7 @@ TEST_CASE("fit_head: the real Fran (Cyberware face patch) is turned to face +z a
   // Her mouth corner lies 3.5 mm behind where local fitting put it: with the
   // mouth bag held there, the bag came out through her lower lip (35 lip
   // pairs on the smooth level 3); the bag now follows the lips.
-  CHECK(test::smooth_region_pairs(r.control, truth().generic.annotations, 3, "lips") == 0);
+  CHECK(test::smooth_region_pairs(r.control, truth().generic, 3, "lips") == 0);
 }
 
 TEST_CASE("fit_head: the real James (menpo3d face capture in mm)") {
@@ -283,14 +283,14 @@ TEST_CASE("fit_head: the real James (menpo3d face capture in mm)") {
   CHECK(turned_triangles(r.aligned.positions, r.control).empty());
   // The mouth bag follows his lips (10 lip pairs on the smooth level 3 while
   // it was held where local fitting put it).
-  CHECK(test::smooth_region_pairs(r.control, truth().generic.annotations, 3, "lips") == 0);
+  CHECK(test::smooth_region_pairs(r.control, truth().generic, 3, "lips") == 0);
   // His ears keep their shape (bound edges): their flaps folded onto the
   // hair and their own bowls, 13 crossing control pairs and 262 ear pairs on
   // the smooth level 3 when free (measured bound: 0 and 39).
   std::vector<std::array<int, 2>> control_pairs;
   REQUIRE(find_self_intersections(r.control, control_pairs).ok());
   CHECK(control_pairs.size() <= 3);
-  CHECK(test::smooth_region_pairs(r.control, truth().generic.annotations, 3, "ears") < 100);
+  CHECK(test::smooth_region_pairs(r.control, truth().generic, 3, "ears") < 100);
 
   // The eyes land on his eyes: the eye rims' centroids against the centroids
   // of the six iBUG landmarks around each eye (james.ljson; the fit does not
@@ -353,7 +353,7 @@ TEST_CASE("fit_head: the real James's ear folds are refined as creases") {
   // The creases are the fit's: refined with them, the ears no longer cross;
   // the same control mesh with the head's curves alone still does.
   const int with = test::smooth_region_pairs(r.control, r.multires.creases, ann, 3, "ears");
-  const int without = test::smooth_region_pairs(r.control, ann, 3, "ears");
+  const int without = test::smooth_region_pairs(r.control, truth().generic, 3, "ears");
   INFO("smooth level-3 ear pairs: " << with << " with the fold creases, " << without << " without");
   CHECK(with == 0);
   CHECK(without >= 3);  // 4 measured (16 with the corner-45 head)

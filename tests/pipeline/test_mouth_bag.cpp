@@ -56,12 +56,12 @@ TEST_CASE("carry_mouth_bag: lips pulled 4 mm back no longer cross the bag on the
   REQUIRE(build_topology(head.mesh, topo).ok());
   // The generic head's own smooth level 3 has pairs at the mouth corners;
   // only new ones count.
-  const int generic_pairs = test::smooth_region_pairs(head.mesh, head.annotations, 3, "lips");
+  const int generic_pairs = test::smooth_region_pairs(head.mesh, head, 3, "lips");
   TriMesh held = lips_moved(head, Vec3(0, 0, -0.004), 0.02, 0.04);
-  const int held_pairs = test::smooth_region_pairs(held, head.annotations, 3, "lips");
+  const int held_pairs = test::smooth_region_pairs(held, head, 3, "lips");
   TriMesh carried = held;
   REQUIRE(carry_mouth_bag(bag_flags(head), topo, head.mesh, carried).ok());
-  const int carried_pairs = test::smooth_region_pairs(carried, head.annotations, 3, "lips");
+  const int carried_pairs = test::smooth_region_pairs(carried, head, 3, "lips");
   INFO("lip pairs on smooth level 3: generic " << generic_pairs << ", lips moved with the bag held " << held_pairs
                                                 << ", bag carried " << carried_pairs);
   CHECK(held_pairs > generic_pairs + 20);
