@@ -33,7 +33,10 @@ const std::vector<std::vector<double>>* skin_detail(const lk::GenericHead& gener
   static std::vector<std::vector<double>> detail[5];
   static bool have[5] = {};
   status = lk::Status::success();
-  if (levels < 0 || levels > 4) return nullptr;
+  if (levels < 0 || levels > 4) {
+    status = lk::Status::error(lk::ErrorCode::InvalidInput, "levels must be 0..4");
+    return nullptr;
+  }
   if (!have[levels]) {
     status = lk::generic_skin_detail(generic, levels, lk::SkinDetailOptions{}, detail[levels]);
     if (!status.ok()) return nullptr;

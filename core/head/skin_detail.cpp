@@ -35,9 +35,9 @@ double distance_along(const HeadShape& shape, const Vec3& p, const Vec3& n, doub
 Status generic_skin_detail(const GenericHead& head, int levels, const SkinDetailOptions& options,
                            std::vector<std::vector<double>>& detail) {
   detail.clear();
-  if (levels < 0 || options.max_distance <= 0 || options.fade_rings < 0 || options.lid_rings < 0 ||
-      options.smooth_passes < 0)
-    return Status::error(ErrorCode::InvalidInput, "skin detail: levels >= 0, max_distance > 0, fade_rings and lid_rings >= 0");
+  if (levels < 0 || options.max_distance <= 0 || options.fade_rings < 0 || options.smooth_passes < 0)
+    return Status::error(ErrorCode::InvalidInput,
+                         "skin detail: levels >= 0, max_distance > 0, fade_rings and smooth_passes >= 0");
   MeshTopology topo;
   Status s = build_topology(head.mesh, topo);
   if (!s) return with_context(s, "skin detail");
@@ -53,13 +53,6 @@ Status generic_skin_detail(const GenericHead& head, int levels, const SkinDetail
     if (name.rfind("ear", 0) == 0 || name == "nose" || name.find("lip") != std::string::npos)
       for (int v : vertices)
         if (v >= 0 && v < topo.num_vertices) skin[v] = 0;
-  // The lids: the control rings round each eye rim.
-  std::vector<int> rims;
-  for (const EyeSocket* eye : {&head.annotations.eye_left, &head.annotations.eye_right})
-    rims.insert(rims.end(), eye->rim.begin(), eye->rim.end());
-  const std::vector<int> from_rim = ring_distances(topo, rims, options.lid_rings);
-  for (int v = 0; v < topo.num_vertices; ++v)
-    if (from_rim[v] >= 0) skin[v] = 0;
   for (const auto& e : mr.creases.edges)
     for (int v : e)
       if (v >= 0 && v < topo.num_vertices) skin[v] = 0;

@@ -27,19 +27,15 @@ struct SkinDetailOptions {
   // The detail fades in over this many rings of each level from the
   // vertices that take none.
   int fade_rings = 2;
-  // Control rings round each eye rim left out (the lids: the shape's socket
-  // blends make the detail ragged there).
-  int lid_rings = 0;
   // Passes of averaging each level's detail with its one-ring.
   int smooth_passes = 2;
 };
 
 // detail: levels + 1 arrays (#V_l of the generic head's levels, built with
 // head_creases); detail[0] is all 0 (the control vertices lie on the shape).
-// Skin: every control vertex but the ears, the nose, the lips, the lids
-// (lid_rings), the pockets (eye sockets, mouth bag, nostrils:
-// head_pockets.h), the neck's open border and the creases' vertices (eye and
-// lip rims, socket rings); a refined vertex is skin when both ends of its
+// Skin: every control vertex but the ears, the nose, the lips, the pockets
+// (eye sockets, mouth bag, nostrils: head_pockets.h), the neck's open border
+// and the creases' vertices (eye and lip rims, socket rings); a refined vertex is skin when both ends of its
 // edge are. Other vertices take 0. Why not the nose and lips: a fit moves
 // them most, and the cast shape's nose tip and lip volumes laid on another
 // nose and mouth raise lumps there (seen on Kira's photos head).
