@@ -6,6 +6,7 @@
 #include "head/generic_head.h"
 #include "head/generic_head_builder.h"
 #include "head/head_creases.h"
+#include "head/skin_detail.h"
 #include "head/surface_quality.h"
 #include "io/io.h"
 #include "mesh/geometry.h"
@@ -23,7 +24,7 @@ namespace {
 const char* kName = "make-generic-head";
 
 int run_make_generic_head(const Args& args) {
-  if (!only_known_options(kName, args, {"out", "report", "level3", "ring-ear", "plate-ear", "even-eye-corners", "face-rows-at-back", "nape-by-shape", "wide-mouth-ring", "diagonals-by-side", "fair", "fair-rim-rings", "nostrils", "teeth-mouth-bag"})) return 2;
+  if (!only_known_options(kName, args, {"out", "report", "level3", "ring-ear", "plate-ear", "even-eye-corners", "face-rows-at-back", "nape-by-shape", "wide-mouth-ring", "diagonals-by-side", "fair", "fair-rim-rings", "nostrils", "teeth-mouth-bag", "skin-detail"})) return 2;
   const std::string out_dir = args.get("out");
   const bool report = args.has("report");
   const std::string level3_path = args.get("level3");
@@ -78,11 +79,19 @@ int run_make_generic_head(const Args& args) {
   Status s = build_generic_head(options, head);
   if (!s) return fail(kName, s.message);
   if (!out_dir.empty()) ::mkdir(out_dir.c_str(), 0755);  // as `likeness fit` does; an existing one is kept
+  // --skin-detail: the report and level 3 with the head's skin detail
+  // (head/skin_detail.h) as displacements, the surface a photos head starts from.
+  std::vector<std::vector<double>> detail;
+  if (args.has("skin-detail")) {
+    s = generic_skin_detail(head, 3, SkinDetailOptions{}, detail);
+    if (!s) return fail(kName, s.message);
+  }
+  const std::vector<std::vector<double>>* with_detail = detail.empty() ? nullptr : &detail;
   // --report: the smooth level 3's roughness per region and every level's
   // crossing pairs (head/surface_quality.h), the issue-35 figures.
   if (report) {
     HeadSurfaceQuality q;
-    s = measure_head_surface(head, 3, q);
+    s = measure_head_surface(head, head_creases(head.mesh, head.annotations), 3, q, with_detail);
     if (!s) return fail(kName, s.message);
     std::printf("smooth level %d with the head's creases (rims, canthi, socket rings), angle between adjacent triangles' normals (deg):\n", q.level);
     std::printf("  %-7s %6s %6s %6s %6s %6s\n", "region", "edges", "mean", "p95", "p99", "max");
@@ -97,6 +106,7 @@ int run_make_generic_head(const Args& args) {
   if (!level3_path.empty()) {
     MultiresMesh smooth;
     s = build_multires(head.mesh, head_creases(head.mesh, head.annotations), 3, smooth);
+    if (s && with_detail) s = apply_skin_detail(detail, smooth);
     if (s) s = write_file(level3_path, write_obj(level_mesh(smooth, 3)));
     if (!s) return fail(kName, s.message);
     std::printf("wrote %s\n", level3_path.c_str());
@@ -123,8 +133,8 @@ int run_make_generic_head(const Args& args) {
   return 0;
 }
 
-Registrar reg({kName, "likeness make-generic-head --out DIR [--report] [--level3 FILE.obj] [--ring-ear|--plate-ear] [--even-eye-corners] [--face-rows-at-back] [--nape-by-shape] [--wide-mouth-ring] [--diagonals-by-side] [--fair N [--fair-rim-rings K]] [--nostrils] [--teeth-mouth-bag]",
-               "builds the generic head control mesh + annotations (writes generic_head.obj/.json; --report: smooth level 3 roughness by region, crossing pairs by level; --level3: that level as a mesh)",
+Registrar reg({kName, "likeness make-generic-head --out DIR [--report] [--level3 FILE.obj] [--ring-ear|--plate-ear] [--even-eye-corners] [--face-rows-at-back] [--nape-by-shape] [--wide-mouth-ring] [--diagonals-by-side] [--fair N [--fair-rim-rings K]] [--nostrils] [--teeth-mouth-bag] [--skin-detail]",
+               "builds the generic head control mesh + annotations (writes generic_head.obj/.json; --report: smooth level 3 roughness by region, crossing pairs by level; --level3: that level as a mesh; --skin-detail: both with the skin detail a photos head starts from)",
                run_make_generic_head});
 
 }  // namespace
