@@ -49,10 +49,23 @@ Status generic_skin_detail(const GenericHead& head, int levels, const SkinDetail
   const std::vector<char> pockets = pocket_vertices(topo, head.annotations);
   for (int v = 0; v < topo.num_vertices; ++v)
     if (pockets[v] || topo.is_boundary(v)) skin[v] = 0;
+  // Only the nose's lower half (tip, wings, columella) is left out; its
+  // upper half, the bridge up to the glabella, is skin: left out, it kept
+  // the levels' rolls across the bridge between the eyes.
+  const Vec3 up = head.annotations.up.normalized();
+  double nose_mid = 0;
+  if (const auto nose = head.annotations.regions.find("nose"); nose != head.annotations.regions.end()) {
+    double low = 1e300, high = -1e300;
+    for (int v : nose->second)
+      if (v >= 0 && v < topo.num_vertices)
+        low = std::min(low, up.dot(head.mesh.positions[v])), high = std::max(high, up.dot(head.mesh.positions[v]));
+    nose_mid = 0.5 * (low + high);
+  }
   for (const auto& [name, vertices] : head.annotations.regions)
     if (name.rfind("ear", 0) == 0 || name == "nose" || name.find("lip") != std::string::npos)
       for (int v : vertices)
-        if (v >= 0 && v < topo.num_vertices) skin[v] = 0;
+        if (v >= 0 && v < topo.num_vertices && (name != "nose" || up.dot(head.mesh.positions[v]) <= nose_mid))
+          skin[v] = 0;
   for (const auto& e : mr.creases.edges)
     for (int v : e)
       if (v >= 0 && v < topo.num_vertices) skin[v] = 0;

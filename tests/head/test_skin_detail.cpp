@@ -14,6 +14,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 using namespace lk;
@@ -53,11 +54,17 @@ TEST_CASE("skin detail: the generic head's levels back on its cast shape, on the
   REQUIRE(build_multires(head.mesh, creases, 3, displaced));
   REQUIRE(apply_skin_detail(detail, displaced));
 
-  // Control vertices keep their index on every level: the ears, the nose,
-  // the lips and the pockets take no detail.
+  // Control vertices keep their index on every level: the ears, the lips,
+  // the pockets and the nose's lower half (tip and wings) take no detail;
+  // its upper half (the bridge) is skin.
   std::vector<char> off = pocket_vertices(topo, head.annotations);
-  for (const char* region : {"ears", "nose", "lips"})
+  for (const char* region : {"ears", "lips"})
     for (int v : head.annotations.regions.at(region)) off[size_t(v)] = 1;
+  const std::vector<int>& nose = head.annotations.regions.at("nose");
+  double low = 1e9, high = -1e9;
+  for (int v : nose) low = std::min(low, head.mesh.positions[size_t(v)].y()), high = std::max(high, head.mesh.positions[size_t(v)].y());
+  std::vector<char> bridge(size_t(topo.num_vertices), 0);
+  for (int v : nose) (head.mesh.positions[size_t(v)].y() > 0.5 * (low + high) ? bridge : off)[size_t(v)] = 1;
   for (int l = 1; l <= 3; ++l)
     for (int v = 0; v < topo.num_vertices; ++v)
       if (off[size_t(v)]) CHECK(detail[size_t(l)][size_t(v)] == 0.0);
@@ -78,6 +85,22 @@ TEST_CASE("skin detail: the generic head's levels back on its cast shape, on the
                                                  << " vertices; largest detail " << 1e3 * largest << " mm");
   CHECK(after * 4 < before);
   CHECK(largest <= SkinDetailOptions{}.max_distance);
+
+  // The bridge's refined vertices come onto the shape too (left out, they
+  // kept the levels' furrows up to the glabella).
+  const std::vector<char> bridge3 = propagate_vertex_mask(plain, bridge)[3];
+  double bridge_before = 0, bridge_after = 0;
+  int bridge_n = 0;
+  for (size_t v = size_t(topo.num_vertices); v < bridge3.size(); ++v) {
+    if (!bridge3[v]) continue;
+    bridge_before += std::abs(shape.distance(plain.state.displaced[3][v]));
+    bridge_after += std::abs(shape.distance(displaced.state.displaced[3][v]));
+    ++bridge_n;
+  }
+  INFO("the bridge's level 3: mean |distance| " << 1e3 * bridge_before / bridge_n << " -> "
+                                                << 1e3 * bridge_after / bridge_n << " mm over " << bridge_n << " vertices");
+  REQUIRE(bridge_n > 50);
+  CHECK(bridge_after * 2 < bridge_before);
 
   // The furrows go: rougher cheeks and brow without it; no new crossing.
   HeadSurfaceQuality q_plain, q_detail;
