@@ -81,8 +81,9 @@ int run_make_generic_head(const Args& args) {
   if (!out_dir.empty()) ::mkdir(out_dir.c_str(), 0755);  // as `likeness fit` does; an existing one is kept
   // --skin-detail: the report and level 3 with the head's skin detail
   // (head/skin_detail.h) as displacements, the surface a photos head starts from.
+  const ButterflyCreases creases = head_creases(head.mesh, head.annotations);
   std::vector<std::vector<double>> detail;
-  if (args.has("skin-detail")) {
+  if (args.has("skin-detail") && (report || !level3_path.empty())) {
     s = generic_skin_detail(head, 3, SkinDetailOptions{}, detail);
     if (!s) return fail(kName, s.message);
   }
@@ -91,7 +92,7 @@ int run_make_generic_head(const Args& args) {
   // crossing pairs (head/surface_quality.h), the issue-35 figures.
   if (report) {
     HeadSurfaceQuality q;
-    s = measure_head_surface(head, head_creases(head.mesh, head.annotations), 3, q, with_detail);
+    s = measure_head_surface(head, creases, 3, q, with_detail);
     if (!s) return fail(kName, s.message);
     std::printf("smooth level %d with the head's creases (rims, canthi, socket rings), angle between adjacent triangles' normals (deg):\n", q.level);
     std::printf("  %-7s %6s %6s %6s %6s %6s\n", "region", "edges", "mean", "p95", "p99", "max");
@@ -105,7 +106,7 @@ int run_make_generic_head(const Args& args) {
   // --level3 FILE: that smooth level 3 as a mesh, to render and look at.
   if (!level3_path.empty()) {
     MultiresMesh smooth;
-    s = build_multires(head.mesh, head_creases(head.mesh, head.annotations), 3, smooth);
+    s = build_multires(head.mesh, creases, 3, smooth);
     if (s && with_detail) s = apply_skin_detail(detail, smooth);
     if (s) s = write_file(level3_path, write_obj(level_mesh(smooth, 3)));
     if (!s) return fail(kName, s.message);

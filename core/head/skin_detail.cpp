@@ -57,8 +57,11 @@ Status generic_skin_detail(const GenericHead& head, int levels, const SkinDetail
   if (const auto nose = head.annotations.regions.find("nose"); nose != head.annotations.regions.end()) {
     double low = 1e300, high = -1e300;
     for (int v : nose->second)
-      if (v >= 0 && v < topo.num_vertices)
-        low = std::min(low, up.dot(head.mesh.positions[v])), high = std::max(high, up.dot(head.mesh.positions[v]));
+      if (v >= 0 && v < topo.num_vertices) {
+        const double height = up.dot(head.mesh.positions[v]);
+        low = std::min(low, height);
+        high = std::max(high, height);
+      }
     nose_mid = 0.5 * (low + high);
   }
   for (const auto& [name, vertices] : head.annotations.regions)

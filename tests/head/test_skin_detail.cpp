@@ -62,9 +62,15 @@ TEST_CASE("skin detail: the generic head's levels back on its cast shape, on the
     for (int v : head.annotations.regions.at(region)) off[size_t(v)] = 1;
   const std::vector<int>& nose = head.annotations.regions.at("nose");
   double low = 1e9, high = -1e9;
-  for (int v : nose) low = std::min(low, head.mesh.positions[size_t(v)].y()), high = std::max(high, head.mesh.positions[size_t(v)].y());
+  for (int v : nose) {
+    low = std::min(low, head.mesh.positions[size_t(v)].y());
+    high = std::max(high, head.mesh.positions[size_t(v)].y());
+  }
   std::vector<char> bridge(size_t(topo.num_vertices), 0);
-  for (int v : nose) (head.mesh.positions[size_t(v)].y() > 0.5 * (low + high) ? bridge : off)[size_t(v)] = 1;
+  for (int v : nose) {
+    if (head.mesh.positions[size_t(v)].y() > 0.5 * (low + high)) bridge[size_t(v)] = 1;
+    else off[size_t(v)] = 1;
+  }
   for (int l = 1; l <= 3; ++l)
     for (int v = 0; v < topo.num_vertices; ++v)
       if (off[size_t(v)]) CHECK(detail[size_t(l)][size_t(v)] == 0.0);
