@@ -64,11 +64,23 @@ Status generic_skin_detail(const GenericHead& head, int levels, const SkinDetail
       }
     nose_mid = 0.5 * (low + high);
   }
+  // The lips are skin: only their lines (the slit's two edges, creases
+  // below) and the bag stay out. Left out whole, the lower lip kept the
+  // levels' wavy ledge on every photos head.
   for (const auto& [name, vertices] : head.annotations.regions)
-    if (name.rfind("ear", 0) == 0 || name == "nose" || name.find("lip") != std::string::npos)
+    if (name.rfind("ear", 0) == 0 || name == "nose")
       for (int v : vertices)
         if (v >= 0 && v < topo.num_vertices && (name != "nose" || up.dot(head.mesh.positions[v]) <= nose_mid))
           skin[v] = 0;
+  // Round the mouth's corners (the lip lines' ends) the lips stay out: with
+  // the detail there, the refined corners crossed on photos heads.
+  for (const CreaseCurve& c : head.annotations.creases)
+    if (c.name.find("lip_line") != std::string::npos && !c.closed && !c.vertices.empty())
+      for (int corner : {c.vertices.front(), c.vertices.back()})
+        if (corner >= 0 && corner < topo.num_vertices) {
+          skin[corner] = 0;
+          for (int w : topo.rings[corner]) skin[w] = 0;
+        }
   for (const auto& e : mr.creases.edges)
     for (int v : e)
       if (v >= 0 && v < topo.num_vertices) skin[v] = 0;

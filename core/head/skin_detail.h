@@ -34,13 +34,13 @@ struct SkinDetailOptions {
 // detail: levels + 1 arrays (#V_l of the generic head's levels, built with
 // head_creases); detail[0] is all 0 (the control vertices lie on the shape).
 // Skin: every control vertex but the ears, the nose's lower half (its
-// tip and wings; the upper half, the bridge, is skin), the lips, the pockets
-// (eye sockets, mouth bag, nostrils: head_pockets.h), the neck's open border
-// and the creases' vertices (eye and lip rims, socket rings); a refined vertex is skin when both ends of its
-// edge are. Other vertices take 0. Why not the nose tip and lips: a fit moves
-// them most, and the cast shape's nose tip and lip volumes laid on another
-// nose and mouth raise lumps there (seen on Kira's photos head); left out,
-// the bridge kept the levels' furrows up to the glabella.
+// tip and wings; the upper half, the bridge, is skin), the pockets (eye
+// sockets, mouth bag, nostrils: head_pockets.h), the neck's open border and
+// the creases' vertices (eye rims, the lip lines, socket rings); a refined
+// vertex is skin when both ends of its edge are. Other vertices take 0. Why
+// not the nose tip: a fit moves it most, and the cast shape's tip laid on
+// another nose raised a knob (seen on Kira's photos head); left out, the
+// bridge and the lips kept the levels' furrows and the lower lip's ledge.
 Status generic_skin_detail(const GenericHead& head, int levels, const SkinDetailOptions& options,
                            std::vector<std::vector<double>>& detail);
 
