@@ -64,9 +64,9 @@ Status generic_skin_detail(const GenericHead& head, int levels, const SkinDetail
       }
     nose_mid = 0.5 * (low + high);
   }
-  // The lips are skin: only their lines (the slit's two edges, creases
-  // below) and the bag stay out. Left out whole, the lower lip kept the
-  // levels' wavy ledge on every photos head.
+  // The lips are skin but for their lines (the slit's two edges, creases
+  // below), the bag (a pocket) and the mouth corners (next). Left out
+  // whole, the lower lip kept the levels' wavy ledge on every photos head.
   for (const auto& [name, vertices] : head.annotations.regions)
     if (name.rfind("ear", 0) == 0 || name == "nose")
       for (int v : vertices)

@@ -36,7 +36,9 @@ struct SkinDetailOptions {
 // Skin: every control vertex but the ears, the nose's lower half (its
 // tip and wings; the upper half, the bridge, is skin), the pockets (eye
 // sockets, mouth bag, nostrils: head_pockets.h), the neck's open border and
-// the creases' vertices (eye rims, the lip lines, socket rings); a refined
+// the creases' vertices (eye rims, the lip lines, socket rings) and each
+// mouth corner with its one-ring (there the refined corners of photos heads
+// crossed); a refined
 // vertex is skin when both ends of its edge are. Other vertices take 0. Why
 // not the nose tip: a fit moves it most, and the cast shape's tip laid on
 // another nose raised a knob (seen on Kira's photos head); left out, the

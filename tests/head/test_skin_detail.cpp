@@ -55,14 +55,17 @@ TEST_CASE("skin detail: the generic head's levels back on its cast shape, on the
   REQUIRE(apply_skin_detail(detail, displaced));
 
   // Control vertices keep their index on every level: the ears, the lip
-  // lines, the pockets and the nose's lower half (tip and wings) take no
-  // detail; the nose's upper half (the bridge) and the lips off their lines
-  // are skin.
+  // lines, the mouth corners with their one-rings, the pockets and the
+  // nose's lower half (tip and wings) take no detail; the nose's upper half
+  // (the bridge) and the lips off their lines are skin.
   std::vector<char> off = pocket_vertices(topo, head.annotations);
   for (int v : head.annotations.regions.at("ears")) off[size_t(v)] = 1;
   for (const CreaseCurve& c : head.annotations.creases)
-    if (c.name.find("lip_line") != std::string::npos)
+    if (c.name.find("lip_line") != std::string::npos) {
       for (int v : c.vertices) off[size_t(v)] = 1;
+      for (int corner : {c.vertices.front(), c.vertices.back()})
+        for (int w : topo.rings[size_t(corner)]) off[size_t(w)] = 1;
+    }
   int lips_detailed = 0;
   for (int v : head.annotations.regions.at("lips"))
     if (!off[size_t(v)] && std::abs(detail[1][size_t(v)]) > 1e-5) ++lips_detailed;
