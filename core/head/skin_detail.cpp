@@ -49,11 +49,13 @@ Status generic_skin_detail(const GenericHead& head, int levels, const SkinDetail
   const std::vector<char> pockets = pocket_vertices(topo, head.annotations);
   for (int v = 0; v < topo.num_vertices; ++v)
     if (pockets[v] || topo.is_boundary(v)) skin[v] = 0;
-  // Only the nose's lower half (tip, wings, columella) is left out; its
-  // upper half, the bridge up to the glabella, is skin: left out, it kept
-  // the levels' rolls across the bridge between the eyes.
+  // Of the nose only its lower half above its base (tip, wings, columella)
+  // is left out. Its upper half, the bridge up to the glabella, is skin:
+  // left out, it kept the levels' rolls across the bridge between the eyes.
+  // So is its base (the lowest tenth of its height, where it meets the upper
+  // lip): left out, it and its fade kept furrows over the philtrum.
   const Vec3 up = head.annotations.up.normalized();
-  double nose_mid = 0;
+  double nose_base = 0, nose_mid = 0;
   if (const auto nose = head.annotations.regions.find("nose"); nose != head.annotations.regions.end()) {
     double low = 1e300, high = -1e300;
     for (int v : nose->second)
@@ -62,15 +64,20 @@ Status generic_skin_detail(const GenericHead& head, int levels, const SkinDetail
         low = std::min(low, height);
         high = std::max(high, height);
       }
+    nose_base = low + 0.1 * (high - low);
     nose_mid = 0.5 * (low + high);
   }
+  const auto nose_left_out = [&](int v) {
+    const double height = up.dot(head.mesh.positions[v]);
+    return height > nose_base && height <= nose_mid;
+  };
   // The lips are skin but for their lines (the slit's two edges, creases
   // below), the bag (a pocket) and the mouth corners (next). Left out
   // whole, the lower lip kept the levels' wavy ledge on every photos head.
   for (const auto& [name, vertices] : head.annotations.regions)
     if (name.rfind("ear", 0) == 0 || name == "nose")
       for (int v : vertices)
-        if (v >= 0 && v < topo.num_vertices && (name != "nose" || up.dot(head.mesh.positions[v]) <= nose_mid))
+        if (v >= 0 && v < topo.num_vertices && (name != "nose" || nose_left_out(v)))
           skin[v] = 0;
   // Round the mouth's corners (the lip lines' ends) the lips stay out: with
   // the detail there, the refined corners crossed on photos heads.

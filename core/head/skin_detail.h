@@ -33,16 +33,16 @@ struct SkinDetailOptions {
 
 // detail: levels + 1 arrays (#V_l of the generic head's levels, built with
 // head_creases); detail[0] is all 0 (the control vertices lie on the shape).
-// Skin: every control vertex but the ears, the nose's lower half (its
-// tip and wings; the upper half, the bridge, is skin), the pockets (eye
-// sockets, mouth bag, nostrils: head_pockets.h), the neck's open border and
-// the creases' vertices (eye rims, the lip lines, socket rings) and each
-// mouth corner with its one-ring (there the refined corners of photos heads
-// crossed); a refined
-// vertex is skin when both ends of its edge are. Other vertices take 0. Why
-// not the nose tip: a fit moves it most, and the cast shape's tip laid on
-// another nose raised a knob (seen on Kira's photos head); left out, the
-// bridge and the lips kept the levels' furrows and the lower lip's ledge.
+// Skin: every control vertex but the ears, the nose's lower half (its tip
+// and wings; the bridge above and the base on the upper lip are skin), the
+// pockets (eye sockets, mouth bag, nostrils: head_pockets.h), the neck's
+// open border, the creases' vertices (eye rims, the lip lines, socket
+// rings) and each mouth corner with its one-ring (there the refined corners
+// of photos heads crossed); a refined vertex is skin when both ends of its
+// edge are. Other vertices take 0. Why not the nose tip: a fit moves it
+// most, and the cast shape's tip laid on another nose raised a knob (seen
+// on Kira's photos head); left out, the bridge, the nose's base and the
+// lips kept the levels' furrows and the lower lip's ledge.
 Status generic_skin_detail(const GenericHead& head, int levels, const SkinDetailOptions& options,
                            std::vector<std::vector<double>>& detail);
 

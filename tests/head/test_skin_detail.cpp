@@ -2,7 +2,7 @@
 // that put its smooth Butterfly levels back on the shape it was cast from,
 // on the skin only. Would fail if the detail were measured on the wrong side
 // of the normal, left the cast shape's nose tip or the pockets in, left the
-// lips out, or raised a crossing.
+// lips, the bridge or the nose's base out, or raised a crossing.
 #include "head/generic_head.h"
 #include "head/head_creases.h"
 #include "head/head_pockets.h"
@@ -56,8 +56,9 @@ TEST_CASE("skin detail: the generic head's levels back on its cast shape, on the
 
   // Control vertices keep their index on every level: the ears, the lip
   // lines, the mouth corners with their one-rings, the pockets and the
-  // nose's lower half (tip and wings) take no detail; the nose's upper half
-  // (the bridge) and the lips off their lines are skin.
+  // nose's lower half above its base (tip and wings) take no detail; the
+  // nose's upper half (the bridge), its base on the upper lip and the lips
+  // off their lines are skin.
   std::vector<char> off = pocket_vertices(topo, head.annotations);
   for (int v : head.annotations.regions.at("ears")) off[size_t(v)] = 1;
   for (const CreaseCurve& c : head.annotations.creases)
@@ -76,9 +77,11 @@ TEST_CASE("skin detail: the generic head's levels back on its cast shape, on the
     low = std::min(low, head.mesh.positions[size_t(v)].y());
     high = std::max(high, head.mesh.positions[size_t(v)].y());
   }
-  std::vector<char> bridge(size_t(topo.num_vertices), 0);
+  std::vector<char> bridge(size_t(topo.num_vertices), 0), base(size_t(topo.num_vertices), 0);
   for (int v : nose) {
-    if (head.mesh.positions[size_t(v)].y() > 0.5 * (low + high)) bridge[size_t(v)] = 1;
+    const double y = head.mesh.positions[size_t(v)].y();
+    if (y > 0.5 * (low + high)) bridge[size_t(v)] = 1;
+    else if (y <= low + 0.1 * (high - low)) base[size_t(v)] = 1;
     else off[size_t(v)] = 1;
   }
   for (int l = 1; l <= 3; ++l)
@@ -102,21 +105,26 @@ TEST_CASE("skin detail: the generic head's levels back on its cast shape, on the
   CHECK(after * 4 < before);
   CHECK(largest <= SkinDetailOptions{}.max_distance);
 
-  // The bridge's refined vertices come onto the shape too (left out, they
-  // kept the levels' furrows up to the glabella).
-  const std::vector<char> bridge3 = propagate_vertex_mask(plain, bridge)[3];
-  double bridge_before = 0, bridge_after = 0;
-  int bridge_n = 0;
-  for (size_t v = size_t(topo.num_vertices); v < bridge3.size(); ++v) {
-    if (!bridge3[v]) continue;
-    bridge_before += std::abs(shape.distance(plain.state.displaced[3][v]));
-    bridge_after += std::abs(shape.distance(displaced.state.displaced[3][v]));
-    ++bridge_n;
-  }
-  INFO("the bridge's level 3: mean |distance| " << 1e3 * bridge_before / bridge_n << " -> "
-                                                << 1e3 * bridge_after / bridge_n << " mm over " << bridge_n << " vertices");
-  REQUIRE(bridge_n > 50);
-  CHECK(bridge_after * 2 < bridge_before);
+  // The refined vertices of the nose's bridge and of its base on the upper
+  // lip come onto the shape too (left out, they kept the levels' furrows up
+  // to the glabella and over the philtrum).
+  const auto closer = [&](const std::vector<char>& control, const char* name, int at_least) {
+    const std::vector<char> mask3 = propagate_vertex_mask(plain, control)[3];
+    double before_m = 0, after_m = 0;
+    int count = 0;
+    for (size_t v = size_t(topo.num_vertices); v < mask3.size(); ++v) {
+      if (!mask3[v]) continue;
+      before_m += std::abs(shape.distance(plain.state.displaced[3][v]));
+      after_m += std::abs(shape.distance(displaced.state.displaced[3][v]));
+      ++count;
+    }
+    INFO(name << "'s level 3: mean |distance| " << 1e3 * before_m / std::max(count, 1) << " -> "
+              << 1e3 * after_m / std::max(count, 1) << " mm over " << count << " vertices");
+    REQUIRE(count > at_least);
+    CHECK(after_m * 2 < before_m);
+  };
+  closer(bridge, "the bridge", 50);
+  closer(base, "the nose's base", 20);
 
   // The furrows go: rougher cheeks and brow without it; no new crossing.
   HeadSurfaceQuality q_plain, q_detail;
