@@ -13,19 +13,21 @@ namespace lk {
 namespace {
 
 // Newton's method along n from p onto the shape's zero set: the signed
-// step t with distance(p + t n) = 0, or 0 when it does not converge within
-// max_distance (a normal grazing the shape, a vertex off it).
+// step t with distance(p + t n) = 0, taken in full up to half of
+// max_distance and tapered linearly to 0 at it (no step where a vertex
+// crosses the limit); 0 when it does not converge (a normal grazing the
+// shape, a vertex off it).
 double distance_along(const HeadShape& shape, const Vec3& p, const Vec3& n, double max_distance) {
   const double h = 1e-6;
   double t = 0;
   for (int k = 0; k < 20; ++k) {
     const Vec3 q = p + t * n;
     const double f = shape.distance(q);
-    if (std::abs(f) < 1e-9) return std::abs(t) <= max_distance ? t : 0.0;
+    if (std::abs(f) < 1e-9) return t * std::clamp(2 * (max_distance - std::abs(t)) / max_distance, 0.0, 1.0);
     const double slope = (shape.distance(q + h * n) - shape.distance(q - h * n)) / (2 * h);
     if (!(std::abs(slope) > 0.3)) return 0.0;
     t -= f / slope;
-    if (!(std::abs(t) <= 2 * max_distance)) return 0.0;
+    if (!(std::abs(t) <= max_distance)) return 0.0;
   }
   return 0.0;
 }

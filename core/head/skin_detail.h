@@ -21,9 +21,12 @@
 namespace lk {
 
 struct SkinDetailOptions {
-  // A vertex farther than this from the shape along its normal (or whose
-  // normal runs along the shape) keeps 0 (m).
-  double max_distance = 0.002;
+  // A vertex's distance to the shape along its normal is its detail in
+  // full up to half of this, tapering linearly to 0 at it (m); a vertex
+  // whose normal runs along the shape keeps 0. Cut off hard at 2 mm, the
+  // outer eye corners (where the shape's lid fold is sharp) kept the
+  // levels' pleats.
+  double max_distance = 0.003;
   // The detail fades in over this many rings of each level from the
   // vertices that take none.
   int fade_rings = 2;

@@ -30,12 +30,14 @@ const GenericHead& asset() {
   return head;
 }
 
-double roughness_p95(const HeadSurfaceQuality& q, const std::string& region) {
+const RegionRoughness& roughness(const HeadSurfaceQuality& q, const std::string& region) {
   for (const RegionRoughness& r : q.regions)
-    if (r.region == region) return r.p95_deg;
+    if (r.region == region) return r;
   FAIL("no region " << region);
-  return 0;
+  return q.regions.front();
 }
+
+double roughness_p95(const HeadSurfaceQuality& q, const std::string& region) { return roughness(q, region).p95_deg; }
 
 }  // namespace
 
@@ -103,7 +105,7 @@ TEST_CASE("skin detail: the generic head's levels back on its cast shape, on the
   INFO("mean |distance| to the shape, level 3: " << 1e3 * before / n << " -> " << 1e3 * after / n << " mm over " << n
                                                  << " vertices; largest detail " << 1e3 * largest << " mm");
   CHECK(after * 4 < before);
-  CHECK(largest <= SkinDetailOptions{}.max_distance);
+  CHECK(largest <= 0.5 * SkinDetailOptions{}.max_distance);  // the taper peaks at half of it
 
   // The refined vertices of the nose's bridge and of its base on the upper
   // lip come onto the shape too (left out, they kept the levels' furrows up
@@ -131,13 +133,17 @@ TEST_CASE("skin detail: the generic head's levels back on its cast shape, on the
   REQUIRE(measure_head_surface(head, creases, 3, q_plain));
   REQUIRE(measure_head_surface(head, creases, 3, q_detail, &detail));
   // The cheeks' furrows go (p95 2.64 -> 2.35 deg); the brow's p95 rises
-  // (8.8 -> 10.8 deg): the shape's own lid fold under the brow, sharper
-  // than the levels' (docs/design/generic_head.md, "The skin detail").
+  // (8.8 -> 9.5 deg): the shape's own lid fold under the brow, sharper
+  // than the levels' (docs/design/generic_head.md, "The skin detail"). Its
+  // p99 stays (15.2): with the detail cut off hard at 2 mm, the pleats at
+  // the outer eye corners raised it to 21.9.
   INFO("cheeks p95 " << roughness_p95(q_plain, "cheeks") << " -> " << roughness_p95(q_detail, "cheeks")
                      << " deg, brow p95 " << roughness_p95(q_plain, "brow") << " -> "
-                     << roughness_p95(q_detail, "brow"));
+                     << roughness_p95(q_detail, "brow") << ", p99 " << roughness(q_plain, "brow").p99_deg << " -> "
+                     << roughness(q_detail, "brow").p99_deg);
   CHECK(roughness_p95(q_detail, "cheeks") < 0.92 * roughness_p95(q_plain, "cheeks"));
-  CHECK(roughness_p95(q_detail, "brow") < 1.3 * roughness_p95(q_plain, "brow"));
+  CHECK(roughness_p95(q_detail, "brow") < 1.15 * roughness_p95(q_plain, "brow"));
+  CHECK(roughness(q_detail, "brow").p99_deg < 1.1 * roughness(q_plain, "brow").p99_deg);
   for (int l = 0; l <= 3; ++l) {
     INFO("level " << l);
     CHECK(q_detail.crossing_pairs[size_t(l)] <= q_plain.crossing_pairs[size_t(l)]);
