@@ -505,7 +505,7 @@ int run(const Args& args) {
           const Vec3& t = r.generic_to_head.t;
           std::printf("; map %.12g %.12g %.12g %.12g %.12g %.12g %.12g %.12g %.12g | %.12g %.12g %.12g", A(0, 0),
                       A(0, 1), A(0, 2), A(1, 0), A(1, 1), A(1, 2), A(2, 0), A(2, 1), A(2, 2), t.x(), t.y(), t.z());
-          std::printf("; orientation %s %s, scores %.6g / %.6g", r.orientation.differs ? "turned" : "kept",
+          std::printf("; orientation %s %s, scores %.6g / %.6g", r.turned ? "turned" : "kept",
                       r.orientation.given_clearly_best ? "(given clearly best)" : "", r.orientation.score_best,
                       r.orientation.score_given);
         }

@@ -17,6 +17,7 @@
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <sstream>
 
@@ -86,6 +87,34 @@ Status zero_pocket_displacements(const std::vector<char>& pocket, MultiresMesh& 
   return evaluate(mr);
 }
 
+// "the scan seems to face ... with ... up" for a turn (as
+// OrientationGuess::rotation) of the scan in the head frame as given, and
+// the flags that say so.
+void describe_turn(const Mat3& turn, const Mat3& given, std::string& what, std::string& flags) {
+  const Mat3 scan_to_upright = turn * given;
+  const Vec3 facing = scan_to_upright.transpose() * Vec3::UnitZ();
+  const Vec3 up = scan_to_upright.transpose() * Vec3::UnitY();
+  auto numbers = [](const Vec3& v) {
+    std::ostringstream s;
+    s.precision(2);
+    for (int k = 0; k < 3; ++k) s << (k ? " " : "") << (std::abs(v[k]) < 5e-3 ? 0.0 : v[k]);
+    return s.str();
+  };
+  what = "the scan seems to face " + axis_name(facing) + " with " + axis_name(up) + " up";
+  flags = "--facing " + numbers(facing) + " --up " + numbers(up);
+}
+
+// Turns the cloud (in the head frame as given) and scan_to_head by `turn`,
+// with a note; why: the evidence, appended to "the scan seems to face ...".
+void turn_scan(const Mat3& turn, const Mat3& given, const std::string& why, PointCloud& cloud, FitHeadResult& out) {
+  std::string what, flags;
+  describe_turn(turn, given, what, flags);
+  for (Vec3& p : cloud.positions) p = turn * p;
+  out.scan_to_head.A = out.unit_to_metres * turn * given;
+  out.turned = true;
+  out.notes.push_back(what + why + ": turned it that way; pass " + flags + " to say so");
+}
+
 // Searches orientations (face_alignment.h) for the cloud in the head frame;
 // when another fits clearly better, either rotates the cloud
 // (and scan_to_head) to it with a note, or fails with the options to pass.
@@ -98,26 +127,57 @@ Status check_orientation(const GenericHead& generic, const FitHeadOptions& optio
   if (!st) return Status::success();  // nothing aligns: the head checks below give the reason
   out.orientation_checked = true;
   if (!out.orientation.differs) return Status::success();
-  // The better orientation in the scan's own frame.
-  const Mat3 scan_to_upright = out.orientation.rotation * given;
-  const Vec3 facing = scan_to_upright.transpose() * Vec3::UnitZ();
-  const Vec3 up = scan_to_upright.transpose() * Vec3::UnitY();
-  auto numbers = [](const Vec3& v) {
-    std::ostringstream s;
-    s.precision(2);
-    for (int k = 0; k < 3; ++k) s << (k ? " " : "") << (std::abs(v[k]) < 5e-3 ? 0.0 : v[k]);
-    return s.str();
-  };
-  const std::string what = "the scan seems to face " + axis_name(facing) + " with " + axis_name(up) +
-                           " up (there its closest-point error is " + pct(out.orientation.score_given / out.orientation.score_best) +
-                           "x smaller than as given)";
-  const std::string flags = "--facing " + numbers(facing) + " --up " + numbers(up);
-  if (options.orientation_check == FitHeadOptions::OrientationCheck::Hint)
-    return Status::error(ErrorCode::NotAHead, what + "; try " + flags);
-  for (Vec3& p : cloud.positions) p = out.orientation.rotation * p;
-  out.scan_to_head.A = out.unit_to_metres * scan_to_upright;
-  out.notes.push_back(what + ": turned it that way; pass " + flags + " to say so");
+  const std::string why = " (there its closest-point error is " +
+                          pct(out.orientation.score_given / out.orientation.score_best) + "x smaller than as given)";
+  if (options.orientation_check == FitHeadOptions::OrientationCheck::Hint) {
+    std::string what, flags;
+    describe_turn(out.orientation.rotation, given, what, flags);
+    return Status::error(ErrorCode::NotAHead, what + why + "; try " + flags);
+  }
+  turn_scan(out.orientation.rotation, given, why, cloud, out);
   return Status::success();
+}
+
+// After check_orientation turned the scan and align_scan aligned it
+// (turned_status): the scan as given is aligned as well, and the turn is
+// kept only when it leaves a larger share of the scan's points within
+// near_distance of the aligned head. The orientation search's closest-point
+// score does not separate a bust's right pose from a wrong one by a margin
+// to rely on (Demosthenes turned to a wrong pose 1.27x "better");
+// this share does (docs/design/align.md, "A turn checked against the scan
+// as given"). before_turn: `out` before check_orientation. Returns the kept
+// one's status (turned_status by value: align_scan may write the caller's).
+Status check_turn(Status turned_status, const PointCloud& as_given, const FitHeadResult& before_turn,
+                  double near_distance, const std::function<Status()>& align_scan, PointCloud& cloud,
+                  FitHeadResult& out) {
+  auto share = [&](const Status& s) {
+    return s ? near_share(out.aligned, cloud.positions, near_distance, 20000) : -1.0;
+  };
+  auto words = [](double s) { return s >= 0 ? pct(100 * s) + "%" : std::string("refused"); };
+  const double turned_share = share(turned_status);
+  FitHeadResult turned = out;
+  PointCloud turned_cloud = cloud;
+  out = before_turn;
+  out.orientation = turned.orientation;
+  out.orientation_checked = true;
+  cloud = as_given;
+  const Status given_status = align_scan();
+  if (given_status.code == ErrorCode::Cancelled) return given_status;
+  const double given_share = share(given_status);
+  const std::string shares = "the share of the scan's points near the aligned head: turned " + words(turned_share) +
+                             ", as given " + words(given_share);
+  if (given_share > turned_share) {
+    out.notes.push_back("the orientation search proposed a turn, but the scan as given lies closer to the head (" +
+                        shares + "): kept as given");
+    return given_status;
+  }
+  out = std::move(turned);
+  cloud = std::move(turned_cloud);
+  if (!turned_status && !given_status)
+    return Status::error(turned_status.code, turned_status.message + " (as given too: " + given_status.message + ")");
+  if (turned_status)
+    out.notes.push_back("the turn was checked against the scan as given (" + shares + "): kept the turn");
+  return turned_status;
 }
 
 // Leaves out the points far sparser than the scan's own sampling
@@ -823,26 +883,11 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
 
   // 1. Initial alignment.
   if (observer.started) observer.started("initial_alignment");
+  // The scan as given, for the orientations tried below.
+  const PointCloud as_given = cloud;
+  const FitHeadResult before_turn = out;
   st = check_orientation(to_align, options, R, cloud, out, progress);
   if (!st) return st;
-  st = estimate_coverage(cloud, options.coverage, out.coverage);
-  if (!st) return with_context(st, "coverage");
-  out.face_only = options.scan_kind == FitHeadOptions::ScanKind::FaceOnly ||
-                  (options.scan_kind == FitHeadOptions::ScanKind::Auto && out.coverage.face_only);
-  if (out.face_only) {
-    st = align_face(to_align.mesh, ann, cloud, options.face_align, out.face_alignment, progress);
-    if (!st) return with_context(st, "initial alignment (face-only scan)");
-    out.alignment.linear = out.alignment.initial_linear = out.face_alignment.linear;
-    out.alignment.translation = out.alignment.initial_translation = out.face_alignment.translation;
-    out.alignment.aligned = to_align.mesh;
-    transform(out.alignment.aligned, out.alignment.linear, out.alignment.translation);
-    out.notes.push_back("face-only scan (its upper part is " + pct(out.coverage.depth_to_width) +
-                        "x as deep as wide; a whole head is 1x or more): aligned by closest points, and the "
-                        "unscanned back, scalp and ears keep the generic head's shape");
-  } else {
-    st = align_initial(to_align.mesh, ann, cloud, options.align, out.alignment, progress);
-    if (!st) return with_context(st, "initial alignment");
-  }
   // The points to fit (the neck below the generic head's neck is not part
   // of the model, and would drag its boundary down) and the share of them
   // near the aligned head, for the alignment as it stands.
@@ -880,97 +925,127 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
       if (!options.cut_neck || cut.keeps(p)) kept.push_back(p);
     return near_share(moved, kept, options.near_distance_pct / 100.0 * diag, options.choose_pitch_points);
   };
-  st = place();
-  if (!st) return st;
-  // Sanity: a head scan lies on (near) the aligned generic head; noise,
-  // furniture or a torso do not. A whole head with surfaces the generic
-  // head lacks (a hat, a beard, a pedestal) may fail it because the
-  // silhouettes misled the alignment: it is aligned again on the face.
-  bool silhouette_face_holds = false;  // the silhouettes' own alignment, by the face's rule below
-  const AlignResult silhouette_alignment = out.alignment;
-  const double silhouette_near = out.near_fraction;
-  double silhouette_face_near = 0;
-  const size_t notes_before_face = out.notes.size();
-  std::string pitches_tried;  // the face's pitch candidates and their shares, for the messages
-  if (out.near_fraction < options.min_near_fraction && !out.face_only && options.refine_on_face) {
-    st = upper_face_near_fraction(to_align.mesh, ann, cloud.positions, scan.faces, out.alignment.linear,
-                                  out.alignment.translation, diag, options.face_refine.score_clamp_fraction,
-                                  silhouette_face_near, options.face_refine.samples);
-    silhouette_face_holds = st && silhouette_face_near >= options.min_near_fraction &&
-                            out.near_fraction >= 0.5 * options.min_near_fraction;
-    st = refine_alignment_on_face(to_align.mesh, ann, cloud.positions, scan.faces, out.alignment.linear,
-                                  out.alignment.translation, diag, options.face_refine, out.face_refine);
-    if (st) {
-      out.notes.push_back("after the silhouette alignment only " + pct(100 * out.near_fraction) +
-                          "% of the points lay near the head (a hat, a beard, a pedestal?): aligned again on the face (" +
-                          pct(100 * out.face_refine.near_fraction) + "% of its points on the scan)");
-      out.alignment.linear = out.face_refine.linear;
-      out.alignment.translation = out.face_refine.translation;
-      st = place();
-      if (!st) return st;
-      out.refined_on_face = true;
-      out.alignment.aligned = out.aligned;
+  // The alignment of the cloud as it is now turned; NotAHead when too few
+  // of its points lie near the aligned head.
+  const auto align_scan = [&]() -> Status {
+    st = estimate_coverage(cloud, options.coverage, out.coverage);
+    if (!st) return with_context(st, "coverage");
+    out.face_only = options.scan_kind == FitHeadOptions::ScanKind::FaceOnly ||
+                    (options.scan_kind == FitHeadOptions::ScanKind::Auto && out.coverage.face_only);
+    if (out.face_only) {
+      st = align_face(to_align.mesh, ann, cloud, options.face_align, out.face_alignment, progress);
+      if (!st) return with_context(st, "initial alignment (face-only scan)");
+      out.alignment.linear = out.alignment.initial_linear = out.face_alignment.linear;
+      out.alignment.translation = out.alignment.initial_translation = out.face_alignment.translation;
+      out.alignment.aligned = to_align.mesh;
+      transform(out.alignment.aligned, out.alignment.linear, out.alignment.translation);
+      out.notes.push_back("face-only scan (its upper part is " + pct(out.coverage.depth_to_width) +
+                          "x as deep as wide; a whole head is 1x or more): aligned by closest points, and the "
+                          "unscanned back, scalp and ears keep the generic head's shape");
+    } else {
+      st = align_initial(to_align.mesh, ann, cloud, options.align, out.alignment, progress);
+      if (!st) return with_context(st, "initial alignment");
     }
-    // When that match (from the silhouettes' pitch) does not hold either,
-    // the silhouettes' minima lie too close to choose by them or by the
-    // face: other pitches are matched and the share of the points near the
-    // head chooses (FitHeadOptions::choose_face_pitch; Gutenberg turned by
-    // 0.05 deg: docs/design/align.md, "Choosing the pitch"). Not when the
-    // silhouettes' own alignment passes the face's rule: it is kept below.
-    const bool holds = out.refined_on_face && out.face_refine.near_fraction >= options.min_near_fraction &&
-                       out.near_fraction >= 0.5 * options.min_near_fraction;
-    FaceRefineResult chosen;
-    if (st && !holds && !silhouette_face_holds && options.choose_face_pitch &&
-        refine_alignment_on_face(to_align.mesh, ann, cloud.positions, scan.faces, silhouette_alignment.linear,
-                                 silhouette_alignment.translation, diag, options.face_refine, chosen, share_near)) {
-      for (const FaceRefineCandidate& c : chosen.candidates)
-        pitches_tried += (pitches_tried.empty() ? "" : ", ") + pct(c.pitch_deg) + " deg " + pct(100 * c.measure) + "%";
-      const AlignResult first = out.alignment;
-      const double first_near = out.near_fraction;
-      out.alignment.linear = chosen.linear;
-      out.alignment.translation = chosen.translation;
-      st = place();
-      if (!st) return st;
-      if (out.near_fraction > first_near) {
-        out.face_refine = chosen;
-        out.alignment.aligned = out.aligned;
-        out.notes.push_back("the face's match left only " + pct(100 * first_near) +
-                            "% of the points near the head: its pitch chosen again by that share (" + pitches_tried +
-                            "): " + pct(chosen.candidates[chosen.chosen].pitch_deg) + " deg, " +
-                            pct(100 * out.near_fraction) + "% near");
-      } else {
-        out.alignment = first;
-        st = place();
-        if (!st) return st;
-      }
-    }
-  }
-  // After the face's alignment: the face must lie on the scan as the whole
-  // head would (the same share), and half that share of the points near
-  // the whole head (the rest may be a hat, a beard, shoulders).
-  bool face_holds = out.refined_on_face && out.face_refine.near_fraction >= options.min_near_fraction &&
-                    out.near_fraction >= 0.5 * options.min_near_fraction;
-  if (out.near_fraction < options.min_near_fraction && !face_holds && silhouette_face_holds) {
-    // The face's match went astray while the silhouettes' alignment passes
-    // the face's rule itself (Plato with a generic head whose mouth moved a
-    // few millimetres: docs/design/fit_real_scans.md): that one is kept.
-    out.notes.resize(notes_before_face);  // its "aligned again on the face"
-    out.alignment = silhouette_alignment;
     st = place();
     if (!st) return st;
-    out.refined_on_face = false;
-    out.notes.push_back("after the silhouette alignment only " + pct(100 * silhouette_near) +
-                        "% of the points lay near the head, but " + pct(100 * silhouette_face_near) +
-                        "% of its upper face lies on the scan (the face's own match did not hold): kept");
-    face_holds = true;
+    // Sanity: a head scan lies on (near) the aligned generic head; noise,
+    // furniture or a torso do not. A whole head with surfaces the generic
+    // head lacks (a hat, a beard, a pedestal) may fail it because the
+    // silhouettes misled the alignment: it is aligned again on the face.
+    bool silhouette_face_holds = false;  // the silhouettes' own alignment, by the face's rule below
+    const AlignResult silhouette_alignment = out.alignment;
+    const double silhouette_near = out.near_fraction;
+    double silhouette_face_near = 0;
+    const size_t notes_before_face = out.notes.size();
+    std::string pitches_tried;  // the face's pitch candidates and their shares, for the messages
+    if (out.near_fraction < options.min_near_fraction && !out.face_only && options.refine_on_face) {
+      st = upper_face_near_fraction(to_align.mesh, ann, cloud.positions, scan.faces, out.alignment.linear,
+                                    out.alignment.translation, diag, options.face_refine.score_clamp_fraction,
+                                    silhouette_face_near, options.face_refine.samples);
+      silhouette_face_holds = st && silhouette_face_near >= options.min_near_fraction &&
+                              out.near_fraction >= 0.5 * options.min_near_fraction;
+      st = refine_alignment_on_face(to_align.mesh, ann, cloud.positions, scan.faces, out.alignment.linear,
+                                    out.alignment.translation, diag, options.face_refine, out.face_refine);
+      if (st) {
+        out.notes.push_back("after the silhouette alignment only " + pct(100 * out.near_fraction) +
+                            "% of the points lay near the head (a hat, a beard, a pedestal?): aligned again on the face (" +
+                            pct(100 * out.face_refine.near_fraction) + "% of its points on the scan)");
+        out.alignment.linear = out.face_refine.linear;
+        out.alignment.translation = out.face_refine.translation;
+        st = place();
+        if (!st) return st;
+        out.refined_on_face = true;
+        out.alignment.aligned = out.aligned;
+      }
+      // When that match (from the silhouettes' pitch) does not hold either,
+      // the silhouettes' minima lie too close to choose by them or by the
+      // face: other pitches are matched and the share of the points near the
+      // head chooses (FitHeadOptions::choose_face_pitch; Gutenberg turned by
+      // 0.05 deg: docs/design/align.md, "Choosing the pitch"). Not when the
+      // silhouettes' own alignment passes the face's rule: it is kept below.
+      const bool holds = out.refined_on_face && out.face_refine.near_fraction >= options.min_near_fraction &&
+                         out.near_fraction >= 0.5 * options.min_near_fraction;
+      FaceRefineResult chosen;
+      if (st && !holds && !silhouette_face_holds && options.choose_face_pitch &&
+          refine_alignment_on_face(to_align.mesh, ann, cloud.positions, scan.faces, silhouette_alignment.linear,
+                                   silhouette_alignment.translation, diag, options.face_refine, chosen, share_near)) {
+        for (const FaceRefineCandidate& c : chosen.candidates)
+          pitches_tried += (pitches_tried.empty() ? "" : ", ") + pct(c.pitch_deg) + " deg " + pct(100 * c.measure) + "%";
+        const AlignResult first = out.alignment;
+        const double first_near = out.near_fraction;
+        out.alignment.linear = chosen.linear;
+        out.alignment.translation = chosen.translation;
+        st = place();
+        if (!st) return st;
+        if (out.near_fraction > first_near) {
+          out.face_refine = chosen;
+          out.alignment.aligned = out.aligned;
+          out.notes.push_back("the face's match left only " + pct(100 * first_near) +
+                              "% of the points near the head: its pitch chosen again by that share (" + pitches_tried +
+                              "): " + pct(chosen.candidates[chosen.chosen].pitch_deg) + " deg, " +
+                              pct(100 * out.near_fraction) + "% near");
+        } else {
+          out.alignment = first;
+          st = place();
+          if (!st) return st;
+        }
+      }
+    }
+    // After the face's alignment: the face must lie on the scan as the whole
+    // head would (the same share), and half that share of the points near
+    // the whole head (the rest may be a hat, a beard, shoulders).
+    bool face_holds = out.refined_on_face && out.face_refine.near_fraction >= options.min_near_fraction &&
+                      out.near_fraction >= 0.5 * options.min_near_fraction;
+    if (out.near_fraction < options.min_near_fraction && !face_holds && silhouette_face_holds) {
+      // The face's match went astray while the silhouettes' alignment passes
+      // the face's rule itself (Plato with a generic head whose mouth moved a
+      // few millimetres: docs/design/fit_real_scans.md): that one is kept.
+      out.notes.resize(notes_before_face);  // its "aligned again on the face"
+      out.alignment = silhouette_alignment;
+      st = place();
+      if (!st) return st;
+      out.refined_on_face = false;
+      out.notes.push_back("after the silhouette alignment only " + pct(100 * silhouette_near) +
+                          "% of the points lay near the head, but " + pct(100 * silhouette_face_near) +
+                          "% of its upper face lies on the scan (the face's own match did not hold): kept");
+      face_holds = true;
+    }
+    if (out.near_fraction < options.min_near_fraction && !face_holds)
+      return Status::error(ErrorCode::NotAHead,
+                           "after alignment only " + pct(100 * out.near_fraction) + "% of the points lie within " +
+                               pct(options.near_distance_pct) + "% of the diagonal of the head surface (need " +
+                               pct(100 * options.min_near_fraction) + "%" +
+                               (pitches_tried.empty() ? "" : "; aligned on the face from pitches " + pitches_tried) +
+                               "); this does not look like a head scan");
+    return Status::success();
+  };
+  st = align_scan();
+  if (st.code == ErrorCode::Cancelled) return st;
+  if (out.turned) {
+    st = check_turn(st, as_given, before_turn, options.near_distance_pct / 100.0 * diag, align_scan, cloud, out);
+    if (st) st = place();
   }
-  if (out.near_fraction < options.min_near_fraction && !face_holds)
-    return Status::error(ErrorCode::NotAHead,
-                         "after alignment only " + pct(100 * out.near_fraction) + "% of the points lie within " +
-                             pct(options.near_distance_pct) + "% of the diagonal of the head surface (need " +
-                             pct(100 * options.min_near_fraction) + "%" +
-                             (pitches_tried.empty() ? "" : "; aligned on the face from pitches " + pitches_tried) +
-                             "); this does not look like a head scan");
+  if (!st) return st;
   if (faired) {  // the fit starts from the faired skin, placed as the cast one was aligned
     out.aligned = generic.mesh;
     for (Vec3& p : out.aligned.positions) p = out.generic_to_head.apply(p);

@@ -9,6 +9,9 @@
 //      Before that, the orientation is checked by coarse ICP from every up
 //      axis and eight yaws (guess_orientation), so a scan in another
 //      convention is turned round with a note, or refused with a hint.
+//      A turn is kept only when, aligned, more of the scan lies near the
+//      head than with the scan aligned as given (the search's score alone
+//      turned a bust to a wrong pose).
 //      A whole head whose points mostly lie off the silhouette-aligned head
 //      (a hat, a beard, a pedestal) is aligned again on its upper face
 //      (face_refine.h) before it is refused.
@@ -397,6 +400,7 @@ struct FitHeadResult {
   FaceAlignResult face_alignment;
   OrientationGuess orientation; // when the check ran
   bool orientation_checked = false;
+  bool turned = false;          // the scan was turned from its given orientation (a note says how)
   std::vector<std::string> notes;  // what the user should know (auto-orientation, partial scan)
   LocalFitResult local_fit;
   BoxFit eye_fit;               // the eye region (skipped when off or the head has no eye rims)
