@@ -87,11 +87,21 @@ Status zero_pocket_displacements(const std::vector<char>& pocket, MultiresMesh& 
   return evaluate(mr);
 }
 
-// "the scan seems to face ... with ... up" for a turn (as
-// OrientationGuess::rotation) of the scan in the head frame as given, and
-// the flags that say so.
-void describe_turn(const Mat3& turn, const Mat3& given, std::string& what, std::string& flags) {
-  const Mat3 scan_to_upright = turn * given;
+// Searches orientations (face_alignment.h) for the cloud in the head frame;
+// when another fits clearly better, either rotates the cloud
+// (and scan_to_head) to it with a note, or fails with the options to pass.
+// as_given: the cloud before the turn, set only when it is turned.
+Status check_orientation(const GenericHead& generic, const FitHeadOptions& options, const Mat3& given,
+                         PointCloud& cloud, FitHeadResult& out, PointCloud& as_given, const ProgressFn& progress) {
+  if (options.orientation_check == FitHeadOptions::OrientationCheck::Off) return Status::success();
+  const Status st = guess_orientation(generic.mesh, generic.annotations, cloud, options.orientation,
+                                      out.orientation, progress);
+  if (st.code == ErrorCode::Cancelled) return st;
+  if (!st) return Status::success();  // nothing aligns: the head checks below give the reason
+  out.orientation_checked = true;
+  if (!out.orientation.differs) return Status::success();
+  // The better orientation in the scan's own frame.
+  const Mat3 scan_to_upright = out.orientation.rotation * given;
   const Vec3 facing = scan_to_upright.transpose() * Vec3::UnitZ();
   const Vec3 up = scan_to_upright.transpose() * Vec3::UnitY();
   auto numbers = [](const Vec3& v) {
@@ -100,41 +110,17 @@ void describe_turn(const Mat3& turn, const Mat3& given, std::string& what, std::
     for (int k = 0; k < 3; ++k) s << (k ? " " : "") << (std::abs(v[k]) < 5e-3 ? 0.0 : v[k]);
     return s.str();
   };
-  what = "the scan seems to face " + axis_name(facing) + " with " + axis_name(up) + " up";
-  flags = "--facing " + numbers(facing) + " --up " + numbers(up);
-}
-
-// Turns the cloud (in the head frame as given) and scan_to_head by `turn`,
-// with a note; why: the evidence, appended to "the scan seems to face ...".
-void turn_scan(const Mat3& turn, const Mat3& given, const std::string& why, PointCloud& cloud, FitHeadResult& out) {
-  std::string what, flags;
-  describe_turn(turn, given, what, flags);
-  for (Vec3& p : cloud.positions) p = turn * p;
-  out.scan_to_head.A = out.unit_to_metres * turn * given;
+  const std::string what = "the scan seems to face " + axis_name(facing) + " with " + axis_name(up) +
+                           " up (there its closest-point error is " + pct(out.orientation.score_given / out.orientation.score_best) +
+                           "x smaller than as given)";
+  const std::string flags = "--facing " + numbers(facing) + " --up " + numbers(up);
+  if (options.orientation_check == FitHeadOptions::OrientationCheck::Hint)
+    return Status::error(ErrorCode::NotAHead, what + "; try " + flags);
+  as_given = cloud;
+  for (Vec3& p : cloud.positions) p = out.orientation.rotation * p;
+  out.scan_to_head.A = out.unit_to_metres * scan_to_upright;
   out.turned = true;
-  out.notes.push_back(what + why + ": turned it that way; pass " + flags + " to say so");
-}
-
-// Searches orientations (face_alignment.h) for the cloud in the head frame;
-// when another fits clearly better, either rotates the cloud
-// (and scan_to_head) to it with a note, or fails with the options to pass.
-Status check_orientation(const GenericHead& generic, const FitHeadOptions& options, const Mat3& given,
-                         PointCloud& cloud, FitHeadResult& out, const ProgressFn& progress) {
-  if (options.orientation_check == FitHeadOptions::OrientationCheck::Off) return Status::success();
-  const Status st = guess_orientation(generic.mesh, generic.annotations, cloud, options.orientation,
-                                      out.orientation, progress);
-  if (st.code == ErrorCode::Cancelled) return st;
-  if (!st) return Status::success();  // nothing aligns: the head checks below give the reason
-  out.orientation_checked = true;
-  if (!out.orientation.differs) return Status::success();
-  const std::string why = " (there its closest-point error is " +
-                          pct(out.orientation.score_given / out.orientation.score_best) + "x smaller than as given)";
-  if (options.orientation_check == FitHeadOptions::OrientationCheck::Hint) {
-    std::string what, flags;
-    describe_turn(out.orientation.rotation, given, what, flags);
-    return Status::error(ErrorCode::NotAHead, what + why + "; try " + flags);
-  }
-  turn_scan(out.orientation.rotation, given, why, cloud, out);
+  out.notes.push_back(what + ": turned it that way; pass " + flags + " to say so");
   return Status::success();
 }
 
@@ -155,8 +141,8 @@ Status check_turn(Status turned_status, const PointCloud& as_given, const FitHea
   };
   auto words = [](double s) { return s >= 0 ? pct(100 * s) + "%" : std::string("refused"); };
   const double turned_share = share(turned_status);
-  FitHeadResult turned = out;
-  PointCloud turned_cloud = cloud;
+  FitHeadResult turned = std::move(out);
+  PointCloud turned_cloud = std::move(cloud);
   out = before_turn;
   out.orientation = turned.orientation;
   out.orientation_checked = true;
@@ -883,10 +869,10 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
 
   // 1. Initial alignment.
   if (observer.started) observer.started("initial_alignment");
-  // The scan as given, for the orientations tried below.
-  const PointCloud as_given = cloud;
+  // The scan and the result before a turn, for check_turn below.
+  PointCloud as_given;
   const FitHeadResult before_turn = out;
-  st = check_orientation(to_align, options, R, cloud, out, progress);
+  st = check_orientation(to_align, options, R, cloud, out, as_given, progress);
   if (!st) return st;
   // The points to fit (the neck below the generic head's neck is not part
   // of the model, and would drag its boundary down) and the share of them
