@@ -46,7 +46,11 @@
 // --fit-real-sweep: the copies of swept_copies instead (shifts along each
 // axis, turns of 0.05-5 deg about each axis); every copy prints where its
 // alignment put the head against the as-given copy's (turn, scale,
-// vertices apart) and which path it took. --fit-real-align-only: stops
+// vertices apart) and which path it took. --fit-real-cube: the scan in
+// each of the 24 right-angle orientations about its centroid (which way
+// its up and facing point), as a held-out scan may come; with
+// --fit-real-align-only each says whether the pose found is the as-given
+// copy's. --fit-real-align-only: stops
 // each fit once its alignment is final (the alignment's figures only).
 // --fit-ear-refit-rounds N: the ear refit's warm rounds
 // (FitHeadOptions::ear_refit_warm_rounds; 0: the whole fit again, cold).
@@ -73,7 +77,11 @@
 // --fit-face-screen I,K: the face refinement's starts screened after I
 // iterations, the K best going on (FaceRefineOptions::screen_iterations,
 // screen_keep; 0: off); --fit-orient-screen-points N: the orientation
-// check's screening on N of its samples (OrientationOptions::screen_points).
+// check's screening on N of its samples (OrientationOptions::screen_points);
+// --fit-orient-screen-keep K: the K best screened starts go on
+// (OrientationOptions::screen_keep); --fit-orient-retry 0|1: the search run
+// again unscreened when the alignment is refused
+// (FitHeadOptions::orientation_retry_unscreened).
 // With --fit-real-align-only each copy's pose line also prints the final
 // map and the orientation check's outcome, to compare two runs to the bit.
 #include "command.h"
@@ -157,6 +165,32 @@ std::vector<Copy> swept_copies(const PointCloud& scan) {
       char name[32];
       std::snprintf(name, sizeof name, "%s %g deg", axes[a], deg);
       add(name, Mat3(Eigen::AngleAxisd(deg * 3.14159265358979323846 / 180.0, Vec3::Unit(a))), Vec3::Zero());
+    }
+  return copies;
+}
+
+// --fit-real-cube: the scan turned about its centroid so that its +y
+// points along each axis and its +z along each axis perpendicular to it:
+// the 24 right-angle orientations, the as-given one first.
+std::vector<Copy> cube_copies(const PointCloud& scan) {
+  Vec3 centroid = Vec3::Zero();
+  for (const Vec3& p : scan.positions) centroid += p;
+  centroid /= std::max(1, scan.size());
+  const char* names[6] = {"+x", "-x", "+y", "-y", "+z", "-z"};
+  auto axis = [](int k) { return Vec3((k / 2 == 0) * (k % 2 ? -1.0 : 1.0), (k / 2 == 1) * (k % 2 ? -1.0 : 1.0),
+                                      (k / 2 == 2) * (k % 2 ? -1.0 : 1.0)); };
+  std::vector<Copy> copies = {Copy{"as given", scan, Mat3::Identity(), Vec3::Zero(), centroid}};
+  for (int u = 0; u < 6; ++u)
+    for (int f = 0; f < 6; ++f) {
+      if (u / 2 == f / 2 || (u == 2 && f == 4)) continue;  // parallel, or the as-given one
+      Mat3 linear;  // +y -> up, +z -> facing
+      linear.col(1) = axis(u);
+      linear.col(2) = axis(f);
+      linear.col(0) = axis(u).cross(axis(f));
+      Copy c{std::string("up ") + names[u] + " face " + names[f], scan, linear, Vec3::Zero(), centroid};
+      for (Vec3& p : c.cloud.positions) p = centroid + linear * (p - centroid);
+      for (Vec3& q : c.cloud.normals) q = linear * q;
+      copies.push_back(std::move(c));
     }
   return copies;
 }
@@ -371,7 +405,8 @@ int run(const Args& args) {
   if (args.has("fit-real-scanned-neck")) options.fit_scanned_neck = true;
   if (args.has("fit-real-no-scanned-neck")) options.fit_scanned_neck = false;
   const std::string only_copy = args.get("fit-real-copy", "");
-  const bool sweep = args.has("fit-real-sweep"), align_only = args.has("fit-real-align-only");
+  const bool sweep = args.has("fit-real-sweep"), align_only = args.has("fit-real-align-only"),
+             cube = args.has("fit-real-cube");
   const bool stages = args.has("fit-real-stages");
   // --fit-align-pitches A,B,...: the silhouettes' pitch starts (deg);
   // --fit-align-polish 0|1: the ICP polish (AlignOptions).
@@ -416,6 +451,13 @@ int run(const Args& args) {
   }
   if (!args.get_int("fit-orient-screen-points", options.orientation.screen_points, options.orientation.screen_points))
     return 1;
+  if (!args.get_int("fit-orient-screen-keep", options.orientation.screen_keep, options.orientation.screen_keep, 1))
+    return 1;
+  {
+    int retry = options.orientation_retry_unscreened ? 1 : 0;
+    if (!args.get_int("fit-orient-retry", retry, retry, 0, 1)) return 1;
+    options.orientation_retry_unscreened = retry == 1;
+  }
   // --fit-align-tolerance T: Powell's relative decrease per sweep (AlignOptions::tolerance).
   if (args.has("fit-align-tolerance")) options.align.tolerance = std::atof(args.get("fit-align-tolerance", "1e-4").c_str());
   if (args.has("fit-ear-refit-late")) options.ear_refit_after_rounds = false;
@@ -453,7 +495,7 @@ int run(const Args& args) {
                 "face -> scan mean / p99 / max mm; neck: points, median / p90 mm");
     std::vector<int> totals;
     std::vector<Vec3> given_pose;  // the as-given copy's aligned head, scan frame
-    const std::vector<Copy> all_copies = sweep ? swept_copies(scan) : nudged_copies(scan, copies);
+    const std::vector<Copy> all_copies = cube ? cube_copies(scan) : sweep ? swept_copies(scan) : nudged_copies(scan, copies);
     for (const Copy& c : all_copies) {
       if (!only_copy.empty() && c.name.find(only_copy) == std::string::npos) continue;
       DistanceStats table1;

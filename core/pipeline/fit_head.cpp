@@ -166,6 +166,47 @@ Status check_turn(Status turned_status, const PointCloud& as_given, const FitHea
   return turned_status;
 }
 
+// After the alignment was refused (refused: its status) in the orientation
+// the screened search chose: the search runs again on the scan as given
+// with every start run through (the screening can drop the right start by a
+// hair: Fran with a crescent lower lip, the right pose 9th of 8 kept;
+// docs/design/align.md). A turn it finds that differs from the one refused
+// is aligned; the refusal stands when there is none or it is refused too.
+// as_given: the scan before the first turn (empty when it was not turned).
+Status retry_unscreened(Status refused, const GenericHead& generic, const FitHeadOptions& options,
+                        const Mat3& given, const FitHeadResult& before_turn, PointCloud& as_given,
+                        const std::function<Status()>& align_scan, PointCloud& cloud, FitHeadResult& out,
+                        const ProgressFn& progress) {
+  const bool first_turned = out.turned;
+  const Mat3 first_rotation = first_turned ? out.orientation.rotation : Mat3::Identity();
+  FitHeadResult refused_out = std::move(out);
+  if (first_turned) cloud = std::move(as_given);
+  out = before_turn;
+  FitHeadOptions unscreened = options;
+  unscreened.orientation.screen_iterations = 0;
+  PointCloud unturned;
+  Status st = check_orientation(generic, unscreened, given, cloud, out, unturned, progress);
+  if (st.code == ErrorCode::Cancelled) return st;
+  // The same pose as the one refused (or none found): nothing new to try
+  // (the caller returns the refusal; the cloud is not put back).
+  const Mat3 between = first_rotation.transpose() * out.orientation.rotation;
+  const double moved_deg =
+      std::acos(std::clamp((between.trace() - 1) / 2, -1.0, 1.0)) * 180.0 / 3.14159265358979323846;
+  if (!st || !out.turned || moved_deg < 10) {
+    out = std::move(refused_out);
+    return refused;
+  }
+  st = align_scan();
+  if (st.code == ErrorCode::Cancelled) return st;
+  if (!st)
+    return Status::error(refused.code, refused.message + " (with every start of the orientation search run through, "
+                                                         "the turn it found was refused too: " + st.message + ")");
+  out.notes.push_back(std::string("the orientation search, screened, left the scan ") +
+                      (first_turned ? "turned" : "as given") + ", where it was refused (" + refused.message +
+                      "); searched again with every start run through: aligned in the orientation found there");
+  return st;
+}
+
 // Leaves out the points far sparser than the scan's own sampling
 // (isolated_scan_points; ratio 0: none), and their entries of `index`, in
 // order. Returns how many were left out.
@@ -1022,13 +1063,19 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
                                pct(options.near_distance_pct) + "% of the diagonal of the head surface (need " +
                                pct(100 * options.min_near_fraction) + "%" +
                                (pitches_tried.empty() ? "" : "; aligned on the face from pitches " + pitches_tried) +
-                               "); this does not look like a head scan");
+                               "); this does not look like a head scan (a head and shoulders lying down or facing "
+                               "away: pass --up and --facing, e.g. --up +z)");
     return Status::success();
   };
   st = align_scan();
   if (st.code == ErrorCode::Cancelled) return st;
   if (out.turned) {
     st = check_turn(st, as_given, before_turn, options.near_distance_pct / 100.0 * diag, align_scan, cloud, out);
+    if (st) st = place();
+  }
+  if (st.code == ErrorCode::NotAHead && options.orientation_retry_unscreened &&
+      options.orientation_check == FitHeadOptions::OrientationCheck::Auto && options.orientation.screen_iterations > 0) {
+    st = retry_unscreened(st, to_align, options, R, before_turn, as_given, align_scan, cloud, out, progress);
     if (st) st = place();
   }
   if (!st) return st;

@@ -114,6 +114,13 @@ struct FitHeadOptions {
   enum class OrientationCheck { Off, Hint, Auto };
   OrientationCheck orientation_check = OrientationCheck::Auto;
   OrientationOptions orientation;
+  // With Auto: when the alignment is refused (too few points near the head)
+  // in the orientation the screened search chose, the search runs again
+  // with every start run through (no screening) and, where it finds another
+  // orientation, the scan is aligned there; kept only if that passes. Off:
+  // on busts turned by right angles it turns refusals into wrong heads
+  // (docs/design/align.md, "A second search when the alignment is refused").
+  bool orientation_retry_unscreened = false;
   LocalFitOptions local;
   // Before the feature boxes, the eyes and brows move as one soft region
   // (fit/local_fit.h: translation and scale, fitted to the scan) when the
