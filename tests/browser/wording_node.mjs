@@ -16,10 +16,16 @@ const hint = 'the scan seems to face -z with +y up (there its closest-point erro
 const h = forPage(hint);
 assert.ok(!/--facing|--up/.test(h) && /turn the scan so the face looks along/.test(h) && /seems to face -z/.test(h), h);
 
+const refused = 'after alignment only 24.1% of the points lie within 2% of the diagonal of the head surface (need 60%); ' +
+                'this does not look like a head scan (a head and shoulders lying down or facing away: pass --up and --facing, e.g. --up +z)';
+const r = forPage(refused);
+assert.ok(!/--up|--facing|pass /.test(r) && /lying down or facing away: turn the scan so the face looks along/.test(r), r);
+assert.ok(r.startsWith('after alignment only 24.1% of the points'), r);
+
 const faceOnly = 'face-only scan (its upper part is 0.4x as deep as wide; a whole head is 1x or more): aligned by closest points';
 assert.equal(forPage(faceOnly), faceOnly, 'a message without command-line words is left alone');
 assert.ok(!/bbox/.test(forPage('1.2 % of the bbox diagonal')));
 assert.equal(photoCount(1), '1 photo');
 assert.equal(photoCount(8), '8 photos');
 assert.equal(photoCount(0), '0 photos');
-console.log('wording: 9/9 checks passed');
+console.log('wording: 11/11 checks passed');

@@ -14,6 +14,8 @@ export function forPage(text) {
              ': the head was turned that way before fitting')
     .replace(/; try --facing [-\d. ]+ --up [-\d. ]+/,
              '; turn the scan so the face looks along its +z axis with +y up, and load it again')
+    .replace(/: pass --up and --facing, e\.g\. --up \+z\)/,
+             ': turn the scan so the face looks along its +z axis with +y up, and load it again)')
     .replace(/\(use --whole-head \/ --face-only to force\)/, '')
     .replace(/bbox diagonal/g, 'the scan\'s size (the diagonal of the box around it)');
 }
