@@ -235,7 +235,7 @@ int run_refit(const std::string& path, const Args& args) {
   GenericHead generic;
   if (Status st = load_generic_head(generic); !st.ok()) return fail(kName, st.message);
   HeadProject refitted;
-  Status st = refit_project(p, generic, levels, refitted);
+  Status st = refit_project(p, generic, {levels}, refitted);
   if (!st) return fail(kName, with_context(st, path).message);
   for (const std::string& note : refitted.fit.notes) std::printf("note: %s\n", note.c_str());
   for (const FitStageReport& s : refitted.fit.stages)

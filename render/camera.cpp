@@ -60,11 +60,11 @@ const char* to_string(CanonicalView view) {
 }
 
 glm::vec3 OrbitCamera::eye() const {
-  return target + distance * direction_from_angles(yaw_deg, pitch_deg);
+  return target + distance * (frame * direction_from_angles(yaw_deg, pitch_deg));
 }
 
 glm::mat4 OrbitCamera::view() const {
-  return glm::lookAt(eye(), target, glm::vec3(0.0f, 1.0f, 0.0f));
+  return glm::lookAt(eye(), target, frame[1]);
 }
 
 glm::mat4 OrbitCamera::projection(float aspect) const {
@@ -173,14 +173,11 @@ OrbitCamera canonical_view(CanonicalView view, const BBox& bbox, float aspect, c
   if (!z.allFinite() || !y.allFinite() || facing.norm() == 0 || (up - up.dot(z) * z).norm() < 1e-6 * up.norm())
     return canonical_view(view, bbox, aspect);
   const Vec3 x = y.cross(z);  // the head's left (head_model.h)
-  OrbitCamera cam = aimed_at(view, bbox);
-  const glm::vec3 h = direction_from_angles(cam.yaw_deg, cam.pitch_deg);  // in the head's frame
-  const Vec3 d = (double(h.x) * x + double(h.y) * y + double(h.z) * z).normalized();
-  cam.yaw_deg = static_cast<float>(glm::degrees(std::atan2(d.x(), d.z())));
-  cam.pitch_deg = std::clamp(static_cast<float>(glm::degrees(std::asin(std::clamp(d.y(), -1.0, 1.0)))),
-                             -kMaxPitchDeg, kMaxPitchDeg);
+  OrbitCamera cam = aimed_at(view, bbox);  // yaw and pitch in the head's frame
+  auto column = [](const Vec3& v) { return glm::vec3(float(v.x()), float(v.y()), float(v.z())); };
+  cam.frame = glm::mat3(column(x), column(y), column(z));
   if (!bbox.valid()) return cam;
-  cam.distance = framing_distance(bbox, forward_of(cam), glm::vec3(0, 1, 0), cam.fov_y_deg, aspect);
+  cam.distance = framing_distance(bbox, cam.frame * forward_of(cam), cam.frame[1], cam.fov_y_deg, aspect);
   return cam;
 }
 

@@ -35,6 +35,10 @@ struct OrbitCamera {
   float pitch_deg = 0.0f;
   float fov_y_deg = 30.0f;   // vertical field of view
   float scene_radius = 0.5f; // size of what is looked at: sets near/far planes
+  // The frame yaw and pitch are taken in (columns: its x, up and z axes in
+  // world coordinates); the identity but for a head shown in a scan's own
+  // orientation, whose up the view keeps (canonical_view with facing, up).
+  glm::mat3 frame = glm::mat3(1.0f);
 
   glm::vec3 eye() const;
   glm::mat4 view() const;
@@ -59,10 +63,11 @@ Status canonical_view(const std::string& name, const BBox& bbox, float aspect, O
 // are the head's +z and +y in world coordinates (a fitted head shown over its
 // scan in the scan's orientation, which need not face +z). The view's
 // direction is taken in the head's frame, so "three-quarter" shows the face
-// from its left front whatever way the scan faced. OrbitCamera keeps world +y
-// up, so a head whose up is not +y is seen rolled, its face still towards
-// the camera. Facing and up need not be unit or exactly orthogonal (up is
-// made orthogonal to facing); degenerate ones give the plain canonical view.
+// from its left front whatever way the scan faced, and the head's up is the
+// view's (the camera's frame is the head's: a scan with +z up is seen
+// upright, and orbits about its own up). Facing and up need not be unit or
+// exactly orthogonal (up is made orthogonal to facing); degenerate ones give
+// the plain canonical view.
 OrbitCamera canonical_view(CanonicalView view, const BBox& bbox, float aspect, const Vec3& facing, const Vec3& up);
 // Tighter: frames the points themselves (e.g. mesh vertices), not their box,
 // whose corners stick out beyond a round head in perspective. Aimed at the

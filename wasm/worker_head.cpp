@@ -199,22 +199,28 @@ val run_fit(const std::string& name, double parse_ms, val progress, Fit fit) {
   return r;
 }
 
+// options[key], when given, as three numbers into out: false when it is not
+// three numbers making a direction.
+bool vec3_option(const val& options, const char* key, lk::Vec3& out) {
+  if (!has(options, key) || options[key].isNull()) return true;
+  const val v = options[key];
+  if (v["length"].as<int>() != 3) return false;
+  lk::Vec3 read;
+  for (int k = 0; k < 3; ++k) read[k] = v[k].as<double>();
+  if (!read.allFinite() || !(read.norm() > 0)) return false;
+  out = read;
+  return true;
+}
+
 val fit_cloud(const std::string& name, lk::PointCloud cloud, double parse_ms, val options, val progress) {
   lk::FitHeadOptions opt;
-  auto vec3_option = [&](const char* key, lk::Vec3& out) {
-    if (!has(options, key) || options[key].isNull()) return true;
-    const val v = options[key];
-    if (v["length"].as<int>() != 3) return false;
-    for (int k = 0; k < 3; ++k) out[k] = v[k].as<double>();
-    return true;
-  };
   if (has(options, "levels")) opt.levels = options["levels"].as<int>();
   // A dense cloud on cell averages (FitHeadOptions::thin_cells_per_edge, off
   // by default): the page's ?thin=X.
   if (has(options, "thinCells")) opt.thin_cells_per_edge = options["thinCells"].as<double>();
   if (!(opt.thin_cells_per_edge >= 0 && opt.thin_cells_per_edge <= 64))
     return error_result(lk::ErrorCode::InvalidInput, "thinCells must be 0..64");
-  if (!vec3_option("up", opt.up) || !vec3_option("facing", opt.facing))
+  if (!vec3_option(options, "up", opt.up) || !vec3_option(options, "facing", opt.facing))
     return error_result(lk::ErrorCode::InvalidInput, "up and facing take three numbers");
   if (opt.levels < 1 || opt.levels > 4) return error_result(lk::ErrorCode::InvalidInput, "levels must be 1..4");
   return run_fit(name, parse_ms, progress,
@@ -226,18 +232,25 @@ val fit_cloud(const std::string& name, lk::PointCloud cloud, double parse_ms, va
 
 // Fits the kept head's scan again (a head opened from a project file keeps
 // its scan's points, not the file) with the options it was fitted with.
-// options: {levels} (optional, 1..4; else the kept head's). Returns what
-// fit_head_job does; on an error the kept head stays.
+// options: {levels (1..4), up, facing (three numbers each)}, each optional:
+// else the kept head's. Returns what fit_head_job does; on an error the
+// kept head stays.
 val refit_kept_scan_job(val options, val progress) {
   if (!kept_project()) return error_result(lk::ErrorCode::InvalidInput, "no fitted head to fit again");
-  const int levels = has(options, "levels") ? options["levels"].as<int>() : 0;
-  if (levels < 0 || levels > 4) return error_result(lk::ErrorCode::InvalidInput, "levels must be 1..4");
+  lk::RefitChanges changes;
+  changes.levels = has(options, "levels") ? options["levels"].as<int>() : 0;
+  if (changes.levels < 0 || changes.levels > 4) return error_result(lk::ErrorCode::InvalidInput, "levels must be 1..4");
+  for (auto [key, slot] : {std::pair{"up", &changes.up}, std::pair{"facing", &changes.facing}}) {
+    lk::Vec3 v;
+    if (!vec3_option(options, key, v)) return error_result(lk::ErrorCode::InvalidInput, "up and facing take three numbers");
+    if (has(options, key) && !options[key].isNull()) *slot = v;
+  }
   const std::string name = has(options, "name") ? options["name"].as<std::string>() : std::string("the kept scan");
   const lk::HeadProject& kept = *kept_project();
   return run_fit(name, 0, progress,
                  [&](const lk::GenericHead& generic, lk::HeadProject& project, const lk::FitStageObserver& observer,
                      const lk::ProgressFn& inner) {
-                   return lk::refit_project(kept, generic, levels, project, observer, inner);
+                   return lk::refit_project(kept, generic, changes, project, observer, inner);
                  });
 }
 

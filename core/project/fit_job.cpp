@@ -39,13 +39,15 @@ Status fit_project(PointCloud scan, const GenericHead& generic, const FitHeadOpt
   return Status::success();
 }
 
-Status refit_project(const HeadProject& project, const GenericHead& generic, int levels, HeadProject& refitted,
-                     const FitStageObserver& observer, const ProgressFn& progress) {
+Status refit_project(const HeadProject& project, const GenericHead& generic, const RefitChanges& changes,
+                     HeadProject& refitted, const FitStageObserver& observer, const ProgressFn& progress) {
   if (project.scan.positions.empty())
     return Status::error(ErrorCode::InvalidInput,
                          "this head keeps no scan to fit again (a head made from photos): drop a scan to fit one");
   FitHeadOptions options = project.options;
-  if (levels > 0) options.levels = levels;
+  if (changes.levels > 0) options.levels = changes.levels;
+  if (changes.up) options.up = *changes.up;
+  if (changes.facing) options.facing = *changes.facing;
   HeadProject fresh;
   const Status status = fit_project(project.scan, generic, options, fresh, observer, progress);
   if (!status.ok()) return status;

@@ -6,6 +6,7 @@
 #pragma once
 #include "project/project.h"
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,13 +19,21 @@ namespace lk {
 Status fit_project(PointCloud scan, const GenericHead& generic, const FitHeadOptions& options,
                    HeadProject& project, const FitStageObserver& observer = {}, const ProgressFn& progress = {});
 
+// What fitting a kept scan again changes of the options it was fitted with:
+// levels > 0 replaces theirs; up and facing, when set, say anew how the scan
+// is turned (the page's "Scan's axes", for a bust that came lying down).
+struct RefitChanges {
+  int levels = 0;
+  std::optional<Vec3> up, facing;
+};
+
 // Fits the generic head again to the scan project keeps (a project opened
 // from a file holds its scan's points and faces, not the scan file), with the
-// options it was fitted with; levels > 0 replaces their levels. refitted
-// becomes the new project; project is left as it was (also on an error).
-// A project without a scan (a head from photos) is refused.
-Status refit_project(const HeadProject& project, const GenericHead& generic, int levels, HeadProject& refitted,
-                     const FitStageObserver& observer = {}, const ProgressFn& progress = {});
+// options it was fitted with as changed. refitted becomes the new project;
+// project is left as it was (also on an error). A project without a scan (a
+// head from photos) is refused.
+Status refit_project(const HeadProject& project, const GenericHead& generic, const RefitChanges& changes,
+                     HeadProject& refitted, const FitStageObserver& observer = {}, const ProgressFn& progress = {});
 
 // A named control vertex of the generic head (the fitted head has the same
 // vertex indices). "right"/"left" are the person's own sides: +x is the

@@ -32,6 +32,7 @@ import { flow as project } from './flows/project.mjs';
 import { flow as keep } from './flows/keep.mjs';
 import { flow as pageStates } from './flows/page_states.mjs';
 import { flow as fitCancel } from './flows/fit_cancel.mjs';
+import { flow as scanAxes } from './flows/scan_axes.mjs';
 import { flow as photoRefusals } from './flows/photo_refusals.mjs';
 import { flow as offline } from './flows/offline.mjs';
 import { flow as accessibility } from './flows/accessibility.mjs';
@@ -43,4 +44,4 @@ import { flow as phone } from './flows/phone.mjs';
 import { flow as realPhotos } from './flows/real_photos.mjs';
 
 runFlows([startup, scanLoad, startupFailures, fit, fitChecks, fitThreads, exportFlow, animation, expressions, followFace, texture, eyeSmile,
-          project, keep, pageStates, fitCancel, photoRefusals, landmarks, photosHead, realPhotos, phone, glb, offline, accessibility, largeScan]);
+          project, keep, pageStates, fitCancel, scanAxes, photoRefusals, landmarks, photosHead, realPhotos, phone, glb, offline, accessibility, largeScan]);

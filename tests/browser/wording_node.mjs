@@ -14,12 +14,15 @@ assert.ok(/head was turned that way/.test(t), t);
 
 const hint = 'the scan seems to face -z with +y up (there its closest-point error is 2x smaller than as given); try --facing 0 0 -1 --up 0 1 0';
 const h = forPage(hint);
-assert.ok(!/--facing|--up/.test(h) && /turn the scan so the face looks along/.test(h) && /seems to face -z/.test(h), h);
+assert.ok(!/--facing|--up/.test(h) && /set the scan's axes under Fit head to up \+Y, face looks along −Z$/.test(h) && /seems to face -z/.test(h), h);
+// Axes the controls cannot name (a turn off the axes): what to set, in words.
+const tilted = forPage('the scan seems to face +x with +y up (2x); try --facing 0.74 0 -0.68 --up 0 1 0');
+assert.ok(/; set the scan's axes under Fit head: which of its axes points to the top of the head/.test(tilted) && !/--/.test(tilted), tilted);
 
 const refused = 'after alignment only 24.1% of the points lie within 2% of the diagonal of the head surface (need 60%); ' +
                 'this does not look like a head scan (a head and shoulders lying down or facing away: pass --up and --facing, e.g. --up +z)';
 const r = forPage(refused);
-assert.ok(!/--up|--facing|pass /.test(r) && /lying down or facing away: turn the scan so the face looks along/.test(r), r);
+assert.ok(!/--up|--facing|pass /.test(r) && /lying down or facing away: set the scan's axes under Fit head: which of its axes points to the top of the head, and which one the face looks along\)$/.test(r), r);
 assert.ok(r.startsWith('after alignment only 24.1% of the points'), r);
 
 const faceOnly = 'face-only scan (its upper part is 0.4x as deep as wide; a whole head is 1x or more): aligned by closest points';
@@ -28,4 +31,4 @@ assert.ok(!/bbox/.test(forPage('1.2 % of the bbox diagonal')));
 assert.equal(photoCount(1), '1 photo');
 assert.equal(photoCount(8), '8 photos');
 assert.equal(photoCount(0), '0 photos');
-console.log('wording: 11/11 checks passed');
+console.log('wording: 12/12 checks passed');

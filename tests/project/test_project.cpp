@@ -12,6 +12,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
@@ -76,7 +77,7 @@ TEST_CASE("project refit: the kept scan is fitted again with the project's optio
   FitHeadResult expect;
   REQUIRE(fit_head(kept, s.generic, test::quick_options(), expect).ok());
   HeadProject r;
-  const Status st = refit_project(p, s.generic, 0, r);
+  const Status st = refit_project(p, s.generic, {}, r);
   INFO(st.message);
   REQUIRE(st.ok());
   CHECK(r.options.levels == test::quick_options().levels);
@@ -88,7 +89,7 @@ TEST_CASE("project refit: the kept scan is fitted again with the project's optio
 
   // levels > 0 replaces the project's.
   HeadProject one;
-  REQUIRE(refit_project(p, s.generic, 1, one).ok());
+  REQUIRE(refit_project(p, s.generic, {1}, one).ok());
   CHECK(one.options.levels == 1);
   CHECK(one.fit.multires.num_levels() < r.fit.multires.num_levels());
 
@@ -96,11 +97,36 @@ TEST_CASE("project refit: the kept scan is fitted again with the project's optio
   HeadProject no_scan = p;
   no_scan.scan = PointCloud{};
   HeadProject target = one;
-  const Status refused = refit_project(no_scan, s.generic, 0, target);
+  const Status refused = refit_project(no_scan, s.generic, {}, target);
   CHECK(refused.code == ErrorCode::InvalidInput);
   CHECK(refused.message.find("no scan") != std::string::npos);
   CHECK(same(target.fit.control.positions, one.fit.control.positions));
   CHECK(target.options.levels == 1);
+}
+
+TEST_CASE("project refit: new axes fit a kept scan that lies with +z up as the same scan upright") {
+  // The scene's scan turned +y -> +z (a bust exported with Blender's axes:
+  // +z up, the face along -y), kept by a project fitted with +y up; told
+  // its axes (the page's "Scan's axes"), the refit sees the upright scan
+  // again: the same head in the head frame, not turned by the search.
+  HeadProject p = test::fitted_project();
+  const std::vector<Vec3> control = p.fit.control.positions;
+  for (Vec3& q : p.scan.positions) q = Vec3(q.x(), -q.z(), q.y());
+  RefitChanges axes;
+  axes.up = Vec3::UnitZ();
+  axes.facing = -Vec3::UnitY();
+  HeadProject r;
+  const Status st = refit_project(p, test::project_scene().generic, axes, r);
+  INFO(st.message);
+  REQUIRE(st.ok());
+  CHECK(r.options.up == Vec3::UnitZ());
+  CHECK(r.options.facing == -Vec3::UnitY());
+  CHECK_FALSE(r.fit.turned);
+  CHECK((r.fit.scan_to_head.A * Vec3::UnitZ()).normalized().isApprox(Vec3::UnitY(), 1e-12));
+  REQUIRE(r.fit.control.positions.size() == control.size());
+  double worst = 0;  // the scan's box diagonal sums its sides in another order: ulps apart at most
+  for (size_t i = 0; i < control.size(); ++i) worst = std::max(worst, (r.fit.control.positions[i] - control[i]).norm());
+  CHECK(worst < 1e-6);
 }
 
 TEST_CASE("project pose: 0 is the rest pose, 1 opens the jaw by its angle and lifts the brows") {

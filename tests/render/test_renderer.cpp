@@ -591,6 +591,20 @@ TEST_CASE("canonical views in a head's own frame: a scan that faces elsewhere is
     CHECK(std::abs(c.x / c.w) <= 1.0);
     CHECK(std::abs(c.y / c.w) <= 1.0);
   }
+  // ... and seen upright: the head's up (+z) is the screen's up, its left
+  // (up x facing = -x) on the screen's right, as a face seen from the front.
+  const glm::mat4 v = lying.view();
+  const glm::vec3 screen_up = glm::mat3(v) * glm::vec3(0, 0, 1), screen_left = glm::mat3(v) * glm::vec3(-1, 0, 0);
+  CHECK(screen_up.y > 0.999f);
+  CHECK(screen_left.x > 0.999f);
+  // A Blender export (+z up, the face along -y): the three-quarter view
+  // is the upright one's, turned with the head.
+  const OrbitCamera blender = canonical_view(CanonicalView::ThreeQuarter, box, 1.3f, Vec3(0, -1, 0), Vec3(0, 0, 1));
+  const Vec3 db = eye_dir(blender);
+  CHECK(db.dot(Vec3(0, -1, 0)) == Approx(d_plain.z()).margin(1e-5));
+  CHECK(db.dot(Vec3(1, 0, 0)) == Approx(d_plain.x()).margin(1e-5));
+  CHECK(db.z() == Approx(d_plain.y()).margin(1e-5));
+  CHECK((glm::mat3(blender.view()) * glm::vec3(0, 0, 1)).y > 0.99f);
   // Degenerate frames fall back to the plain view.
   const OrbitCamera none = canonical_view(CanonicalView::ThreeQuarter, box, 1.3f, Vec3(0, 0, 0), Vec3(0, 1, 0));
   CHECK(none.yaw_deg == tq_plain.yaw_deg);

@@ -12,6 +12,7 @@ import { showComponents, showStage } from './head_view.js';
 import { checkFitQuality } from './checks.js';
 import { forPage } from './wording.js';
 import { pageOption } from './project_inputs.js';
+import { axisVector, defaultFacing, parallel, showAxes, snapAxis } from './axes.js';
 
 // Core stage names -> the Pipeline rows, and the mesh each row shows.
 export const FIT_STAGES = [
@@ -91,8 +92,9 @@ export async function runFit() {
     // ?thin=X fits a dense cloud on cell averages (FitHeadOptions::thin_cells_per_edge,
     // off by default: not lossless, docs/design/page.md).
     const thin = pageOption('thin') > 0 ? { thinCells: pageOption('thin') } : {};  // ?thin, else a restored project's
-    const request = file ? { type: 'fitFile', file, options: { levels: 3, ...thin } }
-                         : { type: 'refit', options: { levels: 3, name } };
+    const axes = { up: axisVector(ui.scanUp.value), facing: axisVector(ui.scanFacing.value) };
+    const request = file ? { type: 'fitFile', file, options: { levels: 3, ...thin, ...axes } }
+                         : { type: 'refit', options: { levels: 3, name, ...axes } };
     result = await runJob(request, [],
       (stage, fraction) => {
         if (stage === 'read') {
@@ -194,6 +196,9 @@ export function showHead(result, name, wallMs, photos = false) {
   // and the view was framed on the scan, which may be a face only.
   const [f, u] = [app.fit.headFacing, app.fit.headUp];
   app.viewer.set_head_frame(f[0], f[1], f[2], u[0], u[1], u[2]);
+  // The axes the head was fitted in (the user's, or those the fit turned
+  // the scan to), so that fitting again starts from them.
+  if (!photos) showAxes(ui.scanUp, ui.scanFacing, snapAxis(u), snapAxis(f));
 }
 
 // What the fit decided on its own about the scan (turned to face +z, a
@@ -210,8 +215,30 @@ function showFitNotes(notes) {
 }
 
 // Fit head, and the Pipeline rows: a fitted row shows its stage's mesh.
+// The loaded scan seen upright as the axes say, before it is fitted: the
+// user sees at once whether they are right.
+export function lookWithScanAxes() {
+  if (!app.viewer || !app.scan) return;
+  const f = axisVector(ui.scanFacing.value), u = axisVector(ui.scanUp.value);
+  app.viewer.set_head_frame(f[0], f[1], f[2], u[0], u[1], u[2]);
+}
+
 export function wireFit() {
   ui.fit.addEventListener('click', runFit);
+  // New axes fit the loaded scan again when Auto-run is on; a facing along
+  // the new up gives way to the usual one for that up (+z up: -y).
+  showAxes(ui.scanUp, ui.scanFacing, ui.scanUp.value, ui.scanFacing.value);
+  const axesChanged = () => {
+    lookWithScanAxes();
+    if (app.scan && (app.scan.file || app.scan.kept) && ui.autoFit.checked) runFit();
+    else if (app.scan) setStatus('Press Fit head to fit the scan with its axes as set.');
+  };
+  ui.scanUp.addEventListener('change', () => {
+    const up = ui.scanUp.value;
+    showAxes(ui.scanUp, ui.scanFacing, up, parallel(up, ui.scanFacing.value) ? defaultFacing(up) : ui.scanFacing.value);
+    axesChanged();
+  });
+  ui.scanFacing.addEventListener('change', axesChanged);
   for (const st of FIT_STAGES) {
     const li = stageItem(st.row);
     li.addEventListener('click', () => { if (li.classList.contains('viewable')) showStage(st.row); });

@@ -369,7 +369,7 @@ export function wireKeep() {
     else if (!app.fit && scanFile() && (!current || current.photosKey !== inputsKey())) scheduleSave(0);  // before its fit starts
     else if (app.fit || app.photos.length) scheduleSave();
   });
-  for (const c of [ui.level, ui.autoFit, ui.showComponents, ui.fullDetail]) c.addEventListener('change', () => scheduleSave());
+  for (const c of [ui.level, ui.autoFit, ui.showComponents, ui.fullDetail, ui.scanUp, ui.scanFacing]) c.addEventListener('change', () => scheduleSave());
   for (const c of [ui.clickerCanvas, ui.clickerUndo, ui.clickerSkip, ui.clickerClear, ui.photoList]) {
     c.addEventListener('click', () => scheduleSave());
   }

@@ -142,6 +142,8 @@ export function controlsFor(s) {
     reset: usable, pointSize: usable, wireframe: usable,
     cancel: usable && s.state === 'working',
     fit: idle && !!s.scanFile,
+    // Which way the scan is turned: set before a scan comes, or to fit it again.
+    scanAxes: idle,
     // A head from the photos' face points: the main flow when no scan is loaded.
     photosHead: idle && !s.scan && (s.facePoints || 0) > 0,
     exportObj: head, exportPly: head, exportGlb: head, animate: head, expressions: head, fullDetail: head, level: head, showPoints: head,

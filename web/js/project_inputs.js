@@ -7,6 +7,7 @@
 // or fitting again.
 import { app, params, ui } from './state.js';
 import { DETECTOR } from './landmarks.js';
+import { AXES, showAxes } from './axes.js';
 
 // A fit's thinning (?thin) and a texture's size (?texture_size) come from
 // the address; a restored project brings its own where the address gives none.
@@ -19,7 +20,8 @@ export function pageOption(name) {
 
 export function pageOptions() {
   return { level: ui.level.value, autoFit: ui.autoFit.checked, showComponents: ui.showComponents.checked,
-           fullDetail: ui.fullDetail.checked, thin: pageOption('thin'), textureSize: pageOption('textureSize') };
+           fullDetail: ui.fullDetail.checked, thin: pageOption('thin'), textureSize: pageOption('textureSize'),
+           scanUp: ui.scanUp.value, scanFacing: ui.scanFacing.value };
 }
 
 export function applyOptions(o) {
@@ -28,6 +30,7 @@ export function applyOptions(o) {
   ui.autoFit.checked = o.autoFit !== false;
   ui.showComponents.checked = o.showComponents !== false;
   ui.fullDetail.checked = !!o.fullDetail;
+  showAxes(ui.scanUp, ui.scanFacing, AXES.includes(o.scanUp) ? o.scanUp : '+y', AXES.includes(o.scanFacing) ? o.scanFacing : '+z');
   app.keptOptions = { thin: Number(o.thin) || 0, textureSize: Number(o.textureSize) || 0 };
 }
 

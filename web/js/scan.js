@@ -4,7 +4,7 @@
 import { app, params, ui, beginJob, endJob, live, setStage, setStatus, showError, stageItem } from './state.js';
 import { extension, formatBytes, handleFiles, listFile, MAX_SCAN_BYTES, refuseFile } from './files.js';
 import { runJob } from './worker_client.js';
-import { FIT_STAGES, forgetFit, nameRows, runFit } from './fit.js';
+import { FIT_STAGES, forgetFit, lookWithScanAxes, nameRows, runFit } from './fit.js';
 
 const SCAN_EXTENSIONS = ['ply', 'obj', 'xyz', 'vtk'];
 // What the viewer draws at most (see loadScan); ?max_display_points=N and
@@ -116,6 +116,7 @@ export async function loadScan(file) {
   if (app.fit) forgetFit();
   app.viewer.set_overlay_points(new Float32Array(0), null, null);
   app.scan = { file, display: { positions: display.positions, normals: display.normals, colors: display.colors } };
+  if (ui.scanUp.value !== '+y' || ui.scanFacing.value !== '+z') lookWithScanAxes();
   nameRows(false);
   for (const st of FIT_STAGES) { setStage(st.row, 'waiting', 0); stageItem(st.row).classList.remove('coming'); }
   const what = result.kind === 'mesh'

@@ -16,7 +16,7 @@ export const ui = {
   dismiss: $('error-dismiss'), dropZone: $('drop-zone'), fileInput: $('file-input'),
   fileList: $('file-list'), reset: $('btn-reset'), generic: $('btn-generic'),
   pointSize: $('point-size'), maxSize: $('max-size'), sample: $('btn-sample'), samplePhotos: $('btn-sample-photos'), cancel: $('btn-cancel'), wireframe: $('wireframe'),
-  fit: $('btn-fit'), autoFit: $('auto-fit'), fitTotal: $('fit-total'), fitView: $('fit-view'),
+  fit: $('btn-fit'), autoFit: $('auto-fit'), scanUp: $('scan-up'), scanFacing: $('scan-facing'), fitTotal: $('fit-total'), fitView: $('fit-view'),
   level: $('level'), showPoints: $('show-points'), showDistance: $('show-distance'), animate: $('animate'), animStats: $('anim-stats'),
   fullDetail: $('full-detail'),
   expressions: $('expressions'), exprControls: $('expr-controls'), exprGroup: $('expr-group'), exprSliders: $('expr-sliders'),
@@ -108,6 +108,7 @@ function applyState(snap) {
   ui.dropZone.classList.toggle('busy', snap.state === 'working');
   ui.cancel.hidden = !c.cancel;
   ui.fit.disabled = !c.fit;
+  ui.scanUp.disabled = ui.scanFacing.disabled = !c.scanAxes;
   ui.photosHead.disabled = !c.photosHead;
   ui.exportObj.disabled = !c.exportObj;
   ui.exportPly.disabled = !c.exportPly;
