@@ -237,16 +237,16 @@ val fit_cloud(const std::string& name, lk::PointCloud cloud, double parse_ms, va
 // kept head stays.
 val refit_kept_scan_job(val options, val progress) {
   if (!kept_project()) return error_result(lk::ErrorCode::InvalidInput, "no fitted head to fit again");
+  const lk::HeadProject& kept = *kept_project();
   lk::RefitChanges changes;
   changes.levels = has(options, "levels") ? options["levels"].as<int>() : 0;
   if (changes.levels < 0 || changes.levels > 4) return error_result(lk::ErrorCode::InvalidInput, "levels must be 1..4");
-  for (auto [key, slot] : {std::pair{"up", &changes.up}, std::pair{"facing", &changes.facing}}) {
-    lk::Vec3 v;
-    if (!vec3_option(options, key, v)) return error_result(lk::ErrorCode::InvalidInput, "up and facing take three numbers");
-    if (has(options, key) && !options[key].isNull()) *slot = v;
-  }
+  lk::Vec3 up = kept.options.up, facing = kept.options.facing;
+  if (!vec3_option(options, "up", up) || !vec3_option(options, "facing", facing))
+    return error_result(lk::ErrorCode::InvalidInput, "up and facing take three numbers");
+  changes.up = up;
+  changes.facing = facing;
   const std::string name = has(options, "name") ? options["name"].as<std::string>() : std::string("the kept scan");
-  const lk::HeadProject& kept = *kept_project();
   return run_fit(name, 0, progress,
                  [&](const lk::GenericHead& generic, lk::HeadProject& project, const lk::FitStageObserver& observer,
                      const lk::ProgressFn& inner) {

@@ -195,7 +195,7 @@ export function showHead(result, name, wallMs, photos = false) {
   // orientation, which need not face +z (Fran's faces 37 degrees off +x),
   // and the view was framed on the scan, which may be a face only.
   const [f, u] = [app.fit.headFacing, app.fit.headUp];
-  app.viewer.set_head_frame(f[0], f[1], f[2], u[0], u[1], u[2]);
+  lookAlong(f, u);
   // The axes the head was fitted in (the user's, or those the fit turned
   // the scan to), so that fitting again starts from them.
   if (!photos) showAxes(ui.scanUp, ui.scanFacing, snapAxis(u), snapAxis(f));
@@ -214,15 +214,16 @@ function showFitNotes(notes) {
   ui.fitNotes.hidden = notes.length === 0;
 }
 
-// Fit head, and the Pipeline rows: a fitted row shows its stage's mesh.
+// The view framed on a head that looks along f with u up (scan frame).
+function lookAlong(f, u) { app.viewer.set_head_frame(f[0], f[1], f[2], u[0], u[1], u[2]); }
+
 // The loaded scan seen upright as the axes say, before it is fitted: the
 // user sees at once whether they are right.
 export function lookWithScanAxes() {
-  if (!app.viewer || !app.scan) return;
-  const f = axisVector(ui.scanFacing.value), u = axisVector(ui.scanUp.value);
-  app.viewer.set_head_frame(f[0], f[1], f[2], u[0], u[1], u[2]);
+  if (app.viewer && app.scan) lookAlong(axisVector(ui.scanFacing.value), axisVector(ui.scanUp.value));
 }
 
+// Fit head, and the Pipeline rows: a fitted row shows its stage's mesh.
 export function wireFit() {
   ui.fit.addEventListener('click', runFit);
   // New axes fit the loaded scan again when Auto-run is on; a facing along

@@ -116,7 +116,7 @@ export async function loadScan(file) {
   if (app.fit) forgetFit();
   app.viewer.set_overlay_points(new Float32Array(0), null, null);
   app.scan = { file, display: { positions: display.positions, normals: display.normals, colors: display.colors } };
-  if (ui.scanUp.value !== '+y' || ui.scanFacing.value !== '+z') lookWithScanAxes();
+  lookWithScanAxes();
   nameRows(false);
   for (const st of FIT_STAGES) { setStage(st.row, 'waiting', 0); stageItem(st.row).classList.remove('coming'); }
   const what = result.kind === 'mesh'
