@@ -9,6 +9,7 @@
 #include "project/fit_job.h"
 #include "project/project_file.h"
 #include "project/quality_job.h"
+#include "scan_axes_option.h"
 
 #include <chrono>
 #include <cmath>
@@ -18,26 +19,6 @@
 
 namespace lk::cli {
 namespace {
-
-// Three numbers ("0 0 1") or an axis name ("+x", "-z").
-bool get_vec3(const Args& a, const std::string& key, Vec3& v) {
-  if (!a.has(key)) return true;
-  const auto vals = a.get_all(key);
-  if (vals.size() == 1) {
-    const std::string& name = vals[0];
-    if (name.size() != 2 || (name[0] != '+' && name[0] != '-') || name[1] < 'x' || name[1] > 'z') return false;
-    v = Vec3::Zero();
-    v[name[1] - 'x'] = name[0] == '+' ? 1.0 : -1.0;
-    return true;
-  }
-  if (vals.size() != 3) return false;
-  for (int k = 0; k < 3; ++k) {
-    char* end = nullptr;
-    v[k] = std::strtod(vals[k].c_str(), &end);
-    if (vals[k].empty() || *end || !std::isfinite(v[k])) return false;
-  }
-  return v.norm() > 0;  // a direction: finite, not zero
-}
 
 int run_fit(const Args& args) {
   const std::string cmd = "fit";
@@ -52,8 +33,10 @@ int run_fit(const Args& args) {
   if (!args.get_int("levels", 3, opt.levels, 0, 5)) return 2;
   // Dense clouds on cell averages (FitHeadOptions::thin_cells_per_edge; off by default).
   if (!args.get_double("thin-cells", 0, opt.thin_cells_per_edge, 0, 64)) return 2;
-  if (!get_vec3(args, "up", opt.up) || !get_vec3(args, "facing", opt.facing))
-    return fail(cmd, "--up and --facing take an axis (+x, -y, ...) or three numbers, e.g. --up +z or --up 0 0 1");
+  std::optional<Vec3> up, facing;
+  if (!get_scan_axes(cmd, args, up, facing)) return 1;
+  opt.up = up.value_or(opt.up);
+  opt.facing = facing.value_or(opt.facing);
   // Conventions the user gave are checked, not overridden: a scan that
   // clearly fits better otherwise is refused with the flags to pass.
   if (args.has("up") || args.has("facing")) opt.orientation_check = FitHeadOptions::OrientationCheck::Hint;

@@ -11,6 +11,7 @@
 #include "project/pose.h"
 #include "project/project_file.h"
 #include "photos/landmarks.h"
+#include "scan_axes_option.h"
 
 #include <nlohmann/json.hpp>
 
@@ -222,20 +223,22 @@ int run_export(const std::string& path, const Args& args) {
   return 0;
 }
 
-// The project's kept scan fitted again (its options; --levels replaces
-// theirs), saved as a new project file: a head made in the page is fitted
+// The project's kept scan fitted again (its options; --levels, --up and
+// --facing replace theirs), saved as a new project file: a head made in the page is fitted
 // natively from what its project file holds.
 int run_refit(const std::string& path, const Args& args) {
   const std::string out = args.get("out");
   if (out.empty()) return fail(kName, "refit needs --out FILE.likeness.glb");
   int levels = 0;
   if (!args.get_int("levels", 0, levels, 1, 4)) return 2;
+  RefitChanges changes{levels, {}, {}};
+  if (!get_scan_axes(kName, args, changes.up, changes.facing)) return 2;
   HeadProject p;
   if (Status st = read_project_file(path, p); !st.ok()) return fail(kName, st.message);
   GenericHead generic;
   if (Status st = load_generic_head(generic); !st.ok()) return fail(kName, st.message);
   HeadProject refitted;
-  Status st = refit_project(p, generic, {levels}, refitted);
+  Status st = refit_project(p, generic, changes, refitted);
   if (!st) return fail(kName, with_context(st, path).message);
   for (const std::string& note : refitted.fit.notes) std::printf("note: %s\n", note.c_str());
   for (const FitStageReport& s : refitted.fit.stages)
@@ -252,7 +255,7 @@ int run_refit(const std::string& path, const Args& args) {
 
 int run_project(const Args& args) {
   // Its two positional words (info|export|refit FILE) are checked below.
-  if (!only_known_options(kName, args, {"level", "levels", "format", "out", "pose", "scan-frame", "extract-photos"}, 2)) return 2;
+  if (!only_known_options(kName, args, {"level", "levels", "up", "facing", "format", "out", "pose", "scan-frame", "extract-photos"}, 2)) return 2;
   const std::string verb = args.positional.empty() ? "" : args.positional[0];
   if (args.positional.size() != 2 || (verb != "info" && verb != "export" && verb != "refit")) {
     fail(kName, "give `info FILE`, `export FILE --out PATH` or `refit FILE --out FILE` (see likeness project --help)");
@@ -307,10 +310,10 @@ const Registrar export_reg({"export", "likeness export --head DIR|FILE.likeness.
 
 const Registrar reg({kName,
                      "likeness project info FILE [--extract-photos DIR] | likeness project export FILE --out PATH [--format obj|ply|textured|glb] "
-                     "[--level L] [--pose A] [--scan-frame] | likeness project refit FILE --out FILE.likeness.glb [--levels L]",
+                     "[--level L] [--pose A] [--scan-frame] | likeness project refit FILE --out FILE.likeness.glb [--levels L] [--up AXIS] [--facing AXIS]",
                      "what a saved head project holds (with --extract-photos its photos and their face points written into DIR, "
                      "for likeness photos); its levels re-exported without fitting again; its kept scan "
-                     "fitted again", run_project});
+                     "fitted again (--up and --facing, as in likeness fit, say anew which way the scan is turned)", run_project});
 
 }  // namespace
 }  // namespace lk::cli

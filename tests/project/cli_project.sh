@@ -2,7 +2,7 @@
 # The project file through the CLI: fit writes it, `project info` reads it,
 # `project export` re-exports without fitting (the fit's level to within its
 # rounding), `texture --project` textures it as the page does and saves it,
-# `project refit` fits the kept scan again, `likeness photos` keeps its photos and points in
+# `project refit` fits the kept scan again (with new axes too), `likeness photos` keeps its photos and points in
 # its project and `project info --extract-photos` gives them back (two of the same name
 # both, one renamed), and a cut or foreign file is
 # refused with exit 1 and a reason.
@@ -47,6 +47,14 @@ done
 "$L" project refit head.likeness.glb --levels 1 --out refit1.likeness.glb > /dev/null
 "$L" project info refit1.likeness.glb | grep -q "level 1: [0-9]* vertices"
 if "$L" project info refit1.likeness.glb | grep -q "level 2:"; then echo "--levels 1 kept level 2"; exit 1; fi
+# --up/--facing reach the refit: told the upright scan lies with +z up, the
+# fit finds it does not and turns it back, saying so; a zero direction is
+# refused as a usage error.
+"$L" project refit head.likeness.glb --levels 1 --up +z --facing -y --out refit_axes.likeness.glb > axes.log
+grep -q "note: the scan seems to face +z with +y up" axes.log
+if grep -q "seems to face" refit.log; then echo "the plain refit turned the scan"; exit 1; fi
+set +e; "$L" project refit head.likeness.glb --up 0 0 0 --out bad.likeness.glb 2> err.txt; rc=$?; set -e
+[ "$rc" = 2 ] && grep -q "take an axis" err.txt && [ ! -e bad.likeness.glb ]
 head -c 4000 head.likeness.glb > cut.glb
 if "$L" project info cut.glb 2> err.txt; then echo "a cut file was read"; exit 1; fi
 grep -q "truncated Likeness project" err.txt
