@@ -81,7 +81,9 @@
 // --fit-orient-screen-keep K: the K best screened starts go on
 // (OrientationOptions::screen_keep); --fit-orient-retry 0|1: the search run
 // again unscreened when the alignment is refused
-// (FitHeadOptions::orientation_retry_unscreened).
+// (FitHeadOptions::orientation_retry_unscreened); --fit-z-up-hint 0|1: a
+// scan refused in the default axes aligned again with +z up, for the
+// refusal to name those axes (FitHeadOptions::suggest_z_up).
 // With --fit-real-align-only each copy's pose line also prints the final
 // map and the orientation check's outcome, to compare two runs to the bit.
 #include "command.h"
@@ -457,6 +459,9 @@ int run(const Args& args) {
     int retry = options.orientation_retry_unscreened ? 1 : 0;
     if (!args.get_int("fit-orient-retry", retry, retry, 0, 1)) return 1;
     options.orientation_retry_unscreened = retry == 1;
+    int z_up = options.suggest_z_up ? 1 : 0;
+    if (!args.get_int("fit-z-up-hint", z_up, z_up, 0, 1)) return 1;
+    options.suggest_z_up = z_up == 1;
   }
   // --fit-align-tolerance T: Powell's relative decrease per sweep (AlignOptions::tolerance).
   if (args.has("fit-align-tolerance")) options.align.tolerance = std::atof(args.get("fit-align-tolerance", "1e-4").c_str());

@@ -24,6 +24,9 @@
 namespace lk {
 namespace {
 
+// The end of the refusal when too few points lie near the aligned head.
+constexpr const char* kAxesHint = " (a head and shoulders lying down or facing away: pass --up and --facing, e.g. --up +z)";
+
 ClipPlane transform_plane(const ClipPlane& c, const AffineMap& m) {
   ClipPlane out;
   out.point = m.apply(c.point);
@@ -809,13 +812,56 @@ Status fit_head(const PointCloud& scan, const GenericHead& generic, const FitHea
 
 namespace {
 
+// fit_head_on in the axes of options only (no second convention).
+Status fit_head_in_axes(const PointCloud& scan, double scan_diagonal, const GenericHead& generic,
+                        const FitHeadOptions& options, FitHeadResult& out, const FitStageObserver& observer,
+                        const ProgressFn& progress);
+
 // fit_head with the scan's size given: a thinned cloud (its isolated points
 // left out) is fitted at the full scan's bbox diagonal, which sets the
 // unit, Table 1's percentages and the fit's distances in percent of it.
-// scan_diagonal 0: the cloud's own.
+// scan_diagonal 0: the cloud's own. A scan refused in the default axes is
+// aligned once more as Blender and CAD tools write it, for the refusal to
+// name those axes where that passes (FitHeadOptions::suggest_z_up).
 Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHead& generic,
                    const FitHeadOptions& options, FitHeadResult& out, const FitStageObserver& observer,
                    const ProgressFn& progress) {
+  const Status first = fit_head_in_axes(scan, scan_diagonal, generic, options, out, observer, progress);
+  if (first.code != ErrorCode::NotAHead || !options.suggest_z_up ||
+      options.orientation_check != FitHeadOptions::OrientationCheck::Auto || options.up != Vec3::UnitY() ||
+      options.facing != Vec3::UnitZ())
+    return first;
+  FitHeadOptions z_up = options;
+  z_up.up = Vec3::UnitZ();
+  z_up.facing = -Vec3::UnitY();
+  z_up.orientation_check = FitHeadOptions::OrientationCheck::Off;  // taken as given, checked by the same shares
+  bool aligned = false;  // stopped here once the alignment passed
+  const ProgressFn until_aligned = [&](const char* stage, double fraction) {
+    if (std::string(stage) == "initial_alignment" && fraction >= 1.0) {
+      aligned = true;
+      return false;
+    }
+    return !progress || progress(stage, fraction);
+  };
+  FitHeadResult second;
+  const Status st = fit_head_in_axes(scan, scan_diagonal, generic, z_up, second, {}, until_aligned);
+  if (st.code == ErrorCode::Cancelled && !aligned) return st;  // the user's cancel
+  if (!aligned) return first;
+  // The axes that pass stand where the refusal guessed at some.
+  std::string message = first.message;
+  const std::string guess = kAxesHint;
+  const bool guessed =
+      message.size() >= guess.size() && message.compare(message.size() - guess.size(), guess.size(), guess) == 0;
+  if (guessed) message.resize(message.size() - guess.size());
+  message += std::string(guessed ? " (" : "; ") +
+             "with +z up and the face along -y, as Blender and CAD tools write scans, the alignment passes; try "
+             "--facing 0 -1 0 --up 0 0 1" + (guessed ? ")" : "");
+  return Status::error(first.code, message);
+}
+
+Status fit_head_in_axes(const PointCloud& scan, double scan_diagonal, const GenericHead& generic,
+                        const FitHeadOptions& options, FitHeadResult& out, const FitStageObserver& observer,
+                        const ProgressFn& progress) {
   out = FitHeadResult{};
   const int n = scan.size();
   out.points = n;
@@ -1063,8 +1109,7 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
                                pct(options.near_distance_pct) + "% of the diagonal of the head surface (need " +
                                pct(100 * options.min_near_fraction) + "%" +
                                (pitches_tried.empty() ? "" : "; aligned on the face from pitches " + pitches_tried) +
-                               "); this does not look like a head scan (a head and shoulders lying down or facing "
-                               "away: pass --up and --facing, e.g. --up +z)");
+                               "); this does not look like a head scan" + kAxesHint);
     return Status::success();
   };
   st = align_scan();

@@ -121,6 +121,13 @@ struct FitHeadOptions {
   // on busts turned by right angles it turns refusals into wrong heads
   // (docs/design/align.md, "A second search when the alignment is refused").
   bool orientation_retry_unscreened = false;
+  // With Auto and the default axes (+y up, face along +z): a scan refused
+  // there is aligned once more with +z up and the face along -y (Blender's
+  // and CAD tools' convention, taken as given), and where that passes the
+  // refusal names those axes. Only named, not fitted: on the busts' 24
+  // right-angle turns it is right for 2 and wrong for 10 (docs/design/
+  // align.md, "Busts written with +z up").
+  bool suggest_z_up = true;
   LocalFitOptions local;
   // Before the feature boxes, the eyes and brows move as one soft region
   // (fit/local_fit.h: translation and scale, fitted to the scan) when the

@@ -25,10 +25,17 @@ const r = forPage(refused);
 assert.ok(!/--up|--facing|pass /.test(r) && /lying down or facing away: set the scan's axes under Fit head: which of its axes points to the top of the head, and which one the face looks along\)$/.test(r), r);
 assert.ok(r.startsWith('after alignment only 24.1% of the points'), r);
 
+// The core named the axes that pass (FitHeadOptions::suggest_z_up): the page names its controls' values.
+const named = 'after alignment only 1.48% of the points lie within 2% of the diagonal of the head surface (need 60%); ' +
+              'this does not look like a head scan (with +z up and the face along -y, as Blender and CAD tools write ' +
+              'scans, the alignment passes; try --facing 0 -1 0 --up 0 0 1)';
+const n = forPage(named);
+assert.ok(!/--/.test(n) && /the alignment passes; set the scan's axes under Fit head to up \+Z, face looks along −Y\)$/.test(n), n);
+
 const faceOnly = 'face-only scan (its upper part is 0.4x as deep as wide; a whole head is 1x or more): aligned by closest points';
 assert.equal(forPage(faceOnly), faceOnly, 'a message without command-line words is left alone');
 assert.ok(!/bbox/.test(forPage('1.2 % of the bbox diagonal')));
 assert.equal(photoCount(1), '1 photo');
 assert.equal(photoCount(8), '8 photos');
 assert.equal(photoCount(0), '0 photos');
-console.log('wording: 12/12 checks passed');
+console.log('wording: 13/13 checks passed');

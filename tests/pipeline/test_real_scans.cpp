@@ -337,6 +337,7 @@ TEST_CASE("fit_head: when the screened orientation search leaves the scan refuse
   FitHeadOptions options;
   options.orientation.screen_keep = 1;
   options.orientation_retry_unscreened = false;
+  options.suggest_z_up = false;  // the refusal as the search left it, named again by the retry's note
   FitHeadResult without;
   const Status refused = fit_head(scan, test::generic_head(), options, without);
   INFO(refused.message);
@@ -355,4 +356,52 @@ TEST_CASE("fit_head: when the screened orientation search leaves the scan refuse
   CHECK(facing_off_deg(r, Vec3(0.794, 0, -0.608)) < 10);
   REQUIRE(!r.stages.empty());
   CHECK(r.stages.back().distance.mean_pct < 0.05);  // 0.039 % as with the defaults
+}
+
+TEST_CASE("fit_head: a bust written as Blender writes it (+z up, face along -y) is refused naming those axes, and "
+          "fitted with them as the upright bust (Gutenberg)",
+          "[pipeline][real_scans][shared]") {
+  LK_REQUIRE_SHARED("head_scans/threedscans_gutenberg/gutenberg.obj");
+  PointCloud scan;
+  REQUIRE(load_point_cloud_file(test::shared_data_dir() + "/head_scans/threedscans_gutenberg/gutenberg.obj", scan).ok());
+  // Blender's import of a +y-up file: y -> z, z -> -y.
+  Mat3 to_blender;
+  to_blender << 1, 0, 0, 0, 0, -1, 0, 1, 0;
+  for (Vec3& p : scan.positions) p = to_blender * p;
+  for (Vec3& n : scan.normals) n = to_blender * n;
+  FitHeadOptions options;
+  options.levels = 1;
+  options.suggest_z_up = false;
+  FitHeadResult r;
+  Status st = fit_head(scan, test::generic_head(), options, r);
+  INFO(st.message);
+  REQUIRE(st.code == ErrorCode::NotAHead);  // the search does not see a bust's up (docs/design/align.md)
+  CHECK(st.message.find("--up 0 0 1") == std::string::npos);
+
+  options.suggest_z_up = true;
+  st = fit_head(scan, test::generic_head(), options, r);
+  INFO(st.message);
+  REQUIRE(st.code == ErrorCode::NotAHead);  // named, not fitted
+  CHECK(st.message.find("the alignment passes; try --facing 0 -1 0 --up 0 0 1)") != std::string::npos);
+  CHECK(st.message.find("pass --up and --facing, e.g.") == std::string::npos);  // the named axes stand for the guess
+
+  // The axes it names fit him as the upright bust is fitted: his face along -y.
+  options.up = Vec3::UnitZ();
+  options.facing = -Vec3::UnitY();
+  st = fit_head(scan, test::generic_head(), options, r);
+  INFO(st.message);
+  REQUIRE(st.ok());
+  CHECK(facing_off_deg(r, -Vec3::UnitY()) < 10);
+  const Vec3 up = (r.scan_to_head.A.transpose() * Vec3::UnitY()).normalized();
+  CHECK(std::acos(std::clamp(up.z(), -1.0, 1.0)) * 180 / 3.14159265358979323846 < 15);
+  // Table 1 as the upright bust's, fitted with the same options.
+  PointCloud upright;
+  REQUIRE(load_point_cloud_file(test::shared_data_dir() + "/head_scans/threedscans_gutenberg/gutenberg.obj", upright).ok());
+  FitHeadOptions plain;
+  plain.levels = 1;
+  FitHeadResult u;
+  REQUIRE(fit_head(upright, test::generic_head(), plain, u).ok());
+  REQUIRE(!r.stages.empty());
+  REQUIRE(!u.stages.empty());
+  CHECK(r.stages.back().distance.mean_pct < 1.1 * u.stages.back().distance.mean_pct);
 }
