@@ -24,6 +24,10 @@ export * from './fixtures.mjs';
 export const READY_TIMEOUT_MS = 180000;  // SwiftShader compiles shaders on the CPU
 export const JOB_TIMEOUT_MS = 120000;
 export const SHOT_DIR = process.env.LK_SCREENSHOT_DIR || '';
+// The real scans and photos beside the repository (../shared/data; LK_SHARED_DATA
+// overrides), never committed: flows that read them skip where they are absent.
+export const SHARED_DATA = process.env.LK_SHARED_DATA ||
+  path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../../../shared/data');
 
 // ---------------------------------------------------------- static server --
 const MIME = {

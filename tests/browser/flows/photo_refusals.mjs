@@ -12,10 +12,8 @@
 // with a reason within seconds.
 import fs from 'node:fs';
 import path from 'node:path';
-import { fileURLToPath } from 'node:url';
-import { bannerText, check, makePng, note, runAlone, settled, state } from '../harness.mjs';
+import { bannerText, check, makePng, note, runAlone, settled, state, SHARED_DATA } from '../harness.mjs';
 
-const SHARED = process.env.LK_SHARED_DATA || path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../../../../shared/data');
 
 // JPEGs made by the browser's encoder: {plain 64x48, small 16x16}.
 async function browserJpegs(page) {
@@ -129,7 +127,7 @@ async function run(s) {
   // A whole portrait as Eye, then as Smile: the face points (landmarks.js)
   // find the eye and the mouth in it; the iris is made from the eye's
   // close-up, the closed mouth is refused with a reason; each in seconds.
-  const portrait = path.join(SHARED, 'multiview_faces/keentools_kira/0001.jpg');
+  const portrait = path.join(SHARED_DATA, 'multiview_faces/keentools_kira/0001.jpg');
   if (fs.existsSync(portrait)) {
     await page.setInputFiles('#file-input', { name: 'portrait.jpg', mimeType: 'image/jpeg', buffer: fs.readFileSync(portrait) });
     await settled(page);

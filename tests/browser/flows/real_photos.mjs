@@ -10,11 +10,9 @@
 // that the page gets there by itself, with every photo accounted for.
 import fs from 'node:fs';
 import path from 'node:path';
-import { fileURLToPath } from 'node:url';
-import { analyse, bannerText, canvasImage, check, note, runAlone, shot, SHOT_DIR } from '../harness.mjs';
+import { analyse, bannerText, canvasImage, check, note, runAlone, shot, SHOT_DIR, SHARED_DATA } from '../harness.mjs';
 
-const SHARED = process.env.LK_SHARED_DATA || path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../../../../shared/data');
-const KIRA = path.join(SHARED, 'multiview_faces', 'keentools_kira');
+const KIRA = path.join(SHARED_DATA, 'multiview_faces', 'keentools_kira');
 const TIMEOUT_MS = 600000;
 
 async function run(s) {

@@ -12,11 +12,9 @@
 // once up is set to +Z as named.
 import fs from 'node:fs';
 import path from 'node:path';
-import { fileURLToPath } from 'node:url';
-import { check, note, runAlone, setFile, settled, shot } from '../harness.mjs';
+import { check, note, runAlone, setFile, settled, shot, SHARED_DATA } from '../harness.mjs';
 import { nativeFit, syntheticScan } from '../synth_scan.mjs';
 
-const SHARED = process.env.LK_SHARED_DATA || path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../../../../shared/data');
 
 // An OBJ's vertices and normals turned +y -> +z, +z -> -y, as Blender's
 // import of a +y-up file writes them.
@@ -114,7 +112,7 @@ async function run(s) {
 }
 
 async function realBust(s) {
-  const file = path.join(SHARED, 'head_scans/threedscans_gutenberg/gutenberg.obj');
+  const file = path.join(SHARED_DATA, 'head_scans/threedscans_gutenberg/gutenberg.obj');
   if (!fs.existsSync(file)) {
     note('the real bust written with +z up is not exercised: ' + file + ' absent');
     return;
