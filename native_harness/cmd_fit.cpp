@@ -39,7 +39,7 @@ int run_fit(const Args& args) {
   opt.facing = facing.value_or(opt.facing);
   // Conventions the user gave are checked, not overridden: a scan that
   // clearly fits better otherwise is refused with the flags to pass.
-  if (args.has("up") || args.has("facing")) opt.orientation_check = FitHeadOptions::OrientationCheck::Hint;
+  if (up || facing) opt.orientation_check = FitHeadOptions::OrientationCheck::Hint;
   if (args.has("no-orientation-check")) opt.orientation_check = FitHeadOptions::OrientationCheck::Off;
   if (args.has("face-only") && args.has("whole-head")) return fail(cmd, "give --face-only or --whole-head, not both");
   if (args.has("face-only")) opt.scan_kind = FitHeadOptions::ScanKind::FaceOnly;
