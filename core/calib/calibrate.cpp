@@ -327,6 +327,17 @@ bool multi_start_pose(const std::vector<Correspondence>& cs, const std::vector<i
   return std::isfinite(best_cost);
 }
 
+// RANSAC's trial count for an inlier share w and samples of s points: the
+// N with 1 - (1 - w^s)^N >= confidence, at most cap (confidence 0: cap).
+int ransac_trials_needed(double w, int s, double confidence, int cap) {
+  if (!(confidence > 0 && confidence < 1)) return cap;
+  const double all_in = std::pow(w, s);
+  if (all_in >= 1) return 1;
+  if (all_in <= 0) return cap;
+  const double n = std::ceil(std::log(1 - confidence) / std::log(1 - all_in));
+  return n < cap ? std::max(1, int(n)) : cap;
+}
+
 double median(std::vector<double> v) {
   if (v.empty()) return 0;
   const size_t m = v.size() / 2;
@@ -380,10 +391,10 @@ Status calibrate_camera(const std::vector<Correspondence>& cs, int image_width, 
     return Status::error(ErrorCode::InvalidInput, "known_focal must be positive (or 0 = unknown)");
   if (options.focal_prior < 0 || !std::isfinite(options.focal_prior) || !(options.focal_prior_sigma > 0) ||
       !std::isfinite(options.focal_prior_sigma) || !(options.pixel_sigma > 0) || !std::isfinite(options.pixel_sigma) ||
-      !options.seen_from.allFinite())
+      !options.seen_from.allFinite() || !(options.ransac_confidence >= 0 && options.ransac_confidence < 1))
     return Status::error(ErrorCode::InvalidInput,
                          "focal_prior must be >= 0 (0 = none), focal_prior_sigma and pixel_sigma positive, "
-                         "seen_from finite");
+                         "seen_from finite, ransac_confidence in [0, 1)");
   const FocalPrior prior = focal_prior_of(options);
 
   // Shape of the 3-D point set: collinear sets never determine a camera;
@@ -452,7 +463,8 @@ Status calibrate_camera(const std::vector<Correspondence>& cs, int image_width, 
     int best = -1;
     double best_sum = 0;
     const int sample = 6;
-    for (int trial = 0; trial < options.ransac_iterations; ++trial) {
+    int trials = options.ransac_iterations;
+    for (int trial = 0; trial < trials; ++trial) {
       std::vector<int> pool = all, pick;
       for (int s = 0; s < sample; ++s) {
         const int j = s + int(rng.next() % std::uint64_t(n - s));
@@ -474,6 +486,8 @@ Status calibrate_camera(const std::vector<Correspondence>& cs, int image_width, 
         inliers.clear();
         for (int i = 0; i < n; ++i)
           if (e[i] < ransac_px) inliers.push_back(i);
+        trials = std::min(trials, ransac_trials_needed(double(best) / n, sample, options.ransac_confidence,
+                                                       options.ransac_iterations));
       }
       if (best == n) break;
     }

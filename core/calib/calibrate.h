@@ -51,7 +51,11 @@ struct CalibOptions {
   Vec3 seen_from = Vec3::Zero();
   bool robust = true;                 // RANSAC + outlier rejection
   double outlier_px = 3.0;            // minimum rejection threshold, pixels
-  int ransac_iterations = 300;        // minimal-set trials (deterministic seed)
+  int ransac_iterations = 300;        // minimal-set trials at most (deterministic seed)
+  // RANSAC stops once a minimal set of inliers has been drawn with this
+  // probability at the best consensus so far (Hartley & Zisserman, Alg.
+  // 4.5); 0: always ransac_iterations trials.
+  double ransac_confidence = 0.999;
   int max_lm_iterations = 100;        // Levenberg-Marquardt iterations per refinement
 };
 
