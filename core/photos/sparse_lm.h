@@ -36,12 +36,21 @@ struct LmOptions {
   int max_iterations = 50;
   double initial_lambda = 1e-3;
   double relative_tolerance = 1e-9;  // stop when a step gains less than this share of the cost
+  // Steps after a factorization: conjugate gradients preconditioned by it,
+  // to this relative residual within cg_max_iterations (else the matrix is
+  // factored); a solve that took more than cg_refactor_iterations has the
+  // next matrix factored (one factorization costs about 60 iterations on
+  // the photos head's control mesh). cg_max_iterations 0: every step factored.
+  double cg_tolerance = 1e-10;
+  int cg_refactor_iterations = 20;
+  int cg_max_iterations = 40;
 };
 
 struct LmReport {
   int iterations = 0;
   double initial_cost = 0, final_cost = 0;
   std::vector<double> costs;  // after each accepted step
+  int factorizations = 0, cg_solves = 0;  // how the steps were solved
 };
 
 LmReport levenberg_marquardt(LeastSquaresProblem& problem, const LmOptions& options = {});
