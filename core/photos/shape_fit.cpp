@@ -308,6 +308,8 @@ class ShapeProblem : public LeastSquaresProblem {
   std::vector<Vec3> positions() const { return positions(delta_); }
 
   int num_parameters() const override { return int(delta_.size()); }
+  // The nodes' displacements alone (no similarity's parameters: follow off).
+  bool vertex_blocks() const override { return num_parameters() == num_delta_; }
   int observation_rows() const {
     int n = 3 * int(binding_.size() + mirror_.size());
     for (const auto& s : sets_) n += s->num_residuals();

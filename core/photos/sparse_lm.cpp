@@ -1,5 +1,7 @@
 #include "photos/sparse_lm.h"
 
+#include "fit/block_ldlt.h"
+
 #include <Eigen/IterativeLinearSolvers>
 #include <algorithm>
 #include <cmath>
@@ -8,10 +10,42 @@
 namespace lk {
 namespace {
 
-// Eigen's preconditioner interface over an existing LDLT factor (of a
-// nearby matrix): solve() applies its inverse.
+// The damped normal matrix's factor: by 3x3 blocks (block_ldlt.h) for a
+// problem of vertices, else Eigen's scalar LDLT, whose symbolic analysis
+// (fill-reducing ordering, elimination tree) is redone only when the
+// pattern changes (a weight dropped to zero removes entries): the same
+// pattern gives the same ordering.
+class Factor {
+ public:
+  explicit Factor(bool blocks) : blocks_(blocks) {}
+  bool factorize(const SparseMat& A) {
+    if (blocks_) return (block_.analyzed() && block_.factorize(A)) || (block_.analyze(A) && block_.factorize(A));
+    if (!same_pattern(A)) {
+      scalar_.analyzePattern(A);
+      outer_.assign(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1);
+      inner_.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
+    }
+    scalar_.factorize(A);
+    return scalar_.info() == Eigen::Success;
+  }
+  Eigen::VectorXd solve(const Eigen::VectorXd& b) const { return blocks_ ? block_.solve(b) : scalar_.solve(b); }
+
+ private:
+  bool same_pattern(const SparseMat& A) const {
+    return A.isCompressed() && outer_.size() == size_t(A.outerSize() + 1) &&
+           std::equal(outer_.begin(), outer_.end(), A.outerIndexPtr()) && inner_.size() == size_t(A.nonZeros()) &&
+           std::equal(inner_.begin(), inner_.end(), A.innerIndexPtr());
+  }
+  bool blocks_;
+  BlockLdlt block_;
+  Eigen::SimplicialLDLT<SparseMat> scalar_;
+  std::vector<int> outer_, inner_;
+};
+
+// Eigen's preconditioner interface over an existing factor (of a nearby
+// matrix): solve() applies its inverse.
 struct FactorPreconditioner {
-  const Eigen::SimplicialLDLT<SparseMat>* factor = nullptr;
+  const Factor* factor = nullptr;
   template <typename M> FactorPreconditioner& analyzePattern(const M&) { return *this; }
   template <typename M> FactorPreconditioner& factorize(const M&) { return *this; }
   template <typename M> FactorPreconditioner& compute(const M&) { return *this; }
@@ -29,17 +63,8 @@ LmReport levenberg_marquardt(LeastSquaresProblem& problem, const LmOptions& opti
   double cost = r.squaredNorm();
   report.initial_cost = report.final_cost = cost;
   double lambda = options.initial_lambda;
-  Eigen::SimplicialLDLT<SparseMat> solver;
-  // The symbolic analysis (fill-reducing ordering, elimination tree) is
-  // redone only when J^T J's pattern changes (a weight dropped to zero
-  // removes entries): the same pattern gives the same ordering.
-  std::vector<int> analyzed_outer, analyzed_inner;
-  const auto same_pattern = [&](const SparseMat& A) {
-    return A.isCompressed() && analyzed_outer.size() == size_t(A.outerSize() + 1) &&
-           std::equal(analyzed_outer.begin(), analyzed_outer.end(), A.outerIndexPtr()) &&
-           analyzed_inner.size() == size_t(A.nonZeros()) &&
-           std::equal(analyzed_inner.begin(), analyzed_inner.end(), A.innerIndexPtr());
-  };
+  report.vertex_blocks = problem.vertex_blocks() && problem.num_parameters() % 3 == 0;
+  Factor solver(report.vertex_blocks);
   // Once a matrix is factored, the next ones (a smaller lambda, the next
   // linearization: close to it) are solved by conjugate gradients with that
   // factor as the preconditioner, which converge in a few iterations at a
@@ -71,14 +96,8 @@ LmReport levenberg_marquardt(LeastSquaresProblem& problem, const LmOptions& opti
         if (cg.iterations() > options.cg_refactor_iterations) factored = false;
       }
       if (!solved) {
-        if (!same_pattern(A)) {
-          solver.analyzePattern(A);
-          analyzed_outer.assign(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1);
-          analyzed_inner.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
-        }
-        solver.factorize(A);
+        factored = solver.factorize(A);
         ++report.factorizations;
-        factored = solver.info() == Eigen::Success;
         if (!factored) {
           lambda *= 10;
           continue;

@@ -30,6 +30,10 @@ class LeastSquaresProblem {
   // +inf when the moved state is invalid (e.g. a point behind a camera).
   virtual double cost_after(const Eigen::VectorXd& step) = 0;
   virtual void apply(const Eigen::VectorXd& step) = 0;
+  // True when the parameters are vertices' x, y, z (interleaved) and
+  // J^T J couples them by 3x3 blocks: the steps are then factored by
+  // blocks (fit/block_ldlt.h), the same factor at less cost.
+  virtual bool vertex_blocks() const { return false; }
 };
 
 struct LmOptions {
@@ -51,6 +55,7 @@ struct LmReport {
   double initial_cost = 0, final_cost = 0;
   std::vector<double> costs;  // after each accepted step
   int factorizations = 0, cg_solves = 0;  // how the steps were solved
+  bool vertex_blocks = false;             // factored by 3x3 vertex blocks
 };
 
 LmReport levenberg_marquardt(LeastSquaresProblem& problem, const LmOptions& options = {});
