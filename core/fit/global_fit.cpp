@@ -6,6 +6,7 @@
 #include "fit/block_ldlt.h"
 #include "fit/closest_point.h"
 #include "fit/data_surface.h"
+#include "fit/factor_preconditioner.h"
 #include "fit/point_patch.h"
 #include "mesh/geometry.h"
 #include "raycast/bvh.h"
@@ -138,34 +139,6 @@ void project(const std::vector<Vec3>& points, DataSurface& data, const VecX& x, 
 // with that ordering, 2.4x faster to compute and about 3x faster to apply
 // (docs/journal.md, "Speed of the global fit's solves").
 using NormalSolver = BlockLdlt;
-
-// Solves H x = g by conjugate gradients preconditioned with the LDLT factor
-// of a nearby matrix, from x0. False when it does not converge quickly (the
-// caller then refactorizes).
-bool preconditioned_cg(const SpMat& H, const VecX& g, const NormalSolver& M, const VecX& x0,
-                       VecX& x) {
-  x = x0;
-  VecX r = g - H * x;
-  const double target = 1e-10 * g.squaredNorm();
-  if (r.squaredNorm() <= target) return true;
-  VecX z = M.solve(r);
-  VecX p = z;
-  double rz = r.dot(z);
-  for (int it = 0; it < 12; ++it) {
-    const VecX Hp = H * p;
-    const double pHp = p.dot(Hp);
-    if (!(pHp > 0)) return false;
-    const double alpha = rz / pHp;
-    x += alpha * p;
-    r -= alpha * Hp;
-    if (r.squaredNorm() <= target) return x.allFinite();
-    z = M.solve(r);
-    const double rz_new = r.dot(z);
-    p = z + (rz_new / rz) * p;
-    rz = rz_new;
-  }
-  return false;
-}
 
 // 1/#S sum_p min(d_p, tau)^2 over the round's points (in its order), with
 // d_p the distance from point p to the triangle it projected to before
@@ -722,6 +695,10 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
   const int total_iterations = sub_rounds * std::max(1, options.max_iterations_per_round) + options.final_iterations;
   NormalSolver solver;
   int factor_fresh_round = -1;  // the round whose matrix `solver` holds
+  FactorPreconditionedCg<NormalSolver> cg;
+  cg.preconditioner().factor = &solver;
+  cg.setMaxIterations(12);
+  cg.setTolerance(1e-5);
   int done_iterations = 0;
 
   // E_back's scan index (over the points fitted), when the term is on.
@@ -941,7 +918,12 @@ Status fit_global(const std::vector<Vec3>& points, const TriMesh& mesh, const Me
         // CG does not converge quickly the matrix is factorized afresh.
         VecX x_star;
         bool solved = false;
-        if (factor_fresh_round >= 0) solved = preconditioned_cg(H, rhs, solver, x, x_star);
+        // CG stops at |r| <= 1e-5 |rhs| within 12 iterations, else it has not converged quickly.
+        if (factor_fresh_round >= 0) {
+          cg.compute(H);
+          x_star = cg.solveWithGuess(rhs, x);
+          solved = cg.info() == Eigen::Success && x_star.allFinite();
+        }
         if (!solved) {
           // (a matrix whose pattern changed is analyzed afresh)
           bool factorized = solver.analyzed() && solver.factorize(H);

@@ -1,8 +1,8 @@
 #include "photos/sparse_lm.h"
 
 #include "fit/block_ldlt.h"
+#include "fit/factor_preconditioner.h"
 
-#include <Eigen/IterativeLinearSolvers>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -42,17 +42,6 @@ class Factor {
   std::vector<int> outer_, inner_;
 };
 
-// Eigen's preconditioner interface over an existing factor (of a nearby
-// matrix): solve() applies its inverse.
-struct FactorPreconditioner {
-  const Factor* factor = nullptr;
-  template <typename M> FactorPreconditioner& analyzePattern(const M&) { return *this; }
-  template <typename M> FactorPreconditioner& factorize(const M&) { return *this; }
-  template <typename M> FactorPreconditioner& compute(const M&) { return *this; }
-  Eigen::VectorXd solve(const Eigen::VectorXd& b) const { return factor->solve(b); }
-  Eigen::ComputationInfo info() const { return Eigen::Success; }
-};
-
 }  // namespace
 
 LmReport levenberg_marquardt(LeastSquaresProblem& problem, const LmOptions& options) {
@@ -71,7 +60,7 @@ LmReport levenberg_marquardt(LeastSquaresProblem& problem, const LmOptions& opti
   // fraction of a factorization's cost; where they do not, the matrix is
   // factored anew.
   bool factored = false;
-  Eigen::ConjugateGradient<SparseMat, Eigen::Lower | Eigen::Upper, FactorPreconditioner> cg;
+  FactorPreconditionedCg<Factor> cg;
   cg.preconditioner().factor = &solver;
   cg.setMaxIterations(options.cg_max_iterations);
   cg.setTolerance(options.cg_tolerance);
