@@ -130,8 +130,9 @@ export async function launchChromium(name, viewport, { hasTouch = false, isMobil
 
 // ----------------------------------------------------------------- checks --
 export const results = [];
+let currentFlow = '';
 export function check(name, ok, detail = '') {
-  results.push({ name, ok: !!ok, detail });
+  results.push({ name, ok: !!ok, detail, flow: currentFlow });
   console.log(`${ok ? 'PASS' : 'FAIL'}  ${name}${detail ? '  (' + detail + ')' : ''}`);
   return !!ok;
 }
@@ -356,6 +357,7 @@ export async function runFlows(flows, argv = process.argv.slice(2)) {
   const t0 = Date.now();
   for (const flow of flows.filter((f) => !only.length || only.includes(f.name))) {
     console.log(`\n== ${flow.name}: ${flow.title}`);
+    currentFlow = flow.name;
     const first = results.length, tFlow = Date.now();
     try {
       await flow.run(s);
@@ -373,6 +375,8 @@ export async function runFlows(flows, argv = process.argv.slice(2)) {
   }
   await s.close();
   const failed = results.filter((r) => !r.ok);
+  // Repeated last, so the tail of a long log (all CI keeps) names what failed.
+  for (const r of failed) console.log(`FAILED  ${r.flow ? r.flow + ': ' : ''}${r.name}${r.detail ? '  (' + String(r.detail).slice(0, 600) + ')' : ''}`);
   console.log(`\nbrowser test: ${results.length - failed.length}/${results.length} checks passed in ` +
               `${((Date.now() - t0) / 1000).toFixed(0)} s` + (SHOT_DIR ? `; screenshots in ${SHOT_DIR}` : ''));
   process.exit(failed.length ? 1 : 0);

@@ -288,12 +288,18 @@ async function run(s) {
   const after = await headPrint(other);
   const how = await other.evaluate(() => ({ state: document.body.dataset.state, fitMs: window.likeness.fit && window.likeness.fit.fitMs,
     tags: [...document.querySelectorAll('#stages li .stage-tag')].slice(1, 5).map((t) => t.textContent),
-    exportOn: !document.getElementById('btn-export-ply').disabled, restored: window.likeness.restored }));
+    exportOn: !document.getElementById('btn-export-ply').disabled, restored: window.likeness.restored,
+    loadMs: window.likeness.project ? window.likeness.project.loadMs : -1 }));
   check('one click restores the same head (levels, positions, stage figures)', how.state === 'done' && sameHead(after, before),
         `before ${JSON.stringify(before)}; after ${JSON.stringify(after)}; ${await bannerText(other)}`);
-  check('... without fitting: no fit time, the rows say "saved", in a fraction of the fit, and it exports',
-        how.fitMs === 0 && how.tags.every((t) => t === 'saved') && ms < fit.fitMs && how.exportOn,
-        `restored in ${ms} ms (page ${Math.round(how.restored.ms)} ms), the fit took ${Math.round(fit.fitMs)} ms; ${how.tags.join('|')}`);
+  // The core's part (opening the kept project file in the worker) is timed
+  // against the fit, as in flow `project`: the page's own part (the head's
+  // levels and texture drawn by SwiftShader, on a CPU the other tests share)
+  // took 3.9 s once under CI's load, about the fit's 4.6 s there.
+  check('... without fitting: no fit time, the rows say "saved", the worker opens it in a fraction of the fit, and it exports',
+        how.fitMs === 0 && how.tags.every((t) => t === 'saved') && how.loadMs >= 0 && how.loadMs < fit.fitMs / 2 && how.exportOn,
+        `worker ${Math.round(how.loadMs)} ms, restored in ${ms} ms (page ${Math.round(how.restored.ms)} ms), ` +
+        `the fit took ${Math.round(fit.fitMs)} ms; ${how.tags.join('|')}`);
   const photosAfter = await other.evaluate(() => window.likeness.photos.map((p) => p.name + ' ' + p.width + 'x' + p.height + ' ' +
     (p.filePoints ? p.filePoints.length / 5 : 0) + ' points').sort().join(', '));
   check('... with its photos and their points', /kept_photo\.png 32x24 7 points/.test(photosAfter) && photosAfter === photosBefore,
