@@ -130,9 +130,8 @@ export async function launchChromium(name, viewport, { hasTouch = false, isMobil
 
 // ----------------------------------------------------------------- checks --
 export const results = [];
-let currentFlow = '';
 export function check(name, ok, detail = '') {
-  results.push({ name, ok: !!ok, detail, flow: currentFlow });
+  results.push({ name, ok: !!ok, detail });
   console.log(`${ok ? 'PASS' : 'FAIL'}  ${name}${detail ? '  (' + detail + ')' : ''}`);
   return !!ok;
 }
@@ -357,7 +356,6 @@ export async function runFlows(flows, argv = process.argv.slice(2)) {
   const t0 = Date.now();
   for (const flow of flows.filter((f) => !only.length || only.includes(f.name))) {
     console.log(`\n== ${flow.name}: ${flow.title}`);
-    currentFlow = flow.name;
     const first = results.length, tFlow = Date.now();
     try {
       await flow.run(s);
@@ -365,6 +363,7 @@ export async function runFlows(flows, argv = process.argv.slice(2)) {
       check(`${flow.name}: the flow ran to the end`, false, e && e.message ? e.message.split('\n')[0] : String(e));
     }
     const mine = results.slice(first);
+    for (const r of mine) r.flow = flow.name;  // named again at the end when failed
     console.log(`== ${flow.name}: ${mine.filter((r) => r.ok).length}/${mine.length} checks passed in ${((Date.now() - tFlow) / 1000).toFixed(1)} s`);
   }
   if (s.shared.has('context') || s.requests.length) {  // a flow with a browser of its own counts too
