@@ -43,6 +43,8 @@
 // guard and the control faces the untangling left crossing (to find where
 // two generic heads' fits part: docs/design/generic_head.md, session 50).
 // --fit-real-copy NAME: only the copies whose name holds NAME ("turn").
+// --fit-real-dense: the copies of dense_copies instead (the same surface
+// sampled 4 and 16 times as densely).
 // --fit-real-sweep: the copies of swept_copies instead (shifts along each
 // axis, turns of 0.05-5 deg about each axis); every copy prints where its
 // alignment put the head against the as-given copy's (turn, scale,
@@ -104,6 +106,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -194,6 +197,52 @@ std::vector<Copy> cube_copies(const PointCloud& scan) {
       for (Vec3& q : c.cloud.normals) q = linear * q;
       copies.push_back(std::move(c));
     }
+  return copies;
+}
+
+// --fit-real-dense: the scan (a mesh) and the same surface sampled 4 and 16
+// times as densely: each triangle split 1:4 at its edges' midpoints, once
+// and twice (normals and colours averaged). The surface does not change, so
+// a fit that depends on how densely it is sampled shows it (real scans come
+// with 10^4 to 10^6 points; docs/design/fit_real_scans.md, "The same
+// surface, sampled more densely"). A raw cloud gets no dense copies.
+PointCloud split_at_midpoints(const PointCloud& scan) {
+  PointCloud out = scan;
+  out.faces.clear();
+  std::map<std::pair<int, int>, int> midpoint;
+  auto mid = [&](int a, int b) {
+    const std::pair<int, int> key(std::min(a, b), std::max(a, b));
+    const auto found = midpoint.find(key);
+    if (found != midpoint.end()) return found->second;
+    const int m = out.size();
+    out.positions.push_back(0.5 * (scan.positions[a] + scan.positions[b]));
+    if (!scan.normals.empty()) {
+      const Vec3 n = scan.normals[a] + scan.normals[b];
+      out.normals.push_back(n.norm() > 0 ? Vec3(n.normalized()) : scan.normals[a]);
+    }
+    if (!scan.colors.empty()) out.colors.push_back(0.5 * (scan.colors[a] + scan.colors[b]));
+    midpoint.emplace(key, m);
+    return m;
+  };
+  for (const Tri& t : scan.faces) {
+    const int ab = mid(t[0], t[1]), bc = mid(t[1], t[2]), ca = mid(t[2], t[0]);
+    out.faces.push_back({t[0], ab, ca});
+    out.faces.push_back({ab, t[1], bc});
+    out.faces.push_back({ca, bc, t[2]});
+    out.faces.push_back({ab, bc, ca});
+  }
+  return out;
+}
+
+std::vector<Copy> dense_copies(const PointCloud& scan) {
+  Vec3 centroid = Vec3::Zero();
+  for (const Vec3& p : scan.positions) centroid += p;
+  centroid /= std::max(1, scan.size());
+  std::vector<Copy> copies = {Copy{"as given", scan, Mat3::Identity(), Vec3::Zero(), centroid}};
+  if (scan.faces.empty()) return copies;
+  PointCloud finer = split_at_midpoints(scan);
+  copies.push_back(Copy{"dense x4", finer, Mat3::Identity(), Vec3::Zero(), centroid});
+  copies.push_back(Copy{"dense x16", split_at_midpoints(finer), Mat3::Identity(), Vec3::Zero(), centroid});
   return copies;
 }
 
@@ -408,7 +457,7 @@ int run(const Args& args) {
   if (args.has("fit-real-no-scanned-neck")) options.fit_scanned_neck = false;
   const std::string only_copy = args.get("fit-real-copy", "");
   const bool sweep = args.has("fit-real-sweep"), align_only = args.has("fit-real-align-only"),
-             cube = args.has("fit-real-cube");
+             cube = args.has("fit-real-cube"), dense = args.has("fit-real-dense");
   const bool stages = args.has("fit-real-stages");
   // --fit-align-pitches A,B,...: the silhouettes' pitch starts (deg);
   // --fit-align-polish 0|1: the ICP polish (AlignOptions).
@@ -500,7 +549,10 @@ int run(const Args& args) {
                 "face -> scan mean / p99 / max mm; neck: points, median / p90 mm");
     std::vector<int> totals;
     std::vector<Vec3> given_pose;  // the as-given copy's aligned head, scan frame
-    const std::vector<Copy> all_copies = cube ? cube_copies(scan) : sweep ? swept_copies(scan) : nudged_copies(scan, copies);
+    const std::vector<Copy> all_copies = cube    ? cube_copies(scan)
+                                         : sweep ? swept_copies(scan)
+                                         : dense ? dense_copies(scan)
+                                                 : nudged_copies(scan, copies);
     for (const Copy& c : all_copies) {
       if (!only_copy.empty() && c.name.find(only_copy) == std::string::npos) continue;
       DistanceStats table1;
