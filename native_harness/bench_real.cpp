@@ -91,6 +91,7 @@
 #include "command.h"
 #include "fit_table.h"
 #include "generic_head_choice.h"
+#include "split4.h"
 #include "timing.h"
 
 #include "fit/scan_noise.h"
@@ -106,7 +107,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <map>
 #include <string>
 #include <vector>
 
@@ -207,29 +207,16 @@ std::vector<Copy> cube_copies(const PointCloud& scan) {
 // with 10^4 to 10^6 points; docs/design/fit_real_scans.md, "The same
 // surface, sampled more densely"). A raw cloud gets no dense copies.
 PointCloud split_at_midpoints(const PointCloud& scan) {
+  std::vector<std::array<int, 2>> edges;
   PointCloud out = scan;
-  out.faces.clear();
-  std::map<std::pair<int, int>, int> midpoint;
-  auto mid = [&](int a, int b) {
-    const std::pair<int, int> key(std::min(a, b), std::max(a, b));
-    const auto found = midpoint.find(key);
-    if (found != midpoint.end()) return found->second;
-    const int m = out.size();
+  out.faces = split4(scan.faces, scan.size(), edges);
+  for (const auto& [a, b] : edges) {
     out.positions.push_back(0.5 * (scan.positions[a] + scan.positions[b]));
     if (!scan.normals.empty()) {
       const Vec3 n = scan.normals[a] + scan.normals[b];
       out.normals.push_back(n.norm() > 0 ? Vec3(n.normalized()) : scan.normals[a]);
     }
     if (!scan.colors.empty()) out.colors.push_back(0.5 * (scan.colors[a] + scan.colors[b]));
-    midpoint.emplace(key, m);
-    return m;
-  };
-  for (const Tri& t : scan.faces) {
-    const int ab = mid(t[0], t[1]), bc = mid(t[1], t[2]), ca = mid(t[2], t[0]);
-    out.faces.push_back({t[0], ab, ca});
-    out.faces.push_back({ab, t[1], bc});
-    out.faces.push_back({ca, bc, t[2]});
-    out.faces.push_back({ab, bc, ca});
   }
   return out;
 }
