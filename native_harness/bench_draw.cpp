@@ -9,11 +9,11 @@
 // the web viewer's size in the measurement page. Median of 9 frames (3 with
 // --quick), after one warm-up frame.
 #include "command.h"
-#include "split4.h"
 #include "timing.h"
 
 #include "head/generic_head.h"
 #include "mesh/geometry.h"
+#include "mesh/midpoint_split.h"
 #include "render/camera.h"
 #include "render/gl.h"
 #include "render/offscreen.h"
@@ -31,7 +31,7 @@ namespace {
 TriMesh split4(const TriMesh& m) {
   std::vector<std::array<int, 2>> edges;
   TriMesh out;
-  out.triangles = lk::cli::split4(m.triangles, m.num_vertices(), edges);
+  out.triangles = split_at_midpoints(m.triangles, m.num_vertices(), edges);
   out.positions = m.positions;
   for (const auto& e : edges) out.positions.push_back(0.5 * (m.positions[e[0]] + m.positions[e[1]]));
   return out;

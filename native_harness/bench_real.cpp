@@ -44,7 +44,10 @@
 // two generic heads' fits part: docs/design/generic_head.md, session 50).
 // --fit-real-copy NAME: only the copies whose name holds NAME ("turn").
 // --fit-real-dense: the copies of dense_copies instead (the same surface
-// sampled 4 and 16 times as densely).
+// sampled 4 and 16 times as densely). --fit-real-surface-cells F: every
+// copy fitted on its surface's cell averages over cells of F times its
+// diagonal (pipeline/scan_thinning.h), an input nearly free of how the
+// surface was tessellated.
 // --fit-real-sweep: the copies of swept_copies instead (shifts along each
 // axis, turns of 0.05-5 deg about each axis); every copy prints where its
 // alignment put the head against the as-given copy's (turn, scale,
@@ -91,14 +94,15 @@
 #include "command.h"
 #include "fit_table.h"
 #include "generic_head_choice.h"
-#include "split4.h"
 #include "timing.h"
 
 #include "fit/scan_noise.h"
 #include "io/io.h"
 #include "mesh/geometry.h"
+#include "mesh/midpoint_split.h"
 #include "pipeline/fit_head.h"
 #include "pipeline/fit_quality.h"
+#include "pipeline/scan_thinning.h"
 #include "raycast/self_intersection.h"
 
 #include <algorithm>
@@ -206,21 +210,6 @@ std::vector<Copy> cube_copies(const PointCloud& scan) {
 // a fit that depends on how densely it is sampled shows it (real scans come
 // with 10^4 to 10^6 points; docs/design/fit_real_scans.md, "The same
 // surface, sampled more densely"). A raw cloud gets no dense copies.
-PointCloud split_at_midpoints(const PointCloud& scan) {
-  std::vector<std::array<int, 2>> edges;
-  PointCloud out = scan;
-  out.faces = split4(scan.faces, scan.size(), edges);
-  for (const auto& [a, b] : edges) {
-    out.positions.push_back(0.5 * (scan.positions[a] + scan.positions[b]));
-    if (!scan.normals.empty()) {
-      const Vec3 n = scan.normals[a] + scan.normals[b];
-      out.normals.push_back(n.norm() > 0 ? Vec3(n.normalized()) : scan.normals[a]);
-    }
-    if (!scan.colors.empty()) out.colors.push_back(0.5 * (scan.colors[a] + scan.colors[b]));
-  }
-  return out;
-}
-
 std::vector<Copy> dense_copies(const PointCloud& scan) {
   Vec3 centroid = Vec3::Zero();
   for (const Vec3& p : scan.positions) centroid += p;
@@ -403,6 +392,7 @@ int run(const Args& args) {
   int guard_remeasure = options.guard_remeasure ? 1 : 0;
   int pleat_undo = options.pleat_undo_where_crossing ? 1 : 0;
   int guard_by_cost = options.guard_choose_by_cost ? 1 : 0;
+  double surface_cells = 0;  // --fit-real-surface-cells: a fraction of the diagonal
   if (!args.get_int("fit-crease-trials", options.global.smooth_guard_crease_trials,
                     options.global.smooth_guard_crease_trials) ||
       !args.get_int("fit-crease-edges", options.global.smooth_guard_crease_max_edges,
@@ -427,11 +417,12 @@ int run(const Args& args) {
       pleat_undo > 1 || !args.get_int("fit-guard-by-cost", guard_by_cost, guard_by_cost) || guard_by_cost < 0 ||
       guard_by_cost > 1 ||
       !args.get_int("fit-guard-cost-tries", options.guard_cost_extra_tries, options.guard_cost_extra_tries) ||
-      options.guard_cost_extra_tries < 0) {
+      options.guard_cost_extra_tries < 0 || !args.get_double("fit-real-surface-cells", 0, surface_cells) ||
+      !(surface_cells >= 0 && surface_cells <= 0.1)) {
     std::printf("   --fit-crease-trials / --fit-crease-edges / --fit-data-level / --fit-pleat-steps take a whole number, "
                 "--fit-restore-rings one up to 8, --fit-hinges-last 0 or 1, --fit-ear-refit-rounds one >= 0, "
                 "--fit-real-copies one from 1 to 13, --fit-untangle-level one from 0 to 3, --fit-guard-others / --fit-guard-remeasure / --fit-pleat-undo / --fit-guard-by-cost 0 or 1, "
-                "--fit-guard-cost-tries one >= 0, "
+                "--fit-guard-cost-tries one >= 0, --fit-real-surface-cells one from 0 to 0.1, "
                 "--fit-crease-angle and --fit-surface-edges a number\n");
     return 1;
   }
@@ -540,8 +531,25 @@ int run(const Args& args) {
                                          : sweep ? swept_copies(scan)
                                          : dense ? dense_copies(scan)
                                                  : nudged_copies(scan, copies);
-    for (const Copy& c : all_copies) {
+    for (Copy c : all_copies) {
       if (!only_copy.empty() && c.name.find(only_copy) == std::string::npos) continue;
+      if (surface_cells > 0) {
+        const int before = c.cloud.size();
+        // The copy fitted on its surface's cell averages (a raw cloud on
+        // its points' averages): what depends on the vertices, not the surface.
+        PointCloud averages;
+        ScanThinning thinned;
+        const double cell = surface_cells * bounding_box(c.cloud.positions).diagonal();
+        st = c.cloud.faces.empty() ? thin_scan(c.cloud, cell, averages, thinned)
+                                   : surface_cell_averages(c.cloud.positions, c.cloud.faces, cell, averages);
+        if (!st) {
+          std::printf("   %-14s surface cell averages: %s\n", c.name.c_str(), st.message.c_str());
+          ++failures;
+          continue;
+        }
+        c.cloud = std::move(averages);
+        std::printf("   %-14s surface cell averages: %d points (of %d)\n", c.name.c_str(), c.cloud.size(), before);
+      }
       DistanceStats table1;
       FitStageObserver obs;
       obs.measured = [&](const FitStageReport& r) {

@@ -24,7 +24,7 @@ int run_bench(const Args& args) {
            "fit-hinges-last", "fit-isolated", "fit-levels", "fit-line-edges", "fit-no-climb",
            "fit-no-corners-to-smooth", "fit-no-creases", "fit-no-eye-region", "fit-scanned-neck", "fit-no-scanned-neck", "fit-no-parents-to-smooth",
            "fit-noise-confidence", "fit-noise-edge", "fit-noise-points", "fit-noise-radius", "fit-pleat-steps",
-           "fit-points", "fit-real-copies", "fit-real-copy", "fit-real-dump", "fit-real-stages", "fit-real-sweep", "fit-real-cube", "fit-real-dense", "fit-real-align-only", "fit-align-pitches", "fit-align-polish", "fit-align-loss", "fit-align-choose", "fit-align-smooth", "fit-align-coarse", "fit-align-tolerance", "fit-real-no-scanned-neck", "fit-real-scanned-neck", "fit-real-scan", "fit-relief-level", "fit-remeasure",
+           "fit-points", "fit-real-copies", "fit-real-copy", "fit-real-dump", "fit-real-stages", "fit-real-sweep", "fit-real-cube", "fit-real-dense", "fit-real-surface-cells", "fit-real-align-only", "fit-align-pitches", "fit-align-polish", "fit-align-loss", "fit-align-choose", "fit-align-smooth", "fit-align-coarse", "fit-align-tolerance", "fit-real-no-scanned-neck", "fit-real-scanned-neck", "fit-real-scan", "fit-relief-level", "fit-remeasure",
            "fit-restarts", "fit-restore-rings", "fit-scan-noise-mm", "fit-seed", "fit-seeds", "fit-separate-rounds",
            "fit-separation-repeats", "fit-smooth-agreement", "fit-smooth-iterations", "fit-smooth-levels",
            "fit-smooth-max-radius", "fit-smooth-region-rings", "fit-smooth-strength", "fit-stations",

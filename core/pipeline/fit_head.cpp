@@ -95,10 +95,18 @@ Status zero_pocket_displacements(const std::vector<char>& pocket, MultiresMesh& 
 // (and scan_to_head) to it with a note, or fails with the options to pass.
 // as_given: the cloud before the turn, set only when it is turned.
 Status check_orientation(const GenericHead& generic, const FitHeadOptions& options, const Mat3& given,
-                         PointCloud& cloud, FitHeadResult& out, PointCloud& as_given, const ProgressFn& progress) {
+                         const std::vector<Tri>& faces, PointCloud& cloud, FitHeadResult& out, PointCloud& as_given,
+                         const ProgressFn& progress) {
   if (options.orientation_check == FitHeadOptions::OrientationCheck::Off) return Status::success();
-  const Status st = guess_orientation(generic.mesh, generic.annotations, cloud, options.orientation,
-                                      out.orientation, progress);
+  // A mesh is searched on its surface (FitHeadOptions::orientation_surface_cell).
+  PointCloud surface;
+  if (!faces.empty() && options.orientation_surface_cell > 0) {
+    const Status made = surface_cell_averages(
+        cloud.positions, faces, options.orientation_surface_cell * bounding_box(cloud.positions).diagonal(), surface);
+    if (!made) return with_context(made, "orientation check");
+  }
+  const Status st = guess_orientation(generic.mesh, generic.annotations, surface.positions.empty() ? cloud : surface,
+                                      options.orientation, out.orientation, progress);
   if (st.code == ErrorCode::Cancelled) return st;
   if (!st) return Status::success();  // nothing aligns: the head checks below give the reason
   out.orientation_checked = true;
@@ -177,9 +185,9 @@ Status check_turn(Status turned_status, const PointCloud& as_given, const FitHea
 // is aligned; the refusal stands when there is none or it is refused too.
 // as_given: the scan before the first turn (empty when it was not turned).
 Status retry_unscreened(Status refused, const GenericHead& generic, const FitHeadOptions& options,
-                        const Mat3& given, const FitHeadResult& before_turn, PointCloud& as_given,
-                        const std::function<Status()>& align_scan, PointCloud& cloud, FitHeadResult& out,
-                        const ProgressFn& progress) {
+                        const Mat3& given, const std::vector<Tri>& faces, const FitHeadResult& before_turn,
+                        PointCloud& as_given, const std::function<Status()>& align_scan, PointCloud& cloud,
+                        FitHeadResult& out, const ProgressFn& progress) {
   const bool first_turned = out.turned;
   const Mat3 first_rotation = first_turned ? out.orientation.rotation : Mat3::Identity();
   FitHeadResult refused_out = std::move(out);
@@ -188,7 +196,7 @@ Status retry_unscreened(Status refused, const GenericHead& generic, const FitHea
   FitHeadOptions unscreened = options;
   unscreened.orientation.screen_iterations = 0;
   PointCloud unturned;
-  Status st = check_orientation(generic, unscreened, given, cloud, out, unturned, progress);
+  Status st = check_orientation(generic, unscreened, given, faces, cloud, out, unturned, progress);
   if (st.code == ErrorCode::Cancelled) return st;
   // The same pose as the one refused (or none found): nothing new to try
   // (the caller returns the refusal; the cloud is not put back).
@@ -959,7 +967,7 @@ Status fit_head_in_axes(const PointCloud& scan, double scan_diagonal, const Gene
   // The scan and the result before a turn, for check_turn below.
   PointCloud as_given;
   const FitHeadResult before_turn = out;
-  st = check_orientation(to_align, options, R, cloud, out, as_given, progress);
+  st = check_orientation(to_align, options, R, scan.faces, cloud, out, as_given, progress);
   if (!st) return st;
   // The points to fit (the neck below the generic head's neck is not part
   // of the model, and would drag its boundary down) and the share of them
@@ -1120,7 +1128,7 @@ Status fit_head_in_axes(const PointCloud& scan, double scan_diagonal, const Gene
   }
   if (st.code == ErrorCode::NotAHead && options.orientation_retry_unscreened &&
       options.orientation_check == FitHeadOptions::OrientationCheck::Auto && options.orientation.screen_iterations > 0) {
-    st = retry_unscreened(st, to_align, options, R, before_turn, as_given, align_scan, cloud, out, progress);
+    st = retry_unscreened(st, to_align, options, R, scan.faces, before_turn, as_given, align_scan, cloud, out, progress);
     if (st) st = place();
   }
   if (!st) return st;

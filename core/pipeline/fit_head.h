@@ -114,6 +114,15 @@ struct FitHeadOptions {
   enum class OrientationCheck { Off, Hint, Auto };
   OrientationCheck orientation_check = OrientationCheck::Auto;
   OrientationOptions orientation;
+  // When > 0, a scan given as a mesh is searched on its surface's cell
+  // averages over cells of this fraction of its diagonal
+  // (surface_cell_averages), not on its vertices. With 0.005 Fran's face
+  // split 1:4, refused on its vertices, is turned as the original; but on
+  // the busts turned by right angles it makes wrong heads of refusals
+  // (Demosthenes 7 -> 12 of 24, Fran 0 -> 1): an option, off
+  // (docs/design/fit_real_scans.md, "The same surface, sampled more
+  // densely"). A raw cloud is searched on its points either way.
+  double orientation_surface_cell = 0.0;
   // With Auto: when the alignment is refused (too few points near the head)
   // in the orientation the screened search chose, the search runs again
   // with every start run through (no screening) and, where it finds another

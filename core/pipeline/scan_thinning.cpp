@@ -1,6 +1,7 @@
 #include "pipeline/scan_thinning.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <utility>
@@ -87,6 +88,49 @@ Status thin_scan(const PointCloud& scan, double cell, PointCloud& out, ScanThinn
   }
   stats.kept = static_cast<int>(m);
   stats.thinned = true;
+  return Status::success();
+}
+
+Status surface_cell_averages(const std::vector<Vec3>& positions, const std::vector<Tri>& faces, double cell,
+                             PointCloud& out) {
+  out = PointCloud{};
+  if (!(cell > 0) || !std::isfinite(cell))
+    return Status::error(ErrorCode::InvalidInput, "surface cells: the cell must be positive and finite");
+  const int n = static_cast<int>(positions.size());
+  PointCloud samples;
+  const double h = cell / 4;
+  for (const Tri& t : faces) {
+    for (int v : t)
+      if (v < 0 || v >= n) return Status::error(ErrorCode::InvalidInput, "surface cells: a triangle's index is out of range");
+    const Vec3 &a = positions[t[0]], &b = positions[t[1]], &c = positions[t[2]];
+    const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+    if (!std::isfinite(longest))
+      return Status::error(ErrorCode::InvalidInput, "surface cells: a triangle has a non-finite corner");
+    const int k = std::max(1, static_cast<int>(std::min(1e4, std::ceil(longest / h))));
+    for (int i = 0; i < k; ++i)
+      for (int j = 0; j < k - i; ++j)
+        samples.positions.push_back(a + (i + 1.0 / 3) / k * (b - a) + (j + 1.0 / 3) / k * (c - a));
+  }
+  if (samples.positions.empty()) return Status::error(ErrorCode::Empty, "surface cells: no triangles");
+  PointCloud averages;
+  ScanThinning stats;
+  const Status st = thin_scan(samples, cell, averages, stats);
+  if (!st) return st;
+  // thin_scan keeps the order of each cell's first sample, which follows
+  // the triangles' order: the grid's order instead.
+  Vec3 lo = samples.positions[0];
+  for (const Vec3& p : samples.positions) lo = lo.cwiseMin(p);
+  std::vector<std::pair<std::array<std::int64_t, 3>, int>> keyed;
+  keyed.reserve(averages.positions.size());
+  for (int i = 0; i < averages.size(); ++i) {
+    std::array<std::int64_t, 3> key;
+    for (int a = 0; a < 3; ++a)
+      key[a] = static_cast<std::int64_t>(std::floor((averages.positions[i][a] - lo[a]) / stats.cell));
+    keyed.push_back({key, i});
+  }
+  std::sort(keyed.begin(), keyed.end());
+  out.positions.reserve(keyed.size());
+  for (const auto& [key, i] : keyed) out.positions.push_back(averages.positions[i]);
   return Status::success();
 }
 

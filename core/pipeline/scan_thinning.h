@@ -45,4 +45,14 @@ struct ScanThinning {
 Status thin_scan(const PointCloud& scan, double cell, PointCloud& out, ScanThinning& stats,
                  const std::vector<char>& leave_out = {});
 
+// The surface of a scan given as a mesh (positions, faces) as cell
+// averages: its triangles sampled on a barycentric grid four times finer
+// than `cell`, the samples averaged per cell (thin_scan), in the cells'
+// grid order. The same surface gives nearly the same points however it was
+// tessellated, which its vertices do not (docs/design/fit_real_scans.md,
+// "The same surface, sampled more densely"). Positions only. Fails on an
+// index out of range, or as thin_scan does.
+Status surface_cell_averages(const std::vector<Vec3>& positions, const std::vector<Tri>& faces, double cell,
+                             PointCloud& out);
+
 }  // namespace lk

@@ -12,6 +12,7 @@
 // its silhouettes leave 8 % of them near after the face's match,
 // docs/design/align.md, "Choosing the pitch").
 #include "io/io.h"
+#include "mesh/midpoint_split.h"
 #include "pipeline/fit_head.h"
 #include "pipeline/fit_quality.h"
 #include "test_data.h"
@@ -356,6 +357,37 @@ TEST_CASE("fit_head: when the screened orientation search leaves the scan refuse
   CHECK(facing_off_deg(r, Vec3(0.794, 0, -0.608)) < 10);
   REQUIRE(!r.stages.empty());
   CHECK(r.stages.back().distance.mean_pct < 0.05);  // 0.039 % as with the defaults
+}
+
+TEST_CASE("fit_head: a face scan split 1:4 at its midpoints, the same surface, is turned and fitted as the original "
+          "(Fran)",
+          "[pipeline][real_scans][shared]") {
+  LK_REQUIRE_SHARED("head_scans/fran_cyberware/fran_cut.vtk");
+  PointCloud scan;
+  REQUIRE(load_point_cloud_file(test::shared_data_dir() + "/head_scans/fran_cyberware/fran_cut.vtk", scan).ok());
+  const PointCloud denser = split_at_midpoints(scan);
+  REQUIRE(denser.size() > 3 * scan.size());
+  // The orientation search on her vertices (the default) refuses the denser
+  // copy as "not a head" (kept as given, where the original is turned): the
+  // density, not the surface, decides. On the surface's cell averages
+  // (FitHeadOptions::orientation_surface_cell, off by default: on turned
+  // busts it makes wrong heads of refusals) both are turned.
+  for (double cell : {0.005, 0.0}) {
+    FitHeadOptions options;
+    options.orientation_surface_cell = cell;
+    options.levels = 1;
+    FitHeadResult r;
+    const Status st = fit_head(denser, test::generic_head(), options, r);
+    INFO("cell " << cell << ": " << st.message);
+    if (cell == 0) {
+      CHECK(st.code == ErrorCode::NotAHead);  // what the surface's averages mend
+      continue;
+    }
+    REQUIRE(st.ok());
+    CHECK(r.turned);
+    CHECK(facing_off_deg(r, Vec3(0.794, 0, -0.608)) < 10);
+    CHECK(r.near_fraction > 0.7);  // 77 % as the original's
+  }
 }
 
 TEST_CASE("fit_head: a bust written as Blender writes it (+z up, face along -y) is refused naming those axes, and "
