@@ -1,7 +1,6 @@
 #include "pipeline/scan_thinning.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdint>
 #include <utility>
@@ -22,7 +21,7 @@ std::uint64_t normal_class(const Vec3& n) {
 }  // namespace
 
 Status thin_scan(const PointCloud& scan, double cell, PointCloud& out, ScanThinning& stats,
-                 const std::vector<char>& leave_out) {
+                 const std::vector<char>& leave_out, bool grid_order) {
   stats = ScanThinning{};
   const size_t n = scan.positions.size();
   stats.points = static_cast<int>(n);
@@ -58,11 +57,12 @@ Status thin_scan(const PointCloud& scan, double cell, PointCloud& out, ScanThinn
   }
   const size_t m_in = keyed.size();
   std::sort(keyed.begin(), keyed.end());
-  // One group per key, placed where its first point was.
+  // One group per key, placed where its first point was (or in the keys'
+  // order, which is the grid's).
   std::vector<std::pair<std::uint32_t, std::uint32_t>> groups;  // (first point, start in keyed)
   for (size_t i = 0; i < m_in; ++i)
     if (i == 0 || keyed[i].first != keyed[i - 1].first) groups.push_back({keyed[i].second, static_cast<std::uint32_t>(i)});
-  std::sort(groups.begin(), groups.end());
+  if (!grid_order) std::sort(groups.begin(), groups.end());
   const size_t m = groups.size();
   out.positions.resize(m);
   if (normals) out.normals.resize(m);
@@ -112,26 +112,10 @@ Status surface_cell_averages(const std::vector<Vec3>& positions, const std::vect
         samples.positions.push_back(a + (i + 1.0 / 3) / k * (b - a) + (j + 1.0 / 3) / k * (c - a));
   }
   if (samples.positions.empty()) return Status::error(ErrorCode::Empty, "surface cells: no triangles");
-  PointCloud averages;
+  // In the grid's order, not the triangles' (which the first sample of each
+  // cell would follow).
   ScanThinning stats;
-  const Status st = thin_scan(samples, cell, averages, stats);
-  if (!st) return st;
-  // thin_scan keeps the order of each cell's first sample, which follows
-  // the triangles' order: the grid's order instead.
-  Vec3 lo = samples.positions[0];
-  for (const Vec3& p : samples.positions) lo = lo.cwiseMin(p);
-  std::vector<std::pair<std::array<std::int64_t, 3>, int>> keyed;
-  keyed.reserve(averages.positions.size());
-  for (int i = 0; i < averages.size(); ++i) {
-    std::array<std::int64_t, 3> key;
-    for (int a = 0; a < 3; ++a)
-      key[a] = static_cast<std::int64_t>(std::floor((averages.positions[i][a] - lo[a]) / stats.cell));
-    keyed.push_back({key, i});
-  }
-  std::sort(keyed.begin(), keyed.end());
-  out.positions.reserve(keyed.size());
-  for (const auto& [key, i] : keyed) out.positions.push_back(averages.positions[i]);
-  return Status::success();
+  return thin_scan(samples, cell, out, stats, {}, true);
 }
 
 }  // namespace lk

@@ -41,9 +41,10 @@ struct ScanThinning {
 // averaged and normalized (a zero average keeps the first point's normal).
 // The output follows the order of each cell's first point in the scan.
 // leave_out (#P flags, or empty): points left out of every average (and
-// cells holding only those are left out).
+// cells holding only those are left out). grid_order: the output in the
+// cells' grid order (x, then y, then z) instead.
 Status thin_scan(const PointCloud& scan, double cell, PointCloud& out, ScanThinning& stats,
-                 const std::vector<char>& leave_out = {});
+                 const std::vector<char>& leave_out = {}, bool grid_order = false);
 
 // The surface of a scan given as a mesh (positions, faces) as cell
 // averages: its triangles sampled on a barycentric grid four times finer
