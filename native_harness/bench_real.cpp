@@ -86,7 +86,9 @@
 // --fit-orient-screen-keep K: the K best screened starts go on
 // (OrientationOptions::screen_keep); --fit-orient-retry 0|1: the search run
 // again unscreened when the alignment is refused
-// (FitHeadOptions::orientation_retry_unscreened); --fit-z-up-hint 0|1: a
+// (FitHeadOptions::orientation_retry_unscreened); --fit-orient-surface-retry
+// X: the second search on a refused mesh's surface, cells of X of its
+// diagonal (FitHeadOptions::orientation_surface_retry_cell; 0: off); --fit-z-up-hint 0|1: a
 // scan refused in the default axes aligned again with +z up, for the
 // refusal to name those axes (FitHeadOptions::suggest_z_up).
 // With --fit-real-align-only each copy's pose line also prints the final
@@ -486,6 +488,9 @@ int run(const Args& args) {
     int retry = options.orientation_retry_unscreened ? 1 : 0;
     if (!args.get_int("fit-orient-retry", retry, retry, 0, 1)) return 1;
     options.orientation_retry_unscreened = retry == 1;
+    if (!args.get_double("fit-orient-surface-retry", options.orientation_surface_retry_cell,
+                         options.orientation_surface_retry_cell, 0, 0.1))
+      return 1;
     int z_up = options.suggest_z_up ? 1 : 0;
     if (!args.get_int("fit-z-up-hint", z_up, z_up, 0, 1)) return 1;
     options.suggest_z_up = z_up == 1;

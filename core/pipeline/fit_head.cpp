@@ -178,25 +178,26 @@ Status check_turn(Status turned_status, const PointCloud& as_given, const FitHea
 }
 
 // After the alignment was refused (refused: its status) in the orientation
-// the screened search chose: the search runs again on the scan as given
-// with every start run through (the screening can drop the right start by a
-// hair: Fran with a crescent lower lip, the right pose 9th of 8 kept;
-// docs/design/align.md). A turn it finds that differs from the one refused
-// is aligned; the refusal stands when there is none or it is refused too.
-// as_given: the scan before the first turn (empty when it was not turned).
-Status retry_unscreened(Status refused, const GenericHead& generic, const FitHeadOptions& options,
-                        const Mat3& given, const std::vector<Tri>& faces, const FitHeadResult& before_turn,
-                        PointCloud& as_given, const std::function<Status()>& align_scan, PointCloud& cloud,
-                        FitHeadResult& out, const ProgressFn& progress) {
+// the first search chose, the search runs again on the scan as given with
+// `search` (its options: every start run through, or a mesh's surface
+// instead of its vertices). A turn it finds that differs from the one
+// refused is aligned; the refusal stands when there is none, when it is
+// refused too, or, with face_patch_only, when it is not aligned as a face
+// patch. how: what the second search did, for the note. as_given: the scan
+// before the first turn (empty when it was not turned).
+Status retry_orientation(Status refused, const GenericHead& generic, const FitHeadOptions& search, const char* how,
+                         bool face_patch_only, const Mat3& given, const std::vector<Tri>& faces,
+                         const FitHeadResult& before_turn, const PointCloud& as_given,
+                         const std::function<Status()>& align_scan, PointCloud& cloud, FitHeadResult& out,
+                         const ProgressFn& progress) {
   const bool first_turned = out.turned;
   const Mat3 first_rotation = first_turned ? out.orientation.rotation : Mat3::Identity();
   FitHeadResult refused_out = std::move(out);
-  if (first_turned) cloud = std::move(as_given);
+  const PointCloud first_cloud = cloud;  // put back with the refusal
+  if (first_turned) cloud = as_given;
   out = before_turn;
-  FitHeadOptions unscreened = options;
-  unscreened.orientation.screen_iterations = 0;
   PointCloud unturned;
-  Status st = check_orientation(generic, unscreened, given, faces, cloud, out, unturned, progress);
+  Status st = check_orientation(generic, search, given, faces, cloud, out, unturned, progress);
   if (st.code == ErrorCode::Cancelled) return st;
   // The same pose as the one refused (or none found): nothing new to try
   // (the caller returns the refusal; the cloud is not put back).
@@ -205,16 +206,24 @@ Status retry_unscreened(Status refused, const GenericHead& generic, const FitHea
       std::acos(std::clamp((between.trace() - 1) / 2, -1.0, 1.0)) * 180.0 / 3.14159265358979323846;
   if (!st || !out.turned || moved_deg < 10) {
     out = std::move(refused_out);
+    cloud = first_cloud;
     return refused;
   }
   st = align_scan();
   if (st.code == ErrorCode::Cancelled) return st;
+  if (st && face_patch_only && !out.face_only) {
+    // A whole head passes the near rule in wrong poses (a bust on its side
+    // turned 128 deg), a face patch's match does not: the refusal stands.
+    out = std::move(refused_out);
+    cloud = first_cloud;
+    return refused;
+  }
   if (!st)
-    return Status::error(refused.code, refused.message + " (with every start of the orientation search run through, "
-                                                         "the turn it found was refused too: " + st.message + ")");
-  out.notes.push_back(std::string("the orientation search, screened, left the scan ") +
-                      (first_turned ? "turned" : "as given") + ", where it was refused (" + refused.message +
-                      "); searched again with every start run through: aligned in the orientation found there");
+    return Status::error(refused.code, refused.message + " (" + how + ", the turn found was refused too: " +
+                                           st.message + ")");
+  out.notes.push_back(std::string("the orientation search left the scan ") + (first_turned ? "turned" : "as given") +
+                      ", where it was refused (" + refused.message + "); " + how +
+                      ", it found another orientation: aligned there");
   return st;
 }
 
@@ -1126,9 +1135,21 @@ Status fit_head_in_axes(const PointCloud& scan, double scan_diagonal, const Gene
     st = check_turn(st, as_given, before_turn, options.near_distance_pct / 100.0 * diag, align_scan, cloud, out);
     if (st) st = place();
   }
-  if (st.code == ErrorCode::NotAHead && options.orientation_retry_unscreened &&
-      options.orientation_check == FitHeadOptions::OrientationCheck::Auto && options.orientation.screen_iterations > 0) {
-    st = retry_unscreened(st, to_align, options, R, scan.faces, before_turn, as_given, align_scan, cloud, out, progress);
+  const bool auto_turn = options.orientation_check == FitHeadOptions::OrientationCheck::Auto;
+  if (st.code == ErrorCode::NotAHead && options.orientation_retry_unscreened && auto_turn &&
+      options.orientation.screen_iterations > 0) {
+    FitHeadOptions unscreened = options;
+    unscreened.orientation.screen_iterations = 0;
+    st = retry_orientation(st, to_align, unscreened, "searched again with every start run through", false, R,
+                           scan.faces, before_turn, as_given, align_scan, cloud, out, progress);
+    if (st) st = place();
+  }
+  if (st.code == ErrorCode::NotAHead && options.orientation_surface_retry_cell > 0 && auto_turn &&
+      !scan.faces.empty() && !(options.orientation_surface_cell > 0)) {
+    FitHeadOptions on_surface = options;
+    on_surface.orientation_surface_cell = options.orientation_surface_retry_cell;
+    st = retry_orientation(st, to_align, on_surface, "searched again on the scan's surface, not its vertices", true, R,
+                           scan.faces, before_turn, as_given, align_scan, cloud, out, progress);
     if (st) st = place();
   }
   if (!st) return st;

@@ -123,6 +123,14 @@ struct FitHeadOptions {
   // (docs/design/fit_real_scans.md, "The same surface, sampled more
   // densely"). A raw cloud is searched on its points either way.
   double orientation_surface_cell = 0.0;
+  // With Auto, a mesh refused in the orientation its vertices' search chose
+  // is searched again on its surface's cell averages (cells of this
+  // fraction of its diagonal) and aligned where that search turns it; kept
+  // only when it passes as a face patch (align_face), whose match does not
+  // pass in a wrong pose as a bust's silhouettes do. Fran's face split 1:4,
+  // refused on her vertices, is turned as the original (docs/design/
+  // fit_real_scans.md, "A second search on the surface"). 0: off.
+  double orientation_surface_retry_cell = 0.005;
   // With Auto: when the alignment is refused (too few points near the head)
   // in the orientation the screened search chose, the search runs again
   // with every start run through (no screening) and, where it finds another

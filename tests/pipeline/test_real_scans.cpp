@@ -338,6 +338,7 @@ TEST_CASE("fit_head: when the screened orientation search leaves the scan refuse
   FitHeadOptions options;
   options.orientation.screen_keep = 1;
   options.orientation_retry_unscreened = false;
+  options.orientation_surface_retry_cell = 0;  // (the search on her surface turns her too)
   options.suggest_z_up = false;  // the refusal as the search left it, named again by the retry's note
   FitHeadResult without;
   const Status refused = fit_head(scan, test::generic_head(), options, without);
@@ -367,26 +368,39 @@ TEST_CASE("fit_head: a face scan split 1:4 at its midpoints, the same surface, i
   REQUIRE(load_point_cloud_file(test::shared_data_dir() + "/head_scans/fran_cyberware/fran_cut.vtk", scan).ok());
   const PointCloud denser = split_at_midpoints(scan);
   REQUIRE(denser.size() > 3 * scan.size());
-  // The orientation search on her vertices (the default) refuses the denser
-  // copy as "not a head" (kept as given, where the original is turned): the
-  // density, not the surface, decides. On the surface's cell averages
-  // (FitHeadOptions::orientation_surface_cell, off by default: on turned
-  // busts it makes wrong heads of refusals) both are turned.
-  for (double cell : {0.005, 0.0}) {
+  // The orientation search on her vertices refuses the denser copy as "not
+  // a head" (kept as given, where the original is turned): the density, not
+  // the surface, decides. The second search on the surface's cell averages
+  // after that refusal (FitHeadOptions::orientation_surface_retry_cell, on
+  // by default) turns her as the original; so does the first search on the
+  // surface (orientation_surface_cell, off by default: on turned busts it
+  // makes wrong heads of refusals).
+  struct Variant {
+    const char* what;
+    double first_cell, retry_cell;
+  };
+  for (const Variant& v : {Variant{"defaults", 0.0, FitHeadOptions{}.orientation_surface_retry_cell},
+                           Variant{"no second search", 0.0, 0.0}, Variant{"first search on the surface", 0.005, 0.0}}) {
     FitHeadOptions options;
-    options.orientation_surface_cell = cell;
+    options.orientation_surface_cell = v.first_cell;
+    options.orientation_surface_retry_cell = v.retry_cell;
     options.levels = 1;
     FitHeadResult r;
     const Status st = fit_head(denser, test::generic_head(), options, r);
-    INFO("cell " << cell << ": " << st.message);
-    if (cell == 0) {
+    INFO(v.what << ": " << st.message);
+    if (v.first_cell == 0 && v.retry_cell == 0) {
       CHECK(st.code == ErrorCode::NotAHead);  // what the surface's averages mend
       continue;
     }
     REQUIRE(st.ok());
     CHECK(r.turned);
+    CHECK(r.face_only);
     CHECK(facing_off_deg(r, Vec3(0.794, 0, -0.608)) < 10);
     CHECK(r.near_fraction > 0.7);  // 77 % as the original's
+    std::string notes;
+    for (const std::string& n : r.notes) notes += n + "\n";
+    // The second search says what it did, and names the first refusal.
+    CHECK((notes.find("searched again on the scan's surface") != std::string::npos) == (v.retry_cell > 0));
   }
 }
 
