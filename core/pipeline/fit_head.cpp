@@ -1015,10 +1015,16 @@ Status fit_head_in_axes(const PointCloud& scan, double scan_diagonal, const Gene
       if (!options.cut_neck || cut.keeps(p)) kept.push_back(p);
     return near_share(moved, kept, options.near_distance_pct / 100.0 * diag, options.choose_pitch_points);
   };
+  // What the silhouettes and the coverage see: the cloud, or (when
+  // silhouette_input is filled: FitHeadOptions::dense_mesh_retry_cell) the
+  // surface's cell averages. The near rule and the face's match stay on
+  // the scan itself.
+  PointCloud silhouette_input;
   // The alignment of the cloud as it is now turned; NotAHead when too few
   // of its points lie near the aligned head.
   const auto align_scan = [&]() -> Status {
-    st = estimate_coverage(cloud, options.coverage, out.coverage);
+    const PointCloud& seen = silhouette_input.positions.empty() ? cloud : silhouette_input;
+    st = estimate_coverage(seen, options.coverage, out.coverage);
     if (!st) return with_context(st, "coverage");
     out.face_only = options.scan_kind == FitHeadOptions::ScanKind::FaceOnly ||
                     (options.scan_kind == FitHeadOptions::ScanKind::Auto && out.coverage.face_only);
@@ -1033,7 +1039,7 @@ Status fit_head_in_axes(const PointCloud& scan, double scan_diagonal, const Gene
                           "x as deep as wide; a whole head is 1x or more): aligned by closest points, and the "
                           "unscanned back, scalp and ears keep the generic head's shape");
     } else {
-      st = align_initial(to_align.mesh, ann, cloud, options.align, out.alignment, progress);
+      st = align_initial(to_align.mesh, ann, seen, options.align, out.alignment, progress);
       if (!st) return with_context(st, "initial alignment");
     }
     st = place();
@@ -1151,6 +1157,31 @@ Status fit_head_in_axes(const PointCloud& scan, double scan_diagonal, const Gene
     st = retry_orientation(st, to_align, on_surface, "searched again on the scan's surface, not its vertices", true, R,
                            scan.faces, before_turn, as_given, align_scan, cloud, out, progress);
     if (st) st = place();
+  }
+  if (st.code == ErrorCode::NotAHead && options.dense_mesh_retry_cell > 0 && !scan.faces.empty() &&
+      surface_cell_averages(cloud.positions, scan.faces, options.dense_mesh_retry_cell * diag, silhouette_input) &&
+      silhouette_input.positions.size() < cloud.positions.size()) {
+    // A dense mesh's silhouettes close fewer gaps than its decimated copy's,
+    // and a bust's pitch has two basins that closing decides between
+    // (Gutenberg at full density refused, decimated fitted): refused, it is
+    // aligned once more with the silhouettes taken from its surface's cell
+    // averages, about as many points as a decimated scan has; kept only when
+    // that passes (docs/design/fit_real_scans.md, "A dense mesh aligned
+    // again on its surface").
+    const Status refused = st;
+    FitHeadResult refused_out = out;
+    st = align_scan();
+    if (st.code == ErrorCode::Cancelled) return st;
+    if (st) {
+      out.notes.push_back("refused on its " + std::to_string(cloud.positions.size()) +
+                          " vertices, the mesh was aligned again with its silhouettes taken from " +
+                          std::to_string(silhouette_input.positions.size()) + " averages over its surface");
+    } else {
+      out = std::move(refused_out);
+      st = refused;
+    }
+    silhouette_input = PointCloud{};
+    st = st ? place() : st;
   }
   if (!st) return st;
   if (faired) {  // the fit starts from the faired skin, placed as the cast one was aligned

@@ -138,6 +138,13 @@ struct FitHeadOptions {
   // on busts turned by right angles it turns refusals into wrong heads
   // (docs/design/align.md, "A second search when the alignment is refused").
   bool orientation_retry_unscreened = false;
+  // A mesh with more vertices than averages over cells of this fraction of
+  // its diagonal (surface_cell_averages), refused after the searches above,
+  // is aligned once more with its silhouettes and coverage taken from those
+  // averages, and kept when that passes: a bust's pose otherwise rests on
+  // how densely it was tessellated (Gutenberg at 64x his density refused).
+  // 0: off.
+  double dense_mesh_retry_cell = 0.005;
   // With Auto and the default axes (+y up, face along +z): a scan refused
   // there is aligned once more with +z up and the face along -y (Blender's
   // and CAD tools' convention, taken as given), and where that passes the
