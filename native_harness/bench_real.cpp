@@ -44,7 +44,9 @@
 // two generic heads' fits part: docs/design/generic_head.md, session 50).
 // --fit-real-copy NAME: only the copies whose name holds NAME ("turn").
 // --fit-real-dense: the copies of dense_copies instead (the same surface
-// sampled 4 and 16 times as densely). --fit-real-surface-cells F: every
+// sampled 4 and 16 times as densely; with --fit-real-dense-x64 also 64
+// times, a full-resolution scan's 0.4-0.6 million vertices: slow).
+// --fit-real-surface-cells F: every
 // copy fitted on its surface's cell averages over cells of F times its
 // diagonal (pipeline/scan_thinning.h), an input nearly free of how the
 // surface was tessellated.
@@ -88,7 +90,12 @@
 // again unscreened when the alignment is refused
 // (FitHeadOptions::orientation_retry_unscreened); --fit-orient-surface-retry
 // X: the second search on a refused mesh's surface, cells of X of its
-// diagonal (FitHeadOptions::orientation_surface_retry_cell; 0: off); --fit-z-up-hint 0|1: a
+// diagonal (FitHeadOptions::orientation_surface_retry_cell; 0: off);
+// --fit-dense-retry X: a dense mesh still refused aligned again on cells
+// of X of its diagonal (FitHeadOptions::dense_mesh_retry_cell; 0: off);
+// --fit-face-match-edge X: the face matched to the vertices of a mesh whose
+// mean edge is under X of its diagonal (FitHeadOptions::
+// face_match_vertices_edge; 0: always its triangles); --fit-z-up-hint 0|1: a
 // scan refused in the default axes aligned again with +z up, for the
 // refusal to name those axes (FitHeadOptions::suggest_z_up).
 // With --fit-real-align-only each copy's pose line also prints the final
@@ -212,7 +219,7 @@ std::vector<Copy> cube_copies(const PointCloud& scan) {
 // a fit that depends on how densely it is sampled shows it (real scans come
 // with 10^4 to 10^6 points; docs/design/fit_real_scans.md, "The same
 // surface, sampled more densely"). A raw cloud gets no dense copies.
-std::vector<Copy> dense_copies(const PointCloud& scan) {
+std::vector<Copy> dense_copies(const PointCloud& scan, bool x64) {
   Vec3 centroid = Vec3::Zero();
   for (const Vec3& p : scan.positions) centroid += p;
   centroid /= std::max(1, scan.size());
@@ -221,6 +228,7 @@ std::vector<Copy> dense_copies(const PointCloud& scan) {
   PointCloud finer = split_at_midpoints(scan);
   copies.push_back(Copy{"dense x4", finer, Mat3::Identity(), Vec3::Zero(), centroid});
   copies.push_back(Copy{"dense x16", split_at_midpoints(finer), Mat3::Identity(), Vec3::Zero(), centroid});
+  if (x64) copies.push_back(Copy{"dense x64", split_at_midpoints(copies.back().cloud), Mat3::Identity(), Vec3::Zero(), centroid});
   return copies;
 }
 
@@ -489,7 +497,10 @@ int run(const Args& args) {
     if (!args.get_int("fit-orient-retry", retry, retry, 0, 1)) return 1;
     options.orientation_retry_unscreened = retry == 1;
     if (!args.get_double("fit-orient-surface-retry", options.orientation_surface_retry_cell,
-                         options.orientation_surface_retry_cell, 0, 0.1))
+                         options.orientation_surface_retry_cell, 0, 0.1) ||
+        !args.get_double("fit-dense-retry", options.dense_mesh_retry_cell, options.dense_mesh_retry_cell, 0, 0.1) ||
+        !args.get_double("fit-face-match-edge", options.face_match_vertices_edge, options.face_match_vertices_edge, 0,
+                         0.1))
       return 1;
     int z_up = options.suggest_z_up ? 1 : 0;
     if (!args.get_int("fit-z-up-hint", z_up, z_up, 0, 1)) return 1;
@@ -534,7 +545,7 @@ int run(const Args& args) {
     std::vector<Vec3> given_pose;  // the as-given copy's aligned head, scan frame
     const std::vector<Copy> all_copies = cube    ? cube_copies(scan)
                                          : sweep ? swept_copies(scan)
-                                         : dense ? dense_copies(scan)
+                                         : dense ? dense_copies(scan, args.has("fit-real-dense-x64"))
                                                  : nudged_copies(scan, copies);
     for (Copy c : all_copies) {
       if (!only_copy.empty() && c.name.find(only_copy) == std::string::npos) continue;

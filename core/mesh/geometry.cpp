@@ -57,12 +57,14 @@ double surface_area(const TriMesh& mesh) {
   return a;
 }
 
-double mean_edge_length(const TriMesh& mesh) {
-  if (mesh.triangles.empty()) return 0;
+double mean_edge_length(const TriMesh& mesh) { return mean_edge_length(mesh.positions, mesh.triangles); }
+
+double mean_edge_length(const std::vector<Vec3>& positions, const std::vector<Tri>& triangles) {
+  if (triangles.empty()) return 0;
   double sum = 0;
-  for (const Tri& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k) sum += (mesh.positions[t[k]] - mesh.positions[t[(k + 1) % 3]]).norm();
-  return sum / (3.0 * mesh.triangles.size());
+  for (const Tri& t : triangles)
+    for (int k = 0; k < 3; ++k) sum += (positions[t[k]] - positions[t[(k + 1) % 3]]).norm();
+  return sum / (3.0 * triangles.size());
 }
 
 bool is_valid(const TriMesh& mesh, std::string* why) {

@@ -23,8 +23,10 @@ double surface_area(const TriMesh& mesh);
 int count_turned_triangles(const std::vector<Tri>& triangles, const std::vector<Vec3>& positions,
                            const std::vector<Vec3>& reference);
 
-// Mean edge length over all triangle edges (each counted per triangle).
+// Mean edge length over all triangle edges (each counted per triangle); 0
+// without triangles.
 double mean_edge_length(const TriMesh& mesh);
+double mean_edge_length(const std::vector<Vec3>& positions, const std::vector<Tri>& triangles);
 
 // True when every coordinate is finite and every index is in range.
 bool is_valid(const TriMesh& mesh, std::string* why = nullptr);

@@ -1003,6 +1003,14 @@ Status fit_head_in_axes(const PointCloud& scan, double scan_diagonal, const Gene
     out.near_fraction = near_share(out.aligned, pts, options.near_distance_pct / 100.0 * diag, 20000);
     return Status::success();
   };
+  // The triangles the face is matched on: none (its vertices) on a mesh
+  // finer than FitHeadOptions::face_match_vertices_edge.
+  static const std::vector<Tri> no_faces;
+  const std::vector<Tri>& face_match_faces =
+      options.face_match_vertices_edge > 0 &&
+              mean_edge_length(cloud.positions, scan.faces) < options.face_match_vertices_edge * diag
+          ? no_faces
+          : scan.faces;
   // The same share for another alignment, on fewer points: what chooses the
   // face's pitch (FitHeadOptions::choose_face_pitch).
   const AlignmentMeasure share_near = [&](const Mat3& linear, const Vec3& translation) {
@@ -1055,12 +1063,12 @@ Status fit_head_in_axes(const PointCloud& scan, double scan_diagonal, const Gene
     const size_t notes_before_face = out.notes.size();
     std::string pitches_tried;  // the face's pitch candidates and their shares, for the messages
     if (out.near_fraction < options.min_near_fraction && !out.face_only && options.refine_on_face) {
-      st = upper_face_near_fraction(to_align.mesh, ann, cloud.positions, scan.faces, out.alignment.linear,
+      st = upper_face_near_fraction(to_align.mesh, ann, cloud.positions, face_match_faces, out.alignment.linear,
                                     out.alignment.translation, diag, options.face_refine.score_clamp_fraction,
                                     silhouette_face_near, options.face_refine.samples);
       silhouette_face_holds = st && silhouette_face_near >= options.min_near_fraction &&
                               out.near_fraction >= 0.5 * options.min_near_fraction;
-      st = refine_alignment_on_face(to_align.mesh, ann, cloud.positions, scan.faces, out.alignment.linear,
+      st = refine_alignment_on_face(to_align.mesh, ann, cloud.positions, face_match_faces, out.alignment.linear,
                                     out.alignment.translation, diag, options.face_refine, out.face_refine);
       if (st) {
         out.notes.push_back("after the silhouette alignment only " + pct(100 * out.near_fraction) +
@@ -1083,7 +1091,7 @@ Status fit_head_in_axes(const PointCloud& scan, double scan_diagonal, const Gene
                          out.near_fraction >= 0.5 * options.min_near_fraction;
       FaceRefineResult chosen;
       if (st && !holds && !silhouette_face_holds && options.choose_face_pitch &&
-          refine_alignment_on_face(to_align.mesh, ann, cloud.positions, scan.faces, silhouette_alignment.linear,
+          refine_alignment_on_face(to_align.mesh, ann, cloud.positions, face_match_faces, silhouette_alignment.linear,
                                    silhouette_alignment.translation, diag, options.face_refine, chosen, share_near)) {
         for (const FaceRefineCandidate& c : chosen.candidates)
           pitches_tried += (pitches_tried.empty() ? "" : ", ") + pct(c.pitch_deg) + " deg " + pct(100 * c.measure) + "%";

@@ -6,6 +6,7 @@
 // input is refused.
 #include "align/face_refine.h"
 #include "mesh/geometry.h"
+#include "mesh/midpoint_split.h"
 #include "raycast/bvh.h"
 #include "test_data.h"
 #include "test_scan.h"
@@ -465,4 +466,46 @@ TEST_CASE("face refinement: screening the starts keeps the winner's result to th
   FaceRefineResult bad;
   CHECK(refine(-1, 3, bad).code == ErrorCode::InvalidInput);
   CHECK(refine(10, 0, bad).code == ErrorCode::InvalidInput);
+}
+
+TEST_CASE("face refinement: a fine mesh's vertices place the face where its triangles do, a coarse mesh's do not") {
+  // FitHeadOptions::face_match_vertices_edge: on a mesh whose edges are
+  // short against the head, the face is matched to the vertices (a nearest
+  // point costs far less there than a nearest triangle), which must put it
+  // where the triangles put it; on a coarse mesh the vertices lie too far
+  // apart for that, which is why the triangles are the default.
+  const GenericHead& generic = test::generic_head();
+  const GenericHead person = test::make_test_head(3);
+  PointCloud coarse;
+  coarse.positions = person.mesh.positions;
+  coarse.faces = person.mesh.triangles;
+  const PointCloud fine = split_at_midpoints(split_at_midpoints(split_at_midpoints(split_at_midpoints(coarse))));
+  const double diag = bounding_box(coarse.positions).diagonal();
+  INFO("mean edge: coarse " << mean_edge_length(coarse.positions, coarse.faces) / diag << ", fine "
+                            << mean_edge_length(fine.positions, fine.faces) / diag << " of the diagonal");
+  const Mat3 start = Mat3(Eigen::AngleAxisd(3 * kPi / 180, Vec3(0.2, 1, 0.3).normalized()));
+  const Vec3 shift(0.002, -0.002, 0.001);
+  FaceRefineOptions o;
+  o.polish_iterations = 200;
+  const std::vector<int> face = upper_face_vertices(generic.mesh, generic.annotations);
+  auto apart_mm = [&](const FaceRefineResult& a, const FaceRefineResult& b) {
+    double sum = 0;
+    for (int v : face) {
+      const Vec3& p = generic.mesh.positions[v];
+      sum += ((a.linear * p + a.translation) - (b.linear * p + b.translation)).norm();
+    }
+    return 1000 * sum / face.size();
+  };
+  FaceRefineResult on_triangles, on_fine_vertices, on_coarse_vertices;
+  const TriMesh& g = generic.mesh;
+  const HeadAnnotations& ann = generic.annotations;
+  REQUIRE(refine_alignment_on_face(g, ann, fine.positions, fine.faces, start, shift, diag, o, on_triangles).ok());
+  REQUIRE(refine_alignment_on_face(g, ann, fine.positions, {}, start, shift, diag, o, on_fine_vertices).ok());
+  REQUIRE(refine_alignment_on_face(g, ann, coarse.positions, {}, start, shift, diag, o, on_coarse_vertices).ok());
+  const double fine_apart = apart_mm(on_triangles, on_fine_vertices);
+  const double coarse_apart = apart_mm(on_triangles, on_coarse_vertices);
+  INFO("the face placed by the fine mesh's vertices " << fine_apart << " mm from where its triangles place it, by the "
+                                                       "coarse mesh's vertices " << coarse_apart << " mm");
+  CHECK(fine_apart < 0.3);               // 0.20 mm at a mean edge of 0.0019 of the diagonal
+  CHECK(coarse_apart > 2 * fine_apart);  // 0.72 mm at 0.030
 }
