@@ -92,6 +92,23 @@ PointCloud turned(const PointCloud& scan, double degrees) {
   return turned_about(scan, degrees, Vec3::UnitY(), rotation, centroid);
 }
 
+// The fit's level 3 crosses itself nowhere: not at the lips or the ears,
+// nor (FitHeadOptions::guard_other_crossings) at the eye rims, the scalp
+// or the neck's seam.
+void check_no_crossings(const FitHeadResult& r) {
+  FitQuality q;
+  REQUIRE(measure_fit_quality(r, test::generic_head().annotations, q).ok());
+  INFO("level " << q.level << ": " << q.crossings.total << " pairs (lips " << q.crossings.lips << ", ears "
+                << q.crossings.ears << ", eye sockets " << q.crossings.eye_sockets << ", rest " << q.crossings.rest
+                << ")");
+  CHECK(q.level == 3);
+  CHECK(q.crossings.lips == 0);
+  CHECK(q.crossings.ears == 0);
+  CHECK(q.crossings.eye_sockets == 0);
+  CHECK(q.crossings.rest == 0);
+  CHECK(q.crossings.total == 0);
+}
+
 }  // namespace
 
 TEST_CASE("fit_head: every real scan fits with no crossing pairs, at the lips and the ears or elsewhere",
@@ -111,19 +128,7 @@ TEST_CASE("fit_head: every real scan fits with no crossing pairs, at the lips an
         const Status st = fit_head(scan, test::generic_head(), options, r);
         INFO(st.message);
         REQUIRE(st.ok());
-        FitQuality q;
-        REQUIRE(measure_fit_quality(r, test::generic_head().annotations, q).ok());
-        INFO("level " << q.level << ": " << q.crossings.total << " pairs (lips " << q.crossings.lips << ", ears "
-                      << q.crossings.ears << ", eye sockets " << q.crossings.eye_sockets << ", rest "
-                      << q.crossings.rest << ")");
-        CHECK(q.level == 3);
-        CHECK(q.crossings.lips == 0);
-        CHECK(q.crossings.ears == 0);
-        // Nor anywhere else (FitHeadOptions::guard_other_crossings): the
-        // eye rims, the scalp, the neck's seam.
-        CHECK(q.crossings.eye_sockets == 0);
-        CHECK(q.crossings.rest == 0);
-        CHECK(q.crossings.total == 0);
+        check_no_crossings(r);
       }
     }
   }
@@ -509,12 +514,5 @@ TEST_CASE("fit_head: a bust split 1:64 at its midpoints fits with no crossing pa
   const Status st = fit_head(dense, test::generic_head(), options, r);
   INFO(st.message);
   REQUIRE(st.ok());
-  FitQuality q;
-  REQUIRE(measure_fit_quality(r, test::generic_head().annotations, q).ok());
-  INFO("level " << q.level << ": " << q.crossings.total << " pairs (lips " << q.crossings.lips << ", ears "
-                << q.crossings.ears << ", rest " << q.crossings.rest << ")");
-  CHECK(q.level == 3);
-  CHECK(q.crossings.lips == 0);
-  CHECK(q.crossings.ears == 0);
-  CHECK(q.crossings.total == 0);
+  check_no_crossings(r);
 }
