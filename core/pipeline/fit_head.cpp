@@ -520,10 +520,7 @@ Status guard_feature_crossings(const FitHeadOptions& options, const HeadAnnotati
     int smoothing; // or: sweeps of umbrella smoothing (halfway to the ring's mean) over the mask
   };
   const Step steps[] = {{0, 0.0, 0}, {1, 0.0, 0}, {2, 0.0, 0}, {1, 0.0, 2}, {1, 0.5, 0}, {1, 1.0, 0},
-                        {2, 0.0, 4}, {2, 1.0, 0}, {3, 1.0, 0}, {3, 0.0, 8}, {5, 1.0, 0},
-                        // the last resort: Demosthenes at 64x his density kept 7 pairs at
-                        // an ear after every step before it (fit_real_scans.md, session 70)
-                        {8, 1.0, 0}};
+                        {2, 0.0, 4}, {2, 1.0, 0}, {3, 1.0, 0}, {3, 0.0, 8}, {5, 1.0, 0}};
   TriMesh target;
   target.triangles = mr.control_triangles;
   std::vector<char> moved_tris;

@@ -347,7 +347,7 @@ struct FitHeadOptions {
   // least change to the most, per cluster of crossings (pairs sharing a
   // control corner): the displacements over the control faces under the
   // pairs (grown by 0-2 rings, faded on the finer levels) go to 0; then
-  // those control vertices (1-8 rings) are smoothed (umbrella sweeps) or
+  // those control vertices (1-5 rings) are smoothed (umbrella sweeps) or
   // moved half or all of the way to the aligned generic head's shape
   // carried by the movement of the head around them (carry_mouth_bag's
   // solve), with the displacements over their support faded too. A step is

@@ -495,24 +495,3 @@ TEST_CASE("fit_head: a bust split 1:64 at its midpoints, the same surface, is al
   for (const std::string& n : r.notes) notes += n + "\n";
   CHECK(notes.find("aligned again with its silhouettes taken from") != std::string::npos);
 }
-
-TEST_CASE("fit_head: a bust split 1:64 at its midpoints fits with no crossing pairs at the ears (Demosthenes)",
-          "[pipeline][real_scans][shared]") {
-  LK_REQUIRE_SHARED("head_scans/demosthenes_photoscan/demosthenes-low-res.obj");
-  PointCloud scan;
-  REQUIRE(load_point_cloud_file(test::shared_data_dir() + "/head_scans/demosthenes_photoscan/demosthenes-low-res.obj",
-                                scan)
-              .ok());
-  // At a full-resolution scan's density his ears fold (301 pairs at the
-  // smooth level 3) and the crossing guard's ladder up to 5 rings moved to
-  // the generic shape left 7 pairs at an ear; its last step (8 rings)
-  // leaves none (docs/design/fit_real_scans.md, session 70).
-  const PointCloud dense = split_at_midpoints(split_at_midpoints(split_at_midpoints(scan)));
-  FitHeadOptions options;
-  options.measure_stages = false;
-  FitHeadResult r;
-  const Status st = fit_head(dense, test::generic_head(), options, r);
-  INFO(st.message);
-  REQUIRE(st.ok());
-  check_no_crossings(r);
-}
