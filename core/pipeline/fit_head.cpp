@@ -1189,7 +1189,7 @@ Status fit_head_in_axes(const PointCloud& scan, double scan_diagonal, const Gene
       st = refused;
     }
     silhouette_input = PointCloud{};
-    st = st ? place() : st;
+    if (st) st = place();
   }
   if (!st) return st;
   if (faired) {  // the fit starts from the faired skin, placed as the cast one was aligned

@@ -92,23 +92,6 @@ PointCloud turned(const PointCloud& scan, double degrees) {
   return turned_about(scan, degrees, Vec3::UnitY(), rotation, centroid);
 }
 
-// The fit's level 3 crosses itself nowhere: not at the lips or the ears,
-// nor (FitHeadOptions::guard_other_crossings) at the eye rims, the scalp
-// or the neck's seam.
-void check_no_crossings(const FitHeadResult& r) {
-  FitQuality q;
-  REQUIRE(measure_fit_quality(r, test::generic_head().annotations, q).ok());
-  INFO("level " << q.level << ": " << q.crossings.total << " pairs (lips " << q.crossings.lips << ", ears "
-                << q.crossings.ears << ", eye sockets " << q.crossings.eye_sockets << ", rest " << q.crossings.rest
-                << ")");
-  CHECK(q.level == 3);
-  CHECK(q.crossings.lips == 0);
-  CHECK(q.crossings.ears == 0);
-  CHECK(q.crossings.eye_sockets == 0);
-  CHECK(q.crossings.rest == 0);
-  CHECK(q.crossings.total == 0);
-}
-
 }  // namespace
 
 TEST_CASE("fit_head: every real scan fits with no crossing pairs, at the lips and the ears or elsewhere",
@@ -128,7 +111,19 @@ TEST_CASE("fit_head: every real scan fits with no crossing pairs, at the lips an
         const Status st = fit_head(scan, test::generic_head(), options, r);
         INFO(st.message);
         REQUIRE(st.ok());
-        check_no_crossings(r);
+        FitQuality q;
+        REQUIRE(measure_fit_quality(r, test::generic_head().annotations, q).ok());
+        INFO("level " << q.level << ": " << q.crossings.total << " pairs (lips " << q.crossings.lips << ", ears "
+                      << q.crossings.ears << ", eye sockets " << q.crossings.eye_sockets << ", rest "
+                      << q.crossings.rest << ")");
+        CHECK(q.level == 3);
+        CHECK(q.crossings.lips == 0);
+        CHECK(q.crossings.ears == 0);
+        // Nor anywhere else (FitHeadOptions::guard_other_crossings): the
+        // eye rims, the scalp, the neck's seam.
+        CHECK(q.crossings.eye_sockets == 0);
+        CHECK(q.crossings.rest == 0);
+        CHECK(q.crossings.total == 0);
       }
     }
   }
@@ -402,10 +397,8 @@ TEST_CASE("fit_head: a face scan split 1:4 at its midpoints, the same surface, i
     CHECK(r.face_only);
     CHECK(facing_off_deg(r, Vec3(0.794, 0, -0.608)) < 10);
     CHECK(r.near_fraction > 0.7);  // 77 % as the original's
-    std::string notes;
-    for (const std::string& n : r.notes) notes += n + "\n";
     // The second search says what it did, and names the first refusal.
-    CHECK((notes.find("searched again on the scan's surface") != std::string::npos) == (v.retry_cell > 0));
+    CHECK((notes_of(r).find("searched again on the scan's surface") != std::string::npos) == (v.retry_cell > 0));
   }
 }
 
@@ -491,7 +484,5 @@ TEST_CASE("fit_head: a bust split 1:64 at its midpoints, the same surface, is al
   INFO("pose " << degrees << " deg, scale " << scale);
   CHECK(degrees < 15);  // 8.8 deg measured
   CHECK(std::abs(scale - 1) < 0.1);
-  std::string notes;
-  for (const std::string& n : r.notes) notes += n + "\n";
-  CHECK(notes.find("aligned again with its silhouettes taken from") != std::string::npos);
+  CHECK(notes_of(r).find("aligned again with its silhouettes taken from") != std::string::npos);
 }
