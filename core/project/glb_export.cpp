@@ -2,6 +2,8 @@
 
 #include "anim/bake.h"
 #include "anim/clips.h"
+#include "anim/face_pose.h"
+#include "anim/face_shapes.h"
 #include "mesh/geometry.h"
 #include "mesh/topology.h"
 #include "project/export.h"
@@ -16,6 +18,7 @@
 #include <cstdint>
 #include <cmath>
 #include <functional>
+#include <map>
 
 namespace lk {
 
@@ -134,17 +137,90 @@ struct MorphedNode {
   std::vector<std::string> targets;
 };
 
-// The clip as one glTF animation: per node whose targets include some of
-// the clip's shapes, a `weights` channel (CUBICSPLINE: each key's in
-// tangents, values and out tangents over all the mesh's targets; zero for
-// the targets the clip does not drive), the key times shared. False when no
-// node has one of its shapes.
-bool add_weights_animation(GltfBuilder& w, const WeightClip& clip, const std::vector<MorphedNode>& nodes) {
+// A joint the face's controls turn about its own origin (an eye's: the
+// eyeball's centre), and how.
+struct TurnedNode {
+  int node = -1;
+  std::function<Mat3(const FaceControls&)> turn;
+};
+
+// The clip's controls at time t (its shapes' weights summed into channels).
+FaceControls clip_controls(const WeightClip& clip, double t) {
+  const std::vector<double> weights = clip_weights(clip, t);
+  std::map<std::string, double> named;
+  for (std::size_t s = 0; s < clip.shapes.size(); ++s) named[clip.shapes[s]] += weights[s];
+  FaceControls c;
+  if (!face_controls_from_weights(named, c).ok()) c = FaceControls{};
+  return c;
+}
+
+// Key times every 1/60 s over the clip (its own keys, at multiples of
+// 0.1 s, among them): rotations between them are slerped (LINEAR), which
+// follows the clip's smoothstep turns to about 0.06 degrees (at 30 keys a
+// second: 0.23).
+constexpr double kTurnRate = 60.0;
+
+// The joints the clip turns, as `rotation` channels (LINEAR quaternions
+// sampled at kTurnRate); their ids, into turned_out.
+void add_turn_channels(GltfBuilder& w, const WeightClip& clip, const std::vector<TurnedNode>& turned,
+                       tinygltf::Animation& anim, std::vector<int>& turned_out) {
+  const int keys = static_cast<int>(std::lround(clip.duration() * kTurnRate)) + 1;
+  if (keys < 2) return;
+  std::vector<FaceControls> controls(static_cast<std::size_t>(keys));
+  for (int k = 0; k < keys; ++k) controls[static_cast<std::size_t>(k)] = clip_controls(clip, std::min(k / kTurnRate, clip.duration()));
+  int input = -1;
+  for (const TurnedNode& n : turned) {
+    std::vector<float> q;
+    bool moves = false;
+    Eigen::Quaterniond prev = Eigen::Quaterniond::Identity();
+    for (const FaceControls& c : controls) {
+      Eigen::Quaterniond r(n.turn(c));
+      r.normalize();
+      if (r.dot(prev) < 0) r.coeffs() = -r.coeffs();  // the short way from the previous key
+      prev = r;
+      moves = moves || r.vec().norm() > 1e-6;
+      q.insert(q.end(), {float(r.x()), float(r.y()), float(r.z()), float(r.w())});
+    }
+    if (!moves) continue;
+    if (input < 0) {
+      std::vector<float> times(static_cast<std::size_t>(keys));
+      for (int k = 0; k < keys; ++k) times[static_cast<std::size_t>(k)] = static_cast<float>(std::min(k / kTurnRate, clip.duration()));
+      input = w.accessor(times.data(), times.size() * 4, keys, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_SCALAR, 0);
+      w.model.accessors.back().minValues = {double(times.front())};
+      w.model.accessors.back().maxValues = {double(times.back())};
+    }
+    tinygltf::AnimationSampler sampler;
+    sampler.input = input;
+    sampler.interpolation = "LINEAR";
+    sampler.output = w.accessor(q.data(), q.size() * 4, keys, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, 0);
+    anim.samplers.push_back(sampler);
+    tinygltf::AnimationChannel channel;
+    channel.sampler = static_cast<int>(anim.samplers.size()) - 1;
+    channel.target_node = n.node;
+    channel.target_path = "rotation";
+    anim.channels.push_back(channel);
+    turned_out.push_back(n.node);
+  }
+}
+
+// The clip as one glTF animation: the joints it turns (an eye's, in Gaze)
+// as rotation channels, so tools that read the gaze from the bones see it;
+// per other node whose targets include some of the clip's shapes, a
+// `weights` channel (CUBICSPLINE: each key's in tangents, values and out
+// tangents over all the mesh's targets; zero for the targets the clip does
+// not drive), the key times shared. A turned node's own targets (the
+// eyeball's eyeLook shapes, for tools that set single weights) are not
+// also animated: the eye would turn twice. False when the clip moves nothing.
+bool add_clip_animation(GltfBuilder& w, const WeightClip& clip, const std::vector<MorphedNode>& nodes,
+                        const std::vector<TurnedNode>& turned) {
   tinygltf::Animation anim;
   anim.name = clip.name;
+  std::vector<int> turned_nodes;
+  add_turn_channels(w, clip, turned, anim, turned_nodes);
   int input = -1;
   const std::size_t keys = clip.times.size();
   for (const MorphedNode& n : nodes) {
+    if (std::find(turned_nodes.begin(), turned_nodes.end(), n.node) != turned_nodes.end()) continue;
     std::vector<int> column(n.targets.size(), -1);  // target -> the clip's shape
     bool any = false;
     for (std::size_t t = 0; t < n.targets.size(); ++t)
@@ -303,6 +379,7 @@ Status export_glb(HeadProject& project, const GenericHead& generic, const GlbExp
   const int head_mesh_node = w.node("HeadMesh", head_mesh);
   model.nodes[head_mesh_node].skin = 0;
   std::vector<MorphedNode> morphed = {{head_mesh_node, names_of(head_targets)}};
+  std::vector<TurnedNode> turned;
 
   if (have_parts) {
     const int eye_mat = textured_material(w, "eye", options.eye_texture, {0.92, 0.92, 0.9, 1.0}, false);
@@ -313,6 +390,8 @@ Status export_glb(HeadProject& project, const GenericHead& generic, const GlbExp
       });
       model.nodes[eye_node[e]].mesh = w.mesh(eye_names[e], eye.positions, eye.normals, eye.uvs, eye.triangles, eye_mat, turns);
       if (!turns.empty()) morphed.push_back({eye_node[e], names_of(turns)});
+      // The joint turns about the eyeball's centre, its origin, as pose_eye does.
+      turned.push_back({eye_node[e], [e](const FaceControls& c) { return eye_rotation(c, e); }});
     }
     const int teeth_mat = textured_material(w, "teeth", options.teeth_texture, {0.80, 0.74, 0.60, 1.0}, true);
     const int tongue_mat = w.material("tongue", -1, {0.55, 0.16, 0.16, 1.0}, 0.5);
@@ -342,7 +421,7 @@ Status export_glb(HeadProject& project, const GenericHead& generic, const GlbExp
   std::vector<std::string> animations;
   if (options.animations)
     for (const WeightClip& clip : weight_clips())
-      if (add_weights_animation(w, clip, morphed)) animations.push_back(clip.name);
+      if (add_clip_animation(w, clip, morphed, turned)) animations.push_back(clip.name);
 
   tinygltf::Scene scene;
   scene.name = "Likeness head";

@@ -11,9 +11,10 @@
 // blendshape and viseme of the muscle layer (anim/face_shapes.h) as a morph
 // target of the head, baked on its level (sparse where that is smaller);
 // the eyes carry the gaze shapes, the lower teeth and tongue the shapes that
-// move the jaw or the tongue, under the same names. With the talking demo
-// and a blink as glTF animations (weights channels, CUBICSPLINE: exactly
-// the page's curves) on every mesh that has targets the clip drives.
+// move the jaw or the tongue, under the same names. With the talking demo,
+// a blink and a gaze as glTF animations: weights channels (CUBICSPLINE:
+// exactly the page's curves) on every mesh that has targets the clip
+// drives, except the eyeballs, which Gaze turns by their joints' rotations.
 #pragma once
 #include "head/head_model.h"
 #include "image/image.h"
@@ -29,7 +30,7 @@ struct GlbExportOptions {
   int level = 2;          // the head's level (0 = the control mesh); clamped to the levels there are
   Image eye_texture;      // the eyeballs' texture (parts.h: generic_eyeball_texture); empty: white
   Image teeth_texture;    // RGBA, voids transparent (generic_teeth_texture); empty: ivory
-  // glTF animations of the morph weights (anim/clips.h: Talk, Blink), for
+  // glTF animations (anim/clips.h: Talk, Blink, Gaze), for
   // viewers that only play clips (model-viewer cannot set single weights).
   bool animations = true;
 };

@@ -4,6 +4,8 @@
 // and future files are refused with a reason and never crash.
 #include "anim/bake.h"
 #include "anim/clips.h"
+#include "anim/face_pose.h"
+#include "anim/face_shapes.h"
 #include "head/generic_head.h"
 #include "io/io.h"
 #include "mesh/topology.h"
@@ -1152,7 +1154,8 @@ TEST_CASE("GLB export: Talk, Blink and Gaze as glTF animations of the morph weig
   const tinygltf::Model m = parsed_glb(bytes);
   REQUIRE(m.animations.size() == 3);
   const std::vector<WeightClip> clips = weight_clips();
-  std::map<std::string, int> channels_on;  // node name -> channels (over both clips)
+  std::map<std::string, int> channels_on;  // node name -> weights channels (over the clips)
+  std::map<std::string, int> turns_on;     // "node in clip" -> rotation channels
   for (size_t a = 0; a < 3; ++a) {
     const tinygltf::Animation& anim = m.animations[a];
     const WeightClip& clip = clips[a];
@@ -1161,6 +1164,10 @@ TEST_CASE("GLB export: Talk, Blink and Gaze as glTF animations of the morph weig
     for (const tinygltf::AnimationChannel& ch : anim.channels) {
       const tinygltf::Node& node = m.nodes.at(ch.target_node);
       INFO(node.name);
+      if (ch.target_path == "rotation") {
+        turns_on[node.name + " in " + anim.name]++;
+        continue;  // checked below, against pose_eye
+      }
       channels_on[node.name]++;
       CHECK(ch.target_path == "weights");
       const tinygltf::AnimationSampler& s = anim.samplers.at(ch.sampler);
@@ -1189,12 +1196,63 @@ TEST_CASE("GLB export: Talk, Blink and Gaze as glTF animations of the morph weig
   }
   // Talk drives the head and, through the visemes that open the jaw, the
   // lower teeth and tongue; Blink only the head (the lids are skin); Gaze
-  // the eyeballs (and the head where the eyeLook shapes move its lids).
-  CHECK(channels_on["HeadMesh"] >= 2);
+  // the head where the eyeLook shapes move its lids, and turns the eyes'
+  // joints (not their eyeLook targets as well: they would turn twice).
+  CHECK(channels_on["HeadMesh"] == 3);
   CHECK(channels_on["LowerTeeth"] == 1);
   CHECK(channels_on["Tongue"] == 1);
-  CHECK(channels_on["LeftEye"] == 1);
-  CHECK(channels_on["RightEye"] == 1);
+  CHECK(channels_on.count("LeftEye") == 0);
+  CHECK(channels_on.count("RightEye") == 0);
+  CHECK(turns_on == std::map<std::string, int>{{"LeftEye in Gaze", 1}, {"RightEye in Gaze", 1}});
+
+  // Gaze's joints turn each eyeball where pose_eye turns it: its vertices
+  // (in the node's frame, the node at the eye's centre) turned by the
+  // slerped key quaternion, every 5 ms, against the clip's weights posed
+  // by the muscle layer; and they look to the head's left at 0.6 s.
+  HeadParts parts;
+  REQUIRE(place_head_parts(p.fit.control, generic, parts).ok());
+  FaceRig face;
+  REQUIRE(make_face_rig(p.fit.control, generic, face).ok());
+  const WeightClip& gaze = gaze_clip();
+  const tinygltf::Animation& anim = m.animations[2];
+  for (const tinygltf::AnimationChannel& ch : anim.channels) {
+    if (ch.target_path != "rotation") continue;
+    const tinygltf::Node& node = m.nodes.at(ch.target_node);
+    const int e = node.name == "LeftEye" ? 0 : 1;
+    INFO(node.name);
+    const tinygltf::AnimationSampler& s = anim.samplers.at(ch.sampler);
+    CHECK(s.interpolation == "LINEAR");
+    const std::vector<float> times = floats_of(m, s.input, 1), q = floats_of(m, s.output, 4);
+    REQUIRE(q.size() == 4 * times.size());
+    CHECK(times.front() == 0.0f);
+    CHECK(std::abs(times.back() - gaze.duration()) < 1e-6);
+    const std::vector<Vec3>& rest = parts.placed.eye[static_cast<size_t>(e)].positions;
+    const Vec3 centre = parts.placement.eye_center[e];
+    double worst = 0, widest = 0;
+    for (int ms = 0; ms <= static_cast<int>(1000 * gaze.duration()); ms += 5) {
+      const double t = ms / 1000.0;
+      size_t k = static_cast<size_t>(std::upper_bound(times.begin(), times.end(), float(t)) - times.begin());
+      k = std::clamp<size_t>(k, 1, times.size() - 1) - 1;
+      const double u = std::clamp((t - times[k]) / (times[k + 1] - times[k]), 0.0, 1.0);
+      const Eigen::Quaterniond a(q[4 * k + 3], q[4 * k], q[4 * k + 1], q[4 * k + 2]);
+      const Eigen::Quaterniond b(q[4 * k + 7], q[4 * k + 4], q[4 * k + 5], q[4 * k + 6]);
+      const Mat3 R = a.slerp(u, b).normalized().toRotationMatrix();
+      const std::vector<double> w = clip_weights(gaze, t);
+      std::map<std::string, double> named;
+      for (size_t i = 0; i < gaze.shapes.size(); ++i) named[gaze.shapes[i]] += w[i];
+      FaceControls c;
+      REQUIRE(face_controls_from_weights(named, c).ok());
+      const std::vector<Vec3> want = pose_eye(face, rest, c, e);
+      for (size_t i = 0; i < rest.size(); ++i) {
+        worst = std::max(worst, (centre + R * (rest[i] - centre) - want[i]).norm());
+        widest = std::max(widest, (want[i] - rest[i]).norm());
+      }
+      if (ms == 600) CHECK((R * Vec3(0, 0, 1)).x() > std::sin(0.9 * kGazeAngle));  // towards +x, the head's left
+    }
+    INFO("worst " << worst * 1000 << " mm; the eye moves up to " << widest * 1000 << " mm");
+    CHECK(worst < 2.5e-5);
+    CHECK(widest > 0.004);
+  }
 
   o.animations = false;
   Bytes plain;

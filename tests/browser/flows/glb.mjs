@@ -10,7 +10,8 @@
 // expression, ARKit blendshape (Apple's names) and viseme of the muscle
 // layer, and jawOpen and smile at weight 1 each change the render; its Talk
 // animation played by three.js's AnimationMixer gives the head the
-// sequence's weights at sampled times; the tongue's tongueOut target pushes
+// sequence's weights at sampled times, and its Gaze animation turns the eye
+// bones; the tongue's tongueOut target pushes
 // its tip out; the file at level 2 with all of them and the textures is
 // under 8 MB.
 import { execFileSync } from 'node:child_process';
@@ -143,6 +144,28 @@ window.result = (async () => {
     mixer.uncacheRoot(gltf.scene);
     gltf.scene.traverse((o) => { if (o.morphTargetInfluences) o.morphTargetInfluences.fill(0); });
   }
+  // Gaze played by the AnimationMixer turns the LeftEye and RightEye bones
+  // (where a tool that reads the gaze from bones looks): each eye's forward
+  // direction (+z) at 0.6 s (to the head's left) and 2.4 s (up), and the
+  // largest weight the eyeballs' own eyeLook targets get (they must stay 0:
+  // the bones turn the eyes).
+  const gazeClip = THREE.AnimationClip.findByName(gltf.animations, 'Gaze');
+  const gazeAt = {}; let eyeWeights = -1;
+  const eyeBones = head && head.isSkinnedMesh ? head.skeleton.bones.filter((b) => /^(Left|Right)Eye/.test(b.name)) : [];
+  if (gazeClip && eyeBones.length === 2) {
+    const mixer = new THREE.AnimationMixer(gltf.scene);
+    mixer.clipAction(gazeClip).play();
+    eyeWeights = 0;
+    for (const t of [0.6, 2.4]) {
+      mixer.setTime(t);
+      gazeAt[t] = eyeBones.map((b) => new THREE.Vector3(0, 0, 1).applyQuaternion(b.quaternion).toArray());
+      for (const b of eyeBones) b.traverse((o) => { if (o.isMesh && o.morphTargetInfluences) eyeWeights = Math.max(eyeWeights, ...o.morphTargetInfluences); });
+    }
+    mixer.stopAllAction();
+    mixer.uncacheRoot(gltf.scene);
+    for (const b of eyeBones) b.quaternion.identity();
+    gltf.scene.traverse((o) => { if (o.morphTargetInfluences) o.morphTargetInfluences.fill(0); });
+  }
   // The tongue's own morph target: tongueOut at 1 pushes its frontmost
   // vertex forward (+z, the face's front), by three.js's own morphing.
   let tongueForward = 0, tongueNames = [];
@@ -184,14 +207,16 @@ window.result = (async () => {
     for (let i = 0; i < posed.length; i += 4) if (Math.abs(posed[i] - rest[i]) + Math.abs(posed[i + 1] - rest[i + 1]) + Math.abs(posed[i + 2] - rest[i + 2]) > 30) boneChanged++;
     boneChanged /= 256 * 256;
     // Left on screen for the screenshot: the head turned by its Head bone, the
-    // jaw open by its Jaw bone, smiling by its morph target.
+    // jaw open by its Jaw bone, the eyes turned 25 degrees to the head's
+    // left by their bones, smiling by its morph target.
     const headBone = gltf.scene.getObjectByName('Head');
     if (headBone) headBone.rotation.y = 0.45;
+    for (const b of eyeBones) b.rotation.y = 25 * Math.PI / 180;
     head.morphTargetInfluences[head.morphTargetDictionary.smile] = 1;
     draw();
   }
   return { names, meshes, headVertices, skinTextured, litFraction: lit / (256 * 256), morphs, jawChanged, smileChanged, bones, boneChanged, chinDrop, crownMoved,
-           clips, talkDuration, talkAt, talkChanged, tongueForward, tongueNames };
+           clips, talkDuration, talkAt, talkChanged, gazeAt, eyeWeights, tongueForward, tongueNames };
 })().catch((e) => ({ error: String(e && e.message || e) }));
 </script>` });
     }
@@ -249,6 +274,17 @@ window.result = (async () => {
         Math.abs(got.talkDuration - 2.6) < 1e-3 && worst < 1e-3 && got.talkChanged > 0.001,
         `clips ${(got.clips || []).join(' ')} (name:tracks), Talk ${got.talkDuration} s; ${rows.join('; ')}; largest difference ${worst.toExponential(2)}; ` +
         `at 1.04 s ${(100 * (got.talkChanged || 0)).toFixed(2)}% of the pixels changed`);
+  // Gaze (core/anim/clips.cpp, spelled here independently): both eyes 25
+  // degrees to the head's left (+x) at 0.6 s, 0.6 of 25 degrees up at 2.4 s.
+  const deg = Math.PI / 180;
+  const gazeWant = { 0.6: [Math.sin(25 * deg), 0, Math.cos(25 * deg)], 2.4: [0, Math.sin(15 * deg), Math.cos(15 * deg)] };
+  let gazeWorst = 0;
+  for (const [t, d] of Object.entries(gazeWant))
+    for (const e of ((got.gazeAt || {})[t] || [])) gazeWorst = Math.max(gazeWorst, Math.acos(Math.min(1, e[0] * d[0] + e[1] * d[1] + e[2] * d[2])) / deg);
+  const gazeRows = Object.entries(got.gazeAt || {}).map(([t, es]) => t + ' s: ' + es.map((e) => '(' + e.map((x) => x.toFixed(3)).join(', ') + ')').join(' '));
+  check('... its Gaze animation turns the LeftEye and RightEye bones (25 degrees to the head\'s left at 0.6 s, 15 up at 2.4 s) and leaves the eyeballs\' own eyeLook weights at 0',
+        Object.keys(got.gazeAt || {}).length === 2 && gazeWorst < 0.5 && got.eyeWeights === 0,
+        `eyes' forward directions ${gazeRows.join('; ')}; worst ${gazeWorst.toFixed(3)} degrees off; the eyeballs' largest weight ${got.eyeWeights}`);
   check('the tongue has its own tongueOut target: at weight 1 three.js moves its tip forward by over 15 mm; smile, brows are not on it',
         got.tongueForward > 0.015 && got.tongueNames.includes('tongueOut') && !got.tongueNames.includes('smile') && !got.tongueNames.includes('browInnerUp'),
         `tip ${(1000 * (got.tongueForward || 0)).toFixed(1)} mm forward; the tongue's targets: ${(got.tongueNames || []).length} (${(got.tongueNames || []).slice(0, 6).join(', ')}, ...)`);
