@@ -293,6 +293,7 @@ export class Session {
   // Console errors and uncaught exceptions of this page fail the run.
   watch(page) {
     page.on('console', (m) => { if (m.type() === 'error') this.consoleErrors.push(m.text()); });
+    if (process.env.LK_CONSOLE) page.on('console', (m) => console.log('console:', m.type(), m.text()));  // debugging a flow
     page.on('pageerror', (e) => this.consoleErrors.push('uncaught: ' + e.message));
     return page;
   }

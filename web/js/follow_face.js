@@ -13,8 +13,9 @@
 // width, the lips' gap, each mouth corner's height along the face's up
 // (chin to forehead) from the eyes' outer corners and its distance out from
 // the face's middle, the mouth's width, the inner and outer brows' heights
-// above the eyes, and the nose tip's place across and along the face (the
-// head's yaw and pitch). The first frames with a face (CALIBRATION_FRAMES)
+// above the eyes, the nose tip's place across and along the face (the
+// head's yaw and pitch), and each iris centre's place across and up the
+// face from its eye's corners (the gaze). The first frames with a face (CALIBRATION_FRAMES)
 // are taken as the neutral face; the shapes' weights are the measures'
 // changes from it over a full-motion span (SPAN, set from the tracker on
 // our own renders of each shape), clamped to [0, 1] and smoothed over time;
@@ -59,15 +60,23 @@ const SPAN = {
   smileOut: 0.05,   // corner drawn out from the face's middle (renders: 0.049-0.070)
   brow: 0.05,       // brow lift over eye-corner distance (render: 0.038)
   pucker: 0.06,     // mouth width loss over eye-corner distance (render: 0.044)
+  // The iris centre's move across and up the face (renders of 25 degrees:
+  // across 0.030-0.040, up 0.019; the detector reads the lids' coupling
+  // and the head's turn as up to 0.011 of gaze): a dead zone below LOOK_DEAD.
+  lookAcross: 0.035,
+  lookUp: 0.022,
 };
+const LOOK_DEAD = 0.008;
+const BLINK_DEAD = 0.1;
 
 const sub = (a, b) => [a[0] - b[0], a[1] - b[1]];
 const dot = (a, b) => a[0] * b[0] + a[1] * b[1];
 const len = (a) => Math.hypot(a[0], a[1]);
 const clamp01 = (x) => Math.min(1, Math.max(0, x));
 
-// The face's measures from its landmarks ([x, y] pixels).
-export function faceMeasures(pts) {
+// The face's measures from its landmarks ([x, y] pixels) and, when the
+// tracker gives them, the two iris centres (either order).
+export function faceMeasures(pts, iris = null) {
   const at = (i) => pts[i];
   // The unit of length: the face's width at the eyes (its outline, 234 to
   // 454) times the generic head's eye-corner distance over it (0.647), so
@@ -88,7 +97,17 @@ export function faceMeasures(pts) {
   const acrossRaw = sub(at(P.eyeL.outer), at(P.eyeR.outer));
   const across = [acrossRaw[0] / len(acrossRaw), acrossRaw[1] / len(acrossRaw)];
   const nose = sub(at(P.noseTip), eyes);
+  // Each eye's gaze: its iris centre (the one nearer the eye) from the
+  // midpoint of its corners, across and up the face; NaN without irises.
+  const gaze = (e) => {
+    if (!iris || iris.length < 2) return [NaN, NaN];
+    const mid = [(at(e.inner)[0] + at(e.outer)[0]) / 2, (at(e.inner)[1] + at(e.outer)[1]) / 2];
+    const c = len(sub(iris[0], mid)) <= len(sub(iris[1], mid)) ? iris[0] : iris[1];
+    return [dot(sub(c, mid), across) / scale, dot(sub(c, mid), up) / scale];
+  };
+  const [lookAcrossL, lookUpL] = gaze(P.eyeL), [lookAcrossR, lookUpR] = gaze(P.eyeR);
   return {
+    lookAcrossL, lookUpL, lookAcrossR, lookUpR,
     noseAcross: dot(nose, across) / scale, noseUp: dot(nose, up) / scale,
     eyeL: eye(P.eyeL), eyeR: eye(P.eyeR),
     lipGap: len(sub(at(P.lipTop), at(P.lipBottom))) / scale,
@@ -120,9 +139,33 @@ export function faceWeights(m, n) {
   // product keeps either alone (the jaw dropping draws the corners out, a
   // closing lid shifts the eyes' corners) from reading as a smile.
   const smile = (c, c0, o, o0) => clamp01((c - c0) / SPAN.smile) * clamp01((o - o0) / SPAN.smileOut);
+  // A blink: the share of the neutral opening closed, past BLINK_DEAD (the
+  // detector narrows the lids' gaps by 16 % on an eye looking up).
+  const closed = (e, e0) => clamp01((1 - e / e0 - BLINK_DEAD) / (SPAN.blink - BLINK_DEAD));
+  const blinkL = closed(m.eyeL, n.eyeL), blinkR = closed(m.eyeR, n.eyeR);
+  // The eyes' gaze: each iris's move from neutral past a dead zone (the
+  // detector's jitter and couplings, SPAN above); towards the face's left
+  // is the left eye looking out and the right eye looking in. A closing lid
+  // hides the iris (its points wander): the gaze fades once the blink
+  // passes 0.5 (looking up narrows the lids' gaps to a blink of about 0.3).
+  const look = {};
+  const gazeKeys = ['lookAcrossL', 'lookUpL', 'lookAcrossR', 'lookUpR'];
+  if (gazeKeys.every((k) => Number.isFinite(m[k]) && Number.isFinite(n[k]))) {
+    const past = (d, span) => clamp01((d - LOOK_DEAD) / (span - LOOK_DEAD));
+    const side = (blink, x, y, towardsLeft, awayFromLeft, suffix) => {
+      const open = clamp01(2 * (1 - blink));
+      look[towardsLeft + suffix] = open * past(x, SPAN.lookAcross);
+      look[awayFromLeft + suffix] = open * past(-x, SPAN.lookAcross);
+      look['eyeLookUp' + suffix] = open * past(y, SPAN.lookUp);
+      look['eyeLookDown' + suffix] = open * past(-y, SPAN.lookUp);
+    };
+    side(blinkL, m.lookAcrossL - n.lookAcrossL, m.lookUpL - n.lookUpL, 'eyeLookOut', 'eyeLookIn', 'Left');
+    side(blinkR, m.lookAcrossR - n.lookAcrossR, m.lookUpR - n.lookUpR, 'eyeLookIn', 'eyeLookOut', 'Right');
+  }
   return {
-    eyeBlinkLeft: clamp01((1 - m.eyeL / n.eyeL) / SPAN.blink),
-    eyeBlinkRight: clamp01((1 - m.eyeR / n.eyeR) / SPAN.blink),
+    eyeBlinkLeft: blinkL,
+    eyeBlinkRight: blinkR,
+    ...look,
     jawOpen: jaw,
     mouthSmileLeft: smile(m.cornerL, n.cornerL, m.cornerOutL, n.cornerOutL),
     mouthSmileRight: smile(m.cornerR, n.cornerR, m.cornerOutR, n.cornerOutR),
@@ -232,8 +275,8 @@ function tick(my) {
   trackLandmarks(v, v.videoWidth, v.videoHeight).then((r) => {
     if (my !== generation || !session) return;
     if (follow.probe && s.neutral && r.points) {
-      const m = faceMeasures(r.points);
-      follow.log.push({ tag, tagAfter: follow.probe(v), raw: faceWeights(m, s.neutral), head: headTurn(m, s.neutral) });
+      const m = faceMeasures(r.points, r.iris);
+      follow.log.push({ tag, tagAfter: follow.probe(v), raw: faceWeights(m, s.neutral), head: headTurn(m, s.neutral), m });
     }
     if (!r.points) {
       say(s.neutral ? 'no-face' : 'calibrating', 'Camera on. No face found: look at the camera.');
@@ -241,7 +284,7 @@ function tick(my) {
       return;
     }
     follow.faces++;
-    const m = faceMeasures(r.points);
+    const m = faceMeasures(r.points, r.iris);
     if (!s.neutral) {
       s.samples.push(m);
       if (s.samples.length >= CALIBRATION_FRAMES) {

@@ -9,6 +9,9 @@
 const BASE = 'vendor/face_mesh/';
 export const DETECTOR = 'mediapipe-face-mesh';
 export const POINT_COUNT = 468;
+// The refined model's iris centres (its points 468-472 and 473-477 are the
+// two irises, each centre first).
+const IRIS_CENTRES = [468, 473];
 
 let loading = null;   // Promise of {mesh, results}: one detector for the page
 let queue = Promise.resolve();
@@ -145,7 +148,8 @@ export function closeTracker() {
 // Landmarks of the face in a video frame (Follow my face): as
 // detectLandmarks (the first 468 points), but on the tracker and without
 // the blank frame first, so it tracks the face from frame to frame as its
-// video graph is meant to.
+// video graph is meant to; with the refined model's two iris centres
+// (points 468 and 473, in its order) as `iris`, null without them.
 export function trackLandmarks(video, width, height) {
   const run = queue.then(async () => {
     const d = await tracker();
@@ -153,7 +157,9 @@ export function trackLandmarks(video, width, height) {
     await d.mesh.send({ image: video });
     const faces = (d.results && d.results.multiFaceLandmarks) || [];
     const first = faces[0];
-    return { faces: faces.length, points: first ? first.slice(0, POINT_COUNT).map((p) => [p.x * width, p.y * height]) : null };
+    const px = (p) => [p.x * width, p.y * height];
+    return { faces: faces.length, points: first ? first.slice(0, POINT_COUNT).map(px) : null,
+             iris: first && first.length >= IRIS_CENTRES[1] + 1 ? IRIS_CENTRES.map((i) => px(first[i])) : null };
   });
   queue = run.catch(() => { tracking = null; });
   return run.catch((e) => {

@@ -4,8 +4,8 @@
 // a y4m made here from our own renders (`likeness render --expression`,
 // the generic head): at rest for NEUTRAL_S seconds, then SEGMENT_S seconds
 // of each tested shape (eyeBlinkLeft/Right, mouthSmileLeft/Right,
-// browInnerUp, mouthPucker, jawOpen) and of the head seen turned (yaw,
-// pitch). Each frame carries its segment's number in 4 black or white
+// browInnerUp, mouthPucker, jawOpen, the gaze's eyeLookOutLeft,
+// eyeLookInRight, eyeLookUpLeft) and of the head seen turned (yaw, pitch). Each frame carries its segment's number in 4 black or white
 // blocks in its top-left corner; the page's follow.probe hook reads them as
 // a frame goes to the detector and when its landmarks come back, so every
 // detected frame is known to be of one segment. The head is a native fit of
@@ -37,6 +37,10 @@ const SEGMENTS = [
   { name: 'browInnerUp', args: ['--expression', 'browInnerUp'] },
   { name: 'mouthPucker', args: ['--expression', 'mouthPucker'] },
   { name: 'jawOpen', args: ['--expression', 'jawOpen'] },
+  // The eyes (25 degrees by the rig): one eye at a time, so a swapped side fails.
+  { name: 'eyeLookOutLeft', args: ['--expression', 'eyeLookOutLeft'] },
+  { name: 'eyeLookInRight', args: ['--expression', 'eyeLookInRight'] },
+  { name: 'eyeLookUpLeft', args: ['--expression', 'eyeLookUpLeft'] },
   // The camera 20 degrees towards the head's left (OrbitCamera's yaw):
   // as if the head turned 20 degrees to its right.
   { name: 'yaw', args: ['--expression', 'neutral', '--yaw', '20', '--pitch', '0'], turn: { yaw: -20, pitch: 0 } },
@@ -44,7 +48,14 @@ const SEGMENTS = [
   { name: 'pitch', args: ['--expression', 'neutral', '--yaw', '0', '--pitch', '15'], turn: { yaw: 0, pitch: -15 } },
 ];
 const YAW_TAG = SEGMENTS.findIndex((g) => g.name === 'yaw') + 1;  // the yaw segment's mark
-const SHAPES = ['eyeBlinkLeft', 'eyeBlinkRight', 'mouthSmileLeft', 'mouthSmileRight', 'browInnerUp', 'mouthPucker', 'jawOpen'];
+const SHAPES = ['eyeBlinkLeft', 'eyeBlinkRight', 'mouthSmileLeft', 'mouthSmileRight', 'browInnerUp', 'mouthPucker', 'jawOpen',
+  'eyeLookOutLeft', 'eyeLookInRight', 'eyeLookUpLeft'];
+// The gaze's other weights, which must stay low on every shape's frames
+// (the other eye, the other directions).
+const GAZE_OTHERS = ['eyeLookInLeft', 'eyeLookOutRight', 'eyeLookUpRight', 'eyeLookDownLeft', 'eyeLookDownRight'];
+const WATCHED = [...SHAPES, ...GAZE_OTHERS];
+// The gaze's measures (follow_face.js), printed per segment against the neutral frames.
+const LOOK = ['lookAcrossL', 'lookUpL', 'lookAcrossR', 'lookUpR'];
 // A shape's weight on its own frames (median) must pass RISE; every other
 // tested shape's must stay under LOW, and the other side's under the
 // shape's own minus GAP.
@@ -95,7 +106,7 @@ const followState = (page) => page.evaluate((yawTag) => {
   return { tag: last ? last.tag : -1, yawFrames, raw: f.raw, on: f.on, state: f.state, frames: f.frames, faces: f.faces, jaw: f.raw.jawOpen || 0, smoothJaw: f.weights.jawOpen || 0,
            message: f.message, checked: document.getElementById('follow-face').checked,
            indicator: !document.getElementById('camera-on').hidden, tracks: f.tracks(),
-           headJaw: window.likeness.expressions.weights.jawOpen || 0,
+           headJaw: window.likeness.expressions.weights.jawOpen || 0, headLook: window.likeness.expressions.weights.eyeLookOutLeft || 0,
            slider: (document.getElementById('expr-w-jawOpen') || {}).value, view: window.likeness.viewer.view_direction(), head: { ...f.head }, stats: document.getElementById('expr-stats').textContent, path: window.likeness.expressions.stats.path || null };
 }, YAW_TAG);
 
@@ -173,16 +184,18 @@ async function run(s) {
           `${shut.faces} faces in ${shut.frames} frames, following ${((t0 - tOn) / 1000).toFixed(1)} s after the toggle; jawOpen ${shut.jaw.toFixed(3)}`);
     // Every segment's frames: detected frames whose mark was the same when
     // sent and when their landmarks came back; the video loops if need be.
-    let log = [], peakJaw = shut;
+    let log = [], peakJaw = shut, peakLook = shut;
     let turnedView = null;
     const shots = new Set();
     while (Date.now() - t0 < 2 * videoS * 1000 + 20000) {
       log = await page.evaluate(() => window.likeness.follow.log.filter((e) => e.tag === e.tagAfter));
       const f = await followState(page);
       if (f.jaw > peakJaw.jaw) peakJaw = f;
+      if (f.headLook > peakLook.headLook) peakLook = f;
       // The view while the turned head's frames are followed.
       // Screenshots of the head following two segments (a smile, the turned head).
-      for (const [name, file] of [['mouthSmileLeft', 'page_follow_face_smile.png'], ['yaw', 'page_follow_face_turn.png']])
+      for (const [name, file] of [['mouthSmileLeft', 'page_follow_face_smile.png'], ['yaw', 'page_follow_face_turn.png'],
+                                  ['eyeLookOutLeft', 'page_follow_face_gaze.png']])
         if (SHOT_DIR && !shots.has(name) && f.tag === SEGMENTS.findIndex((g) => g.name === name) + 1) {
           shots.add(name);
           await page.locator('#canvas').screenshot({ path: path.join(SHOT_DIR, file) });
@@ -201,14 +214,14 @@ async function run(s) {
     for (const [i, seg] of SEGMENTS.entries()) {
       const frames = bySegment(i + 1);
       if (seg.turn) continue;
-      const med = Object.fromEntries(SHAPES.map((k) => [k, median(frames.map((e) => e.raw[k]))]));
+      const med = Object.fromEntries(WATCHED.map((k) => [k, median(frames.map((e) => e.raw[k] || 0))]));
       const other = seg.name.endsWith('Left') ? seg.name.replace(/Left$/, 'Right') : seg.name.endsWith('Right') ? seg.name.replace(/Right$/, 'Left') : null;
-      const others = SHAPES.filter((k) => k !== seg.name && k !== other);
+      const others = WATCHED.filter((k) => k !== seg.name && k !== other);
       const ok = frames.length >= 2 && med[seg.name] > RISE && others.every((k) => med[k] < LOW) &&
                  (!other || (med[other] < LOW));
       check(`on the ${seg.name} frames ${seg.name} rises above ${RISE}` + (other ? `, ${other} (the other side) stays under ${LOW}` : '') +
             ` and the other tested shapes stay under ${LOW}`, ok,
-            `${frames.length} frames; medians: ` + SHAPES.map((k) => k + ' ' + med[k].toFixed(2)).join(', '));
+            `${frames.length} frames; medians: ` + WATCHED.map((k) => k + ' ' + med[k].toFixed(2)).join(', '));
     }
     // The head's turn: on the turned camera's frames, the measured yaw/pitch
     // have the turn's sign and about its size; the neutral frames read ~0.
@@ -222,8 +235,11 @@ async function run(s) {
             `${frames.length} frames; median yaw ${yaw.toFixed(1)}, pitch ${pitch.toFixed(1)} degrees`);
     }
     const neutralFrames = bySegment(0);
+    const neutralLook = Object.fromEntries(LOOK.map((k) => [k, median(neutralFrames.map((e) => e.m[k]))]));
+    note('follow-face: the irises\' moves from the neutral frames (over the eye-corner distance), medians per segment: ' +
+         SEGMENTS.map((g, i) => g.name + ' ' + LOOK.map((k) => k + ' ' + (median(bySegment(i + 1).map((e) => e.m[k])) - neutralLook[k]).toFixed(3)).join(' ')).join('; '));
     note('follow-face: on the neutral frames after calibration (' + neutralFrames.length + '), medians: ' +
-         SHAPES.map((k) => k + ' ' + median(neutralFrames.map((e) => e.raw[k])).toFixed(2)).join(', ') +
+         WATCHED.map((k) => k + ' ' + median(neutralFrames.map((e) => e.raw[k] || 0)).toFixed(2)).join(', ') +
          `, yaw ${median(neutralFrames.map((e) => e.head.yaw)).toFixed(1)}, pitch ${median(neutralFrames.map((e) => e.head.pitch)).toFixed(1)}`);
     // The view turned with the head: the camera moved towards the head's
     // left (cross(up, facing)) when the head turned to its right.
@@ -241,6 +257,9 @@ async function run(s) {
     check('the mouth opening in the video drives the head\'s jawOpen (smoothed) through the page\'s blend',
           peakJaw.jaw > 0.5 && peakJaw.headJaw > 0.3,
           `jawOpen from the landmarks ${peakJaw.jaw.toFixed(3)}, smoothed on the head ${peakJaw.headJaw.toFixed(3)} (its slider ${peakJaw.slider}), path ${peakJaw.path}`);
+
+    check('the left eye looking out in the video turns the head\'s left eye (eyeLookOutLeft, smoothed) through the page\'s blend',
+          peakLook.headLook > 0.5, `eyeLookOutLeft on the head ${peakLook.headLook.toFixed(3)}, path ${peakLook.path}`);
 
     await page.uncheck('#follow-face');
     await page.waitForTimeout(300);
@@ -276,5 +295,5 @@ async function run(s) {
   }
 }
 
-export const flow = { name: 'follow-face', title: 'Follow my face: the fake camera drives blinks, smiles, brows, pucker, jaw and the head\'s turn', run };
+export const flow = { name: 'follow-face', title: 'Follow my face: the fake camera drives blinks, smiles, brows, pucker, jaw, the eyes\' gaze and the head\'s turn', run };
 runAlone(import.meta.url, flow);
