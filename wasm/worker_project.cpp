@@ -108,6 +108,25 @@ val export_glb_job(int level, val parts) {
 // clips (anim/clips.h: [{name, shapes, times, values, slopes}], values and
 // slopes key-major: [k * shapes + s]: what Talk plays), lids ([[upper,
 // lower] vertex of each eye's middle rim column]), bakeMs}.
+// A clip for the page: {name, shapes, times, values, slopes} (values and
+// slopes key-major: [k * shapes + s]).
+val clip_value(const lk::WeightClip& c) {
+  val o = val::object();
+  o.set("name", c.name);
+  val names = val::array();
+  for (const std::string& n : c.shapes) names.call<void>("push", n);
+  o.set("shapes", names);
+  std::vector<double> values, slopes;
+  for (std::size_t k = 0; k < c.times.size(); ++k) {
+    values.insert(values.end(), c.value[k].begin(), c.value[k].end());
+    slopes.insert(slopes.end(), c.slope[k].begin(), c.slope[k].end());
+  }
+  o.set("times", typed_array("Float64Array", c.times));
+  o.set("values", typed_array("Float64Array", values));
+  o.set("slopes", typed_array("Float64Array", slopes));
+  return o;
+}
+
 val face_shapes_job(int level) {
   if (!kept_project()) return error_result(lk::ErrorCode::InvalidInput, "no fitted head to animate");
   lk::HeadProject& p = *kept_project();
@@ -186,22 +205,7 @@ val face_shapes_job(int level) {
     shapes.call<void>("push", shape);
   }
   val clips = val::array();
-  for (const lk::WeightClip& c : lk::weight_clips()) {
-    val o = val::object();
-    o.set("name", c.name);
-    val names = val::array();
-    for (const std::string& n : c.shapes) names.call<void>("push", n);
-    o.set("shapes", names);
-    std::vector<double> values, slopes;
-    for (std::size_t k = 0; k < c.times.size(); ++k) {
-      values.insert(values.end(), c.value[k].begin(), c.value[k].end());
-      slopes.insert(slopes.end(), c.slope[k].begin(), c.slope[k].end());
-    }
-    o.set("times", typed_array("Float64Array", c.times));
-    o.set("values", typed_array("Float64Array", values));
-    o.set("slopes", typed_array("Float64Array", slopes));
-    clips.call<void>("push", o);
-  }
+  for (const lk::WeightClip& c : lk::weight_clips()) clips.call<void>("push", clip_value(c));
   // Each eye's middle rim column, upper and lower lid vertex (control
   // vertices, which every level keeps first): the page measures the lid
   // gap with them, as the core's semantic checks do.
@@ -352,6 +356,19 @@ val load_project_job(const std::string& name, std::uintptr_t data, std::size_t s
   return r;
 }
 
+// Typed words as a clip the page's Talk plays (anim/clips.h text_clip):
+// {ok, clip, truncated}, or the reason there is nothing to say.
+val say_clip_job(std::string text) {
+  lk::WeightClip clip;
+  bool truncated = false;
+  const lk::Status st = lk::text_clip(text, clip, &truncated);
+  if (!st.ok()) return error_result(st);
+  val r = ok_result();
+  r.set("clip", clip_value(clip));
+  r.set("truncated", truncated);
+  return r;
+}
+
 }  // namespace
 }  // namespace lk_worker
 
@@ -361,5 +378,6 @@ EMSCRIPTEN_BINDINGS(likeness_worker_project) {
   emscripten::function("load_project_job", &load_project_job);
   emscripten::function("export_glb_job", &export_glb_job);
   emscripten::function("face_shapes_job", &face_shapes_job);
+  emscripten::function("say_clip_job", &say_clip_job);
   emscripten::function("expression_frame_job", &expression_frame_job);
 }

@@ -116,3 +116,111 @@ TEST_CASE("weight clips: Gaze turns both eyes to the head's left, its right, up 
   CHECK(std::abs(at(2.4, "eyeLookUpLeft") - 0.6) < 1e-12);
   for (double v : clip_weights(c, c.duration())) CHECK(v == 0.0);
 }
+
+namespace {
+
+// The viseme keys of a Say clip, in time order: at each key time the one
+// viseme at its full weight (the others 0), as "name@weight".
+std::vector<std::string> said(const WeightClip& c) {
+  std::vector<std::string> out;
+  for (std::size_t k = 0; k < c.times.size(); ++k) {
+    std::string top;
+    for (std::size_t s = 0; s < c.shapes.size(); ++s)
+      if (c.shapes[s] != "blink" && c.value[k][s] > 0.5) top += (top.empty() ? "" : "+") + c.shapes[s].substr(7);
+    if (!top.empty() && (out.empty() || out.back() != top)) out.push_back(top);
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("weight clips: Say reads typed words to visemes by their spelling, with pauses and blinks") {
+  WeightClip c;
+  REQUIRE(text_clip("papa", c).ok());
+  CHECK(c.name == "Say");
+  CHECK(said(c) == std::vector<std::string>{"PP", "aa", "PP", "aa"});
+  // Every shape it names is one of the 77 (the page and the GLB know them).
+  for (const std::string& s : c.shapes)
+    CHECK(std::find(face_shape_names().begin(), face_shape_names().end(), s) != face_shape_names().end());
+  // Keys ascending, at rest at both ends; each vowel key at weight 1, each
+  // consonant at 0.8: p a p a from 0.10 s, 80 / 120 ms apart.
+  for (std::size_t k = 1; k < c.times.size(); ++k) CHECK(c.times[k] > c.times[k - 1]);
+  for (double v : clip_weights(c, 0.0)) CHECK(v == 0.0);
+  for (double v : clip_weights(c, c.duration())) CHECK(v == 0.0);
+  auto at = [&](double t, const std::string& name) {
+    const auto i = std::find(c.shapes.begin(), c.shapes.end(), name);
+    return i == c.shapes.end() ? 0.0 : clip_weights(c, t)[static_cast<size_t>(i - c.shapes.begin())];
+  };
+  CHECK(std::abs(at(0.10, "viseme_PP") - 0.8) < 1e-12);
+  CHECK(std::abs(at(0.18, "viseme_aa") - 1.0) < 1e-12);
+  CHECK(std::abs(at(0.30, "viseme_PP") - 0.8) < 1e-12);
+  CHECK(std::abs(at(0.38, "viseme_aa") - 1.0) < 1e-12);
+  CHECK(std::abs(at(0.14, "viseme_PP") - 0.4) < 1e-12);  // half way from p to a: smoothstep's middle
+  CHECK(std::abs(at(0.14, "viseme_aa") - 0.5) < 1e-12);
+
+  // Digraphs, the silent final e of longer words, h as breath, repeated
+  // letters as one sound; case and digits do not matter.
+  REQUIRE(text_clip("The SHIP", c).ok());
+  CHECK(said(c) == std::vector<std::string>{"TH", "E", "CH", "I", "PP"});
+  REQUIRE(text_clip("nice ball 42", c).ok());
+  CHECK(said(c) == std::vector<std::string>{"nn", "I", "SS", "PP", "aa", "nn"});  // c before e reads s, ll one nn
+  REQUIRE(text_clip("cat", c).ok());
+  CHECK(said(c) == std::vector<std::string>{"kk", "aa", "DD"});
+  REQUIRE(text_clip("see food", c).ok());
+  CHECK(said(c) == std::vector<std::string>{"SS", "I", "FF", "U", "DD"});
+
+  // Punctuation holds the mouth at rest (250 ms); a space only slows the
+  // cross-fade between its words (60 ms).
+  WeightClip space, stop;
+  REQUIRE(text_clip("ma ma", space).ok());
+  REQUIRE(text_clip("ma. ma", stop).ok());
+  CHECK(std::abs(stop.duration() - space.duration() - (0.25 + 0.08 - 0.06)) < 1e-9);  // the pause, the fade out of it, not the space
+  const double into_pause = 0.10 + 0.08 + 0.12 + 0.12;  // "m" "a", then into the pause
+  for (double t : {into_pause, into_pause + 0.12}) {
+    const std::vector<double> w = clip_weights(stop, t);
+    for (size_t s = 0; s < w.size(); ++s)
+      if (stop.shapes[s] != "blink") CHECK(w[s] == 0.0);
+  }
+  CHECK(said(space) == std::vector<std::string>{"PP", "aa", "PP", "aa"});
+
+  // Blinks every 2.8 s from 0.4 s in a long text; none in one shorter than 0.6 s.
+  REQUIRE(text_clip("a", c).ok());
+  CHECK(std::find(c.shapes.begin(), c.shapes.end(), "blink") == c.shapes.end());
+  REQUIRE(text_clip("hello, nice to meet you. I am a head made from your own photographs", c).ok());
+  INFO("duration " << c.duration());
+  REQUIRE(c.duration() > 3.5);
+  const auto blink = std::find(c.shapes.begin(), c.shapes.end(), "blink");
+  REQUIRE(blink != c.shapes.end());
+  const size_t b = static_cast<size_t>(blink - c.shapes.begin());
+  CHECK(std::abs(clip_weights(c, 0.47)[b] - 1.0) < 1e-12);
+  CHECK(std::abs(clip_weights(c, 3.27)[b] - 1.0) < 1e-12);
+  CHECK(clip_weights(c, 1.5)[b] == 0.0);
+
+  // Whatever the punctuation and spacing: keys strictly ascending, weights
+  // within [0, 1] every 10 ms (the cross-fades never overshoot), at rest at both ends.
+  for (const std::string text : {"hi!!", "...a...", "a - b", "x,y", "   a   ", "Hello, World! How are you?\nFine.",
+                                  "\xc3\x9f\xc3\xbc a", "tt th ee oo ck"}) {
+    INFO(text);
+    REQUIRE(text_clip(text, c).ok());
+    for (std::size_t k = 1; k < c.times.size(); ++k) CHECK(c.times[k] > c.times[k - 1]);
+    double low = 0, high = 0;
+    for (double t = 0; t <= c.duration(); t += 0.01)
+      for (double v : clip_weights(c, t)) {
+        low = std::min(low, v);
+        high = std::max(high, v);
+      }
+    CHECK(low > -1e-12);
+    CHECK(high < 1 + 1e-12);
+    for (double v : clip_weights(c, c.duration())) CHECK(v == 0.0);
+  }
+
+  // Nothing to say: refused with a reason; a long text is cut at the limit, said.
+  const std::string msg = text_clip("123 !?", c).message;
+  CHECK(msg.find("nothing to say") != std::string::npos);
+  CHECK_FALSE(text_clip("", c).ok());
+  bool cut = false;
+  REQUIRE(text_clip(std::string(kMaxSayLetters + 50, 'a') , c, &cut).ok());
+  CHECK(cut);
+  REQUIRE(text_clip("papa", c, &cut).ok());
+  CHECK_FALSE(cut);
+}

@@ -28,13 +28,18 @@ import { runJob } from './worker_client.js';
 import { onHeadShown, showStage, view } from './head_view.js';
 import { onAnimationStop, stopAnimation } from './animation.js';
 
-// Talk plays the core's Talk clip (core/anim/clips.h: "hello, nice to
+// Talk says the words typed beside it (the worker reads them to visemes:
+// anim/clips.h text_clip), or without words plays the core's Talk clip
+// (core/anim/clips.h: "hello, nice to
 // meet you", visemes cross-fading, two blinks) and, with it, its Gaze clip
 // (the eyes to the left, the right and up; other shapes than Talk's),
 // fetched with the shapes: the same keys the exported GLB's "Talk" and
 // "Gaze" animations hold, one source for both. {shapes, times, values,
 // slopes} (values and slopes key-major).
 let talkClip = null, gazeClip = null;
+// What Talk is playing: the demo (Talk with Gaze) or the typed words' clip
+// (the worker's sayClip job, anim/clips.h text_clip), alone.
+let playing = { clip: null, gaze: null };
 
 // A clip's weights at t seconds, added into w: glTF's cubic Hermite
 // (CUBICSPLINE) between the clip's keys, as a glTF player computes the
@@ -57,8 +62,8 @@ function clipWeights(c, t, w = {}) {
 
 // The weights at t seconds into Talk alone (what the GLB's Talk plays).
 export function talkWeights(t) { return clipWeights(talkClip, t); }
-// The demo's: Talk and Gaze together.
-function demoWeights(t) { return clipWeights(gazeClip, t, clipWeights(talkClip, t)); }
+// What Talk plays at t: the demo's Talk and Gaze together, or the words.
+function demoWeights(t) { return clipWeights(playing.gaze, t, clipWeights(playing.clip, t)); }
 const clipEnd = (c) => (c ? c.times[c.times.length - 1] : 0);
 // Talk's keys where the lids are shut (blink 1): a frame that would step
 // over one draws it instead, so a slow GPU (100-200 ms a frame on
@@ -67,7 +72,7 @@ function shutKeys(c) {
   const s = c ? c.shapes.indexOf('blink') : -1;
   return s < 0 ? [] : Array.from(c.times).filter((_, k) => c.values[k * c.shapes.length + s] >= 0.999);
 }
-const talkEnd = () => Math.max(clipEnd(talkClip), clipEnd(gazeClip));
+const talkEnd = () => Math.max(clipEnd(playing.clip), clipEnd(playing.gaze));
 
 const PRESETS = [...document.querySelectorAll('#expressions [data-preset]')].map((b) => b.dataset.preset);
 function groupOf(name) {
@@ -92,6 +97,8 @@ const ex = app.expressions = {
   names: [],
   bakeMs: null,         // the worker's bake of the last level fetched
   talking: false,
+  saying: '',           // the words the last Talk said ('' : the demo phrase)
+  sayNote: '',          // what the page said about them (cut at 400 letters, nothing to say)
   talkFrames: 0,
   talkPeaks: {},        // the last Talk's largest weight per shape drawn
   talkBlinkFrame: null, // the last Talk's frame drawn with the largest blink weight: {t, weights}
@@ -199,6 +206,7 @@ function ensureShapes() {
                                                           eyes: s.eyeMatrices || null, tongue: s.tongueOffsets || null }]));
     talkClip = (r.clips || []).find((c) => c.name === 'Talk') || null;
     gazeClip = (r.clips || []).find((c) => c.name === 'Gaze') || null;
+    if (!ex.talking) playing = { clip: talkClip, gaze: gazeClip };
     const rest = new Float32Array(mesh.positions);
     const names = r.shapes.map((s) => s.name);
     baked = { fit, level, shapes, names, index: new Map(names.map((n, i) => [n, i])), rest, out: rest.slice(),
@@ -564,6 +572,22 @@ async function startTalk() {
   if (!app.fit || ex.talking) return;
   await setWeights({});
   if (!(await ensureShapes())) return;
+  // The typed words, read to visemes by the core; none: the demo phrase.
+  const words = ui.sayText.value.trim();
+  playing = { clip: talkClip, gaze: gazeClip };
+  ex.saying = words;
+  ex.sayNote = '';
+  if (words) {
+    const r = await runJob({ type: 'sayClip', text: words }, []);
+    if (ex.talking) return;  // pressed twice while the words were read
+    if (!r.ok) {
+      ex.sayNote = 'Talk: ' + r.message + '.';
+      ui.exprStats.textContent = ex.sayNote;
+      return;
+    }
+    playing = { clip: r.clip, gaze: null };
+    if (r.truncated) ex.sayNote = 'Only the first 400 letters are said.';
+  }
   const generation = ++talkGeneration;
   ex.talking = true;
   ex.talkFrames = 0;
@@ -574,7 +598,7 @@ async function startTalk() {
   ui.talk.setAttribute('aria-pressed', 'true');
   talkT0 = performance.now();
   let drawnAtUpload = -1, lastT = -1;
-  const shut0 = shutKeys(talkClip);
+  const shut0 = shutKeys(playing.clip);
   const frame = () => {
     if (!ex.talking || generation !== talkGeneration) return;
     // A pose only after the last one was drawn (a slow GPU: no blend thrown away).
@@ -592,7 +616,7 @@ async function startTalk() {
     // The frame drawn with the lids most closed (the tests pose it again).
     if ((ex.weights.blink || 0) > ((ex.talkBlinkFrame && ex.talkBlinkFrame.weights.blink) || 0)) ex.talkBlinkFrame = { t, weights: { ...ex.weights } };
     const st = ex.stats;
-    ui.exprStats.textContent = 'Talking: ' + ex.talkFrames + ' frames, per frame on level ' + baked.level + ': ' +
+    ui.exprStats.textContent = (ex.sayNote ? ex.sayNote + ' ' : '') + 'Talking: ' + ex.talkFrames + ' frames, per frame on level ' + baked.level + ': ' +
       costText(st.blendMs / st.frames, st.uploadMs / st.frames);
     requestAnimationFrame(frame);
   };
@@ -625,6 +649,13 @@ export function wireExpressions() {
     b.addEventListener('click', () => setWeights(b.dataset.preset === 'neutral' ? {} : { [b.dataset.preset]: 1 }).catch(() => {}));
   }
   ui.talk.addEventListener('click', () => (ex.talking ? stopTalk() : startTalk().catch(() => {})));
+  // Enter in the words' box says them.
+  ui.sayText.addEventListener('keydown', (e) => {
+    if (e.key !== 'Enter') return;
+    e.preventDefault();
+    if (ex.talking) stopTalk();
+    startTalk().catch(() => {});
+  });
   ui.exprGroup.addEventListener('change', buildSliders);
   ui.wireframe.addEventListener('change', () => { if (Object.keys(ex.weights).length) draw(); });
   // Opening the panel bakes the shapes (not while another job runs).
