@@ -165,13 +165,14 @@ Status part_textures(const PartTextures& files, const ProjectParts& kept, GlbExp
 // the muscle layer, at rest (avatar tools pose it), with the clips unless
 // animations is false.
 int write_glb(const char* cmd, HeadProject& p, int level, const std::string& out, const PartTextures& textures = {},
-              bool animations = true) {
+              bool animations = true, const std::string& say = {}) {
   GenericHead generic;
   Status st = load_generic_head(generic);
   if (!st) return fail(cmd, st.message);
   GlbExportOptions o;
   o.level = level;
   o.animations = animations;
+  o.say = say;
   if (st = part_textures(textures, p.parts, o); !st) return fail(cmd, st.message);
   Bytes bytes;
   GlbExportReport r;
@@ -272,7 +273,7 @@ int run_project(const Args& args) {
 // `likeness photos` folder (its head.likeness.glb) or a project file.
 int run_export_head(const Args& args) {
   const char* cmd = "export";
-  if (!only_known_options(cmd, args, {"head", "out", "level", "eye-texture", "teeth-texture", "no-animations"})) return 2;
+  if (!only_known_options(cmd, args, {"head", "out", "level", "eye-texture", "teeth-texture", "no-animations", "say"})) return 2;
   std::string head = args.get("head");
   const std::string out = args.get("out");
   if (head.empty() || out.empty())
@@ -295,14 +296,16 @@ int run_export_head(const Args& args) {
   int k = 0;
   for (auto [file, name] : {std::pair{&textures.eye, "eye.png"}, std::pair{&textures.teeth, "teeth.png"}})
     if (!kept[k++] && file->empty() && folder && ::stat((dir + name).c_str(), &info) == 0) *file = dir + name;
-  return write_glb(cmd, p, level, out, textures, !args.has("no-animations"));
+  if (args.has("say") && args.get("say").empty()) return fail(cmd, "--say needs the words, in quotes");
+  return write_glb(cmd, p, level, out, textures, !args.has("no-animations"), args.get("say"));
 }
 
 const Registrar export_reg({"export", "likeness export --head DIR|FILE.likeness.glb --out FILE.glb [--level L] "
-                            "[--eye-texture PNG] [--teeth-texture PNG] [--no-animations]",
+                            "[--eye-texture PNG] [--teeth-texture PNG] [--no-animations] [--say \"WORDS\"]",
                             "the head as a GLB for avatar tools and viewers (level L, default 2): its skin, eyes, teeth "
                             "and tongue, the 77 expressions, ARKit shapes and visemes as morph targets, a small "
-                            "skeleton, the Talk and Blink clips as glTF animations; from a likeness fit or likeness "
+                            "skeleton, the Talk, Blink and Gaze clips as glTF animations (and with --say the words "
+                            "as a Say clip, read to visemes by their spelling); from a likeness fit or likeness "
                             "photos folder or a project file. The eyes and teeth take DIR/eye.png (likeness eye --out) "
                             "and DIR/teeth.png (likeness teeth --generic-out) where they are, else the generic textures; "
                             "a project saved by the page with eye or smile photos keeps their textures, used first",

@@ -68,15 +68,20 @@ val save_project_job(val parts, val inputs) {
 
 // The kept head as a GLB at level (glb_export.h), with the generic eyes'
 // and teeth's textures unless parts gives {eyeTexture, teethTexture} (as
-// image_object makes them); the project is put at rest. Returns {ok, bytes,
-// level, vertices}.
-val export_glb_job(int level, val parts) {
+// image_object makes them) and, with words to say, their "Say" clip as
+// one more animation; the project is put at rest. Returns {ok, bytes,
+// level, vertices, animations}.
+val export_glb_job(int level, val parts, std::string say) {
   if (!kept_project()) return error_result(lk::ErrorCode::InvalidInput, "no fitted head to export");
   lk::Status generic_status;
   const lk::GenericHead* generic = generic_head(generic_status);
   if (!generic) return error_result(lk::with_context(generic_status, "generic head"));
   lk::GlbExportOptions o;
   o.level = level;
+  // Words with nothing to say (no letter) leave the Say clip out rather
+  // than the export.
+  lk::WeightClip said;
+  if (!say.empty() && lk::text_clip(say, said).ok()) o.say = say;
   lk::use_generic_part_textures(o);
   // The iris and teeth textures made from the user's eye and smile photos
   // replace the generic ones.
@@ -91,6 +96,9 @@ val export_glb_job(int level, val parts) {
   r.set("bytes", bytes_array(bytes.data(), bytes.size()));
   r.set("level", report.level);
   r.set("vertices", report.head_vertices);
+  val names = val::array();
+  for (const std::string& a : report.animations) names.call<void>("push", a);
+  r.set("animations", names);
   return r;
 }
 

@@ -353,9 +353,10 @@ const JOBS = {
   exportTextured: (msg) => core.export_textured(msg.level, String(msg.base)),
   // {}: the kept head project as a .likeness.glb file's bytes.
   saveProject: (msg) => core.save_project_job(msg.parts || {}, msg.inputs || {}),
-  // {level, parts: {eyeTexture, teethTexture}}: the head as a GLB; the parts'
-  // textures (from eye and smile photos) replace the generic ones.
-  exportGlb: (msg) => core.export_glb_job(msg.level | 0, msg.parts || {}),
+  // {level, parts: {eyeTexture, teethTexture}, say}: the head as a GLB; the
+  // parts' textures (from eye and smile photos) replace the generic ones;
+  // words to say add a "Say" animation.
+  exportGlb: (msg) => core.export_glb_job(msg.level | 0, msg.parts || {}, String(msg.say || '')),
   // {level}: the muscle layer's 77 shapes baked on the kept head at level
   // (sparse offsets in the scan frame) for the page's Expressions panel.
   faceShapes: (msg) => core.face_shapes_job(msg.level | 0),

@@ -418,10 +418,16 @@ Status export_glb(HeadProject& project, const GenericHead& generic, const GlbExp
     if (!tongue_targets.empty()) morphed.push_back({tongue_node, names_of(tongue_targets)});
   }
 
+  std::vector<WeightClip> clips;
+  if (options.animations) clips = weight_clips();
+  if (!options.say.empty()) {
+    WeightClip said;
+    if (Status s = text_clip(options.say, said); !s.ok()) return with_context(s, "the words to say");
+    clips.push_back(std::move(said));
+  }
   std::vector<std::string> animations;
-  if (options.animations)
-    for (const WeightClip& clip : weight_clips())
-      if (add_clip_animation(w, clip, morphed, turned)) animations.push_back(clip.name);
+  for (const WeightClip& clip : clips)
+    if (add_clip_animation(w, clip, morphed, turned)) animations.push_back(clip.name);
 
   tinygltf::Scene scene;
   scene.name = "Likeness head";

@@ -33,6 +33,9 @@ struct GlbExportOptions {
   // glTF animations (anim/clips.h: Talk, Blink, Gaze), for
   // viewers that only play clips (model-viewer cannot set single weights).
   bool animations = true;
+  // Words the head says, as one more animation named "Say" (anim/clips.h
+  // text_clip), with or without the others; empty: none.
+  std::string say;
 };
 
 // The generic eyeball (256 px) and teeth (512 x 256) textures the page

@@ -38,6 +38,7 @@
 #include <functional>
 #include <map>
 #include <random>
+#include <set>
 #include <sstream>
 
 using namespace lk;
@@ -1262,6 +1263,51 @@ TEST_CASE("GLB export: Talk, Blink and Gaze as glTF animations of the morph weig
   CHECK(plain.size() < bytes.size());
   INFO("animations cost " << (bytes.size() - plain.size()) << " bytes");
   CHECK(bytes.size() - plain.size() < 64 * 1024);
+}
+
+TEST_CASE("GLB export: words to say as a Say animation, playing text_clip's weights; no letter to say is refused") {
+  HeadProject p = textured_project();
+  GenericHead generic;
+  REQUIRE(load_generic_head(generic).ok());
+  GlbExportOptions o;
+  o.level = 0;
+  o.animations = false;
+  o.say = "papa";
+  Bytes bytes;
+  GlbExportReport r;
+  REQUIRE(export_glb(p, generic, o, bytes, &r).ok());
+  CHECK(r.animations == std::vector<std::string>{"Say"});
+  const tinygltf::Model m = parsed_glb(bytes);
+  REQUIRE(m.animations.size() == 1);
+  WeightClip clip;
+  REQUIRE(text_clip("papa", clip).ok());
+  std::set<std::string> on;
+  for (const tinygltf::AnimationChannel& ch : m.animations[0].channels) {
+    const tinygltf::Node& node = m.nodes.at(ch.target_node);
+    INFO(node.name);
+    on.insert(node.name);
+    REQUIRE(ch.target_path == "weights");  // no gaze: no joint turns
+    const tinygltf::AnimationSampler& s = m.animations[0].samplers.at(ch.sampler);
+    const std::vector<std::string> names = target_names_of(m.meshes.at(node.mesh));
+    const std::vector<float> times = floats_of(m, s.input, 1), out = floats_of(m, s.output, 1);
+    double worst = 0;
+    for (int ms = 0; ms <= static_cast<int>(1000 * clip.duration()); ms += 5) {
+      const std::vector<double> got = cubic_spline_at(times, out, names.size(), ms / 1000.0);
+      const std::vector<double> want = clip_weights(clip, ms / 1000.0);
+      for (size_t t = 0; t < names.size(); ++t) {
+        const auto at = std::find(clip.shapes.begin(), clip.shapes.end(), names[t]);
+        worst = std::max(worst, std::abs(got[t] - (at == clip.shapes.end() ? 0.0 : want[static_cast<size_t>(at - clip.shapes.begin())])));
+      }
+    }
+    CHECK(worst < 1e-5);
+  }
+  // The head says it; viseme_aa opens the jaw, so the lower teeth and tongue go along.
+  CHECK(on == std::set<std::string>{"HeadMesh", "LowerTeeth", "Tongue"});
+
+  o.say = "123 !?";
+  const Status refused = export_glb(p, generic, o, bytes, &r);
+  CHECK_FALSE(refused.ok());
+  CHECK(refused.message.find("nothing to say") != std::string::npos);
 }
 
 TEST_CASE("GLB export: tongueOut pushes the tongue's tip out of the mouth, the other shapes only carry it on the jaw") {

@@ -63,13 +63,16 @@ async function exportGlb() {
   try {
     // The irises and teeth from the eye and smile photos, when there are.
     const parts = { eyeTexture: app.eyePhoto ? app.eyePhoto.texture : null, teethTexture: app.smilePhoto ? app.smilePhoto.texture : null };
-    const r = await runJob({ type: 'exportGlb', level, parts }, []);
+    // The words typed beside Talk go along as a "Say" animation.
+    const say = ui.sayText.value.trim();
+    const r = await runJob({ type: 'exportGlb', level, parts, say }, []);
     if (!r.ok) { showError('Export failed: ' + r.message); return; }
     download(name, r.bytes, 'model/gltf-binary');
     const from = [app.eyePhoto ? 'the irises from ' + app.eyePhoto.name : '', app.smilePhoto ? 'the teeth from ' + app.smilePhoto.name : '']
       .filter(Boolean).join(' and ');
     setStatus('Exported ' + name + ' (level ' + r.level + ', ' + r.vertices.toLocaleString('en') + ' vertices' +
-              (app.texture ? ', textured' : '') + ', with eyes, teeth and tongue' + (from ? ', ' + from : '') + '; at rest).');
+              (app.texture ? ', textured' : '') + ', with eyes, teeth and tongue' + (from ? ', ' + from : '') +
+              '; animations ' + (r.animations || []).join(', ') + '; at rest).');
   } catch (e) {
     showError('Export failed: ' + (e && e.message ? e.message : e));
   }

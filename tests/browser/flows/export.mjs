@@ -58,8 +58,10 @@ async function run(s) {
     check('"Distance map (PLY)" downloads level 3 coloured by distance, measured vertices exactly', ok, detail);
   }
   // "Head (GLB)": the chosen level (3) for avatar tools, valid for the
-  // Khronos validator, with the parts' nodes and the clips (core/anim/clips.h).
+  // Khronos validator, with the parts' nodes and the clips (core/anim/clips.h),
+  // and the words typed beside Talk as a "Say" animation.
   {
+    await page.evaluate(() => { document.getElementById('say-text').value = 'hello there'; });
     await page.click('#btn-export-glb');
     await page.waitForFunction((n) => window.likeness.downloads.length >= n + 5, handed, { timeout: JOB_TIMEOUT_MS });
     await new Promise((r) => setTimeout(r, 500));
@@ -73,11 +75,12 @@ async function run(s) {
       const head = json.accessors[json.meshes[json.nodes[names.indexOf('HeadMesh')].mesh].primitives[0].attributes.POSITION].count;
       const clips = (json.animations || []).map((a) => a.name);
       ok = v.issues.numErrors === 0 && head === fit.levels[2] && ['Neck', 'LeftEye', 'RightEye', 'Jaw', 'Tongue'].every((n) => names.includes(n)) &&
-        clips.join(' ') === 'Talk Blink Gaze';
+        clips.join(' ') === 'Talk Blink Gaze Say';
       detail = `${glb.length} bytes; validator ${v.issues.numErrors} errors, ${v.issues.numWarnings} warnings; head ${head} vertices; nodes ${names.join(' ')}; ` +
         `animations ${clips.join(' ') || 'none'}`;
     }
-    check('"Head (GLB)" downloads level 3 with eyes, teeth and tongue and the Talk, Blink and Gaze animations, valid glTF', ok, detail);
+    check('"Head (GLB)" downloads level 3 with eyes, teeth and tongue and the Talk, Blink and Gaze animations, and Say for the words typed beside Talk, valid glTF', ok, detail);
+    await page.evaluate(() => { document.getElementById('say-text').value = ''; });
   }
   page.off('download', onDownload);
 }
