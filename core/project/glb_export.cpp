@@ -160,6 +160,29 @@ FaceControls clip_controls(const WeightClip& clip, double t) {
 // second: 0.23).
 constexpr double kTurnRate = 60.0;
 
+// Key times as an animation's input accessor (with the min and max glTF wants).
+int time_input(GltfBuilder& w, const std::vector<float>& times) {
+  const int input = w.accessor(times.data(), times.size() * 4, static_cast<int>(times.size()), TINYGLTF_COMPONENT_TYPE_FLOAT,
+                               TINYGLTF_TYPE_SCALAR, 0);
+  w.model.accessors.back().minValues = {double(times.front())};
+  w.model.accessors.back().maxValues = {double(times.back())};
+  return input;
+}
+
+// A channel of anim on node's path, its own sampler reading input and output.
+void add_channel(tinygltf::Animation& anim, int input, int output, const char* interpolation, int node, const char* path) {
+  tinygltf::AnimationSampler sampler;
+  sampler.input = input;
+  sampler.interpolation = interpolation;
+  sampler.output = output;
+  anim.samplers.push_back(sampler);
+  tinygltf::AnimationChannel channel;
+  channel.sampler = static_cast<int>(anim.samplers.size()) - 1;
+  channel.target_node = node;
+  channel.target_path = path;
+  anim.channels.push_back(channel);
+}
+
 // The joints the clip turns, as `rotation` channels (LINEAR quaternions
 // sampled at kTurnRate); their ids, into turned_out.
 void add_turn_channels(GltfBuilder& w, const WeightClip& clip, const std::vector<TurnedNode>& turned,
@@ -185,20 +208,10 @@ void add_turn_channels(GltfBuilder& w, const WeightClip& clip, const std::vector
     if (input < 0) {
       std::vector<float> times(static_cast<std::size_t>(keys));
       for (int k = 0; k < keys; ++k) times[static_cast<std::size_t>(k)] = static_cast<float>(std::min(k / kTurnRate, clip.duration()));
-      input = w.accessor(times.data(), times.size() * 4, keys, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_SCALAR, 0);
-      w.model.accessors.back().minValues = {double(times.front())};
-      w.model.accessors.back().maxValues = {double(times.back())};
+      input = time_input(w, times);
     }
-    tinygltf::AnimationSampler sampler;
-    sampler.input = input;
-    sampler.interpolation = "LINEAR";
-    sampler.output = w.accessor(q.data(), q.size() * 4, keys, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, 0);
-    anim.samplers.push_back(sampler);
-    tinygltf::AnimationChannel channel;
-    channel.sampler = static_cast<int>(anim.samplers.size()) - 1;
-    channel.target_node = n.node;
-    channel.target_path = "rotation";
-    anim.channels.push_back(channel);
+    const int output = w.accessor(q.data(), q.size() * 4, keys, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, 0);
+    add_channel(anim, input, output, "LINEAR", n.node, "rotation");
     turned_out.push_back(n.node);
   }
 }
@@ -230,13 +243,7 @@ bool add_clip_animation(GltfBuilder& w, const WeightClip& clip, const std::vecto
           any = true;
         }
     if (!any || keys < 2) continue;
-    if (input < 0) {
-      std::vector<float> times(clip.times.begin(), clip.times.end());
-      input = w.accessor(times.data(), times.size() * 4, static_cast<int>(keys), TINYGLTF_COMPONENT_TYPE_FLOAT,
-                         TINYGLTF_TYPE_SCALAR, 0);
-      w.model.accessors.back().minValues = {double(times.front())};
-      w.model.accessors.back().maxValues = {double(times.back())};
-    }
+    if (input < 0) input = time_input(w, std::vector<float>(clip.times.begin(), clip.times.end()));
     const std::size_t m = n.targets.size();
     std::vector<float> out(3 * keys * m, 0.0f);
     for (std::size_t k = 0; k < keys; ++k)
@@ -247,17 +254,9 @@ bool add_clip_animation(GltfBuilder& w, const WeightClip& clip, const std::vecto
         out[(3 * k + 1) * m + t] = static_cast<float>(clip.value[k][s]);
         out[(3 * k + 2) * m + t] = static_cast<float>(clip.slope[k][s]);  // out tangent
       }
-    tinygltf::AnimationSampler sampler;
-    sampler.input = input;
-    sampler.interpolation = "CUBICSPLINE";
-    sampler.output = w.accessor(out.data(), out.size() * 4, static_cast<int>(out.size()), TINYGLTF_COMPONENT_TYPE_FLOAT,
-                                TINYGLTF_TYPE_SCALAR, 0);
-    anim.samplers.push_back(sampler);
-    tinygltf::AnimationChannel channel;
-    channel.sampler = static_cast<int>(anim.samplers.size()) - 1;
-    channel.target_node = n.node;
-    channel.target_path = "weights";
-    anim.channels.push_back(channel);
+    const int output = w.accessor(out.data(), out.size() * 4, static_cast<int>(out.size()), TINYGLTF_COMPONENT_TYPE_FLOAT,
+                                  TINYGLTF_TYPE_SCALAR, 0);
+    add_channel(anim, input, output, "CUBICSPLINE", n.node, "weights");
   }
   if (anim.channels.empty()) return false;
   w.model.animations.push_back(anim);

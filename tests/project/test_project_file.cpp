@@ -1140,6 +1140,30 @@ std::vector<double> cubic_spline_at(const std::vector<float>& times, const std::
   return w;
 }
 
+// The largest difference, every 5 ms over the clip, between the weights
+// glTF's interpolation gives a weights channel's targets (names) and the
+// clip's for the shapes it drives (0 for the others); largest: the
+// largest weight the channel reaches.
+double worst_weight_error(const tinygltf::Model& m, const tinygltf::AnimationSampler& s, const std::vector<std::string>& names,
+                          const WeightClip& clip, double* largest = nullptr) {
+  const std::vector<float> times = floats_of(m, s.input, 1), out = floats_of(m, s.output, 1);
+  REQUIRE(times.size() == clip.times.size());
+  REQUIRE(out.size() == 3 * times.size() * names.size());
+  double worst = 0, high = 0;
+  for (int ms = 0; ms <= static_cast<int>(1000 * clip.duration()); ms += 5) {
+    const std::vector<double> got = cubic_spline_at(times, out, names.size(), ms / 1000.0);
+    const std::vector<double> want = clip_weights(clip, ms / 1000.0);
+    for (size_t t = 0; t < names.size(); ++t) {
+      const auto at = std::find(clip.shapes.begin(), clip.shapes.end(), names[t]);
+      const double w = at == clip.shapes.end() ? 0.0 : want[static_cast<size_t>(at - clip.shapes.begin())];
+      worst = std::max(worst, std::abs(got[t] - w));
+      high = std::max(high, got[t]);
+    }
+  }
+  if (largest) *largest = high;
+  return worst;
+}
+
 }  // namespace
 
 TEST_CASE("GLB export: Talk, Blink and Gaze as glTF animations of the morph weights, playing the clips' weights") {
@@ -1173,23 +1197,10 @@ TEST_CASE("GLB export: Talk, Blink and Gaze as glTF animations of the morph weig
       CHECK(ch.target_path == "weights");
       const tinygltf::AnimationSampler& s = anim.samplers.at(ch.sampler);
       CHECK(s.interpolation == "CUBICSPLINE");
-      const std::vector<std::string> names = target_names_of(m.meshes.at(node.mesh));
-      const std::vector<float> times = floats_of(m, s.input, 1), out = floats_of(m, s.output, 1);
-      REQUIRE(times.size() == clip.times.size());
-      REQUIRE(out.size() == 3 * times.size() * names.size());
       // At every 5 ms, each target's weight by glTF's interpolation is the
       // clip's for the shapes it drives and 0 for the others.
-      double worst = 0, largest = 0;
-      for (int ms = 0; ms <= static_cast<int>(1000 * clip.duration()); ms += 5) {
-        const std::vector<double> got = cubic_spline_at(times, out, names.size(), ms / 1000.0);
-        const std::vector<double> want = clip_weights(clip, ms / 1000.0);
-        for (size_t t = 0; t < names.size(); ++t) {
-          const auto at = std::find(clip.shapes.begin(), clip.shapes.end(), names[t]);
-          const double w = at == clip.shapes.end() ? 0.0 : want[static_cast<size_t>(at - clip.shapes.begin())];
-          worst = std::max(worst, std::abs(got[t] - w));
-          largest = std::max(largest, got[t]);
-        }
-      }
+      double largest = 0;
+      const double worst = worst_weight_error(m, s, target_names_of(m.meshes.at(node.mesh)), clip, &largest);
       INFO("largest weight " << largest);
       CHECK(worst < 1e-5);  // float32 keys
       CHECK(largest > 0.99);
@@ -1287,19 +1298,7 @@ TEST_CASE("GLB export: words to say as a Say animation, playing text_clip's weig
     INFO(node.name);
     on.insert(node.name);
     REQUIRE(ch.target_path == "weights");  // no gaze: no joint turns
-    const tinygltf::AnimationSampler& s = m.animations[0].samplers.at(ch.sampler);
-    const std::vector<std::string> names = target_names_of(m.meshes.at(node.mesh));
-    const std::vector<float> times = floats_of(m, s.input, 1), out = floats_of(m, s.output, 1);
-    double worst = 0;
-    for (int ms = 0; ms <= static_cast<int>(1000 * clip.duration()); ms += 5) {
-      const std::vector<double> got = cubic_spline_at(times, out, names.size(), ms / 1000.0);
-      const std::vector<double> want = clip_weights(clip, ms / 1000.0);
-      for (size_t t = 0; t < names.size(); ++t) {
-        const auto at = std::find(clip.shapes.begin(), clip.shapes.end(), names[t]);
-        worst = std::max(worst, std::abs(got[t] - (at == clip.shapes.end() ? 0.0 : want[static_cast<size_t>(at - clip.shapes.begin())])));
-      }
-    }
-    CHECK(worst < 1e-5);
+    CHECK(worst_weight_error(m, m.animations[0].samplers.at(ch.sampler), target_names_of(m.meshes.at(node.mesh)), clip) < 1e-5);
   }
   // The head says it; viseme_aa opens the jaw, so the lower teeth and tongue go along.
   CHECK(on == std::set<std::string>{"HeadMesh", "LowerTeeth", "Tongue"});
