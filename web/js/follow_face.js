@@ -67,6 +67,12 @@ const SPAN = {
   lookUp: 0.022,
 };
 const LOOK_DEAD = 0.008;
+// The iris lies in front of its eye's corners: a head turned by a yaw moves
+// it across their midpoint in the image by about LOOK_DEPTH * sin(yaw)
+// (over the eye-corner distance) with the eyes still in the head (our
+// render turned 20 degrees: the near eye 0.008, the far eye 0.023; their
+// mean over sin 20 degrees). Taken off before the gaze is read.
+const LOOK_DEPTH = 0.045;
 const BLINK_DEAD = 0.1;
 
 const sub = (a, b) => [a[0] - b[0], a[1] - b[1]];
@@ -159,8 +165,9 @@ export function faceWeights(m, n) {
       look['eyeLookUp' + suffix] = open * past(y, SPAN.lookUp);
       look['eyeLookDown' + suffix] = open * past(-y, SPAN.lookUp);
     };
-    side(blinkL, m.lookAcrossL - n.lookAcrossL, m.lookUpL - n.lookUpL, 'eyeLookOut', 'eyeLookIn', 'Left');
-    side(blinkR, m.lookAcrossR - n.lookAcrossR, m.lookUpR - n.lookUpR, 'eyeLookIn', 'eyeLookOut', 'Right');
+    const turned = LOOK_DEPTH * Math.sin((headTurn(m, n).yaw * Math.PI) / 180);
+    side(blinkL, m.lookAcrossL - n.lookAcrossL - turned, m.lookUpL - n.lookUpL, 'eyeLookOut', 'eyeLookIn', 'Left');
+    side(blinkR, m.lookAcrossR - n.lookAcrossR - turned, m.lookUpR - n.lookUpR, 'eyeLookIn', 'eyeLookOut', 'Right');
   }
   return {
     eyeBlinkLeft: blinkL,

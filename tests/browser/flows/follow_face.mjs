@@ -230,9 +230,12 @@ async function run(s) {
       const frames = bySegment(i + 1);
       const yaw = median(frames.map((e) => e.head.yaw)), pitch = median(frames.map((e) => e.head.pitch));
       const axis = seg.turn.yaw ? 'yaw' : 'pitch', want = seg.turn[axis], got = axis === 'yaw' ? yaw : pitch, cross = axis === 'yaw' ? pitch : yaw;
-      check(`on the frames of the head turned (${axis} ${want} degrees) the measured ${axis} has its sign and size (within 8 degrees), the other axis under 8`,
-            frames.length >= 2 && Math.abs(got - want) < 8 && Math.abs(cross) < 8,
-            `${frames.length} frames; median yaw ${yaw.toFixed(1)}, pitch ${pitch.toFixed(1)} degrees`);
+      // The eyes stay still in the turned head: no gaze weight's median reaches LOW.
+      const gaze = Object.fromEntries(WATCHED.filter((k) => k.startsWith('eyeLook')).map((k) => [k, median(frames.map((e) => e.raw[k] || 0))]));
+      const gazeHigh = Object.entries(gaze).filter(([, w]) => w >= 0.05).map(([k, w]) => k + ' ' + w.toFixed(2)).join(', ');
+      check(`on the frames of the head turned (${axis} ${want} degrees) the measured ${axis} has its sign and size (within 8 degrees), the other axis under 8, and no gaze reaches ${LOW}`,
+            frames.length >= 2 && Math.abs(got - want) < 8 && Math.abs(cross) < 8 && Object.values(gaze).every((w) => w < LOW),
+            `${frames.length} frames; median yaw ${yaw.toFixed(1)}, pitch ${pitch.toFixed(1)} degrees; gaze medians ${gazeHigh || 'all under 0.05'}`);
     }
     const neutralFrames = bySegment(0);
     const neutralLook = Object.fromEntries(LOOK.map((k) => [k, median(neutralFrames.map((e) => e.m[k]))]));
