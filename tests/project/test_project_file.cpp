@@ -1276,7 +1276,7 @@ TEST_CASE("GLB export: Talk, Blink and Gaze as glTF animations of the morph weig
   CHECK(bytes.size() - plain.size() < 64 * 1024);
 }
 
-TEST_CASE("GLB export: words to say as a Say animation, playing text_clip's weights; no letter to say is refused") {
+TEST_CASE("GLB export: words to say as a Say animation, playing text_clip's weights, and no letter to say refused") {
   HeadProject p = textured_project();
   GenericHead generic;
   REQUIRE(load_generic_head(generic).ok());
