@@ -71,8 +71,7 @@ async function exportGlb() {
     const from = [app.eyePhoto ? 'the irises from ' + app.eyePhoto.name : '', app.smilePhoto ? 'the teeth from ' + app.smilePhoto.name : '']
       .filter(Boolean).join(' and ');
     setStatus('Exported ' + name + ' (level ' + r.level + ', ' + r.vertices.toLocaleString('en') + ' vertices' +
-              (app.texture ? ', textured' : '') + ', with eyes, teeth and tongue' + (from ? ', ' + from : '') +
-              '; animations ' + (r.animations || []).join(', ') + '; at rest).');
+              (app.texture ? ', textured' : '') + ', with eyes, teeth and tongue' + (from ? ', ' + from : '') + '; at rest).');
   } catch (e) {
     showError('Export failed: ' + (e && e.message ? e.message : e));
   }
