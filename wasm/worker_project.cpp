@@ -70,7 +70,7 @@ val save_project_job(val parts, val inputs) {
 // and teeth's textures unless parts gives {eyeTexture, teethTexture} (as
 // image_object makes them) and, with words to say, their "Say" clip as
 // one more animation; the project is put at rest. Returns {ok, bytes,
-// level, vertices, animations}.
+// level, vertices}.
 val export_glb_job(int level, val parts, std::string say) {
   if (!kept_project()) return error_result(lk::ErrorCode::InvalidInput, "no fitted head to export");
   lk::Status generic_status;
@@ -96,26 +96,9 @@ val export_glb_job(int level, val parts, std::string say) {
   r.set("bytes", bytes_array(bytes.data(), bytes.size()));
   r.set("level", report.level);
   r.set("vertices", report.head_vertices);
-  val names = val::array();
-  for (const std::string& a : report.animations) names.call<void>("push", a);
-  r.set("animations", names);
   return r;
 }
 
-// The muscle layer's shapes (core/anim: 10 expressions, ARKit's 52, 15
-// visemes) baked on the kept head at level (put at rest first), for
-// morph-target playback: each shape's moved vertices and their offsets in
-// the scan frame, and for a shape that moves the jaw its rigid motion in the
-// scan frame (for the lower teeth and tongue; blended as I + sum w (M - I),
-// as the GLB's morph targets on the teeth blend). Returns {ok, level,
-// vertexCount, shapes: [{name, indices (Uint32Array), offsets (Float32Array,
-// 3 per index), jawMatrix? (Float32Array, 4x4 column-major), eyeMatrices?
-// ([left, right], the same, for the gaze shapes), tongueOffsets?
-// (Float32Array, 3 per vertex of the components' tongue, scan frame: its
-// push out before the jaw's motion, for the shapes with tongue out)}],
-// clips (anim/clips.h: [{name, shapes, times, values, slopes}], values and
-// slopes key-major: [k * shapes + s]: what Talk plays), lids ([[upper,
-// lower] vertex of each eye's middle rim column]), bakeMs}.
 // A clip for the page: {name, shapes, times, values, slopes} (values and
 // slopes key-major: [k * shapes + s]).
 val clip_value(const lk::WeightClip& c) {
@@ -135,6 +118,20 @@ val clip_value(const lk::WeightClip& c) {
   return o;
 }
 
+// The muscle layer's shapes (core/anim: 10 expressions, ARKit's 52, 15
+// visemes) baked on the kept head at level (put at rest first), for
+// morph-target playback: each shape's moved vertices and their offsets in
+// the scan frame, and for a shape that moves the jaw its rigid motion in the
+// scan frame (for the lower teeth and tongue; blended as I + sum w (M - I),
+// as the GLB's morph targets on the teeth blend). Returns {ok, level,
+// vertexCount, shapes: [{name, indices (Uint32Array), offsets (Float32Array,
+// 3 per index), jawMatrix? (Float32Array, 4x4 column-major), eyeMatrices?
+// ([left, right], the same, for the gaze shapes), tongueOffsets?
+// (Float32Array, 3 per vertex of the components' tongue, scan frame: its
+// push out before the jaw's motion, for the shapes with tongue out)}],
+// clips (anim/clips.h: [{name, shapes, times, values, slopes}], values and
+// slopes key-major: [k * shapes + s]: what Talk plays), lids ([[upper,
+// lower] vertex of each eye's middle rim column]), bakeMs}.
 val face_shapes_job(int level) {
   if (!kept_project()) return error_result(lk::ErrorCode::InvalidInput, "no fitted head to animate");
   lk::HeadProject& p = *kept_project();

@@ -106,8 +106,8 @@ WeightClip make_gaze() {
                                       {2.6, up}, {3.0, {}}}));
 }
 
-// The viseme a letter or digraph says (its length in letters), or "" for a
-// silent one; `word_end`: the letters left in the word from `i`.
+// The viseme the letter or digraph at w[i] says (and its length in
+// letters), or "" for a silent one.
 struct Sound {
   const char* viseme;
   int letters;
@@ -121,8 +121,7 @@ Sound sound_at(const std::string& w, std::size_t i) {
     if (w.compare(i, 2, pair) == 0) return {viseme, 2};
   const char c = w[i];
   // A final e after a consonant in a word of four letters or more is
-  // silent ("nice", "make"; not "the", "she"), and h
-  // alone is breath.
+  // silent ("nice", "make"; not "the", "she"), and h alone is breath.
   if (c == 'h' || (c == 'e' && i + 1 == w.size() && w.size() > 3 && std::string("aeiou").find(w[i - 1]) == std::string::npos))
     return {"", 1};
   switch (c) {

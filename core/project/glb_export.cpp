@@ -189,8 +189,13 @@ void add_turn_channels(GltfBuilder& w, const WeightClip& clip, const std::vector
                        tinygltf::Animation& anim, std::vector<int>& turned_out) {
   const int keys = static_cast<int>(std::lround(clip.duration() * kTurnRate)) + 1;
   if (keys < 2) return;
-  std::vector<FaceControls> controls(static_cast<std::size_t>(keys));
-  for (int k = 0; k < keys; ++k) controls[static_cast<std::size_t>(k)] = clip_controls(clip, std::min(k / kTurnRate, clip.duration()));
+  std::vector<float> times(static_cast<std::size_t>(keys));
+  std::vector<FaceControls> controls(times.size());
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    const double t = std::min(static_cast<double>(k) / kTurnRate, clip.duration());
+    times[k] = static_cast<float>(t);
+    controls[k] = clip_controls(clip, t);
+  }
   int input = -1;
   for (const TurnedNode& n : turned) {
     std::vector<float> q;
@@ -205,11 +210,7 @@ void add_turn_channels(GltfBuilder& w, const WeightClip& clip, const std::vector
       q.insert(q.end(), {float(r.x()), float(r.y()), float(r.z()), float(r.w())});
     }
     if (!moves) continue;
-    if (input < 0) {
-      std::vector<float> times(static_cast<std::size_t>(keys));
-      for (int k = 0; k < keys; ++k) times[static_cast<std::size_t>(k)] = static_cast<float>(std::min(k / kTurnRate, clip.duration()));
-      input = time_input(w, times);
-    }
+    if (input < 0) input = time_input(w, times);
     const int output = w.accessor(q.data(), q.size() * 4, keys, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, 0);
     add_channel(anim, input, output, "LINEAR", n.node, "rotation");
     turned_out.push_back(n.node);
