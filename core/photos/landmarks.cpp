@@ -1,5 +1,6 @@
 #include "photos/landmarks.h"
 
+#include "common/json_depth.h"
 #include "raycast/bvh.h"
 
 #include <nlohmann/json.hpp>
@@ -16,30 +17,11 @@ Status invalid(const std::string& field, const std::string& what) {
   return Status::error(ErrorCode::InvalidInput, field + ": " + what);
 }
 
-// Our documents nest 3 deep ({"points": [[x, y]]}); a file of 4 MB of '['
-// would make the JSON parser build millions of nested arrays first.
+// Our documents nest 3 deep ({"points": [[x, y]]}).
 constexpr int kMaxDepth = 16;
-bool nested_too_deep(const std::string& text) {
-  int depth = 0;
-  bool in_string = false, escaped = false;
-  for (char c : text) {
-    if (in_string) {
-      if (escaped) escaped = false;
-      else if (c == '\\') escaped = true;
-      else if (c == '"') in_string = false;
-    } else if (c == '"') {
-      in_string = true;
-    } else if (c == '[' || c == '{') {
-      if (++depth > kMaxDepth) return true;
-    } else if (c == ']' || c == '}') {
-      --depth;
-    }
-  }
-  return false;
-}
 
 Json parse_document(const std::string& text) {
-  if (nested_too_deep(text)) return Json(Json::value_t::discarded);
+  if (json_nested_deeper(text, kMaxDepth)) return Json(Json::value_t::discarded);
   return Json::parse(text, nullptr, /*allow_exceptions=*/false);
 }
 
