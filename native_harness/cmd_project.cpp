@@ -2,6 +2,7 @@
 // written by `likeness fit --project` or the page's "Save project") holds,
 // and its levels re-exported without fitting again.
 #include "command.h"
+#include "anim/clips.h"
 
 #include "io/io.h"
 #include "head/generic_head.h"
@@ -165,7 +166,7 @@ Status part_textures(const PartTextures& files, const ProjectParts& kept, GlbExp
 // the muscle layer, at rest (avatar tools pose it), with the clips unless
 // animations is false.
 int write_glb(const char* cmd, HeadProject& p, int level, const std::string& out, const PartTextures& textures = {},
-              bool animations = true, const std::string& say = {}) {
+              bool animations = true, const Speech& say = {}) {
   GenericHead generic;
   Status st = load_generic_head(generic);
   if (!st) return fail(cmd, st.message);
@@ -296,16 +297,28 @@ int run_export_head(const Args& args) {
   int k = 0;
   for (auto [file, name] : {std::pair{&textures.eye, "eye.png"}, std::pair{&textures.teeth, "teeth.png"}})
     if (!kept[k++] && file->empty() && folder && ::stat((dir + name).c_str(), &info) == 0) *file = dir + name;
-  if (args.has("say") && args.get("say").empty()) return fail(cmd, "--say needs the words, in quotes");
-  return write_glb(cmd, p, level, out, textures, !args.has("no-animations"), args.get("say"));
+  // The words to say come as the page's speech document (scripts/say
+  // writes it from the words with the page's own lip-sync reader).
+  Speech say;
+  if (args.has("say")) {
+    const std::string file = args.get("say");
+    Bytes bytes;
+    if (file.empty()) return fail(cmd, "--say needs a speech file: scripts/say \"WORDS\" > say.json, then --say say.json");
+    if (Status st = read_file(file, bytes, kMaxSpeechBytes); !st)
+      return fail(cmd, st.message + " (--say takes the file scripts/say \"WORDS\" writes, not the words)");
+    if (Status st = parse_speech_json(std::string(bytes.begin(), bytes.end()), say); !st) return fail(cmd, file + ": " + st.message);
+    WeightClip said;
+    if (Status st = speech_clip(say, said); !st) return fail(cmd, file + ": " + st.message);
+  }
+  return write_glb(cmd, p, level, out, textures, !args.has("no-animations"), say);
 }
 
 const Registrar export_reg({"export", "likeness export --head DIR|FILE.likeness.glb --out FILE.glb [--level L] "
-                            "[--eye-texture PNG] [--teeth-texture PNG] [--no-animations] [--say \"WORDS\"]",
+                            "[--eye-texture PNG] [--teeth-texture PNG] [--no-animations] [--say SAY.json]",
                             "the head as a GLB for avatar tools and viewers (level L, default 2): its skin, eyes, teeth "
                             "and tongue, the 77 expressions, ARKit shapes and visemes as morph targets, a small "
                             "skeleton, the Talk, Blink and Gaze clips as glTF animations (and with --say the words "
-                            "as a Say clip, read to visemes by their spelling); from a likeness fit or likeness "
+                            "as a Say clip: SAY.json is what scripts/say \"WORDS\" writes, the page's reading of them); from a likeness fit or likeness "
                             "photos folder or a project file. The eyes and teeth take DIR/eye.png (likeness eye --out) "
                             "and DIR/teeth.png (likeness teeth --generic-out) where they are, else the generic textures; "
                             "a project saved by the page with eye or smile photos keeps their textures, used first",

@@ -6,6 +6,7 @@
 
 #include "anim/bake.h"
 #include "anim/clips.h"
+#include "anim/speech.h"
 #include "anim/expression.h"
 #include "project/glb_export.h"
 #include "project/parts.h"
@@ -68,20 +69,18 @@ val save_project_job(val parts, val inputs) {
 
 // The kept head as a GLB at level (glb_export.h), with the generic eyes'
 // and teeth's textures unless parts gives {eyeTexture, teethTexture} (as
-// image_object makes them) and, with words to say, their "Say" clip as
-// one more animation; the project is put at rest. Returns {ok, bytes,
-// level, vertices}.
-val export_glb_job(int level, val parts, std::string say) {
+// image_object makes them) and, with a speech document (anim/speech.h,
+// from web/js/speech.js), its "Say" clip as one more animation; the
+// project is put at rest. Returns {ok, bytes, level, vertices}.
+val export_glb_job(int level, val parts, std::string speech) {
   if (!kept_project()) return error_result(lk::ErrorCode::InvalidInput, "no fitted head to export");
   lk::Status generic_status;
   const lk::GenericHead* generic = generic_head(generic_status);
   if (!generic) return error_result(lk::with_context(generic_status, "generic head"));
   lk::GlbExportOptions o;
   o.level = level;
-  // Words with nothing to say (no letter) leave the Say clip out rather
-  // than the export.
-  lk::WeightClip said;
-  if (!say.empty() && lk::text_clip(say, said).ok()) o.say = say;
+  if (!speech.empty())
+    if (lk::Status st = lk::parse_speech_json(speech, o.say); !st.ok()) return error_result(lk::with_context(st, "the words to say"));
   lk::use_generic_part_textures(o);
   // The iris and teeth textures made from the user's eye and smile photos
   // replace the generic ones.
@@ -361,16 +360,17 @@ val load_project_job(const std::string& name, std::uintptr_t data, std::size_t s
   return r;
 }
 
-// Typed words as a clip the page's Talk plays (anim/clips.h text_clip):
-// {ok, clip, truncated}, or the reason there is nothing to say.
-val say_clip_job(std::string text) {
+// Typed words, as the page's speech document (anim/speech.h), as a clip
+// the page's Talk plays (anim/clips.h speech_clip): {ok, clip}, or the
+// reason there is nothing to say.
+val say_clip_job(std::string speech) {
+  lk::Speech said;
   lk::WeightClip clip;
-  bool truncated = false;
-  const lk::Status st = lk::text_clip(text, clip, &truncated);
+  lk::Status st = lk::parse_speech_json(speech, said);
+  if (st) st = lk::speech_clip(said, clip);
   if (!st.ok()) return error_result(st);
   val r = ok_result();
   r.set("clip", clip_value(clip));
-  r.set("truncated", truncated);
   return r;
 }
 

@@ -1,7 +1,6 @@
 #include "anim/clips.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 
 namespace lk {
@@ -106,110 +105,40 @@ WeightClip make_gaze() {
                                       {2.6, up}, {3.0, {}}}));
 }
 
-// The viseme the letter or digraph at w[i] says (and its length in
-// letters), or "" for a silent one.
-struct Sound {
-  const char* viseme;
-  int letters;
-};
-Sound sound_at(const std::string& w, std::size_t i) {
-  static const std::pair<const char*, const char*> kDigraphs[] = {
-      {"th", "viseme_TH"}, {"ch", "viseme_CH"}, {"sh", "viseme_CH"}, {"ph", "viseme_FF"}, {"ck", "viseme_kk"},
-      {"ng", "viseme_nn"}, {"qu", "viseme_kk"}, {"wh", "viseme_U"},  {"ee", "viseme_I"},  {"ea", "viseme_I"},
-      {"oo", "viseme_U"}};
-  for (const auto& [pair, viseme] : kDigraphs)
-    if (w.compare(i, 2, pair) == 0) return {viseme, 2};
-  const char c = w[i];
-  // A final e after a consonant in a word of four letters or more is
-  // silent ("nice", "make"; not "the", "she"), and h alone is breath.
-  if (c == 'h' || (c == 'e' && i + 1 == w.size() && w.size() > 3 && std::string("aeiou").find(w[i - 1]) == std::string::npos))
-    return {"", 1};
-  switch (c) {
-    case 'a': return {"viseme_aa", 1};
-    case 'e': return {"viseme_E", 1};
-    case 'i': case 'y': return {"viseme_I", 1};
-    case 'o': return {"viseme_O", 1};
-    case 'u': case 'w': return {"viseme_U", 1};
-    case 'b': case 'm': case 'p': return {"viseme_PP", 1};
-    case 'f': case 'v': return {"viseme_FF", 1};
-    case 't': case 'd': return {"viseme_DD", 1};
-    case 'c': return {i + 1 < w.size() && std::string("eiy").find(w[i + 1]) != std::string::npos ? "viseme_SS" : "viseme_kk", 1};
-    case 'k': case 'g': case 'q': case 'x': return {"viseme_kk", 1};
-    case 's': case 'z': return {"viseme_SS", 1};
-    case 'n': case 'l': return {"viseme_nn", 1};
-    case 'r': return {"viseme_RR", 1};
-    case 'j': return {"viseme_CH", 1};
-    default: return {"", 1};
-  }
-}
-
-bool is_vowel_viseme(const std::string& v) {
-  return v == "viseme_aa" || v == "viseme_E" || v == "viseme_I" || v == "viseme_O" || v == "viseme_U";
-}
+bool is_vowel_viseme(const std::string& v) { return v == "aa" || v == "E" || v == "I" || v == "O" || v == "U"; }
 
 }  // namespace
 
-Status text_clip(const std::string& text, WeightClip& out, bool* truncated) {
-  constexpr double kVowel = 0.12, kConsonant = 0.08, kSpace = 0.06, kPause = 0.25, kBlinkEvery = 2.8;
+Status speech_clip(const Speech& speech, WeightClip& out) {
+  if (Status s = check_speech(speech); !s) return s;
+  constexpr double kBreath = 0.10, kBlinkEvery = 2.8;
   std::vector<Pose> poses = {{0.0, {}}};
-  double t = 0.10;  // the mouth starts moving after a breath
-  int letters = 0;
-  bool cut = false;
-  std::string word;
-  std::string last;  // the last key's viseme: a repeat ("ll", "ss") is one sound
-  auto say_word = [&]() {
-    for (std::size_t i = 0; i < word.size();) {
-      const Sound s = sound_at(word, i);
-      i += static_cast<std::size_t>(s.letters);
-      const std::string v = s.viseme;
-      if (v.empty() || v == last) continue;
-      const bool vowel = is_vowel_viseme(v);
-      poses.push_back({t, {{v, vowel ? 1.0 : 0.8}}});
-      t += vowel ? kVowel : kConsonant;
-      last = v;
+  // A rest key where the last one is not a rest at that time already.
+  auto rest_at = [&](double t) {
+    if (!(poses.back().second.empty() && t <= poses.back().first + 1e-9)) poses.push_back({t, {}});
+  };
+  double end = kBreath;
+  bool said = false;
+  for (std::size_t i = 0; i < speech.visemes.size(); ++i) {
+    const std::string& v = speech.visemes[i];
+    const double start = kBreath + speech.times[i] * kSpeechUnitSeconds;
+    end = start + speech.durations[i] * kSpeechUnitSeconds;
+    if (v == "sil") {
+      rest_at(start);
+      rest_at(end);
+      continue;
     }
-    word.clear();
-  };
-  // Between words the mouth goes on from one sound to the next; at a
-  // pause it rests for the pause's length.
-  auto gap = [&](double length) {
-    say_word();
-    if (poses.size() > 1 && !poses.back().second.empty()) t += length;
-  };
-  auto pause = [&](double length) {
-    say_word();
-    if (poses.size() < 2 || poses.back().second.empty()) return;
-    poses.push_back({t, {}});
-    t += length;
-    poses.push_back({t, {}});
-    t += kConsonant;  // the fade into the next sound
-    last.clear();
-  };
-  for (const char raw : text) {
-    const char c = static_cast<char>(std::tolower(static_cast<unsigned char>(raw)));
-    if (c >= 'a' && c <= 'z') {
-      if (letters == kMaxSayLetters) {
-        cut = true;
-        break;
-      }
-      ++letters;
-      word.push_back(c);
-    } else if (c == ',' || c == '.' || c == ';' || c == ':' || c == '!' || c == '?' || c == '\n') {
-      pause(kPause);
-    } else if (c == ' ' || c == '\t' || c == '-') {
-      gap(kSpace);
-    }  // anything else (digits, accents, symbols) is skipped, inside a word too
+    poses.push_back({(start + end) / 2, {{"viseme_" + v, is_vowel_viseme(v) ? 1.0 : 0.8}}});
+    said = true;
   }
-  say_word();
-  if (letters == 0 || poses.size() < 2) return Status::error(ErrorCode::InvalidInput, "there is nothing to say: type some words (letters a to z)");
-  if (!poses.back().second.empty()) poses.push_back({t, {}});
+  if (!said) return Status::error(ErrorCode::InvalidInput, "there is nothing to say: type some words");
+  rest_at(end);
   poses.push_back({poses.back().first + 0.3, {}});  // a moment at rest to end
   std::vector<std::pair<std::string, Track>> tracks = pose_tracks(poses);
   std::vector<double> starts;
   for (double b = 0.4; b + 0.2 <= poses.back().first; b += kBlinkEvery) starts.push_back(b);
   if (!starts.empty()) tracks.emplace_back("blink", blinks(starts));
   out = clip_of("Say", tracks);
-  if (truncated) *truncated = cut;
   return Status::success();
 }
 

@@ -5,6 +5,7 @@
 // the Hermite cubic glTF's CUBICSPLINE interpolation computes, so a GLB
 // channel written from these keys plays exactly what the page plays.
 #pragma once
+#include "anim/speech.h"
 #include "common/status.h"
 
 #include <string>
@@ -32,20 +33,16 @@ const WeightClip& gaze_clip();
 // The three, in that order (the GLB's animations).
 std::vector<WeightClip> weight_clips();
 
-// Typed words as a clip named "Say" (the page's Talk with words; lip sync
-// from text, not audio): letters read to visemes by English spelling, one
-// key per sound (vowels 120 ms at weight 1, consonants 80 ms at 0.8),
-// cross-fading by smoothstep as Talk does. Digraphs first (th ch sh ph ck
-// ng qu wh ee ea oo); c before e, i or y reads s; a word's final e (words
-// of 4 letters or more) and h are silent; a repeated sound is one key;
-// letters outside a-z (digits, accents) are skipped. A space adds 60 ms to
-// the cross-fade between its words; punctuation (, . ; : ! ?) or a line
-// break holds the mouth at rest for 250 ms (then 80 ms into the next
-// sound). A blink every 2.8 s from 0.4 s; at rest at both ends. At most
-// kMaxSayLetters letters are read (*truncated says so). InvalidInput when
-// no letter a-z is left to say.
-constexpr int kMaxSayLetters = 400;
-Status text_clip(const std::string& text, WeightClip& out, bool* truncated = nullptr);
+// Words to say (a speech document, anim/speech.h) as a clip named "Say"
+// (the page's Talk with words; lip sync from text, not audio): each
+// viseme a key at the middle of its time (vowels at weight 1, consonants
+// at 0.8), "sil" the mouth at rest from its start to its end, a unit
+// kSpeechUnitSeconds, after a 0.1 s breath; cross-fading by smoothstep as
+// Talk does. A blink every 2.8 s from 0.4 s; at rest at both ends, 0.3 s
+// at rest to close. InvalidInput when check_speech refuses the document or
+// it holds nothing but rest ("there is nothing to say").
+constexpr double kSpeechUnitSeconds = 0.1;
+Status speech_clip(const Speech& speech, WeightClip& out);
 
 // Each shape's weight at t (clamped to [0, duration]), in clip.shapes' order.
 std::vector<double> clip_weights(const WeightClip& clip, double t);

@@ -420,9 +420,9 @@ Status export_glb(HeadProject& project, const GenericHead& generic, const GlbExp
 
   std::vector<WeightClip> clips;
   if (options.animations) clips = weight_clips();
-  if (!options.say.empty()) {
+  if (!options.say.visemes.empty()) {
     WeightClip said;
-    if (Status s = text_clip(options.say, said); !s.ok()) return with_context(s, "the words to say");
+    if (Status s = speech_clip(options.say, said); !s.ok()) return with_context(s, "the words to say");
     clips.push_back(std::move(said));
   }
   std::vector<std::string> animations;

@@ -16,6 +16,7 @@
 // exactly the page's curves) on every mesh that has targets the clip
 // drives, except the eyeballs, which Gaze turns by their joints' rotations.
 #pragma once
+#include "anim/speech.h"
 #include "head/head_model.h"
 #include "image/image.h"
 #include "io/io.h"
@@ -34,8 +35,8 @@ struct GlbExportOptions {
   // viewers that only play clips (model-viewer cannot set single weights).
   bool animations = true;
   // Words the head says, as one more animation named "Say" (anim/clips.h
-  // text_clip), with or without the others; empty: none.
-  std::string say;
+  // speech_clip), with or without the others; no visemes: none.
+  Speech say;
 };
 
 // The generic eyeball (256 px) and teeth (512 x 256) textures the page

@@ -5,6 +5,7 @@
 // (segment by segment), spelled here independently of clips.cpp.
 #include "anim/clips.h"
 #include "anim/face_shapes.h"
+#include "anim/speech.h"
 
 #include <catch2/catch.hpp>
 
@@ -132,76 +133,81 @@ std::vector<std::string> said(const WeightClip& c) {
   return out;
 }
 
+// A speech document as TalkingHead's lipsync-en writes it (web/js/speech.js):
+// visemes at times and durations in its units.
+Speech speech(std::vector<std::string> visemes, std::vector<double> times, std::vector<double> durations) {
+  Speech s;
+  s.visemes = std::move(visemes);
+  s.times = std::move(times);
+  s.durations = std::move(durations);
+  return s;
+}
+
+double weight_of(const WeightClip& c, double t, const std::string& name) {
+  const auto i = std::find(c.shapes.begin(), c.shapes.end(), name);
+  return i == c.shapes.end() ? 0.0 : clip_weights(c, t)[static_cast<size_t>(i - c.shapes.begin())];
+}
+
 }  // namespace
 
-TEST_CASE("weight clips: Say reads typed words to visemes by their spelling, with pauses and blinks") {
+TEST_CASE("weight clips: Say plays a speech document's visemes at their middles, rests at sil, blinks") {
+  // "papa" as lipsync-en reads it: PP aa PP aa.
+  const double u = kSpeechUnitSeconds;
   WeightClip c;
-  REQUIRE(text_clip("papa", c).ok());
+  REQUIRE(speech_clip(speech({"PP", "aa", "PP", "aa"}, {0, 1.08, 2.03, 3.11}, {1.08, 0.95, 1.08, 0.95}), c).ok());
   CHECK(c.name == "Say");
   CHECK(said(c) == std::vector<std::string>{"PP", "aa", "PP", "aa"});
   // Every shape it names is one of the 77 (the page and the GLB know them).
   for (const std::string& s : c.shapes)
     CHECK(std::find(face_shape_names().begin(), face_shape_names().end(), s) != face_shape_names().end());
-  // Keys ascending, at rest at both ends; each vowel key at weight 1, each
-  // consonant at 0.8: p a p a from 0.10 s, 80 / 120 ms apart.
+  // Keys ascending, at rest at both ends; each viseme at its middle after
+  // a 0.1 s breath, vowels at weight 1, consonants at 0.8; half way
+  // between two middles, smoothstep's middle.
   for (std::size_t k = 1; k < c.times.size(); ++k) CHECK(c.times[k] > c.times[k - 1]);
   for (double v : clip_weights(c, 0.0)) CHECK(v == 0.0);
   for (double v : clip_weights(c, c.duration())) CHECK(v == 0.0);
-  auto at = [&](double t, const std::string& name) {
-    const auto i = std::find(c.shapes.begin(), c.shapes.end(), name);
-    return i == c.shapes.end() ? 0.0 : clip_weights(c, t)[static_cast<size_t>(i - c.shapes.begin())];
-  };
-  CHECK(std::abs(at(0.10, "viseme_PP") - 0.8) < 1e-12);
-  CHECK(std::abs(at(0.18, "viseme_aa") - 1.0) < 1e-12);
-  CHECK(std::abs(at(0.30, "viseme_PP") - 0.8) < 1e-12);
-  CHECK(std::abs(at(0.38, "viseme_aa") - 1.0) < 1e-12);
-  CHECK(std::abs(at(0.14, "viseme_PP") - 0.4) < 1e-12);  // half way from p to a: smoothstep's middle
-  CHECK(std::abs(at(0.14, "viseme_aa") - 0.5) < 1e-12);
+  const double p1 = 0.1 + 0.54 * u, a1 = 0.1 + (1.08 + 0.475) * u, p2 = 0.1 + (2.03 + 0.54) * u, a2 = 0.1 + (3.11 + 0.475) * u;
+  CHECK(std::abs(weight_of(c, p1, "viseme_PP") - 0.8) < 1e-12);
+  CHECK(std::abs(weight_of(c, a1, "viseme_aa") - 1.0) < 1e-12);
+  CHECK(std::abs(weight_of(c, p2, "viseme_PP") - 0.8) < 1e-12);
+  CHECK(std::abs(weight_of(c, a2, "viseme_aa") - 1.0) < 1e-12);
+  CHECK(std::abs(weight_of(c, (p1 + a1) / 2, "viseme_PP") - 0.4) < 1e-12);
+  CHECK(std::abs(weight_of(c, (p1 + a1) / 2, "viseme_aa") - 0.5) < 1e-12);
+  // The mouth is at rest again where the last viseme ends, 0.3 s before the clip does.
+  const double end = 0.1 + (3.11 + 0.95) * u;
+  for (const char* v : {"viseme_PP", "viseme_aa"}) CHECK(weight_of(c, end, v) == 0.0);
+  CHECK(std::abs(c.duration() - (end + 0.3)) < 1e-12);
 
-  // Digraphs, the silent final e of longer words, h as breath, repeated
-  // letters as one sound; case and digits do not matter.
-  REQUIRE(text_clip("The SHIP", c).ok());
-  CHECK(said(c) == std::vector<std::string>{"TH", "E", "CH", "I", "PP"});
-  REQUIRE(text_clip("nice ball 42", c).ok());
-  CHECK(said(c) == std::vector<std::string>{"nn", "I", "SS", "PP", "aa", "nn"});  // c before e reads s, ll one nn
-  REQUIRE(text_clip("cat", c).ok());
-  CHECK(said(c) == std::vector<std::string>{"kk", "aa", "DD"});
-  REQUIRE(text_clip("see food", c).ok());
-  CHECK(said(c) == std::vector<std::string>{"SS", "I", "FF", "U", "DD"});
-
-  // Punctuation holds the mouth at rest (250 ms); a space only slows the
-  // cross-fade between its words (60 ms).
-  WeightClip space, stop;
-  REQUIRE(text_clip("ma ma", space).ok());
-  REQUIRE(text_clip("ma. ma", stop).ok());
-  CHECK(std::abs(stop.duration() - space.duration() - (0.25 + 0.08 - 0.06)) < 1e-9);  // the pause, the fade out of it, not the space
-  const double into_pause = 0.10 + 0.08 + 0.12 + 0.12;  // "m" "a", then into the pause
-  for (double t : {into_pause, into_pause + 0.12}) {
-    const std::vector<double> w = clip_weights(stop, t);
-    for (size_t s = 0; s < w.size(); ++s)
-      if (stop.shapes[s] != "blink") CHECK(w[s] == 0.0);
+  // "sil" (a pause between phrases) holds the mouth at rest from its start to its end.
+  REQUIRE(speech_clip(speech({"PP", "aa", "sil", "PP", "aa"}, {0, 1, 2, 4.5, 5.5}, {1, 1, 2.5, 1, 1}), c).ok());
+  for (int k = 0; k <= 25; ++k) {
+    const double t = 0.1 + (2 + 0.1 * k) * u;
+    for (size_t s = 0; s < c.shapes.size(); ++s)
+      if (c.shapes[s] != "blink") CHECK(std::abs(clip_weights(c, t)[s]) < 1e-12);
   }
-  CHECK(said(space) == std::vector<std::string>{"PP", "aa", "PP", "aa"});
+  CHECK(std::abs(weight_of(c, 0.1 + 5 * u, "viseme_PP") - 0.8) < 1e-12);
 
-  // Blinks every 2.8 s from 0.4 s in a long text; none in one shorter than 0.6 s.
-  REQUIRE(text_clip("a", c).ok());
+  // Blinks every 2.8 s from 0.4 s in a long speech (closed 70 ms in); none in one shorter than 0.6 s.
+  REQUIRE(speech_clip(speech({"aa"}, {0}, {1}), c).ok());
   CHECK(std::find(c.shapes.begin(), c.shapes.end(), "blink") == c.shapes.end());
-  REQUIRE(text_clip("hello, nice to meet you. I am a head made from your own photographs", c).ok());
-  INFO("duration " << c.duration());
+  Speech long_one;
+  for (int i = 0; i < 40; ++i) {
+    long_one.visemes.push_back(i % 2 ? "aa" : "nn");
+    long_one.times.push_back(i);
+    long_one.durations.push_back(1);
+  }
+  REQUIRE(speech_clip(long_one, c).ok());
   REQUIRE(c.duration() > 3.5);
-  const auto blink = std::find(c.shapes.begin(), c.shapes.end(), "blink");
-  REQUIRE(blink != c.shapes.end());
-  const size_t b = static_cast<size_t>(blink - c.shapes.begin());
-  CHECK(std::abs(clip_weights(c, 0.47)[b] - 1.0) < 1e-12);
-  CHECK(std::abs(clip_weights(c, 3.27)[b] - 1.0) < 1e-12);
-  CHECK(clip_weights(c, 1.5)[b] == 0.0);
+  CHECK(std::abs(weight_of(c, 0.47, "blink") - 1.0) < 1e-12);
+  CHECK(std::abs(weight_of(c, 3.27, "blink") - 1.0) < 1e-12);
+  CHECK(weight_of(c, 1.5, "blink") == 0.0);
 
-  // Whatever the punctuation and spacing: keys strictly ascending, weights
-  // within [0, 1] every 10 ms (the cross-fades never overshoot), at rest at both ends.
-  for (const std::string text : {"hi!!", "...a...", "a - b", "x,y", "   a   ", "Hello, World! How are you?\nFine.",
-                                  "\xc3\x9f\xc3\xbc a", "tt th ee oo ck"}) {
-    INFO(text);
-    REQUIRE(text_clip(text, c).ok());
+  // Touching, spaced and repeated visemes, pauses anywhere: keys strictly
+  // ascending, weights within [0, 1] every 10 ms, at rest at both ends.
+  for (const Speech& s : {speech({"sil", "aa", "sil", "sil", "E"}, {0, 2.5, 3.5, 6, 9}, {2.5, 1, 2.5, 3, 0.01}),
+                          speech({"aa", "aa", "aa"}, {0, 1, 5}, {1, 0.02, 1}),
+                          speech({"O", "U", "sil"}, {0, 0.5, 0.6}, {0.5, 0.1, 2.5})}) {
+    REQUIRE(speech_clip(s, c).ok());
     for (std::size_t k = 1; k < c.times.size(); ++k) CHECK(c.times[k] > c.times[k - 1]);
     double low = 0, high = 0;
     for (double t = 0; t <= c.duration(); t += 0.01)
@@ -214,13 +220,47 @@ TEST_CASE("weight clips: Say reads typed words to visemes by their spelling, wit
     for (double v : clip_weights(c, c.duration())) CHECK(v == 0.0);
   }
 
-  // Nothing to say: refused with a reason; a long text is cut at the limit, said.
-  const std::string msg = text_clip("123 !?", c).message;
-  CHECK(msg.find("nothing to say") != std::string::npos);
-  CHECK_FALSE(text_clip("", c).ok());
-  bool cut = false;
-  REQUIRE(text_clip(std::string(kMaxSayLetters + 50, 'a') , c, &cut).ok());
-  CHECK(cut);
-  REQUIRE(text_clip("papa", c, &cut).ok());
-  CHECK_FALSE(cut);
+  // Nothing to say (no viseme, or rests only): refused with a reason; so is a document check_speech refuses.
+  CHECK(speech_clip(speech({}, {}, {}), c).message.find("nothing to say") != std::string::npos);
+  CHECK(speech_clip(speech({"sil"}, {0}, {2.5}), c).message.find("nothing to say") != std::string::npos);
+  CHECK(speech_clip(speech({"aa", "zz"}, {0, 1}, {1, 1}), c).code == ErrorCode::InvalidInput);
+}
+
+TEST_CASE("speech documents: read as written, refused with the field and why") {
+  Speech s;
+  const std::string ok = R"({"format": "likeness-speech", "version": 1, "lipsync": "x", "text": "papa",
+    "visemes": ["PP", "aa", "PP", "aa"], "times": [0, 1.08, 2.03, 3.11], "durations": [1.08, 0.95, 1.08, 0.95]})";
+  REQUIRE(parse_speech_json(ok, s).ok());
+  CHECK(s.text == "papa");
+  CHECK(s.visemes == std::vector<std::string>{"PP", "aa", "PP", "aa"});
+  CHECK(s.times == std::vector<double>{0, 1.08, 2.03, 3.11});
+  CHECK(s.durations == std::vector<double>{1.08, 0.95, 1.08, 0.95});
+
+  auto refused = [&](const std::string& text) {
+    const Status st = parse_speech_json(text, s);
+    CHECK_FALSE(st.ok());
+    CHECK(s.visemes.empty());
+    return st.message;
+  };
+  auto doc = [](const std::string& visemes, const std::string& times, const std::string& durations) {
+    return R"({"format": "likeness-speech", "version": 1, "visemes": )" + visemes + R"(, "times": )" + times +
+           R"(, "durations": )" + durations + "}";
+  };
+  CHECK(refused("hello").find("not valid JSON") != std::string::npos);
+  CHECK(refused("[1, 2]").find("not a JSON object") != std::string::npos);
+  CHECK(refused(R"({"format": "likeness-landmarks", "version": 1})").find("format") != std::string::npos);
+  CHECK(refused(R"({"format": "likeness-speech", "version": 2})").find("version") != std::string::npos);
+  CHECK(refused(doc(R"(["PP", "viseme_aa"])", "[0, 1]", "[1, 1]")).find("visemes[1]") != std::string::npos);
+  CHECK(refused(doc(R"(["PP", 3])", "[0, 1]", "[1, 1]")).find("visemes") != std::string::npos);
+  CHECK(refused(doc(R"(["PP", "aa"])", "[0]", "[1, 1]")).find("one entry per viseme") != std::string::npos);
+  CHECK(refused(doc(R"(["PP", "aa"])", "[0, 0.5]", "[1, 1]")).find("before the viseme before it ends") != std::string::npos);
+  CHECK(refused(doc(R"(["PP", "aa"])", "[0, -1]", "[1, 1]")).find("times[1]") != std::string::npos);
+  CHECK(refused(doc(R"(["PP"])", "[0]", "[0]")).find("durations[0]") != std::string::npos);
+  CHECK(refused(doc(R"(["PP"])", "[0]", R"(["1"])")).find("durations") != std::string::npos);
+  CHECK(refused(doc(R"(["PP"])", "[5999.5]", "[1]")).find("units") != std::string::npos);
+  CHECK(refused(std::string(kMaxSpeechBytes + 1, ' ')).find("at most") != std::string::npos);
+  CHECK(refused(std::string(100000, '[')).find("not valid JSON") != std::string::npos);
+  std::string many = "[";
+  for (std::size_t i = 0; i <= kMaxSpeechVisemes; ++i) many += i ? ", \"aa\"" : "\"aa\"";
+  CHECK(refused(doc(many + "]", "[]", "[]")).find("at most") != std::string::npos);
 }

@@ -1276,14 +1276,17 @@ TEST_CASE("GLB export: Talk, Blink and Gaze as glTF animations of the morph weig
   CHECK(bytes.size() - plain.size() < 64 * 1024);
 }
 
-TEST_CASE("GLB export: words to say as a Say animation, playing text_clip's weights, and no letter to say refused") {
+TEST_CASE("GLB export: words to say as a Say animation, playing speech_clip's weights, and nothing to say refused") {
   HeadProject p = textured_project();
   GenericHead generic;
   REQUIRE(load_generic_head(generic).ok());
   GlbExportOptions o;
   o.level = 0;
   o.animations = false;
-  o.say = "papa";
+  // "papa" as the page's lip-sync reader writes it (web/js/speech.js).
+  o.say.visemes = {"PP", "aa", "PP", "aa"};
+  o.say.times = {0, 1.08, 2.03, 3.11};
+  o.say.durations = {1.08, 0.95, 1.08, 0.95};
   Bytes bytes;
   GlbExportReport r;
   REQUIRE(export_glb(p, generic, o, bytes, &r).ok());
@@ -1291,7 +1294,7 @@ TEST_CASE("GLB export: words to say as a Say animation, playing text_clip's weig
   const tinygltf::Model m = parsed_glb(bytes);
   REQUIRE(m.animations.size() == 1);
   WeightClip clip;
-  REQUIRE(text_clip("papa", clip).ok());
+  REQUIRE(speech_clip(o.say, clip).ok());
   std::set<std::string> on;
   for (const tinygltf::AnimationChannel& ch : m.animations[0].channels) {
     const tinygltf::Node& node = m.nodes.at(ch.target_node);
@@ -1303,7 +1306,9 @@ TEST_CASE("GLB export: words to say as a Say animation, playing text_clip's weig
   // The head says it; viseme_aa opens the jaw, so the lower teeth and tongue go along.
   CHECK(on == std::set<std::string>{"HeadMesh", "LowerTeeth", "Tongue"});
 
-  o.say = "123 !?";
+  o.say.visemes = {"sil"};  // a pause alone
+  o.say.times = {0};
+  o.say.durations = {2.5};
   const Status refused = export_glb(p, generic, o, bytes, &r);
   CHECK_FALSE(refused.ok());
   CHECK(refused.message.find("nothing to say") != std::string::npos);
