@@ -361,7 +361,7 @@ const JOBS = {
   // (sparse offsets in the scan frame) for the page's Expressions panel.
   faceShapes: (msg) => core.face_shapes_job(msg.level | 0),
   // {text}: typed words as a clip for Talk ({clip, truncated}), or why not.
-  sayClip: (msg) => core.say_clip_job(String(msg.text || '')),
+  sayClip: (msg) => core.say_clip_job(String(msg.speech || '')),
   // {weights: {name: w}, level}: one frame of the live muscle path (the
   // head posed by the muscle layer and the local update, read, put back at
   // rest): {positions, poseMs, restMs, changed}.

@@ -4,6 +4,7 @@
 import { app, ui, setStatus, showError } from './state.js';
 import { runJob } from './worker_client.js';
 import { distanceMap } from './checks.js';
+import { pageSpeech } from './speech.js';
 
 export function download(name, bytes, mime) {
   const url = URL.createObjectURL(new Blob([bytes], { type: mime }));
@@ -63,8 +64,11 @@ async function exportGlb() {
   try {
     // The irises and teeth from the eye and smile photos, when there are.
     const parts = { eyeTexture: app.eyePhoto ? app.eyePhoto.texture : null, teethTexture: app.smilePhoto ? app.smilePhoto.texture : null };
-    // The words typed beside Talk go along as a "Say" animation.
-    const say = ui.sayText.value.trim();
+    // The words typed beside Talk go along as a "Say" animation (none
+    // when nothing in them can be said).
+    const words = ui.sayText.value.trim();
+    const speech = words ? await pageSpeech(words) : null;
+    const say = speech && !speech.error && speech.visemes.length ? JSON.stringify(speech) : '';
     const r = await runJob({ type: 'exportGlb', level, parts, say }, []);
     if (!r.ok) { showError('Export failed: ' + r.message); return; }
     download(name, r.bytes, 'model/gltf-binary');

@@ -27,9 +27,11 @@ import { app, page, ui, showError } from './state.js';
 import { runJob } from './worker_client.js';
 import { onHeadShown, showStage, view } from './head_view.js';
 import { onAnimationStop, stopAnimation } from './animation.js';
+import { pageSpeech } from './speech.js';
 
-// Talk says the words typed beside it (the worker reads them to visemes:
-// anim/clips.h text_clip), or without words plays the core's Talk clip
+// Talk says the words typed beside it (read to visemes by TalkingHead's
+// lip-sync, speech.js; the worker makes the clip: anim/clips.h
+// speech_clip), or without words plays the core's Talk clip
 // (core/anim/clips.h: "hello, nice to
 // meet you", visemes cross-fading, two blinks) and, with it, its Gaze clip
 // (the eyes to the left, the right and up; other shapes than Talk's),
@@ -38,7 +40,7 @@ import { onAnimationStop, stopAnimation } from './animation.js';
 // slopes} (values and slopes key-major).
 let talkClip = null, gazeClip = null;
 // What Talk is playing: the demo (Talk with Gaze) or the typed words' clip
-// (the worker's sayClip job, anim/clips.h text_clip), alone.
+// (the worker's sayClip job, anim/clips.h speech_clip), alone.
 let playing = { clip: null, gaze: null };
 
 // A clip's weights at t seconds, added into w: glTF's cubic Hermite
@@ -125,6 +127,7 @@ const ex = app.expressions = {
   talkWeights: (t) => talkWeights(t),
   demoWeights: (t) => demoWeights(t),
   get talkSeconds() { return talkEnd(); },
+  get talkKeys() { return playing.clip ? Array.from(playing.clip.times) : []; },  // the clip Talk plays: its key times (s)
   tonguePositions: null,  // the tongue component's last positions on the CPU path (scan frame, before the jaw's matrix)
   // The same computed on demand, whichever path draws (tests, the console).
   tongueBlend: () => {
@@ -578,7 +581,10 @@ async function startTalk() {
   ex.saying = words;
   ex.sayNote = '';
   if (words) {
-    const r = await runJob({ type: 'sayClip', text: words }, []);
+    const speech = await pageSpeech(words);
+    const r = speech.error ? { ok: false, message: speech.error }
+      : !speech.visemes.length ? { ok: false, message: 'there is nothing to say in those words' }
+      : await runJob({ type: 'sayClip', speech: JSON.stringify(speech) }, []);
     if (ex.talking) return;  // pressed twice while the words were read
     if (!r.ok) {
       ex.sayNote = 'Talk: ' + r.message + '.';
@@ -586,7 +592,7 @@ async function startTalk() {
       return;
     }
     playing = { clip: r.clip, gaze: null };
-    if (r.truncated) ex.sayNote = 'Only the first 400 letters are said.';
+    if (speech.truncated) ex.sayNote = `Only the first ${speech.text.length} characters are said.`;
   }
   const generation = ++talkGeneration;
   ex.talking = true;

@@ -1,0 +1,56 @@
+// Typed words as visemes (issue 38): the speech document the core's Say
+// clip is made from (core/anim/speech.h). The reading is TalkingHead's
+// lip-sync for English (npm @met4citizen/talkinghead, lipsync-en.mjs, MIT):
+// numbers and symbols to words, then the letter-to-sound rules of NRL
+// Report 7948 to Oculus visemes with times and lengths in its own units
+// (1 is an average sound). The text is cut into phrases at punctuation and
+// line breaks; each phrase is read alone and the phrases are joined by a
+// pause ("sil", PAUSE units), where the mouth rests. The page and
+// scripts/say (for likeness export --say) both call speechOf, so the same
+// words give the same document. No DOM and no static import: speechOf is handed
+// the lipsync-en reader (pageSpeech: the page's, from its own origin).
+
+export const MAX_SAY_CHARS = 400;
+export const PAUSE = 2.5;
+const LIPSYNC = '@met4citizen/talkinghead 1.7.0 lipsync-en';
+
+// {format, version, lipsync, text, visemes, times, durations, truncated}
+// for text (at most MAX_SAY_CHARS characters are read); visemes is empty
+// when nothing in it can be said.
+export function speechOf(lipsync, text) {
+  const all = String(text);
+  const said = all.slice(0, MAX_SAY_CHARS);
+  const doc = { format: 'likeness-speech', version: 1, lipsync: LIPSYNC, text: said, visemes: [], times: [], durations: [],
+                truncated: all.length > said.length };
+  let t = 0;
+  for (const phrase of said.split(/[,.;:!?\n\r]+/)) {
+    const words = lipsync.preProcessText(phrase);
+    if (!words) continue;
+    const o = lipsync.wordsToVisemes(words);
+    if (!o.visemes.length) continue;
+    if (doc.visemes.length) {
+      doc.visemes.push('sil'); doc.times.push(t); doc.durations.push(PAUSE);
+      t += PAUSE;
+    }
+    for (let i = 0; i < o.visemes.length; i++) {
+      doc.visemes.push(o.visemes[i]); doc.times.push(t + o.times[i]); doc.durations.push(o.durations[i]);
+    }
+    t += o.times[o.times.length - 1] + o.durations[o.durations.length - 1];
+  }
+  return doc;
+}
+
+// The page's reader, loaded from its own origin (build/web/vendor/) the
+// first time words are said; a missing one is said, not thrown.
+let pageReader = null;
+export async function pageSpeech(text) {
+  if (!pageReader) {
+    try {
+      const { LipsyncEn } = await import('../vendor/talkinghead/lipsync-en.mjs');
+      pageReader = new LipsyncEn();
+    } catch (e) {
+      return { error: 'the lip-sync reader (vendor/talkinghead) did not load: ' + (e && e.message ? e.message : e) };
+    }
+  }
+  return speechOf(pageReader, text);
+}
