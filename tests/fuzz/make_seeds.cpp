@@ -220,6 +220,13 @@ int main(int argc, char** argv) {
   put("landmarks", "view_00.json", landmarks_to_json(photo));
   put("landmarks", "map.json", landmark_map_to_json(map));
 
+  // A speech document as scripts/say writes it ("Hello, nice to meet you.").
+  put("speech", "hello.json",
+      R"({"format":"likeness-speech","version":1,"lipsync":"@met4citizen/talkinghead 1.7.0 lipsync-en",)"
+      R"("text":"Hello, nice to meet you.","visemes":["I","E","nn","O","sil","nn","aa","SS","DD","U","PP","I","DD","I","U"],)"
+      R"("times":[0,0.92,1.82,2.7,3.66,6.16,7.04,7.99,10.22,11.27,13.22,14.3,15.22,17.27,18.19],)"
+      R"("durations":[0.92,0.9,0.88,0.96,2.5,0.88,0.95,1.23,1.05,0.95,1.08,0.92,1.05,0.92,0.95]})");
+
   if (g_failures) {
     std::fprintf(stderr, "make_seeds: %d files could not be written under %s\n", g_failures, g_out.c_str());
     return 1;
