@@ -46,7 +46,7 @@ let pageReader = null;
 export async function pageSpeech(text) {
   if (!pageReader) {
     try {
-      const { LipsyncEn } = await import('../vendor/talkinghead/lipsync-en.mjs');
+      const { LipsyncEn } = await import('../vendor/talkinghead/modules/lipsync-en.mjs');
       pageReader = new LipsyncEn();
     } catch (e) {
       return { error: 'the lip-sync reader (vendor/talkinghead) did not load: ' + (e && e.message ? e.message : e) };
