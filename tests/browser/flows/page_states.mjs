@@ -50,6 +50,26 @@ async function run(s) {
                                                     files: !document.getElementById('file-input').disabled }));
   check('... then "Try the sample" loads the sample and the page is usable (not stuck in "working")',
         afterSample.state === 'done' && afterSample.model === 'sample_scan.ply' && afterSample.files, JSON.stringify(afterSample));
+  // A status message that wraps to a second line leaves the view's size as it was.
+  const wrap = await fresh.evaluate(async () => {
+    const status = document.getElementById('status'), canvas = document.getElementById('canvas'), was = status.textContent;
+    const frame = () => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r)));
+    const lines = () => Math.round(status.getBoundingClientRect().height / parseFloat(getComputedStyle(status).lineHeight) * 10) / 10;
+    const one = { view: canvas.getBoundingClientRect().height, text: lines() };
+    let long = was;
+    // Grow the message until it takes two lines (its own words, repeated).
+    status.style.minHeight = '0';
+    while (lines() < 2 && long.length < 2000) { long += ' ' + was; status.textContent = long; }
+    const twoLines = lines();
+    status.style.minHeight = '';
+    await frame();
+    const two = { view: canvas.getBoundingClientRect().height, text: twoLines };
+    status.textContent = was;
+    await frame();
+    return { one, two };
+  });
+  check('a status message of two lines leaves the view its size', wrap.two.text === 2 && Math.abs(wrap.two.view - wrap.one.view) < 0.5,
+        JSON.stringify(wrap));
   await fresh.setInputFiles('#file-input', { name: 'notes.ply', mimeType: 'application/octet-stream', buffer: NOT_A_SCAN });
   await settled(fresh);
   await fresh.click('#error-dismiss');
