@@ -15,6 +15,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <map>
+
 #include <cmath>
 #include <fstream>
 #include <iostream>
@@ -64,8 +66,17 @@ int run_render(const Args& args) {
   int columns = 0;
   if (!args.get_int("columns", static_cast<int>(names.size()), columns, 1, 64)) return 2;
   if (posing) {
-    for (std::size_t i = 0; i < names.size(); ++i)
-      if (Status st = face_shape(names[i], faces[i]); !st) return usage_error(st.message + " (see docs/design/muscles.md)");
+    // A tile's names joined by '+' are posed together, each at full weight.
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      std::map<std::string, double> weights;
+      for (std::size_t at = 0; at <= names[i].size();) {
+        const std::size_t plus = std::min(names[i].find('+', at), names[i].size());
+        weights[names[i].substr(at, plus - at)] = 1.0;
+        at = plus + 1;
+      }
+      if (Status st = face_controls_from_weights(weights, faces[i]); !st)
+        return usage_error(st.message + " (see docs/design/muscles.md)");
+    }
     if (args.has("points") || args.has("texture")) return usage_error("--expression draws a head alone: no --points or --texture");
     if (args.has("project") && args.has("mesh")) return usage_error("give --project or --mesh, not both");
   }
@@ -281,7 +292,7 @@ Registrar reg({"render",
                "likeness render --mesh FILE [--points FILE] [--texture PNG] [--wireframe | --edges-only] "
                "[--view front|left|right|back|top|three-quarter] [--size N] [--point-size PX] "
                "[--flat] [--supersample 1..4] [--no-ao] [--yaw DEG --pitch DEG] [--camera-out FILE.json] --out PNG | "
-               "likeness render --expression NAME[,NAME...] [--columns C] [--face] [--project FILE | --mesh FILE] [--level L] [--lid-seal RIM,CORNER] [--view ...] --out PNG",
+               "likeness render --expression NAME[+NAME...][,NAME...] [--columns C] [--face] [--project FILE | --mesh FILE] [--level L] [--lid-seal RIM,CORNER] [--view ...] --out PNG",
                "draws a mesh (with baked ambient occlusion) and/or point cloud from a canonical view into a PNG "
                "(OSMesa, same shaders as the web app); --yaw/--pitch turn the camera, --camera-out writes its matrices",
                run_render});
