@@ -15,7 +15,8 @@
 // the face's middle, the mouth's width, the inner and outer brows' heights
 // above the eyes, the nose tip's place across and along the face (the
 // head's yaw and pitch), and each iris centre's place across and up the
-// face from its eye's corners (the gaze). The first frames with a face (CALIBRATION_FRAMES)
+// face from its eye's corners (the gaze: across per eye, up and down both
+// eyes together). The first frames with a face (CALIBRATION_FRAMES)
 // are taken as the neutral face; the shapes' weights are the measures'
 // changes from it over a full-motion span (SPAN, set from the tracker on
 // our own renders of each shape), clamped to [0, 1] and smoothed over time;
@@ -60,13 +61,18 @@ const SPAN = {
   smileOut: 0.05,   // corner drawn out from the face's middle (renders: 0.049-0.070)
   brow: 0.05,       // brow lift over eye-corner distance (render: 0.038)
   pucker: 0.06,     // mouth width loss over eye-corner distance (render: 0.044)
-  // The iris centre's move across and up the face (renders of 25 degrees:
-  // across 0.030-0.040, up 0.019; the detector reads the lids' coupling
-  // and the head's turn as up to 0.011 of gaze): a dead zone below LOOK_DEAD.
+  // The iris centre's move across the face, one eye (renders of 25
+  // degrees: 0.030-0.040; the detector reads the lids' coupling and the
+  // head's turn as up to 0.011 of gaze), and both irises' mean move up and
+  // down (renders of both eyes 25 degrees up: 0.015, the right iris read
+  // at less than half the left's; down: 0.011, the upper lid covering the
+  // iris's top; other shapes and the turned head: up to 0.007): dead
+  // zones below LOOK_DEAD and LOOK_DEAD_UP.
   lookAcross: 0.035,
-  lookUp: 0.022,
+  lookUp: 0.017,
+  lookDown: 0.012,
 };
-const LOOK_DEAD = 0.008;
+const LOOK_DEAD = 0.008, LOOK_DEAD_UP = 0.007;
 // The iris lies in front of its eye's corners: a head turned by a yaw moves
 // it across their midpoint in the image by about LOOK_DEPTH * sin(yaw)
 // (over the eye-corner distance) with the eyes still in the head (our
@@ -157,17 +163,24 @@ export function faceWeights(m, n) {
   const look = {};
   const gazeKeys = ['lookAcrossL', 'lookUpL', 'lookAcrossR', 'lookUpR'];
   if (gazeKeys.every((k) => Number.isFinite(m[k]) && Number.isFinite(n[k]))) {
-    const past = (d, span) => clamp01((d - LOOK_DEAD) / (span - LOOK_DEAD));
-    const side = (blink, x, y, towardsLeft, awayFromLeft, suffix) => {
-      const open = clamp01(2 * (1 - blink));
+    const past = (d, span, dead = LOOK_DEAD) => clamp01((d - dead) / (span - dead));
+    const openL = clamp01(2 * (1 - blinkL)), openR = clamp01(2 * (1 - blinkR));
+    // The eyes turn up and down together (people cannot look up with one
+    // eye): the vertical gaze is both irises' mean move, each by how open
+    // its eye is, so one eye's misread (the detector's, on a head tilted
+    // 15 degrees: -0.010 on one eye, +0.006 on the other) is halved and a
+    // closed eye's wandering iris does not count.
+    const both = openL + openR;
+    const y = both > 0 ? (openL * (m.lookUpL - n.lookUpL) + openR * (m.lookUpR - n.lookUpR)) / both : 0;
+    const side = (open, x, towardsLeft, awayFromLeft, suffix) => {
       look[towardsLeft + suffix] = open * past(x, SPAN.lookAcross);
       look[awayFromLeft + suffix] = open * past(-x, SPAN.lookAcross);
-      look['eyeLookUp' + suffix] = open * past(y, SPAN.lookUp);
-      look['eyeLookDown' + suffix] = open * past(-y, SPAN.lookUp);
+      look['eyeLookUp' + suffix] = open * past(y, SPAN.lookUp, LOOK_DEAD_UP);
+      look['eyeLookDown' + suffix] = open * past(-y, SPAN.lookDown, LOOK_DEAD_UP);
     };
     const turned = LOOK_DEPTH * Math.sin((headTurn(m, n).yaw * Math.PI) / 180);
-    side(blinkL, m.lookAcrossL - n.lookAcrossL - turned, m.lookUpL - n.lookUpL, 'eyeLookOut', 'eyeLookIn', 'Left');
-    side(blinkR, m.lookAcrossR - n.lookAcrossR - turned, m.lookUpR - n.lookUpR, 'eyeLookIn', 'eyeLookOut', 'Right');
+    side(openL, m.lookAcrossL - n.lookAcrossL - turned, 'eyeLookOut', 'eyeLookIn', 'Left');
+    side(openR, m.lookAcrossR - n.lookAcrossR - turned, 'eyeLookIn', 'eyeLookOut', 'Right');
   }
   return {
     eyeBlinkLeft: blinkL,
