@@ -1,19 +1,28 @@
-// scripts/say: the words (one argument) as a speech document on stdout.
-import { speechOf } from '../web/js/speech.js';
+// scripts/say: the words (one argument) as a speech document on stdout,
+// read in English or, with --lang, another language TalkingHead reads.
+import { LANGUAGES, speechOf } from '../web/js/speech.js';
 
-const lipsyncPath = new URL('../vendor/node_modules/@met4citizen/talkinghead/modules/lipsync-en.mjs', import.meta.url);
-if (process.argv.length !== 3 || !process.argv[2].trim()) {
-  console.error('usage: scripts/say "WORDS" > say.json');
+const args = process.argv.slice(2);
+let lang = 'en';
+const at = args.indexOf('--lang');
+if (at >= 0) {
+  lang = args[at + 1];
+  args.splice(at, 2);
+}
+if (args.length !== 1 || !args[0].trim() || !LANGUAGES[lang]) {
+  console.error(`usage: scripts/say [--lang ${Object.keys(LANGUAGES).join('|')}] "WORDS" > say.json`);
   process.exit(2);
 }
-let LipsyncEn;
+const language = LANGUAGES[lang];
+const modulePath = new URL('../vendor/node_modules/@met4citizen/talkinghead/modules/' + language.module, import.meta.url);
+let reader;
 try {
-  ({ LipsyncEn } = await import(lipsyncPath.href));
+  reader = new (await import(modulePath.href))[language.reader]();
 } catch (e) {
-  console.error(`say: cannot load TalkingHead's lipsync-en (${lipsyncPath.pathname}); run scripts/setup`);
+  console.error(`say: cannot load TalkingHead's reader (${modulePath.pathname}); run scripts/setup`);
   process.exit(1);
 }
-const doc = speechOf(new LipsyncEn(), process.argv[2]);
+const doc = speechOf(reader, args[0], lang);
 if (!doc.visemes.length) {
   console.error('say: there is nothing to say in those words');
   process.exit(1);

@@ -1,5 +1,5 @@
 // Typed words to a speech document (web/js/speech.js with TalkingHead's
-// lipsync-en, as the page and scripts/say read them) under Node, and, given
+// lip-sync readers, as the page and scripts/say read them) under Node, and, given
 // the native CLI, the document through `likeness export --say` into a GLB's
 // Say animation that the Khronos validator passes.
 // Usage: node tests/browser/speech_node.mjs [build/bin/likeness]   (exit 0: every check passed)
@@ -10,7 +10,7 @@ import os from 'node:os';
 import path from 'node:path';
 import { createRequire } from 'node:module';
 import { fileURLToPath } from 'node:url';
-import { MAX_SAY_CHARS, PAUSE, speechOf } from '../../web/js/speech.js';
+import { LANGUAGES, MAX_SAY_CHARS, PAUSE, preferredLanguage, speechOf } from '../../web/js/speech.js';
 
 const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
 const LIPSYNC = path.join(ROOT, 'vendor/node_modules/@met4citizen/talkinghead/modules/lipsync-en.mjs');
@@ -51,6 +51,24 @@ const long = speechOf(reader, 'ba '.repeat(300));
 assert.ok(long.truncated && long.text.length === MAX_SAY_CHARS && !papa.truncated);
 checks++;
 
+// The other languages TalkingHead reads: each reader loads from the
+// package, reads a sentence of its language to known visemes, and the
+// document names it; the page picks the browser's first language it has.
+const VISEMES = ['sil', 'PP', 'FF', 'TH', 'DD', 'kk', 'CH', 'SS', 'nn', 'RR', 'aa', 'E', 'I', 'O', 'U'];
+const SENTENCES = { de: 'Guten Tag, wie geht es Ihnen?', fr: 'Bonjour, comment allez-vous?', fi: 'Hyvää päivää, mitä kuuluu?',
+                    lt: 'Laba diena, kaip sekasi?' };
+for (const [lang, text] of Object.entries(SENTENCES)) {
+  const file = path.join(ROOT, 'vendor/node_modules/@met4citizen/talkinghead/modules', LANGUAGES[lang].module);
+  const doc = speechOf(new (await import(file))[LANGUAGES[lang].reader](), text, lang);
+  assert.ok(doc.visemes.length >= 6 && doc.visemes.every((v) => VISEMES.includes(v)), lang + ': ' + doc.visemes.join(' '));
+  assert.equal(doc.visemes.filter((v) => v === 'sil').length, 1, lang + ': one pause, at the comma');
+  assert.equal(doc.lipsync, '@met4citizen/talkinghead 1.7.0 lipsync-' + lang);
+}
+assert.equal(preferredLanguage(['de-CH', 'en']), 'de');
+assert.equal(preferredLanguage(['ja', 'fr-FR']), 'fr');
+assert.equal(preferredLanguage(['ja']), 'en');
+checks++;
+
 // The command line: scripts/say writes the document, likeness export
 // reads it into a Say animation of the clip's length (anim/clips.h: 0.1 s
 // a unit after a 0.1 s breath, 0.3 s at rest to end), valid glTF.
@@ -61,6 +79,8 @@ if (cli && fs.existsSync(cli)) {
     const run = (cmd, args) => execFileSync(cmd, args, { encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
     const said = run(path.join(ROOT, 'scripts/say'), ['papa, papa!']);
     assert.deepEqual(JSON.parse(said).visemes, two.visemes);
+    assert.equal(JSON.parse(run(path.join(ROOT, 'scripts/say'), ['--lang', 'de', 'Guten Tag'])).lipsync,
+                 '@met4citizen/talkinghead 1.7.0 lipsync-de');
     fs.writeFileSync(path.join(dir, 'say.json'), said);
     run(cli, ['synth-scan', '--seed', '1', '--points', '5000', '--out', path.join(dir, 'scan')]);
     run(cli, ['fit', '--scan', path.join(dir, 'scan/scan.ply'), '--out', path.join(dir, 'fit'), '--levels', '1']);

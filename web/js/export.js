@@ -67,7 +67,7 @@ async function exportGlb() {
     // The words typed beside Talk go along as a "Say" animation (none
     // when nothing in them can be said).
     const words = ui.sayText.value.trim();
-    const speech = words ? await pageSpeech(words) : null;
+    const speech = words ? await pageSpeech(words, ui.sayLang.value) : null;
     const say = speech && !speech.error && speech.visemes.length ? JSON.stringify(speech) : '';
     const r = await runJob({ type: 'exportGlb', level, parts, say }, []);
     if (!r.ok) { showError('Export failed: ' + r.message); return; }

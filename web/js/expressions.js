@@ -27,7 +27,7 @@ import { app, page, ui, showError } from './state.js';
 import { runJob } from './worker_client.js';
 import { onHeadShown, showStage, view } from './head_view.js';
 import { onAnimationStop, stopAnimation } from './animation.js';
-import { pageSpeech } from './speech.js';
+import { pageSpeech, preferredLanguage } from './speech.js';
 
 // Talk says the words typed beside it (read to visemes by TalkingHead's
 // lip-sync, speech.js; the worker makes the clip: anim/clips.h
@@ -581,7 +581,7 @@ async function startTalk() {
   ex.saying = words;
   ex.sayNote = '';
   if (words) {
-    const speech = await pageSpeech(words);
+    const speech = await pageSpeech(words, ui.sayLang.value);
     const r = speech.error ? { ok: false, message: speech.error }
       : !speech.visemes.length ? { ok: false, message: 'there is nothing to say in those words' }
       : await runJob({ type: 'sayClip', speech: JSON.stringify(speech) }, []);
@@ -655,6 +655,8 @@ export function wireExpressions() {
     b.addEventListener('click', () => setWeights(b.dataset.preset === 'neutral' ? {} : { [b.dataset.preset]: 1 }).catch(() => {}));
   }
   ui.talk.addEventListener('click', () => (ex.talking ? stopTalk() : startTalk().catch(() => {})));
+  // The words are read in the browser's language where TalkingHead reads it.
+  ui.sayLang.value = preferredLanguage(navigator.languages);
   // Enter in the words' box says them.
   ui.sayText.addEventListener('keydown', (e) => {
     if (e.key !== 'Enter') return;

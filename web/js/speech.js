@@ -1,27 +1,36 @@
 // Typed words as visemes (issue 38): the speech document the core's Say
 // clip is made from (core/anim/speech.h). The reading is TalkingHead's
-// lip-sync for English (npm @met4citizen/talkinghead, lipsync-en.mjs, MIT):
+// lip sync (npm @met4citizen/talkinghead, MIT): for English (lipsync-en.mjs)
 // numbers and symbols to words, then the letter-to-sound rules of NRL
-// Report 7948 to Oculus visemes with times and lengths in its own units
-// (1 is an average sound). The text is cut into phrases at punctuation and
+// Report 7948, to Oculus visemes with times and lengths in its own units
+// (1 is an average sound); German, French, Finnish and Lithuanian by its
+// readers for them, alike. The text is cut into phrases at punctuation and
 // line breaks; each phrase is read alone and the phrases are joined by a
 // pause ("sil", PAUSE units), where the mouth rests. The page and
 // scripts/say (for likeness export --say) both call speechOf, so the same
 // words give the same document. No DOM and no static import: speechOf is handed
-// the lipsync-en reader (pageSpeech: the page's, from its own origin).
+// the reader (pageSpeech: the page's, from its own origin).
 
 export const MAX_SAY_CHARS = 400;
 export const PAUSE = 2.5;
-const LIPSYNC = '@met4citizen/talkinghead 1.7.0 lipsync-en';
+// The languages TalkingHead reads: its module and class for each.
+export const LANGUAGES = {
+  en: { module: 'lipsync-en.mjs', reader: 'LipsyncEn' },
+  de: { module: 'lipsync-de.mjs', reader: 'LipsyncDe' },
+  fr: { module: 'lipsync-fr.mjs', reader: 'LipsyncFr' },
+  fi: { module: 'lipsync-fi.mjs', reader: 'LipsyncFi' },
+  lt: { module: 'lipsync-lt.mjs', reader: 'LipsyncLt' },
+};
 
 // {format, version, lipsync, text, visemes, times, durations, truncated}
-// for text (at most MAX_SAY_CHARS characters are read); visemes is empty
-// when nothing in it can be said.
-export function speechOf(lipsync, text) {
+// for text read by lipsync, the reader of language lang (at most
+// MAX_SAY_CHARS characters are read); visemes is empty when nothing in it
+// can be said.
+export function speechOf(lipsync, text, lang = 'en') {
   const all = String(text);
   const said = all.slice(0, MAX_SAY_CHARS);
-  const doc = { format: 'likeness-speech', version: 1, lipsync: LIPSYNC, text: said, visemes: [], times: [], durations: [],
-                truncated: all.length > said.length };
+  const doc = { format: 'likeness-speech', version: 1, lipsync: '@met4citizen/talkinghead 1.7.0 lipsync-' + lang, text: said,
+                visemes: [], times: [], durations: [], truncated: all.length > said.length };
   let t = 0;
   for (const phrase of said.split(/[,.;:!?\n\r]+/)) {
     const words = lipsync.preProcessText(phrase);
@@ -40,17 +49,29 @@ export function speechOf(lipsync, text) {
   return doc;
 }
 
-// The page's reader, loaded from its own origin (build/web/vendor/) the
-// first time words are said; a missing one is said, not thrown.
-let pageReader = null;
-export async function pageSpeech(text) {
-  if (!pageReader) {
+// The page's readers, each loaded from its own origin (build/web/vendor/)
+// the first time words are said in its language; a missing one is said,
+// not thrown.
+const pageReaders = {};
+export async function pageSpeech(text, lang = 'en') {
+  const language = LANGUAGES[lang];
+  if (!language) return { error: 'no lip-sync reader for the language "' + lang + '"' };
+  if (!pageReaders[lang]) {
     try {
-      const { LipsyncEn } = await import('../vendor/talkinghead/modules/lipsync-en.mjs');
-      pageReader = new LipsyncEn();
+      const module = await import('../vendor/talkinghead/modules/' + language.module);
+      pageReaders[lang] = new module[language.reader]();
     } catch (e) {
-      return { error: 'the lip-sync reader (vendor/talkinghead) did not load: ' + (e && e.message ? e.message : e) };
+      return { error: 'the lip-sync reader (vendor/talkinghead, ' + lang + ') did not load: ' + (e && e.message ? e.message : e) };
     }
   }
-  return speechOf(pageReader, text);
+  return speechOf(pageReaders[lang], text, lang);
+}
+
+// The page's first language among the readers' (navigator.languages), else English.
+export function preferredLanguage(languages) {
+  for (const l of languages || []) {
+    const code = String(l).slice(0, 2).toLowerCase();
+    if (LANGUAGES[code]) return code;
+  }
+  return 'en';
 }

@@ -20,7 +20,7 @@ export const ui = {
   level: $('level'), showPoints: $('show-points'), showDistance: $('show-distance'), animate: $('animate'), animStats: $('anim-stats'),
   fullDetail: $('full-detail'),
   expressions: $('expressions'), exprControls: $('expr-controls'), exprGroup: $('expr-group'), exprSliders: $('expr-sliders'),
-  exprStats: $('expr-stats'), talk: $('btn-talk'), sayText: $('say-text'),
+  exprStats: $('expr-stats'), talk: $('btn-talk'), sayText: $('say-text'), sayLang: $('say-lang'),
   follow: $('follow-face'), followStatus: $('follow-status'), followVideo: $('follow-video'), cameraOn: $('camera-on'),
   fitNotes: $('fit-notes'), fitQuality: $('fit-quality'), qualityTitle: $('quality-title'), qualitySummary: $('quality-summary'),
   qualityList: $('quality-list'),

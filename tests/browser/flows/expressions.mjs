@@ -520,6 +520,22 @@ async function run(s) {
         say.talkFrames >= 2 && sayDrawn.length >= 1 && sayDrawn.every((n) => n === 'viseme_PP' || n === 'viseme_aa') &&
         !say.talking && sayRest.d === 0,
         `${sayClip.seconds} s; the clip's peaks: ${round2(sayClip.peaks)}; ${say.talkFrames} frames drew ${round2(say.talkPeaks)}; max |blend - rest| ${sayRest.d}`);
+  // In German (TalkingHead's lipsync-de, loaded from the page's origin when
+  // first chosen): "Mama" is PP aa PP aa too; the page starts in English
+  // (the test browser's language).
+  const startLang = await page.inputValue('#say-lang');
+  await page.selectOption('#say-lang', 'de');
+  await page.fill('#say-text', 'Mama');
+  await talkMs(page, 3);
+  const deClip = await page.evaluate(() => {
+    const e = window.likeness.expressions, peaks = {};
+    for (const t of e.talkKeys) for (const [n, v] of Object.entries(e.demoWeights(t))) peaks[n] = Math.max(peaks[n] || 0, v);
+    return { peaks, saying: e.saying };
+  });
+  check('words in German are read by its own reader: "Mama" plays viseme_PP and viseme_aa (the page started in English)',
+        startLang === 'en' && deClip.saying === 'Mama' && Object.keys(deClip.peaks).filter((n) => n !== 'blink').sort().join(' ') === 'viseme_PP viseme_aa',
+        `started in ${startLang}; the clip's peaks: ${round2(deClip.peaks)}`);
+  await page.selectOption('#say-lang', 'en');
   await page.fill('#say-text', '!? ...');
   await page.click('#btn-talk');
   await page.waitForFunction(() => /nothing to say/.test(document.getElementById('expr-stats').textContent), null, { timeout: JOB_TIMEOUT_MS });
