@@ -1,8 +1,8 @@
 #pragma once
 // Words to say, as visemes (issue 38): the speech document the page
 // (web/js/speech.js) and scripts/say write from typed words with
-// TalkingHead's lip-sync reader, and anim/clips.h speech_clip turns into
-// the Say clip. Reading English into sounds is that library's work; this
+// TalkingHead's lip-sync readers, and anim/clips.h speech_clip turns into
+// the Say clip. Reading words into sounds is that library's work; this
 // module only checks its output, as bytes from outside.
 //   {"format": "likeness-speech", "version": 1, "lipsync": "...",
 //    "text": "hello", "visemes": ["I", "E", "nn", "O"],
