@@ -69,11 +69,8 @@ int run_render(const Args& args) {
     // A tile's names joined by '+' are posed together, each at full weight.
     for (std::size_t i = 0; i < names.size(); ++i) {
       std::map<std::string, double> weights;
-      for (std::size_t at = 0; at <= names[i].size();) {
-        const std::size_t plus = std::min(names[i].find('+', at), names[i].size());
-        weights[names[i].substr(at, plus - at)] = 1.0;
-        at = plus + 1;
-      }
+      for (const std::string& name : split_list(names[i], '+')) weights[name] = 1.0;
+      if (weights.empty()) return usage_error("--expression has an empty name (see docs/design/muscles.md)");
       if (Status st = face_controls_from_weights(weights, faces[i]); !st)
         return usage_error(st.message + " (see docs/design/muscles.md)");
     }

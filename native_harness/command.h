@@ -29,9 +29,9 @@ struct Args {
                   double hi = DBL_MAX) const;
 };
 
-// "a,b,,c" -> {"a", "b", "c"}: a comma-separated option value's items, empty
-// ones left out.
-std::vector<std::string> split_list(const std::string& s);
+// "a,b,,c" -> {"a", "b", "c"}: a comma-separated (or sep-separated) option
+// value's items, empty ones left out.
+std::vector<std::string> split_list(const std::string& s, char sep = ',');
 
 Args parse_args(int argc, char** argv, int first);
 

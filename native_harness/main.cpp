@@ -16,11 +16,11 @@ std::map<std::string, Command>& registry() {
   return r;
 }
 
-std::vector<std::string> split_list(const std::string& s) {
+std::vector<std::string> split_list(const std::string& s, char sep) {
   std::vector<std::string> out;
   size_t a = 0;
   while (a < s.size()) {
-    const size_t b = std::min(s.find(',', a), s.size());
+    const size_t b = std::min(s.find(sep, a), s.size());
     if (b > a) out.push_back(s.substr(a, b - a));
     a = b + 1;
   }
