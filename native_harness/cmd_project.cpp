@@ -2,7 +2,6 @@
 // written by `likeness fit --project` or the page's "Save project") holds,
 // and its levels re-exported without fitting again.
 #include "command.h"
-#include "anim/clips.h"
 
 #include "io/io.h"
 #include "head/generic_head.h"
@@ -307,8 +306,6 @@ int run_export_head(const Args& args) {
     if (Status st = read_file(file, bytes, kMaxSpeechBytes); !st)
       return fail(cmd, st.message + " (--say takes the file scripts/say \"WORDS\" writes, not the words)");
     if (Status st = parse_speech_json(std::string(bytes.begin(), bytes.end()), say); !st) return fail(cmd, file + ": " + st.message);
-    WeightClip said;
-    if (Status st = speech_clip(say, said); !st) return fail(cmd, file + ": " + st.message);
   }
   return write_glb(cmd, p, level, out, textures, !args.has("no-animations"), say);
 }
