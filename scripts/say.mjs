@@ -1,6 +1,6 @@
 // scripts/say: the words (one argument) as a speech document on stdout,
 // read in English or, with --lang, another language TalkingHead reads.
-import { LANGUAGES, speechOf } from '../web/js/speech.js';
+import { LANGUAGES, readerFor, speechOf } from '../web/js/speech.js';
 
 const args = process.argv.slice(2);
 let lang = 'en';
@@ -13,13 +13,12 @@ if (args.length !== 1 || !args[0].trim() || !LANGUAGES[lang]) {
   console.error(`usage: scripts/say [--lang ${Object.keys(LANGUAGES).join('|')}] "WORDS" > say.json`);
   process.exit(2);
 }
-const language = LANGUAGES[lang];
-const modulePath = new URL('../vendor/node_modules/@met4citizen/talkinghead/modules/' + language.module, import.meta.url);
+const modules = new URL('../vendor/node_modules/@met4citizen/talkinghead/modules/', import.meta.url);
 let reader;
 try {
-  reader = new (await import(modulePath.href))[language.reader]();
+  reader = await readerFor(lang, modules);
 } catch (e) {
-  console.error(`say: cannot load TalkingHead's reader (${modulePath.pathname}); run scripts/setup`);
+  console.error(`say: cannot load TalkingHead's reader (${modules.pathname}${LANGUAGES[lang].module}); run scripts/setup`);
   process.exit(1);
 }
 const doc = speechOf(reader, args[0], lang);

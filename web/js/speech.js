@@ -49,17 +49,22 @@ export function speechOf(lipsync, text, lang = 'en') {
   return doc;
 }
 
+// TalkingHead's reader of language lang, from the folder of its modules
+// (a URL: the page's vendor/ copy, or the npm package under Node).
+export async function readerFor(lang, modules) {
+  const language = LANGUAGES[lang];
+  return new (await import(new URL(language.module, modules).href))[language.reader]();
+}
+
 // The page's readers, each loaded from its own origin (build/web/vendor/)
 // the first time words are said in its language; a missing one is said,
 // not thrown.
 const pageReaders = {};
 export async function pageSpeech(text, lang = 'en') {
-  const language = LANGUAGES[lang];
-  if (!language) return { error: 'no lip-sync reader for the language "' + lang + '"' };
+  if (!LANGUAGES[lang]) return { error: 'no lip-sync reader for the language "' + lang + '"' };
   if (!pageReaders[lang]) {
     try {
-      const module = await import('../vendor/talkinghead/modules/' + language.module);
-      pageReaders[lang] = new module[language.reader]();
+      pageReaders[lang] = await readerFor(lang, new URL('../vendor/talkinghead/modules/', import.meta.url));
     } catch (e) {
       return { error: 'the lip-sync reader (vendor/talkinghead, ' + lang + ') did not load: ' + (e && e.message ? e.message : e) };
     }
