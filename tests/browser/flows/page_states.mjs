@@ -58,18 +58,27 @@ async function run(s) {
     const one = { view: canvas.getBoundingClientRect().height, text: lines() };
     let long = was;
     // Grow the message until it takes two lines (its own words, repeated).
-    status.style.minHeight = '0';
-    while (lines() < 2 && long.length < 2000) { long += ' ' + was; status.textContent = long; }
-    const twoLines = lines();
-    status.style.minHeight = '';
+    // (Its natural height: the two lines' box taken off while measuring.)
+    const natural = () => { status.style.minHeight = '0'; status.style.height = 'auto';
+                            const n = lines(); status.style.minHeight = status.style.height = ''; return n; };
+    while (natural() < 2 && long.length < 2000) { long += ' ' + was; status.textContent = long; }
+    const twoLines = natural();
     await frame();
     const two = { view: canvas.getBoundingClientRect().height, text: twoLines };
+    // Twice as long again: it scrolls within the two lines, all of it there.
+    status.textContent = long + ' ' + long;
+    await frame();
+    const four = { view: canvas.getBoundingClientRect().height, text: lines(), natural: natural(),
+                   scrolls: status.scrollHeight > status.clientHeight + 1, focusable: status.tabIndex === 0 };
     status.textContent = was;
     await frame();
-    return { one, two };
+    return { one, two, four };
   });
   check('a status message of two lines leaves the view its size', wrap.two.text === 2 && Math.abs(wrap.two.view - wrap.one.view) < 0.5,
         JSON.stringify(wrap));
+  check('... and one of four lines too: it scrolls within two lines, reachable by the keyboard',
+        Math.abs(wrap.four.view - wrap.one.view) < 0.5 && wrap.four.natural >= 3 && wrap.four.scrolls && wrap.four.focusable,
+        JSON.stringify(wrap.four));
   await fresh.setInputFiles('#file-input', { name: 'notes.ply', mimeType: 'application/octet-stream', buffer: NOT_A_SCAN });
   await settled(fresh);
   await fresh.click('#error-dismiss');
