@@ -93,7 +93,8 @@ export function updateClicker() {
     drawClicker();
     return;
   }
-  ui.clickerNote.textContent = CLICK_NOTE;
+  ui.clickerNote.textContent = CLICK_NOTE +
+    (found ? ' The faint yellow dots are the face points found in the photo: drag one to correct it.' : '');
   const lms = app.fit.landmarks;
   const done = lms.filter((l) => photo.clicks.has(l.id) && photo.clicks.get(l.id) !== 'skip').length;
   const lm = clicker.current >= 0 ? lms[clicker.current] : null;
@@ -157,15 +158,21 @@ function drawClicker() {
   const ox = (w - photo.width * scale) / 2, oy = (h - photo.height * scale) / 2;
   clicker.view = { scale, ox, oy, dpr };
   g.drawImage(img, ox, oy, photo.width * scale, photo.height * scale);
-  // The detector's face points: small dots, the dragged one larger.
+  // The detector's face points: small dots, the dragged one larger. While
+  // the guided landmarks are clicked they are faint, so the eye corners and
+  // lips they cover stay visible; they can still be dragged.
   const found = detected(photo);
   if (found) {
+    const guided = !!(app.fit && app.fit.landmarks);
     g.fillStyle = '#ffd24d';
     for (const [i, p] of found.entries()) {
       if (!p) continue;
-      const r = (i === clicker.drag ? 4 : 1.6) * dpr;
+      const dragged = i === clicker.drag;
+      g.globalAlpha = guided && !dragged ? 0.3 : 1;
+      const r = (dragged ? 4 : guided ? 1.2 : 1.6) * dpr;
       g.fillRect(ox + p[0] * scale - r, oy + p[1] * scale - r, 2 * r, 2 * r);
     }
+    g.globalAlpha = 1;
   }
   // Points: clicked (or from the file), numbered; after a calibration each
   // shows its reprojection error, outliers in red.
