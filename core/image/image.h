@@ -41,4 +41,8 @@ struct ImageF {
 ImageF to_float(const Image& im);          // divides by 255
 Image to_bytes(const ImageF& im);          // clamps to [0,1], rounds
 
+// The image scaled to width x height (stb_image_resize's filters, each
+// channel alike); empty for an empty image or a size below 1.
+Image resized(const Image& im, int width, int height);
+
 }  // namespace lk

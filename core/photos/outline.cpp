@@ -194,6 +194,32 @@ Status extract_outline(const std::vector<std::uint8_t>& mask, int width, int hei
   return Status::success();
 }
 
+Status outline_from_plain_photo(const Image& image, int photo_width, int photo_height, int max_side,
+                                const PlainBackgroundOptions& background, const OutlineOptions& options,
+                                PhotoOutline& out) {
+  out = {};
+  if (image.empty() || photo_width < image.width || photo_height < image.height)
+    return Status::error(ErrorCode::InvalidInput, "plain background: the image is larger than its photo");
+  const double scale = max_side > 0 ? std::min(1.0, double(max_side) / std::max(image.width, image.height)) : 1.0;
+  Image shrunk;
+  if (scale < 1.0) {
+    shrunk = resized(image, std::max(1, int(std::lround(image.width * scale))),
+                     std::max(1, int(std::lround(image.height * scale))));
+    if (shrunk.empty()) return Status::error(ErrorCode::Internal, "plain background: the photo could not be shrunk");
+  }
+  const Image& im = scale < 1.0 ? shrunk : image;
+  std::vector<std::uint8_t> mask;
+  Status s = mask_from_plain_background(im, background, mask);
+  if (s) s = extract_outline(mask, im.width, im.height, im.width, im.height, options, out);
+  if (!s) return s;
+  // Pixel corners: x in the shrunk image is x * photo_width / its width in the photo.
+  const double kx = double(photo_width) / im.width, ky = double(photo_height) / im.height;
+  for (OutlinePoint& p : out.points) p.pixel = Vec2(p.pixel.x() * kx, p.pixel.y() * ky);
+  out.width = photo_width;
+  out.height = photo_height;
+  return Status::success();
+}
+
 Status outline_from_mask_image(const Image& mask_image, int photo_width, int photo_height, const OutlineOptions& options,
                                PhotoOutline& out) {
   if (mask_image.empty()) return Status::error(ErrorCode::InvalidInput, "mask: empty image");

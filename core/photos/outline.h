@@ -76,6 +76,20 @@ Status mask_from_plain_background(const Image& photo, const PlainBackgroundOptio
 Status extract_outline(const std::vector<std::uint8_t>& mask, int width, int height, int expected_width,
                        int expected_height, const OutlineOptions& options, PhotoOutline& out);
 
+// The outline of a photo with a plain background, as `likeness photos
+// --masks-from-photos` and the page find it. `image` is the photo, or a copy
+// of it shrunk to any size (the page passes the one its face detector got);
+// one larger than max_side pixels on its longer side is shrunk to that first
+// (stb_image_resize). The background's mask and the outline are found there
+// (mask_from_plain_background, extract_outline) and the points put in the
+// photo's own pixels, photo_width x photo_height. A 12-megapixel photo's
+// outline so costs what a 1280-px one does; the 6-px spacing at 1280 px is
+// far finer than the silhouettes' 10-mm reach. max_side <= 0: no shrinking.
+inline constexpr int kPlainOutlineMaxSide = 1280;
+Status outline_from_plain_photo(const Image& image, int photo_width, int photo_height, int max_side,
+                                const PlainBackgroundOptions& background, const OutlineOptions& options,
+                                PhotoOutline& out);
+
 // Convenience: mask_from_image + extract_outline, the size checked against
 // the photo's.
 Status outline_from_mask_image(const Image& mask_image, int photo_width, int photo_height,

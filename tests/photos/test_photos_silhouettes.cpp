@@ -153,6 +153,9 @@ TEST_CASE("silhouettes alone grow a shrunken head back to its outlines", "[photo
 TEST_CASE("silhouettes lower the outline distance and the head error on a synthetic session", "[photos]") {
   SilhouetteScenario x = make_silhouette_scenario(1);
   PhotosJobOptions opt;
+  // The whole head's outline (a bald person, near-exact cameras: here the
+  // scalp's outline helps; the job's default leaves it out for real photos).
+  opt.silhouettes.excluded_regions = {"neck"};
   SelfCalibResult calib;
   REQUIRE(self_calibrate(x.s.session.photos, x.s.generic.mesh, x.s.landmarks, opt.calib, calib));
   ShapeFitResult plain, with;
@@ -215,6 +218,59 @@ TEST_CASE("a plain background gives the renderer's mask and a busy one is refuse
   const Status st = mask_from_plain_background(busy, {}, m);
   CHECK(!st);
   CHECK(st.message.find("the background is not plain") != std::string::npos);
+}
+
+// The page finds each outline on the detector's shrunk copy of the photo,
+// the CLI on the photo shrunk to the same size: either way the points must
+// land on the photo's own outline, in the photo's pixels.
+TEST_CASE("an outline found on a shrunk photo lies on the full photo's outline", "[photos]") {
+  test::PhotoScenario s = test::make_photo_scenario(4);
+  SkinField skin;
+  REQUIRE(make_skin_field(s.person, 4, {}, skin));
+  const Camera& cam = s.session.cameras[4];
+  const Vec3 light = (cam.R.transpose() * Vec3(-0.4, -0.6, -1.0)).normalized();
+  Image photo, exact;
+  REQUIRE(render_synthetic_photo(
+      s.person.mesh, cam,
+      [&](const Vec3& p, const Vec3& n) -> Vec3 { return skin_albedo(skin, p) * (0.35 + 0.65 * std::max(0.0, n.dot(light))); },
+      Vec3(0.55, 0.6, 0.65), photo));
+  REQUIRE(synthetic_mask(s.person.mesh, cam, exact));
+  OutlineOptions dense;
+  dense.spacing_px = 1;
+  PhotoOutline truth;
+  REQUIRE(outline_from_mask_image(exact, photo.width, photo.height, dense, truth));
+  auto farthest = [&](const PhotoOutline& o) {
+    double worst = 0;
+    for (const OutlinePoint& p : o.points) {
+      double best = 1e9;
+      for (const OutlinePoint& t : truth.points) best = std::min(best, (t.pixel - p.pixel).norm());
+      worst = std::max(worst, best);
+    }
+    return worst;
+  };
+  const int w = photo.width, h = photo.height;  // 1200 x 1600
+  PhotoOutline full, shrunk_here, shrunk_by_caller;
+  REQUIRE(outline_from_plain_photo(photo, w, h, 0, {}, {}, full));
+  REQUIRE(outline_from_plain_photo(photo, w, h, 400, {}, {}, shrunk_here));
+  REQUIRE(outline_from_plain_photo(resized(photo, 300, 400), w, h, kPlainOutlineMaxSide, {}, {}, shrunk_by_caller));
+  for (const PhotoOutline* o : {&full, &shrunk_here, &shrunk_by_caller}) {
+    CHECK(o->width == w);
+    CHECK(o->height == h);
+  }
+  const double e_full = farthest(full), e_here = farthest(shrunk_here), e_caller = farthest(shrunk_by_caller);
+  std::printf("outline on a shrunk photo: farthest from the full photo's outline %.2f px (full size), %.2f px (shrunk "
+              "to 400 px here), %.2f px (shrunk to 400 px by the caller); %zu, %zu, %zu points\n",
+              e_full, e_here, e_caller, full.points.size(), shrunk_here.points.size(), shrunk_by_caller.points.size());
+  CHECK(e_full < 1.5);
+  // A pixel of the 400-px copy is 4 of the photo's.
+  CHECK(e_here < 4.0);
+  CHECK(e_caller < 4.0);
+  // About a quarter as many points: 6 px apart in the copy, 24 in the photo.
+  CHECK(shrunk_here.points.size() * 3 < full.points.size());
+  CHECK(shrunk_here.points.size() * 6 > full.points.size());
+  // A copy larger than its photo is a caller's mistake.
+  PhotoOutline bad;
+  CHECK(!outline_from_plain_photo(photo, w / 2, h / 2, 0, {}, {}, bad));
 }
 
 TEST_CASE("the photos job refuses outlines that do not fit its photos", "[photos]") {
