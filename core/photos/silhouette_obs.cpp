@@ -32,27 +32,27 @@ double line_distance(const Vec2& pa, const Vec2& pb, const Vec2& s, Vec2* ga, Ve
 
 namespace {
 
-// Pixel centres covered by the projected triangles (any facing).
-void raster_footprint(const std::vector<Vec2>& p, const std::vector<char>& ok, const std::vector<Tri>& tris, int w,
-                      int h, std::vector<std::uint8_t>& fp) {
-  fp.assign(size_t(w) * size_t(h), 0);
+// Whether the pixel (qx, qy)'s centre is covered by a projected triangle
+// (any facing): only the pixels just beyond each rim edge are asked, so they
+// are tested against the triangles directly (the triangles' pixel boxes as a
+// raster of the whole photo would take them) rather than by rasterizing the
+// head, which costs the photo's pixel count: millions at 12 megapixels.
+bool pixel_covered(const std::vector<Vec2>& p, const std::vector<char>& ok, const std::vector<Tri>& tris, int w, int h,
+                   int qx, int qy) {
+  if (qx < 0 || qy < 0 || qx >= w || qy >= h) return false;
+  const Vec2 q(qx + 0.5, qy + 0.5);
   for (const Tri& t : tris) {
     if (!ok[size_t(t[0])] || !ok[size_t(t[1])] || !ok[size_t(t[2])]) continue;
     const Vec2 &a = p[size_t(t[0])], &b = p[size_t(t[1])], &c = p[size_t(t[2])];
+    if (qx < int(std::floor(std::min({a.x(), b.x(), c.x()}))) || qx > int(std::ceil(std::max({a.x(), b.x(), c.x()}))) ||
+        qy < int(std::floor(std::min({a.y(), b.y(), c.y()}))) || qy > int(std::ceil(std::max({a.y(), b.y(), c.y()}))))
+      continue;
     const double area = cross2(b - a, c - a);
     if (std::abs(area) < 1e-12) continue;
-    const int x0 = std::max(0, int(std::floor(std::min({a.x(), b.x(), c.x()}))));
-    const int x1 = std::min(w - 1, int(std::ceil(std::max({a.x(), b.x(), c.x()}))));
-    const int y0 = std::max(0, int(std::floor(std::min({a.y(), b.y(), c.y()}))));
-    const int y1 = std::min(h - 1, int(std::ceil(std::max({a.y(), b.y(), c.y()}))));
     const double sgn = area > 0 ? 1 : -1;
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) {
-        const Vec2 q(x + 0.5, y + 0.5);
-        if (sgn * cross2(b - a, q - a) >= 0 && sgn * cross2(c - b, q - b) >= 0 && sgn * cross2(a - c, q - c) >= 0)
-          fp[size_t(y) * size_t(w) + size_t(x)] = 1;
-      }
+    if (sgn * cross2(b - a, q - a) >= 0 && sgn * cross2(c - b, q - b) >= 0 && sgn * cross2(a - c, q - c) >= 0) return true;
   }
+  return false;
 }
 
 }  // namespace
@@ -88,8 +88,6 @@ std::vector<RimEdge> find_rim_edges(const std::vector<Vec3>& P, const std::vecto
     const Vec3 n = (P[size_t(t[1])] - P[size_t(t[0])]).cross(P[size_t(t[2])] - P[size_t(t[0])]);
     front[f] = n.dot(C - P[size_t(t[0])]) > 0;
   }
-  std::vector<std::uint8_t> fp;
-  if (silhouette_only) raster_footprint(proj, ok, triangles, cam.width, cam.height, fp);
   std::vector<RimEdge> rims;
   for (const auto& e : edges) {
     const int tl = e[2], tr = e[3];
@@ -108,8 +106,7 @@ std::vector<RimEdge> find_rim_edges(const std::vector<Vec3>& P, const std::vecto
     if ((proj[size_t(third)] - r.pa).dot(r.outward) > 0) r.outward = -r.outward;
     if (silhouette_only) {
       const Vec2 q = 0.5 * (r.pa + r.pb) + 2.0 * r.outward;
-      const int qx = int(std::floor(q.x())), qy = int(std::floor(q.y()));
-      if (qx >= 0 && qy >= 0 && qx < cam.width && qy < cam.height && fp[size_t(qy) * size_t(cam.width) + size_t(qx)])
+      if (pixel_covered(proj, ok, triangles, cam.width, cam.height, int(std::floor(q.x())), int(std::floor(q.y()))))
         continue;  // surface beyond it: an inner occluding contour, not the silhouette
     }
     rims.push_back(r);
