@@ -414,11 +414,29 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
     // --photos-no-slide: the map's slide model left out; --photos-no-slide-sigma: its scatter as weights left out.
     opt.use_slide = !args.has("photos-no-slide");
     opt.calib.focal_from_jackknife = args.has("photos-focal-jackknife");
+    if (args.has("photos-sil-exclude")) opt.silhouettes.excluded_regions = split_list(args.get("photos-sil-exclude"));
     opt.calib.use_slide_sigma = !args.has("photos-no-slide-sigma");
     if (!parse_fit_levels(args, opt.fit)) return 1;
+    // --photos-detected-silhouettes: each view rendered as synth-photos
+    // writes it, its outline found on its plain background as the page and
+    // `likeness photos --masks-from-photos` find it.
+    std::vector<PhotoOutline> outlines;
+    const bool with_outlines = args.has("photos-detected-silhouettes");
+    if (with_outlines) {
+      std::vector<Image> images;
+      if (!render_session_images(generic, person, std::uint32_t(seed), truth.cameras, images)) return 1;
+      for (size_t i = 0; i < photos.size(); ++i) {
+        PhotoOutline o;
+        const Status os = outline_from_plain_photo(images[size_t(cam_of[i])], photos[i].width, photos[i].height,
+                                                   kPlainOutlineMaxSide,
+                                                   PlainBackgroundOptions{}, OutlineOptions{}, o);
+        if (!os) std::printf("       view %d: %s\n", cam_of[i], os.message.c_str());
+        outlines.push_back(o);
+      }
+    }
     PhotosJobResult r;
     const double t0 = cpu_clock_ms();
-    const Status st = run_photos_job(generic, mp_map, photos, opt, r);
+    const Status st = run_photos_job(generic, mp_map, photos, opt, r, with_outlines ? &outlines : nullptr);
     const double ms = cpu_clock_ms() - t0;
     if (!st) {
       std::printf("  %-4d failed: %s\n", seed, st.message.c_str());
@@ -544,6 +562,23 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
                 1000 * gu.head.mean, 1000 * fu.head.mean, 1000 * fu.head.p95, 1000 * ga.head.mean, 1000 * fa.head.mean,
                 1000 * fa.head.p95, ms);
     std::printf("       yaw/pitch deg, truth -> recovered:%s\n", views.c_str());
+    {
+      // The head's error by region (aligned on the face), generic -> fit: where the outline helps or hurts.
+      const Similarity sg = fit_similarity(generic.mesh.positions, person.mesh.positions, face);
+      TriMesh fm = r.fit.mesh, gm = generic.mesh;
+      for (Vec3& p : fm.positions) p = sf.apply(p);
+      for (Vec3& p : gm.positions) p = sg.apply(p);
+      std::string line;
+      for (const char* region : {"scalp", "ears"}) {
+        const std::vector<int>& rv = generic.annotations.regions.at(region);
+        const DistanceStats a = surface_distances(person.mesh, rv, gm), b = surface_distances(person.mesh, rv, fm);
+        char buf[120];
+        std::snprintf(buf, sizeof buf, " %s %.2f -> %.2f (p95 %.2f -> %.2f);", region, 1000 * a.mean, 1000 * b.mean,
+                      1000 * a.p95, 1000 * b.p95);
+        line += buf;
+      }
+      std::printf("       by region, aligned, mm:%s\n", line.c_str());
+    }
     if (r.calib.focal_landmarks > 0)
       std::printf("       focal from the landmarks %+.1f%%, over the detector's ratio %+.1f%% +- %.1f%% (jackknife over the photos), prior %+.1f%% +- %.1f%%\n",
                   100 * (r.calib.focal_landmarks_raw - vo.focal_px) / vo.focal_px,
@@ -714,6 +749,7 @@ int run_bench_photos(const Args& args) {
     for (double& k : opt.fit.stiffness_schedule) k *= stiffness_scale;
     opt.lambda_silhouettes = lambda_sil;
     opt.silhouettes.facet_equations = args.has("photos-sil-facets");
+    if (args.has("photos-sil-exclude")) opt.silhouettes.excluded_regions = split_list(args.get("photos-sil-exclude"));
     opt.fit.lambda_features = lambda_features;
     opt.stereo = stereo;
     if (!parse_fit_levels(args, opt.fit)) return 1;
@@ -841,7 +877,7 @@ int run_bench_photos(const Args& args) {
 }
 
 BenchRegistrar reg({"photos", "photos to head on synthetic sessions: camera errors, face distances, stage times "
-                              "(--photos-seeds N --photos-cameras C --photos-noise-px S --photos-map vertices|interior --photos-stiffness-scale K --photos-first-seed S --photos-silhouettes both|on|off --photos-lambda-sil L --photos-mask-grow PX --photos-sil-facets --photos-stereo --photos-lambda-features L --photos-coarse N:S,... --photos-schedule S,...|none --photos-follow K[:W] --photos-symmetry W; --photos-detected DIR: real-detector points on synth-photos renders, made by tests/browser/detect_synth_photos.mjs, with --photos-detected-map FILE --photos-depth-scale SIGMA --photos-depth-0 K0 --photos-depth-yaw2 C --photos-no-slide --photos-no-slide-sigma --photos-true-cameras --photos-drop GROUP --photos-contours --photos-contour-lambda K --photos-lids --photos-pulls --photos-pulls-by-photo)",
+                              "(--photos-seeds N --photos-cameras C --photos-noise-px S --photos-map vertices|interior --photos-stiffness-scale K --photos-first-seed S --photos-silhouettes both|on|off --photos-lambda-sil L --photos-mask-grow PX --photos-sil-facets --photos-sil-exclude REGION,... --photos-stereo --photos-lambda-features L --photos-coarse N:S,... --photos-schedule S,...|none --photos-follow K[:W] --photos-symmetry W; --photos-detected DIR: real-detector points on synth-photos renders, made by tests/browser/detect_synth_photos.mjs, with --photos-detected-map FILE --photos-detected-silhouettes --photos-depth-scale SIGMA --photos-depth-0 K0 --photos-depth-yaw2 C --photos-no-slide --photos-no-slide-sigma --photos-true-cameras --photos-drop GROUP --photos-contours --photos-contour-lambda K --photos-lids --photos-pulls --photos-pulls-by-photo)",
                     run_bench_photos});
 
 }  // namespace

@@ -237,10 +237,12 @@ std::unique_ptr<SilhouetteSet> make_silhouette_set(const GenericHead& generic, c
   }
   if (!any) return nullptr;
   std::vector<char> excluded(size_t(generic.mesh.num_vertices()), 0);
-  auto neck = generic.annotations.regions.find("neck");
-  if (neck != generic.annotations.regions.end())
-    for (int v : neck->second)
+  for (const std::string& name : options.excluded_regions) {
+    auto region = generic.annotations.regions.find(name);
+    if (region == generic.annotations.regions.end()) continue;
+    for (int v : region->second)
       if (v >= 0 && v < generic.mesh.num_vertices()) excluded[size_t(v)] = 1;
+  }
   ChinLine chin;
   auto ch = generic.annotations.regions.find("chin");
   if (ch != generic.annotations.regions.end()) chin.vertices = ch->second;

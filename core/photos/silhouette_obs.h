@@ -5,8 +5,9 @@
 // The rim, found by "rendering" on the CPU: with the mesh's current
 // positions and the photo's camera, the edges between a triangle facing the
 // camera and one facing away, kept only where they lie on the border of the
-// mesh's projected footprint (rasterized: a rim over other surface, like the
-// jaw seen over the neck, is no silhouette). Each outline point searches
+// mesh's projected footprint (the pixel 2 px beyond the edge covered by no
+// triangle: a rim over other surface, like the jaw seen over the neck, is no
+// silhouette). Each outline point searches
 // along its normal, within search_m (on the head, at the distance of the
 // mesh's centre from the camera: the same reach on a 12-megapixel photo as
 // on a small one), for the nearest such rim edge seen
@@ -35,6 +36,7 @@
 
 #include <array>
 #include <cmath>
+#include <string>
 #include <vector>
 
 namespace lk {
@@ -44,6 +46,15 @@ struct SilhouetteOptions {
   double huber_px = 4;            // Huber threshold of the reweighting
   double min_normal_cos = 0.3;    // outline normal vs the rim's outward direction
   bool facet_equations = false;   // the paper's three determinants per point (see above)
+  // The generic head's regions whose rims no outline point is matched to
+  // (make_silhouette_set, photos_job.h). The neck: the mask's neck and
+  // shoulders are not the head's outline. The scalp and the ears: a real
+  // photo's outline there is mostly hair, and through the cameras the
+  // detector's points give (their focal short) the scalp's outline bends the
+  // back of the head (docs/design/photos.md, "The outline in the page").
+  // `bench --only photos --photos-sil-exclude neck` measures the other case,
+  // exact cameras and a bald head, where the scalp's outline helps.
+  std::vector<std::string> excluded_regions = {"neck", "scalp", "ears"};
 };
 
 // Where the head ends downwards, for the chin line: the lowest of these
@@ -75,7 +86,7 @@ struct RimEdge {
   Vec2 pa = Vec2::Zero(), pb = Vec2::Zero(), outward = Vec2::Zero();
   bool excluded = false;  // on the open border (callers add their own exclusions)
 };
-// silhouette_only: only the rims on the border of the mesh's rasterized
+// silhouette_only: only the rims on the border of the mesh's projected
 // footprint (not the jaw seen over the neck); else every occluding contour.
 std::vector<RimEdge> find_rim_edges(const std::vector<Vec3>& positions, const std::vector<Tri>& triangles,
                                     const std::vector<std::array<int, 4>>& edges, const Camera& camera,

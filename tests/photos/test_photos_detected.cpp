@@ -11,6 +11,7 @@
 #include "photos/landmark_learning.h"
 #include "photos/photos_job.h"
 #include "photos/shape_fit.h"
+#include "photos/synthetic_outlines.h"
 #include "photos/synthetic_views.h"
 #include "synth/synth_head.h"
 #include "test_data.h"
@@ -306,6 +307,53 @@ TEST_CASE("on the detector's points the symmetric fit is closer to the person an
   std::printf("landmark rms %.2f -> %.2f px\n", roff.fit.final_rms_px, ron.fit.final_rms_px);
   CHECK(ron.fit.final_rms_px > roff.fit.final_rms_px);
   CHECK(ron.fit.final_rms_px < roff.fit.final_rms_px + 1.0);
+}
+
+// The head's outline in each photo (what a plain background gives: the
+// person's exact mask) through the cameras the detector's points give: the
+// face's outline brings the face closer, and the scalp's, through those
+// cameras (their focal short), would bend the back of the head; the job
+// leaves the scalp and the ears out by default (SilhouetteOptions).
+TEST_CASE("on the detector's points the face's outline brings the face closer and leaves the head's back alone",
+          "[photos][detected][silhouettes]") {
+  const ShippedMap shipped;
+  const GenericHead& generic = shipped.generic;
+  DetectedSession s;
+  load_session(generic, 4, s);
+  REQUIRE(s.photos.size() >= 4);
+  std::vector<PhotoOutline> all, outlines;
+  REQUIRE(synthetic_outlines(s.person.mesh, s.truth.cameras, {}, all));
+  for (int c : s.camera_of) outlines.push_back(all[size_t(c)]);
+  auto aligned_mm = [&](const TriMesh& mesh, const std::vector<const char*>& region_names) {
+    const std::vector<int>& face = generic.annotations.regions.at("face");
+    TriMesh m = mesh;
+    const Similarity sim = fit_similarity(mesh.positions, s.person.mesh.positions, face);
+    for (Vec3& p : m.positions) p = sim.apply(p);
+    std::vector<int> region;
+    for (const char* name : region_names)
+      for (int v : generic.annotations.regions.at(name)) region.push_back(v);
+    return 1000 * surface_distances(s.person.mesh, region, m).mean;
+  };
+  PhotosJobOptions face_only, whole;
+  whole.silhouettes.excluded_regions = {"neck"};
+  PhotosJobResult none, rf, rw;
+  REQUIRE(run_photos_job(generic, shipped.map, s.photos, face_only, none));
+  REQUIRE(run_photos_job(generic, shipped.map, s.photos, face_only, rf, &outlines));
+  REQUIRE(run_photos_job(generic, shipped.map, s.photos, whole, rw, &outlines));
+  double face[3], scalp[3], head[3];
+  const PhotosJobResult* runs[3] = {&none, &rf, &rw};
+  for (int k = 0; k < 3; ++k) {
+    face[k] = aligned_mm(runs[k]->fit.mesh, {"face"});
+    scalp[k] = aligned_mm(runs[k]->fit.mesh, {"scalp"});
+    head[k] = aligned_mm(runs[k]->fit.mesh, {"face", "scalp", "ears"});
+  }
+  std::printf("detected seed 4, aligned mm, no outline / the face's outline (default) / the whole head's: face %.2f / "
+              "%.2f / %.2f, scalp %.2f / %.2f / %.2f, head %.2f / %.2f / %.2f\n",
+              face[0], face[1], face[2], scalp[0], scalp[1], scalp[2], head[0], head[1], head[2]);
+  CHECK(face[1] < 0.8 * face[0]);
+  CHECK(head[1] < head[0]);
+  CHECK(scalp[1] < 0.5 * scalp[2]);
+  CHECK(head[1] < 0.7 * head[2]);
 }
 
 }  // namespace
