@@ -245,7 +245,7 @@ Status write_contour_check(const std::string& path, const std::string& photo_pat
 
 int run_photos(const Args& args) {
   const std::string cmd = "photos";
-  if (!only_known_options(cmd, args, {"points", "photos", "masks", "masks-from-photos", "silhouette-check", "map", "out",
+  if (!only_known_options(cmd, args, {"points", "photos", "masks", "masks-from-photos", "no-outlines", "silhouette-check", "map", "out",
                                       "levels", "focal-px", "texture-size", "no-texture", "register-texture", "label-texture", "stereo", "no-stereo", "coarse",
                                       "schedule", "follow", "folds", "depth-scale", "depth-0", "depth-yaw2", "contours",
                                       "contour-check", "contour-lambda", "focal-sigma", "no-slide", "lids", "iris-photo", "pulls", "pulls-by-photo", "pulls-by-landmark", "focal-jackknife", "symmetry", "no-skin-detail"}))
@@ -260,9 +260,11 @@ int run_photos(const Args& args) {
   if (!mask_paths.empty() && mask_paths.size() != points_paths.size())
     return fail(cmd, std::to_string(mask_paths.size()) + " masks for " + std::to_string(points_paths.size()) +
                          " points files: give one mask per photo, in the same order");
-  const bool plain_masks = args.has("masks-from-photos");
-  if (plain_masks && (photo_paths.empty() || !mask_paths.empty()))
+  // With --photos and no --masks, each photo's outline is found on its
+  // background where that is plain, as the page does (--no-outlines: none).
+  if (args.has("masks-from-photos") && (photo_paths.empty() || !mask_paths.empty()))
     return fail(cmd, "--masks-from-photos needs --photos (and no --masks): it finds each outline on a plain background");
+  const bool plain_masks = !photo_paths.empty() && mask_paths.empty() && !args.has("no-outlines");
   const bool with_outlines = plain_masks || !mask_paths.empty();
   int levels = 3, texture_size = 2048;
   double focal_px = 0;
@@ -343,9 +345,7 @@ int run_photos(const Args& args) {
       PhotoOutline outline;
       Status ms = load_image_file(source, image, plain_masks ? 3 : 0);
       if (ms && plain_masks) {
-        std::vector<std::uint8_t> mask;
-        ms = mask_from_plain_background(image, PlainBackgroundOptions{}, mask);
-        if (ms) ms = extract_outline(mask, image.width, image.height, ph.width, ph.height, OutlineOptions{}, outline);
+        ms = outline_from_plain_photo(image, ph.width, ph.height, kPlainOutlineMaxSide, PlainBackgroundOptions{}, OutlineOptions{}, outline);
       } else if (ms) {
         ms = outline_from_mask_image(image, ph.width, ph.height, OutlineOptions{}, outline);
       }
@@ -822,7 +822,7 @@ int run_learn_landmark_map(const Args& args) {
 }
 
 Registrar photos_reg({"photos",
-                      "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] [--masks M1.png ... | --masks-from-photos] [--silhouette-check] "
+                      "likeness photos --points P1.json P2.json ... --out DIR [--map MAP.json] [--photos P1.jpg ...] [--masks M1.png ... | --no-outlines] [--silhouette-check] "
                       "[--focal-px F] [--levels L] [--texture-size N] [--no-texture] [--register-texture] [--label-texture] [--stereo] [--folds] [--coarse N:S,...|none] [--schedule S,...|none] [--follow K[:W]] [--symmetry W] [--no-skin-detail] [--depth-scale SIGMA [--depth-0 K0] [--depth-yaw2 C]] [--focal-sigma S] [--focal-jackknife] [--no-slide] [--contours [--contour-lambda K]] [--contour-check] [--lids] [--iris-photo NAME] [--pulls | --pulls-by-photo | --pulls-by-landmark]",
                       "a head from several photos' landmarks (fua1998): self-calibrated cameras, fitted control "
                       "mesh, levels, cameras.json, report.json; with --photos the skin from those cameras "
@@ -830,7 +830,8 @@ Registrar photos_reg({"photos",
                       "--register-texture: the photos re-registered on the head first, "
                       "texture/register.h) and the iris found in them (eye.png; --iris-photo NAME: in that photo only, "
                       "else the most frontal eye); head.likeness.glb, the head project; with --masks (white or opaque = the person) the head's outline "
-                      "in each photo as silhouettes (--masks-from-photos: from the photos, plain background only; "
+                      "in each photo as silhouettes, the face's rim matched to it (with --photos and no --masks, by default, from the "
+                      "photos where their background is plain, as the page does; --no-outlines: none; "
                       "--silhouette-check: silhouettes_N.png, outline and rims drawn on each photo); with --photos "
                       "and --stereo, stereo between pairs of them joins the landmarks (off by default: on real "
                       "photos it dents the face, docs/design/photos.md); --coarse: the shape fit first over coarse control "
