@@ -45,13 +45,60 @@ const std::vector<std::vector<double>>* skin_detail(const lk::GenericHead& gener
   return &detail[levels];
 }
 
-// photos: [{name, text}] (text: the photo's likeness-landmarks JSON);
+// A dropped photo's outline on a plain background (photos/outline.h:
+// outline_from_plain_photo, as `likeness photos --masks-from-photos` finds
+// it), for the head's silhouettes. The pixels (decoded: see decode_image) are
+// the photo's or the smaller copy the page's face detector gets; width x
+// height is the photo's own size. -> {ok, points: Float64Array of x y nx ny
+// per outline point, in the photo's pixels} or {ok: false, message} (the
+// background is not plain, no outline in it: the photo keeps its landmarks).
+val plain_outline(const std::string& name, std::uintptr_t data, std::size_t size, val decoded, int width, int height) {
+  lk::Image image;
+  lk::Status status = decode_image(name, data, size, decoded, image, 3);
+  lk::PhotoOutline outline;
+  if (width <= 0 || height <= 0) {  // (the stb path of the 'outline' job: the photo's own size)
+    width = image.width;
+    height = image.height;
+  }
+  if (status.ok())
+    status = lk::outline_from_plain_photo(image, width, height, lk::kPlainOutlineMaxSide, lk::PlainBackgroundOptions{},
+                                          lk::OutlineOptions{}, outline);
+  if (!status.ok()) return error_result(status);
+  std::vector<double> flat;
+  flat.reserve(4 * outline.points.size());
+  for (const lk::OutlinePoint& q : outline.points)
+    flat.insert(flat.end(), {q.pixel.x(), q.pixel.y(), q.normal.x(), q.normal.y()});
+  val r = ok_result();
+  r.set("points", typed_array("Float64Array", flat));
+  return r;
+}
+
+// The outline a photo row carries ({outline: Float64Array x y nx ny ...},
+// from plain_outline) for a photo of width x height; none: no points.
+lk::PhotoOutline outline_of(const val& p, int width, int height) {
+  lk::PhotoOutline o;
+  o.width = width;
+  o.height = height;
+  if (!has(p, "outline") || p["outline"].isNull()) return o;
+  const std::vector<double> flat = emscripten::convertJSArrayToNumberVector<double>(p["outline"]);
+  for (size_t i = 0; i + 3 < flat.size(); i += 4) {
+    const lk::Vec2 q(flat[i], flat[i + 1]), n(flat[i + 2], flat[i + 3]);
+    if (q.allFinite() && n.allFinite() && n.norm() > 0.5 && q.x() >= 0 && q.y() >= 0 && q.x() <= width && q.y() <= height)
+      o.points.push_back({q, n.normalized()});
+  }
+  return o;
+}
+
+// photos: [{name, text, outline?}] (text: the photo's likeness-landmarks
+// JSON; outline: its plain_outline points, the silhouettes);
 // options: {levels (1..4, default 3), focalPx (a focal prior in pixels, 0:
 // none)}. Returns what fit_head_job does (head_result: meshes with the
 // generic head as "aligned", the fitted control mesh as "local" and
 // "control", the levels; notes; components) plus
-//   photos [{name, used, refusal, rmsPx, landmarks, outliers}] in the order given
+//   photos [{name, used, refusal, rmsPx, landmarks, outliers, outlinePoints}] in the order given
 //   focalPx, calibrationRmsPx [before, after], shapeFitRmsPx [before, after],
+//   silhouettes {photos, points, matched [generic, fit], rimToOutlinePx
+//   [generic, fit]} (only when some photo had an outline),
 //   calibrationIterations, shapeFitStages [{stiffness, iterations}], photosMs.
 // A photo whose file is refused (format, size) is named with its reason and
 // left out, as the CLI does. On an error (fewer than 2 usable photos, ...)
@@ -73,6 +120,8 @@ val photos_head_job(val photos, val options) {
   std::vector<lk::LandmarkPhoto> parsed;
   std::vector<int> parsed_index(static_cast<size_t>(n), -1);  // photo k -> its index in parsed, -1: refused
   std::vector<std::string> names(static_cast<size_t>(n)), refusals(static_cast<size_t>(n));
+  std::vector<lk::PhotoOutline> outlines;  // #parsed
+  bool with_outlines = false;
   for (int k = 0; k < n; ++k) {
     const val p = photos[k];
     names[size_t(k)] = has(p, "name") ? p["name"].as<std::string>() : "photo " + std::to_string(k + 1);
@@ -87,6 +136,8 @@ val photos_head_job(val photos, val options) {
     }
     ph.name = names[size_t(k)];
     parsed_index[size_t(k)] = static_cast<int>(parsed.size());
+    outlines.push_back(outline_of(p, ph.width, ph.height));
+    with_outlines = with_outlines || !outlines.back().points.empty();
     parsed.push_back(std::move(ph));
   }
 
@@ -98,7 +149,8 @@ val photos_head_job(val photos, val options) {
   // (the first job of a worker makes the skin detail: counted in its time)
   const std::vector<std::vector<double>>* detail = skin_detail(*generic, levels, status);
   if (!detail) return error_result(lk::with_context(status, "the generic head's skin detail"));
-  status = lk::photos_project(*generic, *map, parsed, opt, levels, *project, job, detail);
+  status = lk::photos_project(*generic, *map, parsed, opt, levels, *project, job, detail,
+                              with_outlines ? &outlines : nullptr);
   const double photos_ms = now_ms() - t0;
 
   val rows = val::array();
@@ -113,6 +165,7 @@ val photos_head_job(val photos, val options) {
     o.set("rmsPx", pc ? pc->rms_px : 0.0);
     o.set("landmarks", pc ? pc->num_landmarks : 0);
     o.set("outliers", pc ? pc->num_outliers : 0);
+    o.set("outlinePoints", i >= 0 ? int(outlines[size_t(i)].points.size()) : 0);
     rows.call<void>("push", o);
   }
   if (!status.ok()) {
@@ -147,6 +200,27 @@ val photos_head_job(val photos, val options) {
     stages.call<void>("push", o);
   }
   r.set("shapeFitStages", stages);
+  // The head's rim against the photos' outlines (fua1998 Sec. 3.2), at the
+  // generic head and at the fit, as `likeness photos` reports them.
+  if (with_outlines) {
+    const auto sil = lk::make_silhouette_set(*generic, generic->mesh, job.calib, outlines, opt.silhouettes);
+    if (sil) {
+      const lk::SilhouetteStats a = sil->stats(generic->mesh.positions), b = sil->stats(job.fit.mesh.positions);
+      val o = val::object(), mean = val::array(), matched = val::array();
+      mean.call<void>("push", a.mean_px);
+      mean.call<void>("push", b.mean_px);
+      matched.call<void>("push", a.matched);
+      matched.call<void>("push", b.matched);
+      o.set("points", a.points);
+      o.set("matched", matched);
+      o.set("rimToOutlinePx", mean);
+      int photos_with = 0;
+      for (size_t i = 0; i < outlines.size() && i < job.calib.photos.size(); ++i)
+        photos_with += job.calib.photos[i].used && !outlines[i].points.empty();
+      o.set("photos", photos_with);
+      r.set("silhouettes", o);
+    }
+  }
   r.set("stages", val::array());  // no scan: no distance figures per stage
   r.set("photosMs", photos_ms);
   r.set("fitMs", photos_ms);
@@ -181,4 +255,5 @@ const lk::Camera* PhotoCameras::find(const lk::HeadProject* of, const std::strin
 EMSCRIPTEN_BINDINGS(likeness_worker_photos) {
   using namespace lk_worker;
   emscripten::function("photos_head_job", &photos_head_job);
+  emscripten::function("plain_outline", &plain_outline);
 }

@@ -260,6 +260,31 @@ async function photoPixels(name, buffer, smallPx = 0, probe = true) {
   return { buffer: first.pixels.buffer, decoded: { width: info.width, height: info.height }, decoder: 'browser', small };
 }
 
+// A photo's outline on a plain background (the core's plain_outline, which
+// finds it on the photo shrunk to 1280 px, kPlainOutlineMaxSide), in its
+// width x height pixels, from photoPixels' result. From the photo's own
+// pixels, as `likeness photos` finds it, up to twice that size; a larger
+// photo's (a 12-megapixel one's) from the detector's 1280-px copy, shrunk by
+// the browser (left open for the page): the core's shrinking would cost a
+// third of a second a photo. -> {points: Float64Array x y nx ny ...} or
+// {message} (why there is none: a room behind the person).
+function photoOutline(name, photo, width, height) {
+  const viaSmall = photo.small && Math.max(width, height) > 2 * 1280;
+  const r = viaSmall ? smallOutline(name, photo.small, width, height)
+    : withHeapBytes(photo.buffer, (ptr, size) => core.plain_outline(name, ptr, size, photo.decoded, width, height));
+  return r.ok ? { points: r.points } : { message: r.message || r.code };
+}
+
+function smallOutline(name, bitmap, width, height) {
+  const canvas = new OffscreenCanvas(bitmap.width, bitmap.height);
+  const ctx = canvas.getContext('2d', { willReadFrequently: true });
+  if (!ctx) return { ok: false, message: 'no 2-D canvas to read the photo from' };
+  ctx.drawImage(bitmap, 0, 0);
+  const pixels = ctx.getImageData(0, 0, bitmap.width, bitmap.height).data;
+  return withHeapBytes(pixels.buffer, (ptr, size) =>
+    core.plain_outline(name, ptr, size, { width: bitmap.width, height: bitmap.height }, width, height));
+}
+
 // Runs fn(ptr, size, decoded) on a photo's pixels (or bytes) in the heap;
 // the result says which decoder ran.
 async function withPhoto(name, buffer, fn, smallPx = 0) {
@@ -286,16 +311,24 @@ const JOBS = {
   // (0: none), read from the file's bytes (the browser's decoder leaves
   // pixels only); small: the photo at most smallPx on its longer side (an
   // ImageBitmap, transferred; none where the photo is smaller or stb decoded it).
+  // outline: the photo's outline on a plain background for the head's
+  // silhouettes (photoOutline).
   image: async (msg) => {
-    const r = await withPhoto(msg.name, msg.buffer, (ptr, size, decoded) => core.check_image(msg.name, ptr, size, decoded),
-                              msg.smallPx | 0);
-    if (r && r.ok) {
-      // EXIF sits in the file's first segments (APP1, at most 64 kB).
-      const head = msg.buffer.slice(0, 256 * 1024);
-      const f = withHeapBytes(head, (ptr, size) => core.photo_focal(ptr, size, r.width, r.height));
-      r.focalPx = f.focalPx;
-      r.focalSource = f.source;
+    const photo = await photoPixels(msg.name, msg.buffer, msg.smallPx | 0);
+    if (photo.error) return photo.error;
+    const r = withHeapBytes(photo.buffer, (ptr, size) => core.check_image(msg.name, ptr, size, photo.decoded));
+    r.decoder = photo.decoder;
+    if (!r.ok) {
+      if (photo.small) photo.small.close();
+      return r;
     }
+    r.outline = photoOutline(msg.name, photo, r.width, r.height);
+    if (photo.small) r.small = photo.small;
+    // EXIF sits in the file's first segments (APP1, at most 64 kB).
+    const head = msg.buffer.slice(0, 256 * 1024);
+    const f = withHeapBytes(head, (ptr, size) => core.photo_focal(ptr, size, r.width, r.height));
+    r.focalPx = f.focalPx;
+    r.focalSource = f.source;
     return r;
   },
   // {file}: a scan as a File, read in slices -> what 'parse' returns.
@@ -372,9 +405,20 @@ const JOBS = {
   // {name, buffer, guess?: [x, y]}: an eye photo -> the eyeball (iris) texture.
   eye: (msg, progress) => withPhoto(msg.name, msg.buffer, (ptr, size, decoded) =>
     core.eye_photo_job(msg.name, ptr, size, msg.guess || null, decoded, progress)),
-  // {photos: [{name, text}], options}: each photo's face landmarks
-  // (likeness-landmarks JSON) -> cameras and the person's head (issue 37),
-  // kept in this worker like a fitted head.
+  // {name, buffer, smallPx}: a photo's outline again (a photo restored from
+  // a kept or saved project, which keeps its points, not its outline):
+  // {ok, width, height, outline} (photoOutline's).
+  outline: async (msg) => {
+    const photo = await photoPixels(msg.name, msg.buffer, msg.smallPx | 0, false);
+    if (photo.error) return photo.error;
+    const size = photo.decoded || {};
+    const outline = photoOutline(msg.name, photo, size.width | 0, size.height | 0);
+    if (photo.small) photo.small.close();
+    return { ok: true, outline };
+  },
+  // {photos: [{name, text, outline?}], options}: each photo's face landmarks
+  // (likeness-landmarks JSON) and its outline ('image' job) -> cameras and
+  // the person's head (issue 37), kept in this worker like a fitted head.
   photos: (msg) => core.photos_head_job(msg.photos || [], msg.options || {}),
   // {name, buffer}: a smile photo -> the teeth texture (teeth model's uvs).
   smile: (msg) => withPhoto(msg.name, msg.buffer, (ptr, size, decoded) => core.smile_photo_job(msg.name, ptr, size, decoded)),

@@ -8,11 +8,12 @@ namespace lk {
 
 Status photos_project(const GenericHead& generic, const LandmarkMap& map, const std::vector<LandmarkPhoto>& photos,
                       const PhotosJobOptions& options, int levels, HeadProject& project, PhotosJobResult& result,
-                      const std::vector<std::vector<double>>* skin_detail) {
+                      const std::vector<std::vector<double>>* skin_detail,
+                      const std::vector<PhotoOutline>* outlines) {
   project = HeadProject{};
   result = PhotosJobResult{};
   if (levels < 1 || levels > 4) return Status::error(ErrorCode::InvalidInput, "photos: levels must be 1..4");
-  Status s = run_photos_job(generic, map, photos, options, result);
+  Status s = run_photos_job(generic, map, photos, options, result, outlines);
   if (!s) return s;
   return project_from_photos(generic, result, levels, project, skin_detail);
 }

@@ -18,7 +18,7 @@
 
 namespace lk {
 
-// Runs run_photos_job(generic, map, photos, options, result) and, when it
+// Runs run_photos_job(generic, map, photos, options, result, outlines) and, when it
 // succeeds, makes project a new project of its control mesh with `levels`
 // (1..4) Butterfly levels (project_from_photos, with skin_detail). fit.aligned is the generic head (the shape the
 // self-calibration starts from), fit.local and fit.control the fitted
@@ -26,7 +26,8 @@ namespace lk {
 // empty and result holds what the job got to (each photo's refusal).
 Status photos_project(const GenericHead& generic, const LandmarkMap& map, const std::vector<LandmarkPhoto>& photos,
                       const PhotosJobOptions& options, int levels, HeadProject& project, PhotosJobResult& result,
-                      const std::vector<std::vector<double>>* skin_detail = nullptr);
+                      const std::vector<std::vector<double>>* skin_detail = nullptr,
+                      const std::vector<PhotoOutline>* outlines = nullptr);
 
 // The project of a finished photos job (what photos_project makes after
 // running it): for `likeness photos`, which runs the job with its outlines

@@ -50,7 +50,8 @@ export async function checkPhotos(photos, alone) {
                                ' photo, kept for the Texture stage';
     // checked: the worker checked these bytes (the texture job need not probe them again).
     const photo = addPhoto({ name: file.name, file, width: result.width, height: result.height, decoder: result.decoder, checked: true,
-                             exifFocalPx: result.focalPx || 0, checkMs: performance.now() - t0, small: result.small || null });
+                             exifFocalPx: result.focalPx || 0, checkMs: performance.now() - t0, small: result.small || null,
+                             outline: result.outline || null });
     // Its face points are found now, while the worker checks the next photo
     // (the detector takes one photo at a time, landmarks.js).
     findLandmarks([photo]);
@@ -103,7 +104,7 @@ function addPhoto(entry) {
 // still reads the original file. The worker's check made it from its own
 // decode of the photo (photo.small), so the photo is decoded here only where
 // it did not (a photo smaller than that, or the stb decoder).
-const DETECT_PX = 1280;
+export const DETECT_PX = 1280;  // = the core's kPlainOutlineMaxSide (photos/outline.h)
 async function detectionImage(photo) {
   const small = photo.small;
   photo.small = null;
@@ -279,7 +280,7 @@ export function renderPhotos() {
     // The last head from photos: used, or why not.
     const ph = (photo.role || 'face') === 'face' ? photo.photosHead : null;
     if (ph) {
-      if (ph.used) note += ' · used for the head (' + ph.rmsPx.toFixed(1) + ' px)';
+      if (ph.used) note += ' · used for the head (' + ph.rmsPx.toFixed(1) + ' px' + (ph.outlinePoints ? ', and its outline' : '') + ')';
       else { note += ' · not used for the head' + (ph.leftOut ? ' (no face points)' : ph.refusal ? ': ' + ph.refusal : ''); meta.classList.add('bad'); }
     }
     if (photo.calib) {

@@ -9,7 +9,7 @@
 import { app, ui, beginJob, endJob, live, setStage, setStatus, showError, stageItem } from './state.js';
 import { runJob } from './worker_client.js';
 import { landmarksJson } from './landmarks.js';
-import { facePhotos, findingFacePoints, renderPhotos } from './photos.js';
+import { DETECT_PX, facePhotos, findingFacePoints, renderPhotos } from './photos.js';
 import { FIT_STAGES, showHead } from './fit.js';
 import { checkFitQuality } from './checks.js';
 import { stopAnimation } from './animation.js';
@@ -49,7 +49,7 @@ function rowsDone(r, n, prior) {
         ' px (generic head → bundle adjustment) · both stages ' + (r.photosMs / 1000).toFixed(2) + ' s');
   setStage('local_fit', 'done', 1, 'complete');
   stats('local_fit', 'landmark error on the fitted mesh ' + f0.toFixed(1) + ' → ' + f1.toFixed(1) + ' px · stiffness ' +
-        r.shapeFitStages.map((s) => s.stiffness).join(', '));
+        r.shapeFitStages.map((s) => s.stiffness).join(', ') + silhouetteStats(r.silhouettes));
   // No scan: the scan fit's global stage did not run; its row is no result.
   const g = stageItem('global_fit');
   setStage('global_fit', 'not run (no scan)', 0);
@@ -59,11 +59,32 @@ function rowsDone(r, n, prior) {
   stats('subdivide', 'Butterfly levels of the fitted control mesh; no scan, so no detail displacements');
 }
 
+// The head's rim against the photos' outlines (a plain background gives
+// them; a room behind the person does not).
+function silhouetteStats(sil) {
+  if (!sil || !sil.photos) return ' · no outline (the photos\' backgrounds are not plain)';
+  const [a, b] = sil.rimToOutlinePx;
+  return ' · the outline in ' + sil.photos + ' photo' + (sil.photos === 1 ? '' : 's') + ': head edge to outline ' +
+         a.toFixed(1) + ' → ' + b.toFixed(1) + ' px';
+}
+
 // The focal prior from the photos' EXIF (the median over those that give
 // one, as `likeness photos` takes it), 0: none.
 function exifFocal(photos) {
   const f = photos.map((p) => p.exifFocalPx || 0).filter((x) => x > 0).sort((a, b) => a - b);
   return f.length ? f[Math.floor(f.length / 2)] : 0;
+}
+
+// Each photo's outline on a plain background (the worker finds it when the
+// photo is dropped): found again for photos restored from a kept or saved
+// project, which keep their points but not their outline.
+async function findOutlines(photos) {
+  for (const p of photos) {
+    if (p.outline) continue;
+    const buffer = await p.file.arrayBuffer();
+    const r = await runJob({ type: 'outline', name: p.name, buffer, smallPx: DETECT_PX }, [buffer]);
+    p.outline = r.ok ? r.outline : { message: r.message || r.code };
+  }
 }
 
 export async function makeHeadFromPhotos(trigger = 'button') {
@@ -92,7 +113,10 @@ export async function makeHeadFromPhotos(trigger = 'button') {
   const t0 = performance.now();
   let result;
   try {
-    const list = photos.map((p) => ({ name: p.name, text: JSON.stringify(landmarksJson(p.name, p.width, p.height, p.detect.points)) }));
+    await findOutlines(photos);
+    if (!live(job)) return;
+    const list = photos.map((p) => ({ name: p.name, text: JSON.stringify(landmarksJson(p.name, p.width, p.height, p.detect.points)),
+                                      outline: p.outline && p.outline.points ? p.outline.points : null }));
     result = await runJob({ type: 'photos', photos: list, options: { levels: 3, focalPx: prior } }, []);
   } catch (e) {
     if (e && e.cancelled) {

@@ -4,8 +4,9 @@
 // dropped as its rendered PNGs only. The page's own detector finds each
 // view's landmarks (synth-photos' landmark files use a placeholder map, not
 // MediaPipe's, so they are not given), and with Auto-run on, with no click,
-// the worker makes the head: every view with a face is used, each photo's
-// row says so, the Pipeline rows say what ran, the canvas shows the head,
+// the worker makes the head: every view with a face is used, with its
+// outline on the plain background, each photo's row says so, the Pipeline
+// rows say what ran, the canvas shows the head,
 // and it exports; then it is textured from the same photos with their
 // recovered cameras (no click). The fitted head is compared with the synthetic person's
 // truth (person.obj, same topology as the generic head). Bad input: a flat
@@ -133,6 +134,11 @@ async function run(s) {
     check('every photo with a face is used, and its row says so', r.head.used === withFace.length &&
           withFace.every((p) => p.used && /used for the head/.test(p.row)),
           r.photos.map((p) => `${p.name}: "${p.row}"`).join(' | '));
+    // The renders' plain background gives each its outline; the fit brings the face's edge onto it.
+    const sil = /the outline in (\d+) photos: head edge to outline ([\d.]+) → ([\d.]+) px/.exec(r.stages.local_fit.stats);
+    check('each photo\'s outline on its plain background is used, and the head\'s edge comes closer to it',
+          withFace.every((p) => /and its outline/.test(p.row)) && sil && Number(sil[1]) === withFace.length &&
+          Number(sil[3]) < Number(sil[2]), `"${r.stages.local_fit.stats}"`);
     check('no click: no trusted click on the page, no landmark clicked on any photo', r.clicks === 0 && r.photos.every((p) => p.clicks === 0),
           `${r.clicks} clicks`);
     check('the Pipeline rows say what ran: Face points, Self-calibration, Shape fit, Subdivide; the scan fit\'s global stage not run',
@@ -175,7 +181,9 @@ async function run(s) {
       fs.writeFileSync(f, JSON.stringify(p.json));
       return f;
     });
-    execFileSync(bin, ['photos', '--points', ...files, '--levels', '1', '--out', path.join(dir, 'cli')]);
+    // (with the photos: their outlines on the plain background, as the page finds them)
+    const pngs = saved.map((p) => path.join(dir, p.name));
+    execFileSync(bin, ['photos', '--points', ...files, '--photos', ...pngs, '--no-texture', '--levels', '1', '--out', path.join(dir, 'cli')]);
     const cli = readObj(path.join(dir, 'cli', 'control.obj'));
     const cams = JSON.parse(fs.readFileSync(path.join(dir, 'cli', 'cameras.json'), 'utf8'));
     let worst = Infinity;
@@ -222,6 +230,7 @@ async function run(s) {
     }
     await page.close();
 
+    await outlineJobs(s);
     await badInput(s, fs.readFileSync(path.join(dir, 'view_03.png')));
     await photosSample(s);
   } finally {
@@ -246,6 +255,38 @@ async function photosSample(s) {
         tex && tex.photos === r.head.used && r.clicks === 0,
         `head ${r.head.ok ? 'from ' + r.head.used + ' of ' + r.head.photos + ' photos' : 'refused: ' + r.head.message}; ` +
         (tex ? `textured from ${tex.photos} in ${Math.round(tex.ms)} ms` : 'no texture'));
+  await page.close();
+}
+
+// The worker's outline of a photo on a plain background, in the photo's
+// pixels: a 2700x2000 photo (past 2560 px its outline comes from the
+// detector's 1280-px copy, shrunk by the browser) of a disk of radius 600 px
+// on a plain wall; the 'outline' job (photos restored from a project) gives
+// the same from the file alone; a busy background gives none, with why.
+async function outlineJobs(s) {
+  const page = await s.newPage();
+  const W = 2700, H = 2000, cx = 1300, cy = 1050, R = 600;
+  const disk = makePhotoPng(W, H, (x, y) => (Math.hypot(x + 0.5 - cx, y + 0.5 - cy) <= R ? [200, 150, 120] : [90, 100, 110]));
+  const busy = makePhotoPng(640, 480, (x, y) => [(x * 37 + y * 11) & 255, (x * 7) & 255, (y * 13) & 255]);
+  const r = await page.evaluate(async ({ disk, busy }) => {
+    const { runJob } = await import('./js/worker_client.js');
+    const bytes = (a) => new Uint8Array(a).buffer;
+    const checked = await runJob({ type: 'image', name: 'disk.png', buffer: bytes(disk), smallPx: 1280 }, []);
+    if (checked.small) checked.small.close();
+    const again = await runJob({ type: 'outline', name: 'disk.png', buffer: bytes(disk), smallPx: 1280 }, []);
+    const refused = await runJob({ type: 'outline', name: 'busy.png', buffer: bytes(busy), smallPx: 1280 }, []);
+    const pts = (o) => (o && o.points ? Array.from(o.points) : []);
+    return { ok: checked.ok, small: !!checked.small, first: pts(checked.outline), again: pts(again.outline),
+             refused: refused.outline && refused.outline.message };
+  }, { disk: [...disk], busy: [...busy] });
+  let worst = 0, n = 0;
+  for (let i = 0; i + 3 < r.first.length; i += 4, ++n) worst = Math.max(worst, Math.abs(Math.hypot(r.first[i] - cx, r.first[i + 1] - cy) - R));
+  const same = r.first.length === r.again.length && r.first.every((v, i) => Math.abs(v - r.again[i]) < 1e-9);
+  check('a photo\'s outline on a plain background lies on it in the photo\'s own pixels, from the detector\'s copy of a ' +
+        'large photo and from the file alone alike; a busy background gives none, and why',
+        r.ok && r.small && n > 50 && worst < 4 && same && /not plain/.test(r.refused || ''),
+        `${n} points, farthest ${worst.toFixed(2)} px from the ${R}-px circle; the outline job ${same ? 'the same' : 'differs'}; ` +
+        `busy: "${r.refused}"`);
   await page.close();
 }
 
