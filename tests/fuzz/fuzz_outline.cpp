@@ -1,6 +1,7 @@
 // libFuzzer target: a mask file as `likeness photos --masks` reads it
 // (read_image, then the photos' outline, photos/outline.h), and the same
-// bytes as a photo with a plain background (--masks-from-photos). A success
+// bytes as a photo with a plain background (`likeness photos --photos`, the
+// page), whole and shrunk (outline_from_plain_photo). A success
 // holds points inside the image (on pixel edges, so within [0, size]) with
 // finite unit normals, at least min_points of them, and a foreground share
 // in (0, max]. The images are capped at 256 k pixels so the fuzzer spends
@@ -48,5 +49,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, size_t size) {
   for (std::uint8_t m : plain) lk::fuzz::require(m <= 1);
   s = lk::extract_outline(plain, image.width, image.height, image.width, image.height, options, outline);
   if (s) check_outline(outline, options);
+  // As the page and `likeness photos --photos` find it: the image shrunk to
+  // 64 px first, read as the copy of a photo twice its size; the points in
+  // that photo's pixels.
+  s = lk::outline_from_plain_photo(image, 2 * image.width, 2 * image.height, 64, lk::PlainBackgroundOptions{}, options,
+                                   outline);
+  if (s) {
+    lk::fuzz::require(outline.width == 2 * image.width && outline.height == 2 * image.height);
+    check_outline(outline, options);
+  } else {
+    lk::fuzz::require(!s.message.empty());
+  }
   return 0;
 }

@@ -184,20 +184,24 @@ TEST_CASE("silhouettes lower the outline distance and the head error on a synthe
   CHECK(hw.p95 < hp.p95);
 }
 
+// A view as synth-photos renders it (shaded skin on a plain grey-blue
+// backdrop) and the renderer's exact mask of it.
+void render_plain_view(const test::PhotoScenario& s, const SkinField& skin, const Camera& cam, Image& photo, Image& exact) {
+  const Vec3 light = (cam.R.transpose() * Vec3(-0.4, -0.6, -1.0)).normalized();
+  REQUIRE(render_synthetic_photo(
+      s.person.mesh, cam,
+      [&](const Vec3& p, const Vec3& n) -> Vec3 { return skin_albedo(skin, p) * (0.35 + 0.65 * std::max(0.0, n.dot(light))); },
+      Vec3(0.55, 0.6, 0.65), photo));
+  REQUIRE(synthetic_mask(s.person.mesh, cam, exact));
+}
+
 TEST_CASE("a plain background gives the renderer's mask and a busy one is refused", "[photos]") {
   test::PhotoScenario s = test::make_photo_scenario(4);
   SkinField skin;
   REQUIRE(make_skin_field(s.person, 4, {}, skin));
   for (size_t c : {size_t(0), size_t(4), size_t(9)}) {
-    const Camera& cam = s.session.cameras[c];
-    // As synth-photos renders it: shaded skin on a plain grey-blue backdrop.
-    const Vec3 light = (cam.R.transpose() * Vec3(-0.4, -0.6, -1.0)).normalized();
     Image photo, exact;
-    REQUIRE(render_synthetic_photo(
-        s.person.mesh, cam,
-        [&](const Vec3& p, const Vec3& n) -> Vec3 { return skin_albedo(skin, p) * (0.35 + 0.65 * std::max(0.0, n.dot(light))); },
-        Vec3(0.55, 0.6, 0.65), photo));
-    REQUIRE(synthetic_mask(s.person.mesh, cam, exact));
+    render_plain_view(s, skin, s.session.cameras[c], photo, exact);
     std::vector<std::uint8_t> derived;
     REQUIRE(mask_from_plain_background(photo, {}, derived));
     const std::vector<std::uint8_t> truth = mask_from_image(exact);
@@ -227,14 +231,8 @@ TEST_CASE("an outline found on a shrunk photo lies on the full photo's outline",
   test::PhotoScenario s = test::make_photo_scenario(4);
   SkinField skin;
   REQUIRE(make_skin_field(s.person, 4, {}, skin));
-  const Camera& cam = s.session.cameras[4];
-  const Vec3 light = (cam.R.transpose() * Vec3(-0.4, -0.6, -1.0)).normalized();
   Image photo, exact;
-  REQUIRE(render_synthetic_photo(
-      s.person.mesh, cam,
-      [&](const Vec3& p, const Vec3& n) -> Vec3 { return skin_albedo(skin, p) * (0.35 + 0.65 * std::max(0.0, n.dot(light))); },
-      Vec3(0.55, 0.6, 0.65), photo));
-  REQUIRE(synthetic_mask(s.person.mesh, cam, exact));
+  render_plain_view(s, skin, s.session.cameras[4], photo, exact);
   OutlineOptions dense;
   dense.spacing_px = 1;
   PhotoOutline truth;
