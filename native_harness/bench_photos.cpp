@@ -419,7 +419,7 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
     if (!parse_fit_levels(args, opt.fit)) return 1;
     // --photos-detected-silhouettes: each view rendered as synth-photos
     // writes it, its outline found on its plain background as the page and
-    // `likeness photos --masks-from-photos` find it.
+    // `likeness photos --photos` find it.
     std::vector<PhotoOutline> outlines;
     const bool with_outlines = args.has("photos-detected-silhouettes");
     if (with_outlines) {

@@ -261,7 +261,8 @@ int run_photos(const Args& args) {
     return fail(cmd, std::to_string(mask_paths.size()) + " masks for " + std::to_string(points_paths.size()) +
                          " points files: give one mask per photo, in the same order");
   // With --photos and no --masks, each photo's outline is found on its
-  // background where that is plain, as the page does (--no-outlines: none).
+  // background where that is plain, as the page does (--no-outlines: none);
+  // --masks-from-photos, the old name of that default, is still accepted.
   if (args.has("masks-from-photos") && (photo_paths.empty() || !mask_paths.empty()))
     return fail(cmd, "--masks-from-photos needs --photos (and no --masks): it finds each outline on a plain background");
   const bool plain_masks = !photo_paths.empty() && mask_paths.empty() && !args.has("no-outlines");

@@ -46,10 +46,10 @@ const std::vector<std::vector<double>>* skin_detail(const lk::GenericHead& gener
 }
 
 // A dropped photo's outline on a plain background (photos/outline.h:
-// outline_from_plain_photo, as `likeness photos --masks-from-photos` finds
-// it), for the head's silhouettes. The pixels (decoded: see decode_image) are
-// the photo's or the smaller copy the page's face detector gets; width x
-// height is the photo's own size. -> {ok, points: Float64Array of x y nx ny
+// outline_from_plain_photo, as `likeness photos --photos` finds it), for the
+// head's silhouettes. The pixels (decoded: see decode_image) are the photo's
+// or the smaller copy the page's face detector gets; width x height is the
+// photo's own size. -> {ok, points: Float64Array of x y nx ny
 // per outline point, in the photo's pixels} or {ok: false, message} (the
 // background is not plain, no outline in it: the photo keeps its landmarks).
 val plain_outline(const std::string& name, std::uintptr_t data, std::size_t size, val decoded, int width, int height) {

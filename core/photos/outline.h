@@ -77,7 +77,7 @@ Status extract_outline(const std::vector<std::uint8_t>& mask, int width, int hei
                        int expected_height, const OutlineOptions& options, PhotoOutline& out);
 
 // The outline of a photo with a plain background, as `likeness photos
-// --masks-from-photos` and the page find it. `image` is the photo, or a copy
+// --photos` and the page find it. `image` is the photo, or a copy
 // of it shrunk to any size (the page passes the one its face detector got);
 // one larger than max_side pixels on its longer side is shrunk to that first
 // (stb_image_resize). The background's mask and the outline are found there
