@@ -425,6 +425,7 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
     if (with_outlines) {
       std::vector<Image> images;
       if (!render_session_images(generic, person, std::uint32_t(seed), truth.cameras, images)) return 1;
+      const double o0 = cpu_clock_ms();
       for (size_t i = 0; i < photos.size(); ++i) {
         PhotoOutline o;
         const Status os = outline_from_plain_photo(images[size_t(cam_of[i])], photos[i].width, photos[i].height,
@@ -433,6 +434,10 @@ int run_bench_detected(const Args& args, const std::string& dir, const GenericHe
         if (!os) std::printf("       view %d: %s\n", cam_of[i], os.message.c_str());
         outlines.push_back(o);
       }
+      if (!photos.empty())
+        std::printf("       outlines: %zu photos of %dx%d, %.0f ms CPU each (shrunk to %d px, found, put back)\n",
+                    photos.size(), photos[0].width, photos[0].height, (cpu_clock_ms() - o0) / photos.size(),
+                    kPlainOutlineMaxSide);
     }
     PhotosJobResult r;
     const double t0 = cpu_clock_ms();
