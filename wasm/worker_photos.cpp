@@ -256,4 +256,7 @@ EMSCRIPTEN_BINDINGS(likeness_worker_photos) {
   using namespace lk_worker;
   emscripten::function("photos_head_job", &photos_head_job);
   emscripten::function("plain_outline", &plain_outline);
+  // The longer side plain_outline shrinks a photo to (worker.js: when the
+  // detector's copy of that size serves instead).
+  emscripten::constant("PLAIN_OUTLINE_MAX_SIDE", lk::kPlainOutlineMaxSide);
 }

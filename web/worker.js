@@ -268,9 +268,8 @@ async function photoPixels(name, buffer, smallPx = 0, probe = true) {
 // the browser (left open for the page): the core's shrinking would cost a
 // third of a second a photo. -> {points: Float64Array x y nx ny ...} or
 // {message} (why there is none: a room behind the person).
-const OUTLINE_MAX_SIDE = 1280;  // the core's kPlainOutlineMaxSide (photos/outline.h)
 function photoOutline(name, photo, width, height) {
-  const viaSmall = photo.small && Math.max(width, height) > 2 * OUTLINE_MAX_SIDE;
+  const viaSmall = photo.small && Math.max(width, height) > 2 * core.PLAIN_OUTLINE_MAX_SIDE;
   const r = viaSmall ? smallOutline(name, photo.small, width, height)
     : withHeapBytes(photo.buffer, (ptr, size) => core.plain_outline(name, ptr, size, photo.decoded, width, height));
   return r.ok ? { points: r.points } : { message: r.message || r.code };
