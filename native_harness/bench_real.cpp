@@ -105,6 +105,8 @@
 #include "generic_head_choice.h"
 #include "timing.h"
 
+#include "align/face_refine.h"
+#include "align/face_symmetry.h"
 #include "fit/scan_noise.h"
 #include "io/io.h"
 #include "mesh/geometry.h"
@@ -243,6 +245,27 @@ std::vector<Vec3> aligned_in_scan(const FitHeadResult& r, const Copy& c) {
     out.push_back(c.centroid + undo * (q - c.offset - c.centroid));
   }
   return out;
+}
+
+// How far the scan's face is turned from the aligned generic face: the
+// turn about the aligned face's up at which the scan's relief in front of
+// it is most mirror-symmetric (align/face_symmetry.h), in the fit's frame.
+// Near 0 where the face match found the face's own axis; Gutenberg's
+// default match stops some 20 deg short (docs/design/fit_real_scans.md).
+bool face_symmetry_turn(const FitHeadResult& r, const Copy& c, const GenericHead& generic, double& yaw, double& score) {
+  std::vector<Vec3> face = upper_face_samples(generic.mesh, generic.annotations, FaceRefineOptions{}.samples);
+  for (Vec3& p : face) p = r.generic_to_head.apply(p);
+  TriMesh scan;
+  for (const Vec3& p : c.cloud.positions) scan.positions.push_back(r.scan_to_head.apply(p));
+  scan.triangles = c.cloud.faces;
+  MeshBvh surface;
+  if (!scan.triangles.empty() && !build_bvh(scan, surface)) return false;
+  FaceSymmetry s;
+  if (!face_symmetry_yaw(face, r.generic_to_head.A * generic.annotations.look, r.generic_to_head.A * generic.annotations.up,
+                         surface, scan.positions, FaceSymmetryOptions{}, s))
+    return false;
+  yaw = s.yaw_deg, score = s.score;
+  return true;
 }
 
 // The scan and its four nudged copies; with `count` above 5, up to eight
@@ -618,6 +641,11 @@ int run(const Args& args) {
           std::printf("; orientation %s %s, scores %.6g / %.6g", r.turned ? "turned" : "kept",
                       r.orientation.given_clearly_best ? "(given clearly best)" : "", r.orientation.score_best,
                       r.orientation.score_given);
+        }
+        {
+          double yaw = 0, score = 0;
+          if (face_symmetry_turn(r, c, generic, yaw, score))
+            std::printf("; the scan's face most symmetric %+.1f deg about the aligned face's up (%.2f)", yaw, score);
         }
         for (const FaceRefineCandidate& k : r.face_refine.candidates)
           std::printf("%s%+.0f: %.1f", &k == &r.face_refine.candidates.front() ? "; pitches " : ", ", k.pitch_deg,
