@@ -83,7 +83,9 @@
 // (FitHeadOptions::guard_choose_by_cost, guard_cost_extra_tries).
 // --fit-face-screen I,K: the face refinement's starts screened after I
 // iterations, the K best going on (FaceRefineOptions::screen_iterations,
-// screen_keep; 0: off); --fit-orient-screen-points N: the orientation
+// screen_keep; 0: off); --fit-face-symmetry 0|1: the face's symmetric
+// turn as a start and in the choice of its pitch
+// (FaceRefineOptions::symmetry_yaw_start; off by default); --fit-orient-screen-points N: the orientation
 // check's screening on N of its samples (OrientationOptions::screen_points);
 // --fit-orient-screen-keep K: the K best screened starts go on
 // (OrientationOptions::screen_keep); --fit-orient-retry 0|1: the search run
@@ -105,7 +107,6 @@
 #include "generic_head_choice.h"
 #include "timing.h"
 
-#include "align/face_refine.h"
 #include "align/face_symmetry.h"
 #include "fit/scan_noise.h"
 #include "io/io.h"
@@ -247,22 +248,15 @@ std::vector<Vec3> aligned_in_scan(const FitHeadResult& r, const Copy& c) {
   return out;
 }
 
-// How far the scan's face is turned from the aligned generic face: the
-// turn about the aligned face's up at which the scan's relief in front of
-// it is most mirror-symmetric (align/face_symmetry.h), in the fit's frame.
-// Near 0 where the face match found the face's own axis; Gutenberg's
-// default match stops some 20 deg short (docs/design/fit_real_scans.md).
+// How far the scan's face is turned from the aligned generic face, in the
+// fit's frame (align/face_symmetry.h): near 0 where the face match found
+// the face's own axis.
 bool face_symmetry_turn(const FitHeadResult& r, const Copy& c, const GenericHead& generic, double& yaw, double& score) {
-  std::vector<Vec3> face = upper_face_samples(generic.mesh, generic.annotations, FaceRefineOptions{}.samples);
-  for (Vec3& p : face) p = r.generic_to_head.apply(p);
-  TriMesh scan;
-  for (const Vec3& p : c.cloud.positions) scan.positions.push_back(r.scan_to_head.apply(p));
-  scan.triangles = c.cloud.faces;
-  MeshBvh surface;
-  if (!scan.triangles.empty() && !build_bvh(scan, surface)) return false;
+  std::vector<Vec3> scan;
+  for (const Vec3& p : c.cloud.positions) scan.push_back(r.scan_to_head.apply(p));
   FaceSymmetry s;
-  if (!face_symmetry_yaw(face, r.generic_to_head.A * generic.annotations.look, r.generic_to_head.A * generic.annotations.up,
-                         surface, scan.positions, FaceSymmetryOptions{}, s))
+  if (!face_symmetry_of_alignment(generic.mesh, generic.annotations, scan, c.cloud.faces, r.generic_to_head.A,
+                                  r.generic_to_head.t, FaceSymmetryOptions{}, s))
     return false;
   yaw = s.yaw_deg, score = s.score;
   return true;
@@ -511,6 +505,8 @@ int run(const Args& args) {
     options.face_refine.screen_iterations = items.empty() ? 0 : std::atoi(items[0].c_str());
     if (items.size() > 1) options.face_refine.screen_keep = std::atoi(items[1].c_str());
   }
+  if (args.has("fit-face-symmetry"))
+    options.face_refine.symmetry_yaw_start = args.get("fit-face-symmetry", "1") != "0";
   if (!args.get_int("fit-orient-screen-points", options.orientation.screen_points, options.orientation.screen_points))
     return 1;
   if (!args.get_int("fit-orient-screen-keep", options.orientation.screen_keep, options.orientation.screen_keep, 1))
@@ -648,8 +644,9 @@ int run(const Args& args) {
             std::printf("; the scan's face most symmetric %+.1f deg about the aligned face's up (%.2f)", yaw, score);
         }
         for (const FaceRefineCandidate& k : r.face_refine.candidates)
-          std::printf("%s%+.0f: %.1f", &k == &r.face_refine.candidates.front() ? "; pitches " : ", ", k.pitch_deg,
-                      100 * k.measure);
+          std::printf("%s%+.0f: %.1f (face most symmetric %+.1f deg, %.2f)",
+                      &k == &r.face_refine.candidates.front() ? "; pitches " : ", ", k.pitch_deg, 100 * k.measure,
+                      k.symmetry_yaw_deg, k.symmetry_score);
         if (!given_pose.empty() && given_pose.size() == pose.size()) {
           Mat3 A = Mat3::Zero(), B = Mat3::Zero();  // least squares: pose ~ M * given (centred)
           Vec3 ca = Vec3::Zero(), cb = Vec3::Zero();

@@ -1,5 +1,6 @@
 #include "align/face_refine.h"
 
+#include "align/face_symmetry.h"
 #include "common/cloud_tree.h"
 #include "common/sampling.h"
 #include "mesh/geometry.h"
@@ -280,9 +281,41 @@ Status refine_alignment_on_face(const TriMesh& generic, const HeadAnnotations& a
     }
     width = hi - lo;
   }
+  const double kDeg = 3.14159265358979323846 / 180.0;
+  // The turn of a run's face to where the scan's relief in front of it is
+  // most mirror-symmetric (c: the face's centre under the run's map).
+  auto symmetry_of = [&](const Run& run, FaceSymmetry& symmetry, Vec3& c) {
+    std::vector<Vec3> world(n);
+    c = Vec3::Zero();
+    for (int i = 0; i < n; ++i) world[i] = run.linear * face[i] + run.translation, c += world[i];
+    c /= n;
+    const Vec3 up_w = (run.linear * ann.up.normalized()).normalized();
+    const Vec3 look_w = (run.linear * look).normalized();
+    return bool(face_symmetry_yaw(world, look_w, up_w, surface, cloud, FaceSymmetryOptions{}, symmetry));
+  };
+  // The winner's face turned by that much about its vertical axis, its
+  // midline onto the scan's, runs as one more start and wins by the same
+  // clamped score (FaceRefineOptions::symmetry_yaw_start).
+  auto symmetric_start = [&](Run& winner, int iterations) {
+    FaceSymmetry symmetry;
+    Vec3 c;
+    if (!symmetry_of(winner, symmetry, c)) return;
+    if (out.symmetry_score <= -2) out.symmetry_yaw_deg = symmetry.yaw_deg, out.symmetry_score = symmetry.score;
+    if (!(std::fabs(symmetry.yaw_deg) > o.symmetry_yaw_min_deg)) return;
+    const Vec3 up_w = (winner.linear * ann.up.normalized()).normalized();
+    const Vec3 look_w = (winner.linear * look).normalized();
+    const Vec3 u = (up_w - up_w.dot(look_w) * look_w).normalized();
+    const Mat3 turn = Mat3(Eigen::AngleAxisd(symmetry.yaw_deg * kDeg, u));
+    const Vec3 across = u.cross(turn * look_w);
+    Run r;
+    r.linear = turn * winner.linear;
+    r.translation = turn * (winner.translation - c) + c + symmetry.midline_shift * across;
+    advance(r, iterations);
+    out.iterations += r.iterations;
+    if (r.score < winner.score) winner = std::move(r);
+  };
   // The best by the clamped score of the starts turned by `candidate`
   // degrees more about the horizontal axis, each run for `iterations`.
-  const double kDeg = 3.14159265358979323846 / 180.0;
   Vec3 centre_iso = Vec3::Zero();  // the isotropic map's face centre
   for (const Vec3& g : face) centre_iso += isotropic * g;
   centre_iso /= n;
@@ -317,23 +350,43 @@ Status refine_alignment_on_face(const TriMesh& generic, const HeadAnnotations& a
       out.iterations += runs[k].iterations;
       if (goes_on[k] && (!found || runs[k].score < winner.score)) winner = runs[k], found = true;
     }
+    if (found && o.symmetry_yaw_start) symmetric_start(winner, iterations);
     return winner;
   };
   if (!whole) {
     best = best_of_starts(0.0, o.iterations);
     any = true;
   } else {
-    // Each pitch candidate briefly; the one the whole-scan measure rates
-    // highest (the first of equals) goes on.
-    double best_measure = 0;
+    // Each pitch candidate briefly. The one the whole-scan measure rates
+    // highest (the first of equals) goes on, among the candidates whose
+    // face looks along the scan's own (FaceRefineOptions::
+    // symmetry_margin) where any does.
+    std::vector<Run> runs;
     for (double candidate : o.candidate_pitches_deg) {
-      const Run r = best_of_starts(candidate, o.candidate_iterations);
-      double m = whole(r.linear, r.translation);
-      if (!std::isfinite(m)) m = -1e300;
-      out.candidates.push_back({candidate, m, r.score, r.near});
-      if (!any || m > best_measure) {
-        best = r, best_measure = m, any = true;
-        out.chosen = static_cast<int>(out.candidates.size()) - 1;
+      runs.push_back(best_of_starts(candidate, o.candidate_iterations));
+      const Run& r = runs.back();
+      FaceRefineCandidate k{candidate, whole(r.linear, r.translation), r.score, r.near};
+      if (!std::isfinite(k.measure)) k.measure = -1e300;
+      if (o.symmetry_yaw_start) {
+        FaceSymmetry symmetry;
+        Vec3 c;
+        if (symmetry_of(r, symmetry, c)) k.symmetry_yaw_deg = symmetry.yaw_deg, k.symmetry_score = symmetry.score;
+      }
+      out.candidates.push_back(k);
+    }
+    auto facing = [&](const FaceRefineCandidate& k) {
+      return k.symmetry_score > -2 && std::fabs(k.symmetry_yaw_deg) <= o.symmetry_yaw_min_deg;
+    };
+    double most_symmetric = -2;
+    for (const FaceRefineCandidate& k : out.candidates)
+      if (facing(k)) most_symmetric = std::max(most_symmetric, k.symmetry_score);
+    double best_measure = 0;
+    for (size_t i = 0; i < runs.size(); ++i) {
+      const FaceRefineCandidate& k = out.candidates[i];
+      if (most_symmetric > -2 && !(facing(k) && k.symmetry_score >= most_symmetric - o.symmetry_margin)) continue;
+      if (!any || k.measure > best_measure) {
+        best = runs[i], best_measure = k.measure, any = true;
+        out.chosen = static_cast<int>(i);
       }
     }
     // The winner's match goes on, and is kept where it does not move the

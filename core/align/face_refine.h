@@ -47,6 +47,21 @@ struct FaceRefineOptions {
   // about the horizontal axis (head up / down) and the vertical one.
   std::vector<double> pitch_starts_deg = {0.0, 12.0, -12.0};
   std::vector<double> yaw_starts_deg = {0.0, 20.0, -20.0};
+  // A head turned on its bust (Gutenberg) leaves the face's match short of
+  // the turn (docs/design/fit_real_scans.md). After each search its winner
+  // is turned about the face's vertical axis to where the scan's relief in
+  // front of it is most mirror-symmetric (align/face_symmetry.h), where
+  // that is more than symmetry_yaw_min_deg away, and run as one more start
+  // (it wins by the clamped score). Among the pitch candidates, those whose
+  // face looks along the scan's own (the most symmetric view within
+  // symmetry_yaw_min_deg, its correlation within symmetry_margin of the
+  // best such candidate's) are chosen from first. Off by default: it finds
+  // Gutenberg's face, but his fit then puts his left upper lid below the
+  // lower one and the face rig refuses the head (docs/design/
+  // fit_real_scans.md, "The face's symmetry as a measure of its yaw").
+  bool symmetry_yaw_start = false;
+  double symmetry_yaw_min_deg = 10.0;
+  double symmetry_margin = 0.1;
   // and shifts across the face, as fractions of its width.
   std::vector<double> shift_starts = {0.0, 0.2, -0.2};
   // At least this share of the pairs pulls.
@@ -83,6 +98,10 @@ struct FaceRefineCandidate {
   double measure = 0;        // the whole-scan measure of its pose (higher is better)
   double score = 0;          // its best start's clamped score
   double near_fraction = 0;  // its best start's share of the face on the scan
+  // Its face's most symmetric view (FaceRefineOptions::symmetry_yaw_start):
+  // the turn from its own, and the correlation (-2: not measured).
+  double symmetry_yaw_deg = 0;
+  double symmetry_score = -2;
 };
 
 struct FaceRefineResult {
@@ -96,6 +115,10 @@ struct FaceRefineResult {
   int iterations = 0;        // over all starts
   std::vector<FaceRefineCandidate> candidates;  // with a whole-scan measure: each pitch candidate
   int chosen = -1;                              // the one that continued (-1: no measure given)
+  // The first search's winner's most symmetric view: its turn and
+  // correlation (-2: not measured; FaceRefineOptions::symmetry_yaw_start).
+  double symmetry_yaw_deg = 0;
+  double symmetry_score = -2;
   double continued_measure = -1;                // the measure after it continued (kept when not lower)
 };
 

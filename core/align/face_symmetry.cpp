@@ -1,5 +1,7 @@
 #include "align/face_symmetry.h"
 
+#include "align/face_refine.h"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -166,6 +168,25 @@ Status face_symmetry_yaw(const std::vector<Vec3>& face_samples, const Vec3& view
   }
   if (!(out.score > -1.5)) return Status::error(ErrorCode::Empty, "face symmetry: no view drew enough of the scan");
   return Status::success();
+}
+
+Status face_symmetry_of_alignment(const TriMesh& generic, const HeadAnnotations& ann, const std::vector<Vec3>& cloud,
+                                  const std::vector<Tri>& faces, const Mat3& linear, const Vec3& translation,
+                                  const FaceSymmetryOptions& options, FaceSymmetry& out) {
+  out = FaceSymmetry{};
+  if (!linear.allFinite() || !translation.allFinite())
+    return Status::error(ErrorCode::InvalidInput, "face symmetry: bad alignment");
+  std::vector<Vec3> face = upper_face_samples(generic, ann, FaceRefineOptions{}.samples);
+  for (Vec3& p : face) p = linear * p + translation;
+  TriMesh scan;
+  scan.positions = cloud;
+  scan.triangles = faces;
+  MeshBvh surface;
+  if (!faces.empty()) {
+    const Status st = build_bvh(scan, surface);
+    if (!st) return st;
+  }
+  return face_symmetry_yaw(face, linear * ann.look, linear * ann.up, surface, cloud, options, out);
 }
 
 }  // namespace lk

@@ -6,9 +6,11 @@
 // closest-point match 20 deg short of the head's turn
 // (docs/design/fit_real_scans.md, Gutenberg); a face is close to
 // mirror-symmetric, so the turn that makes the scan's relief in front of
-// the aligned face symmetric says how far the match is off. `likeness bench
-// --only fit-real` prints it per scan; no stage acts on it yet (as a start
-// for the face match it was tried and not kept: the same note). The scan is
+// the aligned face symmetric says how far the match is off. With
+// FaceRefineOptions::symmetry_yaw_start (face_refine.h, off by default)
+// the face's match tries that turn as a start and prefers pitch candidates
+// whose face is symmetric; `likeness bench --only fit-real` prints it per
+// scan. The scan is
 // drawn as a height map along views
 // turned about the face's vertical axis (orthographic, the first surface hit;
 // a raw cloud's points splatted, the front-most kept) over the cells the
@@ -24,6 +26,8 @@
 #pragma once
 #include "common/status.h"
 #include "common/types.h"
+#include "head/head_model.h"
+#include "mesh/tri_mesh.h"
 #include "raycast/bvh.h"
 
 #include <vector>
@@ -52,5 +56,13 @@ struct FaceSymmetry {
 Status face_symmetry_yaw(const std::vector<Vec3>& face_samples, const Vec3& view, const Vec3& up,
                          const MeshBvh& surface, const std::vector<Vec3>& cloud, const FaceSymmetryOptions& options,
                          FaceSymmetry& out);
+
+// The same, for a generic head aligned to a scan (world point = linear *
+// generic point + translation): its upper face's samples (face_refine.h,
+// upper_face_samples) seen along the aligned face; the scan as its
+// triangles (faces over cloud) or, with faces empty, its points.
+Status face_symmetry_of_alignment(const TriMesh& generic, const HeadAnnotations& ann, const std::vector<Vec3>& cloud,
+                                  const std::vector<Tri>& faces, const Mat3& linear, const Vec3& translation,
+                                  const FaceSymmetryOptions& options, FaceSymmetry& out);
 
 }  // namespace lk

@@ -1062,58 +1062,80 @@ Status fit_head_in_axes(const PointCloud& scan, double scan_diagonal, const Gene
     double silhouette_face_near = 0;
     const size_t notes_before_face = out.notes.size();
     std::string pitches_tried;  // the face's pitch candidates and their shares, for the messages
-    if (out.near_fraction < options.min_near_fraction && !out.face_only && options.refine_on_face) {
-      st = upper_face_near_fraction(to_align.mesh, ann, cloud.positions, face_match_faces, out.alignment.linear,
-                                    out.alignment.translation, diag, options.face_refine.score_clamp_fraction,
-                                    silhouette_face_near, options.face_refine.samples);
-      silhouette_face_holds = st && silhouette_face_near >= options.min_near_fraction &&
-                              out.near_fraction >= 0.5 * options.min_near_fraction;
-      st = refine_alignment_on_face(to_align.mesh, ann, cloud.positions, face_match_faces, out.alignment.linear,
-                                    out.alignment.translation, diag, options.face_refine, out.face_refine);
-      if (st) {
-        out.notes.push_back("after the silhouette alignment only " + pct(100 * out.near_fraction) +
-                            "% of the points lay near the head (a hat, a beard, a pedestal?): aligned again on the face (" +
-                            pct(100 * out.face_refine.near_fraction) + "% of its points on the scan)");
-        out.alignment.linear = out.face_refine.linear;
-        out.alignment.translation = out.face_refine.translation;
+    // The face's match with its symmetric turns first (FaceRefineOptions::
+    // symmetry_yaw_start: a head turned on its bust), and again without
+    // them where that leaves the scan refused (Gutenberg's copy turned by
+    // 0.05 deg: docs/design/fit_real_scans.md).
+    for (int attempt = 0; attempt < 2; ++attempt) {
+      FaceRefineOptions face_options = options.face_refine;
+      if (attempt == 1) {
+        face_options.symmetry_yaw_start = false;
+        out.notes.resize(notes_before_face);
+        out.alignment = silhouette_alignment;
         st = place();
         if (!st) return st;
-        out.refined_on_face = true;
-        out.alignment.aligned = out.aligned;
+        out.refined_on_face = false;
+        out.face_refine = FaceRefineResult{};
+        pitches_tried.clear();
       }
-      // When that match (from the silhouettes' pitch) does not hold either,
-      // the silhouettes' minima lie too close to choose by them or by the
-      // face: other pitches are matched and the share of the points near the
-      // head chooses (FitHeadOptions::choose_face_pitch; Gutenberg turned by
-      // 0.05 deg: docs/design/align.md, "Choosing the pitch"). Not when the
-      // silhouettes' own alignment passes the face's rule: it is kept below.
-      const bool holds = out.refined_on_face && out.face_refine.near_fraction >= options.min_near_fraction &&
-                         out.near_fraction >= 0.5 * options.min_near_fraction;
-      FaceRefineResult chosen;
-      if (st && !holds && !silhouette_face_holds && options.choose_face_pitch &&
-          refine_alignment_on_face(to_align.mesh, ann, cloud.positions, face_match_faces, silhouette_alignment.linear,
-                                   silhouette_alignment.translation, diag, options.face_refine, chosen, share_near)) {
-        for (const FaceRefineCandidate& c : chosen.candidates)
-          pitches_tried += (pitches_tried.empty() ? "" : ", ") + pct(c.pitch_deg) + " deg " + pct(100 * c.measure) + "%";
-        const AlignResult first = out.alignment;
-        const double first_near = out.near_fraction;
-        out.alignment.linear = chosen.linear;
-        out.alignment.translation = chosen.translation;
-        st = place();
-        if (!st) return st;
-        if (out.near_fraction > first_near) {
-          out.face_refine = chosen;
-          out.alignment.aligned = out.aligned;
-          out.notes.push_back("the face's match left only " + pct(100 * first_near) +
-                              "% of the points near the head: its pitch chosen again by that share (" + pitches_tried +
-                              "): " + pct(chosen.candidates[chosen.chosen].pitch_deg) + " deg, " +
-                              pct(100 * out.near_fraction) + "% near");
-        } else {
-          out.alignment = first;
+      if (out.near_fraction < options.min_near_fraction && !out.face_only && options.refine_on_face) {
+        st = upper_face_near_fraction(to_align.mesh, ann, cloud.positions, face_match_faces, out.alignment.linear,
+                                      out.alignment.translation, diag, face_options.score_clamp_fraction,
+                                      silhouette_face_near, face_options.samples);
+        silhouette_face_holds = st && silhouette_face_near >= options.min_near_fraction &&
+                                out.near_fraction >= 0.5 * options.min_near_fraction;
+        st = refine_alignment_on_face(to_align.mesh, ann, cloud.positions, face_match_faces, out.alignment.linear,
+                                      out.alignment.translation, diag, face_options, out.face_refine);
+        if (st) {
+          out.notes.push_back("after the silhouette alignment only " + pct(100 * out.near_fraction) +
+                              "% of the points lay near the head (a hat, a beard, a pedestal?): aligned again on the face (" +
+                              pct(100 * out.face_refine.near_fraction) + "% of its points on the scan)");
+          out.alignment.linear = out.face_refine.linear;
+          out.alignment.translation = out.face_refine.translation;
           st = place();
           if (!st) return st;
+          out.refined_on_face = true;
+          out.alignment.aligned = out.aligned;
+        }
+        // When that match (from the silhouettes' pitch) does not hold either,
+        // the silhouettes' minima lie too close to choose by them or by the
+        // face: other pitches are matched and the share of the points near the
+        // head chooses (FitHeadOptions::choose_face_pitch; Gutenberg turned by
+        // 0.05 deg: docs/design/align.md, "Choosing the pitch"). Not when the
+        // silhouettes' own alignment passes the face's rule: it is kept below.
+        const bool holds = out.refined_on_face && out.face_refine.near_fraction >= options.min_near_fraction &&
+                           out.near_fraction >= 0.5 * options.min_near_fraction;
+        FaceRefineResult chosen;
+        if (st && !holds && !silhouette_face_holds && options.choose_face_pitch &&
+            refine_alignment_on_face(to_align.mesh, ann, cloud.positions, face_match_faces, silhouette_alignment.linear,
+                                     silhouette_alignment.translation, diag, face_options, chosen, share_near)) {
+          for (const FaceRefineCandidate& c : chosen.candidates)
+            pitches_tried += (pitches_tried.empty() ? "" : ", ") + pct(c.pitch_deg) + " deg " + pct(100 * c.measure) + "%";
+          const AlignResult first = out.alignment;
+          const double first_near = out.near_fraction;
+          out.alignment.linear = chosen.linear;
+          out.alignment.translation = chosen.translation;
+          st = place();
+          if (!st) return st;
+          if (out.near_fraction > first_near) {
+            out.face_refine = chosen;
+            out.alignment.aligned = out.aligned;
+            out.notes.push_back("the face's match left only " + pct(100 * first_near) +
+                                "% of the points near the head: its pitch chosen again by that share (" + pitches_tried +
+                                "): " + pct(chosen.candidates[chosen.chosen].pitch_deg) + " deg, " +
+                                pct(100 * out.near_fraction) + "% near");
+          } else {
+            out.alignment = first;
+            st = place();
+            if (!st) return st;
+          }
         }
       }
+      const bool holds = out.near_fraction >= options.min_near_fraction ||
+                         (out.refined_on_face && out.face_refine.near_fraction >= options.min_near_fraction &&
+                          out.near_fraction >= 0.5 * options.min_near_fraction) ||
+                         silhouette_face_holds;
+      if (holds || !options.face_refine.symmetry_yaw_start) break;
     }
     // After the face's alignment: the face must lie on the scan as the whole
     // head would (the same share), and half that share of the points near

@@ -87,7 +87,9 @@ struct FitHeadOptions {
   double near_distance_pct = 2.0;    // percent of the bbox diagonal
   // A whole head that fails the check above after the silhouette alignment
   // is aligned again on its upper face (align/face_refine.h: a hat, a
-  // beard or a pedestal misled the silhouettes) and checked again.
+  // beard or a pedestal misled the silhouettes) and checked again. With
+  // face_refine.symmetry_yaw_start (a head turned on its bust; off by
+  // default) the match that leaves the scan refused runs again without it.
   bool refine_on_face = true;
   FaceRefineOptions face_refine;
   // When that alignment on the face does not pass the check either, the

@@ -509,3 +509,41 @@ TEST_CASE("face refinement: a fine mesh's vertices place the face where its tria
   CHECK(fine_apart < 0.3);               // 0.20 mm at a mean edge of 0.0019 of the diagonal
   CHECK(coarse_apart > 2 * fine_apart);  // 0.72 mm at 0.030
 }
+
+TEST_CASE("face refinement: the symmetric turn's start keeps a face the starts reach") {
+  // The beret-and-beard scene from a start turned 40 deg about the face's
+  // vertical axis: the starts reach the face here (the trap of a turned
+  // bust is tested on the real Gutenberg, tests/pipeline/test_real_scans),
+  // and the symmetric turn's start must not move it off.
+  const GenericHead& generic = test::generic_head();
+  const TriMesh& m = generic.mesh;
+  const HeadAnnotations& ann = generic.annotations;
+  const HatAndBeard scene = hat_and_beard(m, ann);
+  const std::vector<Vec3> face = upper_face_samples(m, ann, 800);
+  Vec3 c = Vec3::Zero();
+  for (const Vec3& p : face) c += scene.s_true * scene.R_true * p + scene.t_true;
+  c /= double(face.size());
+  const Mat3 turn = Mat3(Eigen::AngleAxisd(40 * kPi / 180, scene.R_true * ann.up.normalized()));
+  const Mat3 start_linear = turn * scene.s_true * scene.R_true;
+  const Vec3 start_translation = turn * (scene.t_true - c) + c;
+  auto off_deg = [&](const FaceRefineResult& r) {
+    const Eigen::JacobiSVD<Mat3> svd(r.linear, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    return angle_deg(svd.matrixU() * svd.matrixV().transpose(), scene.R_true);
+  };
+  FaceRefineOptions without;
+  without.symmetry_yaw_start = false;
+  FaceRefineResult a, b;
+  REQUIRE(refine_alignment_on_face(m, ann, scene.cloud, {}, start_linear, start_translation, scene.diag, without, a)
+              .ok());
+  FaceRefineOptions with;
+  with.symmetry_yaw_start = true;
+  REQUIRE(refine_alignment_on_face(m, ann, scene.cloud, {}, start_linear, start_translation, scene.diag, with, b)
+              .ok());
+  INFO("without the symmetric start " << off_deg(a) << " deg off (score " << a.score << "), with it " << off_deg(b)
+                                      << " deg (score " << b.score << ", symmetric at " << b.symmetry_yaw_deg << " deg, "
+                                      << b.symmetry_score << ")");
+  CHECK(off_deg(b) < 6);
+  CHECK(b.score <= a.score);
+  CHECK(b.symmetry_score > 0.9);  // measured at the first search's winner
+  CHECK(std::fabs(b.symmetry_yaw_deg) <= 5);
+}
