@@ -69,7 +69,7 @@ TEST_CASE("face symmetry: the most symmetric view is the head's turn, on triangl
   }
 }
 
-TEST_CASE("face symmetry: a face pushed in on one side is less symmetric; bad input is refused") {
+TEST_CASE("face symmetry: a face pushed in on one side is less symmetric, and bad input is refused") {
   const GenericHead& g = test::generic_head();
   const std::vector<Vec3> face = upper_face_samples(g.mesh, g.annotations, 800);
   Turned t = turned_head(g, face, 0.0);
