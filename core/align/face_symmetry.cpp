@@ -96,7 +96,6 @@ Status face_symmetry_yaw(const std::vector<Vec3>& face_samples, const Vec3& view
   if (!v0.allFinite() || !u.allFinite() || !(std::fabs(up.normalized().dot(v0)) < 0.99))
     return Status::error(ErrorCode::InvalidInput, "face symmetry: bad view or up direction");
 
-  out.score = -2;  // below any correlation until a view pairs enough cells
   const double kDeg = 3.14159265358979323846 / 180.0;
   const int steps = static_cast<int>(std::floor(o.yaw_range_deg / o.yaw_step_deg + 1e-9));
   for (int s = -steps; s <= steps; ++s) {
@@ -119,11 +118,29 @@ Status face_symmetry_yaw(const std::vector<Vec3>& face_samples, const Vec3& view
     const double y0 = ylo - o.margin * height;
     map.rows = std::max(1, static_cast<int>(std::ceil(height * (1 + 2 * o.margin) / map.cell)));
     map.h.assign(size_t(map.cols) * map.rows, std::numeric_limits<double>::quiet_NaN());
+    // The cell a point (less the centre) falls in, false outside the map.
+    auto cell_of = [&](const Vec3& d, int& i, int& r) {
+      i = static_cast<int>(std::floor((x_axis.dot(d) - map.x0) / map.cell));
+      r = static_cast<int>(std::floor((u.dot(d) - y0) / map.cell));
+      return i >= 0 && i < map.cols && r >= 0 && r < map.rows;
+    };
+    // Only the cells the face's samples cover (dilated by one) are drawn:
+    // the relief of a beard, a beret or hair beside the face is not the face's.
+    std::vector<char> covered(map.h.size(), 0);
+    for (const Vec3& p : face_samples) {
+      int i = 0, r = 0;
+      cell_of(p - centre, i, r);
+      for (int dr = -1; dr <= 1; ++dr)
+        for (int di = -1; di <= 1; ++di)
+          if (i + di >= 0 && i + di < map.cols && r + dr >= 0 && r + dr < map.rows)
+            covered[(r + dr) * map.cols + i + di] = 1;
+    }
     // Surface within half the face's width in front of and behind its samples.
     const double z_front = zhi + 0.5 * width, z_back = zlo - 0.5 * width;
     if (!surface.empty()) {
       for (int r = 0; r < map.rows; ++r)
         for (int i = 0; i < map.cols; ++i) {
+          if (!covered[r * map.cols + i]) continue;
           Ray ray;
           ray.origin = centre + (map.x0 + (i + 0.5) * map.cell) * x_axis + (y0 + (r + 0.5) * map.cell) * u + z_front * v;
           ray.direction = -v;
@@ -135,29 +152,11 @@ Status face_symmetry_yaw(const std::vector<Vec3>& face_samples, const Vec3& view
       for (const Vec3& p : cloud) {
         const Vec3 d = p - centre;
         const double z = v.dot(d);
-        if (!(z >= z_back && z <= z_front)) continue;
-        const int i = static_cast<int>(std::floor((x_axis.dot(d) - map.x0) / map.cell));
-        const int r = static_cast<int>(std::floor((u.dot(d) - y0) / map.cell));
-        if (i < 0 || i >= map.cols || r < 0 || r >= map.rows) continue;
+        int i = 0, r = 0;
+        if (!(z >= z_back && z <= z_front) || !cell_of(d, i, r) || !covered[r * map.cols + i]) continue;
         double& h = map.h[r * map.cols + i];
         if (!(h >= z)) h = z;  // NaN or lower
       }
-    }
-    // Only the cells the face's samples cover (dilated by one): the relief
-    // of a beard, a beret or hair beside the face is not the face's.
-    {
-      std::vector<char> covered(map.h.size(), 0);
-      for (const Vec3& p : face_samples) {
-        const Vec3 d = p - centre;
-        const int i = static_cast<int>(std::floor((x_axis.dot(d) - map.x0) / map.cell));
-        const int r = static_cast<int>(std::floor((u.dot(d) - y0) / map.cell));
-        for (int dr = -1; dr <= 1; ++dr)
-          for (int di = -1; di <= 1; ++di)
-            if (i + di >= 0 && i + di < map.cols && r + dr >= 0 && r + dr < map.rows)
-              covered[(r + dr) * map.cols + i + di] = 1;
-      }
-      for (size_t k = 0; k < map.h.size(); ++k)
-        if (!covered[k]) map.h[k] = std::numeric_limits<double>::quiet_NaN();
     }
     double score = -2, midline = 0;
     if (detrend_and_clip(map, o.clip_sigmas))

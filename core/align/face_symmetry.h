@@ -47,7 +47,7 @@ struct FaceSymmetryOptions {
 struct FaceSymmetry {
   double yaw_deg = 0;        // the most symmetric view's turn (about up, right-handed)
   double midline_shift = 0;  // its midline, across the face from the samples' centre (scan units)
-  double score = -1;         // its correlation with the mirror image (-1..1)
+  double score = -2;         // its correlation with the mirror image (-1..1; -2: no view paired enough cells)
   std::vector<double> yaws_deg, scores;  // every view tried and its best correlation
 };
 
