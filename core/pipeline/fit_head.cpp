@@ -1062,6 +1062,13 @@ Status fit_head_in_axes(const PointCloud& scan, double scan_diagonal, const Gene
     double silhouette_face_near = 0;
     const size_t notes_before_face = out.notes.size();
     std::string pitches_tried;  // the face's pitch candidates and their shares, for the messages
+    // The face's rule after its match: the face must lie on the scan as the
+    // whole head would (the same share), and half that share of the points
+    // near the whole head (the rest may be a hat, a beard, shoulders).
+    auto face_rule_holds = [&] {
+      return out.refined_on_face && out.face_refine.near_fraction >= options.min_near_fraction &&
+             out.near_fraction >= 0.5 * options.min_near_fraction;
+    };
     // The face's match with its symmetric turns first (FaceRefineOptions::
     // symmetry_yaw_start: a head turned on its bust), and again without
     // them where that leaves the scan refused (Gutenberg's copy turned by
@@ -1103,8 +1110,7 @@ Status fit_head_in_axes(const PointCloud& scan, double scan_diagonal, const Gene
         // head chooses (FitHeadOptions::choose_face_pitch; Gutenberg turned by
         // 0.05 deg: docs/design/align.md, "Choosing the pitch"). Not when the
         // silhouettes' own alignment passes the face's rule: it is kept below.
-        const bool holds = out.refined_on_face && out.face_refine.near_fraction >= options.min_near_fraction &&
-                           out.near_fraction >= 0.5 * options.min_near_fraction;
+        const bool holds = face_rule_holds();
         FaceRefineResult chosen;
         if (st && !holds && !silhouette_face_holds && options.choose_face_pitch &&
             refine_alignment_on_face(to_align.mesh, ann, cloud.positions, face_match_faces, silhouette_alignment.linear,
@@ -1131,17 +1137,10 @@ Status fit_head_in_axes(const PointCloud& scan, double scan_diagonal, const Gene
           }
         }
       }
-      const bool holds = out.near_fraction >= options.min_near_fraction ||
-                         (out.refined_on_face && out.face_refine.near_fraction >= options.min_near_fraction &&
-                          out.near_fraction >= 0.5 * options.min_near_fraction) ||
-                         silhouette_face_holds;
-      if (holds || !options.face_refine.symmetry_yaw_start) break;
+      const bool refused = out.near_fraction < options.min_near_fraction && !face_rule_holds() && !silhouette_face_holds;
+      if (!refused || !options.face_refine.symmetry_yaw_start) break;
     }
-    // After the face's alignment: the face must lie on the scan as the whole
-    // head would (the same share), and half that share of the points near
-    // the whole head (the rest may be a hat, a beard, shoulders).
-    bool face_holds = out.refined_on_face && out.face_refine.near_fraction >= options.min_near_fraction &&
-                      out.near_fraction >= 0.5 * options.min_near_fraction;
+    bool face_holds = face_rule_holds();
     if (out.near_fraction < options.min_near_fraction && !face_holds && silhouette_face_holds) {
       // The face's match went astray while the silhouettes' alignment passes
       // the face's rule itself (Plato with a generic head whose mouth moved a
