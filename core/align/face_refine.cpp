@@ -2,13 +2,13 @@
 
 #include "align/face_symmetry.h"
 #include "common/cloud_tree.h"
+#include "common/rotation.h"
 #include "common/sampling.h"
 #include "mesh/geometry.h"
 #include "multires/surface_samples.h"
 #include "raycast/bvh.h"
 
 #include <Eigen/Geometry>
-#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -260,11 +260,11 @@ Status refine_alignment_on_face(const TriMesh& generic, const HeadAnnotations& a
   // The starts keep the given map's rotation and mean scale but not its
   // stretch: the silhouettes of a hat or a beard stretch the head (wider,
   // shallower) where the face is not.
-  const Eigen::JacobiSVD<Mat3> svd(linear, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Mat3 rotation = svd.matrixU() * svd.matrixV().transpose();
+  const Mat3 rotation = nearest_rotation(linear);
   if (rotation.determinant() < 0)
     return Status::error(ErrorCode::InvalidInput, "face refinement: the alignment mirrors the head");
-  const Mat3 isotropic = (svd.singularValues().sum() / 3.0) * rotation;
+  // The mean of linear's singular values: the trace of its stretch R^T linear.
+  const Mat3 isotropic = ((rotation.transpose() * linear).trace() / 3.0) * rotation;
   // The face's centre under the given map: the turns of the starts pivot there.
   Vec3 centre = Vec3::Zero();
   for (const Vec3& g : face) centre += linear * g + translation;
