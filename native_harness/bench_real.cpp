@@ -85,7 +85,8 @@
 // iterations, the K best going on (FaceRefineOptions::screen_iterations,
 // screen_keep; 0: off); --fit-face-symmetry 0|1: the face's symmetric
 // turn as a start and in the choice of its pitch
-// (FaceRefineOptions::symmetry_yaw_start; off by default); --fit-orient-screen-points N: the orientation
+// (FaceRefineOptions::symmetry_yaw_start; off by default); --fit-face-frame 0|1: the result turned to
+// the aligned face's look (FitHeadOptions::face_frame; off by default); --fit-orient-screen-points N: the orientation
 // check's screening on N of its samples (OrientationOptions::screen_points);
 // --fit-orient-screen-keep K: the K best screened starts go on
 // (OrientationOptions::screen_keep); --fit-orient-retry 0|1: the search run
@@ -507,6 +508,7 @@ int run(const Args& args) {
   }
   if (args.has("fit-face-symmetry"))
     options.face_refine.symmetry_yaw_start = args.get("fit-face-symmetry", "1") != "0";
+  if (args.has("fit-face-frame")) options.face_frame = args.get("fit-face-frame", "1") != "0";
   if (!args.get_int("fit-orient-screen-points", options.orientation.screen_points, options.orientation.screen_points))
     return 1;
   if (!args.get_int("fit-orient-screen-keep", options.orientation.screen_keep, options.orientation.screen_keep, 1))
@@ -629,6 +631,7 @@ int run(const Args& args) {
             if (a.face_distance >= 0) std::printf(" face %.4g", a.face_distance);
           }
         std::printf(", near %.1f %%", 100 * r.near_fraction);
+        if (options.face_frame) std::printf(", head frame turned %+.1f deg about up to the face's look", r.face_frame_deg);
         if (align_only) {  // the final map and the orientation check's outcome, to compare runs to the bit
           const Mat3& A = r.generic_to_head.A;
           const Vec3& t = r.generic_to_head.t;

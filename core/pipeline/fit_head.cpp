@@ -3,6 +3,7 @@
 #include "align/face_refine.h"
 
 #include "common/parallel.h"
+#include "common/rotation.h"
 #include "fit/closest_point.h"
 #include "head/generic_head.h"
 #include "mesh/geometry.h"
@@ -755,6 +756,47 @@ Status fit_head_on(const PointCloud& scan, double scan_diagonal, const GenericHe
                    const FitHeadOptions& options, FitHeadResult& out, const FitStageObserver& observer,
                    const ProgressFn& progress);
 
+// The result re-expressed in the head frame turned by Q (FitHeadOptions::
+// face_frame): every point, vector and map in the head frame turns; the
+// scan's frame and the figures do not change. The displacements are
+// lengths along the normals: they stay.
+void turn_result(const Mat3& Q, FitHeadResult& out) {
+  if (Q == Mat3::Identity()) return;
+  const Vec3 zero = Vec3::Zero();
+  auto turn_map = [&](Mat3& A, Vec3& t) {
+    A = Q * A;
+    t = Q * t;
+  };
+  auto turn_all = [&](std::vector<Vec3>& v) {
+    for (Vec3& p : v) p = Q * p;
+  };
+  turn_map(out.scan_to_head.A, out.scan_to_head.t);
+  turn_map(out.generic_to_head.A, out.generic_to_head.t);
+  for (TriMesh* m : {&out.aligned, &out.local, &out.control, &out.alignment.aligned}) transform(*m, Q, zero);
+  for (TriMesh& m : out.level_meshes) transform(m, Q, zero);
+  // The limiter's finest pairs describe the turned level as they did the
+  // level (crossing is a property of the shape): their fingerprint follows.
+  std::vector<Vec3>* finest = out.multires.state.displaced.empty() ? nullptr : &out.multires.state.displaced.back();
+  const bool pairs_current = finest && finest_pairs_of(out.fold_limit, *finest);
+  turn_all(out.multires.control);
+  for (auto* arrays : {&out.multires.state.base, &out.multires.state.normals, &out.multires.state.displaced,
+                       &out.multires.state.face_normals})
+    for (std::vector<Vec3>& v : *arrays) turn_all(v);
+  if (pairs_current) out.fold_limit.finest_pairs_fingerprint = positions_fingerprint(*finest);
+  turn_map(out.alignment.linear, out.alignment.translation);
+  turn_map(out.alignment.initial_linear, out.alignment.initial_translation);
+  turn_map(out.face_alignment.linear, out.face_alignment.translation);
+  out.face_alignment.rotation = Q * out.face_alignment.rotation;
+  turn_map(out.face_refine.linear, out.face_refine.translation);
+  // The boxes' maps act in the head frame: x -> A x + t becomes Q A Q^T x + Q t.
+  auto turn_box = [&](BoxFit& b) {
+    b.transform.A = Q * b.transform.A * Q.transpose();
+    b.transform.t = Q * b.transform.t;
+  };
+  turn_box(out.eye_fit);
+  for (BoxFit& b : out.local_fit.boxes) turn_box(b);
+}
+
 // 2000000 -> "2,000,000".
 std::string with_commas(long long v) {
   std::string digits = std::to_string(v), out;
@@ -961,7 +1003,15 @@ Status fit_head_in_axes(const PointCloud& scan, double scan_diagonal, const Gene
   };
   auto stage_done = [&](const char* name, const TriMesh& surface, const std::vector<Vec3>& pts,
                         MeshBvh* tree = nullptr) {
-    if (observer.finished) observer.finished(name, surface);
+    if (observer.finished) {
+      if (out.face_frame_turn == Mat3::Identity()) {
+        observer.finished(name, surface);
+      } else {  // shown as the result will be (FitHeadOptions::face_frame)
+        TriMesh turned = surface;
+        transform(turned, out.face_frame_turn, Vec3::Zero());
+        observer.finished(name, turned);
+      }
+    }
     FitStageReport rep;
     rep.name = name;
     if (options.measure_stages) rep.distance = surface_distance(surface, pts, tree);
@@ -1213,6 +1263,18 @@ Status fit_head_in_axes(const PointCloud& scan, double scan_diagonal, const Gene
     if (st) st = place();
   }
   if (!st) return st;
+  if (options.face_frame) {
+    // The turn about the head frame's up to the aligned generic face's look
+    // (FitHeadOptions::face_frame), applied to the result at the end
+    // (turn_result): the fit itself runs in the frame it was aligned in.
+    const Mat3 turn = nearest_rotation(out.generic_to_head.A);
+    const Vec3 look = turn * Vec3::UnitZ();
+    if (turn.determinant() > 0 && std::hypot(look.x(), look.z()) > 0.5) {
+      const double yaw = std::atan2(look.x(), look.z());
+      out.face_frame_turn = Mat3(Eigen::AngleAxisd(-yaw, Vec3::UnitY()));
+      out.face_frame_deg = yaw * 180.0 / 3.14159265358979323846;
+    }
+  }
   if (faired) {  // the fit starts from the faired skin, placed as the cast one was aligned
     out.aligned = generic.mesh;
     for (Vec3& p : out.aligned.positions) p = out.generic_to_head.apply(p);
@@ -1830,6 +1892,7 @@ Status fit_head_in_axes(const PointCloud& scan, double scan_diagonal, const Gene
   // refitted to the finest level as it left it: no level-3 build for the
   // figures.
   stage_done("subdivision", finest, pts, ears_reverted && !guard_searched ? nullptr : &relief_tree);
+  turn_result(out.face_frame_turn, out);
   return Status::success();
 }
 

@@ -92,6 +92,21 @@ struct FitHeadOptions {
   // default) the match that leaves the scan refused runs again without it.
   bool refine_on_face = true;
   FaceRefineOptions face_refine;
+  // The result turned about the head frame's up to the aligned generic
+  // head's look: once the alignment is final, the head frame turns by the
+  // yaw of the alignment's rotation (the polar factor of its map), so the
+  // fitted face looks along +z, as the generic head's does, whatever way
+  // the scan faced or the head turned on its bust. Up stays the scan's (as
+  // given or as the orientation check turned it): a bust's pitch under the
+  // silhouettes is less sure than its up, and the face rig was measured on
+  // fits upright that way. The face rig (lids and jaw turn about x), the
+  // glTF export and the page's views read that frame; scan_to_head carries
+  // the turn. The fit runs unturned and its figures do not change. Off by
+  // default: the rig on the page's real fits gains lid pairs on Gutenberg's
+  // blink (turned 17 deg: 0 -> 3 on the control mesh) and a mouth-bag pair
+  // on James (6 deg); docs/design/fit_real_scans.md. Off: the frame of up
+  // and facing (and of the orientation check's turn).
+  bool face_frame = false;
   // When that alignment on the face does not pass the check either, the
   // face is matched again from the pitch candidates (FaceRefineOptions::
   // candidate_pitches_deg), the one with the largest share of the points
@@ -437,6 +452,11 @@ struct FitHeadResult {
   double unit_to_metres = 1;    // the unit picked: 1 (m), 0.01 (cm), 0.001 (mm)
   AffineMap scan_to_head;       // rotation * unit scale (no translation)
   AffineMap generic_to_head;    // the initial alignment
+  // FitHeadOptions::face_frame: the turn about +y from the frame of up and
+  // facing (and the orientation check) to the head frame, and the aligned
+  // face's yaw it undid (degrees, + towards +x).
+  Mat3 face_frame_turn = Mat3::Identity();
+  double face_frame_deg = 0;
   TriMesh aligned, local, control;  // control mesh after each fitting stage
   MultiresMesh multires;        // levels over `control` with displacements
   std::vector<TriMesh> level_meshes;  // levels 1..L (displaced)

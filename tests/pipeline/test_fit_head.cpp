@@ -31,9 +31,13 @@ const Scene& scene() {
   return s;
 }
 
+// The result in the scene's frame, where the truth is (FitHeadOptions::
+// face_frame turns it to the aligned face's; the fit is the same: tested
+// below, "the result in the aligned face's frame").
 FitHeadOptions quick_options() {
   FitHeadOptions o;
   o.levels = 2;
+  o.face_frame = false;
   return o;
 }
 
@@ -163,6 +167,74 @@ TEST_CASE("fit_head: any unit and orientation give the same head") {
   const DistanceStats d = point_to_surface_stats(mm.positions, back, r.bbox_diagonal, 7);
   CHECK(d.mean_pct < 0.5);
   CHECK(d.mean > 0.0);
+}
+
+// The control mesh's eye line (left rim's centroid minus the right's).
+Vec3 eye_line(const TriMesh& control, const HeadAnnotations& a) {
+  auto centroid = [&](const std::vector<int>& rim) {
+    Vec3 c = Vec3::Zero();
+    for (int v : rim) c += control.positions[static_cast<size_t>(v)];
+    return Vec3(c / static_cast<double>(rim.size()));
+  };
+  return centroid(a.eye_left.rim) - centroid(a.eye_right.rim);
+}
+
+// The eye line's turn about +y off +x, degrees.
+double eye_line_yaw_deg(const Vec3& line) { return std::atan2(-line.z(), line.x()) * 180 / M_PI; }
+
+TEST_CASE("fit_head: the result in the aligned face's frame, a head turned 20 deg on its shoulders facing +z") {
+  // The scan turned 20 deg about its up (the face towards +x), the axes
+  // given as +y up, +z facing: with face_frame the result turns back by
+  // the aligned face's yaw, and is otherwise the same fit, turned.
+  const Scene& s = scene();
+  const double yaw = 20 * M_PI / 180;
+  const Mat3 R = Eigen::AngleAxisd(yaw, Vec3::UnitY()).toRotationMatrix();
+  PointCloud turned = s.scan;
+  for (Vec3& p : turned.positions) p = R * p;
+  for (Vec3& n : turned.normals) n = R * n;
+  FitHeadOptions on = quick_options(), off = quick_options();
+  on.face_frame = true;
+  FitHeadResult r_on, r_off;
+  REQUIRE(fit_head(turned, s.generic, on, r_on).ok());
+  REQUIRE(fit_head(turned, s.generic, off, r_off).ok());
+  INFO("face's yaw undone " << r_on.face_frame_deg << " deg; eye line yaw " << eye_line_yaw_deg(eye_line(r_off.control, s.generic.annotations))
+                            << " deg unturned, " << eye_line_yaw_deg(eye_line(r_on.control, s.generic.annotations)) << " turned");
+  CHECK(std::abs(r_on.face_frame_deg - 20) < 3);
+  CHECK(r_off.face_frame_deg == 0);
+  CHECK(r_off.face_frame_turn == Mat3::Identity());
+  // The face looks along +z: its eye line along +x (within the fit's own
+  // error, about 1 deg here), where unturned it is 20 deg off.
+  CHECK(std::abs(eye_line_yaw_deg(eye_line(r_on.control, s.generic.annotations))) < 3);
+  CHECK(std::abs(eye_line_yaw_deg(eye_line(r_off.control, s.generic.annotations)) - 20) < 3);
+  // The same fit, turned: every mesh, the levels, the maps; figures equal.
+  const Mat3& Q = r_on.face_frame_turn;
+  CHECK((Q * Vec3::UnitY()).isApprox(Vec3::UnitY(), 1e-12));
+  CHECK((r_on.scan_to_head.A - Q * r_off.scan_to_head.A).norm() < 1e-12);
+  auto same_turned = [&](const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+    REQUIRE(a.size() == b.size());
+    double worst = 0;
+    for (size_t i = 0; i < a.size(); ++i) worst = std::max(worst, (a[i] - Q * b[i]).norm());
+    return worst;
+  };
+  CHECK(same_turned(r_on.control.positions, r_off.control.positions) < 1e-12);
+  CHECK(same_turned(r_on.aligned.positions, r_off.aligned.positions) < 1e-12);
+  REQUIRE(r_on.level_meshes.size() == r_off.level_meshes.size());
+  CHECK(same_turned(r_on.level_meshes.back().positions, r_off.level_meshes.back().positions) < 1e-12);
+  CHECK(same_turned(r_on.multires.state.displaced.back(), r_off.multires.state.displaced.back()) < 1e-12);
+  for (const Vec3& g : s.generic.mesh.positions)
+    CHECK((r_on.generic_to_head.apply(g) - Q * r_off.generic_to_head.apply(g)).norm() < 1e-12);
+  REQUIRE(r_on.stages.size() == r_off.stages.size());
+  for (size_t k = 0; k < r_on.stages.size(); ++k) CHECK(r_on.stages[k].distance.mean == r_off.stages[k].distance.mean);
+  // The quality report takes the limiter's pairs on the turned level too.
+  CHECK(finest_pairs_of(r_on.fold_limit, r_on.multires.state.displaced.back()) != nullptr);
+  FitQuality q_on, q_off;
+  REQUIRE(measure_fit_quality(r_on, s.generic.annotations, q_on).ok());
+  REQUIRE(measure_fit_quality(r_off, s.generic.annotations, q_off).ok());
+  CHECK(q_on.crossings.total == q_off.crossings.total);
+  // Mapped back through scan_to_head, the turned control mesh lies where the unturned one does.
+  const Mat3 back_on = r_on.scan_to_head.A.inverse(), back_off = r_off.scan_to_head.A.inverse();
+  for (size_t i = 0; i < r_on.control.positions.size(); ++i)
+    CHECK((back_on * r_on.control.positions[i] - back_off * r_off.control.positions[i]).norm() < 1e-12);
 }
 
 TEST_CASE("fit_head rejects what is not a head with a clear error") {

@@ -286,8 +286,12 @@ static std::string notes_of(const FitHeadResult& r) {
   for (const std::string& n : r.notes) notes += n + "\n";
   return notes;
 }
+// How far the axes the orientation check chose (scan_to_head less the
+// turn to the aligned face's frame, FitHeadOptions::face_frame) face from
+// `facing`, in the scan's frame.
 static double facing_off_deg(const FitHeadResult& r, const Vec3& facing) {
-  const Vec3 f = (r.scan_to_head.A.transpose() * Vec3::UnitZ()).normalized();
+  const Mat3 oriented = r.face_frame_turn.transpose() * r.scan_to_head.A;
+  const Vec3 f = (oriented.transpose() * Vec3::UnitZ()).normalized();
   return std::acos(std::clamp(f.dot(facing.normalized()), -1.0, 1.0)) * 180 / 3.14159265358979323846;
 }
 

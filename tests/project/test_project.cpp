@@ -122,7 +122,8 @@ TEST_CASE("project refit: new axes fit a kept scan that lies with +z up as the s
   CHECK(r.options.up == Vec3::UnitZ());
   CHECK(r.options.facing == -Vec3::UnitY());
   CHECK_FALSE(r.fit.turned);
-  CHECK((r.fit.scan_to_head.A * Vec3::UnitZ()).normalized().isApprox(Vec3::UnitY(), 1e-12));
+  // The given axes, less the turn to the aligned face's frame (FitHeadOptions::face_frame).
+  CHECK((r.fit.face_frame_turn.transpose() * r.fit.scan_to_head.A * Vec3::UnitZ()).normalized().isApprox(Vec3::UnitY(), 1e-12));
   REQUIRE(r.fit.control.positions.size() == control.size());
   double worst = 0;  // the scan's box diagonal sums its sides in another order: ulps apart at most
   for (size_t i = 0; i < control.size(); ++i) worst = std::max(worst, (r.fit.control.positions[i] - control[i]).norm());

@@ -428,7 +428,7 @@ TEST_CASE("project file: foreign, future and edited files are refused with a rea
   refused([&](Obj& d) {  // invertible on paper, its inverse 1e100 (found by tests/fuzz/fuzz_project)
     Obj fit = at(d, {"fit"}), map = at(d, {"fit", "scan_to_head"});
     tinygltf::Value::Array a = map["A"].Get<tinygltf::Value::Array>();
-    a[0] = tinygltf::Value(1e-100);
+    for (int k = 0; k < 3; ++k) a[k] = tinygltf::Value(1e-100);  // a row (or column) 1e-100 long, turned or not
     map["A"] = tinygltf::Value(a);
     fit["scan_to_head"] = tinygltf::Value(map);
     d["fit"] = tinygltf::Value(fit);
