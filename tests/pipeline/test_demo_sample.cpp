@@ -144,9 +144,10 @@ TEST_CASE("fit_head: synthetic seed 6's mouth is fitted in the right basin: no l
     INFO((subject ? "the head of 23 Nov (even back rows)" : "the asset"));
     const PointCloud scan = demo_scan(*generic, 6);
     FitHeadResult r;
-    // Measured in the scan's frame: turned to the aligned face's (by 1.0
-    // deg), one vertex of 27,882 flips to another closest triangle and the
-    // maximum reads 4.9 mm instead of 3.2 (FitHeadOptions::face_frame).
+    // Measured in the scan's frame: the same fit turned by its aligned
+    // face's whole rotation (1.0 deg; FitHeadOptions::face_frame's first
+    // form) had one vertex of 27,882 flip to another closest triangle, the
+    // maximum reading 4.9 mm instead of 3.2.
     FitHeadOptions in_scan_frame;
     in_scan_frame.face_frame = false;
     Status st = fit_head(scan, *generic, in_scan_frame, r);
