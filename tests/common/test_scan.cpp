@@ -102,4 +102,10 @@ PointCloud scan_height_field(const std::function<double(double, double)>& surfac
   return c;
 }
 
+Vec3 vertices_centroid(const TriMesh& mesh, const std::vector<int>& indices) {
+  Vec3 c = Vec3::Zero();
+  for (int v : indices) c += mesh.positions[static_cast<size_t>(v)];
+  return c / static_cast<double>(indices.size());
+}
+
 }  // namespace lk::test

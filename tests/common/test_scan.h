@@ -82,4 +82,7 @@ TestScan make_test_scan(std::uint32_t seed, int points, const TestScanOptions& o
 PointCloud scan_height_field(const std::function<double(double, double)>& surface, double size,
                              int count, double sigma, unsigned seed);
 
+// The mean position of mesh's vertices `indices` (an eye rim's centre).
+Vec3 vertices_centroid(const TriMesh& mesh, const std::vector<int>& indices);
+
 }  // namespace lk::test

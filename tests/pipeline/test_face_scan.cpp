@@ -66,12 +66,6 @@ double truth_face_to_mesh(const Truth& t, const TriMesh& mesh, double max_depth_
   return point_to_surface_stats(face, mesh, 1.0).mean;
 }
 
-Vec3 rim_centroid(const TriMesh& mesh, const std::vector<int>& rim) {
-  Vec3 c = Vec3::Zero();
-  for (int v : rim) c += mesh.positions[v];
-  return c / double(rim.size());
-}
-
 // A synthetic head whose eyes, lids and brows sit 8 mm lower than the
 // generic head's proportions put them: a smooth field, full within 22 mm
 // of either eye socket's centre and gone at 45 mm, so the face between
@@ -107,14 +101,14 @@ TEST_CASE("fit_head: eyes 8 mm lower than the generic head's land on the scan's 
     REQUIRE(st.ok());
     CHECK(r.eye_fit.skipped == (on == 0));
     for (int e = 0; e < 2; ++e) {
-      const Vec3 truth_rim = rim_centroid(head.mesh, *rims[e]);
-      const Vec3 d = rim_centroid(r.control, *rims[e]) - truth_rim;
-      const Vec3 dl = rim_centroid(r.local, *rims[e]) - truth_rim;
+      const Vec3 truth_rim = test::vertices_centroid(head.mesh, *rims[e]);
+      const Vec3 d = test::vertices_centroid(r.control, *rims[e]) - truth_rim;
+      const Vec3 dl = test::vertices_centroid(r.local, *rims[e]) - truth_rim;
       error[on][e] = d.norm();
       local_error[on][e] = dl.norm();
       where << "eye region " << (on ? "on" : "off") << ", eye " << e << ": fitted rim off by (" << 1000 * d.transpose()
             << ") mm, after local fitting (" << 1000 * dl.transpose() << "), aligned generic's ("
-            << 1000 * (rim_centroid(r.aligned, *rims[e]) - truth_rim).transpose() << ") mm\n";
+            << 1000 * (test::vertices_centroid(r.aligned, *rims[e]) - truth_rim).transpose() << ") mm\n";
     }
     CHECK(turned_triangles(r.aligned.positions, r.control).empty());
     CHECK(r.stages[3].distance.mean_pct < 0.15);
@@ -318,8 +312,8 @@ TEST_CASE("fit_head: the real James (menpo3d face capture in mm)") {
         }
     REQUIRE(count == 6);
     expected /= count;
-    const Vec3 aligned = rim_centroid(r.aligned, socket->rim) - expected;
-    const Vec3 fitted = rim_centroid(r.control, socket->rim) - expected;
+    const Vec3 aligned = test::vertices_centroid(r.aligned, socket->rim) - expected;
+    const Vec3 fitted = test::vertices_centroid(r.control, socket->rim) - expected;
     INFO(label << ": rim centroid off by (" << 1000 * fitted.transpose() << ") mm, aligned generic's ("
                << 1000 * aligned.transpose() << ") mm");
     CHECK(aligned.y() > 0.008);

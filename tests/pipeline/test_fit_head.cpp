@@ -171,12 +171,7 @@ TEST_CASE("fit_head: any unit and orientation give the same head") {
 
 // The control mesh's eye line (left rim's centroid minus the right's).
 Vec3 eye_line(const TriMesh& control, const HeadAnnotations& a) {
-  auto centroid = [&](const std::vector<int>& rim) {
-    Vec3 c = Vec3::Zero();
-    for (int v : rim) c += control.positions[static_cast<size_t>(v)];
-    return Vec3(c / static_cast<double>(rim.size()));
-  };
-  return centroid(a.eye_left.rim) - centroid(a.eye_right.rim);
+  return test::vertices_centroid(control, a.eye_left.rim) - test::vertices_centroid(control, a.eye_right.rim);
 }
 
 // The eye line's turn about +y off +x, degrees.
